@@ -1,0 +1,77 @@
+//! The correction: raw ADC counts in, SI values and [`Flags`] out.
+//!
+//! Build a corrector from a validated [`Calibration`](crate::model::Calibration) (or take the
+//! explicit `identity` fallback, which passes raw counts through and flags every sample
+//! [`Flags::NO_CALIBRATION`]). Tell it the temperature and supply voltage with
+//! `set_environment` whenever they change: that interpolates the coefficient table once and
+//! precomputes everything the per-sample path needs. Until it is called, every sample is
+//! flagged [`Flags::TEMPERATURE_CLAMPED`] and [`Flags::VOLTAGE_CLAMPED`] (the coefficients of the
+//! middle of the calibrated spans are used). Then call `correct` per sample, or
+//! `correct_batch` over a DMA block.
+//!
+//! | sensor      | corrector           | raw        | output                      |
+//! |-------------|---------------------|------------|-----------------------------|
+//! | single axis | [`AxisCorrector`]   | `i32`      | `[f32; 1]`                  |
+//! | triad       | [`TriadCorrector`]  | `[i32; 3]` | `[f32; 3]`                  |
+//! | IMU         | [`ImuCorrector`]    | `[i32; 6]` | `[f32; 6]`: ax ay az gx gy gz |
+//!
+//! None of these functions can panic, for any input, NaN temperatures and voltages included.
+//! The `f32` outputs are finite for every raw code inside the ADC rails; a code beyond a rail is
+//! corrected as if it were at the rail, and flagged.
+
+mod environment;
+mod flags;
+mod imu;
+mod kernel;
+mod single;
+mod triad;
+
+pub use flags::Flags;
+pub use imu::ImuCorrector;
+pub use single::AxisCorrector;
+pub use triad::TriadCorrector;
+
+/// A corrected sample: `N` values in SI units (m/s^2, rad/s) and the flags that apply.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Corrected<const N: usize> {
+    /// Corrected values.
+    pub values: [f32; N],
+    /// Why the sample cannot be fully trusted; empty when it can.
+    pub flags: Flags,
+}
+
+impl<const N: usize> Default for Corrected<N> {
+    fn default() -> Self {
+        Self {
+            values: [0.0; N],
+            flags: Flags::NONE,
+        }
+    }
+}
+
+/// `|L' f|` for a packed lower-triangular `L` (row-major) of dimension `N`: the 1-sigma of an
+/// output whose features are `f`.
+fn factor_norm<const N: usize>(packed: &[f32], f: &[f32; N]) -> f32 {
+    let mut sum = 0.0;
+    for j in 0..N {
+        let mut dot = 0.0;
+        for (i, fi) in f.iter().enumerate().skip(j) {
+            dot += packed.get(i * (i + 1) / 2 + j).copied().unwrap_or(0.0) * fi;
+        }
+        sum += dot * dot;
+    }
+    libm::sqrtf(sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::factor_norm;
+
+    #[test]
+    fn factor_norm_is_sqrt_of_quadratic_form() {
+        // L = [[2, 0], [1, 3]] -> C = L L' = [[4, 2], [2, 10]]; f = [1, 2] -> f'Cf = 4+8+40.
+        let s = factor_norm(&[2.0, 1.0, 3.0], &[1.0, 2.0]);
+        assert!((s - 52f32.sqrt()).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,172 @@
+//! The triad corrector: three axes of one quantity.
+
+use super::environment::effective_set;
+use super::kernel::{TriadKernel, all_linear};
+use super::{Corrected, Flags, factor_norm};
+use crate::Error;
+use crate::model::interval::Bound;
+use crate::model::{Calibration, Channel, Environment, Rails, Sensor, TriadCovariance, TriadSet};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    Identity,
+    Linear,
+    Nonlinear,
+}
+
+/// Corrects an accelerometer or gyro triad (see the [module docs](super)).
+#[derive(Debug, Clone)]
+pub struct TriadCorrector<'a> {
+    source: Option<(&'a Environment, &'a [TriadSet], &'a [Channel; 3], Rails)>,
+    mode: Mode,
+    kernel: TriadKernel,
+    env_flags: Flags,
+    covariance: Option<TriadCovariance>,
+}
+
+impl<'a> TriadCorrector<'a> {
+    /// A corrector for a triad calibration, at an unknown environment (see the module docs).
+    ///
+    /// # Errors
+    /// [`Error::CorrectorWrongSensor`] when `cal` is not a triad.
+    pub fn new(cal: &'a Calibration) -> Result<Self, Error> {
+        let data = cal.data();
+        let Sensor::Triad {
+            rails,
+            channels,
+            sets,
+            ..
+        } = &data.sensor
+        else {
+            return Err(Error::CorrectorWrongSensor);
+        };
+        let linear = sets.iter().all(|s| all_linear(&s.axes));
+        let mut out = Self {
+            source: Some((&data.environment, sets, channels, *rails)),
+            mode: if linear {
+                Mode::Linear
+            } else {
+                Mode::Nonlinear
+            },
+            kernel: TriadKernel::IDENTITY,
+            env_flags: Flags::NONE,
+            covariance: None,
+        };
+        out.set_environment(f32::NAN, f32::NAN);
+        Ok(out)
+    }
+
+    /// The fallback when no valid calibration exists: outputs are the raw codes and every
+    /// sample is flagged [`Flags::NO_CALIBRATION`].
+    #[must_use]
+    pub const fn identity() -> Self {
+        Self {
+            source: None,
+            mode: Mode::Identity,
+            kernel: TriadKernel::IDENTITY,
+            env_flags: Flags::NO_CALIBRATION,
+            covariance: None,
+        }
+    }
+
+    /// Interpolates the coefficients at `temperature` (C) and `voltage` (V) and precomputes the
+    /// per-sample path. Outside the calibrated spans (or NaN) the table edge is used and every
+    /// sample is flagged.
+    pub fn set_environment(&mut self, temperature: f32, voltage: f32) {
+        let Some((env, sets, channels, rails)) = self.source else {
+            return;
+        };
+        let Some((set, flags)) = effective_set(env, sets, temperature, voltage) else {
+            *self = Self::identity();
+            return;
+        };
+        self.kernel = TriadKernel::new(&set, channels, &rails, &[Bound::point(0.0); 3]);
+        self.env_flags = flags;
+        self.covariance = set.covariance;
+    }
+
+    /// The flags that the current environment puts on every sample.
+    #[must_use]
+    pub const fn environment_flags(&self) -> Flags {
+        self.env_flags
+    }
+
+    /// Corrects one sample.
+    #[must_use]
+    #[inline]
+    pub fn correct(&self, raw: [i32; 3]) -> Corrected<3> {
+        match self.mode {
+            Mode::Linear => self.step::<false>(raw),
+            Mode::Nonlinear => self.step::<true>(raw),
+            Mode::Identity => self.identity_step(raw),
+        }
+    }
+
+    /// Corrects `raw` into `out`, sample by sample, and returns how many were corrected (the
+    /// shorter of the two lengths).
+    pub fn correct_batch(&self, raw: &[[i32; 3]], out: &mut [Corrected<3>]) -> usize {
+        let pairs = raw.iter().zip(out.iter_mut());
+        let n = raw.len().min(pairs.len());
+        match self.mode {
+            Mode::Linear => pairs.for_each(|(r, o)| *o = self.step::<false>(*r)),
+            Mode::Nonlinear => pairs.for_each(|(r, o)| *o = self.step::<true>(*r)),
+            Mode::Identity => pairs.for_each(|(r, o)| *o = self.identity_step(*r)),
+        }
+        n
+    }
+
+    /// The 1-sigma calibration error of each output for `raw` at the current environment, from
+    /// the stored covariance factor; `None` when the calibration has none.
+    #[must_use]
+    pub fn sigma(&self, raw: [i32; 3]) -> Option<[f32; 3]> {
+        let cov = self.covariance.as_ref()?;
+        let (w, _) = self.kernel.offsets(self.kernel.clamp(raw));
+        let [u0, u1, u2] = self.kernel.linearized(w);
+        let f = [1.0, u0, u1, u2];
+        Some(cov.map(|l| factor_norm(&l, &f)))
+    }
+
+    #[inline(always)]
+    fn step<const NONLINEAR: bool>(&self, raw: [i32; 3]) -> Corrected<3> {
+        let k = &self.kernel;
+        let (w, acc) = k.offsets(raw);
+        let values = if NONLINEAR {
+            k.nonlinear(w)
+        } else {
+            k.linear(w)
+        };
+        if acc < k.limit {
+            Corrected {
+                values,
+                flags: self.env_flags,
+            }
+        } else {
+            self.slow::<NONLINEAR>(raw)
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn slow<const NONLINEAR: bool>(&self, raw: [i32; 3]) -> Corrected<3> {
+        let k = &self.kernel;
+        let (w, _) = k.offsets(k.clamp(raw));
+        let values = if NONLINEAR {
+            k.nonlinear(w)
+        } else {
+            k.linear(w)
+        };
+        let flags = self
+            .env_flags
+            .with_if(Flags::SATURATED, k.saturated(&raw))
+            .with_if(Flags::OUT_OF_RANGE, k.out_of_range(&values));
+        Corrected { values, flags }
+    }
+
+    #[inline(always)]
+    fn identity_step(&self, raw: [i32; 3]) -> Corrected<3> {
+        Corrected {
+            values: raw.map(|r| r as f32),
+            flags: self.env_flags,
+        }
+    }
+}

@@ -1,0 +1,305 @@
+//! Example calibrations for documentation, tests, golden vectors and benchmarks.
+//!
+//! Realistic magnitudes, not any real unit: a 16-bit converter, an accelerometer at about
+//! 412 counts per m/s^2, a gyro at about 900 counts per rad/s, temperature drift of bias and
+//! scale, small misalignment, g-sensitivity and lever arms of a few millimetres.
+#![expect(
+    clippy::indexing_slicing,
+    reason = "fixed, in-bounds indices in example constructors; not on the device path"
+)]
+
+use super::{
+    AxisNonlinearity, BoundedVec, CalibrationData, Channel, Environment, Identity, ImuSet,
+    Quantity, Rails, Sensor, Serial, SingleSet, Span, TriadSet,
+};
+
+const G: f32 = 9.806_65;
+
+fn identity(serial: &str) -> Identity {
+    Identity {
+        serial: Serial::new(serial).unwrap_or_default(),
+        created_unix_s: 1_795_000_000,
+        data_hash: [
+            0x5a, 0x1c, 0x07, 0xe2, 0x9b, 0x44, 0x30, 0xd1, 0x6f, 0x88, 0x02, 0xa7, 0x3e, 0xc5,
+            0x91, 0x0b,
+        ],
+        tool_version: [0, 1, 0],
+    }
+}
+
+fn table<T: Clone, const N: usize>(items: &[T]) -> BoundedVec<T, N> {
+    BoundedVec::from_slice(items).unwrap_or_default()
+}
+
+fn accel_channels() -> [Channel; 3] {
+    [
+        Channel {
+            center: 32_768.0 + 341.5,
+            range: Span::new(-75.0, 75.0),
+        },
+        Channel {
+            center: 32_768.0 + 561.25,
+            range: Span::new(-75.0, 75.0),
+        },
+        Channel {
+            center: 32_768.0 + 3_659.0,
+            range: Span::new(-75.0, 75.0),
+        },
+    ]
+}
+
+fn gyro_channels() -> [Channel; 3] {
+    [
+        Channel {
+            center: 32_768.0 + 18.0,
+            range: Span::new(-35.0, 35.0),
+        },
+        Channel {
+            center: 32_768.0 - 338.5,
+            range: Span::new(-35.0, 35.0),
+        },
+        Channel {
+            center: 32_768.0 - 250.75,
+            range: Span::new(-35.0, 35.0),
+        },
+    ]
+}
+
+/// Packed Cholesky factor over `[1, u0, u1, u2]` for an output with bias sigma `b` and scale
+/// sigma `s` (relative to the nominal `scale`).
+fn triad_factor(b: f32, s: f32, scale: f32) -> [[f32; 10]; 3] {
+    let row = |i: usize| -> [f32; 10] {
+        let mut l = [0.0; 10];
+        // L00 (bias), then a small correlation of bias and own scale.
+        l[0] = b;
+        for j in 0..3 {
+            let diag = [2, 5, 9][j];
+            l[diag] = if j == i { s * scale } else { 0.2 * s * scale };
+        }
+        l[1 + i * (i + 3) / 2] = -0.1 * b / 30_000.0;
+        l
+    };
+    [row(0), row(1), row(2)]
+}
+
+fn accel_set(t: f32, nonlinear: bool) -> TriadSet {
+    let dt = t - 25.0;
+    let s = 1.0 / 412.0 * (1.0 + 80e-6 * dt);
+    let axis = |q: f32, k: f32| AxisNonlinearity {
+        quadratic: if nonlinear {
+            q * (1.0 + 0.002 * dt)
+        } else {
+            0.0
+        },
+        cubic: if nonlinear { k } else { 0.0 },
+        odd_quadratic: if nonlinear { 2.0e-8 } else { 0.0 },
+        asymmetry: if nonlinear { 4.0e-4 } else { 0.0 },
+        asymmetry_break: 0.0,
+    };
+    let matrix = [
+        [s * 1.002, s * 1.5e-3, -s * 0.8e-3],
+        [0.0, s * 0.997, s * 2.1e-3],
+        [0.0, 0.0, s * 1.004],
+    ];
+    let bias = [12.0 + 0.35 * dt, -8.0 + 0.2 * dt, 30.0 - 0.5 * dt];
+    let offset = core::array::from_fn(|i| {
+        -(matrix[i][0] * bias[0] + matrix[i][1] * bias[1] + matrix[i][2] * bias[2])
+    });
+    TriadSet {
+        axes: [
+            axis(3.0e-7, 1.0e-12),
+            axis(-2.0e-7, 0.0),
+            axis(1.5e-7, -2.0e-12),
+        ],
+        matrix,
+        offset,
+        covariance: if nonlinear {
+            Some(triad_factor(2.0e-3, 1.5e-4, s))
+        } else {
+            None
+        },
+    }
+}
+
+fn gyro_set(t: f32, nonlinear: bool) -> TriadSet {
+    let dt = t - 25.0;
+    let s = 1.0 / 900.0 * (1.0 - 120e-6 * dt);
+    let axis = |q: f32| AxisNonlinearity {
+        quadratic: if nonlinear { q } else { 0.0 },
+        cubic: if nonlinear { 4.0e-13 } else { 0.0 },
+        odd_quadratic: 0.0,
+        asymmetry: if nonlinear { -2.5e-4 } else { 0.0 },
+        asymmetry_break: if nonlinear { 40.0 } else { 0.0 },
+    };
+    let matrix = [
+        [s * 0.998, s * 3.0e-3, s * 1.0e-3],
+        [-s * 2.5e-3, s * 1.003, s * 4.0e-3],
+        [s * 1.2e-3, -s * 3.5e-3, s * 1.001],
+    ];
+    let bias = [-4.0 + 0.8 * dt, 6.0 - 0.3 * dt, 2.5 + 0.1 * dt];
+    let offset = core::array::from_fn(|i| {
+        -(matrix[i][0] * bias[0] + matrix[i][1] * bias[1] + matrix[i][2] * bias[2])
+    });
+    TriadSet {
+        axes: [axis(1.0e-7), axis(-1.2e-7), axis(0.5e-7)],
+        matrix,
+        offset,
+        covariance: if nonlinear {
+            Some(triad_factor(1.0e-3, 2.0e-4, s))
+        } else {
+            None
+        },
+    }
+}
+
+fn imu_set(t: f32, full: bool) -> ImuSet {
+    let dt = t - 25.0;
+    ImuSet {
+        accel: accel_set(t, full),
+        gyro: gyro_set(t, full),
+        g_sensitivity: if full {
+            [
+                [2.0e-4 + 1e-6 * dt, -1.0e-4, 0.5e-4],
+                [0.8e-4, 1.5e-4, -0.3e-4],
+                [-0.2e-4, 0.6e-4, 3.0e-4],
+            ]
+        } else {
+            [[0.0; 3]; 3]
+        },
+    }
+}
+
+impl CalibrationData {
+    /// A single-axis accelerometer (spin axis, +-50 g) with a 3-point temperature table and a
+    /// 2-point voltage table (bilinear), every nonlinear term and a covariance factor.
+    #[must_use]
+    pub fn example_single() -> Self {
+        let temperatures = [-40.0, 25.0, 85.0];
+        let voltages = [4.5, 5.5];
+        let mut sets = [SingleSet {
+            axis: AxisNonlinearity::LINEAR,
+            scale: 0.0,
+            offset: 0.0,
+            covariance: None,
+        }; 6];
+        for (ti, t) in temperatures.iter().enumerate() {
+            for (vi, v) in voltages.iter().enumerate() {
+                let dt = t - 25.0;
+                let dv = v - 5.0;
+                let scale = 50.0 * G / 32_000.0 * (1.0 + 60e-6 * dt + 2e-3 * dv);
+                sets[ti * 2 + vi] = SingleSet {
+                    axis: AxisNonlinearity {
+                        quadratic: 2.0e-7 + 1.0e-9 * dt,
+                        cubic: 1.0e-12,
+                        odd_quadratic: -5.0e-8,
+                        asymmetry: 1.0e-3 + 1.0e-4 * dv,
+                        asymmetry_break: 25.0,
+                    },
+                    scale,
+                    offset: -scale * (4.0 * dt + 20.0 * dv),
+                    covariance: Some([0.02, 1.0e-6, 3.0e-7]),
+                };
+            }
+        }
+        CalibrationData {
+            identity: identity("SPN-A-000123"),
+            environment: Environment {
+                temperature_span: Span::new(-40.0, 85.0),
+                voltage_span: Span::new(4.5, 5.5),
+                temperatures: table(&temperatures),
+                voltages: table(&voltages),
+            },
+            sensor: Sensor::Single {
+                quantity: Quantity::Acceleration,
+                rails: Rails::unsigned(16),
+                channel: Channel {
+                    center: 32_768.0 + 211.25,
+                    range: Span::new(-45.0 * G, 45.0 * G),
+                },
+                sets: table(&sets),
+            },
+        }
+    }
+
+    /// An accelerometer triad with 1 count = 0.01 m/s^2, small misalignment, no table.
+    #[must_use]
+    pub fn example_triad() -> Self {
+        let set = TriadSet {
+            axes: [AxisNonlinearity::LINEAR; 3],
+            matrix: [
+                [0.01, 1.0e-4, -5.0e-5],
+                [0.0, 0.0101, 8.0e-5],
+                [0.0, 0.0, 0.0099],
+            ],
+            offset: [0.0, 0.02, -0.015],
+            covariance: None,
+        };
+        let channel = Channel {
+            center: 32_768.0,
+            range: Span::new(-150.0, 150.0),
+        };
+        CalibrationData {
+            identity: identity("TRI-7"),
+            environment: Environment::fixed(Span::new(15.0, 35.0), Span::new(3.0, 3.6)),
+            sensor: Sensor::Triad {
+                quantity: Quantity::Acceleration,
+                rails: Rails::unsigned(16),
+                channels: [channel; 3],
+                sets: table(&[set]),
+            },
+        }
+    }
+
+    /// A full IMU: an 8-point temperature table from -40 to 85 C, every nonlinear term on both
+    /// triads, misalignment, g-sensitivity, lever arms and covariance factors.
+    #[must_use]
+    pub fn example_imu() -> Self {
+        Self::imu(true)
+    }
+
+    /// An IMU with bias and scale-misalignment only (no nonlinear terms, no g-sensitivity, no
+    /// lever arm), at one temperature.
+    #[must_use]
+    pub fn example_imu_linear() -> Self {
+        Self::imu(false)
+    }
+
+    fn imu(full: bool) -> Self {
+        let temperatures = [-40.0, -20.0, 0.0, 15.0, 30.0, 50.0, 70.0, 85.0];
+        let points: &[f32] = if full { &temperatures } else { &[] };
+        let sets: heapless::Vec<ImuSet, 8> = if full {
+            temperatures.iter().map(|t| imu_set(*t, true)).collect()
+        } else {
+            core::iter::once(imu_set(25.0, false)).collect()
+        };
+        CalibrationData {
+            identity: identity(if full {
+                "IMU-FULL-0042"
+            } else {
+                "IMU-LIN-0042"
+            }),
+            environment: Environment {
+                temperature_span: Span::new(-40.0, 85.0),
+                voltage_span: Span::new(3.0, 3.6),
+                temperatures: table(points),
+                voltages: BoundedVec::new(),
+            },
+            sensor: Sensor::Imu {
+                accel_rails: Rails::unsigned(16),
+                gyro_rails: Rails::unsigned(16),
+                accel: accel_channels(),
+                gyro: gyro_channels(),
+                lever_arm: if full {
+                    Some([
+                        [0.006, 0.001, -0.002],
+                        [-0.001, 0.0055, 0.0015],
+                        [0.002, -0.0025, 0.004],
+                    ])
+                } else {
+                    None
+                },
+                sets: table(&sets),
+            },
+        }
+    }
+}

@@ -1,0 +1,291 @@
+//! What a calibration is: the correction coefficients of a single axis, a triad or an IMU,
+//! tabulated over temperature and supply voltage, with the calibrated ranges, the ADC rails and
+//! the unit's identity.
+//!
+//! # The correction, per sample
+//!
+//! Raw counts `r` come in; SI values come out (m/s^2 for acceleration, rad/s for angular rate).
+//! For every axis, with `c` the axis [`Channel::center`] (the code at zero input):
+//!
+//! ```text
+//! v = r - c                                                  counts from the zero-input code
+//! u = v + q v^2 + k v^3 + o v|v| + s |v - b|                 AxisNonlinearity (q, k, o, s, b)
+//! ```
+//!
+//! `u` is the linearised output in counts. The asymmetry term `s |v - b|` gives the axis the
+//! slopes `1 + s` above the breakpoint `b` and `1 - s` below it (an asymmetric scale factor).
+//! Then, per sensor:
+//!
+//! - single axis: `y = offset + scale * u` ([`SingleSet`]);
+//! - triad: `y = M u + offset` with `M` the 3x3 scale-misalignment matrix, row-major
+//!   ([`TriadSet`]): `M` holds the scale factors (SI units per count) on its diagonal and the
+//!   misalignment off it; `offset = -M b` for a bias `b` in counts;
+//! - IMU: the accelerometer triad gives the specific force at the sensor `a_s`; the gyro triad
+//!   gives `w = M_g u_g + offset_g - G a_s` with `G` the g-sensitivity (rad/s per m/s^2,
+//!   [`ImuSet`]); then each accelerometer axis `i`, sitting at `r_i` from the reference point
+//!   (the rows of [`Sensor::Imu::lever_arm`], metres, body frame), is moved to the reference
+//!   point: `a_i = a_s,i - [w x (w x r_i) + dw/dt x r_i]_i`, with `dw/dt` the backward
+//!   difference of `w` at the corrector's sample rate.
+//!
+//! The coefficient sets are tabulated at temperature breakpoints and/or voltage breakpoints
+//! ([`Environment`]); the device interpolates them linearly (bilinearly when both tables are
+//! present) and clamps to the table's edges outside it, flagging every sample.
+
+mod bounded;
+pub mod examples;
+pub(crate) mod interval;
+mod sets;
+pub(crate) mod validate;
+
+pub use bounded::{BoundedVec, Serial};
+pub(crate) use sets::Blend;
+pub use sets::{AxisNonlinearity, ImuSet, SingleCovariance, SingleSet, TriadCovariance, TriadSet};
+
+use serde::{Deserialize, Serialize};
+
+use crate::Error;
+
+/// Most temperature breakpoints a table can have.
+pub const MAX_TEMPERATURES: usize = 16;
+/// Most voltage breakpoints a table can have.
+pub const MAX_VOLTAGES: usize = 8;
+/// Most coefficient sets a calibration can hold (temperature points x voltage points).
+pub const MAX_SETS: usize = 16;
+/// Longest serial number, in bytes.
+pub const SERIAL_CAPACITY: usize = 16;
+/// Longest lever arm accepted, in metres.
+pub const MAX_LEVER_ARM_M: f32 = 10.0;
+
+/// The physical quantity a sensor measures, and so the unit of its corrected output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Quantity {
+    /// Specific force, m/s^2.
+    Acceleration,
+    /// Angular rate, rad/s.
+    AngularRate,
+}
+
+/// A closed interval `[lo, hi]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Span {
+    /// Lower end.
+    pub lo: f32,
+    /// Upper end.
+    pub hi: f32,
+}
+
+impl Span {
+    /// The interval `[lo, hi]`.
+    #[must_use]
+    pub const fn new(lo: f32, hi: f32) -> Self {
+        Self { lo, hi }
+    }
+
+    /// True when `x` lies in `[lo, hi]` (false for NaN).
+    #[must_use]
+    pub fn contains(&self, x: f32) -> bool {
+        self.lo <= x && x <= self.hi
+    }
+}
+
+/// The ADC's limits: a sample at or beyond a rail (`raw <= lo` or `raw >= hi`) is saturated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Rails {
+    /// Lowest code; codes at or below it are saturated.
+    pub lo: i32,
+    /// Highest code; codes at or above it are saturated.
+    pub hi: i32,
+}
+
+impl Rails {
+    /// The rails of an unsigned `bits`-bit converter: `0` and `2^bits - 1`.
+    #[must_use]
+    pub const fn unsigned(bits: u32) -> Self {
+        Self {
+            lo: 0,
+            hi: ((1i64 << bits) - 1) as i32,
+        }
+    }
+
+    /// True when `raw` is at or beyond a rail.
+    #[must_use]
+    pub const fn saturated(&self, raw: i32) -> bool {
+        raw <= self.lo || raw >= self.hi
+    }
+}
+
+/// What does not change with temperature or voltage for one axis.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Channel {
+    /// The code at zero input (counts); the origin of the axis nonlinearity.
+    pub center: f32,
+    /// The calibrated input range (SI units): corrected values outside it are flagged.
+    pub range: Span,
+}
+
+/// The calibrated temperature and voltage spans, and the breakpoints of the coefficient table.
+///
+/// The table holds `nt x nv` coefficient sets, `nt = max(1, temperatures.len())` and
+/// `nv = max(1, voltages.len())`, stored temperature-major: set `t * nv + v` belongs to
+/// temperature breakpoint `t` and voltage breakpoint `v`. With no breakpoints of a kind the
+/// coefficients do not depend on that quantity; its span is still checked and flagged.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Environment {
+    /// Calibrated temperature span, degrees Celsius.
+    pub temperature_span: Span,
+    /// Calibrated supply-voltage span, volts.
+    pub voltage_span: Span,
+    /// Temperature breakpoints, strictly increasing, inside `temperature_span`.
+    pub temperatures: BoundedVec<f32, MAX_TEMPERATURES>,
+    /// Voltage breakpoints, strictly increasing, inside `voltage_span`.
+    pub voltages: BoundedVec<f32, MAX_VOLTAGES>,
+}
+
+impl Environment {
+    /// A calibration made at one temperature and voltage span with no table.
+    #[must_use]
+    pub const fn fixed(temperature_span: Span, voltage_span: Span) -> Self {
+        Self {
+            temperature_span,
+            voltage_span,
+            temperatures: BoundedVec::new(),
+            voltages: BoundedVec::new(),
+        }
+    }
+
+    /// Temperature points of the table (at least 1).
+    #[must_use]
+    pub fn temperature_points(&self) -> usize {
+        self.temperatures.len().max(1)
+    }
+
+    /// Voltage points of the table (at least 1).
+    #[must_use]
+    pub fn voltage_points(&self) -> usize {
+        self.voltages.len().max(1)
+    }
+}
+
+/// Where a calibration came from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Identity {
+    /// The unit's serial number.
+    pub serial: Serial,
+    /// When the calibration was made, seconds since 1970-01-01 UTC.
+    pub created_unix_s: u64,
+    /// The first 16 bytes of the SHA-256 of the observation data the fit used.
+    pub data_hash: [u8; 16],
+    /// Version (major, minor, patch) of the tool that made the calibration.
+    pub tool_version: [u16; 3],
+}
+
+/// The sensor, its fixed per-axis data, and its table of coefficient sets.
+#[expect(
+    clippy::large_enum_variant,
+    reason = "no allocator on the device: a calibration is one fixed-size value"
+)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Sensor {
+    /// One axis.
+    Single {
+        /// What it measures.
+        quantity: Quantity,
+        /// ADC rails.
+        rails: Rails,
+        /// Zero-input code and calibrated range.
+        channel: Channel,
+        /// One set per table point.
+        sets: BoundedVec<SingleSet, MAX_SETS>,
+    },
+    /// Three axes of one quantity (an accelerometer or a gyro triad).
+    Triad {
+        /// What it measures.
+        quantity: Quantity,
+        /// ADC rails, shared by the three axes.
+        rails: Rails,
+        /// Per axis: zero-input code and calibrated range.
+        channels: [Channel; 3],
+        /// One set per table point.
+        sets: BoundedVec<TriadSet, MAX_SETS>,
+    },
+    /// An accelerometer triad and a gyro triad sampled together.
+    Imu {
+        /// Accelerometer ADC rails.
+        accel_rails: Rails,
+        /// Gyro ADC rails.
+        gyro_rails: Rails,
+        /// Accelerometer axes.
+        accel: [Channel; 3],
+        /// Gyro axes.
+        gyro: [Channel; 3],
+        /// Row `i`: position of accelerometer axis `i` from the reference point, metres, body
+        /// frame. `None`: no size-effect correction.
+        lever_arm: Option<[[f32; 3]; 3]>,
+        /// One set per table point.
+        sets: BoundedVec<ImuSet, MAX_SETS>,
+    },
+}
+
+impl Sensor {
+    /// Number of coefficient sets.
+    #[must_use]
+    pub fn set_count(&self) -> usize {
+        match self {
+            Sensor::Single { sets, .. } => sets.len(),
+            Sensor::Triad { sets, .. } => sets.len(),
+            Sensor::Imu { sets, .. } => sets.len(),
+        }
+    }
+}
+
+/// A calibration as plain data: what the blob carries. Build one, then validate it with
+/// [`Calibration::new`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CalibrationData {
+    /// Where it came from.
+    pub identity: Identity,
+    /// Calibrated spans and table breakpoints.
+    pub environment: Environment,
+    /// The sensor and its coefficients.
+    pub sensor: Sensor,
+}
+
+/// A validated calibration: every float finite, breakpoints strictly increasing, table shape
+/// and capacities right, matrices invertible, outputs bounded inside the rails. The only ways
+/// to get one are [`Calibration::new`] and [`crate::blob::decode`].
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Calibration {
+    data: CalibrationData,
+}
+
+impl Calibration {
+    /// Validates `data`.
+    ///
+    /// # Errors
+    /// The first `Invalid*` [`Error`] found.
+    pub fn new(data: CalibrationData) -> Result<Self, Error> {
+        validate::validate(&data)?;
+        Ok(Self { data })
+    }
+
+    /// The validated data.
+    #[must_use]
+    pub const fn data(&self) -> &CalibrationData {
+        &self.data
+    }
+
+    /// Gives the data back.
+    #[must_use]
+    pub fn into_data(self) -> CalibrationData {
+        self.data
+    }
+}

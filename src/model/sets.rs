@@ -1,0 +1,203 @@
+//! Coefficient sets: what a calibration holds at one temperature and voltage point.
+
+use serde::{Deserialize, Serialize};
+
+/// Per-axis nonlinearity of the correction, in counts:
+/// `u = v + quadratic v^2 + cubic v^3 + odd_quadratic v|v| + asymmetry |v - asymmetry_break|`
+/// with `v` the raw code minus the axis center.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AxisNonlinearity {
+    /// Coefficient of `v^2` (1/count).
+    pub quadratic: f32,
+    /// Coefficient of `v^3` (1/count^2).
+    pub cubic: f32,
+    /// Coefficient of `v|v|` (1/count).
+    pub odd_quadratic: f32,
+    /// Coefficient of `|v - asymmetry_break|` (dimensionless): the slope is `1 + asymmetry`
+    /// above the breakpoint and `1 - asymmetry` below it.
+    pub asymmetry: f32,
+    /// The asymmetry breakpoint (counts from the center).
+    pub asymmetry_break: f32,
+}
+
+impl AxisNonlinearity {
+    /// No nonlinearity: `u = v`.
+    pub const LINEAR: Self = Self {
+        quadratic: 0.0,
+        cubic: 0.0,
+        odd_quadratic: 0.0,
+        asymmetry: 0.0,
+        asymmetry_break: 0.0,
+    };
+
+    /// True when every term is zero.
+    #[must_use]
+    pub fn is_linear(&self) -> bool {
+        self.quadratic == 0.0
+            && self.cubic == 0.0
+            && self.odd_quadratic == 0.0
+            && self.asymmetry == 0.0
+    }
+
+    /// The coefficients as an array, in declaration order.
+    #[must_use]
+    pub const fn to_array(&self) -> [f32; 5] {
+        [
+            self.quadratic,
+            self.cubic,
+            self.odd_quadratic,
+            self.asymmetry,
+            self.asymmetry_break,
+        ]
+    }
+}
+
+/// The packed lower-triangular Cholesky factor `L` of a covariance `C = L L'` over the features
+/// `[1, u]` of one output: the 1-sigma calibration error of the output is `|L' f|`.
+/// Layout: `[L00, L10, L11]`.
+pub type SingleCovariance = [f32; 3];
+
+/// Per output of a triad, the packed lower-triangular Cholesky factor `L` (row-major:
+/// `L00; L10 L11; L20 L21 L22; L30 L31 L32 L33`) of the covariance of that output's bias and
+/// matrix row over the features `f = [1, u0, u1, u2]` (counts): the output's 1-sigma
+/// calibration error is `|L' f|`. The uncertainty of the nonlinear terms is not included.
+pub type TriadCovariance = [[f32; 10]; 3];
+
+/// Coefficients of a single axis at one table point: `y = offset + scale * u`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SingleSet {
+    /// The axis nonlinearity.
+    pub axis: AxisNonlinearity,
+    /// Scale factor, SI units per count.
+    pub scale: f32,
+    /// Offset, SI units.
+    pub offset: f32,
+    /// Optional covariance factor (see [`SingleCovariance`]).
+    pub covariance: Option<SingleCovariance>,
+}
+
+/// Coefficients of a triad at one table point: `y = matrix * u + offset`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TriadSet {
+    /// Per-axis nonlinearity.
+    pub axes: [AxisNonlinearity; 3],
+    /// Scale-misalignment matrix, row-major, SI units per count.
+    pub matrix: [[f32; 3]; 3],
+    /// Offset, SI units (`-matrix * bias`).
+    pub offset: [f32; 3],
+    /// Optional covariance factors (see [`TriadCovariance`]).
+    pub covariance: Option<TriadCovariance>,
+}
+
+impl TriadSet {
+    /// True when no axis has a nonlinear term.
+    #[must_use]
+    pub fn is_linear(&self) -> bool {
+        self.axes.iter().all(AxisNonlinearity::is_linear)
+    }
+}
+
+/// Coefficients of an IMU at one table point.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ImuSet {
+    /// The accelerometer triad: specific force at the sensor, m/s^2.
+    pub accel: TriadSet,
+    /// The gyro triad before g-sensitivity, rad/s.
+    pub gyro: TriadSet,
+    /// Gyro g-sensitivity, row-major, rad/s per m/s^2: subtracted as `G a_s`.
+    pub g_sensitivity: [[f32; 3]; 3],
+}
+
+/// Linear interpolation of coefficient sets, field by field.
+pub(crate) trait Blend: Copy {
+    /// `self + (other - self) * t`.
+    fn blend(&self, other: &Self, t: f32) -> Self;
+}
+
+#[inline]
+fn lerp(a: f32, b: f32, t: f32) -> f32 {
+    a + (b - a) * t
+}
+
+fn lerp_array<const N: usize>(a: &[f32; N], b: &[f32; N], t: f32) -> [f32; N] {
+    let mut out = *a;
+    for (o, (x, y)) in out.iter_mut().zip(a.iter().zip(b.iter())) {
+        *o = lerp(*x, *y, t);
+    }
+    out
+}
+
+fn lerp_matrix<const R: usize, const C: usize>(
+    a: &[[f32; C]; R],
+    b: &[[f32; C]; R],
+    t: f32,
+) -> [[f32; C]; R] {
+    let mut out = *a;
+    for (o, (x, y)) in out.iter_mut().zip(a.iter().zip(b.iter())) {
+        *o = lerp_array(x, y, t);
+    }
+    out
+}
+
+impl Blend for AxisNonlinearity {
+    fn blend(&self, other: &Self, t: f32) -> Self {
+        Self {
+            quadratic: lerp(self.quadratic, other.quadratic, t),
+            cubic: lerp(self.cubic, other.cubic, t),
+            odd_quadratic: lerp(self.odd_quadratic, other.odd_quadratic, t),
+            asymmetry: lerp(self.asymmetry, other.asymmetry, t),
+            asymmetry_break: lerp(self.asymmetry_break, other.asymmetry_break, t),
+        }
+    }
+}
+
+fn blend_option<T: Copy>(a: &Option<T>, b: &Option<T>, f: impl Fn(&T, &T) -> T) -> Option<T> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(f(a, b)),
+        _ => None,
+    }
+}
+
+impl Blend for SingleSet {
+    fn blend(&self, other: &Self, t: f32) -> Self {
+        Self {
+            axis: self.axis.blend(&other.axis, t),
+            scale: lerp(self.scale, other.scale, t),
+            offset: lerp(self.offset, other.offset, t),
+            covariance: blend_option(&self.covariance, &other.covariance, |a, b| {
+                lerp_array(a, b, t)
+            }),
+        }
+    }
+}
+
+impl Blend for TriadSet {
+    fn blend(&self, other: &Self, t: f32) -> Self {
+        let mut axes = self.axes;
+        for (o, (a, b)) in axes.iter_mut().zip(self.axes.iter().zip(other.axes.iter())) {
+            *o = a.blend(b, t);
+        }
+        Self {
+            axes,
+            matrix: lerp_matrix(&self.matrix, &other.matrix, t),
+            offset: lerp_array(&self.offset, &other.offset, t),
+            covariance: blend_option(&self.covariance, &other.covariance, |a, b| {
+                lerp_matrix(a, b, t)
+            }),
+        }
+    }
+}
+
+impl Blend for ImuSet {
+    fn blend(&self, other: &Self, t: f32) -> Self {
+        Self {
+            accel: self.accel.blend(&other.accel, t),
+            gyro: self.gyro.blend(&other.gyro, t),
+            g_sensitivity: lerp_matrix(&self.g_sensitivity, &other.g_sensitivity, t),
+        }
+    }
+}

@@ -1,0 +1,371 @@
+//! The one checking gate for calibration data: after it passes, nothing in the correction can
+//! panic or produce a non-finite value for a raw code inside the rails.
+
+use super::interval::{Bound, affine_bound, axis_bound};
+use super::sets::{AxisNonlinearity, ImuSet, SingleSet, TriadSet};
+use super::{
+    BoundedVec, CalibrationData, Channel, Environment, MAX_LEVER_ARM_M, Rails, Sensor, Span,
+};
+use crate::Error;
+use crate::error::{Field, Part};
+
+/// Largest corrected magnitude a validated calibration may produce inside its rails. Far above
+/// any physical value, and small enough that the lever-arm term (`w^2 r`, `dw/dt r`) stays
+/// finite in single precision.
+pub(crate) const OUTPUT_LIMIT: f32 = 1e15;
+
+pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
+    let serial = &data.identity.serial;
+    if serial.overflowed() {
+        return Err(Error::InvalidCapacity {
+            field: Field::Serial,
+            capacity: super::SERIAL_CAPACITY,
+        });
+    }
+    let text = serial.as_str();
+    if text.is_empty() || !text.bytes().all(|b| b.is_ascii_graphic() || b == b' ') {
+        return Err(Error::InvalidSerial);
+    }
+    validate_environment(&data.environment)?;
+    let expected = data.environment.temperature_points() * data.environment.voltage_points();
+    match &data.sensor {
+        Sensor::Single {
+            rails,
+            channel,
+            sets,
+            ..
+        } => {
+            validate_rails(rails, Part::Sensor)?;
+            validate_channels(core::slice::from_ref(channel), rails, Part::Sensor)?;
+            validate_table(sets, expected)?;
+            for (i, set) in sets.iter().enumerate() {
+                validate_single_set(set, i as u8, rails, channel)?;
+            }
+            covariance_consistent(sets.iter().map(|s| s.covariance.is_some()))
+        }
+        Sensor::Triad {
+            rails,
+            channels,
+            sets,
+            ..
+        } => {
+            validate_rails(rails, Part::Sensor)?;
+            validate_channels(channels, rails, Part::Sensor)?;
+            validate_table(sets, expected)?;
+            for (i, set) in sets.iter().enumerate() {
+                validate_triad_set(set, i as u8, Part::Sensor)?;
+                let bound = triad_output_bound(set, channels, rails);
+                check_bounded(&bound, Part::Sensor, i as u8)?;
+            }
+            covariance_consistent(sets.iter().map(|s| s.covariance.is_some()))
+        }
+        Sensor::Imu {
+            accel_rails,
+            gyro_rails,
+            accel,
+            gyro,
+            lever_arm,
+            sets,
+        } => {
+            validate_rails(accel_rails, Part::Accelerometer)?;
+            validate_rails(gyro_rails, Part::Gyro)?;
+            validate_channels(accel, accel_rails, Part::Accelerometer)?;
+            validate_channels(gyro, gyro_rails, Part::Gyro)?;
+            if let Some(arm) = lever_arm {
+                validate_lever_arm(arm)?;
+            }
+            validate_table(sets, expected)?;
+            for (i, set) in sets.iter().enumerate() {
+                validate_imu_set(set, i as u8, accel, accel_rails, gyro, gyro_rails)?;
+            }
+            covariance_consistent(
+                sets.iter()
+                    .flat_map(|s| [s.accel.covariance.is_some(), s.gyro.covariance.is_some()]),
+            )
+        }
+    }
+}
+
+fn finite(
+    x: f32,
+    field: Field,
+    part: Option<Part>,
+    set: Option<u8>,
+    index: Option<u8>,
+) -> Result<(), Error> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::InvalidNonFinite {
+            field,
+            part,
+            set,
+            index,
+        })
+    }
+}
+
+fn finite_all<'a>(
+    xs: impl IntoIterator<Item = &'a f32>,
+    field: Field,
+    part: Option<Part>,
+    set: Option<u8>,
+) -> Result<(), Error> {
+    for (i, x) in xs.into_iter().enumerate() {
+        finite(*x, field, part, set, Some(i as u8))?;
+    }
+    Ok(())
+}
+
+fn validate_span(
+    span: &Span,
+    field: Field,
+    part: Option<Part>,
+    index: Option<u8>,
+) -> Result<(), Error> {
+    finite(span.lo, field, part, None, index)?;
+    finite(span.hi, field, part, None, index)?;
+    if span.lo > span.hi {
+        return Err(Error::InvalidSpanOrder { field, part, index });
+    }
+    Ok(())
+}
+
+fn validate_breakpoints<const N: usize>(
+    points: &BoundedVec<f32, N>,
+    span: &Span,
+    field: Field,
+) -> Result<(), Error> {
+    if points.overflowed() {
+        return Err(Error::InvalidCapacity { field, capacity: N });
+    }
+    finite_all(points.iter(), field, None, None)?;
+    for (i, pair) in points.windows(2).enumerate() {
+        if let [a, b] = pair
+            && b <= a
+        {
+            return Err(Error::InvalidBreakpointOrder {
+                field,
+                index: (i + 1) as u8,
+            });
+        }
+    }
+    for (i, p) in points.iter().enumerate() {
+        if !span.contains(*p) {
+            return Err(Error::InvalidBreakpointOutsideSpan {
+                field,
+                index: i as u8,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn validate_environment(env: &Environment) -> Result<(), Error> {
+    validate_span(&env.temperature_span, Field::TemperatureSpan, None, None)?;
+    validate_span(&env.voltage_span, Field::VoltageSpan, None, None)?;
+    validate_breakpoints(
+        &env.temperatures,
+        &env.temperature_span,
+        Field::TemperatureBreakpoint,
+    )?;
+    validate_breakpoints(&env.voltages, &env.voltage_span, Field::VoltageBreakpoint)
+}
+
+fn validate_rails(rails: &Rails, part: Part) -> Result<(), Error> {
+    if i64::from(rails.lo) + 1 >= i64::from(rails.hi) {
+        return Err(Error::InvalidRails { part });
+    }
+    Ok(())
+}
+
+fn validate_channels(channels: &[Channel], rails: &Rails, part: Part) -> Result<(), Error> {
+    for (i, ch) in channels.iter().enumerate() {
+        let index = Some(i as u8);
+        finite(ch.center, Field::Center, Some(part), None, index)?;
+        // The comparison is made in f64 so that rails beyond 2^24 are compared exactly.
+        let c = f64::from(ch.center);
+        if c <= f64::from(rails.lo) || c >= f64::from(rails.hi) {
+            return Err(Error::InvalidCenter {
+                part,
+                axis: i as u8,
+            });
+        }
+        validate_span(&ch.range, Field::InputRange, Some(part), index)?;
+        if ch.range.lo == ch.range.hi {
+            return Err(Error::InvalidSpanOrder {
+                field: Field::InputRange,
+                part: Some(part),
+                index,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn validate_table<T, const N: usize>(
+    sets: &BoundedVec<T, N>,
+    expected: usize,
+) -> Result<(), Error> {
+    if sets.overflowed() {
+        return Err(Error::InvalidCapacity {
+            field: Field::Sets,
+            capacity: N,
+        });
+    }
+    if sets.len() != expected {
+        return Err(Error::InvalidTableShape {
+            expected,
+            found: sets.len(),
+        });
+    }
+    Ok(())
+}
+
+fn covariance_consistent(mut present: impl Iterator<Item = bool>) -> Result<(), Error> {
+    let Some(first) = present.next() else {
+        return Ok(());
+    };
+    if present.all(|p| p == first) {
+        Ok(())
+    } else {
+        Err(Error::InvalidCovarianceIncomplete)
+    }
+}
+
+fn validate_axis(n: &AxisNonlinearity, part: Part, set: u8, axis: u8) -> Result<(), Error> {
+    let fields = [
+        (n.quadratic, Field::Quadratic),
+        (n.cubic, Field::Cubic),
+        (n.odd_quadratic, Field::OddQuadratic),
+        (n.asymmetry, Field::Asymmetry),
+        (n.asymmetry_break, Field::AsymmetryBreak),
+    ];
+    for (x, field) in fields {
+        finite(x, field, Some(part), Some(set), Some(axis))?;
+    }
+    Ok(())
+}
+
+fn validate_single_set(
+    set: &SingleSet,
+    i: u8,
+    rails: &Rails,
+    channel: &Channel,
+) -> Result<(), Error> {
+    let part = Part::Sensor;
+    validate_axis(&set.axis, part, i, 0)?;
+    finite(set.scale, Field::Scale, Some(part), Some(i), None)?;
+    finite(set.offset, Field::Offset, Some(part), Some(i), None)?;
+    if let Some(cov) = &set.covariance {
+        finite_all(cov.iter(), Field::Covariance, Some(part), Some(i))?;
+    }
+    if set.scale == 0.0 {
+        return Err(Error::InvalidSingularMatrix { part, set: i });
+    }
+    let (v_lo, v_hi) = rail_offsets(rails, channel);
+    let bound = Bound::point(set.offset).add(axis_bound(&set.axis, v_lo, v_hi).scale(set.scale));
+    check_bounded(&[bound], part, i)
+}
+
+fn validate_triad_set(set: &TriadSet, i: u8, part: Part) -> Result<(), Error> {
+    for (a, axis) in set.axes.iter().enumerate() {
+        validate_axis(axis, part, i, a as u8)?;
+    }
+    finite_all(
+        set.matrix.iter().flatten(),
+        Field::Matrix,
+        Some(part),
+        Some(i),
+    )?;
+    finite_all(set.offset.iter(), Field::Offset, Some(part), Some(i))?;
+    if let Some(cov) = &set.covariance {
+        finite_all(cov.iter().flatten(), Field::Covariance, Some(part), Some(i))?;
+    }
+    if !invertible(&set.matrix) {
+        return Err(Error::InvalidSingularMatrix { part, set: i });
+    }
+    Ok(())
+}
+
+fn validate_imu_set(
+    set: &ImuSet,
+    i: u8,
+    accel: &[Channel; 3],
+    accel_rails: &Rails,
+    gyro: &[Channel; 3],
+    gyro_rails: &Rails,
+) -> Result<(), Error> {
+    validate_triad_set(&set.accel, i, Part::Accelerometer)?;
+    validate_triad_set(&set.gyro, i, Part::Gyro)?;
+    finite_all(
+        set.g_sensitivity.iter().flatten(),
+        Field::GSensitivity,
+        Some(Part::Gyro),
+        Some(i),
+    )?;
+    let a = triad_output_bound(&set.accel, accel, accel_rails);
+    check_bounded(&a, Part::Accelerometer, i)?;
+    let mut w = triad_output_bound(&set.gyro, gyro, gyro_rails);
+    for (wi, g_row) in w.iter_mut().zip(set.g_sensitivity.iter()) {
+        *wi = wi.add(affine_bound(&g_row.map(|g| -g), 0.0, &a));
+    }
+    check_bounded(&w, Part::Gyro, i)
+}
+
+fn validate_lever_arm(arm: &[[f32; 3]; 3]) -> Result<(), Error> {
+    for (i, row) in arm.iter().enumerate() {
+        finite_all(row.iter(), Field::LeverArm, Some(Part::Accelerometer), None)?;
+        let len = libm::sqrtf(row.iter().map(|x| x * x).sum());
+        if len > MAX_LEVER_ARM_M {
+            return Err(Error::InvalidLeverArm { axis: i as u8 });
+        }
+    }
+    Ok(())
+}
+
+/// `v` at the two rails of an axis.
+pub(crate) fn rail_offsets(rails: &Rails, channel: &Channel) -> (f32, f32) {
+    (
+        rails.lo as f32 - channel.center,
+        rails.hi as f32 - channel.center,
+    )
+}
+
+/// Bound of a triad's outputs over every code inside its rails.
+fn triad_output_bound(set: &TriadSet, channels: &[Channel; 3], rails: &Rails) -> [Bound; 3] {
+    let mut u = [Bound::point(0.0); 3];
+    for ((b, n), c) in u.iter_mut().zip(&set.axes).zip(channels) {
+        let (lo, hi) = rail_offsets(rails, c);
+        *b = axis_bound(n, lo, hi);
+    }
+    let mut y = [Bound::point(0.0); 3];
+    for ((b, row), o) in y.iter_mut().zip(&set.matrix).zip(&set.offset) {
+        *b = affine_bound(row, *o, &u);
+    }
+    y
+}
+
+fn check_bounded(bounds: &[Bound], part: Part, set: u8) -> Result<(), Error> {
+    for b in bounds {
+        if !(b.is_finite()
+            && b.lo >= -OUTPUT_LIMIT
+            && b.hi <= OUTPUT_LIMIT
+            && b.mag <= OUTPUT_LIMIT)
+        {
+            return Err(Error::InvalidUnboundedOutput { part, set });
+        }
+    }
+    Ok(())
+}
+
+/// A scale-misalignment matrix is invertible when its determinant is not negligible against
+/// the product of its row lengths (Hadamard's bound): a ratio of 1 is orthogonal, 0 singular.
+pub(crate) fn invertible(m: &[[f32; 3]; 3]) -> bool {
+    let a = nalgebra::Matrix3::from_fn(|i, j| {
+        f64::from(m.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0))
+    });
+    let det = a.determinant();
+    let hadamard: f64 = a.row_iter().map(|r| r.norm()).product();
+    hadamard > 0.0 && (det / hadamard).abs() > 1e-6
+}

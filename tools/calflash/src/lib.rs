@@ -1,0 +1,2 @@
+//! `calflash`: the host half of the calibration toolchain.
+#![forbid(unsafe_code)]
