@@ -1,1 +1,6 @@
-//! Shared helpers for the host tests live in the test files; this crate has no library code.
+//! Shared by the host tests and by the QEMU test firmware's build script: the golden blobs and
+//! vectors, their text format, and the host-side computation of the expected outputs.
+#![forbid(unsafe_code)]
+
+pub mod golden;
+pub mod qemu;

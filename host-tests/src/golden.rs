@@ -1,0 +1,438 @@
+//! Golden vectors: checked-in blobs plus, per blob, a sequence of environments and raw samples
+//! with the exact `f32` outputs (as bit patterns) and flags the correction must produce.
+//!
+//! The same files are checked on the host (`tests/golden.rs`) and compiled into the QEMU test
+//! firmware (`firmware/build.rs`), so host and Cortex-M4F are held to the same bits.
+//!
+//! Vector file format, one item per line (`#` starts a comment):
+//!
+//! ```text
+//! blob imu.blob                 the blob file, relative to the vectors file
+//! kind imu 1000                 single | triad | imu <sample rate, Hz>
+//! env 41c80000 40533333         temperature and voltage as f32 bits
+//! raw 33109 ... => 3f8ccccd ... flags 00
+//! ```
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use spincal::correct::{AxisCorrector, Corrected, ImuCorrector, TriadCorrector};
+use spincal::model::{Calibration, CalibrationData, Rails, Sensor};
+
+/// The sensor kind of a case.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Kind {
+    /// Single axis.
+    Single,
+    /// Triad.
+    Triad,
+    /// IMU at a sample rate (Hz).
+    Imu(f32),
+}
+
+/// One step of a case.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// Set the environment: temperature (C), voltage (V).
+    Env(f32, f32),
+    /// Correct a raw sample; expect these output bits and flags.
+    Sample {
+        /// Raw codes.
+        raw: Vec<i32>,
+        /// Expected outputs as `f32::to_bits`.
+        expected: Vec<u32>,
+        /// Expected flag bits.
+        flags: u8,
+    },
+}
+
+/// A golden case: a blob and the steps run against it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Case {
+    /// Blob file name, relative to the golden directory.
+    pub blob: String,
+    /// Sensor kind.
+    pub kind: Kind,
+    /// Steps in order.
+    pub steps: Vec<Step>,
+}
+
+/// The directory with the golden files.
+#[must_use]
+pub fn dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("golden")
+}
+
+/// The golden cases: name, calibration, kind.
+#[must_use]
+pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
+    vec![
+        ("single", CalibrationData::example_single(), Kind::Single),
+        ("triad", CalibrationData::example_triad(), Kind::Triad),
+        ("imu", CalibrationData::example_imu(), Kind::Imu(1000.0)),
+    ]
+}
+
+/// Encodes a calibration as a blob.
+///
+/// # Panics
+/// When the data is invalid (the examples are valid).
+#[must_use]
+pub fn encode(data: &CalibrationData) -> Vec<u8> {
+    let cal = Calibration::new(data.clone()).expect("example calibration is valid");
+    let mut buf = vec![0u8; spincal::blob::MAX_BLOB_LEN];
+    let n = spincal::blob::encode(&cal, &mut buf).expect("fits");
+    buf.truncate(n);
+    buf
+}
+
+/// A small deterministic generator (64-bit LCG), so inputs never change between runs.
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> u32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 33) as u32
+    }
+
+    /// Uniform in `[lo, hi]`.
+    fn range(&mut self, lo: i64, hi: i64) -> i32 {
+        let span = (hi - lo + 1) as u64;
+        (lo + (u64::from(self.next()) % span) as i64) as i32
+    }
+}
+
+/// Raw inputs for one axis: mostly inside the calibrated range, then the edges and beyond.
+fn axis_inputs(rails: Rails, center: f32, rng: &mut Lcg, n: usize) -> Vec<i32> {
+    let c = i64::from(center.round() as i32);
+    let (lo, hi) = (i64::from(rails.lo), i64::from(rails.hi));
+    let mut v: Vec<i32> = (0..n)
+        .map(|_| rng.range((c - 6_000).max(lo + 1), (c + 6_000).min(hi - 1)))
+        .collect();
+    let extremes = [
+        rails.lo,
+        rails.hi,
+        rails.lo + 1,
+        rails.hi - 1,
+        rails.lo.saturating_sub(7),
+        rails.hi.saturating_add(1_000),
+        i32::MIN,
+        i32::MAX,
+        rng.range(lo + 1, hi - 1),
+        rng.range(lo + 1, hi - 1),
+    ];
+    v.extend_from_slice(&extremes);
+    v
+}
+
+/// Environments each case is run at: the nominal point, a table edge, between breakpoints,
+/// beyond the span, and NaN.
+fn environments(data: &CalibrationData) -> Vec<(f32, f32)> {
+    let env = &data.environment;
+    let tmid = 0.5 * (env.temperature_span.lo + env.temperature_span.hi);
+    let vmid = 0.5 * (env.voltage_span.lo + env.voltage_span.hi);
+    vec![
+        (tmid, vmid),
+        (env.temperature_span.lo, env.voltage_span.hi),
+        (
+            37.3,
+            env.voltage_span.lo + 0.37 * (env.voltage_span.hi - env.voltage_span.lo),
+        ),
+        (env.temperature_span.hi + 15.0, env.voltage_span.lo - 0.5),
+        (f32::NAN, f32::NAN),
+    ]
+}
+
+/// Raw samples for a case: per axis, `axis_inputs` shuffled across axes.
+fn samples(data: &CalibrationData, rng: &mut Lcg) -> Vec<Vec<i32>> {
+    let n = 14;
+    let columns: Vec<Vec<i32>> = match &data.sensor {
+        Sensor::Single { rails, channel, .. } => vec![axis_inputs(*rails, channel.center, rng, n)],
+        Sensor::Triad {
+            rails, channels, ..
+        } => channels
+            .iter()
+            .map(|c| axis_inputs(*rails, c.center, rng, n))
+            .collect(),
+        Sensor::Imu {
+            accel_rails,
+            gyro_rails,
+            accel,
+            gyro,
+            ..
+        } => {
+            let mut cols: Vec<Vec<i32>> = accel
+                .iter()
+                .map(|c| axis_inputs(*accel_rails, c.center, rng, n))
+                .collect();
+            cols.extend(
+                gyro.iter()
+                    .map(|c| axis_inputs(*gyro_rails, c.center, rng, n)),
+            );
+            cols
+        }
+    };
+    let axes = columns.len();
+    let extremes = columns[0].len() - n;
+    let in_range = |i: usize| -> Vec<i32> { columns.iter().map(|c| c[i % n]).collect() };
+    let mut rows: Vec<Vec<i32>> = (0..n).map(in_range).collect();
+    // Each extreme alone on each axis, the others inside the range...
+    for e in 0..extremes {
+        for a in 0..axes {
+            let mut row = in_range(e + a);
+            row[a] = columns[a][n + e];
+            rows.push(row);
+        }
+    }
+    // ...and all axes at extremes together, rotated so each axis meets each extreme.
+    for e in 0..extremes {
+        rows.push(
+            columns
+                .iter()
+                .enumerate()
+                .map(|(a, c)| c[n + (e + a) % extremes])
+                .collect(),
+        );
+    }
+    rows
+}
+
+/// Runs a case's inputs through the host build of the correction and records the outputs.
+///
+/// # Panics
+/// When the data does not fit the kind.
+#[must_use]
+pub fn compute(data: &CalibrationData, kind: Kind, blob: &str) -> Case {
+    let cal = Calibration::new(data.clone()).expect("valid");
+    let mut rng = Lcg(0x5eed_0000_0000_0001);
+    let inputs = samples(data, &mut rng);
+    let mut steps = Vec::new();
+    let mut runner = Runner::new(&cal, kind);
+    for (t, v) in environments(data) {
+        steps.push(Step::Env(t, v));
+        runner.set_environment(t, v);
+        for raw in &inputs {
+            let (values, flags) = runner.correct(raw);
+            steps.push(Step::Sample {
+                raw: raw.clone(),
+                expected: values.iter().map(|x| x.to_bits()).collect(),
+                flags,
+            });
+        }
+    }
+    Case {
+        blob: blob.to_string(),
+        kind,
+        steps,
+    }
+}
+
+/// Any of the three correctors behind one interface.
+pub enum Runner<'a> {
+    /// Single axis.
+    Single(AxisCorrector<'a>),
+    /// Triad.
+    Triad(TriadCorrector<'a>),
+    /// IMU.
+    Imu(ImuCorrector<'a>),
+}
+
+impl<'a> Runner<'a> {
+    /// The corrector for `kind`.
+    ///
+    /// # Panics
+    /// When the calibration does not fit the kind.
+    #[must_use]
+    pub fn new(cal: &'a Calibration, kind: Kind) -> Self {
+        match kind {
+            Kind::Single => Self::Single(AxisCorrector::new(cal).expect("single")),
+            Kind::Triad => Self::Triad(TriadCorrector::new(cal).expect("triad")),
+            Kind::Imu(rate) => Self::Imu(ImuCorrector::new(cal, rate).expect("imu")),
+        }
+    }
+
+    /// Sets the environment.
+    pub fn set_environment(&mut self, t: f32, v: f32) {
+        match self {
+            Self::Single(c) => c.set_environment(t, v),
+            Self::Triad(c) => c.set_environment(t, v),
+            Self::Imu(c) => c.set_environment(t, v),
+        }
+    }
+
+    /// Corrects one sample given as a slice of the right length.
+    ///
+    /// # Panics
+    /// On a wrong length.
+    pub fn correct(&mut self, raw: &[i32]) -> (Vec<f32>, u8) {
+        fn parts<const N: usize>(c: Corrected<N>) -> (Vec<f32>, u8) {
+            (c.values.to_vec(), c.flags.bits())
+        }
+        match self {
+            Self::Single(c) => parts(c.correct(raw[0])),
+            Self::Triad(c) => parts(c.correct(raw.try_into().expect("3 codes"))),
+            Self::Imu(c) => parts(c.correct(raw.try_into().expect("6 codes"))),
+        }
+    }
+}
+
+/// Renders a case in the vector file format.
+#[must_use]
+pub fn render(case: &Case) -> String {
+    let mut s = String::from(
+        "# spincal golden vectors: regenerate with SPINCAL_ACCEPT=1 cargo test -p host-tests --test golden\n",
+    );
+    writeln!(s, "blob {}", case.blob).unwrap();
+    match case.kind {
+        Kind::Single => writeln!(s, "kind single").unwrap(),
+        Kind::Triad => writeln!(s, "kind triad").unwrap(),
+        Kind::Imu(rate) => writeln!(s, "kind imu {rate}").unwrap(),
+    }
+    for step in &case.steps {
+        match step {
+            Step::Env(t, v) => {
+                writeln!(
+                    s,
+                    "env {:08x} {:08x}  # {t} C, {v} V",
+                    t.to_bits(),
+                    v.to_bits()
+                )
+                .unwrap();
+            }
+            Step::Sample {
+                raw,
+                expected,
+                flags,
+            } => {
+                let raw: Vec<String> = raw.iter().map(ToString::to_string).collect();
+                let out: Vec<String> = expected.iter().map(|b| format!("{b:08x}")).collect();
+                let dec: Vec<String> = expected
+                    .iter()
+                    .map(|b| format!("{:.6e}", f32::from_bits(*b)))
+                    .collect();
+                writeln!(
+                    s,
+                    "raw {} => {} flags {flags:02x}  # {}",
+                    raw.join(" "),
+                    out.join(" "),
+                    dec.join(" ")
+                )
+                .unwrap();
+            }
+        }
+    }
+    s
+}
+
+/// A parse failure: the line (1-based) and what was wrong.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParseError {
+    /// Line number.
+    pub line: usize,
+    /// What was expected.
+    pub message: String,
+}
+
+impl std::fmt::Display for ParseError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "line {}: {}", self.line, self.message)
+    }
+}
+
+/// Parses the vector file format.
+///
+/// # Errors
+/// The first malformed line.
+pub fn parse(text: &str) -> Result<Case, ParseError> {
+    let mut blob = None;
+    let mut kind = None;
+    let mut steps = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let err = |message: &str| ParseError {
+            line: i + 1,
+            message: message.to_string(),
+        };
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let mut words = line.split_whitespace();
+        let hex = |w: Option<&str>| {
+            w.and_then(|w| u32::from_str_radix(w, 16).ok())
+                .ok_or_else(|| err("expected 8 hex digits"))
+        };
+        match words.next() {
+            Some("blob") => {
+                blob = Some(
+                    words
+                        .next()
+                        .ok_or_else(|| err("blob needs a file name"))?
+                        .to_string(),
+                )
+            }
+            Some("kind") => {
+                kind = Some(match (words.next(), words.next()) {
+                    (Some("single"), None) => Kind::Single,
+                    (Some("triad"), None) => Kind::Triad,
+                    (Some("imu"), Some(rate)) => Kind::Imu(
+                        rate.parse()
+                            .map_err(|_| err("imu needs a sample rate in Hz"))?,
+                    ),
+                    _ => return Err(err("kind is single, triad or imu <rate>")),
+                });
+            }
+            Some("env") => {
+                let t = f32::from_bits(hex(words.next())?);
+                let v = f32::from_bits(hex(words.next())?);
+                steps.push(Step::Env(t, v));
+            }
+            Some("raw") => {
+                let mut raw = Vec::new();
+                for w in words.by_ref() {
+                    if w == "=>" {
+                        break;
+                    }
+                    raw.push(w.parse().map_err(|_| err("raw codes are integers"))?);
+                }
+                let mut expected = Vec::new();
+                let mut flags = None;
+                while let Some(w) = words.next() {
+                    if w == "flags" {
+                        flags = Some(
+                            words
+                                .next()
+                                .and_then(|f| u8::from_str_radix(f, 16).ok())
+                                .ok_or_else(|| err("flags needs 2 hex digits"))?,
+                        );
+                        break;
+                    }
+                    expected.push(hex(Some(w))?);
+                }
+                if expected.len() != raw.len() {
+                    return Err(err("as many outputs as raw codes are expected"));
+                }
+                let flags = flags.ok_or_else(|| err("missing flags"))?;
+                steps.push(Step::Sample {
+                    raw,
+                    expected,
+                    flags,
+                });
+            }
+            _ => return Err(err("a line starts with blob, kind, env or raw")),
+        }
+    }
+    Ok(Case {
+        blob: blob.ok_or(ParseError {
+            line: 0,
+            message: "no blob line".into(),
+        })?,
+        kind: kind.ok_or(ParseError {
+            line: 0,
+            message: "no kind line".into(),
+        })?,
+        steps,
+    })
+}

@@ -1,0 +1,89 @@
+//! Golden byte vectors of three blobs and the correction outputs they must produce.
+//!
+//! A format or arithmetic change shows up here as a diff of checked-in files; accept a
+//! deliberate change with `SPINCAL_ACCEPT=1 cargo test -p host-tests --test golden` and commit
+//! the files. The QEMU test (`tests/qemu.rs`) holds the Cortex-M4F to the same vectors.
+
+use host_tests::golden::{self, Step};
+use spincal::blob;
+
+fn accept() -> bool {
+    std::env::var("SPINCAL_ACCEPT").is_ok_and(|v| v == "1")
+}
+
+#[test]
+fn blobs_match_their_golden_bytes() {
+    for (name, data, _) in golden::examples() {
+        let bytes = golden::encode(&data);
+        let path = golden::dir().join(format!("{name}.blob"));
+        if accept() {
+            std::fs::write(&path, &bytes).unwrap();
+        }
+        let stored = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert_eq!(
+            bytes,
+            stored,
+            "{name}: encoding differs from {}",
+            path.display()
+        );
+        let decoded = blob::decode(&stored).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(
+            decoded.data(),
+            &data,
+            "{name}: golden blob decodes to other data"
+        );
+    }
+}
+
+#[test]
+fn vectors_match_the_host_correction() {
+    for (name, data, kind) in golden::examples() {
+        let case = golden::compute(&data, kind, &format!("{name}.blob"));
+        let path = golden::dir().join(format!("{name}.vectors"));
+        if accept() {
+            std::fs::write(&path, golden::render(&case)).unwrap();
+        }
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let stored = golden::parse(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert_eq!(stored.kind, case.kind);
+        assert_eq!(stored.steps.len(), case.steps.len(), "{name}: step count");
+        for (i, (got, want)) in case.steps.iter().zip(&stored.steps).enumerate() {
+            match (got, want) {
+                (Step::Env(a, b), Step::Env(c, d)) => {
+                    assert_eq!(
+                        (a.to_bits(), b.to_bits()),
+                        (c.to_bits(), d.to_bits()),
+                        "{name} step {i}"
+                    );
+                }
+                _ => assert_eq!(got, want, "{name} step {i}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn vectors_cover_every_flag() {
+    let mut seen = 0u8;
+    let mut clean = 0;
+    for (name, _, _) in golden::examples() {
+        let text = std::fs::read_to_string(golden::dir().join(format!("{name}.vectors"))).unwrap();
+        for step in golden::parse(&text).unwrap().steps {
+            if let Step::Sample { flags, .. } = step {
+                seen |= flags;
+                clean += usize::from(flags == 0);
+            }
+        }
+    }
+    // Everything but NO_CALIBRATION (the identity fallback has no blob).
+    assert_eq!(seen, 0b10_1111, "flags seen: {seen:#08b}");
+    assert!(clean > 100, "only {clean} clean samples");
+}
+
+#[test]
+fn parse_reports_the_line() {
+    let err = golden::parse("blob a.blob\nkind triad\nraw 1 2 3 => 0 0 zz flags 00\n").unwrap_err();
+    assert_eq!(err.line, 3);
+    assert!(err.message.contains("hex"), "{err}");
+}

@@ -1,0 +1,46 @@
+//! The golden vectors on the Cortex-M4F: builds the test firmware for thumbv7em-none-eabihf,
+//! runs it under qemu-system-arm (mps2-an386) and fails on any mismatch with the host's
+//! expected outputs. Skips with a notice when QEMU or the target is missing, unless
+//! `SPINCAL_REQUIRE_QEMU=1` (as in CI).
+
+use std::time::Duration;
+
+use host_tests::qemu;
+
+#[test]
+fn golden_vectors_match_on_cortex_m4f() {
+    if !qemu::available_or_skip("golden_vectors_match_on_cortex_m4f") {
+        return;
+    }
+    let bin = qemu::build_firmware().unwrap_or_else(|e| panic!("{e}"));
+    let run = qemu::run(&bin.join("golden"), &[], Duration::from_secs(120)).expect("qemu starts");
+    println!("{}", run.stdout);
+    assert_eq!(
+        run.code,
+        Some(0),
+        "firmware reported failures:\n{}\n{}",
+        run.stdout,
+        run.stderr
+    );
+    let summary = run
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("golden:"))
+        .expect("summary line");
+    assert!(summary.ends_with(" 0 mismatches"), "{summary}");
+    // Every sample of every vector file was checked on the device.
+    let expected: usize = ["single", "triad", "imu"]
+        .iter()
+        .map(|n| {
+            std::fs::read_to_string(host_tests::golden::dir().join(format!("{n}.vectors")))
+                .unwrap()
+                .lines()
+                .filter(|l| l.starts_with("raw "))
+                .count()
+        })
+        .sum();
+    assert!(
+        summary.contains(&format!(" {expected} samples checked")),
+        "{summary}"
+    );
+}
