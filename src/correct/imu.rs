@@ -2,21 +2,18 @@
 //! g-sensitivity and the accelerometer size effect (lever arm).
 
 use super::environment::effective_set;
-use super::kernel::{TriadKernel, affine, all_linear, range_bounds};
+use super::kernel::{Shape, TriadKernel, affine, range_bounds};
 use super::{Corrected, Flags, factor_norm};
 use crate::Error;
 use crate::model::interval::{Bound, affine_bound};
 use crate::model::{Calibration, Channel, Environment, ImuSet, Rails, Sensor, TriadCovariance};
 
+/// The per-sample arithmetic: the axis [`Shape`] (with g-sensitivity whenever it is not
+/// `Linear`) and whether the lever arm is applied.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mode {
-    Identity,
-    /// Bias and scale-misalignment only.
-    Linear,
-    /// Nonlinear terms and g-sensitivity, no lever arm.
-    Full,
-    /// Everything, lever arm included.
-    FullLever,
+struct Mode {
+    shape: Shape,
+    lever: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -77,16 +74,20 @@ impl<'a> ImuCorrector<'a> {
         if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
             return Err(Error::CorrectorBadSampleRate);
         }
-        let linear = sets.iter().all(|s| {
-            all_linear(&s.accel.axes)
-                && all_linear(&s.gyro.axes)
-                && s.g_sensitivity.iter().flatten().all(|g| *g == 0.0)
-        });
-        let mode = match (lever_arm, linear) {
-            (Some(_), _) => Mode::FullLever,
-            (None, true) => Mode::Linear,
-            (None, false) => Mode::Full,
+        let shape = Shape::of(
+            sets.iter()
+                .flat_map(|s| s.accel.axes.iter().chain(&s.gyro.axes)),
+        );
+        let g_sensitive = sets
+            .iter()
+            .any(|s| s.g_sensitivity.iter().flatten().any(|g| *g != 0.0));
+        let lever = lever_arm.is_some();
+        // g-sensitivity and the lever arm ride on the nonlinear path.
+        let shape = match shape {
+            Shape::Linear if g_sensitive || lever => Shape::Polynomial,
+            other => other,
         };
+        let mode = Mode { shape, lever };
         let lever = lever_arm.unwrap_or([[0.0; 3]; 3]);
         let mut out = Self {
             source: Some(Source {
@@ -119,7 +120,10 @@ impl<'a> ImuCorrector<'a> {
     pub const fn identity() -> Self {
         Self {
             source: None,
-            mode: Mode::Identity,
+            mode: Mode {
+                shape: Shape::Identity,
+                lever: false,
+            },
             accel: TriadKernel::IDENTITY,
             gyro: TriadKernel::IDENTITY,
             limits: [0; 2],
@@ -153,7 +157,7 @@ impl<'a> ImuCorrector<'a> {
             .map(|row| affine_bound(&row.map(|g| -g), 0.0, &a));
         self.gyro = TriadKernel::new(&set.gyro, src.gyro, &src.gyro_rails, &g_term);
         self.limits = [self.accel.limit, self.gyro.limit];
-        if self.mode == Mode::FullLever && !self.primed {
+        if self.mode.lever && !self.primed {
             self.accel.limit = 0;
         }
         self.g = set.g_sensitivity;
@@ -165,7 +169,7 @@ impl<'a> ImuCorrector<'a> {
     /// derivative is unknown and flagged.
     pub fn reset(&mut self) {
         self.primed = false;
-        if self.mode == Mode::FullLever {
+        if self.mode.lever {
             self.accel.limit = 0;
         }
     }
@@ -180,25 +184,49 @@ impl<'a> ImuCorrector<'a> {
     #[must_use]
     #[inline]
     pub fn correct(&mut self, raw: [i32; 6]) -> Corrected<6> {
-        match self.mode {
-            Mode::Linear => self.step::<false, false>(raw),
-            Mode::Full => self.step::<true, false>(raw),
-            Mode::FullLever => self.step::<true, true>(raw),
-            Mode::Identity => self.identity_step(raw),
+        let mut out = Corrected::default();
+        let o = &mut out;
+        match (self.mode.shape, self.mode.lever) {
+            (Shape::Linear, _) => self.step::<false, false, false>(raw, o),
+            (Shape::Polynomial, false) => self.step::<true, false, false>(raw, o),
+            (Shape::Polynomial, true) => self.step::<true, false, true>(raw, o),
+            (Shape::Asymmetric, false) => self.step::<true, true, false>(raw, o),
+            (Shape::Asymmetric, true) => self.step::<true, true, true>(raw, o),
+            (Shape::Identity, _) => *o = self.passthrough(raw),
         }
+        out
     }
 
     /// Corrects `raw` into `out`, in order, and returns how many samples were corrected.
     pub fn correct_batch(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
         let pairs = raw.iter().zip(out.iter_mut());
         let n = pairs.len();
-        match self.mode {
-            Mode::Linear => pairs.for_each(|(r, o)| *o = self.step::<false, false>(*r)),
-            Mode::Full => pairs.for_each(|(r, o)| *o = self.step::<true, false>(*r)),
-            Mode::FullLever => pairs.for_each(|(r, o)| *o = self.step::<true, true>(*r)),
-            Mode::Identity => pairs.for_each(|(r, o)| *o = self.identity_step(*r)),
+        let Mode { shape, lever } = self.mode;
+        match (shape, lever) {
+            (Shape::Linear, _) => pairs.for_each(|(r, o)| self.step::<false, false, false>(*r, o)),
+            (Shape::Polynomial, false) => {
+                pairs.for_each(|(r, o)| self.step::<true, false, false>(*r, o));
+            }
+            (Shape::Polynomial, true) => {
+                pairs.for_each(|(r, o)| self.step::<true, false, true>(*r, o));
+            }
+            (Shape::Asymmetric, false) => {
+                pairs.for_each(|(r, o)| self.step::<true, true, false>(*r, o));
+            }
+            (Shape::Asymmetric, true) => {
+                pairs.for_each(|(r, o)| self.step::<true, true, true>(*r, o));
+            }
+            (Shape::Identity, _) => pairs.for_each(|(r, o)| *o = self.passthrough(*r)),
         }
         n
+    }
+
+    #[inline(always)]
+    fn passthrough(&self, raw: [i32; 6]) -> Corrected<6> {
+        Corrected {
+            values: raw.map(|x| x as f32),
+            flags: self.env_flags,
+        }
     }
 
     /// The 1-sigma calibration error of each output for `raw` at the current environment
@@ -210,7 +238,7 @@ impl<'a> ImuCorrector<'a> {
         let (ra, rg) = split(raw);
         let features = |k: &TriadKernel, r: [i32; 3]| {
             let (w, _) = k.offsets(k.clamp(r));
-            let [u0, u1, u2] = k.linearized(w);
+            let [u0, u1, u2] = k.linearized::<true>(w);
             [1.0, u0, u1, u2]
         };
         let fa = features(&self.accel, ra);
@@ -220,26 +248,30 @@ impl<'a> ImuCorrector<'a> {
         Some([a0, a1, a2, g0, g1, g2])
     }
 
-    /// Specific force at the sensor and the corrected rate.
+    /// Specific force at the sensor and the corrected rate (with g-sensitivity on the
+    /// nonlinear path).
     #[inline(always)]
-    fn triads<const FULL: bool>(&self, wa: [i32; 3], wg: [i32; 3]) -> ([f32; 3], [f32; 3]) {
-        if FULL {
-            let a = self.accel.nonlinear(wa);
-            let w0 = self.gyro.nonlinear(wg);
-            let [g0, g1, g2] = &self.g;
-            let [n0, n1, n2] = [g0.map(|g| -g), g1.map(|g| -g), g2.map(|g| -g)];
-            let [o0, o1, o2] = w0;
-            (
-                a,
-                [
-                    affine(&n0, o0, &a),
-                    affine(&n1, o1, &a),
-                    affine(&n2, o2, &a),
-                ],
-            )
-        } else {
-            (self.accel.linear(wa), self.gyro.linear(wg))
+    fn triads<const NONLINEAR: bool, const ASYM: bool>(
+        &self,
+        wa: [i32; 3],
+        wg: [i32; 3],
+    ) -> ([f32; 3], [f32; 3]) {
+        let a = self.accel.outputs::<NONLINEAR, ASYM>(wa);
+        let w = self.gyro.outputs::<NONLINEAR, ASYM>(wg);
+        if !NONLINEAR {
+            return (a, w);
         }
+        let [g0, g1, g2] = &self.g;
+        let [n0, n1, n2] = [g0.map(|g| -g), g1.map(|g| -g), g2.map(|g| -g)];
+        let [o0, o1, o2] = w;
+        (
+            a,
+            [
+                affine(&n0, o0, &a),
+                affine(&n1, o1, &a),
+                affine(&n2, o2, &a),
+            ],
+        )
     }
 
     /// Moves the specific force from each accelerometer axis to the reference point.
@@ -263,35 +295,41 @@ impl<'a> ImuCorrector<'a> {
     }
 
     #[inline(always)]
-    fn step<const FULL: bool, const LEVER: bool>(&mut self, raw: [i32; 6]) -> Corrected<6> {
+    fn step<const NONLINEAR: bool, const ASYM: bool, const LEVER: bool>(
+        &mut self,
+        raw: [i32; 6],
+        out: &mut Corrected<6>,
+    ) {
         let (ra, rg) = split(raw);
         let (wa, acc_a) = self.accel.offsets(ra);
         let (wg, acc_g) = self.gyro.offsets(rg);
-        let (a, w) = self.triads::<FULL>(wa, wg);
         if (acc_a < self.accel.limit) & (acc_g < self.gyro.limit) {
+            let (a, w) = self.triads::<NONLINEAR, ASYM>(wa, wg);
             let a = if LEVER {
-                let out = self.lever_arm(a, w, self.prev_rate);
+                let moved = self.lever_arm(a, w, self.prev_rate);
                 self.prev_rate = w;
-                out
+                moved
             } else {
                 a
             };
-            Corrected {
-                values: join(a, w),
-                flags: self.env_flags,
-            }
+            out.values = join(a, w);
+            out.flags = self.env_flags;
         } else {
-            self.slow::<FULL, LEVER>(raw)
+            self.slow::<NONLINEAR, ASYM, LEVER>(raw, out);
         }
     }
 
     #[cold]
     #[inline(never)]
-    fn slow<const FULL: bool, const LEVER: bool>(&mut self, raw: [i32; 6]) -> Corrected<6> {
+    fn slow<const NONLINEAR: bool, const ASYM: bool, const LEVER: bool>(
+        &mut self,
+        raw: [i32; 6],
+        out: &mut Corrected<6>,
+    ) {
         let (ra, rg) = split(raw);
         let (wa, _) = self.accel.offsets(self.accel.clamp(ra));
         let (wg, _) = self.gyro.offsets(self.gyro.clamp(rg));
-        let (a, w) = self.triads::<FULL>(wa, wg);
+        let (a, w) = self.triads::<NONLINEAR, ASYM>(wa, wg);
         let mut flags = self
             .env_flags
             .with_if(
@@ -310,24 +348,14 @@ impl<'a> ImuCorrector<'a> {
                 self.accel.limit = la;
                 flags |= Flags::RATE_DERIVATIVE_UNKNOWN;
             }
-            let out = self.lever_arm(a, w, self.prev_rate);
+            let moved = self.lever_arm(a, w, self.prev_rate);
             self.prev_rate = w;
-            out
+            moved
         } else {
             a
         };
-        Corrected {
-            values: join(a, w),
-            flags,
-        }
-    }
-
-    #[inline(always)]
-    fn identity_step(&self, raw: [i32; 6]) -> Corrected<6> {
-        Corrected {
-            values: raw.map(|r| r as f32),
-            flags: self.env_flags,
-        }
+        out.values = join(a, w);
+        out.flags = flags;
     }
 }
 

@@ -20,12 +20,15 @@ use crate::model::{AxisNonlinearity, Channel, Rails, TriadSet};
 const MAX_WINDOW_BITS: u32 = 24;
 
 /// Per-axis linearisation: `u = v + v (v (q + k v) + o |v|) + s |v - b|` with `v = w - delta`.
+/// Without `ASYM` the asymmetry term is left out (the corrector only does so when every
+/// coefficient set has `s = 0`).
 #[inline(always)]
-pub(crate) fn linearize(n: &[f32; 5], delta: f32, w: i32) -> f32 {
+pub(crate) fn linearize<const ASYM: bool>(n: &[f32; 5], delta: f32, w: i32) -> f32 {
     let [q, k, o, s, b] = *n;
     let v = w as f32 - delta;
     let inner = v * (q + k * v) + o * v.abs();
-    v + v * inner + s * (v - b).abs()
+    let u = v + v * inner;
+    if ASYM { u + s * (v - b).abs() } else { u }
 }
 
 /// `offset + row . u`, accumulated left to right (one multiply-accumulate per term).
@@ -138,7 +141,7 @@ impl TriadKernel {
 
     /// Outputs for a triad with no nonlinear terms.
     #[inline(always)]
-    pub fn linear(&self, w: [i32; 3]) -> [f32; 3] {
+    fn linear(&self, w: [i32; 3]) -> [f32; 3] {
         let u = w.map(|x| x as f32);
         let [r0, r1, r2] = &self.m;
         let [o0, o1, o2] = self.off_lin;
@@ -147,21 +150,25 @@ impl TriadKernel {
 
     /// Linearised per-axis outputs `u` (counts from the center).
     #[inline(always)]
-    pub fn linearized(&self, w: [i32; 3]) -> [f32; 3] {
+    pub fn linearized<const ASYM: bool>(&self, w: [i32; 3]) -> [f32; 3] {
         let [w0, w1, w2] = w;
         let [n0, n1, n2] = &self.nl;
         let [d0, d1, d2] = self.delta;
         [
-            linearize(n0, d0, w0),
-            linearize(n1, d1, w1),
-            linearize(n2, d2, w2),
+            linearize::<ASYM>(n0, d0, w0),
+            linearize::<ASYM>(n1, d1, w1),
+            linearize::<ASYM>(n2, d2, w2),
         ]
     }
 
-    /// Outputs with the nonlinear terms.
+    /// Outputs: with the nonlinear terms when `NONLINEAR` (and the asymmetry term when `ASYM`),
+    /// else bias and matrix only.
     #[inline(always)]
-    pub fn nonlinear(&self, w: [i32; 3]) -> [f32; 3] {
-        let u = self.linearized(w);
+    pub fn outputs<const NONLINEAR: bool, const ASYM: bool>(&self, w: [i32; 3]) -> [f32; 3] {
+        if !NONLINEAR {
+            return self.linear(w);
+        }
+        let u = self.linearized::<ASYM>(w);
         let [r0, r1, r2] = &self.m;
         let [o0, o1, o2] = self.off;
         [affine(r0, o0, &u), affine(r1, o1, &u), affine(r2, o2, &u)]
@@ -254,9 +261,33 @@ pub(crate) fn search_window<const N: usize>(
     }
 }
 
-/// True when no axis of the set has a nonlinear term.
-pub(crate) fn all_linear(axes: &[AxisNonlinearity]) -> bool {
-    axes.iter().all(AxisNonlinearity::is_linear)
+/// Which arithmetic a corrector's per-sample path needs, decided once from all the coefficient
+/// sets of a calibration: the fewer terms, the shorter the path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Shape {
+    /// No calibration: raw codes out.
+    Identity,
+    /// Bias and matrix only.
+    Linear,
+    /// Polynomial terms, no asymmetry.
+    Polynomial,
+    /// Polynomial and asymmetry terms.
+    Asymmetric,
+}
+
+impl Shape {
+    /// The shape that covers every axis in `axes`.
+    pub fn of<'a>(axes: impl IntoIterator<Item = &'a AxisNonlinearity>) -> Self {
+        axes.into_iter().fold(Shape::Linear, |shape, a| {
+            if a.asymmetry != 0.0 {
+                Shape::Asymmetric
+            } else if !a.is_linear() && shape == Shape::Linear {
+                Shape::Polynomial
+            } else {
+                shape
+            }
+        })
+    }
 }
 
 #[cfg(test)]
@@ -289,7 +320,7 @@ mod tests {
         // Every code in the window maps inside the range, the first one outside may not.
         let (w, acc) = k.offsets([32_768 + 8_191, 32_768 - 8_192, 32_768]);
         assert!(acc < k.limit);
-        let edge = k.linear(w);
+        let edge = k.outputs::<false, false>(w);
         assert!(!k.out_of_range(&edge));
         assert!((edge[0] - 81.91).abs() < 1e-4 && (edge[1] + 81.92).abs() < 1e-4);
         let (_, acc) = k.offsets([32_768 + 8_192, 32_768, 32_768]);

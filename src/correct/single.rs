@@ -1,18 +1,11 @@
 //! The single-axis corrector.
 
 use super::environment::effective_set;
-use super::kernel::{linearize, search_window};
+use super::kernel::{Shape, linearize, search_window};
 use super::{Corrected, Flags, factor_norm};
 use crate::Error;
 use crate::model::interval::{Bound, axis_bound};
 use crate::model::{Calibration, Channel, Environment, Rails, Sensor, SingleCovariance, SingleSet};
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mode {
-    Identity,
-    Linear,
-    Nonlinear,
-}
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct AxisKernel {
@@ -70,9 +63,9 @@ impl AxisKernel {
     }
 
     #[inline(always)]
-    fn value<const NONLINEAR: bool>(&self, w: i32) -> f32 {
+    fn value<const NONLINEAR: bool, const ASYM: bool>(&self, w: i32) -> f32 {
         if NONLINEAR {
-            self.off + self.scale * linearize(&self.nl, self.delta, w)
+            self.off + self.scale * linearize::<ASYM>(&self.nl, self.delta, w)
         } else {
             self.off_lin + self.scale * w as f32
         }
@@ -83,7 +76,7 @@ impl AxisKernel {
 #[derive(Debug, Clone)]
 pub struct AxisCorrector<'a> {
     source: Option<(&'a Environment, &'a [SingleSet], &'a Channel, Rails)>,
-    mode: Mode,
+    shape: Shape,
     kernel: AxisKernel,
     env_flags: Flags,
     covariance: Option<SingleCovariance>,
@@ -105,14 +98,9 @@ impl<'a> AxisCorrector<'a> {
         else {
             return Err(Error::CorrectorWrongSensor);
         };
-        let linear = sets.iter().all(|s| s.axis.is_linear());
         let mut out = Self {
             source: Some((&data.environment, sets, channel, *rails)),
-            mode: if linear {
-                Mode::Linear
-            } else {
-                Mode::Nonlinear
-            },
+            shape: Shape::of(sets.iter().map(|s| &s.axis)),
             kernel: AxisKernel::IDENTITY,
             env_flags: Flags::NONE,
             covariance: None,
@@ -127,7 +115,7 @@ impl<'a> AxisCorrector<'a> {
     pub const fn identity() -> Self {
         Self {
             source: None,
-            mode: Mode::Identity,
+            shape: Shape::Identity,
             kernel: AxisKernel::IDENTITY,
             env_flags: Flags::NO_CALIBRATION,
             covariance: None,
@@ -159,21 +147,20 @@ impl<'a> AxisCorrector<'a> {
     #[must_use]
     #[inline]
     pub fn correct(&self, raw: i32) -> Corrected<1> {
-        match self.mode {
-            Mode::Linear => self.step::<false>(raw),
-            Mode::Nonlinear => self.step::<true>(raw),
-            Mode::Identity => self.identity_step(raw),
-        }
+        let mut out = Corrected::default();
+        self.correct_batch(core::slice::from_ref(&raw), core::slice::from_mut(&mut out));
+        out
     }
 
     /// Corrects `raw` into `out` and returns how many samples were corrected.
     pub fn correct_batch(&self, raw: &[i32], out: &mut [Corrected<1>]) -> usize {
         let pairs = raw.iter().zip(out.iter_mut());
         let n = pairs.len();
-        match self.mode {
-            Mode::Linear => pairs.for_each(|(r, o)| *o = self.step::<false>(*r)),
-            Mode::Nonlinear => pairs.for_each(|(r, o)| *o = self.step::<true>(*r)),
-            Mode::Identity => pairs.for_each(|(r, o)| *o = self.identity_step(*r)),
+        match self.shape {
+            Shape::Linear => pairs.for_each(|(r, o)| self.step::<false, false>(*r, o)),
+            Shape::Polynomial => pairs.for_each(|(r, o)| self.step::<true, false>(*r, o)),
+            Shape::Asymmetric => pairs.for_each(|(r, o)| self.step::<true, true>(*r, o)),
+            Shape::Identity => pairs.for_each(|(r, o)| *o = self.passthrough(r)),
         }
         n
     }
@@ -185,49 +172,42 @@ impl<'a> AxisCorrector<'a> {
         let cov = self.covariance.as_ref()?;
         let k = &self.kernel;
         let clamped = raw.max(k.rails.lo).min(k.rails.hi);
-        let u = linearize(&k.nl, k.delta, clamped.wrapping_sub(k.base));
+        let u = linearize::<true>(&k.nl, k.delta, clamped.wrapping_sub(k.base));
         Some(factor_norm(cov, &[1.0, u]))
     }
 
     #[inline(always)]
-    fn step<const NONLINEAR: bool>(&self, raw: i32) -> Corrected<1> {
+    fn passthrough(&self, r: &i32) -> Corrected<1> {
+        Corrected {
+            values: [*r as f32],
+            flags: self.env_flags,
+        }
+    }
+
+    #[inline(always)]
+    fn step<const NONLINEAR: bool, const ASYM: bool>(&self, raw: i32, out: &mut Corrected<1>) {
         let k = &self.kernel;
         let w = raw.wrapping_sub(k.base);
-        let value = k.value::<NONLINEAR>(w);
-        if (w as u32) < k.limit {
-            Corrected {
-                values: [value],
-                flags: self.env_flags,
-            }
-        } else {
-            self.slow::<NONLINEAR>(raw)
+        out.values = [k.value::<NONLINEAR, ASYM>(w)];
+        out.flags = self.env_flags;
+        if (w as u32) >= k.limit {
+            self.slow::<NONLINEAR, ASYM>(raw, out);
         }
     }
 
     #[cold]
     #[inline(never)]
-    fn slow<const NONLINEAR: bool>(&self, raw: i32) -> Corrected<1> {
+    fn slow<const NONLINEAR: bool, const ASYM: bool>(&self, raw: i32, out: &mut Corrected<1>) {
         let k = &self.kernel;
         let clamped = raw.max(k.rails.lo).min(k.rails.hi);
-        let value = k.value::<NONLINEAR>(clamped.wrapping_sub(k.base));
-        let flags = self
+        let value = k.value::<NONLINEAR, ASYM>(clamped.wrapping_sub(k.base));
+        out.flags = self
             .env_flags
             .with_if(Flags::SATURATED, k.rails.saturated(raw))
             .with_if(
                 Flags::OUT_OF_RANGE,
                 !(k.range_lo <= value && value <= k.range_hi),
             );
-        Corrected {
-            values: [value],
-            flags,
-        }
-    }
-
-    #[inline(always)]
-    fn identity_step(&self, raw: i32) -> Corrected<1> {
-        Corrected {
-            values: [raw as f32],
-            flags: self.env_flags,
-        }
+        out.values = [value];
     }
 }

@@ -1,24 +1,17 @@
 //! The triad corrector: three axes of one quantity.
 
 use super::environment::effective_set;
-use super::kernel::{TriadKernel, all_linear};
+use super::kernel::{Shape, TriadKernel};
 use super::{Corrected, Flags, factor_norm};
 use crate::Error;
 use crate::model::interval::Bound;
 use crate::model::{Calibration, Channel, Environment, Rails, Sensor, TriadCovariance, TriadSet};
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mode {
-    Identity,
-    Linear,
-    Nonlinear,
-}
-
 /// Corrects an accelerometer or gyro triad (see the [module docs](super)).
 #[derive(Debug, Clone)]
 pub struct TriadCorrector<'a> {
     source: Option<(&'a Environment, &'a [TriadSet], &'a [Channel; 3], Rails)>,
-    mode: Mode,
+    shape: Shape,
     kernel: TriadKernel,
     env_flags: Flags,
     covariance: Option<TriadCovariance>,
@@ -40,14 +33,9 @@ impl<'a> TriadCorrector<'a> {
         else {
             return Err(Error::CorrectorWrongSensor);
         };
-        let linear = sets.iter().all(|s| all_linear(&s.axes));
         let mut out = Self {
             source: Some((&data.environment, sets, channels, *rails)),
-            mode: if linear {
-                Mode::Linear
-            } else {
-                Mode::Nonlinear
-            },
+            shape: Shape::of(sets.iter().flat_map(|s| &s.axes)),
             kernel: TriadKernel::IDENTITY,
             env_flags: Flags::NONE,
             covariance: None,
@@ -62,7 +50,7 @@ impl<'a> TriadCorrector<'a> {
     pub const fn identity() -> Self {
         Self {
             source: None,
-            mode: Mode::Identity,
+            shape: Shape::Identity,
             kernel: TriadKernel::IDENTITY,
             env_flags: Flags::NO_CALIBRATION,
             covariance: None,
@@ -95,22 +83,27 @@ impl<'a> TriadCorrector<'a> {
     #[must_use]
     #[inline]
     pub fn correct(&self, raw: [i32; 3]) -> Corrected<3> {
-        match self.mode {
-            Mode::Linear => self.step::<false>(raw),
-            Mode::Nonlinear => self.step::<true>(raw),
-            Mode::Identity => self.identity_step(raw),
+        let mut out = Corrected::default();
+        let o = &mut out;
+        match self.shape {
+            Shape::Linear => self.step::<false, false>(raw, o),
+            Shape::Polynomial => self.step::<true, false>(raw, o),
+            Shape::Asymmetric => self.step::<true, true>(raw, o),
+            Shape::Identity => *o = self.passthrough(&raw),
         }
+        out
     }
 
     /// Corrects `raw` into `out`, sample by sample, and returns how many were corrected (the
     /// shorter of the two lengths).
     pub fn correct_batch(&self, raw: &[[i32; 3]], out: &mut [Corrected<3>]) -> usize {
         let pairs = raw.iter().zip(out.iter_mut());
-        let n = raw.len().min(pairs.len());
-        match self.mode {
-            Mode::Linear => pairs.for_each(|(r, o)| *o = self.step::<false>(*r)),
-            Mode::Nonlinear => pairs.for_each(|(r, o)| *o = self.step::<true>(*r)),
-            Mode::Identity => pairs.for_each(|(r, o)| *o = self.identity_step(*r)),
+        let n = pairs.len();
+        match self.shape {
+            Shape::Linear => pairs.for_each(|(r, o)| self.step::<false, false>(*r, o)),
+            Shape::Polynomial => pairs.for_each(|(r, o)| self.step::<true, false>(*r, o)),
+            Shape::Asymmetric => pairs.for_each(|(r, o)| self.step::<true, true>(*r, o)),
+            Shape::Identity => pairs.for_each(|(r, o)| *o = self.passthrough(r)),
         }
         n
     }
@@ -121,52 +114,40 @@ impl<'a> TriadCorrector<'a> {
     pub fn sigma(&self, raw: [i32; 3]) -> Option<[f32; 3]> {
         let cov = self.covariance.as_ref()?;
         let (w, _) = self.kernel.offsets(self.kernel.clamp(raw));
-        let [u0, u1, u2] = self.kernel.linearized(w);
+        let [u0, u1, u2] = self.kernel.linearized::<true>(w);
         let f = [1.0, u0, u1, u2];
         Some(cov.map(|l| factor_norm(&l, &f)))
     }
 
     #[inline(always)]
-    fn step<const NONLINEAR: bool>(&self, raw: [i32; 3]) -> Corrected<3> {
+    fn passthrough(&self, r: &[i32; 3]) -> Corrected<3> {
+        Corrected {
+            values: r.map(|x| x as f32),
+            flags: self.env_flags,
+        }
+    }
+
+    #[inline(always)]
+    fn step<const NONLINEAR: bool, const ASYM: bool>(&self, raw: [i32; 3], out: &mut Corrected<3>) {
         let k = &self.kernel;
         let (w, acc) = k.offsets(raw);
-        let values = if NONLINEAR {
-            k.nonlinear(w)
-        } else {
-            k.linear(w)
-        };
-        if acc < k.limit {
-            Corrected {
-                values,
-                flags: self.env_flags,
-            }
-        } else {
-            self.slow::<NONLINEAR>(raw)
+        out.values = k.outputs::<NONLINEAR, ASYM>(w);
+        out.flags = self.env_flags;
+        if acc >= k.limit {
+            self.slow::<NONLINEAR, ASYM>(raw, out);
         }
     }
 
     #[cold]
     #[inline(never)]
-    fn slow<const NONLINEAR: bool>(&self, raw: [i32; 3]) -> Corrected<3> {
+    fn slow<const NONLINEAR: bool, const ASYM: bool>(&self, raw: [i32; 3], out: &mut Corrected<3>) {
         let k = &self.kernel;
         let (w, _) = k.offsets(k.clamp(raw));
-        let values = if NONLINEAR {
-            k.nonlinear(w)
-        } else {
-            k.linear(w)
-        };
-        let flags = self
+        let values = k.outputs::<NONLINEAR, ASYM>(w);
+        out.flags = self
             .env_flags
             .with_if(Flags::SATURATED, k.saturated(&raw))
             .with_if(Flags::OUT_OF_RANGE, k.out_of_range(&values));
-        Corrected { values, flags }
-    }
-
-    #[inline(always)]
-    fn identity_step(&self, raw: [i32; 3]) -> Corrected<3> {
-        Corrected {
-            values: raw.map(|r| r as f32),
-            flags: self.env_flags,
-        }
+        out.values = values;
     }
 }

@@ -1,0 +1,184 @@
+//! Instruction counts of the correction on the Cortex-M4F. Run under QEMU with
+//! `-icount shift=10` (`cargo xtask bench` does): every instruction then advances the CMSDK
+//! timer by exactly 25.6 ticks, so the counts are exact and repeat from run to run.
+//!
+//! Prints one line per benchmark: `bench <name> <instructions per operation> <operations>`,
+//! and `size <name> <bytes>` for the RAM the device keeps.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box;
+
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use spincal::blob;
+use spincal::correct::{Corrected, ImuCorrector};
+use spincal::model::{Calibration, CalibrationData, Sensor};
+use spincal_firmware::timer;
+
+const N: usize = 256;
+
+static IMU_BLOB: &[u8] = include_bytes!("../../../host-tests/golden/imu.blob");
+
+/// Raw samples around the zero-input codes (well inside the calibrated range), or all at the
+/// rails when `saturated`.
+fn samples(saturated: bool) -> [[i32; 6]; N] {
+    let mut state: u32 = 0x1234_5678;
+    core::array::from_fn(|i| {
+        core::array::from_fn(|a| {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            if saturated {
+                if (i + a) % 2 == 0 { 0 } else { 65_535 }
+            } else {
+                let center = [33_109, 33_329, 36_427, 32_786, 32_430, 32_517][a];
+                center + ((state >> 16) as i32 % 4_000) - 2_000
+            }
+        })
+    })
+}
+
+fn instructions_per(ticks: u32, ops: usize) -> (u64, u64) {
+    let total = timer::instructions(ticks);
+    let ops = ops as u64;
+    // Tenths of an instruction.
+    ((total * 10 + ops / 2) / ops, total)
+}
+
+fn report(name: &str, ticks: u32, ops: usize) {
+    let (tenths, total) = instructions_per(ticks, ops);
+    hprintln!(
+        "bench {} {}.{} {} {}",
+        name,
+        tenths / 10,
+        tenths % 10,
+        ops,
+        total
+    );
+}
+
+fn without_asymmetry(mut data: CalibrationData) -> CalibrationData {
+    if let Sensor::Imu { sets, .. } = &mut data.sensor {
+        for set in sets.as_mut_slice() {
+            for axis in set.accel.axes.iter_mut().chain(set.gyro.axes.iter_mut()) {
+                axis.asymmetry = 0.0;
+                axis.asymmetry_break = 0.0;
+            }
+        }
+    }
+    data
+}
+
+#[inline(never)]
+fn batch(c: &mut ImuCorrector<'_>, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
+    c.correct_batch(raw, out)
+}
+
+#[inline(never)]
+fn one(c: &mut ImuCorrector<'_>, raw: [i32; 6]) -> Corrected<6> {
+    c.correct(raw)
+}
+
+fn bench_batch(name: &str, c: &mut ImuCorrector<'_>, raw: &[[i32; 6]; N]) {
+    let mut out = [Corrected::<6>::default(); N];
+    // Warm up (the first lever-arm sample primes the rate derivative).
+    batch(c, black_box(raw), &mut out);
+    let t0 = timer::now();
+    let n = batch(c, black_box(raw), &mut out);
+    let t1 = timer::now();
+    black_box(&out);
+    report(name, t0.wrapping_sub(t1), n);
+}
+
+fn bench_one(name: &str, c: &mut ImuCorrector<'_>, raw: &[[i32; 6]; N]) {
+    let mut out = [Corrected::<6>::default(); N];
+    let t0 = timer::now();
+    for (r, o) in raw.iter().zip(out.iter_mut()) {
+        *o = one(c, black_box(*r));
+    }
+    let t1 = timer::now();
+    black_box(&out);
+    report(name, t0.wrapping_sub(t1), N);
+}
+
+#[entry]
+fn main() -> ! {
+    timer::start();
+    let Ok(linear) = Calibration::new(CalibrationData::example_imu_linear()) else {
+        fail("linear example invalid")
+    };
+    let Ok(full) = Calibration::new(CalibrationData::example_imu()) else {
+        fail("full example invalid")
+    };
+    // The "full model": polynomial, misalignment, g-sensitivity, lever arm (the
+    // example without its asymmetry terms).
+    let Ok(poly) = Calibration::new(without_asymmetry(CalibrationData::example_imu())) else {
+        fail("polynomial example invalid")
+    };
+    let inside = samples(false);
+    let railed = samples(true);
+
+    let Ok(mut c) = ImuCorrector::new(&linear, 1000.0) else {
+        fail("linear corrector")
+    };
+    c.set_environment(25.0, 3.3);
+    bench_batch("imu_linear_batch", &mut c, &inside);
+    bench_one("imu_linear_call", &mut c, &inside);
+    bench_batch("imu_linear_batch_saturated", &mut c, &railed);
+
+    let Ok(mut c) = ImuCorrector::new(&poly, 1000.0) else {
+        fail("polynomial corrector")
+    };
+    c.set_environment(22.5, 3.3);
+    bench_batch("imu_full_batch", &mut c, &inside);
+    bench_one("imu_full_call", &mut c, &inside);
+    bench_batch("imu_full_batch_saturated", &mut c, &railed);
+
+    let Ok(mut c) = ImuCorrector::new(&full, 1000.0) else {
+        fail("full corrector")
+    };
+    c.set_environment(22.5, 3.3);
+    bench_batch("imu_full_asym_batch", &mut c, &inside);
+    bench_one("imu_full_asym_call", &mut c, &inside);
+
+    // set_environment over the 8-point temperature table, at points spread over the table.
+    let temps = [-37.0f32, -12.5, 3.0, 16.0, 29.9, 44.0, 61.0, 84.0];
+    let t0 = timer::now();
+    for t in temps {
+        c.set_environment(black_box(t), black_box(3.3));
+    }
+    let t1 = timer::now();
+    black_box(&c);
+    report("set_environment_8pt", t0.wrapping_sub(t1), temps.len());
+
+    // Decode + validate the full IMU blob.
+    let t0 = timer::now();
+    let decoded = blob::decode(black_box(IMU_BLOB));
+    let t1 = timer::now();
+    if decoded.as_ref() != Ok(&full) {
+        fail("golden IMU blob does not decode to the example");
+    }
+    black_box(&decoded);
+    report("decode_validate_imu_blob", t0.wrapping_sub(t1), 1);
+
+    hprintln!("size calibration {}", core::mem::size_of::<Calibration>());
+    hprintln!(
+        "size imu_corrector {}",
+        core::mem::size_of::<ImuCorrector<'_>>()
+    );
+    hprintln!("size imu_blob {}", IMU_BLOB.len());
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {}
+}
+
+fn fail(what: &str) -> ! {
+    hprintln!("FAIL {}", what);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("PANIC: {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
