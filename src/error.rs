@@ -183,7 +183,7 @@ pub enum Error {
         /// The coefficient set.
         set: u8,
     },
-    /// Covariance factors present for some coefficient sets and missing for others.
+    /// A covariance table whose length differs from the number of coefficient sets.
     InvalidCovarianceIncomplete,
     /// A lever arm longer than `MAX_LEVER_ARM_M`.
     InvalidLeverArm {
@@ -339,7 +339,7 @@ impl fmt::Display for Error {
                 "the scale of the {part} in coefficient set {set} is singular"
             ),
             Error::InvalidCovarianceIncomplete => {
-                f.write_str("covariance factors are present for some coefficient sets but not all")
+                f.write_str("the covariance table does not have one factor per coefficient set")
             }
             Error::InvalidLeverArm { axis } => write!(
                 f,

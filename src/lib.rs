@@ -76,4 +76,4 @@ pub mod model;
 
 mod error;
 
-pub use error::Error;
+pub use error::{Error, Field, Part};

@@ -48,6 +48,7 @@ pub struct Case {
 include!(concat!(env!("OUT_DIR"), "/golden_cases.rs"));
 
 /// Any of the three correctors.
+#[expect(clippy::large_enum_variant, reason = "one runner per test, never moved in a loop")]
 pub enum Runner<'a> {
     /// Single axis.
     Single(AxisCorrector<'a>),

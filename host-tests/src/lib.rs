@@ -2,5 +2,7 @@
 //! vectors, their text format, and the host-side computation of the expected outputs.
 #![forbid(unsafe_code)]
 
+pub mod fields;
 pub mod golden;
 pub mod qemu;
+pub mod reference;

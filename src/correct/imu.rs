@@ -6,7 +6,7 @@ use super::kernel::{Shape, TriadKernel, affine, range_bounds};
 use super::{Corrected, Flags, factor_norm};
 use crate::Error;
 use crate::model::interval::{Bound, affine_bound};
-use crate::model::{Calibration, Channel, Environment, ImuSet, Rails, Sensor, TriadCovariance};
+use crate::model::{Calibration, Channel, Environment, ImuCovariance, ImuSet, Rails, Sensor};
 
 /// The per-sample arithmetic: the axis [`Shape`] (with g-sensitivity whenever it is not
 /// `Linear`) and whether the lever arm is applied.
@@ -24,6 +24,7 @@ struct Source<'a> {
     gyro: &'a [Channel; 3],
     accel_rails: Rails,
     gyro_rails: Rails,
+    covariance: Option<&'a [ImuCovariance]>,
 }
 
 /// Corrects a 6-axis IMU sample `[ax, ay, az, gx, gy, gz]` (see the [module docs](super)).
@@ -48,7 +49,7 @@ pub struct ImuCorrector<'a> {
     prev_rate: [f32; 3],
     primed: bool,
     env_flags: Flags,
-    covariance: Option<(TriadCovariance, TriadCovariance)>,
+    covariance: Option<ImuCovariance>,
 }
 
 impl<'a> ImuCorrector<'a> {
@@ -67,6 +68,7 @@ impl<'a> ImuCorrector<'a> {
             gyro,
             lever_arm,
             sets,
+            covariance,
         } = &data.sensor
         else {
             return Err(Error::CorrectorWrongSensor);
@@ -97,6 +99,7 @@ impl<'a> ImuCorrector<'a> {
                 gyro,
                 accel_rails: *accel_rails,
                 gyro_rails: *gyro_rails,
+                covariance: covariance.as_deref(),
             }),
             mode,
             accel: TriadKernel::IDENTITY,
@@ -162,7 +165,10 @@ impl<'a> ImuCorrector<'a> {
         }
         self.g = set.g_sensitivity;
         self.env_flags = flags;
-        self.covariance = set.accel.covariance.zip(set.gyro.covariance);
+        self.covariance = src
+            .covariance
+            .and_then(|table| effective_set(src.env, table, temperature, voltage))
+            .map(|(c, _)| c);
     }
 
     /// Forgets the previous gyro sample (after a gap in the stream): the next sample's rate
@@ -234,7 +240,10 @@ impl<'a> ImuCorrector<'a> {
     /// `None` when the calibration has no covariance factors.
     #[must_use]
     pub fn sigma(&self, raw: [i32; 6]) -> Option<[f32; 6]> {
-        let (ca, cg) = self.covariance.as_ref()?;
+        let ImuCovariance {
+            accel: ca,
+            gyro: cg,
+        } = self.covariance.as_ref()?;
         let (ra, rg) = split(raw);
         let features = |k: &TriadKernel, r: [i32; 3]| {
             let (w, _) = k.offsets(k.clamp(r));

@@ -306,7 +306,6 @@ mod tests {
             axes: [AxisNonlinearity::LINEAR; 3],
             matrix: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]],
             offset: [0.0; 3],
-            covariance: None,
         };
         let k = TriadKernel::new(
             &set,

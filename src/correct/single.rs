@@ -72,10 +72,19 @@ impl AxisKernel {
     }
 }
 
+#[derive(Debug, Clone, Copy)]
+struct Source<'a> {
+    env: &'a Environment,
+    sets: &'a [SingleSet],
+    channel: &'a Channel,
+    rails: Rails,
+    covariance: Option<&'a [SingleCovariance]>,
+}
+
 /// Corrects a single-axis sensor (see the [module docs](super)).
 #[derive(Debug, Clone)]
 pub struct AxisCorrector<'a> {
-    source: Option<(&'a Environment, &'a [SingleSet], &'a Channel, Rails)>,
+    source: Option<Source<'a>>,
     shape: Shape,
     kernel: AxisKernel,
     env_flags: Flags,
@@ -93,13 +102,20 @@ impl<'a> AxisCorrector<'a> {
             rails,
             channel,
             sets,
+            covariance,
             ..
         } = &data.sensor
         else {
             return Err(Error::CorrectorWrongSensor);
         };
         let mut out = Self {
-            source: Some((&data.environment, sets, channel, *rails)),
+            source: Some(Source {
+                env: &data.environment,
+                sets,
+                channel,
+                rails: *rails,
+                covariance: covariance.as_deref(),
+            }),
             shape: Shape::of(sets.iter().map(|s| &s.axis)),
             kernel: AxisKernel::IDENTITY,
             env_flags: Flags::NONE,
@@ -125,16 +141,19 @@ impl<'a> AxisCorrector<'a> {
     /// Interpolates the coefficients at `temperature` (C) and `voltage` (V); see
     /// [`TriadCorrector::set_environment`](super::TriadCorrector::set_environment).
     pub fn set_environment(&mut self, temperature: f32, voltage: f32) {
-        let Some((env, sets, channel, rails)) = self.source else {
+        let Some(src) = self.source else {
             return;
         };
-        let Some((set, flags)) = effective_set(env, sets, temperature, voltage) else {
+        let Some((set, flags)) = effective_set(src.env, src.sets, temperature, voltage) else {
             *self = Self::identity();
             return;
         };
-        self.kernel = AxisKernel::new(&set, channel, &rails);
+        self.kernel = AxisKernel::new(&set, src.channel, &src.rails);
         self.env_flags = flags;
-        self.covariance = set.covariance;
+        self.covariance = src
+            .covariance
+            .and_then(|table| effective_set(src.env, table, temperature, voltage))
+            .map(|(c, _)| c);
     }
 
     /// The flags that the current environment puts on every sample.

@@ -7,10 +7,19 @@ use crate::Error;
 use crate::model::interval::Bound;
 use crate::model::{Calibration, Channel, Environment, Rails, Sensor, TriadCovariance, TriadSet};
 
+#[derive(Debug, Clone, Copy)]
+struct Source<'a> {
+    env: &'a Environment,
+    sets: &'a [TriadSet],
+    channels: &'a [Channel; 3],
+    rails: Rails,
+    covariance: Option<&'a [TriadCovariance]>,
+}
+
 /// Corrects an accelerometer or gyro triad (see the [module docs](super)).
 #[derive(Debug, Clone)]
 pub struct TriadCorrector<'a> {
-    source: Option<(&'a Environment, &'a [TriadSet], &'a [Channel; 3], Rails)>,
+    source: Option<Source<'a>>,
     shape: Shape,
     kernel: TriadKernel,
     env_flags: Flags,
@@ -28,13 +37,20 @@ impl<'a> TriadCorrector<'a> {
             rails,
             channels,
             sets,
+            covariance,
             ..
         } = &data.sensor
         else {
             return Err(Error::CorrectorWrongSensor);
         };
         let mut out = Self {
-            source: Some((&data.environment, sets, channels, *rails)),
+            source: Some(Source {
+                env: &data.environment,
+                sets,
+                channels,
+                rails: *rails,
+                covariance: covariance.as_deref(),
+            }),
             shape: Shape::of(sets.iter().flat_map(|s| &s.axes)),
             kernel: TriadKernel::IDENTITY,
             env_flags: Flags::NONE,
@@ -61,16 +77,19 @@ impl<'a> TriadCorrector<'a> {
     /// per-sample path. Outside the calibrated spans (or NaN) the table edge is used and every
     /// sample is flagged.
     pub fn set_environment(&mut self, temperature: f32, voltage: f32) {
-        let Some((env, sets, channels, rails)) = self.source else {
+        let Some(src) = self.source else {
             return;
         };
-        let Some((set, flags)) = effective_set(env, sets, temperature, voltage) else {
+        let Some((set, flags)) = effective_set(src.env, src.sets, temperature, voltage) else {
             *self = Self::identity();
             return;
         };
-        self.kernel = TriadKernel::new(&set, channels, &rails, &[Bound::point(0.0); 3]);
+        self.kernel = TriadKernel::new(&set, src.channels, &src.rails, &[Bound::point(0.0); 3]);
         self.env_flags = flags;
-        self.covariance = set.covariance;
+        self.covariance = src
+            .covariance
+            .and_then(|table| effective_set(src.env, table, temperature, voltage))
+            .map(|(c, _)| c);
     }
 
     /// The flags that the current environment puts on every sample.

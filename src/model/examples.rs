@@ -9,8 +9,8 @@
 )]
 
 use super::{
-    AxisNonlinearity, BoundedVec, CalibrationData, Channel, Environment, Identity, ImuSet,
-    Quantity, Rails, Sensor, Serial, SingleSet, Span, TriadSet,
+    AxisNonlinearity, BoundedVec, CalibrationData, Channel, Environment, Identity, ImuCovariance,
+    ImuSet, Quantity, Rails, Sensor, Serial, SingleSet, Span, TriadSet,
 };
 
 const G: f32 = 9.806_65;
@@ -113,11 +113,14 @@ fn accel_set(t: f32, nonlinear: bool) -> TriadSet {
         ],
         matrix,
         offset,
-        covariance: if nonlinear {
-            Some(triad_factor(2.0e-3, 1.5e-4, s))
-        } else {
-            None
-        },
+    }
+}
+
+fn imu_covariance(t: f32) -> ImuCovariance {
+    let dt = t - 25.0;
+    ImuCovariance {
+        accel: triad_factor(2.0e-3, 1.5e-4, 1.0 / 412.0 * (1.0 + 80e-6 * dt)),
+        gyro: triad_factor(1.0e-3, 2.0e-4, 1.0 / 900.0 * (1.0 - 120e-6 * dt)),
     }
 }
 
@@ -144,11 +147,6 @@ fn gyro_set(t: f32, nonlinear: bool) -> TriadSet {
         axes: [axis(1.0e-7), axis(-1.2e-7), axis(0.5e-7)],
         matrix,
         offset,
-        covariance: if nonlinear {
-            Some(triad_factor(1.0e-3, 2.0e-4, s))
-        } else {
-            None
-        },
     }
 }
 
@@ -180,7 +178,6 @@ impl CalibrationData {
             axis: AxisNonlinearity::LINEAR,
             scale: 0.0,
             offset: 0.0,
-            covariance: None,
         }; 6];
         for (ti, t) in temperatures.iter().enumerate() {
             for (vi, v) in voltages.iter().enumerate() {
@@ -197,7 +194,6 @@ impl CalibrationData {
                     },
                     scale,
                     offset: -scale * (4.0 * dt + 20.0 * dv),
-                    covariance: Some([0.02, 1.0e-6, 3.0e-7]),
                 };
             }
         }
@@ -217,6 +213,7 @@ impl CalibrationData {
                     range: Span::new(-45.0 * G, 45.0 * G),
                 },
                 sets: table(&sets),
+                covariance: Some(table(&[[0.02, 1.0e-6, 3.0e-7]; 6])),
             },
         }
     }
@@ -232,7 +229,6 @@ impl CalibrationData {
                 [0.0, 0.0, 0.0099],
             ],
             offset: [0.0, 0.02, -0.015],
-            covariance: None,
         };
         let channel = Channel {
             center: 32_768.0,
@@ -246,6 +242,7 @@ impl CalibrationData {
                 rails: Rails::unsigned(16),
                 channels: [channel; 3],
                 sets: table(&[set]),
+                covariance: None,
             },
         }
     }
@@ -299,6 +296,11 @@ impl CalibrationData {
                     None
                 },
                 sets: table(&sets),
+                covariance: if full {
+                    Some(table(&temperatures.map(imu_covariance)))
+                } else {
+                    None
+                },
             },
         }
     }

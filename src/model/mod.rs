@@ -39,7 +39,9 @@ pub(crate) mod validate;
 
 pub use bounded::{BoundedVec, Serial};
 pub(crate) use sets::Blend;
-pub use sets::{AxisNonlinearity, ImuSet, SingleCovariance, SingleSet, TriadCovariance, TriadSet};
+pub use sets::{
+    AxisNonlinearity, ImuCovariance, ImuSet, SingleCovariance, SingleSet, TriadCovariance, TriadSet,
+};
 
 use serde::{Deserialize, Serialize};
 
@@ -203,6 +205,8 @@ pub enum Sensor {
         channel: Channel,
         /// One set per table point.
         sets: BoundedVec<SingleSet, MAX_SETS>,
+        /// Optional covariance factors, one per set.
+        covariance: Option<BoundedVec<SingleCovariance, MAX_SETS>>,
     },
     /// Three axes of one quantity (an accelerometer or a gyro triad).
     Triad {
@@ -214,6 +218,8 @@ pub enum Sensor {
         channels: [Channel; 3],
         /// One set per table point.
         sets: BoundedVec<TriadSet, MAX_SETS>,
+        /// Optional covariance factors, one per set.
+        covariance: Option<BoundedVec<TriadCovariance, MAX_SETS>>,
     },
     /// An accelerometer triad and a gyro triad sampled together.
     Imu {
@@ -230,6 +236,8 @@ pub enum Sensor {
         lever_arm: Option<[[f32; 3]; 3]>,
         /// One set per table point.
         sets: BoundedVec<ImuSet, MAX_SETS>,
+        /// Optional covariance factors, one per set.
+        covariance: Option<BoundedVec<ImuCovariance, MAX_SETS>>,
     },
 }
 

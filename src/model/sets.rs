@@ -74,8 +74,6 @@ pub struct SingleSet {
     pub scale: f32,
     /// Offset, SI units.
     pub offset: f32,
-    /// Optional covariance factor (see [`SingleCovariance`]).
-    pub covariance: Option<SingleCovariance>,
 }
 
 /// Coefficients of a triad at one table point: `y = matrix * u + offset`.
@@ -88,8 +86,6 @@ pub struct TriadSet {
     pub matrix: [[f32; 3]; 3],
     /// Offset, SI units (`-matrix * bias`).
     pub offset: [f32; 3],
-    /// Optional covariance factors (see [`TriadCovariance`]).
-    pub covariance: Option<TriadCovariance>,
 }
 
 impl TriadSet {
@@ -98,6 +94,16 @@ impl TriadSet {
     pub fn is_linear(&self) -> bool {
         self.axes.iter().all(AxisNonlinearity::is_linear)
     }
+}
+
+/// Covariance factors of an IMU at one table point (see [`TriadCovariance`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ImuCovariance {
+    /// The accelerometer outputs.
+    pub accel: TriadCovariance,
+    /// The gyro outputs (before g-sensitivity).
+    pub gyro: TriadCovariance,
 }
 
 /// Coefficients of an IMU at one table point.
@@ -155,10 +161,24 @@ impl Blend for AxisNonlinearity {
     }
 }
 
-fn blend_option<T: Copy>(a: &Option<T>, b: &Option<T>, f: impl Fn(&T, &T) -> T) -> Option<T> {
-    match (a, b) {
-        (Some(a), Some(b)) => Some(f(a, b)),
-        _ => None,
+impl<const N: usize> Blend for [f32; N] {
+    fn blend(&self, other: &Self, t: f32) -> Self {
+        lerp_array(self, other, t)
+    }
+}
+
+impl<const N: usize, const M: usize> Blend for [[f32; N]; M] {
+    fn blend(&self, other: &Self, t: f32) -> Self {
+        lerp_matrix(self, other, t)
+    }
+}
+
+impl Blend for ImuCovariance {
+    fn blend(&self, other: &Self, t: f32) -> Self {
+        Self {
+            accel: self.accel.blend(&other.accel, t),
+            gyro: self.gyro.blend(&other.gyro, t),
+        }
     }
 }
 
@@ -168,9 +188,6 @@ impl Blend for SingleSet {
             axis: self.axis.blend(&other.axis, t),
             scale: lerp(self.scale, other.scale, t),
             offset: lerp(self.offset, other.offset, t),
-            covariance: blend_option(&self.covariance, &other.covariance, |a, b| {
-                lerp_array(a, b, t)
-            }),
         }
     }
 }
@@ -185,9 +202,6 @@ impl Blend for TriadSet {
             axes,
             matrix: lerp_matrix(&self.matrix, &other.matrix, t),
             offset: lerp_array(&self.offset, &other.offset, t),
-            covariance: blend_option(&self.covariance, &other.covariance, |a, b| {
-                lerp_matrix(a, b, t)
-            }),
         }
     }
 }

@@ -33,6 +33,7 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
             rails,
             channel,
             sets,
+            covariance,
             ..
         } => {
             validate_rails(rails, Part::Sensor)?;
@@ -41,12 +42,13 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
             for (i, set) in sets.iter().enumerate() {
                 validate_single_set(set, i as u8, rails, channel)?;
             }
-            covariance_consistent(sets.iter().map(|s| s.covariance.is_some()))
+            validate_covariance(covariance.as_ref(), sets.len(), Part::Sensor, |c| c.iter())
         }
         Sensor::Triad {
             rails,
             channels,
             sets,
+            covariance,
             ..
         } => {
             validate_rails(rails, Part::Sensor)?;
@@ -57,7 +59,9 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
                 let bound = triad_output_bound(set, channels, rails);
                 check_bounded(&bound, Part::Sensor, i as u8)?;
             }
-            covariance_consistent(sets.iter().map(|s| s.covariance.is_some()))
+            validate_covariance(covariance.as_ref(), sets.len(), Part::Sensor, |c| {
+                c.iter().flatten()
+            })
         }
         Sensor::Imu {
             accel_rails,
@@ -66,6 +70,7 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
             gyro,
             lever_arm,
             sets,
+            covariance,
         } => {
             validate_rails(accel_rails, Part::Accelerometer)?;
             validate_rails(gyro_rails, Part::Gyro)?;
@@ -78,10 +83,9 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
             for (i, set) in sets.iter().enumerate() {
                 validate_imu_set(set, i as u8, accel, accel_rails, gyro, gyro_rails)?;
             }
-            covariance_consistent(
-                sets.iter()
-                    .flat_map(|s| [s.accel.covariance.is_some(), s.gyro.covariance.is_some()]),
-            )
+            validate_covariance(covariance.as_ref(), sets.len(), Part::Accelerometer, |c| {
+                c.accel.iter().flatten().chain(c.gyro.iter().flatten())
+            })
         }
     }
 }
@@ -222,15 +226,37 @@ fn validate_table<T, const N: usize>(
     Ok(())
 }
 
-fn covariance_consistent(mut present: impl Iterator<Item = bool>) -> Result<(), Error> {
-    let Some(first) = present.next() else {
+/// A covariance table: one finite factor per coefficient set.
+fn validate_covariance<'a, C: 'a, const N: usize, I: Iterator<Item = &'a f32>>(
+    table: Option<&'a BoundedVec<C, N>>,
+    sets: usize,
+    part: Part,
+    floats: impl Fn(&'a C) -> I,
+) -> Result<(), Error> {
+    let Some(table) = table else {
         return Ok(());
     };
-    if present.all(|p| p == first) {
-        Ok(())
-    } else {
-        Err(Error::InvalidCovarianceIncomplete)
+    if table.overflowed() {
+        return Err(Error::InvalidCapacity {
+            field: Field::Covariance,
+            capacity: N,
+        });
     }
+    if table.len() != sets {
+        return Err(Error::InvalidCovarianceIncomplete);
+    }
+    for (i, factor) in table.iter().enumerate() {
+        for (k, x) in floats(factor).enumerate() {
+            finite(
+                *x,
+                Field::Covariance,
+                Some(part),
+                Some(i as u8),
+                Some(k as u8),
+            )?;
+        }
+    }
+    Ok(())
 }
 
 fn validate_axis(n: &AxisNonlinearity, part: Part, set: u8, axis: u8) -> Result<(), Error> {
@@ -257,9 +283,6 @@ fn validate_single_set(
     validate_axis(&set.axis, part, i, 0)?;
     finite(set.scale, Field::Scale, Some(part), Some(i), None)?;
     finite(set.offset, Field::Offset, Some(part), Some(i), None)?;
-    if let Some(cov) = &set.covariance {
-        finite_all(cov.iter(), Field::Covariance, Some(part), Some(i))?;
-    }
     if set.scale == 0.0 {
         return Err(Error::InvalidSingularMatrix { part, set: i });
     }
@@ -279,9 +302,6 @@ fn validate_triad_set(set: &TriadSet, i: u8, part: Part) -> Result<(), Error> {
         Some(i),
     )?;
     finite_all(set.offset.iter(), Field::Offset, Some(part), Some(i))?;
-    if let Some(cov) = &set.covariance {
-        finite_all(cov.iter().flatten(), Field::Covariance, Some(part), Some(i))?;
-    }
     if !invertible(&set.matrix) {
         return Err(Error::InvalidSingularMatrix { part, set: i });
     }

@@ -1,0 +1,451 @@
+//! The f32 correction against the independent f64 reference, every code of a 16-bit channel,
+//! environment sweeps beyond the tables, the identity fallback, batch against single samples,
+//! and the 1-sigma calibration error.
+#![expect(clippy::needless_range_loop, reason = "index loops mirror the formulas they check")]
+
+use host_tests::golden::{Kind, Runner};
+use host_tests::reference::{self, Value};
+use proptest::collection::vec;
+use proptest::prelude::*;
+use spincal::correct::{AxisCorrector, Flags, ImuCorrector, TriadCorrector};
+use spincal::model::{Calibration, CalibrationData, Sensor};
+
+/// The stated bound: the f32 output differs from the f64 reference by at most
+/// `RELATIVE_BOUND` of the sum of the magnitudes of the terms that make the output (about 85
+/// ulp of that sum: single precision rounds by 2^-24 = 6e-8 per operation and the IMU's deepest
+/// path has about 30 operations, the table interpolation included) plus `FULL_SCALE_BOUND` of
+/// the output's full scale (about 17 ulp of it: the hot path works on codes counted from the
+/// edge of its window, not from the center, so its terms can reach full scale).
+const RELATIVE_BOUND: f64 = 5e-6;
+const FULL_SCALE_BOUND: f64 = 1e-6;
+
+fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
+    let mut v = host_tests::golden::examples();
+    v.push((
+        "imu_linear",
+        CalibrationData::example_imu_linear(),
+        Kind::Imu(1000.0),
+    ));
+    v
+}
+
+fn rails_and_centers(data: &CalibrationData) -> Vec<(i32, i32, f32)> {
+    match &data.sensor {
+        Sensor::Single { rails, channel, .. } => vec![(rails.lo, rails.hi, channel.center)],
+        Sensor::Triad {
+            rails, channels, ..
+        } => channels
+            .iter()
+            .map(|c| (rails.lo, rails.hi, c.center))
+            .collect(),
+        Sensor::Imu {
+            accel_rails,
+            gyro_rails,
+            accel,
+            gyro,
+            ..
+        } => accel
+            .iter()
+            .map(|c| (accel_rails.lo, accel_rails.hi, c.center))
+            .chain(
+                gyro.iter()
+                    .map(|c| (gyro_rails.lo, gyro_rails.hi, c.center)),
+            )
+            .collect(),
+    }
+}
+
+fn check_against_reference(
+    data: &CalibrationData,
+    kind: Kind,
+    env: (f32, f32),
+    raws: &[Vec<i32>],
+) -> Result<(), TestCaseError> {
+    let cal = Calibration::new(data.clone()).unwrap();
+    let mut runner = Runner::new(&cal, kind);
+    runner.set_environment(env.0, env.1);
+    let rate = match kind {
+        Kind::Imu(r) => f64::from(r),
+        _ => 0.0,
+    };
+    let mut prev: Option<[f64; 3]> = None;
+    for raw in raws {
+        let (got, flags) = runner.correct(raw);
+        let r = reference::correct(data, f64::from(env.0), f64::from(env.1), raw, rate, prev);
+        let want = &r.values;
+        for (i, (g, Value { y, mag, full_scale })) in got.iter().zip(want).enumerate() {
+            let err = (f64::from(*g) - y).abs();
+            let bound = RELATIVE_BOUND * mag + FULL_SCALE_BOUND * full_scale;
+            prop_assert!(
+                err <= bound,
+                "output {i} for {raw:?} at {env:?}: f32 {g}, f64 {y}, error {err:e} > {bound:e}"
+            );
+        }
+        let flags = Flags::from_bits_truncate(flags);
+        prop_assert_eq!(
+            flags.contains(Flags::SATURATED),
+            r.saturated,
+            "saturation of {:?}",
+            raw
+        );
+        // The range flag may differ from the reference only within rounding of a boundary.
+        if flags.contains(Flags::OUT_OF_RANGE) != r.out_of_range {
+            prop_assert!(
+                r.range_margin <= RELATIVE_BOUND,
+                "range flag of {:?}: margin {:e}",
+                raw,
+                r.range_margin
+            );
+        }
+        if want.len() == 6 {
+            prev = Some([want[3].y, want[4].y, want[5].y]);
+        }
+    }
+    Ok(())
+}
+
+fn raw_strategy(data: &CalibrationData) -> impl Strategy<Value = Vec<i32>> + use<> {
+    let axes = rails_and_centers(data);
+    axes.into_iter()
+        .map(|(lo, hi, c)| {
+            let c = c as i32;
+            prop_oneof![
+                8 => c - 8_000..c + 8_000,
+                1 => lo..=hi,
+                1 => any::<i32>(),
+            ]
+        })
+        .collect::<Vec<_>>()
+}
+
+fn env_strategy(data: &CalibrationData) -> impl Strategy<Value = (f32, f32)> + use<> {
+    let e = &data.environment;
+    let (t0, t1) = (e.temperature_span.lo, e.temperature_span.hi);
+    let (v0, v1) = (e.voltage_span.lo, e.voltage_span.hi);
+    (
+        prop_oneof![4 => t0 - 20.0..t1 + 20.0, 1 => Just(f32::NAN)],
+        prop_oneof![4 => v0 - 1.0..v1 + 1.0, 1 => Just(f32::NAN)],
+    )
+}
+
+fn case_strategy() -> impl Strategy<Value = (usize, (f32, f32), Vec<Vec<i32>>)> {
+    (0..examples().len()).prop_flat_map(|case| {
+        let data = examples().swap_remove(case).1;
+        (
+            Just(case),
+            env_strategy(&data),
+            vec(raw_strategy(&data), 40),
+        )
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    #[test]
+    fn f32_correction_agrees_with_f64_reference((case, env, raws) in case_strategy()) {
+        let (_, data, kind) = examples().swap_remove(case);
+        check_against_reference(&data, kind, env, &raws)?;
+    }
+}
+
+#[test]
+fn every_code_of_a_16_bit_channel_is_finite_and_flagged_exactly() {
+    // Single axis: all 65,536 codes.
+    let data = CalibrationData::example_single();
+    let cal = Calibration::new(data.clone()).unwrap();
+    let mut c = AxisCorrector::new(&cal).unwrap();
+    c.set_environment(25.0, 5.0);
+    let Sensor::Single { channel, .. } = &data.sensor else {
+        unreachable!()
+    };
+    let (mut saturated, mut out_of_range) = (0, 0);
+    for code in 0..=65_535 {
+        let out = c.correct(code);
+        let y = out.values[0];
+        assert!(y.is_finite(), "code {code}: {y}");
+        assert_eq!(
+            out.flags.contains(Flags::SATURATED),
+            code == 0 || code == 65_535,
+            "code {code}"
+        );
+        let outside = !(channel.range.lo <= y && y <= channel.range.hi);
+        assert_eq!(
+            out.flags.contains(Flags::OUT_OF_RANGE),
+            outside,
+            "code {code}: {y}"
+        );
+        assert!(
+            !out.flags
+                .contains(Flags::TEMPERATURE_CLAMPED | Flags::VOLTAGE_CLAMPED)
+        );
+        saturated += usize::from(out.flags.contains(Flags::SATURATED));
+        out_of_range += usize::from(outside);
+    }
+    assert_eq!(saturated, 2);
+    assert!(
+        out_of_range > 1_000 && out_of_range < 20_000,
+        "{out_of_range}"
+    );
+
+    // Each axis of the full IMU: all codes on one axis, the others at their centers.
+    let data = CalibrationData::example_imu();
+    let cal = Calibration::new(data.clone()).unwrap();
+    let mut c = ImuCorrector::new(&cal, 1000.0).unwrap();
+    c.set_environment(20.0, 3.3);
+    let centers: Vec<i32> = rails_and_centers(&data)
+        .iter()
+        .map(|(_, _, c)| *c as i32)
+        .collect();
+    for axis in 0..6 {
+        for code in 0..=65_535 {
+            let mut raw: [i32; 6] = centers.clone().try_into().unwrap();
+            raw[axis] = code;
+            let out = c.correct(raw);
+            assert!(
+                out.values.iter().all(|v| v.is_finite()),
+                "axis {axis} code {code}"
+            );
+            assert_eq!(
+                out.flags.contains(Flags::SATURATED),
+                code == 0 || code == 65_535,
+                "axis {axis} code {code}"
+            );
+        }
+    }
+}
+
+#[test]
+fn temperature_and_voltage_beyond_the_table_are_clamped_and_flagged() {
+    let data = CalibrationData::example_single();
+    let cal = Calibration::new(data).unwrap();
+    let mut c = AxisCorrector::new(&cal).unwrap();
+    let raw = 40_000;
+    c.set_environment(-40.0, 4.5);
+    let edge = c.correct(raw);
+    assert!(edge.flags.is_clean(), "{}", edge.flags);
+    for t in [-40.5, -60.0, -1e30, f32::NEG_INFINITY] {
+        c.set_environment(t, 4.5);
+        let out = c.correct(raw);
+        assert_eq!(out.values, edge.values, "clamped to the -40 C set at {t}");
+        assert_eq!(out.flags, Flags::TEMPERATURE_CLAMPED);
+    }
+    c.set_environment(-40.0, 4.0);
+    assert_eq!(c.correct(raw).values, edge.values);
+    assert_eq!(c.correct(raw).flags, Flags::VOLTAGE_CLAMPED);
+    c.set_environment(f32::INFINITY, 9.0);
+    let hot = c.correct(raw);
+    c.set_environment(85.0, 5.5);
+    assert_eq!(hot.values, c.correct(raw).values);
+    assert_eq!(
+        hot.flags,
+        Flags::TEMPERATURE_CLAMPED | Flags::VOLTAGE_CLAMPED
+    );
+    // A sweep across the whole span: flagged exactly outside it, outputs continuous inside.
+    let mut last = None;
+    for i in -200..=1_450 {
+        let t = i as f32 * 0.1;
+        c.set_environment(t, 5.0);
+        let out = c.correct(raw);
+        assert_eq!(
+            out.flags.contains(Flags::TEMPERATURE_CLAMPED),
+            !(-40.0..=85.0).contains(&t),
+            "{t}"
+        );
+        if let Some(prev) = last {
+            let step: f32 = out.values[0] - prev;
+            assert!(step.abs() < 0.01, "jump of {step} at {t} C");
+        }
+        last = Some(out.values[0]);
+    }
+    // NaN: flagged, the middle of the span used, outputs finite.
+    c.set_environment(f32::NAN, f32::NAN);
+    let nan = c.correct(raw);
+    assert!(nan.values[0].is_finite());
+    assert_eq!(
+        nan.flags,
+        Flags::TEMPERATURE_CLAMPED | Flags::VOLTAGE_CLAMPED
+    );
+    // A fresh corrector flags until it is told the environment.
+    let fresh = AxisCorrector::new(&cal).unwrap();
+    assert_eq!(
+        fresh.correct(raw).flags,
+        Flags::TEMPERATURE_CLAMPED | Flags::VOLTAGE_CLAMPED
+    );
+}
+
+#[test]
+fn identity_fallback_flags_every_sample() {
+    let axis = AxisCorrector::identity();
+    let triad = TriadCorrector::identity();
+    let mut imu = ImuCorrector::identity();
+    imu.set_environment(25.0, 3.3);
+    for raw in [0, 1, 32_768, 65_535, -5, i32::MAX] {
+        let a = axis.correct(raw);
+        assert_eq!((a.values[0], a.flags), (raw as f32, Flags::NO_CALIBRATION));
+        let t = triad.correct([raw; 3]);
+        assert_eq!(t.flags, Flags::NO_CALIBRATION);
+        let i = imu.correct([raw; 6]);
+        assert_eq!(
+            (i.values, i.flags),
+            ([raw as f32; 6], Flags::NO_CALIBRATION)
+        );
+    }
+    assert_eq!(imu.sigma([0; 6]), None);
+}
+
+#[test]
+fn wrong_sensor_kind_and_bad_rate_are_refused() {
+    let triad = Calibration::new(CalibrationData::example_triad()).unwrap();
+    assert_eq!(
+        AxisCorrector::new(&triad).err(),
+        Some(spincal::Error::CorrectorWrongSensor)
+    );
+    assert_eq!(
+        ImuCorrector::new(&triad, 100.0).err(),
+        Some(spincal::Error::CorrectorWrongSensor)
+    );
+    let imu = Calibration::new(CalibrationData::example_imu()).unwrap();
+    assert_eq!(
+        TriadCorrector::new(&imu).err(),
+        Some(spincal::Error::CorrectorWrongSensor)
+    );
+    for rate in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        assert_eq!(
+            ImuCorrector::new(&imu, rate).err(),
+            Some(spincal::Error::CorrectorBadSampleRate)
+        );
+    }
+}
+
+#[test]
+fn batch_equals_sample_by_sample() {
+    let data = CalibrationData::example_imu();
+    let cal = Calibration::new(data).unwrap();
+    let mut one = ImuCorrector::new(&cal, 800.0).unwrap();
+    let mut many = one.clone();
+    one.set_environment(12.0, 3.2);
+    many.set_environment(12.0, 3.2);
+    let raw: Vec<[i32; 6]> = (0..500)
+        .map(|i| std::array::from_fn(|a| 30_000 + ((i * 7919 + a * 104_729) % 6_000) as i32))
+        .collect();
+    let mut out = vec![Default::default(); 500];
+    assert_eq!(many.correct_batch(&raw, &mut out), 500);
+    for (r, o) in raw.iter().zip(&out) {
+        assert_eq!(one.correct(*r), *o);
+    }
+    // A shorter output buffer corrects only what fits.
+    assert_eq!(many.correct_batch(&raw, &mut out[..10]), 10);
+}
+
+#[test]
+fn lever_arm_first_sample_is_flagged_and_reset_flags_again() {
+    let cal = Calibration::new(CalibrationData::example_imu()).unwrap();
+    let mut c = ImuCorrector::new(&cal, 1000.0).unwrap();
+    c.set_environment(25.0, 3.3);
+    let raw = [33_109, 33_329, 36_427, 34_000, 32_430, 32_517];
+    assert_eq!(c.correct(raw).flags, Flags::RATE_DERIVATIVE_UNKNOWN);
+    assert!(c.correct(raw).flags.is_clean());
+    c.reset();
+    assert_eq!(c.correct(raw).flags, Flags::RATE_DERIVATIVE_UNKNOWN);
+    assert!(c.correct(raw).flags.is_clean());
+    // Linear IMUs have no lever arm and never need priming.
+    let lin = Calibration::new(CalibrationData::example_imu_linear()).unwrap();
+    let mut c = ImuCorrector::new(&lin, 1000.0).unwrap();
+    c.set_environment(25.0, 3.3);
+    assert!(c.correct(raw).flags.is_clean());
+}
+
+#[test]
+fn lever_arm_removes_the_centripetal_acceleration_of_a_steady_spin() {
+    // Spin about z at a steady rate: the accelerometer at r sees w x (w x r) on top of the
+    // specific force at the reference point; the corrected output must not.
+    let data = CalibrationData::example_imu();
+    let cal = Calibration::new(data.clone()).unwrap();
+    let mut with = ImuCorrector::new(&cal, 1000.0).unwrap();
+    let mut without_data = data.clone();
+    if let Sensor::Imu { lever_arm, .. } = &mut without_data.sensor {
+        *lever_arm = None;
+    }
+    let without_cal = Calibration::new(without_data).unwrap();
+    let mut without = ImuCorrector::new(&without_cal, 1000.0).unwrap();
+    with.set_environment(25.0, 3.3);
+    without.set_environment(25.0, 3.3);
+    let raw = [33_109, 33_329, 36_427, 32_786, 32_430, 32_517 + 20_000];
+    let _ = with.correct(raw);
+    let a = with.correct(raw);
+    let b = without.correct(raw);
+    let Sensor::Imu {
+        lever_arm: Some(r), ..
+    } = &data.sensor
+    else {
+        unreachable!()
+    };
+    let w: [f64; 3] = [a.values[3], a.values[4], a.values[5]].map(f64::from);
+    let ww: f64 = w.iter().map(|x| x * x).sum();
+    for i in 0..3 {
+        let ri = r[i].map(f64::from);
+        let dot: f64 = (0..3).map(|j| w[j] * ri[j]).sum();
+        let centripetal = w[i] * dot - ri[i] * ww;
+        let got = f64::from(b.values[i]) - f64::from(a.values[i]);
+        assert!(
+            (got - centripetal).abs() < 1e-4 * (1.0 + centripetal.abs()),
+            "axis {i}: {got} vs {centripetal}"
+        );
+    }
+    assert!(ww > 400.0, "the test spins at {} rad/s", ww.sqrt());
+}
+
+#[test]
+fn sigma_matches_the_quadratic_form_of_the_covariance() {
+    let data = CalibrationData::example_imu();
+    let cal = Calibration::new(data.clone()).unwrap();
+    let mut c = ImuCorrector::new(&cal, 1000.0).unwrap();
+    c.set_environment(30.0, 3.3); // a breakpoint: the set is used as stored
+    let Sensor::Imu {
+        accel,
+        sets,
+        covariance: Some(cov),
+        ..
+    } = &data.sensor
+    else {
+        unreachable!()
+    };
+    let set = &sets[4].accel;
+    let raw = [34_000, 31_000, 36_000, 32_786, 32_430, 32_517];
+    let sigma = c.sigma(raw).unwrap();
+    // u for a set whose nonlinearity is evaluated in f64, then f' L L' f.
+    for i in 0..3 {
+        let l = cov[4].accel[i].map(f64::from);
+        let u: Vec<f64> = (0..3)
+            .map(|j| {
+                let v = f64::from(raw[j]) - f64::from(accel[j].center);
+                let n = set.axes[j];
+                v + f64::from(n.quadratic) * v * v
+                    + f64::from(n.cubic) * v * v * v
+                    + f64::from(n.odd_quadratic) * v * v.abs()
+                    + f64::from(n.asymmetry) * (v - f64::from(n.asymmetry_break)).abs()
+            })
+            .collect();
+        let f = [1.0, u[0], u[1], u[2]];
+        let mut c = [[0.0; 4]; 4];
+        let idx = |r: usize, k: usize| r * (r + 1) / 2 + k;
+        for r in 0..4 {
+            for s in 0..4 {
+                c[r][s] = (0..=r.min(s)).map(|k| l[idx(r, k)] * l[idx(s, k)]).sum();
+            }
+        }
+        let q: f64 = (0..4)
+            .flat_map(|r| (0..4).map(move |s| (r, s)))
+            .map(|(r, s)| f[r] * c[r][s] * f[s])
+            .sum();
+        let want = q.sqrt();
+        assert!(
+            (f64::from(sigma[i]) - want).abs() < 1e-5 * want,
+            "{} vs {want}",
+            sigma[i]
+        );
+    }
+    let no_cov = Calibration::new(CalibrationData::example_imu_linear()).unwrap();
+    assert_eq!(ImuCorrector::new(&no_cov, 1000.0).unwrap().sigma(raw), None);
+}
