@@ -2,8 +2,6 @@
 //! timer used to count instructions under `-icount`, and a runner over the three correctors.
 #![no_std]
 
-// Links the single-core critical-section implementation semihosting needs.
-use cortex_m as _;
 use spincal::correct::{AxisCorrector, Corrected, ImuCorrector, TriadCorrector};
 use spincal::model::Calibration;
 
@@ -48,7 +46,10 @@ pub struct Case {
 include!(concat!(env!("OUT_DIR"), "/golden_cases.rs"));
 
 /// Any of the three correctors.
-#[expect(clippy::large_enum_variant, reason = "one runner per test, never moved in a loop")]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "one runner per test, never moved in a loop"
+)]
 pub enum Runner<'a> {
     /// Single axis.
     Single(AxisCorrector<'a>),
@@ -91,6 +92,53 @@ impl<'a> Runner<'a> {
             Self::Triad(c) => put(c.correct(raw.try_into().ok()?), out),
             Self::Imu(c) => put(c.correct(raw.try_into().ok()?), out),
         })
+    }
+}
+
+/// Ends the QEMU run with the given status (semihosting `SYS_EXIT`: QEMU exits 0 or 1).
+pub fn exit(success: bool) -> ! {
+    cortex_m_semihosting::debug::exit(if success {
+        cortex_m_semihosting::debug::EXIT_SUCCESS
+    } else {
+        cortex_m_semihosting::debug::EXIT_FAILURE
+    });
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    cortex_m_semihosting::hprintln!("PANIC: {}", info);
+    exit(false)
+}
+
+/// Stack high-water marks: paint the free stack below the stack pointer, run, find the lowest
+/// word that changed.
+pub mod stack {
+    const PAINT: u32 = 0xDEAD_BEEF;
+    const DEPTH: usize = 64 * 1024;
+
+    /// Runs `f` and returns its result and the bytes of stack it used (to 4 bytes).
+    #[inline(never)]
+    pub fn high_water<R>(f: impl FnOnce() -> R) -> (R, usize) {
+        let sp = cortex_m::register::msp::read() as usize;
+        let bottom = sp - DEPTH;
+        for addr in (bottom..sp).step_by(4) {
+            // SAFETY: free stack below the stack pointer of this function, in the 4 MiB RAM;
+            // nothing else runs (no interrupts are enabled).
+            unsafe { (addr as *mut u32).write_volatile(PAINT) };
+        }
+        let r = f();
+        let mut lowest = sp;
+        for addr in (bottom..sp).step_by(4) {
+            // SAFETY: as above, reading back.
+            if unsafe { (addr as *const u32).read_volatile() } != PAINT {
+                lowest = addr;
+                break;
+            }
+        }
+        (r, sp - lowest)
     }
 }
 

@@ -231,7 +231,10 @@ pub fn compute(data: &CalibrationData, kind: Kind, blob: &str) -> Case {
 }
 
 /// Any of the three correctors behind one interface.
-#[expect(clippy::large_enum_variant, reason = "one runner per test, never moved in a loop")]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "one runner per test, never moved in a loop"
+)]
 pub enum Runner<'a> {
     /// Single axis.
     Single(AxisCorrector<'a>),

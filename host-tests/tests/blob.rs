@@ -572,3 +572,29 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn decode_in_reuses_one_slot_across_kinds_and_failures() {
+    let mut slot = CalibrationData::empty();
+    let blobs: Vec<(CalibrationData, Vec<u8>)> = examples()
+        .into_iter()
+        .map(|(_, d)| {
+            let b = golden::encode(&d);
+            (d, b)
+        })
+        .collect();
+    for order in [[0, 1, 2], [2, 0, 1], [1, 2, 0], [2, 2, 1]] {
+        for i in order {
+            let (data, bytes) = &blobs[i];
+            // A corrupt blob first: refused, and the next good one decodes fully anyway.
+            let mut bad = bytes.clone();
+            let last = bad.len() - 1;
+            bad[last] ^= 1;
+            assert!(blob::decode_in(&bad, &mut slot).is_err());
+            let cal = blob::decode_in(bytes, &mut slot).unwrap();
+            assert_eq!(cal.data(), data);
+        }
+    }
+    // The placeholder itself does not validate.
+    assert!(Calibration::validate_in_place(&CalibrationData::empty()).is_err());
+}

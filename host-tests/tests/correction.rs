@@ -1,7 +1,10 @@
 //! The f32 correction against the independent f64 reference, every code of a 16-bit channel,
 //! environment sweeps beyond the tables, the identity fallback, batch against single samples,
 //! and the 1-sigma calibration error.
-#![expect(clippy::needless_range_loop, reason = "index loops mirror the formulas they check")]
+#![expect(
+    clippy::needless_range_loop,
+    reason = "index loops mirror the formulas they check"
+)]
 
 use host_tests::golden::{Kind, Runner};
 use host_tests::reference::{self, Value};

@@ -28,6 +28,8 @@
 //! # Ok::<(), spincal::Error>(())
 //! ```
 
+mod payload;
+
 use crate::Error;
 use crate::model::{Calibration, CalibrationData};
 
@@ -117,12 +119,8 @@ pub fn encode(cal: &Calibration, out: &mut [u8]) -> Result<usize, Error> {
     Ok(HEADER_LEN + payload_len)
 }
 
-/// Checks, decodes and validates a blob. `bytes` must be exactly one blob.
-///
-/// # Errors
-/// In the order checked: `Header*`, `Length*`, [`Error::ChecksumMismatch`], `Payload*`, then
-/// the `Invalid*` errors of [`Calibration::new`].
-pub fn decode(bytes: &[u8]) -> Result<Calibration, Error> {
+/// Checks the header, the length and the CRC of `bytes` and returns the payload.
+fn checked_payload(bytes: &[u8]) -> Result<&[u8], Error> {
     let header = Header::parse(bytes)?;
     let declared = header.blob_len();
     if bytes.len() < declared {
@@ -137,10 +135,8 @@ pub fn decode(bytes: &[u8]) -> Result<Calibration, Error> {
             found: bytes.len(),
         });
     }
-    let (prefix, payload) = (
-        bytes.get(..HEADER_LEN - 4).unwrap_or_default(),
-        bytes.get(HEADER_LEN..).unwrap_or_default(),
-    );
+    let prefix = bytes.get(..HEADER_LEN - 4).unwrap_or_default();
+    let payload = bytes.get(HEADER_LEN..).unwrap_or_default();
     let computed = crc_of(prefix, payload);
     if computed != header.crc {
         return Err(Error::ChecksumMismatch {
@@ -148,10 +144,34 @@ pub fn decode(bytes: &[u8]) -> Result<Calibration, Error> {
             computed,
         });
     }
-    let (data, rest): (CalibrationData, &[u8]) =
-        postcard::take_from_bytes(payload).map_err(|_| Error::PayloadMalformed)?;
-    if !rest.is_empty() {
-        return Err(Error::PayloadTrailingBytes { unread: rest.len() });
-    }
-    Calibration::new(data)
+    Ok(payload)
+}
+
+/// Checks, decodes and validates a blob into `slot` and returns the validated calibration,
+/// which borrows the slot. This is the device's way in: the slot is typically a `static`, and
+/// decoding reads the payload piece by piece straight into it, so the stack never holds a copy
+/// of the whole calibration. On error the slot holds unspecified (unvalidated) data.
+///
+/// # Errors
+/// In the order checked: `Header*`, `Length*`, [`Error::ChecksumMismatch`], `Payload*`, then
+/// the `Invalid*` errors of [`Calibration::new`].
+pub fn decode_in<'a>(
+    bytes: &[u8],
+    slot: &'a mut CalibrationData,
+) -> Result<&'a Calibration, Error> {
+    let payload = checked_payload(bytes)?;
+    payload::read_into(payload, slot)?;
+    Calibration::validate_in_place(slot)
+}
+
+/// Checks, decodes and validates a blob. `bytes` must be exactly one blob. Returns the
+/// calibration by value, which costs stack for a few copies of it; on the device prefer
+/// [`decode_in`].
+///
+/// # Errors
+/// As [`decode_in`].
+pub fn decode(bytes: &[u8]) -> Result<Calibration, Error> {
+    let mut slot = CalibrationData::empty();
+    decode_in(bytes, &mut slot)?;
+    Ok(Calibration::validated(slot))
 }

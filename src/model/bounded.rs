@@ -49,6 +49,20 @@ impl<T, const N: usize> BoundedVec<T, N> {
         self.items.push(item)
     }
 
+    /// Removes every element and the overflow mark.
+    pub fn clear(&mut self) {
+        self.items.clear();
+        self.overflowed = false;
+    }
+
+    /// Appends an element, or drops it and marks the vector as overflowed when it is full (how
+    /// a decoder records a sequence longer than the capacity).
+    pub(crate) fn push_or_mark(&mut self, item: T) {
+        if self.items.push(item).is_err() {
+            self.overflowed = true;
+        }
+    }
+
     /// The elements as a slice.
     #[must_use]
     pub fn as_slice(&self) -> &[T] {
@@ -112,9 +126,7 @@ impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for BoundedVec<T
             fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
                 let mut out = BoundedVec::new();
                 while let Some(item) = seq.next_element::<T>()? {
-                    if out.items.push(item).is_err() {
-                        out.overflowed = true;
-                    }
+                    out.push_or_mark(item);
                 }
                 Ok(out)
             }
@@ -140,6 +152,12 @@ pub struct Serial {
 }
 
 impl Serial {
+    /// The empty serial (not valid in a calibration).
+    pub const EMPTY: Self = Self {
+        text: heapless::String::new(),
+        overflowed: false,
+    };
+
     /// A serial number from text, or `None` when it is longer than the capacity.
     #[must_use]
     pub fn new(text: &str) -> Option<Self> {

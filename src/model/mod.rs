@@ -43,6 +43,7 @@ pub use sets::{
     AxisNonlinearity, ImuCovariance, ImuSet, SingleCovariance, SingleSet, TriadCovariance, TriadSet,
 };
 
+use ref_cast::{RefCastCustom, ref_cast_custom};
 use serde::{Deserialize, Serialize};
 
 use crate::Error;
@@ -266,11 +267,40 @@ pub struct CalibrationData {
     pub sensor: Sensor,
 }
 
+impl CalibrationData {
+    /// A placeholder to decode into (see [`crate::blob::decode_in`]): an empty serial and no
+    /// coefficient sets, so it does not validate.
+    #[must_use]
+    pub const fn empty() -> Self {
+        Self {
+            identity: Identity {
+                serial: Serial::EMPTY,
+                created_unix_s: 0,
+                data_hash: [0; 16],
+                tool_version: [0; 3],
+            },
+            environment: Environment::fixed(Span::new(0.0, 0.0), Span::new(0.0, 0.0)),
+            sensor: Sensor::Single {
+                quantity: Quantity::Acceleration,
+                rails: Rails { lo: 0, hi: 0 },
+                channel: Channel {
+                    center: 0.0,
+                    range: Span::new(0.0, 0.0),
+                },
+                sets: BoundedVec::new(),
+                covariance: None,
+            },
+        }
+    }
+}
+
 /// A validated calibration: every float finite, breakpoints strictly increasing, table shape
 /// and capacities right, matrices invertible, outputs bounded inside the rails. The only ways
-/// to get one are [`Calibration::new`] and [`crate::blob::decode`].
-#[derive(Debug, Clone, PartialEq)]
+/// to get one are [`Calibration::new`], [`Calibration::validate_in_place`],
+/// [`crate::blob::decode`] and [`crate::blob::decode_in`].
+#[derive(Debug, Clone, PartialEq, RefCastCustom)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(transparent)]
 pub struct Calibration {
     data: CalibrationData,
 }
@@ -283,6 +313,24 @@ impl Calibration {
     pub fn new(data: CalibrationData) -> Result<Self, Error> {
         validate::validate(&data)?;
         Ok(Self { data })
+    }
+
+    /// Validates `data` where it lies and, when it passes, views it as a calibration, with no
+    /// copy (for a calibration kept in a `static` on the device).
+    ///
+    /// # Errors
+    /// The first `Invalid*` [`Error`] found.
+    pub fn validate_in_place(data: &CalibrationData) -> Result<&Self, Error> {
+        validate::validate(data)?;
+        Ok(Self::view(data))
+    }
+
+    #[ref_cast_custom]
+    const fn view(data: &CalibrationData) -> &Self;
+
+    /// Wraps data that has just passed validation.
+    pub(crate) const fn validated(data: CalibrationData) -> Self {
+        Self { data }
     }
 
     /// The validated data.

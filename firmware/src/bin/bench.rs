@@ -10,11 +10,11 @@
 use core::hint::black_box;
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::hprintln;
 use spincal::blob;
 use spincal::correct::{Corrected, ImuCorrector};
 use spincal::model::{Calibration, CalibrationData, Sensor};
-use spincal_firmware::timer;
+use spincal_firmware::{stack, timer};
 
 const N: usize = 256;
 
@@ -150,35 +150,37 @@ fn main() -> ! {
     black_box(&c);
     report("set_environment_8pt", t0.wrapping_sub(t1), temps.len());
 
-    // Decode + validate the full IMU blob.
+    // Decode + validate the full IMU blob into a slot, as the device does at boot.
+    let mut slot = CalibrationData::empty();
     let t0 = timer::now();
-    let decoded = blob::decode(black_box(IMU_BLOB));
+    let decoded = blob::decode_in(black_box(IMU_BLOB), &mut slot).is_ok();
     let t1 = timer::now();
-    if decoded.as_ref() != Ok(&full) {
+    if !decoded || slot != *full.data() {
         fail("golden IMU blob does not decode to the example");
     }
-    black_box(&decoded);
     report("decode_validate_imu_blob", t0.wrapping_sub(t1), 1);
+    let (_, decode_stack) =
+        stack::high_water(|| black_box(blob::decode_in(black_box(IMU_BLOB), &mut slot)).is_ok());
 
+    let mut one_out = Corrected::<6>::default();
+    let (_, correct_stack) = stack::high_water(|| {
+        one_out = one(&mut c, black_box(inside[3]));
+    });
+    let (_, env_stack) = stack::high_water(|| c.set_environment(black_box(41.0), 3.3));
+    black_box(&one_out);
+    hprintln!("stack correct {}", correct_stack);
+    hprintln!("stack set_environment {}", env_stack);
+    hprintln!("stack decode {}", decode_stack);
     hprintln!("size calibration {}", core::mem::size_of::<Calibration>());
     hprintln!(
         "size imu_corrector {}",
         core::mem::size_of::<ImuCorrector<'_>>()
     );
     hprintln!("size imu_blob {}", IMU_BLOB.len());
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    spincal_firmware::exit(true)
 }
 
 fn fail(what: &str) -> ! {
     hprintln!("FAIL {}", what);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("PANIC: {}", info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
+    spincal_firmware::exit(false)
 }

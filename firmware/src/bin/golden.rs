@@ -5,7 +5,7 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::hprintln;
 use spincal::blob;
 use spincal_firmware::{CASES, Runner, Step};
 
@@ -69,17 +69,5 @@ fn main() -> ! {
         checked,
         failures
     );
-    debug::exit(if failures == 0 {
-        debug::EXIT_SUCCESS
-    } else {
-        debug::EXIT_FAILURE
-    });
-    loop {}
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("PANIC: {}", info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
+    spincal_firmware::exit(failures == 0)
 }

@@ -1,1 +1,58 @@
-fn main() {}
+//! The task runner: `cargo xtask <task>`.
+//!
+//! - `test`: everything CI checks, on a fresh machine too (it installs what it needs).
+//! - `bench`: instruction counts on the Cortex-M4F under QEMU `-icount`, code and RAM sizes,
+//!   and the host criterion benchmarks.
+//! - `calibrate`: the main job, end to end, on the QEMU device.
+//! - `setup`: only the setup steps.
+#![forbid(unsafe_code)]
+
+mod bench;
+mod calibrate;
+mod setup;
+mod test;
+
+use std::process::ExitCode;
+
+const USAGE: &str = "usage: cargo xtask <test | bench | calibrate | setup>
+
+  test       rustfmt, clippy (host and thumb), docs, every host test and the QEMU tests;
+             installs the thumb target and qemu-system-arm when missing
+  bench      instruction counts on the Cortex-M4F (QEMU -icount), sizes, host benchmarks
+  calibrate  the main job on the QEMU device
+  setup      add the thumb target and install qemu-system-arm, nothing else";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("test") => test::run(),
+        Some("bench") => bench::run(&args[1..]),
+        Some("calibrate") => calibrate::run(&args[1..]),
+        Some("setup") => setup::run(true).map(|_| ()),
+        Some("-h" | "--help" | "help") => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        _ => Err(USAGE.to_string()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The repository root.
+fn root() -> std::path::PathBuf {
+    host_tests::qemu::root()
+}
+
+/// `cargo` as the one running us.
+fn cargo() -> std::process::Command {
+    let mut cmd =
+        std::process::Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    cmd.current_dir(root());
+    cmd
+}

@@ -1,0 +1,151 @@
+//! `cargo xtask test`: every check CI runs, all of them, failures reported together.
+
+use std::process::Command;
+use std::time::Instant;
+
+use host_tests::qemu::{REQUIRE_ENV, TARGET};
+
+use crate::{cargo, root, setup};
+
+struct Step {
+    name: &'static str,
+    cmd: Command,
+}
+
+fn step(name: &'static str, args: &[&str]) -> Step {
+    let mut cmd = cargo();
+    cmd.args(args);
+    Step { name, cmd }
+}
+
+pub fn run() -> Result<(), String> {
+    let setup = setup::run(true)?;
+    let mut steps = vec![
+        step("rustfmt", &["fmt", "--all", "--check"]),
+        {
+            let mut s = step("rustfmt (firmware)", &["fmt", "--check"]);
+            s.cmd.current_dir(root().join("firmware"));
+            s
+        },
+        step(
+            "clippy (host)",
+            &[
+                "clippy",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        ),
+        step(
+            "clippy (thumb, no default features)",
+            &[
+                "clippy",
+                "-p",
+                "spincal",
+                "--target",
+                TARGET,
+                "--no-default-features",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        ),
+        step(
+            "clippy (thumb, defmt)",
+            &[
+                "clippy",
+                "-p",
+                "spincal",
+                "--target",
+                TARGET,
+                "--features",
+                "defmt",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        ),
+        {
+            let mut s = step(
+                "clippy (firmware)",
+                &[
+                    "clippy",
+                    "--release",
+                    "--target",
+                    TARGET,
+                    "--",
+                    "-D",
+                    "warnings",
+                ],
+            );
+            s.cmd.current_dir(root().join("firmware"));
+            s
+        },
+        step(
+            "build (thumb, no default features)",
+            &[
+                "build",
+                "-p",
+                "spincal",
+                "--target",
+                TARGET,
+                "--no-default-features",
+            ],
+        ),
+        {
+            let mut s = step("docs", &["doc", "--workspace", "--no-deps"]);
+            s.cmd.env("RUSTDOCFLAGS", "-D warnings");
+            s
+        },
+        {
+            let mut s = step("tests (host and QEMU)", &["test", "--workspace"]);
+            if setup.qemu_missing.is_none() {
+                s.cmd.env(REQUIRE_ENV, "1");
+            }
+            s
+        },
+    ];
+    let mut failed = Vec::new();
+    let total = Instant::now();
+    for s in &mut steps {
+        println!("\n=== xtask test: {} ===", s.name);
+        let start = Instant::now();
+        let ok = s.cmd.status().is_ok_and(|st| st.success());
+        println!(
+            "=== {}: {} in {:.0?} ===",
+            s.name,
+            if ok { "ok" } else { "FAILED" },
+            start.elapsed()
+        );
+        if !ok {
+            failed.push(s.name);
+        }
+    }
+    println!("\n=== summary ({:.0?}) ===", total.elapsed());
+    for s in &steps {
+        println!(
+            "  {:<40} {}",
+            s.name,
+            if failed.contains(&s.name) {
+                "FAILED"
+            } else {
+                "ok"
+            }
+        );
+    }
+    if let Some(why) = &setup.qemu_missing {
+        println!("  {:<40} SKIPPED: {why}", "QEMU tests");
+    }
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{} of {} steps failed: {}",
+            failed.len(),
+            steps.len(),
+            failed.join(", ")
+        ))
+    }
+}
