@@ -1,2 +1,12 @@
-//! `calflash`: the host half of the calibration toolchain.
+//! `calflash`: the host half of the calibration toolchain. Reads observations, fits sensor
+//! models with regression-grade statistics, and reports them.
+//!
+//! The library holds all the logic; `main.rs` is a thin CLI over it.
 #![forbid(unsafe_code)]
+
+pub mod cmd;
+pub mod formula;
+pub mod obs;
+pub mod regression;
+pub mod report;
+pub mod stats;

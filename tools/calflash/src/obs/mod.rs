@@ -1,0 +1,519 @@
+//! Reading observations: a header row naming the columns, then one observation per row, as CSV
+//! or as whitespace-separated text. Only the columns a fit needs are kept, as `f64`, so a file of
+//! millions of rows streams through in one pass. Every error names the file, the line and the
+//! column.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// How a file separates its fields.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Decide from the header line: a comma means CSV, otherwise whitespace.
+    Auto,
+    /// Comma-separated values with a header row (quoting as RFC 4180).
+    Csv,
+    /// Fields separated by runs of spaces or tabs, with a header row.
+    Whitespace,
+}
+
+/// A failure to read observations.
+#[derive(Debug, thiserror::Error)]
+pub enum ObsError {
+    /// The file cannot be opened or read.
+    #[error("{path}: {source}")]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// Bytes that are not UTF-8 text (or a NUL byte).
+    #[error("{path}:{line}: not text (a binary file?); expected UTF-8 text with a header row")]
+    NotText {
+        /// File.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+    },
+    /// No header row.
+    #[error(
+        "{path}: the file is empty; expected a header row naming the columns, then observations"
+    )]
+    Empty {
+        /// File.
+        path: PathBuf,
+    },
+    /// A header and no observations.
+    #[error("{path}: the header has no observations under it")]
+    NoRows {
+        /// File.
+        path: PathBuf,
+    },
+    /// Two columns with one name.
+    #[error("{path}:{line}: the column name `{name}` appears twice in the header")]
+    DuplicateColumn {
+        /// File.
+        path: PathBuf,
+        /// Header line.
+        line: u64,
+        /// The name.
+        name: String,
+    },
+    /// A column the model needs is not in the header.
+    #[error("{path}: no column `{name}`; the header has: {}", available.join(", "))]
+    MissingColumn {
+        /// File.
+        path: PathBuf,
+        /// The missing name.
+        name: String,
+        /// The header's names.
+        available: Vec<String>,
+    },
+    /// A row with another number of fields than the header.
+    #[error("{path}:{line}: {found} fields, but the header has {expected}")]
+    Ragged {
+        /// File.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// Fields found.
+        found: usize,
+        /// Fields in the header.
+        expected: usize,
+    },
+    /// A cell that is not a number.
+    #[error("{path}:{line}:{column}: `{text}` in column `{name}` is not a number")]
+    NotNumber {
+        /// File.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// 1-based field number.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The cell.
+        text: String,
+    },
+    /// NaN or infinity.
+    #[error(
+        "{path}:{line}:{column}: `{text}` in column `{name}` is not a finite number; remove the observation or fix the value"
+    )]
+    NotFinite {
+        /// File.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// 1-based field number.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The cell.
+        text: String,
+    },
+}
+
+/// The columns a fit asked for, one value per observation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    /// The file they came from.
+    pub path: PathBuf,
+    /// The column names, as asked for.
+    pub names: Vec<String>,
+    /// The columns, in the order of `names`.
+    pub columns: Vec<Vec<f64>>,
+    /// The 1-based file line of each observation.
+    pub lines: Vec<u64>,
+}
+
+impl Table {
+    /// Number of observations.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.lines.len()
+    }
+
+    /// True when there are no observations.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.lines.is_empty()
+    }
+
+    /// The column named `name`.
+    #[must_use]
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| self.columns[i].as_slice())
+    }
+
+    /// The observations at the given indices, in that order.
+    #[must_use]
+    pub fn select(&self, rows: &[usize]) -> Self {
+        Self {
+            path: self.path.clone(),
+            names: self.names.clone(),
+            columns: self
+                .columns
+                .iter()
+                .map(|c| rows.iter().map(|&i| c[i]).collect())
+                .collect(),
+            lines: rows.iter().map(|&i| self.lines[i]).collect(),
+        }
+    }
+}
+
+/// Collects the wanted fields of each row into columns.
+struct Collector<'a> {
+    path: &'a Path,
+    wanted: &'a [String],
+    /// For each wanted column, its field index in the file.
+    index: Vec<usize>,
+    header_len: usize,
+    table: Table,
+}
+
+impl<'a> Collector<'a> {
+    fn new(
+        path: &'a Path,
+        wanted: &'a [String],
+        header: &[String],
+        line: u64,
+    ) -> Result<Self, ObsError> {
+        for (i, name) in header.iter().enumerate() {
+            if header[..i].contains(name) {
+                return Err(ObsError::DuplicateColumn {
+                    path: path.into(),
+                    line,
+                    name: name.clone(),
+                });
+            }
+        }
+        let index = wanted
+            .iter()
+            .map(|w| {
+                header
+                    .iter()
+                    .position(|h| h == w)
+                    .ok_or_else(|| ObsError::MissingColumn {
+                        path: path.into(),
+                        name: w.clone(),
+                        available: header.to_vec(),
+                    })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            path,
+            wanted,
+            index,
+            header_len: header.len(),
+            table: Table {
+                path: path.into(),
+                names: wanted.to_vec(),
+                columns: vec![Vec::new(); wanted.len()],
+                lines: Vec::new(),
+            },
+        })
+    }
+
+    fn row<'f>(
+        &mut self,
+        line: u64,
+        fields: impl ExactSizeIterator<Item = &'f str> + Clone,
+    ) -> Result<(), ObsError> {
+        if fields.len() != self.header_len {
+            return Err(ObsError::Ragged {
+                path: self.path.into(),
+                line,
+                found: fields.len(),
+                expected: self.header_len,
+            });
+        }
+        for (k, &i) in self.index.iter().enumerate() {
+            let text = fields.clone().nth(i).unwrap_or_default().trim();
+            let value: f64 = text.parse().map_err(|_| ObsError::NotNumber {
+                path: self.path.into(),
+                line,
+                column: i + 1,
+                name: self.wanted[k].clone(),
+                text: text.into(),
+            })?;
+            if !value.is_finite() {
+                return Err(ObsError::NotFinite {
+                    path: self.path.into(),
+                    line,
+                    column: i + 1,
+                    name: self.wanted[k].clone(),
+                    text: text.into(),
+                });
+            }
+            self.table.columns[k].push(value);
+        }
+        self.table.lines.push(line);
+        Ok(())
+    }
+
+    fn finish(self) -> Result<Table, ObsError> {
+        if self.table.is_empty() {
+            return Err(ObsError::NoRows {
+                path: self.path.into(),
+            });
+        }
+        Ok(self.table)
+    }
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> ObsError + '_ {
+    move |source| ObsError::Io {
+        path: path.into(),
+        source,
+    }
+}
+
+/// Reads the `wanted` columns of the file at `path`.
+///
+/// # Errors
+/// An [`ObsError`] naming the file, line and column.
+pub fn read_columns(path: &Path, wanted: &[String], format: Format) -> Result<Table, ObsError> {
+    let file = File::open(path).map_err(io(path))?;
+    let mut reader = BufReader::with_capacity(1 << 16, file);
+    let format = match format {
+        Format::Auto => sniff(path, &mut reader)?,
+        f => f,
+    };
+    match format {
+        Format::Csv => read_csv(path, reader, wanted),
+        _ => read_whitespace(path, reader, wanted),
+    }
+}
+
+/// Reads lines until the first that is neither empty nor a comment, without consuming any.
+fn sniff(path: &Path, reader: &mut BufReader<File>) -> Result<Format, ObsError> {
+    let buf = reader.fill_buf().map_err(io(path))?;
+    let text = String::from_utf8_lossy(&buf[..buf.len().min(64 * 1024)]);
+    let header = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .unwrap_or("");
+    Ok(if header.contains(',') {
+        Format::Csv
+    } else {
+        Format::Whitespace
+    })
+}
+
+/// Counts lines in the bytes passing through, so that a record's byte offset can be turned
+/// into its line (the csv crate does not count blank lines).
+struct LineCounter<R> {
+    inner: R,
+    offset: u64,
+    /// Byte offsets of newlines read but not yet passed by a record.
+    newlines: std::rc::Rc<std::cell::RefCell<std::collections::VecDeque<u64>>>,
+}
+
+impl<R: Read> Read for LineCounter<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        let mut q = self.newlines.borrow_mut();
+        for (i, b) in buf[..n].iter().enumerate() {
+            if *b == b'\n' {
+                q.push_back(self.offset + i as u64);
+            }
+        }
+        self.offset += n as u64;
+        Ok(n)
+    }
+}
+
+fn read_csv(path: &Path, reader: impl Read, wanted: &[String]) -> Result<Table, ObsError> {
+    let newlines = std::rc::Rc::new(std::cell::RefCell::new(std::collections::VecDeque::new()));
+    let reader = LineCounter {
+        inner: reader,
+        offset: 0,
+        newlines: newlines.clone(),
+    };
+    let mut lines_before = 0u64;
+    let mut line_of = |byte: u64| {
+        let mut q = newlines.borrow_mut();
+        while q.front().is_some_and(|&nl| nl < byte) {
+            q.pop_front();
+            lines_before += 1;
+        }
+        lines_before + 1
+    };
+    let mut csv = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_reader(reader);
+    let mut record = csv::ByteRecord::new();
+    let mut collector: Option<Collector<'_>> = None;
+    loop {
+        let more = csv
+            .read_byte_record(&mut record)
+            .map_err(|e| csv_error(path, &e))?;
+        if !more {
+            break;
+        }
+        // The line of a record is that of its last byte: blank lines before it belong to it
+        // in the csv crate's positions.
+        let line = line_of(csv.position().byte().saturating_sub(1));
+        if record.iter().any(|f| f.contains(&0)) {
+            return Err(ObsError::NotText {
+                path: path.into(),
+                line,
+            });
+        }
+        let fields: Vec<&str> = record
+            .iter()
+            .map(std::str::from_utf8)
+            .collect::<Result<_, _>>()
+            .map_err(|_| ObsError::NotText {
+                path: path.into(),
+                line,
+            })?;
+        if fields.len() == 1 && fields[0].is_empty() {
+            continue;
+        }
+        match &mut collector {
+            None => {
+                let header: Vec<String> = fields.iter().map(|s| s.to_string()).collect();
+                collector = Some(Collector::new(path, wanted, &header, line)?);
+            }
+            Some(c) => c.row(line, fields.iter().copied())?,
+        }
+    }
+    collector
+        .ok_or(ObsError::Empty { path: path.into() })?
+        .finish()
+}
+
+fn csv_error(path: &Path, e: &csv::Error) -> ObsError {
+    match e.kind() {
+        csv::ErrorKind::Io(err) => ObsError::Io {
+            path: path.into(),
+            source: std::io::Error::new(err.kind(), err.to_string()),
+        },
+        _ => ObsError::NotText {
+            path: path.into(),
+            line: e.position().map_or(0, csv::Position::line),
+        },
+    }
+}
+
+fn read_whitespace(
+    path: &Path,
+    mut reader: impl BufRead,
+    wanted: &[String],
+) -> Result<Table, ObsError> {
+    let mut buf = Vec::with_capacity(256);
+    let mut line = 0u64;
+    let mut collector: Option<Collector<'_>> = None;
+    loop {
+        buf.clear();
+        if reader.read_until(b'\n', &mut buf).map_err(io(path))? == 0 {
+            break;
+        }
+        line += 1;
+        if buf.contains(&0) {
+            return Err(ObsError::NotText {
+                path: path.into(),
+                line,
+            });
+        }
+        let text = std::str::from_utf8(&buf).map_err(|_| ObsError::NotText {
+            path: path.into(),
+            line,
+        })?;
+        let text = text.trim();
+        if text.is_empty() || text.starts_with('#') {
+            continue;
+        }
+        let fields = text.split_whitespace();
+        match &mut collector {
+            None => {
+                let header: Vec<String> = fields.map(str::to_string).collect();
+                collector = Some(Collector::new(path, wanted, &header, line)?);
+            }
+            Some(c) => {
+                let fields: Vec<&str> = fields.collect();
+                c.row(line, fields.iter().copied())?;
+            }
+        }
+    }
+    collector
+        .ok_or(ObsError::Empty { path: path.into() })?
+        .finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(name: &str, content: &[u8]) -> (tempfile::TempDir, PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join(name);
+        std::fs::write(&p, content).unwrap();
+        (dir, p)
+    }
+
+    fn want(names: &[&str]) -> Vec<String> {
+        names.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn csv_and_whitespace_read_the_same() {
+        let (_d, csv) = write(
+            "a.csv",
+            b"# comment\nrate, volts ,temp\n1,2.5,20\n\n-3,4e-3,21\n",
+        );
+        let (_e, ws) = write(
+            "a.txt",
+            b"rate volts\ttemp\n1   2.5 20\n# skipped\n-3 4e-3 21\n",
+        );
+        for (p, lines) in [(csv, [3, 5]), (ws, [2, 4])] {
+            let t = read_columns(&p, &want(&["volts", "rate"]), Format::Auto).unwrap();
+            assert_eq!(t.columns, vec![vec![2.5, 4e-3], vec![1.0, -3.0]]);
+            assert_eq!(t.lines, lines, "{}", p.display());
+        }
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        let cases: [(&[u8], &str); 9] = [
+            (b"", "is empty"),
+            (b"a,b\n", "no observations"),
+            (b"a,b\n1,2\n3\n", ":3: 1 fields, but the header has 2"),
+            (b"a,b\n1,x\n", ":2:2: `x` in column `b` is not a number"),
+            (
+                b"a,b\n1,NaN\n",
+                ":2:2: `NaN` in column `b` is not a finite number",
+            ),
+            (b"a,b\n1,inf\n", "not a finite number"),
+            (b"a,c\n1,2\n", "no column `b`; the header has: a, c"),
+            (b"a,a,b\n1,2,3\n", "`a` appears twice"),
+            (b"a,b\n1,\x00\x01\n", ":2: not text"),
+        ];
+        for (content, expected) in cases {
+            let (_d, p) = write("x.csv", content);
+            let e = read_columns(&p, &want(&["a", "b"]), Format::Auto).unwrap_err();
+            let msg = e.to_string();
+            assert!(msg.contains(expected), "{msg}");
+            assert!(msg.starts_with(&p.display().to_string()), "{msg}");
+        }
+        let (_d, p) = write(
+            "bin.dat",
+            &[0x89, b'P', b'N', b'G', 0, 0xff, 0xfe, b'\n', 1, 2],
+        );
+        let e = read_columns(&p, &want(&["a"]), Format::Auto).unwrap_err();
+        assert!(e.to_string().contains(":1: not text"), "{e}");
+        let e =
+            read_columns(Path::new("/nonexistent/x.csv"), &want(&["a"]), Format::Auto).unwrap_err();
+        assert!(e.to_string().starts_with("/nonexistent/x.csv: "), "{e}");
+    }
+}

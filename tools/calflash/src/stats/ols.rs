@@ -1,0 +1,430 @@
+//! Ordinary least squares by Householder QR, with the statistics of a regression package.
+//!
+//! Solve, factor and diagnose are kept apart: the columns are scaled to unit length, factored
+//! `X D^-1 = Q R`, and everything else (coefficients, covariance, leverage, influence) comes
+//! from `Q` and `R^-1` without ever forming `X'X`. Every diagnostic is closed form, O(n p) or
+//! O(n p^2): no leave-one-out refits.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::dist;
+use super::influence::{self, Influence};
+
+/// Options of a fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// Significance level for confidence intervals, outlier and influence thresholds.
+    pub alpha: f64,
+    /// A column whose part independent of the columns before it is smaller than this fraction
+    /// of its length is rank deficient.
+    pub rank_tolerance: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            alpha: 0.05,
+            rank_tolerance: 1e-10,
+        }
+    }
+}
+
+/// Why a model cannot be fitted.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FitError {
+    /// Not more observations than terms: no residual degree of freedom.
+    #[error("{n} observations cannot fit {p} terms: at least {} are needed for one residual degree of freedom", p + 1)]
+    TooFewObservations {
+        /// Observations.
+        n: usize,
+        /// Terms.
+        p: usize,
+    },
+    /// A column that the columns before it explain (to the rank tolerance).
+    #[error("column {column} is a linear combination of the columns before it")]
+    RankDeficient {
+        /// The column index.
+        column: usize,
+        /// Its approximation by earlier columns: `(index, coefficient)`.
+        combination: Vec<(usize, f64)>,
+    },
+    /// NaN or infinity in the data.
+    #[error("the data hold a value that is not finite")]
+    NotFinite,
+}
+
+/// Everything a fit reports. Vectors over terms are in the order of `names`; vectors over
+/// observations are in the order of the data.
+#[derive(Debug, Clone)]
+pub struct Fit {
+    /// Term names.
+    pub names: Vec<String>,
+    /// Whether the model has an intercept (R^2 is then centered).
+    pub intercept: bool,
+    /// Observations.
+    pub n: usize,
+    /// Terms.
+    pub p: usize,
+    /// Residual degrees of freedom, `n - p`.
+    pub dof: usize,
+    /// Significance level used for intervals and flags.
+    pub alpha: f64,
+    /// Coefficients.
+    pub coefficients: Vec<f64>,
+    /// Standard errors.
+    pub std_errors: Vec<f64>,
+    /// t statistics.
+    pub t: Vec<f64>,
+    /// Two-sided p-values.
+    pub p_values: Vec<f64>,
+    /// Lower ends of the `1 - alpha` confidence intervals.
+    pub ci_lower: Vec<f64>,
+    /// Upper ends.
+    pub ci_upper: Vec<f64>,
+    /// Covariance of the coefficients, `sigma2 (X'X)^-1`.
+    pub covariance: DMatrix<f64>,
+    /// Residual sum of squares.
+    pub rss: f64,
+    /// Residual variance `rss / dof`.
+    pub sigma2: f64,
+    /// Total sum of squares (about the mean with an intercept, about 0 without).
+    pub tss: f64,
+    /// Coefficient of determination.
+    pub r2: f64,
+    /// Adjusted R^2: `1 - (n - k) / (n - p) (1 - R^2)`, `k` = 1 with an intercept, else 0.
+    pub adj_r2: f64,
+    /// Model degrees of freedom, `p - k`.
+    pub df_model: usize,
+    /// F statistic of the model against the intercept alone (or against nothing).
+    pub f: f64,
+    /// Its p-value.
+    pub f_p: f64,
+    /// Gaussian log-likelihood at the estimate.
+    pub log_likelihood: f64,
+    /// Akaike information criterion, `-2 llf + 2 p`.
+    pub aic: f64,
+    /// Bayesian information criterion, `-2 llf + ln(n) p`.
+    pub bic: f64,
+    /// Ratio of the largest to the smallest singular value of the design matrix.
+    pub condition_number: f64,
+    /// Variance inflation factor of each term; `None` for the intercept.
+    pub vif: Vec<Option<f64>>,
+    /// Fitted values.
+    pub fitted: Vec<f64>,
+    /// Residuals.
+    pub residuals: Vec<f64>,
+    /// Per-observation influence measures.
+    pub influence: Influence,
+    /// Durbin-Watson statistic of the residuals in data order.
+    pub durbin_watson: f64,
+    /// `A` with `(X'X)^-1 = A A'` (upper triangular), for prediction variances.
+    factor: DMatrix<f64>,
+}
+
+/// A prediction at one point of the model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prediction {
+    /// The fitted value.
+    pub value: f64,
+    /// Variance of the fitted value (the calibration's own error there): `x' C x`.
+    pub variance: f64,
+    /// Variance of a new observation there: `sigma2 + x' C x`.
+    pub observation_variance: f64,
+}
+
+impl Fit {
+    /// The prediction at a model row `x` (as built by the formula: intercept first).
+    ///
+    /// # Panics
+    /// When `x` does not have `p` entries.
+    #[must_use]
+    pub fn predict(&self, x: &[f64]) -> Prediction {
+        assert_eq!(x.len(), self.p, "a model row has one entry per term");
+        let value = x.iter().zip(&self.coefficients).map(|(a, b)| a * b).sum();
+        // A' x, then its squared length.
+        let mut q = 0.0;
+        for j in 0..self.p {
+            let s: f64 = (0..=j).map(|i| self.factor[(i, j)] * x[i]).sum();
+            q += s * s;
+        }
+        let variance = self.sigma2 * q;
+        Prediction {
+            value,
+            variance,
+            observation_variance: self.sigma2 + variance,
+        }
+    }
+
+    /// `(X'X)^-1`: the covariance of the coefficients per unit residual variance.
+    #[must_use]
+    pub fn unscaled_covariance(&self) -> DMatrix<f64> {
+        &self.factor * self.factor.transpose()
+    }
+}
+
+/// Fits `y = X b + e` by least squares.
+///
+/// # Errors
+/// [`FitError`] when there are not more observations than columns, a column is (numerically)
+/// a combination of the columns before it, or the data are not finite.
+pub fn fit(
+    x: &DMatrix<f64>,
+    y: &[f64],
+    names: Vec<String>,
+    intercept: bool,
+    opts: &Options,
+) -> Result<Fit, FitError> {
+    let (n, p) = x.shape();
+    assert_eq!(y.len(), n, "one response per row");
+    assert_eq!(names.len(), p, "one name per column");
+    if n <= p {
+        return Err(FitError::TooFewObservations { n, p });
+    }
+    if !y.iter().chain(x.iter()).all(|v| v.is_finite()) {
+        return Err(FitError::NotFinite);
+    }
+    // Scale the columns to unit length: the factorisation then sees the geometry, not units.
+    let norms: Vec<f64> = x.column_iter().map(|c| c.norm()).collect();
+    if let Some(j) = norms.iter().position(|&d| d == 0.0) {
+        return Err(FitError::RankDeficient {
+            column: j,
+            combination: Vec::new(),
+        });
+    }
+    let mut xs = x.clone();
+    for (j, mut c) in xs.column_iter_mut().enumerate() {
+        c /= norms[j];
+    }
+    let qr = xs.qr();
+    let r = qr.r();
+    for j in 0..p {
+        if r[(j, j)].abs() < opts.rank_tolerance {
+            return Err(rank_deficient(&r, &norms, j));
+        }
+    }
+    let q = qr.q();
+    // R^-1 (upper triangular), then A = D^-1 R^-1.
+    let r_inv = r
+        .clone()
+        .solve_upper_triangular(&DMatrix::identity(p, p))
+        .ok_or_else(|| rank_deficient(&r, &norms, p - 1))?;
+    let mut factor = r_inv;
+    for (i, mut row) in factor.row_iter_mut().enumerate() {
+        row /= norms[i];
+    }
+    // b = A Q'y.
+    let qty = q.tr_mul(&DVector::from_column_slice(y));
+    let beta = &factor * &qty;
+    let coefficients: Vec<f64> = beta.iter().copied().collect();
+    let fitted_v = x * &beta;
+    let fitted: Vec<f64> = fitted_v.iter().copied().collect();
+    let residuals: Vec<f64> = y.iter().zip(&fitted).map(|(a, b)| a - b).collect();
+    let rss: f64 = residuals.iter().map(|e| e * e).sum();
+    let dof = n - p;
+    let sigma2 = rss / dof as f64;
+    let unscaled = &factor * factor.transpose();
+    let covariance = &unscaled * sigma2;
+    let std_errors: Vec<f64> = (0..p).map(|j| covariance[(j, j)].sqrt()).collect();
+    let t: Vec<f64> = coefficients
+        .iter()
+        .zip(&std_errors)
+        .map(|(b, s)| b / s)
+        .collect();
+    let p_values: Vec<f64> = t
+        .iter()
+        .map(|&t| dist::t_two_sided(t, dof as f64))
+        .collect();
+    let crit = dist::t_upper_quantile(opts.alpha / 2.0, dof as f64);
+    let ci_lower = coefficients
+        .iter()
+        .zip(&std_errors)
+        .map(|(b, s)| b - crit * s)
+        .collect();
+    let ci_upper = coefficients
+        .iter()
+        .zip(&std_errors)
+        .map(|(b, s)| b + crit * s)
+        .collect();
+
+    let k = usize::from(intercept);
+    let tss = if intercept {
+        let mean = y.iter().sum::<f64>() / n as f64;
+        y.iter().map(|v| (v - mean) * (v - mean)).sum()
+    } else {
+        y.iter().map(|v| v * v).sum()
+    };
+    let r2 = 1.0 - rss / tss;
+    let adj_r2 = 1.0 - (n - k) as f64 / dof as f64 * (1.0 - r2);
+    let df_model = p - k;
+    let (f, f_p) = if df_model == 0 {
+        (f64::NAN, f64::NAN)
+    } else {
+        let f = (tss - rss) / df_model as f64 / sigma2;
+        (f, dist::f_upper(f, df_model as f64, dof as f64))
+    };
+    let nf = n as f64;
+    let log_likelihood = -nf / 2.0 * ((2.0 * std::f64::consts::PI).ln() + (rss / nf).ln() + 1.0);
+    let aic = -2.0 * log_likelihood + 2.0 * p as f64;
+    let bic = -2.0 * log_likelihood + nf.ln() * p as f64;
+
+    // Singular values of X are those of R D.
+    let mut rd = r.clone();
+    for (j, mut c) in rd.column_iter_mut().enumerate() {
+        c *= norms[j];
+    }
+    let sv = rd.singular_values();
+    let condition_number = sv.max() / sv.min();
+
+    let vif = (0..p)
+        .map(|j| {
+            let col = x.column(j);
+            let is_constant = col.iter().all(|v| *v == col[0]);
+            if intercept && is_constant {
+                None
+            } else {
+                let ss = if intercept {
+                    let mean = col.mean();
+                    col.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>()
+                } else {
+                    col.iter().map(|v| v * v).sum()
+                };
+                Some(unscaled[(j, j)] * ss)
+            }
+        })
+        .collect();
+
+    let influence = influence::compute(&q, &factor, &residuals, rss, dof, p, opts.alpha);
+    let durbin_watson = residuals
+        .windows(2)
+        .map(|w| (w[1] - w[0]).powi(2))
+        .sum::<f64>()
+        / rss;
+
+    Ok(Fit {
+        names,
+        intercept,
+        n,
+        p,
+        dof,
+        alpha: opts.alpha,
+        coefficients,
+        std_errors,
+        t,
+        p_values,
+        ci_lower,
+        ci_upper,
+        covariance,
+        rss,
+        sigma2,
+        tss,
+        r2,
+        adj_r2,
+        df_model,
+        f,
+        f_p,
+        log_likelihood,
+        aic,
+        bic,
+        condition_number,
+        vif,
+        fitted,
+        residuals,
+        influence,
+        durbin_watson,
+        factor,
+    })
+}
+
+/// Column `j` is (nearly) explained by the columns before it: find the combination.
+fn rank_deficient(r: &DMatrix<f64>, norms: &[f64], j: usize) -> FitError {
+    let combination = if j == 0 {
+        Vec::new()
+    } else {
+        let r11 = r.view((0, 0), (j, j)).clone_owned();
+        let rhs = r.view((0, j), (j, 1)).clone_owned();
+        r11.solve_upper_triangular(&rhs).map_or_else(Vec::new, |c| {
+            // Scaled columns: x_j / d_j = sum c_k x_k / d_k.
+            (0..j).map(|k| (k, c[k] * norms[j] / norms[k])).collect()
+        })
+    };
+    FitError::RankDeficient {
+        column: j,
+        combination,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line_data() -> (DMatrix<f64>, Vec<f64>) {
+        // The seed's example 1: x = 1..10, y = 2 + 3x + small noise.
+        let noise = [0.1, -0.2, 0.05, 0.0, 0.15, -0.1, 0.2, -0.05, -0.1, 0.05];
+        let x = DMatrix::from_fn(10, 2, |i, j| if j == 0 { 1.0 } else { (i + 1) as f64 });
+        let y = (0..10)
+            .map(|i| 2.0 + 3.0 * (i + 1) as f64 + noise[i])
+            .collect();
+        (x, y)
+    }
+
+    #[test]
+    fn seed_example_covariance_form() {
+        let (x, y) = line_data();
+        let f = fit(
+            &x,
+            &y,
+            vec!["1".into(), "x".into()],
+            true,
+            &Options::default(),
+        )
+        .unwrap();
+        // (X'X)^-1 of the seed: [[0.4667, -0.0667], [-0.0667, 0.0121]].
+        let c = f.unscaled_covariance();
+        assert!((c[(0, 0)] - 0.466_666_666_666_7).abs() < 1e-12);
+        assert!((c[(0, 1)] + 0.066_666_666_666_7).abs() < 1e-12);
+        assert!((c[(1, 1)] - 0.012_121_212_121_2).abs() < 1e-12);
+        assert!((f.coefficients[1] - 3.0).abs() < 0.05);
+        // Prediction variance grows away from the centroid (x = 5.5).
+        let at = |v: f64| f.predict(&[1.0, v]).variance;
+        assert!(at(5.5) < at(1.0) && at(1.0) < at(-5.0));
+        assert!((at(5.5) / f.sigma2 - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rank_deficiency_finds_the_combination() {
+        let x = DMatrix::from_fn(6, 3, |i, j| match j {
+            0 => 1.0,
+            1 => i as f64,
+            _ => 2.0 - 3.0 * i as f64,
+        });
+        let y: Vec<f64> = (0..6).map(|i| i as f64 * 0.5).collect();
+        let e = fit(
+            &x,
+            &y,
+            vec!["1".into(), "a".into(), "b".into()],
+            true,
+            &Options::default(),
+        )
+        .unwrap_err();
+        let FitError::RankDeficient {
+            column,
+            combination,
+        } = e
+        else {
+            panic!("{e}")
+        };
+        assert_eq!(column, 2);
+        assert!((combination[0].1 - 2.0).abs() < 1e-9 && (combination[1].1 + 3.0).abs() < 1e-9);
+        let e = fit(
+            &x.view((0, 0), (2, 2)).clone_owned(),
+            &y[..2],
+            vec!["1".into(), "a".into()],
+            true,
+            &Options::default(),
+        );
+        assert!(matches!(
+            e,
+            Err(FitError::TooFewObservations { n: 2, p: 2 })
+        ));
+    }
+}
