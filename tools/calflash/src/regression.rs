@@ -270,6 +270,9 @@ fn model_row(formula: &Formula, point: &Point) -> Result<Vec<f64>, RegressionErr
 /// # Errors
 /// A [`RegressionError`] naming the file, line, column or term.
 pub fn run(req: &Request) -> Result<Regression, RegressionError> {
+    if let Some(reduced) = &req.compare {
+        check_nested(reduced, &req.formula)?;
+    }
     let extra: Vec<String> = req.compare.iter().flat_map(Formula::columns).collect();
     let table = read(req, &extra)?;
     let opts = &req.options;
@@ -353,18 +356,10 @@ pub fn run(req: &Request) -> Result<Regression, RegressionError> {
         .compare
         .as_ref()
         .map(|reduced| {
-            if reduced.response != formula.response
-                || (reduced.intercept && !formula.intercept)
-                || reduced.terms.iter().any(|t| !formula.terms.contains(t))
-            {
-                return Err(RegressionError::Request(format!(
-                    "--compare: {reduced} is not nested in {formula} (same response, and only \
-                     terms the full model has)"
-                )));
-            }
+            check_nested(reduced, &formula)?;
             let d = reduced.design(&table);
             let rf = fit_design(&d, reduced, &table, opts)?;
-            Ok(Comparison {
+            Ok::<_, RegressionError>(Comparison {
                 reduced: reduced.to_string(),
                 reduced_aic: rf.aic,
                 test: select::partial_f(&f, &rf),
@@ -390,6 +385,24 @@ pub fn run(req: &Request) -> Result<Regression, RegressionError> {
         elimination,
         holdout,
     })
+}
+
+fn check_nested(reduced: &Formula, full: &Formula) -> Result<(), RegressionError> {
+    if reduced.response != full.response
+        || (reduced.intercept && !full.intercept)
+        || reduced.terms.iter().any(|t| !full.terms.contains(t))
+    {
+        return Err(RegressionError::Request(format!(
+            "--compare: {reduced} is not nested in {full} (same response, and only terms the \
+             full model has)"
+        )));
+    }
+    if reduced.width() == full.width() {
+        return Err(RegressionError::Request(format!(
+            "--compare: {reduced} is the same model as {full}"
+        )));
+    }
+    Ok(())
 }
 
 fn warnings(f: &Fit, runs: &[(String, RunsTest)]) -> Vec<String> {

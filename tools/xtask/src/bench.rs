@@ -86,3 +86,37 @@ pub fn run(args: &[String]) -> Result<(), String> {
     }
     Ok(())
 }
+
+/// `cargo xtask bench-fit`: calflash's engine (criterion), then statsmodels on the same design
+/// when Python has it (it says so and skips otherwise).
+pub fn fit() -> Result<(), String> {
+    let ok = cargo()
+        .args([
+            "bench", "-p", "calflash", "--bench", "fit", "--", "--noplot",
+        ])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !ok {
+        return Err("calflash fit benchmark failed".into());
+    }
+    let have = std::process::Command::new("python3")
+        .args(["-c", "import statsmodels"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !have {
+        println!(
+            "statsmodels: SKIPPED, python3 cannot import statsmodels (pip install statsmodels)"
+        );
+        return Ok(());
+    }
+    let script = crate::root().join("tools/calflash/crosscheck/bench_statsmodels.py");
+    let ok = std::process::Command::new("python3")
+        .arg(script)
+        .status()
+        .is_ok_and(|s| s.success());
+    if ok {
+        Ok(())
+    } else {
+        Err("statsmodels benchmark failed".into())
+    }
+}

@@ -3,6 +3,7 @@
 //! - `test`: everything CI checks, on a fresh machine too (it installs what it needs).
 //! - `bench`: instruction counts on the Cortex-M4F under QEMU `-icount`, code and RAM sizes,
 //!   and the host criterion benchmarks.
+//! - `bench-fit`: the regression engine against statsmodels, in the same run.
 //! - `calibrate`: the main job, end to end, on the QEMU device.
 //! - `setup`: only the setup steps.
 #![forbid(unsafe_code)]
@@ -14,11 +15,12 @@ mod test;
 
 use std::process::ExitCode;
 
-const USAGE: &str = "usage: cargo xtask <test | bench | calibrate | setup>
+const USAGE: &str = "usage: cargo xtask <test | bench | bench-fit | calibrate | setup>
 
   test       rustfmt, clippy (host and thumb), docs, every host test and the QEMU tests;
              installs the thumb target and qemu-system-arm when missing
   bench      instruction counts on the Cortex-M4F (QEMU -icount), sizes, host benchmarks
+  bench-fit  the regression engine at n = 10^4..10^6 by 10 terms, and statsmodels in the same run
   calibrate  the main job on the QEMU device
   setup      add the thumb target and install qemu-system-arm, nothing else";
 
@@ -27,6 +29,7 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("test") => test::run(),
         Some("bench") => bench::run(&args[1..]),
+        Some("bench-fit") => bench::fit(),
         Some("calibrate") => calibrate::run(&args[1..]),
         Some("setup") => setup::run(true).map(|_| ()),
         Some("-h" | "--help" | "help") => {

@@ -19,8 +19,16 @@ pub fn write_atomically(
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    let mut tmp =
-        tempfile::NamedTempFile::new_in(dir).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut builder = tempfile::Builder::new();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt as _;
+        // An ordinary file for its reader, not the private 0600 of a temporary file.
+        builder.permissions(std::fs::Permissions::from_mode(0o644));
+    }
+    let mut tmp = builder
+        .tempfile_in(dir)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file_mut());
         contents(&mut w).map_err(|e| format!("{}: {e}", path.display()))?;

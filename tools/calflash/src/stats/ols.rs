@@ -390,6 +390,41 @@ mod tests {
         assert!((at(5.5) / f.sigma2 - 0.1).abs() < 1e-12);
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// The residuals are orthogonal to every column (to rounding scaled by eps n), the
+        /// fitted values rebuild y, and the covariance is symmetric positive definite.
+        #[test]
+        fn normal_equations_hold(n in 8usize..200, p in 1usize..7, seed in 0u64..1000) {
+            let mut state = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
+            let mut u = move || {
+                state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+                (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+            };
+            let p = p.min(n - 1);
+            let x = DMatrix::from_fn(n, p, |_, j| if j == 0 { 1.0 } else { u() * 10f64.powi(j as i32 - 2) });
+            let y: Vec<f64> = (0..n).map(|_| u()).collect();
+            let names = (0..p).map(|j| format!("x{j}")).collect();
+            let f = fit(&x, &y, names, true, &Options::default()).unwrap();
+            let scale = f64::EPSILON * n as f64 * 10.0;
+            for j in 0..p {
+                let col = x.column(j);
+                let dot: f64 = col.iter().zip(&f.residuals).map(|(a, e)| a * e).sum();
+                let bound = scale * col.norm() * y.iter().map(|v| v * v).sum::<f64>().sqrt();
+                proptest::prop_assert!(dot.abs() <= bound, "column {j}: {dot:e} > {bound:e}");
+            }
+            for ((fi, ei), yi) in f.fitted.iter().zip(&f.residuals).zip(&y) {
+                proptest::prop_assert!((fi + ei - yi).abs() <= 4.0 * f64::EPSILON * (1.0 + yi.abs()));
+            }
+            let c = f.unscaled_covariance();
+            proptest::prop_assert!((&c - c.transpose()).amax() <= 1e-12 * c.amax());
+            proptest::prop_assert!(c.clone().cholesky().is_some());
+            let h: f64 = f.influence.leverage.iter().sum();
+            proptest::prop_assert!((h - p as f64).abs() < 1e-9 * p as f64, "trace of the hat matrix {h}");
+        }
+    }
+
     #[test]
     fn rank_deficiency_finds_the_combination() {
         let x = DMatrix::from_fn(6, 3, |i, j| match j {

@@ -65,7 +65,8 @@ pub fn runs_test(residuals: &[f64], order: &[usize]) -> RunsTest {
 #[must_use]
 pub fn order_by(values: &[f64]) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..values.len()).collect();
-    idx.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+    // Ties broken by index: the same order as a stable sort, at the speed of an unstable one.
+    idx.sort_unstable_by(|&a, &b| values[a].total_cmp(&values[b]).then(a.cmp(&b)));
     idx
 }
 

@@ -1,0 +1,268 @@
+//! `calflash fit` from the command line: the messages users read for bad input (exact text,
+//! the file path replaced by `<FILE>`), the exit code, and that no output file is left behind.
+
+use std::path::Path;
+use std::process::Command;
+
+fn calflash(dir: &Path, args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+const GOOD: &str =
+    "rate,temp,volts\n-100,20,1.5\n-50,25,2.0\n0,30,2.5\n50,20,3.0\n100,25,3.51\n150,30,4.0\n";
+
+fn bad_input(name: &str, content: &[u8], model: &str) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join(name);
+    std::fs::write(&file, content).unwrap();
+    let (code, stdout, stderr) = calflash(
+        dir.path(),
+        &["fit", name, "--model", model, "--json", "out.json"],
+    );
+    assert_eq!(code, 1, "{name}: exit code; stderr: {stderr}");
+    assert!(stdout.is_empty(), "{name}: printed {stdout}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
+    assert!(
+        !dir.path().join("out.json").exists(),
+        "{name}: an output file was left behind"
+    );
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        left,
+        [std::ffi::OsString::from(name)],
+        "{name}: stray files {left:?}"
+    );
+    stderr.trim_end().replace(name, "<FILE>")
+}
+
+#[test]
+fn bad_input_gets_one_clear_line_and_no_output() {
+    let m = "volts ~ 1 + rate + temp";
+    let cases: Vec<(&str, Vec<u8>, &str, &str)> = vec![
+        (
+            "missing column",
+            b"rate,volts\n1,2\n".to_vec(),
+            m,
+            "calflash: <FILE>: the model uses `temp` (in term temp), but the file has no such column; its columns are: rate, volts",
+        ),
+        (
+            "missing response",
+            b"rate,temp\n1,2\n".to_vec(),
+            m,
+            "calflash: <FILE>: the model uses `volts` (in the response), but the file has no such column; its columns are: rate, temp",
+        ),
+        (
+            "non-numeric cell",
+            b"rate,temp,volts\n1,20,2\n2,x20,3\n".to_vec(),
+            m,
+            "calflash: <FILE>:3:2: `x20` in column `temp` is not a number",
+        ),
+        (
+            "NaN",
+            b"rate,temp,volts\n1,20,NaN\n".to_vec(),
+            m,
+            "calflash: <FILE>:2:3: `NaN` in column `volts` is not a finite number; remove the observation or fix the value",
+        ),
+        (
+            "infinity",
+            b"rate temp volts\n1 20 2\n2 inf 3\n".to_vec(),
+            m,
+            "calflash: <FILE>:3:2: `inf` in column `temp` is not a finite number; remove the observation or fix the value",
+        ),
+        (
+            "empty file",
+            b"".to_vec(),
+            m,
+            "calflash: <FILE>: the file is empty; expected a header row naming the columns, then observations",
+        ),
+        (
+            "header only",
+            b"rate,temp,volts\n".to_vec(),
+            m,
+            "calflash: <FILE>: the header has no observations under it",
+        ),
+        (
+            "ragged row",
+            b"rate,temp,volts\n1,20,2\n2,3\n".to_vec(),
+            m,
+            "calflash: <FILE>:3: 2 fields, but the header has 3",
+        ),
+        (
+            "fewer observations than terms",
+            b"rate,temp,volts\n1,20,2\n2,25,3\n3,20,4\n".to_vec(),
+            "volts ~ 1 + rate + temp + rate:temp",
+            "calflash: <FILE>: 3 observations cannot fit 4 terms: at least 5 are needed for one residual degree of freedom",
+        ),
+        (
+            "constant column",
+            b"rate,temp,volts\n1,25,2\n2,25,3\n3,25,4.1\n4,25,5\n".to_vec(),
+            m,
+            "calflash: <FILE>: temp is not observable: it is constant (25) over all 4 observations, so it cannot be told apart from the intercept; vary it, or drop the term",
+        ),
+        (
+            "two rates for a quadratic",
+            b"rate,temp,volts\n-1,20,2\n1,25,3\n-1,30,2.1\n1,20,3.1\n".to_vec(),
+            "volts ~ 1 + rate + rate^2",
+            "calflash: <FILE>: rate^2 is not observable: rate takes only 2 distinct values; it needs at least 3",
+        ),
+        (
+            "unknown variable",
+            GOOD.as_bytes().to_vec(),
+            "volts ~ 1 + rate + tmp",
+            "calflash: <FILE>: the model uses `tmp` (in term tmp), but the file has no such column; its columns are: rate, temp, volts",
+        ),
+        (
+            "malformed formula",
+            GOOD.as_bytes().to_vec(),
+            "volts ~ 1 + rate +",
+            "calflash: model: expected a term, found the end of the formula at column 19 of `volts ~ 1 + rate +`",
+        ),
+        (
+            "not text",
+            vec![
+                0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, 0, 0, 0, 0x0d, 0xff,
+            ],
+            m,
+            "calflash: <FILE>:1: not text (a binary file?); expected UTF-8 text with a header row",
+        ),
+    ];
+    for (what, content, model, expected) in cases {
+        let got = bad_input("data.csv", &content, model);
+        assert_eq!(got, expected, "{what}");
+    }
+}
+
+#[test]
+fn a_fit_writes_its_json_and_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("d.csv"), GOOD).unwrap();
+    let (code, stdout, stderr) = calflash(
+        dir.path(),
+        &[
+            "fit",
+            "d.csv",
+            "--model",
+            "volts ~ rate + temp",
+            "--json",
+            "fit.json",
+            "--predict-at",
+            "rate=10,temp=25",
+            "--curve",
+            "rate=-200:200:5",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stdout.contains("model  volts ~ 1 + rate + temp"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("prediction at rate=10,temp=25:"),
+        "{stdout}"
+    );
+    assert!(stdout.ends_with("report: fit.json\n"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("fit.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["schema"], "calflash.fit/1");
+    for key in [
+        "terms",
+        "coefficients",
+        "std_errors",
+        "covariance",
+        "t",
+        "p",
+        "rss",
+        "sigma2",
+        "dof",
+        "r2",
+        "adj_r2",
+        "f",
+        "aic",
+        "bic",
+        "condition_number",
+        "vif",
+        "residuals",
+        "leverage",
+        "student_internal",
+        "student_external",
+        "cooks_distance",
+        "dffits",
+        "dfbetas",
+        "predictions",
+        "curve",
+    ] {
+        assert!(!json[key].is_null(), "{key} missing");
+    }
+    assert_eq!(json["terms"], serde_json::json!(["1", "rate", "temp"]));
+    assert_eq!(json["dfbetas"].as_array().unwrap().len(), 6);
+    assert_eq!(json["curve"]["points"].as_array().unwrap().len(), 5);
+    assert!(json["predictions"][0]["variance"].as_f64().unwrap() > 0.0);
+    // JSON to standard output.
+    let (code, stdout, _) = calflash(
+        dir.path(),
+        &["fit", "d.csv", "--model", "volts ~ rate", "--json", "-"],
+    );
+    assert_eq!(code, 0);
+    let json: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(json["n_obs"], 6);
+}
+
+#[test]
+fn bad_options_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("d.csv"), GOOD).unwrap();
+    let cases = [
+        (
+            vec!["--predict-at", "rate=1"],
+            "calflash: prediction point: give a value for `temp` too (the model volts ~ 1 + rate + temp uses it)",
+        ),
+        (
+            vec!["--predict-at", "rate=x,temp=1"],
+            "calflash: --predict-at: `x` is not a number (in `rate=x`)",
+        ),
+        (
+            vec!["--curve", "speed=0:1:5"],
+            "calflash: --curve: `speed` is not a variable of the model volts ~ 1 + rate + temp",
+        ),
+        (
+            vec!["--compare", "volts ~ rate + other"],
+            "calflash: --compare: volts ~ 1 + rate + other is not nested in volts ~ 1 + rate + temp (same response, and only terms the full model has)",
+        ),
+        (
+            vec!["--alpha", "1.5"],
+            "calflash: --alpha 1.5 is not between 0 and 1",
+        ),
+        (
+            vec!["--holdout-every", "100"],
+            "calflash: --holdout-every 100: only 6 observations, none held out",
+        ),
+    ];
+    for (extra, expected) in cases {
+        let mut args = vec![
+            "fit",
+            "d.csv",
+            "--model",
+            "volts ~ rate + temp",
+            "--json",
+            "o.json",
+        ];
+        args.extend(extra.iter());
+        let (code, _, stderr) = calflash(dir.path(), &args);
+        assert_eq!((code, stderr.trim_end()), (1, expected), "{extra:?}");
+        assert!(!dir.path().join("o.json").exists());
+    }
+}
