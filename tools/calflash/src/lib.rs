@@ -5,8 +5,11 @@
 #![forbid(unsafe_code)]
 
 pub mod cmd;
+pub mod columns;
 pub mod formula;
 pub mod obs;
 pub mod regression;
 pub mod report;
+pub mod sensor;
+pub mod sim;
 pub mod stats;

@@ -129,6 +129,13 @@ pub struct Table {
 }
 
 impl Table {
+    /// Adds a derived column.
+    pub fn push_column(&mut self, name: &str, values: Vec<f64>) {
+        debug_assert_eq!(values.len(), self.len());
+        self.names.push(name.into());
+        self.columns.push(values);
+    }
+
     /// Number of observations.
     #[must_use]
     pub fn len(&self) -> usize {
@@ -270,6 +277,46 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> ObsError + '_ {
     move |source| ObsError::Io {
         path: path.into(),
         source,
+    }
+}
+
+/// The column names of the file's header row.
+///
+/// # Errors
+/// As [`read_columns`].
+pub fn header(path: &Path, format: Format) -> Result<Vec<String>, ObsError> {
+    let file = File::open(path).map_err(io(path))?;
+    let mut reader = BufReader::new(file);
+    let format = match format {
+        Format::Auto => sniff(path, &mut reader)?,
+        f => f,
+    };
+    let mut line = 0u64;
+    let mut buf = Vec::new();
+    loop {
+        buf.clear();
+        if reader.read_until(b'\n', &mut buf).map_err(io(path))? == 0 {
+            return Err(ObsError::Empty { path: path.into() });
+        }
+        line += 1;
+        let text = std::str::from_utf8(&buf)
+            .ok()
+            .filter(|_| !buf.contains(&0))
+            .ok_or(ObsError::NotText {
+                path: path.into(),
+                line,
+            })?
+            .trim();
+        if text.is_empty() || text.starts_with('#') {
+            continue;
+        }
+        return Ok(match format {
+            Format::Csv => text
+                .split(',')
+                .map(|s| s.trim().trim_matches('"').to_string())
+                .collect(),
+            _ => text.split_whitespace().map(str::to_string).collect(),
+        });
     }
 }
 

@@ -1,0 +1,70 @@
+//! The covariance factor the device stores: the calibration error of a corrected output as a
+//! quadratic form in the device's features `[1, u...]`, from the forward fits' covariances.
+
+use nalgebra::DMatrix;
+
+/// Packed lower-triangular Cholesky factor (row-major) of a symmetric positive semidefinite
+/// matrix; a tiny diagonal jitter is added when rounding leaves it indefinite.
+#[must_use]
+pub fn packed_cholesky(q: &DMatrix<f64>) -> Vec<f64> {
+    let n = q.nrows();
+    let scale = (0..n)
+        .map(|i| q[(i, i)].abs())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let mut jitter = 0.0;
+    loop {
+        let m = q + DMatrix::identity(n, n) * jitter;
+        if let Some(c) = m.cholesky() {
+            let l = c.l();
+            let mut out = Vec::with_capacity(n * (n + 1) / 2);
+            for i in 0..n {
+                for j in 0..=i {
+                    out.push(l[(i, j)]);
+                }
+            }
+            return out;
+        }
+        jitter = if jitter == 0.0 {
+            1e-14 * scale
+        } else {
+            jitter * 10.0
+        };
+    }
+}
+
+/// For outputs `y = M u + off` of a triad whose forward fits (axis k: bias and sensitivity row,
+/// covariance `C_k` over `[1, x]`) give `y = S^-1 (out - b)`: the covariance of each `y_i` over
+/// the features `[1, u0, u1, u2]`,
+/// `Q_i = T' (sum_k (S^-1)_ik^2 C_k) T` with `[1, x] = T [1, u]`.
+#[must_use]
+pub fn triad(
+    s_inv: &DMatrix<f64>,
+    c: &[DMatrix<f64>; 3],
+    m: &DMatrix<f64>,
+    off: &[f64; 3],
+) -> [Vec<f64>; 3] {
+    let mut t = DMatrix::zeros(4, 4);
+    t[(0, 0)] = 1.0;
+    for j in 0..3 {
+        t[(j + 1, 0)] = off[j];
+        for k in 0..3 {
+            t[(j + 1, k + 1)] = m[(j, k)];
+        }
+    }
+    std::array::from_fn(|i| {
+        let mut sum = DMatrix::zeros(4, 4);
+        for (k, ck) in c.iter().enumerate() {
+            sum += ck * s_inv[(i, k)].powi(2);
+        }
+        packed_cholesky(&(t.transpose() * sum * &t))
+    })
+}
+
+/// For a single axis `y = off + scale u`, forward bias and scale with covariance `C` (2x2):
+/// `Q = T' C T / slope^2` over `[1, u]`.
+#[must_use]
+pub fn single(c: &DMatrix<f64>, slope: f64, off: f64, scale: f64) -> Vec<f64> {
+    let t = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, off, scale]);
+    packed_cholesky(&(t.transpose() * c * &t / (slope * slope)))
+}

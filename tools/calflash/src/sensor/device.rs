@@ -1,0 +1,277 @@
+//! Building the device's calibration: identity, environment spans and breakpoints, the blob
+//! written with the firmware crate's encoder, and a check of the device's f32 correction
+//! against the same correction in f64.
+
+use std::path::Path;
+
+use spincal::blob;
+use spincal::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
+use spincal::model::{
+    BoundedVec, Calibration, CalibrationData, Environment, Identity, Quantity, Sensor, Serial,
+    Span, TriadSet,
+};
+
+use super::invert::linearize;
+use super::table::Layout;
+use super::{Options, PointFit, WorkflowError};
+use crate::columns as col;
+use crate::obs::Table;
+
+/// The SI unit of a quantity.
+#[must_use]
+pub fn unit(q: Quantity) -> &'static str {
+    match q {
+        Quantity::Acceleration => "m/s^2",
+        Quantity::AngularRate => "rad/s",
+    }
+}
+
+pub(crate) fn too_many(path: &Path, n: usize) -> WorkflowError {
+    WorkflowError::msg(
+        path,
+        format!(
+            "the table has {n} points; the device holds at most {}",
+            spincal::model::MAX_SETS
+        ),
+    )
+}
+
+/// The unit's identity: serial, now, the data's hash, this tool's version.
+///
+/// # Errors
+/// A serial the device cannot store.
+pub fn identity(opts: &Options) -> Result<Identity, WorkflowError> {
+    let serial = Serial::new(&opts.serial)
+        .filter(|s| {
+            !s.as_str().is_empty()
+                && s.as_str()
+                    .bytes()
+                    .all(|b| b.is_ascii_graphic() || b == b' ')
+        })
+        .ok_or_else(|| {
+            WorkflowError::Message(format!(
+                "--serial `{}`: the device stores 1 to {} printable ASCII characters",
+                opts.serial,
+                spincal::model::SERIAL_CAPACITY
+            ))
+        })?;
+    let v = |s: &str| s.parse::<u16>().unwrap_or(0);
+    let mut version = env!("CARGO_PKG_VERSION").split('.');
+    Ok(Identity {
+        serial,
+        created_unix_s: opts.created.unwrap_or_else(|| {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_secs())
+        }),
+        data_hash: super::data_hash(&opts.file)?,
+        tool_version: [
+            v(version.next().unwrap_or("0")),
+            v(version.next().unwrap_or("0")),
+            v(version.next().unwrap_or("0")),
+        ],
+    })
+}
+
+/// Calibrated spans (observed, or the options' when a column is absent) and breakpoints.
+///
+/// # Errors
+/// More breakpoints than the device holds.
+pub fn environment(
+    table: &Table,
+    layout: &Layout,
+    opts: &Options,
+) -> Result<Environment, WorkflowError> {
+    let span = |name: &str, default: Span| match table.column(name) {
+        Some(c) => Span::new(
+            c.iter().copied().fold(f64::INFINITY, f64::min) as f32,
+            c.iter().copied().fold(f64::NEG_INFINITY, f64::max) as f32,
+        ),
+        None => default,
+    };
+    fn points<const N: usize>(
+        v: &[f64],
+        what: &str,
+        opts: &Options,
+    ) -> Result<BoundedVec<f32, N>, WorkflowError> {
+        let f: Vec<f32> = v.iter().map(|x| *x as f32).collect();
+        BoundedVec::from_slice(&f).ok_or_else(|| {
+            WorkflowError::msg(
+                &opts.file,
+                format!("{} {what} setpoints; the device holds at most {N}", v.len()),
+            )
+        })
+    }
+    Ok(Environment {
+        temperature_span: span(col::TEMP, opts.temp_span),
+        voltage_span: span(col::VOLT, opts.volt_span),
+        temperatures: points(&layout.temps, "temperature", opts)?,
+        voltages: points(&layout.volts, "voltage", opts)?,
+    })
+}
+
+fn f64_triad(set: &TriadSet, v: [f64; 3]) -> [f64; 3] {
+    let u: [f64; 3] =
+        std::array::from_fn(|j| linearize(&set.axes[j].to_array().map(f64::from), v[j]));
+    std::array::from_fn(|i| {
+        f64::from(set.offset[i])
+            + (0..3)
+                .map(|j| f64::from(set.matrix[i][j]) * u[j])
+                .sum::<f64>()
+    })
+}
+
+/// Validates and encodes `data`, decodes the blob back as the device does, and runs the
+/// device's f32 correction at each table point over codes spanning the calibrated range,
+/// against the same stored coefficients evaluated in f64. Returns the blob and the largest
+/// difference (SI).
+///
+/// # Errors
+/// When the calibration does not validate (a coefficient the device cannot hold).
+pub fn build_and_check(
+    path: &Path,
+    data: &CalibrationData,
+    points: &[PointFit],
+) -> Result<(Vec<u8>, f64), WorkflowError> {
+    let cal = Calibration::new(data.clone()).map_err(|e| {
+        WorkflowError::msg(
+            path,
+            format!("the calibration is not valid for the device: {e}"),
+        )
+    })?;
+    let mut buf = vec![0u8; blob::MAX_BLOB_LEN];
+    let n = blob::encode(&cal, &mut buf)
+        .map_err(|e| WorkflowError::msg(path, format!("cannot write the blob: {e}")))?;
+    buf.truncate(n);
+    let back = blob::decode(&buf).map_err(|e| {
+        WorkflowError::msg(path, format!("the written blob does not read back: {e}"))
+    })?;
+    let env = &data.environment;
+    let mut worst = 0.0f64;
+    let at = |p: &PointFit| {
+        (
+            p.temp.map_or(
+                0.5 * (env.temperature_span.lo + env.temperature_span.hi),
+                |t| t as f32,
+            ),
+            p.volt
+                .map_or(0.5 * (env.voltage_span.lo + env.voltage_span.hi), |v| {
+                    v as f32
+                }),
+        )
+    };
+    match &data.sensor {
+        Sensor::Single { channel, sets, .. } => {
+            let mut c =
+                AxisCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
+            for (p, set) in points.iter().zip(sets.iter()) {
+                let (t, v) = at(p);
+                c.set_environment(t, v);
+                let f = &p.axes[0];
+                let own = |x: f64| f.coef("1") + f.coef(col::INPUT) * x;
+                let (a, b) = (
+                    own(f64::from(channel.range.lo)),
+                    own(f64::from(channel.range.hi)),
+                );
+                for k in 0..=2000 {
+                    let code = (a + (b - a) * f64::from(k) / 2000.0).round() as i32;
+                    let dev = f64::from(c.correct(code).values[0]);
+                    let v = f64::from(code) - f64::from(channel.center);
+                    let host = f64::from(set.offset)
+                        + f64::from(set.scale) * linearize(&set.axis.to_array().map(f64::from), v);
+                    worst = worst.max((dev - host).abs());
+                }
+            }
+        }
+        Sensor::Triad { channels, sets, .. } => {
+            let mut c =
+                TriadCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
+            for (p, set) in points.iter().zip(sets.iter()) {
+                let (t, v) = at(p);
+                c.set_environment(t, v);
+                for k in 0..2000u32 {
+                    let code: [i32; 3] =
+                        std::array::from_fn(|j| sample_code(&channels[j], &p.axes[j], k, j));
+                    let dev = c.correct(code).values;
+                    let host = f64_triad(
+                        set,
+                        std::array::from_fn(|j| f64::from(code[j]) - f64::from(channels[j].center)),
+                    );
+                    for j in 0..3 {
+                        worst = worst.max((f64::from(dev[j]) - host[j]).abs());
+                    }
+                }
+            }
+        }
+        Sensor::Imu {
+            accel, gyro, sets, ..
+        } => {
+            let mut c = ImuCorrector::new(&back, 1000.0)
+                .map_err(|e| WorkflowError::Message(e.to_string()))?;
+            for (p, set) in points.iter().zip(sets.iter()) {
+                let (t, v) = at(p);
+                c.set_environment(t, v);
+                for k in 0..2000u32 {
+                    c.reset();
+                    let ca: [i32; 3] =
+                        std::array::from_fn(|j| sample_code(&accel[j], &p.axes[j], k, j));
+                    let cg: [i32; 3] =
+                        std::array::from_fn(|j| sample_code(&gyro[j], &p.axes[j + 3], k, j + 3));
+                    // With the rate steady, the lever-arm derivative term is zero and the
+                    // centripetal term is the same in both: compare without lever arm by
+                    // correcting twice (the second sample has a known derivative of zero).
+                    let raw = [ca[0], ca[1], ca[2], cg[0], cg[1], cg[2]];
+                    let _ = c.correct(raw);
+                    let dev = c.correct(raw).values;
+                    let a = f64_triad(
+                        &set.accel,
+                        std::array::from_fn(|j| f64::from(ca[j]) - f64::from(accel[j].center)),
+                    );
+                    let w0 = f64_triad(
+                        &set.gyro,
+                        std::array::from_fn(|j| f64::from(cg[j]) - f64::from(gyro[j].center)),
+                    );
+                    let w: [f64; 3] = std::array::from_fn(|i| {
+                        w0[i]
+                            - (0..3)
+                                .map(|j| f64::from(set.g_sensitivity[i][j]) * a[j])
+                                .sum::<f64>()
+                    });
+                    let a_ref = lever_f64(data, a, w);
+                    for j in 0..3 {
+                        worst = worst.max((f64::from(dev[j]) - a_ref[j]).abs());
+                        worst = worst.max((f64::from(dev[j + 3]) - w[j]).abs());
+                    }
+                }
+            }
+        }
+    }
+    Ok((buf, worst))
+}
+
+fn lever_f64(data: &CalibrationData, a: [f64; 3], w: [f64; 3]) -> [f64; 3] {
+    let Sensor::Imu {
+        lever_arm: Some(r), ..
+    } = &data.sensor
+    else {
+        return a;
+    };
+    let ww: f64 = w.iter().map(|x| x * x).sum();
+    std::array::from_fn(|i| {
+        let ri = r[i].map(f64::from);
+        let dot: f64 = (0..3).map(|k| w[k] * ri[k]).sum();
+        a[i] - (w[i] * dot - ri[i] * ww)
+    })
+}
+
+/// A code for axis `j` of sample `k`: spread over the calibrated range by a low-discrepancy
+/// sequence, so that combinations of the three axes are covered.
+fn sample_code(ch: &spincal::model::Channel, fit: &super::AxisFit, k: u32, j: usize) -> i32 {
+    let frac = (f64::from(k)
+        * [
+            0.618_034, 0.754_878, 0.569_840, 0.830_990, 0.475_528, 0.690_983,
+        ][j % 6])
+        .fract();
+    let x = f64::from(ch.range.lo) + (f64::from(ch.range.hi) - f64::from(ch.range.lo)) * frac;
+    (f64::from(ch.center) + fit.coef(&fit.own) * x).round() as i32
+}

@@ -1,0 +1,210 @@
+//! From a fitted forward model to the correction the device applies.
+//!
+//! One axis's forward model, in counts, is
+//! `out(x) = bias + slope x + c2 x^2 + c3 x^3 + coq x|x| + ca (|x - bp| - |bp|)`. The device
+//! (see `spincal::model`) linearises the raw code first, `u = v + q v^2 + k v^3 + o v|v| +
+//! s |v - b|` with `v = out - center`, then applies an affine map. The linearisation must
+//! carry `v` to the linear part of the forward model, `L(x) = bias - center + slope x`; its
+//! coefficients are fitted by least squares over a dense grid of the calibrated range, and the
+//! worst error on a finer grid is the inversion error reported against the residual noise.
+
+use nalgebra::{DMatrix, DVector};
+
+/// One axis's own forward polynomial (counts).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Own {
+    /// Output at zero input.
+    pub bias: f64,
+    /// Counts per SI unit.
+    pub slope: f64,
+    /// Coefficient of x^2 (counts / SI^2).
+    pub c2: f64,
+    /// Coefficient of x^3.
+    pub c3: f64,
+    /// Coefficient of x|x|.
+    pub coq: f64,
+    /// Coefficient of the kink `|x - bp| - |bp|` (asymmetric scale).
+    pub ca: f64,
+    /// The asymmetry breakpoint, SI.
+    pub bp: f64,
+}
+
+impl Own {
+    /// The output for input `x`.
+    #[must_use]
+    pub fn output(&self, x: f64) -> f64 {
+        self.bias
+            + self.slope * x
+            + self.c2 * x * x
+            + self.c3 * x * x * x
+            + self.coq * x * x.abs()
+            + self.ca * ((x - self.bp).abs() - self.bp.abs())
+    }
+
+    fn is_linear(&self) -> bool {
+        self.c2 == 0.0 && self.c3 == 0.0 && self.coq == 0.0 && self.ca == 0.0
+    }
+}
+
+/// The device's linearisation `[q, k, o, s, b]` (as `spincal::model::AxisNonlinearity`).
+pub type Linearization = [f64; 5];
+
+/// `u(v)` in f64, exactly the device's formula.
+#[must_use]
+pub fn linearize(n: &Linearization, v: f64) -> f64 {
+    let [q, k, o, s, b] = *n;
+    v + v * (v * (q + k * v) + o * v.abs()) + s * (v - b).abs()
+}
+
+fn grid(lo: f64, hi: f64, n: usize, extra: f64) -> Vec<f64> {
+    let mut g: Vec<f64> = (0..n)
+        .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+        .collect();
+    if extra > lo && extra < hi {
+        g.push(extra);
+    }
+    g
+}
+
+/// A fitted linearisation: `L(x) ~ alpha + gamma u(out(x) - center)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fitted {
+    /// The device's coefficients.
+    pub n: Linearization,
+    /// Constant of the affine map.
+    pub alpha: f64,
+    /// Slope of the affine map.
+    pub gamma: f64,
+    /// Worst error over the calibrated range, SI units (counts / slope).
+    pub error: f64,
+}
+
+/// Fits the linearisation of `own` over `[lo, hi]` around `center`.
+#[must_use]
+pub fn linearization(own: &Own, center: f64, lo: f64, hi: f64) -> Fitted {
+    let lin = |x: f64| own.bias - center + own.slope * x;
+    if own.is_linear() {
+        let n = [0.0; 5];
+        return Fitted {
+            n,
+            alpha: 0.0,
+            gamma: 1.0,
+            error: max_error(own, center, lo, hi, &n, 0.0, 1.0, lin),
+        };
+    }
+    let vb = own.output(own.bp) - center;
+    let xs = grid(lo, hi, 2001, own.bp);
+    let vs: Vec<f64> = xs.iter().map(|x| own.output(*x) - center).collect();
+    let scale = vs.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1.0);
+    // Columns in v / scale so that v^3 and v stay comparable; rescaled after.
+    type Col = (usize, fn(f64, f64) -> f64);
+    let mut cols: Vec<Col> = Vec::new();
+    if own.c2 != 0.0 {
+        cols.push((0, |w, _| w * w));
+    }
+    if own.c3 != 0.0 {
+        cols.push((1, |w, _| w * w * w));
+    }
+    if own.coq != 0.0 {
+        cols.push((2, |w, _| w * w.abs()));
+    }
+    if own.ca != 0.0 {
+        cols.push((3, |w, wb| (w - wb).abs()));
+    }
+    let wb = vb / scale;
+    // L ~ alpha + gamma v + sum d_k term_k(v): columns 1, w, then the nonlinear terms.
+    let a = DMatrix::from_fn(xs.len(), cols.len() + 2, |i, j| match j {
+        0 => 1.0,
+        1 => vs[i] / scale,
+        _ => (cols[j - 2].1)(vs[i] / scale, wb),
+    });
+    let b = DVector::from_iterator(xs.len(), xs.iter().map(|x| lin(*x)));
+    let sol = a
+        .svd(true, true)
+        .solve(&b, 1e-14)
+        .unwrap_or_else(|_| DVector::zeros(cols.len() + 2));
+    let alpha = sol[0];
+    let gamma = sol[1] / scale;
+    let mut n = [0.0, 0.0, 0.0, 0.0, vb];
+    for (j, (which, _)) in cols.iter().enumerate() {
+        let d = sol[j + 2]
+            / match which {
+                0 | 2 => scale * scale,
+                1 => scale * scale * scale,
+                _ => scale,
+            };
+        n[*which] = d / gamma;
+    }
+    if own.ca == 0.0 {
+        n[4] = 0.0;
+    }
+    Fitted {
+        n,
+        alpha,
+        gamma,
+        error: max_error(own, center, lo, hi, &n, alpha, gamma, lin),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn max_error(
+    own: &Own,
+    center: f64,
+    lo: f64,
+    hi: f64,
+    n: &Linearization,
+    alpha: f64,
+    gamma: f64,
+    lin: impl Fn(f64) -> f64,
+) -> f64 {
+    grid(lo, hi, 20_001, own.bp)
+        .iter()
+        .map(|x| (alpha + gamma * linearize(n, own.output(*x) - center) - lin(*x)).abs())
+        .fold(0.0, f64::max)
+        / own.slope.abs()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quadratic_and_cubic_are_inverted_far_below_a_count() {
+        let own = Own {
+            bias: 32_900.0,
+            slope: 408.0,
+            c2: 408.0 * 1.5e-4,
+            c3: -408.0 * 2e-6,
+            ..Own::default()
+        };
+        // At a table point whose bias is 40 counts off the center.
+        let f = linearization(&own, 32_860.0, -20.0, 20.0);
+        let n = f.n;
+        assert!(n[0] != 0.0 && n[1] != 0.0 && n[2] == 0.0 && n[3] == 0.0);
+        // The forward nonlinearity is 0.3% of full scale; the inverse leaves a few micro-g.
+        assert!(f.error < 1e-4, "{f:?}");
+        let lin_only = Own {
+            c2: 0.0,
+            c3: 0.0,
+            ..own
+        };
+        let f = linearization(&lin_only, 32_900.0, -50.0, 50.0);
+        assert_eq!((f.n, f.alpha, f.gamma), ([0.0; 5], 0.0, 1.0));
+        assert!(f.error < 1e-12);
+    }
+
+    #[test]
+    fn asymmetric_scale_is_a_kink_in_the_linearisation() {
+        let own = Own {
+            bias: 32_768.0,
+            slope: 900.0,
+            ca: 900.0 * 2e-3,
+            bp: 0.5,
+            ..Own::default()
+        };
+        let f = linearization(&own, 32_768.0, -30.0, 30.0);
+        assert!((f.n[3] + 2e-3).abs() < 1e-5, "{f:?}");
+        assert!((f.n[4] - (own.output(0.5) - 32_768.0)).abs() < 1e-9);
+        assert!(f.error < 1e-6, "{f:?}");
+    }
+}

@@ -1,0 +1,328 @@
+//! Sensor workflows: from observations to the coefficient set the device applies, with the
+//! evidence to accept or reject the unit.
+//!
+//! Every workflow fits the forward model (what the sensor outputs for a known input) per output
+//! axis and per table point with the regression engine, keeps only the terms the data support,
+//! derives the device's correction, measures how far that correction is from the exact
+//! inverse over the calibrated range, and builds a `spincal` calibration.
+
+pub mod compare;
+pub mod covariance;
+pub mod device;
+pub mod hysteresis;
+pub mod invert;
+pub mod record;
+pub mod single;
+pub mod table;
+pub mod threshold;
+pub mod triad;
+
+use std::path::{Path, PathBuf};
+
+use spincal::model::{CalibrationData, Rails, Span};
+
+use crate::formula::{Formula, FormulaError};
+use crate::obs::{Format, ObsError};
+use crate::stats::Fit;
+use crate::stats::select::PartialF;
+
+/// A workflow that cannot run on these observations, in words naming the file, the column,
+/// the term or the table point.
+#[derive(Debug, thiserror::Error)]
+pub enum WorkflowError {
+    /// Reading failed.
+    #[error(transparent)]
+    Obs(#[from] ObsError),
+    /// A formula does not parse.
+    #[error(transparent)]
+    Formula(#[from] FormulaError),
+    /// Anything else, already in words.
+    #[error("{0}")]
+    Message(String),
+}
+
+impl WorkflowError {
+    pub(crate) fn msg(path: &Path, text: impl std::fmt::Display) -> Self {
+        Self::Message(format!("{}: {text}", path.display()))
+    }
+}
+
+/// Options shared by the workflows.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// The observations.
+    pub file: PathBuf,
+    /// Their format.
+    pub format: Format,
+    /// Unit serial number.
+    pub serial: String,
+    /// Significance level for term selection and tests.
+    pub alpha: f64,
+    /// ADC rails of every channel.
+    pub rails: Rails,
+    /// Temperature span when the data have no temperature column.
+    pub temp_span: Span,
+    /// Voltage span when the data have no voltage column.
+    pub volt_span: Span,
+    /// Keep every preset term (no backward elimination).
+    pub keep_all_terms: bool,
+    /// Asymmetry: `None` to decide from the test, `Some(true)` to keep, `Some(false)` to drop.
+    pub asymmetry: Option<bool>,
+    /// Asymmetry breakpoint (SI).
+    pub breakpoint: f64,
+    /// A model formula instead of the preset (single axis only).
+    pub model: Option<String>,
+    /// Acceptance: the largest residual noise, SI units (per axis), if specified.
+    pub max_noise: Option<f64>,
+    /// Creation time, seconds since 1970 (now if `None`).
+    pub created: Option<u64>,
+}
+
+impl Options {
+    /// Defaults for a file.
+    #[must_use]
+    pub fn new(file: impl Into<PathBuf>, serial: &str) -> Self {
+        Self {
+            file: file.into(),
+            format: Format::Auto,
+            serial: serial.into(),
+            alpha: 0.05,
+            rails: Rails::unsigned(16),
+            temp_span: Span::new(20.0, 30.0),
+            volt_span: Span::new(0.0, 100.0),
+            keep_all_terms: false,
+            asymmetry: None,
+            breakpoint: 0.0,
+            model: None,
+            max_noise: None,
+            created: None,
+        }
+    }
+}
+
+/// One fitted forward regression.
+#[derive(Debug, Clone)]
+pub struct AxisFit {
+    /// The output column.
+    pub output: String,
+    /// The term of the axis' own reference input (its coefficient is the scale factor).
+    pub own: String,
+    /// The model.
+    pub formula: Formula,
+    /// The fit.
+    pub fit: Fit,
+    /// The fit's input values (the own-axis reference input) per observation, for figures.
+    pub input: Vec<f64>,
+    /// The sweep direction per observation, when the data have one.
+    pub dir: Option<Vec<f64>>,
+    /// File lines of the observations.
+    pub lines: Vec<u64>,
+}
+
+impl AxisFit {
+    /// The coefficient of a term, 0 when the model lacks it.
+    #[must_use]
+    pub fn coef(&self, term: &str) -> f64 {
+        self.index(term).map_or(0.0, |i| self.fit.coefficients[i])
+    }
+
+    /// The position of a term.
+    #[must_use]
+    pub fn index(&self, term: &str) -> Option<usize> {
+        self.fit.names.iter().position(|n| n == term)
+    }
+}
+
+/// The fits and the correction at one table point.
+#[derive(Debug, Clone)]
+pub struct PointFit {
+    /// Temperature setpoint.
+    pub temp: Option<f64>,
+    /// Voltage setpoint.
+    pub volt: Option<f64>,
+    /// One fit per output axis.
+    pub axes: Vec<AxisFit>,
+    /// Worst inversion error per output axis over the calibrated range, SI.
+    pub inversion_error: Vec<f64>,
+    /// Residual noise per output axis in SI (residual sigma over the scale factor).
+    pub noise: Vec<f64>,
+}
+
+/// A test with a decision.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decision {
+    /// What was tested.
+    pub name: String,
+    /// The test.
+    pub test: PartialF,
+    /// The effect size in words (slopes, offset) for the report.
+    pub detail: String,
+    /// Whether the term is kept in the device model.
+    pub kept: bool,
+}
+
+/// Accept, review or reject.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Every check passed.
+    Accept,
+    /// A person should look at a finding before accepting.
+    Review,
+    /// The unit or the calibration does not meet its requirements.
+    Reject,
+}
+
+/// One check of the acceptance summary.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Finding {
+    /// Its outcome.
+    pub verdict: Verdict,
+    /// What it found, in words.
+    pub text: String,
+}
+
+/// The outcome of a calibration workflow.
+#[derive(Debug, Clone)]
+pub struct Calibrated {
+    /// The calibration for the device.
+    pub data: CalibrationData,
+    /// The blob.
+    pub blob: Vec<u8>,
+    /// Per table point, the fits and the correction.
+    pub points: Vec<PointFit>,
+    /// The table's temperature breakpoints.
+    pub temps: Vec<f64>,
+    /// The table's voltage breakpoints.
+    pub volts: Vec<f64>,
+    /// Index of the reference point.
+    pub reference: usize,
+    /// Model choices and decisions, in words (preset expansion, terms dropped).
+    pub notes: Vec<String>,
+    /// Tests with decisions (asymmetry, hysteresis).
+    pub decisions: Vec<Decision>,
+    /// Per output axis, the calibrated input range (SI).
+    pub ranges: Vec<Span>,
+    /// Units of the inputs per output axis.
+    pub units: Vec<&'static str>,
+    /// Largest difference between the device's f32 correction and the f64 correction, SI.
+    pub device_error: f64,
+    /// The acceptance summary.
+    pub findings: Vec<Finding>,
+}
+
+impl Calibrated {
+    /// The overall verdict: the worst finding.
+    #[must_use]
+    pub fn verdict(&self) -> Verdict {
+        self.findings
+            .iter()
+            .map(|f| f.verdict)
+            .max()
+            .unwrap_or(Verdict::Accept)
+    }
+}
+
+/// The acceptance checks every workflow shares.
+pub(crate) fn findings(
+    points: &[PointFit],
+    axis_names: &[String],
+    units: &[&str],
+    opts: &Options,
+    device_error: f64,
+) -> Vec<Finding> {
+    let mut out = Vec::new();
+    for (a, name) in axis_names.iter().enumerate() {
+        let noise = points.iter().map(|p| p.noise[a]).fold(0.0, f64::max);
+        let inv = points
+            .iter()
+            .map(|p| p.inversion_error[a])
+            .fold(0.0, f64::max);
+        let unit = units[a];
+        match opts.max_noise {
+            Some(limit) if noise > limit => out.push(Finding {
+                verdict: Verdict::Reject,
+                text: format!(
+                    "{name}: residual noise {noise:.3e} {unit} exceeds the limit {limit:.3e}"
+                ),
+            }),
+            Some(limit) => out.push(Finding {
+                verdict: Verdict::Accept,
+                text: format!(
+                    "{name}: residual noise {noise:.3e} {unit} within the limit {limit:.3e}"
+                ),
+            }),
+            None => {}
+        }
+        out.push(if inv <= 0.1 * noise {
+            Finding {
+                verdict: Verdict::Accept,
+                text: format!(
+                    "{name}: the device's correction is within {inv:.2e} {unit} of the exact inverse over the calibrated range ({:.1e} of the noise)",
+                    inv / noise
+                ),
+            }
+        } else {
+            Finding {
+                verdict: Verdict::Reject,
+                text: format!(
+                    "{name}: the device's correction is {inv:.2e} {unit} from the exact inverse, more than a tenth of the noise {noise:.2e}: the forward model is too nonlinear for the device's correction form"
+                ),
+            }
+        });
+        for p in points {
+            let f = &p.axes[a].fit;
+            let where_ = table::describe(&table::Point {
+                temp: p.temp,
+                volt: p.volt,
+                rows: vec![],
+            });
+            if !f.influence.outliers.is_empty() {
+                let lines: Vec<String> = f
+                    .influence
+                    .outliers
+                    .iter()
+                    .map(|(i, _)| p.axes[a].lines[*i].to_string())
+                    .collect();
+                out.push(Finding {
+                    verdict: Verdict::Review,
+                    text: format!("{name} at {where_}: outliers at line {}", lines.join(", ")),
+                });
+            }
+        }
+    }
+    let min_noise = points
+        .iter()
+        .flat_map(|p| &p.noise)
+        .fold(f64::INFINITY, |m, v| m.min(*v));
+    out.push(Finding {
+        verdict: if device_error <= 0.01 * min_noise {
+            Verdict::Accept
+        } else {
+            Verdict::Review
+        },
+        text: format!(
+            "the device's f32 correction matches the f64 correction to {device_error:.2e} ({:.1e} of the smallest noise)",
+            device_error / min_noise
+        ),
+    });
+    out
+}
+
+/// First 16 bytes of the SHA-256 of a file.
+///
+/// # Errors
+/// The read error.
+pub fn data_hash(path: &Path) -> Result<[u8; 16], ObsError> {
+    use sha2::Digest as _;
+    let bytes = std::fs::read(path).map_err(|source| ObsError::Io {
+        path: path.into(),
+        source,
+    })?;
+    let digest = sha2::Sha256::digest(&bytes);
+    let mut out = [0u8; 16];
+    out.copy_from_slice(&digest[..16]);
+    Ok(out)
+}

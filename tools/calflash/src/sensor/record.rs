@@ -1,0 +1,178 @@
+//! The calibration record: what `calflash calibrate --json` writes (schema
+//! `calflash.calibration/1`) and `calflash compare` reads. It carries the forward fits with
+//! their covariances per table point and output axis, the decisions, the acceptance summary and
+//! the blob itself.
+
+use serde::{Deserialize, Serialize};
+
+use super::{Calibrated, Finding, Verdict};
+
+/// The schema identifier.
+pub const SCHEMA: &str = "calflash.calibration/1";
+
+/// One forward fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AxisRecord {
+    /// Output column.
+    pub output: String,
+    /// Model formula.
+    pub model: String,
+    /// Term names.
+    pub terms: Vec<String>,
+    /// Coefficients (counts per unit of each term).
+    pub coefficients: Vec<f64>,
+    /// Standard errors.
+    pub std_errors: Vec<f64>,
+    /// Covariance, rows in the order of `terms`.
+    pub covariance: Vec<Vec<f64>>,
+    /// Residual variance (counts^2).
+    pub sigma2: f64,
+    /// Residual degrees of freedom.
+    pub dof: usize,
+    /// Observations.
+    pub n: usize,
+    /// Residual noise in SI units.
+    pub noise: f64,
+    /// Worst inversion error of the device's correction, SI.
+    pub inversion_error: f64,
+}
+
+/// One table point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PointRecord {
+    /// Temperature setpoint, if the table has a temperature axis.
+    pub temp: Option<f64>,
+    /// Voltage setpoint.
+    pub volt: Option<f64>,
+    /// Fits per output axis.
+    pub axes: Vec<AxisRecord>,
+}
+
+/// A calibration record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Record {
+    /// `calflash.calibration/1`.
+    pub schema: String,
+    /// Unit serial.
+    pub serial: String,
+    /// `single`, `triad` or `imu`.
+    pub sensor: String,
+    /// Seconds since 1970.
+    pub created_unix_s: u64,
+    /// The observation file.
+    pub data_file: String,
+    /// First 16 bytes of its SHA-256, hex.
+    pub data_hash: String,
+    /// Tool version.
+    pub tool_version: String,
+    /// The overall verdict.
+    pub verdict: Verdict,
+    /// The acceptance checks.
+    pub findings: Vec<Finding>,
+    /// Model choices.
+    pub notes: Vec<String>,
+    /// Tests with decisions: name, F, p, kept, detail.
+    pub decisions: Vec<serde_json::Value>,
+    /// The table points.
+    pub points: Vec<PointRecord>,
+    /// Largest f32-versus-f64 difference of the device's correction.
+    pub device_error: f64,
+    /// The blob, hex.
+    pub blob: String,
+}
+
+fn hex(b: &[u8]) -> String {
+    b.iter().map(|x| format!("{x:02x}")).collect()
+}
+
+impl Record {
+    /// The record of a calibration made from `data_file`.
+    #[must_use]
+    pub fn new(c: &Calibrated, data_file: &str) -> Self {
+        let id = &c.data.identity;
+        let sensor = match c.data.sensor {
+            spincal::model::Sensor::Single { .. } => "single",
+            spincal::model::Sensor::Triad { .. } => "triad",
+            spincal::model::Sensor::Imu { .. } => "imu",
+        };
+        Self {
+            schema: SCHEMA.into(),
+            serial: id.serial.as_str().into(),
+            sensor: sensor.into(),
+            created_unix_s: id.created_unix_s,
+            data_file: data_file.into(),
+            data_hash: hex(&id.data_hash),
+            tool_version: format!("{}.{}.{}", id.tool_version[0], id.tool_version[1], id.tool_version[2]),
+            verdict: c.verdict(),
+            findings: c.findings.clone(),
+            notes: c.notes.clone(),
+            decisions: c
+                .decisions
+                .iter()
+                .map(|d| {
+                    serde_json::json!({"name": d.name, "f": d.test.f, "df_num": d.test.df_num, "df_den": d.test.df_den, "p": d.test.p, "kept": d.kept, "detail": d.detail})
+                })
+                .collect(),
+            points: c
+                .points
+                .iter()
+                .map(|p| PointRecord {
+                    temp: p.temp,
+                    volt: p.volt,
+                    axes: p
+                        .axes
+                        .iter()
+                        .enumerate()
+                        .map(|(k, a)| AxisRecord {
+                            output: a.output.clone(),
+                            model: a.formula.to_string(),
+                            terms: a.fit.names.clone(),
+                            coefficients: a.fit.coefficients.clone(),
+                            std_errors: a.fit.std_errors.clone(),
+                            covariance: a.fit.covariance.row_iter().map(|r| r.iter().copied().collect()).collect(),
+                            sigma2: a.fit.sigma2,
+                            dof: a.fit.dof,
+                            n: a.fit.n,
+                            noise: p.noise[k],
+                            inversion_error: p.inversion_error[k],
+                        })
+                        .collect(),
+                })
+                .collect(),
+            device_error: c.device_error,
+            blob: hex(&c.blob),
+        }
+    }
+
+    /// Reads a record.
+    ///
+    /// # Errors
+    /// A message naming the file and what is wrong.
+    pub fn read(path: &std::path::Path) -> Result<Self, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let r: Self = serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}:{}:{}: not a calibration record: {e}",
+                path.display(),
+                e.line(),
+                e.column()
+            )
+        })?;
+        if r.schema != SCHEMA {
+            return Err(format!(
+                "{}: schema `{}`, expected `{SCHEMA}`",
+                path.display(),
+                r.schema
+            ));
+        }
+        Ok(r)
+    }
+
+    /// The blob's bytes.
+    #[must_use]
+    pub fn blob_bytes(&self) -> Vec<u8> {
+        (0..self.blob.len() / 2)
+            .filter_map(|i| u8::from_str_radix(&self.blob[2 * i..2 * i + 2], 16).ok())
+            .collect()
+    }
+}

@@ -1,0 +1,378 @@
+//! The single-axis workflow: IEEE Std 1293-style forward model, term selection, asymmetry and
+//! hysteresis tests, a coefficient set per temperature and voltage point, the correction.
+
+use nalgebra::DMatrix;
+use spincal::model::{
+    AxisNonlinearity, BoundedVec, CalibrationData, Channel, Quantity, Sensor, SingleSet, Span,
+};
+
+use super::invert::{Own, linearization};
+use super::table::{self, Layout};
+use super::{AxisFit, Calibrated, Decision, Options, PointFit, WorkflowError, covariance, device};
+use crate::columns as col;
+use crate::formula::{self, Formula};
+use crate::obs::{self, Table};
+use crate::stats::{self, FitError, select};
+
+/// The derived column holding `|input - breakpoint| - |breakpoint|`.
+pub const KINK: &str = "input_kink";
+
+/// The terms of the IEEE 1293-style preset: bias, scale, g-squared, cubic, odd-quadratic, and
+/// the cross-axis and cross-coupling terms of the cross inputs the file has.
+#[must_use]
+pub fn preset(cross: &[&str]) -> String {
+    let mut f = String::from("output ~ 1 + input + input^2 + input^3 + input:abs(input)");
+    for c in cross {
+        f.push_str(&format!(" + {c} + input:{c}"));
+    }
+    f
+}
+
+/// Terms the device applies (the others are reported only).
+fn applied(term: &str) -> bool {
+    matches!(
+        term,
+        "1" | "input" | "input^2" | "input^3" | "input:abs(input)"
+    ) || term == KINK
+}
+
+fn fit_axis(
+    formula: &Formula,
+    table: &Table,
+    alpha: f64,
+    path: &std::path::Path,
+    where_: &str,
+) -> Result<AxisFit, WorkflowError> {
+    let d = formula.design(table);
+    let opts = stats::Options {
+        alpha,
+        ..stats::Options::default()
+    };
+    let fit = stats::fit(&d.x, &d.y, d.names, d.intercept, &opts).map_err(|e| match e {
+        FitError::RankDeficient {
+            column,
+            combination,
+        } => WorkflowError::msg(
+            path,
+            format!(
+                "at {where_}: {}",
+                formula.explain_rank_deficiency(table, column, &combination)
+            ),
+        ),
+        FitError::TooFewObservations { n, p } => WorkflowError::msg(
+            path,
+            format!(
+                "{where_} has {n} observations; the model {formula} ({p} terms) needs at least {}",
+                p + 1
+            ),
+        ),
+        FitError::NotFinite => WorkflowError::msg(path, "a value is not finite"),
+    })?;
+    Ok(AxisFit {
+        output: formula.response.clone(),
+        own: col::INPUT.into(),
+        formula: formula.clone(),
+        input: table.column(col::INPUT).unwrap_or_default().to_vec(),
+        dir: table.column(col::DIR).map(<[f64]>::to_vec),
+        lines: table.lines.clone(),
+        fit,
+    })
+}
+
+/// Terms of `formula` that are not significant, dropped one at a time (never `1` or `input`,
+/// never a term another kept term contains), with the reasons.
+fn select_terms(
+    formula: &Formula,
+    table: &Table,
+    alpha: f64,
+    notes: &mut Vec<String>,
+) -> Result<Formula, WorkflowError> {
+    let d = formula.design(table);
+    let opts = stats::Options {
+        alpha,
+        ..stats::Options::default()
+    };
+    let e = select::backward(
+        &d.x,
+        &d.y,
+        &d.names,
+        d.intercept,
+        &opts,
+        alpha,
+        |names, j| {
+            let name = &names[j];
+            if name == "1" || name == col::INPUT {
+                return false;
+            }
+            let Some(t) = formula.terms.iter().find(|t| &t.name() == name) else {
+                return false;
+            };
+            !formula
+                .terms
+                .iter()
+                .filter(|o| names.contains(&o.name()))
+                .any(|o| Formula::contains(o, t))
+        },
+    )
+    .map_err(|e| WorkflowError::Message(e.to_string()))?;
+    let mut out = formula.clone();
+    for s in &e.steps {
+        notes.push(format!(
+            "dropped {}: not significant (p = {:.3} > {alpha})",
+            s.dropped, s.p_value
+        ));
+        out = out.without(&s.dropped);
+    }
+    Ok(out)
+}
+
+fn sub(table: &Table, rows: &[usize]) -> Table {
+    table.select(rows)
+}
+
+/// Calibrates a single-axis sensor from the observations in `opts.file`.
+///
+/// # Errors
+/// A [`WorkflowError`] naming the file, column, term or table point.
+pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, WorkflowError> {
+    let path = &opts.file;
+    let header = obs::header(path, opts.format)?;
+    for need in [col::INPUT, col::OUTPUT] {
+        if !header.iter().any(|h| h == need) {
+            return Err(WorkflowError::msg(
+                path,
+                format!(
+                    "missing the column `{need}` ({}); the file has: {}",
+                    if need == col::INPUT {
+                        "the reference input, SI units"
+                    } else {
+                        "the sensor output, counts"
+                    },
+                    header.join(", ")
+                ),
+            ));
+        }
+    }
+    let has = |c: &str| header.iter().any(|h| h == c);
+    let mut wanted: Vec<String> = vec![col::INPUT.into(), col::OUTPUT.into()];
+    for c in [col::INPUT_P, col::INPUT_O, col::TEMP, col::VOLT, col::DIR] {
+        if has(c) {
+            wanted.push(c.into());
+        }
+    }
+    let mut table = obs::read_columns(path, &wanted, opts.format)?;
+    let varies = |t: &Table, c: &str| t.column(c).is_some_and(|v| v.iter().any(|x| *x != v[0]));
+    let input = table.column(col::INPUT).unwrap_or_default().to_vec();
+    let bp = opts.breakpoint;
+    table.push_column(
+        KINK,
+        input.iter().map(|x| (x - bp).abs() - bp.abs()).collect(),
+    );
+
+    let mut notes = Vec::new();
+    let cross: Vec<&str> = [col::INPUT_P, col::INPUT_O]
+        .into_iter()
+        .filter(|c| varies(&table, c))
+        .collect();
+    let (mut model, chosen) = match &opts.model {
+        Some(m) => (formula::parse(m)?, false),
+        None => {
+            let text = preset(&cross);
+            notes.push(format!("preset ieee-single expands to: {text}"));
+            (formula::parse(&text)?, true)
+        }
+    };
+    for t in &model.terms {
+        let name = t.name();
+        if t.variables()
+            .iter()
+            .any(|v| !table.names.iter().any(|n| n == v))
+        {
+            return Err(WorkflowError::msg(
+                path,
+                format!("the model term {name} uses a column the file does not have"),
+            ));
+        }
+    }
+    let layout: Layout = table::layout(
+        &table,
+        has(col::TEMP).then_some(col::TEMP),
+        has(col::VOLT).then_some(col::VOLT),
+    )
+    .map_err(|e| WorkflowError::msg(path, e))?;
+    let reference = layout.reference();
+    let ref_rows = &layout.points[reference].rows;
+    let ref_table = sub(&table, ref_rows);
+    let ref_where = table::describe(&layout.points[reference]);
+    // Check the full model can be estimated, then keep the terms the data support.
+    fit_axis(&model, &ref_table, opts.alpha, path, &ref_where)?;
+    if chosen && !opts.keep_all_terms {
+        model = select_terms(&model, &ref_table, opts.alpha, &mut notes)?;
+        notes.push(format!(
+            "model after term selection at {ref_where}: {model}"
+        ));
+    }
+
+    // Asymmetry: does a kink at the breakpoint improve the model?
+    let mut decisions = Vec::new();
+    let with_kink = {
+        let mut m = model.clone();
+        m.terms.push(formula::Term::var(KINK));
+        m
+    };
+    let below = input.iter().filter(|x| **x < bp).count();
+    let above = input.len() - below;
+    if below >= 2 && above >= 2 {
+        let full = fit_axis(&with_kink, &ref_table, opts.alpha, path, &ref_where)?;
+        let reduced = fit_axis(&model, &ref_table, opts.alpha, path, &ref_where)?;
+        let test = select::partial_f(&full.fit, &reduced.fit);
+        let k1 = full.coef(col::INPUT);
+        let ca = full.coef(KINK);
+        let kept = opts.asymmetry.unwrap_or(test.p < opts.alpha);
+        decisions.push(Decision {
+            name: format!("asymmetry about {bp}"),
+            test,
+            detail: format!(
+                "scale factor {:.6e} above and {:.6e} below the breakpoint ({:+.3e} relative)",
+                k1 + ca,
+                k1 - ca,
+                2.0 * ca / k1
+            ),
+            kept,
+        });
+        if kept {
+            model = with_kink;
+        }
+    } else if opts.asymmetry == Some(true) {
+        return Err(WorkflowError::msg(
+            path,
+            format!(
+                "asymmetry about {bp} is not observable: {below} inputs below and {above} above it; each side needs at least 2"
+            ),
+        ));
+    }
+
+    // Hysteresis: an offset by sweep direction (reported; the device cannot know the direction).
+    if varies(&table, col::DIR) {
+        let mut m = model.clone();
+        m.terms.push(formula::Term::var(col::DIR));
+        let full = fit_axis(&m, &ref_table, opts.alpha, path, &ref_where)?;
+        let reduced = fit_axis(&model, &ref_table, opts.alpha, path, &ref_where)?;
+        let test = select::partial_f(&full.fit, &reduced.fit);
+        let h = full.coef(col::DIR);
+        let se = full.fit.std_errors[full.index(col::DIR).unwrap_or(0)];
+        decisions.push(Decision {
+            name: "hysteresis".into(),
+            test,
+            detail: format!(
+                "output {:+.4} counts ascending, {:+.4} descending (+-{:.2}); {:.3e} input units",
+                h,
+                -h,
+                se,
+                h / full.coef(col::INPUT)
+            ),
+            kept: false,
+        });
+    }
+    for t in &model.terms {
+        if !applied(&t.name()) {
+            notes.push(format!(
+                "{t} is estimated and reported but not applied: the single-axis device does not see the cross-axis inputs"
+            ));
+        }
+    }
+
+    // A fit per table point with the chosen terms.
+    let lo = input.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = input.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut fits = Vec::with_capacity(layout.points.len());
+    for p in &layout.points {
+        let t = sub(&table, &p.rows);
+        fits.push(fit_axis(&model, &t, opts.alpha, path, &table::describe(p))?);
+    }
+    let own = |f: &AxisFit| Own {
+        bias: f.coef("1"),
+        slope: f.coef(col::INPUT),
+        c2: f.coef("input^2"),
+        c3: f.coef("input^3"),
+        coq: f.coef("input:abs(input)"),
+        ca: f.coef(KINK),
+        bp,
+    };
+    let center = own(&fits[reference]).bias;
+    let mut sets = Vec::new();
+    let mut covs = Vec::new();
+    let mut points = Vec::new();
+    for (p, f) in layout.points.iter().zip(fits) {
+        let o = own(&f);
+        let lin = linearization(&o, center, lo, hi);
+        let (n, err) = (lin.n, lin.error);
+        // x = (L - (bias - center)) / slope with L = alpha + gamma u.
+        let scale = lin.gamma / o.slope;
+        let offset = (lin.alpha - (o.bias - center)) / o.slope;
+        let (i0, i1) = (f.index("1").unwrap_or(0), f.index(col::INPUT).unwrap_or(0));
+        let c = DMatrix::from_fn(2, 2, |r, k| f.fit.covariance[([i0, i1][r], [i0, i1][k])]);
+        let factor = covariance::single(&c, o.slope, offset, scale);
+        covs.push([factor[0] as f32, factor[1] as f32, factor[2] as f32]);
+        sets.push(SingleSet {
+            axis: AxisNonlinearity {
+                quadratic: n[0] as f32,
+                cubic: n[1] as f32,
+                odd_quadratic: n[2] as f32,
+                asymmetry: n[3] as f32,
+                asymmetry_break: n[4] as f32,
+            },
+            scale: scale as f32,
+            offset: offset as f32,
+        });
+        points.push(PointFit {
+            temp: p.temp,
+            volt: p.volt,
+            noise: vec![f.fit.sigma2.sqrt() / o.slope.abs()],
+            inversion_error: vec![err],
+            axes: vec![f],
+        });
+    }
+    let env = device::environment(&table, &layout, opts)?;
+    let range = Span::new(lo as f32, hi as f32);
+    let data = CalibrationData {
+        identity: device::identity(opts)?,
+        environment: env,
+        sensor: Sensor::Single {
+            quantity,
+            rails: opts.rails,
+            channel: Channel {
+                center: center as f32,
+                range,
+            },
+            sets: BoundedVec::from_slice(&sets)
+                .ok_or_else(|| device::too_many(path, sets.len()))?,
+            covariance: Some(
+                BoundedVec::from_slice(&covs).ok_or_else(|| device::too_many(path, covs.len()))?,
+            ),
+        },
+    };
+    let (blob, device_error) = device::build_and_check(path, &data, &points)?;
+    let unit = device::unit(quantity);
+    let findings = super::findings(
+        &points,
+        &["output".to_string()],
+        &[unit],
+        opts,
+        device_error,
+    );
+    Ok(Calibrated {
+        data,
+        blob,
+        points,
+        temps: layout.temps.clone(),
+        volts: layout.volts.clone(),
+        reference,
+        notes,
+        decisions,
+        ranges: vec![range],
+        units: vec![unit],
+        device_error,
+        findings,
+    })
+}

@@ -1,0 +1,336 @@
+//! Test plans: the conditions a unit is put through on the bench.
+//!
+//! A condition is the specific force `f` (m/s^2) and the angular rate `w` (rad/s) at the unit's
+//! reference point, in the unit's axes, with the chamber temperature and the supply voltage.
+//! A single-axis sensor reads the x component (of `f` for an accelerometer, `w` for a gyro);
+//! y and z are its cross axes p and o.
+//!
+//! Plan items (each a word, combined with `--temps`, `--volts` and `--repeat`):
+//!
+//! | item | conditions |
+//! |---|---|
+//! | `head:N` | dividing head: gravity at N angles in the x-z plane, `f = g (cos t, 0, sin t)` |
+//! | `tumble:6`, `tumble:12`, `tumble:18`, `tumble:24`, `tumble:26` | gravity along the 6 axes; + 6 diagonals of the xy, yz, zx planes (12); + all 12 edge diagonals (18); 6 axes at 4 headings each (24); + 8 cube corners (26) |
+//! | `sphere:N` | gravity along N directions spread evenly over the sphere |
+//! | `rate:LO:HI:N` | rate-table steps (rad/s): N rates, about each of the 6 axis directions with that direction up |
+//! | `centrifuge:LO:HI:N` | N levels (in g) along each of the 6 axis directions, gravity on the next axis, spin about it (arm 0.5 m) |
+//! | `sweep:LO:HI:N` | ascending then descending input along x (hysteresis), with the direction |
+//! | `fine:LO:HI:N` | N small steps of the x input near zero (threshold, dead band, resolution) |
+//!
+//! Single-axis plans use only the first direction of each item (`+x` up for `rate`, `+x`
+//! radial for `centrifuge`); triads use them all.
+
+use serde::{Deserialize, Serialize};
+
+/// Standard gravity, m/s^2.
+pub const G: f64 = 9.806_65;
+/// Centrifuge arm, metres.
+pub const ARM: f64 = 0.5;
+
+/// One test condition.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Condition {
+    /// Specific force at the reference point, m/s^2.
+    pub f: [f64; 3],
+    /// Angular rate, rad/s.
+    pub w: [f64; 3],
+    /// Chamber temperature, degrees C.
+    pub temp: f64,
+    /// Supply voltage, volts.
+    pub volt: f64,
+    /// +1 ascending, -1 descending, 0 not a sweep.
+    pub dir: f64,
+}
+
+/// A plan item that cannot be read.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("plan item `{item}`: {why}")]
+pub struct PlanError {
+    /// The item.
+    pub item: String,
+    /// What is wrong.
+    pub why: String,
+}
+
+fn unit(v: [f64; 3]) -> [f64; 3] {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    v.map(|c| c / n)
+}
+
+fn axes() -> Vec<[f64; 3]> {
+    let mut out = Vec::new();
+    for k in 0..3 {
+        for s in [1.0, -1.0] {
+            let mut v = [0.0; 3];
+            v[k] = s;
+            out.push(v);
+        }
+    }
+    out
+}
+
+fn edges() -> Vec<[f64; 3]> {
+    let mut out = Vec::new();
+    for (a, b) in [(0, 1), (1, 2), (0, 2)] {
+        for (sa, sb) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            let mut v = [0.0; 3];
+            v[a] = sa;
+            v[b] = sb;
+            out.push(unit(v));
+        }
+    }
+    out
+}
+
+/// The gravity directions of a tumble of `n` positions.
+fn tumble(n: usize) -> Option<Vec<[f64; 3]>> {
+    let e = edges();
+    Some(match n {
+        6 => axes(),
+        12 => {
+            let mut v = axes();
+            // One diagonal pair per plane: (1,1,0), (-1,-1,0), ...
+            v.extend([e[0], e[3], e[4], e[7], e[8], e[11]]);
+            v
+        }
+        18 => axes().into_iter().chain(e).collect(),
+        24 => axes().into_iter().flat_map(|d| [d; 4]).collect(),
+        26 => {
+            let mut v: Vec<[f64; 3]> = axes().into_iter().chain(e).collect();
+            for sx in [1.0, -1.0] {
+                for sy in [1.0, -1.0] {
+                    for sz in [1.0, -1.0] {
+                        v.push(unit([sx, sy, sz]));
+                    }
+                }
+            }
+            v
+        }
+        _ => return None,
+    })
+}
+
+/// `n` directions spread over the sphere (a Fibonacci lattice).
+fn sphere(n: usize) -> Vec<[f64; 3]> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let phi = golden * i as f64;
+            [r * phi.cos(), r * phi.sin(), z]
+        })
+        .collect()
+}
+
+fn linspace(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    if n == 1 {
+        return vec![lo];
+    }
+    (0..n)
+        .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+        .collect()
+}
+
+fn still(f: [f64; 3]) -> Condition {
+    Condition {
+        f,
+        w: [0.0; 3],
+        temp: 25.0,
+        volt: 0.0,
+        dir: 0.0,
+    }
+}
+
+/// The conditions of one plan item; `single` keeps a single-axis sensor's subset.
+///
+/// # Errors
+/// A [`PlanError`] saying what the item should look like.
+pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
+    let err = |why: &str| PlanError {
+        item: text.into(),
+        why: why.into(),
+    };
+    let mut parts = text.split(':');
+    let kind = parts.next().unwrap_or_default();
+    let nums: Vec<&str> = parts.collect();
+    let range = || -> Result<(f64, f64, usize), PlanError> {
+        let [lo, hi, n] = nums[..] else {
+            return Err(err("expected KIND:LO:HI:N"));
+        };
+        let num = |s: &str| {
+            s.parse::<f64>()
+                .map_err(|_| err(&format!("`{s}` is not a number")))
+        };
+        let n: usize = n
+            .parse()
+            .map_err(|_| err(&format!("`{n}` is not a count")))?;
+        if n == 0 {
+            return Err(err("the count must be at least 1"));
+        }
+        Ok((num(lo)?, num(hi)?, n))
+    };
+    let count = || -> Result<usize, PlanError> {
+        let [n] = nums[..] else {
+            return Err(err("expected KIND:N"));
+        };
+        n.parse().map_err(|_| err(&format!("`{n}` is not a count")))
+    };
+    let dirs = |all: Vec<[f64; 3]>| {
+        if single {
+            all.into_iter().take(1).collect()
+        } else {
+            all
+        }
+    };
+    Ok(match kind {
+        "head" => {
+            let n = count()?;
+            if n == 0 {
+                return Err(err("the count must be at least 1"));
+            }
+            (0..n)
+                .map(|i| {
+                    let t = 2.0 * std::f64::consts::PI * i as f64 / n as f64;
+                    still([G * t.cos(), 0.0, G * t.sin()])
+                })
+                .collect()
+        }
+        "tumble" => {
+            let n = count()?;
+            let d = tumble(n).ok_or_else(|| err("tumbles have 6, 12, 18, 24 or 26 positions"))?;
+            d.into_iter().map(|u| still(u.map(|c| G * c))).collect()
+        }
+        "sphere" => sphere(count()?)
+            .into_iter()
+            .map(|u| still(u.map(|c| G * c)))
+            .collect(),
+        "rate" => {
+            let (lo, hi, n) = range()?;
+            let mut out = Vec::new();
+            for up in dirs(axes()) {
+                for r in linspace(lo, hi, n) {
+                    out.push(Condition {
+                        f: up.map(|c| G * c),
+                        w: up.map(|c| r * c),
+                        ..still([0.0; 3])
+                    });
+                }
+            }
+            out
+        }
+        "centrifuge" => {
+            let (lo, hi, n) = range()?;
+            let mut out = Vec::new();
+            for radial in dirs(axes()) {
+                let k = radial.iter().position(|c| *c != 0.0).unwrap_or(0);
+                let mut vertical = [0.0; 3];
+                vertical[(k + 1) % 3] = 1.0;
+                for level in linspace(lo, hi, n) {
+                    let spin = (level * G / ARM).sqrt();
+                    out.push(Condition {
+                        f: std::array::from_fn(|j| level * G * radial[j] + G * vertical[j]),
+                        w: vertical.map(|c| spin * c),
+                        ..still([0.0; 3])
+                    });
+                }
+            }
+            out
+        }
+        "sweep" => {
+            let (lo, hi, n) = range()?;
+            let up = linspace(lo, hi, n);
+            let mut out: Vec<Condition> = up
+                .iter()
+                .map(|x| Condition {
+                    dir: 1.0,
+                    ..still([*x, 0.0, 0.0])
+                })
+                .collect();
+            out.extend(up.iter().rev().map(|x| Condition {
+                dir: -1.0,
+                ..still([*x, 0.0, 0.0])
+            }));
+            out
+        }
+        "fine" => {
+            let (lo, hi, n) = range()?;
+            linspace(lo, hi, n)
+                .into_iter()
+                .map(|x| still([x, 0.0, 0.0]))
+                .collect()
+        }
+        _ => {
+            return Err(err(
+                "the kinds are head, tumble, sphere, rate, centrifuge, sweep and fine",
+            ));
+        }
+    })
+}
+
+/// A whole plan: every item, at every temperature and supply voltage, `repeat` times.
+///
+/// # Errors
+/// The first bad item.
+pub fn plan(
+    items: &[String],
+    temps: &[f64],
+    volts: &[f64],
+    repeat: usize,
+    single: bool,
+) -> Result<Vec<Condition>, PlanError> {
+    let mut base = Vec::new();
+    for i in items {
+        base.extend(item(i, single)?);
+    }
+    let mut out = Vec::with_capacity(base.len() * temps.len() * volts.len() * repeat);
+    for &t in temps {
+        for &v in volts {
+            for _ in 0..repeat {
+                out.extend(base.iter().map(|c| Condition {
+                    temp: t,
+                    volt: v,
+                    ..*c
+                }));
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tumbles_and_spins() {
+        for n in [6, 12, 18, 24, 26] {
+            let c = item(&format!("tumble:{n}"), false).unwrap();
+            assert_eq!(c.len(), n);
+            assert!(
+                c.iter()
+                    .all(|c| ((c.f.iter().map(|x| x * x).sum::<f64>()).sqrt() - G).abs() < 1e-12)
+            );
+        }
+        assert!(item("tumble:7", false).is_err());
+        let r = item("rate:-5:5:11", false).unwrap();
+        assert_eq!(r.len(), 66);
+        assert_eq!(item("rate:-5:5:11", true).unwrap().len(), 11);
+        let c = item("centrifuge:1:10:4", false).unwrap();
+        let last = c[3];
+        // 10 g radial along +x, gravity on y, spin about y with w^2 R = 10 g.
+        assert!((last.f[0] - 10.0 * G).abs() < 1e-9 && (last.f[1] - G).abs() < 1e-12);
+        assert!((last.w[1] * last.w[1] * ARM - 10.0 * G).abs() < 1e-9);
+        let s = item("sweep:-1:1:5", true).unwrap();
+        assert_eq!(
+            s.iter().map(|c| c.dir).collect::<Vec<_>>(),
+            [1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0]
+        );
+        assert_eq!(
+            item("rate:1:2", false).unwrap_err().to_string(),
+            "plan item `rate:1:2`: expected KIND:LO:HI:N"
+        );
+        let p = plan(&["tumble:6".into()], &[-40.0, 85.0], &[3.3], 2, false).unwrap();
+        assert_eq!(p.len(), 24);
+    }
+}
