@@ -18,12 +18,31 @@ struct Cli {
 enum Command {
     /// Fit a formula model to observations, with regression statistics.
     Fit(cmd::fit::FitArgs),
+    /// Calibrate a sensor: fit, decide, invert, write blob, report and record.
+    Calibrate(cmd::calibrate::CalibrateArgs),
+    /// Simulate a sensor through a test plan, writing an observation file.
+    Simulate(cmd::simulate::SimulateArgs),
+    /// Run raw counts through the device's correction.
+    Apply(cmd::apply::ApplyArgs),
+    /// Compare two calibrations of one unit.
+    Compare(cmd::compare::CompareArgs),
+    /// Threshold, dead band and resolution from a fine-step run.
+    Threshold(cmd::threshold::ThresholdArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Fit(args) => cmd::fit::run(args),
+        Command::Calibrate(args) => match cmd::calibrate::run(args) {
+            // A rejected unit is a result, not an error: its own exit code for test stations.
+            Ok(calflash::sensor::Verdict::Reject) => return ExitCode::from(3),
+            other => other.map(|_| ()),
+        },
+        Command::Simulate(args) => cmd::simulate::run(args),
+        Command::Apply(args) => cmd::apply::run(args),
+        Command::Compare(args) => cmd::compare::run(args),
+        Command::Threshold(args) => cmd::threshold::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,3 +1,8 @@
 //! One module per subcommand, each a thin `run` over the library.
 
+pub mod apply;
+pub mod calibrate;
+pub mod compare;
 pub mod fit;
+pub mod simulate;
+pub mod threshold;

@@ -1,6 +1,8 @@
 //! Reports: they only read results.
 
+pub mod html;
 pub mod json;
+pub mod plot;
 pub mod terminal;
 
 use std::io::Write;

@@ -173,8 +173,8 @@ pub fn build_and_check(
                     own(f64::from(channel.range.lo)),
                     own(f64::from(channel.range.hi)),
                 );
-                for k in 0..=2000 {
-                    let code = (a + (b - a) * f64::from(k) / 2000.0).round() as i32;
+                for k in 0..=500 {
+                    let code = (a + (b - a) * f64::from(k) / 500.0).round() as i32;
                     let dev = f64::from(c.correct(code).values[0]);
                     let v = f64::from(code) - f64::from(channel.center);
                     let host = f64::from(set.offset)
@@ -189,7 +189,7 @@ pub fn build_and_check(
             for (p, set) in points.iter().zip(sets.iter()) {
                 let (t, v) = at(p);
                 c.set_environment(t, v);
-                for k in 0..2000u32 {
+                for k in 0..500u32 {
                     let code: [i32; 3] =
                         std::array::from_fn(|j| sample_code(&channels[j], &p.axes[j], k, j));
                     let dev = c.correct(code).values;
@@ -211,7 +211,7 @@ pub fn build_and_check(
             for (p, set) in points.iter().zip(sets.iter()) {
                 let (t, v) = at(p);
                 c.set_environment(t, v);
-                for k in 0..2000u32 {
+                for k in 0..500u32 {
                     c.reset();
                     let ca: [i32; 3] =
                         std::array::from_fn(|j| sample_code(&accel[j], &p.axes[j], k, j));

@@ -157,7 +157,7 @@ fn max_error(
     gamma: f64,
     lin: impl Fn(f64) -> f64,
 ) -> f64 {
-    grid(lo, hi, 20_001, own.bp)
+    grid(lo, hi, 5_001, own.bp)
         .iter()
         .map(|x| (alpha + gamma * linearize(n, own.output(*x) - center) - lin(*x)).abs())
         .fold(0.0, f64::max)

@@ -159,6 +159,8 @@ pub struct Decision {
     pub detail: String,
     /// Whether the term is kept in the device model.
     pub kept: bool,
+    /// The figure: residuals of the model without the term against the input, by group.
+    pub figure: Vec<(String, Vec<(f64, f64)>)>,
 }
 
 /// Accept, review or reject.
@@ -203,6 +205,8 @@ pub struct Calibrated {
     pub notes: Vec<String>,
     /// Tests with decisions (asymmetry, hysteresis).
     pub decisions: Vec<Decision>,
+    /// The asymmetry breakpoint used (single axis).
+    pub breakpoint: f64,
     /// Per output axis, the calibrated input range (SI).
     pub ranges: Vec<Span>,
     /// Units of the inputs per output axis.

@@ -229,7 +229,20 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         let k1 = full.coef(col::INPUT);
         let ca = full.coef(KINK);
         let kept = opts.asymmetry.unwrap_or(test.p < opts.alpha);
+        let side = |below: bool| -> Vec<(f64, f64)> {
+            reduced
+                .input
+                .iter()
+                .zip(&reduced.fit.residuals)
+                .filter(|(x, _)| (**x < bp) == below)
+                .map(|(x, e)| (*x, *e))
+                .collect()
+        };
         decisions.push(Decision {
+            figure: vec![
+                (format!("below {bp}"), side(true)),
+                (format!("above {bp}"), side(false)),
+            ],
             name: format!("asymmetry about {bp}"),
             test,
             detail: format!(
@@ -261,7 +274,16 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         let test = select::partial_f(&full.fit, &reduced.fit);
         let h = full.coef(col::DIR);
         let se = full.fit.std_errors[full.index(col::DIR).unwrap_or(0)];
+        let figure = super::hysteresis::by_direction(&reduced)
+            .map(|(up, down)| {
+                vec![
+                    ("ascending".to_string(), up),
+                    ("descending".to_string(), down),
+                ]
+            })
+            .unwrap_or_default();
         decisions.push(Decision {
+            figure,
             name: "hysteresis".into(),
             test,
             detail: format!(
@@ -369,6 +391,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         volts: layout.volts.clone(),
         reference,
         notes,
+        breakpoint: bp,
         decisions,
         ranges: vec![range],
         units: vec![unit],

@@ -268,7 +268,7 @@ fn triad(
         // Inversion error over the calibrated box: forward (fitted, cross-axis included), then
         // the device's correction in f64.
         let mut err = [0.0f64; 3];
-        for k in 0..4000u32 {
+        for k in 0..1000u32 {
             let x: [f64; 3] = std::array::from_fn(|j| {
                 let frac = (f64::from(k) * [0.618_034, 0.754_878, 0.569_840][j]).fract();
                 f64::from(ranges[j].lo) + (f64::from(ranges[j].hi) - f64::from(ranges[j].lo)) * frac
@@ -585,6 +585,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         volts: layout.volts.clone(),
         reference: layout.reference(),
         notes,
+        breakpoint: 0.0,
         decisions: Vec::new(),
         ranges,
         units,

@@ -60,6 +60,20 @@ impl Observations {
         Ok(())
     }
 
+    /// The observations as a table, as if read from `path` (line numbers from 2: the header
+    /// is line 1).
+    #[must_use]
+    pub fn to_table(&self, path: &str) -> crate::obs::Table {
+        crate::obs::Table {
+            path: path.into(),
+            names: self.names.clone(),
+            columns: (0..self.names.len())
+                .map(|i| self.rows.iter().map(|r| r[i]).collect())
+                .collect(),
+            lines: (0..self.rows.len() as u64).map(|i| i + 2).collect(),
+        }
+    }
+
     /// A column's values.
     #[must_use]
     pub fn column(&self, name: &str) -> Option<Vec<f64>> {

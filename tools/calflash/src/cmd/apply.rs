@@ -1,0 +1,179 @@
+//! `calflash apply`: raw counts through the firmware crate's own correction, to SI values, so
+//! a user sees exactly what the device computes.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use spincal::blob;
+use spincal::correct::{AxisCorrector, Flags, ImuCorrector, TriadCorrector};
+use spincal::model::Sensor;
+
+use crate::columns as col;
+use crate::obs::{self, Format};
+use crate::report;
+
+/// Run a file of raw counts through the device's correction.
+#[derive(Debug, Args)]
+pub struct ApplyArgs {
+    /// The calibration blob.
+    #[arg(long)]
+    pub blob: PathBuf,
+    /// The raw file (with a header row).
+    pub input: PathBuf,
+    /// The raw columns, comma-separated (default: output; a_x,a_y,a_z; g_x,g_y,g_z; or all six
+    /// for an IMU).
+    #[arg(long, value_delimiter = ',')]
+    pub columns: Vec<String>,
+    /// Temperature, C, for every sample (default: the middle of the calibrated span).
+    #[arg(long, conflicts_with = "temp_column")]
+    pub temp: Option<f32>,
+    /// A column with the temperature of each sample.
+    #[arg(long)]
+    pub temp_column: Option<String>,
+    /// Supply voltage, V (default: the middle of the calibrated span).
+    #[arg(long)]
+    pub volt: Option<f32>,
+    /// Sample rate, Hz (the IMU's lever-arm derivative).
+    #[arg(long, default_value_t = 1000.0)]
+    pub rate: f32,
+    /// Also write the 1-sigma calibration error of each value.
+    #[arg(long)]
+    pub sigma: bool,
+    /// Field separator of the input.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub format: Format,
+    /// The corrected file to write (CSV).
+    #[arg(long, short)]
+    pub output: PathBuf,
+}
+
+enum Any<'a> {
+    Single(AxisCorrector<'a>),
+    Triad(Box<TriadCorrector<'a>>),
+    Imu(Box<ImuCorrector<'a>>),
+}
+
+/// Runs `calflash apply`.
+///
+/// # Errors
+/// A bad blob or input file.
+pub fn run(args: &ApplyArgs) -> Result<(), String> {
+    let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let cal = blob::decode(&bytes).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let data = cal.data();
+    let (default_cols, out_names): (Vec<&str>, Vec<&str>) = match &data.sensor {
+        Sensor::Single { .. } => (vec![col::OUTPUT], vec!["value"]),
+        Sensor::Triad {
+            quantity: spincal::model::Quantity::Acceleration,
+            ..
+        } => (col::A.to_vec(), vec!["ax", "ay", "az"]),
+        Sensor::Triad { .. } => (col::GYRO.to_vec(), vec!["wx", "wy", "wz"]),
+        Sensor::Imu { .. } => (
+            col::A.iter().chain(&col::GYRO).copied().collect(),
+            vec!["ax", "ay", "az", "wx", "wy", "wz"],
+        ),
+    };
+    let cols: Vec<String> = if args.columns.is_empty() {
+        default_cols.iter().map(|s| s.to_string()).collect()
+    } else {
+        args.columns.clone()
+    };
+    if cols.len() != default_cols.len() {
+        return Err(format!(
+            "--columns: the calibration corrects {} channel(s), {} columns given",
+            default_cols.len(),
+            cols.len()
+        ));
+    }
+    let mut wanted = cols.clone();
+    if let Some(t) = &args.temp_column {
+        wanted.push(t.clone());
+    }
+    let table = obs::read_columns(&args.input, &wanted, args.format).map_err(|e| e.to_string())?;
+    let env = &data.environment;
+    let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
+    let volt = args.volt.unwrap_or_else(|| mid(env.voltage_span));
+    let temp0 = args.temp.unwrap_or_else(|| mid(env.temperature_span));
+    let mut corrector = match &data.sensor {
+        Sensor::Single { .. } => Any::Single(AxisCorrector::new(&cal).map_err(|e| e.to_string())?),
+        Sensor::Triad { .. } => Any::Triad(Box::new(
+            TriadCorrector::new(&cal).map_err(|e| e.to_string())?,
+        )),
+        Sensor::Imu { .. } => Any::Imu(Box::new(
+            ImuCorrector::new(&cal, args.rate).map_err(|e| e.to_string())?,
+        )),
+    };
+    let set_env = |c: &mut Any<'_>, t: f32| match c {
+        Any::Single(c) => c.set_environment(t, volt),
+        Any::Triad(c) => c.set_environment(t, volt),
+        Any::Imu(c) => c.set_environment(t, volt),
+    };
+    set_env(&mut corrector, temp0);
+    let temps = args.temp_column.as_ref().and_then(|t| table.column(t));
+    let mut last_temp = temp0;
+    let mut header = vec!["line".to_string()];
+    header.extend(out_names.iter().map(|s| s.to_string()));
+    header.extend(["flags".to_string(), "flag_names".to_string()]);
+    if args.sigma {
+        header.extend(out_names.iter().map(|s| format!("sigma_{s}")));
+    }
+    let mut rows = String::new();
+    use std::fmt::Write as _;
+    let mut flagged = 0usize;
+    for i in 0..table.len() {
+        if let Some(t) = temps {
+            let t = t[i] as f32;
+            if t != last_temp {
+                set_env(&mut corrector, t);
+                last_temp = t;
+            }
+        }
+        let raw: Vec<i32> = cols
+            .iter()
+            .map(|c| table.column(c).map_or(0, |v| v[i].round() as i32))
+            .collect();
+        let (values, flags, sigma): (Vec<f32>, Flags, Option<Vec<f32>>) = match &mut corrector {
+            Any::Single(c) => {
+                let o = c.correct(raw[0]);
+                (o.values.to_vec(), o.flags, c.sigma(raw[0]).map(|s| vec![s]))
+            }
+            Any::Triad(c) => {
+                let r = [raw[0], raw[1], raw[2]];
+                let o = c.correct(r);
+                (o.values.to_vec(), o.flags, c.sigma(r).map(|s| s.to_vec()))
+            }
+            Any::Imu(c) => {
+                let r = [raw[0], raw[1], raw[2], raw[3], raw[4], raw[5]];
+                let o = c.correct(r);
+                (o.values.to_vec(), o.flags, c.sigma(r).map(|s| s.to_vec()))
+            }
+        };
+        flagged += usize::from(!flags.is_clean());
+        let _ = write!(rows, "{}", table.lines[i]);
+        for v in &values {
+            let _ = write!(rows, ",{v}");
+        }
+        let _ = write!(rows, ",{},{}", flags.bits(), flags);
+        if args.sigma {
+            match &sigma {
+                Some(s) => s.iter().for_each(|v| {
+                    let _ = write!(rows, ",{v}");
+                }),
+                None => values.iter().for_each(|_| rows.push(',')),
+            }
+        }
+        rows.push('\n');
+    }
+    report::write_atomically(&args.output, |w| {
+        writeln!(w, "{}", header.join(","))?;
+        w.write_all(rows.as_bytes())
+    })?;
+    println!(
+        "calflash apply: {} samples corrected with unit {}'s calibration ({} flagged) into {}",
+        table.len(),
+        data.identity.serial,
+        flagged,
+        args.output.display()
+    );
+    Ok(())
+}

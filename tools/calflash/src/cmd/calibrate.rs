@@ -1,0 +1,250 @@
+//! `calflash calibrate`: a sensor workflow from observations to the device's blob, with the
+//! report and the record.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use spincal::model::{Quantity, Rails, Span};
+
+use crate::obs::Format;
+use crate::report::{self, terminal::num, terminal::pval};
+use crate::sensor::{self, Options, Verdict, record::Record, single, triad};
+
+/// The sensor of a workflow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SensorKind {
+    /// Single-axis accelerometer (columns input, output).
+    SingleAccel,
+    /// Single-axis gyro.
+    SingleGyro,
+    /// Accelerometer triad (f_*, a_*).
+    Accel,
+    /// Gyro triad (w_*, g_*; f_* for g-sensitivity).
+    Gyro,
+    /// IMU (f_*, w_*, a_*, g_*).
+    Imu,
+}
+
+/// Asymmetry handling.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Asymmetry {
+    /// Keep it when the test finds it.
+    Auto,
+    /// Always keep it.
+    Keep,
+    /// Never.
+    Drop,
+}
+
+/// Calibrate a sensor: fit, decide, invert, and write the blob, the report and the record.
+#[derive(Debug, Args)]
+pub struct CalibrateArgs {
+    /// The observations (see `calflash::columns` for the column names).
+    pub data: PathBuf,
+    /// What the observations are of.
+    #[arg(long, value_enum)]
+    pub sensor: SensorKind,
+    /// The unit's serial number (1 to 16 printable ASCII characters).
+    #[arg(long)]
+    pub serial: String,
+    /// Write the blob here.
+    #[arg(long)]
+    pub blob: Option<PathBuf>,
+    /// Write the HTML report here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Write the calibration record (JSON, for `calflash compare`) here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// A single-axis model instead of the IEEE 1293 preset (e.g. "output ~ 1 + input + input^2").
+    #[arg(long)]
+    pub model: Option<String>,
+    /// Keep every preset term instead of dropping the ones that are not significant.
+    #[arg(long)]
+    pub keep_all_terms: bool,
+    /// Triads: add own-axis g-squared, cubic and odd-quadratic terms to the preset.
+    #[arg(long)]
+    pub nonlinear: bool,
+    /// Single axis: asymmetric scale factor.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub asymmetry: Asymmetry,
+    /// Single axis: the asymmetry breakpoint (input units).
+    #[arg(long, default_value_t = 0.0)]
+    pub breakpoint: f64,
+    /// ADC resolution: rails at 0 and 2^bits - 1.
+    #[arg(long, default_value_t = 16)]
+    pub adc_bits: u32,
+    /// ADC rails LO:HI (instead of --adc-bits).
+    #[arg(long, value_name = "LO:HI")]
+    pub rails: Option<String>,
+    /// Calibrated temperature span when the data have no temp column.
+    #[arg(long, value_name = "LO:HI", default_value = "20:30")]
+    pub temp_span: String,
+    /// Calibrated supply-voltage span when the data have no volt column.
+    #[arg(long, value_name = "LO:HI", default_value = "0:100")]
+    pub volt_span: String,
+    /// Reject when the residual noise of an axis exceeds this (input units).
+    #[arg(long)]
+    pub max_noise: Option<f64>,
+    /// Significance level.
+    #[arg(long, default_value_t = 0.05)]
+    pub alpha: f64,
+    /// Field separator of the data.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub format: Format,
+}
+
+fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
+    let (a, b) = text
+        .split_once(':')
+        .ok_or_else(|| format!("{what}: `{text}` is not LO:HI"))?;
+    let n = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .map_err(|_| format!("{what}: `{s}` is not a number"))
+    };
+    let (a, b) = (n(a)?, n(b)?);
+    if a > b {
+        return Err(format!("{what}: {a} is above {b}"));
+    }
+    Ok((a, b))
+}
+
+/// Runs `calflash calibrate`; returns the verdict (the process exits 3 on reject).
+///
+/// # Errors
+/// A message naming the file, column, term or table point.
+pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
+    let mut opts = Options::new(&args.data, &args.serial);
+    opts.format = args.format;
+    opts.alpha = args.alpha;
+    opts.keep_all_terms = args.keep_all_terms;
+    opts.asymmetry = match args.asymmetry {
+        Asymmetry::Auto => None,
+        Asymmetry::Keep => Some(true),
+        Asymmetry::Drop => Some(false),
+    };
+    opts.breakpoint = args.breakpoint;
+    opts.model.clone_from(&args.model);
+    opts.max_noise = args.max_noise;
+    opts.rails = match &args.rails {
+        Some(r) => {
+            let (lo, hi) = pair(r, "--rails")?;
+            Rails {
+                lo: lo as i32,
+                hi: hi as i32,
+            }
+        }
+        None if (2..=24).contains(&args.adc_bits) => Rails::unsigned(args.adc_bits),
+        None => return Err(format!("--adc-bits {}: between 2 and 24", args.adc_bits)),
+    };
+    let (t0, t1) = pair(&args.temp_span, "--temp-span")?;
+    opts.temp_span = Span::new(t0 as f32, t1 as f32);
+    let (v0, v1) = pair(&args.volt_span, "--volt-span")?;
+    opts.volt_span = Span::new(v0 as f32, v1 as f32);
+    if args.model.is_some()
+        && !matches!(
+            args.sensor,
+            SensorKind::SingleAccel | SensorKind::SingleGyro
+        )
+    {
+        return Err("--model applies to single-axis sensors; triads use their presets".into());
+    }
+    let c = match args.sensor {
+        SensorKind::SingleAccel => single::calibrate(&opts, Quantity::Acceleration),
+        SensorKind::SingleGyro => single::calibrate(&opts, Quantity::AngularRate),
+        SensorKind::Accel => triad::calibrate(&opts, triad::Kind::Accel, args.nonlinear),
+        SensorKind::Gyro => triad::calibrate(&opts, triad::Kind::Gyro, args.nonlinear),
+        SensorKind::Imu => triad::calibrate(&opts, triad::Kind::Imu, args.nonlinear),
+    }
+    .map_err(|e| e.to_string())?;
+    let data_name = args.data.display().to_string();
+    let html = args
+        .report
+        .as_ref()
+        .map(|_| report::html::render(&c, &data_name))
+        .transpose()?;
+    let record = Record::new(&c, &data_name);
+    if let Some(p) = &args.blob {
+        report::write_atomically(p, |w| w.write_all(&c.blob))?;
+    }
+    if let (Some(p), Some(html)) = (&args.report, &html) {
+        report::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
+    }
+    if let Some(p) = &args.json {
+        report::write_atomically(p, |w| {
+            serde_json::to_writer_pretty(&mut *w, &record).map_err(std::io::Error::other)
+        })?;
+    }
+    print!("{}", summary(&c, args));
+    Ok(c.verdict())
+}
+
+fn summary(c: &sensor::Calibrated, args: &CalibrateArgs) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let word = |v: Verdict| match v {
+        Verdict::Accept => "ACCEPT",
+        Verdict::Review => "REVIEW",
+        Verdict::Reject => "REJECT",
+    };
+    let _ = writeln!(
+        s,
+        "calflash calibrate  {}  unit {}: {}",
+        args.data.display(),
+        c.data.identity.serial,
+        word(c.verdict())
+    );
+    for f in &c.findings {
+        let _ = writeln!(s, "  {:<6} {}", word(f.verdict), f.text);
+    }
+    for n in &c.notes {
+        let _ = writeln!(s, "  note   {n}");
+    }
+    for d in &c.decisions {
+        let _ = writeln!(
+            s,
+            "  test   {}: F = {}, p = {}: {}; {}",
+            d.name,
+            num(d.test.f),
+            pval(d.test.p),
+            if d.kept { "kept" } else { "not kept" },
+            d.detail
+        );
+    }
+    let r = &c.points[c.reference];
+    for (a, axis) in r.axes.iter().enumerate() {
+        let coefs: Vec<String> = axis
+            .fit
+            .names
+            .iter()
+            .zip(&axis.fit.coefficients)
+            .zip(&axis.fit.std_errors)
+            .map(|((n, b), e)| format!("{n} {} +- {}", num(*b), num(*e)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "  {}: {} (noise {} {})",
+            axis.output,
+            coefs.join(", "),
+            num(r.noise[a]),
+            c.units[a]
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  table: {} point(s); blob {} bytes",
+        c.points.len(),
+        c.blob.len()
+    );
+    for (p, what) in [
+        (&args.blob, "blob"),
+        (&args.report, "report"),
+        (&args.json, "record"),
+    ] {
+        if let Some(p) = p {
+            let _ = writeln!(s, "  {what}: {}", p.display());
+        }
+    }
+    s
+}

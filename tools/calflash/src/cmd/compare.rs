@@ -1,0 +1,83 @@
+//! `calflash compare`: which terms of a unit's calibration moved beyond their uncertainty
+//! between two calibrations.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::report::{self, terminal::num, terminal::pval};
+use crate::sensor::{compare, record::Record};
+
+/// Compare two calibration records of one unit (Wald tests per term, chi-square per axis).
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// The earlier record (from `calflash calibrate --json`).
+    pub before: PathBuf,
+    /// The later record.
+    pub after: PathBuf,
+    /// Significance level.
+    #[arg(long, default_value_t = 0.05)]
+    pub alpha: f64,
+    /// Write the comparison as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Runs `calflash compare`.
+///
+/// # Errors
+/// Unreadable or incomparable records.
+pub fn run(args: &CompareArgs) -> Result<(), String> {
+    let a = Record::read(&args.before)?;
+    let b = Record::read(&args.after)?;
+    let changes = compare::compare(&a, &b, args.alpha)?;
+    println!(
+        "calflash compare  unit {}  {} -> {}",
+        a.serial,
+        args.before.display(),
+        args.after.display()
+    );
+    let mut moved_any = false;
+    for c in &changes {
+        let at = match (c.temp, c.volt) {
+            (Some(t), Some(v)) => format!(" at {t:.1} C, {v:.2} V"),
+            (Some(t), None) => format!(" at {t:.1} C"),
+            (None, Some(v)) => format!(" at {v:.2} V"),
+            (None, None) => String::new(),
+        };
+        let moved: Vec<&compare::TermChange> = c.terms.iter().filter(|t| t.moved).collect();
+        moved_any |= !moved.is_empty() || c.p < args.alpha;
+        println!(
+            "  {}{at}: chi-square {} on {} dof, p = {}: {}",
+            c.output,
+            num(c.chi2),
+            c.df,
+            pval(c.p),
+            if c.p < args.alpha {
+                "CHANGED"
+            } else {
+                "no change beyond the uncertainty"
+            }
+        );
+        for t in &c.terms {
+            println!(
+                "    {:<16} {} -> {}  z = {:>7.2}  p = {}{}",
+                t.term,
+                num(t.before),
+                num(t.after),
+                t.z,
+                pval(t.p),
+                if t.moved { "  MOVED" } else { "" }
+            );
+        }
+    }
+    if !moved_any {
+        println!("  no term moved beyond its uncertainty at {}", args.alpha);
+    }
+    if let Some(p) = &args.json {
+        report::write_atomically(p, |w| {
+            serde_json::to_writer_pretty(&mut *w, &changes).map_err(std::io::Error::other)
+        })?;
+    }
+    Ok(())
+}

@@ -1,0 +1,109 @@
+//! `calflash simulate`: a virtual sensor through a test plan, to an observation file.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::calibrate::SensorKind;
+use crate::report;
+use crate::sim::{self, Sensor, plan, truth};
+
+/// Simulate a sensor with known true coefficients and noise through a test plan.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// What to simulate.
+    #[arg(long, value_enum)]
+    pub sensor: SensorKind,
+    /// Plan items (repeatable): head:N, tumble:6|12|18|24|26, sphere:N, rate:LO:HI:N (rad/s),
+    /// centrifuge:LO:HI:N (g), sweep:LO:HI:N, fine:LO:HI:N.
+    #[arg(long, required = true)]
+    pub plan: Vec<String>,
+    /// Chamber temperatures, C (comma-separated).
+    #[arg(long, default_value = "25", value_delimiter = ',')]
+    pub temps: Vec<f64>,
+    /// Supply voltages, V (comma-separated).
+    #[arg(long, default_value = "5", value_delimiter = ',')]
+    pub volts: Vec<f64>,
+    /// Repetitions of the whole plan at each temperature and voltage.
+    #[arg(long, default_value_t = 1)]
+    pub repeat: usize,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Round outputs to whole counts (single readings rather than averages).
+    #[arg(long)]
+    pub quantize: bool,
+    /// True coefficients (JSON, the fields of the sensor's truth); default: a typical unit.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+    /// Write the truth used here (JSON).
+    #[arg(long)]
+    pub write_truth: Option<PathBuf>,
+    /// The observation file to write (CSV).
+    #[arg(long, short)]
+    pub output: PathBuf,
+}
+
+fn load<T: serde::de::DeserializeOwned + Default>(p: Option<&PathBuf>) -> Result<T, String> {
+    match p {
+        None => Ok(T::default()),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            serde_json::from_str(&text)
+                .map_err(|e| format!("{}:{}:{}: {e}", p.display(), e.line(), e.column()))
+        }
+    }
+}
+
+/// Runs `calflash simulate`.
+///
+/// # Errors
+/// A bad plan item or truth file.
+pub fn run(args: &SimulateArgs) -> Result<(), String> {
+    let single = matches!(
+        args.sensor,
+        SensorKind::SingleAccel | SensorKind::SingleGyro
+    );
+    if args.repeat == 0 {
+        return Err("--repeat: at least 1".into());
+    }
+    let conditions = plan::plan(&args.plan, &args.temps, &args.volts, args.repeat, single)
+        .map_err(|e| e.to_string())?;
+    let t = args.truth.as_ref();
+    let sensor = match args.sensor {
+        SensorKind::SingleAccel => Sensor::Single {
+            gyro: false,
+            truth: load::<truth::SingleTruth>(t)?,
+        },
+        SensorKind::SingleGyro => Sensor::Single {
+            gyro: true,
+            truth: load::<truth::SingleTruth>(t)?,
+        },
+        SensorKind::Accel => Sensor::Accel(match t {
+            Some(_) => load::<truth::TriadTruth>(t)?,
+            None => truth::TriadTruth::accelerometer(),
+        }),
+        SensorKind::Gyro => Sensor::Gyro(match t {
+            Some(_) => load::<truth::TriadTruth>(t)?,
+            None => truth::TriadTruth::gyro(),
+        }),
+        SensorKind::Imu => Sensor::Imu(Box::new(load::<truth::ImuTruth>(t)?)),
+    };
+    let obs = sim::simulate(&sensor, &conditions, args.seed, args.quantize);
+    report::write_atomically(&args.output, |w| obs.write_csv(w))?;
+    if let Some(p) = &args.write_truth {
+        let json = match &sensor {
+            Sensor::Single { truth, .. } => serde_json::to_string_pretty(truth),
+            Sensor::Accel(t) | Sensor::Gyro(t) => serde_json::to_string_pretty(t),
+            Sensor::Imu(t) => serde_json::to_string_pretty(t),
+        }
+        .map_err(|e| e.to_string())?;
+        report::write_atomically(p, |w| w.write_all(json.as_bytes()))?;
+    }
+    println!(
+        "calflash simulate: {} observations written to {}",
+        obs.rows.len(),
+        args.output.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,69 @@
+//! `calflash threshold`: threshold, dead band and resolution from a fine-step run.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::columns as col;
+use crate::obs::{self, Format};
+use crate::report::terminal::num;
+use crate::sensor::threshold;
+
+/// Threshold, dead band and resolution of a single axis from a fine-step run near zero.
+#[derive(Debug, Args)]
+pub struct ThresholdArgs {
+    /// The fine-step run (columns input, output).
+    pub data: PathBuf,
+    /// The accepted scale factor, counts per input unit.
+    #[arg(long)]
+    pub scale: f64,
+    /// Output at zero input, counts (default: the mean output at input 0).
+    #[arg(long)]
+    pub bias: Option<f64>,
+    /// Field separator.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub format: Format,
+}
+
+/// Runs `calflash threshold`.
+///
+/// # Errors
+/// A bad file or a run that cannot give the figures.
+pub fn run(args: &ThresholdArgs) -> Result<(), String> {
+    if !(args.scale.is_finite() && args.scale != 0.0) {
+        return Err("--scale: a finite, non-zero scale factor".into());
+    }
+    let t = obs::read_columns(
+        &args.data,
+        &[col::INPUT.into(), col::OUTPUT.into()],
+        args.format,
+    )
+    .map_err(|e| e.to_string())?;
+    let r = threshold::analyse(
+        t.column(col::INPUT).unwrap_or_default(),
+        t.column(col::OUTPUT).unwrap_or_default(),
+        args.scale,
+        args.bias,
+    )
+    .map_err(|e| format!("{}: {e}", args.data.display()))?;
+    let opt = |v: Option<f64>| v.map_or("not reached".into(), num);
+    println!("calflash threshold  {}", args.data.display());
+    println!("  output at zero input  {} counts", num(r.zero));
+    println!(
+        "  threshold             {} (positive), {} (negative)",
+        opt(r.positive),
+        opt(r.negative)
+    );
+    match r.dead_band {
+        Some((a, b)) => println!("  dead band             [{}, {}]", num(a), num(b)),
+        None => println!(
+            "  dead band             not found: the response never reaches half the expected on one side"
+        ),
+    }
+    println!("  resolution            {}", opt(r.resolution));
+    println!("  steps (input, response counts, ratio to expected):");
+    for (x, resp, ratio) in &r.steps {
+        println!("    {:>12} {:>12} {:>8.3}", num(*x), num(*resp), ratio);
+    }
+    Ok(())
+}

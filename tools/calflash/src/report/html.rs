@@ -1,0 +1,339 @@
+//! The calibration report: one HTML file with inline SVG figures, the verdict first.
+
+use std::fmt::Write as _;
+
+use super::plot::{COLORS, Figure, Series, svg};
+use super::terminal::{num, pval};
+use crate::sensor::{Calibrated, Verdict};
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+fn verdict_word(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Accept => "ACCEPT",
+        Verdict::Review => "REVIEW",
+        Verdict::Reject => "REJECT",
+    }
+}
+
+const STYLE: &str = "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}\
+h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #ccc}\
+.verdict{font-size:1.4em;padding:.5em 1em;border-radius:6px;display:inline-block}\
+.accept{background:#d9f2d9}.review{background:#fff3cd}.reject{background:#f8d7da}\
+table{border-collapse:collapse;margin:.5em 0}td,th{padding:2px 10px;text-align:right;border-bottom:1px solid #eee}\
+th{background:#f4f4f4}td:first-child,th:first-child{text-align:left}.fig{margin:1em 0}";
+
+/// Renders the report.
+///
+/// # Errors
+/// A figure that cannot be drawn.
+pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
+    let id = &c.data.identity;
+    let mut h = String::new();
+    let verdict = c.verdict();
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>Calibration {}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n",
+        esc(id.serial.as_str())
+    );
+    let _ = writeln!(
+        h,
+        "<h1>Calibration of unit {}</h1>",
+        esc(id.serial.as_str())
+    );
+    let _ = writeln!(
+        h,
+        "<p class=\"verdict {}\">{}</p>",
+        verdict_word(verdict).to_lowercase(),
+        verdict_word(verdict)
+    );
+    let _ = writeln!(h, "<ul>");
+    for f in &c.findings {
+        let _ = writeln!(
+            h,
+            "<li><b>{}</b>: {}</li>",
+            verdict_word(f.verdict),
+            esc(&f.text)
+        );
+    }
+    let _ = writeln!(h, "</ul>");
+    let hash: String = id.data_hash.iter().map(|b| format!("{b:02x}")).collect();
+    let _ = writeln!(
+        h,
+        "<p>Data {} (SHA-256 {}&#8230;), {} observations at {} table point{}; calflash {}.{}.{}; blob {} bytes.</p>",
+        esc(data_file),
+        hash,
+        c.points.iter().map(|p| p.axes[0].fit.n).sum::<usize>(),
+        c.points.len(),
+        if c.points.len() == 1 { "" } else { "s" },
+        id.tool_version[0],
+        id.tool_version[1],
+        id.tool_version[2],
+        c.blob.len()
+    );
+
+    let _ = writeln!(h, "<h2>Model</h2>\n<ul>");
+    for n in &c.notes {
+        let _ = writeln!(h, "<li>{}</li>", esc(n));
+    }
+    let _ = writeln!(h, "</ul>");
+    for d in &c.decisions {
+        let _ = writeln!(
+            h,
+            "<h2>{}</h2>\n<p>Partial F = {} on ({}, {}) dof, p = {}: {}. {}.</p>",
+            esc(&d.name),
+            num(d.test.f),
+            d.test.df_num,
+            d.test.df_den,
+            pval(d.test.p),
+            if d.kept {
+                "kept in the device model"
+            } else {
+                "not in the device model"
+            },
+            esc(&d.detail)
+        );
+        if !d.figure.is_empty() {
+            let series = d
+                .figure
+                .iter()
+                .enumerate()
+                .map(|(k, (name, pts))| Series {
+                    name,
+                    points: pts,
+                    color: COLORS[k % COLORS.len()],
+                    line: false,
+                    errors: None,
+                })
+                .collect();
+            let _ = writeln!(
+                h,
+                "<div class=\"fig\">{}</div>",
+                svg(&Figure {
+                    title: &format!("{}: residuals without the term", d.name),
+                    x: "input",
+                    y: "residual (counts)",
+                    series,
+                    band: None,
+                    zero_line: true,
+                })?
+            );
+        }
+    }
+
+    let reference = &c.points[c.reference];
+    for (a, axis) in reference.axes.iter().enumerate() {
+        let unit = c.units[a];
+        let _ = writeln!(h, "<h2>{} at the reference point</h2>", esc(&axis.output));
+        let f = &axis.fit;
+        let _ = writeln!(
+            h,
+            "<p>{}: residual sigma {} counts ({} {unit}), R&#178; {}, inversion error {} {unit}.</p>",
+            esc(&axis.formula.to_string()),
+            num(f.sigma2.sqrt()),
+            num(reference.noise[a]),
+            num(f.r2),
+            num(reference.inversion_error[a])
+        );
+        let _ = writeln!(
+            h,
+            "<table><tr><th>term</th><th>coefficient</th><th>std error</th><th>t</th><th>p</th></tr>"
+        );
+        for j in 0..f.p {
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                esc(&f.names[j]),
+                num(f.coefficients[j]),
+                num(f.std_errors[j]),
+                num(f.t[j]),
+                pval(f.p_values[j])
+            );
+        }
+        let _ = writeln!(h, "</table>");
+        // Residuals against the input, every table point.
+        let by_point: Vec<Vec<(f64, f64)>> = c
+            .points
+            .iter()
+            .map(|p| {
+                p.axes[a]
+                    .input
+                    .iter()
+                    .copied()
+                    .zip(p.axes[a].fit.residuals.iter().copied())
+                    .collect()
+            })
+            .collect();
+        let names: Vec<String> = c
+            .points
+            .iter()
+            .map(|p| {
+                crate::sensor::table::describe(&crate::sensor::table::Point {
+                    temp: p.temp,
+                    volt: p.volt,
+                    rows: vec![],
+                })
+            })
+            .collect();
+        let series = by_point
+            .iter()
+            .zip(&names)
+            .enumerate()
+            .map(|(k, (pts, name))| Series {
+                name,
+                points: pts,
+                color: COLORS[k % COLORS.len()],
+                line: false,
+                errors: None,
+            })
+            .collect();
+        let range = c.ranges[a];
+        let _ = writeln!(
+            h,
+            "<div class=\"fig\">{}</div>",
+            svg(&Figure {
+                title: &format!("{}: residuals against the input", axis.output),
+                x: &format!("{} ({unit})", axis.own),
+                y: "residual (counts)",
+                series,
+                band: Some((f64::from(range.lo), f64::from(range.hi))),
+                zero_line: true,
+            })?
+        );
+        let order: Vec<Vec<(f64, f64)>> = c
+            .points
+            .iter()
+            .map(|p| {
+                p.axes[a]
+                    .lines
+                    .iter()
+                    .map(|l| *l as f64)
+                    .zip(p.axes[a].fit.residuals.iter().copied())
+                    .collect()
+            })
+            .collect();
+        let series = order
+            .iter()
+            .zip(&names)
+            .enumerate()
+            .map(|(k, (pts, name))| Series {
+                name,
+                points: pts,
+                color: COLORS[k % COLORS.len()],
+                line: false,
+                errors: None,
+            })
+            .collect();
+        let _ = writeln!(
+            h,
+            "<div class=\"fig\">{}</div>",
+            svg(&Figure {
+                title: &format!("{}: residuals in test order", axis.output),
+                x: "line of the data file",
+                y: "residual (counts)",
+                series,
+                band: None,
+                zero_line: true,
+            })?
+        );
+        // The calibration's own error over and beyond the calibrated range.
+        let (lo, hi) = (f64::from(range.lo), f64::from(range.hi));
+        let w = hi - lo;
+        let slope = axis.coef(&axis.own).abs();
+        let curve: Vec<(f64, f64)> = (0..=200)
+            .map(|k| {
+                let x = lo - 0.5 * w + 2.0 * w * f64::from(k) / 200.0;
+                let mut row = Vec::new();
+                axis.formula.row(
+                    |v| {
+                        if v == axis.own {
+                            x
+                        } else if v == crate::sensor::single::KINK {
+                            (x - c.breakpoint).abs() - c.breakpoint.abs()
+                        } else {
+                            0.0
+                        }
+                    },
+                    &mut row,
+                );
+                (x, f.predict(&row).variance.sqrt() / slope)
+            })
+            .collect();
+        let _ = writeln!(
+            h,
+            "<div class=\"fig\">{}</div>",
+            svg(&Figure {
+                title: &format!("{}: 1-sigma calibration error over the range", axis.output),
+                x: &format!("{} ({unit})", axis.own),
+                y: &format!("1-sigma ({unit})"),
+                series: vec![Series {
+                    name: "prediction standard error",
+                    points: &curve,
+                    color: COLORS[0],
+                    line: true,
+                    errors: None,
+                }],
+                band: Some((lo, hi)),
+                zero_line: true,
+            })?
+        );
+        // Coefficients against temperature.
+        if c.temps.len() > 1 {
+            for (term, what) in [
+                ("1", "bias (counts)"),
+                (axis.own.as_str(), "scale factor (counts per unit)"),
+            ] {
+                let pts: Vec<(f64, f64)> = c
+                    .points
+                    .iter()
+                    .filter_map(|p| Some((p.temp?, p.axes[a].coef(term))))
+                    .collect();
+                let errs: Vec<f64> = c
+                    .points
+                    .iter()
+                    .filter(|p| p.temp.is_some())
+                    .map(|p| {
+                        p.axes[a]
+                            .index(term)
+                            .map_or(0.0, |i| p.axes[a].fit.std_errors[i])
+                    })
+                    .collect();
+                let _ = writeln!(
+                    h,
+                    "<div class=\"fig\">{}</div>",
+                    svg(&Figure {
+                        title: &format!(
+                            "{}: {what} against temperature (error bars 1-sigma)",
+                            axis.output
+                        ),
+                        x: "temperature (C)",
+                        y: what,
+                        series: vec![Series {
+                            name: what,
+                            points: &pts,
+                            color: COLORS[1],
+                            line: true,
+                            errors: Some(&errs),
+                        }],
+                        band: None,
+                        zero_line: false,
+                    })?
+                );
+            }
+        }
+    }
+    let _ = writeln!(
+        h,
+        "<h2>Device</h2>\n<p>The blob holds {} coefficient set{} with covariance factors; the device's f32 correction differs from the f64 correction by at most {}.</p>",
+        c.points.len(),
+        if c.points.len() == 1 { "" } else { "s" },
+        num(c.device_error)
+    );
+    let _ = writeln!(h, "</body>\n</html>");
+    Ok(h)
+}

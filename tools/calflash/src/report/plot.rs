@@ -1,0 +1,182 @@
+//! SVG figures for the HTML report, drawn with plotters' SVG backend (text is laid out by the
+//! browser, so no font files are needed).
+
+use plotters::prelude::*;
+
+/// A named set of points and how to draw it.
+pub struct Series<'a> {
+    /// Legend name.
+    pub name: &'a str,
+    /// Points.
+    pub points: &'a [(f64, f64)],
+    /// Colour.
+    pub color: RGBColor,
+    /// Join the points with a line.
+    pub line: bool,
+    /// Vertical error bars (half-widths, one per point).
+    pub errors: Option<&'a [f64]>,
+}
+
+/// Blue, orange, green, red, purple, brown: distinguishable series colours.
+pub const COLORS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+/// What a figure shows.
+pub struct Figure<'a> {
+    /// Title.
+    pub title: &'a str,
+    /// x label.
+    pub x: &'a str,
+    /// y label.
+    pub y: &'a str,
+    /// The series.
+    pub series: Vec<Series<'a>>,
+    /// An x interval to shade (the calibrated range).
+    pub band: Option<(f64, f64)>,
+    /// Draw y = 0.
+    pub zero_line: bool,
+}
+
+fn bounds(fig: &Figure<'_>) -> ((f64, f64), (f64, f64)) {
+    let mut x = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut y = (f64::INFINITY, f64::NEG_INFINITY);
+    for s in &fig.series {
+        for (i, (px, py)) in s.points.iter().enumerate() {
+            if !(px.is_finite() && py.is_finite()) {
+                continue;
+            }
+            let e = s.errors.and_then(|e| e.get(i)).copied().unwrap_or(0.0);
+            x = (x.0.min(*px), x.1.max(*px));
+            y = (y.0.min(py - e), y.1.max(py + e));
+        }
+    }
+    if let Some((a, b)) = fig.band {
+        x = (x.0.min(a), x.1.max(b));
+    }
+    if fig.zero_line {
+        y = (y.0.min(0.0), y.1.max(0.0));
+    }
+    let pad = |(lo, hi): (f64, f64)| {
+        if !lo.is_finite() {
+            return (-1.0, 1.0);
+        }
+        let w = if hi > lo { hi - lo } else { lo.abs().max(1.0) };
+        (lo - 0.05 * w, hi + 0.05 * w)
+    };
+    (pad(x), pad(y))
+}
+
+/// Draws a figure as an SVG document (a string).
+///
+/// # Errors
+/// plotters' drawing error, as text.
+pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (720, 360)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let ((x0, x1), (y0, y1)) = bounds(fig);
+        let mut chart = ChartBuilder::on(&root)
+            .caption(fig.title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(fig.x)
+            .y_desc(fig.y)
+            .y_label_formatter(&|v| super::terminal::num(*v))
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        if let Some((a, b)) = fig.band {
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [(a, y0), (b, y1)],
+                    RGBColor(230, 240, 255).filled(),
+                )))
+                .map_err(|e| e.to_string())?
+                .label("calibrated range")
+                .legend(|(x, y)| {
+                    Rectangle::new(
+                        [(x, y - 5), (x + 12, y + 5)],
+                        RGBColor(230, 240, 255).filled(),
+                    )
+                });
+        }
+        if fig.zero_line {
+            chart
+                .draw_series(LineSeries::new([(x0, 0.0), (x1, 0.0)], BLACK.mix(0.4)))
+                .map_err(|e| e.to_string())?;
+        }
+        for s in &fig.series {
+            let color = s.color;
+            let pts: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|(a, b)| a.is_finite() && b.is_finite())
+                .collect();
+            if let Some(errors) = s.errors {
+                chart
+                    .draw_series(pts.iter().zip(errors).map(|((x, y), e)| {
+                        ErrorBar::new_vertical(*x, y - e, *y, y + e, color.filled(), 6)
+                    }))
+                    .map_err(|e| e.to_string())?;
+            }
+            let anno = if s.line {
+                chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
+            } else {
+                chart.draw_series(pts.iter().map(|p| Circle::new(*p, 2, color.filled())))
+            }
+            .map_err(|e| e.to_string())?;
+            anno.label(s.name).legend(move |(x, y)| {
+                Rectangle::new([(x, y - 3), (x + 12, y + 3)], color.filled())
+            });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.3))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_figure_is_an_svg_with_its_marks() {
+        let pts = [(0.0, 1.0), (1.0, -0.5), (2.0, 0.25)];
+        let s = svg(&Figure {
+            title: "residuals",
+            x: "input",
+            y: "residual",
+            series: vec![Series {
+                name: "data",
+                points: &pts,
+                color: COLORS[0],
+                line: false,
+                errors: Some(&[0.1, 0.1, 0.1]),
+            }],
+            band: Some((0.5, 1.5)),
+            zero_line: true,
+        })
+        .unwrap();
+        assert!(s.starts_with("<svg"));
+        assert!(s.matches("<circle").count() >= 3);
+        assert!(s.contains("residuals") && s.contains("calibrated range"));
+    }
+}
