@@ -115,6 +115,7 @@ fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
 /// # Errors
 /// A message naming the file, column, term or table point.
 pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
+    sensor::device::serial(&args.serial)?;
     let mut opts = Options::new(&args.data, &args.serial);
     opts.format = args.format;
     opts.alpha = args.alpha;

@@ -106,9 +106,21 @@ impl Formula {
             let needed = self.terms.iter().filter(|t| t.variables() == [var]).count()
                 + usize::from(self.intercept);
             if distinct.len() < needed {
+                let own = term.degree_in(var) as usize + usize::from(self.intercept);
+                let why = if needed == own {
+                    format!("it needs at least {needed}")
+                } else {
+                    format!(
+                        "the model's {needed} terms in {var}{} need at least {needed}",
+                        if self.intercept {
+                            " (the intercept included)"
+                        } else {
+                            ""
+                        }
+                    )
+                };
                 return format!(
-                    "{name} is not observable: {var} takes only {} distinct value{}; it needs at \
-                     least {needed}",
+                    "{name} is not observable: {var} takes only {} distinct value{}; {why}",
                     distinct.len(),
                     if distinct.len() == 1 { "" } else { "s" }
                 );

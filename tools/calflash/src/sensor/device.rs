@@ -36,6 +36,26 @@ pub(crate) fn too_many(path: &Path, n: usize) -> WorkflowError {
     )
 }
 
+/// A serial number the device can store.
+///
+/// # Errors
+/// What is wrong with it.
+pub fn serial(text: &str) -> Result<Serial, String> {
+    Serial::new(text)
+        .filter(|s| {
+            !s.as_str().is_empty()
+                && s.as_str()
+                    .bytes()
+                    .all(|b| b.is_ascii_graphic() || b == b' ')
+        })
+        .ok_or_else(|| {
+            format!(
+                "--serial `{text}`: the device stores 1 to {} printable ASCII characters",
+                spincal::model::SERIAL_CAPACITY
+            )
+        })
+}
+
 /// The unit's identity: serial, now, the data's hash, this tool's version.
 ///
 /// # Errors
