@@ -126,6 +126,35 @@ fn select_terms(
     Ok(out)
 }
 
+/// The Chow test of separate fits of `model` below and above the breakpoint, in words (empty
+/// when a side has too few observations for its own fit).
+fn chow(model: &Formula, t: &Table, bp: f64, alpha: f64, path: &std::path::Path, where_: &str) -> String {
+    let input = t.column(col::INPUT).unwrap_or_default();
+    let below: Vec<usize> = (0..t.len()).filter(|&i| input[i] < bp).collect();
+    let above: Vec<usize> = (0..t.len()).filter(|&i| input[i] >= bp).collect();
+    let k = model.width();
+    if below.len() <= k || above.len() <= k {
+        return String::new();
+    }
+    let fits = (
+        fit_axis(model, t, alpha, path, where_),
+        fit_axis(model, &t.select(&below), alpha, path, where_),
+        fit_axis(model, &t.select(&above), alpha, path, where_),
+    );
+    let (Ok(pooled), Ok(lo), Ok(hi)) = fits else {
+        return String::new();
+    };
+    let separate = lo.fit.rss + hi.fit.rss;
+    let dof = t.len() - 2 * k;
+    let f = (pooled.fit.rss - separate) / k as f64 / (separate / dof as f64);
+    let p = stats::dist::f_upper(f, k as f64, dof as f64);
+    format!(
+        "; Chow test of separate fits below and above: F = {f:.3} on ({k}, {dof}) dof, p = {p:.3e}; slopes {:.6e} below, {:.6e} above",
+        lo.coef(col::INPUT),
+        hi.coef(col::INPUT)
+    )
+}
+
 fn sub(table: &Table, rows: &[usize]) -> Table {
     table.select(rows)
 }
@@ -246,10 +275,11 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             name: format!("asymmetry about {bp}"),
             test,
             detail: format!(
-                "scale factor {:.6e} above and {:.6e} below the breakpoint ({:+.3e} relative)",
+                "scale factor {:.6e} above and {:.6e} below the breakpoint ({:+.3e} relative){}",
                 k1 + ca,
                 k1 - ca,
-                2.0 * ca / k1
+                2.0 * ca / k1,
+                chow(&model, &ref_table, bp, opts.alpha, path, &ref_where)
             ),
             kept,
         });
