@@ -32,6 +32,7 @@
 //! - [`blob`]: the wire format (header, CRC, postcard payload), `encode` and `decode`.
 //! - [`correct`]: effective coefficients per environment, raw counts to SI units, flags,
 //!   lever arm, 1-sigma calibration error.
+//! - [`store`]: two power-fail-safe slots over an `embedded-storage` NOR flash.
 //!
 //! # Features
 //!
@@ -73,6 +74,7 @@
 pub mod blob;
 pub mod correct;
 pub mod model;
+pub mod store;
 
 mod error;
 

@@ -4,5 +4,6 @@
 
 pub mod fields;
 pub mod golden;
+pub mod nor;
 pub mod qemu;
 pub mod reference;

@@ -128,7 +128,14 @@ fn select_terms(
 
 /// The Chow test of separate fits of `model` below and above the breakpoint, in words (empty
 /// when a side has too few observations for its own fit).
-fn chow(model: &Formula, t: &Table, bp: f64, alpha: f64, path: &std::path::Path, where_: &str) -> String {
+fn chow(
+    model: &Formula,
+    t: &Table,
+    bp: f64,
+    alpha: f64,
+    path: &std::path::Path,
+    where_: &str,
+) -> String {
     let input = t.column(col::INPUT).unwrap_or_default();
     let below: Vec<usize> = (0..t.len()).filter(|&i| input[i] < bp).collect();
     let above: Vec<usize> = (0..t.len()).filter(|&i| input[i] >= bp).collect();

@@ -1,0 +1,346 @@
+//! The store's promise, tested by cutting the power: after any cut during an update, or during
+//! the recovery that follows it, the store yields exactly the old or exactly the new
+//! calibration, never an error and never a mix; an update that returned Ok survives any later
+//! cut. On a simulated NOR flash with write sizes 1, 4, 8 and 16 bytes; every count printed is
+//! recorded in RELIABILITY.md.
+
+use host_tests::golden;
+use host_tests::nor::{SimFlash, Tear};
+use spincal::model::{CalibrationData, Serial};
+use spincal::store::{Store, StoreError};
+
+const ERASE: usize = 1024;
+const SLOT: u32 = 4 * ERASE as u32;
+const SIZE: usize = 2 * SLOT as usize + ERASE;
+
+/// Calibrations to write: the golden triad and single axis, under several serials.
+fn blobs() -> Vec<Vec<u8>> {
+    let mut out = Vec::new();
+    for (i, serial) in ["OLD-1", "NEW-2", "NEWER-3", "X-4"].iter().enumerate() {
+        let mut d = if i % 2 == 0 {
+            CalibrationData::example_triad()
+        } else {
+            CalibrationData::example_single()
+        };
+        d.identity.serial = Serial::new(serial).unwrap();
+        out.push(golden::encode(&d));
+    }
+    out
+}
+
+fn update<const W: usize>(
+    flash: SimFlash<W, ERASE>,
+    blob: &[u8],
+) -> (SimFlash<W, ERASE>, Result<u32, StoreError>) {
+    let mut store = Store::new(flash, 0, SLOT).unwrap();
+    let mut buf = vec![0u8; SLOT as usize];
+    let mut scratch = CalibrationData::empty();
+    let r = store.update(blob, &mut buf, &mut scratch).map(|i| i.seq);
+    (store.into_inner(), r)
+}
+
+/// Reboot and load: the blob bytes of the calibration the store yields.
+fn boot<const W: usize>(
+    mut flash: SimFlash<W, ERASE>,
+) -> (SimFlash<W, ERASE>, Result<Vec<u8>, StoreError>) {
+    flash.reboot();
+    let before = flash.mem.clone();
+    let mut store = Store::new(flash, 0, SLOT).unwrap();
+    let mut buf = vec![0u8; SLOT as usize];
+    let mut slot = CalibrationData::empty();
+    let r = store
+        .load(&mut buf, &mut slot)
+        .map(|(_, info)| buf[..info.len as usize].to_vec());
+    let flash = store.into_inner();
+    assert_eq!(flash.ops, 0, "boot must not write or erase");
+    assert_eq!(flash.mem, before, "boot changed the flash");
+    (flash, r)
+}
+
+fn tears(op_len: usize, erase: bool) -> Vec<Tear> {
+    let mut t = vec![Tear::Skip, Tear::Complete];
+    if erase {
+        t.extend((1..=4).map(Tear::RandomZeros));
+    } else {
+        t.extend((0..op_len).map(Tear::Partial));
+        t.extend((1..=4).map(Tear::RandomBits));
+    }
+    t
+}
+
+/// The operations of an update from `flash`: (is erase, bytes written).
+fn operations<const W: usize>(flash: &SimFlash<W, ERASE>, blob: &[u8]) -> Vec<(bool, usize)> {
+    // Dry run on a copy with a spy: count ops and their sizes by cutting "complete" at each.
+    let mut out = Vec::new();
+    let (done, r) = update(flash.clone(), blob);
+    r.unwrap();
+    for i in 0..done.ops - flash.ops {
+        let mut f = flash.clone();
+        let before = f.mem.clone();
+        f.cut_at(i, Tear::Complete);
+        let (f, _) = update(f, blob);
+        // An erase touches a whole slot; a write touches at most its own bytes.
+        let changed = f.mem.iter().zip(&before).filter(|(a, b)| a != b).count();
+        let is_erase = i == 0;
+        out.push((
+            is_erase,
+            if is_erase {
+                0
+            } else {
+                changed.max(16).min(blob.len() + 16)
+            },
+        ));
+    }
+    out
+}
+
+/// Cuts every operation of an update of `new` from `start` in every way; returns the cases run.
+fn every_cut<const W: usize>(start: &SimFlash<W, ERASE>, old: Option<&[u8]>, new: &[u8]) -> usize {
+    let ops = operations(start, new);
+    let mut cases = 0;
+    for (i, (is_erase, len)) in ops.iter().enumerate() {
+        for tear in tears(*len, *is_erase) {
+            let mut f = start.clone();
+            f.cut_at(i, tear);
+            let (f, r) = update(f, new);
+            assert!(
+                r.is_err(),
+                "op {i} {tear:?}: the update cannot succeed without power"
+            );
+            assert!(f.violations.is_empty(), "{:?}", f.violations);
+            let (_, got) = boot(f);
+            match (got, old) {
+                (Ok(b), Some(old)) => assert!(b == old || b == new, "W={W} op {i} {tear:?}: a mix"),
+                (Ok(b), None) => assert_eq!(b, new, "W={W} op {i} {tear:?}"),
+                (Err(StoreError::NoValidSlot), None) => {}
+                (Err(e), _) => panic!("W={W} op {i} {tear:?}: {e}"),
+            }
+            cases += 1;
+        }
+    }
+    cases
+}
+
+fn cut_every_operation<const W: usize>() -> usize {
+    let b = blobs();
+    let mut cases = 0;
+    // A new unit: flash never erased.
+    let fresh = SimFlash::<W, ERASE>::new(SIZE);
+    cases += every_cut(&fresh, None, &b[0]);
+    // One valid slot.
+    let (one, r) = update(fresh.clone(), &b[0]);
+    r.unwrap();
+    cases += every_cut(&one, Some(&b[0]), &b[1]);
+    // Both slots valid (the idle one older).
+    let (two, r) = update(one.clone(), &b[1]);
+    r.unwrap();
+    cases += every_cut(&two, Some(&b[1]), &b[2]);
+    // The idle slot left half-written by an earlier cut.
+    let mut torn = one.clone();
+    torn.cut_at(1, Tear::Partial(37));
+    let (torn, _) = update(torn, &b[3]);
+    let (torn, got) = boot(torn);
+    assert_eq!(got.unwrap(), b[0]);
+    cases += every_cut(&torn, Some(&b[0]), &b[1]);
+    cases
+}
+
+#[test]
+fn a_cut_at_every_operation_leaves_old_or_new() {
+    let cases = cut_every_operation::<1>()
+        + cut_every_operation::<4>()
+        + cut_every_operation::<8>()
+        + cut_every_operation::<16>();
+    println!("powerfail: {cases} single-cut cases (write sizes 1, 4, 8, 16)");
+    assert!(cases > 4_000);
+}
+
+fn nested<const W: usize>() -> usize {
+    let b = blobs();
+    let (start, r) = update(SimFlash::<W, ERASE>::new(SIZE), &b[0]);
+    r.unwrap();
+    let ops = operations(&start, &b[1]);
+    let mut cases = 0;
+    let kinds = |len: usize, erase: bool| -> Vec<Tear> {
+        if erase {
+            vec![Tear::Skip, Tear::Complete, Tear::RandomZeros(9)]
+        } else {
+            vec![
+                Tear::Skip,
+                Tear::Complete,
+                Tear::Partial(len / 2),
+                Tear::RandomBits(5),
+            ]
+        }
+    };
+    for (i, (ei, li)) in ops.iter().enumerate() {
+        for t1 in kinds(*li, *ei) {
+            let mut f = start.clone();
+            f.cut_at(i, t1);
+            let (f, _) = update(f, &b[1]);
+            // Recovery: boot (which writes nothing), then the host retries the update and the
+            // power is cut again, at every operation of the retry.
+            let (f, got) = boot(f);
+            let first = got.unwrap();
+            assert!(first == b[0] || first == b[1]);
+            let (done, r) = update(f.clone(), &b[1]);
+            r.unwrap();
+            for j in 0..done.ops - f.ops {
+                for t2 in kinds(16, j == 0) {
+                    let mut g = f.clone();
+                    g.cut_at(j, t2);
+                    let (g, _) = update(g, &b[1]);
+                    assert!(g.violations.is_empty(), "{:?}", g.violations);
+                    let (_, got) = boot(g);
+                    let got = got
+                        .unwrap_or_else(|e| panic!("W={W} cuts {i} {t1:?} then {j} {t2:?}: {e}"));
+                    assert!(
+                        got == b[0] || got == b[1],
+                        "W={W} cuts {i} {t1:?} then {j} {t2:?}: a mix"
+                    );
+                    cases += 1;
+                }
+            }
+        }
+    }
+    cases
+}
+
+#[test]
+fn every_pair_of_nested_cuts_during_recovery() {
+    let cases = nested::<1>() + nested::<4>() + nested::<8>() + nested::<16>();
+    println!("powerfail: {cases} nested-cut cases");
+    assert!(cases > 500);
+}
+
+#[test]
+fn an_update_that_returned_ok_survives_any_later_cut() {
+    let b = blobs();
+    let (f, r) = update(SimFlash::<4, ERASE>::new(SIZE), &b[0]);
+    r.unwrap();
+    let (f, r) = update(f, &b[1]);
+    r.unwrap();
+    // Every cut of the next update, and of the one after it, keeps b[1] (or the newer).
+    let ops = operations(&f, &b[2]);
+    for (i, (e, len)) in ops.iter().enumerate() {
+        for tear in tears(*len, *e) {
+            let mut g = f.clone();
+            g.cut_at(i, tear);
+            let (g, _) = update(g, &b[2]);
+            let (_, got) = boot(g);
+            let got = got.unwrap();
+            assert!(got == b[1] || got == b[2]);
+        }
+    }
+}
+
+/// A small deterministic generator for the campaign.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+}
+
+fn campaign<const W: usize>(sequences: usize, seed: u64) -> usize {
+    let b = blobs();
+    let mut rng = Rng(seed);
+    let mut cuts = 0;
+    for _ in 0..sequences {
+        let mut flash = SimFlash::<W, ERASE>::new(SIZE);
+        let mut current: Option<Vec<u8>> = None;
+        for _ in 0..(1 + rng.below(4)) {
+            let new = &b[rng.below(b.len() as u64) as usize];
+            let cut = rng.below(3) != 0;
+            if cut {
+                let at = rng.below(5) as usize;
+                let tear = match rng.below(5) {
+                    0 => Tear::Skip,
+                    1 => Tear::Complete,
+                    2 => Tear::Partial(rng.below(400) as usize),
+                    3 => Tear::RandomBits(rng.next()),
+                    _ => Tear::RandomZeros(rng.next()),
+                };
+                flash.cut_at(at, tear);
+                cuts += 1;
+            }
+            let (f, r) = update(flash, new);
+            let (f, got) = boot(f);
+            assert!(f.violations.is_empty(), "{:?}", f.violations);
+            match (r, got) {
+                (Ok(_), Ok(g)) => assert_eq!(&g, new, "an update that returned Ok is not current"),
+                (Err(_), Ok(g)) => assert!(
+                    Some(&g) == current.as_ref() || &g == new,
+                    "a mix or a stale calibration"
+                ),
+                (Err(_), Err(StoreError::NoValidSlot)) => {
+                    assert!(current.is_none(), "a committed calibration was lost")
+                }
+                (r, g) => panic!("update {r:?}, boot {g:?}"),
+            }
+            current = boot(f.clone()).1.ok();
+            flash = f;
+        }
+    }
+    cuts
+}
+
+#[test]
+fn a_random_campaign_of_multi_cut_sequences() {
+    let n = 25_000;
+    let cuts =
+        campaign::<1>(n, 1) + campaign::<4>(n, 2) + campaign::<8>(n, 3) + campaign::<16>(n, 4);
+    println!("powerfail: {} random sequences with {cuts} cuts", 4 * n);
+    assert!(cuts > 100_000);
+}
+
+#[test]
+fn a_locked_store_refuses_updates_and_keeps_its_calibration() {
+    let b = blobs();
+    let (f, r) = update(SimFlash::<4, ERASE>::new(SIZE), &b[0]);
+    r.unwrap();
+    let mut store = Store::new(f, 0, SLOT).unwrap();
+    assert!(!store.is_locked().unwrap());
+    store.lock().unwrap();
+    assert!(store.is_locked().unwrap());
+    let mut buf = vec![0u8; SLOT as usize];
+    let mut scratch = CalibrationData::empty();
+    assert_eq!(
+        store.update(&b[1], &mut buf, &mut scratch),
+        Err(StoreError::Locked)
+    );
+    let (_, got) = boot(store.into_inner());
+    assert_eq!(got.unwrap(), b[0]);
+}
+
+#[test]
+fn invalid_blobs_and_bad_layouts_are_refused_before_writing() {
+    let b = blobs();
+    let (f, r) = update(SimFlash::<4, ERASE>::new(SIZE), &b[0]);
+    r.unwrap();
+    let before = f.mem.clone();
+    let mut bad = b[1].clone();
+    bad[20] ^= 1;
+    let (f, r) = update(f, &bad);
+    assert!(matches!(
+        r,
+        Err(StoreError::InvalidBlob(
+            spincal::Error::ChecksumMismatch { .. }
+        ))
+    ));
+    assert_eq!(f.mem, before, "nothing written");
+    assert!(matches!(
+        Store::new(f.clone(), 100, SLOT),
+        Err(StoreError::Layout)
+    ));
+    assert!(matches!(
+        Store::new(f, 0, 100 * SLOT),
+        Err(StoreError::Layout)
+    ));
+}
