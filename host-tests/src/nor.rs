@@ -160,7 +160,7 @@ impl<const W: usize, const E: usize> NorFlash for SimFlash<W, E> {
 
     fn erase(&mut self, from: u32, to: u32) -> Result<(), SimError> {
         let (from, to) = (from as usize, to as usize);
-        if from % E != 0 || to % E != 0 || from > to {
+        if !from.is_multiple_of(E) || !to.is_multiple_of(E) || from > to {
             return Err(SimError(NorFlashErrorKind::NotAligned));
         }
         if to > self.mem.len() {
@@ -190,7 +190,7 @@ impl<const W: usize, const E: usize> NorFlash for SimFlash<W, E> {
 
     fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), SimError> {
         let o = offset as usize;
-        if o % W != 0 || bytes.len() % W != 0 {
+        if !o.is_multiple_of(W) || !bytes.len().is_multiple_of(W) {
             return Err(SimError(NorFlashErrorKind::NotAligned));
         }
         if o + bytes.len() > self.mem.len() {
