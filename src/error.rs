@@ -4,7 +4,7 @@
 use core::fmt;
 
 /// Which part of the calibration a validation error is about.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Field {
@@ -49,7 +49,7 @@ pub enum Field {
 }
 
 /// Which sensor of a calibration an error is about.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Part {
@@ -67,7 +67,7 @@ pub enum Part {
 /// fixed header is read, `Checksum*` before anything is decoded, `Payload*` while the postcard
 /// payload is decoded, `Invalid*` while the decoded values are validated, `Encode*` while a
 /// blob is written, and `Corrector*` when a corrector is built.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Error {

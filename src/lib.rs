@@ -74,6 +74,7 @@
 pub mod blob;
 pub mod correct;
 pub mod model;
+pub mod protocol;
 pub mod store;
 
 mod error;

@@ -1,0 +1,237 @@
+//! The device's side of the update protocol: requests in, responses out, over a [`Store`].
+
+use embedded_storage::nor_flash::NorFlash;
+
+use super::{FrameError, Identity, MAX_CHUNK, MAX_FRAME, PROTOCOL_VERSION, Request, Response, Status};
+use crate::blob::{self, MAX_BLOB_LEN};
+use crate::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
+use crate::model::{Calibration, CalibrationData, Sensor, Serial};
+use crate::store::{SlotInfo, Store, StoreError};
+
+/// Bytes of the buffer the store needs (a blob padded to any write size).
+pub const SLOT_BUFFER: usize = MAX_BLOB_LEN + 16;
+
+/// Sample rate assumed for the IMU's lever-arm derivative in test vectors, Hz.
+const VECTOR_RATE_HZ: f32 = 1000.0;
+
+/// The device: its store, the validated RAM copy of the current calibration, and the state of
+/// a transfer. About 35 KB: keep it in a `static`.
+#[derive(Debug)]
+pub struct Device<F> {
+    store: Store<F>,
+    unit: Serial,
+    firmware: [u16; 3],
+    cal: CalibrationData,
+    loaded: Option<SlotInfo>,
+    scratch: CalibrationData,
+    rx: [u8; MAX_BLOB_LEN],
+    transfer: Option<(u32, u32)>,
+    next: u32,
+    buf: [u8; SLOT_BUFFER],
+    frame: [u8; MAX_FRAME],
+}
+
+impl<F: NorFlash> Device<F> {
+    /// A device over `store`, loading the current calibration (if any).
+    pub fn new(store: Store<F>, unit: Serial, firmware: [u16; 3]) -> Self {
+        let mut d = Self {
+            store,
+            unit,
+            firmware,
+            cal: CalibrationData::empty(),
+            loaded: None,
+            scratch: CalibrationData::empty(),
+            rx: [0; MAX_BLOB_LEN],
+            transfer: None,
+            next: 0,
+            buf: [0; SLOT_BUFFER],
+            frame: [0; MAX_FRAME],
+        };
+        d.reload();
+        d
+    }
+
+    fn reload(&mut self) {
+        self.loaded = self.store.load(&mut self.buf, &mut self.cal).ok().map(|(_, info)| info);
+    }
+
+    /// The current calibration (the validated RAM copy), if any.
+    pub fn calibration(&self) -> Option<&Calibration> {
+        self.loaded?;
+        Calibration::validate_in_place(&self.cal).ok()
+    }
+
+    /// The unit's serial.
+    pub const fn unit(&self) -> &Serial {
+        &self.unit
+    }
+
+    /// Handles one frame (without its terminator) and writes the response frame into `out`;
+    /// returns its length (0 if `out` is too small for it).
+    pub fn handle_frame(&mut self, frame: &[u8], out: &mut [u8]) -> usize {
+        let response = match super::decode::<Request>(frame, &mut self.frame) {
+            Ok(req) => self.handle(req),
+            Err(FrameError::Message) if super::unknown_request(frame, &mut self.frame) => Response::Error(Status::UnknownRequest),
+            Err(FrameError::Message) => Response::Error(Status::Malformed),
+            Err(_) => Response::Error(Status::BadFrame),
+        };
+        super::encode(&response, out).unwrap_or(0)
+    }
+
+    /// Handles one request.
+    pub fn handle(&mut self, req: Request) -> Response {
+        match req {
+            Request::Identify => self.identify(),
+            Request::ReadBlob { offset, len } => self.read_blob(offset, len),
+            Request::WriteBegin { len, crc } => self.begin(len, crc),
+            Request::WriteChunk { offset, data } => self.chunk(offset, &data),
+            Request::Commit => self.commit(),
+            Request::RunVectors { temperature, voltage, raw } => self.vectors(temperature, voltage, &raw),
+            Request::Lock => match self.store.lock() {
+                Ok(()) => Response::LockedOk,
+                Err(_) => Response::Error(Status::StoreFailed),
+            },
+        }
+    }
+
+    fn identify(&mut self) -> Response {
+        let slots = self.store.scan(&mut self.buf, &mut self.scratch);
+        let locked = self.store.is_locked();
+        let (Ok(slots), Ok(locked)) = (slots, locked) else {
+            return Response::Error(Status::StoreFailed);
+        };
+        Response::Identity(Identity {
+            unit: self.unit.clone(),
+            firmware: self.firmware,
+            format: blob::FORMAT_VERSION,
+            protocol: PROTOCOL_VERSION,
+            slots,
+            calibration: self.loaded.map(|_| self.cal.identity.serial.clone()),
+            blob_len: self.loaded.map_or(0, |i| i.len),
+            locked,
+            capacity: self.store.capacity() as u32,
+        })
+    }
+
+    fn read_blob(&mut self, offset: u32, len: u16) -> Response {
+        let Some(info) = self.loaded else {
+            return Response::Error(Status::NoCalibration);
+        };
+        let end = u64::from(offset) + u64::from(len);
+        if usize::from(len) > MAX_CHUNK || end > u64::from(info.len) {
+            return Response::Error(Status::OutOfRange);
+        }
+        let mut data = heapless::Vec::<u8, MAX_CHUNK>::new();
+        if data.resize(usize::from(len), 0).is_err() {
+            return Response::Error(Status::OutOfRange);
+        }
+        match self.store.read_slot(&info, offset, &mut data) {
+            Ok(()) => Response::Blob { offset, data },
+            Err(_) => Response::Error(Status::StoreFailed),
+        }
+    }
+
+    fn begin(&mut self, len: u32, crc: u32) -> Response {
+        match self.store.is_locked() {
+            Ok(true) => return Response::Error(Status::Locked),
+            Ok(false) => {}
+            Err(_) => return Response::Error(Status::StoreFailed),
+        }
+        if len as usize > MAX_BLOB_LEN || len as usize > self.store.capacity() || len == 0 {
+            return Response::Error(Status::TooLarge);
+        }
+        self.transfer = Some((len, crc));
+        self.next = 0;
+        Response::Ready
+    }
+
+    fn chunk(&mut self, offset: u32, data: &[u8]) -> Response {
+        let Some((len, _)) = self.transfer else {
+            return Response::Error(Status::NoTransfer);
+        };
+        let end = offset as usize + data.len();
+        if offset != self.next || end > len as usize {
+            return Response::Error(Status::OutOfOrder);
+        }
+        match self.rx.get_mut(offset as usize..end) {
+            Some(dst) => dst.copy_from_slice(data),
+            None => return Response::Error(Status::OutOfOrder),
+        }
+        self.next = end as u32;
+        Response::ChunkOk { next: self.next }
+    }
+
+    fn commit(&mut self) -> Response {
+        let Some((len, crc)) = self.transfer.take() else {
+            return Response::Error(Status::NoTransfer);
+        };
+        if self.next != len {
+            return Response::Error(Status::OutOfOrder);
+        }
+        let blob = self.rx.get(..len as usize).unwrap_or_default();
+        if crc::Crc::<u32>::new(&crc::CRC_32_ISCSI).checksum(blob) != crc {
+            return Response::Error(Status::CrcMismatch);
+        }
+        match self.store.update(blob, &mut self.buf, &mut self.scratch) {
+            Ok(info) => {
+                self.reload();
+                Response::Committed { seq: info.seq }
+            }
+            Err(StoreError::InvalidBlob(e)) => Response::Error(Status::InvalidBlob(e)),
+            Err(StoreError::Locked) => Response::Error(Status::Locked),
+            Err(StoreError::BlobTooLarge { .. }) => Response::Error(Status::TooLarge),
+            Err(_) => {
+                // Whatever the store managed, the RAM copy is reloaded from what is committed.
+                self.reload();
+                Response::Error(Status::StoreFailed)
+            }
+        }
+    }
+
+    fn vectors(&mut self, temperature: f32, voltage: f32, raw: &[[i32; 6]]) -> Response {
+        let Some(cal) = self.calibration() else {
+            return Response::Error(Status::NoCalibration);
+        };
+        let mut out = heapless::Vec::new();
+        match &cal.data().sensor {
+            Sensor::Single { .. } => {
+                let Ok(mut c) = AxisCorrector::new(cal) else {
+                    return Response::Error(Status::NoCalibration);
+                };
+                c.set_environment(temperature, voltage);
+                for r in raw {
+                    let o = c.correct(r[0]);
+                    let [v] = o.values;
+                    let _ = out.push(([v, 0.0, 0.0, 0.0, 0.0, 0.0], o.flags.bits()));
+                }
+            }
+            Sensor::Triad { .. } => {
+                let Ok(mut c) = TriadCorrector::new(cal) else {
+                    return Response::Error(Status::NoCalibration);
+                };
+                c.set_environment(temperature, voltage);
+                for r in raw {
+                    let o = c.correct([r[0], r[1], r[2]]);
+                    let [a, b, d] = o.values;
+                    let _ = out.push(([a, b, d, 0.0, 0.0, 0.0], o.flags.bits()));
+                }
+            }
+            Sensor::Imu { .. } => {
+                let Ok(mut c) = ImuCorrector::new(cal, VECTOR_RATE_HZ) else {
+                    return Response::Error(Status::NoCalibration);
+                };
+                c.set_environment(temperature, voltage);
+                for r in raw {
+                    let o = c.correct(*r);
+                    let _ = out.push((o.values, o.flags.bits()));
+                }
+            }
+        }
+        Response::Vectors { out }
+    }
+}
+
+/// The sample rate the device assumes for test vectors of an IMU (the host must use the same).
+pub const fn vector_rate_hz() -> f32 {
+    VECTOR_RATE_HZ
+}

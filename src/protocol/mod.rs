@@ -1,0 +1,235 @@
+//! The update protocol over a serial link, shared by the device and `calflash`.
+//!
+//! A frame is `COBS(postcard(message) ++ CRC-32C(postcard(message)), little-endian) ++ 0x00`.
+//! The host sends a [`Request`], the device answers with one [`Response`]. A frame that does
+//! not decode, fails its CRC or carries an unknown request gets [`Response::Error`] and changes
+//! nothing. [`Device`] is the device's side, over any [`NorFlash`](embedded_storage::nor_flash::NorFlash).
+//!
+//! ```
+//! use spincal::protocol::{self, Request, MAX_FRAME};
+//!
+//! let mut frame = [0u8; MAX_FRAME];
+//! let n = protocol::encode(&Request::Identify, &mut frame).unwrap();
+//! assert_eq!(frame[n - 1], 0, "frames end with 0x00");
+//! let mut scratch = [0u8; MAX_FRAME];
+//! let back: Request = protocol::decode(&frame[..n - 1], &mut scratch).unwrap();
+//! assert_eq!(back, Request::Identify);
+//! ```
+
+mod device;
+
+pub use device::{Device, SLOT_BUFFER, vector_rate_hz};
+
+use serde::{Deserialize, Serialize};
+
+use crate::model::Serial;
+use crate::store::SlotState;
+
+/// Bytes of blob per chunk.
+pub const MAX_CHUNK: usize = 256;
+/// Samples per test-vector request.
+pub const MAX_VECTORS: usize = 16;
+/// Largest encoded frame, terminator included.
+pub const MAX_FRAME: usize = 640;
+/// The protocol's version (in [`Identity`]).
+pub const PROTOCOL_VERSION: u8 = 1;
+
+/// What the host asks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Request {
+    /// Who are you, and what do you hold?
+    Identify,
+    /// `len` bytes of the current blob from `offset`.
+    ReadBlob {
+        /// Offset.
+        offset: u32,
+        /// Bytes (at most [`MAX_CHUNK`]).
+        len: u16,
+    },
+    /// A new blob of `len` bytes with CRC-32C `crc` follows in chunks.
+    WriteBegin {
+        /// Blob bytes.
+        len: u32,
+        /// CRC-32C of the whole blob.
+        crc: u32,
+    },
+    /// The next chunk of the blob (chunks come in order).
+    WriteChunk {
+        /// Its offset in the blob.
+        offset: u32,
+        /// The bytes.
+        data: heapless::Vec<u8, MAX_CHUNK>,
+    },
+    /// Check the whole blob and make it the current calibration.
+    Commit,
+    /// Correct raw samples with the current calibration at a temperature and voltage (each
+    /// sample is 6 codes; a single axis uses the first, a triad the first three).
+    RunVectors {
+        /// Temperature, C.
+        temperature: f32,
+        /// Supply voltage, V.
+        voltage: f32,
+        /// Raw samples.
+        raw: heapless::Vec<[i32; 6], MAX_VECTORS>,
+    },
+    /// Refuse all further writes, for good.
+    Lock,
+}
+
+/// Why the device refused a request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Status {
+    /// The frame was not COBS, or too long, or its CRC did not match.
+    BadFrame,
+    /// The frame's message did not decode.
+    Malformed,
+    /// A request this firmware does not know.
+    UnknownRequest,
+    /// The unit is locked against writes.
+    Locked,
+    /// A chunk or commit without a transfer begun.
+    NoTransfer,
+    /// A chunk at another offset than the next expected, or past the declared length.
+    OutOfOrder,
+    /// A blob longer than a slot holds.
+    TooLarge,
+    /// The received blob's CRC differs from the one declared.
+    CrcMismatch,
+    /// The received blob is not a valid calibration (the blob error follows).
+    InvalidBlob(crate::Error),
+    /// The store failed to commit; the previous calibration stays current.
+    StoreFailed,
+    /// No valid calibration is stored.
+    NoCalibration,
+    /// The requested range is outside the blob.
+    OutOfRange,
+}
+
+/// The device's answer to [`Request::Identify`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Identity {
+    /// The unit's serial number (fixed in the unit).
+    pub unit: Serial,
+    /// Firmware version (major, minor, patch).
+    pub firmware: [u16; 3],
+    /// Blob format version the firmware reads.
+    pub format: u8,
+    /// Protocol version.
+    pub protocol: u8,
+    /// Both slots.
+    pub slots: [SlotState; 2],
+    /// The current calibration's serial, if one is loaded.
+    pub calibration: Option<Serial>,
+    /// Its blob length.
+    pub blob_len: u32,
+    /// Whether writes are refused.
+    pub locked: bool,
+    /// Bytes a slot holds.
+    pub capacity: u32,
+}
+
+/// What the device answers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Response {
+    /// To [`Request::Identify`].
+    Identity(Identity),
+    /// To [`Request::ReadBlob`].
+    Blob {
+        /// Offset.
+        offset: u32,
+        /// Bytes.
+        data: heapless::Vec<u8, MAX_CHUNK>,
+    },
+    /// To [`Request::WriteBegin`]: send the chunks.
+    Ready,
+    /// To [`Request::WriteChunk`]: received up to `next`.
+    ChunkOk {
+        /// The next offset expected.
+        next: u32,
+    },
+    /// To [`Request::Commit`]: the new calibration is current.
+    Committed {
+        /// Its slot's sequence number.
+        seq: u32,
+    },
+    /// To [`Request::RunVectors`]: outputs (as many as the sensor has, then zeros) and flag
+    /// bits per sample.
+    Vectors {
+        /// Corrected samples.
+        out: heapless::Vec<([f32; 6], u8), MAX_VECTORS>,
+    },
+    /// To [`Request::Lock`].
+    LockedOk,
+    /// A refusal; nothing changed.
+    Error(Status),
+}
+
+/// A frame that cannot be made or read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FrameError {
+    /// The output buffer is too small.
+    TooLong,
+    /// Not COBS.
+    Cobs,
+    /// Shorter than a CRC.
+    Truncated,
+    /// The CRC does not match.
+    Crc,
+    /// The message does not decode (or has trailing bytes).
+    Message,
+}
+
+const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
+
+/// Encodes `msg` as a frame into `out`, terminator included; returns its length.
+///
+/// # Errors
+/// [`FrameError::TooLong`] when `out` cannot hold it.
+pub fn encode<T: Serialize>(msg: &T, out: &mut [u8]) -> Result<usize, FrameError> {
+    let mut raw = [0u8; MAX_FRAME];
+    let body = postcard::to_slice(msg, &mut raw).map_err(|_| FrameError::TooLong)?.len();
+    let crc = CRC.checksum(raw.get(..body).unwrap_or_default()).to_le_bytes();
+    raw.get_mut(body..body + 4).ok_or(FrameError::TooLong)?.copy_from_slice(&crc);
+    let n = cobs::try_encode(raw.get(..body + 4).unwrap_or_default(), out).map_err(|_| FrameError::TooLong)?;
+    *out.get_mut(n).ok_or(FrameError::TooLong)? = 0;
+    Ok(n + 1)
+}
+
+/// Decodes a frame (without its 0x00 terminator), using `scratch` for the COBS decoding.
+///
+/// # Errors
+/// The [`FrameError`] of the first check that fails.
+pub fn decode<'a, T: Deserialize<'a>>(frame: &[u8], scratch: &'a mut [u8]) -> Result<T, FrameError> {
+    if frame.len() > scratch.len() {
+        return Err(FrameError::TooLong);
+    }
+    let n = cobs::decode(frame, scratch).map_err(|_| FrameError::Cobs)?;
+    let data = scratch.get(..n).ok_or(FrameError::Cobs)?;
+    let Some(body_len) = n.checked_sub(4) else {
+        return Err(FrameError::Truncated);
+    };
+    let (body, crc) = data.split_at(body_len);
+    let stored = u32::from_le_bytes(crc.try_into().map_err(|_| FrameError::Truncated)?);
+    if CRC.checksum(body) != stored {
+        return Err(FrameError::Crc);
+    }
+    let (msg, rest) = postcard::take_from_bytes(body).map_err(|_| FrameError::Message)?;
+    if !rest.is_empty() {
+        return Err(FrameError::Message);
+    }
+    Ok(msg)
+}
+
+/// Number of request kinds (the largest known postcard variant index plus one).
+const REQUEST_KINDS: u32 = 7;
+
+/// Whether a body that failed to decode names a request this firmware does not know.
+fn unknown_request(frame: &[u8], scratch: &mut [u8]) -> bool {
+    let Ok(n) = cobs::decode(frame, scratch) else {
+        return false;
+    };
+    let body = scratch.get(..n.saturating_sub(4)).unwrap_or_default();
+    matches!(postcard::take_from_bytes::<u32>(body), Ok((tag, _)) if tag >= REQUEST_KINDS)
+}
