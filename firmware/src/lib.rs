@@ -95,6 +95,134 @@ impl<'a> Runner<'a> {
     }
 }
 
+/// UART0 of mps2-an386 (CMSDK APB UART), polled.
+pub struct Uart {
+    base: usize,
+}
+
+impl Uart {
+    const DATA: usize = 0x00;
+    const STATE: usize = 0x04;
+    const CTRL: usize = 0x08;
+    const BAUDDIV: usize = 0x10;
+
+    /// UART0 at 0x40004000, transmitter and receiver enabled.
+    pub fn uart0() -> Self {
+        let u = Self { base: 0x4000_4000 };
+        // SAFETY: the documented CMSDK UART registers of mps2-an386.
+        unsafe {
+            ((u.base + Self::BAUDDIV) as *mut u32).write_volatile(16);
+            ((u.base + Self::CTRL) as *mut u32).write_volatile(0b11);
+        }
+        u
+    }
+
+    fn state(&self) -> u32 {
+        // SAFETY: a read of the STATE register.
+        unsafe { ((self.base + Self::STATE) as *const u32).read_volatile() }
+    }
+
+    /// Waits for and returns one byte.
+    pub fn read(&self) -> u8 {
+        while self.state() & 0b10 == 0 {}
+        // SAFETY: a read of the DATA register with the receive buffer full.
+        unsafe { ((self.base + Self::DATA) as *const u32).read_volatile() as u8 }
+    }
+
+    /// Sends bytes, waiting while the transmit buffer is full.
+    pub fn write_all(&self, bytes: &[u8]) {
+        for b in bytes {
+            while self.state() & 0b1 != 0 {}
+            // SAFETY: a write of the DATA register with the transmit buffer free.
+            unsafe { ((self.base + Self::DATA) as *mut u32).write_volatile(u32::from(*b)) };
+        }
+    }
+}
+
+/// The calibration region of `memory.x` (writable code SSRAM under QEMU) as a NOR flash:
+/// erase sets 0xFF, programming only clears bits, 4-byte writes, 4 KiB sectors.
+pub struct RamFlash {
+    base: usize,
+    len: usize,
+}
+
+/// A RAM flash never fails.
+#[derive(Debug, Clone, Copy)]
+pub struct RamFlashError;
+
+impl embedded_storage::nor_flash::NorFlashError for RamFlashError {
+    fn kind(&self) -> embedded_storage::nor_flash::NorFlashErrorKind {
+        embedded_storage::nor_flash::NorFlashErrorKind::OutOfBounds
+    }
+}
+
+impl RamFlash {
+    /// Bytes per slot (`_calib_slot_size` of memory.x).
+    pub const SLOT_SIZE: u32 = 0x7000;
+
+    /// The 64 KiB region at `_calib_start` (0x003F0000).
+    pub fn calibration_region() -> Self {
+        Self {
+            base: 0x003F_0000,
+            len: 0x1_0000,
+        }
+    }
+
+    fn check(&self, offset: u32, len: usize) -> Result<usize, RamFlashError> {
+        let o = offset as usize;
+        if o.checked_add(len).is_some_and(|end| end <= self.len) {
+            Ok(self.base + o)
+        } else {
+            Err(RamFlashError)
+        }
+    }
+}
+
+impl embedded_storage::nor_flash::ErrorType for RamFlash {
+    type Error = RamFlashError;
+}
+
+impl embedded_storage::nor_flash::ReadNorFlash for RamFlash {
+    const READ_SIZE: usize = 1;
+
+    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), RamFlashError> {
+        let at = self.check(offset, bytes.len())?;
+        for (i, b) in bytes.iter_mut().enumerate() {
+            // SAFETY: inside the calibration region, which nothing else uses.
+            *b = unsafe { ((at + i) as *const u8).read_volatile() };
+        }
+        Ok(())
+    }
+
+    fn capacity(&self) -> usize {
+        self.len
+    }
+}
+
+impl embedded_storage::nor_flash::NorFlash for RamFlash {
+    const WRITE_SIZE: usize = 4;
+    const ERASE_SIZE: usize = 4096;
+
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), RamFlashError> {
+        let at = self.check(from, to.saturating_sub(from) as usize)?;
+        for i in 0..(to - from) as usize {
+            // SAFETY: inside the calibration region.
+            unsafe { ((at + i) as *mut u8).write_volatile(0xff) };
+        }
+        Ok(())
+    }
+
+    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), RamFlashError> {
+        let at = self.check(offset, bytes.len())?;
+        for (i, b) in bytes.iter().enumerate() {
+            let p = (at + i) as *mut u8;
+            // SAFETY: inside the calibration region; programming only clears bits.
+            unsafe { p.write_volatile(p.read_volatile() & b) };
+        }
+        Ok(())
+    }
+}
+
 /// Ends the QEMU run with the given status (semihosting `SYS_EXIT`: QEMU exits 0 or 1).
 pub fn exit(success: bool) -> ! {
     cortex_m_semihosting::debug::exit(if success {

@@ -344,3 +344,20 @@ fn invalid_blobs_and_bad_layouts_are_refused_before_writing() {
         Err(StoreError::Layout)
     ));
 }
+
+#[test]
+fn a_slot_image_is_what_an_update_writes() {
+    let b = blobs();
+    let (f, r) = update(SimFlash::<4, ERASE>::new(SIZE), &b[2]);
+    r.unwrap();
+    let mut image = vec![0u8; SLOT as usize];
+    let mut scratch = CalibrationData::empty();
+    let n = spincal::store::slot_image(&b[2], 1, &mut image, &mut scratch).unwrap();
+    assert_eq!(n, 32 + b[2].len());
+    assert_eq!(&f.mem[..SLOT as usize], &image[..], "byte for byte");
+    // And a flash programmed with it boots with that calibration.
+    let mut g = SimFlash::<4, ERASE>::new(SIZE);
+    g.mem[..SLOT as usize].copy_from_slice(&image);
+    g.mem[SLOT as usize..].fill(0xff);
+    assert_eq!(boot(g).1.unwrap(), b[2]);
+}

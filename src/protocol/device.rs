@@ -169,7 +169,7 @@ impl<F: NorFlash> Device<F> {
             return Response::Error(Status::OutOfOrder);
         }
         let blob = self.rx.get(..len as usize).unwrap_or_default();
-        if crc::Crc::<u32>::new(&crc::CRC_32_ISCSI).checksum(blob) != crc {
+        if super::checksum(blob) != crc {
             return Response::Error(Status::CrcMismatch);
         }
         match self.store.update(blob, &mut self.buf, &mut self.scratch) {

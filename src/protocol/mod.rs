@@ -183,6 +183,12 @@ pub enum FrameError {
 
 const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
 
+/// The CRC-32C a [`Request::WriteBegin`] declares for a blob.
+#[must_use]
+pub fn checksum(bytes: &[u8]) -> u32 {
+    CRC.checksum(bytes)
+}
+
 /// Encodes `msg` as a frame into `out`, terminator included; returns its length.
 ///
 /// # Errors

@@ -434,6 +434,42 @@ impl<F: NorFlash> Store<F> {
     }
 }
 
+/// The bytes a slot holds after a committed update of `blob` with sequence number `seq`, for
+/// programming a unit by other means (a debug probe, a production flasher) with exactly what an
+/// update would write. `out` is the slot: it is filled with 0xFF first. Returns the bytes used.
+///
+/// # Errors
+/// [`StoreError::InvalidBlob`] when the blob does not decode and validate (it is checked with
+/// `scratch`), [`StoreError::BlobTooLarge`] when it does not fit `out`.
+pub fn slot_image(blob: &[u8], seq: u32, out: &mut [u8], scratch: &mut CalibrationData) -> Result<usize, StoreError> {
+    blob::decode_in(blob, scratch).map_err(StoreError::InvalidBlob)?;
+    let capacity = out.len().saturating_sub(BLOB_OFFSET);
+    if blob.len() > capacity {
+        return Err(StoreError::BlobTooLarge {
+            len: blob.len(),
+            capacity,
+        });
+    }
+    out.fill(0xff);
+    let fields = [
+        COMMIT,
+        [0xff; 4],
+        [0xff; 4],
+        [0xff; 4],
+        MAGIC,
+        seq.to_le_bytes(),
+        (blob.len() as u32).to_le_bytes(),
+        blob_crc(blob).to_le_bytes(),
+    ];
+    for (chunk, f) in out.chunks_exact_mut(4).zip(fields) {
+        chunk.copy_from_slice(&f);
+    }
+    if let Some(dst) = out.get_mut(BLOB_OFFSET..BLOB_OFFSET + blob.len()) {
+        dst.copy_from_slice(blob);
+    }
+    Ok(BLOB_OFFSET + blob.len())
+}
+
 fn blob_crc(bytes: &[u8]) -> u32 {
     crc::Crc::<u32>::new(&crc::CRC_32_ISCSI).checksum(bytes)
 }

@@ -6,6 +6,8 @@
 
 pub mod cmd;
 pub mod columns;
+pub mod db;
+pub mod device;
 pub mod formula;
 pub mod obs;
 pub mod regression;

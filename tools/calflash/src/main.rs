@@ -28,6 +28,12 @@ enum Command {
     Compare(cmd::compare::CompareArgs),
     /// Threshold, dead band and resolution from a fine-step run.
     Threshold(cmd::threshold::ThresholdArgs),
+    /// Write a calibration into a unit and verify it there.
+    Flash(cmd::flash::FlashArgs),
+    /// The calibration region as Intel HEX or binary for any flasher, or over SWD.
+    Image(cmd::image::ImageArgs),
+    /// A unit's fits and flashes.
+    History(cmd::history::HistoryArgs),
 }
 
 fn main() -> ExitCode {
@@ -43,6 +49,9 @@ fn main() -> ExitCode {
         Command::Apply(args) => cmd::apply::run(args),
         Command::Compare(args) => cmd::compare::run(args),
         Command::Threshold(args) => cmd::threshold::run(args),
+        Command::Flash(args) => cmd::flash::run(args),
+        Command::Image(args) => cmd::image::run(args),
+        Command::History(args) => cmd::history::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

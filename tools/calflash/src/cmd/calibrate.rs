@@ -92,6 +92,12 @@ pub struct CalibrateArgs {
     /// Field separator of the data.
     #[arg(long, value_enum, default_value = "auto")]
     pub format: Format,
+    /// The unit history database (default: $CALFLASH_DB, else the user's data directory).
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Do not record the fit.
+    #[arg(long)]
+    pub no_db: bool,
 }
 
 fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
@@ -178,6 +184,15 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         })?;
     }
     print!("{}", summary(&c, args));
+    if !args.no_db {
+        let path = args.db.clone().unwrap_or_else(crate::db::default_path);
+        let fallback = serde_json::to_value(&record).unwrap_or_default();
+        let report_path = args.report.as_deref();
+        println!(
+            "  {}",
+            super::flash::record(&path, |d| d.record_fit(&record, report_path, &c.blob), &fallback)
+        );
+    }
     Ok(c.verdict())
 }
 

@@ -11,10 +11,14 @@ use crate::sensor::{compare, record::Record};
 /// Compare two calibration records of one unit (Wald tests per term, chi-square per axis).
 #[derive(Debug, Args)]
 pub struct CompareArgs {
-    /// The earlier record (from `calflash calibrate --json`).
-    pub before: PathBuf,
+    /// The earlier record: a file from `calflash calibrate --json`, or `db:ID` from
+    /// `calflash history`.
+    pub before: String,
     /// The later record.
-    pub after: PathBuf,
+    pub after: String,
+    /// The unit history database for `db:ID` records.
+    #[arg(long)]
+    pub db: Option<PathBuf>,
     /// Significance level.
     #[arg(long, default_value_t = 0.05)]
     pub alpha: f64,
@@ -28,14 +32,24 @@ pub struct CompareArgs {
 /// # Errors
 /// Unreadable or incomparable records.
 pub fn run(args: &CompareArgs) -> Result<(), String> {
-    let a = Record::read(&args.before)?;
-    let b = Record::read(&args.after)?;
+    let load = |r: &str| -> Result<Record, String> {
+        match r.strip_prefix("db:") {
+            Some(id) => {
+                let id: i64 = id.parse().map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
+                let path = args.db.clone().unwrap_or_else(crate::db::default_path);
+                crate::db::Db::open(&path)?.record(id)
+            }
+            None => Record::read(std::path::Path::new(r)),
+        }
+    };
+    let a = load(&args.before)?;
+    let b = load(&args.after)?;
     let changes = compare::compare(&a, &b, args.alpha)?;
     println!(
         "calflash compare  unit {}  {} -> {}",
         a.serial,
-        args.before.display(),
-        args.after.display()
+        args.before,
+        args.after
     );
     let mut moved_any = false;
     for c in &changes {

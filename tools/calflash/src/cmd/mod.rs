@@ -4,5 +4,8 @@ pub mod apply;
 pub mod calibrate;
 pub mod compare;
 pub mod fit;
+pub mod flash;
+pub mod history;
+pub mod image;
 pub mod simulate;
 pub mod threshold;

@@ -1,0 +1,74 @@
+//! `calflash image`: the calibration region as a file for any flasher, or written over SWD.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::device::image::{self, Region};
+use crate::report;
+
+/// Write the calibration region (slot 0 committed with the blob) as Intel HEX and raw binary at
+/// the address of memory.x, or program it over SWD with probe-rs (feature `probe`).
+#[derive(Debug, Args)]
+pub struct ImageArgs {
+    /// The blob.
+    #[arg(long)]
+    pub blob: PathBuf,
+    /// Write Intel HEX here.
+    #[arg(long)]
+    pub hex: Option<PathBuf>,
+    /// Write raw binary here (load it at the region's address).
+    #[arg(long)]
+    pub bin: Option<PathBuf>,
+    /// Program the region into a unit over SWD with probe-rs; the chip name as probe-rs knows
+    /// it (for example STM32F407VGTx).
+    #[arg(long, value_name = "CHIP")]
+    pub probe: Option<String>,
+}
+
+/// Runs `calflash image`.
+///
+/// # Errors
+/// A bad blob, an unwritable file, or a probe failure.
+pub fn run(args: &ImageArgs) -> Result<(), String> {
+    let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let region = Region::from_memory_x();
+    let image = image::region_image(&bytes, region).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    if args.hex.is_none() && args.bin.is_none() && args.probe.is_none() {
+        return Err("give --hex, --bin or --probe".into());
+    }
+    if let Some(p) = &args.bin {
+        report::write_atomically(p, |w| w.write_all(&image))?;
+        println!("calflash image: {} bytes for address {:#010x} in {}", image.len(), region.start, p.display());
+    }
+    if let Some(p) = &args.hex {
+        let hex = image::intel_hex(&image, region.start)?;
+        report::write_atomically(p, |w| w.write_all(hex.as_bytes()))?;
+        println!("calflash image: Intel HEX at {:#010x} in {}", region.start, p.display());
+    }
+    if let Some(chip) = &args.probe {
+        probe(chip, region.start, &image)?;
+    }
+    Ok(())
+}
+
+#[cfg(feature = "probe")]
+fn probe(chip: &str, address: u32, image: &[u8]) -> Result<(), String> {
+    use probe_rs::flashing::{DownloadOptions, FlashLoader};
+    use probe_rs::{Permissions, Session};
+    let mut session = Session::auto_attach(chip, Permissions::default()).map_err(|e| format!("probe-rs: cannot attach to {chip}: {e}"))?;
+    let mut loader: FlashLoader = session.target().flash_loader();
+    loader
+        .add_data(u64::from(address), image)
+        .map_err(|e| format!("probe-rs: {e}"))?;
+    loader
+        .commit(&mut session, DownloadOptions::default())
+        .map_err(|e| format!("probe-rs: programming failed: {e}"))?;
+    println!("calflash image: {} bytes programmed at {address:#010x} over SWD", image.len());
+    Ok(())
+}
+
+#[cfg(not(feature = "probe"))]
+fn probe(_chip: &str, _address: u32, _image: &[u8]) -> Result<(), String> {
+    Err("this calflash was built without the `probe` feature (cargo build -p calflash --features probe)".into())
+}

@@ -1,0 +1,221 @@
+//! The unit history: every fit and every flash of every unit, in one SQLite file.
+//!
+//! Default location `$CALFLASH_DB`, else `$XDG_DATA_HOME/calflash/units.sqlite`, else
+//! `~/.local/share/calflash/units.sqlite`; `--db` chooses another. Each record is written in
+//! one transaction, so a failure (a read-only file, a full disk) leaves no half-written row.
+
+use std::path::{Path, PathBuf};
+
+use rusqlite::{Connection, ErrorCode, OptionalExtension, params};
+
+use crate::sensor::record::Record;
+
+/// The default database path.
+#[must_use]
+pub fn default_path() -> PathBuf {
+    if let Some(p) = std::env::var_os("CALFLASH_DB") {
+        return PathBuf::from(p);
+    }
+    let data = std::env::var_os("XDG_DATA_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
+        .unwrap_or_else(|| PathBuf::from("."));
+    data.join("calflash").join("units.sqlite")
+}
+
+/// One row of a unit's history.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Entry {
+    /// Record id (for `calflash compare db:ID`).
+    pub id: i64,
+    /// `fit` or `flash`.
+    pub kind: String,
+    /// Seconds since 1970.
+    pub time: i64,
+    /// Hash of the observation data.
+    pub data_hash: String,
+    /// The models (fits).
+    pub model: Option<String>,
+    /// Verdict (fits) or verification outcome (flashes).
+    pub outcome: String,
+    /// The report's path, if any.
+    pub report: Option<String>,
+    /// Blob bytes.
+    pub blob_len: usize,
+}
+
+/// The history database.
+pub struct Db {
+    conn: Connection,
+    path: PathBuf,
+}
+
+fn explain(path: &Path, e: &rusqlite::Error) -> String {
+    let why = match e.sqlite_error_code() {
+        Some(ErrorCode::ReadOnly) => "the database file is read-only".to_string(),
+        Some(ErrorCode::DiskFull) => "the disk is full".to_string(),
+        Some(ErrorCode::CannotOpen) => "the database cannot be opened (a directory, or no permission)".to_string(),
+        Some(ErrorCode::NotADatabase) => "the file is not a calflash database".to_string(),
+        _ => e.to_string(),
+    };
+    format!("the unit history database {}: {why}", path.display())
+}
+
+const SCHEMA: &str = "
+CREATE TABLE IF NOT EXISTS records (
+    id INTEGER PRIMARY KEY,
+    serial TEXT NOT NULL,
+    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash')),
+    time INTEGER NOT NULL,
+    data_hash TEXT NOT NULL,
+    model TEXT,
+    coefficients TEXT,
+    covariance TEXT,
+    report TEXT,
+    blob BLOB NOT NULL,
+    verification TEXT,
+    outcome TEXT NOT NULL,
+    record TEXT
+);
+CREATE INDEX IF NOT EXISTS records_serial ON records (serial, time);
+";
+
+fn now() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs() as i64)
+}
+
+impl Db {
+    /// Opens (creating when needed) the database at `path`.
+    ///
+    /// # Errors
+    /// A message naming the file and why.
+    pub fn open(path: &Path) -> Result<Self, String> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| format!("the unit history database {}: {e}", path.display()))?;
+        }
+        let conn = Connection::open(path).map_err(|e| explain(path, &e))?;
+        conn.busy_timeout(std::time::Duration::from_secs(5)).map_err(|e| explain(path, &e))?;
+        // Creating the schema writes: a read-only file fails here only if it is new.
+        let exists: bool = conn
+            .query_row("SELECT count(*) FROM sqlite_master WHERE name = 'records'", [], |r| r.get::<_, i64>(0))
+            .map_err(|e| explain(path, &e))?
+            > 0;
+        if !exists {
+            conn.execute_batch(SCHEMA).map_err(|e| explain(path, &e))?;
+        }
+        Ok(Self {
+            conn,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Records a fit.
+    ///
+    /// # Errors
+    /// A message naming the file and why; nothing is written then.
+    pub fn record_fit(&mut self, rec: &Record, report: Option<&Path>, blob: &[u8]) -> Result<i64, String> {
+        let models: Vec<&str> = rec.points.first().map(|p| p.axes.iter().map(|a| a.model.as_str()).collect()).unwrap_or_default();
+        let coefficients: Vec<serde_json::Value> = rec
+            .points
+            .iter()
+            .map(|p| serde_json::json!({"temp": p.temp, "volt": p.volt, "axes": p.axes.iter().map(|a| serde_json::json!({"output": a.output, "terms": a.terms, "coefficients": a.coefficients, "std_errors": a.std_errors})).collect::<Vec<_>>()}))
+            .collect();
+        let covariance: Vec<Vec<&Vec<Vec<f64>>>> = rec.points.iter().map(|p| p.axes.iter().map(|a| &a.covariance).collect()).collect();
+        let tx = self.conn.transaction().map_err(|e| explain(&self.path, &e))?;
+        tx.execute(
+            "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
+             VALUES (?1, 'fit', ?2, ?3, ?4, ?5, ?6, ?7, ?8, NULL, ?9, ?10)",
+            params![
+                rec.serial,
+                rec.created_unix_s as i64,
+                rec.data_hash,
+                models.join("; "),
+                serde_json::to_string(&coefficients).unwrap_or_default(),
+                serde_json::to_string(&covariance).unwrap_or_default(),
+                report.map(|p| p.display().to_string()),
+                blob,
+                format!("{:?}", rec.verdict).to_lowercase(),
+                serde_json::to_string(rec).unwrap_or_default(),
+            ],
+        )
+        .map_err(|e| explain(&self.path, &e))?;
+        let id = tx.last_insert_rowid();
+        tx.commit().map_err(|e| explain(&self.path, &e))?;
+        Ok(id)
+    }
+
+    /// Records a flash (done or failed): the unit, the blob, the verification.
+    ///
+    /// # Errors
+    /// A message naming the file and why; nothing is written then.
+    pub fn record_flash(&mut self, unit: &str, blob: &[u8], verification: &serde_json::Value, outcome: &str) -> Result<i64, String> {
+        let (hash, coefficients) = match spincal::blob::decode(blob) {
+            Ok(cal) => (
+                cal.data().identity.data_hash.iter().map(|b| format!("{b:02x}")).collect::<String>(),
+                Some(format!("{:?}", cal.data().sensor)),
+            ),
+            Err(_) => (String::new(), None),
+        };
+        let tx = self.conn.transaction().map_err(|e| explain(&self.path, &e))?;
+        tx.execute(
+            "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
+             VALUES (?1, 'flash', ?2, ?3, NULL, ?4, NULL, NULL, ?5, ?6, ?7, NULL)",
+            params![unit, now(), hash, coefficients, blob, verification.to_string(), outcome],
+        )
+        .map_err(|e| explain(&self.path, &e))?;
+        let id = tx.last_insert_rowid();
+        tx.commit().map_err(|e| explain(&self.path, &e))?;
+        Ok(id)
+    }
+
+    /// A unit's history, oldest first.
+    ///
+    /// # Errors
+    /// A message naming the file and why.
+    pub fn history(&self, serial: &str) -> Result<Vec<Entry>, String> {
+        let mut st = self
+            .conn
+            .prepare("SELECT id, kind, time, data_hash, model, outcome, report, length(blob) FROM records WHERE serial = ?1 ORDER BY time, id")
+            .map_err(|e| explain(&self.path, &e))?;
+        let rows = st
+            .query_map([serial], |r| {
+                Ok(Entry {
+                    id: r.get(0)?,
+                    kind: r.get(1)?,
+                    time: r.get(2)?,
+                    data_hash: r.get(3)?,
+                    model: r.get(4)?,
+                    outcome: r.get(5)?,
+                    report: r.get(6)?,
+                    blob_len: r.get::<_, i64>(7)? as usize,
+                })
+            })
+            .map_err(|e| explain(&self.path, &e))?;
+        rows.collect::<Result<_, _>>().map_err(|e| explain(&self.path, &e))
+    }
+
+    /// The calibration record of fit `id`.
+    ///
+    /// # Errors
+    /// No such fit.
+    pub fn record(&self, id: i64) -> Result<Record, String> {
+        let text: Option<Option<String>> = self
+            .conn
+            .query_row("SELECT record FROM records WHERE id = ?1", [id], |r| r.get(0))
+            .optional()
+            .map_err(|e| explain(&self.path, &e))?;
+        match text {
+            None => Err(format!("{}: no record {id}", self.path.display())),
+            Some(None) => Err(format!("{}: record {id} is a flash, not a fit; compare fits", self.path.display())),
+            Some(Some(t)) => serde_json::from_str(&t).map_err(|e| format!("{}: record {id}: {e}", self.path.display())),
+        }
+    }
+
+    /// Where the database is.
+    #[must_use]
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}

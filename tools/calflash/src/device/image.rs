@@ -1,0 +1,91 @@
+//! Slot images for any flasher: the calibration region exactly as an update leaves it (slot 0
+//! committed with the blob, slot 1 and the lock sector erased), as raw binary and as Intel HEX
+//! at the region's address from `memory.x`.
+
+use spincal::model::CalibrationData;
+use spincal::store;
+
+/// The example target's memory map, as the firmware links it.
+const MEMORY_X: &str = include_str!("../../../../memory.x");
+
+/// Where the calibration region is: its address, slot size and total size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Region {
+    /// Address of slot 0.
+    pub start: u32,
+    /// Bytes per slot.
+    pub slot_size: u32,
+    /// Bytes of the lock sector after the two slots.
+    pub lock_size: u32,
+}
+
+fn symbol(name: &str) -> Option<u32> {
+    let line = MEMORY_X.lines().find(|l| l.trim_start().starts_with(name))?;
+    let value = line.split('=').nth(1)?.trim().trim_end_matches(';').trim();
+    u32::from_str_radix(value.trim_start_matches("0x"), 16).ok()
+}
+
+impl Region {
+    /// The region of `memory.x` (`_calib_start`, `_calib_slot_size`; a 4 KiB lock sector).
+    ///
+    /// # Panics
+    /// When `memory.x` lacks the symbols (a build error of this repository).
+    #[must_use]
+    pub fn from_memory_x() -> Self {
+        Self {
+            start: symbol("_calib_start").expect("memory.x defines _calib_start"),
+            slot_size: symbol("_calib_slot_size").expect("memory.x defines _calib_slot_size"),
+            lock_size: 4096,
+        }
+    }
+}
+
+/// The region's bytes after committing `blob` into slot 0 with sequence number 1.
+///
+/// # Errors
+/// When the blob is invalid or does not fit a slot.
+pub fn region_image(blob: &[u8], region: Region) -> Result<Vec<u8>, String> {
+    let mut out = vec![0xffu8; (2 * region.slot_size + region.lock_size) as usize];
+    let mut scratch = CalibrationData::empty();
+    store::slot_image(blob, 1, &mut out[..region.slot_size as usize], &mut scratch).map_err(|e| e.to_string())?;
+    Ok(out)
+}
+
+/// Intel HEX of `bytes` at `address`, with extended linear address records.
+///
+/// # Errors
+/// The writer's.
+pub fn intel_hex(bytes: &[u8], address: u32) -> Result<String, String> {
+    let mut records = Vec::new();
+    let mut upper = None;
+    for (k, chunk) in bytes.chunks(16).enumerate() {
+        let at = address + (k * 16) as u32;
+        if upper != Some(at >> 16) {
+            upper = Some(at >> 16);
+            records.push(ihex::Record::ExtendedLinearAddress((at >> 16) as u16));
+        }
+        records.push(ihex::Record::Data {
+            offset: (at & 0xffff) as u16,
+            value: chunk.to_vec(),
+        });
+    }
+    records.push(ihex::Record::EndOfFile);
+    ihex::create_object_file_representation(&records).map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn region_and_hex() {
+        let r = Region::from_memory_x();
+        assert_eq!(r, Region { start: 0x003f_0000, slot_size: 0x7000, lock_size: 4096 });
+        let hex = intel_hex(&[1, 2, 3], 0x003f_fffe).unwrap();
+        let lines: Vec<&str> = hex.lines().collect();
+        assert_eq!(lines[0], ":02000004003FBB");
+        assert!(lines.last().unwrap().starts_with(":00000001FF"));
+        let back = ihex::Reader::new(&hex).count();
+        assert_eq!(back, lines.len());
+    }
+}
