@@ -1,0 +1,33 @@
+//! The main job, end to end on the QEMU device: simulate, calibrate, report, blob, boot the
+//! example firmware, flash over the emulated UART, verify on the device, record. Skips with a
+//! notice without QEMU (unless SPINCAL_REQUIRE_QEMU=1, as in CI).
+
+use host_tests::mainjob::{self, Job};
+use host_tests::qemu;
+
+#[test]
+fn the_main_job_runs_end_to_end() {
+    if !qemu::available_or_skip("the_main_job_runs_end_to_end") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let job = Job {
+        data: None,
+        workdir: dir.path().join("job"),
+        db: dir.path().join("units.sqlite"),
+        seed: 43,
+    };
+    let s = mainjob::run(&job, |l| println!("{l}")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.flash.unit, mainjob::UNIT);
+    assert!(s.flash.read_back_identical);
+    assert!(s.flash.max_ulp <= 2, "{} ulp", s.flash.max_ulp);
+    assert_eq!(s.flash.vectors, 64);
+    let db = calflash::db::Db::open(&job.db).unwrap();
+    let h = db.history(mainjob::UNIT).unwrap();
+    assert_eq!(h.len(), 2);
+    assert_eq!((h[0].kind.as_str(), h[1].kind.as_str()), ("fit", "flash"));
+    let html = std::fs::read_to_string(job.workdir.join("report.html")).unwrap();
+    assert!(html.matches("<svg").count() >= 10);
+    let log = std::fs::read_to_string(job.workdir.join("qemu.log")).unwrap();
+    assert!(log.contains("device: unit QEMU-0001 up"), "{log}");
+}
