@@ -8,3 +8,5 @@ pub mod mainjob;
 pub mod nor;
 pub mod qemu;
 pub mod reference;
+pub mod tcp_unit;
+pub mod unit;

@@ -3,17 +3,18 @@
 //! the emulated UART, verify it on the device, record it in the unit history, and summarise.
 //! `cargo xtask calibrate` runs it; `tests/mainjob.rs` runs it in CI.
 
-use std::net::{TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Stdio};
-use std::time::{Duration, Instant};
+use std::path::PathBuf;
+use std::time::Duration;
 
 use calflash::db::Db;
-use calflash::device::{self, Client, FlashOptions};
+use calflash::device::{self, FlashOptions};
 use calflash::sensor::{self, Options, record::Record, triad};
 use calflash::sim::{self, Sensor, plan, truth::ImuTruth};
 
+use spincal::store::SlotState;
+
 use crate::qemu;
+use crate::unit::QemuUnit;
 
 /// The serial number the QEMU unit is built with (`firmware/src/bin/device.rs`).
 pub const UNIT: &str = "QEMU-0001";
@@ -42,51 +43,6 @@ pub struct Summary {
     pub flash: device::FlashReport,
     /// Database ids of the fit and the flash.
     pub records: (i64, i64),
-}
-
-struct Qemu(Child);
-
-impl Drop for Qemu {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-fn free_port() -> Result<u16, String> {
-    let l = TcpListener::bind("127.0.0.1:0").map_err(|e| format!("no free TCP port: {e}"))?;
-    l.local_addr().map(|a| a.port()).map_err(|e| e.to_string())
-}
-
-/// Boots the device firmware with its UART on a TCP port; returns QEMU and the port.
-fn boot(elf: &Path, log: &Path, extra: &[String]) -> Result<(Qemu, u16), String> {
-    let port = free_port()?;
-    let mut cmd = qemu::command(elf, &[]);
-    cmd.arg("-serial").arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"));
-    cmd.args(extra);
-    let out = std::fs::File::create(log).map_err(|e| format!("{}: {e}", log.display()))?;
-    let child = cmd
-        .stdin(Stdio::null())
-        .stdout(out.try_clone().map_err(|e| e.to_string())?)
-        .stderr(out)
-        .spawn()
-        .map_err(|e| format!("cannot start qemu-system-arm: {e}"))?;
-    Ok((Qemu(child), port))
-}
-
-/// Connects to the QEMU unit, waiting for it to listen.
-pub fn connect(port: u16, timeout: Duration) -> Result<Client<TcpStream>, String> {
-    let start = Instant::now();
-    loop {
-        match TcpStream::connect(("127.0.0.1", port)) {
-            Ok(s) => {
-                s.set_read_timeout(Some(Duration::from_millis(200))).map_err(|e| e.to_string())?;
-                return Ok(Client::new(s, timeout));
-            }
-            Err(_) if start.elapsed() < Duration::from_secs(20) => std::thread::sleep(Duration::from_millis(50)),
-            Err(e) => return Err(format!("the QEMU unit's UART on port {port} does not answer: {e}")),
-        }
-    }
 }
 
 /// Runs the main job.
@@ -140,20 +96,24 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         report.display()
     ));
 
-    say("3. building the device firmware and booting it on QEMU mps2-an386 (Cortex-M4F)");
+    say("3. building the device firmware and powering the unit on: QEMU mps2-an386 (Cortex-M4F)");
     let bin = qemu::build_firmware()?;
+    let elf = bin.join("device");
+    let flash_file = w("unit-flash.bin");
     let log = w("qemu.log");
-    let (qemu, port) = boot(&bin.join("device"), &log, &[])?;
-    let mut client = connect(port, Duration::from_secs(5))?;
+    let unit = QemuUnit::power_on(&elf, Some(&flash_file), &log)?;
+    let mut client = unit.connect(Duration::from_secs(5))?;
     let before = client.identify().map_err(|e| e.to_string())?;
     say(&format!(
-        "4. the unit answers on its UART (tcp port {port}): {}, holding {}",
+        "4. the unit answers on its UART (tcp port {}): {}, holding {} (flash kept in {})",
+        unit.port,
         before.unit.as_str(),
-        before.calibration.as_ref().map_or("no calibration", |s| s.as_str())
+        before.calibration.as_ref().map_or("no calibration", |s| s.as_str()),
+        flash_file.display()
     ));
     let flash = device::flash(&mut client, &c.blob, &FlashOptions::default(), |_, _| {}).map_err(|e| e.to_string())?;
-    let after = client.identify().map_err(|e| e.to_string())?;
-    drop(qemu);
+    drop(client);
+    unit.power_off()?;
     let flash_id = db.record_flash(
         &flash.unit,
         &c.blob,
@@ -161,14 +121,34 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         "verified",
     )?;
     say(&format!(
-        "5. flashed over the emulated UART: committed as slot sequence {}, {} bytes read back identical, {} test vectors through the device's correction within {} ulp of the host's",
-        flash.seq, flash.bytes, flash.vectors, flash.max_ulp
+        "5. flashed over the emulated UART: committed as slot sequence {}, {} bytes read back identical, {} test vectors through the device's correction within {} ulp of the host's; recorded as db:{fit_id} (fit) and db:{flash_id} (flash) in {}",
+        flash.seq, flash.bytes, flash.vectors, flash.max_ulp, job.db.display()
     ));
+
+    let reboot_log = w("qemu-reboot.log");
+    let unit = QemuUnit::power_on(&elf, Some(&flash_file), &reboot_log)?;
+    let mut client = unit.connect(Duration::from_secs(5))?;
+    let after = client.identify().map_err(|e| e.to_string())?;
+    drop(client);
+    drop(unit);
+    let booted = std::fs::read_to_string(&reboot_log).unwrap_or_default();
+    let self_test = booted
+        .lines()
+        .find(|l| l.starts_with("device: calibration") || l.starts_with("device: no valid"))
+        .unwrap_or("device: (no self-test line)")
+        .to_string();
+    if after.calibration.is_none() || after.slots.iter().all(|s| !matches!(s, SlotState::Valid { seq, .. } if *seq == flash.seq)) {
+        return Err(format!(
+            "after a power cycle the unit does not hold the calibration just flashed (slots {:?}); see {}",
+            after.slots,
+            reboot_log.display()
+        ));
+    }
     say(&format!(
-        "6. the unit now holds {} (slots {:?}); recorded as db:{fit_id} (fit) and db:{flash_id} (flash) in {}",
+        "6. power-cycled: the unit boots holding {} (slots {:?}); its boot self-test says \"{}\"",
         after.calibration.as_ref().map_or("nothing", |s| s.as_str()),
         after.slots,
-        job.db.display()
+        self_test.trim_start_matches("device: ")
     ));
     let qemu_said = std::fs::read_to_string(&log).unwrap_or_default();
     let lines = vec![
@@ -177,7 +157,8 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         format!("blob        {}", blob.display()),
         format!("record      {}", json.display()),
         format!("history     calflash history {UNIT} --db {}", job.db.display()),
-        format!("device log  {} ({} lines)", log.display(), qemu_said.lines().count()),
+        format!("unit flash  {} (the next run boots the unit with it)", flash_file.display()),
+        format!("device log  {} ({} lines), {}", log.display(), qemu_said.lines().count(), reboot_log.display()),
     ];
     Ok(Summary {
         lines,

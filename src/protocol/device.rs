@@ -61,6 +61,11 @@ impl<F: NorFlash> Device<F> {
         Calibration::validate_in_place(&self.cal).ok()
     }
 
+    /// The store, giving up the device (to inspect the flash after a session).
+    pub fn into_store(self) -> Store<F> {
+        self.store
+    }
+
     /// The unit's serial.
     pub const fn unit(&self) -> &Serial {
         &self.unit

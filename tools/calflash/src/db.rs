@@ -23,6 +23,37 @@ pub fn default_path() -> PathBuf {
     data.join("calflash").join("units.sqlite")
 }
 
+/// Records with `f` in the database at `path`; when that fails, saves `fallback` as JSON in
+/// `beside` so that nothing is lost.
+///
+/// # Errors
+/// When the database could not take the record: the message says why and where the record
+/// was saved instead (or that it could not be).
+pub fn record_or_save(
+    path: &Path,
+    f: impl FnOnce(&mut Db) -> Result<i64, String>,
+    fallback: &serde_json::Value,
+    beside: &Path,
+    serial: &str,
+) -> Result<String, String> {
+    match Db::open(path).and_then(|mut d| f(&mut d)) {
+        Ok(id) => Ok(format!("recorded as db:{id} in {}", path.display())),
+        Err(e) => {
+            let nanos = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos());
+            let safe: String = serial.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
+            let file = beside.join(format!("calflash-unrecorded-{safe}-{nanos}.json"));
+            let body = serde_json::to_vec_pretty(fallback).unwrap_or_default();
+            let saved = crate::report::write_atomically(&file, |w| std::io::Write::write_all(w, &body));
+            Err(match saved {
+                Ok(()) => format!("NOT recorded: {e}; the record is saved in {} instead", file.display()),
+                Err(why) => format!("NOT recorded: {e}; nor could it be saved in {} ({why})", file.display()),
+            })
+        }
+    }
+}
+
 /// One row of a unit's history.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Entry {
@@ -53,7 +84,11 @@ pub struct Db {
 fn explain(path: &Path, e: &rusqlite::Error) -> String {
     let why = match e.sqlite_error_code() {
         Some(ErrorCode::ReadOnly) => "the database file is read-only".to_string(),
-        Some(ErrorCode::DiskFull) => "the disk is full".to_string(),
+        Some(ErrorCode::DiskFull) => "the disk (or the database's size limit) is full".to_string(),
+        Some(ErrorCode::SystemIoFailure) => format!(
+            "it cannot be written (disk I/O error: the file, or its journal {}-journal beside it, cannot be written)",
+            path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+        ),
         Some(ErrorCode::CannotOpen) => "the database cannot be opened (a directory, or no permission)".to_string(),
         Some(ErrorCode::NotADatabase) => "the file is not a calflash database".to_string(),
         _ => e.to_string(),
@@ -217,5 +252,57 @@ impl Db {
     #[must_use]
     pub fn path(&self) -> &Path {
         &self.path
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flash(db: &mut Db) -> Result<i64, String> {
+        db.record_flash("UNIT-1", &[0u8; 4000], &serde_json::json!({"ok": true}), "verified")
+    }
+
+    #[test]
+    fn a_full_database_says_so_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        let mut db = Db::open(&path).unwrap();
+        flash(&mut db).unwrap();
+        let pages: i64 = db.conn.query_row("PRAGMA page_count", [], |r| r.get(0)).unwrap();
+        // The size limit stands in for a full disk: SQLite reports both as SQLITE_FULL.
+        let _: i64 = db.conn.query_row(&format!("PRAGMA max_page_count = {pages}"), [], |r| r.get(0)).unwrap();
+        let e = flash(&mut db).unwrap_err();
+        assert_eq!(e, format!("the unit history database {}: the disk (or the database's size limit) is full", path.display()));
+        assert_eq!(db.history("UNIT-1").unwrap().len(), 1, "the failed record left nothing behind");
+    }
+
+    #[test]
+    fn a_read_only_database_says_so() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        flash(&mut Db::open(&path).unwrap()).unwrap();
+        let mut perms = std::fs::metadata(&path).unwrap().permissions();
+        perms.set_readonly(true);
+        std::fs::set_permissions(&path, perms).unwrap();
+        if std::fs::OpenOptions::new().append(true).open(&path).is_ok() {
+            // Root writes read-only files; the journal test in host-tests/tests/flash_faults.rs
+            // covers an unwritable database there.
+            println!("a_read_only_database_says_so: skipped, running as a user who can write read-only files (root)");
+            return;
+        }
+        let mut db = Db::open(&path).unwrap();
+        let e = flash(&mut db).unwrap_err();
+        assert_eq!(e, format!("the unit history database {}: the database file is read-only", path.display()));
+        assert_eq!(db.history("UNIT-1").unwrap().len(), 1);
+    }
+
+    #[test]
+    fn a_file_that_is_not_a_database_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        std::fs::write(&path, b"serial,time\nUNIT-1,0\n".repeat(100)).unwrap();
+        let e = Db::open(&path).err().unwrap();
+        assert_eq!(e, format!("the unit history database {}: the file is not a calflash database", path.display()));
     }
 }

@@ -1,27 +1,65 @@
-//! `cargo xtask calibrate`: the main job on the QEMU device.
+//! `cargo xtask calibrate`: the main job, end to end, on the QEMU device.
 //!
-//! Until `calflash` can fit and flash a calibration, this boots the demo firmware on QEMU
-//! mps2-an386: it decodes and validates the example IMU calibration blob on the Cortex-M4F,
-//! corrects a stream of raw samples from a spinning unit and prints what it computed.
+//! Simulates an IMU's test data (or takes `--data FILE`), calibrates it with `calflash`
+//! (fit, report, blob, record), boots the example device firmware on QEMU mps2-an386, flashes
+//! the calibration over the emulated UART, verifies it on the device (read-back and test vectors
+//! through the device's own correction), and records fit and flash in the unit history.
 
-use std::time::Duration;
+use std::path::PathBuf;
 
-use host_tests::qemu;
+use host_tests::mainjob::{self, Job};
 
 use crate::setup;
 
-pub fn run(_args: &[String]) -> Result<(), String> {
+const USAGE: &str = "usage: cargo xtask calibrate [--data FILE] [--out DIR] [--db FILE] [--seed N]
+
+  --data FILE  IMU observations to calibrate (CSV, columns as `calflash simulate --sensor imu`
+               writes them); default: a simulated unit
+  --out DIR    where the observations, report, blob, record and device log go
+               (default target/calibrate)
+  --db FILE    the unit history database (default DIR/units.sqlite)
+  --seed N     seed of the simulated unit (default 43)";
+
+fn parse(args: &[String]) -> Result<Job, String> {
+    let mut data = None;
+    let mut out = crate::root().join("target").join("calibrate");
+    let mut db = None;
+    let mut seed = 43;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut value = |name: &str| it.next().cloned().ok_or(format!("{name} needs a value\n\n{USAGE}"));
+        match a.as_str() {
+            "--data" => data = Some(PathBuf::from(value("--data")?)),
+            "--out" => out = PathBuf::from(value("--out")?),
+            "--db" => db = Some(PathBuf::from(value("--db")?)),
+            "--seed" => {
+                let v = value("--seed")?;
+                seed = v.parse().map_err(|_| format!("--seed: expected a whole number, found `{v}`"))?;
+            }
+            "-h" | "--help" => return Err(USAGE.to_string()),
+            other => return Err(format!("unknown option `{other}`\n\n{USAGE}")),
+        }
+    }
+    let db = db.unwrap_or_else(|| out.join("units.sqlite"));
+    Ok(Job { data, workdir: out, db, seed })
+}
+
+pub fn run(args: &[String]) -> Result<(), String> {
+    let job = parse(args)?;
+    if let Some(d) = &job.data
+        && !d.is_file()
+    {
+        return Err(format!("--data {}: no such file", d.display()));
+    }
     let setup = setup::run(false)?;
     if let Some(why) = setup.qemu_missing {
         return Err(format!("the QEMU device is not available: {why}"));
     }
-    println!("xtask: building the device firmware for {}", qemu::TARGET);
-    let bin = qemu::build_firmware()?;
-    println!("xtask: booting it on QEMU mps2-an386 (Cortex-M4F)\n");
-    let run = qemu::run(&bin.join("demo"), &[], Duration::from_secs(120))?;
-    print!("{}", run.stdout);
-    if run.code != Some(0) {
-        return Err(format!("the demo firmware failed:\n{}", run.stderr));
+    println!("xtask: the main job, on the QEMU Cortex-M4F device\n");
+    let s = mainjob::run(&job, |l| println!("{l}"))?;
+    println!();
+    for l in &s.lines {
+        println!("{l}");
     }
     Ok(())
 }

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use clap::Args;
 
-use crate::db::{self, Db};
+use crate::db;
 use crate::device::{self, Client, FlashOptions, link::Link};
 
 /// Write a calibration into a unit, commit it, read it back, run test vectors, record it.
@@ -34,24 +34,6 @@ pub struct FlashArgs {
     pub no_db: bool,
 }
 
-/// Records in the database, or, when that fails, in a JSON file beside, so nothing is lost.
-pub(crate) fn record(db_path: &std::path::Path, f: impl FnOnce(&mut Db) -> Result<i64, String>, fallback: &serde_json::Value) -> String {
-    match Db::open(db_path).and_then(|mut d| f(&mut d)) {
-        Ok(id) => format!("recorded as {} in {}", id, db_path.display()),
-        Err(e) => {
-            let name = format!(
-                "calflash-unrecorded-{}.json",
-                std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos())
-            );
-            let saved = std::fs::write(&name, serde_json::to_vec_pretty(fallback).unwrap_or_default()).is_ok();
-            format!(
-                "NOT recorded: {e}; {}",
-                if saved { format!("the record is saved in {name} instead") } else { "and it could not be saved elsewhere".into() }
-            )
-        }
-    }
-}
-
 /// Runs `calflash flash`.
 ///
 /// # Errors
@@ -73,6 +55,7 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
     let result = device::flash(&mut client, &bytes, &opts, |done, _| bar.set_position(done as u64));
     bar.finish_and_clear();
     let db_path = args.db.clone().unwrap_or_else(db::default_path);
+    let beside = args.blob.parent().map_or_else(|| std::path::PathBuf::from("."), std::path::Path::to_path_buf);
     let unit = spincal::blob::decode(&bytes).map_or_else(|_| "?".into(), |c| c.data().identity.serial.as_str().to_string());
     match result {
         Ok(report) => {
@@ -92,7 +75,9 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
             );
             if !args.no_db {
                 let v = serde_json::to_value(&report).unwrap_or_default();
-                println!("  {}", record(&db_path, |d| d.record_flash(&report.unit, &bytes, &v, "verified"), &v));
+                let said = db::record_or_save(&db_path, |d| d.record_flash(&report.unit, &bytes, &v, "verified"), &v, &beside, &report.unit)
+                    .map_err(|e| format!("the unit holds the new calibration, verified, but the flash is {e}"))?;
+                println!("  {said}");
             }
             Ok(())
         }
@@ -100,7 +85,10 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
             let msg = e.to_string();
             if !args.no_db && !matches!(e, device::flash::FlashError::Device(device::DeviceError::Io { .. })) {
                 let v = serde_json::json!({"error": msg, "port": args.port});
-                eprintln!("  {}", record(&db_path, |d| d.record_flash(&unit, &bytes, &v, "failed"), &v));
+                match db::record_or_save(&db_path, |d| d.record_flash(&unit, &bytes, &v, "failed"), &v, &beside, &unit) {
+                    Ok(said) => eprintln!("  the failed attempt is {said}"),
+                    Err(said) => eprintln!("  the failed attempt is {said}"),
+                }
             }
             Err(msg)
         }

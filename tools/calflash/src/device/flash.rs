@@ -89,17 +89,42 @@ pub enum FlashError {
         /// The cause.
         source: DeviceError,
     },
+    /// The commit was sent but its answer was lost: the unit holds either its previous
+    /// calibration or the new one, never a mix.
+    #[error(
+        "{source}: the commit was sent but its answer was lost, so the unit holds either its previous calibration {current} or the new one (never a mix); run `calflash flash` again to finish and verify"
+    )]
+    CommitUnknown {
+        /// What the unit held before.
+        current: String,
+        /// The cause.
+        source: DeviceError,
+    },
+    /// The link failed after the commit, during verification.
+    #[error(
+        "{source}, after the commit: the unit holds the new calibration (slot sequence {seq}) but it is NOT verified; flash again to verify it"
+    )]
+    Unverified {
+        /// The committed sequence number.
+        seq: u32,
+        /// The cause.
+        source: DeviceError,
+    },
     /// Something failed before or after the transfer.
     #[error(transparent)]
     Device(#[from] DeviceError),
     /// The read-back differs.
-    #[error("the blob read back from the unit differs from the one written (first difference at byte {at})")]
+    #[error(
+        "the blob read back from the unit differs from the one written (first difference at byte {at}); the unit is not verified: flash it again before use"
+    )]
     ReadBack {
         /// First differing byte.
         at: usize,
     },
     /// The unit's outputs differ from the host's.
-    #[error("the unit's correction differs from the host's by {max_ulp} ulp (at most 2 are allowed) on {count} of {total} values")]
+    #[error(
+        "the unit's correction differs from the host's by {max_ulp} ulp (at most 2 are allowed) on {count} of {total} values; the unit is not verified"
+    )]
     Vectors {
         /// Largest difference.
         max_ulp: u32,
@@ -242,13 +267,16 @@ pub fn flash<L: Read + Write>(
             return Err(transfer(total, &current, DeviceError::Refused { what, status }));
         }
         // The commit was sent but no answer came: the unit holds the old or the new one.
-        Err(e) => return Err(FlashError::Device(e)),
+        Err(source) => return Err(FlashError::CommitUnknown { current, source }),
     };
     // Read back byte for byte.
     let mut back = Vec::with_capacity(total);
     while back.len() < total {
         let len = (total - back.len()).min(MAX_CHUNK) as u16;
-        match client.ask(&Request::ReadBlob { offset: back.len() as u32, len })? {
+        match client
+            .ask(&Request::ReadBlob { offset: back.len() as u32, len })
+            .map_err(|source| FlashError::Unverified { seq, source })?
+        {
             Response::Blob { data, .. } => back.extend_from_slice(&data),
             other => {
                 return Err(FlashError::Device(DeviceError::Unexpected {
@@ -278,7 +306,7 @@ pub fn flash<L: Read + Write>(
             temperature: t,
             voltage: v,
             raw: heapless::Vec::from_slice(&raw).expect("16 samples"),
-        })?;
+        }).map_err(|source| FlashError::Unverified { seq, source })?;
         let Response::Vectors { out } = resp else {
             return Err(FlashError::Device(DeviceError::Unexpected {
                 what: "RunVectors".into(),

@@ -1,0 +1,145 @@
+//! The example device as a unit on the bench: the `device` firmware booted on QEMU mps2-an386
+//! with its UART on a TCP port, and its calibration flash kept in a file between power cycles.
+//!
+//! The emulated flash is the 64 KiB region at `_calib_start` (0x003F0000). At power-on the file,
+//! when given and present, is loaded there (`-device loader`); at [`QemuUnit::power_off`] the
+//! region is saved back through the QEMU monitor (`pmemsave`) to a temporary file that replaces
+//! the old one only once QEMU has written it completely.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Stdio};
+use std::time::{Duration, Instant};
+
+use calflash::device::Client;
+
+use crate::qemu;
+
+/// Address and size of the calibration region (memory.x).
+pub const REGION: (u32, u32) = (0x003F_0000, 0x1_0000);
+
+/// A running QEMU unit. Dropping it kills QEMU (a power cut: nothing is saved).
+#[derive(Debug)]
+pub struct QemuUnit {
+    child: Child,
+    /// The TCP port of the unit's UART.
+    pub port: u16,
+    monitor: u16,
+    flash: Option<PathBuf>,
+}
+
+impl Drop for QemuUnit {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn free_port() -> Result<u16, String> {
+    let l = TcpListener::bind("127.0.0.1:0").map_err(|e| format!("no free TCP port: {e}"))?;
+    l.local_addr().map(|a| a.port()).map_err(|e| e.to_string())
+}
+
+impl QemuUnit {
+    /// Powers on `elf` (the `device` firmware) with its flash from `flash` when that file exists
+    /// (an erased flash otherwise); QEMU's output goes to `log`. The firmware starts when a
+    /// client connects to the UART ([`QemuUnit::connect`]).
+    ///
+    /// # Errors
+    /// When QEMU cannot be started or the log cannot be created.
+    pub fn power_on(elf: &Path, flash: Option<&Path>, log: &Path) -> Result<Self, String> {
+        let (port, monitor) = (free_port()?, free_port()?);
+        let mut cmd = qemu::command(elf, &[]);
+        cmd.arg("-serial").arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"));
+        cmd.arg("-monitor").arg(format!("tcp:127.0.0.1:{monitor},server=on,wait=off"));
+        if let Some(f) = flash.filter(|f| f.exists()) {
+            let len = std::fs::metadata(f).map_err(|e| format!("{}: {e}", f.display()))?.len();
+            if len != u64::from(REGION.1) {
+                return Err(format!(
+                    "{}: a flash image of {len} bytes; the calibration region is {} bytes",
+                    f.display(),
+                    REGION.1
+                ));
+            }
+            cmd.arg("-device").arg(format!("loader,file={},addr={:#x},force-raw=on", f.display(), REGION.0));
+        }
+        let out = std::fs::File::create(log).map_err(|e| format!("{}: {e}", log.display()))?;
+        let child = cmd
+            .stdin(Stdio::null())
+            .stdout(out.try_clone().map_err(|e| e.to_string())?)
+            .stderr(out)
+            .spawn()
+            .map_err(|e| format!("cannot start qemu-system-arm: {e}"))?;
+        Ok(Self {
+            child,
+            port,
+            monitor,
+            flash: flash.map(Path::to_path_buf),
+        })
+    }
+
+    /// Connects to the unit's UART, waiting for QEMU to listen; `timeout` is the client's
+    /// per-reply timeout.
+    ///
+    /// # Errors
+    /// When the UART does not listen within 20 s.
+    pub fn connect(&self, timeout: Duration) -> Result<Client<TcpStream>, String> {
+        let s = connect_tcp(self.port)?;
+        s.set_read_timeout(Some(Duration::from_millis(200))).map_err(|e| e.to_string())?;
+        Ok(Client::new(s, timeout))
+    }
+
+    /// Saves the flash to its file (when one was given) and stops QEMU.
+    ///
+    /// # Errors
+    /// When the monitor does not answer or the image is not written completely; the old file
+    /// is then left as it was.
+    pub fn power_off(mut self) -> Result<(), String> {
+        let Some(flash) = self.flash.clone() else {
+            return Ok(());
+        };
+        let tmp = flash.with_extension("bin.partial");
+        let _ = std::fs::remove_file(&tmp);
+        let mon = connect_tcp(self.monitor)?;
+        mon.set_read_timeout(Some(Duration::from_secs(10))).map_err(|e| e.to_string())?;
+        let mut w = mon.try_clone().map_err(|e| e.to_string())?;
+        let mut r = BufReader::new(mon);
+        let prompt = |r: &mut BufReader<TcpStream>| -> Result<(), String> {
+            let mut seen = Vec::new();
+            let mut byte = [0u8; 1];
+            while !seen.ends_with(b"(qemu) ") {
+                r.read_exact(&mut byte).map_err(|e| format!("the QEMU monitor stopped answering: {e}"))?;
+                seen.push(byte[0]);
+            }
+            Ok(())
+        };
+        prompt(&mut r)?;
+        writeln!(w, "pmemsave {:#x} {:#x} \"{}\"", REGION.0, REGION.1, tmp.display()).map_err(|e| e.to_string())?;
+        prompt(&mut r)?;
+        let _ = writeln!(w, "quit");
+        let mut rest = String::new();
+        let _ = r.read_line(&mut rest);
+        let start = Instant::now();
+        while self.child.try_wait().map_err(|e| e.to_string())?.is_none() && start.elapsed() < Duration::from_secs(10) {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let len = std::fs::metadata(&tmp).map(|m| m.len()).unwrap_or(0);
+        if len != u64::from(REGION.1) {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(format!("QEMU saved {len} of {} bytes of the unit's flash; {} kept as it was", REGION.1, flash.display()));
+        }
+        std::fs::rename(&tmp, &flash).map_err(|e| format!("{}: {e}", flash.display()))
+    }
+}
+
+fn connect_tcp(port: u16) -> Result<TcpStream, String> {
+    let start = Instant::now();
+    loop {
+        match TcpStream::connect(("127.0.0.1", port)) {
+            Ok(s) => return Ok(s),
+            Err(_) if start.elapsed() < Duration::from_secs(20) => std::thread::sleep(Duration::from_millis(50)),
+            Err(e) => return Err(format!("the QEMU unit on port {port} does not answer: {e}")),
+        }
+    }
+}
