@@ -74,6 +74,8 @@ mod tests {
     #[test]
     fn times() {
         assert_eq!(super::format_time(0), "1970-01-01 00:00:00");
-        assert_eq!(super::format_time(1_795_000_000), "2026-11-18 05:46:40");
+        // Checked against Python: datetime.utcfromtimestamp(1795000000), and a leap day.
+        assert_eq!(super::format_time(1_795_000_000), "2026-11-18 11:06:40");
+        assert_eq!(super::format_time(951_782_400), "2000-02-29 00:00:00");
     }
 }
