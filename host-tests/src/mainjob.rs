@@ -56,7 +56,11 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         Some(d) => d.clone(),
         None => {
             let conds = plan::plan(
-                &["tumble:26".into(), "rate:-6:6:7".into(), "centrifuge:1:5:5".into()],
+                &[
+                    "tumble:26".into(),
+                    "rate:-6:6:7".into(),
+                    "centrifuge:1:5:5".into(),
+                ],
                 &[-40.0, 25.0, 85.0],
                 &[3.3],
                 1,
@@ -67,8 +71,10 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
             truth.accel.lever = [[0.012, 0.0, 0.0], [0.0, 0.009, 0.0], [0.0, 0.0, 0.015]];
             let obs = sim::simulate(&Sensor::Imu(Box::new(truth)), &conds, job.seed, false);
             let path = w("observations.csv");
-            obs.write_csv(std::fs::File::create(&path).map_err(|e| format!("{}: {e}", path.display()))?)
-                .map_err(|e| e.to_string())?;
+            obs.write_csv(
+                std::fs::File::create(&path).map_err(|e| format!("{}: {e}", path.display()))?,
+            )
+            .map_err(|e| e.to_string())?;
             say(&format!(
                 "1. simulated an IMU through a 26-position tumble, rate-table steps and centrifuge levels at -40, 25 and 85 C: {} observations in {}",
                 obs.rows.len(),
@@ -85,7 +91,11 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     let (blob, report, json) = (w("unit.blob"), w("report.html"), w("calibration.json"));
     std::fs::write(&blob, &c.blob).map_err(|e| e.to_string())?;
     std::fs::write(&report, html).map_err(|e| e.to_string())?;
-    std::fs::write(&json, serde_json::to_vec_pretty(&record).map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    std::fs::write(
+        &json,
+        serde_json::to_vec_pretty(&record).map_err(|e| e.to_string())?,
+    )
+    .map_err(|e| e.to_string())?;
     let mut db = Db::open(&job.db)?;
     let fit_id = db.record_fit(&record, Some(&report), &c.blob)?;
     say(&format!(
@@ -108,10 +118,14 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         "4. the unit answers on its UART (tcp port {}): {}, holding {} (flash kept in {})",
         unit.port,
         before.unit.as_str(),
-        before.calibration.as_ref().map_or("no calibration", |s| s.as_str()),
+        before
+            .calibration
+            .as_ref()
+            .map_or("no calibration", |s| s.as_str()),
         flash_file.display()
     ));
-    let flash = device::flash(&mut client, &c.blob, &FlashOptions::default(), |_, _| {}).map_err(|e| e.to_string())?;
+    let flash = device::flash(&mut client, &c.blob, &FlashOptions::default(), |_, _| {})
+        .map_err(|e| e.to_string())?;
     drop(client);
     unit.power_off()?;
     let flash_id = db.record_flash(
@@ -122,7 +136,11 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     )?;
     say(&format!(
         "5. flashed over the emulated UART: committed as slot sequence {}, {} bytes read back identical, {} test vectors through the device's correction within {} ulp of the host's; recorded as db:{fit_id} (fit) and db:{flash_id} (flash) in {}",
-        flash.seq, flash.bytes, flash.vectors, flash.max_ulp, job.db.display()
+        flash.seq,
+        flash.bytes,
+        flash.vectors,
+        flash.max_ulp,
+        job.db.display()
     ));
 
     let reboot_log = w("qemu-reboot.log");
@@ -137,7 +155,12 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         .find(|l| l.starts_with("device: calibration") || l.starts_with("device: no valid"))
         .unwrap_or("device: (no self-test line)")
         .to_string();
-    if after.calibration.is_none() || after.slots.iter().all(|s| !matches!(s, SlotState::Valid { seq, .. } if *seq == flash.seq)) {
+    if after.calibration.is_none()
+        || after
+            .slots
+            .iter()
+            .all(|s| !matches!(s, SlotState::Valid { seq, .. } if *seq == flash.seq))
+    {
         return Err(format!(
             "after a power cycle the unit does not hold the calibration just flashed (slots {:?}); see {}",
             after.slots,
@@ -156,9 +179,20 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         format!("report      {}", report.display()),
         format!("blob        {}", blob.display()),
         format!("record      {}", json.display()),
-        format!("history     calflash history {UNIT} --db {}", job.db.display()),
-        format!("unit flash  {} (the next run boots the unit with it)", flash_file.display()),
-        format!("device log  {} ({} lines), {}", log.display(), qemu_said.lines().count(), reboot_log.display()),
+        format!(
+            "history     calflash history {UNIT} --db {}",
+            job.db.display()
+        ),
+        format!(
+            "unit flash  {} (the next run boots the unit with it)",
+            flash_file.display()
+        ),
+        format!(
+            "device log  {} ({} lines), {}",
+            log.display(),
+            qemu_said.lines().count(),
+            reboot_log.display()
+        ),
     ];
     Ok(Summary {
         lines,

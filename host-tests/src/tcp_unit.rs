@@ -31,7 +31,11 @@ pub fn blank_flash() -> Flash {
 #[must_use]
 pub fn device(flash: Flash, unit: &str) -> Box<Device<Flash>> {
     let store = Store::new(flash, 0, SLOT).expect("the bench flash holds two slots");
-    Box::new(Device::new(store, Serial::new(unit).expect("a short serial"), [0, 1, 0]))
+    Box::new(Device::new(
+        store,
+        Serial::new(unit).expect("a short serial"),
+        [0, 1, 0],
+    ))
 }
 
 /// What goes wrong, counted in requests received (the first is 1).
@@ -65,7 +69,9 @@ impl TcpUnit {
         let listener = TcpListener::bind("127.0.0.1:0").expect("a local port");
         let port = listener.local_addr().expect("bound").port();
         let thread = std::thread::spawn(move || {
-            let Ok((mut s, _)) = listener.accept() else { return device };
+            let Ok((mut s, _)) = listener.accept() else {
+                return device;
+            };
             let mut pending = Vec::new();
             let mut buf = [0u8; 1024];
             let mut n = 0usize;

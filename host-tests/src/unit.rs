@@ -1,7 +1,7 @@
 //! The example device as a unit on the bench: the `device` firmware booted on QEMU mps2-an386
 //! with its UART on a TCP port, and its calibration flash kept in a file between power cycles.
 //!
-//! The emulated flash is the 64 KiB region at `_calib_start` (0x003F0000). At power-on the file,
+//! The emulated flash is the calibration store at `_calib_start` (memory.x). At power-on the file,
 //! when given and present, is loaded there (`-device loader`); at [`QemuUnit::power_off`] the
 //! region is saved back through the QEMU monitor (`pmemsave`) to a temporary file that replaces
 //! the old one only once QEMU has written it completely.
@@ -16,8 +16,12 @@ use calflash::device::Client;
 
 use crate::qemu;
 
-/// Address and size of the calibration region (memory.x).
-pub const REGION: (u32, u32) = (0x003F_0000, 0x1_0000);
+/// Address and size of the calibration store (memory.x: two slots and the lock sector).
+#[must_use]
+pub fn region() -> (u32, u32) {
+    let r = calflash::device::image::Region::from_memory_x();
+    (r.start, 2 * r.slot_size + r.lock_size)
+}
 
 /// A running QEMU unit. Dropping it kills QEMU (a power cut: nothing is saved).
 #[derive(Debug)]
@@ -51,18 +55,25 @@ impl QemuUnit {
     pub fn power_on(elf: &Path, flash: Option<&Path>, log: &Path) -> Result<Self, String> {
         let (port, monitor) = (free_port()?, free_port()?);
         let mut cmd = qemu::command(elf, &[]);
-        cmd.arg("-serial").arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"));
-        cmd.arg("-monitor").arg(format!("tcp:127.0.0.1:{monitor},server=on,wait=off"));
+        cmd.arg("-serial")
+            .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"));
+        cmd.arg("-monitor")
+            .arg(format!("tcp:127.0.0.1:{monitor},server=on,wait=off"));
         if let Some(f) = flash.filter(|f| f.exists()) {
-            let len = std::fs::metadata(f).map_err(|e| format!("{}: {e}", f.display()))?.len();
-            if len != u64::from(REGION.1) {
+            let len = std::fs::metadata(f)
+                .map_err(|e| format!("{}: {e}", f.display()))?
+                .len();
+            let (start, size) = region();
+            if len != u64::from(size) {
                 return Err(format!(
-                    "{}: a flash image of {len} bytes; the calibration region is {} bytes",
-                    f.display(),
-                    REGION.1
+                    "{}: a flash image of {len} bytes; the calibration store is {size} bytes",
+                    f.display()
                 ));
             }
-            cmd.arg("-device").arg(format!("loader,file={},addr={:#x},force-raw=on", f.display(), REGION.0));
+            cmd.arg("-device").arg(format!(
+                "loader,file={},addr={start:#x},force-raw=on",
+                f.display()
+            ));
         }
         let out = std::fs::File::create(log).map_err(|e| format!("{}: {e}", log.display()))?;
         let child = cmd
@@ -86,7 +97,8 @@ impl QemuUnit {
     /// When the UART does not listen within 20 s.
     pub fn connect(&self, timeout: Duration) -> Result<Client<TcpStream>, String> {
         let s = connect_tcp(self.port)?;
-        s.set_read_timeout(Some(Duration::from_millis(200))).map_err(|e| e.to_string())?;
+        s.set_read_timeout(Some(Duration::from_millis(200)))
+            .map_err(|e| e.to_string())?;
         Ok(Client::new(s, timeout))
     }
 
@@ -102,32 +114,41 @@ impl QemuUnit {
         let tmp = flash.with_extension("bin.partial");
         let _ = std::fs::remove_file(&tmp);
         let mon = connect_tcp(self.monitor)?;
-        mon.set_read_timeout(Some(Duration::from_secs(10))).map_err(|e| e.to_string())?;
+        mon.set_read_timeout(Some(Duration::from_secs(10)))
+            .map_err(|e| e.to_string())?;
         let mut w = mon.try_clone().map_err(|e| e.to_string())?;
         let mut r = BufReader::new(mon);
         let prompt = |r: &mut BufReader<TcpStream>| -> Result<(), String> {
             let mut seen = Vec::new();
             let mut byte = [0u8; 1];
             while !seen.ends_with(b"(qemu) ") {
-                r.read_exact(&mut byte).map_err(|e| format!("the QEMU monitor stopped answering: {e}"))?;
+                r.read_exact(&mut byte)
+                    .map_err(|e| format!("the QEMU monitor stopped answering: {e}"))?;
                 seen.push(byte[0]);
             }
             Ok(())
         };
         prompt(&mut r)?;
-        writeln!(w, "pmemsave {:#x} {:#x} \"{}\"", REGION.0, REGION.1, tmp.display()).map_err(|e| e.to_string())?;
+        let (start, size) = region();
+        writeln!(w, "pmemsave {start:#x} {size:#x} \"{}\"", tmp.display())
+            .map_err(|e| e.to_string())?;
         prompt(&mut r)?;
         let _ = writeln!(w, "quit");
         let mut rest = String::new();
         let _ = r.read_line(&mut rest);
         let start = Instant::now();
-        while self.child.try_wait().map_err(|e| e.to_string())?.is_none() && start.elapsed() < Duration::from_secs(10) {
+        while self.child.try_wait().map_err(|e| e.to_string())?.is_none()
+            && start.elapsed() < Duration::from_secs(10)
+        {
             std::thread::sleep(Duration::from_millis(20));
         }
         let len = std::fs::metadata(&tmp).map(|m| m.len()).unwrap_or(0);
-        if len != u64::from(REGION.1) {
+        if len != u64::from(size) {
             let _ = std::fs::remove_file(&tmp);
-            return Err(format!("QEMU saved {len} of {} bytes of the unit's flash; {} kept as it was", REGION.1, flash.display()));
+            return Err(format!(
+                "QEMU saved {len} of {size} bytes of the unit's flash; {} kept as it was",
+                flash.display()
+            ));
         }
         std::fs::rename(&tmp, &flash).map_err(|e| format!("{}: {e}", flash.display()))
     }
@@ -138,7 +159,9 @@ fn connect_tcp(port: u16) -> Result<TcpStream, String> {
     loop {
         match TcpStream::connect(("127.0.0.1", port)) {
             Ok(s) => return Ok(s),
-            Err(_) if start.elapsed() < Duration::from_secs(20) => std::thread::sleep(Duration::from_millis(50)),
+            Err(_) if start.elapsed() < Duration::from_secs(20) => {
+                std::thread::sleep(Duration::from_millis(50))
+            }
             Err(e) => return Err(format!("the QEMU unit on port {port} does not answer: {e}")),
         }
     }

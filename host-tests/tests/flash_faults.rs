@@ -33,7 +33,9 @@ struct Bench {
 
 impl Bench {
     fn new() -> Self {
-        Self { dir: tempfile::tempdir().unwrap() }
+        Self {
+            dir: tempfile::tempdir().unwrap(),
+        }
     }
 
     fn path(&self, name: &str) -> PathBuf {
@@ -48,7 +50,14 @@ impl Bench {
 
     /// Runs `calflash flash` against a unit over `flash` with `fault`; returns the result and
     /// the flash afterwards.
-    fn flash(&self, flash: Flash, unit: &str, blob: &Path, fault: Fault, force: bool) -> (Result<(), String>, Flash) {
+    fn flash(
+        &self,
+        flash: Flash,
+        unit: &str,
+        blob: &Path,
+        fault: Fault,
+        force: bool,
+    ) -> (Result<(), String>, Flash) {
         let u = TcpUnit::serve(tcp_unit::device(flash, unit), fault);
         let args = FlashArgs {
             blob: blob.to_path_buf(),
@@ -65,7 +74,13 @@ impl Bench {
 
     /// A unit holding the old calibration.
     fn unit_with_old(&self) -> Flash {
-        let (r, flash) = self.flash(tcp_unit::blank_flash(), UNIT, &self.blob("old.blob", &old_blob()), Fault::None, false);
+        let (r, flash) = self.flash(
+            tcp_unit::blank_flash(),
+            UNIT,
+            &self.blob("old.blob", &old_blob()),
+            Fault::None,
+            false,
+        );
         r.unwrap();
         flash
     }
@@ -114,7 +129,13 @@ fn a_unit_that_stops_answering_mid_transfer_keeps_its_calibration() {
         )
     );
     assert_eq!(held_after_reboot(flash.clone()), Some(old_blob()));
-    assert_eq!(b.history(), [("flash".into(), "verified".into()), ("flash".into(), "failed".into())]);
+    assert_eq!(
+        b.history(),
+        [
+            ("flash".into(), "verified".into()),
+            ("flash".into(), "failed".into())
+        ]
+    );
     // The abandoned transfer does not stand in the way of the next one.
     let (r, flash) = b.flash(flash, UNIT, &new, Fault::None, false);
     r.unwrap();
@@ -126,14 +147,28 @@ fn a_garbled_answer_or_a_dropped_link_changes_nothing() {
     let b = Bench::new();
     let new = b.blob("new.blob", &new_blob());
     for (fault, says) in [
-        (Fault::GarbleAnswer(3), "the unit's answer to the chunk at byte 0 was garbled"),
-        (Fault::GarbleAnswer(2), "the unit's answer to the start of a"),
-        (Fault::CloseAt(5), "the link failed during the chunk at byte 512"),
+        (
+            Fault::GarbleAnswer(3),
+            "the unit's answer to the chunk at byte 0 was garbled",
+        ),
+        (
+            Fault::GarbleAnswer(2),
+            "the unit's answer to the start of a",
+        ),
+        (
+            Fault::CloseAt(5),
+            "the link failed during the chunk at byte 512",
+        ),
     ] {
         let (r, flash) = b.flash(b.unit_with_old(), UNIT, &new, fault, false);
         let e = r.unwrap_err();
         assert!(e.starts_with(says), "{fault:?}: {e}");
-        assert!(e.ends_with(&format!("nothing was committed: the unit keeps its calibration {UNIT}")), "{e}");
+        assert!(
+            e.ends_with(&format!(
+                "nothing was committed: the unit keeps its calibration {UNIT}"
+            )),
+            "{e}"
+        );
         assert_eq!(held_after_reboot(flash), Some(old_blob()), "{fault:?}");
     }
 }
@@ -146,8 +181,16 @@ fn a_lost_commit_answer_says_old_or_new_and_the_unit_holds_one_of_them() {
     for fault in [Fault::SilentFrom(commit), Fault::GarbleAnswer(commit)] {
         let (r, flash) = b.flash(b.unit_with_old(), UNIT, &new, fault, false);
         let e = r.unwrap_err();
-        assert!(e.contains("the commit was sent but its answer was lost"), "{e}");
-        assert!(e.contains(&format!("either its previous calibration {UNIT} or the new one")), "{e}");
+        assert!(
+            e.contains("the commit was sent but its answer was lost"),
+            "{e}"
+        );
+        assert!(
+            e.contains(&format!(
+                "either its previous calibration {UNIT} or the new one"
+            )),
+            "{e}"
+        );
         let held = held_after_reboot(flash);
         match fault {
             // Silence from the commit on: the unit never handled it.
@@ -156,7 +199,13 @@ fn a_lost_commit_answer_says_old_or_new_and_the_unit_holds_one_of_them() {
         }
     }
     // A lost answer after the commit: committed but not verified, and said so.
-    let (r, flash) = b.flash(b.unit_with_old(), UNIT, &new, Fault::SilentFrom(commit + 1), false);
+    let (r, flash) = b.flash(
+        b.unit_with_old(),
+        UNIT,
+        &new,
+        Fault::SilentFrom(commit + 1),
+        false,
+    );
     let e = r.unwrap_err();
     assert!(e.ends_with("after the commit: the unit holds the new calibration (slot sequence 2) but it is NOT verified; flash again to verify it"), "{e}");
     assert_eq!(held_after_reboot(flash), Some(new_blob()));
@@ -170,7 +219,9 @@ fn a_wrong_serial_is_refused_unless_forced() {
     let (r, flash) = b.flash(blank.clone(), "OTHER-9", &blob, Fault::None, false);
     assert_eq!(
         r.unwrap_err(),
-        format!("the blob is for unit {UNIT} but the unit is OTHER-9; nothing was written (use --force to write it anyway)")
+        format!(
+            "the blob is for unit {UNIT} but the unit is OTHER-9; nothing was written (use --force to write it anyway)"
+        )
     );
     assert_eq!(flash.mem, blank.mem, "nothing written");
     let (r, flash) = b.flash(blank, "OTHER-9", &blob, Fault::None, true);
@@ -184,8 +235,17 @@ fn a_locked_unit_refuses_and_keeps_its_calibration() {
     let mut d = tcp_unit::device(b.unit_with_old(), UNIT);
     assert_eq!(d.handle(Request::Lock), Response::LockedOk);
     let locked = d.into_store().into_inner();
-    let (r, flash) = b.flash(locked.clone(), UNIT, &b.blob("new.blob", &new_blob()), Fault::None, false);
-    assert_eq!(r.unwrap_err(), format!("unit {UNIT} is locked against writes; it keeps its calibration {UNIT}"));
+    let (r, flash) = b.flash(
+        locked.clone(),
+        UNIT,
+        &b.blob("new.blob", &new_blob()),
+        Fault::None,
+        false,
+    );
+    assert_eq!(
+        r.unwrap_err(),
+        format!("unit {UNIT} is locked against writes; it keeps its calibration {UNIT}")
+    );
     assert_eq!(flash.mem, locked.mem, "nothing written");
 }
 
@@ -199,7 +259,10 @@ fn an_unwritable_database_loses_no_record() {
     let (r, flash) = b.flash(tcp_unit::blank_flash(), UNIT, &blob, Fault::None, false);
     let e = r.unwrap_err();
     assert!(e.starts_with("the unit holds the new calibration, verified, but the flash is NOT recorded: the unit history database "), "{e}");
-    let saved = e.rsplit_once("the record is saved in ").map(|(_, p)| p.trim_end_matches(" instead")).unwrap_or_else(|| panic!("{e}"));
+    let saved = e
+        .rsplit_once("the record is saved in ")
+        .map(|(_, p)| p.trim_end_matches(" instead"))
+        .unwrap_or_else(|| panic!("{e}"));
     let record: serde_json::Value = serde_json::from_slice(&std::fs::read(saved).unwrap()).unwrap();
     assert_eq!(record["unit"], UNIT);
     assert_eq!(record["read_back_identical"], true);

@@ -36,9 +36,24 @@ fn crc(b: &[u8]) -> u32 {
 }
 
 fn write(d: &mut Device<Flash>, blob: &[u8]) -> Response {
-    assert_eq!(call(d, &Request::WriteBegin { len: blob.len() as u32, crc: crc(blob) }), Response::Ready);
+    assert_eq!(
+        call(
+            d,
+            &Request::WriteBegin {
+                len: blob.len() as u32,
+                crc: crc(blob)
+            }
+        ),
+        Response::Ready
+    );
     for (k, chunk) in blob.chunks(MAX_CHUNK).enumerate() {
-        let r = call(d, &Request::WriteChunk { offset: (k * MAX_CHUNK) as u32, data: heapless::Vec::from_slice(chunk).unwrap() });
+        let r = call(
+            d,
+            &Request::WriteChunk {
+                offset: (k * MAX_CHUNK) as u32,
+                data: heapless::Vec::from_slice(chunk).unwrap(),
+            },
+        );
         assert!(matches!(r, Response::ChunkOk { .. }), "{r:?}");
     }
     call(d, &Request::Commit)
@@ -55,7 +70,13 @@ fn read_back(d: &mut Device<Flash>, len: usize) -> Vec<u8> {
     let mut out = Vec::new();
     while out.len() < len {
         let n = (len - out.len()).min(MAX_CHUNK) as u16;
-        match call(d, &Request::ReadBlob { offset: out.len() as u32, len: n }) {
+        match call(
+            d,
+            &Request::ReadBlob {
+                offset: out.len() as u32,
+                len: n,
+            },
+        ) {
             Response::Blob { data, .. } => out.extend_from_slice(&data),
             r => panic!("{r:?}"),
         }
@@ -67,7 +88,10 @@ fn read_back(d: &mut Device<Flash>, len: usize) -> Vec<u8> {
 fn update_read_back_and_vectors() {
     let mut d = device();
     let id = identity(&mut d);
-    assert_eq!((id.calibration, id.locked, id.unit.as_str()), (None, false, "UNIT-1"));
+    assert_eq!(
+        (id.calibration, id.locked, id.unit.as_str()),
+        (None, false, "UNIT-1")
+    );
     assert_eq!(id.slots, [SlotState::Empty; 2].map(|_| SlotState::Invalid));
     let blob = golden::encode(&CalibrationData::example_imu());
     assert_eq!(write(&mut d, &blob), Response::Committed { seq: 1 });
@@ -77,9 +101,20 @@ fn update_read_back_and_vectors() {
     assert!(matches!(id.slots[0], SlotState::Valid { seq: 1, .. }));
     assert_eq!(read_back(&mut d, blob.len()), blob);
     // Test vectors: the device's outputs are the host's, bit for bit.
-    let raw: Vec<[i32; 6]> = (0..16).map(|i| std::array::from_fn(|a| 31_000 + i * 311 + a as i32 * 977)).collect();
-    let resp = call(&mut d, &Request::RunVectors { temperature: 31.5, voltage: 3.3, raw: heapless::Vec::from_slice(&raw).unwrap() });
-    let Response::Vectors { out } = resp else { panic!("{resp:?}") };
+    let raw: Vec<[i32; 6]> = (0..16)
+        .map(|i| std::array::from_fn(|a| 31_000 + i * 311 + a as i32 * 977))
+        .collect();
+    let resp = call(
+        &mut d,
+        &Request::RunVectors {
+            temperature: 31.5,
+            voltage: 3.3,
+            raw: heapless::Vec::from_slice(&raw).unwrap(),
+        },
+    );
+    let Response::Vectors { out } = resp else {
+        panic!("{resp:?}")
+    };
     let cal = Calibration::new(CalibrationData::example_imu()).unwrap();
     let mut host = spincal::correct::ImuCorrector::new(&cal, protocol::vector_rate_hz()).unwrap();
     host.set_environment(31.5, 3.3);
@@ -104,11 +139,21 @@ fn refusals_change_nothing() {
 
     // Corrupt, truncated and unknown frames.
     let mut frame = [0u8; MAX_FRAME];
-    let n = protocol::encode(&Request::WriteBegin { len: new.len() as u32, crc: crc(&new) }, &mut frame).unwrap();
+    let n = protocol::encode(
+        &Request::WriteBegin {
+            len: new.len() as u32,
+            crc: crc(&new),
+        },
+        &mut frame,
+    )
+    .unwrap();
     let mut bad = frame[..n - 1].to_vec();
     bad[2] ^= 0x40;
     assert_eq!(raw_call(&mut d, &bad), Response::Error(Status::BadFrame));
-    assert_eq!(raw_call(&mut d, &frame[..n / 2]), Response::Error(Status::BadFrame));
+    assert_eq!(
+        raw_call(&mut d, &frame[..n / 2]),
+        Response::Error(Status::BadFrame)
+    );
     assert_eq!(raw_call(&mut d, &[]), Response::Error(Status::BadFrame));
     let unknown = {
         // Variant 42 of the request enum, with a good CRC.
@@ -119,7 +164,10 @@ fn refusals_change_nothing() {
         let k = cobs::encode(&raw, &mut out);
         out[..k].to_vec()
     };
-    assert_eq!(raw_call(&mut d, &unknown), Response::Error(Status::UnknownRequest));
+    assert_eq!(
+        raw_call(&mut d, &unknown),
+        Response::Error(Status::UnknownRequest)
+    );
     let malformed = {
         let body = [2u8, 0xff];
         let mut raw = body.to_vec();
@@ -128,43 +176,130 @@ fn refusals_change_nothing() {
         let k = cobs::encode(&raw, &mut out);
         out[..k].to_vec()
     };
-    assert_eq!(raw_call(&mut d, &malformed), Response::Error(Status::Malformed));
+    assert_eq!(
+        raw_call(&mut d, &malformed),
+        Response::Error(Status::Malformed)
+    );
 
     // Protocol misuse.
-    assert_eq!(call(&mut d, &Request::Commit), Response::Error(Status::NoTransfer));
     assert_eq!(
-        call(&mut d, &Request::WriteChunk { offset: 0, data: heapless::Vec::from_slice(&new[..10]).unwrap() }),
+        call(&mut d, &Request::Commit),
         Response::Error(Status::NoTransfer)
     );
-    assert_eq!(call(&mut d, &Request::WriteBegin { len: 1_000_000, crc: 0 }), Response::Error(Status::TooLarge));
-    assert_eq!(call(&mut d, &Request::WriteBegin { len: new.len() as u32, crc: crc(&new) }), Response::Ready);
     assert_eq!(
-        call(&mut d, &Request::WriteChunk { offset: 5, data: heapless::Vec::from_slice(&new[5..10]).unwrap() }),
+        call(
+            &mut d,
+            &Request::WriteChunk {
+                offset: 0,
+                data: heapless::Vec::from_slice(&new[..10]).unwrap()
+            }
+        ),
+        Response::Error(Status::NoTransfer)
+    );
+    assert_eq!(
+        call(
+            &mut d,
+            &Request::WriteBegin {
+                len: 1_000_000,
+                crc: 0
+            }
+        ),
+        Response::Error(Status::TooLarge)
+    );
+    assert_eq!(
+        call(
+            &mut d,
+            &Request::WriteBegin {
+                len: new.len() as u32,
+                crc: crc(&new)
+            }
+        ),
+        Response::Ready
+    );
+    assert_eq!(
+        call(
+            &mut d,
+            &Request::WriteChunk {
+                offset: 5,
+                data: heapless::Vec::from_slice(&new[5..10]).unwrap()
+            }
+        ),
         Response::Error(Status::OutOfOrder)
     );
-    assert_eq!(call(&mut d, &Request::Commit), Response::Error(Status::OutOfOrder));
+    assert_eq!(
+        call(&mut d, &Request::Commit),
+        Response::Error(Status::OutOfOrder)
+    );
     // A wrong CRC, then an invalid blob with a right one.
-    assert_eq!(call(&mut d, &Request::WriteBegin { len: new.len() as u32, crc: crc(&new) ^ 1 }), Response::Ready);
+    assert_eq!(
+        call(
+            &mut d,
+            &Request::WriteBegin {
+                len: new.len() as u32,
+                crc: crc(&new) ^ 1
+            }
+        ),
+        Response::Ready
+    );
     for (k, chunk) in new.chunks(MAX_CHUNK).enumerate() {
-        call(&mut d, &Request::WriteChunk { offset: (k * MAX_CHUNK) as u32, data: heapless::Vec::from_slice(chunk).unwrap() });
+        call(
+            &mut d,
+            &Request::WriteChunk {
+                offset: (k * MAX_CHUNK) as u32,
+                data: heapless::Vec::from_slice(chunk).unwrap(),
+            },
+        );
     }
-    assert_eq!(call(&mut d, &Request::Commit), Response::Error(Status::CrcMismatch));
+    assert_eq!(
+        call(&mut d, &Request::Commit),
+        Response::Error(Status::CrcMismatch)
+    );
     let mut invalid = new.clone();
     invalid[30] ^= 1;
     let r = write(&mut d, &invalid);
-    assert!(matches!(r, Response::Error(Status::InvalidBlob(spincal::Error::ChecksumMismatch { .. }))), "{r:?}");
+    assert!(
+        matches!(
+            r,
+            Response::Error(Status::InvalidBlob(spincal::Error::ChecksumMismatch { .. }))
+        ),
+        "{r:?}"
+    );
     // A transfer never committed.
-    assert_eq!(call(&mut d, &Request::WriteBegin { len: new.len() as u32, crc: crc(&new) }), Response::Ready);
+    assert_eq!(
+        call(
+            &mut d,
+            &Request::WriteBegin {
+                len: new.len() as u32,
+                crc: crc(&new)
+            }
+        ),
+        Response::Ready
+    );
     assert_eq!(identity(&mut d), before, "nothing changed");
     assert_eq!(read_back(&mut d, old.len()), old);
 
     // Locked: writes refused, the calibration kept.
     assert_eq!(call(&mut d, &Request::Lock), Response::LockedOk);
     assert!(identity(&mut d).locked);
-    assert_eq!(call(&mut d, &Request::WriteBegin { len: new.len() as u32, crc: crc(&new) }), Response::Error(Status::Locked));
+    assert_eq!(
+        call(
+            &mut d,
+            &Request::WriteBegin {
+                len: new.len() as u32,
+                crc: crc(&new)
+            }
+        ),
+        Response::Error(Status::Locked)
+    );
     assert_eq!(read_back(&mut d, old.len()), old);
     assert_eq!(
-        call(&mut d, &Request::ReadBlob { offset: old.len() as u32 - 2, len: 10 }),
+        call(
+            &mut d,
+            &Request::ReadBlob {
+                offset: old.len() as u32 - 2,
+                len: 10
+            }
+        ),
         Response::Error(Status::OutOfRange)
     );
 }
@@ -172,7 +307,17 @@ fn refusals_change_nothing() {
 #[test]
 fn a_new_unit_answers_without_a_calibration() {
     let mut d = device();
-    let r = call(&mut d, &Request::RunVectors { temperature: 25.0, voltage: 3.3, raw: heapless::Vec::new() });
+    let r = call(
+        &mut d,
+        &Request::RunVectors {
+            temperature: 25.0,
+            voltage: 3.3,
+            raw: heapless::Vec::new(),
+        },
+    );
     assert_eq!(r, Response::Error(Status::NoCalibration));
-    assert_eq!(call(&mut d, &Request::ReadBlob { offset: 0, len: 4 }), Response::Error(Status::NoCalibration));
+    assert_eq!(
+        call(&mut d, &Request::ReadBlob { offset: 0, len: 4 }),
+        Response::Error(Status::NoCalibration)
+    );
 }

@@ -2,7 +2,9 @@
 
 use embedded_storage::nor_flash::NorFlash;
 
-use super::{FrameError, Identity, MAX_CHUNK, MAX_FRAME, PROTOCOL_VERSION, Request, Response, Status};
+use super::{
+    FrameError, Identity, MAX_CHUNK, MAX_FRAME, PROTOCOL_VERSION, Request, Response, Status,
+};
 use crate::blob::{self, MAX_BLOB_LEN};
 use crate::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
 use crate::model::{Calibration, CalibrationData, Sensor, Serial};
@@ -52,7 +54,11 @@ impl<F: NorFlash> Device<F> {
     }
 
     fn reload(&mut self) {
-        self.loaded = self.store.load(&mut self.buf, &mut self.cal).ok().map(|(_, info)| info);
+        self.loaded = self
+            .store
+            .load(&mut self.buf, &mut self.cal)
+            .ok()
+            .map(|(_, info)| info);
     }
 
     /// The current calibration (the validated RAM copy), if any.
@@ -76,7 +82,9 @@ impl<F: NorFlash> Device<F> {
     pub fn handle_frame(&mut self, frame: &[u8], out: &mut [u8]) -> usize {
         let response = match super::decode::<Request>(frame, &mut self.frame) {
             Ok(req) => self.handle(req),
-            Err(FrameError::Message) if super::unknown_request(frame, &mut self.frame) => Response::Error(Status::UnknownRequest),
+            Err(FrameError::Message) if super::unknown_request(frame, &mut self.frame) => {
+                Response::Error(Status::UnknownRequest)
+            }
             Err(FrameError::Message) => Response::Error(Status::Malformed),
             Err(_) => Response::Error(Status::BadFrame),
         };
@@ -91,7 +99,11 @@ impl<F: NorFlash> Device<F> {
             Request::WriteBegin { len, crc } => self.begin(len, crc),
             Request::WriteChunk { offset, data } => self.chunk(offset, &data),
             Request::Commit => self.commit(),
-            Request::RunVectors { temperature, voltage, raw } => self.vectors(temperature, voltage, &raw),
+            Request::RunVectors {
+                temperature,
+                voltage,
+                raw,
+            } => self.vectors(temperature, voltage, &raw),
             Request::Lock => match self.store.lock() {
                 Ok(()) => Response::LockedOk,
                 Err(_) => Response::Error(Status::StoreFailed),

@@ -195,10 +195,17 @@ pub fn checksum(bytes: &[u8]) -> u32 {
 /// [`FrameError::TooLong`] when `out` cannot hold it.
 pub fn encode<T: Serialize>(msg: &T, out: &mut [u8]) -> Result<usize, FrameError> {
     let mut raw = [0u8; MAX_FRAME];
-    let body = postcard::to_slice(msg, &mut raw).map_err(|_| FrameError::TooLong)?.len();
-    let crc = CRC.checksum(raw.get(..body).unwrap_or_default()).to_le_bytes();
-    raw.get_mut(body..body + 4).ok_or(FrameError::TooLong)?.copy_from_slice(&crc);
-    let n = cobs::try_encode(raw.get(..body + 4).unwrap_or_default(), out).map_err(|_| FrameError::TooLong)?;
+    let body = postcard::to_slice(msg, &mut raw)
+        .map_err(|_| FrameError::TooLong)?
+        .len();
+    let crc = CRC
+        .checksum(raw.get(..body).unwrap_or_default())
+        .to_le_bytes();
+    raw.get_mut(body..body + 4)
+        .ok_or(FrameError::TooLong)?
+        .copy_from_slice(&crc);
+    let n = cobs::try_encode(raw.get(..body + 4).unwrap_or_default(), out)
+        .map_err(|_| FrameError::TooLong)?;
     *out.get_mut(n).ok_or(FrameError::TooLong)? = 0;
     Ok(n + 1)
 }
@@ -207,7 +214,10 @@ pub fn encode<T: Serialize>(msg: &T, out: &mut [u8]) -> Result<usize, FrameError
 ///
 /// # Errors
 /// The [`FrameError`] of the first check that fails.
-pub fn decode<'a, T: Deserialize<'a>>(frame: &[u8], scratch: &'a mut [u8]) -> Result<T, FrameError> {
+pub fn decode<'a, T: Deserialize<'a>>(
+    frame: &[u8],
+    scratch: &'a mut [u8],
+) -> Result<T, FrameError> {
     if frame.len() > scratch.len() {
         return Err(FrameError::TooLong);
     }

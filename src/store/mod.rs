@@ -441,7 +441,12 @@ impl<F: NorFlash> Store<F> {
 /// # Errors
 /// [`StoreError::InvalidBlob`] when the blob does not decode and validate (it is checked with
 /// `scratch`), [`StoreError::BlobTooLarge`] when it does not fit `out`.
-pub fn slot_image(blob: &[u8], seq: u32, out: &mut [u8], scratch: &mut CalibrationData) -> Result<usize, StoreError> {
+pub fn slot_image(
+    blob: &[u8],
+    seq: u32,
+    out: &mut [u8],
+    scratch: &mut CalibrationData,
+) -> Result<usize, StoreError> {
     blob::decode_in(blob, scratch).map_err(StoreError::InvalidBlob)?;
     let capacity = out.len().saturating_sub(BLOB_OFFSET);
     if blob.len() > capacity {

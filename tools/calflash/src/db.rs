@@ -42,13 +42,29 @@ pub fn record_or_save(
             let nanos = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_nanos());
-            let safe: String = serial.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
+            let safe: String = serial
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || c == '-' {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
             let file = beside.join(format!("calflash-unrecorded-{safe}-{nanos}.json"));
             let body = serde_json::to_vec_pretty(fallback).unwrap_or_default();
-            let saved = crate::report::write_atomically(&file, |w| std::io::Write::write_all(w, &body));
+            let saved =
+                crate::report::write_atomically(&file, |w| std::io::Write::write_all(w, &body));
             Err(match saved {
-                Ok(()) => format!("NOT recorded: {e}; the record is saved in {} instead", file.display()),
-                Err(why) => format!("NOT recorded: {e}; nor could it be saved in {} ({why})", file.display()),
+                Ok(()) => format!(
+                    "NOT recorded: {e}; the record is saved in {} instead",
+                    file.display()
+                ),
+                Err(why) => format!(
+                    "NOT recorded: {e}; nor could it be saved in {} ({why})",
+                    file.display()
+                ),
             })
         }
     }
@@ -87,9 +103,12 @@ fn explain(path: &Path, e: &rusqlite::Error) -> String {
         Some(ErrorCode::DiskFull) => "the disk (or the database's size limit) is full".to_string(),
         Some(ErrorCode::SystemIoFailure) => format!(
             "it cannot be written (disk I/O error: the file, or its journal {}-journal beside it, cannot be written)",
-            path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+            path.file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
         ),
-        Some(ErrorCode::CannotOpen) => "the database cannot be opened (a directory, or no permission)".to_string(),
+        Some(ErrorCode::CannotOpen) => {
+            "the database cannot be opened (a directory, or no permission)".to_string()
+        }
         Some(ErrorCode::NotADatabase) => "the file is not a calflash database".to_string(),
         _ => e.to_string(),
     };
@@ -128,13 +147,19 @@ impl Db {
     /// A message naming the file and why.
     pub fn open(path: &Path) -> Result<Self, String> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| format!("the unit history database {}: {e}", path.display()))?;
+            std::fs::create_dir_all(dir)
+                .map_err(|e| format!("the unit history database {}: {e}", path.display()))?;
         }
         let conn = Connection::open(path).map_err(|e| explain(path, &e))?;
-        conn.busy_timeout(std::time::Duration::from_secs(5)).map_err(|e| explain(path, &e))?;
+        conn.busy_timeout(std::time::Duration::from_secs(5))
+            .map_err(|e| explain(path, &e))?;
         // Creating the schema writes: a read-only file fails here only if it is new.
         let exists: bool = conn
-            .query_row("SELECT count(*) FROM sqlite_master WHERE name = 'records'", [], |r| r.get::<_, i64>(0))
+            .query_row(
+                "SELECT count(*) FROM sqlite_master WHERE name = 'records'",
+                [],
+                |r| r.get::<_, i64>(0),
+            )
             .map_err(|e| explain(path, &e))?
             > 0;
         if !exists {
@@ -150,15 +175,31 @@ impl Db {
     ///
     /// # Errors
     /// A message naming the file and why; nothing is written then.
-    pub fn record_fit(&mut self, rec: &Record, report: Option<&Path>, blob: &[u8]) -> Result<i64, String> {
-        let models: Vec<&str> = rec.points.first().map(|p| p.axes.iter().map(|a| a.model.as_str()).collect()).unwrap_or_default();
+    pub fn record_fit(
+        &mut self,
+        rec: &Record,
+        report: Option<&Path>,
+        blob: &[u8],
+    ) -> Result<i64, String> {
+        let models: Vec<&str> = rec
+            .points
+            .first()
+            .map(|p| p.axes.iter().map(|a| a.model.as_str()).collect())
+            .unwrap_or_default();
         let coefficients: Vec<serde_json::Value> = rec
             .points
             .iter()
             .map(|p| serde_json::json!({"temp": p.temp, "volt": p.volt, "axes": p.axes.iter().map(|a| serde_json::json!({"output": a.output, "terms": a.terms, "coefficients": a.coefficients, "std_errors": a.std_errors})).collect::<Vec<_>>()}))
             .collect();
-        let covariance: Vec<Vec<&Vec<Vec<f64>>>> = rec.points.iter().map(|p| p.axes.iter().map(|a| &a.covariance).collect()).collect();
-        let tx = self.conn.transaction().map_err(|e| explain(&self.path, &e))?;
+        let covariance: Vec<Vec<&Vec<Vec<f64>>>> = rec
+            .points
+            .iter()
+            .map(|p| p.axes.iter().map(|a| &a.covariance).collect())
+            .collect();
+        let tx = self
+            .conn
+            .transaction()
+            .map_err(|e| explain(&self.path, &e))?;
         tx.execute(
             "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
              VALUES (?1, 'fit', ?2, ?3, ?4, ?5, ?6, ?7, ?8, NULL, ?9, ?10)",
@@ -185,15 +226,29 @@ impl Db {
     ///
     /// # Errors
     /// A message naming the file and why; nothing is written then.
-    pub fn record_flash(&mut self, unit: &str, blob: &[u8], verification: &serde_json::Value, outcome: &str) -> Result<i64, String> {
+    pub fn record_flash(
+        &mut self,
+        unit: &str,
+        blob: &[u8],
+        verification: &serde_json::Value,
+        outcome: &str,
+    ) -> Result<i64, String> {
         let (hash, coefficients) = match spincal::blob::decode(blob) {
             Ok(cal) => (
-                cal.data().identity.data_hash.iter().map(|b| format!("{b:02x}")).collect::<String>(),
+                cal.data()
+                    .identity
+                    .data_hash
+                    .iter()
+                    .map(|b| format!("{b:02x}"))
+                    .collect::<String>(),
                 Some(format!("{:?}", cal.data().sensor)),
             ),
             Err(_) => (String::new(), None),
         };
-        let tx = self.conn.transaction().map_err(|e| explain(&self.path, &e))?;
+        let tx = self
+            .conn
+            .transaction()
+            .map_err(|e| explain(&self.path, &e))?;
         tx.execute(
             "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
              VALUES (?1, 'flash', ?2, ?3, NULL, ?4, NULL, NULL, ?5, ?6, ?7, NULL)",
@@ -228,7 +283,8 @@ impl Db {
                 })
             })
             .map_err(|e| explain(&self.path, &e))?;
-        rows.collect::<Result<_, _>>().map_err(|e| explain(&self.path, &e))
+        rows.collect::<Result<_, _>>()
+            .map_err(|e| explain(&self.path, &e))
     }
 
     /// The calibration record of fit `id`.
@@ -238,13 +294,19 @@ impl Db {
     pub fn record(&self, id: i64) -> Result<Record, String> {
         let text: Option<Option<String>> = self
             .conn
-            .query_row("SELECT record FROM records WHERE id = ?1", [id], |r| r.get(0))
+            .query_row("SELECT record FROM records WHERE id = ?1", [id], |r| {
+                r.get(0)
+            })
             .optional()
             .map_err(|e| explain(&self.path, &e))?;
         match text {
             None => Err(format!("{}: no record {id}", self.path.display())),
-            Some(None) => Err(format!("{}: record {id} is a flash, not a fit; compare fits", self.path.display())),
-            Some(Some(t)) => serde_json::from_str(&t).map_err(|e| format!("{}: record {id}: {e}", self.path.display())),
+            Some(None) => Err(format!(
+                "{}: record {id} is a flash, not a fit; compare fits",
+                self.path.display()
+            )),
+            Some(Some(t)) => serde_json::from_str(&t)
+                .map_err(|e| format!("{}: record {id}: {e}", self.path.display())),
         }
     }
 
@@ -260,7 +322,12 @@ mod tests {
     use super::*;
 
     fn flash(db: &mut Db) -> Result<i64, String> {
-        db.record_flash("UNIT-1", &[0u8; 4000], &serde_json::json!({"ok": true}), "verified")
+        db.record_flash(
+            "UNIT-1",
+            &[0u8; 4000],
+            &serde_json::json!({"ok": true}),
+            "verified",
+        )
     }
 
     #[test]
@@ -269,12 +336,30 @@ mod tests {
         let path = dir.path().join("units.sqlite");
         let mut db = Db::open(&path).unwrap();
         flash(&mut db).unwrap();
-        let pages: i64 = db.conn.query_row("PRAGMA page_count", [], |r| r.get(0)).unwrap();
+        let pages: i64 = db
+            .conn
+            .query_row("PRAGMA page_count", [], |r| r.get(0))
+            .unwrap();
         // The size limit stands in for a full disk: SQLite reports both as SQLITE_FULL.
-        let _: i64 = db.conn.query_row(&format!("PRAGMA max_page_count = {pages}"), [], |r| r.get(0)).unwrap();
+        let _: i64 = db
+            .conn
+            .query_row(&format!("PRAGMA max_page_count = {pages}"), [], |r| {
+                r.get(0)
+            })
+            .unwrap();
         let e = flash(&mut db).unwrap_err();
-        assert_eq!(e, format!("the unit history database {}: the disk (or the database's size limit) is full", path.display()));
-        assert_eq!(db.history("UNIT-1").unwrap().len(), 1, "the failed record left nothing behind");
+        assert_eq!(
+            e,
+            format!(
+                "the unit history database {}: the disk (or the database's size limit) is full",
+                path.display()
+            )
+        );
+        assert_eq!(
+            db.history("UNIT-1").unwrap().len(),
+            1,
+            "the failed record left nothing behind"
+        );
     }
 
     #[test]
@@ -288,12 +373,20 @@ mod tests {
         if std::fs::OpenOptions::new().append(true).open(&path).is_ok() {
             // Root writes read-only files; the journal test in host-tests/tests/flash_faults.rs
             // covers an unwritable database there.
-            println!("a_read_only_database_says_so: skipped, running as a user who can write read-only files (root)");
+            println!(
+                "a_read_only_database_says_so: skipped, running as a user who can write read-only files (root)"
+            );
             return;
         }
         let mut db = Db::open(&path).unwrap();
         let e = flash(&mut db).unwrap_err();
-        assert_eq!(e, format!("the unit history database {}: the database file is read-only", path.display()));
+        assert_eq!(
+            e,
+            format!(
+                "the unit history database {}: the database file is read-only",
+                path.display()
+            )
+        );
         assert_eq!(db.history("UNIT-1").unwrap().len(), 1);
     }
 
@@ -303,6 +396,12 @@ mod tests {
         let path = dir.path().join("units.sqlite");
         std::fs::write(&path, b"serial,time\nUNIT-1,0\n".repeat(100)).unwrap();
         let e = Db::open(&path).err().unwrap();
-        assert_eq!(e, format!("the unit history database {}: the file is not a calflash database", path.display()));
+        assert_eq!(
+            e,
+            format!(
+                "the unit history database {}: the file is not a calflash database",
+                path.display()
+            )
+        );
     }
 }

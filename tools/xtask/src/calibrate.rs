@@ -27,21 +27,32 @@ fn parse(args: &[String]) -> Result<Job, String> {
     let mut seed = 43;
     let mut it = args.iter();
     while let Some(a) = it.next() {
-        let mut value = |name: &str| it.next().cloned().ok_or(format!("{name} needs a value\n\n{USAGE}"));
+        let mut value = |name: &str| {
+            it.next()
+                .cloned()
+                .ok_or(format!("{name} needs a value\n\n{USAGE}"))
+        };
         match a.as_str() {
             "--data" => data = Some(PathBuf::from(value("--data")?)),
             "--out" => out = PathBuf::from(value("--out")?),
             "--db" => db = Some(PathBuf::from(value("--db")?)),
             "--seed" => {
                 let v = value("--seed")?;
-                seed = v.parse().map_err(|_| format!("--seed: expected a whole number, found `{v}`"))?;
+                seed = v
+                    .parse()
+                    .map_err(|_| format!("--seed: expected a whole number, found `{v}`"))?;
             }
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown option `{other}`\n\n{USAGE}")),
         }
     }
     let db = db.unwrap_or_else(|| out.join("units.sqlite"));
-    Ok(Job { data, workdir: out, db, seed })
+    Ok(Job {
+        data,
+        workdir: out,
+        db,
+        seed,
+    })
 }
 
 pub fn run(args: &[String]) -> Result<(), String> {

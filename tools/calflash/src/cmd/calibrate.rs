@@ -194,8 +194,14 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
             .find_map(|p| p.parent().map(std::path::Path::to_path_buf))
             .unwrap_or_else(|| std::path::PathBuf::from("."));
         let serial = c.data.identity.serial.as_str();
-        let said = crate::db::record_or_save(&path, |d| d.record_fit(&record, report_path, &c.blob), &fallback, &beside, serial)
-            .map_err(|e| format!("the calibration is written but {e}"))?;
+        let said = crate::db::record_or_save(
+            &path,
+            |d| d.record_fit(&record, report_path, &c.blob),
+            &fallback,
+            &beside,
+            serial,
+        )
+        .map_err(|e| format!("the calibration is written but {e}"))?;
         println!("  {said}");
     }
     Ok(c.verdict())

@@ -35,7 +35,9 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
     let load = |r: &str| -> Result<Record, String> {
         match r.strip_prefix("db:") {
             Some(id) => {
-                let id: i64 = id.parse().map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
+                let id: i64 = id
+                    .parse()
+                    .map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
                 let path = args.db.clone().unwrap_or_else(crate::db::default_path);
                 crate::db::Db::open(&path)?.record(id)
             }
@@ -47,9 +49,7 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
     let changes = compare::compare(&a, &b, args.alpha)?;
     println!(
         "calflash compare  unit {}  {} -> {}",
-        a.serial,
-        args.before,
-        args.after
+        a.serial, args.before, args.after
     );
     let mut moved_any = false;
     for c in &changes {

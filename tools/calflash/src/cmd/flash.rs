@@ -52,11 +52,19 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
         force: args.force,
         vector_batches: args.vectors,
     };
-    let result = device::flash(&mut client, &bytes, &opts, |done, _| bar.set_position(done as u64));
+    let result = device::flash(&mut client, &bytes, &opts, |done, _| {
+        bar.set_position(done as u64)
+    });
     bar.finish_and_clear();
     let db_path = args.db.clone().unwrap_or_else(db::default_path);
-    let beside = args.blob.parent().map_or_else(|| std::path::PathBuf::from("."), std::path::Path::to_path_buf);
-    let unit = spincal::blob::decode(&bytes).map_or_else(|_| "?".into(), |c| c.data().identity.serial.as_str().to_string());
+    let beside = args.blob.parent().map_or_else(
+        || std::path::PathBuf::from("."),
+        std::path::Path::to_path_buf,
+    );
+    let unit = spincal::blob::decode(&bytes).map_or_else(
+        |_| "?".into(),
+        |c| c.data().identity.serial.as_str().to_string(),
+    );
     match result {
         Ok(report) => {
             println!(
@@ -75,17 +83,36 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
             );
             if !args.no_db {
                 let v = serde_json::to_value(&report).unwrap_or_default();
-                let said = db::record_or_save(&db_path, |d| d.record_flash(&report.unit, &bytes, &v, "verified"), &v, &beside, &report.unit)
-                    .map_err(|e| format!("the unit holds the new calibration, verified, but the flash is {e}"))?;
+                let said = db::record_or_save(
+                    &db_path,
+                    |d| d.record_flash(&report.unit, &bytes, &v, "verified"),
+                    &v,
+                    &beside,
+                    &report.unit,
+                )
+                .map_err(|e| {
+                    format!("the unit holds the new calibration, verified, but the flash is {e}")
+                })?;
                 println!("  {said}");
             }
             Ok(())
         }
         Err(e) => {
             let msg = e.to_string();
-            if !args.no_db && !matches!(e, device::flash::FlashError::Device(device::DeviceError::Io { .. })) {
+            if !args.no_db
+                && !matches!(
+                    e,
+                    device::flash::FlashError::Device(device::DeviceError::Io { .. })
+                )
+            {
                 let v = serde_json::json!({"error": msg, "port": args.port});
-                match db::record_or_save(&db_path, |d| d.record_flash(&unit, &bytes, &v, "failed"), &v, &beside, &unit) {
+                match db::record_or_save(
+                    &db_path,
+                    |d| d.record_flash(&unit, &bytes, &v, "failed"),
+                    &v,
+                    &beside,
+                    &unit,
+                ) {
                     Ok(said) => eprintln!("  the failed attempt is {said}"),
                     Err(said) => eprintln!("  the failed attempt is {said}"),
                 }

@@ -28,10 +28,18 @@ pub fn run(args: &HistoryArgs) -> Result<(), String> {
     let d = Db::open(&path)?;
     let rows = d.history(&args.serial)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?
+        );
         return Ok(());
     }
-    println!("calflash history  unit {}  ({} records in {})", args.serial, rows.len(), path.display());
+    println!(
+        "calflash history  unit {}  ({} records in {})",
+        args.serial,
+        rows.len(),
+        path.display()
+    );
     for r in &rows {
         println!(
             "  db:{:<5} {:<5} {} UTC  {:<9} data {}  blob {} bytes{}{}",
@@ -41,8 +49,14 @@ pub fn run(args: &HistoryArgs) -> Result<(), String> {
             r.outcome,
             r.data_hash.get(..12).unwrap_or(&r.data_hash),
             r.blob_len,
-            r.model.as_ref().map(|m| format!("  {m}")).unwrap_or_default(),
-            r.report.as_ref().map(|p| format!("  report {p}")).unwrap_or_default()
+            r.model
+                .as_ref()
+                .map(|m| format!("  {m}"))
+                .unwrap_or_default(),
+            r.report
+                .as_ref()
+                .map(|p| format!("  report {p}"))
+                .unwrap_or_default()
         );
     }
     if rows.is_empty() {
@@ -66,7 +80,12 @@ fn format_time(t: i64) -> String {
     let d = doy - (153 * mp + 2) / 5 + 1;
     let m = if mp < 10 { mp + 3 } else { mp - 9 };
     let y = if m <= 2 { y + 1 } else { y };
-    format!("{y:04}-{m:02}-{d:02} {:02}:{:02}:{:02}", secs / 3600, secs / 60 % 60, secs % 60)
+    format!(
+        "{y:04}-{m:02}-{d:02} {:02}:{:02}:{:02}",
+        secs / 3600,
+        secs / 60 % 60,
+        secs % 60
+    )
 }
 
 #[cfg(test)]

@@ -33,18 +33,28 @@ pub struct ImageArgs {
 pub fn run(args: &ImageArgs) -> Result<(), String> {
     let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let region = Region::from_memory_x();
-    let image = image::region_image(&bytes, region).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let image =
+        image::region_image(&bytes, region).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     if args.hex.is_none() && args.bin.is_none() && args.probe.is_none() {
         return Err("give --hex, --bin or --probe".into());
     }
     if let Some(p) = &args.bin {
         report::write_atomically(p, |w| w.write_all(&image))?;
-        println!("calflash image: {} bytes for address {:#010x} in {}", image.len(), region.start, p.display());
+        println!(
+            "calflash image: {} bytes for address {:#010x} in {}",
+            image.len(),
+            region.start,
+            p.display()
+        );
     }
     if let Some(p) = &args.hex {
         let hex = image::intel_hex(&image, region.start)?;
         report::write_atomically(p, |w| w.write_all(hex.as_bytes()))?;
-        println!("calflash image: Intel HEX at {:#010x} in {}", region.start, p.display());
+        println!(
+            "calflash image: Intel HEX at {:#010x} in {}",
+            region.start,
+            p.display()
+        );
     }
     if let Some(chip) = &args.probe {
         probe(chip, region.start, &image)?;
@@ -56,7 +66,8 @@ pub fn run(args: &ImageArgs) -> Result<(), String> {
 fn probe(chip: &str, address: u32, image: &[u8]) -> Result<(), String> {
     use probe_rs::flashing::{DownloadOptions, FlashLoader};
     use probe_rs::{Permissions, Session};
-    let mut session = Session::auto_attach(chip, Permissions::default()).map_err(|e| format!("probe-rs: cannot attach to {chip}: {e}"))?;
+    let mut session = Session::auto_attach(chip, Permissions::default())
+        .map_err(|e| format!("probe-rs: cannot attach to {chip}: {e}"))?;
     let mut loader: FlashLoader = session.target().flash_loader();
     loader
         .add_data(u64::from(address), image)
@@ -64,7 +75,10 @@ fn probe(chip: &str, address: u32, image: &[u8]) -> Result<(), String> {
     loader
         .commit(&mut session, DownloadOptions::default())
         .map_err(|e| format!("probe-rs: programming failed: {e}"))?;
-    println!("calflash image: {} bytes programmed at {address:#010x} over SWD", image.len());
+    println!(
+        "calflash image: {} bytes programmed at {address:#010x} over SWD",
+        image.len()
+    );
     Ok(())
 }
 

@@ -87,11 +87,17 @@ impl<L: Read + Write> Client<L> {
     pub fn call(&mut self, req: &Request) -> Result<Response, DeviceError> {
         let what = name(req);
         let mut frame = [0u8; MAX_FRAME];
-        let n = protocol::encode(req, &mut frame).map_err(|why| DeviceError::Garbled { what: what.clone(), why })?;
+        let n = protocol::encode(req, &mut frame).map_err(|why| DeviceError::Garbled {
+            what: what.clone(),
+            why,
+        })?;
         self.link
             .write_all(&frame[..n])
             .and_then(|()| self.link.flush())
-            .map_err(|source| DeviceError::Io { what: what.clone(), source })?;
+            .map_err(|source| DeviceError::Io {
+                what: what.clone(),
+                source,
+            })?;
         let start = Instant::now();
         let mut byte = [0u8; 256];
         loop {
@@ -111,11 +117,20 @@ impl<L: Read + Write> Client<L> {
                 Ok(0) => {
                     return Err(DeviceError::Io {
                         what,
-                        source: std::io::Error::new(std::io::ErrorKind::UnexpectedEof, "the link closed"),
+                        source: std::io::Error::new(
+                            std::io::ErrorKind::UnexpectedEof,
+                            "the link closed",
+                        ),
                     });
                 }
                 Ok(k) => self.pending.extend_from_slice(&byte[..k]),
-                Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut | std::io::ErrorKind::Interrupted) => {}
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock
+                            | std::io::ErrorKind::TimedOut
+                            | std::io::ErrorKind::Interrupted
+                    ) => {}
                 Err(source) => return Err(DeviceError::Io { what, source }),
             }
         }
@@ -127,7 +142,10 @@ impl<L: Read + Write> Client<L> {
     /// As `call`, and [`DeviceError::Refused`].
     pub fn ask(&mut self, req: &Request) -> Result<Response, DeviceError> {
         match self.call(req)? {
-            Response::Error(status) => Err(DeviceError::Refused { what: name(req), status }),
+            Response::Error(status) => Err(DeviceError::Refused {
+                what: name(req),
+                status,
+            }),
             r => Ok(r),
         }
     }

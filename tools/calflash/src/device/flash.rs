@@ -78,7 +78,9 @@ pub enum FlashError {
         current: String,
     },
     /// The link or the unit failed during the transfer, before the commit.
-    #[error("{source}, at byte {at} of {total} of the transfer; nothing was committed: the unit keeps its calibration {current}")]
+    #[error(
+        "{source}, at byte {at} of {total} of the transfer; nothing was committed: the unit keeps its calibration {current}"
+    )]
     Transfer {
         /// Bytes sent.
         at: usize,
@@ -150,10 +152,21 @@ pub fn ulp_distance(a: f32, b: f32) -> u32 {
 fn samples(cal: &Calibration, batch: usize) -> Vec<[i32; 6]> {
     let (centers, rails): (Vec<f32>, Vec<spincal::model::Rails>) = match &cal.data().sensor {
         Sensor::Single { channel, rails, .. } => (vec![channel.center], vec![*rails]),
-        Sensor::Triad { channels, rails, .. } => (channels.iter().map(|c| c.center).collect(), vec![*rails; 3]),
-        Sensor::Imu { accel, gyro, accel_rails, gyro_rails, .. } => (
+        Sensor::Triad {
+            channels, rails, ..
+        } => (channels.iter().map(|c| c.center).collect(), vec![*rails; 3]),
+        Sensor::Imu {
+            accel,
+            gyro,
+            accel_rails,
+            gyro_rails,
+            ..
+        } => (
             accel.iter().chain(gyro.iter()).map(|c| c.center).collect(),
-            [*accel_rails; 3].into_iter().chain([*gyro_rails; 3]).collect(),
+            [*accel_rails; 3]
+                .into_iter()
+                .chain([*gyro_rails; 3])
+                .collect(),
         ),
     };
     (0..MAX_VECTORS)
@@ -245,13 +258,19 @@ pub fn flash<L: Read + Write>(
         source,
     };
     client
-        .ask(&Request::WriteBegin { len: total as u32, crc: crc(bytes) })
+        .ask(&Request::WriteBegin {
+            len: total as u32,
+            crc: crc(bytes),
+        })
         .map_err(|e| transfer(0, &current, e))?;
     for (k, chunk) in bytes.chunks(MAX_CHUNK).enumerate() {
         let offset = k * MAX_CHUNK;
         let data = heapless::Vec::from_slice(chunk).expect("a chunk fits");
         client
-            .ask(&Request::WriteChunk { offset: offset as u32, data })
+            .ask(&Request::WriteChunk {
+                offset: offset as u32,
+                data,
+            })
             .map_err(|e| transfer(offset, &current, e))?;
         progress(offset + chunk.len(), total);
     }
@@ -264,7 +283,11 @@ pub fn flash<L: Read + Write>(
             }));
         }
         Err(DeviceError::Refused { status, what }) => {
-            return Err(transfer(total, &current, DeviceError::Refused { what, status }));
+            return Err(transfer(
+                total,
+                &current,
+                DeviceError::Refused { what, status },
+            ));
         }
         // The commit was sent but no answer came: the unit holds the old or the new one.
         Err(source) => return Err(FlashError::CommitUnknown { current, source }),
@@ -274,7 +297,10 @@ pub fn flash<L: Read + Write>(
     while back.len() < total {
         let len = (total - back.len()).min(MAX_CHUNK) as u16;
         match client
-            .ask(&Request::ReadBlob { offset: back.len() as u32, len })
+            .ask(&Request::ReadBlob {
+                offset: back.len() as u32,
+                len,
+            })
             .map_err(|source| FlashError::Unverified { seq, source })?
         {
             Response::Blob { data, .. } => back.extend_from_slice(&data),
@@ -293,7 +319,12 @@ pub fn flash<L: Read + Write>(
     let env = &cal.data().environment;
     let (t0, t1) = (env.temperature_span.lo, env.temperature_span.hi);
     let (v0, v1) = (env.voltage_span.lo, env.voltage_span.hi);
-    let points = [((t0 + t1) / 2.0, (v0 + v1) / 2.0), (t0, v1), (t1, v0), (t1 + 10.0, (v0 + v1) / 2.0)];
+    let points = [
+        ((t0 + t1) / 2.0, (v0 + v1) / 2.0),
+        (t0, v1),
+        (t1, v0),
+        (t1 + 10.0, (v0 + v1) / 2.0),
+    ];
     let mut max_ulp = 0;
     let mut beyond = 0;
     let mut compared = 0;
@@ -302,11 +333,13 @@ pub fn flash<L: Read + Write>(
     for b in 0..opts.vector_batches {
         let (t, v) = points[b % points.len()];
         let raw = samples(&cal, b);
-        let resp = client.ask(&Request::RunVectors {
-            temperature: t,
-            voltage: v,
-            raw: heapless::Vec::from_slice(&raw).expect("16 samples"),
-        }).map_err(|source| FlashError::Unverified { seq, source })?;
+        let resp = client
+            .ask(&Request::RunVectors {
+                temperature: t,
+                voltage: v,
+                raw: heapless::Vec::from_slice(&raw).expect("16 samples"),
+            })
+            .map_err(|source| FlashError::Unverified { seq, source })?;
         let Response::Vectors { out } = resp else {
             return Err(FlashError::Device(DeviceError::Unexpected {
                 what: "RunVectors".into(),

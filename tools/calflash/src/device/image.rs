@@ -20,7 +20,9 @@ pub struct Region {
 }
 
 fn symbol(name: &str) -> Option<u32> {
-    let line = MEMORY_X.lines().find(|l| l.trim_start().starts_with(name))?;
+    let line = MEMORY_X
+        .lines()
+        .find(|l| l.trim_start().starts_with(name))?;
     let value = line.split('=').nth(1)?.trim().trim_end_matches(';').trim();
     u32::from_str_radix(value.trim_start_matches("0x"), 16).ok()
 }
@@ -47,7 +49,8 @@ impl Region {
 pub fn region_image(blob: &[u8], region: Region) -> Result<Vec<u8>, String> {
     let mut out = vec![0xffu8; (2 * region.slot_size + region.lock_size) as usize];
     let mut scratch = CalibrationData::empty();
-    store::slot_image(blob, 1, &mut out[..region.slot_size as usize], &mut scratch).map_err(|e| e.to_string())?;
+    store::slot_image(blob, 1, &mut out[..region.slot_size as usize], &mut scratch)
+        .map_err(|e| e.to_string())?;
     Ok(out)
 }
 
@@ -80,7 +83,14 @@ mod tests {
     #[test]
     fn region_and_hex() {
         let r = Region::from_memory_x();
-        assert_eq!(r, Region { start: 0x003f_0000, slot_size: 0x7000, lock_size: 4096 });
+        assert_eq!(
+            r,
+            Region {
+                start: 0x003f_0000,
+                slot_size: 0x7000,
+                lock_size: 4096
+            }
+        );
         let hex = intel_hex(&[1, 2, 3], 0x003f_fffe).unwrap();
         let lines: Vec<&str> = hex.lines().collect();
         assert_eq!(lines[0], ":02000004003FBB");

@@ -21,7 +21,8 @@ impl Link {
     pub fn open(spec: &str, timeout: Duration) -> Result<Self, String> {
         if let Some(addr) = spec.strip_prefix("tcp://") {
             let s = TcpStream::connect(addr).map_err(|e| format!("{spec}: cannot connect: {e}"))?;
-            s.set_read_timeout(Some(timeout)).map_err(|e| format!("{spec}: {e}"))?;
+            s.set_read_timeout(Some(timeout))
+                .map_err(|e| format!("{spec}: {e}"))?;
             s.set_nodelay(true).map_err(|e| format!("{spec}: {e}"))?;
             Ok(Self::Tcp(s))
         } else {

@@ -1,0 +1,81 @@
+//! The example device boots from what a flasher wrote: the region image `calflash image --bin`
+//! makes is loaded at `_calib_start` on QEMU, and the unit comes up with that calibration (read
+//! back byte for byte over its UART); a corrupted image gives a unit that holds nothing and flags
+//! every sample. Skips without QEMU unless SPINCAL_REQUIRE_QEMU=1 (as in CI).
+
+use std::time::Duration;
+
+use calflash::device::image::{Region, region_image};
+use host_tests::unit::QemuUnit;
+use host_tests::{golden, qemu};
+use spincal::model::CalibrationData;
+use spincal::protocol::{MAX_CHUNK, Request, Response};
+use spincal::store::SlotState;
+
+fn boot_with(
+    image: &[u8],
+    dir: &std::path::Path,
+) -> (spincal::protocol::Identity, Vec<u8>, String) {
+    let bin = qemu::build_firmware().unwrap_or_else(|e| panic!("{e}"));
+    let (flash, log) = (dir.join("flash.bin"), dir.join("qemu.log"));
+    std::fs::write(&flash, image).unwrap();
+    let unit = QemuUnit::power_on(&bin.join("device"), Some(&flash), &log).unwrap();
+    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    let id = client.identify().unwrap();
+    let mut back = Vec::new();
+    while back.len() < id.blob_len as usize {
+        let len = (id.blob_len as usize - back.len()).min(MAX_CHUNK) as u16;
+        match client
+            .call(&Request::ReadBlob {
+                offset: back.len() as u32,
+                len,
+            })
+            .unwrap()
+        {
+            Response::Blob { data, .. } => back.extend_from_slice(&data),
+            r => panic!("{r:?}"),
+        }
+    }
+    drop(client);
+    drop(unit);
+    (id, back, std::fs::read_to_string(&log).unwrap())
+}
+
+#[test]
+fn the_unit_boots_with_the_image_a_flasher_wrote() {
+    if !qemu::available_or_skip("the_unit_boots_with_the_image_a_flasher_wrote") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let blob = golden::encode(&CalibrationData::example_imu());
+    let image = region_image(&blob, Region::from_memory_x()).unwrap();
+    let (id, back, log) = boot_with(&image, dir.path());
+    assert_eq!(
+        id.calibration.as_ref().map(|s| s.as_str()),
+        Some("IMU-FULL-0042"),
+        "{log}"
+    );
+    assert!(
+        matches!(id.slots[0], SlotState::Valid { seq: 1, .. }),
+        "{:?}",
+        id.slots
+    );
+    assert_eq!(back, blob);
+    assert!(
+        log.contains("device: calibration IMU-FULL-0042 loaded; 1000 raw samples corrected"),
+        "{log}"
+    );
+
+    // One flipped bit in the payload: the slot fails its CRC and the unit holds nothing.
+    let mut bad = image.clone();
+    bad[40] ^= 0x04;
+    let (id, back, log) = boot_with(&bad, dir.path());
+    assert_eq!(id.calibration, None, "{log}");
+    assert!(back.is_empty());
+    assert!(
+        log.contains(
+            "device: no valid calibration; 1000 samples passed through and flagged (1000 flagged)"
+        ),
+        "{log}"
+    );
+}
