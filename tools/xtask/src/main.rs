@@ -5,23 +5,26 @@
 //!   and the host criterion benchmarks.
 //! - `bench-fit`: the regression engine against statsmodels, in the same run.
 //! - `calibrate`: the main job, end to end, on the QEMU device.
+//! - `fuzz`: a longer fuzzing run of every target (`--secs N` each).
 //! - `setup`: only the setup steps.
 #![forbid(unsafe_code)]
 
 mod bench;
 mod calibrate;
+mod fuzz;
 mod setup;
 mod test;
 
 use std::process::ExitCode;
 
-const USAGE: &str = "usage: cargo xtask <test | bench | bench-fit | calibrate | setup>
+const USAGE: &str = "usage: cargo xtask <test | bench | bench-fit | calibrate | fuzz | setup>
 
   test       rustfmt, clippy (host and thumb), docs, every host test and the QEMU tests;
              installs the thumb target and qemu-system-arm when missing
   bench      instruction counts on the Cortex-M4F (QEMU -icount), sizes, host benchmarks
   bench-fit  the regression engine at n = 10^4..10^6 by 10 terms, and statsmodels in the same run
   calibrate  the main job on the QEMU device
+  fuzz       every fuzz target for --secs N seconds (default 300), with executions and findings
   setup      add the thumb target and install qemu-system-arm, nothing else";
 
 fn main() -> ExitCode {
@@ -31,6 +34,7 @@ fn main() -> ExitCode {
         Some("bench") => bench::run(&args[1..]),
         Some("bench-fit") => bench::fit(),
         Some("calibrate") => calibrate::run(&args[1..]),
+        Some("fuzz") => fuzz::command(&args[1..]),
         Some("setup") => setup::run(true).map(|_| ()),
         Some("-h" | "--help" | "help") => {
             println!("{USAGE}");

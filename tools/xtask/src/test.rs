@@ -39,6 +39,19 @@ pub fn run() -> Result<(), String> {
             ],
         ),
         step(
+            "clippy (calflash with probe-rs, built not run)",
+            &[
+                "clippy",
+                "-p",
+                "calflash",
+                "--features",
+                "probe",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        ),
+        step(
             "clippy (thumb, no default features)",
             &[
                 "clippy",
@@ -123,6 +136,18 @@ pub fn run() -> Result<(), String> {
             failed.push(s.name);
         }
     }
+    println!("\n=== xtask test: fuzz smoke (cargo +nightly fuzz, a minute in total) ===");
+    let start = Instant::now();
+    let fuzz = crate::fuzz::smoke();
+    let fuzz_line = match &fuzz {
+        Ok(None) => "ok".to_string(),
+        Ok(Some(why)) => format!("SKIPPED: {why}"),
+        Err(e) => {
+            failed.push("fuzz smoke");
+            format!("FAILED: {e}")
+        }
+    };
+    println!("=== fuzz smoke: {fuzz_line} in {:.0?} ===", start.elapsed());
     println!("\n=== summary ({:.0?}) ===", total.elapsed());
     for s in &steps {
         println!(
@@ -135,6 +160,7 @@ pub fn run() -> Result<(), String> {
             }
         );
     }
+    println!("  {:<40} {fuzz_line}", "fuzz smoke");
     if let Some(why) = &setup.qemu_missing {
         println!("  {:<40} SKIPPED: {why}", "QEMU tests");
     }
@@ -144,7 +170,7 @@ pub fn run() -> Result<(), String> {
         Err(format!(
             "{} of {} steps failed: {}",
             failed.len(),
-            steps.len(),
+            steps.len() + 1,
             failed.join(", ")
         ))
     }

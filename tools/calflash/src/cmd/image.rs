@@ -65,18 +65,21 @@ pub fn run(args: &ImageArgs) -> Result<(), String> {
 #[cfg(feature = "probe")]
 fn probe(chip: &str, address: u32, image: &[u8]) -> Result<(), String> {
     use probe_rs::flashing::{DownloadOptions, FlashLoader};
-    use probe_rs::{Permissions, Session};
-    let mut session = Session::auto_attach(chip, Permissions::default())
+    use probe_rs::{Session, SessionConfig};
+    let mut session = Session::auto_attach(chip, SessionConfig::default())
         .map_err(|e| format!("probe-rs: cannot attach to {chip}: {e}"))?;
     let mut loader: FlashLoader = session.target().flash_loader();
     loader
         .add_data(u64::from(address), image)
         .map_err(|e| format!("probe-rs: {e}"))?;
+    // Only the region's sectors are erased and written; the flash loader reads them back.
+    let mut options = DownloadOptions::default();
+    options.verify = true;
     loader
-        .commit(&mut session, DownloadOptions::default())
+        .commit(&mut session, options)
         .map_err(|e| format!("probe-rs: programming failed: {e}"))?;
     println!(
-        "calflash image: {} bytes programmed at {address:#010x} over SWD",
+        "calflash image: {} bytes programmed at {address:#010x} over SWD and verified",
         image.len()
     );
     Ok(())

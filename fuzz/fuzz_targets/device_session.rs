@@ -1,0 +1,149 @@
+//! The device's protocol handler driven through whole sessions: the input is a program of
+//! requests (identify, begin a transfer of one of three blobs, send the next chunk, possibly
+//! damaged, commit, read back, run vectors, lock, or a raw garbage frame). A model tracks what a
+//! correct unit holds: the last blob whose commit was answered `Committed`. After every step the
+//! device holds exactly that, read-back returns its bytes, and a reboot loads it again.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use spincal::blob;
+use spincal::model::{Calibration, CalibrationData, Serial};
+use spincal::protocol::{self, Device, MAX_CHUNK, MAX_FRAME, Request, Response};
+use spincal::store::Store;
+use spincal_fuzz::RamNor;
+
+const SLOT: u32 = 12 * 1024;
+
+fn encode(data: CalibrationData) -> Vec<u8> {
+    let cal = Calibration::new(data).expect("example validates");
+    let mut out = vec![0u8; blob::MAX_BLOB_LEN];
+    let n = blob::encode(&cal, &mut out).expect("encodes");
+    out.truncate(n);
+    out
+}
+
+fn call(d: &mut Device<RamNor>, req: &Request) -> Response {
+    let mut frame = [0u8; MAX_FRAME];
+    let n = protocol::encode(req, &mut frame).expect("a request frames");
+    raw(d, &frame[..n - 1])
+}
+
+fn raw(d: &mut Device<RamNor>, frame: &[u8]) -> Response {
+    let mut out = [0u8; MAX_FRAME];
+    let n = d.handle_frame(frame, &mut out);
+    assert!(n > 0 && out[n - 1] == 0);
+    let mut s = [0u8; MAX_FRAME];
+    protocol::decode(&out[..n - 1], &mut s).expect("the response decodes")
+}
+
+fn held(d: &Device<RamNor>) -> Option<CalibrationData> {
+    d.calibration().map(|c| c.data().clone())
+}
+
+fuzz_target!(|data: &[u8]| {
+    let blobs = [
+        encode(CalibrationData::example_single()),
+        encode(CalibrationData::example_triad()),
+        encode(CalibrationData::example_imu()),
+    ];
+    let store = Store::new(RamNor { mem: vec![0xff; 2 * SLOT as usize + 1024] }, 0, SLOT).expect("layout");
+    let mut d = Box::new(Device::new(store, Serial::new("FUZZ-1").expect("serial"), [0, 1, 0]));
+    let mut expected: Option<usize> = None;
+    let mut transfer: Option<(usize, usize)> = None; // (blob, next offset)
+    let mut locked = false;
+    let mut it = data.iter().copied();
+    while let Some(op) = it.next() {
+        let mut arg = || it.next().unwrap_or(0);
+        match op % 8 {
+            0 => {
+                let Response::Identity(id) = call(&mut d, &Request::Identify) else { panic!("identify") };
+                assert_eq!(id.locked, locked);
+                assert_eq!(id.blob_len as usize, expected.map_or(0, |k| blobs[k].len()));
+            }
+            1 => {
+                let k = usize::from(arg()) % 3;
+                let damage = arg();
+                let crc = protocol::checksum(&blobs[k]) ^ u32::from(damage == 0xAA);
+                let r = call(&mut d, &Request::WriteBegin { len: blobs[k].len() as u32, crc });
+                if r == Response::Ready {
+                    transfer = (damage != 0xAA).then_some((k, 0));
+                } else {
+                    assert!(locked || damage == 0xAA, "{r:?}");
+                    transfer = None;
+                }
+            }
+            2 => {
+                let skew = arg();
+                if let Some((k, at)) = transfer {
+                    let b = &blobs[k];
+                    let end = (at + MAX_CHUNK).min(b.len());
+                    let mut chunk = b[at..end].to_vec();
+                    let offset = if skew == 0x55 { at + 1 } else { at };
+                    let damaged = skew == 0x66 && !chunk.is_empty();
+                    if damaged {
+                        chunk[0] ^= 1;
+                    }
+                    let r = call(&mut d, &Request::WriteChunk { offset: offset as u32, data: heapless::Vec::from_slice(&chunk).expect("chunk") });
+                    match r {
+                        Response::ChunkOk { .. } if damaged => transfer = None, // the blob is damaged: its CRC will fail
+                        Response::ChunkOk { .. } => transfer = Some((k, end)),
+                        _ => assert!(skew == 0x55 || at >= b.len(), "{r:?}"),
+                    }
+                }
+            }
+            3 => {
+                let r = call(&mut d, &Request::Commit);
+                match (transfer, r) {
+                    (Some((k, at)), Response::Committed { .. }) => {
+                        assert_eq!(at, blobs[k].len());
+                        expected = Some(k);
+                    }
+                    (_, Response::Committed { .. }) => panic!("committed an incomplete or damaged transfer"),
+                    (Some((k, at)), r) => assert!(at < blobs[k].len() || locked, "{r:?}"),
+                    _ => {}
+                }
+                transfer = None;
+            }
+            4 => {
+                let (offset, len) = (u32::from(arg()) * 37, u16::from(arg()) * 3);
+                match (call(&mut d, &Request::ReadBlob { offset, len }), expected) {
+                    (Response::Blob { data, .. }, Some(k)) => {
+                        let o = offset as usize;
+                        assert_eq!(&data[..], &blobs[k][o..o + data.len()]);
+                    }
+                    (Response::Blob { .. }, None) => panic!("read a blob from an empty unit"),
+                    _ => {}
+                }
+            }
+            5 => {
+                let raw: Vec<[i32; 6]> = (0..usize::from(arg() % 17)).map(|i| [i as i32 * 977 + i32::from(arg()) * 131; 6]).collect();
+                let t = f32::from(arg()) - 60.0;
+                let r = call(&mut d, &Request::RunVectors { temperature: t, voltage: 3.3, raw: heapless::Vec::from_slice(&raw).expect("16 at most") });
+                if expected.is_some() {
+                    assert!(matches!(r, Response::Vectors { .. }), "{r:?}");
+                }
+            }
+            6 => {
+                if arg() == 0x77 {
+                    assert_eq!(call(&mut d, &Request::Lock), Response::LockedOk);
+                    locked = true;
+                    transfer = None;
+                }
+            }
+            _ => {
+                let n = usize::from(arg() % 64);
+                let frame: Vec<u8> = (0..n).map(|_| arg()).filter(|b| *b != 0).collect();
+                if !matches!(raw(&mut d, &frame), Response::Error(_)) {
+                    // A garbage frame that happens to be a valid request: the model no longer knows.
+                    return;
+                }
+            }
+        }
+        assert_eq!(held(&d), expected.map(|k| blob::decode(&blobs[k]).expect("blob").data().clone()));
+    }
+    // A reboot loads the same.
+    let expect = held(&d);
+    let flash = d.into_store().into_inner();
+    let d = Box::new(Device::new(Store::new(flash, 0, SLOT).expect("layout"), Serial::new("FUZZ-1").expect("serial"), [0, 1, 0]));
+    assert_eq!(held(&d), expect);
+});
