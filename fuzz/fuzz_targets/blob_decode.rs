@@ -9,10 +9,18 @@ use spincal::model::CalibrationData;
 use spincal_fuzz::{exercise, seal};
 
 fuzz_target!(|data: &[u8]| {
-    let Some((&mode, rest)) = data.split_first() else { return };
-    let bytes = if mode & 1 == 1 { seal(rest) } else { rest.to_vec() };
+    let Some((&mode, rest)) = data.split_first() else {
+        return;
+    };
+    let bytes = if mode & 1 == 1 {
+        seal(rest)
+    } else {
+        rest.to_vec()
+    };
     let mut slot = CalibrationData::empty();
-    let Ok(cal) = blob::decode_in(&bytes, &mut slot) else { return };
+    let Ok(cal) = blob::decode_in(&bytes, &mut slot) else {
+        return;
+    };
     let mut out = vec![0u8; blob::MAX_BLOB_LEN];
     let n = blob::encode(cal, &mut out).expect("a decoded calibration re-encodes");
     let again = blob::decode(&out[..n]).expect("a re-encoded calibration decodes");

@@ -46,8 +46,19 @@ fuzz_target!(|data: &[u8]| {
         encode(CalibrationData::example_triad()),
         encode(CalibrationData::example_imu()),
     ];
-    let store = Store::new(RamNor { mem: vec![0xff; 2 * SLOT as usize + 1024] }, 0, SLOT).expect("layout");
-    let mut d = Box::new(Device::new(store, Serial::new("FUZZ-1").expect("serial"), [0, 1, 0]));
+    let store = Store::new(
+        RamNor {
+            mem: vec![0xff; 2 * SLOT as usize + 1024],
+        },
+        0,
+        SLOT,
+    )
+    .expect("layout");
+    let mut d = Box::new(Device::new(
+        store,
+        Serial::new("FUZZ-1").expect("serial"),
+        [0, 1, 0],
+    ));
     let mut expected: Option<usize> = None;
     let mut transfer: Option<(usize, usize)> = None; // (blob, next offset)
     let mut locked = false;
@@ -56,7 +67,9 @@ fuzz_target!(|data: &[u8]| {
         let mut arg = || it.next().unwrap_or(0);
         match op % 8 {
             0 => {
-                let Response::Identity(id) = call(&mut d, &Request::Identify) else { panic!("identify") };
+                let Response::Identity(id) = call(&mut d, &Request::Identify) else {
+                    panic!("identify")
+                };
                 assert_eq!(id.locked, locked);
                 assert_eq!(id.blob_len as usize, expected.map_or(0, |k| blobs[k].len()));
             }
@@ -64,7 +77,13 @@ fuzz_target!(|data: &[u8]| {
                 let k = usize::from(arg()) % 3;
                 let damage = arg();
                 let crc = protocol::checksum(&blobs[k]) ^ u32::from(damage == 0xAA);
-                let r = call(&mut d, &Request::WriteBegin { len: blobs[k].len() as u32, crc });
+                let r = call(
+                    &mut d,
+                    &Request::WriteBegin {
+                        len: blobs[k].len() as u32,
+                        crc,
+                    },
+                );
                 if r == Response::Ready {
                     transfer = (damage != 0xAA).then_some((k, 0));
                 } else {
@@ -83,7 +102,13 @@ fuzz_target!(|data: &[u8]| {
                     if damaged {
                         chunk[0] ^= 1;
                     }
-                    let r = call(&mut d, &Request::WriteChunk { offset: offset as u32, data: heapless::Vec::from_slice(&chunk).expect("chunk") });
+                    let r = call(
+                        &mut d,
+                        &Request::WriteChunk {
+                            offset: offset as u32,
+                            data: heapless::Vec::from_slice(&chunk).expect("chunk"),
+                        },
+                    );
                     match r {
                         Response::ChunkOk { .. } if damaged => transfer = None, // the blob is damaged: its CRC will fail
                         Response::ChunkOk { .. } => transfer = Some((k, end)),
@@ -98,7 +123,9 @@ fuzz_target!(|data: &[u8]| {
                         assert_eq!(at, blobs[k].len());
                         expected = Some(k);
                     }
-                    (_, Response::Committed { .. }) => panic!("committed an incomplete or damaged transfer"),
+                    (_, Response::Committed { .. }) => {
+                        panic!("committed an incomplete or damaged transfer")
+                    }
                     (Some((k, at)), r) => assert!(at < blobs[k].len() || locked, "{r:?}"),
                     _ => {}
                 }
@@ -116,9 +143,18 @@ fuzz_target!(|data: &[u8]| {
                 }
             }
             5 => {
-                let raw: Vec<[i32; 6]> = (0..usize::from(arg() % 17)).map(|i| [i as i32 * 977 + i32::from(arg()) * 131; 6]).collect();
+                let raw: Vec<[i32; 6]> = (0..usize::from(arg() % 17))
+                    .map(|i| [i as i32 * 977 + i32::from(arg()) * 131; 6])
+                    .collect();
                 let t = f32::from(arg()) - 60.0;
-                let r = call(&mut d, &Request::RunVectors { temperature: t, voltage: 3.3, raw: heapless::Vec::from_slice(&raw).expect("16 at most") });
+                let r = call(
+                    &mut d,
+                    &Request::RunVectors {
+                        temperature: t,
+                        voltage: 3.3,
+                        raw: heapless::Vec::from_slice(&raw).expect("16 at most"),
+                    },
+                );
                 if expected.is_some() {
                     assert!(matches!(r, Response::Vectors { .. }), "{r:?}");
                 }
@@ -139,11 +175,18 @@ fuzz_target!(|data: &[u8]| {
                 }
             }
         }
-        assert_eq!(held(&d), expected.map(|k| blob::decode(&blobs[k]).expect("blob").data().clone()));
+        assert_eq!(
+            held(&d),
+            expected.map(|k| blob::decode(&blobs[k]).expect("blob").data().clone())
+        );
     }
     // A reboot loads the same.
     let expect = held(&d);
     let flash = d.into_store().into_inner();
-    let d = Box::new(Device::new(Store::new(flash, 0, SLOT).expect("layout"), Serial::new("FUZZ-1").expect("serial"), [0, 1, 0]));
+    let d = Box::new(Device::new(
+        Store::new(flash, 0, SLOT).expect("layout"),
+        Serial::new("FUZZ-1").expect("serial"),
+        [0, 1, 0],
+    ));
     assert_eq!(held(&d), expect);
 });

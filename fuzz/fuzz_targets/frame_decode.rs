@@ -17,22 +17,39 @@ fuzz_target!(|data: &[u8]| {
     let _ = protocol::decode::<Request>(data, &mut scratch);
     let _ = protocol::decode::<Response>(data, &mut scratch);
 
-    let flash = RamNor { mem: vec![0xff; 2 * SLOT as usize + 1024] };
+    let flash = RamNor {
+        mem: vec![0xff; 2 * SLOT as usize + 1024],
+    };
     let store = Store::new(flash, 0, SLOT).expect("layout");
-    let mut device = Box::new(Device::new(store, Serial::new("FUZZ-1").expect("serial"), [0, 1, 0]));
+    let mut device = Box::new(Device::new(
+        store,
+        Serial::new("FUZZ-1").expect("serial"),
+        [0, 1, 0],
+    ));
     for frame in data.split(|b| *b == 0).take(64) {
         let mut out = [0u8; MAX_FRAME];
         let n = device.handle_frame(frame, &mut out);
-        assert!(n > 0 && out[n - 1] == 0, "every frame gets a response frame");
+        assert!(
+            n > 0 && out[n - 1] == 0,
+            "every frame gets a response frame"
+        );
         let mut s = [0u8; MAX_FRAME];
         protocol::decode::<Response>(&out[..n - 1], &mut s).expect("the device's response decodes");
     }
     let loaded = device.calibration().map(|c| c.data().clone());
     let mut flash = device.into_store().into_inner();
     // After a reboot the store holds what the device said it held.
-    let mut store = Store::new(core::mem::replace(&mut flash, RamNor { mem: Vec::new() }), 0, SLOT).expect("layout");
+    let mut store = Store::new(
+        core::mem::replace(&mut flash, RamNor { mem: Vec::new() }),
+        0,
+        SLOT,
+    )
+    .expect("layout");
     let mut buf = vec![0u8; spincal::protocol::SLOT_BUFFER];
     let mut slot = CalibrationData::empty();
-    let reloaded = store.load(&mut buf, &mut slot).ok().map(|(c, _)| c.data().clone());
+    let reloaded = store
+        .load(&mut buf, &mut slot)
+        .ok()
+        .map(|(c, _)| c.data().clone());
     assert_eq!(reloaded, loaded);
 });

@@ -23,8 +23,13 @@ fn encode(data: CalibrationData) -> Vec<u8> {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let Some((&mode, rest)) = data.split_first() else { return };
-    let (a, b) = (encode(CalibrationData::example_imu()), encode(CalibrationData::example_triad()));
+    let Some((&mode, rest)) = data.split_first() else {
+        return;
+    };
+    let (a, b) = (
+        encode(CalibrationData::example_imu()),
+        encode(CalibrationData::example_triad()),
+    );
     let mut buf = vec![0u8; spincal::protocol::SLOT_BUFFER];
     let mut scratch = CalibrationData::empty();
     let mem = if mode & 1 == 0 {
@@ -32,7 +37,14 @@ fuzz_target!(|data: &[u8]| {
         m.resize(REGION, 0xff);
         m
     } else {
-        let mut s = Store::new(RamNor { mem: vec![0xff; REGION] }, 0, SLOT).expect("layout");
+        let mut s = Store::new(
+            RamNor {
+                mem: vec![0xff; REGION],
+            },
+            0,
+            SLOT,
+        )
+        .expect("layout");
         s.update(&a, &mut buf, &mut scratch).expect("first update");
         s.update(&b, &mut buf, &mut scratch).expect("second update");
         let mut m = s.into_inner().mem;
@@ -43,16 +55,23 @@ fuzz_target!(|data: &[u8]| {
         m
     };
     let mut store = Store::new(RamNor { mem }, 0, SLOT).expect("layout");
-    let slots = store.scan(&mut buf, &mut scratch).expect("a RAM flash does not fail");
+    let slots = store
+        .scan(&mut buf, &mut scratch)
+        .expect("a RAM flash does not fail");
     let locked = store.is_locked().expect("a RAM flash does not fail");
     let mut slot = CalibrationData::empty();
     let loaded = match store.load(&mut buf, &mut slot) {
         Ok((cal, info)) => {
-            assert!(matches!(slots[usize::from(info.index)], SlotState::Valid { seq, .. } if seq == info.seq));
+            assert!(
+                matches!(slots[usize::from(info.index)], SlotState::Valid { seq, .. } if seq == info.seq)
+            );
             Some(cal.data().clone())
         }
         Err(StoreError::NoValidSlot) => {
-            assert!(slots.iter().all(|s| !matches!(s, SlotState::Valid { .. })), "{slots:?}");
+            assert!(
+                slots.iter().all(|s| !matches!(s, SlotState::Valid { .. })),
+                "{slots:?}"
+            );
             None
         }
         Err(e) => panic!("load failed on a RAM flash: {e:?}"),
@@ -64,7 +83,9 @@ fuzz_target!(|data: &[u8]| {
         Ok(_) => {
             assert!(!locked);
             let mut slot = CalibrationData::empty();
-            let (cal, _) = store.load(&mut buf, &mut slot).expect("an update that returned Ok loads");
+            let (cal, _) = store
+                .load(&mut buf, &mut slot)
+                .expect("an update that returned Ok loads");
             assert_eq!(cal.data(), blob::decode(&a).expect("a").data());
         }
         Err(StoreError::Locked) => assert!(locked),

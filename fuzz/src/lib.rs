@@ -1,7 +1,9 @@
 //! Shared by the fuzz targets: a RAM NOR flash with NOR rules, blob sealing, and running a
 //! decoded calibration through the correction.
 
-use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash};
+use embedded_storage::nor_flash::{
+    ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
+};
 use spincal::blob::{FORMAT_VERSION, HEADER_LEN, MAGIC};
 use spincal::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
 use spincal::model::{Calibration, Sensor};
@@ -29,7 +31,12 @@ impl ErrorType for RamNor {
 }
 
 impl RamNor {
-    fn range(&self, offset: u32, len: usize, align: usize) -> Result<core::ops::Range<usize>, RamNorError> {
+    fn range(
+        &self,
+        offset: u32,
+        len: usize,
+        align: usize,
+    ) -> Result<core::ops::Range<usize>, RamNorError> {
         let o = offset as usize;
         if o % align != 0 || len % align != 0 {
             return Err(RamNorError(NorFlashErrorKind::NotAligned));
@@ -60,7 +67,9 @@ impl NorFlash for RamNor {
     const ERASE_SIZE: usize = 1024;
 
     fn erase(&mut self, from: u32, to: u32) -> Result<(), RamNorError> {
-        let len = to.checked_sub(from).ok_or(RamNorError(NorFlashErrorKind::OutOfBounds))? as usize;
+        let len = to
+            .checked_sub(from)
+            .ok_or(RamNorError(NorFlashErrorKind::OutOfBounds))? as usize;
         let r = self.range(from, len, Self::ERASE_SIZE)?;
         self.mem[r].fill(0xff);
         Ok(())
@@ -98,7 +107,11 @@ pub fn seal(payload: &[u8]) -> Vec<u8> {
 /// be finite or flagged.
 pub fn exercise(cal: &Calibration, seed: &[u8]) {
     let raw = |k: usize, a: usize| -> i32 {
-        let b = |i: usize| seed.get((k * 6 + a + i) % seed.len().max(1)).copied().unwrap_or(0);
+        let b = |i: usize| {
+            seed.get((k * 6 + a + i) % seed.len().max(1))
+                .copied()
+                .unwrap_or(0)
+        };
         i32::from_le_bytes([b(0), b(1), b(2), b(3)]) >> (b(4) % 24)
     };
     let env = |k: usize| (f32::from(seed.get(k).copied().unwrap_or(25)) - 100.0, 3.3);
@@ -119,7 +132,10 @@ pub fn exercise(cal: &Calibration, seed: &[u8]) {
                 c.set_environment(t, v);
                 for k in 0..8 {
                     let o = c.correct(core::array::from_fn(|a| raw(k, a)));
-                    assert!(o.values.iter().all(|x| x.is_finite()) || !o.flags.is_clean(), "{o:?}");
+                    assert!(
+                        o.values.iter().all(|x| x.is_finite()) || !o.flags.is_clean(),
+                        "{o:?}"
+                    );
                 }
             }
         }
@@ -129,7 +145,10 @@ pub fn exercise(cal: &Calibration, seed: &[u8]) {
                 c.set_environment(t, v);
                 for k in 0..8 {
                     let o = c.correct(core::array::from_fn(|a| raw(k, a)));
-                    assert!(o.values.iter().all(|x| x.is_finite()) || !o.flags.is_clean(), "{o:?}");
+                    assert!(
+                        o.values.iter().all(|x| x.is_finite()) || !o.flags.is_clean(),
+                        "{o:?}"
+                    );
                 }
             }
         }

@@ -27,6 +27,11 @@ pub fn run() -> Result<(), String> {
             s.cmd.current_dir(root().join("firmware"));
             s
         },
+        {
+            let mut s = step("rustfmt (fuzz)", &["fmt", "--check"]);
+            s.cmd.current_dir(root().join("fuzz"));
+            s
+        },
         step(
             "clippy (host)",
             &[
