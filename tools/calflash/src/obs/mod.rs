@@ -3,6 +3,8 @@
 //! millions of rows streams through in one pass. Every error names the file, the line and the
 //! column.
 
+pub mod recording;
+
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
