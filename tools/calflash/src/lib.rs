@@ -9,6 +9,7 @@ pub mod columns;
 pub mod db;
 pub mod device;
 pub mod formula;
+pub mod noise;
 pub mod nonlinear;
 pub mod obs;
 pub mod regression;

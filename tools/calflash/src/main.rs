@@ -20,6 +20,10 @@ enum Command {
     Fit(cmd::fit::FitArgs),
     /// Calibrate a sensor: fit, decide, invert, write blob, report and record.
     Calibrate(cmd::calibrate::CalibrateArgs),
+    /// Calibrate an IMU without equipment, from still poses turned by hand.
+    Selfcal(cmd::selfcal::SelfcalArgs),
+    /// Allan deviation and IEEE 952 noise terms of a still recording.
+    Allan(cmd::allan::AllanArgs),
     /// Simulate a sensor through a test plan, writing an observation file.
     Simulate(cmd::simulate::SimulateArgs),
     /// Run raw counts through the device's correction.
@@ -45,6 +49,8 @@ fn main() -> ExitCode {
             Ok(calflash::sensor::Verdict::Reject) => return ExitCode::from(3),
             other => other.map(|_| ()),
         },
+        Command::Selfcal(args) => cmd::selfcal::run(args),
+        Command::Allan(args) => cmd::allan::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Apply(args) => cmd::apply::run(args),
         Command::Compare(args) => cmd::compare::run(args),

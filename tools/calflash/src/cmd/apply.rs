@@ -18,8 +18,16 @@ pub struct ApplyArgs {
     /// The calibration blob.
     #[arg(long)]
     pub blob: PathBuf,
-    /// The raw file (with a header row).
+    /// The raw file: observations with a header row, or with `--recording` a raw recording
+    /// (timestamp and counts per line, as `calflash selfcal` reads).
     pub input: PathBuf,
+    /// The input is a raw recording: timestamp and three counts per line (then give the gyro
+    /// file with `--gyro`), or timestamp and six counts.
+    #[arg(long)]
+    pub recording: bool,
+    /// The gyro file of a recording in two files.
+    #[arg(long, requires = "recording")]
+    pub gyro: Option<PathBuf>,
     /// The raw columns, comma-separated (default: output; a_x,a_y,a_z; g_x,g_y,g_z; or all six
     /// for an IMU).
     #[arg(long, value_delimiter = ',')]
@@ -45,6 +53,56 @@ pub struct ApplyArgs {
     /// The corrected file to write (CSV).
     #[arg(long, short)]
     pub output: PathBuf,
+}
+
+/// Raw samples to correct, with a label per sample.
+struct Input {
+    header: String,
+    labels: Vec<String>,
+    raw: Vec<Vec<i32>>,
+    temps: Option<Vec<f64>>,
+}
+
+fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
+    let rails = spincal::model::Rails {
+        lo: i32::MIN,
+        hi: i32::MAX,
+    };
+    let (acc, gyro) = match (channels, &args.gyro) {
+        (6, Some(g)) => (args.input.as_path(), Some(g.as_path())),
+        (6, None) => (args.input.as_path(), None),
+        // One triad: its file holds a timestamp and three counts; read it as both halves.
+        (3, None) => (args.input.as_path(), Some(args.input.as_path())),
+        _ => {
+            return Err(format!(
+                "--gyro: the calibration corrects {channels} channel(s); a gyro file goes with an IMU calibration"
+            ));
+        }
+    };
+    let rec = crate::obs::recording::read(acc, gyro, rails).map_err(|e| e.to_string())?;
+    Ok(Input {
+        header: "line,t".into(),
+        labels: rec
+            .line
+            .iter()
+            .zip(&rec.t)
+            .map(|(l, t)| format!("{l},{t}"))
+            .collect(),
+        raw: rec
+            .acc
+            .iter()
+            .zip(&rec.gyro)
+            .map(|(a, g)| {
+                let a = a.map(|x| x.round() as i32);
+                if channels == 6 {
+                    a.into_iter().chain(g.map(|x| x.round() as i32)).collect()
+                } else {
+                    a.to_vec()
+                }
+            })
+            .collect(),
+        temps: None,
+    })
 }
 
 enum Any<'a> {
@@ -85,11 +143,32 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
             cols.len()
         ));
     }
-    let mut wanted = cols.clone();
-    if let Some(t) = &args.temp_column {
-        wanted.push(t.clone());
-    }
-    let table = obs::read_columns(&args.input, &wanted, args.format).map_err(|e| e.to_string())?;
+    let input = if args.recording {
+        recording_input(args, default_cols.len())?
+    } else {
+        let mut wanted = cols.clone();
+        if let Some(t) = &args.temp_column {
+            wanted.push(t.clone());
+        }
+        let table =
+            obs::read_columns(&args.input, &wanted, args.format).map_err(|e| e.to_string())?;
+        Input {
+            header: "line".into(),
+            labels: table.lines.iter().map(ToString::to_string).collect(),
+            raw: (0..table.len())
+                .map(|i| {
+                    cols.iter()
+                        .map(|c| table.column(c).map_or(0, |v| v[i].round() as i32))
+                        .collect()
+                })
+                .collect(),
+            temps: args
+                .temp_column
+                .as_ref()
+                .and_then(|t| table.column(t))
+                .map(<[f64]>::to_vec),
+        }
+    };
     let env = &data.environment;
     let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
     let volt = args.volt.unwrap_or_else(|| mid(env.voltage_span));
@@ -109,9 +188,9 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
         Any::Imu(c) => c.set_environment(t, volt),
     };
     set_env(&mut corrector, temp0);
-    let temps = args.temp_column.as_ref().and_then(|t| table.column(t));
+    let temps = input.temps.as_deref();
     let mut last_temp = temp0;
-    let mut header = vec!["line".to_string()];
+    let mut header = vec![input.header.clone()];
     header.extend(out_names.iter().map(|s| s.to_string()));
     header.extend(["flags".to_string(), "flag_names".to_string()]);
     if args.sigma {
@@ -120,7 +199,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
     let mut rows = String::new();
     use std::fmt::Write as _;
     let mut flagged = 0usize;
-    for i in 0..table.len() {
+    for (i, raw) in input.raw.iter().enumerate() {
         if let Some(t) = temps {
             let t = t[i] as f32;
             if t != last_temp {
@@ -128,10 +207,6 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
                 last_temp = t;
             }
         }
-        let raw: Vec<i32> = cols
-            .iter()
-            .map(|c| table.column(c).map_or(0, |v| v[i].round() as i32))
-            .collect();
         let (values, flags, sigma): (Vec<f32>, Flags, Option<Vec<f32>>) = match &mut corrector {
             Any::Single(c) => {
                 let o = c.correct(raw[0]);
@@ -149,7 +224,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
             }
         };
         flagged += usize::from(!flags.is_clean());
-        let _ = write!(rows, "{}", table.lines[i]);
+        let _ = write!(rows, "{}", input.labels[i]);
         for v in &values {
             let _ = write!(rows, ",{v}");
         }
@@ -170,7 +245,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
     })?;
     println!(
         "calflash apply: {} samples corrected with unit {}'s calibration ({} flagged) into {}",
-        table.len(),
+        input.raw.len(),
         data.identity.serial,
         flagged,
         args.output.display()

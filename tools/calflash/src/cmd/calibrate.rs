@@ -100,7 +100,7 @@ pub struct CalibrateArgs {
     pub no_db: bool,
 }
 
-fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
+pub(crate) fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
     let (a, b) = text
         .split_once(':')
         .ok_or_else(|| format!("{what}: `{text}` is not LO:HI"))?;

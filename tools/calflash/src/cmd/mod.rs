@@ -1,5 +1,6 @@
 //! One module per subcommand, each a thin `run` over the library.
 
+pub mod allan;
 pub mod apply;
 pub mod calibrate;
 pub mod compare;
@@ -7,5 +8,6 @@ pub mod fit;
 pub mod flash;
 pub mod history;
 pub mod image;
+pub mod selfcal;
 pub mod simulate;
 pub mod threshold;

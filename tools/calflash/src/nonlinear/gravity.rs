@@ -40,7 +40,9 @@ impl AccelModel {
             let v = raw[j] - self.center[j];
             v + self.quadratic[j] * v * v
         });
-        std::array::from_fn(|i| self.offset[i] + (0..3).map(|j| self.matrix[i][j] * u[j]).sum::<f64>())
+        std::array::from_fn(|i| {
+            self.offset[i] + (0..3).map(|j| self.matrix[i][j] * u[j]).sum::<f64>()
+        })
     }
 
     fn from_params(center: [f64; 3], p: &[f64]) -> Self {
@@ -48,7 +50,11 @@ impl AccelModel {
             center,
             matrix: [[p[0], p[1], p[2]], [0.0, p[3], p[4]], [0.0, 0.0, p[5]]],
             offset: [p[6], p[7], p[8]],
-            quadratic: if p.len() == 12 { [p[9], p[10], p[11]] } else { [0.0; 3] },
+            quadratic: if p.len() == 12 {
+                [p[9], p[10], p[11]]
+            } else {
+                [0.0; 3]
+            },
         }
     }
 }
@@ -62,7 +68,11 @@ struct Gravity<'a> {
 
 impl Gravity<'_> {
     fn force(&self, p: &[f64], v: &[f64; 3]) -> ([f64; 3], [f64; 3]) {
-        let q = if self.quadratic { [p[9], p[10], p[11]] } else { [0.0; 3] };
+        let q = if self.quadratic {
+            [p[9], p[10], p[11]]
+        } else {
+            [0.0; 3]
+        };
         let u: [f64; 3] = std::array::from_fn(|j| v[j] + q[j] * v[j] * v[j]);
         let a = [
             p[0] * u[0] + p[1] * u[1] + p[2] * u[2] + p[6],
@@ -88,9 +98,21 @@ impl Problem for Gravity<'_> {
     fn jacobian(&self, p: &[f64], _r: &[f64], out: &mut DMatrix<f64>) {
         for (i, v) in self.v.iter().enumerate() {
             let (a, u) = self.force(p, v);
-            let norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt().max(f64::MIN_POSITIVE);
+            let norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+                .sqrt()
+                .max(f64::MIN_POSITIVE);
             let e = [a[0] / norm, a[1] / norm, a[2] / norm];
-            let row = [e[0] * u[0], e[0] * u[1], e[0] * u[2], e[1] * u[1], e[1] * u[2], e[2] * u[2], e[0], e[1], e[2]];
+            let row = [
+                e[0] * u[0],
+                e[0] * u[1],
+                e[0] * u[2],
+                e[1] * u[1],
+                e[1] * u[2],
+                e[2] * u[2],
+                e[0],
+                e[1],
+                e[2],
+            ];
             for (k, x) in row.iter().enumerate() {
                 out[(i, k)] = *x;
             }
@@ -139,7 +161,11 @@ impl AccelFit {
     /// Residual standard deviation with its degrees of freedom, m/s^2.
     #[must_use]
     pub fn sigma(&self) -> f64 {
-        let dof = self.residuals.len().saturating_sub(self.params.len()).max(1);
+        let dof = self
+            .residuals
+            .len()
+            .saturating_sub(self.params.len())
+            .max(1);
         (self.residuals.iter().map(|r| r * r).sum::<f64>() / dof as f64).sqrt()
     }
 }
@@ -149,13 +175,30 @@ impl AccelFit {
 pub fn center_and_start(means: &[[f64; 3]], g: f64) -> ([f64; 3], Vec<f64>) {
     let (lo, hi): (Vec<f64>, Vec<f64>) = (0..3)
         .map(|j| {
-            means.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| (lo.min(m[j]), hi.max(m[j])))
+            means
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| {
+                    (lo.min(m[j]), hi.max(m[j]))
+                })
         })
         .unzip();
     let center: [f64; 3] = std::array::from_fn(|j| ((lo[j] + hi[j]) / 2.0).round());
     let s: [f64; 3] = std::array::from_fn(|j| 2.0 * g / (hi[j] - lo[j]).max(1e-9));
     let b: [f64; 3] = std::array::from_fn(|j| (lo[j] + hi[j]) / 2.0 - center[j]);
-    (center, vec![s[0], 0.0, 0.0, s[1], 0.0, s[2], -s[0] * b[0], -s[1] * b[1], -s[2] * b[2]])
+    (
+        center,
+        vec![
+            s[0],
+            0.0,
+            0.0,
+            s[1],
+            0.0,
+            s[2],
+            -s[0] * b[0],
+            -s[1] * b[1],
+            -s[2] * b[2],
+        ],
+    )
 }
 
 /// Fits the correction to pose means (raw counts) for gravity `g`; with `quadratic`, the
@@ -163,9 +206,22 @@ pub fn center_and_start(means: &[[f64; 3]], g: f64) -> ([f64; 3], Vec<f64>) {
 ///
 /// # Errors
 /// Too few poses, or no convergence.
-pub fn fit(means: &[[f64; 3]], g: f64, center: [f64; 3], start: &[f64], quadratic: bool) -> Result<AccelFit, LmError> {
-    let v: Vec<[f64; 3]> = means.iter().map(|m| std::array::from_fn(|j| m[j] - center[j])).collect();
-    let problem = Gravity { v: &v, g, quadratic };
+pub fn fit(
+    means: &[[f64; 3]],
+    g: f64,
+    center: [f64; 3],
+    start: &[f64],
+    quadratic: bool,
+) -> Result<AccelFit, LmError> {
+    let v: Vec<[f64; 3]> = means
+        .iter()
+        .map(|m| std::array::from_fn(|j| m[j] - center[j]))
+        .collect();
+    let problem = Gravity {
+        v: &v,
+        g,
+        quadratic,
+    };
     let mut p0 = start[..9].to_vec();
     if quadratic {
         p0.extend_from_slice(start.get(9..12).unwrap_or(&[0.0; 3]));
@@ -208,7 +264,11 @@ mod tests {
         // Truth in the correction form.
         let truth = AccelModel {
             center: [32768.0, 32768.0, 32768.0],
-            matrix: [[1.0 / 410.0, 2e-5, -1e-5], [0.0, 1.0 / 415.0, 3e-5], [0.0, 0.0, 1.0 / 412.0]],
+            matrix: [
+                [1.0 / 410.0, 2e-5, -1e-5],
+                [0.0, 1.0 / 415.0, 3e-5],
+                [0.0, 0.0, 1.0 / 412.0],
+            ],
             offset: [0.05, -0.03, 0.08],
             quadratic: [2e-6, 0.0, -1e-6],
         };
@@ -238,7 +298,11 @@ mod tests {
             .collect();
         let (center, start) = center_and_start(&raw, g);
         let lin = fit(&raw, g, center, &start, false).unwrap();
-        assert!(lin.rms() > 1e-4, "the quadratic truth leaves a linear residual: {}", lin.rms());
+        assert!(
+            lin.rms() > 1e-4,
+            "the quadratic truth leaves a linear residual: {}",
+            lin.rms()
+        );
         let mut s2 = lin.params.clone();
         s2.extend([0.0; 3]);
         let quad = fit(&raw, g, center, &s2, true).unwrap();

@@ -49,7 +49,9 @@ pub struct Solution {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LmError {
     /// Fewer residuals than parameters.
-    #[error("{n} residuals for {p} parameters; at least as many residuals as parameters are needed")]
+    #[error(
+        "{n} residuals for {p} parameters; at least as many residuals as parameters are needed"
+    )]
     TooFew {
         /// Residuals.
         n: usize,
@@ -72,7 +74,11 @@ fn sum_sq(r: &[f64]) -> f64 {
 ///
 /// # Errors
 /// [`LmError`].
-pub fn solve(problem: &impl Problem, p0: &[f64], max_iterations: usize) -> Result<Solution, LmError> {
+pub fn solve(
+    problem: &impl Problem,
+    p0: &[f64],
+    max_iterations: usize,
+) -> Result<Solution, LmError> {
     let (n, np) = (problem.residual_count(), p0.len());
     if n < np {
         return Err(LmError::TooFew { n, p: np });
@@ -114,8 +120,18 @@ pub fn solve(problem: &impl Problem, p0: &[f64], max_iterations: usize) -> Resul
             let q: Vec<f64> = p.iter().zip(delta.iter()).map(|(x, dx)| x + dx).collect();
             problem.residuals(&q, &mut trial);
             let t = sum_sq(&trial);
-            let step = delta.iter().zip(&d).map(|(x, s)| (x * s).powi(2)).sum::<f64>().sqrt();
-            let scale = p.iter().zip(&d).map(|(x, s)| (x * s).powi(2)).sum::<f64>().sqrt();
+            let step = delta
+                .iter()
+                .zip(&d)
+                .map(|(x, s)| (x * s).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let scale = p
+                .iter()
+                .zip(&d)
+                .map(|(x, s)| (x * s).powi(2))
+                .sum::<f64>()
+                .sqrt();
             let small_step = step <= 1e-12 * (scale + 1e-12);
             if t.is_finite() && t <= rss {
                 let relative = (rss - t) / rss.max(f64::MIN_POSITIVE);
@@ -126,7 +142,13 @@ pub fn solve(problem: &impl Problem, p0: &[f64], max_iterations: usize) -> Resul
                 improved = true;
                 if relative < 1e-14 || small_step {
                     problem.jacobian(&p, &r, &mut j);
-                    return Ok(Solution { p, residuals: r, rss, jacobian: j, iterations: it });
+                    return Ok(Solution {
+                        p,
+                        residuals: r,
+                        rss,
+                        jacobian: j,
+                        iterations: it,
+                    });
                 }
                 break;
             }
@@ -137,7 +159,13 @@ pub fn solve(problem: &impl Problem, p0: &[f64], max_iterations: usize) -> Resul
         }
         if !improved {
             // No step lowers the sum: a minimum to the precision of the residuals.
-            return Ok(Solution { p, residuals: r, rss, jacobian: j, iterations: it });
+            return Ok(Solution {
+                p,
+                residuals: r,
+                rss,
+                jacobian: j,
+                iterations: it,
+            });
         }
         problem.jacobian(&p, &r, &mut j);
     }
@@ -194,7 +222,11 @@ mod tests {
         let x: Vec<f64> = (0..20).map(|k| f64::from(k) * 0.1).collect();
         let y = x.iter().map(|x| 2.5 * (-1.3 * x).exp()).collect();
         let s = solve(&Exp { x, y }, &[1.0, 0.0], 200).unwrap();
-        assert!((s.p[0] - 2.5).abs() < 1e-9 && (s.p[1] + 1.3).abs() < 1e-9, "{:?}", s.p);
+        assert!(
+            (s.p[0] - 2.5).abs() < 1e-9 && (s.p[1] + 1.3).abs() < 1e-9,
+            "{:?}",
+            s.p
+        );
 
         struct Rosen;
         impl Problem for Rosen {
@@ -207,7 +239,11 @@ mod tests {
             }
         }
         let s = solve(&Rosen, &[-1.2, 1.0], 500).unwrap();
-        assert!((s.p[0] - 1.0).abs() < 1e-7 && (s.p[1] - 1.0).abs() < 1e-7, "{:?}", s.p);
+        assert!(
+            (s.p[0] - 1.0).abs() < 1e-7 && (s.p[1] - 1.0).abs() < 1e-7,
+            "{:?}",
+            s.p
+        );
     }
 
     #[test]
@@ -229,7 +265,11 @@ mod tests {
         }
         let x: Vec<f64> = (0..10).map(f64::from).collect();
         let noise = [0.1, -0.2, 0.05, 0.0, 0.3, -0.1, -0.25, 0.15, 0.02, -0.07];
-        let y: Vec<f64> = x.iter().zip(noise).map(|(x, e)| 1.0 + 2.0 * x + e).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .zip(noise)
+            .map(|(x, e)| 1.0 + 2.0 * x + e)
+            .collect();
         let s = solve(&Line { x: x.clone(), y }, &[0.0, 0.0], 50).unwrap();
         let c = covariance(&s).unwrap();
         let sxx: f64 = x.iter().map(|x| (x - 4.5).powi(2)).sum();

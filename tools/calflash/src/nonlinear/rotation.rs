@@ -13,11 +13,12 @@
 
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
-
 use super::lm::{self, LmError, Problem};
 
 /// The parameter names: `M` row by row.
-pub const TERMS: [&str; 9] = ["G11", "G12", "G13", "G21", "G22", "G23", "G31", "G32", "G33"];
+pub const TERMS: [&str; 9] = [
+    "G11", "G12", "G13", "G21", "G22", "G23", "G31", "G32", "G33",
+];
 
 /// One rotation between two still poses.
 #[derive(Debug, Clone)]
@@ -38,7 +39,10 @@ fn quat_of(phi: [f64; 3]) -> [f64; 4] {
     let t2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2];
     let (c, s) = if t2 < 2.5e-3 {
         // cos(t/2) and sin(t/2)/t to t^6: error below 1e-14 at 0.05 rad.
-        (1.0 - t2 / 8.0 + t2 * t2 / 384.0 - t2 * t2 * t2 / 46_080.0, 0.5 - t2 / 48.0 + t2 * t2 / 3840.0 - t2 * t2 * t2 / 645_120.0)
+        (
+            1.0 - t2 / 8.0 + t2 * t2 / 384.0 - t2 * t2 * t2 / 46_080.0,
+            0.5 - t2 / 48.0 + t2 * t2 / 3840.0 - t2 * t2 * t2 / 645_120.0,
+        )
     } else {
         let t = t2.sqrt();
         ((0.5 * t).cos(), (0.5 * t).sin() / t)
@@ -59,13 +63,20 @@ fn quat_mul(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
 /// vectors at the start (`g_to = R^T g_from`).
 #[must_use]
 pub fn integrate(m: &Matrix3<f64>, seg: &Segment) -> Matrix3<f64> {
-    let w = |x: &[f64; 3]| -> [f64; 3] { std::array::from_fn(|i| m[(i, 0)] * x[0] + m[(i, 1)] * x[1] + m[(i, 2)] * x[2]) };
+    let w = |x: &[f64; 3]| -> [f64; 3] {
+        std::array::from_fn(|i| m[(i, 0)] * x[0] + m[(i, 1)] * x[1] + m[(i, 2)] * x[2])
+    };
     let mut q = [1.0, 0.0, 0.0, 0.0];
     let mut w0 = w(&seg.x[0]);
     for (k, dt) in seg.dt.iter().enumerate() {
         let w1 = w(&seg.x[k + 1]);
-        let c = [w0[1] * w1[2] - w0[2] * w1[1], w0[2] * w1[0] - w0[0] * w1[2], w0[0] * w1[1] - w0[1] * w1[0]];
-        let phi: [f64; 3] = std::array::from_fn(|i| 0.5 * (w0[i] + w1[i]) * dt + c[i] * (dt * dt / 12.0));
+        let c = [
+            w0[1] * w1[2] - w0[2] * w1[1],
+            w0[2] * w1[0] - w0[0] * w1[2],
+            w0[0] * w1[1] - w0[1] * w1[0],
+        ];
+        let phi: [f64; 3] =
+            std::array::from_fn(|i| 0.5 * (w0[i] + w1[i]) * dt + c[i] * (dt * dt / 12.0));
         q = quat_mul(q, quat_of(phi));
         w0 = w1;
     }
@@ -151,13 +162,18 @@ impl GyroFit {
     /// RMS of the angle errors, degrees.
     #[must_use]
     pub fn rms_deg(&self) -> f64 {
-        (self.angles.iter().map(|a| a * a).sum::<f64>() / self.angles.len() as f64).sqrt().to_degrees()
+        (self.angles.iter().map(|a| a * a).sum::<f64>() / self.angles.len() as f64)
+            .sqrt()
+            .to_degrees()
     }
 
     /// Largest angle error, degrees.
     #[must_use]
     pub fn max_deg(&self) -> f64 {
-        self.angles.iter().fold(0.0f64, |m, a| m.max(*a)).to_degrees()
+        self.angles
+            .iter()
+            .fold(0.0f64, |m, a| m.max(*a))
+            .to_degrees()
     }
 }
 
@@ -185,30 +201,57 @@ mod tests {
 
     #[test]
     fn recovers_a_known_gyro_from_simulated_rotations() {
-        let truth = Matrix3::new(2.1e-4, 3e-6, -2e-6, -4e-6, 2.08e-4, 5e-6, 1e-6, -3e-6, 2.12e-4);
+        let truth = Matrix3::new(
+            2.1e-4, 3e-6, -2e-6, -4e-6, 2.08e-4, 5e-6, 1e-6, -3e-6, 2.12e-4,
+        );
         let inv = truth.try_inverse().unwrap();
         // Rotations about varied axes, 2 s at 100 Hz with a smooth rate profile.
         let mut g = Vector3::new(0.0, 0.0, 1.0);
         let mut segments = Vec::new();
         for k in 0..12 {
-            let axis = Vector3::new((k as f64).sin(), (k as f64 * 1.7).cos(), 0.5 + (k % 3) as f64).normalize();
+            let axis = Vector3::new(
+                (k as f64).sin(),
+                (k as f64 * 1.7).cos(),
+                0.5 + (k % 3) as f64,
+            )
+            .normalize();
             let n = 200;
             let dt = 0.01;
             let peak = 1.5;
-            let rates: Vec<Vector3<f64>> = (0..=n).map(|s| axis * peak * (std::f64::consts::PI * s as f64 / n as f64).sin()).collect();
-            let x: Vec<[f64; 3]> = rates.iter().map(|w| { let c = inv * w; [c[0], c[1], c[2]] }).collect();
-            let seg0 = Segment { dt: vec![dt; n], x, from: g.into(), to: [0.0; 3] };
+            let rates: Vec<Vector3<f64>> = (0..=n)
+                .map(|s| axis * peak * (std::f64::consts::PI * s as f64 / n as f64).sin())
+                .collect();
+            let x: Vec<[f64; 3]> = rates
+                .iter()
+                .map(|w| {
+                    let c = inv * w;
+                    [c[0], c[1], c[2]]
+                })
+                .collect();
+            let seg0 = Segment {
+                dt: vec![dt; n],
+                x,
+                from: g.into(),
+                to: [0.0; 3],
+            };
             // The truth's own integration gives the gravity direction after.
             let r = integrate(&truth, &seg0);
             let to = r.transpose() * g;
-            segments.push(Segment { to: to.into(), ..seg0 });
+            segments.push(Segment {
+                to: to.into(),
+                ..seg0
+            });
             g = to;
         }
         let start = [[2e-4, 0.0, 0.0], [0.0, 2e-4, 0.0], [0.0, 0.0, 2e-4]];
         let f = fit(&segments, start).unwrap();
         for i in 0..3 {
             for j in 0..3 {
-                assert!((f.matrix[i][j] - truth[(i, j)]).abs() < 1e-9, "{:?}", f.matrix);
+                assert!(
+                    (f.matrix[i][j] - truth[(i, j)]).abs() < 1e-9,
+                    "{:?}",
+                    f.matrix
+                );
             }
         }
         assert!(f.rms_deg() < 1e-6);

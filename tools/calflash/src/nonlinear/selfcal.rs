@@ -79,7 +79,9 @@ pub const MIN_ROTATIONS: usize = 6;
 #[derive(Debug, thiserror::Error)]
 pub enum SelfCalError {
     /// The recording is shorter than its initial rest.
-    #[error("{file}: the recording lasts {len:.1} s, no longer than the initial rest of {rest:.1} s (--init-rest); record the rest, then turn the unit through still poses")]
+    #[error(
+        "{file}: the recording lasts {len:.1} s, no longer than the initial rest of {rest:.1} s (--init-rest); record the rest, then turn the unit through still poses"
+    )]
     TooShort {
         /// File(s).
         file: String,
@@ -89,7 +91,9 @@ pub enum SelfCalError {
         rest: f64,
     },
     /// The initial rest moves.
-    #[error("{file}: the unit moves at {at:.1} s, inside the initial rest of {rest:.1} s (--init-rest): the accelerometer varies {ratio:.0} times more there than in the quietest second; give the length of the real rest with --init-rest, or record one")]
+    #[error(
+        "{file}: the unit moves at {at:.1} s, inside the initial rest of {rest:.1} s (--init-rest): the accelerometer varies {ratio:.0} times more there than in the quietest second; give the length of the real rest with --init-rest, or record one"
+    )]
     RestNotStill {
         /// File(s).
         file: String,
@@ -101,7 +105,9 @@ pub enum SelfCalError {
         ratio: f64,
     },
     /// Too few still poses at every threshold.
-    #[error("{file}: too few still poses: {tried}; the accelerometer fit needs at least {needed}. Hold each pose still for longer (at least {min_still:.1} s, --min-still), turn the unit through more poses (30 or more, spread over all directions), or lower --min-still if the poses are shorter")]
+    #[error(
+        "{file}: too few still poses: {tried}; the accelerometer fit needs at least {needed}. Hold each pose still for longer (at least {min_still:.1} s, --min-still), turn the unit through more poses (30 or more, spread over all directions), or lower --min-still if the poses are shorter"
+    )]
     TooFewPoses {
         /// File(s).
         file: String,
@@ -113,7 +119,9 @@ pub enum SelfCalError {
         min_still: f64,
     },
     /// Too few usable rotations.
-    #[error("{file}: {usable} usable rotations between still poses ({skipped} skipped: {why}); the gyro fit needs at least {needed}")]
+    #[error(
+        "{file}: {usable} usable rotations between still poses ({skipped} skipped: {why}); the gyro fit needs at least {needed}"
+    )]
     TooFewRotations {
         /// File(s).
         file: String,
@@ -227,11 +235,19 @@ fn rms(x: &[f64]) -> f64 {
 
 fn fit_err(source: &str, what: &'static str) -> impl FnOnce(LmError) -> SelfCalError {
     let source = source.to_string();
-    move |err| SelfCalError::Fit { file: source, what, err }
+    move |err| SelfCalError::Fit {
+        file: source,
+        what,
+        err,
+    }
 }
 
 /// Fits the accelerometer to `means`, linear then (by `q`) quadratic.
-fn accel_fit(means: &[[f64; 3]], g: f64, q: Quadratic) -> Result<(AccelFit, Option<QuadraticTest>), LmError> {
+fn accel_fit(
+    means: &[[f64; 3]],
+    g: f64,
+    q: Quadratic,
+) -> Result<(AccelFit, Option<QuadraticTest>), LmError> {
     let (center, start) = gravity::center_and_start(means, g);
     let lin = gravity::fit(means, g, center, &start, false)?;
     let try_quad = q != Quadratic::Off && means.len() > 12;
@@ -241,7 +257,10 @@ fn accel_fit(means: &[[f64; 3]], g: f64, q: Quadratic) -> Result<(AccelFit, Opti
     let mut s = lin.params.clone();
     s.extend([0.0; 3]);
     let quad = gravity::fit(means, g, center, &s, true)?;
-    let (rss0, rss1) = (lin.residuals.iter().map(|r| r * r).sum::<f64>(), quad.residuals.iter().map(|r| r * r).sum::<f64>());
+    let (rss0, rss1) = (
+        lin.residuals.iter().map(|r| r * r).sum::<f64>(),
+        quad.residuals.iter().map(|r| r * r).sum::<f64>(),
+    );
     let dof = (means.len() - 12) as f64;
     let f = ((rss0 - rss1) / 3.0) / (rss1 / dof).max(f64::MIN_POSITIVE);
     let p = FisherSnedecor::new(3.0, dof).map_or(f64::NAN, |d| 1.0 - d.cdf(f.max(0.0)));
@@ -256,7 +275,8 @@ fn accel_fit(means: &[[f64; 3]], g: f64, q: Quadratic) -> Result<(AccelFit, Opti
 fn holdout(means: &[[f64; 3]], g: f64, quadratic: bool, folds: usize) -> Result<Holdout, LmError> {
     let mut errs = Vec::new();
     for f in 0..folds {
-        let (train, test): (Vec<_>, Vec<_>) = means.iter().enumerate().partition(|(k, _)| k % folds != f);
+        let (train, test): (Vec<_>, Vec<_>) =
+            means.iter().enumerate().partition(|(k, _)| k % folds != f);
         let train: Vec<[f64; 3]> = train.into_iter().map(|(_, m)| *m).collect();
         let (center, start) = gravity::center_and_start(&train, g);
         let mut fit = gravity::fit(&train, g, center, &start, false)?;
@@ -270,7 +290,11 @@ fn holdout(means: &[[f64; 3]], g: f64, quadratic: bool, folds: usize) -> Result<
             errs.push((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt() - g);
         }
     }
-    Ok(Holdout { folds, rms: rms(&errs), max: errs.iter().fold(0.0f64, |m, e| m.max(e.abs())) })
+    Ok(Holdout {
+        folds,
+        rms: rms(&errs),
+        max: errs.iter().fold(0.0f64, |m, e| m.max(e.abs())),
+    })
 }
 
 fn unit(a: [f64; 3]) -> [f64; 3] {
@@ -289,14 +313,34 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
     let t0 = rec.t[0];
     let rest_end = rec.t.partition_point(|t| *t < t0 + opts.init_rest);
     if rest_end >= rec.len() {
-        return Err(SelfCalError::TooShort { file: source.into(), len: rec.t[rec.len() - 1] - t0, rest: opts.init_rest });
+        return Err(SelfCalError::TooShort {
+            file: source.into(),
+            len: rec.t[rec.len() - 1] - t0,
+            rest: opts.init_rest,
+        });
     }
     // The rest must be still: no second of it far noisier than its quietest.
     let second = samples(1.0);
-    let blocks: Vec<(usize, f64)> = (0..rest_end / second).map(|b| (b * second, statics::rest_level(&rec.acc[b * second..(b + 1) * second]))).collect();
-    let quietest = blocks.iter().map(|b| b.1).fold(f64::INFINITY, f64::min).max(1e-12);
+    let blocks: Vec<(usize, f64)> = (0..rest_end / second)
+        .map(|b| {
+            (
+                b * second,
+                statics::rest_level(&rec.acc[b * second..(b + 1) * second]),
+            )
+        })
+        .collect();
+    let quietest = blocks
+        .iter()
+        .map(|b| b.1)
+        .fold(f64::INFINITY, f64::min)
+        .max(1e-12);
     if let Some(&(at, level)) = blocks.iter().find(|b| b.1 > 25.0 * quietest) {
-        return Err(SelfCalError::RestNotStill { file: source.into(), at: rec.t[at] - t0, rest: opts.init_rest, ratio: level / quietest });
+        return Err(SelfCalError::RestNotStill {
+            file: source.into(),
+            at: rec.t[at] - t0,
+            rest: opts.init_rest,
+            ratio: level / quietest,
+        });
     }
     let rest_level = statics::rest_level(&rec.acc[..rest_end]);
     let measure = statics::measure(&rec.acc, samples(opts.window) | 1);
@@ -310,7 +354,9 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         let rms_m = if poses.len() >= MIN_POSES {
             let means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
             let (center, start) = gravity::center_and_start(&means, opts.g);
-            gravity::fit(&means, opts.g, center, &start, false).ok().map(|f| f.rms())
+            gravity::fit(&means, opts.g, center, &start, false)
+                .ok()
+                .map(|f| f.rms())
         } else {
             None
         };
@@ -319,30 +365,59 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         {
             best = Some((trials.len(), r, poses.clone()));
         }
-        trials.push(Trial { multiplier: m, poses: poses.len(), rms: rms_m });
+        trials.push(Trial {
+            multiplier: m,
+            poses: poses.len(),
+            rms: rms_m,
+        });
     }
     let Some((chosen, _, poses)) = best else {
-        let tried = trials.iter().map(|t| format!("{} at {} x the rest level", t.poses, t.multiplier)).collect::<Vec<_>>().join(", ");
-        return Err(SelfCalError::TooFewPoses { file: source.into(), tried, needed: MIN_POSES, min_still: opts.min_still });
+        let tried = trials
+            .iter()
+            .map(|t| format!("{} at {} x the rest level", t.poses, t.multiplier))
+            .collect::<Vec<_>>()
+            .join(", ");
+        return Err(SelfCalError::TooFewPoses {
+            file: source.into(),
+            tried,
+            needed: MIN_POSES,
+            min_still: opts.min_still,
+        });
     };
     let pose_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
-    let (accel, quadratic_test) = accel_fit(&pose_means, opts.g, opts.quadratic).map_err(fit_err(source, "accelerometer"))?;
+    let (accel, quadratic_test) =
+        accel_fit(&pose_means, opts.g, opts.quadratic).map_err(fit_err(source, "accelerometer"))?;
     let quadratic = accel.params.len() == 12;
-    let holdout = holdout(&pose_means, opts.g, quadratic, opts.folds.clamp(2, pose_means.len())).map_err(fit_err(source, "hold-out accelerometer"))?;
+    let holdout = holdout(
+        &pose_means,
+        opts.g,
+        quadratic,
+        opts.folds.clamp(2, pose_means.len()),
+    )
+    .map_err(fit_err(source, "hold-out accelerometer"))?;
 
     // The gyro.
     let gyro_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.gyro, r)).collect();
     let rest_gyro = statics::mean(&rec.gyro, &(0..rest_end));
     let gyro_bias = match opts.gyro_bias {
-        GyroBias::Poses => std::array::from_fn(|j| gyro_means.iter().map(|m| m[j]).sum::<f64>() / gyro_means.len() as f64),
+        GyroBias::Poses => std::array::from_fn(|j| {
+            gyro_means.iter().map(|m| m[j]).sum::<f64>() / gyro_means.len() as f64
+        }),
         GyroBias::Rest => rest_gyro,
     };
     let gyro_bias_spread = std::array::from_fn(|j| {
-        let (lo, hi) = gyro_means.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| (lo.min(m[j]), hi.max(m[j])));
+        let (lo, hi) = gyro_means
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| {
+                (lo.min(m[j]), hi.max(m[j]))
+            });
         hi - lo
     });
     let mid = |r: &Range<usize>| 0.5 * (rec.t[r.start] + rec.t[r.end - 1]);
-    let dirs: Vec<[f64; 3]> = pose_means.iter().map(|m| unit(accel.model.apply(*m))).collect();
+    let dirs: Vec<[f64; 3]> = pose_means
+        .iter()
+        .map(|m| unit(accel.model.apply(*m)))
+        .collect();
     let mut segments = Vec::new();
     let mut const_segments = Vec::new();
     let mut rotations = Vec::new();
@@ -350,11 +425,21 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
     for k in 0..poses.len().saturating_sub(1) {
         let span = poses[k].end - 1..poses[k + 1].start + 1;
         if rec.saturated[span.clone()].iter().any(|s| *s) {
-            skipped.push(Skipped { pose: k, why: "a saturated sample".into() });
+            skipped.push(Skipped {
+                pose: k,
+                why: "a saturated sample".into(),
+            });
             continue;
         }
-        if let Some(gap) = rec.gaps.iter().find(|g| g.from >= rec.t[span.start] && g.to <= rec.t[span.end - 1]) {
-            skipped.push(Skipped { pose: k, why: format!("{} samples dropped at line {}", gap.missing, gap.line) });
+        if let Some(gap) = rec
+            .gaps
+            .iter()
+            .find(|g| g.from >= rec.t[span.start] && g.to <= rec.t[span.end - 1])
+        {
+            skipped.push(Skipped {
+                pose: k,
+                why: format!("{} samples dropped at line {}", gap.missing, gap.line),
+            });
             continue;
         }
         let (ta, tb) = (mid(&poses[k]), mid(&poses[k + 1]));
@@ -362,26 +447,67 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
             match opts.gyro_bias {
                 GyroBias::Poses => {
                     let w = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
-                    std::array::from_fn(|j| gyro_means[k][j] + w * (gyro_means[k + 1][j] - gyro_means[k][j]))
+                    std::array::from_fn(|j| {
+                        gyro_means[k][j] + w * (gyro_means[k + 1][j] - gyro_means[k][j])
+                    })
                 }
                 GyroBias::Rest => rest_gyro,
             }
         };
-        let dt: Vec<f64> = rec.t[span.clone()].windows(2).map(|w| w[1] - w[0]).collect();
-        let x: Vec<[f64; 3]> = span.clone().map(|i| { let b = bias_at(rec.t[i]); std::array::from_fn(|j| rec.gyro[i][j] - b[j]) }).collect();
-        let xc: Vec<[f64; 3]> = span.clone().map(|i| std::array::from_fn(|j| rec.gyro[i][j] - gyro_bias[j])).collect();
-        segments.push(Segment { dt: dt.clone(), x, from: dirs[k], to: dirs[k + 1] });
-        const_segments.push(Segment { dt, x: xc, from: dirs[k], to: dirs[k + 1] });
+        let dt: Vec<f64> = rec.t[span.clone()]
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .collect();
+        let x: Vec<[f64; 3]> = span
+            .clone()
+            .map(|i| {
+                let b = bias_at(rec.t[i]);
+                std::array::from_fn(|j| rec.gyro[i][j] - b[j])
+            })
+            .collect();
+        let xc: Vec<[f64; 3]> = span
+            .clone()
+            .map(|i| std::array::from_fn(|j| rec.gyro[i][j] - gyro_bias[j]))
+            .collect();
+        segments.push(Segment {
+            dt: dt.clone(),
+            x,
+            from: dirs[k],
+            to: dirs[k + 1],
+        });
+        const_segments.push(Segment {
+            dt,
+            x: xc,
+            from: dirs[k],
+            to: dirs[k + 1],
+        });
         rotations.push(k);
     }
     if segments.len() < MIN_ROTATIONS {
-        let why = if skipped.is_empty() { "none".into() } else { skipped.iter().map(|s| s.why.clone()).collect::<Vec<_>>().join("; ") };
-        return Err(SelfCalError::TooFewRotations { file: source.into(), usable: segments.len(), skipped: skipped.len(), why, needed: MIN_ROTATIONS });
+        let why = if skipped.is_empty() {
+            "none".into()
+        } else {
+            skipped
+                .iter()
+                .map(|s| s.why.clone())
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        return Err(SelfCalError::TooFewRotations {
+            file: source.into(),
+            usable: segments.len(),
+            skipped: skipped.len(),
+            why,
+            needed: MIN_ROTATIONS,
+        });
     }
     let start = gyro_start(&segments);
     let gyro = rotation::fit(&segments, start).map_err(fit_err(source, "gyro"))?;
     let m = Matrix3::from_fn(|i, j| gyro.matrix[i][j]);
-    let constant_bias_angles = const_segments.iter().map(|s| rotation::angle(&m, s)).collect();
+    let constant_bias_angles = const_segments
+        .iter()
+        .map(|s| rotation::angle(&m, s))
+        .collect();
     Ok(SelfCal {
         options: opts.clone(),
         rate,
@@ -410,25 +536,45 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
 /// explains them poorly.
 fn gyro_start(segments: &[Segment]) -> [[f64; 3]; 3] {
     let probe = &segments[..segments.len().min(8)];
-    let cost = |m: &Matrix3<f64>| probe.iter().map(|s| rotation::angle(m, s).powi(2)).sum::<f64>();
+    let cost = |m: &Matrix3<f64>| {
+        probe
+            .iter()
+            .map(|s| rotation::angle(m, s).powi(2))
+            .sum::<f64>()
+    };
     let mut ratios: Vec<f64> = segments
         .iter()
         .filter_map(|s| {
-            let turned = (s.from[0] * s.to[0] + s.from[1] * s.to[1] + s.from[2] * s.to[2]).clamp(-1.0, 1.0).acos();
-            let sum: [f64; 3] = std::array::from_fn(|j| s.x.iter().zip(s.dt.iter().chain([&0.0])).map(|(x, dt)| x[j] * dt).sum());
+            let turned = (s.from[0] * s.to[0] + s.from[1] * s.to[1] + s.from[2] * s.to[2])
+                .clamp(-1.0, 1.0)
+                .acos();
+            let sum: [f64; 3] = std::array::from_fn(|j| {
+                s.x.iter()
+                    .zip(s.dt.iter().chain([&0.0]))
+                    .map(|(x, dt)| x[j] * dt)
+                    .sum()
+            });
             let counts = (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
             (turned > 0.2 && counts > 0.0).then(|| turned / counts)
         })
         .collect();
     ratios.sort_by(f64::total_cmp);
     // The angle between gravity directions understates a rotation: try a little above it too.
-    let scales: Vec<f64> = ratios.get(ratios.len() / 2).map_or_else(Vec::new, |r| (-2..=6).map(|k| r * 2f64.powf(f64::from(k) / 4.0)).collect());
+    let scales: Vec<f64> = ratios.get(ratios.len() / 2).map_or_else(Vec::new, |r| {
+        (-2..=6)
+            .map(|k| r * 2f64.powf(f64::from(k) / 4.0))
+            .collect()
+    });
     let mut best = (f64::INFINITY, Matrix3::identity());
     let search = |scales: &[f64], best: &mut (f64, Matrix3<f64>)| {
         for signs in 0..8u32 {
             let sign = |k: u32| if signs >> k & 1 == 1 { -1.0 } else { 1.0 };
             for &c in scales {
-                let m = Matrix3::from_diagonal(&nalgebra::Vector3::new(sign(0) * c, sign(1) * c, sign(2) * c));
+                let m = Matrix3::from_diagonal(&nalgebra::Vector3::new(
+                    sign(0) * c,
+                    sign(1) * c,
+                    sign(2) * c,
+                ));
                 let v = cost(&m);
                 if v < best.0 {
                     *best = (v, m);
@@ -439,7 +585,9 @@ fn gyro_start(segments: &[Segment]) -> [[f64; 3]; 3] {
     search(&scales, &mut best);
     // Poorly explained (an RMS above 10 degrees): search the scale.
     if best.0 > probe.len() as f64 * 0.03 {
-        let grid: Vec<f64> = (0..=48).map(|e| 10f64.powf(-7.0 + f64::from(e) / 8.0)).collect();
+        let grid: Vec<f64> = (0..=48)
+            .map(|e| 10f64.powf(-7.0 + f64::from(e) / 8.0))
+            .collect();
         search(&grid, &mut best);
     }
     std::array::from_fn(|i| std::array::from_fn(|j| best.1[(i, j)]))

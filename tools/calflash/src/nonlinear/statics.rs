@@ -52,11 +52,18 @@ pub fn rest_level(acc: &[[f64; 3]]) -> f64 {
 /// Runs of at least `min_len` samples whose measure is below `threshold` and which are not
 /// `excluded` (saturated).
 #[must_use]
-pub fn intervals(measure: &[f64], excluded: &[bool], threshold: f64, min_len: usize) -> Vec<Range<usize>> {
+pub fn intervals(
+    measure: &[f64],
+    excluded: &[bool],
+    threshold: f64,
+    min_len: usize,
+) -> Vec<Range<usize>> {
     let mut out = Vec::new();
     let mut start = None;
     for k in 0..=measure.len() {
-        let still = k < measure.len() && measure[k] < threshold && !excluded.get(k).copied().unwrap_or(false);
+        let still = k < measure.len()
+            && measure[k] < threshold
+            && !excluded.get(k).copied().unwrap_or(false);
         match (still, start) {
             (true, None) => start = Some(k),
             (false, Some(s)) => {
@@ -93,15 +100,25 @@ mod tests {
         };
         for k in 0..3000 {
             let moving = (1000..1500).contains(&k);
-            let base = if moving { 500.0 * (f64::from(k) * 0.05).sin() } else { 0.0 };
+            let base = if moving {
+                500.0 * (f64::from(k) * 0.05).sin()
+            } else {
+                0.0
+            };
             acc.push([base + noise(), 400.0 + noise(), -base + noise()]);
         }
         let m = measure(&acc, 101);
         let level = rest_level(&acc[..800]);
         let found = intervals(&m, &vec![false; acc.len()], 4.0 * level, 100);
         assert_eq!(found.len(), 2, "{found:?}");
-        assert!(found[0].start == 0 && (940..=1000).contains(&found[0].end), "{found:?}");
-        assert!((1500..=1560).contains(&found[1].start) && found[1].end == 3000, "{found:?}");
+        assert!(
+            found[0].start == 0 && (940..=1000).contains(&found[0].end),
+            "{found:?}"
+        );
+        assert!(
+            (1500..=1560).contains(&found[1].start) && found[1].end == 3000,
+            "{found:?}"
+        );
         // Excluded samples split a run.
         let mut ex = vec![false; acc.len()];
         ex[2000] = true;

@@ -23,7 +23,9 @@ pub enum RecordingError {
         source: std::io::Error,
     },
     /// Not UTF-8 text.
-    #[error("{path}:{line}: not text (a binary file?); expected a timestamp and three counts per line")]
+    #[error(
+        "{path}:{line}: not text (a binary file?); expected a timestamp and three counts per line"
+    )]
     NotText {
         /// File.
         path: PathBuf,
@@ -57,7 +59,9 @@ pub enum RecordingError {
         text: String,
     },
     /// Time going backwards or standing still.
-    #[error("{path}:{line}: timestamp {t} s is not after the previous line's {prev} s; timestamps must increase")]
+    #[error(
+        "{path}:{line}: timestamp {t} s is not after the previous line's {prev} s; timestamps must increase"
+    )]
     NotIncreasing {
         /// File.
         path: PathBuf,
@@ -69,7 +73,9 @@ pub enum RecordingError {
         prev: f64,
     },
     /// The two files disagree.
-    #[error("{gyro}:{line}: {what}; the accelerometer file {acc} and the gyro file must hold the same samples, line for line")]
+    #[error(
+        "{gyro}:{line}: {what}; the accelerometer file {acc} and the gyro file must hold the same samples, line for line"
+    )]
     Mismatch {
         /// Accelerometer file.
         acc: PathBuf,
@@ -150,15 +156,34 @@ struct Rows {
     line: Vec<usize>,
 }
 
-const NAMES: [&str; 7] = ["timestamp", "x count", "y count", "z count", "gyro x count", "gyro y count", "gyro z count"];
+const NAMES: [&str; 7] = [
+    "timestamp",
+    "x count",
+    "y count",
+    "z count",
+    "gyro x count",
+    "gyro y count",
+    "gyro z count",
+];
 
 fn read_rows(path: &Path, widths: &[usize]) -> Result<Rows, RecordingError> {
-    let bytes = std::fs::read(path).map_err(|source| RecordingError::Io { path: path.to_path_buf(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let text = std::str::from_utf8(&bytes).map_err(|e| RecordingError::NotText {
         path: path.to_path_buf(),
-        line: bytes[..e.valid_up_to()].iter().filter(|b| **b == b'\n').count() + 1,
+        line: bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|b| **b == b'\n')
+            .count()
+            + 1,
     })?;
-    let mut rows = Rows { t: Vec::new(), v: Vec::new(), line: Vec::new() };
+    let mut rows = Rows {
+        t: Vec::new(),
+        v: Vec::new(),
+        line: Vec::new(),
+    };
     let mut width = None;
     let mut seen_data = false;
     for (i, raw) in text.lines().enumerate() {
@@ -167,9 +192,16 @@ fn read_rows(path: &Path, widths: &[usize]) -> Result<Rows, RecordingError> {
         if s.is_empty() || s.starts_with('#') {
             continue;
         }
-        let fields: Vec<&str> = if s.contains(',') { s.split(',').map(str::trim).collect() } else { s.split_ascii_whitespace().collect() };
+        let fields: Vec<&str> = if s.contains(',') {
+            s.split(',').map(str::trim).collect()
+        } else {
+            s.split_ascii_whitespace().collect()
+        };
         // A header line of names before the first sample.
-        if !seen_data && fields.first().is_some_and(|f| f.parse::<f64>().is_err()) && fields.iter().any(|f| f.chars().any(char::is_alphabetic)) {
+        if !seen_data
+            && fields.first().is_some_and(|f| f.parse::<f64>().is_err())
+            && fields.iter().any(|f| f.chars().any(char::is_alphabetic))
+        {
             continue;
         }
         seen_data = true;
@@ -182,22 +214,36 @@ fn read_rows(path: &Path, widths: &[usize]) -> Result<Rows, RecordingError> {
             } else {
                 "4 (timestamp, x, y, z counts)".into()
             };
-            return Err(RecordingError::Fields { path: path.to_path_buf(), line, found: fields.len(), expected });
+            return Err(RecordingError::Fields {
+                path: path.to_path_buf(),
+                line,
+                found: fields.len(),
+                expected,
+            });
         }
         let mut vals = Vec::with_capacity(w - 1);
         for (k, f) in fields.iter().enumerate() {
-            let x: f64 = f.parse().ok().filter(|x: &f64| x.is_finite()).ok_or_else(|| RecordingError::Number {
-                path: path.to_path_buf(),
-                line,
-                field: k + 1,
-                what: NAMES[k.min(6)],
-                text: (*f).to_string(),
-            })?;
+            let x: f64 = f
+                .parse()
+                .ok()
+                .filter(|x: &f64| x.is_finite())
+                .ok_or_else(|| RecordingError::Number {
+                    path: path.to_path_buf(),
+                    line,
+                    field: k + 1,
+                    what: NAMES[k.min(6)],
+                    text: (*f).to_string(),
+                })?;
             if k == 0 {
                 if let Some(&prev) = rows.t.last()
                     && x <= prev
                 {
-                    return Err(RecordingError::NotIncreasing { path: path.to_path_buf(), line, t: x, prev });
+                    return Err(RecordingError::NotIncreasing {
+                        path: path.to_path_buf(),
+                        line,
+                        t: x,
+                        prev,
+                    });
                 }
                 rows.t.push(x);
             } else {
@@ -208,9 +254,19 @@ fn read_rows(path: &Path, widths: &[usize]) -> Result<Rows, RecordingError> {
         rows.line.push(line);
     }
     if rows.t.is_empty() {
-        return Err(RecordingError::Empty { path: path.to_path_buf() });
+        return Err(RecordingError::Empty {
+            path: path.to_path_buf(),
+        });
     }
     Ok(rows)
+}
+
+struct Parsed {
+    t: Vec<f64>,
+    acc: Vec<[f64; 3]>,
+    gyro: Vec<[f64; 3]>,
+    line: Vec<usize>,
+    source: String,
 }
 
 fn triple(v: &[f64], from: usize) -> [f64; 3] {
@@ -223,12 +279,24 @@ fn triple(v: &[f64], from: usize) -> [f64; 3] {
 /// # Errors
 /// A [`RecordingError`] naming the file and line.
 pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, RecordingError> {
-    let (t, a, g, line, source): (Vec<f64>, Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<usize>, String) = match gyro {
+    let Parsed {
+        t,
+        acc: a,
+        gyro: g,
+        line,
+        source,
+    } = match gyro {
         None => {
             let r = read_rows(acc, &[7])?;
             let a = r.v.iter().map(|v| triple(v, 0)).collect();
             let g = r.v.iter().map(|v| triple(v, 3)).collect();
-            (r.t, a, g, r.line, acc.display().to_string())
+            Parsed {
+                t: r.t,
+                acc: a,
+                gyro: g,
+                line: r.line,
+                source: acc.display().to_string(),
+            }
         }
         Some(gp) => {
             let ra = read_rows(acc, &[4])?;
@@ -240,16 +308,40 @@ pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, 
                 what,
             };
             if ra.t.len() != rg.t.len() {
-                let line = rg.line.get(ra.t.len().min(rg.t.len())).or(rg.line.last()).copied().unwrap_or(1);
-                return Err(mismatch(line, format!("{} gyro samples against {} accelerometer samples", rg.t.len(), ra.t.len())));
+                let line = rg
+                    .line
+                    .get(ra.t.len().min(rg.t.len()))
+                    .or(rg.line.last())
+                    .copied()
+                    .unwrap_or(1);
+                return Err(mismatch(
+                    line,
+                    format!(
+                        "{} gyro samples against {} accelerometer samples",
+                        rg.t.len(),
+                        ra.t.len()
+                    ),
+                ));
             }
             let tol = 1e-6 * ra.t.iter().fold(1.0f64, |m, x| m.max(x.abs()));
             if let Some(k) = (0..ra.t.len()).find(|&k| (ra.t[k] - rg.t[k]).abs() > tol) {
-                return Err(mismatch(rg.line[k], format!("timestamp {} s where the accelerometer's is {} s", rg.t[k], ra.t[k])));
+                return Err(mismatch(
+                    rg.line[k],
+                    format!(
+                        "timestamp {} s where the accelerometer's is {} s",
+                        rg.t[k], ra.t[k]
+                    ),
+                ));
             }
             let a = ra.v.iter().map(|v| triple(v, 0)).collect();
             let g = rg.v.iter().map(|v| triple(v, 0)).collect();
-            (ra.t, a, g, ra.line, format!("{} + {}", acc.display(), gp.display()))
+            Parsed {
+                t: ra.t,
+                acc: a,
+                gyro: g,
+                line: ra.line,
+                source: format!("{} + {}", acc.display(), gp.display()),
+            }
         }
     };
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
@@ -270,10 +362,16 @@ pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, 
             missing: ((w[1] - w[0]) / period).round() as usize - 1,
         })
         .collect();
-    let at_rail = |s: &[f64; 3]| s.iter().any(|x| *x <= f64::from(rails.lo) || *x >= f64::from(rails.hi));
+    let at_rail = |s: &[f64; 3]| {
+        s.iter()
+            .any(|x| *x <= f64::from(rails.lo) || *x >= f64::from(rails.hi))
+    };
     let sa: Vec<bool> = a.iter().map(at_rail).collect();
     let sg: Vec<bool> = g.iter().map(at_rail).collect();
-    let saturated_count = (sa.iter().filter(|x| **x).count(), sg.iter().filter(|x| **x).count());
+    let saturated_count = (
+        sa.iter().filter(|x| **x).count(),
+        sg.iter().filter(|x| **x).count(),
+    );
     let saturated = sa.iter().zip(&sg).map(|(x, y)| *x || *y).collect();
     Ok(Recording {
         source,
@@ -301,15 +399,35 @@ mod tests {
     #[test]
     fn reads_both_layouts_and_reports_gaps_and_rails() {
         let d = tempfile::tempdir().unwrap();
-        let a = write(d.path(), "a.txt", "# rest\n0.00 1 2 3\n0.01 1 2 3\n0.02 0 2 3\n0.05 1 2 3\n");
-        let g = write(d.path(), "g.txt", "0.00 5 6 7\n0.01 5 6 7\n0.02 5 6 7\n0.05 5 6 65535\n");
+        let a = write(
+            d.path(),
+            "a.txt",
+            "# rest\n0.00 1 2 3\n0.01 1 2 3\n0.02 0 2 3\n0.05 1 2 3\n",
+        );
+        let g = write(
+            d.path(),
+            "g.txt",
+            "0.00 5 6 7\n0.01 5 6 7\n0.02 5 6 7\n0.05 5 6 65535\n",
+        );
         let r = read(&a, Some(&g), Rails::unsigned(16)).unwrap();
         assert_eq!(r.len(), 4);
         assert_eq!(r.gyro[3], [5.0, 6.0, 65535.0]);
         assert_eq!(r.saturated, [false, false, true, true]);
         assert_eq!(r.saturated_count, (1, 1));
-        assert_eq!(r.gaps, [Gap { line: 5, from: 0.02, to: 0.05, missing: 2 }]);
-        let one = write(d.path(), "imu.csv", "t,ax,ay,az,gx,gy,gz\n0,1,2,3,4,5,6\n0.01,1,2,3,4,5,6\n");
+        assert_eq!(
+            r.gaps,
+            [Gap {
+                line: 5,
+                from: 0.02,
+                to: 0.05,
+                missing: 2
+            }]
+        );
+        let one = write(
+            d.path(),
+            "imu.csv",
+            "t,ax,ay,az,gx,gy,gz\n0,1,2,3,4,5,6\n0.01,1,2,3,4,5,6\n",
+        );
         let r = read(&one, None, Rails::unsigned(16)).unwrap();
         assert_eq!((r.acc[1], r.gyro[1]), ([1.0, 2.0, 3.0], [4.0, 5.0, 6.0]));
     }
@@ -320,19 +438,53 @@ mod tests {
         let rails = Rails::unsigned(16);
         let msg = |a: &Path, g: Option<&Path>| read(a, g, rails).unwrap_err().to_string();
         let back = write(d.path(), "back.txt", "0.00 1 2 3\n0.02 1 2 3\n0.01 1 2 3\n");
-        assert_eq!(msg(&back, Some(&back)), format!("{}:3: timestamp 0.01 s is not after the previous line's 0.02 s; timestamps must increase", back.display()));
+        assert_eq!(
+            msg(&back, Some(&back)),
+            format!(
+                "{}:3: timestamp 0.01 s is not after the previous line's 0.02 s; timestamps must increase",
+                back.display()
+            )
+        );
         let word = write(d.path(), "word.txt", "0.00 1 2 3\n0.01 1 x 3\n");
-        assert_eq!(msg(&word, Some(&word)), format!("{}:2: field 3 (y count) is `x`; expected a number", word.display()));
+        assert_eq!(
+            msg(&word, Some(&word)),
+            format!(
+                "{}:2: field 3 (y count) is `x`; expected a number",
+                word.display()
+            )
+        );
         let short = write(d.path(), "short.txt", "0.00 1 2 3\n0.01 1 2\n");
-        assert_eq!(msg(&short, Some(&short)), format!("{}:2: 3 fields; expected 4, as on the first sample line", short.display()));
+        assert_eq!(
+            msg(&short, Some(&short)),
+            format!(
+                "{}:2: 3 fields; expected 4, as on the first sample line",
+                short.display()
+            )
+        );
         let other = write(d.path(), "other.txt", "0.00 1 2 3\n0.015 1 2 3\n");
         let ok = write(d.path(), "ok.txt", "0.00 1 2 3\n0.01 1 2 3\n");
         assert_eq!(
             msg(&ok, Some(&other)),
-            format!("{}:2: timestamp 0.015 s where the accelerometer's is 0.01 s; the accelerometer file {} and the gyro file must hold the same samples, line for line", other.display(), ok.display())
+            format!(
+                "{}:2: timestamp 0.015 s where the accelerometer's is 0.01 s; the accelerometer file {} and the gyro file must hold the same samples, line for line",
+                other.display(),
+                ok.display()
+            )
         );
-        assert_eq!(msg(&ok, None), format!("{}:1: 4 fields; expected 7 (timestamp, accelerometer x, y, z, gyro x, y, z counts), or give the gyro file too", ok.display()));
+        assert_eq!(
+            msg(&ok, None),
+            format!(
+                "{}:1: 4 fields; expected 7 (timestamp, accelerometer x, y, z, gyro x, y, z counts), or give the gyro file too",
+                ok.display()
+            )
+        );
         let empty = write(d.path(), "empty.txt", "# nothing\n");
-        assert_eq!(msg(&empty, Some(&ok)), format!("{}: no samples; expected a timestamp and three counts per line", empty.display()));
+        assert_eq!(
+            msg(&empty, Some(&ok)),
+            format!(
+                "{}: no samples; expected a timestamp and three counts per line",
+                empty.display()
+            )
+        );
     }
 }

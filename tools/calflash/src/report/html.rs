@@ -21,7 +21,7 @@ fn verdict_word(v: Verdict) -> &'static str {
     }
 }
 
-const STYLE: &str = "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}\
+pub(crate) const STYLE: &str = "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}\
 h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #ccc}\
 .verdict{font-size:1.4em;padding:.5em 1em;border-radius:6px;display:inline-block}\
 .accept{background:#d9f2d9}.review{background:#fff3cd}.reject{background:#f8d7da}\
@@ -119,7 +119,8 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
                     x: "input",
                     y: "residual (counts)",
                     series,
-                    band: None,
+                    bands: Vec::new(),
+                    band_label: "",
                     zero_line: true,
                 })?
             );
@@ -201,7 +202,8 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
                 x: &format!("{} ({unit})", axis.own),
                 y: "residual (counts)",
                 series,
-                band: Some((f64::from(range.lo), f64::from(range.hi))),
+                bands: vec![(f64::from(range.lo), f64::from(range.hi))],
+                band_label: "calibrated range",
                 zero_line: true,
             })?
         );
@@ -237,7 +239,8 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
                 x: "line of the data file",
                 y: "residual (counts)",
                 series,
-                band: None,
+                bands: Vec::new(),
+                band_label: "",
                 zero_line: true,
             })?
         );
@@ -278,7 +281,8 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
                     line: true,
                     errors: None,
                 }],
-                band: Some((lo, hi)),
+                bands: vec![(lo, hi)],
+                band_label: "calibrated range",
                 zero_line: true,
             })?
         );
@@ -320,7 +324,8 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
                             line: true,
                             errors: Some(&errs),
                         }],
-                        band: None,
+                        bands: Vec::new(),
+                        band_label: "",
                         zero_line: false,
                     })?
                 );

@@ -3,6 +3,7 @@
 pub mod html;
 pub mod json;
 pub mod plot;
+pub mod selfcal;
 pub mod terminal;
 
 use std::io::Write;

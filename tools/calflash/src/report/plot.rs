@@ -37,8 +37,10 @@ pub struct Figure<'a> {
     pub y: &'a str,
     /// The series.
     pub series: Vec<Series<'a>>,
-    /// An x interval to shade (the calibrated range).
-    pub band: Option<(f64, f64)>,
+    /// x intervals to shade (the calibrated range, the still poses).
+    pub bands: Vec<(f64, f64)>,
+    /// The legend of the shaded intervals.
+    pub band_label: &'a str,
     /// Draw y = 0.
     pub zero_line: bool,
 }
@@ -56,8 +58,8 @@ fn bounds(fig: &Figure<'_>) -> ((f64, f64), (f64, f64)) {
             y = (y.0.min(py - e), y.1.max(py + e));
         }
     }
-    if let Some((a, b)) = fig.band {
-        x = (x.0.min(a), x.1.max(b));
+    for (a, b) in &fig.bands {
+        x = (x.0.min(*a), x.1.max(*b));
     }
     if fig.zero_line {
         y = (y.0.min(0.0), y.1.max(0.0));
@@ -97,14 +99,13 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
             .light_line_style(RGBColor(235, 235, 235))
             .draw()
             .map_err(|e| e.to_string())?;
-        if let Some((a, b)) = fig.band {
+        if !fig.bands.is_empty() {
             chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(a, y0), (b, y1)],
-                    RGBColor(230, 240, 255).filled(),
-                )))
+                .draw_series(fig.bands.iter().map(|(a, b)| {
+                    Rectangle::new([(*a, y0), (*b, y1)], RGBColor(230, 240, 255).filled())
+                }))
                 .map_err(|e| e.to_string())?
-                .label("calibrated range")
+                .label(fig.band_label)
                 .legend(|(x, y)| {
                     Rectangle::new(
                         [(x, y - 5), (x + 12, y + 5)],
@@ -153,6 +154,81 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
     Ok(out)
 }
 
+/// Draws series on logarithmic axes (the Allan deviation), as an SVG document. Points with a
+/// coordinate at or below zero are left out.
+///
+/// # Errors
+/// plotters' drawing error, as text.
+pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, String> {
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (720, 420)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let pos: Vec<(f64, f64)> = fig
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().copied())
+            .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
+            .collect();
+        let fold = |f: fn(&(f64, f64)) -> f64| {
+            pos.iter()
+                .map(f)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                })
+        };
+        let ((x0, x1), (y0, y1)) = (fold(|p| p.0), fold(|p| p.1));
+        if !x0.is_finite() {
+            return Err(format!("{}: nothing to draw", fig.title));
+        }
+        let mut chart = ChartBuilder::on(&root)
+            .caption(fig.title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(80)
+            .build_cartesian_2d(
+                (x0 / 1.5..x1 * 1.5).log_scale(),
+                (y0 / 1.5..y1 * 1.5).log_scale(),
+            )
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(fig.x)
+            .y_desc(fig.y)
+            .x_label_formatter(&|v| super::terminal::num(*v))
+            .y_label_formatter(&|v| super::terminal::num(*v))
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for s in &fig.series {
+            let color = s.color;
+            let pts: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+                .collect();
+            let anno = if s.line {
+                chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
+            } else {
+                chart.draw_series(pts.iter().map(|p| Circle::new(*p, 3, color.filled())))
+            }
+            .map_err(|e| e.to_string())?;
+            anno.label(s.name).legend(move |(x, y)| {
+                Rectangle::new([(x, y - 3), (x + 12, y + 3)], color.filled())
+            });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.3))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -171,7 +247,8 @@ mod tests {
                 line: false,
                 errors: Some(&[0.1, 0.1, 0.1]),
             }],
-            band: Some((0.5, 1.5)),
+            bands: vec![(0.5, 1.5)],
+            band_label: "calibrated range",
             zero_line: true,
         })
         .unwrap();

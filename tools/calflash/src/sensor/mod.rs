@@ -12,6 +12,7 @@ pub mod device;
 pub mod hysteresis;
 pub mod invert;
 pub mod record;
+pub mod selfcal;
 pub mod single;
 pub mod table;
 pub mod threshold;

@@ -1,0 +1,213 @@
+//! `calflash allan`: the overlapping Allan deviation of a still recording and its IEEE Std 952
+//! noise terms, per axis, in stated units, with a log-log figure.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use spincal::model::Rails;
+
+use crate::noise::allan::{self, NoiseTerms, Point};
+use crate::obs::recording;
+use crate::report;
+
+/// Which sensor of the recording.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Which {
+    /// The gyro (rad/s with --scale).
+    Gyro,
+    /// The accelerometer (m/s^2 with --scale).
+    Accel,
+}
+
+/// Allan deviation of a still recording.
+#[derive(Debug, Args)]
+pub struct AllanArgs {
+    /// The recording (as `calflash selfcal` reads it).
+    pub acc: PathBuf,
+    /// The gyro file, when separate.
+    pub gyro: Option<PathBuf>,
+    /// Which sensor.
+    #[arg(long, value_enum, default_value = "gyro")]
+    pub sensor: Which,
+    /// Counts per SI unit (per rad/s or per m/s^2), one for all axes or three; without it the
+    /// deviation is in counts.
+    #[arg(long, value_delimiter = ',')]
+    pub scale: Vec<f64>,
+    /// Use only samples from this time on, s from the start.
+    #[arg(long)]
+    pub from: Option<f64>,
+    /// Up to this time, s from the start.
+    #[arg(long)]
+    pub to: Option<f64>,
+    /// Cluster sizes per doubling of tau.
+    #[arg(long, default_value_t = 2)]
+    pub per_octave: usize,
+    /// Write the log-log figure (SVG) here.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Write the curve and the terms as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Runs `calflash allan`.
+///
+/// # Errors
+/// Bad input or too short a recording.
+pub fn run(args: &AllanArgs) -> Result<(), String> {
+    let rec = recording::read(
+        &args.acc,
+        args.gyro.as_deref(),
+        Rails {
+            lo: i32::MIN,
+            hi: i32::MAX,
+        },
+    )
+    .map_err(|e| e.to_string())?;
+    let t0 = rec.t[0];
+    let (a, b) = (args.from.unwrap_or(0.0), args.to.unwrap_or(f64::INFINITY));
+    let idx: Vec<usize> = (0..rec.len())
+        .filter(|&i| (a..=b).contains(&(rec.t[i] - t0)))
+        .collect();
+    if idx.len() < 100 {
+        return Err(format!(
+            "{}: {} samples between {a} s and {b} s; the Allan deviation needs a still recording of at least 100 (many thousands for the slow terms)",
+            rec.source,
+            idx.len()
+        ));
+    }
+    if let Some(g) = rec.gaps.iter().find(|g| (a..=b).contains(&(g.from - t0))) {
+        return Err(format!(
+            "{}:{}: {} samples dropped at {:.3} s; the Allan deviation needs an unbroken record (use --from/--to to take a part without gaps)",
+            rec.source,
+            g.line,
+            g.missing,
+            g.from - t0
+        ));
+    }
+    let scale: [f64; 3] = match args.scale.as_slice() {
+        [] => [1.0; 3],
+        [s] => [*s; 3],
+        [x, y, z] => [*x, *y, *z],
+        other => {
+            return Err(format!(
+                "--scale: one value or three, {} given",
+                other.len()
+            ));
+        }
+    };
+    if scale.iter().any(|s| !(s.is_finite() && *s != 0.0)) {
+        return Err("--scale: counts per unit must be finite and non-zero".into());
+    }
+    let (unit, si) = match (args.sensor, args.scale.is_empty()) {
+        (_, true) => ("counts", false),
+        (Which::Gyro, false) => ("rad/s", true),
+        (Which::Accel, false) => ("m/s^2", true),
+    };
+    let axes = ["x", "y", "z"];
+    let mut curves: Vec<Vec<Point>> = Vec::new();
+    let mut terms: Vec<NoiseTerms> = Vec::new();
+    println!(
+        "calflash allan  {}  {} samples at {:.2} Hz ({:.1} s), {} in {unit}",
+        rec.source,
+        idx.len(),
+        rec.rate(),
+        idx.len() as f64 / rec.rate(),
+        if args.sensor == Which::Gyro {
+            "gyro"
+        } else {
+            "accelerometer"
+        }
+    );
+    for j in 0..3 {
+        let y: Vec<f64> = idx.iter().map(|&i| if args.sensor == Which::Gyro { rec.gyro[i][j] } else { rec.acc[i][j] } / scale[j]).collect();
+        let c = allan::overlapping(&y, rec.period, args.per_octave);
+        let t = allan::noise_terms(&c);
+        println!("  {}: {}", axes[j], describe(&t, args.sensor, unit, si));
+        curves.push(c);
+        terms.push(t);
+    }
+    if let Some(p) = &args.plot {
+        let pts: Vec<Vec<(f64, f64)>> = curves
+            .iter()
+            .map(|c| c.iter().map(|p| (p.tau, p.adev)).collect())
+            .collect();
+        let fits: Vec<Vec<(f64, f64)>> = curves
+            .iter()
+            .zip(&terms)
+            .map(|(c, t)| c.iter().map(|p| (p.tau, t.adev(p.tau))).collect())
+            .collect();
+        let mut series = Vec::new();
+        for j in 0..3 {
+            series.push(report::plot::Series {
+                name: axes[j],
+                points: &pts[j],
+                color: report::plot::COLORS[j],
+                line: false,
+                errors: None,
+            });
+            series.push(report::plot::Series {
+                name: "noise terms",
+                points: &fits[j],
+                color: report::plot::COLORS[j],
+                line: true,
+                errors: None,
+            });
+        }
+        let y = format!("Allan deviation [{unit}]");
+        let fig = report::plot::Figure {
+            title: "Overlapping Allan deviation",
+            x: "tau [s]",
+            y: &y,
+            series,
+            bands: Vec::new(),
+            band_label: "",
+            zero_line: false,
+        };
+        let svg = report::plot::svg_loglog(&fig)?;
+        report::write_atomically(p, |w| w.write_all(svg.as_bytes()))?;
+    }
+    if let Some(p) = &args.json {
+        let v = serde_json::json!({"schema": "calflash.allan/1", "source": rec.source, "unit": unit, "axes": axes.iter().zip(&curves).zip(&terms).map(|((a, c), t)| serde_json::json!({"axis": a, "curve": c, "terms": t})).collect::<Vec<_>>()});
+        report::write_atomically(p, |w| {
+            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+        })?;
+    }
+    Ok(())
+}
+
+fn describe(t: &NoiseTerms, which: Which, unit: &str, si: bool) -> String {
+    use crate::report::terminal::num;
+    let deg = 180.0 / std::f64::consts::PI;
+    match (which, si) {
+        (Which::Gyro, true) => format!(
+            "ARW {} rad/s/sqrt(Hz) = {} deg/sqrt(h); bias instability {} rad/s = {} deg/h; RRW {} rad/s/sqrt(s) = {} deg/h/sqrt(h); quantization {} rad; rate ramp {} rad/s^2",
+            num(t.random_walk),
+            num(t.random_walk * deg * 60.0),
+            num(t.bias_instability),
+            num(t.bias_instability * deg * 3600.0),
+            num(t.rate_random_walk),
+            num(t.rate_random_walk * deg * 3600.0 * 60.0),
+            num(t.quantization),
+            num(t.rate_ramp)
+        ),
+        (Which::Accel, true) => format!(
+            "VRW {} m/s^2/sqrt(Hz) = {} m/s/sqrt(h); bias instability {} m/s^2 = {} mg; acceleration random walk {} m/s^2/sqrt(s); quantization {} m/s; ramp {} m/s^3",
+            num(t.random_walk),
+            num(t.random_walk * 60.0),
+            num(t.bias_instability),
+            num(t.bias_instability / 9.80665e-3),
+            num(t.rate_random_walk),
+            num(t.quantization),
+            num(t.rate_ramp)
+        ),
+        _ => format!(
+            "random walk {} {unit}/sqrt(Hz); bias instability {} {unit}; rate random walk {} {unit}/sqrt(s); quantization {} {unit} s; ramp {} {unit}/s",
+            num(t.random_walk),
+            num(t.bias_instability),
+            num(t.rate_random_walk),
+            num(t.quantization),
+            num(t.rate_ramp)
+        ),
+    }
+}

@@ -1,0 +1,130 @@
+//! `calflash selfcal`: an IMU calibrated from a recording of still poses, with no equipment.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use spincal::model::{Rails, Span};
+
+use crate::nonlinear::selfcal::{self, GyroBias, Options, Quadratic};
+use crate::obs::recording;
+use crate::report;
+use crate::sensor::{device, selfcal as build};
+
+/// Calibrate an IMU without equipment: still poses by hand, gravity as the only reference.
+#[derive(Debug, Args)]
+pub struct SelfcalArgs {
+    /// The accelerometer recording (timestamp and three counts per line), or one file with the
+    /// timestamp and six counts (accelerometer, then gyro).
+    pub acc: PathBuf,
+    /// The gyro recording, when separate (same timestamps, line for line).
+    pub gyro: Option<PathBuf>,
+    /// Local gravity, m/s^2 (look it up for the site: it varies by 0.5 % over the Earth).
+    #[arg(long)]
+    pub g: f64,
+    /// The unit's serial number.
+    #[arg(long)]
+    pub serial: String,
+    /// Length of the rest at the start of the recording, s.
+    #[arg(long, default_value_t = 30.0)]
+    pub init_rest: f64,
+    /// Window of the still measure, s.
+    #[arg(long, default_value_t = 1.0)]
+    pub window: f64,
+    /// Shortest still pose, s.
+    #[arg(long, default_value_t = 1.0)]
+    pub min_still: f64,
+    /// The accelerometer's quadratic terms.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub quadratic: Quadratic,
+    /// Where the gyro bias during rotations comes from.
+    #[arg(long, value_enum, default_value = "poses")]
+    pub gyro_bias: GyroBias,
+    /// ADC bits (rails at 0 and 2^bits - 1; samples there are excluded).
+    #[arg(long, default_value_t = 16)]
+    pub bits: u32,
+    /// Calibrated temperature span, C (LO:HI), stored for the device's flags.
+    #[arg(long, default_value = "20:30")]
+    pub temp_span: String,
+    /// Calibrated supply-voltage span, V (LO:HI).
+    #[arg(long, default_value = "0:100")]
+    pub volt_span: String,
+    /// Write the blob here.
+    #[arg(long)]
+    pub blob: Option<PathBuf>,
+    /// Write the HTML report here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Write the JSON record here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Runs `calflash selfcal`.
+///
+/// # Errors
+/// Bad input, or a recording that cannot calibrate the unit (the message says what to do).
+pub fn run(args: &SelfcalArgs) -> Result<(), String> {
+    if !(args.g.is_finite() && (9.7..=9.9).contains(&args.g)) {
+        return Err(format!(
+            "--g {}: local gravity is between 9.78 and 9.84 m/s^2 on the Earth's surface; give it in m/s^2",
+            args.g
+        ));
+    }
+    if !(1..=31).contains(&args.bits) {
+        return Err(format!("--bits {}: expected 1 to 31", args.bits));
+    }
+    let serial = device::serial(&args.serial)?;
+    let (t0, t1) = super::calibrate::pair(&args.temp_span, "--temp-span")?;
+    let (v0, v1) = super::calibrate::pair(&args.volt_span, "--volt-span")?;
+    let rails = Rails::unsigned(args.bits);
+    let rec = recording::read(&args.acc, args.gyro.as_deref(), rails).map_err(|e| e.to_string())?;
+    let opts = Options {
+        g: args.g,
+        init_rest: args.init_rest,
+        window: args.window,
+        min_still: args.min_still,
+        quadratic: args.quadratic,
+        gyro_bias: args.gyro_bias,
+        ..Options::default()
+    };
+    let c = selfcal::calibrate(&rec, &opts).map_err(|e| e.to_string())?;
+    let mut files = vec![args.acc.as_path()];
+    files.extend(args.gyro.as_deref());
+    let version: Vec<u16> = env!("CARGO_PKG_VERSION")
+        .split('.')
+        .map(|v| v.parse().unwrap_or(0))
+        .collect();
+    let identity = spincal::model::Identity {
+        serial: serial.clone(),
+        created_unix_s: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs()),
+        data_hash: build::files_hash(&files)?,
+        tool_version: [version[0], version[1], version[2]],
+    };
+    let data = build::calibration_data(
+        &c,
+        &rec,
+        identity,
+        rails,
+        Span::new(t0 as f32, t1 as f32),
+        Span::new(v0 as f32, v1 as f32),
+    );
+    let check = build::build_and_check(&data, &c, &rec)?;
+    let name = serial.as_str();
+    if let Some(p) = &args.blob {
+        report::write_atomically(p, |w| w.write_all(&check.blob))?;
+    }
+    if let Some(p) = &args.json {
+        let v = report::selfcal::record(&c, &rec, &check, name);
+        report::write_atomically(p, |w| {
+            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+        })?;
+    }
+    if let Some(p) = &args.report {
+        let html = report::selfcal::html(&c, &rec, &check, name)?;
+        report::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
+    }
+    print!("{}", report::selfcal::summary(&c, &rec, &check, name));
+    Ok(())
+}

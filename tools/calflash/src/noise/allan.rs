@@ -1,0 +1,241 @@
+//! Overlapping Allan deviation of a rate (or specific-force) record and the IEEE Std 952 noise
+//! terms read from it.
+//!
+//! For samples `y_k` at interval `tau0`, with `theta` their running integral, the overlapping
+//! Allan variance at `tau = m tau0` is
+//!
+//! ```text
+//! AVAR(tau) = sum_k (theta_{k+2m} - 2 theta_{k+m} + theta_k)^2 / (2 tau^2 (N - 2m))
+//! ```
+//!
+//! (IEEE Std 952-1997, annex C). The noise terms are fitted to the curve as the sum of the
+//! standard shapes, each with a coefficient that cannot be negative:
+//!
+//! ```text
+//! AVAR(tau) = 3 Q^2 / tau^2 + N^2 / tau + (2 ln 2 / pi) B^2 + K^2 tau / 3 + R^2 tau^2 / 2
+//! ```
+//!
+//! quantization `Q`, angle (or velocity) random walk `N`, bias instability `B`, rate random walk
+//! `K` and rate ramp `R`, in the record's unit `u`: `Q` in `u s`, `N` in `u s^(1/2)` (that is,
+//! `u/sqrt(Hz)`), `B` in `u`, `K` in `u / s^(1/2)`, `R` in `u / s`. Each point is weighted by
+//! the inverse square of its relative uncertainty; every subset of the terms is tried and the
+//! best fit with all coefficients non-negative is kept.
+
+use nalgebra::{DMatrix, DVector};
+
+/// One point of the curve.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Point {
+    /// Cluster time, s.
+    pub tau: f64,
+    /// Allan deviation, in the record's unit.
+    pub adev: f64,
+    /// Its 1-sigma relative uncertainty (from the number of independent clusters).
+    pub rel_error: f64,
+}
+
+/// Overlapping Allan deviation at `per_octave` cluster sizes per doubling (at least 1), from
+/// one sample up to a third of the record. `O(n)` per cluster size.
+#[must_use]
+pub fn overlapping(y: &[f64], tau0: f64, per_octave: usize) -> Vec<Point> {
+    let n = y.len();
+    if n < 3 {
+        return Vec::new();
+    }
+    // The running integral, in sample units, about the mean (to keep the sums small).
+    let mean = y.iter().sum::<f64>() / n as f64;
+    let mut theta = Vec::with_capacity(n + 1);
+    theta.push(0.0);
+    let mut acc = 0.0;
+    for v in y {
+        acc += v - mean;
+        theta.push(acc);
+    }
+    let mut ms: Vec<usize> = Vec::new();
+    let steps = per_octave.max(1) as f64;
+    let mut k = 0.0f64;
+    loop {
+        let m = 2f64.powf(k / steps).round() as usize;
+        if m > n / 3 {
+            break;
+        }
+        if ms.last() != Some(&m) {
+            ms.push(m);
+        }
+        k += 1.0;
+    }
+    let len = theta.len();
+    ms.into_iter()
+        .map(|m| {
+            let count = len - 2 * m;
+            let mut sum = 0.0;
+            for i in 0..count {
+                let d = theta[i + 2 * m] - 2.0 * theta[i + m] + theta[i];
+                sum += d * d;
+            }
+            // theta is in samples x (unit); theta * tau0 is the integral. tau = m tau0.
+            let avar = sum / (2.0 * (m * m) as f64 * count as f64);
+            let independent = (n / m).saturating_sub(1).max(1);
+            Point {
+                tau: m as f64 * tau0,
+                adev: avar.sqrt(),
+                rel_error: 1.0 / (2.0 * independent as f64).sqrt(),
+            }
+        })
+        .collect()
+}
+
+/// The IEEE Std 952 noise terms (zero when the curve does not show a term).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct NoiseTerms {
+    /// Quantization, `u s`.
+    pub quantization: f64,
+    /// Angle / velocity random walk, `u s^(1/2)` (`u/sqrt(Hz)`).
+    pub random_walk: f64,
+    /// Bias instability, `u`.
+    pub bias_instability: f64,
+    /// Rate random walk, `u / s^(1/2)`.
+    pub rate_random_walk: f64,
+    /// Rate ramp, `u / s`.
+    pub rate_ramp: f64,
+}
+
+/// Shapes of the five terms at `tau`, as coefficients of the squared parameters.
+fn shapes(tau: f64) -> [f64; 5] {
+    [
+        3.0 / (tau * tau),
+        1.0 / tau,
+        2.0 * std::f64::consts::LN_2 / std::f64::consts::PI,
+        tau / 3.0,
+        tau * tau / 2.0,
+    ]
+}
+
+impl NoiseTerms {
+    /// The Allan deviation these terms give at `tau`.
+    #[must_use]
+    pub fn adev(&self, tau: f64) -> f64 {
+        let c = [
+            self.quantization,
+            self.random_walk,
+            self.bias_instability,
+            self.rate_random_walk,
+            self.rate_ramp,
+        ];
+        shapes(tau)
+            .iter()
+            .zip(c)
+            .map(|(s, c)| s * c * c)
+            .sum::<f64>()
+            .sqrt()
+    }
+}
+
+/// Fits the noise terms to `curve`.
+#[must_use]
+pub fn noise_terms(curve: &[Point]) -> NoiseTerms {
+    let rows: Vec<(&Point, f64)> = curve
+        .iter()
+        .filter(|p| p.adev > 0.0)
+        .map(|p| (p, 1.0 / (p.adev * p.adev * 2.0 * p.rel_error)))
+        .collect();
+    let mut best: Option<(f64, [f64; 5])> = None;
+    for subset in 1u32..32 {
+        let cols: Vec<usize> = (0..5).filter(|k| subset >> k & 1 == 1).collect();
+        if cols.len() > rows.len() {
+            continue;
+        }
+        // Weighted rows: AVAR / (AVAR * relative error of AVAR) = shapes . c.
+        let a = DMatrix::from_fn(rows.len(), cols.len(), |i, j| {
+            shapes(rows[i].0.tau)[cols[j]] * rows[i].1
+        });
+        let b = DVector::from_fn(rows.len(), |i, _| {
+            rows[i].0.adev * rows[i].0.adev * rows[i].1
+        });
+        let Ok(x) = a.clone().svd(true, true).solve(&b, 1e-12) else {
+            continue;
+        };
+        if x.iter().any(|v| *v < 0.0 || !v.is_finite()) {
+            continue;
+        }
+        let rss = (&a * &x - &b).norm_squared();
+        if best.as_ref().is_none_or(|(r, _)| rss < *r * (1.0 - 1e-9)) {
+            let mut c = [0.0; 5];
+            for (j, &k) in cols.iter().enumerate() {
+                c[k] = x[j];
+            }
+            best = Some((rss, c));
+        }
+    }
+    let c = best.map_or([0.0; 5], |b| b.1).map(f64::sqrt);
+    NoiseTerms {
+        quantization: c[0],
+        random_walk: c[1],
+        bias_instability: c[2],
+        rate_random_walk: c[3],
+        rate_ramp: c[4],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    use super::*;
+
+    #[test]
+    fn white_noise_gives_its_density_at_every_tau() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let n = Normal::new(0.0, 1.0).unwrap();
+        let tau0: f64 = 0.01;
+        let density = 0.02; // u / sqrt(Hz)
+        let y: Vec<f64> = (0..200_000)
+            .map(|_| density / tau0.sqrt() * n.sample(&mut rng))
+            .collect();
+        let c = overlapping(&y, tau0, 1);
+        for p in c.iter().filter(|p| p.tau <= 20.0) {
+            let want = density / p.tau.sqrt();
+            assert!(
+                (p.adev / want - 1.0).abs() < 4.0 * p.rel_error + 0.01,
+                "{p:?} want {want}"
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod recovery {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    use super::*;
+
+    /// White rate noise of density `n_true` and a rate random walk of `k_true`, 10^7 samples at
+    /// 100 Hz: both recovered within 10 %.
+    #[test]
+    fn recovers_random_walk_and_rate_random_walk_of_simulated_noise() {
+        let (n_true, k_true, tau0): (f64, f64, f64) = (0.01, 2e-4, 0.01);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let g = Normal::new(0.0, 1.0).unwrap();
+        let mut bias = 0.0;
+        let y: Vec<f64> = (0..10_000_000)
+            .map(|_| {
+                bias += k_true * tau0.sqrt() * g.sample(&mut rng);
+                bias + n_true / tau0.sqrt() * g.sample(&mut rng)
+            })
+            .collect();
+        let curve = overlapping(&y, tau0, 2);
+        let t = noise_terms(&curve);
+        assert!((t.random_walk / n_true - 1.0).abs() < 0.10, "{t:?}");
+        assert!((t.rate_random_walk / k_true - 1.0).abs() < 0.10, "{t:?}");
+        // And the curve the terms give follows the measured one.
+        for p in &curve {
+            assert!(
+                (t.adev(p.tau) / p.adev - 1.0).abs() < 3.0 * p.rel_error + 0.02,
+                "{p:?} {}",
+                t.adev(p.tau)
+            );
+        }
+    }
+}

@@ -1,0 +1,209 @@
+//! The device's calibration from a calibration without equipment: one IMU coefficient set
+//! (accelerometer and gyro triads in the correction form), written with the firmware crate's
+//! encoder and checked against the f64 fit through the device's own f32 correction.
+//!
+//! Convention (also in the JSON record): raw counts `r` per axis, `v = r - center`;
+//! accelerometer `a = M (v + q * v^2) + o` in m/s^2 with `M` upper triangular, rows and columns
+//! in x, y, z order (the body frame is the accelerometer frame: x along the accelerometer's x
+//! axis, y in its x-y plane); gyro `w = G v` in rad/s with `G` full (it also rotates the gyro
+//! axes into the body frame) and `center` the gyro bias in counts.
+
+use std::path::Path;
+
+use spincal::blob;
+use spincal::correct::ImuCorrector;
+use spincal::model::{
+    AxisNonlinearity, BoundedVec, Calibration, CalibrationData, Channel, Environment, Identity,
+    ImuSet, Rails, Sensor, Span, TriadSet,
+};
+
+use crate::nonlinear::selfcal::SelfCal;
+use crate::obs::recording::Recording;
+
+/// First 16 bytes of the SHA-256 of the files, in order.
+///
+/// # Errors
+/// A file that cannot be read.
+pub fn files_hash(paths: &[&Path]) -> Result<[u8; 16], String> {
+    use sha2::Digest as _;
+    let mut h = sha2::Sha256::new();
+    for p in paths {
+        h.update(std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))?);
+    }
+    let mut out = [0u8; 16];
+    out.copy_from_slice(&h.finalize()[..16]);
+    Ok(out)
+}
+
+fn f32s<const N: usize>(x: [f64; N]) -> [f32; N] {
+    x.map(|v| v as f32)
+}
+
+/// The calibration the device stores.
+#[must_use]
+pub fn calibration_data(
+    c: &SelfCal,
+    rec: &Recording,
+    identity: Identity,
+    rails: Rails,
+    temp: Span,
+    volt: Span,
+) -> CalibrationData {
+    let g = c.options.g;
+    // Calibrated ranges: what the poses and rotations showed, with a tenth of the span added.
+    let poses: Vec<[f64; 3]> = c
+        .pose_means
+        .iter()
+        .map(|m| c.accel.model.apply(*m))
+        .collect();
+    let accel_range: [Span; 3] = std::array::from_fn(|j| {
+        let (lo, hi) = poses.iter().fold((-0.1 * g, 0.1 * g), |(lo, hi), a| {
+            (lo.min(a[j]), hi.max(a[j]))
+        });
+        let pad = 0.1 * (hi - lo);
+        Span::new((lo - pad) as f32, (hi + pad) as f32)
+    });
+    let m = c.gyro.matrix;
+    let mut wmax = [0.0f64; 3];
+    for &k in &c.rotations {
+        for i in c.poses[k].end..c.poses[k + 1].start {
+            let v: [f64; 3] = std::array::from_fn(|j| rec.gyro[i][j] - c.gyro_bias[j]);
+            for (a, w) in wmax.iter_mut().enumerate() {
+                *w = w.max((0..3).map(|j| m[a][j] * v[j]).sum::<f64>().abs());
+            }
+        }
+    }
+    let gyro_range: [Span; 3] = wmax.map(|w| Span::new((-1.1 * w) as f32, (1.1 * w) as f32));
+    let channel = |center: f64, range: Span| Channel {
+        center: center as f32,
+        range,
+    };
+    let accel_set = TriadSet {
+        axes: std::array::from_fn(|j| AxisNonlinearity {
+            quadratic: c.accel.model.quadratic[j] as f32,
+            ..AxisNonlinearity::LINEAR
+        }),
+        matrix: c.accel.model.matrix.map(f32s),
+        offset: f32s(c.accel.model.offset),
+    };
+    let gyro_set = TriadSet {
+        axes: [AxisNonlinearity::LINEAR; 3],
+        matrix: m.map(f32s),
+        offset: [0.0; 3],
+    };
+    let mut sets = BoundedVec::new();
+    let _ = sets.push(ImuSet {
+        accel: accel_set,
+        gyro: gyro_set,
+        g_sensitivity: [[0.0; 3]; 3],
+    });
+    CalibrationData {
+        identity,
+        environment: Environment {
+            temperature_span: temp,
+            voltage_span: volt,
+            temperatures: BoundedVec::new(),
+            voltages: BoundedVec::new(),
+        },
+        sensor: Sensor::Imu {
+            accel_rails: rails,
+            gyro_rails: rails,
+            accel: std::array::from_fn(|j| channel(c.accel.model.center[j], accel_range[j])),
+            gyro: std::array::from_fn(|j| channel(c.gyro_bias[j], gyro_range[j])),
+            lever_arm: None,
+            sets,
+            covariance: None,
+        },
+    }
+}
+
+/// What the device computes, checked: the blob, and the largest differences between the
+/// device's f32 correction and the f64 fit over the poses (m/s^2) and over every sample of the
+/// rotations (rad/s).
+#[derive(Debug, Clone)]
+pub struct DeviceCheck {
+    /// The blob.
+    pub blob: Vec<u8>,
+    /// Largest accelerometer difference at the poses, m/s^2.
+    pub accel: f64,
+    /// Largest gyro difference during the rotations, rad/s.
+    pub gyro: f64,
+    /// RMS of `|a| - g` at the poses, from the mean of the device's corrected samples, m/s^2.
+    pub device_accel_rms: f64,
+}
+
+/// Validates and encodes `data`, then corrects the recording's poses and rotations through the
+/// decoded blob with the device's correction.
+///
+/// # Errors
+/// When the calibration does not validate.
+pub fn build_and_check(
+    data: &CalibrationData,
+    c: &SelfCal,
+    rec: &Recording,
+) -> Result<DeviceCheck, String> {
+    let cal = Calibration::new(data.clone())
+        .map_err(|e| format!("the calibration is not valid for the device: {e}"))?;
+    let mut buf = vec![0u8; blob::MAX_BLOB_LEN];
+    let n = blob::encode(&cal, &mut buf).map_err(|e| format!("cannot write the blob: {e}"))?;
+    buf.truncate(n);
+    let back =
+        blob::decode(&buf).map_err(|e| format!("the written blob does not read back: {e}"))?;
+    let mut dev = ImuCorrector::new(&back, rec.rate() as f32).map_err(|e| e.to_string())?;
+    let env = &data.environment;
+    dev.set_environment(
+        0.5 * (env.temperature_span.lo + env.temperature_span.hi),
+        0.5 * (env.voltage_span.lo + env.voltage_span.hi),
+    );
+    let (mut worst_a, mut worst_g, mut sq) = (0.0f64, 0.0f64, 0.0f64);
+    let gm = nalgebra::Matrix3::from_fn(|i, j| c.gyro.matrix[i][j]);
+    let raw_at = |i: usize| -> [i32; 6] {
+        std::array::from_fn(|j| {
+            if j < 3 {
+                rec.acc[i][j]
+            } else {
+                rec.gyro[i][j - 3]
+            }
+            .round() as i32
+        })
+    };
+    for r in &c.poses {
+        let mut sum = [0.0f64; 3];
+        dev.reset();
+        for i in r.clone() {
+            let raw = raw_at(i);
+            let out = dev.correct(raw).values;
+            let host = c
+                .accel
+                .model
+                .apply(std::array::from_fn(|j| f64::from(raw[j])));
+            for j in 0..3 {
+                worst_a = worst_a.max((f64::from(out[j]) - host[j]).abs());
+                sum[j] += f64::from(out[j]);
+            }
+        }
+        let norm = sum
+            .iter()
+            .map(|s| (s / r.len() as f64).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        sq += (norm - c.options.g).powi(2);
+    }
+    for &k in &c.rotations {
+        for i in c.poses[k].end..c.poses[k + 1].start {
+            let raw = raw_at(i);
+            let out = dev.correct(raw).values;
+            let v = nalgebra::Vector3::from_fn(|j, _| f64::from(raw[j + 3]) - c.gyro_bias[j]);
+            let host = gm * v;
+            for j in 0..3 {
+                worst_g = worst_g.max((f64::from(out[j + 3]) - host[j]).abs());
+            }
+        }
+    }
+    Ok(DeviceCheck {
+        blob: buf,
+        accel: worst_a,
+        gyro: worst_g,
+        device_accel_rms: (sq / c.poses.len() as f64).sqrt(),
+    })
+}
