@@ -372,11 +372,26 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         });
     }
     let Some((chosen, _, poses)) = best else {
-        let tried = trials
+        // Runs of thresholds that found the same number: "7 at 1 x, 8 at 2 x to 10 x".
+        let mut runs: Vec<(usize, f64, f64)> = Vec::new();
+        for t in &trials {
+            match runs.last_mut() {
+                Some(r) if r.0 == t.poses => r.2 = t.multiplier,
+                _ => runs.push((t.poses, t.multiplier, t.multiplier)),
+            }
+        }
+        let tried = runs
             .iter()
-            .map(|t| format!("{} at {} x the rest level", t.poses, t.multiplier))
+            .map(|(n, a, b)| {
+                if a == b {
+                    format!("{n} at {a} x")
+                } else {
+                    format!("{n} at {a} x to {b} x")
+                }
+            })
             .collect::<Vec<_>>()
-            .join(", ");
+            .join(", ")
+            + " the initial rest's level";
         return Err(SelfCalError::TooFewPoses {
             file: source.into(),
             tried,

@@ -1,0 +1,252 @@
+//! Calibration without equipment on simulated hand tumbles of a known unit: the truth comes
+//! back within its standard errors; too few poses, a moving "rest", dropped samples and
+//! saturated samples each get a clear account.
+
+use std::path::Path;
+use std::process::Command;
+
+use calflash::nonlinear::selfcal::{self, Options, SelfCalError};
+use calflash::obs::recording::{self, Recording};
+use calflash::sim::recording::Tumble;
+use spincal::model::Rails;
+
+fn write(rec: &Recording, dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let (a, g) = (dir.join("acc.txt"), dir.join("gyro.txt"));
+    let text = |x: &[[f64; 3]]| {
+        rec.t
+            .iter()
+            .zip(x)
+            .map(|(t, v)| format!("{t:.6} {} {} {}\n", v[0], v[1], v[2]))
+            .collect::<String>()
+    };
+    std::fs::write(&a, text(&rec.acc)).unwrap();
+    std::fs::write(&g, text(&rec.gyro)).unwrap();
+    (a, g)
+}
+
+fn opts() -> Options {
+    Options {
+        g: 9.81,
+        init_rest: 30.0,
+        ..Options::default()
+    }
+}
+
+#[test]
+fn a_simulated_unit_comes_back_within_its_standard_errors() {
+    let truth = Tumble::default();
+    let rec = truth.record();
+    let c = selfcal::calibrate(&rec, &opts()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(c.poses.len(), truth.poses + 1, "the rest and every pose");
+    assert_eq!(c.rotations.len(), truth.poses);
+    // Accelerometer: the truth's matrix and offset, referred to the fitted center.
+    let cov = c.accel.covariance.as_ref().unwrap();
+    let m = &c.accel.model;
+    let shift: Vec<f64> = (0..3).map(|j| m.center[j] - truth.accel_center).collect();
+    let o_true: Vec<f64> = (0..3)
+        .map(|i| {
+            truth.accel_offset[i]
+                + (0..3)
+                    .map(|j| truth.accel_matrix[(i, j)] * shift[j])
+                    .sum::<f64>()
+        })
+        .collect();
+    let want = [
+        truth.accel_matrix[(0, 0)],
+        truth.accel_matrix[(0, 1)],
+        truth.accel_matrix[(0, 2)],
+        truth.accel_matrix[(1, 1)],
+        truth.accel_matrix[(1, 2)],
+        truth.accel_matrix[(2, 2)],
+        o_true[0],
+        o_true[1],
+        o_true[2],
+    ];
+    for (k, w) in want.iter().enumerate() {
+        let z = (c.accel.params[k] - w) / cov[(k, k)].sqrt();
+        assert!(
+            z.abs() < 4.5,
+            "{}: {} against {w}, z = {z}",
+            c.accel.terms[k],
+            c.accel.params[k]
+        );
+    }
+    // Gyro.
+    let cov = c.gyro.covariance.as_ref().unwrap();
+    for i in 0..3 {
+        for j in 0..3 {
+            let z = (c.gyro.matrix[i][j] - truth.gyro_matrix[(i, j)])
+                / cov[(3 * i + j, 3 * i + j)].sqrt();
+            assert!(
+                z.abs() < 4.5,
+                "G{}{}: {} against {}, z = {z}",
+                i + 1,
+                j + 1,
+                c.gyro.matrix[i][j],
+                truth.gyro_matrix[(i, j)]
+            );
+        }
+        assert!(
+            (c.gyro_bias[i] - truth.gyro_bias[i]).abs() < 0.5,
+            "{:?}",
+            c.gyro_bias
+        );
+    }
+    // 3 counts of noise over 400 samples per pose: |a| - g at the level of 0.5 mm/s^2.
+    assert!(c.accel.rms() < 1e-3, "{}", c.accel.rms());
+    assert!(c.gyro.rms_deg() < 0.1, "{}", c.gyro.rms_deg());
+}
+
+#[test]
+fn too_few_poses_says_how_many_and_what_to_do() {
+    let rec = Tumble {
+        poses: 7,
+        ..Tumble::default()
+    }
+    .record();
+    let e = selfcal::calibrate(&rec, &opts()).unwrap_err();
+    assert!(matches!(e, SelfCalError::TooFewPoses { .. }));
+    let msg = e.to_string();
+    assert!(
+        msg.contains("too few still poses: 7 at 1 x, 8 at 2 x to 10 x the initial rest's level; "),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("the accelerometer fit needs at least 12"),
+        "{msg}"
+    );
+    assert!(msg.contains("turn the unit through more poses"), "{msg}");
+}
+
+#[test]
+fn a_rest_that_moves_is_named() {
+    let rec = Tumble::default().record();
+    let e = selfcal::calibrate(
+        &rec,
+        &Options {
+            init_rest: 40.0,
+            ..opts()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("simulated tumble (seed 1): the unit moves at 30.0 s, inside the initial rest of 40.0 s (--init-rest)"), "{e}");
+    let e = selfcal::calibrate(
+        &rec,
+        &Options {
+            init_rest: 1000.0,
+            ..opts()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("no longer than the initial rest of 1000.0 s"),
+        "{e}"
+    );
+}
+
+#[test]
+fn dropped_and_saturated_samples_are_reported_and_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rec = Tumble::default().record();
+    // Drop 5 samples in the middle of the third rotation (rest 3000, then 600 per pose).
+    let drop_at = 3000 + 2 * 600 + 100;
+    for v in [&mut rec.acc as &mut Vec<[f64; 3]>, &mut rec.gyro] {
+        v.drain(drop_at..drop_at + 5);
+    }
+    rec.t.drain(drop_at..drop_at + 5);
+    // A saturated accelerometer sample in the middle of the fifth pose's hold.
+    let sat = 3000 + 4 * 600 + 400;
+    rec.acc[sat][1] = 65535.0;
+    let (a, g) = write(&rec, dir.path());
+    let rec = recording::read(&a, Some(&g), Rails::unsigned(16)).unwrap();
+    assert_eq!(rec.gaps.len(), 1);
+    assert_eq!((rec.gaps[0].line, rec.gaps[0].missing), (drop_at + 1, 5));
+    assert_eq!(rec.saturated_count, (1, 0));
+    let c = selfcal::calibrate(&rec, &opts()).unwrap_or_else(|e| panic!("{e}"));
+    // The saturated sample splits its pose in two, and neither half contains it; the "rotation"
+    // between the halves contains it and is left out.
+    assert!(c.poses.iter().all(|p| !p.contains(&sat)));
+    assert_eq!(c.poses.len(), 38);
+    let why: Vec<&str> = c.skipped.iter().map(|s| s.why.as_str()).collect();
+    assert_eq!(
+        why,
+        [
+            format!("5 samples dropped at line {}", drop_at + 1).as_str(),
+            "a saturated sample"
+        ]
+    );
+
+    // The command line reports both.
+    let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
+        .arg("selfcal")
+        .arg(&a)
+        .arg(&g)
+        .args(["--g", "9.81", "--serial", "SIM-1"])
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{said}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        said.contains(
+            "1 gaps (5 samples dropped); saturated samples excluded: 1 accelerometer, 0 gyro"
+        ),
+        "{said}"
+    );
+    assert!(
+        said.contains(&format!(
+            "left out: 5 samples dropped at line {}",
+            drop_at + 1
+        )),
+        "{said}"
+    );
+}
+
+#[test]
+fn the_command_line_refuses_bad_input_with_one_clear_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = Tumble {
+        poses: 5,
+        ..Tumble::default()
+    }
+    .record();
+    let (a, g) = write(&rec, dir.path());
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
+            .arg("selfcal")
+            .arg(&a)
+            .arg(&g)
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (code, err) = run(&[
+        "--g",
+        "9.81",
+        "--serial",
+        "SIM-1",
+        "--blob",
+        dir.path().join("x.blob").to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(1));
+    assert!(
+        err.contains("too few still poses: 7 at 1 x, 6 at 2 x to 10 x the initial rest's level; "),
+        "{err}"
+    );
+    assert!(!dir.path().join("x.blob").exists(), "nothing written");
+    let (code, err) = run(&["--g", "981", "--serial", "SIM-1"]);
+    assert_eq!(code, Some(1));
+    assert!(
+        err.contains("--g 981: local gravity is between 9.78 and 9.84 m/s^2"),
+        "{err}"
+    );
+}
