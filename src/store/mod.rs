@@ -42,7 +42,6 @@ const LOCKED: [u8; 4] = *b"LOCK";
 
 /// Why the store cannot do what was asked.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum StoreError {
     /// The flash driver failed.
@@ -82,6 +81,37 @@ impl core::fmt::Display for StoreError {
             Self::InvalidBlob(e) => write!(f, "the blob is not a valid calibration: {e}"),
             Self::VerifyFailed => f.write_str("the slot read back differs from what was written"),
             Self::Locked => f.write_str("the unit is locked against writes"),
+        }
+    }
+}
+
+// `NorFlashErrorKind` has no `defmt::Format`: the flash error is logged by its name.
+#[cfg(feature = "defmt")]
+impl defmt::Format for StoreError {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        match self {
+            Self::Flash(k) => {
+                let kind = match k {
+                    NorFlashErrorKind::NotAligned => "not aligned",
+                    NorFlashErrorKind::OutOfBounds => "out of bounds",
+                    _ => "other",
+                };
+                defmt::write!(f, "flash error: {=str}", kind);
+            }
+            Self::Layout => defmt::write!(f, "Layout"),
+            Self::NoValidSlot => defmt::write!(f, "NoValidSlot"),
+            Self::BlobTooLarge { len, capacity } => {
+                defmt::write!(
+                    f,
+                    "BlobTooLarge {{ len: {=usize}, capacity: {=usize} }}",
+                    len,
+                    capacity
+                );
+            }
+            Self::BufferTooSmall => defmt::write!(f, "BufferTooSmall"),
+            Self::InvalidBlob(e) => defmt::write!(f, "InvalidBlob({})", e),
+            Self::VerifyFailed => defmt::write!(f, "VerifyFailed"),
+            Self::Locked => defmt::write!(f, "Locked"),
         }
     }
 }

@@ -23,7 +23,11 @@ fn self_test(device: &Device<RamFlash>) {
     let mut clean = 0u32;
     let mut flagged = 0u32;
     let mut count = |f: Flags| {
-        if f.is_clean() { clean += 1 } else { flagged += 1 }
+        if f.is_clean() {
+            clean += 1
+        } else {
+            flagged += 1
+        }
     };
     let raw = |k: i32, a: i32| 32_768 + ((k * 37 + a * 101) % 400) - 200;
     match device.calibration() {
@@ -33,8 +37,10 @@ fn self_test(device: &Device<RamFlash>) {
             for k in 0..1000 {
                 count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags);
             }
-            hprintln!("device: no valid calibration; 1000 samples passed through and flagged ({} flagged)", flagged);
-            return;
+            hprintln!(
+                "device: no valid calibration; 1000 samples passed through and flagged ({} flagged)",
+                flagged
+            );
         }
         Some(cal) => {
             match &cal.data().sensor {
@@ -47,13 +53,17 @@ fn self_test(device: &Device<RamFlash>) {
                 Sensor::Triad { .. } => {
                     if let Ok(mut c) = TriadCorrector::new(cal) {
                         c.set_environment(25.0, 3.3);
-                        (0..1000).for_each(|k| count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags));
+                        (0..1000).for_each(|k| {
+                            count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags)
+                        });
                     }
                 }
                 Sensor::Imu { .. } => {
                     if let Ok(mut c) = ImuCorrector::new(cal, 1000.0) {
                         c.set_environment(25.0, 3.3);
-                        (0..1000).for_each(|k| count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags));
+                        (0..1000).for_each(|k| {
+                            count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags)
+                        });
                     }
                 }
             }
@@ -79,7 +89,10 @@ fn main() -> ! {
     let Some(device) = device else {
         spincal_firmware::exit(false)
     };
-    hprintln!("device: unit {} up; serving the update protocol on UART0", UNIT_SERIAL);
+    hprintln!(
+        "device: unit {} up; serving the update protocol on UART0",
+        UNIT_SERIAL
+    );
     self_test(device);
     let uart = Uart::uart0();
     let mut frame = [0u8; MAX_FRAME];
