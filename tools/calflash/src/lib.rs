@@ -7,6 +7,7 @@
 pub mod cmd;
 pub mod columns;
 pub mod db;
+pub mod design;
 pub mod device;
 pub mod formula;
 pub mod noise;

@@ -1,0 +1,412 @@
+//! Exact optimal designs by exchange: `n` points (repeats allowed) chosen from candidate model
+//! rows to maximise `det(X'X)` (D), or minimise `trace(W (X'X)^-1)` with `W = I` (A) or `W`
+//! the region's moment matrix (I, the average prediction variance).
+//!
+//! Modified Fedorov exchange: for each design point in turn, the candidate that improves the
+//! criterion most replaces it; passes repeat until none improves. The gain of every candidate is
+//! evaluated in `O(p)` from rank-one update formulas, and after a swap the inverse information
+//! and the per-candidate quantities are updated in `O(N p)`, with a full recomputation every 25
+//! swaps to keep rounding from accumulating. Each restart starts from a different random set of
+//! `p` candidates completed greedily (the point of largest prediction variance next); the best
+//! design over the restarts is kept.
+
+use nalgebra::{DMatrix, DVector};
+use rand::{RngExt, SeedableRng};
+
+/// What to optimise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum Criterion {
+    /// Maximise `det(X'X)`: the smallest joint confidence region of the parameters.
+    D,
+    /// Minimise `trace((X'X)^-1)`: the smallest average parameter variance.
+    A,
+    /// Minimise the average prediction variance over the operating region.
+    I,
+}
+
+/// Search settings.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Observations.
+    pub n: usize,
+    /// Restarts.
+    pub restarts: usize,
+    /// Seed of the random starts.
+    pub seed: u64,
+}
+
+/// A design found.
+#[derive(Debug, Clone)]
+pub struct Found {
+    /// Candidate indices of the points (repeats allowed), sorted.
+    pub points: Vec<usize>,
+    /// The criterion's value: `det(X'X)^(1/p) / n` (D) or `trace(W (X'X)^-1) * n` (A, I).
+    pub value: f64,
+    /// How many restarts reached (within 1e-9) the best value.
+    pub hits: usize,
+}
+
+/// Why no design was found.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ExchangeError {
+    /// Fewer observations than parameters.
+    #[error("{n} observations cannot estimate {p} parameters; at least {p} are needed")]
+    TooFew {
+        /// Observations.
+        n: usize,
+        /// Parameters.
+        p: usize,
+    },
+    /// The candidates cannot estimate the model.
+    #[error("no set of the candidates estimates every parameter (the candidate model rows have rank {rank} of {p})")]
+    Singular {
+        /// Rank of the candidates.
+        rank: usize,
+        /// Parameters.
+        p: usize,
+    },
+}
+
+/// The working state of one exchange: the design, `M^-1` and per-candidate quantities.
+struct State<'a> {
+    f: &'a DMatrix<f64>,
+    w: Option<&'a DMatrix<f64>>,
+    design: Vec<usize>,
+    m_inv: DMatrix<f64>,
+    /// `u_j = M^-1 x_j`, row j.
+    u: DMatrix<f64>,
+    /// `W u_j`, row j (A and I).
+    wu: DMatrix<f64>,
+    /// `d_j = x_j' M^-1 x_j`.
+    d: Vec<f64>,
+    /// `a_j = u_j' W u_j` (A and I).
+    a: Vec<f64>,
+    since_refresh: usize,
+}
+
+impl<'a> State<'a> {
+    fn new(f: &'a DMatrix<f64>, w: Option<&'a DMatrix<f64>>, design: Vec<usize>) -> Option<Self> {
+        let (nc, p) = f.shape();
+        let mut s = Self {
+            f,
+            w,
+            design,
+            m_inv: DMatrix::zeros(p, p),
+            u: DMatrix::zeros(nc, p),
+            wu: DMatrix::zeros(nc, p),
+            d: vec![0.0; nc],
+            a: vec![0.0; nc],
+            since_refresh: 0,
+        };
+        s.refresh().then_some(s)
+    }
+
+    /// Recomputes everything from the design; false when `X'X` is singular.
+    fn refresh(&mut self) -> bool {
+        let p = self.f.ncols();
+        let x = DMatrix::from_fn(self.design.len(), p, |i, j| self.f[(self.design[i], j)]);
+        let svd = x.svd(false, true);
+        let v_t = svd.v_t.expect("requested");
+        let s = &svd.singular_values;
+        if s.min() <= 1e-10 * s.max() {
+            return false;
+        }
+        let mut m_inv = DMatrix::zeros(p, p);
+        for k in 0..p {
+            let row = v_t.row(k);
+            m_inv += (1.0 / (s[k] * s[k])) * row.transpose() * row;
+        }
+        self.u = self.f * &m_inv;
+        for j in 0..self.f.nrows() {
+            self.d[j] = self.f.row(j).dot(&self.u.row(j));
+        }
+        if let Some(w) = self.w {
+            self.wu = &self.u * w;
+            for j in 0..self.f.nrows() {
+                self.a[j] = self.u.row(j).dot(&self.wu.row(j));
+            }
+        }
+        self.m_inv = m_inv;
+        self.since_refresh = 0;
+        true
+    }
+
+    /// Adds (`sign = 1`) or removes (`sign = -1`) candidate `k` from the information.
+    fn update(&mut self, k: usize, sign: f64) {
+        let uk = self.u.row(k).transpose();
+        let denom = 1.0 + sign * self.d[k];
+        // s_x = x' M^-1 x_k for every candidate.
+        let s_all = self.f * &uk;
+        let (wuk, ak) = (self.wu.row(k).transpose(), self.a[k]);
+        let t_all = if self.w.is_some() { Some(&self.u * &wuk) } else { None };
+        for j in 0..self.f.nrows() {
+            let c = sign * s_all[j] / denom;
+            for col in 0..self.u.ncols() {
+                self.u[(j, col)] -= c * uk[col];
+            }
+            self.d[j] -= sign * s_all[j] * s_all[j] / denom;
+            if let Some(t) = &t_all {
+                for col in 0..self.u.ncols() {
+                    self.wu[(j, col)] -= c * wuk[col];
+                }
+                self.a[j] += -2.0 * c * t[j] + c * c * ak;
+            }
+        }
+        self.m_inv -= (sign / denom) * &uk * uk.transpose();
+    }
+
+    fn value(&self, criterion: Criterion) -> f64 {
+        let n = self.design.len() as f64;
+        match criterion {
+            Criterion::D => {
+                let p = self.f.ncols();
+                // det(M^-1)^(-1/p) / n from the inverse's eigenvalues (it is symmetric).
+                let ev = self.m_inv.clone().symmetric_eigenvalues();
+                (-ev.iter().map(|v| v.ln()).sum::<f64>() / p as f64).exp() / n
+            }
+            _ => (self.w.expect("A and I have a weight") * &self.m_inv).trace() * n,
+        }
+    }
+
+    /// The best replacement for design point `slot`: `(candidate, gain)` with gain > 0 meaning
+    /// better (D: the determinant ratio minus one; A, I: the relative decrease).
+    fn best_swap(&self, slot: usize, criterion: Criterion, phi: f64) -> Option<(usize, f64)> {
+        let i = self.design[slot];
+        let (di, ui) = (self.d[i], self.u.row(i));
+        let wui = self.wu.row(i);
+        let ai = self.a[i];
+        let mut best: Option<(usize, f64)> = None;
+        for j in 0..self.f.nrows() {
+            if j == i {
+                continue;
+            }
+            let dij = ui.dot(&self.f.row(j));
+            let dj = self.d[j];
+            let gain = match criterion {
+                Criterion::D => (1.0 + dj) * (1.0 - di) + dij * dij - 1.0,
+                _ => {
+                    let c = dij / (1.0 + dj);
+                    let d1 = di - dij * dij / (1.0 + dj);
+                    if 1.0 - d1 <= 1e-12 {
+                        continue;
+                    }
+                    let wij = wui.dot(&self.u.row(j));
+                    let after = phi - self.a[j] / (1.0 + dj) + (ai - 2.0 * c * wij + c * c * self.a[j]) / (1.0 - d1);
+                    (phi - after) / phi
+                }
+            };
+            if best.is_none_or(|(_, g)| gain > g) {
+                best = Some((j, gain));
+            }
+        }
+        best
+    }
+
+    fn swap(&mut self, slot: usize, j: usize) {
+        let i = self.design[slot];
+        self.update(j, 1.0);
+        self.update(i, -1.0);
+        self.design[slot] = j;
+        self.since_refresh += 1;
+        if self.since_refresh >= 25 {
+            self.refresh();
+        }
+    }
+
+    /// `trace(W M^-1)` in the state's own units (without the factor n).
+    fn phi(&self) -> f64 {
+        self.w.map_or(0.0, |w| (w * &self.m_inv).trace())
+    }
+}
+
+/// A random start: `p` candidates in random order that are jointly estimable, then greedily the
+/// candidate of largest prediction variance until `n`.
+fn start(f: &DMatrix<f64>, n: usize, rng: &mut rand_chacha::ChaCha8Rng) -> Option<Vec<usize>> {
+    let (nc, p) = f.shape();
+    let mut order: Vec<usize> = (0..nc).collect();
+    for k in (1..nc).rev() {
+        order.swap(k, rng.random_range(0..=k));
+    }
+    // Gram-Schmidt over the random order picks p independent rows.
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut design = Vec::new();
+    let scale = (0..nc).map(|j| f.row(j).norm()).fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
+    for &j in &order {
+        let mut v = f.row(j).transpose();
+        for b in &basis {
+            let c = v.dot(b);
+            v -= c * b;
+        }
+        if v.norm() > 1e-8 * scale {
+            basis.push(v.normalize());
+            design.push(j);
+            if design.len() == p {
+                break;
+            }
+        }
+    }
+    if design.len() < p {
+        return None;
+    }
+    // Greedy completion by the largest prediction variance.
+    let mut state = State::new(f, None, design)?;
+    while state.design.len() < n {
+        let j = (0..nc).max_by(|a, b| state.d[*a].total_cmp(&state.d[*b]))?;
+        state.update(j, 1.0);
+        state.design.push(j);
+    }
+    Some(state.design)
+}
+
+/// Finds an exact `criterion`-optimal design of `opts.n` points from the candidate model rows
+/// `f` (`N x p`). `w` is the region's moment matrix for I (ignored otherwise). `progress(done,
+/// total)` is called after each restart.
+///
+/// # Errors
+/// Too few observations, or candidates that cannot estimate the model.
+pub fn optimize(
+    f: &DMatrix<f64>,
+    criterion: Criterion,
+    w: Option<&DMatrix<f64>>,
+    opts: &Options,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Found, ExchangeError> {
+    let p = f.ncols();
+    if opts.n < p {
+        return Err(ExchangeError::TooFew { n: opts.n, p });
+    }
+    let rank = {
+        let sv = f.singular_values();
+        sv.iter().filter(|s| **s > 1e-10 * sv.max()).count()
+    };
+    if rank < p {
+        return Err(ExchangeError::Singular { rank, p });
+    }
+    let identity = DMatrix::identity(p, p);
+    let weight = match criterion {
+        Criterion::D => None,
+        Criterion::A => Some(&identity),
+        Criterion::I => Some(w.unwrap_or(&identity)),
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed);
+    let mut best: Option<Found> = None;
+    let restarts = opts.restarts.max(1);
+    for r in 0..restarts {
+        let Some(design) = start(f, opts.n, &mut rng) else { continue };
+        let Some(mut state) = State::new(f, weight, design) else { continue };
+        for _pass in 0..100 {
+            let mut improved = false;
+            for slot in 0..state.design.len() {
+                let phi = state.phi();
+                if let Some((j, gain)) = state.best_swap(slot, criterion, phi)
+                    && gain > 1e-10
+                {
+                    state.swap(slot, j);
+                    improved = true;
+                }
+            }
+            if !improved {
+                break;
+            }
+        }
+        state.refresh();
+        let value = state.value(criterion);
+        let better = |v: f64, b: f64| match criterion {
+            Criterion::D => v > b,
+            _ => v < b,
+        };
+        match &mut best {
+            Some(b) if (value - b.value).abs() <= 1e-9 * b.value.abs() => b.hits += 1,
+            Some(b) if !better(value, b.value) => {}
+            _ => {
+                let mut points = state.design.clone();
+                points.sort_unstable();
+                best = Some(Found { points, value, hits: 1 });
+            }
+        }
+        progress(r + 1, restarts);
+    }
+    best.ok_or(ExchangeError::Singular { rank, p })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(k: usize) -> Vec<f64> {
+        (0..k).map(|i| -1.0 + 2.0 * i as f64 / (k - 1) as f64).collect()
+    }
+
+    fn poly(xs: &[f64], degree: usize) -> DMatrix<f64> {
+        DMatrix::from_fn(xs.len(), degree + 1, |i, j| xs[i].powi(j as i32))
+    }
+
+    fn counts(xs: &[f64], found: &Found) -> Vec<(f64, usize)> {
+        let mut out: Vec<(f64, usize)> = Vec::new();
+        for &k in &found.points {
+            match out.last_mut() {
+                Some((x, c)) if *x == xs[k] => *c += 1,
+                _ => out.push((xs[k], 1)),
+            }
+        }
+        out
+    }
+
+    fn opts(n: usize) -> Options {
+        Options { n, restarts: 8, seed: 3 }
+    }
+
+    #[test]
+    fn a_line_puts_half_the_points_at_each_end() {
+        let xs = grid(201);
+        let f = poly(&xs, 1);
+        for c in [Criterion::D, Criterion::A] {
+            let found = optimize(&f, c, None, &opts(10), |_, _| {}).unwrap();
+            assert_eq!(counts(&xs, &found), [(-1.0, 5), (1.0, 5)], "{c:?}");
+        }
+    }
+
+    #[test]
+    fn a_quadratic_puts_a_third_at_each_end_and_the_middle() {
+        let xs = grid(201);
+        let f = poly(&xs, 2);
+        let found = optimize(&f, Criterion::D, None, &opts(12), |_, _| {}).unwrap();
+        assert_eq!(counts(&xs, &found), [(-1.0, 4), (0.0, 4), (1.0, 4)]);
+    }
+
+    #[test]
+    fn the_i_optimal_quadratic_puts_half_the_points_in_the_middle() {
+        // Over a uniform region on [-1, 1] the I-optimal quadratic has weights 1/4, 1/2, 1/4.
+        let xs = grid(201);
+        let f = poly(&xs, 2);
+        let w = f.transpose() * &f / xs.len() as f64;
+        let found = optimize(&f, Criterion::I, Some(&w), &opts(12), |_, _| {}).unwrap();
+        assert_eq!(counts(&xs, &found), [(-1.0, 3), (0.0, 6), (1.0, 3)]);
+    }
+
+    #[test]
+    fn a_cubic_reaches_the_known_d_optimum() {
+        // The D-optimal cubic on [-1, 1]: a quarter at each of -1, -1/sqrt 5, 1/sqrt 5, 1.
+        let xs = grid(2001);
+        let f = poly(&xs, 3);
+        let found = optimize(&f, Criterion::D, None, &opts(12), |_, _| {}).unwrap();
+        let r = 1.0 / 5f64.sqrt();
+        let optimum = poly(&[-1.0, -r, r, 1.0, -1.0, -r, r, 1.0, -1.0, -r, r, 1.0], 3);
+        let det = |x: &DMatrix<f64>| (x.transpose() * x).determinant();
+        let x = DMatrix::from_fn(12, 4, |i, j| f[(found.points[i], j)]);
+        let efficiency = (det(&x) / det(&optimum)).powf(0.25);
+        assert!(efficiency >= 0.999, "{efficiency}: {:?}", counts(&xs, &found));
+        for (x, c) in counts(&xs, &found) {
+            assert_eq!(c, 3);
+            assert!([(-1.0f64), -r, r, 1.0].iter().any(|o| (o - x).abs() < 1.5e-3), "{x}");
+        }
+    }
+
+    #[test]
+    fn too_few_points_or_a_blind_candidate_set_are_refused() {
+        let f = poly(&grid(11), 2);
+        assert_eq!(optimize(&f, Criterion::D, None, &opts(2), |_, _| {}).unwrap_err(), ExchangeError::TooFew { n: 2, p: 3 });
+        let f = poly(&[-1.0, 1.0], 2);
+        assert_eq!(optimize(&f, Criterion::D, None, &opts(6), |_, _| {}).unwrap_err(), ExchangeError::Singular { rank: 2, p: 3 });
+    }
+}
