@@ -24,6 +24,8 @@ enum Command {
     Selfcal(cmd::selfcal::SelfcalArgs),
     /// Allan deviation and IEEE 952 noise terms of a still recording.
     Allan(cmd::allan::AllanArgs),
+    /// Evaluate and optimise test plans before running them; predict their precision.
+    Design(cmd::design::DesignArgs),
     /// Simulate a sensor through a test plan, writing an observation file.
     Simulate(cmd::simulate::SimulateArgs),
     /// Run raw counts through the device's correction.
@@ -51,6 +53,7 @@ fn main() -> ExitCode {
         },
         Command::Selfcal(args) => cmd::selfcal::run(args),
         Command::Allan(args) => cmd::allan::run(args),
+        Command::Design(args) => cmd::design::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Apply(args) => cmd::apply::run(args),
         Command::Compare(args) => cmd::compare::run(args),

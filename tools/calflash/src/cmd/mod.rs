@@ -4,6 +4,7 @@ pub mod allan;
 pub mod apply;
 pub mod calibrate;
 pub mod compare;
+pub mod design;
 pub mod fit;
 pub mod flash;
 pub mod history;

@@ -168,38 +168,23 @@ impl<'a> State<'a> {
         }
     }
 
-    /// The best replacement for design point `slot`: `(candidate, gain)` with gain > 0 meaning
-    /// better (D: the determinant ratio minus one; A, I: the relative decrease).
-    fn best_swap(&self, slot: usize, criterion: Criterion, phi: f64) -> Option<(usize, f64)> {
-        let i = self.design[slot];
-        let (di, ui) = (self.d[i], self.u.row(i));
-        let wui = self.wu.row(i);
-        let ai = self.a[i];
-        let mut best: Option<(usize, f64)> = None;
-        for j in 0..self.f.nrows() {
-            if j == i {
-                continue;
-            }
-            let dij = ui.dot(&self.f.row(j));
-            let dj = self.d[j];
-            let gain = match criterion {
-                Criterion::D => (1.0 + dj) * (1.0 - di) + dij * dij - 1.0,
-                _ => {
-                    let c = dij / (1.0 + dj);
-                    let d1 = di - dij * dij / (1.0 + dj);
-                    if 1.0 - d1 <= 1e-12 {
-                        continue;
-                    }
-                    let wij = wui.dot(&self.u.row(j));
-                    let after = phi - self.a[j] / (1.0 + dj) + (ai - 2.0 * c * wij + c * c * self.a[j]) / (1.0 - d1);
-                    (phi - after) / phi
+    /// The effect of replacing design candidate `i` by `j`: the determinant ratio (D) or the
+    /// new `trace(W M^-1)` (A, I); `None` when the swap would make the information singular.
+    fn effect(&self, i: usize, j: usize, criterion: Criterion, phi: f64) -> Option<f64> {
+        let dij = self.u.row(i).dot(&self.f.row(j));
+        let (di, dj) = (self.d[i], self.d[j]);
+        match criterion {
+            Criterion::D => Some((1.0 + dj) * (1.0 - di) + dij * dij),
+            _ => {
+                let c = dij / (1.0 + dj);
+                let d1 = di - dij * dij / (1.0 + dj);
+                if 1.0 - d1 <= 1e-12 {
+                    return None;
                 }
-            };
-            if best.is_none_or(|(_, g)| gain > g) {
-                best = Some((j, gain));
+                let wij = self.wu.row(i).dot(&self.u.row(j));
+                Some(phi - self.a[j] / (1.0 + dj) + (self.a[i] - 2.0 * c * wij + c * c * self.a[j]) / (1.0 - d1))
             }
         }
-        best
     }
 
     fn swap(&mut self, slot: usize, j: usize) {
@@ -269,39 +254,94 @@ pub fn optimize(
     criterion: Criterion,
     w: Option<&DMatrix<f64>>,
     opts: &Options,
+    progress: impl FnMut(usize, usize),
+) -> Result<Found, ExchangeError> {
+    optimize_blocks(&[f.clone()], criterion, &[w.cloned()], opts, progress)
+}
+
+/// Like [`optimize`] for several models observed at the same points (the three axes of a
+/// triad, each with its own terms): `fs[b]` holds model `b`'s rows of the same `N` candidates.
+/// The compound criterion is the product of the determinants (D) or the sum of the traces
+/// (A, I); `ws[b]` is block `b`'s region moments for I.
+///
+/// # Errors
+/// Too few observations, or candidates that cannot estimate a model.
+pub fn optimize_blocks(
+    fs: &[DMatrix<f64>],
+    criterion: Criterion,
+    ws: &[Option<DMatrix<f64>>],
+    opts: &Options,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Found, ExchangeError> {
-    let p = f.ncols();
-    if opts.n < p {
-        return Err(ExchangeError::TooFew { n: opts.n, p });
-    }
-    let rank = {
+    let nc = fs[0].nrows();
+    for f in fs {
+        let p = f.ncols();
+        if opts.n < p {
+            return Err(ExchangeError::TooFew { n: opts.n, p });
+        }
         let sv = f.singular_values();
-        sv.iter().filter(|s| **s > 1e-10 * sv.max()).count()
-    };
-    if rank < p {
-        return Err(ExchangeError::Singular { rank, p });
+        let rank = sv.iter().filter(|s| **s > 1e-10 * sv.max()).count();
+        if rank < p {
+            return Err(ExchangeError::Singular { rank, p });
+        }
     }
-    let identity = DMatrix::identity(p, p);
-    let weight = match criterion {
-        Criterion::D => None,
-        Criterion::A => Some(&identity),
-        Criterion::I => Some(w.unwrap_or(&identity)),
-    };
+    let weights: Vec<Option<DMatrix<f64>>> = fs
+        .iter()
+        .enumerate()
+        .map(|(b, f)| match criterion {
+            Criterion::D => None,
+            Criterion::A => Some(DMatrix::identity(f.ncols(), f.ncols())),
+            Criterion::I => Some(ws.get(b).cloned().flatten().unwrap_or_else(|| DMatrix::identity(f.ncols(), f.ncols()))),
+        })
+        .collect();
+    // The start is built on the widest model (it estimates the others' columns too when the
+    // blocks share their inputs); the exchange then works on all.
+    let widest = (0..fs.len()).max_by_key(|b| fs[*b].ncols()).unwrap_or(0);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed);
     let mut best: Option<Found> = None;
     let restarts = opts.restarts.max(1);
+    let better = |v: f64, b: f64| match criterion {
+        Criterion::D => v > b,
+        _ => v < b,
+    };
     for r in 0..restarts {
-        let Some(design) = start(f, opts.n, &mut rng) else { continue };
-        let Some(mut state) = State::new(f, weight, design) else { continue };
+        progress(r, restarts);
+        let Some(design) = start(&fs[widest], opts.n, &mut rng) else { continue };
+        let states: Option<Vec<State<'_>>> = fs.iter().zip(&weights).map(|(f, w)| State::new(f, w.as_ref(), design.clone())).collect();
+        let Some(mut states) = states else { continue };
         for _pass in 0..100 {
             let mut improved = false;
-            for slot in 0..state.design.len() {
-                let phi = state.phi();
-                if let Some((j, gain)) = state.best_swap(slot, criterion, phi)
+            for slot in 0..opts.n {
+                let i = states[0].design[slot];
+                let phis: Vec<f64> = states.iter().map(State::phi).collect();
+                let total_phi: f64 = phis.iter().sum();
+                let mut choice: Option<(usize, f64)> = None;
+                'candidates: for j in 0..nc {
+                    if j == i {
+                        continue;
+                    }
+                    // D: the product of the blocks' determinant ratios, as a gain over 1.
+                    // A, I: the relative decrease of the summed traces.
+                    let mut acc = if criterion == Criterion::D { 1.0 } else { 0.0 };
+                    for (st, phi) in states.iter().zip(&phis) {
+                        let Some(e) = st.effect(i, j, criterion, *phi) else { continue 'candidates };
+                        if criterion == Criterion::D {
+                            acc *= e;
+                        } else {
+                            acc += e;
+                        }
+                    }
+                    let gain = if criterion == Criterion::D { acc - 1.0 } else { (total_phi - acc) / total_phi };
+                    if choice.is_none_or(|(_, g)| gain > g) {
+                        choice = Some((j, gain));
+                    }
+                }
+                if let Some((j, gain)) = choice
                     && gain > 1e-10
                 {
-                    state.swap(slot, j);
+                    for st in &mut states {
+                        st.swap(slot, j);
+                    }
                     improved = true;
                 }
             }
@@ -309,24 +349,29 @@ pub fn optimize(
                 break;
             }
         }
-        state.refresh();
-        let value = state.value(criterion);
-        let better = |v: f64, b: f64| match criterion {
-            Criterion::D => v > b,
-            _ => v < b,
-        };
+        let mut value = if criterion == Criterion::D { 1.0 } else { 0.0 };
+        for st in &mut states {
+            st.refresh();
+            let v = st.value(criterion);
+            if criterion == Criterion::D {
+                value *= v;
+            } else {
+                value += v;
+            }
+        }
         match &mut best {
             Some(b) if (value - b.value).abs() <= 1e-9 * b.value.abs() => b.hits += 1,
             Some(b) if !better(value, b.value) => {}
             _ => {
-                let mut points = state.design.clone();
+                let mut points = states[0].design.clone();
                 points.sort_unstable();
                 best = Some(Found { points, value, hits: 1 });
             }
         }
-        progress(r + 1, restarts);
     }
-    best.ok_or(ExchangeError::Singular { rank, p })
+    progress(restarts, restarts);
+    let p = fs[0].ncols();
+    best.ok_or(ExchangeError::Singular { rank: p, p })
 }
 
 #[cfg(test)]

@@ -3,3 +3,6 @@
 
 pub mod criteria;
 pub mod exchange;
+pub mod models;
+pub mod points;
+pub mod predict;

@@ -1,5 +1,6 @@
 //! Reports: they only read results.
 
+pub mod design;
 pub mod html;
 pub mod json;
 pub mod plot;

@@ -1,0 +1,481 @@
+//! `calflash design`: evaluate plans, find optimal ones, predict and confirm their precision.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Subcommand};
+use nalgebra::DMatrix;
+
+use super::calibrate::SensorKind;
+use crate::design::criteria::{self, Criteria};
+use crate::design::exchange::{self, Criterion};
+use crate::design::models::{self, Block};
+use crate::design::points::{self, Points, Unit};
+use crate::design::predict;
+use crate::report;
+use crate::report::design as show;
+use crate::sim::{self, truth};
+
+/// Plans before tests: evaluate, optimise, predict.
+#[derive(Debug, Args)]
+pub struct DesignArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub action: Action,
+}
+
+/// The design subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Action {
+    /// Criteria, covariance form and prediction variance of one or more plans, side by side.
+    Evaluate(EvaluateArgs),
+    /// An exact optimal plan over the points the equipment can reach.
+    Optimize(OptimizeArgs),
+    /// Expected errors of a plan, confirmed by Monte Carlo; or the fewest observations for a
+    /// target error.
+    Predict(PredictArgs),
+}
+
+/// What the plans are for.
+#[derive(Debug, Args)]
+pub struct ModelArgs {
+    /// The model: a formula (`~ 1 + rate + rate^2` or `volts ~ ...`) or a preset: single,
+    /// triad, triad-nonlinear, gyro-gsens.
+    #[arg(long)]
+    pub model: String,
+    /// The unit the plan items drive (which input a single axis reads; triad inputs are the
+    /// specific force, or the rate for a gyro).
+    #[arg(long, value_enum, default_value = "single-accel")]
+    pub sensor: SensorKind,
+    /// The operating region for the G and I criteria (repeatable grids NAME=LO:HI:N, combined);
+    /// default: the candidates or the plan's own points.
+    #[arg(long)]
+    pub region: Vec<String>,
+    /// Chamber temperatures for plan items, C.
+    #[arg(long, default_value = "25", value_delimiter = ',')]
+    pub temps: Vec<f64>,
+    /// Supply voltages for plan items, V.
+    #[arg(long, default_value = "5", value_delimiter = ',')]
+    pub volts: Vec<f64>,
+}
+
+/// `calflash design evaluate`.
+#[derive(Debug, Args)]
+pub struct EvaluateArgs {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// A plan: a file (CSV with a header naming the variables) or plan items
+    /// (`tumble:24`, `rate:-10:10:11,tumble:6`, ...). Repeat to compare.
+    #[arg(long, required = true)]
+    pub plan: Vec<String>,
+    /// The prediction-variance curve over one variable, NAME=LO:HI:N (the figure in --report).
+    #[arg(long)]
+    pub curve: Option<String>,
+    /// Orientation error of the fixture, degrees (1 sigma about each axis): the standard errors
+    /// with it, for triads (needs --noise and --scale).
+    #[arg(long)]
+    pub fixture_error: Option<f64>,
+    /// Output noise, counts (1 sigma), for standard errors in counts.
+    #[arg(long)]
+    pub noise: Option<f64>,
+    /// Counts per SI unit of the input (for the fixture error).
+    #[arg(long)]
+    pub scale: Option<f64>,
+    /// Write the figures and tables as HTML here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Write JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// `calflash design optimize`.
+#[derive(Debug, Args)]
+pub struct OptimizeArgs {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Observations in the plan.
+    #[arg(long)]
+    pub n: usize,
+    /// The criterion.
+    #[arg(long, value_enum, default_value = "d")]
+    pub criterion: Criterion,
+    /// Candidate points the equipment reaches: plan items (head:N, tumble:6|12|18|24|26,
+    /// sphere:N, rate:LO:HI:N, centrifuge:LO:HI:N), repeatable.
+    #[arg(long)]
+    pub candidates: Vec<String>,
+    /// Candidate grids NAME=LO:HI:N (repeatable; combined with each other and with the items).
+    #[arg(long)]
+    pub grid: Vec<String>,
+    /// Random restarts of the exchange.
+    #[arg(long, default_value_t = 10)]
+    pub restarts: usize,
+    /// Seed of the restarts.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Compare with these plans too (files or items, repeatable), besides the usual ones.
+    #[arg(long)]
+    pub compare: Vec<String>,
+    /// The plan file to write (CSV), for `calflash simulate --plan-file` and a test station.
+    #[arg(long, short)]
+    pub output: PathBuf,
+}
+
+/// `calflash design predict`.
+#[derive(Debug, Args)]
+pub struct PredictArgs {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// The plan (file or items). Without it, give --target: the fewest observations on the
+    /// optimal plan over --candidates/--grid are found.
+    #[arg(long)]
+    pub plan: Option<String>,
+    /// Output noise, counts (1 sigma); default: the simulator's unit's.
+    #[arg(long)]
+    pub noise: Option<f64>,
+    /// Operating points NAME=VALUE[,NAME=VALUE...] (repeatable).
+    #[arg(long)]
+    pub at: Vec<String>,
+    /// Confirm with this many simulated calibrations (single-axis sensors and triads).
+    #[arg(long)]
+    pub monte_carlo: Option<usize>,
+    /// The largest acceptable expected error at the operating points (counts).
+    #[arg(long)]
+    pub target: Option<f64>,
+    /// Candidates for --target (plan items).
+    #[arg(long)]
+    pub candidates: Vec<String>,
+    /// Candidate grids for --target.
+    #[arg(long)]
+    pub grid: Vec<String>,
+    /// The criterion of the plans for --target.
+    #[arg(long, value_enum, default_value = "i")]
+    pub criterion: Criterion,
+    /// Write JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Runs `calflash design`.
+///
+/// # Errors
+/// Bad input or a plan that cannot estimate the model.
+pub fn run(args: &DesignArgs) -> Result<(), String> {
+    match &args.action {
+        Action::Evaluate(a) => evaluate(a),
+        Action::Optimize(a) => optimize(a),
+        Action::Predict(a) => predict(a),
+    }
+}
+
+fn unit(kind: SensorKind) -> (Unit, bool) {
+    match kind {
+        SensorKind::SingleAccel => (Unit::SingleAccel, false),
+        SensorKind::SingleGyro => (Unit::SingleGyro, true),
+        SensorKind::Accel | SensorKind::Imu => (Unit::Triad, false),
+        SensorKind::Gyro => (Unit::Triad, true),
+    }
+}
+
+/// A plan from a file or from items.
+fn load_plan(spec: &str, vars: &[String], m: &ModelArgs) -> Result<Points, String> {
+    let path = Path::new(spec);
+    if path.is_file() {
+        return points::read(path, vars);
+    }
+    let items: Vec<String> = spec.split(',').map(|s| s.trim().to_string()).collect();
+    points::from_items(&items, &m.temps, &m.volts, 1, unit(m.sensor).0).map_err(|e| format!("--plan `{spec}`: not a file, and {e}"))
+}
+
+fn grids(specs: &[String]) -> Result<Points, String> {
+    let mut p = Points { names: Vec::new(), rows: Vec::new() };
+    for g in specs {
+        p = p.product(&points::grid(g)?);
+    }
+    Ok(p)
+}
+
+fn candidates(items: &[String], grid_specs: &[String], m: &ModelArgs) -> Result<Points, String> {
+    let from_items = if items.is_empty() {
+        Points { names: Vec::new(), rows: Vec::new() }
+    } else {
+        points::from_items(items, &m.temps, &m.volts, 1, unit(m.sensor).0)?
+    };
+    let c = from_items.product(&grids(grid_specs)?);
+    if c.rows.is_empty() {
+        return Err("no candidates: give --candidates plan items or --grid NAME=LO:HI:N".into());
+    }
+    Ok(c)
+}
+
+/// The model's blocks and, checked, that every variable a block reads is set by `pts` or by
+/// the region (variables the points leave out take their defaults only when `strict` is off).
+fn check_variables(blocks: &[Block], pts: &Points, what: &str) -> Result<(), String> {
+    for v in models::variables(blocks) {
+        if !pts.names.contains(&v) {
+            return Err(format!(
+                "{what}: the model reads `{v}`, which it does not set (it sets {}); name the variable as the plan does, or add a grid {v}=LO:HI:N",
+                if pts.names.is_empty() { "nothing".to_string() } else { pts.names.join(", ") }
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn region_rows(m: &ModelArgs, fallback: &Points, block: &Block) -> Result<DMatrix<f64>, String> {
+    if m.region.is_empty() {
+        Ok(fallback.model_rows(&block.formula))
+    } else {
+        Ok(grids(&m.region)?.model_rows(&block.formula))
+    }
+}
+
+/// Evaluates `pts` for every block; a plan that cannot estimate a block names the term.
+fn evaluate_plan(name: &str, pts: &Points, blocks: &[Block], m: &ModelArgs) -> Result<Vec<Criteria>, String> {
+    blocks
+        .iter()
+        .map(|b| {
+            let x = pts.model_rows(&b.formula);
+            let region = region_rows(m, pts, b)?;
+            criteria::evaluate(&x, &region, b.formula.intercept).map_err(|dep| {
+                let table = to_table(pts, &b.formula);
+                let why = b.formula.explain_rank_deficiency(&table, dep.column, &dep.combination);
+                format!("plan {name} cannot estimate the model{}: {why}", if blocks.len() > 1 { format!(" of axis {}", b.label) } else { String::new() })
+            })
+        })
+        .collect()
+}
+
+fn to_table(pts: &Points, f: &crate::formula::Formula) -> crate::obs::Table {
+    let names = f.columns();
+    crate::obs::Table {
+        path: PathBuf::from("plan"),
+        columns: names.iter().map(|n| (0..pts.rows.len()).map(|r| pts.value(r, n)).collect()).collect(),
+        names,
+        lines: (1..=pts.rows.len() as u64).collect(),
+    }
+}
+
+fn evaluate(a: &EvaluateArgs) -> Result<(), String> {
+    let (u, gyro) = unit(a.model.sensor);
+    let blocks = models::blocks(&a.model.model, gyro)?;
+    let vars = models::variables(&blocks);
+    let mut plans = Vec::new();
+    for spec in &a.plan {
+        let pts = load_plan(spec, &vars, &a.model)?;
+        check_variables(&blocks, &pts, &format!("plan {spec}"))?;
+        let crit = evaluate_plan(spec, &pts, &blocks, &a.model)?;
+        plans.push(show::PlanResult { name: spec.clone(), points: pts, criteria: crit, fixture: None });
+    }
+    if let Some(deg) = a.fixture_error {
+        let (Some(noise), Some(scale)) = (a.noise, a.scale) else {
+            return Err("--fixture-error needs --noise (counts) and --scale (counts per SI unit)".into());
+        };
+        if u != Unit::Triad {
+            return Err("--fixture-error applies to triads (--sensor accel or gyro)".into());
+        }
+        for p in &mut plans {
+            let se: Vec<(Vec<f64>, Vec<f64>)> = blocks
+                .iter()
+                .zip(&p.criteria)
+                .enumerate()
+                .map(|(axis, (b, c))| {
+                    let x = p.points.model_rows(&b.formula);
+                    let extra = predict::orientation_variance(&p.points, axis, scale, deg.to_radians(), gyro);
+                    let cov = predict::covariance_with(&x, &c.unscaled_covariance, noise, &extra);
+                    let plain = (0..c.p).map(|k| noise * c.unscaled_covariance[(k, k)].sqrt()).collect();
+                    (plain, (0..c.p).map(|k| cov[(k, k)].sqrt()).collect())
+                })
+                .collect();
+            p.fixture = Some(se);
+        }
+    }
+    let curve = a.curve.as_deref().map(points::grid).transpose()?;
+    print!("{}", show::evaluate_text(&a.model.model, &blocks, &plans, a.fixture_error));
+    if let Some(path) = &a.json {
+        let v = show::evaluate_json(&blocks, &plans);
+        report::write_atomically(path, |w| serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other))?;
+    }
+    if let Some(path) = &a.report {
+        let html = show::evaluate_html(&a.model.model, &blocks, &plans, curve.as_ref())?;
+        report::write_atomically(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
+    }
+    Ok(())
+}
+
+/// The usual plans to compare an optimum with: uniform spacing over each grid, and the 6, 12 and
+/// 24-position tumbles for triads.
+fn usual_plans(o: &OptimizeArgs, cands: &Points) -> Vec<(String, Points)> {
+    let mut out = Vec::new();
+    let (u, _) = unit(o.model.sensor);
+    if u == Unit::Triad {
+        for k in [6, 12, 24] {
+            if let Ok(p) = points::from_items(&[format!("tumble:{k}")], &o.model.temps, &o.model.volts, 1, u) {
+                // Repeated to the plan's size, as a station would.
+                let reps = o.n.div_ceil(p.rows.len()).max(1);
+                let idx: Vec<usize> = (0..p.rows.len()).cycle().take(reps * p.rows.len()).collect();
+                out.push((format!("tumble:{k} x{reps}"), p.select(&idx)));
+            }
+        }
+    }
+    // Uniform: n points spread evenly over the candidates in their order.
+    let m = cands.rows.len();
+    if m > 0 {
+        let idx: Vec<usize> = (0..o.n).map(|k| if o.n == 1 { 0 } else { (k * (m - 1) + (o.n - 1) / 2) / (o.n - 1) }).collect();
+        out.push((format!("uniform ({} points over the candidates)", o.n), cands.select(&idx)));
+    }
+    out
+}
+
+fn optimize(o: &OptimizeArgs) -> Result<(), String> {
+    let (u, gyro) = unit(o.model.sensor);
+    let blocks = models::blocks(&o.model.model, gyro)?;
+    let vars = models::variables(&blocks);
+    let cands = candidates(&o.candidates, &o.grid, &o.model)?;
+    check_variables(&blocks, &cands, "the candidates")?;
+    let fs: Vec<DMatrix<f64>> = blocks.iter().map(|b| cands.model_rows(&b.formula)).collect();
+    let ws: Vec<Option<DMatrix<f64>>> = blocks
+        .iter()
+        .map(|b| {
+            let r = region_rows(&o.model, &cands, b).ok()?;
+            Some(r.transpose() * &r / r.nrows() as f64)
+        })
+        .collect();
+    let bar = indicatif::ProgressBar::new(o.restarts as u64);
+    bar.set_style(indicatif::ProgressStyle::with_template("  exchange {bar:30} restart {pos}/{len}").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));
+    let start = std::time::Instant::now();
+    let found = exchange::optimize_blocks(&fs, o.criterion, &ws, &exchange::Options { n: o.n, restarts: o.restarts, seed: o.seed }, |d, _| {
+        if start.elapsed().as_secs_f64() > 0.5 {
+            bar.set_position(d as u64);
+        }
+    })
+    .map_err(|e| {
+        let names: Vec<String> = blocks.iter().map(|b| b.formula.term_names().join(", ")).collect();
+        format!("{e}; the model's terms: {}", names.join(" | "))
+    })?;
+    bar.finish_and_clear();
+    let plan = cands.select(&found.points);
+    let mut compare = vec![("optimal".to_string(), plan.clone())];
+    for spec in &o.compare {
+        compare.push((spec.clone(), load_plan(spec, &vars, &o.model)?));
+    }
+    compare.extend(usual_plans(o, &cands));
+    let mut rows = Vec::new();
+    for (name, pts) in &compare {
+        match evaluate_plan(name, pts, &blocks, &o.model) {
+            Ok(c) => rows.push(show::PlanResult { name: name.clone(), points: pts.clone(), criteria: c, fixture: None }),
+            Err(e) => println!("  ({e})"),
+        }
+    }
+    // The model's variables, then the columns `calflash simulate --plan-file` reads.
+    let sim_cols: Vec<&str> = match u {
+        Unit::Triad => crate::columns::F.iter().chain(crate::columns::W.iter()).copied().chain([crate::columns::TEMP, crate::columns::VOLT]).collect(),
+        _ => vec![crate::columns::INPUT, crate::columns::INPUT_P, crate::columns::INPUT_O, crate::columns::TEMP, crate::columns::VOLT],
+    };
+    let mut keep: Vec<String> = vars.clone();
+    for n in &cands.names {
+        if sim_cols.contains(&n.as_str()) && !keep.contains(n) {
+            keep.push(n.clone());
+        }
+    }
+    report::write_atomically(&o.output, |w| std::io::Write::write_all(w, points::to_csv(&plan, &keep).as_bytes()))?;
+    print!("{}", show::optimize_text(o.criterion, o.n, &cands, &found, &blocks, &rows, start.elapsed(), &o.output));
+    Ok(())
+}
+
+fn predict(a: &PredictArgs) -> Result<(), String> {
+    let (u, gyro) = unit(a.model.sensor);
+    let blocks = models::blocks(&a.model.model, gyro)?;
+    let vars = models::variables(&blocks);
+    let sensor = match a.model.sensor {
+        SensorKind::SingleAccel => sim::Sensor::Single { gyro: false, truth: truth::SingleTruth::default() },
+        SensorKind::SingleGyro => sim::Sensor::Single { gyro: true, truth: truth::SingleTruth::default() },
+        SensorKind::Accel => sim::Sensor::Accel(truth::TriadTruth::default()),
+        SensorKind::Gyro => sim::Sensor::Gyro(truth::TriadTruth::default()),
+        SensorKind::Imu => return Err("--sensor imu: predict one triad at a time (accel or gyro)".into()),
+    };
+    // Per block: the given noise, or the simulator's unit's (per axis for a triad).
+    let noises: Vec<f64> = (0..blocks.len())
+        .map(|k| {
+            a.noise.unwrap_or(match &sensor {
+                sim::Sensor::Single { truth, .. } => truth.noise,
+                sim::Sensor::Accel(t) | sim::Sensor::Gyro(t) => t.noise[k.min(2)],
+                sim::Sensor::Imu(t) => t.accel.noise[k.min(2)],
+            })
+        })
+        .collect();
+    let noise = noises[0];
+    let mut at = Points { names: Vec::new(), rows: Vec::new() };
+    for spec in &a.at {
+        let mut names = Vec::new();
+        let mut row = Vec::new();
+        for kv in spec.split(',') {
+            let (k, v) = kv.split_once('=').ok_or_else(|| format!("--at `{spec}`: expected NAME=VALUE[,NAME=VALUE...]"))?;
+            names.push(k.trim().to_string());
+            row.push(v.trim().parse::<f64>().map_err(|_| format!("--at `{spec}`: `{v}` is not a number"))?);
+        }
+        if at.rows.is_empty() {
+            at.names = names;
+        } else if at.names != names {
+            return Err(format!("--at `{spec}`: every operating point must name the same variables ({})", at.names.join(", ")));
+        }
+        at.rows.push(row);
+    }
+    if at.rows.is_empty() {
+        return Err("--at: give at least one operating point, NAME=VALUE[,NAME=VALUE...]".into());
+    }
+    if let Some(target) = a.target {
+        if blocks.len() != 1 {
+            return Err("--target: one model at a time (a formula or the single preset)".into());
+        }
+        let cands = candidates(&a.candidates, &a.grid, &a.model)?;
+        check_variables(&blocks, &cands, "the candidates")?;
+        let f = cands.model_rows(&blocks[0].formula);
+        let region = region_rows(&a.model, &cands, &blocks[0])?;
+        let w = region.transpose() * &region / region.nrows() as f64;
+        let at_rows = at.model_rows(&blocks[0].formula);
+        let s = predict::smallest_n(&f, a.criterion, Some(&w), &at_rows, noise, target, 5, |n| eprint!("\r  trying {n} observations   "))?;
+        eprint!("\r{:40}\r", "");
+        println!(
+            "calflash design predict  model {}: the fewest observations for an expected error of at most {target} counts at the {} operating point(s), noise {noise} counts: {} on the {:?}-optimal plan (largest expected error {:.4})",
+            a.model.model,
+            at.rows.len(),
+            s.n,
+            a.criterion,
+            s.worst
+        );
+        for (row, count) in points::tally(&cands.select(&s.found.points)) {
+            println!("    {count:>4} x  {}", cands.names.iter().zip(&row).filter(|(n, _)| vars.contains(n)).map(|(n, v)| format!("{n} = {v}")).collect::<Vec<_>>().join(", "));
+        }
+        return Ok(());
+    }
+    let spec = a.plan.as_deref().ok_or("give --plan (or --target with --candidates)")?;
+    let pts = load_plan(spec, &vars, &a.model)?;
+    check_variables(&blocks, &pts, &format!("plan {spec}"))?;
+    let crit = evaluate_plan(spec, &pts, &blocks, &a.model)?;
+    let outputs: Vec<&str> = match (u, gyro) {
+        (Unit::Triad, false) => crate::columns::A.to_vec(),
+        (Unit::Triad, true) => crate::columns::GYRO.to_vec(),
+        _ => vec![crate::columns::OUTPUT],
+    };
+    let mut results = Vec::new();
+    for (k, (b, c)) in blocks.iter().zip(&crit).enumerate() {
+        let at_rows = at.model_rows(&b.formula);
+        let e = predict::expected(&c.unscaled_covariance, noises[k], &at_rows);
+        let mc = match a.monte_carlo {
+            Some(runs) if runs >= 10 => {
+                let x = pts.model_rows(&b.formula);
+                Some(predict::monte_carlo(&pts, u, &sensor, outputs[k.min(outputs.len() - 1)], &x, &at_rows, runs, 7)?)
+            }
+            Some(runs) => return Err(format!("--monte-carlo {runs}: at least 10 runs")),
+            None => None,
+        };
+        results.push((b.clone(), e, mc));
+    }
+    let text = show::predict_text(spec, noise, &at, &results);
+    print!("{text}");
+    if let Some(path) = &a.json {
+        let v = show::predict_json(spec, noise, &at, &results);
+        report::write_atomically(path, |w| serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,69 @@
+//! The models a plan is designed for: any formula, or a sensor preset expanded to one formula
+//! per output (the three axes of a triad share their points but not all their terms).
+
+use crate::columns as col;
+use crate::formula::{self, Formula};
+
+/// The presets, for messages.
+pub const PRESETS: &str = "single (IEEE 1293 single axis: 1 + input + input^2 + input^3 + input:abs(input)), \
+triad (per axis: 1 + x + y + z inputs), triad-nonlinear (+ own^2 + own^3 + own:abs(own)), \
+gyro-gsens (gyro triad + f_x + f_y + f_z)";
+
+/// One model to design for.
+#[derive(Debug, Clone)]
+pub struct Block {
+    /// What it is (`x`, `y`, `z` for a triad's axes, else the response).
+    pub label: String,
+    /// The formula.
+    pub formula: Formula,
+}
+
+/// Expands `model` (a formula, `~ ...` without a response, or a preset) for a unit whose
+/// triad inputs are the rates (`gyro`) or the specific forces.
+///
+/// # Errors
+/// A formula that does not parse, naming where.
+pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, String> {
+    let inputs = if gyro { col::W } else { col::F };
+    let triad = |extra: &dyn Fn(usize) -> String| -> Result<Vec<Block>, String> {
+        (0..3)
+            .map(|i| {
+                let text = format!("out_{} ~ 1 + {} + {} + {}{}", ["x", "y", "z"][i], inputs[0], inputs[1], inputs[2], extra(i));
+                Ok(Block { label: ["x", "y", "z"][i].to_string(), formula: formula::parse(&text).map_err(|e| e.to_string())? })
+            })
+            .collect()
+    };
+    match model.trim() {
+        "single" => {
+            let f = formula::parse("output ~ 1 + input + input^2 + input^3 + input:abs(input)").map_err(|e| e.to_string())?;
+            Ok(vec![Block { label: "output".into(), formula: f }])
+        }
+        "triad" => triad(&|_| String::new()),
+        "triad-nonlinear" => triad(&|i| format!(" + {0}^2 + {0}^3 + {0}:abs({0})", inputs[i])),
+        "gyro-gsens" => {
+            if !gyro {
+                return Err("--model gyro-gsens: the g-sensitivity preset is for a gyro triad (--sensor gyro)".into());
+            }
+            triad(&|_| format!(" + {} + {} + {}", col::F[0], col::F[1], col::F[2]))
+        }
+        text => {
+            let full = if text.starts_with('~') { format!("response {text}") } else { text.to_string() };
+            let f = formula::parse(&full).map_err(|e| format!("--model: {e} (or a preset: {PRESETS})"))?;
+            Ok(vec![Block { label: f.response.clone(), formula: f }])
+        }
+    }
+}
+
+/// The variables the blocks read (no responses), in order of appearance.
+#[must_use]
+pub fn variables(blocks: &[Block]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for b in blocks {
+        for v in b.formula.columns().into_iter().skip(1) {
+            if !out.contains(&v) {
+                out.push(v);
+            }
+        }
+    }
+    out
+}
