@@ -25,12 +25,21 @@ pub fn candidates() -> DMatrix<f64> {
 
 fn bench(c: &mut Criterion) {
     let f = candidates();
-    let opts = Options { n: 40, restarts: 5, seed: 1 };
+    let opts = Options {
+        n: 40,
+        restarts: 5,
+        seed: 1,
+    };
     let mut g = c.benchmark_group("design");
     g.sample_size(10);
-    g.bench_function("D-optimal, 10 terms, 40 points, 10,164 candidates, 5 restarts", |b| {
-        b.iter(|| black_box(optimize(black_box(&f), Optimality::D, None, &opts, |_, _| {}).unwrap()));
-    });
+    g.bench_function(
+        "D-optimal, 10 terms, 40 points, 10,164 candidates, 5 restarts",
+        |b| {
+            b.iter(|| {
+                black_box(optimize(black_box(&f), Optimality::D, None, &opts, |_, _| {}).unwrap())
+            });
+        },
+    );
     g.finish();
 }
 

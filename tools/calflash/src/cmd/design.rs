@@ -56,6 +56,40 @@ pub struct ModelArgs {
     /// Supply voltages for plan items, V.
     #[arg(long, default_value = "5", value_delimiter = ',')]
     pub volts: Vec<f64>,
+    /// The equipment's limits NAME=LO:HI (repeatable): a plan or candidate beyond them is
+    /// refused.
+    #[arg(long)]
+    pub limit: Vec<String>,
+}
+
+/// Refuses points beyond the equipment's limits.
+fn check_limits(pts: &Points, limits: &[String], what: &str) -> Result<(), String> {
+    for l in limits {
+        let bad = || format!("--limit `{l}`: expected NAME=LO:HI, for example rate=-800:800");
+        let (name, range) = l.split_once('=').ok_or_else(bad)?;
+        let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
+        let (lo, hi): (f64, f64) = (
+            lo.trim().parse().map_err(|_| bad())?,
+            hi.trim().parse().map_err(|_| bad())?,
+        );
+        let name = name.trim();
+        if !pts.names.iter().any(|n| n == name) {
+            return Err(format!(
+                "--limit {name}: {what} has no variable {name} (it has {})",
+                pts.names.join(", ")
+            ));
+        }
+        for r in 0..pts.rows.len() {
+            let v = pts.value(r, name);
+            if !(lo..=hi).contains(&v) {
+                return Err(format!(
+                    "{what}, point {}: {name} = {v} is outside the equipment's limits {lo} to {hi}",
+                    r + 1
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// `calflash design evaluate`.
@@ -183,11 +217,15 @@ fn load_plan(spec: &str, vars: &[String], m: &ModelArgs) -> Result<Points, Strin
         return points::read(path, vars);
     }
     let items: Vec<String> = spec.split(',').map(|s| s.trim().to_string()).collect();
-    points::from_items(&items, &m.temps, &m.volts, 1, unit(m.sensor).0).map_err(|e| format!("--plan `{spec}`: not a file, and {e}"))
+    points::from_items(&items, &m.temps, &m.volts, 1, unit(m.sensor).0)
+        .map_err(|e| format!("--plan `{spec}`: not a file, and {e}"))
 }
 
 fn grids(specs: &[String]) -> Result<Points, String> {
-    let mut p = Points { names: Vec::new(), rows: Vec::new() };
+    let mut p = Points {
+        names: Vec::new(),
+        rows: Vec::new(),
+    };
     for g in specs {
         p = p.product(&points::grid(g)?);
     }
@@ -196,7 +234,10 @@ fn grids(specs: &[String]) -> Result<Points, String> {
 
 fn candidates(items: &[String], grid_specs: &[String], m: &ModelArgs) -> Result<Points, String> {
     let from_items = if items.is_empty() {
-        Points { names: Vec::new(), rows: Vec::new() }
+        Points {
+            names: Vec::new(),
+            rows: Vec::new(),
+        }
     } else {
         points::from_items(items, &m.temps, &m.volts, 1, unit(m.sensor).0)?
     };
@@ -214,7 +255,11 @@ fn check_variables(blocks: &[Block], pts: &Points, what: &str) -> Result<(), Str
         if !pts.names.contains(&v) {
             return Err(format!(
                 "{what}: the model reads `{v}`, which it does not set (it sets {}); name the variable as the plan does, or add a grid {v}=LO:HI:N",
-                if pts.names.is_empty() { "nothing".to_string() } else { pts.names.join(", ") }
+                if pts.names.is_empty() {
+                    "nothing".to_string()
+                } else {
+                    pts.names.join(", ")
+                }
             ));
         }
     }
@@ -230,16 +275,31 @@ fn region_rows(m: &ModelArgs, fallback: &Points, block: &Block) -> Result<DMatri
 }
 
 /// Evaluates `pts` for every block; a plan that cannot estimate a block names the term.
-fn evaluate_plan(name: &str, pts: &Points, blocks: &[Block], m: &ModelArgs) -> Result<Vec<Criteria>, String> {
+fn evaluate_plan(
+    name: &str,
+    pts: &Points,
+    blocks: &[Block],
+    m: &ModelArgs,
+    region_points: &Points,
+) -> Result<Vec<Criteria>, String> {
     blocks
         .iter()
         .map(|b| {
             let x = pts.model_rows(&b.formula);
-            let region = region_rows(m, pts, b)?;
+            let region = region_rows(m, region_points, b)?;
             criteria::evaluate(&x, &region, b.formula.intercept).map_err(|dep| {
                 let table = to_table(pts, &b.formula);
-                let why = b.formula.explain_rank_deficiency(&table, dep.column, &dep.combination);
-                format!("plan {name} cannot estimate the model{}: {why}", if blocks.len() > 1 { format!(" of axis {}", b.label) } else { String::new() })
+                let why = b
+                    .formula
+                    .explain_rank_deficiency(&table, dep.column, &dep.combination);
+                format!(
+                    "plan {name} cannot estimate the model{}: {why}",
+                    if blocks.len() > 1 {
+                        format!(" of axis {}", b.label)
+                    } else {
+                        String::new()
+                    }
+                )
             })
         })
         .collect()
@@ -249,7 +309,10 @@ fn to_table(pts: &Points, f: &crate::formula::Formula) -> crate::obs::Table {
     let names = f.columns();
     crate::obs::Table {
         path: PathBuf::from("plan"),
-        columns: names.iter().map(|n| (0..pts.rows.len()).map(|r| pts.value(r, n)).collect()).collect(),
+        columns: names
+            .iter()
+            .map(|n| (0..pts.rows.len()).map(|r| pts.value(r, n)).collect())
+            .collect(),
         names,
         lines: (1..=pts.rows.len() as u64).collect(),
     }
@@ -259,16 +322,30 @@ fn evaluate(a: &EvaluateArgs) -> Result<(), String> {
     let (u, gyro) = unit(a.model.sensor);
     let blocks = models::blocks(&a.model.model, gyro)?;
     let vars = models::variables(&blocks);
-    let mut plans = Vec::new();
+    let mut loaded = Vec::new();
     for spec in &a.plan {
         let pts = load_plan(spec, &vars, &a.model)?;
         check_variables(&blocks, &pts, &format!("plan {spec}"))?;
-        let crit = evaluate_plan(spec, &pts, &blocks, &a.model)?;
-        plans.push(show::PlanResult { name: spec.clone(), points: pts, criteria: crit, fixture: None });
+        check_limits(&pts, &a.model.limit, &format!("plan {spec}"))?;
+        loaded.push((spec.clone(), pts));
+    }
+    // Without --region, every plan is judged over all the plans' points together.
+    let union = union(loaded.iter().map(|(_, p)| p), &vars);
+    let mut plans = Vec::new();
+    for (spec, pts) in loaded {
+        let crit = evaluate_plan(&spec, &pts, &blocks, &a.model, &union)?;
+        plans.push(show::PlanResult {
+            name: spec,
+            points: pts,
+            criteria: crit,
+            fixture: None,
+        });
     }
     if let Some(deg) = a.fixture_error {
         let (Some(noise), Some(scale)) = (a.noise, a.scale) else {
-            return Err("--fixture-error needs --noise (counts) and --scale (counts per SI unit)".into());
+            return Err(
+                "--fixture-error needs --noise (counts) and --scale (counts per SI unit)".into(),
+            );
         };
         if u != Unit::Triad {
             return Err("--fixture-error applies to triads (--sensor accel or gyro)".into());
@@ -280,9 +357,17 @@ fn evaluate(a: &EvaluateArgs) -> Result<(), String> {
                 .enumerate()
                 .map(|(axis, (b, c))| {
                     let x = p.points.model_rows(&b.formula);
-                    let extra = predict::orientation_variance(&p.points, axis, scale, deg.to_radians(), gyro);
+                    let extra = predict::orientation_variance(
+                        &p.points,
+                        axis,
+                        scale,
+                        deg.to_radians(),
+                        gyro,
+                    );
                     let cov = predict::covariance_with(&x, &c.unscaled_covariance, noise, &extra);
-                    let plain = (0..c.p).map(|k| noise * c.unscaled_covariance[(k, k)].sqrt()).collect();
+                    let plain = (0..c.p)
+                        .map(|k| noise * c.unscaled_covariance[(k, k)].sqrt())
+                        .collect();
                     (plain, (0..c.p).map(|k| cov[(k, k)].sqrt()).collect())
                 })
                 .collect();
@@ -290,16 +375,35 @@ fn evaluate(a: &EvaluateArgs) -> Result<(), String> {
         }
     }
     let curve = a.curve.as_deref().map(points::grid).transpose()?;
-    print!("{}", show::evaluate_text(&a.model.model, &blocks, &plans, a.fixture_error));
+    print!(
+        "{}",
+        show::evaluate_text(&a.model.model, &blocks, &plans, a.fixture_error)
+    );
     if let Some(path) = &a.json {
         let v = show::evaluate_json(&blocks, &plans);
-        report::write_atomically(path, |w| serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other))?;
+        report::write_atomically(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+        })?;
     }
     if let Some(path) = &a.report {
         let html = show::evaluate_html(&a.model.model, &blocks, &plans, curve.as_ref())?;
         report::write_atomically(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
     }
     Ok(())
+}
+
+/// The points of all `plans`, on the variables `vars`.
+fn union<'a>(plans: impl Iterator<Item = &'a Points>, vars: &[String]) -> Points {
+    let mut rows = Vec::new();
+    for p in plans {
+        for r in 0..p.rows.len() {
+            rows.push(vars.iter().map(|v| p.value(r, v)).collect());
+        }
+    }
+    Points {
+        names: vars.to_vec(),
+        rows,
+    }
 }
 
 /// The usual plans to compare an optimum with: uniform spacing over each grid, and the 6, 12 and
@@ -309,10 +413,19 @@ fn usual_plans(o: &OptimizeArgs, cands: &Points) -> Vec<(String, Points)> {
     let (u, _) = unit(o.model.sensor);
     if u == Unit::Triad {
         for k in [6, 12, 24] {
-            if let Ok(p) = points::from_items(&[format!("tumble:{k}")], &o.model.temps, &o.model.volts, 1, u) {
+            if let Ok(p) = points::from_items(
+                &[format!("tumble:{k}")],
+                &o.model.temps,
+                &o.model.volts,
+                1,
+                u,
+            ) {
                 // Repeated to the plan's size, as a station would.
                 let reps = o.n.div_ceil(p.rows.len()).max(1);
-                let idx: Vec<usize> = (0..p.rows.len()).cycle().take(reps * p.rows.len()).collect();
+                let idx: Vec<usize> = (0..p.rows.len())
+                    .cycle()
+                    .take(reps * p.rows.len())
+                    .collect();
                 out.push((format!("tumble:{k} x{reps}"), p.select(&idx)));
             }
         }
@@ -320,8 +433,19 @@ fn usual_plans(o: &OptimizeArgs, cands: &Points) -> Vec<(String, Points)> {
     // Uniform: n points spread evenly over the candidates in their order.
     let m = cands.rows.len();
     if m > 0 {
-        let idx: Vec<usize> = (0..o.n).map(|k| if o.n == 1 { 0 } else { (k * (m - 1) + (o.n - 1) / 2) / (o.n - 1) }).collect();
-        out.push((format!("uniform ({} points over the candidates)", o.n), cands.select(&idx)));
+        let idx: Vec<usize> = (0..o.n)
+            .map(|k| {
+                if o.n == 1 {
+                    0
+                } else {
+                    (k * (m - 1) + (o.n - 1) / 2) / (o.n - 1)
+                }
+            })
+            .collect();
+        out.push((
+            format!("uniform ({} points over the candidates)", o.n),
+            cands.select(&idx),
+        ));
     }
     out
 }
@@ -332,7 +456,11 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
     let vars = models::variables(&blocks);
     let cands = candidates(&o.candidates, &o.grid, &o.model)?;
     check_variables(&blocks, &cands, "the candidates")?;
-    let fs: Vec<DMatrix<f64>> = blocks.iter().map(|b| cands.model_rows(&b.formula)).collect();
+    check_limits(&cands, &o.model.limit, "the candidates")?;
+    let fs: Vec<DMatrix<f64>> = blocks
+        .iter()
+        .map(|b| cands.model_rows(&b.formula))
+        .collect();
     let ws: Vec<Option<DMatrix<f64>>> = blocks
         .iter()
         .map(|b| {
@@ -341,15 +469,31 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
         })
         .collect();
     let bar = indicatif::ProgressBar::new(o.restarts as u64);
-    bar.set_style(indicatif::ProgressStyle::with_template("  exchange {bar:30} restart {pos}/{len}").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("  exchange {bar:30} restart {pos}/{len}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
     let start = std::time::Instant::now();
-    let found = exchange::optimize_blocks(&fs, o.criterion, &ws, &exchange::Options { n: o.n, restarts: o.restarts, seed: o.seed }, |d, _| {
-        if start.elapsed().as_secs_f64() > 0.5 {
-            bar.set_position(d as u64);
-        }
-    })
+    let found = exchange::optimize_blocks(
+        &fs,
+        o.criterion,
+        &ws,
+        &exchange::Options {
+            n: o.n,
+            restarts: o.restarts,
+            seed: o.seed,
+        },
+        |d, _| {
+            if start.elapsed().as_secs_f64() > 0.5 {
+                bar.set_position(d as u64);
+            }
+        },
+    )
     .map_err(|e| {
-        let names: Vec<String> = blocks.iter().map(|b| b.formula.term_names().join(", ")).collect();
+        let names: Vec<String> = blocks
+            .iter()
+            .map(|b| b.formula.term_names().join(", "))
+            .collect();
         format!("{e}; the model's terms: {}", names.join(" | "))
     })?;
     bar.finish_and_clear();
@@ -361,15 +505,31 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
     compare.extend(usual_plans(o, &cands));
     let mut rows = Vec::new();
     for (name, pts) in &compare {
-        match evaluate_plan(name, pts, &blocks, &o.model) {
-            Ok(c) => rows.push(show::PlanResult { name: name.clone(), points: pts.clone(), criteria: c, fixture: None }),
+        match evaluate_plan(name, pts, &blocks, &o.model, &cands) {
+            Ok(c) => rows.push(show::PlanResult {
+                name: name.clone(),
+                points: pts.clone(),
+                criteria: c,
+                fixture: None,
+            }),
             Err(e) => println!("  ({e})"),
         }
     }
     // The model's variables, then the columns `calflash simulate --plan-file` reads.
     let sim_cols: Vec<&str> = match u {
-        Unit::Triad => crate::columns::F.iter().chain(crate::columns::W.iter()).copied().chain([crate::columns::TEMP, crate::columns::VOLT]).collect(),
-        _ => vec![crate::columns::INPUT, crate::columns::INPUT_P, crate::columns::INPUT_O, crate::columns::TEMP, crate::columns::VOLT],
+        Unit::Triad => crate::columns::F
+            .iter()
+            .chain(crate::columns::W.iter())
+            .copied()
+            .chain([crate::columns::TEMP, crate::columns::VOLT])
+            .collect(),
+        _ => vec![
+            crate::columns::INPUT,
+            crate::columns::INPUT_P,
+            crate::columns::INPUT_O,
+            crate::columns::TEMP,
+            crate::columns::VOLT,
+        ],
     };
     let mut keep: Vec<String> = vars.clone();
     for n in &cands.names {
@@ -377,8 +537,22 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
             keep.push(n.clone());
         }
     }
-    report::write_atomically(&o.output, |w| std::io::Write::write_all(w, points::to_csv(&plan, &keep).as_bytes()))?;
-    print!("{}", show::optimize_text(o.criterion, o.n, &cands, &found, &blocks, &rows, start.elapsed(), &o.output));
+    report::write_atomically(&o.output, |w| {
+        std::io::Write::write_all(w, points::to_csv(&plan, &keep).as_bytes())
+    })?;
+    print!(
+        "{}",
+        show::optimize_text(
+            o.criterion,
+            o.n,
+            &cands,
+            &found,
+            &blocks,
+            &rows,
+            start.elapsed(),
+            &o.output
+        )
+    );
     Ok(())
 }
 
@@ -387,11 +561,19 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
     let blocks = models::blocks(&a.model.model, gyro)?;
     let vars = models::variables(&blocks);
     let sensor = match a.model.sensor {
-        SensorKind::SingleAccel => sim::Sensor::Single { gyro: false, truth: truth::SingleTruth::default() },
-        SensorKind::SingleGyro => sim::Sensor::Single { gyro: true, truth: truth::SingleTruth::default() },
+        SensorKind::SingleAccel => sim::Sensor::Single {
+            gyro: false,
+            truth: truth::SingleTruth::default(),
+        },
+        SensorKind::SingleGyro => sim::Sensor::Single {
+            gyro: true,
+            truth: truth::SingleTruth::default(),
+        },
         SensorKind::Accel => sim::Sensor::Accel(truth::TriadTruth::default()),
         SensorKind::Gyro => sim::Sensor::Gyro(truth::TriadTruth::default()),
-        SensorKind::Imu => return Err("--sensor imu: predict one triad at a time (accel or gyro)".into()),
+        SensorKind::Imu => {
+            return Err("--sensor imu: predict one triad at a time (accel or gyro)".into());
+        }
     };
     // Per block: the given noise, or the simulator's unit's (per axis for a triad).
     let noises: Vec<f64> = (0..blocks.len())
@@ -404,19 +586,31 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
         })
         .collect();
     let noise = noises[0];
-    let mut at = Points { names: Vec::new(), rows: Vec::new() };
+    let mut at = Points {
+        names: Vec::new(),
+        rows: Vec::new(),
+    };
     for spec in &a.at {
         let mut names = Vec::new();
         let mut row = Vec::new();
         for kv in spec.split(',') {
-            let (k, v) = kv.split_once('=').ok_or_else(|| format!("--at `{spec}`: expected NAME=VALUE[,NAME=VALUE...]"))?;
+            let (k, v) = kv
+                .split_once('=')
+                .ok_or_else(|| format!("--at `{spec}`: expected NAME=VALUE[,NAME=VALUE...]"))?;
             names.push(k.trim().to_string());
-            row.push(v.trim().parse::<f64>().map_err(|_| format!("--at `{spec}`: `{v}` is not a number"))?);
+            row.push(
+                v.trim()
+                    .parse::<f64>()
+                    .map_err(|_| format!("--at `{spec}`: `{v}` is not a number"))?,
+            );
         }
         if at.rows.is_empty() {
             at.names = names;
         } else if at.names != names {
-            return Err(format!("--at `{spec}`: every operating point must name the same variables ({})", at.names.join(", ")));
+            return Err(format!(
+                "--at `{spec}`: every operating point must name the same variables ({})",
+                at.names.join(", ")
+            ));
         }
         at.rows.push(row);
     }
@@ -433,7 +627,14 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
         let region = region_rows(&a.model, &cands, &blocks[0])?;
         let w = region.transpose() * &region / region.nrows() as f64;
         let at_rows = at.model_rows(&blocks[0].formula);
-        let s = predict::smallest_n(&f, a.criterion, Some(&w), &at_rows, noise, target, 5, |n| eprint!("\r  trying {n} observations   "))?;
+        let goal = predict::Target {
+            at: &at_rows,
+            sigma: noise,
+            error: target,
+        };
+        let s = predict::smallest_n(&f, a.criterion, Some(&w), &goal, 5, |n| {
+            eprint!("\r  trying {n} observations   ")
+        })?;
         eprint!("\r{:40}\r", "");
         println!(
             "calflash design predict  model {}: the fewest observations for an expected error of at most {target} counts at the {} operating point(s), noise {noise} counts: {} on the {:?}-optimal plan (largest expected error {:.4})",
@@ -444,14 +645,27 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
             s.worst
         );
         for (row, count) in points::tally(&cands.select(&s.found.points)) {
-            println!("    {count:>4} x  {}", cands.names.iter().zip(&row).filter(|(n, _)| vars.contains(n)).map(|(n, v)| format!("{n} = {v}")).collect::<Vec<_>>().join(", "));
+            println!(
+                "    {count:>4} x  {}",
+                cands
+                    .names
+                    .iter()
+                    .zip(&row)
+                    .filter(|(n, _)| vars.contains(n))
+                    .map(|(n, v)| format!("{n} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
         }
         return Ok(());
     }
-    let spec = a.plan.as_deref().ok_or("give --plan (or --target with --candidates)")?;
+    let spec = a
+        .plan
+        .as_deref()
+        .ok_or("give --plan (or --target with --candidates)")?;
     let pts = load_plan(spec, &vars, &a.model)?;
     check_variables(&blocks, &pts, &format!("plan {spec}"))?;
-    let crit = evaluate_plan(spec, &pts, &blocks, &a.model)?;
+    let crit = evaluate_plan(spec, &pts, &blocks, &a.model, &pts)?;
     let outputs: Vec<&str> = match (u, gyro) {
         (Unit::Triad, false) => crate::columns::A.to_vec(),
         (Unit::Triad, true) => crate::columns::GYRO.to_vec(),
@@ -464,7 +678,14 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
         let mc = match a.monte_carlo {
             Some(runs) if runs >= 10 => {
                 let x = pts.model_rows(&b.formula);
-                Some(predict::monte_carlo(&pts, u, &sensor, outputs[k.min(outputs.len() - 1)], &x, &at_rows, runs, 7)?)
+                let sim = predict::Simulation {
+                    sensor: &sensor,
+                    unit: u,
+                    output: outputs[k.min(outputs.len() - 1)],
+                    runs,
+                    seed: 7,
+                };
+                Some(predict::monte_carlo(&pts, &sim, &x, &at_rows)?)
             }
             Some(runs) => return Err(format!("--monte-carlo {runs}: at least 10 runs")),
             None => None,
@@ -475,7 +696,9 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
     print!("{text}");
     if let Some(path) = &a.json {
         let v = show::predict_json(spec, noise, &at, &results);
-        report::write_atomically(path, |w| serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other))?;
+        report::write_atomically(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+        })?;
     }
     Ok(())
 }

@@ -16,8 +16,13 @@ pub struct SimulateArgs {
     pub sensor: SensorKind,
     /// Plan items (repeatable): head:N, tumble:6|12|18|24|26, sphere:N, rate:LO:HI:N (rad/s),
     /// centrifuge:LO:HI:N (g), sweep:LO:HI:N, fine:LO:HI:N.
-    #[arg(long, required = true)]
+    #[arg(long, required_unless_present = "plan_file")]
     pub plan: Vec<String>,
+    /// A plan file instead (CSV with a header; columns f_x f_y f_z w_x w_y w_z for triads or
+    /// input input_p input_o for a single axis, temp, volt; missing ones are 0, 25 C, 5 V), as
+    /// `calflash design optimize` writes it. Each row is one observation.
+    #[arg(long, conflicts_with = "plan")]
+    pub plan_file: Option<PathBuf>,
     /// Chamber temperatures, C (comma-separated).
     #[arg(long, default_value = "25", value_delimiter = ',')]
     pub temps: Vec<f64>,
@@ -55,6 +60,43 @@ fn load<T: serde::de::DeserializeOwned + Default>(p: Option<&PathBuf>) -> Result
     }
 }
 
+/// The conditions of a plan file, `repeat` times.
+fn plan_file(
+    path: &std::path::Path,
+    kind: SensorKind,
+    repeat: usize,
+) -> Result<Vec<plan::Condition>, String> {
+    use crate::columns as col;
+    use crate::design::points::{self, Unit};
+    let header = crate::obs::header(path, crate::obs::Format::Auto).map_err(|e| e.to_string())?;
+    let known: Vec<&str> = col::F
+        .iter()
+        .chain(col::W.iter())
+        .copied()
+        .chain([col::INPUT, col::INPUT_P, col::INPUT_O, col::TEMP, col::VOLT])
+        .collect();
+    let names: Vec<String> = header
+        .iter()
+        .filter(|h| known.contains(&h.as_str()))
+        .cloned()
+        .collect();
+    if names.is_empty() {
+        return Err(format!(
+            "{}: no plan columns; expected some of {}",
+            path.display(),
+            known.join(", ")
+        ));
+    }
+    let pts = points::read(path, &names)?;
+    let unit = match kind {
+        SensorKind::SingleAccel => Unit::SingleAccel,
+        SensorKind::SingleGyro => Unit::SingleGyro,
+        _ => Unit::Triad,
+    };
+    let once = crate::design::predict::conditions(&pts, unit);
+    Ok((0..repeat).flat_map(|_| once.iter().copied()).collect())
+}
+
 /// Runs `calflash simulate`.
 ///
 /// # Errors
@@ -67,8 +109,11 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     if args.repeat == 0 {
         return Err("--repeat: at least 1".into());
     }
-    let conditions = plan::plan(&args.plan, &args.temps, &args.volts, args.repeat, single)
-        .map_err(|e| e.to_string())?;
+    let conditions = match &args.plan_file {
+        Some(path) => plan_file(path, args.sensor, args.repeat)?,
+        None => plan::plan(&args.plan, &args.temps, &args.volts, args.repeat, single)
+            .map_err(|e| e.to_string())?,
+    };
     let t = args.truth.as_ref();
     let sensor = match args.sensor {
         SensorKind::SingleAccel => Sensor::Single {

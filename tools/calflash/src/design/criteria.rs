@@ -58,18 +58,31 @@ pub fn first_dependent(x: &DMatrix<f64>) -> Option<Dependent> {
         let col = x.column(j).into_owned();
         let norm = col.norm();
         if norm == 0.0 {
-            return Some(Dependent { column: j, combination: Vec::new() });
+            return Some(Dependent {
+                column: j,
+                combination: Vec::new(),
+            });
         }
         if j == 0 {
             continue;
         }
         let earlier = x.columns(0, j).into_owned();
         let svd = earlier.clone().svd(true, true);
-        let Ok(coef) = svd.solve(&col, 1e-12 * svd.singular_values.max()) else { continue };
+        let Ok(coef) = svd.solve(&col, 1e-12 * svd.singular_values.max()) else {
+            continue;
+        };
         let resid = (&earlier * &coef - &col).norm();
         if resid <= 1e-9 * norm {
-            let combination = coef.iter().enumerate().filter(|(_, c)| c.abs() > 1e-12).map(|(k, c)| (k, *c)).collect();
-            return Some(Dependent { column: j, combination });
+            let combination = coef
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.abs() > 1e-12)
+                .map(|(k, c)| (k, *c))
+                .collect();
+            return Some(Dependent {
+                column: j,
+                combination,
+            });
         }
     }
     None
@@ -91,7 +104,11 @@ pub fn prediction_variance(unscaled: &DMatrix<f64>, n: usize, region: &DMatrix<f
 ///
 /// # Errors
 /// The first column the plan cannot estimate.
-pub fn evaluate(x: &DMatrix<f64>, region: &DMatrix<f64>, intercept: bool) -> Result<Criteria, Dependent> {
+pub fn evaluate(
+    x: &DMatrix<f64>,
+    region: &DMatrix<f64>,
+    intercept: bool,
+) -> Result<Criteria, Dependent> {
     let (n, p) = x.shape();
     if let Some(dep) = first_dependent(x) {
         return Err(dep);
@@ -136,7 +153,18 @@ pub fn evaluate(x: &DMatrix<f64>, region: &DMatrix<f64>, intercept: bool) -> Res
             Some(unscaled[(j, j)] * ss)
         })
         .collect();
-    Ok(Criteria { n, p, d, a, e, g, i, condition_number, vif, unscaled_covariance: unscaled })
+    Ok(Criteria {
+        n,
+        p,
+        d,
+        a,
+        e,
+        g,
+        i,
+        condition_number,
+        vif,
+        unscaled_covariance: unscaled,
+    })
 }
 
 #[cfg(test)]
@@ -151,13 +179,28 @@ mod tests {
     fn a_straight_line_at_the_ends_has_the_textbook_values() {
         // Half the points at each end of [-1, 1]: M = I, so D = A = E = 1 and d(x) = 1 + x^2.
         let x = poly(&[-1.0, 1.0, -1.0, 1.0], 1);
-        let region = poly(&(0..=20).map(|k| -1.0 + 0.1 * f64::from(k)).collect::<Vec<_>>(), 1);
+        let region = poly(
+            &(0..=20)
+                .map(|k| -1.0 + 0.1 * f64::from(k))
+                .collect::<Vec<_>>(),
+            1,
+        );
         let c = evaluate(&x, &region, true).unwrap();
-        for (v, w) in [(c.d, 1.0), (c.a, 1.0), (c.e, 1.0), (c.g, 2.0), (c.condition_number, 1.0)] {
+        for (v, w) in [
+            (c.d, 1.0),
+            (c.a, 1.0),
+            (c.e, 1.0),
+            (c.g, 2.0),
+            (c.condition_number, 1.0),
+        ] {
             assert!((v - w).abs() < 1e-12, "{c:?}");
         }
         // The mean of 1 + x^2 over the 21 grid points.
-        let want = 1.0 + (0..=20).map(|k| (-1.0 + 0.1 * f64::from(k)).powi(2)).sum::<f64>() / 21.0;
+        let want = 1.0
+            + (0..=20)
+                .map(|k| (-1.0 + 0.1 * f64::from(k)).powi(2))
+                .sum::<f64>()
+                / 21.0;
         assert!((c.i - want).abs() < 1e-12);
         assert!((c.vif[1].unwrap() - 1.0).abs() < 1e-12);
     }

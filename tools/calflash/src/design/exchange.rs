@@ -58,7 +58,9 @@ pub enum ExchangeError {
         p: usize,
     },
     /// The candidates cannot estimate the model.
-    #[error("no set of the candidates estimates every parameter (the candidate model rows have rank {rank} of {p})")]
+    #[error(
+        "no set of the candidates estimates every parameter (the candidate model rows have rank {rank} of {p})"
+    )]
     Singular {
         /// Rank of the candidates.
         rank: usize,
@@ -138,7 +140,11 @@ impl<'a> State<'a> {
         // s_x = x' M^-1 x_k for every candidate.
         let s_all = self.f * &uk;
         let (wuk, ak) = (self.wu.row(k).transpose(), self.a[k]);
-        let t_all = if self.w.is_some() { Some(&self.u * &wuk) } else { None };
+        let t_all = if self.w.is_some() {
+            Some(&self.u * &wuk)
+        } else {
+            None
+        };
         for j in 0..self.f.nrows() {
             let c = sign * s_all[j] / denom;
             for col in 0..self.u.ncols() {
@@ -182,7 +188,10 @@ impl<'a> State<'a> {
                     return None;
                 }
                 let wij = self.wu.row(i).dot(&self.u.row(j));
-                Some(phi - self.a[j] / (1.0 + dj) + (self.a[i] - 2.0 * c * wij + c * c * self.a[j]) / (1.0 - d1))
+                Some(
+                    phi - self.a[j] / (1.0 + dj)
+                        + (self.a[i] - 2.0 * c * wij + c * c * self.a[j]) / (1.0 - d1),
+                )
             }
         }
     }
@@ -215,7 +224,10 @@ fn start(f: &DMatrix<f64>, n: usize, rng: &mut rand_chacha::ChaCha8Rng) -> Optio
     // Gram-Schmidt over the random order picks p independent rows.
     let mut basis: Vec<DVector<f64>> = Vec::new();
     let mut design = Vec::new();
-    let scale = (0..nc).map(|j| f.row(j).norm()).fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
+    let scale = (0..nc)
+        .map(|j| f.row(j).norm())
+        .fold(0.0f64, f64::max)
+        .max(f64::MIN_POSITIVE);
     for &j in &order {
         let mut v = f.row(j).transpose();
         for b in &basis {
@@ -256,7 +268,13 @@ pub fn optimize(
     opts: &Options,
     progress: impl FnMut(usize, usize),
 ) -> Result<Found, ExchangeError> {
-    optimize_blocks(&[f.clone()], criterion, &[w.cloned()], opts, progress)
+    optimize_blocks(
+        std::slice::from_ref(f),
+        criterion,
+        &[w.cloned()],
+        opts,
+        progress,
+    )
 }
 
 /// Like [`optimize`] for several models observed at the same points (the three axes of a
@@ -291,7 +309,12 @@ pub fn optimize_blocks(
         .map(|(b, f)| match criterion {
             Criterion::D => None,
             Criterion::A => Some(DMatrix::identity(f.ncols(), f.ncols())),
-            Criterion::I => Some(ws.get(b).cloned().flatten().unwrap_or_else(|| DMatrix::identity(f.ncols(), f.ncols()))),
+            Criterion::I => Some(
+                ws.get(b)
+                    .cloned()
+                    .flatten()
+                    .unwrap_or_else(|| DMatrix::identity(f.ncols(), f.ncols())),
+            ),
         })
         .collect();
     // The start is built on the widest model (it estimates the others' columns too when the
@@ -306,8 +329,14 @@ pub fn optimize_blocks(
     };
     for r in 0..restarts {
         progress(r, restarts);
-        let Some(design) = start(&fs[widest], opts.n, &mut rng) else { continue };
-        let states: Option<Vec<State<'_>>> = fs.iter().zip(&weights).map(|(f, w)| State::new(f, w.as_ref(), design.clone())).collect();
+        let Some(design) = start(&fs[widest], opts.n, &mut rng) else {
+            continue;
+        };
+        let states: Option<Vec<State<'_>>> = fs
+            .iter()
+            .zip(&weights)
+            .map(|(f, w)| State::new(f, w.as_ref(), design.clone()))
+            .collect();
         let Some(mut states) = states else { continue };
         for _pass in 0..100 {
             let mut improved = false;
@@ -324,14 +353,20 @@ pub fn optimize_blocks(
                     // A, I: the relative decrease of the summed traces.
                     let mut acc = if criterion == Criterion::D { 1.0 } else { 0.0 };
                     for (st, phi) in states.iter().zip(&phis) {
-                        let Some(e) = st.effect(i, j, criterion, *phi) else { continue 'candidates };
+                        let Some(e) = st.effect(i, j, criterion, *phi) else {
+                            continue 'candidates;
+                        };
                         if criterion == Criterion::D {
                             acc *= e;
                         } else {
                             acc += e;
                         }
                     }
-                    let gain = if criterion == Criterion::D { acc - 1.0 } else { (total_phi - acc) / total_phi };
+                    let gain = if criterion == Criterion::D {
+                        acc - 1.0
+                    } else {
+                        (total_phi - acc) / total_phi
+                    };
                     if choice.is_none_or(|(_, g)| gain > g) {
                         choice = Some((j, gain));
                     }
@@ -365,7 +400,11 @@ pub fn optimize_blocks(
             _ => {
                 let mut points = states[0].design.clone();
                 points.sort_unstable();
-                best = Some(Found { points, value, hits: 1 });
+                best = Some(Found {
+                    points,
+                    value,
+                    hits: 1,
+                });
             }
         }
     }
@@ -379,7 +418,9 @@ mod tests {
     use super::*;
 
     fn grid(k: usize) -> Vec<f64> {
-        (0..k).map(|i| -1.0 + 2.0 * i as f64 / (k - 1) as f64).collect()
+        (0..k)
+            .map(|i| -1.0 + 2.0 * i as f64 / (k - 1) as f64)
+            .collect()
     }
 
     fn poly(xs: &[f64], degree: usize) -> DMatrix<f64> {
@@ -398,7 +439,11 @@ mod tests {
     }
 
     fn opts(n: usize) -> Options {
-        Options { n, restarts: 8, seed: 3 }
+        Options {
+            n,
+            restarts: 8,
+            seed: 3,
+        }
     }
 
     #[test]
@@ -440,18 +485,33 @@ mod tests {
         let det = |x: &DMatrix<f64>| (x.transpose() * x).determinant();
         let x = DMatrix::from_fn(12, 4, |i, j| f[(found.points[i], j)]);
         let efficiency = (det(&x) / det(&optimum)).powf(0.25);
-        assert!(efficiency >= 0.999, "{efficiency}: {:?}", counts(&xs, &found));
+        assert!(
+            efficiency >= 0.999,
+            "{efficiency}: {:?}",
+            counts(&xs, &found)
+        );
         for (x, c) in counts(&xs, &found) {
             assert_eq!(c, 3);
-            assert!([(-1.0f64), -r, r, 1.0].iter().any(|o| (o - x).abs() < 1.5e-3), "{x}");
+            assert!(
+                [(-1.0f64), -r, r, 1.0]
+                    .iter()
+                    .any(|o| (o - x).abs() < 1.5e-3),
+                "{x}"
+            );
         }
     }
 
     #[test]
     fn too_few_points_or_a_blind_candidate_set_are_refused() {
         let f = poly(&grid(11), 2);
-        assert_eq!(optimize(&f, Criterion::D, None, &opts(2), |_, _| {}).unwrap_err(), ExchangeError::TooFew { n: 2, p: 3 });
+        assert_eq!(
+            optimize(&f, Criterion::D, None, &opts(2), |_, _| {}).unwrap_err(),
+            ExchangeError::TooFew { n: 2, p: 3 }
+        );
         let f = poly(&[-1.0, 1.0], 2);
-        assert_eq!(optimize(&f, Criterion::D, None, &opts(6), |_, _| {}).unwrap_err(), ExchangeError::Singular { rank: 2, p: 3 });
+        assert_eq!(
+            optimize(&f, Criterion::D, None, &opts(6), |_, _| {}).unwrap_err(),
+            ExchangeError::Singular { rank: 2, p: 3 }
+        );
     }
 }

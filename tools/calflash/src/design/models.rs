@@ -28,15 +28,29 @@ pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, String> {
     let triad = |extra: &dyn Fn(usize) -> String| -> Result<Vec<Block>, String> {
         (0..3)
             .map(|i| {
-                let text = format!("out_{} ~ 1 + {} + {} + {}{}", ["x", "y", "z"][i], inputs[0], inputs[1], inputs[2], extra(i));
-                Ok(Block { label: ["x", "y", "z"][i].to_string(), formula: formula::parse(&text).map_err(|e| e.to_string())? })
+                let text = format!(
+                    "out_{} ~ 1 + {} + {} + {}{}",
+                    ["x", "y", "z"][i],
+                    inputs[0],
+                    inputs[1],
+                    inputs[2],
+                    extra(i)
+                );
+                Ok(Block {
+                    label: ["x", "y", "z"][i].to_string(),
+                    formula: formula::parse(&text).map_err(|e| e.to_string())?,
+                })
             })
             .collect()
     };
     match model.trim() {
         "single" => {
-            let f = formula::parse("output ~ 1 + input + input^2 + input^3 + input:abs(input)").map_err(|e| e.to_string())?;
-            Ok(vec![Block { label: "output".into(), formula: f }])
+            let f = formula::parse("output ~ 1 + input + input^2 + input^3 + input:abs(input)")
+                .map_err(|e| e.to_string())?;
+            Ok(vec![Block {
+                label: "output".into(),
+                formula: f,
+            }])
         }
         "triad" => triad(&|_| String::new()),
         "triad-nonlinear" => triad(&|i| format!(" + {0}^2 + {0}^3 + {0}:abs({0})", inputs[i])),
@@ -47,9 +61,17 @@ pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, String> {
             triad(&|_| format!(" + {} + {} + {}", col::F[0], col::F[1], col::F[2]))
         }
         text => {
-            let full = if text.starts_with('~') { format!("response {text}") } else { text.to_string() };
-            let f = formula::parse(&full).map_err(|e| format!("--model: {e} (or a preset: {PRESETS})"))?;
-            Ok(vec![Block { label: f.response.clone(), formula: f }])
+            let full = if text.starts_with('~') {
+                format!("response {text}")
+            } else {
+                text.to_string()
+            };
+            let f = formula::parse(&full)
+                .map_err(|e| format!("--model: {e} (or a preset: {PRESETS})"))?;
+            Ok(vec![Block {
+                label: f.response.clone(),
+                formula: f,
+            }])
         }
     }
 }

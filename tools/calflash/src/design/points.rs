@@ -37,7 +37,10 @@ impl Points {
     /// The value of `name` at row `r` (the default when the set lacks the variable).
     #[must_use]
     pub fn value(&self, r: usize, name: &str) -> f64 {
-        self.names.iter().position(|n| n == name).map_or_else(|| default_value(name), |k| self.rows[r][k])
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .map_or_else(|| default_value(name), |k| self.rows[r][k])
     }
 
     /// The model rows of `formula` at every point.
@@ -65,14 +68,26 @@ impl Points {
         }
         let mut names = self.names.clone();
         names.extend(other.names.iter().cloned());
-        let rows = self.rows.iter().flat_map(|a| other.rows.iter().map(move |b| a.iter().chain(b).copied().collect())).collect();
+        let rows = self
+            .rows
+            .iter()
+            .flat_map(|a| {
+                other
+                    .rows
+                    .iter()
+                    .map(move |b| a.iter().chain(b).copied().collect())
+            })
+            .collect();
         Self { names, rows }
     }
 
     /// The rows of `indices`, in order (repeats kept).
     #[must_use]
     pub fn select(&self, indices: &[usize]) -> Self {
-        Self { names: self.names.clone(), rows: indices.iter().map(|&k| self.rows[k].clone()).collect() }
+        Self {
+            names: self.names.clone(),
+            rows: indices.iter().map(|&k| self.rows[k].clone()).collect(),
+        }
     }
 }
 
@@ -88,14 +103,20 @@ pub enum Unit {
 }
 
 fn condition_values(c: &Condition, unit: Unit) -> Vec<f64> {
-    let mut v = vec![c.f[0], c.f[1], c.f[2], c.w[0], c.w[1], c.w[2], c.temp, c.volt];
+    let mut v = vec![
+        c.f[0], c.f[1], c.f[2], c.w[0], c.w[1], c.w[2], c.temp, c.volt,
+    ];
     let s = if unit == Unit::SingleGyro { c.w } else { c.f };
     v.extend([s[0], s[1], s[2]]);
     v
 }
 
 fn condition_names() -> Vec<String> {
-    let mut n: Vec<String> = col::F.iter().chain(col::W.iter()).map(|s| (*s).to_string()).collect();
+    let mut n: Vec<String> = col::F
+        .iter()
+        .chain(col::W.iter())
+        .map(|s| (*s).to_string())
+        .collect();
     n.extend([col::TEMP, col::VOLT, col::INPUT, col::INPUT_P, col::INPUT_O].map(String::from));
     n
 }
@@ -105,9 +126,19 @@ fn condition_names() -> Vec<String> {
 ///
 /// # Errors
 /// A plan item that cannot be read.
-pub fn from_items(items: &[String], temps: &[f64], volts: &[f64], repeat: usize, unit: Unit) -> Result<Points, String> {
-    let conds = plan::plan(items, temps, volts, repeat, unit != Unit::Triad).map_err(|e| e.to_string())?;
-    Ok(Points { names: condition_names(), rows: conds.iter().map(|c| condition_values(c, unit)).collect() })
+pub fn from_items(
+    items: &[String],
+    temps: &[f64],
+    volts: &[f64],
+    repeat: usize,
+    unit: Unit,
+) -> Result<Points, String> {
+    let conds =
+        plan::plan(items, temps, volts, repeat, unit != Unit::Triad).map_err(|e| e.to_string())?;
+    Ok(Points {
+        names: condition_names(),
+        rows: conds.iter().map(|c| condition_values(c, unit)).collect(),
+    })
 }
 
 /// A grid `NAME=LO:HI:N` (N evenly spaced values, both ends included).
@@ -115,22 +146,44 @@ pub fn from_items(items: &[String], temps: &[f64], volts: &[f64], repeat: usize,
 /// # Errors
 /// A malformed grid.
 pub fn grid(text: &str) -> Result<Points, String> {
-    let bad = |why: &str| format!("grid `{text}`: {why}; expected NAME=LO:HI:N, for example rate=-10:10:21");
+    let bad = |why: &str| {
+        format!("grid `{text}`: {why}; expected NAME=LO:HI:N, for example rate=-10:10:21")
+    };
     let (name, spec) = text.split_once('=').ok_or_else(|| bad("no `=`"))?;
     let parts: Vec<&str> = spec.split(':').collect();
-    let [lo, hi, n] = parts[..] else { return Err(bad("not three fields after `=`")) };
+    let [lo, hi, n] = parts[..] else {
+        return Err(bad("not three fields after `=`"));
+    };
     let num = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite());
-    let (Some(lo), Some(hi)) = (num(lo), num(hi)) else { return Err(bad("LO and HI must be numbers")) };
-    let n: usize = n.trim().parse().map_err(|_| bad("N must be a whole number"))?;
+    let (Some(lo), Some(hi)) = (num(lo), num(hi)) else {
+        return Err(bad("LO and HI must be numbers"));
+    };
+    let n: usize = n
+        .trim()
+        .parse()
+        .map_err(|_| bad("N must be a whole number"))?;
     if n == 0 || (n == 1 && lo != hi) || lo > hi {
-        return Err(bad("N must be at least 2 (1 when LO = HI) and LO at most HI"));
+        return Err(bad(
+            "N must be at least 2 (1 when LO = HI) and LO at most HI",
+        ));
     }
     let name = name.trim();
     if name.is_empty() {
         return Err(bad("no variable name"));
     }
-    let rows = (0..n).map(|k| vec![if n == 1 { lo } else { lo + (hi - lo) * k as f64 / (n - 1) as f64 }]).collect();
-    Ok(Points { names: vec![name.to_string()], rows })
+    let rows = (0..n)
+        .map(|k| {
+            vec![if n == 1 {
+                lo
+            } else {
+                lo + (hi - lo) * k as f64 / (n - 1) as f64
+            }]
+        })
+        .collect();
+    Ok(Points {
+        names: vec![name.to_string()],
+        rows,
+    })
 }
 
 /// Reads a plan file: the columns `names` (each must be present) from a CSV or whitespace file
@@ -140,31 +193,59 @@ pub fn grid(text: &str) -> Result<Points, String> {
 /// The reader's error, naming the file, line and column.
 pub fn read(path: &Path, names: &[String]) -> Result<Points, String> {
     let table = obs::read_columns(path, names, Format::Auto).map_err(|e| e.to_string())?;
-    let rows = (0..table.len()).map(|r| names.iter().map(|n| table.column(n).map_or(0.0, |c| c[r])).collect()).collect();
-    Ok(Points { names: names.to_vec(), rows })
+    let rows = (0..table.len())
+        .map(|r| {
+            names
+                .iter()
+                .map(|n| table.column(n).map_or(0.0, |c| c[r]))
+                .collect()
+        })
+        .collect();
+    Ok(Points {
+        names: names.to_vec(),
+        rows,
+    })
 }
 
 /// The plan as CSV: the variables of `keep` (in order) that the points set, then a `repeat`
 /// count per distinct point when `collapse`.
 #[must_use]
 pub fn to_csv(points: &Points, keep: &[String]) -> String {
-    let cols: Vec<usize> = keep.iter().filter_map(|k| points.names.iter().position(|n| n == k)).collect();
-    let mut out = cols.iter().map(|&c| points.names[c].clone()).collect::<Vec<_>>().join(",");
+    let cols: Vec<usize> = keep
+        .iter()
+        .filter_map(|k| points.names.iter().position(|n| n == k))
+        .collect();
+    let mut out = cols
+        .iter()
+        .map(|&c| points.names[c].clone())
+        .collect::<Vec<_>>()
+        .join(",");
     out.push('\n');
     for r in &points.rows {
-        out.push_str(&cols.iter().map(|&c| format!("{}", r[c])).collect::<Vec<_>>().join(","));
+        out.push_str(
+            &cols
+                .iter()
+                .map(|&c| format!("{}", r[c]))
+                .collect::<Vec<_>>()
+                .join(","),
+        );
         out.push('\n');
     }
     out
 }
 
-/// Distinct rows and how often each occurs, in first-seen order.
+/// Distinct rows (equal to 12 significant digits) and how often each occurs, in first-seen
+/// order.
 #[must_use]
 pub fn tally(points: &Points) -> Vec<(Vec<f64>, usize)> {
-    let mut seen: BTreeMap<Vec<u64>, usize> = BTreeMap::new();
+    let mut seen: BTreeMap<Vec<String>, usize> = BTreeMap::new();
     let mut out: Vec<(Vec<f64>, usize)> = Vec::new();
     for r in &points.rows {
-        let key: Vec<u64> = r.iter().map(|v| v.to_bits()).collect();
+        // Equal to 12 significant digits: cos(135 deg) and cos(225 deg) are one point.
+        let key: Vec<String> = r
+            .iter()
+            .map(|v| format!("{:.11e}", if v.abs() < 1e-12 { 0.0 } else { *v }))
+            .collect();
         match seen.get(&key) {
             Some(&k) => out[k].1 += 1,
             None => {
@@ -198,6 +279,9 @@ mod tests {
         let f = crate::formula::parse("y ~ 1 + f_x + f_y + f_z").unwrap();
         let x = tumble.model_rows(&f);
         assert_eq!(x.shape(), (6, 4));
-        assert_eq!(tally(&p.select(&[0, 0, 1])), [(vec![-1.0, -40.0], 2), (vec![-1.0, 85.0], 1)]);
+        assert_eq!(
+            tally(&p.select(&[0, 0, 1])),
+            [(vec![-1.0, -40.0], 2), (vec![-1.0, 85.0], 1)]
+        );
     }
 }

@@ -24,8 +24,13 @@ pub struct Expected {
 /// `sigma` times the square roots of the covariance form's diagonal and of `x'(X'X)^-1 x`.
 #[must_use]
 pub fn expected(unscaled: &DMatrix<f64>, sigma: f64, at: &DMatrix<f64>) -> Expected {
-    let terms = (0..unscaled.nrows()).map(|k| sigma * unscaled[(k, k)].sqrt()).collect();
-    let at = criteria::prediction_variance(unscaled, 1, at).iter().map(|v| sigma * v.sqrt()).collect();
+    let terms = (0..unscaled.nrows())
+        .map(|k| sigma * unscaled[(k, k)].sqrt())
+        .collect();
+    let at = criteria::prediction_variance(unscaled, 1, at)
+        .iter()
+        .map(|v| sigma * v.sqrt())
+        .collect();
     Expected { terms, at }
 }
 
@@ -34,7 +39,13 @@ pub fn expected(unscaled: &DMatrix<f64>, sigma: f64, at: &DMatrix<f64>) -> Expec
 /// `e x f`, and the output by `scale` times its component along the axis, so the added variance
 /// is `(scale delta)^2 (|f|^2 - f_axis^2)`. `scale` is counts per SI unit.
 #[must_use]
-pub fn orientation_variance(points: &Points, axis: usize, scale: f64, delta: f64, gyro: bool) -> Vec<f64> {
+pub fn orientation_variance(
+    points: &Points,
+    axis: usize,
+    scale: f64,
+    delta: f64,
+    gyro: bool,
+) -> Vec<f64> {
     let names = if gyro { col::W } else { col::F };
     (0..points.rows.len())
         .map(|r| {
@@ -48,7 +59,12 @@ pub fn orientation_variance(points: &Points, axis: usize, scale: f64, delta: f64
 /// The parameters' covariance when point `r`'s noise variance is `sigma^2 + extra[r]`:
 /// `C X' diag(sigma^2 + extra) X C` with `C = (X'X)^-1`.
 #[must_use]
-pub fn covariance_with(x: &DMatrix<f64>, unscaled: &DMatrix<f64>, sigma: f64, extra: &[f64]) -> DMatrix<f64> {
+pub fn covariance_with(
+    x: &DMatrix<f64>,
+    unscaled: &DMatrix<f64>,
+    sigma: f64,
+    extra: &[f64],
+) -> DMatrix<f64> {
     let mut xw = x.clone();
     for (r, mut row) in xw.row_iter_mut().enumerate() {
         row *= (sigma * sigma + extra[r]).sqrt();
@@ -70,7 +86,13 @@ pub fn conditions(points: &Points, unit: Unit) -> Vec<Condition> {
                 Unit::SingleGyro => ([0.0; 3], single),
                 Unit::Triad => (col::F.map(v), col::W.map(v)),
             };
-            Condition { f, w, temp: v(col::TEMP), volt: v(col::VOLT), dir: 0.0 }
+            Condition {
+                f,
+                w,
+                temp: v(col::TEMP),
+                volt: v(col::VOLT),
+                dir: 0.0,
+            }
         })
         .collect()
 }
@@ -93,30 +115,53 @@ fn sd(samples: &[Vec<f64>], k: usize) -> f64 {
     (samples.iter().map(|s| (s[k] - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
 }
 
-/// Simulates `runs` calibrations of `sensor` through `points` and fits `x` (the plan's model
-/// rows) to the simulated `output` column each time.
+/// The simulated unit of a Monte Carlo run.
+#[derive(Debug, Clone, Copy)]
+pub struct Simulation<'a> {
+    /// The sensor and its truth.
+    pub sensor: &'a sim::Sensor,
+    /// How plan points drive it.
+    pub unit: Unit,
+    /// The simulated column the model fits.
+    pub output: &'a str,
+    /// Runs.
+    pub runs: usize,
+    /// Seed of the first run.
+    pub seed: u64,
+}
+
+/// Simulates `sim.runs` calibrations through `points` and fits `x` (the plan's model rows) to
+/// the simulated output column each time.
 ///
 /// # Errors
 /// A simulated fit that fails.
 pub fn monte_carlo(
     points: &Points,
-    unit: Unit,
-    sensor: &sim::Sensor,
-    output: &str,
+    sim: &Simulation<'_>,
     x: &DMatrix<f64>,
     at: &DMatrix<f64>,
-    runs: usize,
-    seed: u64,
 ) -> Result<MonteCarlo, String> {
-    let conds = conditions(points, unit);
+    let (sensor, output, runs, seed) = (sim.sensor, sim.output, sim.runs, sim.seed);
+    let conds = conditions(points, sim.unit);
     let names: Vec<String> = (0..x.ncols()).map(|k| format!("c{k}")).collect();
     let mut coefs = Vec::with_capacity(runs);
     let mut preds = Vec::with_capacity(runs);
     for r in 0..runs {
         let obs = sim::simulate(sensor, &conds, seed.wrapping_add(r as u64), false);
-        let y = obs.column(output).ok_or_else(|| format!("the simulator writes no column {output}"))?;
-        let fit = stats::fit(x, &y, names.clone(), false, &stats::Options::default()).map_err(|e| format!("simulated run {r}: {e:?}"))?;
-        let p: Vec<f64> = (0..at.nrows()).map(|i| at.row(i).iter().zip(&fit.coefficients).map(|(a, b)| a * b).sum()).collect();
+        let y = obs
+            .column(output)
+            .ok_or_else(|| format!("the simulator writes no column {output}"))?;
+        let fit = stats::fit(x, &y, names.clone(), false, &stats::Options::default())
+            .map_err(|e| format!("simulated run {r}: {e:?}"))?;
+        let p: Vec<f64> = (0..at.nrows())
+            .map(|i| {
+                at.row(i)
+                    .iter()
+                    .zip(&fit.coefficients)
+                    .map(|(a, b)| a * b)
+                    .sum()
+            })
+            .collect();
         coefs.push(fit.coefficients);
         preds.push(p);
     }
@@ -139,7 +184,19 @@ pub struct Smallest {
     pub worst: f64,
 }
 
-/// Searches `n` by doubling, then bisection.
+/// What the smallest plan must reach: an expected error of at most `error` at the operating
+/// points' model rows `at`, for output noise `sigma`.
+#[derive(Debug, Clone, Copy)]
+pub struct Target<'a> {
+    /// Operating points' model rows.
+    pub at: &'a DMatrix<f64>,
+    /// Output noise.
+    pub sigma: f64,
+    /// The largest acceptable expected error.
+    pub error: f64,
+}
+
+/// Searches `n` by doubling, then bisection, optimising each plan with `restarts` restarts.
 ///
 /// # Errors
 /// Candidates that cannot estimate the model, or a target not reached with 100,000 observations.
@@ -147,18 +204,33 @@ pub fn smallest_n(
     f: &DMatrix<f64>,
     criterion: Criterion,
     w: Option<&DMatrix<f64>>,
-    at: &DMatrix<f64>,
-    sigma: f64,
-    target: f64,
+    goal: &Target<'_>,
     restarts: usize,
     mut progress: impl FnMut(usize),
 ) -> Result<Smallest, String> {
+    let (at, sigma, target) = (goal.at, goal.sigma, goal.error);
     let p = f.ncols();
     let mut worst_at = |n: usize| -> Result<(f64, Found), String> {
         progress(n);
-        let found = exchange::optimize(f, criterion, w, &exchange::Options { n, restarts, seed: 1 }, |_, _| {}).map_err(|e| e.to_string())?;
+        let found = exchange::optimize(
+            f,
+            criterion,
+            w,
+            &exchange::Options {
+                n,
+                restarts,
+                seed: 1,
+            },
+            |_, _| {},
+        )
+        .map_err(|e| e.to_string())?;
         let x = DMatrix::from_fn(n, p, |i, j| f[(found.points[i], j)]);
-        let c = criteria::evaluate(&x, at, false).map_err(|d| format!("the optimal plan of {n} points cannot estimate column {}", d.column))?;
+        let c = criteria::evaluate(&x, at, false).map_err(|d| {
+            format!(
+                "the optimal plan of {n} points cannot estimate column {}",
+                d.column
+            )
+        })?;
         let e = expected(&c.unscaled_covariance, sigma, at);
         Ok((e.at.iter().fold(0.0f64, |m, v| m.max(*v)), found))
     };
@@ -166,7 +238,10 @@ pub fn smallest_n(
     let mut best = worst_at(hi)?;
     while best.0 > target {
         if hi >= 100_000 {
-            return Err(format!("even {hi} observations give an expected error of {:.3e} > {target:.3e}: lower the noise or the target", best.0));
+            return Err(format!(
+                "even {hi} observations give an expected error of {:.3e} > {target:.3e}: lower the noise or the target",
+                best.0
+            ));
         }
         hi = (hi * 2).min(100_000);
         best = worst_at(hi)?;
@@ -182,5 +257,9 @@ pub fn smallest_n(
             lo = mid;
         }
     }
-    Ok(Smallest { n: hi, worst: best.0, found: best.1 })
+    Ok(Smallest {
+        n: hi,
+        worst: best.0,
+        found: best.1,
+    })
 }

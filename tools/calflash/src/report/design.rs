@@ -34,13 +34,26 @@ fn d_eff(a: &Criteria, best: f64) -> f64 {
 /// The comparison table.
 fn table(blocks: &[Block], plans: &[PlanResult]) -> String {
     let mut s = String::new();
-    let w = plans.iter().map(|p| p.name.len()).max().unwrap_or(8).clamp(10, 28);
+    let w = plans
+        .iter()
+        .map(|p| p.name.len())
+        .max()
+        .unwrap_or(8)
+        .clamp(10, 28);
     for (b, block) in blocks.iter().enumerate() {
         let p = block.formula.width();
         if blocks.len() > 1 {
-            let _ = writeln!(s, "  axis {}: {} ({p} parameters)", block.label, block.formula.term_names().join(" + "));
+            let _ = writeln!(
+                s,
+                "  axis {}: {} ({p} parameters)",
+                block.label,
+                block.formula.term_names().join(" + ")
+            );
         }
-        let best_d = plans.iter().map(|pl| pl.criteria[b].d).fold(0.0f64, f64::max);
+        let best_d = plans
+            .iter()
+            .map(|pl| pl.criteria[b].d)
+            .fold(0.0f64, f64::max);
         let _ = write!(s, "  {:<26}", "");
         for pl in plans {
             let _ = write!(s, " {:>w$}", truncate(&pl.name, w));
@@ -54,26 +67,50 @@ fn table(blocks: &[Block], plans: &[PlanResult]) -> String {
             s.push('\n');
         };
         row(&mut s, "observations n", &|pl| pl.criteria[b].n.to_string());
-        row(&mut s, "distinct points", &|pl| points::tally(&pl.points).len().to_string());
+        row(&mut s, "distinct points", &|pl| {
+            points::tally(&pl.points).len().to_string()
+        });
         row(&mut s, "IEEE 4(p+2)", &|_| (4 * (p + 2)).to_string());
-        row(&mut s, "residual dof n - p", &|pl| (pl.criteria[b].n as i64 - p as i64).to_string());
+        row(&mut s, "residual dof n - p", &|pl| {
+            (pl.criteria[b].n as i64 - p as i64).to_string()
+        });
         row(&mut s, "D  det(M)^(1/p)", &|pl| num(pl.criteria[b].d));
-        row(&mut s, "D-efficiency vs best", &|pl| format!("{:.4}", d_eff(&pl.criteria[b], best_d)));
+        row(&mut s, "D-efficiency vs best", &|pl| {
+            format!("{:.4}", d_eff(&pl.criteria[b], best_d))
+        });
         row(&mut s, "A  trace(M^-1)/p", &|pl| num(pl.criteria[b].a));
         row(&mut s, "E  min eig(M)", &|pl| num(pl.criteria[b].e));
         row(&mut s, "G  max n x'(X'X)^-1 x", &|pl| num(pl.criteria[b].g));
-        row(&mut s, "G-efficiency p / G", &|pl| format!("{:.4}", p as f64 / pl.criteria[b].g));
-        row(&mut s, "I  mean n x'(X'X)^-1 x", &|pl| num(pl.criteria[b].i));
-        row(&mut s, "condition number", &|pl| num(pl.criteria[b].condition_number));
-        row(&mut s, "largest VIF", &|pl| num(pl.criteria[b].vif.iter().flatten().fold(0.0f64, |m, v| m.max(*v))));
+        row(&mut s, "G-efficiency p / G", &|pl| {
+            format!("{:.4}", p as f64 / pl.criteria[b].g)
+        });
+        row(
+            &mut s,
+            "I  mean n x'(X'X)^-1 x",
+            &|pl| num(pl.criteria[b].i),
+        );
+        row(&mut s, "condition number", &|pl| {
+            num(pl.criteria[b].condition_number)
+        });
+        row(&mut s, "largest VIF", &|pl| {
+            num(pl.criteria[b]
+                .vif
+                .iter()
+                .flatten()
+                .fold(0.0f64, |m, v| m.max(*v)))
+        });
         let names = block.formula.term_names();
         for (k, name) in names.iter().enumerate() {
-            row(&mut s, &format!("sd({name}) / sigma"), &|pl| num(pl.criteria[b].unscaled_covariance[(k, k)].sqrt()));
+            row(&mut s, &format!("sd({name}) / sigma"), &|pl| {
+                num(pl.criteria[b].unscaled_covariance[(k, k)].sqrt())
+            });
         }
         if plans.iter().any(|pl| pl.fixture.is_some()) {
             for (k, name) in names.iter().enumerate() {
                 row(&mut s, &format!("sd({name}) + fixture"), &|pl| {
-                    pl.fixture.as_ref().map_or("-".into(), |f| format!("{} ({})", num(f[b].1[k]), num(f[b].0[k])))
+                    pl.fixture.as_ref().map_or("-".into(), |f| {
+                        format!("{} ({})", num(f[b].1[k]), num(f[b].0[k]))
+                    })
                 });
             }
         }
@@ -82,17 +119,40 @@ fn table(blocks: &[Block], plans: &[PlanResult]) -> String {
 }
 
 fn truncate(s: &str, w: usize) -> String {
-    if s.chars().count() <= w { s.to_string() } else { format!("{}…", s.chars().take(w - 1).collect::<String>()) }
+    if s.chars().count() <= w {
+        s.to_string()
+    } else {
+        format!("{}…", s.chars().take(w - 1).collect::<String>())
+    }
 }
 
 /// `design evaluate`'s terminal text.
 #[must_use]
-pub fn evaluate_text(model: &str, blocks: &[Block], plans: &[PlanResult], fixture: Option<f64>) -> String {
+pub fn evaluate_text(
+    model: &str,
+    blocks: &[Block],
+    plans: &[PlanResult],
+    fixture: Option<f64>,
+) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "calflash design evaluate  model {model}: {}", blocks.iter().map(|b| b.formula.term_names().join(" + ")).collect::<Vec<_>>().join(" | "));
-    let _ = writeln!(s, "  M = X'X / n; standard errors are sigma x sd/sigma; G and I over the operating region (n x'(X'X)^-1 x is at least p)");
+    let _ = writeln!(
+        s,
+        "calflash design evaluate  model {model}: {}",
+        blocks
+            .iter()
+            .map(|b| b.formula.term_names().join(" + "))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    let _ = writeln!(
+        s,
+        "  M = X'X / n; standard errors are sigma x sd/sigma; G and I over the operating region (n x'(X'X)^-1 x is at least p)"
+    );
     if let Some(deg) = fixture {
-        let _ = writeln!(s, "  fixture orientation error {deg} deg (1 sigma per axis): standard errors with it (without it in brackets), in counts");
+        let _ = writeln!(
+            s,
+            "  fixture orientation error {deg} deg (1 sigma per axis): standard errors with it (without it in brackets), in counts"
+        );
     }
     s.push_str(&table(blocks, plans));
     s
@@ -124,7 +184,12 @@ pub fn evaluate_json(blocks: &[Block], plans: &[PlanResult]) -> Value {
 ///
 /// # Errors
 /// A figure that cannot be drawn.
-pub fn evaluate_html(model: &str, blocks: &[Block], plans: &[PlanResult], curve: Option<&Points>) -> Result<String, String> {
+pub fn evaluate_html(
+    model: &str,
+    blocks: &[Block],
+    plans: &[PlanResult],
+    curve: Option<&Points>,
+) -> Result<String, String> {
     let mut h = format!(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>Plans for {0}</title>\n<style>{1}</style>\n</head>\n<body>\n<h1>Plans for {0}</h1>\n<pre>{2}</pre>\n",
         esc(model),
@@ -138,31 +203,70 @@ pub fn evaluate_html(model: &str, blocks: &[Block], plans: &[PlanResult], curve:
             let series_pts: Vec<Vec<(f64, f64)>> = plans
                 .iter()
                 .map(|pl| {
-                    let pv = criteria::prediction_variance(&pl.criteria[b].unscaled_covariance, 1, &rows);
+                    let pv = criteria::prediction_variance(
+                        &pl.criteria[b].unscaled_covariance,
+                        1,
+                        &rows,
+                    );
                     c.rows.iter().zip(pv).map(|(r, v)| (r[0], v)).collect()
                 })
                 .collect();
             let marks: Vec<Vec<(f64, f64)>> = plans
                 .iter()
                 .map(|pl| {
-                    let pv = criteria::prediction_variance(&pl.criteria[b].unscaled_covariance, 1, &pl.points.model_rows(&block.formula));
-                    (0..pl.points.rows.len()).map(|r| (pl.points.value(r, &var), pv[r])).collect()
+                    let pv = criteria::prediction_variance(
+                        &pl.criteria[b].unscaled_covariance,
+                        1,
+                        &pl.points.model_rows(&block.formula),
+                    );
+                    (0..pl.points.rows.len())
+                        .map(|r| (pl.points.value(r, &var), pv[r]))
+                        .collect()
                 })
                 .collect();
-            let lo = plans.iter().flat_map(|pl| (0..pl.points.rows.len()).map(|r| pl.points.value(r, &var))).fold(f64::INFINITY, f64::min);
-            let hi = plans.iter().flat_map(|pl| (0..pl.points.rows.len()).map(|r| pl.points.value(r, &var))).fold(f64::NEG_INFINITY, f64::max);
+            let lo = plans
+                .iter()
+                .flat_map(|pl| (0..pl.points.rows.len()).map(|r| pl.points.value(r, &var)))
+                .fold(f64::INFINITY, f64::min);
+            let hi = plans
+                .iter()
+                .flat_map(|pl| (0..pl.points.rows.len()).map(|r| pl.points.value(r, &var)))
+                .fold(f64::NEG_INFINITY, f64::max);
             let mut series = Vec::new();
             for (k, pl) in plans.iter().enumerate() {
-                series.push(Series { name: &pl.name, points: &series_pts[k], color: COLORS[k % COLORS.len()], line: true, errors: None });
-                series.push(Series { name: "its points", points: &marks[k], color: COLORS[k % COLORS.len()], line: false, errors: None });
+                series.push(Series {
+                    name: &pl.name,
+                    points: &series_pts[k],
+                    color: COLORS[k % COLORS.len()],
+                    line: true,
+                    errors: None,
+                });
+                series.push(Series {
+                    name: "its points",
+                    points: &marks[k],
+                    color: COLORS[k % COLORS.len()],
+                    line: false,
+                    errors: None,
+                });
             }
-            let title = format!("Prediction variance / sigma^2 over {var}{}", if blocks.len() > 1 { format!(", axis {}", block.label) } else { String::new() });
+            let title = format!(
+                "Prediction variance / sigma^2 over {var}{}",
+                if blocks.len() > 1 {
+                    format!(", axis {}", block.label)
+                } else {
+                    String::new()
+                }
+            );
             let fig = Figure {
                 title: &title,
                 x: &var,
                 y: "x'(X'X)^-1 x",
                 series,
-                bands: if lo.is_finite() { vec![(lo, hi)] } else { Vec::new() },
+                bands: if lo.is_finite() {
+                    vec![(lo, hi)]
+                } else {
+                    Vec::new()
+                },
                 band_label: "range of the plans' points",
                 zero_line: true,
             };
@@ -174,7 +278,9 @@ pub fn evaluate_html(model: &str, blocks: &[Block], plans: &[PlanResult], curve:
 }
 
 fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 /// `design optimize`'s terminal text.
@@ -193,22 +299,40 @@ pub fn optimize_text(
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "calflash design optimize  {criterion:?}-optimal plan of {n} observations from {} candidates: {} distinct points; {} restart(s) reached the best value; {:.2} s",
+        "calflash design optimize  {criterion:?}-optimal plan of {n} observations from {} candidates; {} restart(s) reached the best value; {:.2} s",
         cands.rows.len(),
-        points::tally(&cands.select(&found.points)).len(),
         found.hits,
         took.as_secs_f64()
     );
+    // The distinct points as the model sees them.
     let vars: Vec<String> = crate::design::models::variables(blocks);
-    for (row, count) in points::tally(&cands.select(&found.points)) {
+    let chosen = cands.select(&found.points);
+    let seen = Points {
+        names: vars.clone(),
+        rows: (0..chosen.rows.len())
+            .map(|r| vars.iter().map(|v| chosen.value(r, v)).collect())
+            .collect(),
+    };
+    for (row, count) in points::tally(&seen) {
         let _ = writeln!(
             s,
             "    {count:>4} x  {}",
-            cands.names.iter().zip(&row).filter(|(n, _)| vars.contains(n)).map(|(n, v)| format!("{n} = {}", num(*v))).collect::<Vec<_>>().join(", ")
+            vars.iter()
+                .zip(&row)
+                .map(|(n, v)| format!("{n} = {}", num(*v)))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
-    let _ = writeln!(s, "  written to {} (for `calflash simulate --plan-file` and a test station)", output.display());
-    let _ = writeln!(s, "  against other plans (efficiency of each against the best listed):");
+    let _ = writeln!(
+        s,
+        "  written to {} (for `calflash simulate --plan-file` and a test station)",
+        output.display()
+    );
+    let _ = writeln!(
+        s,
+        "  against other plans (efficiency of each against the best listed):"
+    );
     s.push_str(&table(blocks, rows));
     s
 }
@@ -224,23 +348,53 @@ fn ratio(a: f64, b: f64) -> String {
 #[must_use]
 pub fn predict_text(plan: &str, noise: f64, at: &Points, results: &[Predicted]) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "calflash design predict  plan {plan}, noise {noise} counts (1 sigma)");
+    let _ = writeln!(
+        s,
+        "calflash design predict  plan {plan}, noise {noise} counts (1 sigma)"
+    );
     for (b, e, mc) in results {
         if results.len() > 1 {
             let _ = writeln!(s, "  axis {}", b.label);
         }
-        let _ = writeln!(s, "    {:<28} {:>14} {:>14} {:>10}", "standard error of", "expected", "simulated", "difference");
+        let _ = writeln!(
+            s,
+            "    {:<28} {:>14} {:>14} {:>10}",
+            "standard error of", "expected", "simulated", "difference"
+        );
         for (k, name) in b.formula.term_names().iter().enumerate() {
             let sim = mc.as_ref().map(|m| m.terms[k]);
-            let _ = writeln!(s, "    {name:<28} {:>14} {:>14} {:>10}", num(e.terms[k]), sim.map_or("-".into(), num), sim.map_or(String::new(), |v| ratio(v, e.terms[k])));
+            let _ = writeln!(
+                s,
+                "    {name:<28} {:>14} {:>14} {:>10}",
+                num(e.terms[k]),
+                sim.map_or("-".into(), num),
+                sim.map_or(String::new(), |v| ratio(v, e.terms[k]))
+            );
         }
         for (r, row) in at.rows.iter().enumerate() {
-            let label = at.names.iter().zip(row).map(|(n, v)| format!("{n}={}", num(*v))).collect::<Vec<_>>().join(",");
+            let label = at
+                .names
+                .iter()
+                .zip(row)
+                .map(|(n, v)| format!("{n}={}", num(*v)))
+                .collect::<Vec<_>>()
+                .join(",");
             let sim = mc.as_ref().map(|m| m.at[r]);
-            let _ = writeln!(s, "    {:<28} {:>14} {:>14} {:>10}", format!("prediction at {label}"), num(e.at[r]), sim.map_or("-".into(), num), sim.map_or(String::new(), |v| ratio(v, e.at[r])));
+            let _ = writeln!(
+                s,
+                "    {:<28} {:>14} {:>14} {:>10}",
+                format!("prediction at {label}"),
+                num(e.at[r]),
+                sim.map_or("-".into(), num),
+                sim.map_or(String::new(), |v| ratio(v, e.at[r]))
+            );
         }
         if let Some(m) = mc {
-            let _ = writeln!(s, "    simulated: {} calibrations of the simulator's unit through the plan, the model fitted each time", m.runs);
+            let _ = writeln!(
+                s,
+                "    simulated: {} calibrations of the simulator's unit through the plan, the model fitted each time",
+                m.runs
+            );
         }
     }
     s
