@@ -122,6 +122,23 @@ fn known_optima_come_out() {
         &s(&p("cubic.json")),
     ]);
     let j = json(&p("cubic.json"));
+    ok(&[
+        "design",
+        "evaluate",
+        "--model",
+        "~ 1 + x + x^2 + x^3",
+        "--plan",
+        &s(&p("cubic.csv")),
+        "--plan",
+        &s(&p("exact.csv")),
+        "--curve",
+        "x=-1.2:1.2:49",
+        "--report",
+        &s(&p("cubic.html")),
+    ]);
+    let html = std::fs::read_to_string(p("cubic.html")).unwrap();
+    assert_eq!(html.matches("<svg").count(), 1);
+    assert!(html.contains("range of the plans") && html.contains("D-efficiency vs best"));
     let d = |k: usize| {
         j["plans"][k]["blocks"][0]["criteria"]["d"]
             .as_f64()
