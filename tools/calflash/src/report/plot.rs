@@ -133,25 +133,49 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
                     }))
                     .map_err(|e| e.to_string())?;
             }
-            let anno = if s.line {
-                chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
-            } else {
-                chart.draw_series(pts.iter().map(|p| Circle::new(*p, 2, color.filled())))
-            }
-            .map_err(|e| e.to_string())?;
-            anno.label(s.name).legend(move |(x, y)| {
-                Rectangle::new([(x, y - 3), (x + 12, y + 3)], color.filled())
-            });
+            line_or_marks(&mut chart, s, &pts, 2)?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        legend(&mut chart)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(out)
+}
+
+/// Draws a series as a line or as dots, with its legend entry.
+fn line_or_marks<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    s: &Series<'_>,
+    pts: &[(f64, f64)],
+    radius: i32,
+) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate<From = (f64, f64)>,
+{
+    let color = s.color;
+    let anno = if s.line {
+        chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
+    } else {
+        chart.draw_series(pts.iter().map(|p| Circle::new(*p, radius, color.filled())))
+    }
+    .map_err(|e| e.to_string())?;
+    anno.label(s.name)
+        .legend(move |(x, y)| Rectangle::new([(x, y - 3), (x + 12, y + 3)], color.filled()));
+    Ok(())
+}
+
+/// The legend box.
+fn legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .draw()
+        .map_err(|e| e.to_string())
 }
 
 /// Draws series on logarithmic axes (the Allan deviation), as an SVG document. Points with a
@@ -201,29 +225,15 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, String> {
             .draw()
             .map_err(|e| e.to_string())?;
         for s in &fig.series {
-            let color = s.color;
             let pts: Vec<(f64, f64)> = s
                 .points
                 .iter()
                 .copied()
                 .filter(|(x, y)| *x > 0.0 && *y > 0.0)
                 .collect();
-            let anno = if s.line {
-                chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
-            } else {
-                chart.draw_series(pts.iter().map(|p| Circle::new(*p, 3, color.filled())))
-            }
-            .map_err(|e| e.to_string())?;
-            anno.label(s.name).legend(move |(x, y)| {
-                Rectangle::new([(x, y - 3), (x + 12, y + 3)], color.filled())
-            });
+            line_or_marks(&mut chart, s, &pts, 3)?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        legend(&mut chart)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(out)
