@@ -6,6 +6,7 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
+use super::html::esc;
 use super::plot::{COLORS, Figure, Series, svg};
 use super::terminal::num;
 use crate::design::criteria::{self, Criteria};
@@ -275,12 +276,6 @@ pub fn evaluate_html(
     }
     h.push_str("</body>\n</html>\n");
     Ok(h)
-}
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
 
 /// `design optimize`'s terminal text.

@@ -6,7 +6,7 @@ use super::plot::{COLORS, Figure, Series, svg};
 use super::terminal::{num, pval};
 use crate::sensor::{Calibrated, Verdict};
 
-fn esc(s: &str) -> String {
+pub(crate) fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")

@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 
 use serde_json::{Value, json};
 
+use super::html::esc;
 use super::plot::{COLORS, Figure, Series, svg};
 use super::terminal::{num, pval};
 use crate::nonlinear::selfcal::SelfCal;
@@ -316,12 +317,6 @@ pub fn record(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) -
         },
         "device": {"blob_bytes": check.blob.len(), "accel_f32_vs_f64_m_s2": check.accel, "gyro_f32_vs_f64_rad_s": check.gyro, "accel_rms_m_s2": check.device_accel_rms},
     })
-}
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
 
 /// The HTML report.
