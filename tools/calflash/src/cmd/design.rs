@@ -6,6 +6,7 @@ use clap::{Args, Subcommand};
 use nalgebra::DMatrix;
 
 use super::calibrate::SensorKind;
+use crate::design::coordinate;
 use crate::design::criteria::{self, Criteria};
 use crate::design::exchange::{self, Criterion};
 use crate::design::models::{self, Block};
@@ -143,6 +144,9 @@ pub struct OptimizeArgs {
     /// Random restarts of the exchange.
     #[arg(long, default_value_t = 10)]
     pub restarts: usize,
+    /// The search.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub method: Method,
     /// Seed of the restarts.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -232,6 +236,9 @@ fn grids(specs: &[String]) -> Result<Points, String> {
     Ok(p)
 }
 
+/// The most candidates a Fedorov exchange lists (beyond, the coordinate exchange).
+const MAX_LISTED: f64 = 2e6;
+
 fn candidates(items: &[String], grid_specs: &[String], m: &ModelArgs) -> Result<Points, String> {
     let from_items = if items.is_empty() {
         Points {
@@ -241,7 +248,21 @@ fn candidates(items: &[String], grid_specs: &[String], m: &ModelArgs) -> Result<
     } else {
         points::from_items(items, &m.temps, &m.volts, 1, unit(m.sensor).0)?
     };
-    let c = from_items.product(&grids(grid_specs)?);
+    let per_grid: Vec<Points> = grid_specs
+        .iter()
+        .map(|g| points::grid(g))
+        .collect::<Result<_, _>>()?;
+    let count = per_grid
+        .iter()
+        .map(|g| g.rows.len() as f64)
+        .product::<f64>()
+        * (from_items.rows.len().max(1) as f64);
+    if count > MAX_LISTED {
+        return Err(format!(
+            "the candidates number {count:.3e}, too many to list (at most {MAX_LISTED:.0e}); `design optimize --method coordinate` searches the levels of --grid factors without listing them"
+        ));
+    }
+    let c = per_grid.iter().fold(from_items, |acc, g| acc.product(g));
     if c.rows.is_empty() {
         return Err("no candidates: give --candidates plan items or --grid NAME=LO:HI:N".into());
     }
@@ -450,12 +471,35 @@ fn usual_plans(o: &OptimizeArgs, cands: &Points) -> Vec<(String, Points)> {
     out
 }
 
-fn optimize(o: &OptimizeArgs) -> Result<(), String> {
-    let (u, gyro) = unit(o.model.sensor);
-    let blocks = models::blocks(&o.model.model, gyro)?;
-    let vars = models::variables(&blocks);
+/// How `optimize` searches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// Coordinate exchange when the candidates are only grids of more than 50,000 combinations,
+    /// else Fedorov.
+    Auto,
+    /// Fedorov exchange over the listed candidates.
+    Fedorov,
+    /// Coordinate exchange over the grids' levels, without listing their combinations.
+    Coordinate,
+}
+
+/// A found plan, however it was searched.
+struct Searched {
+    plan: Points,
+    hits: usize,
+    over: String,
+    region: Points,
+    listed: Option<Points>,
+}
+
+fn search_fedorov(
+    o: &OptimizeArgs,
+    blocks: &[Block],
+    bar: &indicatif::ProgressBar,
+    start: std::time::Instant,
+) -> Result<Searched, String> {
     let cands = candidates(&o.candidates, &o.grid, &o.model)?;
-    check_variables(&blocks, &cands, "the candidates")?;
+    check_variables(blocks, &cands, "the candidates")?;
     check_limits(&cands, &o.model.limit, "the candidates")?;
     let fs: Vec<DMatrix<f64>> = blocks
         .iter()
@@ -468,44 +512,190 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
             Some(r.transpose() * &r / r.nrows() as f64)
         })
         .collect();
+    let opts = exchange::Options {
+        n: o.n,
+        restarts: o.restarts,
+        seed: o.seed,
+    };
+    let found = exchange::optimize_blocks(&fs, o.criterion, &ws, &opts, |d, _| {
+        if start.elapsed().as_secs_f64() > 0.5 {
+            bar.set_position(d as u64);
+        }
+    })
+    .map_err(|e| {
+        format!(
+            "{e}; the model's terms: {}",
+            blocks
+                .iter()
+                .map(|b| b.formula.term_names().join(", "))
+                .collect::<Vec<_>>()
+                .join(" | ")
+        )
+    })?;
+    Ok(Searched {
+        plan: cands.select(&found.points),
+        hits: found.hits,
+        over: format!("{} candidates (Fedorov exchange)", cands.rows.len()),
+        region: cands.clone(),
+        listed: Some(cands),
+    })
+}
+
+fn search_coordinate(
+    o: &OptimizeArgs,
+    blocks: &[Block],
+    bar: &indicatif::ProgressBar,
+    start: std::time::Instant,
+) -> Result<Searched, String> {
+    if !o.candidates.is_empty() {
+        return Err("--method coordinate: works on the levels of --grid factors; plan items are listed candidates (use --method fedorov)".into());
+    }
+    if blocks.len() != 1 {
+        return Err(
+            "--method coordinate: one model at a time (a formula or the single preset)".into(),
+        );
+    }
+    let factor_grids: Vec<Points> = o
+        .grid
+        .iter()
+        .map(|g| points::grid(g))
+        .collect::<Result<_, _>>()?;
+    if factor_grids.is_empty() {
+        return Err("--method coordinate: give the factors as --grid NAME=LO:HI:N".into());
+    }
+    let factors: Vec<coordinate::Factor> = factor_grids
+        .iter()
+        .map(|g| coordinate::Factor {
+            name: g.names[0].clone(),
+            levels: g.rows.iter().map(|r| r[0]).collect(),
+        })
+        .collect();
+    let names: Vec<String> = factors.iter().map(|f| f.name.clone()).collect();
+    let probe = Points {
+        names: names.clone(),
+        rows: vec![factors.iter().map(|f| f.levels[0]).collect()],
+    };
+    check_variables(blocks, &probe, "the factors")?;
+    let limits_probe = Points {
+        names: names.clone(),
+        rows: factors
+            .iter()
+            .enumerate()
+            .flat_map(|(k, f)| f.levels.iter().map(move |l| (k, *l)))
+            .map(|(k, l)| {
+                let mut r = probe.rows[0].clone();
+                r[k] = l;
+                r
+            })
+            .collect(),
+    };
+    check_limits(&limits_probe, &o.model.limit, "the factors")?;
+    let formula = blocks[0].formula.clone();
+    let row = |x: &[f64]| {
+        let mut out = Vec::new();
+        let pts = Points {
+            names: names.clone(),
+            rows: vec![x.to_vec()],
+        };
+        formula.row(|v| pts.value(0, v), &mut out);
+        nalgebra::DVector::from_vec(out)
+    };
+    // The region: the --region grids, or 20,000 random combinations of the levels.
+    let region = if o.model.region.is_empty() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(o.seed ^ 0x5eed);
+        Points {
+            names: names.clone(),
+            rows: (0..20_000)
+                .map(|_| {
+                    factors
+                        .iter()
+                        .map(|f| f.levels[rng.random_range(0..f.levels.len())])
+                        .collect()
+                })
+                .collect(),
+        }
+    } else {
+        grids(&o.model.region)?
+    };
+    let r = region.model_rows(&formula);
+    let w = r.transpose() * &r / r.nrows() as f64;
+    let opts = exchange::Options {
+        n: o.n,
+        restarts: o.restarts,
+        seed: o.seed,
+    };
+    let found = coordinate::optimize(&factors, &row, o.criterion, Some(&w), &opts, |d, _| {
+        if start.elapsed().as_secs_f64() > 0.5 {
+            bar.set_position(d as u64);
+        }
+    })
+    .map_err(|e| {
+        format!(
+            "{e}; the model's terms: {}",
+            formula.term_names().join(", ")
+        )
+    })?;
+    let combinations: f64 = factors.iter().map(|f| f.levels.len() as f64).product();
+    Ok(Searched {
+        plan: Points {
+            names,
+            rows: found.points,
+        },
+        hits: found.hits,
+        over: format!(
+            "{} factors, {combinations:.3e} combinations (coordinate exchange)",
+            factors.len()
+        ),
+        region,
+        listed: None,
+    })
+}
+
+fn optimize(o: &OptimizeArgs) -> Result<(), String> {
+    let (u, gyro) = unit(o.model.sensor);
+    let blocks = models::blocks(&o.model.model, gyro)?;
+    let vars = models::variables(&blocks);
+    let combinations: f64 = o
+        .grid
+        .iter()
+        .filter_map(|g| points::grid(g).ok())
+        .map(|g| g.rows.len() as f64)
+        .product();
+    let method = match o.method {
+        Method::Auto
+            if o.candidates.is_empty()
+                && !o.grid.is_empty()
+                && combinations > 50_000.0
+                && blocks.len() == 1 =>
+        {
+            Method::Coordinate
+        }
+        Method::Auto => Method::Fedorov,
+        m => m,
+    };
     let bar = indicatif::ProgressBar::new(o.restarts as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("  exchange {bar:30} restart {pos}/{len}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let start = std::time::Instant::now();
-    let found = exchange::optimize_blocks(
-        &fs,
-        o.criterion,
-        &ws,
-        &exchange::Options {
-            n: o.n,
-            restarts: o.restarts,
-            seed: o.seed,
-        },
-        |d, _| {
-            if start.elapsed().as_secs_f64() > 0.5 {
-                bar.set_position(d as u64);
-            }
-        },
-    )
-    .map_err(|e| {
-        let names: Vec<String> = blocks
-            .iter()
-            .map(|b| b.formula.term_names().join(", "))
-            .collect();
-        format!("{e}; the model's terms: {}", names.join(" | "))
-    })?;
+    let searched = match method {
+        Method::Coordinate => search_coordinate(o, &blocks, &bar, start)?,
+        _ => search_fedorov(o, &blocks, &bar, start)?,
+    };
     bar.finish_and_clear();
-    let plan = cands.select(&found.points);
-    let mut compare = vec![("optimal".to_string(), plan.clone())];
+    let took = start.elapsed();
+    let mut compare = vec![("optimal".to_string(), searched.plan.clone())];
     for spec in &o.compare {
         compare.push((spec.clone(), load_plan(spec, &vars, &o.model)?));
     }
-    compare.extend(usual_plans(o, &cands));
+    if let Some(cands) = &searched.listed {
+        compare.extend(usual_plans(o, cands));
+    }
     let mut rows = Vec::new();
     for (name, pts) in &compare {
-        match evaluate_plan(name, pts, &blocks, &o.model, &cands) {
+        match evaluate_plan(name, pts, &blocks, &o.model, &searched.region) {
             Ok(c) => rows.push(show::PlanResult {
                 name: name.clone(),
                 points: pts.clone(),
@@ -532,26 +722,25 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
         ],
     };
     let mut keep: Vec<String> = vars.clone();
-    for n in &cands.names {
+    for n in &searched.plan.names {
         if sim_cols.contains(&n.as_str()) && !keep.contains(n) {
             keep.push(n.clone());
         }
     }
     report::write_atomically(&o.output, |w| {
-        std::io::Write::write_all(w, points::to_csv(&plan, &keep).as_bytes())
+        std::io::Write::write_all(w, points::to_csv(&searched.plan, &keep).as_bytes())
     })?;
+    let head = show::Search {
+        criterion: o.criterion,
+        n: o.n,
+        over: &searched.over,
+        hits: searched.hits,
+        took,
+        output: &o.output,
+    };
     print!(
         "{}",
-        show::optimize_text(
-            o.criterion,
-            o.n,
-            &cands,
-            &found,
-            &blocks,
-            &rows,
-            start.elapsed(),
-            &o.output
-        )
+        show::optimize_text(&head, &searched.plan, &blocks, &rows)
     );
     Ok(())
 }

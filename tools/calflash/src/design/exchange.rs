@@ -69,6 +69,46 @@ pub enum ExchangeError {
     },
 }
 
+/// What replacing design row `x_i` by `x_j` depends on, with `u = M^-1 x`: `d_i = x_i' u_i`,
+/// `d_j = x_j' u_j`, `d_ij = x_i' u_j`, and for A and I `a_i = u_i' W u_i`, `a_j = u_j' W u_j`,
+/// `w_ij = u_i' W u_j`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pair {
+    pub di: f64,
+    pub dj: f64,
+    pub dij: f64,
+    pub ai: f64,
+    pub aj: f64,
+    pub wij: f64,
+}
+
+impl Pair {
+    /// The determinant ratio (D), or the new `trace(W M^-1)` from the current `phi` (A, I), by
+    /// the rank-one update formulas (add `x_j`, then remove `x_i`); `None` when the swap makes
+    /// the information singular.
+    pub(crate) fn effect(&self, criterion: Criterion, phi: f64) -> Option<f64> {
+        let Self {
+            di,
+            dj,
+            dij,
+            ai,
+            aj,
+            wij,
+        } = *self;
+        match criterion {
+            Criterion::D => Some((1.0 + dj) * (1.0 - di) + dij * dij),
+            _ => {
+                let c = dij / (1.0 + dj);
+                let d1 = di - dij * dij / (1.0 + dj);
+                if 1.0 - d1 <= 1e-12 {
+                    return None;
+                }
+                Some(phi - aj / (1.0 + dj) + (ai - 2.0 * c * wij + c * c * aj) / (1.0 - d1))
+            }
+        }
+    }
+}
+
 /// The working state of one exchange: the design, `M^-1` and per-candidate quantities.
 struct State<'a> {
     f: &'a DMatrix<f64>,
@@ -177,23 +217,19 @@ impl<'a> State<'a> {
     /// The effect of replacing design candidate `i` by `j`: the determinant ratio (D) or the
     /// new `trace(W M^-1)` (A, I); `None` when the swap would make the information singular.
     fn effect(&self, i: usize, j: usize, criterion: Criterion, phi: f64) -> Option<f64> {
-        let dij = self.u.row(i).dot(&self.f.row(j));
-        let (di, dj) = (self.d[i], self.d[j]);
-        match criterion {
-            Criterion::D => Some((1.0 + dj) * (1.0 - di) + dij * dij),
-            _ => {
-                let c = dij / (1.0 + dj);
-                let d1 = di - dij * dij / (1.0 + dj);
-                if 1.0 - d1 <= 1e-12 {
-                    return None;
-                }
-                let wij = self.wu.row(i).dot(&self.u.row(j));
-                Some(
-                    phi - self.a[j] / (1.0 + dj)
-                        + (self.a[i] - 2.0 * c * wij + c * c * self.a[j]) / (1.0 - d1),
-                )
-            }
-        }
+        let pair = Pair {
+            di: self.d[i],
+            dj: self.d[j],
+            dij: self.u.row(i).dot(&self.f.row(j)),
+            ai: self.a[i],
+            aj: self.a[j],
+            wij: if criterion == Criterion::D {
+                0.0
+            } else {
+                self.wu.row(i).dot(&self.u.row(j))
+            },
+        };
+        pair.effect(criterion, phi)
     }
 
     fn swap(&mut self, slot: usize, j: usize) {

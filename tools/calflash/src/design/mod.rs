@@ -1,6 +1,7 @@
 //! Experimental design: what a plan of observation points can estimate and how precisely,
 //! before a single test is run, and exact optimal plans over the points the equipment can reach.
 
+pub mod coordinate;
 pub mod criteria;
 pub mod exchange;
 pub mod models;

@@ -10,7 +10,7 @@ use super::html::esc;
 use super::plot::{COLORS, Figure, Series, svg};
 use super::terminal::num;
 use crate::design::criteria::{self, Criteria};
-use crate::design::exchange::{Criterion, Found};
+use crate::design::exchange::Criterion;
 use crate::design::models::Block;
 use crate::design::points::{self, Points};
 use crate::design::predict::{Expected, MonteCarlo};
@@ -278,34 +278,47 @@ pub fn evaluate_html(
     Ok(h)
 }
 
+/// What a search did, for the summary.
+#[derive(Debug, Clone, Copy)]
+pub struct Search<'a> {
+    /// The criterion.
+    pub criterion: Criterion,
+    /// Observations.
+    pub n: usize,
+    /// What was searched (candidates, factors).
+    pub over: &'a str,
+    /// Restarts that reached the best value.
+    pub hits: usize,
+    /// How long it took.
+    pub took: std::time::Duration,
+    /// The plan file written.
+    pub output: &'a Path,
+}
+
 /// `design optimize`'s terminal text.
-#[expect(clippy::too_many_arguments, reason = "one summary of one search")]
 #[must_use]
 pub fn optimize_text(
-    criterion: Criterion,
-    n: usize,
-    cands: &Points,
-    found: &Found,
+    head: &Search<'_>,
+    plan: &Points,
     blocks: &[Block],
     rows: &[PlanResult],
-    took: std::time::Duration,
-    output: &Path,
 ) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "calflash design optimize  {criterion:?}-optimal plan of {n} observations from {} candidates; {} restart(s) reached the best value; {:.2} s",
-        cands.rows.len(),
-        found.hits,
-        took.as_secs_f64()
+        "calflash design optimize  {:?}-optimal plan of {} observations over {}; {} restart(s) reached the best value; {:.2} s",
+        head.criterion,
+        head.n,
+        head.over,
+        head.hits,
+        head.took.as_secs_f64()
     );
     // The distinct points as the model sees them.
     let vars: Vec<String> = crate::design::models::variables(blocks);
-    let chosen = cands.select(&found.points);
     let seen = Points {
         names: vars.clone(),
-        rows: (0..chosen.rows.len())
-            .map(|r| vars.iter().map(|v| chosen.value(r, v)).collect())
+        rows: (0..plan.rows.len())
+            .map(|r| vars.iter().map(|v| plan.value(r, v)).collect())
             .collect(),
     };
     for (row, count) in points::tally(&seen) {
@@ -322,7 +335,7 @@ pub fn optimize_text(
     let _ = writeln!(
         s,
         "  written to {} (for `calflash simulate --plan-file` and a test station)",
-        output.display()
+        head.output.display()
     );
     let _ = writeln!(
         s,
