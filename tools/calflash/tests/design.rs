@@ -152,20 +152,76 @@ fn coordinate_exchange_searches_factor_levels_without_listing_them() {
     let dir = tempfile::tempdir().unwrap();
     let plan = dir.path().join("c.csv");
     let plan = plan.to_str().unwrap();
-    ok(&["design", "optimize", "--model", "~ 1 + x + x^2", "--grid", "x=-1:1:201", "--n", "12", "--method", "coordinate", "-o", plan]);
+    ok(&[
+        "design",
+        "optimize",
+        "--model",
+        "~ 1 + x + x^2",
+        "--grid",
+        "x=-1:1:201",
+        "--n",
+        "12",
+        "--method",
+        "coordinate",
+        "-o",
+        plan,
+    ]);
     let v = plan_values(Path::new(plan), "x");
     for (at, want) in [(-1.0, 4), (0.0, 4), (1.0, 4)] {
-        assert_eq!(v.iter().filter(|x| (**x - at).abs() < 1e-12).count(), want, "{v:?}");
+        assert_eq!(
+            v.iter().filter(|x| (**x - at).abs() < 1e-12).count(),
+            want,
+            "{v:?}"
+        );
     }
     // 41^3 combinations: the automatic choice is the coordinate exchange.
     let quad = "~ 1 + a + b + c + a^2 + b^2 + c^2 + a:b + a:c + b:c";
-    let text = ok(&["design", "optimize", "--model", quad, "--grid", "a=-1:1:41", "--grid", "b=-1:1:41", "--grid", "c=-1:1:41", "--n", "20", "--restarts", "3", "-o", plan]);
-    assert!(text.contains("over 3 factors, 6.892e4 combinations (coordinate exchange)"), "{text}");
+    let text = ok(&[
+        "design",
+        "optimize",
+        "--model",
+        quad,
+        "--grid",
+        "a=-1:1:41",
+        "--grid",
+        "b=-1:1:41",
+        "--grid",
+        "c=-1:1:41",
+        "--n",
+        "20",
+        "--restarts",
+        "3",
+        "-o",
+        plan,
+    ]);
+    assert!(
+        text.contains("over 3 factors, 6.892e4 combinations (coordinate exchange)"),
+        "{text}"
+    );
     assert_eq!(plan_values(Path::new(plan), "c").len(), 20);
     // Listing 2001^2 candidates for the Fedorov exchange is refused with the way out.
-    let (code, _, err) = calflash(&["design", "optimize", "--model", "~ 1 + a + b", "--grid", "a=-1:1:2001", "--grid", "b=-1:1:2001", "--n", "8", "--method", "fedorov", "-o", plan]);
+    let (code, _, err) = calflash(&[
+        "design",
+        "optimize",
+        "--model",
+        "~ 1 + a + b",
+        "--grid",
+        "a=-1:1:2001",
+        "--grid",
+        "b=-1:1:2001",
+        "--n",
+        "8",
+        "--method",
+        "fedorov",
+        "-o",
+        plan,
+    ]);
     assert_eq!(code, 1);
-    assert!(err.contains("the candidates number 4.004e6, too many to list") && err.contains("--method coordinate"), "{err}");
+    assert!(
+        err.contains("the candidates number 4.004e6, too many to list")
+            && err.contains("--method coordinate"),
+        "{err}"
+    );
 }
 
 #[test]
