@@ -23,6 +23,17 @@ pub fn default_path() -> PathBuf {
     data.join("calflash").join("units.sqlite")
 }
 
+/// Where a record that the database cannot take is saved: the directory of the first output
+/// file given, else the current directory.
+#[must_use]
+pub fn beside(outputs: &[Option<&Path>]) -> PathBuf {
+    outputs
+        .iter()
+        .flatten()
+        .find_map(|p| p.parent().map(Path::to_path_buf))
+        .unwrap_or_else(|| PathBuf::from("."))
+}
+
 /// Records with `f` in the database at `path`; when that fails, saves `fallback` as JSON in
 /// `beside` so that nothing is lost.
 ///
@@ -222,6 +233,55 @@ impl Db {
         Ok(id)
     }
 
+    /// Records a calibration without equipment (`calflash selfcal`): its JSON record
+    /// (`calflash.selfcal/1`) as the coefficients and covariance, the report and the blob.
+    ///
+    /// # Errors
+    /// A message naming the file and why; nothing is written then.
+    pub fn record_selfcal(
+        &mut self,
+        serial: &str,
+        record: &serde_json::Value,
+        report: Option<&Path>,
+        blob: &[u8],
+    ) -> Result<i64, String> {
+        let hash = spincal::blob::decode(blob).map_or_else(
+            |_| String::new(),
+            |c| {
+                c.data()
+                    .identity
+                    .data_hash
+                    .iter()
+                    .map(|b| format!("{b:02x}"))
+                    .collect()
+            },
+        );
+        let coefficients = serde_json::json!({"accel": record["accel"], "gyro": record["gyro"]["matrix_rad_s_per_count"], "gyro_bias_counts": record["gyro"]["bias_counts"]});
+        let covariance = serde_json::json!({"accel": record["accel"]["covariance"], "gyro": record["gyro"]["covariance"]});
+        let tx = self
+            .conn
+            .transaction()
+            .map_err(|e| explain(&self.path, &e))?;
+        tx.execute(
+            "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
+             VALUES (?1, 'fit', ?2, ?3, 'selfcal: accelerometer from |a| = g, gyro from rotations', ?4, ?5, ?6, ?7, NULL, ?8, NULL)",
+            params![
+                serial,
+                now(),
+                hash,
+                coefficients.to_string(),
+                covariance.to_string(),
+                report.map(|p| p.display().to_string()),
+                blob,
+                record["verdict"].as_str().unwrap_or("").to_lowercase(),
+            ],
+        )
+        .map_err(|e| explain(&self.path, &e))?;
+        let id = tx.last_insert_rowid();
+        tx.commit().map_err(|e| explain(&self.path, &e))?;
+        Ok(id)
+    }
+
     /// Records a flash (done or failed): the unit, the blob, the verification.
     ///
     /// # Errors
@@ -302,7 +362,7 @@ impl Db {
         match text {
             None => Err(format!("{}: no record {id}", self.path.display())),
             Some(None) => Err(format!(
-                "{}: record {id} is a flash, not a fit; compare fits",
+                "{}: record {id} is a flash or a calibration without equipment, not a fit of `calflash calibrate`; compare those",
                 self.path.display()
             )),
             Some(Some(t)) => serde_json::from_str(&t)

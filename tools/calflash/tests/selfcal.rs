@@ -183,7 +183,7 @@ fn dropped_and_saturated_samples_are_reported_and_left_out() {
         .arg("selfcal")
         .arg(&a)
         .arg(&g)
-        .args(["--g", "9.81", "--serial", "SIM-1"])
+        .args(["--g", "9.81", "--serial", "SIM-1", "--no-db"])
         .output()
         .unwrap();
     let said = String::from_utf8_lossy(&out.stdout);
@@ -222,6 +222,7 @@ fn the_command_line_refuses_bad_input_with_one_clear_line() {
             .arg(&a)
             .arg(&g)
             .args(args)
+            .arg("--no-db")
             .output()
             .unwrap();
         (

@@ -47,6 +47,8 @@ fn the_xsens_recording_meets_the_acceptance_figures() {
         .arg(&blob)
         .arg("--report")
         .arg(&html)
+        .arg("--db")
+        .arg(out.path().join("units.sqlite"))
         .output()
         .unwrap();
     let said = String::from_utf8_lossy(&run.stdout);

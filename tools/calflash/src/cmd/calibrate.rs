@@ -188,11 +188,11 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         let path = args.db.clone().unwrap_or_else(crate::db::default_path);
         let fallback = serde_json::to_value(&record).unwrap_or_default();
         let report_path = args.report.as_deref();
-        let beside = [&args.blob, &args.json, &args.report]
-            .into_iter()
-            .flatten()
-            .find_map(|p| p.parent().map(std::path::Path::to_path_buf))
-            .unwrap_or_else(|| std::path::PathBuf::from("."));
+        let beside = crate::db::beside(&[
+            args.blob.as_deref(),
+            args.json.as_deref(),
+            args.report.as_deref(),
+        ]);
         let serial = c.data.identity.serial.as_str();
         let said = crate::db::record_or_save(
             &path,

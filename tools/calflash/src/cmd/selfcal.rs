@@ -57,6 +57,12 @@ pub struct SelfcalArgs {
     /// Write the JSON record here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// The unit history database (default: $CALFLASH_DB, else the user's data directory).
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Do not record the calibration.
+    #[arg(long)]
+    pub no_db: bool,
 }
 
 /// Runs `calflash selfcal`.
@@ -115,10 +121,10 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
     if let Some(p) = &args.blob {
         report::write_atomically(p, |w| w.write_all(&check.blob))?;
     }
+    let record = report::selfcal::record(&c, &rec, &check, name);
     if let Some(p) = &args.json {
-        let v = report::selfcal::record(&c, &rec, &check, name);
         report::write_atomically(p, |w| {
-            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+            serde_json::to_writer_pretty(&mut *w, &record).map_err(std::io::Error::other)
         })?;
     }
     if let Some(p) = &args.report {
@@ -126,5 +132,22 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
         report::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
     }
     print!("{}", report::selfcal::summary(&c, &rec, &check, name));
+    if !args.no_db {
+        let path = args.db.clone().unwrap_or_else(crate::db::default_path);
+        let beside = crate::db::beside(&[
+            args.blob.as_deref(),
+            args.json.as_deref(),
+            args.report.as_deref(),
+        ]);
+        let said = crate::db::record_or_save(
+            &path,
+            |d| d.record_selfcal(name, &record, args.report.as_deref(), &check.blob),
+            &record,
+            &beside,
+            name,
+        )
+        .map_err(|e| format!("the calibration is written but {e}"))?;
+        println!("  {said}");
+    }
     Ok(())
 }
