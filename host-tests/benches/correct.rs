@@ -6,7 +6,7 @@ use std::hint::black_box;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use spincal::blob;
 use spincal::correct::{Corrected, ImuCorrector};
-use spincal::model::{Calibration, CalibrationData, Sensor};
+use spincal::model::{Calibration, CalibrationData};
 
 fn samples() -> Vec<[i32; 6]> {
     let centers = [33_109, 33_329, 36_427, 32_786, 32_430, 32_517];
@@ -17,27 +17,12 @@ fn samples() -> Vec<[i32; 6]> {
         .collect()
 }
 
-fn without_asymmetry(mut data: CalibrationData) -> CalibrationData {
-    if let Sensor::Imu { sets, .. } = &mut data.sensor {
-        for set in sets.as_mut_slice() {
-            for axis in set.accel.axes.iter_mut().chain(set.gyro.axes.iter_mut()) {
-                axis.asymmetry = 0.0;
-                axis.asymmetry_break = 0.0;
-            }
-        }
-    }
-    data
-}
-
 fn bench(c: &mut Criterion) {
     let raw = samples();
     let mut out = vec![Corrected::<6>::default(); raw.len()];
     let cases = [
         ("imu_linear", CalibrationData::example_imu_linear()),
-        (
-            "imu_full",
-            without_asymmetry(CalibrationData::example_imu()),
-        ),
+        ("imu_full", CalibrationData::example_imu_polynomial()),
         ("imu_full_asym", CalibrationData::example_imu()),
     ];
     let mut group = c.benchmark_group("correct");

@@ -70,6 +70,16 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
         ("single", CalibrationData::example_single(), Kind::Single),
         ("triad", CalibrationData::example_triad(), Kind::Triad),
         ("imu", CalibrationData::example_imu(), Kind::Imu(1000.0)),
+        (
+            "imu_linear",
+            CalibrationData::example_imu_linear(),
+            Kind::Imu(1000.0),
+        ),
+        (
+            "imu_polynomial",
+            CalibrationData::example_imu_polynomial(),
+            Kind::Imu(1000.0),
+        ),
     ]
 }
 

@@ -7,6 +7,7 @@ use core::ops::{BitOr, BitOrAssign};
 /// vouches for.
 #[derive(Clone, Copy, PartialEq, Eq, Default, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(transparent)]
 pub struct Flags(u8);
 
 impl Flags {

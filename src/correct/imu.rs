@@ -208,6 +208,18 @@ impl<'a> ImuCorrector<'a> {
         let pairs = raw.iter().zip(out.iter_mut());
         let n = pairs.len();
         let Mode { shape, lever } = self.mode;
+        #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+        match (shape, lever) {
+            (Shape::Linear, _) => {
+                self.linear_m4f(raw, out);
+                return n;
+            }
+            (Shape::Polynomial, true) => {
+                self.lever_m4f(raw, out);
+                return n;
+            }
+            _ => {}
+        }
         match (shape, lever) {
             (Shape::Linear, _) => pairs.for_each(|(r, o)| self.step::<false, false, false>(*r, o)),
             (Shape::Polynomial, false) => {
@@ -225,6 +237,48 @@ impl<'a> ImuCorrector<'a> {
             (Shape::Identity, _) => pairs.for_each(|(r, o)| *o = self.passthrough(*r)),
         }
         n
+    }
+
+    /// The linear batch on the Cortex-M4F kernel; samples outside a window take `step`.
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    fn linear_m4f(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) {
+        let block = super::m4f::LinearBlock::new(&self.accel, &self.gyro, self.env_flags.bits());
+        let (mut raw, mut out) = (raw, out);
+        loop {
+            let done = super::m4f::linear(&block, raw, out);
+            let Some(((r, raw_next), (o, out_next))) = next_after(raw, out, done) else {
+                break;
+            };
+            self.step::<false, false, false>(*r, o);
+            (raw, out) = (raw_next, out_next);
+        }
+    }
+
+    /// The full-model batch (polynomial, g-sensitivity, lever arm) on the Cortex-M4F kernel;
+    /// samples outside a window take `step`, which may prime the rate derivative.
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    fn lever_m4f(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) {
+        let mut block = super::m4f::LeverBlock::new(
+            &self.accel,
+            &self.gyro,
+            self.env_flags.bits(),
+            &self.g,
+            &self.lever,
+            &self.lever_rate,
+            self.prev_rate,
+        );
+        let (mut raw, mut out) = (raw, out);
+        loop {
+            let done = super::m4f::lever(&mut block, raw, out);
+            self.prev_rate = block.prev_rate;
+            let Some(((r, raw_next), (o, out_next))) = next_after(raw, out, done) else {
+                break;
+            };
+            self.step::<true, false, true>(*r, o);
+            block.prev_rate = self.prev_rate;
+            block.header.accel_limit = self.accel.limit;
+            (raw, out) = (raw_next, out_next);
+        }
     }
 
     #[inline(always)]
@@ -379,4 +433,23 @@ fn join(a: [f32; 3], w: [f32; 3]) -> [f32; 6] {
     let [a0, a1, a2] = a;
     let [w0, w1, w2] = w;
     [a0, a1, a2, w0, w1, w2]
+}
+
+/// The sample at `done` and the rest after it, of both slices; `None` when either has run out.
+#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+#[expect(
+    clippy::type_complexity,
+    reason = "two split_first results side by side"
+)]
+fn next_after<'r, 'o>(
+    raw: &'r [[i32; 6]],
+    out: &'o mut [Corrected<6>],
+    done: usize,
+) -> Option<(
+    (&'r [i32; 6], &'r [[i32; 6]]),
+    (&'o mut Corrected<6>, &'o mut [Corrected<6>]),
+)> {
+    let r = raw.get(done..)?.split_first()?;
+    let o = out.get_mut(done..)?.split_first_mut()?;
+    Some((r, o))
 }

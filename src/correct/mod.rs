@@ -23,6 +23,8 @@ mod environment;
 mod flags;
 mod imu;
 mod kernel;
+#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+mod m4f;
 mod single;
 mod triad;
 
@@ -32,8 +34,11 @@ pub use single::AxisCorrector;
 pub use triad::TriadCorrector;
 
 /// A corrected sample: `N` values in SI units (m/s^2, rad/s) and the flags that apply.
+///
+/// `#[repr(C)]`: the Cortex-M4F batch kernels write it directly.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(C)]
 pub struct Corrected<const N: usize> {
     /// Corrected values.
     pub values: [f32; N],

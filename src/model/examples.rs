@@ -254,6 +254,23 @@ impl CalibrationData {
         Self::imu(true)
     }
 
+    /// [`example_imu`](Self::example_imu) without the asymmetric scale: the spinning round's
+    /// full model (polynomial, misalignment, g-sensitivity, lever arm) over the same table.
+    #[must_use]
+    pub fn example_imu_polynomial() -> Self {
+        let mut data = Self::imu(true);
+        data.identity = identity("IMU-POLY-0042");
+        if let Sensor::Imu { sets, .. } = &mut data.sensor {
+            for set in sets.as_mut_slice() {
+                for axis in set.accel.axes.iter_mut().chain(set.gyro.axes.iter_mut()) {
+                    axis.asymmetry = 0.0;
+                    axis.asymmetry_break = 0.0;
+                }
+            }
+        }
+        data
+    }
+
     /// An IMU with bias and scale-misalignment only (no nonlinear terms, no g-sensitivity, no
     /// lever arm), at one temperature.
     #[must_use]

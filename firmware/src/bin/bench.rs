@@ -13,7 +13,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use spincal::blob;
 use spincal::correct::{Corrected, ImuCorrector};
-use spincal::model::{Calibration, CalibrationData, Sensor};
+use spincal::model::{Calibration, CalibrationData};
 use spincal_firmware::{stack, timer};
 
 const N: usize = 256;
@@ -56,17 +56,6 @@ fn report(name: &str, ticks: u32, ops: usize) {
     );
 }
 
-fn without_asymmetry(mut data: CalibrationData) -> CalibrationData {
-    if let Sensor::Imu { sets, .. } = &mut data.sensor {
-        for set in sets.as_mut_slice() {
-            for axis in set.accel.axes.iter_mut().chain(set.gyro.axes.iter_mut()) {
-                axis.asymmetry = 0.0;
-                axis.asymmetry_break = 0.0;
-            }
-        }
-    }
-    data
-}
 
 #[inline(never)]
 fn batch(c: &mut ImuCorrector<'_>, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
@@ -111,7 +100,7 @@ fn main() -> ! {
     };
     // The "full model": polynomial, misalignment, g-sensitivity, lever arm (the
     // example without its asymmetry terms).
-    let Ok(poly) = Calibration::new(without_asymmetry(CalibrationData::example_imu())) else {
+    let Ok(poly) = Calibration::new(CalibrationData::example_imu_polynomial()) else {
         fail("polynomial example invalid")
     };
     let inside = samples(false);

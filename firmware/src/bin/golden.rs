@@ -7,7 +7,13 @@
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use spincal::blob;
-use spincal_firmware::{CASES, Runner, Step};
+use spincal::correct::{Corrected, ImuCorrector};
+use spincal::model::Calibration;
+use spincal_firmware::{CASES, Case, Kind, Runner, Step};
+
+/// Samples per `correct_batch` call: the steps between two environments go through in blocks
+/// of this many, so the batch path meets the window edges at every position.
+const BLOCK: usize = 16;
 
 #[entry]
 fn main() -> ! {
@@ -62,6 +68,11 @@ fn main() -> ! {
                 }
             }
         }
+        if let Kind::Imu(rate) = case.kind {
+            let (n, bad) = check_batch(case, &cal, rate);
+            checked += n;
+            failures += bad;
+        }
         hprintln!("case {}: {} steps", case.name, case.steps.len());
     }
     hprintln!(
@@ -70,4 +81,98 @@ fn main() -> ! {
         failures
     );
     spincal_firmware::exit(failures == 0)
+}
+
+/// Samples waiting for one `correct_batch` call, with what they must give.
+struct Batch<'c> {
+    name: &'c str,
+    raw: [[i32; 6]; BLOCK],
+    expected: [(&'c [u32], u8); BLOCK],
+    filled: usize,
+    checked: u32,
+    failures: u32,
+}
+
+impl<'c> Batch<'c> {
+    fn push(&mut self, raw: &[i32], expected: &'c [u32], flags: u8) -> bool {
+        let (Some(slot), Some(want), Ok(codes)) = (
+            self.raw.get_mut(self.filled),
+            self.expected.get_mut(self.filled),
+            <[i32; 6]>::try_from(raw),
+        ) else {
+            return false;
+        };
+        *slot = codes;
+        *want = (expected, flags);
+        self.filled += 1;
+        true
+    }
+
+    fn flush(&mut self, imu: &mut ImuCorrector<'_>) {
+        let mut out = [Corrected::<6>::default(); BLOCK];
+        let raw = self.raw.get(..self.filled).unwrap_or_default();
+        let n = imu.correct_batch(raw, &mut out);
+        for ((o, (want, flags)), r) in out.iter().zip(&self.expected).zip(raw).take(n) {
+            self.checked += 1;
+            let got = o.values.map(f32::to_bits);
+            if got.as_slice() != *want || o.flags.bits() != *flags {
+                self.failures += 1;
+                hprintln!(
+                    "FAIL {} batch: raw {:?}: got {:08x?} flags {:02x}, expected {:08x?} flags {:02x}",
+                    self.name,
+                    r,
+                    got,
+                    o.flags.bits(),
+                    want,
+                    flags
+                );
+            }
+        }
+        if n != self.filled {
+            self.failures += 1;
+            hprintln!("FAIL {} batch: {} of {} corrected", self.name, n, self.filled);
+        }
+        self.filled = 0;
+    }
+}
+
+/// Runs an IMU case again through `correct_batch` (the hand-scheduled Cortex-M4F kernels for
+/// the linear and full shapes) and compares every output bit and flag with the vectors; returns
+/// the samples checked and the mismatches.
+fn check_batch(case: &Case, cal: &Calibration, rate: f32) -> (u32, u32) {
+    let Ok(mut imu) = ImuCorrector::new(cal, rate) else {
+        hprintln!("FAIL {}: no IMU corrector for the batch pass", case.name);
+        return (0, 1);
+    };
+    let mut batch = Batch {
+        name: case.name,
+        raw: [[0; 6]; BLOCK],
+        expected: [(&[], 0); BLOCK],
+        filled: 0,
+        checked: 0,
+        failures: 0,
+    };
+    for step in case.steps {
+        match step {
+            Step::Env(t, v) => {
+                batch.flush(&mut imu);
+                imu.set_environment(*t, *v);
+            }
+            Step::Sample {
+                raw,
+                expected,
+                flags,
+            } => {
+                if !batch.push(raw, expected, *flags) {
+                    hprintln!("FAIL {} batch: a sample is not 6 codes", case.name);
+                    return (batch.checked, batch.failures + 1);
+                }
+                if batch.filled == BLOCK {
+                    batch.flush(&mut imu);
+                }
+            }
+        }
+    }
+    batch.flush(&mut imu);
+    (batch.checked, batch.failures)
 }

@@ -1,0 +1,442 @@
+//! Hand-scheduled Cortex-M4F kernels for the two IMU batch shapes that matter most: bias and
+//! matrix only (`Linear`), and polynomial with g-sensitivity and lever arm (the spinning
+//! round's full model). Compiled only for hard-float Arm targets; everywhere else, and for the
+//! other shapes, `correct_batch` runs the compiled Rust path.
+//!
+//! # Why assembly
+//!
+//! LLVM loads each coefficient with its own `vldr` and spills the window bases, which costs
+//! about 20 instructions per sample for the linear shape and 75 for the full one (see
+//! `BENCHMARKS.md`). These kernels lay the coefficients out in the order they are used and load
+//! each block with one `vldm`, move two codes into the FPU per `vmov`, store the six outputs
+//! with one `vstm`, and keep the window test in integer registers.
+//!
+//! # Bit-exact with the Rust path
+//!
+//! Every kernel performs exactly the operations of [`ImuCorrector`](super::ImuCorrector)'s fast
+//! path, in the same order: `vmla`/`vmls` on the Cortex-M4F round the product before the
+//! addition (they are not fused), which is what the Rust expressions `a + b * c` and
+//! `a - b * c` compute. A kernel returns at the first sample outside the safe window; the caller
+//! corrects that sample with the Rust slow path and resumes. The QEMU golden test checks the
+//! batch outputs against the host's per-sample outputs bit for bit.
+//!
+//! # Memory layout
+//!
+//! Each kernel reads one `#[repr(C)]` block: a [`Header`] (window bases and limits of both
+//! triads, the environment flags) and then the coefficients in the order the kernel loads them.
+//! The `offset_of!` assertions below pin every offset the assembly uses.
+
+#![allow(unsafe_code)]
+
+use core::mem::{offset_of, size_of};
+
+use super::Corrected;
+use super::kernel::TriadKernel;
+
+/// Window bases and limits of both triads and the environment flags (36 bytes).
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Header {
+    accel_base: [i32; 3],
+    /// Accelerometer window limit (0 until the lever arm is primed).
+    pub accel_limit: u32,
+    gyro_base: [i32; 3],
+    gyro_limit: u32,
+    flags: u32,
+}
+
+impl Header {
+    fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8) -> Self {
+        Self {
+            accel_base: accel.base,
+            accel_limit: accel.limit,
+            gyro_base: gyro.base,
+            gyro_limit: gyro.limit,
+            flags: u32::from(flags),
+        }
+    }
+}
+
+/// Coefficients of the linear kernel: offsets (the six accumulators' start values), then the
+/// accelerometer and gyro matrices row-major.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LinearBlock {
+    header: Header,
+    offset: [f32; 6],
+    matrix: [f32; 18],
+}
+
+impl LinearBlock {
+    pub fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8) -> Self {
+        Self {
+            header: Header::new(accel, gyro, flags),
+            offset: join(accel.off_lin, gyro.off_lin),
+            matrix: matrices(accel, gyro),
+        }
+    }
+}
+
+/// Coefficients of the full kernel in the order it loads them, and the previous gyro rate.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LeverBlock {
+    /// Windows and flags.
+    pub header: Header,
+    /// Per axis `q` (the first `vldm` also loads `delta`, `k` and `o`).
+    q: [f32; 6],
+    delta: [f32; 6],
+    k: [f32; 6],
+    o: [f32; 6],
+    offset: [f32; 6],
+    matrix: [f32; 18],
+    /// Negated g-sensitivity, row-major.
+    neg_g: [[f32; 3]; 3],
+    lever: [[f32; 3]; 3],
+    /// The off-diagonal lever terms times the sample rate that the rate-difference term uses:
+    /// `f0[1], f0[2], f1[0], f1[2], f2[0], f2[1]`.
+    lever_rate: [f32; 6],
+    /// The previous corrected gyro rate; the kernel updates it.
+    pub prev_rate: [f32; 3],
+}
+
+impl LeverBlock {
+    pub fn new(
+        accel: &TriadKernel,
+        gyro: &TriadKernel,
+        flags: u8,
+        g: &[[f32; 3]; 3],
+        lever: &[[f32; 3]; 3],
+        lever_rate: &[[f32; 3]; 3],
+        prev_rate: [f32; 3],
+    ) -> Self {
+        let pick = |f: fn([f32; 5]) -> f32| join(accel.nl.map(f), gyro.nl.map(f));
+        let [[_, f01, f02], [f10, _, f12], [f20, f21, _]] = *lever_rate;
+        Self {
+            header: Header::new(accel, gyro, flags),
+            q: pick(|[q, ..]| q),
+            delta: join(accel.delta, gyro.delta),
+            k: pick(|[_, k, ..]| k),
+            o: pick(|[_, _, o, ..]| o),
+            offset: join(accel.off, gyro.off),
+            matrix: matrices(accel, gyro),
+            neg_g: g.map(|row| row.map(|x| -x)),
+            lever: *lever,
+            lever_rate: [f01, f02, f10, f12, f20, f21],
+            prev_rate,
+        }
+    }
+}
+
+fn join(a: [f32; 3], b: [f32; 3]) -> [f32; 6] {
+    let [a0, a1, a2] = a;
+    let [b0, b1, b2] = b;
+    [a0, a1, a2, b0, b1, b2]
+}
+
+fn matrices(accel: &TriadKernel, gyro: &TriadKernel) -> [f32; 18] {
+    let mut m = [0.0; 18];
+    for (dst, src) in m
+        .iter_mut()
+        .zip(accel.m.iter().flatten().chain(gyro.m.iter().flatten()))
+    {
+        *dst = *src;
+    }
+    m
+}
+
+// The offsets the assembly below uses.
+const _: () = {
+    assert!(offset_of!(Header, accel_limit) == 12);
+    assert!(offset_of!(Header, gyro_base) == 16);
+    assert!(offset_of!(Header, gyro_limit) == 28);
+    assert!(offset_of!(Header, flags) == 32);
+    assert!(size_of::<Header>() == 36);
+    assert!(offset_of!(LinearBlock, offset) == 36);
+    assert!(offset_of!(LinearBlock, matrix) == 60);
+    assert!(offset_of!(LeverBlock, q) == 36);
+    assert!(offset_of!(LeverBlock, delta) == 60);
+    assert!(offset_of!(LeverBlock, k) == 84);
+    assert!(offset_of!(LeverBlock, o) == 108);
+    assert!(offset_of!(LeverBlock, offset) == 132);
+    assert!(offset_of!(LeverBlock, matrix) == 156);
+    assert!(offset_of!(LeverBlock, neg_g) == 228);
+    assert!(offset_of!(LeverBlock, lever) == 264);
+    assert!(offset_of!(LeverBlock, lever_rate) == 300);
+    assert!(offset_of!(LeverBlock, prev_rate) == 324);
+    assert!(offset_of!(Corrected<6>, values) == 0);
+    assert!(offset_of!(Corrected<6>, flags) == 24);
+    assert!(size_of::<Corrected<6>>() == 28);
+};
+
+// Both kernels: r0 = block, r1 = raw samples, r2 = outputs, r3 = count. They return in r0 the
+// number of samples corrected before the first one outside a window (the count when none is).
+// The window test is the Rust one: `(w0 | w1 | w2) < limit` (unsigned) for both triads, with
+// `w_j = raw_j - base_j` (wrapping). Registers: r4-r9 the six codes, then the offsets w; r10,
+// r11, r12, lr a triad's bases and limit; r3 the samples left, whose starting value is saved on
+// the stack. s16-s31 are callee-saved and pushed.
+core::arch::global_asm!(
+    ".syntax unified",
+    ".thumb",
+    ".fpu fpv4-sp-d16",
+    //
+    // Linear: y = off_lin + M w per triad. The matrices stay in s14-s31 for the whole batch.
+    ".section .text.spincal_imu_linear_m4f,\"ax\",%progbits",
+    ".global spincal_imu_linear_m4f",
+    ".type spincal_imu_linear_m4f,%function",
+    ".p2align 2",
+    ".thumb_func",
+    "spincal_imu_linear_m4f:",
+    "push {{r3-r11, lr}}",
+    "vpush {{s16-s31}}",
+    "add r4, r0, #60",
+    "vldm r4, {{s14-s31}}",
+    "cmp r3, #0",
+    "beq 3f",
+    "1:",
+    "ldm r1!, {{r4-r9}}",
+    "ldm r0, {{r10-r12, lr}}",
+    "sub r4, r4, r10",
+    "sub r5, r5, r11",
+    "sub r6, r6, r12",
+    "orr r10, r4, r5",
+    "orr r10, r10, r6",
+    "cmp r10, lr",
+    "bhs 3f",
+    "ldrd r10, r11, [r0, #16]",
+    "ldrd r12, lr, [r0, #24]",
+    "sub r7, r7, r10",
+    "sub r8, r8, r11",
+    "sub r9, r9, r12",
+    "orr r10, r7, r8",
+    "orr r10, r10, r9",
+    "cmp r10, lr",
+    "bhs 3f",
+    "vmov s0, s1, r4, r5",
+    "vmov s2, s3, r6, r7",
+    "vmov s4, s5, r8, r9",
+    "vcvt.f32.s32 s0, s0",
+    "vcvt.f32.s32 s1, s1",
+    "vcvt.f32.s32 s2, s2",
+    "vcvt.f32.s32 s3, s3",
+    "vcvt.f32.s32 s4, s4",
+    "vcvt.f32.s32 s5, s5",
+    "add r4, r0, #36",
+    "vldm r4, {{s6-s11}}",
+    "vmla.f32 s6, s14, s0",
+    "vmla.f32 s6, s15, s1",
+    "vmla.f32 s6, s16, s2",
+    "vmla.f32 s7, s17, s0",
+    "vmla.f32 s7, s18, s1",
+    "vmla.f32 s7, s19, s2",
+    "vmla.f32 s8, s20, s0",
+    "vmla.f32 s8, s21, s1",
+    "vmla.f32 s8, s22, s2",
+    "vmla.f32 s9, s23, s3",
+    "vmla.f32 s9, s24, s4",
+    "vmla.f32 s9, s25, s5",
+    "vmla.f32 s10, s26, s3",
+    "vmla.f32 s10, s27, s4",
+    "vmla.f32 s10, s28, s5",
+    "vmla.f32 s11, s29, s3",
+    "vmla.f32 s11, s30, s4",
+    "vmla.f32 s11, s31, s5",
+    "vstm r2!, {{s6-s11}}",
+    "ldr r4, [r0, #32]",
+    "strb r4, [r2], #4",
+    "subs r3, r3, #1",
+    "bne 1b",
+    "3:",
+    "vpop {{s16-s31}}",
+    "pop {{r1, r4-r11, lr}}",
+    "sub r0, r1, r3",
+    "bx lr",
+    ".size spincal_imu_linear_m4f, . - spincal_imu_linear_m4f",
+    //
+    // Full: per axis v = w - delta, u = v + v (v (q + k v) + o |v|); y = off + M u per triad;
+    // gyro w_i += (-g_i) . a; accelerometer a_i moved by the lever arm with the previous rate.
+    // r4 walks the block from `q` to `prev_rate`.
+    ".section .text.spincal_imu_lever_m4f,\"ax\",%progbits",
+    ".global spincal_imu_lever_m4f",
+    ".type spincal_imu_lever_m4f,%function",
+    ".p2align 2",
+    ".thumb_func",
+    "spincal_imu_lever_m4f:",
+    "push {{r3-r11, lr}}",
+    "vpush {{s16-s31}}",
+    "cmp r3, #0",
+    "beq 3f",
+    "1:",
+    "ldm r1!, {{r4-r9}}",
+    "ldm r0, {{r10-r12, lr}}",
+    "sub r4, r4, r10",
+    "sub r5, r5, r11",
+    "sub r6, r6, r12",
+    "orr r10, r4, r5",
+    "orr r10, r10, r6",
+    "cmp r10, lr",
+    "bhs 3f",
+    "ldrd r10, r11, [r0, #16]",
+    "ldrd r12, lr, [r0, #24]",
+    "sub r7, r7, r10",
+    "sub r8, r8, r11",
+    "sub r9, r9, r12",
+    "orr r10, r7, r8",
+    "orr r10, r10, r9",
+    "cmp r10, lr",
+    "bhs 3f",
+    "vmov s0, s1, r4, r5",
+    "vmov s2, s3, r6, r7",
+    "vmov s4, s5, r8, r9",
+    "vcvt.f32.s32 s0, s0",
+    "vcvt.f32.s32 s1, s1",
+    "vcvt.f32.s32 s2, s2",
+    "vcvt.f32.s32 s3, s3",
+    "vcvt.f32.s32 s4, s4",
+    "vcvt.f32.s32 s5, s5",
+    // q -> s6-s11 (the accumulators t), delta -> s12-s17, k -> s18-s23, o -> s24-s29.
+    "add r4, r0, #36",
+    "vldm r4!, {{s6-s29}}",
+    "vsub.f32 s0, s0, s12",
+    "vsub.f32 s1, s1, s13",
+    "vsub.f32 s2, s2, s14",
+    "vsub.f32 s3, s3, s15",
+    "vsub.f32 s4, s4, s16",
+    "vsub.f32 s5, s5, s17",
+    "vmla.f32 s6, s18, s0",
+    "vmla.f32 s7, s19, s1",
+    "vmla.f32 s8, s20, s2",
+    "vmla.f32 s9, s21, s3",
+    "vmla.f32 s10, s22, s4",
+    "vmla.f32 s11, s23, s5",
+    "vmul.f32 s6, s0, s6",
+    "vmul.f32 s7, s1, s7",
+    "vmul.f32 s8, s2, s8",
+    "vmul.f32 s9, s3, s9",
+    "vmul.f32 s10, s4, s10",
+    "vmul.f32 s11, s5, s11",
+    "vabs.f32 s30, s0",
+    "vmla.f32 s6, s24, s30",
+    "vabs.f32 s30, s1",
+    "vmla.f32 s7, s25, s30",
+    "vabs.f32 s30, s2",
+    "vmla.f32 s8, s26, s30",
+    "vabs.f32 s30, s3",
+    "vmla.f32 s9, s27, s30",
+    "vabs.f32 s30, s4",
+    "vmla.f32 s10, s28, s30",
+    "vabs.f32 s30, s5",
+    "vmla.f32 s11, s29, s30",
+    "vmla.f32 s0, s0, s6",
+    "vmla.f32 s1, s1, s7",
+    "vmla.f32 s2, s2, s8",
+    "vmla.f32 s3, s3, s9",
+    "vmla.f32 s4, s4, s10",
+    "vmla.f32 s5, s5, s11",
+    // offsets -> s6-s11 (the outputs), matrices -> s12-s29.
+    "vldm r4!, {{s6-s29}}",
+    "vmla.f32 s6, s12, s0",
+    "vmla.f32 s6, s13, s1",
+    "vmla.f32 s6, s14, s2",
+    "vmla.f32 s7, s15, s0",
+    "vmla.f32 s7, s16, s1",
+    "vmla.f32 s7, s17, s2",
+    "vmla.f32 s8, s18, s0",
+    "vmla.f32 s8, s19, s1",
+    "vmla.f32 s8, s20, s2",
+    "vmla.f32 s9, s21, s3",
+    "vmla.f32 s9, s22, s4",
+    "vmla.f32 s9, s23, s5",
+    "vmla.f32 s10, s24, s3",
+    "vmla.f32 s10, s25, s4",
+    "vmla.f32 s10, s26, s5",
+    "vmla.f32 s11, s27, s3",
+    "vmla.f32 s11, s28, s4",
+    "vmla.f32 s11, s29, s5",
+    // -g -> s12-s20, lever rows -> s21-s29.
+    "vldm r4!, {{s12-s29}}",
+    "vmla.f32 s9, s12, s6",
+    "vmla.f32 s9, s13, s7",
+    "vmla.f32 s9, s14, s8",
+    "vmla.f32 s10, s15, s6",
+    "vmla.f32 s10, s16, s7",
+    "vmla.f32 s10, s17, s8",
+    "vmla.f32 s11, s18, s6",
+    "vmla.f32 s11, s19, s7",
+    "vmla.f32 s11, s20, s8",
+    // f01 f02 f10 f12 f20 f21 -> s12-s17; previous rate -> s0-s2, then d = w - prev.
+    "vldm r4!, {{s12-s17}}",
+    "vldm r4, {{s0-s2}}",
+    "vsub.f32 s0, s9, s0",
+    "vsub.f32 s1, s10, s1",
+    "vsub.f32 s2, s11, s2",
+    "vmul.f32 s3, s9, s9",
+    "vmla.f32 s3, s10, s10",
+    "vmla.f32 s3, s11, s11",
+    "vmul.f32 s4, s9, s21",
+    "vmla.f32 s4, s10, s22",
+    "vmla.f32 s4, s11, s23",
+    "vmls.f32 s6, s9, s4",
+    "vmla.f32 s6, s21, s3",
+    "vmls.f32 s6, s1, s13",
+    "vmla.f32 s6, s2, s12",
+    "vmul.f32 s4, s9, s24",
+    "vmla.f32 s4, s10, s25",
+    "vmla.f32 s4, s11, s26",
+    "vmls.f32 s7, s10, s4",
+    "vmla.f32 s7, s25, s3",
+    "vmls.f32 s7, s2, s14",
+    "vmla.f32 s7, s0, s15",
+    "vmul.f32 s4, s9, s27",
+    "vmla.f32 s4, s10, s28",
+    "vmla.f32 s4, s11, s29",
+    "vmls.f32 s8, s11, s4",
+    "vmla.f32 s8, s29, s3",
+    "vmls.f32 s8, s0, s17",
+    "vmla.f32 s8, s1, s16",
+    "vstm r4, {{s9-s11}}",
+    "vstm r2!, {{s6-s11}}",
+    "ldr r4, [r0, #32]",
+    "strb r4, [r2], #4",
+    "subs r3, r3, #1",
+    "bne 1b",
+    "3:",
+    "vpop {{s16-s31}}",
+    "pop {{r1, r4-r11, lr}}",
+    "sub r0, r1, r3",
+    "bx lr",
+    ".size spincal_imu_lever_m4f, . - spincal_imu_lever_m4f",
+);
+
+unsafe extern "C" {
+    fn spincal_imu_linear_m4f(
+        block: *const LinearBlock,
+        raw: *const [i32; 6],
+        out: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_lever_m4f(
+        block: *mut LeverBlock,
+        raw: *const [i32; 6],
+        out: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+}
+
+/// Corrects samples with the linear kernel until the first one outside a window; returns how
+/// many it corrected.
+pub(crate) fn linear(block: &LinearBlock, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
+    let n = raw.len().min(out.len());
+    // SAFETY: the kernel reads `n` samples from `raw` and writes `n` outputs (28 bytes each:
+    // the values and the flag byte) to `out`, reads only `block`, saves every callee-saved
+    // register it uses and returns at most `n`. The layouts are pinned by the assertions above.
+    unsafe { spincal_imu_linear_m4f(block, raw.as_ptr(), out.as_mut_ptr(), n) }
+}
+
+/// Corrects samples with the full kernel until the first one outside a window; returns how many
+/// it corrected and leaves the last corrected rate in `block.prev_rate`.
+pub(crate) fn lever(block: &mut LeverBlock, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
+    let n = raw.len().min(out.len());
+    // SAFETY: as for `linear`; the kernel also writes `block.prev_rate`.
+    unsafe { spincal_imu_lever_m4f(block, raw.as_ptr(), out.as_mut_ptr(), n) }
+}
