@@ -1,4 +1,5 @@
-//! Golden byte vectors of three blobs and the correction outputs they must produce.
+//! Golden byte vectors of the example blobs (single axis, triad, and three IMUs: full, linear,
+//! polynomial without asymmetry) and the correction outputs they must produce.
 //!
 //! A format or arithmetic change shows up here as a diff of checked-in files; accept a
 //! deliberate change with `SPINCAL_ACCEPT=1 cargo test -p host-tests --test golden` and commit

@@ -239,23 +239,16 @@ impl<'a> ImuCorrector<'a> {
         n
     }
 
-    /// The linear batch on the Cortex-M4F kernel; samples outside a window take `step`.
+    /// The linear batch on the Cortex-M4F kernel.
     #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
     fn linear_m4f(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) {
         let block = super::m4f::LinearBlock::new(&self.accel, &self.gyro, self.env_flags.bits());
-        let (mut raw, mut out) = (raw, out);
-        loop {
-            let done = super::m4f::linear(&block, raw, out);
-            let Some(((r, raw_next), (o, out_next))) = next_after(raw, out, done) else {
-                break;
-            };
-            self.step::<false, false, false>(*r, o);
-            (raw, out) = (raw_next, out_next);
-        }
+        self.drive_m4f::<false, false>(raw, out, |_, r, o| super::m4f::linear(&block, r, o));
     }
 
-    /// The full-model batch (polynomial, g-sensitivity, lever arm) on the Cortex-M4F kernel;
-    /// samples outside a window take `step`, which may prime the rate derivative.
+    /// The full-model batch (polynomial, g-sensitivity, lever arm) on the Cortex-M4F kernel.
+    /// The kernel keeps the previous rate in its block; the slow path may prime the rate
+    /// derivative, which opens the accelerometer window.
     #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
     fn lever_m4f(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) {
         let mut block = super::m4f::LeverBlock::new(
@@ -267,18 +260,52 @@ impl<'a> ImuCorrector<'a> {
             &self.lever_rate,
             self.prev_rate,
         );
+        self.drive_m4f::<true, true>(raw, out, |c, r, o| {
+            block.prev_rate = c.prev_rate;
+            block.header.accel_limit = c.accel.limit;
+            let done = super::m4f::lever(&mut block, r, o);
+            c.prev_rate = block.prev_rate;
+            done
+        });
+    }
+
+    /// Runs a batch with `kernel` (which stops at the first sample outside a window) and the
+    /// slow path for the samples outside: a run of them (a saturated burst) stays in Rust until
+    /// a sample is inside the windows again.
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    fn drive_m4f<const NONLINEAR: bool, const LEVER: bool>(
+        &mut self,
+        raw: &[[i32; 6]],
+        out: &mut [Corrected<6>],
+        mut kernel: impl FnMut(&mut Self, &[[i32; 6]], &mut [Corrected<6>]) -> usize,
+    ) {
         let (mut raw, mut out) = (raw, out);
         loop {
-            let done = super::m4f::lever(&mut block, raw, out);
-            self.prev_rate = block.prev_rate;
-            let Some(((r, raw_next), (o, out_next))) = next_after(raw, out, done) else {
+            let done = kernel(self, raw, out);
+            (raw, out) = after(raw, out, done);
+            let mut slow = 0;
+            for (r, o) in raw.iter().zip(out.iter_mut()) {
+                if self.inside(r) {
+                    break;
+                }
+                self.slow::<NONLINEAR, false, LEVER>(*r, o);
+                slow += 1;
+            }
+            if slow == 0 {
                 break;
-            };
-            self.step::<true, false, true>(*r, o);
-            block.prev_rate = self.prev_rate;
-            block.header.accel_limit = self.accel.limit;
-            (raw, out) = (raw_next, out_next);
+            }
+            (raw, out) = after(raw, out, slow);
         }
+    }
+
+    /// The fast path's window test.
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    #[inline(always)]
+    fn inside(&self, raw: &[i32; 6]) -> bool {
+        let (ra, rg) = split(*raw);
+        let (_, acc_a) = self.accel.offsets(ra);
+        let (_, acc_g) = self.gyro.offsets(rg);
+        (acc_a < self.accel.limit) & (acc_g < self.gyro.limit)
     }
 
     #[inline(always)]
@@ -435,21 +462,15 @@ fn join(a: [f32; 3], w: [f32; 3]) -> [f32; 6] {
     [a0, a1, a2, w0, w1, w2]
 }
 
-/// The sample at `done` and the rest after it, of both slices; `None` when either has run out.
+/// Both slices without their first `k` items.
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-#[expect(
-    clippy::type_complexity,
-    reason = "two split_first results side by side"
-)]
-fn next_after<'r, 'o>(
+fn after<'r, 'o>(
     raw: &'r [[i32; 6]],
     out: &'o mut [Corrected<6>],
-    done: usize,
-) -> Option<(
-    (&'r [i32; 6], &'r [[i32; 6]]),
-    (&'o mut Corrected<6>, &'o mut [Corrected<6>]),
-)> {
-    let r = raw.get(done..)?.split_first()?;
-    let o = out.get_mut(done..)?.split_first_mut()?;
-    Some((r, o))
+    k: usize,
+) -> (&'r [[i32; 6]], &'o mut [Corrected<6>]) {
+    (
+        raw.get(k..).unwrap_or_default(),
+        out.get_mut(k..).unwrap_or_default(),
+    )
 }

@@ -15,6 +15,10 @@
 //! | triad       | [`TriadCorrector`]  | `[i32; 3]` | `[f32; 3]`                  |
 //! | IMU         | [`ImuCorrector`]    | `[i32; 6]` | `[f32; 6]`: ax ay az gx gy gz |
 //!
+//! On hard-float Arm targets (the Cortex-M4F), `ImuCorrector::correct_batch` runs hand-scheduled
+//! kernels for the two commonest shapes, bias and matrix only, and the full model with
+//! g-sensitivity and lever arm; they give the same bits as the compiled path (`BENCHMARKS.md`).
+//!
 //! None of these functions can panic, for any input, NaN temperatures and voltages included.
 //! The `f32` outputs are finite for every raw code inside the ADC rails; a code beyond a rail is
 //! corrected as if it were at the rail, and flagged.

@@ -56,7 +56,6 @@ fn report(name: &str, ticks: u32, ops: usize) {
     );
 }
 
-
 #[inline(never)]
 fn batch(c: &mut ImuCorrector<'_>, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
     c.correct_batch(raw, out)
@@ -121,6 +120,15 @@ fn main() -> ! {
     bench_batch("imu_full_batch", &mut c, &inside);
     bench_one("imu_full_call", &mut c, &inside);
     bench_batch("imu_full_batch_saturated", &mut c, &railed);
+    let mut block_out = [Corrected::<6>::default(); 16];
+    let (_, batch_stack) = stack::high_water(|| {
+        batch(
+            &mut c,
+            black_box(inside.get(..16).unwrap_or_default()),
+            &mut block_out,
+        )
+    });
+    black_box(&block_out);
 
     let Ok(mut c) = ImuCorrector::new(&full, 1000.0) else {
         fail("full corrector")
@@ -158,6 +166,7 @@ fn main() -> ! {
     let (_, env_stack) = stack::high_water(|| c.set_environment(black_box(41.0), 3.3));
     black_box(&one_out);
     hprintln!("stack correct {}", correct_stack);
+    hprintln!("stack correct_batch {}", batch_stack);
     hprintln!("stack set_environment {}", env_stack);
     hprintln!("stack decode {}", decode_stack);
     hprintln!("size calibration {}", core::mem::size_of::<Calibration>());

@@ -130,7 +130,12 @@ impl<'c> Batch<'c> {
         }
         if n != self.filled {
             self.failures += 1;
-            hprintln!("FAIL {} batch: {} of {} corrected", self.name, n, self.filled);
+            hprintln!(
+                "FAIL {} batch: {} of {} corrected",
+                self.name,
+                n,
+                self.filled
+            );
         }
         self.filled = 0;
     }

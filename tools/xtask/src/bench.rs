@@ -61,6 +61,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
         n.starts_with("spincal::correct")
             || n.starts_with("bench::batch")
             || n.starts_with("bench::one")
+            || n.starts_with("spincal_imu_")
     })?;
     println!("\n| .text of the correction path (symbol) | bytes |\n|---|---:|");
     for (name, size) in &syms {
