@@ -234,7 +234,8 @@ impl Db {
     }
 
     /// Records a calibration without equipment (`calflash selfcal`): its JSON record
-    /// (`calflash.selfcal/1`) as the coefficients and covariance, the report and the blob.
+    /// (`calflash.selfcal/1`, which `calflash compare` reads), its coefficients and covariance,
+    /// the report and the blob.
     ///
     /// # Errors
     /// A message naming the file and why; nothing is written then.
@@ -264,7 +265,7 @@ impl Db {
             .map_err(|e| explain(&self.path, &e))?;
         tx.execute(
             "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
-             VALUES (?1, 'fit', ?2, ?3, 'selfcal: accelerometer from |a| = g, gyro from rotations', ?4, ?5, ?6, ?7, NULL, ?8, NULL)",
+             VALUES (?1, 'fit', ?2, ?3, 'selfcal: accelerometer from |a| = g, gyro from rotations', ?4, ?5, ?6, ?7, NULL, ?8, ?9)",
             params![
                 serial,
                 now(),
@@ -274,6 +275,7 @@ impl Db {
                 report.map(|p| p.display().to_string()),
                 blob,
                 record["verdict"].as_str().unwrap_or("").to_lowercase(),
+                record.to_string(),
             ],
         )
         .map_err(|e| explain(&self.path, &e))?;
@@ -347,11 +349,11 @@ impl Db {
             .map_err(|e| explain(&self.path, &e))
     }
 
-    /// The calibration record of fit `id`.
+    /// The JSON record of calibration `id` (of `calflash calibrate` or `calflash selfcal`).
     ///
     /// # Errors
-    /// No such fit.
-    pub fn record(&self, id: i64) -> Result<Record, String> {
+    /// No such record, or a flash.
+    pub fn record(&self, id: i64) -> Result<String, String> {
         let text: Option<Option<String>> = self
             .conn
             .query_row("SELECT record FROM records WHERE id = ?1", [id], |r| {
@@ -362,11 +364,10 @@ impl Db {
         match text {
             None => Err(format!("{}: no record {id}", self.path.display())),
             Some(None) => Err(format!(
-                "{}: record {id} is a flash or a calibration without equipment, not a fit of `calflash calibrate`; compare those",
+                "{}: record {id} is a flash, not a calibration; compare calibrations (`calflash history` lists them)",
                 self.path.display()
             )),
-            Some(Some(t)) => serde_json::from_str(&t)
-                .map_err(|e| format!("{}: record {id}: {e}", self.path.display())),
+            Some(Some(t)) => Ok(t),
         }
     }
 

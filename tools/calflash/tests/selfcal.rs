@@ -251,3 +251,116 @@ fn the_command_line_refuses_bad_input_with_one_clear_line() {
         "{err}"
     );
 }
+
+/// Runs `calflash` in `dir`; returns its exit code, stdout and stderr.
+fn calflash(dir: &Path, args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Calibrates one simulated tumble of unit SIM-7 with `calflash selfcal`, recording it in
+/// `db.sqlite` and writing `name.json`.
+fn selfcal_cli(dir: &Path, truth: &Tumble, name: &str) {
+    let sub = dir.join(name);
+    std::fs::create_dir_all(&sub).unwrap();
+    let (a, g) = write(&truth.record(), &sub);
+    let json = format!("{name}.json");
+    let (code, said, err) = calflash(
+        dir,
+        &[
+            "selfcal",
+            a.to_str().unwrap(),
+            g.to_str().unwrap(),
+            "--g",
+            "9.81",
+            "--serial",
+            "SIM-7",
+            "--db",
+            "db.sqlite",
+            "--json",
+            &json,
+        ],
+    );
+    assert_eq!(code, 0, "{said}{err}");
+}
+
+/// `calflash compare` reads selfcal records, from files and from the unit history: another
+/// tumble of the same unit shows no change beyond the uncertainty; a gyro whose scale moved by
+/// 0.3 % is CHANGED while the accelerometer is not; a selfcal record is not compared with a
+/// record of another kind.
+#[test]
+fn compare_reads_selfcal_records() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let unit = Tumble::default();
+    selfcal_cli(d, &unit, "first");
+    selfcal_cli(
+        d,
+        &Tumble {
+            seed: unit.seed + 1,
+            ..unit.clone()
+        },
+        "again",
+    );
+    let mut shocked = Tumble {
+        seed: unit.seed + 2,
+        ..unit.clone()
+    };
+    shocked.gyro_matrix *= 1.003;
+    selfcal_cli(d, &shocked, "shocked");
+
+    let (code, said, err) = calflash(d, &["compare", "first.json", "again.json"]);
+    assert_eq!(code, 0, "{said}{err}");
+    assert!(said.contains("accelerometer: chi-square"), "{said}");
+    assert!(said.contains("gyro: chi-square"), "{said}");
+    assert!(!said.contains("CHANGED"), "{said}");
+
+    // From the history: records 1 and 3 (every selfcal run above was recorded).
+    let (code, said, err) = calflash(d, &["compare", "db:1", "db:3", "--db", "db.sqlite"]);
+    assert_eq!(code, 0, "{said}{err}");
+    let line = |out: &str, output: &str| {
+        out.lines()
+            .find(|l| l.trim_start().starts_with(&format!("{output}:")))
+            .unwrap_or_else(|| panic!("no {output} line in\n{out}"))
+            .to_string()
+    };
+    assert!(line(&said, "gyro").ends_with("CHANGED"), "{said}");
+    assert!(
+        line(&said, "accelerometer").ends_with("no change beyond the uncertainty"),
+        "{said}"
+    );
+    // The diagonal gyro terms moved; the file form gives the same.
+    for term in ["G11", "G22", "G33"] {
+        let t = said
+            .lines()
+            .find(|l| l.trim_start().starts_with(term))
+            .unwrap();
+        assert!(t.ends_with("MOVED"), "{t}");
+    }
+    let (_, from_files, _) = calflash(d, &["compare", "first.json", "shocked.json"]);
+    assert_eq!(
+        from_files.lines().skip(1).collect::<Vec<_>>(),
+        said.lines().skip(1).collect::<Vec<_>>()
+    );
+
+    // A record of another kind.
+    let other = serde_json::json!({"schema": "calflash.calibration/1"});
+    std::fs::write(d.join("other.json"), other.to_string()).unwrap();
+    let (code, _, err) = calflash(d, &["compare", "first.json", "other.json"]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("other.json: not a calibration record"),
+        "{err}"
+    );
+    let (code, _, err) = calflash(d, &["compare", "first.json", "missing.json"]);
+    assert_eq!(code, 1);
+    assert!(err.starts_with("calflash: missing.json: "), "{err}");
+}

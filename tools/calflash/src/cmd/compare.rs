@@ -6,13 +6,13 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::report::{self, terminal::num, terminal::pval};
-use crate::sensor::{compare, record::Record};
+use crate::sensor::compare::{self, Estimates};
 
-/// Compare two calibration records of one unit (Wald tests per term, chi-square per axis).
+/// Compare two calibration records of one unit (Wald tests per term, chi-square per output).
 #[derive(Debug, Args)]
 pub struct CompareArgs {
-    /// The earlier record: a file from `calflash calibrate --json`, or `db:ID` from
-    /// `calflash history`.
+    /// The earlier record: a file from `calflash calibrate --json` or `calflash selfcal --json`,
+    /// or `db:ID` from `calflash history`.
     pub before: String,
     /// The later record.
     pub after: String,
@@ -32,16 +32,20 @@ pub struct CompareArgs {
 /// # Errors
 /// Unreadable or incomparable records.
 pub fn run(args: &CompareArgs) -> Result<(), String> {
-    let load = |r: &str| -> Result<Record, String> {
+    let load = |r: &str| -> Result<Estimates, String> {
         match r.strip_prefix("db:") {
             Some(id) => {
                 let id: i64 = id
                     .parse()
                     .map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
                 let path = args.db.clone().unwrap_or_else(crate::db::default_path);
-                crate::db::Db::open(&path)?.record(id)
+                let text = crate::db::Db::open(&path)?.record(id)?;
+                Estimates::parse(&text, &format!("{} record {id}", path.display()))
             }
-            None => Record::read(std::path::Path::new(r)),
+            None => {
+                let text = std::fs::read_to_string(r).map_err(|e| format!("{r}: {e}"))?;
+                Estimates::parse(&text, r)
+            }
         }
     };
     let a = load(&args.before)?;

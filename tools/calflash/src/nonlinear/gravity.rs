@@ -46,17 +46,43 @@ impl AccelModel {
     }
 
     fn from_params(center: [f64; 3], p: &[f64]) -> Self {
+        let n = p.len();
+        let p = |k: usize| p.get(k).copied().unwrap_or(0.0);
         Self {
             center,
-            matrix: [[p[0], p[1], p[2]], [0.0, p[3], p[4]], [0.0, 0.0, p[5]]],
-            offset: [p[6], p[7], p[8]],
-            quadratic: if p.len() == 12 {
-                [p[9], p[10], p[11]]
+            matrix: [[p(0), p(1), p(2)], [0.0, p(3), p(4)], [0.0, 0.0, p(5)]],
+            offset: [p(6), p(7), p(8)],
+            quadratic: if n == 12 {
+                [p(9), p(10), p(11)]
             } else {
                 [0.0; 3]
             },
         }
     }
+}
+
+/// The same correction referred to the center `to`: parameters in the layout of
+/// [`LINEAR_TERMS`] (and [`QUADRATIC_TERMS`] when there are 12) for a model whose center is
+/// `from`. With `d = to - from` and `s = 1 + 2 q d` per axis, `v_from = v_to + d` gives
+/// `M' = M diag(s)`, `q' = q / s` and `o' = o + M (d + q d^2)`: the same function of the raw
+/// codes. (Only when some `1 + 2 q d` is zero, far outside any sensor's range, is it not.)
+#[must_use]
+pub fn recentered(params: &[f64], from: [f64; 3], to: [f64; 3]) -> Vec<f64> {
+    let m = AccelModel::from_params(from, params);
+    let d: [f64; 3] = std::array::from_fn(|j| to[j] - from[j]);
+    let s: [f64; 3] = std::array::from_fn(|j| 1.0 + 2.0 * m.quadratic[j] * d[j]);
+    let shift: [f64; 3] = std::array::from_fn(|j| d[j] + m.quadratic[j] * d[j] * d[j]);
+    let mut out = Vec::with_capacity(params.len());
+    for (i, j) in [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)] {
+        out.push(m.matrix[i][j] * s[j]);
+    }
+    for i in 0..3 {
+        out.push(m.offset[i] + (0..3).map(|j| m.matrix[i][j] * shift[j]).sum::<f64>());
+    }
+    if params.len() == 12 {
+        out.extend((0..3).map(|j| m.quadratic[j] / s[j]));
+    }
+    out
 }
 
 struct Gravity<'a> {
@@ -312,6 +338,38 @@ mod tests {
             let (a, b) = (truth.apply(x), quad.model.apply(x));
             for i in 0..3 {
                 assert!((a[i] - b[i]).abs() < 1e-6, "{a:?} {b:?}");
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod recenter_tests {
+    use super::*;
+
+    #[test]
+    fn a_recentered_model_is_the_same_function_of_the_codes() {
+        let p = [
+            2.4e-3, 3e-5, -2e-5, 2.45e-3, 4e-5, 2.41e-3, 0.57, -0.16, 0.09, 2e-7, -1e-7, 3e-7,
+        ];
+        let (from, to) = (
+            [32_768.0, 32_700.5, 33_010.0],
+            [32_771.0, 32_690.0, 33_000.25],
+        );
+        for params in [&p[..9], &p[..]] {
+            let a = AccelModel::from_params(from, params);
+            let b = AccelModel::from_params(to, &recentered(params, from, to));
+            for raw in [
+                [32_768.0, 32_768.0, 32_768.0],
+                [28_000.0, 37_500.0, 30_100.0],
+            ] {
+                let (x, y) = (a.apply(raw), b.apply(raw));
+                for i in 0..3 {
+                    assert!(
+                        (x[i] - y[i]).abs() < 1e-9 * (1.0 + x[i].abs()),
+                        "{x:?} {y:?}"
+                    );
+                }
             }
         }
     }

@@ -1,13 +1,259 @@
 //! Before/after comparison of two calibrations of one unit (before and after shock, before
 //! and after flight, months apart): per term a Wald test of the change against both
-//! calibrations' uncertainties, and per output axis and table point a chi-square test of all
-//! terms together.
+//! calibrations' uncertainties, and per output (axis, or triad for a calibration without
+//! equipment) and table point a chi-square test of all terms together.
+//!
+//! Two kinds of record compare: those of `calflash calibrate` (`calflash.calibration/1`: per
+//! table point and output axis, the forward fit's terms) and those of `calflash selfcal`
+//! (`calflash.selfcal/1`: one point, the accelerometer's parameters and the gyro matrix, each
+//! with its covariance). A record is compared only with one of its kind.
 
 use nalgebra::{DMatrix, DVector};
+use serde_json::Value;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
-use super::record::Record;
+use super::record::{self, Record};
+use crate::nonlinear::gravity;
 use crate::stats::dist;
+
+/// One output's estimated terms and their covariance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// Output (axis, or triad).
+    pub output: String,
+    /// Term names.
+    pub terms: Vec<String>,
+    /// Estimates.
+    pub values: Vec<f64>,
+    /// Standard errors.
+    pub std_errors: Vec<f64>,
+    /// Covariance, rows in the order of `terms`.
+    pub covariance: Vec<Vec<f64>>,
+}
+
+/// The estimates of one table point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointEstimates {
+    /// Temperature setpoint.
+    pub temp: Option<f64>,
+    /// Voltage setpoint.
+    pub volt: Option<f64>,
+    /// Per output.
+    pub outputs: Vec<Estimate>,
+}
+
+/// What a comparison needs of a calibration record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimates {
+    /// Unit serial.
+    pub serial: String,
+    /// The kind of record: `single`, `triad`, `imu` (`calflash calibrate`) or
+    /// `imu without equipment` (`calflash selfcal`).
+    pub kind: String,
+    /// Per table point.
+    pub points: Vec<PointEstimates>,
+    /// A selfcal record's accelerometer center (counts): its parameters are relative to it, so
+    /// a comparison refers the later record's accelerometer to the earlier one's center.
+    pub accel_center: Option<[f64; 3]>,
+}
+
+/// The schema of a `calflash selfcal` record.
+pub const SELFCAL_SCHEMA: &str = "calflash.selfcal/1";
+
+impl Estimates {
+    /// The estimates of a `calflash calibrate` record.
+    #[must_use]
+    pub fn of_record(r: &Record) -> Self {
+        Self {
+            serial: r.serial.clone(),
+            kind: r.sensor.clone(),
+            points: r
+                .points
+                .iter()
+                .map(|p| PointEstimates {
+                    temp: p.temp,
+                    volt: p.volt,
+                    outputs: p
+                        .axes
+                        .iter()
+                        .map(|a| Estimate {
+                            output: a.output.clone(),
+                            terms: a.terms.clone(),
+                            values: a.coefficients.clone(),
+                            std_errors: a.std_errors.clone(),
+                            covariance: a.covariance.clone(),
+                        })
+                        .collect(),
+                })
+                .collect(),
+            accel_center: None,
+        }
+    }
+
+    /// The estimates of a `calflash selfcal` record: the accelerometer's parameters and the
+    /// gyro matrix (row by row), each with its covariance. An output whose covariance the
+    /// record lacks (terms not all observable) is left out.
+    ///
+    /// # Errors
+    /// A field missing or of the wrong type, named with `source`.
+    pub fn of_selfcal(v: &Value, source: &str) -> Result<Self, String> {
+        let field = |path: &[&str]| -> Result<&Value, String> {
+            path.iter()
+                .try_fold(v, |at, key| at.get(key))
+                .ok_or_else(|| format!("{source}: selfcal record without `{}`", path.join(".")))
+        };
+        let numbers = |x: &Value, what: &str| -> Result<Vec<f64>, String> {
+            let flat: Vec<&Value> = match x.as_array() {
+                Some(items) if items.iter().all(Value::is_array) => items
+                    .iter()
+                    .flat_map(|r| r.as_array().into_iter().flatten())
+                    .collect(),
+                Some(items) => items.iter().collect(),
+                None => Vec::new(),
+            };
+            flat.iter()
+                .map(|n| n.as_f64())
+                .collect::<Option<Vec<f64>>>()
+                .filter(|n| !n.is_empty())
+                .ok_or_else(|| format!("{source}: `{what}` is not a list of numbers"))
+        };
+        let names = |x: &Value, what: &str| -> Result<Vec<String>, String> {
+            x.as_array()
+                .and_then(|a| a.iter().map(|t| t.as_str().map(String::from)).collect())
+                .ok_or_else(|| format!("{source}: `{what}` is not a list of names"))
+        };
+        let estimate = |output: &str,
+                        terms: Vec<String>,
+                        values: Vec<f64>,
+                        cov: &Value,
+                        what: &str|
+         -> Result<Option<Estimate>, String> {
+            if cov.is_null() {
+                return Ok(None);
+            }
+            let k = terms.len();
+            let flat = numbers(cov, what)?;
+            if values.len() != k || flat.len() != k * k {
+                return Err(format!(
+                    "{source}: `{what}` is not {k} x {k} for the {k} terms of the {output}"
+                ));
+            }
+            let covariance: Vec<Vec<f64>> = flat.chunks(k).map(<[f64]>::to_vec).collect();
+            let std_errors = (0..k).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
+            Ok(Some(Estimate {
+                output: output.into(),
+                terms,
+                values,
+                std_errors,
+                covariance,
+            }))
+        };
+        let serial = field(&["serial"])?
+            .as_str()
+            .ok_or_else(|| format!("{source}: `serial` is not a string"))?
+            .to_string();
+        let accel = estimate(
+            "accelerometer",
+            names(field(&["accel", "terms"])?, "accel.terms")?,
+            numbers(field(&["accel", "parameters"])?, "accel.parameters")?,
+            field(&["accel", "covariance"])?,
+            "accel.covariance",
+        )?;
+        let gyro = estimate(
+            "gyro",
+            names(field(&["gyro", "terms"])?, "gyro.terms")?,
+            numbers(
+                field(&["gyro", "matrix_rad_s_per_count"])?,
+                "gyro.matrix_rad_s_per_count",
+            )?,
+            field(&["gyro", "covariance"])?,
+            "gyro.covariance",
+        )?;
+        let center = numbers(field(&["accel", "center_counts"])?, "accel.center_counts")?;
+        let accel_center = <[f64; 3]>::try_from(center.as_slice())
+            .map_err(|_| format!("{source}: `accel.center_counts` is not 3 numbers"))?;
+        Ok(Self {
+            accel_center: Some(accel_center),
+            serial,
+            kind: "imu without equipment".into(),
+            points: vec![PointEstimates {
+                temp: None,
+                volt: None,
+                outputs: accel.into_iter().chain(gyro).collect(),
+            }],
+        })
+    }
+
+    /// These estimates with the selfcal accelerometer referred to the center `to`
+    /// ([`gravity::recentered`]); the covariance goes through the map's Jacobian (central
+    /// differences, steps of a thousandth of each standard error).
+    #[must_use]
+    pub fn recentered(&self, to: [f64; 3]) -> Self {
+        let Some(from) = self.accel_center else {
+            return self.clone();
+        };
+        let mut out = self.clone();
+        out.accel_center = Some(to);
+        for e in out
+            .points
+            .iter_mut()
+            .flat_map(|p| &mut p.outputs)
+            .filter(|e| e.output == "accelerometer")
+        {
+            let k = e.values.len();
+            let map = |p: &[f64]| DVector::from_vec(gravity::recentered(p, from, to));
+            let mut jac = DMatrix::zeros(k, k);
+            for c in 0..k {
+                let h = (e.std_errors[c] * 1e-3)
+                    .max(e.values[c].abs() * 1e-9)
+                    .max(1e-300);
+                let mut up = e.values.clone();
+                let mut down = e.values.clone();
+                up[c] += h;
+                down[c] -= h;
+                jac.set_column(c, &((map(&up) - map(&down)) / (2.0 * h)));
+            }
+            let cov = DMatrix::from_fn(k, k, |i, j| e.covariance[i][j]);
+            let moved = &jac * cov * jac.transpose();
+            e.values = map(&e.values).iter().copied().collect();
+            e.covariance = moved
+                .row_iter()
+                .map(|r| r.iter().copied().collect())
+                .collect();
+            e.std_errors = (0..k).map(|i| moved[(i, i)].max(0.0).sqrt()).collect();
+        }
+        out
+    }
+
+    /// Reads either kind of record from its JSON text; `source` names it in errors.
+    ///
+    /// # Errors
+    /// Not JSON, an unknown schema, or a record missing what the comparison needs.
+    pub fn parse(text: &str, source: &str) -> Result<Self, String> {
+        let v: Value = serde_json::from_str(text).map_err(|e| {
+            format!(
+                "{source}:{}:{}: not a calibration record: {e}",
+                e.line(),
+                e.column()
+            )
+        })?;
+        match v.get("schema").and_then(Value::as_str) {
+            Some(record::SCHEMA) => {
+                let r: Record = serde_json::from_value(v)
+                    .map_err(|e| format!("{source}: not a calibration record: {e}"))?;
+                Ok(Self::of_record(&r))
+            }
+            Some(SELFCAL_SCHEMA) => Self::of_selfcal(&v, source),
+            Some(other) => Err(format!(
+                "{source}: schema `{other}`, expected `{}` or `{SELFCAL_SCHEMA}`",
+                record::SCHEMA
+            )),
+            None => Err(format!(
+                "{source}: no `schema`: not a record of `calflash calibrate` or `calflash selfcal`"
+            )),
+        }
+    }
+}
 
 /// The change of one term.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -49,19 +295,28 @@ pub struct AxisChange {
 ///
 /// # Errors
 /// When the records are of different units or sensors, or share no table point.
-pub fn compare(before: &Record, after: &Record, alpha: f64) -> Result<Vec<AxisChange>, String> {
+pub fn compare(
+    before: &Estimates,
+    after: &Estimates,
+    alpha: f64,
+) -> Result<Vec<AxisChange>, String> {
     if before.serial != after.serial {
         return Err(format!(
             "the records are of different units: {} and {} (compare calibrations of one unit)",
             before.serial, after.serial
         ));
     }
-    if before.sensor != after.sensor {
+    if before.kind != after.kind {
         return Err(format!(
-            "the records are of different sensors: {} and {}",
-            before.sensor, after.sensor
+            "the records are of different kinds: {} and {} (compare two records of one kind)",
+            before.kind, after.kind
         ));
     }
+    // Parameters relative to a center compare only at one center.
+    let after = &match before.accel_center {
+        Some(c) if after.accel_center != Some(c) => after.recentered(c),
+        _ => after.clone(),
+    };
     let near = |a: Option<f64>, b: Option<f64>, tol: f64| match (a, b) {
         (Some(a), Some(b)) => (a - b).abs() <= tol,
         (None, None) => true,
@@ -76,8 +331,8 @@ pub fn compare(before: &Record, after: &Record, alpha: f64) -> Result<Vec<AxisCh
         else {
             continue;
         };
-        for ab in &pb.axes {
-            let Some(aa) = pa.axes.iter().find(|a| a.output == ab.output) else {
+        for ab in &pb.outputs {
+            let Some(aa) = pa.outputs.iter().find(|a| a.output == ab.output) else {
                 continue;
             };
             let common: Vec<(usize, usize)> = ab
@@ -89,13 +344,13 @@ pub fn compare(before: &Record, after: &Record, alpha: f64) -> Result<Vec<AxisCh
             let terms: Vec<TermChange> = common
                 .iter()
                 .map(|&(i, j)| {
-                    let d = aa.coefficients[j] - ab.coefficients[i];
+                    let d = aa.values[j] - ab.values[i];
                     let z = d / (ab.std_errors[i].powi(2) + aa.std_errors[j].powi(2)).sqrt();
                     let p = dist::normal_two_sided(z);
                     TermChange {
                         term: ab.terms[i].clone(),
-                        before: ab.coefficients[i],
-                        after: aa.coefficients[j],
+                        before: ab.values[i],
+                        after: aa.values[j],
                         z,
                         p,
                         moved: p < alpha,
@@ -103,12 +358,8 @@ pub fn compare(before: &Record, after: &Record, alpha: f64) -> Result<Vec<AxisCh
                 })
                 .collect();
             let k = common.len();
-            let d = DVector::from_iterator(
-                k,
-                common
-                    .iter()
-                    .map(|&(i, j)| aa.coefficients[j] - ab.coefficients[i]),
-            );
+            let d =
+                DVector::from_iterator(k, common.iter().map(|&(i, j)| aa.values[j] - ab.values[i]));
             let c = DMatrix::from_fn(k, k, |r, s| {
                 let (i1, j1) = common[r];
                 let (i2, j2) = common[s];
@@ -128,7 +379,54 @@ pub fn compare(before: &Record, after: &Record, alpha: f64) -> Result<Vec<AxisCh
         }
     }
     if out.is_empty() {
-        return Err("the records share no table point and output axis".into());
+        return Err(
+            "the records share no table point and output with a covariance to compare".into(),
+        );
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one(kind: &str, value: f64) -> Estimates {
+        Estimates {
+            serial: "U-1".into(),
+            kind: kind.into(),
+            points: vec![PointEstimates {
+                temp: None,
+                volt: None,
+                outputs: vec![Estimate {
+                    output: "gyro".into(),
+                    terms: vec!["G11".into(), "G22".into()],
+                    values: vec![value, 1.0],
+                    std_errors: vec![0.01, 0.01],
+                    covariance: vec![vec![1e-4, 0.0], vec![0.0, 1e-4]],
+                }],
+            }],
+            accel_center: None,
+        }
+    }
+
+    #[test]
+    fn records_of_different_kinds_are_refused() {
+        let e = compare(&one("imu", 1.0), &one("imu without equipment", 1.0), 0.05).unwrap_err();
+        assert_eq!(
+            e,
+            "the records are of different kinds: imu and imu without equipment (compare two records of one kind)"
+        );
+    }
+
+    #[test]
+    fn a_term_moved_by_five_combined_standard_errors_is_flagged() {
+        // Combined standard error sqrt(2) * 0.01; a change of 5 of them.
+        let moved = 1.0 + 5.0 * 2f64.sqrt() * 0.01;
+        let c = compare(&one("imu", 1.0), &one("imu", moved), 0.05).unwrap();
+        let t = &c[0].terms;
+        assert!((t[0].z - 5.0).abs() < 1e-9 && t[0].moved, "{t:?}");
+        assert!(!t[1].moved);
+        assert_eq!(c[0].df, 2);
+        assert!((c[0].chi2 - 25.0).abs() < 1e-9);
+    }
 }
