@@ -2,21 +2,14 @@
 //! Monte Carlo through the simulator, triad tumbles compare as theory says, the fixture's
 //! orientation error adds what it should, and bad input is refused with a clear message.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
 
 use serde_json::Value;
 
 fn calflash(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    common::calflash(Path::new("."), args)
 }
 
 fn ok(args: &[&str]) -> String {

@@ -5,9 +5,12 @@
 use std::path::Path;
 use std::process::Command;
 
+mod common;
+
 use calflash::nonlinear::selfcal::{self, Options, SelfCalError};
 use calflash::obs::recording::{self, Recording};
 use calflash::sim::recording::Tumble;
+use common::calflash;
 use spincal::model::Rails;
 
 fn write(rec: &Recording, dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
@@ -250,20 +253,6 @@ fn the_command_line_refuses_bad_input_with_one_clear_line() {
         err.contains("--g 981: local gravity is between 9.78 and 9.84 m/s^2"),
         "{err}"
     );
-}
-
-/// Runs `calflash` in `dir`; returns its exit code, stdout and stderr.
-fn calflash(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 /// Calibrates one simulated tumble of unit SIM-7 with `calflash selfcal`, recording it in

@@ -2,21 +2,11 @@
 //! apply, compare, threshold; the report is valid XHTML with its figures; bad plans and data get
 //! one clear line and a non-zero exit.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-fn calflash(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use std::path::Path;
+
+use common::calflash;
 
 fn ok(dir: &Path, args: &[&str]) -> String {
     let (code, out, err) = calflash(dir, args);
