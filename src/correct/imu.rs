@@ -1,6 +1,9 @@
 //! The IMU corrector: an accelerometer triad and a gyro triad sampled together, with gyro
 //! g-sensitivity and the accelerometer size effect (lever arm).
 
+#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+mod fast;
+
 use super::environment::effective_set;
 use super::kernel::{Shape, TriadKernel, affine, range_bounds};
 use super::{Corrected, Flags, factor_norm};
@@ -50,6 +53,9 @@ pub struct ImuCorrector<'a> {
     primed: bool,
     env_flags: Flags,
     covariance: Option<ImuCovariance>,
+    /// The Cortex-M4F kernel's coefficient block for the environment (`fast.rs`).
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    hot: super::m4f::Hot,
 }
 
 impl<'a> ImuCorrector<'a> {
@@ -112,6 +118,8 @@ impl<'a> ImuCorrector<'a> {
             primed: false,
             env_flags: Flags::NONE,
             covariance: None,
+            #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+            hot: super::m4f::Hot::None,
         };
         out.set_environment(f32::NAN, f32::NAN);
         Ok(out)
@@ -137,6 +145,8 @@ impl<'a> ImuCorrector<'a> {
             primed: false,
             env_flags: Flags::NO_CALIBRATION,
             covariance: None,
+            #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+            hot: super::m4f::Hot::None,
         }
     }
 
@@ -169,6 +179,8 @@ impl<'a> ImuCorrector<'a> {
             .covariance
             .and_then(|table| effective_set(src.env, table, temperature, voltage))
             .map(|(c, _)| c);
+        #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+        self.refresh_m4f();
     }
 
     /// Forgets the previous gyro sample (after a gap in the stream): the next sample's rate
@@ -191,6 +203,10 @@ impl<'a> ImuCorrector<'a> {
     #[inline]
     pub fn correct(&mut self, raw: [i32; 6]) -> Corrected<6> {
         let mut out = Corrected::default();
+        #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+        if self.one_m4f(raw, &mut out) {
+            return out;
+        }
         let o = &mut out;
         match (self.mode.shape, self.mode.lever) {
             (Shape::Linear, _) => self.step::<false, false, false>(raw, o),
@@ -205,21 +221,13 @@ impl<'a> ImuCorrector<'a> {
 
     /// Corrects `raw` into `out`, in order, and returns how many samples were corrected.
     pub fn correct_batch(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
-        let pairs = raw.iter().zip(out.iter_mut());
-        let n = pairs.len();
-        let Mode { shape, lever } = self.mode;
+        let n = raw.len().min(out.len());
         #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-        match (shape, lever) {
-            (Shape::Linear, _) => {
-                self.linear_m4f(raw, out);
-                return n;
-            }
-            (Shape::Polynomial, true) => {
-                self.lever_m4f(raw, out);
-                return n;
-            }
-            _ => {}
+        if self.batch_m4f(raw, out) {
+            return n;
         }
+        let pairs = raw.iter().zip(out.iter_mut());
+        let Mode { shape, lever } = self.mode;
         match (shape, lever) {
             (Shape::Linear, _) => pairs.for_each(|(r, o)| self.step::<false, false, false>(*r, o)),
             (Shape::Polynomial, false) => {
@@ -237,75 +245,6 @@ impl<'a> ImuCorrector<'a> {
             (Shape::Identity, _) => pairs.for_each(|(r, o)| *o = self.passthrough(*r)),
         }
         n
-    }
-
-    /// The linear batch on the Cortex-M4F kernel.
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-    fn linear_m4f(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) {
-        let block = super::m4f::LinearBlock::new(&self.accel, &self.gyro, self.env_flags.bits());
-        self.drive_m4f::<false, false>(raw, out, |_, r, o| super::m4f::linear(&block, r, o));
-    }
-
-    /// The full-model batch (polynomial, g-sensitivity, lever arm) on the Cortex-M4F kernel.
-    /// The kernel keeps the previous rate in its block; the slow path may prime the rate
-    /// derivative, which opens the accelerometer window.
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-    fn lever_m4f(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) {
-        let mut block = super::m4f::LeverBlock::new(
-            &self.accel,
-            &self.gyro,
-            self.env_flags.bits(),
-            &self.g,
-            &self.lever,
-            &self.lever_rate,
-            self.prev_rate,
-        );
-        self.drive_m4f::<true, true>(raw, out, |c, r, o| {
-            block.prev_rate = c.prev_rate;
-            block.header.accel_limit = c.accel.limit;
-            let done = super::m4f::lever(&mut block, r, o);
-            c.prev_rate = block.prev_rate;
-            done
-        });
-    }
-
-    /// Runs a batch with `kernel` (which stops at the first sample outside a window) and the
-    /// slow path for the samples outside: a run of them (a saturated burst) stays in Rust until
-    /// a sample is inside the windows again.
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-    fn drive_m4f<const NONLINEAR: bool, const LEVER: bool>(
-        &mut self,
-        raw: &[[i32; 6]],
-        out: &mut [Corrected<6>],
-        mut kernel: impl FnMut(&mut Self, &[[i32; 6]], &mut [Corrected<6>]) -> usize,
-    ) {
-        let (mut raw, mut out) = (raw, out);
-        loop {
-            let done = kernel(self, raw, out);
-            (raw, out) = after(raw, out, done);
-            let mut slow = 0;
-            for (r, o) in raw.iter().zip(out.iter_mut()) {
-                if self.inside(r) {
-                    break;
-                }
-                self.slow::<NONLINEAR, false, LEVER>(*r, o);
-                slow += 1;
-            }
-            if slow == 0 {
-                break;
-            }
-            (raw, out) = after(raw, out, slow);
-        }
-    }
-
-    /// The fast path's window test.
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-    #[inline(always)]
-    fn inside(&self, raw: &[i32; 6]) -> bool {
-        let (ra, rg) = split(*raw);
-        let (_, acc_a) = self.accel.offsets(ra);
-        let (_, acc_g) = self.gyro.offsets(rg);
-        (acc_a < self.accel.limit) & (acc_g < self.gyro.limit)
     }
 
     #[inline(always)]
@@ -460,17 +399,4 @@ fn join(a: [f32; 3], w: [f32; 3]) -> [f32; 6] {
     let [a0, a1, a2] = a;
     let [w0, w1, w2] = w;
     [a0, a1, a2, w0, w1, w2]
-}
-
-/// Both slices without their first `k` items.
-#[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-fn after<'r, 'o>(
-    raw: &'r [[i32; 6]],
-    out: &'o mut [Corrected<6>],
-    k: usize,
-) -> (&'r [[i32; 6]], &'o mut [Corrected<6>]) {
-    (
-        raw.get(k..).unwrap_or_default(),
-        out.get_mut(k..).unwrap_or_default(),
-    )
 }

@@ -1,7 +1,8 @@
 //! Hand-scheduled Cortex-M4F kernels for the two IMU batch shapes that matter most: bias and
 //! matrix only (`Linear`), and polynomial with g-sensitivity and lever arm (the spinning
-//! round's full model). Compiled only for hard-float Arm targets; everywhere else, and for the
-//! other shapes, `correct_batch` runs the compiled Rust path.
+//! round's full model), run by `ImuCorrector::correct` and `correct_batch` (`imu/fast.rs`).
+//! Compiled only for hard-float Arm targets; everywhere else, and for the other shapes, the
+//! compiled Rust path runs.
 //!
 //! # Why assembly
 //!
@@ -18,7 +19,7 @@
 //! addition (they are not fused), which is what the Rust expressions `a + b * c` and
 //! `a - b * c` compute. A kernel returns at the first sample outside the safe window; the caller
 //! corrects that sample with the Rust slow path and resumes. The QEMU golden test checks the
-//! batch outputs against the host's per-sample outputs bit for bit.
+//! outputs of `correct` and of `correct_batch` against the host's bit for bit.
 //!
 //! # Memory layout
 //!
@@ -32,6 +33,21 @@ use core::mem::{offset_of, size_of};
 
 use super::Corrected;
 use super::kernel::TriadKernel;
+
+/// The block of the current environment's kernel, if its shape has one.
+#[derive(Debug, Clone, Copy)]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "one per corrector, never moved per sample"
+)]
+pub(crate) enum Hot {
+    /// No kernel for the shape: the compiled Rust path.
+    None,
+    /// Bias and matrix only.
+    Linear(LinearBlock),
+    /// Polynomial, g-sensitivity and lever arm.
+    Lever(LeverBlock),
+}
 
 /// Window bases and limits of both triads and the environment flags (36 bytes).
 #[repr(C)]

@@ -15,8 +15,8 @@
 //! | triad       | [`TriadCorrector`]  | `[i32; 3]` | `[f32; 3]`                  |
 //! | IMU         | [`ImuCorrector`]    | `[i32; 6]` | `[f32; 6]`: ax ay az gx gy gz |
 //!
-//! On hard-float Arm targets (the Cortex-M4F), `ImuCorrector::correct_batch` runs hand-scheduled
-//! kernels for the two commonest shapes, bias and matrix only, and the full model with
+//! On hard-float Arm targets (the Cortex-M4F), `ImuCorrector::correct` and `correct_batch` run
+//! hand-scheduled kernels for the two commonest shapes, bias and matrix only, and the full model with
 //! g-sensitivity and lever arm; they give the same bits as the compiled path (`BENCHMARKS.md`).
 //!
 //! None of these functions can panic, for any input, NaN temperatures and voltages included.

@@ -1,0 +1,117 @@
+//! How [`ImuCorrector`] uses the Cortex-M4F kernels ([`m4f`](super::super::m4f)): the
+//! coefficient block is built with the environment, `correct` runs the kernel on one sample and
+//! `correct_batch` on the whole batch; a sample outside a window, and any outside samples after
+//! it, take the Rust slow path.
+
+use super::super::Corrected;
+use super::super::kernel::Shape;
+use super::super::m4f::{self, Hot, LeverBlock, LinearBlock};
+use super::{ImuCorrector, split};
+
+impl ImuCorrector<'_> {
+    /// Builds the kernel's block for the current effective coefficients (none for a shape
+    /// without a kernel).
+    pub(super) fn refresh_m4f(&mut self) {
+        let flags = self.env_flags.bits();
+        self.hot = match (self.mode.shape, self.mode.lever) {
+            (Shape::Linear, _) => Hot::Linear(LinearBlock::new(&self.accel, &self.gyro, flags)),
+            (Shape::Polynomial, true) => Hot::Lever(LeverBlock::new(
+                &self.accel,
+                &self.gyro,
+                flags,
+                &self.g,
+                &self.lever,
+                &self.lever_rate,
+                self.prev_rate,
+            )),
+            _ => Hot::None,
+        };
+    }
+
+    /// Runs the kernel until the first sample outside a window; `None` when the shape has no
+    /// kernel. The lever-arm state (previous rate, whether the accelerometer window is open)
+    /// lives in the corrector and is handed to the kernel's block and back.
+    #[inline(always)]
+    fn kernel(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> Option<usize> {
+        match &mut self.hot {
+            Hot::None => None,
+            Hot::Linear(block) => Some(m4f::linear(block, raw, out)),
+            Hot::Lever(block) => {
+                block.prev_rate = self.prev_rate;
+                block.header.accel_limit = self.accel.limit;
+                let done = m4f::lever(block, raw, out);
+                self.prev_rate = block.prev_rate;
+                Some(done)
+            }
+        }
+    }
+
+    /// The slow path of the shapes that have a kernel.
+    fn slow_m4f(&mut self, raw: [i32; 6], out: &mut Corrected<6>) {
+        if self.mode.lever {
+            self.slow::<true, false, true>(raw, out);
+        } else {
+            self.slow::<false, false, false>(raw, out);
+        }
+    }
+
+    /// `correct` on the kernel; false when the shape has none.
+    #[inline(always)]
+    pub(super) fn one_m4f(&mut self, raw: [i32; 6], out: &mut Corrected<6>) -> bool {
+        match self.kernel(core::slice::from_ref(&raw), core::slice::from_mut(out)) {
+            None => false,
+            Some(1) => true,
+            Some(_) => {
+                self.slow_m4f(raw, out);
+                true
+            }
+        }
+    }
+
+    /// `correct_batch` on the kernel; false (nothing done) when the shape has none. A run of
+    /// samples outside the windows (a saturated burst) stays on the slow path until a sample is
+    /// inside again.
+    pub(super) fn batch_m4f(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> bool {
+        if matches!(self.hot, Hot::None) {
+            return false;
+        }
+        let (mut raw, mut out) = (raw, out);
+        loop {
+            let done = self.kernel(raw, out).unwrap_or(0);
+            (raw, out) = after(raw, out, done);
+            let mut slow = 0;
+            for (r, o) in raw.iter().zip(out.iter_mut()) {
+                if self.inside(r) {
+                    break;
+                }
+                self.slow_m4f(*r, o);
+                slow += 1;
+            }
+            if slow == 0 {
+                return true;
+            }
+            (raw, out) = after(raw, out, slow);
+        }
+    }
+
+    /// The fast path's window test.
+    #[inline(always)]
+    fn inside(&self, raw: &[i32; 6]) -> bool {
+        let (ra, rg) = split(*raw);
+        let (_, acc_a) = self.accel.offsets(ra);
+        let (_, acc_g) = self.gyro.offsets(rg);
+        (acc_a < self.accel.limit) & (acc_g < self.gyro.limit)
+    }
+}
+
+/// Both slices without their first `k` items.
+fn after<'r, 'o>(
+    raw: &'r [[i32; 6]],
+    out: &'o mut [Corrected<6>],
+    k: usize,
+) -> (&'r [[i32; 6]], &'o mut [Corrected<6>]) {
+    (
+        raw.get(k..).unwrap_or_default(),
+        out.get_mut(k..).unwrap_or_default(),
+    )
+}
