@@ -353,3 +353,88 @@ fn compare_reads_selfcal_records() {
     assert_eq!(code, 1);
     assert!(err.starts_with("calflash: missing.json: "), "{err}");
 }
+
+/// The selfcal blob carries covariance factors: the device's 1-sigma at the zero-input codes is
+/// the fit's offset uncertainty (accelerometer) and the stored bias's (gyro), along an axis it
+/// grows as the fit's covariance says, and the device's outputs are within 4.5 of its sigmas of
+/// the simulated unit's truth at every pose.
+#[test]
+fn the_selfcal_blob_carries_the_calibration_uncertainty() {
+    use calflash::sensor::selfcal as build;
+    use spincal::correct::ImuCorrector;
+    use spincal::model::{Calibration, Identity, Serial, Span};
+
+    let truth = Tumble::default();
+    let rec = truth.record();
+    let c = selfcal::calibrate(&rec, &opts()).unwrap_or_else(|e| panic!("{e}"));
+    let identity = Identity {
+        serial: Serial::new("SIM-8").unwrap(),
+        created_unix_s: 0,
+        data_hash: [0; 16],
+        tool_version: [0, 1, 0],
+    };
+    let data = build::calibration_data(
+        &c,
+        &rec,
+        identity,
+        Rails::unsigned(16),
+        Span::new(20.0, 30.0),
+        Span::new(3.0, 3.6),
+    );
+    let cal = Calibration::new(data).unwrap();
+    let mut dev = ImuCorrector::new(&cal, rec.rate() as f32).unwrap();
+    dev.set_environment(25.0, 3.3);
+    let ca = c.accel.covariance.as_ref().unwrap();
+    let center = c.accel.model.center.map(|x| x.round() as i32);
+    let bias = c.gyro_bias.map(|x| x.round() as i32);
+    let near = |got: f32, want: f64| (f64::from(got) / want - 1.0).abs() < 0.02;
+
+    // At (about) the zero-input codes: the offsets' standard errors.
+    let at = |a: [i32; 3], g: [i32; 3]| [a[0], a[1], a[2], g[0], g[1], g[2]];
+    let s = dev
+        .sigma(at(center, bias))
+        .expect("the blob has covariance factors");
+    for i in 0..3 {
+        // The codes are within half a count of the centers: the offset terms dominate.
+        assert!(
+            near(s[i], ca[(6 + i, 6 + i)].sqrt()),
+            "accel {i}: {} against {}",
+            s[i],
+            ca[(6 + i, 6 + i)].sqrt()
+        );
+        let g = c.gyro.matrix[i];
+        let want = (0..3)
+            .map(|j| (g[j] * c.gyro_bias_rms[j]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(
+            near(s[3 + i], want),
+            "gyro {i}: {} against {want}",
+            s[3 + i]
+        );
+    }
+    // 4000 counts along x: sigma_x^2 = var(o1) + 2 d cov(o1, M11) + d^2 var(M11).
+    let mut a = center;
+    a[0] += 4000;
+    let s = dev.sigma(at(a, bias)).unwrap();
+    let u = {
+        let v = f64::from(a[0]) - c.accel.model.center[0];
+        v + c.accel.model.quadratic[0] * v * v
+    };
+    let want = (ca[(6, 6)] + 2.0 * u * ca[(6, 0)] + u * u * ca[(0, 0)]).sqrt();
+    assert!(near(s[0], want), "{} against {want}", s[0]);
+
+    // Every pose: device output against the truth, in units of the device's sigma.
+    for p in &c.poses {
+        let m = calflash::nonlinear::statics::mean(&rec.acc, p);
+        let raw = at(m.map(|x| x.round() as i32), bias);
+        let out = dev.correct(raw).values;
+        let s = dev.sigma(raw).unwrap();
+        let r = nalgebra::Vector3::from_fn(|j, _| f64::from(raw[j]) - truth.accel_center);
+        let a_true = truth.accel_matrix * r + truth.accel_offset;
+        for i in 0..3 {
+            let z = (f64::from(out[i]) - a_true[i]) / f64::from(s[i]);
+            assert!(z.abs() < 4.5, "pose {p:?} axis {i}: z = {z}");
+        }
+    }
+}

@@ -221,6 +221,9 @@ pub struct SelfCal {
     pub gyro_bias: [f64; 3],
     /// Spread of the gyro's mean at the poses (max - min, counts) per axis.
     pub gyro_bias_spread: [f64; 3],
+    /// RMS of the gyro's mean at the poses about the stored bias (counts) per axis: the 1-sigma
+    /// error of the constant bias the device stores.
+    pub gyro_bias_rms: [f64; 3],
     /// Gravity-direction error of each rotation with the stored constant bias, radians.
     pub constant_bias_angles: Vec<f64>,
     /// Rotations used: between pose `k` and `k + 1`.
@@ -428,6 +431,14 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
             });
         hi - lo
     });
+    let gyro_bias_rms = std::array::from_fn(|j| {
+        (gyro_means
+            .iter()
+            .map(|m| (m[j] - gyro_bias[j]).powi(2))
+            .sum::<f64>()
+            / gyro_means.len() as f64)
+            .sqrt()
+    });
     let mid = |r: &Range<usize>| 0.5 * (rec.t[r.start] + rec.t[r.end - 1]);
     let dirs: Vec<[f64; 3]> = pose_means
         .iter()
@@ -539,6 +550,7 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         gyro,
         gyro_bias,
         gyro_bias_spread,
+        gyro_bias_rms,
         constant_bias_angles,
         rotations,
         skipped,

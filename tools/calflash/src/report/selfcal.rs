@@ -306,6 +306,7 @@ pub fn record(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) -
         "gyro": {
             "bias_counts": c.gyro_bias,
             "bias_spread_counts": c.gyro_bias_spread,
+            "bias_rms_counts": c.gyro_bias_rms,
             "matrix_rad_s_per_count": c.gyro.matrix,
             "terms": crate::nonlinear::rotation::TERMS,
             "covariance": cov(&c.gyro.covariance),

@@ -10,11 +10,12 @@
 
 use std::path::Path;
 
+use nalgebra::DMatrix;
 use spincal::blob;
 use spincal::correct::ImuCorrector;
 use spincal::model::{
     AxisNonlinearity, BoundedVec, Calibration, CalibrationData, Channel, Environment, Identity,
-    ImuSet, Rails, Sensor, Span, TriadSet,
+    ImuCovariance, ImuSet, Rails, Sensor, Span, TriadSet,
 };
 
 use crate::nonlinear::selfcal::SelfCal;
@@ -112,9 +113,53 @@ pub fn calibration_data(
             gyro: std::array::from_fn(|j| channel(c.gyro_bias[j], gyro_range[j])),
             lever_arm: None,
             sets,
-            covariance: None,
+            covariance: covariance_factors(c).and_then(|f| BoundedVec::from_slice(&[f])),
         },
     }
+}
+
+/// The covariance factors the device stores (see [`spincal::model::TriadCovariance`]): per
+/// output, the covariance of its offset and matrix row over the features `[1, u0, u1, u2]`.
+/// Accelerometer: from the fit's covariance (the structural zeros of the upper-triangular `M`
+/// have none). Gyro: the matrix rows from the fit's covariance, and the offset from the stored
+/// bias's error (the pose means' RMS about it, [`SelfCal::gyro_bias_rms`]) through `G`, as
+/// `w = G (raw - bias)`. `None` when a fit has no covariance.
+#[must_use]
+pub fn covariance_factors(c: &SelfCal) -> Option<ImuCovariance> {
+    let ca = c.accel.covariance.as_ref()?;
+    let cg = c.gyro.covariance.as_ref()?;
+    // Accelerometer parameters: M11 M12 M13 M22 M23 M33 o1 o2 o3 [q1 q2 q3].
+    let accel_index: [[Option<usize>; 4]; 3] = [
+        [Some(6), Some(0), Some(1), Some(2)],
+        [Some(7), None, Some(3), Some(4)],
+        [Some(8), None, None, Some(5)],
+    ];
+    let accel = accel_index.map(|idx| {
+        let q = DMatrix::from_fn(4, 4, |r, s| match (idx[r], idx[s]) {
+            (Some(a), Some(b)) => ca[(a, b)],
+            _ => 0.0,
+        });
+        packed(&q)
+    });
+    let g = c.gyro.matrix;
+    let gyro: [[f32; 10]; 3] = std::array::from_fn(|i| {
+        let mut q = DMatrix::zeros(4, 4);
+        q[(0, 0)] = (0..3)
+            .map(|j| (g[i][j] * c.gyro_bias_rms[j]).powi(2))
+            .sum::<f64>();
+        for r in 0..3 {
+            for s in 0..3 {
+                q[(r + 1, s + 1)] = cg[(3 * i + r, 3 * i + s)];
+            }
+        }
+        packed(&q)
+    });
+    Some(ImuCovariance { accel, gyro })
+}
+
+fn packed(q: &DMatrix<f64>) -> [f32; 10] {
+    let l = super::covariance::packed_cholesky(q);
+    std::array::from_fn(|k| l.get(k).copied().unwrap_or(0.0) as f32)
 }
 
 /// What the device computes, checked: the blob, and the largest differences between the
