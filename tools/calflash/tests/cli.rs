@@ -1,21 +1,9 @@
 //! `calflash fit` from the command line: the messages users read for bad input (exact text,
 //! the file path replaced by `<FILE>`), the exit code, and that no output file is left behind.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-fn calflash(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::calflash;
 
 const GOOD: &str =
     "rate,temp,volts\n-100,20,1.5\n-50,25,2.0\n0,30,2.5\n50,20,3.0\n100,25,3.51\n150,30,4.0\n";
