@@ -1,8 +1,8 @@
-//! Hand-scheduled Cortex-M4F kernels for the two IMU batch shapes that matter most: bias and
-//! matrix only (`Linear`), and polynomial with g-sensitivity and lever arm (the spinning
-//! round's full model), run by `ImuCorrector::correct` and `correct_batch` (`imu/fast.rs`).
-//! Compiled only for hard-float Arm targets; everywhere else, and for the other shapes, the
-//! compiled Rust path runs.
+//! Hand-scheduled Cortex-M4F kernels for the IMU shapes that matter most: bias and matrix only
+//! (`Linear`), and polynomial with g-sensitivity and lever arm (the spinning round's full
+//! model), with or without the asymmetric scale; run by `ImuCorrector::correct` and
+//! `correct_batch` (`imu/fast.rs`). Compiled only for hard-float Arm targets; everywhere else,
+//! and for the other shapes (nonlinear without a lever arm), the compiled Rust path runs.
 //!
 //! # Why assembly
 //!
@@ -36,10 +36,6 @@ use super::kernel::TriadKernel;
 
 /// The block of the current environment's kernel, if its shape has one.
 #[derive(Debug, Clone, Copy)]
-#[expect(
-    clippy::large_enum_variant,
-    reason = "one per corrector, never moved per sample"
-)]
 pub(crate) enum Hot {
     /// No kernel for the shape: the compiled Rust path.
     None,
@@ -47,6 +43,8 @@ pub(crate) enum Hot {
     Linear(LinearBlock),
     /// Polynomial, g-sensitivity and lever arm.
     Lever(LeverBlock),
+    /// The same with the asymmetric scale.
+    Asym(LeverBlock),
 }
 
 /// Window bases and limits of both triads and the environment flags (36 bytes).
@@ -114,6 +112,8 @@ pub(crate) struct LeverBlock {
     lever_rate: [f32; 6],
     /// The previous corrected gyro rate; the kernel updates it.
     pub prev_rate: [f32; 3],
+    /// Per axis the asymmetry `s`, then its breakpoint `b` (the asymmetric kernel only).
+    asym: [f32; 12],
 }
 
 impl LeverBlock {
@@ -140,6 +140,14 @@ impl LeverBlock {
             lever: *lever,
             lever_rate: [f01, f02, f10, f12, f20, f21],
             prev_rate,
+            asym: {
+                let mut sb = [0.0; 12];
+                let (s, b) = (pick(|[.., s, _]| s), pick(|[.., b]| b));
+                for (dst, src) in sb.iter_mut().zip(s.iter().chain(&b)) {
+                    *dst = *src;
+                }
+                sb
+            },
         }
     }
 }
@@ -180,6 +188,7 @@ const _: () = {
     assert!(offset_of!(LeverBlock, lever) == 264);
     assert!(offset_of!(LeverBlock, lever_rate) == 300);
     assert!(offset_of!(LeverBlock, prev_rate) == 324);
+    assert!(offset_of!(LeverBlock, asym) == 336);
     assert!(offset_of!(Corrected<6>, values) == 0);
     assert!(offset_of!(Corrected<6>, flags) == 24);
     assert!(size_of::<Corrected<6>>() == 28);
@@ -284,15 +293,10 @@ core::arch::global_asm!(
     "spincal_store_and_return",
     ".size spincal_imu_linear_m4f, . - spincal_imu_linear_m4f",
     //
-    // Full: per axis v = w - delta, u = v + v (v (q + k v) + o |v|); y = off + M u per triad;
-    // gyro w_i += (-g_i) . a; accelerometer a_i moved by the lever arm with the previous rate.
-    // r4 walks the block from `q` to `prev_rate`.
-    ".section .text.spincal_imu_lever_m4f,\"ax\",%progbits",
-    ".global spincal_imu_lever_m4f",
-    ".type spincal_imu_lever_m4f,%function",
-    ".p2align 2",
-    ".thumb_func",
-    "spincal_imu_lever_m4f:",
+    // Full: per axis v = w - delta, u = v + v (v (q + k v) + o |v|) (+ s |v - b| with `asym`);
+    // y = off + M u per triad; gyro w_i += (-g_i) . a; accelerometer a_i moved by the lever arm
+    // with the previous rate. r4 walks the block from `q` to `prev_rate`.
+    ".macro spincal_full asym",
     "spincal_entry",
     "cmp r3, #0",
     "beq 3f",
@@ -331,12 +335,37 @@ core::arch::global_asm!(
     "vmla.f32 s10, s28, s30",
     "vabs.f32 s30, s5",
     "vmla.f32 s11, s29, s30",
+    ".if \\asym",
+    // Asymmetry: s -> s12-s17, b -> s18-s23 (the block's end), then |v - b| in s18-s23.
+    "add r5, r0, #336",
+    "vldm r5, {{s12-s23}}",
+    "vsub.f32 s18, s0, s18",
+    "vsub.f32 s19, s1, s19",
+    "vsub.f32 s20, s2, s20",
+    "vsub.f32 s21, s3, s21",
+    "vsub.f32 s22, s4, s22",
+    "vsub.f32 s23, s5, s23",
+    "vabs.f32 s18, s18",
+    "vabs.f32 s19, s19",
+    "vabs.f32 s20, s20",
+    "vabs.f32 s21, s21",
+    "vabs.f32 s22, s22",
+    "vabs.f32 s23, s23",
+    ".endif",
     "vmla.f32 s0, s0, s6",
     "vmla.f32 s1, s1, s7",
     "vmla.f32 s2, s2, s8",
     "vmla.f32 s3, s3, s9",
     "vmla.f32 s4, s4, s10",
     "vmla.f32 s5, s5, s11",
+    ".if \\asym",
+    "vmla.f32 s0, s12, s18",
+    "vmla.f32 s1, s13, s19",
+    "vmla.f32 s2, s14, s20",
+    "vmla.f32 s3, s15, s21",
+    "vmla.f32 s4, s16, s22",
+    "vmla.f32 s5, s17, s23",
+    ".endif",
     // offsets -> s6-s11 (the outputs), matrices -> s12-s29.
     "vldm r4!, {{s6-s29}}",
     "vmla.f32 s6, s12, s0",
@@ -400,7 +429,25 @@ core::arch::global_asm!(
     "vmla.f32 s8, s1, s16",
     "vstm r4, {{s9-s11}}",
     "spincal_store_and_return",
+    ".endm",
+    //
+    ".section .text.spincal_imu_lever_m4f,\"ax\",%progbits",
+    ".global spincal_imu_lever_m4f",
+    ".type spincal_imu_lever_m4f,%function",
+    ".p2align 2",
+    ".thumb_func",
+    "spincal_imu_lever_m4f:",
+    "spincal_full 0",
     ".size spincal_imu_lever_m4f, . - spincal_imu_lever_m4f",
+    //
+    ".section .text.spincal_imu_asym_m4f,\"ax\",%progbits",
+    ".global spincal_imu_asym_m4f",
+    ".type spincal_imu_asym_m4f,%function",
+    ".p2align 2",
+    ".thumb_func",
+    "spincal_imu_asym_m4f:",
+    "spincal_full 1",
+    ".size spincal_imu_asym_m4f, . - spincal_imu_asym_m4f",
 );
 
 unsafe extern "C" {
@@ -411,6 +458,12 @@ unsafe extern "C" {
         n: usize,
     ) -> usize;
     fn spincal_imu_lever_m4f(
+        block: *mut LeverBlock,
+        raw: *const [i32; 6],
+        out: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_asym_m4f(
         block: *mut LeverBlock,
         raw: *const [i32; 6],
         out: *mut Corrected<6>,
@@ -434,4 +487,11 @@ pub(crate) fn lever(block: &mut LeverBlock, raw: &[[i32; 6]], out: &mut [Correct
     let n = raw.len().min(out.len());
     // SAFETY: as for `linear`; the kernel also writes `block.prev_rate`.
     unsafe { spincal_imu_lever_m4f(block, raw.as_ptr(), out.as_mut_ptr(), n) }
+}
+
+/// As [`lever`], with the asymmetric scale term.
+pub(crate) fn asym(block: &mut LeverBlock, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
+    let n = raw.len().min(out.len());
+    // SAFETY: as for `lever`; the kernel also reads `block.asym`.
+    unsafe { spincal_imu_asym_m4f(block, raw.as_ptr(), out.as_mut_ptr(), n) }
 }

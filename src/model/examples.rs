@@ -85,16 +85,17 @@ fn triad_factor(b: f32, s: f32, scale: f32) -> [[f32; 10]; 3] {
 fn accel_set(t: f32, nonlinear: bool) -> TriadSet {
     let dt = t - 25.0;
     let s = 1.0 / 412.0 * (1.0 + 80e-6 * dt);
-    let axis = |q: f32, k: f32| AxisNonlinearity {
+    // Every axis has its own terms, so a coefficient applied to the wrong axis shows.
+    let axis = |q: f32, k: f32, o: f32, a: f32, b: f32| AxisNonlinearity {
         quadratic: if nonlinear {
             q * (1.0 + 0.002 * dt)
         } else {
             0.0
         },
         cubic: if nonlinear { k } else { 0.0 },
-        odd_quadratic: if nonlinear { 2.0e-8 } else { 0.0 },
-        asymmetry: if nonlinear { 4.0e-4 } else { 0.0 },
-        asymmetry_break: 0.0,
+        odd_quadratic: if nonlinear { o } else { 0.0 },
+        asymmetry: if nonlinear { a } else { 0.0 },
+        asymmetry_break: if nonlinear { b } else { 0.0 },
     };
     let matrix = [
         [s * 1.002, s * 1.5e-3, -s * 0.8e-3],
@@ -107,9 +108,9 @@ fn accel_set(t: f32, nonlinear: bool) -> TriadSet {
     });
     TriadSet {
         axes: [
-            axis(3.0e-7, 1.0e-12),
-            axis(-2.0e-7, 0.0),
-            axis(1.5e-7, -2.0e-12),
+            axis(3.0e-7, 1.0e-12, 2.0e-8, 4.0e-4, 0.0),
+            axis(-2.0e-7, 0.0, -1.5e-8, 3.0e-4, 15.0),
+            axis(1.5e-7, -2.0e-12, 3.0e-8, 5.0e-4, -20.0),
         ],
         matrix,
         offset,
@@ -127,12 +128,12 @@ fn imu_covariance(t: f32) -> ImuCovariance {
 fn gyro_set(t: f32, nonlinear: bool) -> TriadSet {
     let dt = t - 25.0;
     let s = 1.0 / 900.0 * (1.0 - 120e-6 * dt);
-    let axis = |q: f32| AxisNonlinearity {
+    let axis = |q: f32, k: f32, o: f32, a: f32, b: f32| AxisNonlinearity {
         quadratic: if nonlinear { q } else { 0.0 },
-        cubic: if nonlinear { 4.0e-13 } else { 0.0 },
-        odd_quadratic: 0.0,
-        asymmetry: if nonlinear { -2.5e-4 } else { 0.0 },
-        asymmetry_break: if nonlinear { 40.0 } else { 0.0 },
+        cubic: if nonlinear { k } else { 0.0 },
+        odd_quadratic: if nonlinear { o } else { 0.0 },
+        asymmetry: if nonlinear { a } else { 0.0 },
+        asymmetry_break: if nonlinear { b } else { 0.0 },
     };
     let matrix = [
         [s * 0.998, s * 3.0e-3, s * 1.0e-3],
@@ -144,7 +145,11 @@ fn gyro_set(t: f32, nonlinear: bool) -> TriadSet {
         -(matrix[i][0] * bias[0] + matrix[i][1] * bias[1] + matrix[i][2] * bias[2])
     });
     TriadSet {
-        axes: [axis(1.0e-7), axis(-1.2e-7), axis(0.5e-7)],
+        axes: [
+            axis(1.0e-7, 4.0e-13, 1.0e-8, -2.5e-4, 40.0),
+            axis(-1.2e-7, -3.0e-13, 0.0, -1.5e-4, -30.0),
+            axis(0.5e-7, 2.0e-13, -2.0e-8, 2.0e-4, 10.0),
+        ],
         matrix,
         offset,
     }

@@ -15,15 +15,22 @@ impl ImuCorrector<'_> {
         let flags = self.env_flags.bits();
         self.hot = match (self.mode.shape, self.mode.lever) {
             (Shape::Linear, _) => Hot::Linear(LinearBlock::new(&self.accel, &self.gyro, flags)),
-            (Shape::Polynomial, true) => Hot::Lever(LeverBlock::new(
-                &self.accel,
-                &self.gyro,
-                flags,
-                &self.g,
-                &self.lever,
-                &self.lever_rate,
-                self.prev_rate,
-            )),
+            (Shape::Polynomial | Shape::Asymmetric, true) => {
+                let block = LeverBlock::new(
+                    &self.accel,
+                    &self.gyro,
+                    flags,
+                    &self.g,
+                    &self.lever,
+                    &self.lever_rate,
+                    self.prev_rate,
+                );
+                if self.mode.shape == Shape::Asymmetric {
+                    Hot::Asym(block)
+                } else {
+                    Hot::Lever(block)
+                }
+            }
             _ => Hot::None,
         };
     }
@@ -36,10 +43,14 @@ impl ImuCorrector<'_> {
         match &mut self.hot {
             Hot::None => None,
             Hot::Linear(block) => Some(m4f::linear(block, raw, out)),
-            Hot::Lever(block) => {
+            Hot::Lever(block) | Hot::Asym(block) => {
                 block.prev_rate = self.prev_rate;
                 block.header.accel_limit = self.accel.limit;
-                let done = m4f::lever(block, raw, out);
+                let done = if self.mode.shape == Shape::Asymmetric {
+                    m4f::asym(block, raw, out)
+                } else {
+                    m4f::lever(block, raw, out)
+                };
                 self.prev_rate = block.prev_rate;
                 Some(done)
             }
@@ -48,10 +59,10 @@ impl ImuCorrector<'_> {
 
     /// The slow path of the shapes that have a kernel.
     fn slow_m4f(&mut self, raw: [i32; 6], out: &mut Corrected<6>) {
-        if self.mode.lever {
-            self.slow::<true, false, true>(raw, out);
-        } else {
-            self.slow::<false, false, false>(raw, out);
+        match (self.mode.shape, self.mode.lever) {
+            (Shape::Asymmetric, true) => self.slow::<true, true, true>(raw, out),
+            (_, true) => self.slow::<true, false, true>(raw, out),
+            _ => self.slow::<false, false, false>(raw, out),
         }
     }
 
