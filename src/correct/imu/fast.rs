@@ -15,17 +15,9 @@ impl ImuCorrector<'_> {
         let flags = self.env_flags.bits();
         self.hot = match (self.mode.shape, self.mode.lever) {
             (Shape::Linear, _) => Hot::Linear(LinearBlock::new(&self.accel, &self.gyro, flags)),
-            (Shape::Polynomial | Shape::Asymmetric, true) => {
-                let block = LeverBlock::new(
-                    &self.accel,
-                    &self.gyro,
-                    flags,
-                    &self.g,
-                    &self.lever,
-                    &self.lever_rate,
-                    self.prev_rate,
-                );
-                if self.mode.shape == Shape::Asymmetric {
+            (shape @ (Shape::Polynomial | Shape::Asymmetric), true) => {
+                let block = self.lever_block();
+                if shape == Shape::Asymmetric {
                     Hot::Asym(block)
                 } else {
                     Hot::Lever(block)
@@ -33,6 +25,20 @@ impl ImuCorrector<'_> {
             }
             _ => Hot::None,
         };
+    }
+
+    /// The full kernels' block for the current coefficients.
+    #[inline(always)]
+    fn lever_block(&self) -> LeverBlock {
+        LeverBlock::new(
+            &self.accel,
+            &self.gyro,
+            self.env_flags.bits(),
+            &self.g,
+            &self.lever,
+            &self.lever_rate,
+            self.prev_rate,
+        )
     }
 
     /// Runs the kernel until the first sample outside a window; `None` when the shape has no
@@ -43,16 +49,13 @@ impl ImuCorrector<'_> {
         match &mut self.hot {
             Hot::None => None,
             Hot::Linear(block) => Some(m4f::linear(block, raw, out)),
-            Hot::Lever(block) | Hot::Asym(block) => {
-                block.prev_rate = self.prev_rate;
-                block.header.accel_limit = self.accel.limit;
-                let done = if self.mode.shape == Shape::Asymmetric {
-                    m4f::asym(block, raw, out)
-                } else {
-                    m4f::lever(block, raw, out)
-                };
-                self.prev_rate = block.prev_rate;
-                Some(done)
+            Hot::Lever(block) => {
+                let state = (&mut self.prev_rate, self.accel.limit);
+                Some(with_lever_state(block, state, m4f::lever, raw, out))
+            }
+            Hot::Asym(block) => {
+                let state = (&mut self.prev_rate, self.accel.limit);
+                Some(with_lever_state(block, state, m4f::asym, raw, out))
             }
         }
     }
@@ -113,6 +116,22 @@ impl ImuCorrector<'_> {
         let (_, acc_g) = self.gyro.offsets(rg);
         (acc_a < self.accel.limit) & (acc_g < self.gyro.limit)
     }
+}
+
+/// A lever-arm kernel with the corrector's lever-arm state: the previous rate (handed in and
+/// back) and the accelerometer window's limit (0 until the rate derivative is primed).
+fn with_lever_state(
+    block: &mut LeverBlock,
+    (prev_rate, accel_limit): (&mut [f32; 3], u32),
+    kernel: fn(&mut LeverBlock, &[[i32; 6]], &mut [Corrected<6>]) -> usize,
+    raw: &[[i32; 6]],
+    out: &mut [Corrected<6>],
+) -> usize {
+    block.prev_rate = *prev_rate;
+    block.header.accel_limit = accel_limit;
+    let done = kernel(block, raw, out);
+    *prev_rate = block.prev_rate;
+    done
 }
 
 /// Both slices without their first `k` items.
