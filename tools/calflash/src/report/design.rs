@@ -7,7 +7,7 @@ use std::path::Path;
 use serde_json::{Value, json};
 
 use super::html::esc;
-use super::plot::{COLORS, Figure, Series, svg};
+use super::plot::{Figure, Series, svg};
 use super::terminal::num;
 use crate::design::criteria::{self, Criteria};
 use crate::design::exchange::Criterion;
@@ -235,20 +235,8 @@ pub fn evaluate_html(
                 .fold(f64::NEG_INFINITY, f64::max);
             let mut series = Vec::new();
             for (k, pl) in plans.iter().enumerate() {
-                series.push(Series {
-                    name: &pl.name,
-                    points: &series_pts[k],
-                    color: COLORS[k % COLORS.len()],
-                    line: true,
-                    errors: None,
-                });
-                series.push(Series {
-                    name: "its points",
-                    points: &marks[k],
-                    color: COLORS[k % COLORS.len()],
-                    line: false,
-                    errors: None,
-                });
+                series.push(Series::curve(&pl.name, &series_pts[k], k));
+                series.push(Series::dots("its points", &marks[k], k));
             }
             let title = format!(
                 "Prediction variance / sigma^2 over {var}{}",

@@ -103,13 +103,7 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
                 .figure
                 .iter()
                 .enumerate()
-                .map(|(k, (name, pts))| Series {
-                    name,
-                    points: pts,
-                    color: COLORS[k % COLORS.len()],
-                    line: false,
-                    errors: None,
-                })
+                .map(|(k, (name, pts))| Series::dots(name, pts, k))
                 .collect();
             let _ = writeln!(
                 h,
@@ -185,13 +179,7 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
             .iter()
             .zip(&names)
             .enumerate()
-            .map(|(k, (pts, name))| Series {
-                name,
-                points: pts,
-                color: COLORS[k % COLORS.len()],
-                line: false,
-                errors: None,
-            })
+            .map(|(k, (pts, name))| Series::dots(name, pts, k))
             .collect();
         let range = c.ranges[a];
         let _ = writeln!(
@@ -223,13 +211,7 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
             .iter()
             .zip(&names)
             .enumerate()
-            .map(|(k, (pts, name))| Series {
-                name,
-                points: pts,
-                color: COLORS[k % COLORS.len()],
-                line: false,
-                errors: None,
-            })
+            .map(|(k, (pts, name))| Series::dots(name, pts, k))
             .collect();
         let _ = writeln!(
             h,
@@ -274,13 +256,7 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
                 title: &format!("{}: 1-sigma calibration error over the range", axis.output),
                 x: &format!("{} ({unit})", axis.own),
                 y: &format!("1-sigma ({unit})"),
-                series: vec![Series {
-                    name: "prediction standard error",
-                    points: &curve,
-                    color: COLORS[0],
-                    line: true,
-                    errors: None,
-                }],
+                series: vec![Series::curve("prediction standard error", &curve, 0)],
                 bands: vec![(lo, hi)],
                 band_label: "calibrated range",
                 zero_line: true,

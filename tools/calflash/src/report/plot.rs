@@ -27,6 +27,29 @@ pub const COLORS: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
+impl<'a> Series<'a> {
+    /// Unjoined points in the `k`-th colour.
+    #[must_use]
+    pub fn dots(name: &'a str, points: &'a [(f64, f64)], k: usize) -> Self {
+        Self {
+            name,
+            points,
+            color: COLORS[k % COLORS.len()],
+            line: false,
+            errors: None,
+        }
+    }
+
+    /// A line through the points in the `k`-th colour.
+    #[must_use]
+    pub fn curve(name: &'a str, points: &'a [(f64, f64)], k: usize) -> Self {
+        Self {
+            line: true,
+            ..Self::dots(name, points, k)
+        }
+    }
+}
+
 /// What a figure shows.
 pub struct Figure<'a> {
     /// Title.

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use serde_json::{Value, json};
 
 use super::html::esc;
-use super::plot::{COLORS, Figure, Series, svg};
+use super::plot::{Figure, Series, svg};
 use super::terminal::{num, pval};
 use crate::nonlinear::selfcal::SelfCal;
 use crate::obs::recording::Recording;
@@ -366,13 +366,7 @@ pub fn html(
         x: "time [s]",
         y: "counts",
         series: (0..3)
-            .map(|j| Series {
-                name: names[j],
-                points: &sig[j],
-                color: COLORS[j],
-                line: true,
-                errors: None,
-            })
+            .map(|j| Series::curve(names[j], &sig[j], j))
             .collect(),
         bands: bands.clone(),
         band_label: "still pose",
@@ -397,20 +391,8 @@ pub fn html(
         x: "time [s]",
         y: "log10 of counts^2",
         series: vec![
-            Series {
-                name: "still measure",
-                points: &meas,
-                color: COLORS[0],
-                line: true,
-                errors: None,
-            },
-            Series {
-                name: "threshold",
-                points: &th,
-                color: COLORS[3],
-                line: true,
-                errors: None,
-            },
+            Series::curve("still measure", &meas, 0),
+            Series::curve("threshold", &th, 3),
         ],
         bands,
         band_label: "still pose",
@@ -426,13 +408,7 @@ pub fn html(
         title: "Threshold search: accelerometer RMS at each threshold",
         x: "threshold [x initial rest level]",
         y: "RMS |a| - g [mm/s^2]",
-        series: vec![Series {
-            name: "linear fit",
-            points: &trials,
-            color: COLORS[0],
-            line: true,
-            errors: None,
-        }],
+        series: vec![Series::curve("linear fit", &trials, 0)],
         bands: Vec::new(),
         band_label: "",
         zero_line: false,
@@ -449,13 +425,7 @@ pub fn html(
         title: "Accelerometer: |a| - g at each pose",
         x: "pose",
         y: "mm/s^2",
-        series: vec![Series {
-            name: "residual",
-            points: &res,
-            color: COLORS[0],
-            line: false,
-            errors: None,
-        }],
+        series: vec![Series::dots("residual", &res, 0)],
         bands: Vec::new(),
         band_label: "",
         zero_line: true,
@@ -482,20 +452,8 @@ pub fn html(
         x: "rotation (after pose)",
         y: "degrees",
         series: vec![
-            Series {
-                name: "fit",
-                points: &ang,
-                color: COLORS[0],
-                line: false,
-                errors: None,
-            },
-            Series {
-                name: "stored constant bias",
-                points: &angc,
-                color: COLORS[1],
-                line: false,
-                errors: None,
-            },
+            Series::dots("fit", &ang, 0),
+            Series::dots("stored constant bias", &angc, 1),
         ],
         bands: Vec::new(),
         band_label: "",
