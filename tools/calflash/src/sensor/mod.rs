@@ -121,6 +121,60 @@ pub struct AxisFit {
 }
 
 impl AxisFit {
+    /// Fits `formula` over `table` with the regression statistics at level `alpha`; `own` is
+    /// the axis' reference input column. A failure is an error about `path` that says where
+    /// (`where_`, a table point) and why: the rank deficiency explained (prefixed with the
+    /// response when `name_response`), or too few observations for the model.
+    ///
+    /// # Errors
+    /// The fit's, as above.
+    pub fn fit(
+        formula: &Formula,
+        table: &crate::obs::Table,
+        own: &str,
+        alpha: f64,
+        (path, where_): (&Path, &str),
+        name_response: bool,
+    ) -> Result<Self, WorkflowError> {
+        use crate::stats::{self, FitError};
+        let d = formula.design(table);
+        let opts = stats::Options {
+            alpha,
+            ..stats::Options::default()
+        };
+        let fit = stats::fit(&d.x, &d.y, d.names, d.intercept, &opts).map_err(|e| match e {
+            FitError::RankDeficient {
+                column,
+                combination,
+            } => {
+                let why = formula.explain_rank_deficiency(table, column, &combination);
+                let who = if name_response {
+                    format!("{} ", formula.response)
+                } else {
+                    String::new()
+                };
+                WorkflowError::msg(path, format!("{who}at {where_}: {why}"))
+            }
+            FitError::TooFewObservations { n, p } => WorkflowError::msg(
+                path,
+                format!(
+                    "{where_} has {n} observations; the model {formula} ({p} terms) needs at least {}",
+                    p + 1
+                ),
+            ),
+            FitError::NotFinite => WorkflowError::msg(path, "a value is not finite"),
+        })?;
+        Ok(Self {
+            output: formula.response.clone(),
+            own: own.into(),
+            formula: formula.clone(),
+            input: table.column(own).unwrap_or_default().to_vec(),
+            dir: None,
+            lines: table.lines.clone(),
+            fit,
+        })
+    }
+
     /// The coefficient of a term, 0 when the model lacks it.
     #[must_use]
     pub fn coef(&self, term: &str) -> f64 {

@@ -12,7 +12,7 @@ use super::{AxisFit, Calibrated, Decision, Options, PointFit, WorkflowError, cov
 use crate::columns as col;
 use crate::formula::{self, Formula};
 use crate::obs::{self, Table};
-use crate::stats::{self, FitError, select};
+use crate::stats::{self, select};
 
 /// The derived column holding `|input - breakpoint| - |breakpoint|`.
 pub const KINK: &str = "input_kink";
@@ -43,40 +43,9 @@ fn fit_axis(
     path: &std::path::Path,
     where_: &str,
 ) -> Result<AxisFit, WorkflowError> {
-    let d = formula.design(table);
-    let opts = stats::Options {
-        alpha,
-        ..stats::Options::default()
-    };
-    let fit = stats::fit(&d.x, &d.y, d.names, d.intercept, &opts).map_err(|e| match e {
-        FitError::RankDeficient {
-            column,
-            combination,
-        } => WorkflowError::msg(
-            path,
-            format!(
-                "at {where_}: {}",
-                formula.explain_rank_deficiency(table, column, &combination)
-            ),
-        ),
-        FitError::TooFewObservations { n, p } => WorkflowError::msg(
-            path,
-            format!(
-                "{where_} has {n} observations; the model {formula} ({p} terms) needs at least {}",
-                p + 1
-            ),
-        ),
-        FitError::NotFinite => WorkflowError::msg(path, "a value is not finite"),
-    })?;
-    Ok(AxisFit {
-        output: formula.response.clone(),
-        own: col::INPUT.into(),
-        formula: formula.clone(),
-        input: table.column(col::INPUT).unwrap_or_default().to_vec(),
-        dir: table.column(col::DIR).map(<[f64]>::to_vec),
-        lines: table.lines.clone(),
-        fit,
-    })
+    let mut fit = AxisFit::fit(formula, table, col::INPUT, alpha, (path, where_), false)?;
+    fit.dir = table.column(col::DIR).map(<[f64]>::to_vec);
+    Ok(fit)
 }
 
 /// Terms of `formula` that are not significant, dropped one at a time (never `1` or `input`,

@@ -21,7 +21,7 @@ use super::{AxisFit, Calibrated, Options, PointFit, WorkflowError, covariance, d
 use crate::columns as col;
 use crate::formula::{self, Formula};
 use crate::obs::{self, Table};
-use crate::stats::{self, FitError, select};
+use crate::stats::{self, select};
 
 /// What is calibrated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -73,41 +73,7 @@ fn fit_one(
     path: &std::path::Path,
     where_: &str,
 ) -> Result<AxisFit, WorkflowError> {
-    let d = formula.design(t);
-    let opts = stats::Options {
-        alpha,
-        ..stats::Options::default()
-    };
-    let fit = stats::fit(&d.x, &d.y, d.names, d.intercept, &opts).map_err(|e| match e {
-        FitError::RankDeficient {
-            column,
-            combination,
-        } => WorkflowError::msg(
-            path,
-            format!(
-                "{} at {where_}: {}",
-                formula.response,
-                formula.explain_rank_deficiency(t, column, &combination)
-            ),
-        ),
-        FitError::TooFewObservations { n, p } => WorkflowError::msg(
-            path,
-            format!(
-                "{where_} has {n} observations; the model {formula} ({p} terms) needs at least {}",
-                p + 1
-            ),
-        ),
-        FitError::NotFinite => WorkflowError::msg(path, "a value is not finite"),
-    })?;
-    Ok(AxisFit {
-        output: formula.response.clone(),
-        own: own.into(),
-        formula: formula.clone(),
-        input: t.column(own).unwrap_or_default().to_vec(),
-        dir: None,
-        lines: t.lines.clone(),
-        fit,
-    })
+    AxisFit::fit(formula, t, own, alpha, (path, where_), true)
 }
 
 fn triad(
