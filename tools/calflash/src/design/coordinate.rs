@@ -7,7 +7,7 @@
 use nalgebra::{DMatrix, DVector};
 use rand::{RngExt, SeedableRng};
 
-use super::exchange::{Criterion, ExchangeError, Options, Pair};
+use super::exchange::{Criterion, ExchangeError, Options, Pair, inverse_information};
 
 /// One factor and the levels it can take.
 #[derive(Debug, Clone, PartialEq)]
@@ -55,17 +55,9 @@ impl<'a, R: Fn(&[f64]) -> DVector<f64>> Info<'a, R> {
     fn refresh(&mut self) -> bool {
         let p = self.rows[0].len();
         let x = DMatrix::from_fn(self.rows.len(), p, |i, j| self.rows[i][j]);
-        let svd = x.svd(false, true);
-        let v_t = svd.v_t.expect("requested");
-        let s = &svd.singular_values;
-        if s.min() <= 1e-10 * s.max() {
+        let Some(m_inv) = inverse_information(x) else {
             return false;
-        }
-        let mut m_inv = DMatrix::zeros(p, p);
-        for k in 0..p {
-            let r = v_t.row(k);
-            m_inv += (1.0 / (s[k] * s[k])) * r.transpose() * r;
-        }
+        };
         self.m_inv = m_inv;
         self.swaps = 0;
         true

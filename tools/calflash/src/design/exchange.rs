@@ -147,17 +147,9 @@ impl<'a> State<'a> {
     fn refresh(&mut self) -> bool {
         let p = self.f.ncols();
         let x = DMatrix::from_fn(self.design.len(), p, |i, j| self.f[(self.design[i], j)]);
-        let svd = x.svd(false, true);
-        let v_t = svd.v_t.expect("requested");
-        let s = &svd.singular_values;
-        if s.min() <= 1e-10 * s.max() {
+        let Some(m_inv) = inverse_information(x) else {
             return false;
-        }
-        let mut m_inv = DMatrix::zeros(p, p);
-        for k in 0..p {
-            let row = v_t.row(k);
-            m_inv += (1.0 / (s[k] * s[k])) * row.transpose() * row;
-        }
+        };
         self.u = self.f * &m_inv;
         for j in 0..self.f.nrows() {
             self.d[j] = self.f.row(j).dot(&self.u.row(j));
@@ -447,6 +439,27 @@ pub fn optimize_blocks(
     progress(restarts, restarts);
     let p = fs[0].ncols();
     best.ok_or(ExchangeError::Singular { rank: p, p })
+}
+
+/// `(X'X)^-1 = V S^-2 V'` from the SVD of the design `x` (never the normal equations); `None`
+/// when `x` has fewer rows than columns or a singular value at or below 1e-10 of the largest.
+pub(super) fn inverse_information(x: DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let p = x.ncols();
+    if x.nrows() < p {
+        return None;
+    }
+    let svd = x.svd(false, true);
+    let v_t = svd.v_t?;
+    let s = &svd.singular_values;
+    if s.min() <= 1e-10 * s.max() {
+        return None;
+    }
+    let mut m_inv = DMatrix::zeros(p, p);
+    for (k, sk) in s.iter().enumerate() {
+        let row = v_t.row(k);
+        m_inv += (1.0 / (sk * sk)) * row.transpose() * row;
+    }
+    Some(m_inv)
 }
 
 #[cfg(test)]
