@@ -80,7 +80,25 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
             CalibrationData::example_imu_polynomial(),
             Kind::Imu(1000.0),
         ),
+        (
+            "imu_no_lever",
+            without_lever(CalibrationData::example_imu()),
+            Kind::Imu(1000.0),
+        ),
+        (
+            "imu_polynomial_no_lever",
+            without_lever(CalibrationData::example_imu_polynomial()),
+            Kind::Imu(1000.0),
+        ),
     ]
+}
+
+/// `data` (an IMU) with its accelerometer at the reference point: no lever arm.
+fn without_lever(mut data: CalibrationData) -> CalibrationData {
+    if let Sensor::Imu { lever_arm, .. } = &mut data.sensor {
+        *lever_arm = None;
+    }
+    data
 }
 
 /// Encodes a calibration as a blob.

@@ -7,7 +7,7 @@
 use host_tests::golden;
 use host_tests::nor::{SimFlash, Tear};
 use spincal::model::{CalibrationData, Serial};
-use spincal::store::{Store, StoreError};
+use spincal::store::{SlotState, Store, StoreError};
 
 const ERASE: usize = 1024;
 const SLOT: u32 = 4 * ERASE as u32;
@@ -360,4 +360,40 @@ fn a_slot_image_is_what_an_update_writes() {
     g.mem[..SLOT as usize].copy_from_slice(&image);
     g.mem[SLOT as usize..].fill(0xff);
     assert_eq!(boot(g).1.unwrap(), b[2]);
+}
+
+/// Found by `cargo fuzz` (store_flash): a newer slot whose header claims a blob longer than any
+/// valid blob (but within the slot) must count as invalid, so boot falls back to the older
+/// slot; it once made `scan` and `load` fail with `BufferTooSmall` instead, losing both.
+#[test]
+fn a_header_claiming_an_impossible_length_is_an_invalid_slot() {
+    const BIG_SLOT: u32 = 12 * ERASE as u32;
+    let region = 2 * BIG_SLOT as usize + ERASE;
+    let [old, new, ..] = &blobs()[..] else {
+        unreachable!()
+    };
+    let mut store = Store::new(SimFlash::<4, ERASE>::new(region), 0, BIG_SLOT).unwrap();
+    let mut buf = vec![0u8; spincal::protocol::SLOT_BUFFER];
+    let mut scratch = CalibrationData::empty();
+    store.update(old, &mut buf, &mut scratch).unwrap();
+    let newer = store.update(new, &mut buf, &mut scratch).unwrap();
+    let mut flash = store.into_inner();
+    // The slot header's length field (slot offset 16 + 8, `store` module docs), set beyond the
+    // largest blob and the boot buffer but within the slot; the commit marker and magic stay
+    // sound.
+    let at = newer.index as usize * BIG_SLOT as usize + 24;
+    let len = u32::try_from(spincal::protocol::SLOT_BUFFER + 1).unwrap();
+    assert!(len < BIG_SLOT - 32);
+    flash.mem[at..at + 4].copy_from_slice(&len.to_le_bytes());
+    let mut store = Store::new(flash, 0, BIG_SLOT).unwrap();
+    let slots = store.scan(&mut buf, &mut scratch).unwrap();
+    assert_eq!(slots[usize::from(newer.index)], SlotState::Invalid);
+    let mut slot = CalibrationData::empty();
+    let (cal, info) = store.load(&mut buf, &mut slot).unwrap();
+    assert_ne!(info.index, newer.index);
+    assert_eq!(
+        cal.data(),
+        spincal::blob::decode(old).unwrap().data(),
+        "boot falls back to the older calibration"
+    );
 }

@@ -36,15 +36,38 @@ use super::kernel::TriadKernel;
 
 /// The block of the current environment's kernel, if its shape has one.
 #[derive(Debug, Clone, Copy)]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "one per corrector, built with the environment, never moved per sample"
+)]
 pub(crate) enum Hot {
     /// No kernel for the shape: the compiled Rust path.
     None,
     /// Bias and matrix only.
     Linear(LinearBlock),
-    /// Polynomial, g-sensitivity and lever arm.
-    Lever(LeverBlock),
-    /// The same with the asymmetric scale.
-    Asym(LeverBlock),
+    /// Polynomial and g-sensitivity, with or without the asymmetric scale and the lever arm.
+    Full(FullBlock, Full),
+}
+
+/// A full kernel's entry point.
+type FullKernel =
+    unsafe extern "C" fn(*mut FullBlock, *const [i32; 6], *mut Corrected<6>, usize) -> usize;
+
+/// Which full kernel, chosen once with the environment.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Full(FullKernel);
+
+impl Full {
+    /// The kernel with (or without) the asymmetry term `s |v - b|` and the lever arm (which
+    /// reads and writes `prev_rate`).
+    pub fn new(asym: bool, lever: bool) -> Self {
+        Self(match (asym, lever) {
+            (false, true) => spincal_imu_full_m4f,
+            (true, true) => spincal_imu_full_asym_m4f,
+            (false, false) => spincal_imu_poly_m4f,
+            (true, false) => spincal_imu_poly_asym_m4f,
+        })
+    }
 }
 
 /// Window bases and limits of both triads and the environment flags (36 bytes).
@@ -94,7 +117,7 @@ impl LinearBlock {
 /// Coefficients of the full kernel in the order it loads them, and the previous gyro rate.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct LeverBlock {
+pub(crate) struct FullBlock {
     /// Windows and flags.
     pub header: Header,
     /// Per axis `q` (the first `vldm` also loads `delta`, `k` and `o`).
@@ -116,7 +139,7 @@ pub(crate) struct LeverBlock {
     asym: [f32; 12],
 }
 
-impl LeverBlock {
+impl FullBlock {
     pub fn new(
         accel: &TriadKernel,
         gyro: &TriadKernel,
@@ -178,17 +201,17 @@ const _: () = {
     assert!(size_of::<Header>() == 36);
     assert!(offset_of!(LinearBlock, offset) == 36);
     assert!(offset_of!(LinearBlock, matrix) == 60);
-    assert!(offset_of!(LeverBlock, q) == 36);
-    assert!(offset_of!(LeverBlock, delta) == 60);
-    assert!(offset_of!(LeverBlock, k) == 84);
-    assert!(offset_of!(LeverBlock, o) == 108);
-    assert!(offset_of!(LeverBlock, offset) == 132);
-    assert!(offset_of!(LeverBlock, matrix) == 156);
-    assert!(offset_of!(LeverBlock, neg_g) == 228);
-    assert!(offset_of!(LeverBlock, lever) == 264);
-    assert!(offset_of!(LeverBlock, lever_rate) == 300);
-    assert!(offset_of!(LeverBlock, prev_rate) == 324);
-    assert!(offset_of!(LeverBlock, asym) == 336);
+    assert!(offset_of!(FullBlock, q) == 36);
+    assert!(offset_of!(FullBlock, delta) == 60);
+    assert!(offset_of!(FullBlock, k) == 84);
+    assert!(offset_of!(FullBlock, o) == 108);
+    assert!(offset_of!(FullBlock, offset) == 132);
+    assert!(offset_of!(FullBlock, matrix) == 156);
+    assert!(offset_of!(FullBlock, neg_g) == 228);
+    assert!(offset_of!(FullBlock, lever) == 264);
+    assert!(offset_of!(FullBlock, lever_rate) == 300);
+    assert!(offset_of!(FullBlock, prev_rate) == 324);
+    assert!(offset_of!(FullBlock, asym) == 336);
     assert!(offset_of!(Corrected<6>, values) == 0);
     assert!(offset_of!(Corrected<6>, flags) == 24);
     assert!(size_of::<Corrected<6>>() == 28);
@@ -294,9 +317,9 @@ core::arch::global_asm!(
     ".size spincal_imu_linear_m4f, . - spincal_imu_linear_m4f",
     //
     // Full: per axis v = w - delta, u = v + v (v (q + k v) + o |v|) (+ s |v - b| with `asym`);
-    // y = off + M u per triad; gyro w_i += (-g_i) . a; accelerometer a_i moved by the lever arm
-    // with the previous rate. r4 walks the block from `q` to `prev_rate`.
-    ".macro spincal_full asym",
+    // y = off + M u per triad; gyro w_i += (-g_i) . a; with `lever`, accelerometer a_i moved by
+    // the lever arm with the previous rate. r4 walks the block from `q` to `prev_rate`.
+    ".macro spincal_full asym, lever",
     "spincal_entry",
     "cmp r3, #0",
     "beq 3f",
@@ -398,6 +421,7 @@ core::arch::global_asm!(
     "vmla.f32 s11, s19, s7",
     "vmla.f32 s11, s20, s8",
     // f01 f02 f10 f12 f20 f21 -> s12-s17; previous rate -> s0-s2, then d = w - prev.
+    ".if \\lever",
     "vldm r4!, {{s12-s17}}",
     "vldm r4, {{s0-s2}}",
     "vsub.f32 s0, s9, s0",
@@ -428,26 +452,45 @@ core::arch::global_asm!(
     "vmls.f32 s8, s0, s17",
     "vmla.f32 s8, s1, s16",
     "vstm r4, {{s9-s11}}",
+    ".endif",
     "spincal_store_and_return",
     ".endm",
     //
-    ".section .text.spincal_imu_lever_m4f,\"ax\",%progbits",
-    ".global spincal_imu_lever_m4f",
-    ".type spincal_imu_lever_m4f,%function",
+    ".section .text.spincal_imu_full_m4f,\"ax\",%progbits",
+    ".global spincal_imu_full_m4f",
+    ".type spincal_imu_full_m4f,%function",
     ".p2align 2",
     ".thumb_func",
-    "spincal_imu_lever_m4f:",
-    "spincal_full 0",
-    ".size spincal_imu_lever_m4f, . - spincal_imu_lever_m4f",
+    "spincal_imu_full_m4f:",
+    "spincal_full 0, 1",
+    ".size spincal_imu_full_m4f, . - spincal_imu_full_m4f",
     //
-    ".section .text.spincal_imu_asym_m4f,\"ax\",%progbits",
-    ".global spincal_imu_asym_m4f",
-    ".type spincal_imu_asym_m4f,%function",
+    ".section .text.spincal_imu_full_asym_m4f,\"ax\",%progbits",
+    ".global spincal_imu_full_asym_m4f",
+    ".type spincal_imu_full_asym_m4f,%function",
     ".p2align 2",
     ".thumb_func",
-    "spincal_imu_asym_m4f:",
-    "spincal_full 1",
-    ".size spincal_imu_asym_m4f, . - spincal_imu_asym_m4f",
+    "spincal_imu_full_asym_m4f:",
+    "spincal_full 1, 1",
+    ".size spincal_imu_full_asym_m4f, . - spincal_imu_full_asym_m4f",
+    //
+    ".section .text.spincal_imu_poly_m4f,\"ax\",%progbits",
+    ".global spincal_imu_poly_m4f",
+    ".type spincal_imu_poly_m4f,%function",
+    ".p2align 2",
+    ".thumb_func",
+    "spincal_imu_poly_m4f:",
+    "spincal_full 0, 0",
+    ".size spincal_imu_poly_m4f, . - spincal_imu_poly_m4f",
+    //
+    ".section .text.spincal_imu_poly_asym_m4f,\"ax\",%progbits",
+    ".global spincal_imu_poly_asym_m4f",
+    ".type spincal_imu_poly_asym_m4f,%function",
+    ".p2align 2",
+    ".thumb_func",
+    "spincal_imu_poly_asym_m4f:",
+    "spincal_full 1, 0",
+    ".size spincal_imu_poly_asym_m4f, . - spincal_imu_poly_asym_m4f",
 );
 
 unsafe extern "C" {
@@ -457,16 +500,28 @@ unsafe extern "C" {
         out: *mut Corrected<6>,
         n: usize,
     ) -> usize;
-    fn spincal_imu_lever_m4f(
-        block: *mut LeverBlock,
-        raw: *const [i32; 6],
-        out: *mut Corrected<6>,
+    fn spincal_imu_full_m4f(
+        b: *mut FullBlock,
+        r: *const [i32; 6],
+        o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
-    fn spincal_imu_asym_m4f(
-        block: *mut LeverBlock,
-        raw: *const [i32; 6],
-        out: *mut Corrected<6>,
+    fn spincal_imu_full_asym_m4f(
+        b: *mut FullBlock,
+        r: *const [i32; 6],
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_poly_m4f(
+        b: *mut FullBlock,
+        r: *const [i32; 6],
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_poly_asym_m4f(
+        b: *mut FullBlock,
+        r: *const [i32; 6],
+        o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
 }
@@ -481,17 +536,17 @@ pub(crate) fn linear(block: &LinearBlock, raw: &[[i32; 6]], out: &mut [Corrected
     unsafe { spincal_imu_linear_m4f(block, raw.as_ptr(), out.as_mut_ptr(), n) }
 }
 
-/// Corrects samples with the full kernel until the first one outside a window; returns how many
-/// it corrected and leaves the last corrected rate in `block.prev_rate`.
-pub(crate) fn lever(block: &mut LeverBlock, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
+/// Corrects samples with the `kind` full kernel until the first one outside a window; returns
+/// how many it corrected. With the lever arm it leaves the last corrected rate in
+/// `block.prev_rate`.
+#[inline(always)]
+pub(crate) fn full(
+    kind: Full,
+    block: &mut FullBlock,
+    raw: &[[i32; 6]],
+    out: &mut [Corrected<6>],
+) -> usize {
     let n = raw.len().min(out.len());
-    // SAFETY: as for `linear`; the kernel also writes `block.prev_rate`.
-    unsafe { spincal_imu_lever_m4f(block, raw.as_ptr(), out.as_mut_ptr(), n) }
-}
-
-/// As [`lever`], with the asymmetric scale term.
-pub(crate) fn asym(block: &mut LeverBlock, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
-    let n = raw.len().min(out.len());
-    // SAFETY: as for `lever`; the kernel also reads `block.asym`.
-    unsafe { spincal_imu_asym_m4f(block, raw.as_ptr(), out.as_mut_ptr(), n) }
+    // SAFETY: as for `linear`; these kernels also write `block.prev_rate` (with the lever arm).
+    unsafe { (kind.0)(block, raw.as_ptr(), out.as_mut_ptr(), n) }
 }

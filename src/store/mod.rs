@@ -221,7 +221,10 @@ impl<F: NorFlash> Store<F> {
         let magic = word(COMMIT_SPAN);
         let seq = u32::from_le_bytes(word(COMMIT_SPAN + 4));
         let len = u32::from_le_bytes(word(COMMIT_SPAN + 8));
-        if word(0) != COMMIT || magic != MAGIC || len == 0 || len as usize > self.capacity() {
+        // A length no valid blob can have (beyond the slot, or beyond the largest blob) makes
+        // the slot invalid; it must never turn into an error that hides the other slot.
+        let longest = self.capacity().min(blob::MAX_BLOB_LEN);
+        if word(0) != COMMIT || magic != MAGIC || len == 0 || len as usize > longest {
             return Ok(Err(SlotState::Invalid));
         }
         Ok(Ok(SlotInfo { index, seq, len }))

@@ -13,7 +13,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use spincal::blob;
 use spincal::correct::{Corrected, ImuCorrector};
-use spincal::model::{Calibration, CalibrationData};
+use spincal::model::{Calibration, CalibrationData, Sensor};
 use spincal_firmware::{stack, timer};
 
 const N: usize = 256;
@@ -129,6 +129,21 @@ fn main() -> ! {
         )
     });
     black_box(&block_out);
+
+    // The same without the lever arm (the accelerometer at the reference point).
+    let mut no_lever = CalibrationData::example_imu_polynomial();
+    if let Sensor::Imu { lever_arm, .. } = &mut no_lever.sensor {
+        *lever_arm = None;
+    }
+    let Ok(no_lever) = Calibration::new(no_lever) else {
+        fail("no-lever example invalid")
+    };
+    let Ok(mut c) = ImuCorrector::new(&no_lever, 1000.0) else {
+        fail("no-lever corrector")
+    };
+    c.set_environment(22.5, 3.3);
+    bench_batch("imu_poly_no_lever_batch", &mut c, &inside);
+    bench_one("imu_poly_no_lever_call", &mut c, &inside);
 
     let Ok(mut c) = ImuCorrector::new(&full, 1000.0) else {
         fail("full corrector")

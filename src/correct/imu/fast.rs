@@ -5,7 +5,7 @@
 
 use super::super::Corrected;
 use super::super::kernel::Shape;
-use super::super::m4f::{self, Hot, LeverBlock, LinearBlock};
+use super::super::m4f::{self, Full, FullBlock, Hot, LinearBlock};
 use super::{ImuCorrector, split};
 
 impl ImuCorrector<'_> {
@@ -15,22 +15,18 @@ impl ImuCorrector<'_> {
         let flags = self.env_flags.bits();
         self.hot = match (self.mode.shape, self.mode.lever) {
             (Shape::Linear, _) => Hot::Linear(LinearBlock::new(&self.accel, &self.gyro, flags)),
-            (shape @ (Shape::Polynomial | Shape::Asymmetric), true) => {
-                let block = self.lever_block();
-                if shape == Shape::Asymmetric {
-                    Hot::Asym(block)
-                } else {
-                    Hot::Lever(block)
-                }
-            }
+            (shape @ (Shape::Polynomial | Shape::Asymmetric), lever) => Hot::Full(
+                self.full_block(),
+                Full::new(shape == Shape::Asymmetric, lever),
+            ),
             _ => Hot::None,
         };
     }
 
     /// The full kernels' block for the current coefficients.
     #[inline(always)]
-    fn lever_block(&self) -> LeverBlock {
-        LeverBlock::new(
+    fn full_block(&self) -> FullBlock {
+        FullBlock::new(
             &self.accel,
             &self.gyro,
             self.env_flags.bits(),
@@ -49,13 +45,9 @@ impl ImuCorrector<'_> {
         match &mut self.hot {
             Hot::None => None,
             Hot::Linear(block) => Some(m4f::linear(block, raw, out)),
-            Hot::Lever(block) => {
+            Hot::Full(block, kind) => {
                 let state = (&mut self.prev_rate, self.accel.limit);
-                Some(with_lever_state(block, state, m4f::lever, raw, out))
-            }
-            Hot::Asym(block) => {
-                let state = (&mut self.prev_rate, self.accel.limit);
-                Some(with_lever_state(block, state, m4f::asym, raw, out))
+                Some(with_lever_state(block, state, *kind, raw, out))
             }
         }
     }
@@ -64,7 +56,9 @@ impl ImuCorrector<'_> {
     fn slow_m4f(&mut self, raw: [i32; 6], out: &mut Corrected<6>) {
         match (self.mode.shape, self.mode.lever) {
             (Shape::Asymmetric, true) => self.slow::<true, true, true>(raw, out),
-            (_, true) => self.slow::<true, false, true>(raw, out),
+            (Shape::Asymmetric, false) => self.slow::<true, true, false>(raw, out),
+            (Shape::Polynomial, true) => self.slow::<true, false, true>(raw, out),
+            (Shape::Polynomial, false) => self.slow::<true, false, false>(raw, out),
             _ => self.slow::<false, false, false>(raw, out),
         }
     }
@@ -118,18 +112,19 @@ impl ImuCorrector<'_> {
     }
 }
 
-/// A lever-arm kernel with the corrector's lever-arm state: the previous rate (handed in and
-/// back) and the accelerometer window's limit (0 until the rate derivative is primed).
+/// A full kernel with the corrector's lever-arm state: the previous rate (handed in and back)
+/// and the accelerometer window's limit (0 until the rate derivative is primed).
+#[inline(always)]
 fn with_lever_state(
-    block: &mut LeverBlock,
+    block: &mut FullBlock,
     (prev_rate, accel_limit): (&mut [f32; 3], u32),
-    kernel: fn(&mut LeverBlock, &[[i32; 6]], &mut [Corrected<6>]) -> usize,
+    kind: Full,
     raw: &[[i32; 6]],
     out: &mut [Corrected<6>],
 ) -> usize {
     block.prev_rate = *prev_rate;
     block.header.accel_limit = accel_limit;
-    let done = kernel(block, raw, out);
+    let done = m4f::full(kind, block, raw, out);
     *prev_rate = block.prev_rate;
     done
 }
