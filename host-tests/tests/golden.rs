@@ -1,5 +1,6 @@
-//! Golden byte vectors of the example blobs (single axis, triad, and three IMUs: full, linear,
-//! polynomial without asymmetry) and the correction outputs they must produce.
+//! Golden byte vectors of the example blobs (single axis, triad, and five IMUs: full, linear,
+//! without asymmetry, and both of those without the lever arm) and the correction outputs they
+//! must produce.
 //!
 //! A format or arithmetic change shows up here as a diff of checked-in files; accept a
 //! deliberate change with `SPINCAL_ACCEPT=1 cargo test -p host-tests --test golden` and commit

@@ -1,8 +1,7 @@
-//! Hand-scheduled Cortex-M4F kernels for the IMU shapes that matter most: bias and matrix only
-//! (`Linear`), and polynomial with g-sensitivity and lever arm (the spinning round's full
-//! model), with or without the asymmetric scale; run by `ImuCorrector::correct` and
-//! `correct_batch` (`imu/fast.rs`). Compiled only for hard-float Arm targets; everywhere else,
-//! and for the other shapes (nonlinear without a lever arm), the compiled Rust path runs.
+//! Hand-scheduled Cortex-M4F kernels for every IMU shape: bias and matrix only (`Linear`), and
+//! polynomial with g-sensitivity (the full model), with or without the asymmetric scale and the
+//! lever arm; run by `ImuCorrector::correct` and `correct_batch` (`imu/fast.rs`). Compiled only
+//! for hard-float Arm targets; everywhere else the compiled Rust path runs.
 //!
 //! # Why assembly
 //!

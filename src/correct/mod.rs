@@ -16,8 +16,7 @@
 //! | IMU         | [`ImuCorrector`]    | `[i32; 6]` | `[f32; 6]`: ax ay az gx gy gz |
 //!
 //! On hard-float Arm targets (the Cortex-M4F), `ImuCorrector::correct` and `correct_batch` run
-//! hand-scheduled kernels for bias and matrix only, and for the full model with g-sensitivity
-//! and lever arm (with or without asymmetry); they give the same bits as the compiled path
+//! hand-scheduled kernels for every IMU shape; they give the same bits as the compiled path
 //! (`BENCHMARKS.md`).
 //!
 //! None of these functions can panic, for any input, NaN temperatures and voltages included.
