@@ -145,6 +145,35 @@ CREATE TABLE IF NOT EXISTS records (
 CREATE INDEX IF NOT EXISTS records_serial ON records (serial, time);
 ";
 
+/// One row of `records`.
+struct Row<'a> {
+    serial: &'a str,
+    kind: &'static str,
+    time: i64,
+    data_hash: String,
+    model: Option<String>,
+    coefficients: Option<String>,
+    covariance: Option<String>,
+    report: Option<&'a Path>,
+    blob: &'a [u8],
+    verification: Option<String>,
+    outcome: String,
+    record: Option<String>,
+}
+
+/// The observation-data hash a blob carries, hex; `None` when it does not decode.
+fn blob_hash(blob: &[u8]) -> Option<String> {
+    let cal = spincal::blob::decode(blob).ok()?;
+    Some(
+        cal.data()
+            .identity
+            .data_hash
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect(),
+    )
+}
+
 fn now() -> i64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
@@ -207,30 +236,20 @@ impl Db {
             .iter()
             .map(|p| p.axes.iter().map(|a| &a.covariance).collect())
             .collect();
-        let tx = self
-            .conn
-            .transaction()
-            .map_err(|e| explain(&self.path, &e))?;
-        tx.execute(
-            "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
-             VALUES (?1, 'fit', ?2, ?3, ?4, ?5, ?6, ?7, ?8, NULL, ?9, ?10)",
-            params![
-                rec.serial,
-                rec.created_unix_s as i64,
-                rec.data_hash,
-                models.join("; "),
-                serde_json::to_string(&coefficients).unwrap_or_default(),
-                serde_json::to_string(&covariance).unwrap_or_default(),
-                report.map(|p| p.display().to_string()),
-                blob,
-                format!("{:?}", rec.verdict).to_lowercase(),
-                serde_json::to_string(rec).unwrap_or_default(),
-            ],
-        )
-        .map_err(|e| explain(&self.path, &e))?;
-        let id = tx.last_insert_rowid();
-        tx.commit().map_err(|e| explain(&self.path, &e))?;
-        Ok(id)
+        self.insert(&Row {
+            serial: &rec.serial,
+            kind: "fit",
+            time: rec.created_unix_s as i64,
+            data_hash: rec.data_hash.clone(),
+            model: Some(models.join("; ")),
+            coefficients: Some(serde_json::to_string(&coefficients).unwrap_or_default()),
+            covariance: Some(serde_json::to_string(&covariance).unwrap_or_default()),
+            report,
+            blob,
+            verification: None,
+            outcome: format!("{:?}", rec.verdict).to_lowercase(),
+            record: Some(serde_json::to_string(rec).unwrap_or_default()),
+        })
     }
 
     /// Records a calibration without equipment (`calflash selfcal`): its JSON record
@@ -246,42 +265,22 @@ impl Db {
         report: Option<&Path>,
         blob: &[u8],
     ) -> Result<i64, String> {
-        let hash = spincal::blob::decode(blob).map_or_else(
-            |_| String::new(),
-            |c| {
-                c.data()
-                    .identity
-                    .data_hash
-                    .iter()
-                    .map(|b| format!("{b:02x}"))
-                    .collect()
-            },
-        );
         let coefficients = serde_json::json!({"accel": record["accel"], "gyro": record["gyro"]["matrix_rad_s_per_count"], "gyro_bias_counts": record["gyro"]["bias_counts"]});
         let covariance = serde_json::json!({"accel": record["accel"]["covariance"], "gyro": record["gyro"]["covariance"]});
-        let tx = self
-            .conn
-            .transaction()
-            .map_err(|e| explain(&self.path, &e))?;
-        tx.execute(
-            "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
-             VALUES (?1, 'fit', ?2, ?3, 'selfcal: accelerometer from |a| = g, gyro from rotations', ?4, ?5, ?6, ?7, NULL, ?8, ?9)",
-            params![
-                serial,
-                now(),
-                hash,
-                coefficients.to_string(),
-                covariance.to_string(),
-                report.map(|p| p.display().to_string()),
-                blob,
-                record["verdict"].as_str().unwrap_or("").to_lowercase(),
-                record.to_string(),
-            ],
-        )
-        .map_err(|e| explain(&self.path, &e))?;
-        let id = tx.last_insert_rowid();
-        tx.commit().map_err(|e| explain(&self.path, &e))?;
-        Ok(id)
+        self.insert(&Row {
+            serial,
+            kind: "fit",
+            time: now(),
+            data_hash: blob_hash(blob).unwrap_or_default(),
+            model: Some("selfcal: accelerometer from |a| = g, gyro from rotations".into()),
+            coefficients: Some(coefficients.to_string()),
+            covariance: Some(covariance.to_string()),
+            report,
+            blob,
+            verification: None,
+            outcome: record["verdict"].as_str().unwrap_or("").to_lowercase(),
+            record: Some(record.to_string()),
+        })
     }
 
     /// Records a flash (done or failed): the unit, the blob, the verification.
@@ -295,26 +294,48 @@ impl Db {
         verification: &serde_json::Value,
         outcome: &str,
     ) -> Result<i64, String> {
-        let (hash, coefficients) = match spincal::blob::decode(blob) {
-            Ok(cal) => (
-                cal.data()
-                    .identity
-                    .data_hash
-                    .iter()
-                    .map(|b| format!("{b:02x}"))
-                    .collect::<String>(),
-                Some(format!("{:?}", cal.data().sensor)),
-            ),
-            Err(_) => (String::new(), None),
-        };
+        let sensor = spincal::blob::decode(blob)
+            .ok()
+            .map(|cal| format!("{:?}", cal.data().sensor));
+        self.insert(&Row {
+            serial: unit,
+            kind: "flash",
+            time: now(),
+            data_hash: blob_hash(blob).unwrap_or_default(),
+            model: None,
+            coefficients: sensor,
+            covariance: None,
+            report: None,
+            blob,
+            verification: Some(verification.to_string()),
+            outcome: outcome.into(),
+            record: None,
+        })
+    }
+
+    /// Inserts one record in one transaction; its id.
+    fn insert(&mut self, row: &Row<'_>) -> Result<i64, String> {
         let tx = self
             .conn
             .transaction()
             .map_err(|e| explain(&self.path, &e))?;
         tx.execute(
             "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
-             VALUES (?1, 'flash', ?2, ?3, NULL, ?4, NULL, NULL, ?5, ?6, ?7, NULL)",
-            params![unit, now(), hash, coefficients, blob, verification.to_string(), outcome],
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+            params![
+                row.serial,
+                row.kind,
+                row.time,
+                row.data_hash,
+                row.model,
+                row.coefficients,
+                row.covariance,
+                row.report.map(|p| p.display().to_string()),
+                row.blob,
+                row.verification,
+                row.outcome,
+                row.record,
+            ],
         )
         .map_err(|e| explain(&self.path, &e))?;
         let id = tx.last_insert_rowid();
