@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use spincal::model::{Quantity, Rails, Span};
 
+use super::outputs::Outputs;
 use crate::obs::Format;
 use crate::report::{self, terminal::num, terminal::pval};
 use crate::sensor::{self, Options, Verdict, record::Record, single, triad};
@@ -47,15 +48,9 @@ pub struct CalibrateArgs {
     /// The unit's serial number (1 to 16 printable ASCII characters).
     #[arg(long)]
     pub serial: String,
-    /// Write the blob here.
-    #[arg(long)]
-    pub blob: Option<PathBuf>,
-    /// Write the HTML report here.
-    #[arg(long)]
-    pub report: Option<PathBuf>,
-    /// Write the calibration record (JSON, for `calflash compare`) here.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
+    /// Blob, report, record and unit history.
+    #[command(flatten)]
+    pub out: Outputs,
     /// A single-axis model instead of the IEEE 1293 preset (e.g. "output ~ 1 + input + input^2").
     #[arg(long)]
     pub model: Option<String>,
@@ -92,12 +87,6 @@ pub struct CalibrateArgs {
     /// Field separator of the data.
     #[arg(long, value_enum, default_value = "auto")]
     pub format: Format,
-    /// The unit history database (default: $CALFLASH_DB, else the user's data directory).
-    #[arg(long)]
-    pub db: Option<PathBuf>,
-    /// Do not record the fit.
-    #[arg(long)]
-    pub no_db: bool,
 }
 
 pub(crate) fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
@@ -166,44 +155,16 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
     }
     .map_err(|e| e.to_string())?;
     let data_name = args.data.display().to_string();
-    let html = args
-        .report
-        .as_ref()
-        .map(|_| report::html::render(&c, &data_name))
-        .transpose()?;
     let record = Record::new(&c, &data_name);
-    if let Some(p) = &args.blob {
-        report::write_atomically(p, |w| w.write_all(&c.blob))?;
-    }
-    if let (Some(p), Some(html)) = (&args.report, &html) {
-        report::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
-    }
-    if let Some(p) = &args.json {
-        report::write_atomically(p, |w| {
-            serde_json::to_writer_pretty(&mut *w, &record).map_err(std::io::Error::other)
-        })?;
-    }
+    args.out
+        .write(&c.blob, &record, || report::html::render(&c, &data_name))?;
     print!("{}", summary(&c, args));
-    if !args.no_db {
-        let path = args.db.clone().unwrap_or_else(crate::db::default_path);
-        let fallback = serde_json::to_value(&record).unwrap_or_default();
-        let report_path = args.report.as_deref();
-        let beside = crate::db::beside(&[
-            args.blob.as_deref(),
-            args.json.as_deref(),
-            args.report.as_deref(),
-        ]);
-        let serial = c.data.identity.serial.as_str();
-        let said = crate::db::record_or_save(
-            &path,
-            |d| d.record_fit(&record, report_path, &c.blob),
-            &fallback,
-            &beside,
-            serial,
-        )
-        .map_err(|e| format!("the calibration is written but {e}"))?;
-        println!("  {said}");
-    }
+    let serial = c.data.identity.serial.as_str();
+    let fallback = serde_json::to_value(&record).unwrap_or_default();
+    let report_path = args.out.report.as_deref();
+    args.out.record(serial, &fallback, |d| {
+        d.record_fit(&record, report_path, &c.blob)
+    })?;
     Ok(c.verdict())
 }
 
@@ -265,9 +226,9 @@ fn summary(c: &sensor::Calibrated, args: &CalibrateArgs) -> String {
         c.blob.len()
     );
     for (p, what) in [
-        (&args.blob, "blob"),
-        (&args.report, "report"),
-        (&args.json, "record"),
+        (&args.out.blob, "blob"),
+        (&args.out.report, "report"),
+        (&args.out.json, "record"),
     ] {
         if let Some(p) = p {
             let _ = writeln!(s, "  {what}: {}", p.display());

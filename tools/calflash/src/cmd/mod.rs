@@ -9,6 +9,7 @@ pub mod fit;
 pub mod flash;
 pub mod history;
 pub mod image;
+pub mod outputs;
 pub mod selfcal;
 pub mod simulate;
 pub mod threshold;

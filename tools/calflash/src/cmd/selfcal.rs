@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 use spincal::model::{Rails, Span};
 
+use super::outputs::Outputs;
 use crate::nonlinear::selfcal::{self, GyroBias, Options, Quadratic};
 use crate::obs::recording;
 use crate::report;
@@ -48,21 +49,9 @@ pub struct SelfcalArgs {
     /// Calibrated supply-voltage span, V (LO:HI).
     #[arg(long, default_value = "0:100")]
     pub volt_span: String,
-    /// Write the blob here.
-    #[arg(long)]
-    pub blob: Option<PathBuf>,
-    /// Write the HTML report here.
-    #[arg(long)]
-    pub report: Option<PathBuf>,
-    /// Write the JSON record here.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
-    /// The unit history database (default: $CALFLASH_DB, else the user's data directory).
-    #[arg(long)]
-    pub db: Option<PathBuf>,
-    /// Do not record the calibration.
-    #[arg(long)]
-    pub no_db: bool,
+    /// Blob, report, record and unit history.
+    #[command(flatten)]
+    pub out: Outputs,
 }
 
 /// Runs `calflash selfcal`.
@@ -118,36 +107,14 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
     );
     let check = build::build_and_check(&data, &c, &rec)?;
     let name = serial.as_str();
-    if let Some(p) = &args.blob {
-        report::write_atomically(p, |w| w.write_all(&check.blob))?;
-    }
     let record = report::selfcal::record(&c, &rec, &check, name);
-    if let Some(p) = &args.json {
-        report::write_atomically(p, |w| {
-            serde_json::to_writer_pretty(&mut *w, &record).map_err(std::io::Error::other)
-        })?;
-    }
-    if let Some(p) = &args.report {
-        let html = report::selfcal::html(&c, &rec, &check, name)?;
-        report::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
-    }
+    args.out.write(&check.blob, &record, || {
+        report::selfcal::html(&c, &rec, &check, name)
+    })?;
     print!("{}", report::selfcal::summary(&c, &rec, &check, name));
-    if !args.no_db {
-        let path = args.db.clone().unwrap_or_else(crate::db::default_path);
-        let beside = crate::db::beside(&[
-            args.blob.as_deref(),
-            args.json.as_deref(),
-            args.report.as_deref(),
-        ]);
-        let said = crate::db::record_or_save(
-            &path,
-            |d| d.record_selfcal(name, &record, args.report.as_deref(), &check.blob),
-            &record,
-            &beside,
-            name,
-        )
-        .map_err(|e| format!("the calibration is written but {e}"))?;
-        println!("  {said}");
-    }
+    let report_path = args.out.report.as_deref();
+    args.out.record(name, &record, |d| {
+        d.record_selfcal(name, &record, report_path, &check.blob)
+    })?;
     Ok(())
 }
