@@ -208,8 +208,17 @@ pub enum Error {
     EncodePayloadTooLong,
     /// The calibration is for another kind of sensor than the corrector.
     CorrectorWrongSensor,
-    /// A sample rate that is not finite and positive.
+    /// A sample rate that is not finite and positive, or above
+    /// [`MAX_SAMPLE_RATE_HZ`](crate::model::MAX_SAMPLE_RATE_HZ).
     CorrectorBadSampleRate,
+    /// With a lever arm, an accelerometer axis must sense mainly along itself: the diagonal of
+    /// the inverse of its scale-misalignment matrix must dominate its row.
+    InvalidSensingDirection {
+        /// The coefficient set.
+        set: u8,
+        /// The accelerometer axis.
+        axis: u8,
+    },
 }
 
 impl fmt::Display for Field {
@@ -366,9 +375,16 @@ impl fmt::Display for Error {
             Error::CorrectorWrongSensor => {
                 f.write_str("the calibration is for another kind of sensor than this corrector")
             }
-            Error::CorrectorBadSampleRate => {
-                f.write_str("the sample rate must be finite and positive")
-            }
+            Error::CorrectorBadSampleRate => write!(
+                f,
+                "the sample rate must be finite, positive and at most {} Hz",
+                crate::model::MAX_SAMPLE_RATE_HZ
+            ),
+            Error::InvalidSensingDirection { set, axis } => write!(
+                f,
+                "accelerometer axis {axis} in coefficient set {set} does not sense mainly \
+                 along itself, so its lever arm cannot be removed"
+            ),
         }
     }
 }

@@ -134,6 +134,18 @@ pub struct Reference {
     /// Smallest distance of a range-checked value to a range boundary, relative to its
     /// magnitude: the range flag of an f32 computation can only differ when this is tiny.
     pub range_margin: f64,
+    /// IMU: the state the next sample's lever term needs (see [`LeverState`]).
+    pub lever: Option<LeverState>,
+}
+
+/// What an IMU correction carries from one sample to the next: the corrected rate and the
+/// lever term (`spincal::model::rotation`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LeverState {
+    /// The corrected rate, rad/s.
+    pub rate: [f64; 3],
+    /// The lever term `e`, m/s^2.
+    pub lever: [f64; 3],
 }
 
 fn margin(v: &Value, lo: f32, hi: f32) -> f64 {
@@ -141,8 +153,9 @@ fn margin(v: &Value, lo: f32, hi: f32) -> f64 {
     d / v.mag.max(1e-30)
 }
 
-/// Reference correction of one sample by the model's definitions. `prev_rate` is the previous
-/// corrected rate for the lever arm's derivative (IMU only).
+/// Reference correction of one sample by the model's definitions. `prev` is what the previous
+/// sample left (IMU only); without it the sample is the first, whose lever term is solved to
+/// its fixed point with no rate difference.
 #[must_use]
 pub fn correct(
     data: &CalibrationData,
@@ -150,16 +163,39 @@ pub fn correct(
     volt: f64,
     raw: &[i32],
     sample_rate: f64,
-    prev_rate: Option<[f64; 3]>,
+    prev: Option<LeverState>,
 ) -> Reference {
-    let (values, saturated, out_of_range, range_margin) =
-        correct_parts(data, t, volt, raw, sample_rate, prev_rate);
+    let (values, saturated, out_of_range, range_margin, lever) =
+        correct_parts(data, t, volt, raw, sample_rate, prev);
     Reference {
         values,
         saturated,
         out_of_range,
         range_margin,
+        lever,
     }
+}
+
+/// The lever term by its definition (`spincal::model::rotation`): with `m` the device's
+/// accelerometer matrix (`S^-1` up to a diagonal), `N` the rows of `m^-1` normalised to a unit
+/// diagonal, `e = N^-1 [n_i . (w x (w x r_i) + dw x r_i)]_i`.
+fn lever_term(
+    m: &nalgebra::Matrix3<f64>,
+    r: &[[f32; 3]; 3],
+    w: [f64; 3],
+    dw: [f64; 3],
+) -> [f64; 3] {
+    use nalgebra::{Matrix3, Vector3};
+    let minv = m.try_inverse().expect("validated matrix");
+    let n = Matrix3::from_fn(|i, j| minv[(i, j)] / minv[(i, i)]);
+    let om = Vector3::from(w);
+    let d = Vector3::from_fn(|i, _| {
+        let ri = Vector3::from(r[i].map(f64::from));
+        let at = om.cross(&om.cross(&ri)) + Vector3::from(dw).cross(&ri);
+        n.row(i).transpose().dot(&at)
+    });
+    let e = n.try_inverse().expect("normalised directions") * d;
+    [e[0], e[1], e[2]]
 }
 
 fn correct_parts(
@@ -168,8 +204,8 @@ fn correct_parts(
     volt: f64,
     raw: &[i32],
     sample_rate: f64,
-    prev_rate: Option<[f64; 3]>,
-) -> (Vec<Value>, bool, bool, f64) {
+    prev: Option<LeverState>,
+) -> (Vec<Value>, bool, bool, f64, Option<LeverState>) {
     let w = weights(&data.environment, t, volt);
     match &data.sensor {
         Sensor::Single {
@@ -191,7 +227,7 @@ fn correct_parts(
                 full_scale: scale.abs() * half_span(rails, channel),
             };
             let m = margin(&value, channel.range.lo, channel.range.hi);
-            (vec![value], rails.saturated(raw[0]), out, m)
+            (vec![value], rails.saturated(raw[0]), out, m, None)
         }
         Sensor::Triad {
             rails,
@@ -211,7 +247,7 @@ fn correct_parts(
                 .zip(channels)
                 .map(|(v, c)| margin(v, c.range.lo, c.range.hi))
                 .fold(f64::INFINITY, f64::min);
-            (y.to_vec(), sat, out, m)
+            (y.to_vec(), sat, out, m, None)
         }
         Sensor::Imu {
             accel_rails,
@@ -225,15 +261,61 @@ fn correct_parts(
             let acc: Vec<TriadSet> = sets.iter().map(|s: &ImuSet| s.accel).collect();
             let gyr: Vec<TriadSet> = sets.iter().map(|s| s.gyro).collect();
             let (a, _) = triad(&acc, &w, accel, accel_rails, [raw[0], raw[1], raw[2]]);
-            let (mut g, _) = triad(&gyr, &w, gyro, gyro_rails, [raw[3], raw[4], raw[5]]);
-            for (i, gi) in g.iter_mut().enumerate() {
-                for (j, aj) in a.iter().enumerate() {
-                    let gs = mix(&w, |s| f64::from(sets[s].g_sensitivity[i][j]));
-                    gi.y -= gs * aj.y;
-                    gi.mag += (gs * aj.y).abs();
-                    gi.full_scale += (gs * aj.full_scale).abs();
+            let (ws, _) = triad(&gyr, &w, gyro, gyro_rails, [raw[3], raw[4], raw[5]]);
+            let gs: [[f64; 3]; 3] = std::array::from_fn(|i| {
+                std::array::from_fn(|j| mix(&w, |s| f64::from(sets[s].g_sensitivity[i][j])))
+            });
+            // w = ws - G x for the specific force x at the reference point.
+            let rate = |x: &[f64; 3], xmag: &[f64; 3]| -> [Value; 3] {
+                std::array::from_fn(|i| {
+                    let mut v = ws[i];
+                    for j in 0..3 {
+                        v.y -= gs[i][j] * x[j];
+                        v.mag += (gs[i][j] * xmag[j]).abs();
+                        v.full_scale += (gs[i][j] * a[j].full_scale).abs();
+                    }
+                    v
+                })
+            };
+            let ay = [a[0].y, a[1].y, a[2].y];
+            let amag = [a[0].mag, a[1].mag, a[2].mag];
+            let (g, a_ref, state) = match lever_arm {
+                None => (rate(&ay, &amag), a, None),
+                Some(r) => {
+                    let m = nalgebra::Matrix3::from_fn(|i, j| {
+                        mix(&w, |s| f64::from(sets[s].accel.matrix[i][j]))
+                    });
+                    let prev = prev.unwrap_or_else(|| {
+                        // The first sample: the fixed point of e = e(w(a - e)), no rate
+                        // difference.
+                        let mut e = [0.0; 3];
+                        let mut om = [0.0; 3];
+                        for _ in 0..50 {
+                            let x = [ay[0] - e[0], ay[1] - e[1], ay[2] - e[2]];
+                            let g = rate(&x, &amag);
+                            om = [g[0].y, g[1].y, g[2].y];
+                            e = lever_term(&m, r, om, [0.0; 3]);
+                        }
+                        LeverState { rate: om, lever: e }
+                    });
+                    let x = std::array::from_fn(|j| ay[j] - prev.lever[j]);
+                    let xmag = std::array::from_fn(|j| amag[j] + prev.lever[j].abs());
+                    let g = rate(&x, &xmag);
+                    let om = [g[0].y, g[1].y, g[2].y];
+                    let dw = std::array::from_fn(|k| (om[k] - prev.rate[k]) * sample_rate);
+                    let e = lever_term(&m, r, om, dw);
+                    // The rounding scale of e: its terms' magnitudes.
+                    let ww: f64 = om.iter().map(|x| x * x).sum();
+                    let dd: f64 = dw.iter().map(|x| x.abs()).sum();
+                    let rr: f64 = r.iter().flatten().map(|x| f64::from(x.abs())).sum();
+                    let a_ref = std::array::from_fn(|i| Value {
+                        y: a[i].y - e[i],
+                        mag: a[i].mag + e[i].abs() + 4.0 * (ww + dd) * rr,
+                        full_scale: a[i].full_scale,
+                    });
+                    (g, a_ref, Some(LeverState { rate: om, lever: e }))
                 }
-            }
+            };
             let out = a
                 .iter()
                 .zip(accel)
@@ -247,38 +329,9 @@ fn correct_parts(
                 .chain(g.iter().zip(gyro))
                 .map(|(v, c)| margin(v, c.range.lo, c.range.hi))
                 .fold(f64::INFINITY, f64::min);
-            let mut a_ref = a;
-            if let Some(r) = lever_arm {
-                let om = [g[0].y, g[1].y, g[2].y];
-                let dw = match prev_rate {
-                    Some(p) => [
-                        (om[0] - p[0]) * sample_rate,
-                        (om[1] - p[1]) * sample_rate,
-                        (om[2] - p[2]) * sample_rate,
-                    ],
-                    None => [0.0; 3],
-                };
-                for (i, ai) in a_ref.iter_mut().enumerate() {
-                    let ri = r[i].map(f64::from);
-                    let cross = |x: [f64; 3], y: [f64; 3]| {
-                        [
-                            x[1] * y[2] - x[2] * y[1],
-                            x[2] * y[0] - x[0] * y[2],
-                            x[0] * y[1] - x[1] * y[0],
-                        ]
-                    };
-                    let centripetal = cross(om, cross(om, ri));
-                    let tangential = cross(dw, ri);
-                    let corr = centripetal[i] + tangential[i];
-                    ai.y -= corr;
-                    ai.mag += corr.abs()
-                        + om.iter().map(|x| x * x).sum::<f64>()
-                            * ri.iter().map(|x| x.abs()).sum::<f64>();
-                }
-            }
             let mut v = a_ref.to_vec();
             v.extend_from_slice(&g);
-            (v, sat, out, m)
+            (v, sat, out, m, state)
         }
     }
 }

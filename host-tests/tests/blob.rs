@@ -306,6 +306,21 @@ fn each_validation_rule_has_its_own_error() {
             Error::InvalidLeverArm { axis: 1 },
         ),
         (
+            "an accelerometer axis sensing along another",
+            Box::new(|d| {
+                if let Sensor::Imu { sets, .. } = &mut d.sensor {
+                    // Axis 2 of set 3 senses mostly along y: its lever term is undefined.
+                    let m = &mut sets.as_mut_slice()[3].accel.matrix;
+                    *m = [
+                        [m[0][0], 0.0, 0.0],
+                        [0.0, m[0][0], 0.0],
+                        [0.0, 3.0 * m[0][0], m[0][0]],
+                    ];
+                }
+            }),
+            Error::InvalidSensingDirection { set: 3, axis: 2 },
+        ),
+        (
             "unbounded output",
             Box::new(|d| {
                 if let Sensor::Imu { sets, .. } = &mut d.sensor {

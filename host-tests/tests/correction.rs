@@ -71,7 +71,7 @@ fn check_against_reference(
         Kind::Imu(r) => f64::from(r),
         _ => 0.0,
     };
-    let mut prev: Option<[f64; 3]> = None;
+    let mut prev = None;
     for raw in raws {
         let (got, flags) = runner.correct(raw);
         let r = reference::correct(data, f64::from(env.0), f64::from(env.1), raw, rate, prev);
@@ -100,9 +100,7 @@ fn check_against_reference(
                 r.range_margin
             );
         }
-        if want.len() == 6 {
-            prev = Some([want[3].y, want[4].y, want[5].y]);
-        }
+        prev = r.lever;
     }
     Ok(())
 }
@@ -313,11 +311,40 @@ fn wrong_sensor_kind_and_bad_rate_are_refused() {
         TriadCorrector::new(&imu).err(),
         Some(spincal::Error::CorrectorWrongSensor)
     );
-    for rate in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+    for rate in [0.0, -1.0, f32::NAN, f32::INFINITY, 2.0e5] {
         assert_eq!(
             ImuCorrector::new(&imu, rate).err(),
             Some(spincal::Error::CorrectorBadSampleRate)
         );
+    }
+}
+
+#[test]
+fn a_lever_feedback_without_bound_is_refused_at_the_gate() {
+    // The g-sensitivity feeds the previous lever term back into the rate. With a physical
+    // unit the loop gain is tiny; with a g-sensitivity of 1 rad/s per m/s^2 and metre-long
+    // arms it grows without bound, and validation refuses it: every validated calibration
+    // makes a corrector at every legal rate.
+    let mut data = CalibrationData::example_imu();
+    if let Sensor::Imu {
+        sets, lever_arm, ..
+    } = &mut data.sensor
+    {
+        *lever_arm = Some([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+        for s in sets.as_mut_slice() {
+            s.g_sensitivity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        }
+    }
+    assert!(matches!(
+        Calibration::new(data),
+        Err(spincal::Error::InvalidUnboundedOutput {
+            part: spincal::Part::Gyro,
+            ..
+        })
+    ));
+    let imu = Calibration::new(CalibrationData::example_imu()).unwrap();
+    for rate in [1.0, 1000.0, spincal::correct::MAX_SAMPLE_RATE_HZ] {
+        assert!(ImuCorrector::new(&imu, rate).is_ok(), "{rate} Hz");
     }
 }
 
@@ -360,9 +387,10 @@ fn lever_arm_first_sample_is_flagged_and_reset_flags_again() {
 }
 
 #[test]
-fn lever_arm_removes_the_centripetal_acceleration_of_a_steady_spin() {
-    // Spin about z at a steady rate: the accelerometer at r sees w x (w x r) on top of the
-    // specific force at the reference point; the corrected output must not.
+fn lever_arm_removes_what_each_axis_senses_of_a_steady_spin() {
+    // Spin about z at a steady rate: accelerometer axis i at r_i senses, along its own
+    // direction n_i, w x (w x r_i) on top of the specific force at the reference point; the
+    // corrected output must not, and the gyro's g-sensitivity must see the reference force.
     let data = CalibrationData::example_imu();
     let cal = Calibration::new(data.clone()).unwrap();
     let mut with = ImuCorrector::new(&cal, 1000.0).unwrap();
@@ -372,31 +400,57 @@ fn lever_arm_removes_the_centripetal_acceleration_of_a_steady_spin() {
     }
     let without_cal = Calibration::new(without_data).unwrap();
     let mut without = ImuCorrector::new(&without_cal, 1000.0).unwrap();
-    with.set_environment(25.0, 3.3);
-    without.set_environment(25.0, 3.3);
+    with.set_environment(30.0, 3.3); // a breakpoint: set 4 as stored
+    without.set_environment(30.0, 3.3);
     let raw = [33_109, 33_329, 36_427, 32_786, 32_430, 32_517 + 20_000];
     let _ = with.correct(raw);
     let a = with.correct(raw);
     let b = without.correct(raw);
     let Sensor::Imu {
-        lever_arm: Some(r), ..
+        lever_arm: Some(r),
+        sets,
+        ..
     } = &data.sensor
     else {
         unreachable!()
     };
+    let set = &sets[4];
+    let m = nalgebra::Matrix3::from_fn(|i, j| f64::from(set.accel.matrix[i][j]));
+    let minv = m.try_inverse().unwrap();
+    let n = nalgebra::Matrix3::from_fn(|i, j| minv[(i, j)] / minv[(i, i)]);
     let w: [f64; 3] = [a.values[3], a.values[4], a.values[5]].map(f64::from);
-    let ww: f64 = w.iter().map(|x| x * x).sum();
+    let sensed = nalgebra::Vector3::from_fn(|i, _| {
+        let c = spincal::model::rotation::force_at(&[0.0; 3], &w, &[0.0; 3], &r[i].map(f64::from));
+        n.row(i).transpose().dot(&nalgebra::Vector3::from(c))
+    });
+    let e = n.try_inverse().unwrap() * sensed;
     for i in 0..3 {
-        let ri = r[i].map(f64::from);
-        let dot: f64 = (0..3).map(|j| w[j] * ri[j]).sum();
-        let centripetal = w[i] * dot - ri[i] * ww;
         let got = f64::from(b.values[i]) - f64::from(a.values[i]);
         assert!(
-            (got - centripetal).abs() < 1e-4 * (1.0 + centripetal.abs()),
-            "axis {i}: {got} vs {centripetal}"
+            (got - e[i]).abs() < 1e-4 * (1.0 + e[i].abs()),
+            "axis {i}: {got} vs {}",
+            e[i]
+        );
+        // The rates differ by the g-sensitivity of the lever term: w = ws - G (a_s - e).
+        let ge: f64 = (0..3)
+            .map(|j| f64::from(set.g_sensitivity[i][j]) * e[j])
+            .sum();
+        let got = f64::from(a.values[i + 3]) - f64::from(b.values[i + 3]);
+        assert!(
+            (got - ge).abs() < 1e-5 * (1.0 + w[i].abs()),
+            "rate {i}: {got} vs {ge}"
         );
     }
-    assert!(ww > 400.0, "the test spins at {} rad/s", ww.sqrt());
+    assert!(w.iter().map(|x| x * x).sum::<f64>() > 400.0);
+    // With misalignment the off-axis components matter: the own-component-only term is off.
+    let own: f64 = (0..3)
+        .map(|i| {
+            let c =
+                spincal::model::rotation::force_at(&[0.0; 3], &w, &[0.0; 3], &r[i].map(f64::from));
+            (c[i] - e[i]).abs()
+        })
+        .fold(0.0, f64::max);
+    assert!(own > 1e-3, "the example's misalignment must matter: {own}");
 }
 
 #[test]

@@ -32,6 +32,7 @@ use core::mem::{offset_of, size_of};
 
 use super::Corrected;
 use super::kernel::TriadKernel;
+use crate::model::rotation::LeverTerms;
 
 /// The block of the current environment's kernel, if its shape has one.
 #[derive(Debug, Clone, Copy)]
@@ -113,7 +114,7 @@ impl LinearBlock {
     }
 }
 
-/// Coefficients of the full kernel in the order it loads them, and the previous gyro rate.
+/// Coefficients of the full kernel in the order it loads them, and the lever-arm state.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct FullBlock {
@@ -128,12 +129,13 @@ pub(crate) struct FullBlock {
     matrix: [f32; 18],
     /// Negated g-sensitivity, row-major.
     neg_g: [[f32; 3]; 3],
-    lever: [[f32; 3]; 3],
-    /// The off-diagonal lever terms times the sample rate that the rate-difference term uses:
-    /// `f0[1], f0[2], f1[0], f1[2], f2[0], f2[1]`.
-    lever_rate: [f32; 6],
-    /// The previous corrected gyro rate; the kernel updates it.
+    /// The previous corrected gyro rate; the lever kernels update it.
     pub prev_rate: [f32; 3],
+    /// The previous lever term; the lever kernels update it.
+    pub prev_lever: [f32; 3],
+    /// The lever term's coefficients, per output the six quadratic then the three tangential
+    /// ones ([`LeverTerms`]).
+    lever: [f32; 27],
     /// Per axis the asymmetry `s`, then its breakpoint `b` (the asymmetric kernel only).
     asym: [f32; 12],
 }
@@ -143,13 +145,20 @@ impl FullBlock {
         accel: &TriadKernel,
         gyro: &TriadKernel,
         flags: u8,
-        g: &[[f32; 3]; 3],
-        lever: &[[f32; 3]; 3],
-        lever_rate: &[[f32; 3]; 3],
-        prev_rate: [f32; 3],
+        neg_g: &[[f32; 3]; 3],
+        terms: &LeverTerms<f32>,
+        (prev_rate, prev_lever): ([f32; 3], [f32; 3]),
     ) -> Self {
         let pick = |f: fn([f32; 5]) -> f32| join(accel.nl.map(f), gyro.nl.map(f));
-        let [[_, f01, f02], [f10, _, f12], [f20, f21, _]] = *lever_rate;
+        let mut lever = [0.0; 27];
+        let per_output = terms
+            .quad
+            .iter()
+            .zip(&terms.tangential)
+            .flat_map(|(q, t)| q.iter().chain(t));
+        for (dst, src) in lever.iter_mut().zip(per_output) {
+            *dst = *src;
+        }
         Self {
             header: Header::new(accel, gyro, flags),
             q: pick(|[q, ..]| q),
@@ -158,10 +167,10 @@ impl FullBlock {
             o: pick(|[_, _, o, ..]| o),
             offset: join(accel.off, gyro.off),
             matrix: matrices(accel, gyro),
-            neg_g: g.map(|row| row.map(|x| -x)),
-            lever: *lever,
-            lever_rate: [f01, f02, f10, f12, f20, f21],
+            neg_g: *neg_g,
             prev_rate,
+            prev_lever,
+            lever,
             asym: {
                 let mut sb = [0.0; 12];
                 let (s, b) = (pick(|[.., s, _]| s), pick(|[.., b]| b));
@@ -207,10 +216,10 @@ const _: () = {
     assert!(offset_of!(FullBlock, offset) == 132);
     assert!(offset_of!(FullBlock, matrix) == 156);
     assert!(offset_of!(FullBlock, neg_g) == 228);
-    assert!(offset_of!(FullBlock, lever) == 264);
-    assert!(offset_of!(FullBlock, lever_rate) == 300);
-    assert!(offset_of!(FullBlock, prev_rate) == 324);
-    assert!(offset_of!(FullBlock, asym) == 336);
+    assert!(offset_of!(FullBlock, prev_rate) == 264);
+    assert!(offset_of!(FullBlock, prev_lever) == 276);
+    assert!(offset_of!(FullBlock, lever) == 288);
+    assert!(offset_of!(FullBlock, asym) == 396);
     assert!(offset_of!(Corrected<6>, values) == 0);
     assert!(offset_of!(Corrected<6>, flags) == 24);
     assert!(size_of::<Corrected<6>>() == 28);
@@ -316,8 +325,9 @@ core::arch::global_asm!(
     ".size spincal_imu_linear_m4f, . - spincal_imu_linear_m4f",
     //
     // Full: per axis v = w - delta, u = v + v (v (q + k v) + o |v|) (+ s |v - b| with `asym`);
-    // y = off + M u per triad; gyro w_i += (-g_i) . a; with `lever`, accelerometer a_i moved by
-    // the lever arm with the previous rate. r4 walks the block from `q` to `prev_rate`.
+    // y = off + M u per triad; gyro w_i += (-g_i) . x; with `lever`, x = a - e_prev and the
+    // accelerometer output a - e(w, w - w_prev) (model/rotation.rs). r4 walks the block from
+    // `q` to the lever coefficients.
     ".macro spincal_full asym, lever",
     "spincal_entry",
     "cmp r3, #0",
@@ -359,7 +369,7 @@ core::arch::global_asm!(
     "vmla.f32 s11, s29, s30",
     ".if \\asym",
     // Asymmetry: s -> s12-s17, b -> s18-s23 (the block's end), then |v - b| in s18-s23.
-    "add r5, r0, #336",
+    "add r5, r0, #396",
     "vldm r5, {{s12-s23}}",
     "vsub.f32 s18, s0, s18",
     "vsub.f32 s19, s1, s19",
@@ -408,8 +418,74 @@ core::arch::global_asm!(
     "vmla.f32 s11, s27, s3",
     "vmla.f32 s11, s28, s4",
     "vmla.f32 s11, s29, s5",
-    // -g -> s12-s20, lever rows -> s21-s29.
-    "vldm r4!, {{s12-s29}}",
+    // Gyro w += (-g) . x, with x the specific force at the reference point: a itself without
+    // the lever arm; with it, a less the previous lever term (model/rotation.rs).
+    ".if \\lever",
+    // -g -> s12-s20, previous rate -> s21-s23, previous lever term -> s24-s26; r5 keeps the
+    // address after them for the state's store.
+    "vldm r4!, {{s12-s26}}",
+    "mov r5, r4",
+    "vsub.f32 s24, s6, s24",
+    "vsub.f32 s25, s7, s25",
+    "vsub.f32 s26, s8, s26",
+    "vmla.f32 s9, s12, s24",
+    "vmla.f32 s9, s13, s25",
+    "vmla.f32 s9, s14, s26",
+    "vmla.f32 s10, s15, s24",
+    "vmla.f32 s10, s16, s25",
+    "vmla.f32 s10, s17, s26",
+    "vmla.f32 s11, s18, s24",
+    "vmla.f32 s11, s19, s25",
+    "vmla.f32 s11, s20, s26",
+    // Rate difference d -> s15-s17; monomials w0^2 w1^2 w2^2 w0w1 w0w2 w1w2 -> s0-s5.
+    "vsub.f32 s15, s9, s21",
+    "vsub.f32 s16, s10, s22",
+    "vsub.f32 s17, s11, s23",
+    "vmul.f32 s0, s9, s9",
+    "vmul.f32 s1, s10, s10",
+    "vmul.f32 s2, s11, s11",
+    "vmul.f32 s3, s9, s10",
+    "vmul.f32 s4, s9, s11",
+    "vmul.f32 s5, s10, s11",
+    // Lever term e_j = quad_j . m + tan_j . d -> s12-s14: output 0 and five terms of
+    // output 1 from the first load (s18-s31), the rest from the second (s18-s30).
+    "vldm r4!, {{s18-s31}}",
+    "vmul.f32 s12, s18, s0",
+    "vmla.f32 s12, s19, s1",
+    "vmla.f32 s12, s20, s2",
+    "vmla.f32 s12, s21, s3",
+    "vmla.f32 s12, s22, s4",
+    "vmla.f32 s12, s23, s5",
+    "vmla.f32 s12, s24, s15",
+    "vmla.f32 s12, s25, s16",
+    "vmla.f32 s12, s26, s17",
+    "vmul.f32 s13, s27, s0",
+    "vmla.f32 s13, s28, s1",
+    "vmla.f32 s13, s29, s2",
+    "vmla.f32 s13, s30, s3",
+    "vmla.f32 s13, s31, s4",
+    "vldm r4!, {{s18-s30}}",
+    "vmla.f32 s13, s18, s5",
+    "vmla.f32 s13, s19, s15",
+    "vmla.f32 s13, s20, s16",
+    "vmla.f32 s13, s21, s17",
+    "vmul.f32 s14, s22, s0",
+    "vmla.f32 s14, s23, s1",
+    "vmla.f32 s14, s24, s2",
+    "vmla.f32 s14, s25, s3",
+    "vmla.f32 s14, s26, s4",
+    "vmla.f32 s14, s27, s5",
+    "vmla.f32 s14, s28, s15",
+    "vmla.f32 s14, s29, s16",
+    "vmla.f32 s14, s30, s17",
+    // f = a - e; store the new rate and lever term as the state.
+    "vsub.f32 s6, s6, s12",
+    "vsub.f32 s7, s7, s13",
+    "vsub.f32 s8, s8, s14",
+    "vstmdb r5!, {{s9-s14}}",
+    ".else",
+    // -g -> s12-s20.
+    "vldm r4, {{s12-s20}}",
     "vmla.f32 s9, s12, s6",
     "vmla.f32 s9, s13, s7",
     "vmla.f32 s9, s14, s8",
@@ -419,38 +495,6 @@ core::arch::global_asm!(
     "vmla.f32 s11, s18, s6",
     "vmla.f32 s11, s19, s7",
     "vmla.f32 s11, s20, s8",
-    // f01 f02 f10 f12 f20 f21 -> s12-s17; previous rate -> s0-s2, then d = w - prev.
-    ".if \\lever",
-    "vldm r4!, {{s12-s17}}",
-    "vldm r4, {{s0-s2}}",
-    "vsub.f32 s0, s9, s0",
-    "vsub.f32 s1, s10, s1",
-    "vsub.f32 s2, s11, s2",
-    "vmul.f32 s3, s9, s9",
-    "vmla.f32 s3, s10, s10",
-    "vmla.f32 s3, s11, s11",
-    "vmul.f32 s4, s9, s21",
-    "vmla.f32 s4, s10, s22",
-    "vmla.f32 s4, s11, s23",
-    "vmls.f32 s6, s9, s4",
-    "vmla.f32 s6, s21, s3",
-    "vmls.f32 s6, s1, s13",
-    "vmla.f32 s6, s2, s12",
-    "vmul.f32 s4, s9, s24",
-    "vmla.f32 s4, s10, s25",
-    "vmla.f32 s4, s11, s26",
-    "vmls.f32 s7, s10, s4",
-    "vmla.f32 s7, s25, s3",
-    "vmls.f32 s7, s2, s14",
-    "vmla.f32 s7, s0, s15",
-    "vmul.f32 s4, s9, s27",
-    "vmla.f32 s4, s10, s28",
-    "vmla.f32 s4, s11, s29",
-    "vmls.f32 s8, s11, s4",
-    "vmla.f32 s8, s29, s3",
-    "vmls.f32 s8, s0, s17",
-    "vmla.f32 s8, s1, s16",
-    "vstm r4, {{s9-s11}}",
     ".endif",
     "spincal_store_and_return",
     ".endm",
@@ -536,8 +580,8 @@ pub(crate) fn linear(block: &LinearBlock, raw: &[[i32; 6]], out: &mut [Corrected
 }
 
 /// Corrects samples with the `kind` full kernel until the first one outside a window; returns
-/// how many it corrected. With the lever arm it leaves the last corrected rate in
-/// `block.prev_rate`.
+/// how many it corrected. With the lever arm it leaves the last corrected rate and lever term
+/// in `block.prev_rate` and `block.prev_lever`.
 #[inline(always)]
 pub(crate) fn full(
     kind: Full,
@@ -546,6 +590,7 @@ pub(crate) fn full(
     out: &mut [Corrected<6>],
 ) -> usize {
     let n = raw.len().min(out.len());
-    // SAFETY: as for `linear`; these kernels also write `block.prev_rate` (with the lever arm).
+    // SAFETY: as for `linear`; these kernels also write `block.prev_rate` and
+    // `block.prev_lever` (with the lever arm).
     unsafe { (kind.0)(block, raw.as_ptr(), out.as_mut_ptr(), n) }
 }

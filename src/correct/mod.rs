@@ -33,7 +33,7 @@ mod single;
 mod triad;
 
 pub use flags::Flags;
-pub use imu::ImuCorrector;
+pub use imu::{ImuCorrector, MAX_SAMPLE_RATE_HZ};
 pub use single::AxisCorrector;
 pub use triad::TriadCorrector;
 

@@ -20,12 +20,14 @@
 //! - triad: `y = M u + offset` with `M` the 3x3 scale-misalignment matrix, row-major
 //!   ([`TriadSet`]): `M` holds the scale factors (SI units per count) on its diagonal and the
 //!   misalignment off it; `offset = -M b` for a bias `b` in counts;
-//! - IMU: the accelerometer triad gives the specific force at the sensor `a_s`; the gyro triad
-//!   gives `w = M_g u_g + offset_g - G a_s` with `G` the g-sensitivity (rad/s per m/s^2,
-//!   [`ImuSet`]); then each accelerometer axis `i`, sitting at `r_i` from the reference point
-//!   (the rows of [`Sensor::Imu::lever_arm`], metres, body frame), is moved to the reference
-//!   point: `a_i = a_s,i - [w x (w x r_i) + dw/dt x r_i]_i`, with `dw/dt` the backward
-//!   difference of `w` at the corrector's sample rate.
+//! - IMU: the accelerometer triad gives the sensor-domain specific force `a`; the gyro triad
+//!   gives `w = M_g u_g + offset_g - G f` with `G` the g-sensitivity (rad/s per m/s^2,
+//!   [`ImuSet`]) acting on the specific force at the reference point `f`; each accelerometer
+//!   axis `i` sits at `r_i` from the reference point (the rows of [`Sensor::Imu::lever_arm`],
+//!   metres, body frame), and `f = a - e(w, dw/dt)` removes what each axis sensed of the
+//!   centripetal and tangential accelerations at its position, with `dw/dt` the backward
+//!   difference of `w` at the corrector's sample rate. [`rotation`] writes the model under
+//!   rotation out in full, forward and inverse.
 //!
 //! The coefficient sets are tabulated at temperature breakpoints and/or voltage breakpoints
 //! ([`Environment`]); the device interpolates them linearly (bilinearly when both tables are
@@ -34,6 +36,7 @@
 mod bounded;
 pub mod examples;
 pub(crate) mod interval;
+pub mod rotation;
 mod sets;
 pub(crate) mod validate;
 
@@ -58,6 +61,10 @@ pub const MAX_SETS: usize = 16;
 pub const SERIAL_CAPACITY: usize = 16;
 /// Longest lever arm accepted, in metres.
 pub const MAX_LEVER_ARM_M: f32 = 10.0;
+/// Highest sample rate an IMU corrector accepts, Hz: above any IMU's output rate, and the rate
+/// at which validation proves the lever term's feedback bounded (the tangential term grows
+/// with the rate, so that bound holds at every lower rate).
+pub const MAX_SAMPLE_RATE_HZ: f32 = 1.0e5;
 
 /// The physical quantity a sensor measures, and so the unit of its corrected output.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

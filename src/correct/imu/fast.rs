@@ -30,23 +30,22 @@ impl ImuCorrector<'_> {
             &self.accel,
             &self.gyro,
             self.env_flags.bits(),
-            &self.g,
-            &self.lever,
-            &self.lever_rate,
-            self.prev_rate,
+            &self.neg_g,
+            &self.terms,
+            (self.prev_rate, self.prev_lever),
         )
     }
 
     /// Runs the kernel until the first sample outside a window; `None` when the shape has no
-    /// kernel. The lever-arm state (previous rate, whether the accelerometer window is open)
-    /// lives in the corrector and is handed to the kernel's block and back.
+    /// kernel. The lever-arm state (previous rate and lever term, whether the accelerometer
+    /// window is open) lives in the corrector and is handed to the kernel's block and back.
     #[inline(always)]
     fn kernel(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> Option<usize> {
         match &mut self.hot {
             Hot::None => None,
             Hot::Linear(block) => Some(m4f::linear(block, raw, out)),
             Hot::Full(block, kind) => {
-                let state = (&mut self.prev_rate, self.accel.limit);
+                let state = (&mut self.prev_rate, &mut self.prev_lever, self.accel.limit);
                 Some(with_lever_state(block, state, *kind, raw, out))
             }
         }
@@ -112,20 +111,23 @@ impl ImuCorrector<'_> {
     }
 }
 
-/// A full kernel with the corrector's lever-arm state: the previous rate (handed in and back)
-/// and the accelerometer window's limit (0 until the rate derivative is primed).
+/// A full kernel with the corrector's lever-arm state: the previous rate and lever term
+/// (handed in and back) and the accelerometer window's limit (0 until the lever state is
+/// primed and inside its bound).
 #[inline(always)]
 fn with_lever_state(
     block: &mut FullBlock,
-    (prev_rate, accel_limit): (&mut [f32; 3], u32),
+    (prev_rate, prev_lever, accel_limit): (&mut [f32; 3], &mut [f32; 3], u32),
     kind: Full,
     raw: &[[i32; 6]],
     out: &mut [Corrected<6>],
 ) -> usize {
     block.prev_rate = *prev_rate;
+    block.prev_lever = *prev_lever;
     block.header.accel_limit = accel_limit;
     let done = m4f::full(kind, block, raw, out);
     *prev_rate = block.prev_rate;
+    *prev_lever = block.prev_lever;
     done
 }
 
