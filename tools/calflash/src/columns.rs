@@ -6,7 +6,8 @@
 //!
 //! Triads and IMUs, in the unit's axes: `f_x f_y f_z` (reference specific force, m/s^2),
 //! `w_x w_y w_z` (reference rate, rad/s), `a_x a_y a_z` (accelerometer counts), `g_x g_y g_z`
-//! (gyro counts), and optionally `temp`, `volt`.
+//! (gyro counts), and optionally `dw_x dw_y dw_z` (angular acceleration, rad/s^2: spin-up and
+//! spin-down), `temp`, `volt`.
 
 /// Reference input of a single axis.
 pub const INPUT: &str = "input";
@@ -26,6 +27,8 @@ pub const DIR: &str = "dir";
 pub const F: [&str; 3] = ["f_x", "f_y", "f_z"];
 /// Reference rate.
 pub const W: [&str; 3] = ["w_x", "w_y", "w_z"];
+/// Reference angular acceleration.
+pub const DW: [&str; 3] = ["dw_x", "dw_y", "dw_z"];
 /// Accelerometer counts.
 pub const A: [&str; 3] = ["a_x", "a_y", "a_z"];
 /// Gyro counts.

@@ -268,8 +268,8 @@ fn imu_on_tumble_rate_table_and_centrifuge_with_lever_arms() {
         ([3.0, -2.0, 9.0], [0.0, 0.0, 5.0]),
         ([0.0, 9.8, 0.0], [4.0, 0.0, 0.0]),
     ] {
-        let a = truth.accel.output(f, f, w, 25.0, 3.3);
-        let g = truth.gyro.output(w, f, w, 25.0, 3.3);
+        let a = truth.accel.accel_output(f, w, [0.0; 3], 25.0, 3.3);
+        let g = truth.gyro.gyro_output(w, f, 25.0, 3.3);
         let raw = [a[0], a[1], a[2], g[0], g[1], g[2]].map(|v| v.round() as i32);
         dev.reset();
         let _ = dev.correct(raw);
@@ -323,7 +323,7 @@ fn lone_accelerometer_triad_with_own_axis_nonlinearity() {
     dev.set_environment(25.0, 3.3);
     for f in [[30.0, 0.0, 9.8], [-20.0, 10.0, -9.8], [0.0, -35.0, 0.0]] {
         let raw = truth
-            .output(f, f, [0.0; 3], 25.0, 3.3)
+            .accel_output(f, [0.0; 3], [0.0; 3], 25.0, 3.3)
             .map(|v| v.round() as i32);
         let out = dev.correct(raw);
         let sigma = dev.sigma(raw).unwrap();

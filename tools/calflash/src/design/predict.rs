@@ -89,6 +89,7 @@ pub fn conditions(points: &Points, unit: Unit) -> Vec<Condition> {
             Condition {
                 f,
                 w,
+                dw: col::DW.map(v),
                 temp: v(col::TEMP),
                 volt: v(col::VOLT),
                 dir: 0.0,

@@ -138,6 +138,14 @@ impl Table {
         self.columns.push(values);
     }
 
+    /// Replaces the values of the column `name`, or adds it.
+    pub fn set_column(&mut self, name: &str, values: Vec<f64>) {
+        match self.names.iter().position(|n| n == name) {
+            Some(i) => self.columns[i] = values,
+            None => self.push_column(name, values),
+        }
+    }
+
     /// Number of observations.
     #[must_use]
     pub fn len(&self) -> usize {

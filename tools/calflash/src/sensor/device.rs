@@ -8,7 +8,7 @@ use spincal::blob;
 use spincal::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
 use spincal::model::{
     BoundedVec, Calibration, CalibrationData, Environment, Identity, Quantity, Sensor, Serial,
-    Span, TriadSet,
+    Span, TriadSet, rotation,
 };
 
 use super::invert::linearize;
@@ -144,7 +144,7 @@ fn f64_triad(set: &TriadSet, v: [f64; 3]) -> [f64; 3] {
 /// Validates and encodes `data`, decodes the blob back as the device does, and runs the
 /// device's f32 correction at each table point over codes spanning the calibrated range,
 /// against the same stored coefficients evaluated in f64. Returns the blob and the largest
-/// difference (SI).
+/// difference of each output (SI).
 ///
 /// # Errors
 /// When the calibration does not validate (a coefficient the device cannot hold).
@@ -152,7 +152,7 @@ pub fn build_and_check(
     path: &Path,
     data: &CalibrationData,
     points: &[PointFit],
-) -> Result<(Vec<u8>, f64), WorkflowError> {
+) -> Result<(Vec<u8>, Vec<f64>), WorkflowError> {
     let cal = Calibration::new(data.clone()).map_err(|e| {
         WorkflowError::msg(
             path,
@@ -167,7 +167,12 @@ pub fn build_and_check(
         WorkflowError::msg(path, format!("the written blob does not read back: {e}"))
     })?;
     let env = &data.environment;
-    let mut worst = 0.0f64;
+    let mut worst = vec![0.0f64; points.first().map_or(0, |p| p.axes.len())];
+    let mut note = |j: usize, e: f64| {
+        if let Some(w) = worst.get_mut(j) {
+            *w = w.max(e);
+        }
+    };
     let at = |p: &PointFit| {
         (
             p.temp.map_or(
@@ -199,7 +204,7 @@ pub fn build_and_check(
                     let v = f64::from(code) - f64::from(channel.center);
                     let host = f64::from(set.offset)
                         + f64::from(set.scale) * linearize(&set.axis.to_array().map(f64::from), v);
-                    worst = worst.max((dev - host).abs());
+                    note(0, (dev - host).abs());
                 }
             }
         }
@@ -218,7 +223,7 @@ pub fn build_and_check(
                         std::array::from_fn(|j| f64::from(code[j]) - f64::from(channels[j].center)),
                     );
                     for j in 0..3 {
-                        worst = worst.max((f64::from(dev[j]) - host[j]).abs());
+                        note(j, (f64::from(dev[j]) - host[j]).abs());
                     }
                 }
             }
@@ -237,9 +242,8 @@ pub fn build_and_check(
                         std::array::from_fn(|j| sample_code(&accel[j], &p.axes[j], k, j));
                     let cg: [i32; 3] =
                         std::array::from_fn(|j| sample_code(&gyro[j], &p.axes[j + 3], k, j + 3));
-                    // With the rate steady, the lever-arm derivative term is zero and the
-                    // centripetal term is the same in both: compare without lever arm by
-                    // correcting twice (the second sample has a known derivative of zero).
+                    // A steady rate: the second sample has a known rate difference of zero and
+                    // the previous lever term of the same rate, so it is the fixed point.
                     let raw = [ca[0], ca[1], ca[2], cg[0], cg[1], cg[2]];
                     let _ = c.correct(raw);
                     let dev = c.correct(raw).values;
@@ -247,20 +251,14 @@ pub fn build_and_check(
                         &set.accel,
                         std::array::from_fn(|j| f64::from(ca[j]) - f64::from(accel[j].center)),
                     );
-                    let w0 = f64_triad(
+                    let ws = f64_triad(
                         &set.gyro,
                         std::array::from_fn(|j| f64::from(cg[j]) - f64::from(gyro[j].center)),
                     );
-                    let w: [f64; 3] = std::array::from_fn(|i| {
-                        w0[i]
-                            - (0..3)
-                                .map(|j| f64::from(set.g_sensitivity[i][j]) * a[j])
-                                .sum::<f64>()
-                    });
-                    let a_ref = lever_f64(data, a, w);
+                    let (a_ref, w) = imu_f64(data, set, a, ws);
                     for j in 0..3 {
-                        worst = worst.max((f64::from(dev[j]) - a_ref[j]).abs());
-                        worst = worst.max((f64::from(dev[j + 3]) - w[j]).abs());
+                        note(j, (f64::from(dev[j]) - a_ref[j]).abs());
+                        note(j + 3, (f64::from(dev[j + 3]) - w[j]).abs());
                     }
                 }
             }
@@ -269,19 +267,38 @@ pub fn build_and_check(
     Ok((buf, worst))
 }
 
-fn lever_f64(data: &CalibrationData, a: [f64; 3], w: [f64; 3]) -> [f64; 3] {
-    let Sensor::Imu {
-        lever_arm: Some(r), ..
-    } = &data.sensor
-    else {
-        return a;
+/// The IMU correction in f64 for a steady rate (no rate difference): the reference-point force
+/// and the rate for sensor-domain force `a` and gyro output `ws`, the lever term solved to its
+/// fixed point (`spincal::model::rotation`).
+fn imu_f64(
+    data: &CalibrationData,
+    set: &spincal::model::ImuSet,
+    a: [f64; 3],
+    ws: [f64; 3],
+) -> ([f64; 3], [f64; 3]) {
+    let g = set.g_sensitivity.map(|r| r.map(f64::from));
+    let rate = |x: [f64; 3]| -> [f64; 3] {
+        std::array::from_fn(|i| ws[i] - (0..3).map(|j| g[i][j] * x[j]).sum::<f64>())
     };
-    let ww: f64 = w.iter().map(|x| x * x).sum();
-    std::array::from_fn(|i| {
-        let ri = r[i].map(f64::from);
-        let dot: f64 = (0..3).map(|k| w[k] * ri[k]).sum();
-        a[i] - (w[i] * dot - ri[i] * ww)
-    })
+    let terms = match &data.sensor {
+        Sensor::Imu {
+            lever_arm: Some(r), ..
+        } => rotation::LeverTerms::new(
+            &set.accel.matrix.map(|row| row.map(f64::from)),
+            &r.map(|row| row.map(f64::from)),
+            1.0,
+        ),
+        _ => None,
+    };
+    let Some(terms) = terms else {
+        return (a, rate(a));
+    };
+    let mut e = [0.0; 3];
+    for _ in 0..20 {
+        e = terms.eval(&rate(std::array::from_fn(|j| a[j] - e[j])), &[0.0; 3]);
+    }
+    let w = rate(std::array::from_fn(|j| a[j] - e[j]));
+    (std::array::from_fn(|j| a[j] - e[j]), w)
 }
 
 /// A code for axis `j` of sample `k`: spread over the calibrated range by a low-discrepancy

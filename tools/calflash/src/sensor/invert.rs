@@ -102,7 +102,10 @@ pub fn linearization(own: &Own, center: f64, lo: f64, hi: f64) -> Fitted {
     if own.c2 != 0.0 {
         cols.push((0, |w, _| w * w));
     }
-    if own.c3 != 0.0 {
+    // The inverse of a quadratic or odd-quadratic term has a cubic term of its own
+    // (`z + a z^2` inverts to `v - a v^2 + 2 a^2 v^3 - ...`), so the cubic column goes in with
+    // any of them.
+    if own.c2 != 0.0 || own.c3 != 0.0 || own.coq != 0.0 {
         cols.push((1, |w, _| w * w * w));
     }
     if own.coq != 0.0 {
@@ -191,6 +194,34 @@ mod tests {
         let f = linearization(&lin_only, 32_900.0, -50.0, 50.0);
         assert_eq!((f.n, f.alpha, f.gamma), ([0.0; 5], 0.0, 1.0));
         assert!(f.error < 1e-12);
+    }
+
+    #[test]
+    fn a_g_squared_term_alone_is_inverted_with_its_cubic() {
+        // A high-rate gyro axis with only K2: 17 counts per rad/s over +-1900 rad/s, K2 of
+        // 1e-6 /(rad/s) (0.2% at full scale). Without the inverse's cubic term the device's
+        // correction is off by about 1e-2 rad/s at the ends of the range.
+        let own = Own {
+            bias: 32_768.0,
+            slope: 17.0,
+            c2: 17.0 * 1e-6,
+            ..Own::default()
+        };
+        let f = linearization(&own, 32_768.0, -1900.0, 1900.0);
+        assert!(f.n[1] != 0.0, "{f:?}");
+        assert!(f.error < 1e-4, "{f:?}");
+        // The quadratic-only inverse, for contrast.
+        let q_only = max_error(
+            &own,
+            32_768.0,
+            -1900.0,
+            1900.0,
+            &[f.n[0], 0.0, 0.0, 0.0, 0.0],
+            f.alpha,
+            f.gamma,
+            |x| own.bias - 32_768.0 + own.slope * x,
+        );
+        assert!(q_only > 100.0 * f.error, "{q_only} vs {}", f.error);
     }
 
     #[test]

@@ -11,6 +11,7 @@ pub mod covariance;
 pub mod device;
 pub mod hysteresis;
 pub mod invert;
+pub mod lever;
 pub mod record;
 pub mod selfcal;
 pub mod single;
@@ -290,7 +291,7 @@ pub(crate) fn findings(
     axis_names: &[String],
     units: &[&str],
     opts: &Options,
-    device_error: f64,
+    device_error: &[f64],
 ) -> Vec<Finding> {
     let mut out = Vec::new();
     for (a, name) in axis_names.iter().enumerate() {
@@ -352,19 +353,31 @@ pub(crate) fn findings(
             }
         }
     }
-    let min_noise = points
+    // Each output's f32 rounding against its own noise (units differ between outputs).
+    let (ratio, worst) = device_error
         .iter()
-        .flat_map(|p| &p.noise)
-        .fold(f64::INFINITY, |m, v| m.min(*v));
+        .enumerate()
+        .map(|(a, e)| {
+            let noise = points
+                .iter()
+                .filter_map(|p| p.noise.get(a))
+                .fold(f64::INFINITY, |m, v| m.min(*v));
+            (e / noise, a)
+        })
+        .fold((0.0, 0), |best, x| if x.0 > best.0 { x } else { best });
+    let (name, unit) = (
+        axis_names.get(worst).map_or("", String::as_str),
+        units.get(worst).copied().unwrap_or(""),
+    );
+    let e = device_error.get(worst).copied().unwrap_or(0.0);
     out.push(Finding {
-        verdict: if device_error <= 0.01 * min_noise {
+        verdict: if ratio <= 0.01 {
             Verdict::Accept
         } else {
             Verdict::Review
         },
         text: format!(
-            "the device's f32 correction matches the f64 correction to {device_error:.2e} ({:.1e} of the smallest noise)",
-            device_error / min_noise
+            "the device's f32 correction matches the f64 correction to {ratio:.1e} of each output's noise at most ({name}: {e:.2e} {unit})"
         ),
     });
     out

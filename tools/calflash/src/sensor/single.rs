@@ -380,14 +380,15 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             ),
         },
     };
-    let (blob, device_error) = device::build_and_check(path, &data, &points)?;
+    let (blob, output_errors) = device::build_and_check(path, &data, &points)?;
+    let device_error = output_errors.iter().copied().fold(0.0, f64::max);
     let unit = device::unit(quantity);
     let findings = super::findings(
         &points,
         &["output".to_string()],
         &[unit],
         opts,
-        device_error,
+        &output_errors,
     );
     Ok(Calibrated {
         data,

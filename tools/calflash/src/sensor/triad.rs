@@ -3,11 +3,12 @@
 //! nonlinearity, gyro g-sensitivity, accelerometer lever arms from spin, a coefficient set per
 //! temperature and voltage point, and the correction.
 //!
-//! Forward model of output axis `i` (counts), fitted axis by axis:
-//! `out_i = b_i + sum_j S_ij x_j [+ c2 x_i^2 + c3 x_i^3 + coq x_i|x_i|]
-//!          [+ sum_j Gout_ij f_j (gyro)] [+ sum_k L_ik (w_i w_k - d_ik |w|^2) (accelerometer)]`,
-//! with `x` the reference specific force (accelerometer) or rate (gyro). The device applies
-//! `y = S^-1 (u - (b - center))`, `G = S^-1 Gout`, and lever arms `r_ik = L_ik / S_ii`.
+//! Forward model of output axis `i` (counts), fitted axis by axis, as `spincal::model::rotation`
+//! writes it: `out_i = b_i + s_i . F_i [+ c2 x^2 + c3 x^3 + coq x|x|] [+ g_i . f (gyro)]`, with
+//! `F_i` the specific force at accelerometer axis `i`'s lever arm (the reference rate for a
+//! gyro) and `x` what the axis senses along itself in SI units; `sensor::lever` turns it into
+//! regressions (Gauss-Newton for the lever arms). The device applies
+//! `y = S^-1 (u - (b - center))`, `G = S^-1 g`, and the lever arms `r_i` as fitted.
 
 use nalgebra::{DMatrix, Matrix3};
 use spincal::model::{
@@ -17,7 +18,7 @@ use spincal::model::{
 
 use super::invert::{Own, linearization, linearize};
 use super::table::{self, Layout};
-use super::{AxisFit, Calibrated, Options, PointFit, WorkflowError, covariance, device};
+use super::{AxisFit, Calibrated, Options, PointFit, WorkflowError, covariance, device, lever};
 use crate::columns as col;
 use crate::formula::{self, Formula};
 use crate::obs::{self, Table};
@@ -32,11 +33,6 @@ pub enum Kind {
     Gyro,
     /// Both, sampled together.
     Imu,
-}
-
-/// Name of the lever-arm regressor of accelerometer axis `i`, component `k`.
-fn lever_column(i: usize, k: usize) -> String {
-    format!("lever_{}{}", ["x", "y", "z"][i], ["x", "y", "z"][k])
 }
 
 /// The results of one triad.
@@ -58,12 +54,21 @@ struct TriadResult {
 struct Spec<'a> {
     outputs: [&'a str; 3],
     inputs: [&'a str; 3],
+    /// A gyro (its sensed input is the rate; g-sensitivity possible).
+    gyro: bool,
     /// g-sensitivity regressors (gyro).
     g_sens: bool,
     /// Lever-arm regressors (accelerometer under spin).
     lever: bool,
     nonlinear: bool,
 }
+
+/// Most regression steps of one axis' fit (Gauss-Newton for the lever arms, refreshed sensed
+/// inputs for the nonlinear terms); it converges in a handful.
+const MAX_STEPS: usize = 50;
+/// Converged when no estimate moves by more than this, relative to the axis' scale factor (or
+/// in metres for the lever arm).
+const STEP_TOLERANCE: f64 = 1e-11;
 
 fn fit_one(
     formula: &Formula,
@@ -74,6 +79,91 @@ fn fit_one(
     where_: &str,
 ) -> Result<AxisFit, WorkflowError> {
     AxisFit::fit(formula, t, own, alpha, (path, where_), true)
+}
+
+/// Fits axis `i` of a triad at one table point: one regression when the model is linear in
+/// its coefficients, else regression steps from [`lever::Estimate::start`] until the estimates
+/// the regressors are made from stop moving (`sensor::lever`).
+#[allow(clippy::too_many_arguments)]
+fn fit_axis(
+    spec: &Spec<'_>,
+    formula: &Formula,
+    t: &Table,
+    i: usize,
+    lever_use: Option<&[bool; 3]>,
+    opts: &Options,
+    where_: &str,
+) -> Result<AxisFit, WorkflowError> {
+    let iterate = lever_use.is_some() || spec.nonlinear;
+    let mut est = lever::Estimate::start(i);
+    for step in 0..MAX_STEPS {
+        let at = lever::axis_table(
+            t,
+            spec.gyro,
+            i,
+            spec.outputs[i],
+            &est,
+            lever_use,
+            spec.nonlinear,
+        );
+        let fit = fit_one(formula, &at, spec.inputs[i], opts.alpha, &opts.file, where_)?;
+        if !iterate {
+            return Ok(fit);
+        }
+        let s = spec.inputs.map(|n| fit.coef(n));
+        // The first step's lever coefficients are S_ii r_ik (its regressors assume a unit
+        // sensitivity); later ones are r_ik.
+        let per = if step == 0 { s[i] } else { 1.0 };
+        let next = lever::Estimate {
+            s,
+            r: std::array::from_fn(|k| fit.coef(&lever::column(i, k)) / per),
+            g: if spec.gyro {
+                col::F.map(|n| fit.coef(n))
+            } else {
+                [0.0; 3]
+            },
+        };
+        let scale = s[i].abs().max(f64::MIN_POSITIVE);
+        let moved = (0..3)
+            .map(|k| {
+                ((next.s[k] - est.s[k]).abs() / scale)
+                    .max((next.r[k] - est.r[k]).abs())
+                    .max((next.g[k] - est.g[k]).abs() / scale)
+            })
+            .fold(0.0, f64::max);
+        if step > 0 && moved <= STEP_TOLERANCE {
+            return Ok(fit);
+        }
+        if !next.s.iter().chain(&next.r).all(|x| x.is_finite()) || s[i] == 0.0 {
+            break;
+        }
+        est = next;
+    }
+    Err(WorkflowError::msg(
+        &opts.file,
+        format!(
+            "{} at {where_}: the fit of the sensitivity and lever arm did not settle in {MAX_STEPS} steps; the plan may not separate them (spin the unit at several rates and hold it still in several positions)",
+            spec.outputs[i]
+        ),
+    ))
+}
+
+/// Notes on the lever-arm components the plan cannot estimate.
+fn lever_notes(estimable: &[[bool; 3]; 3], notes: &mut Vec<String>) {
+    let missing: Vec<String> = (0..3)
+        .flat_map(|i| (0..3).map(move |k| (i, k)))
+        .filter(|(i, k)| !estimable[*i][*k])
+        .map(|(i, k)| format!("r_{}{}", lever::AXES[i], lever::AXES[k]))
+        .collect();
+    let estimated = 9 - missing.len();
+    if missing.is_empty() {
+        notes.push("the plan spins the unit about axes and diagonals: all nine lever-arm components of the accelerometer are estimated".into());
+    } else {
+        notes.push(format!(
+            "the plan spins the unit: {estimated} of the nine lever-arm components are estimated; {} cannot be (component k of axis i needs a spin with rate along both i and k, or an angular acceleration about the third axis) and are set to 0: add a `diagonal:LO:HI:N` plan item (the rate table's 45-degree fixture) to estimate them",
+            missing.join(", ")
+        ));
+    }
 }
 
 fn triad(
@@ -87,35 +177,45 @@ fn triad(
     let reference = layout.reference();
     let ref_table = table.select(&layout.points[reference].rows);
     let ref_where = table::describe(&layout.points[reference]);
+    let estimable = spec
+        .lever
+        .then(|| lever::estimable(lever::motion(table).into_iter()));
+    if let Some(e) = &estimable {
+        lever_notes(e, notes);
+    }
     let mut formulas = Vec::new();
     for i in 0..3 {
         let mut text = format!(
             "{} ~ 1 + {} + {} + {}",
             spec.outputs[i], spec.inputs[0], spec.inputs[1], spec.inputs[2]
         );
-        let own = spec.inputs[i];
         if spec.nonlinear {
-            text.push_str(&format!(" + {own}^2 + {own}^3 + {own}:abs({own})"));
+            let n = lever::SENSED;
+            text.push_str(&format!(" + {n}^2 + {n}^3 + {n}:abs({n})"));
         }
         if spec.g_sens {
             text.push_str(&format!(" + {} + {} + {}", col::F[0], col::F[1], col::F[2]));
         }
-        if spec.lever {
-            for k in 0..3 {
-                let name = lever_column(i, k);
-                if table
-                    .column(&name)
-                    .is_some_and(|c| c.iter().any(|v| v.abs() > 1e-12))
-                {
-                    text.push_str(&format!(" + {name}"));
-                }
+        if let Some(e) = &estimable {
+            for k in (0..3).filter(|k| e[i][*k]) {
+                text.push_str(&format!(" + {}", lever::column(i, k)));
             }
         }
         notes.push(format!("preset expands {} to: {text}", spec.outputs[i]));
         let mut f = formula::parse(&text)?;
-        fit_one(&f, &ref_table, own, opts.alpha, path, &ref_where)?;
+        // Terms are chosen on the first step's regressors at the reference point.
+        let first = lever::axis_table(
+            &ref_table,
+            spec.gyro,
+            i,
+            spec.outputs[i],
+            &lever::Estimate::start(i),
+            estimable.as_ref().map(|e| &e[i]),
+            spec.nonlinear,
+        );
+        fit_one(&f, &first, spec.inputs[i], opts.alpha, path, &ref_where)?;
         if !opts.keep_all_terms {
-            let d = f.design(&ref_table);
+            let d = f.design(&first);
             let sopts = stats::Options {
                 alpha: opts.alpha,
                 ..stats::Options::default()
@@ -154,23 +254,42 @@ fn triad(
         }
         formulas.push(f);
     }
+    // The lever components each axis' formula kept.
+    let lever_use: Option<[[bool; 3]; 3]> = estimable.map(|_| {
+        std::array::from_fn(|i| {
+            std::array::from_fn(|k| {
+                formulas[i]
+                    .terms
+                    .iter()
+                    .any(|t| t.name() == lever::column(i, k))
+            })
+        })
+    });
 
     let mut fits: Vec<[AxisFit; 3]> = Vec::new();
     for p in &layout.points {
         let t = table.select(&p.rows);
         let w = table::describe(p);
-        let a = fit_one(&formulas[0], &t, spec.inputs[0], opts.alpha, path, &w)?;
-        let b = fit_one(&formulas[1], &t, spec.inputs[1], opts.alpha, path, &w)?;
-        let c = fit_one(&formulas[2], &t, spec.inputs[2], opts.alpha, path, &w)?;
-        fits.push([a, b, c]);
+        let one = |i: usize| {
+            fit_axis(
+                spec,
+                &formulas[i],
+                &t,
+                i,
+                lever_use.as_ref().map(|u| &u[i]),
+                opts,
+                &w,
+            )
+        };
+        fits.push([one(0)?, one(1)?, one(2)?]);
     }
-    let ranges: [Span; 3] = std::array::from_fn(|j| {
-        let c = table.column(spec.inputs[j]).unwrap_or_default();
-        Span::new(
-            c.iter().copied().fold(f64::INFINITY, f64::min) as f32,
-            c.iter().copied().fold(f64::NEG_INFINITY, f64::max) as f32,
-        )
-    });
+    let s_of = |f: &[AxisFit; 3]| Matrix3::from_fn(|i, j| f[i].coef(spec.inputs[j]));
+    let b_of = |f: &[AxisFit; 3]| [f[0].coef("1"), f[1].coef("1"), f[2].coef("1")];
+    let lever_of = |f: &[AxisFit; 3]| -> [[f64; 3]; 3] {
+        std::array::from_fn(|i| std::array::from_fn(|k| f[i].coef(&lever::column(i, k))))
+    };
+    let lever_arm = lever_use.map(|_| lever_of(&fits[reference]));
+    let ranges = calibrated_ranges(spec, table, &s_of(&fits[reference]), lever_arm.as_ref());
     for (j, r) in ranges.iter().enumerate() {
         if r.lo >= r.hi {
             return Err(WorkflowError::msg(
@@ -182,8 +301,6 @@ fn triad(
             ));
         }
     }
-    let s_of = |f: &[AxisFit; 3]| Matrix3::from_fn(|i, j| f[i].coef(spec.inputs[j]));
-    let b_of = |f: &[AxisFit; 3]| [f[0].coef("1"), f[1].coef("1"), f[2].coef("1")];
     let centers = b_of(&fits[reference]);
     let mut out = TriadResult {
         fits: Vec::new(),
@@ -192,14 +309,15 @@ fn triad(
         errors: Vec::new(),
         noise: Vec::new(),
         g: Vec::new(),
-        lever: None,
+        lever: lever_arm,
         centers,
         ranges,
     };
-    for f in &fits {
+    for (f, p) in fits.iter().zip(&layout.points) {
         let s = s_of(f);
         let b = b_of(f);
-        let m = s.try_inverse().ok_or_else(|| {
+        let t = table.select(&p.rows);
+        let inv = s.try_inverse().ok_or_else(|| {
             WorkflowError::msg(
                 path,
                 "the fitted sensitivity matrix is singular: the plan does not separate the axes",
@@ -208,31 +326,37 @@ fn triad(
         let own = |i: usize| Own {
             bias: b[i],
             slope: s[(i, i)],
-            c2: f[i].coef(&format!("{}^2", spec.inputs[i])),
-            c3: f[i].coef(&format!("{}^3", spec.inputs[i])),
-            coq: f[i].coef(&format!("{0}:abs({0})", spec.inputs[i])),
+            c2: f[i].coef(&format!("{}^2", lever::SENSED)),
+            c3: f[i].coef(&format!("{}^3", lever::SENSED)),
+            coq: f[i].coef(&format!("{0}:abs({0})", lever::SENSED)),
             ..Own::default()
         };
+        // What each axis senses (SI, along itself) over the calibrated box, the data's own
+        // sensed inputs included: the span its linearisation must cover.
+        let corners = box_corners(&ranges);
         let fitted: [_; 3] = std::array::from_fn(|i| {
-            linearization(
-                &own(i),
-                centers[i],
-                f64::from(ranges[i].lo),
-                f64::from(ranges[i].hi),
-            )
+            let sensed = |x: &[f64; 3]| (0..3).map(|j| s[(i, j)] * x[j]).sum::<f64>() / s[(i, i)];
+            let (lo, hi) = corners
+                .iter()
+                .map(sensed)
+                .chain(sensed_values(spec, &t, i, &f[i]))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                });
+            linearization(&own(i), centers[i], lo, hi)
         });
         let lins: [[f64; 5]; 3] = fitted.map(|f| f.n);
         // y = S^-1 (L - (b - center)), L_j = alpha_j + gamma_j u_j: the device's matrix is
         // S^-1 diag(gamma) and its offset S^-1 (alpha - (b - center)).
-        let inv = m;
         let m = Matrix3::from_fn(|i, j| inv[(i, j)] * fitted[j].gamma);
         let off: [f64; 3] = std::array::from_fn(|i| {
             (0..3)
                 .map(|k| inv[(i, k)] * (fitted[k].alpha - (b[k] - centers[k])))
                 .sum::<f64>()
         });
-        // Inversion error over the calibrated box: forward (fitted, cross-axis included), then
-        // the device's correction in f64.
+        // Inversion error over the calibrated box: each axis senses s_i . x and responds with
+        // its fitted nonlinearity (model/rotation.rs); the device's correction, in f64, must
+        // give x back.
         let mut err = [0.0f64; 3];
         for k in 0..1000u32 {
             let x: [f64; 3] = std::array::from_fn(|j| {
@@ -240,12 +364,8 @@ fn triad(
                 f64::from(ranges[j].lo) + (f64::from(ranges[j].hi) - f64::from(ranges[j].lo)) * frac
             });
             let out: [f64; 3] = std::array::from_fn(|i| {
-                let o = own(i);
-                o.output(x[i])
-                    + (0..3)
-                        .filter(|j| *j != i)
-                        .map(|j| s[(i, j)] * x[j])
-                        .sum::<f64>()
+                let z: f64 = (0..3).map(|j| s[(i, j)] * x[j]).sum();
+                own(i).output(z / s[(i, i)])
             });
             let u: [f64; 3] = std::array::from_fn(|i| linearize(&lins[i], out[i] - centers[i]));
             for i in 0..3 {
@@ -288,15 +408,72 @@ fn triad(
                 .push(std::array::from_fn(|i| std::array::from_fn(|j| g[(i, j)])));
         }
     }
-    if spec.lever {
-        let f = &fits[reference];
-        let s = s_of(f);
-        out.lever = Some(std::array::from_fn(|i| {
-            std::array::from_fn(|k| f[i].coef(&lever_column(i, k)) / s[(i, i)])
-        }));
-    }
     out.fits = fits;
     Ok(out)
+}
+
+/// What axis `i` sensed (SI, along itself) at each observation of `t`, under its fit.
+fn sensed_values(spec: &Spec<'_>, t: &Table, i: usize, fit: &AxisFit) -> Vec<f64> {
+    let est = lever::Estimate {
+        s: spec.inputs.map(|n| fit.coef(n)),
+        r: std::array::from_fn(|k| fit.coef(&lever::column(i, k))),
+        g: if spec.gyro {
+            col::F.map(|n| fit.coef(n))
+        } else {
+            [0.0; 3]
+        },
+    };
+    let at = lever::axis_table(t, spec.gyro, i, spec.outputs[i], &est, None, true);
+    at.column(lever::SENSED).unwrap_or_default().to_vec()
+}
+
+/// The eight corners of the calibrated box.
+fn box_corners(ranges: &[Span; 3]) -> Vec<[f64; 3]> {
+    (0..8)
+        .map(|c| {
+            std::array::from_fn(|j| {
+                let r = ranges[j];
+                f64::from(if c & (1 << j) == 0 { r.lo } else { r.hi })
+            })
+        })
+        .collect()
+}
+
+/// The calibrated range of each output: what the device range-checks. For a gyro, the
+/// reference rates; for an accelerometer, the sensor-domain force `f + e(w, dw)` the axes
+/// sensed (`spincal::model::rotation`), centripetal included, over every observation: a rate
+/// table that drove an axis past the centrifuge's levels calibrated it there.
+fn calibrated_ranges(
+    spec: &Spec<'_>,
+    table: &Table,
+    s: &Matrix3<f64>,
+    lever_arm: Option<&[[f64; 3]; 3]>,
+) -> [Span; 3] {
+    let get = |names: [&str; 3], r: usize| -> [f64; 3] {
+        std::array::from_fn(|k| table.column(names[k]).map_or(0.0, |c| c[r]))
+    };
+    let inv = s.try_inverse();
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for r in 0..table.len() {
+        let mut x = get(spec.inputs, r);
+        if let (Some(arm), Some(inv)) = (lever_arm, &inv) {
+            let (f, w, dw) = (get(col::F, r), get(col::W, r), get(col::DW, r));
+            // z_i - s_i . f: what axis i sensed of its lever terms; S^-1 of it.
+            let d: [f64; 3] = std::array::from_fn(|i| {
+                let at = spincal::model::rotation::force_at(&f, &w, &dw, &arm[i]);
+                (0..3).map(|j| s[(i, j)] * (at[j] - f[j])).sum()
+            });
+            for (j, xj) in x.iter_mut().enumerate() {
+                *xj += (0..3).map(|k| inv[(j, k)] * d[k]).sum::<f64>();
+            }
+        }
+        for j in 0..3 {
+            lo[j] = lo[j].min(x[j]);
+            hi[j] = hi[j].max(x[j]);
+        }
+    }
+    std::array::from_fn(|j| Span::new(lo[j] as f32, hi[j] as f32))
 }
 
 /// Calibrates a triad or an IMU from the observations in `opts.file`.
@@ -336,12 +513,17 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
     }
     let has = |c: &str| header.iter().any(|h| h == c);
     let mut wanted: Vec<String> = need.iter().map(|s| s.to_string()).collect();
-    for c in col::F.iter().chain(&col::W).chain(&[col::TEMP, col::VOLT]) {
+    for c in col::F
+        .iter()
+        .chain(&col::W)
+        .chain(&col::DW)
+        .chain(&[col::TEMP, col::VOLT])
+    {
         if has(c) && !wanted.iter().any(|w| w == c) {
             wanted.push(c.to_string());
         }
     }
-    let mut table = obs::read_columns(path, &wanted, opts.format)?;
+    let table = obs::read_columns(path, &wanted, opts.format)?;
     let mut notes = Vec::new();
     let spin = table.column(col::W[0]).is_some()
         && (0..table.len()).any(|r| {
@@ -350,28 +532,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
                 .any(|w| table.column(w).is_some_and(|c| c[r] != 0.0))
         });
     let accel_lever = spin && kind != Kind::Gyro;
-    if accel_lever {
-        let w: Vec<[f64; 3]> = (0..table.len())
-            .map(|r| std::array::from_fn(|k| table.column(col::W[k]).map_or(0.0, |c| c[r])))
-            .collect();
-        for i in 0..3 {
-            for k in 0..3 {
-                let v: Vec<f64> = w
-                    .iter()
-                    .map(|w| {
-                        w[i] * w[k]
-                            - if i == k {
-                                w.iter().map(|c| c * c).sum::<f64>()
-                            } else {
-                                0.0
-                            }
-                    })
-                    .collect();
-                table.push_column(&lever_column(i, k), v);
-            }
-        }
-        notes.push("the plan spins the unit: the accelerometer's lever arms are estimated".into());
-    } else if kind != Kind::Gyro {
+    if !accel_lever && kind != Kind::Gyro {
         notes.push(
             "the plan does not spin the unit: no lever arms (size effect) are estimated".into(),
         );
@@ -393,6 +554,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
                 &Spec {
                     outputs: col::A,
                     inputs: col::F,
+                    gyro: false,
                     g_sens: false,
                     lever: accel_lever,
                     nonlinear,
@@ -423,6 +585,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
                 &Spec {
                     outputs: col::GYRO,
                     inputs: col::W,
+                    gyro: true,
                     g_sens: gyro_g,
                     lever: false,
                     nonlinear,
@@ -516,7 +679,8 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         }
         points.push(pf);
     }
-    let (blob, device_error) = device::build_and_check(path, &data, &points)?;
+    let (blob, output_errors) = device::build_and_check(path, &data, &points)?;
+    let device_error = output_errors.iter().copied().fold(0.0, f64::max);
     let mut names = Vec::new();
     let mut units = Vec::new();
     let mut ranges = Vec::new();
@@ -542,7 +706,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             r.map(|row| row.map(|v| (v * 1e5).round() / 1e5))
         ));
     }
-    let findings = super::findings(&points, &names, &units, opts, device_error);
+    let findings = super::findings(&points, &names, &units, opts, &output_errors);
     Ok(Calibrated {
         data,
         blob,

@@ -3,6 +3,7 @@
 
 pub mod plan;
 pub mod recording;
+pub mod spin;
 pub mod truth;
 
 use rand::SeedableRng;
@@ -133,41 +134,43 @@ pub fn simulate(
                 ]);
             }
         }
-        Sensor::Accel(t) | Sensor::Gyro(t) => {
-            let gyro = matches!(sensor, Sensor::Gyro(_));
-            let out_names = if gyro { col::GYRO } else { col::A };
+        Sensor::Accel(_) | Sensor::Gyro(_) | Sensor::Imu(_) => {
+            // Angular acceleration columns only when the plan has some.
+            let spins_up = conditions.iter().any(|c| c.dw.iter().any(|x| *x != 0.0));
+            let (accel, gyro) = match sensor {
+                Sensor::Accel(t) => (Some(t), None),
+                Sensor::Gyro(t) => (None, Some(t)),
+                Sensor::Imu(t) => (Some(&t.accel), Some(&t.gyro)),
+                Sensor::Single { .. } => (None, None),
+            };
+            let inputs = col::F.iter().chain(&col::W);
+            let inputs: Vec<&str> = if spins_up {
+                inputs.chain(&col::DW).copied().collect()
+            } else {
+                inputs.copied().collect()
+            };
             names.extend(
-                col::F
+                inputs
                     .iter()
-                    .chain(&col::W)
                     .chain(&[col::TEMP, col::VOLT])
-                    .chain(&out_names)
+                    .chain(accel.map_or(&[][..], |_| &col::A[..]))
+                    .chain(gyro.map_or(&[][..], |_| &col::GYRO[..]))
                     .map(|s| s.to_string()),
             );
             for c in conditions {
-                let x = if gyro { c.w } else { c.f };
-                let out = t.output(x, c.f, c.w, c.temp, c.volt);
-                let mut row: Vec<f64> = c.f.iter().chain(&c.w).chain(&env(c)).copied().collect();
-                row.extend((0..3).map(|i| noisy(&mut rng, out[i], t.noise[i], quantize)));
-                rows.push(row);
-            }
-        }
-        Sensor::Imu(t) => {
-            names.extend(
-                col::F
-                    .iter()
-                    .chain(&col::W)
-                    .chain(&[col::TEMP, col::VOLT])
-                    .chain(&col::A)
-                    .chain(&col::GYRO)
-                    .map(|s| s.to_string()),
-            );
-            for c in conditions {
-                let a = t.accel.output(c.f, c.f, c.w, c.temp, c.volt);
-                let g = t.gyro.output(c.w, c.f, c.w, c.temp, c.volt);
-                let mut row: Vec<f64> = c.f.iter().chain(&c.w).chain(&env(c)).copied().collect();
-                row.extend((0..3).map(|i| noisy(&mut rng, a[i], t.accel.noise[i], quantize)));
-                row.extend((0..3).map(|i| noisy(&mut rng, g[i], t.gyro.noise[i], quantize)));
+                let mut row: Vec<f64> = c.f.iter().chain(&c.w).copied().collect();
+                if spins_up {
+                    row.extend(c.dw);
+                }
+                row.extend(env(c));
+                if let Some(t) = accel {
+                    let a = t.accel_output(c.f, c.w, c.dw, c.temp, c.volt);
+                    row.extend((0..3).map(|i| noisy(&mut rng, a[i], t.noise[i], quantize)));
+                }
+                if let Some(t) = gyro {
+                    let g = t.gyro_output(c.w, c.f, c.temp, c.volt);
+                    row.extend((0..3).map(|i| noisy(&mut rng, g[i], t.noise[i], quantize)));
+                }
                 rows.push(row);
             }
         }

@@ -1,7 +1,8 @@
 //! Test plans: the conditions a unit is put through on the bench.
 //!
-//! A condition is the specific force `f` (m/s^2) and the angular rate `w` (rad/s) at the unit's
-//! reference point, in the unit's axes, with the chamber temperature and the supply voltage.
+//! A condition is the specific force `f` (m/s^2) at the unit's reference point, the angular
+//! rate `w` (rad/s) and angular acceleration `dw` (rad/s^2), in the unit's axes, with the
+//! chamber temperature and the supply voltage.
 //! A single-axis sensor reads the x component (of `f` for an accelerometer, `w` for a gyro);
 //! y and z are its cross axes p and o.
 //!
@@ -13,6 +14,7 @@
 //! | `tumble:6`, `tumble:12`, `tumble:18`, `tumble:24`, `tumble:26` | gravity along the 6 axes; + 6 diagonals of the xy, yz, zx planes (12); + all 12 edge diagonals (18); 6 axes at 4 headings each (24); + 8 cube corners (26) |
 //! | `sphere:N` | gravity along N directions spread evenly over the sphere |
 //! | `rate:LO:HI:N` | rate-table steps (rad/s): N rates, about each of the 6 axis directions with that direction up |
+//! | `diagonal:LO:HI:N` | the same about the 12 diagonals between two axes (a 45-degree fixture on the rate table): with the axis spins, every lever-arm component is estimable |
 //! | `centrifuge:LO:HI:N` | N levels (in g) along each of the 6 axis directions, gravity on the next axis, spin about it (arm 0.5 m) |
 //! | `sweep:LO:HI:N` | ascending then descending input along x (hysteresis), with the direction |
 //! | `fine:LO:HI:N` | N small steps of the x input near zero (threshold, dead band, resolution) |
@@ -34,6 +36,9 @@ pub struct Condition {
     pub f: [f64; 3],
     /// Angular rate, rad/s.
     pub w: [f64; 3],
+    /// Angular acceleration, rad/s^2 (spin-up, spin-down).
+    #[serde(default)]
+    pub dw: [f64; 3],
     /// Chamber temperature, degrees C.
     pub temp: f64,
     /// Supply voltage, volts.
@@ -136,6 +141,7 @@ fn still(f: [f64; 3]) -> Condition {
     Condition {
         f,
         w: [0.0; 3],
+        dw: [0.0; 3],
         temp: 25.0,
         volt: 0.0,
         dir: 0.0,
@@ -205,10 +211,11 @@ pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
             .into_iter()
             .map(|u| still(u.map(|c| G * c)))
             .collect(),
-        "rate" => {
+        "rate" | "diagonal" => {
             let (lo, hi, n) = range()?;
             let mut out = Vec::new();
-            for up in dirs(axes()) {
+            let about = if kind == "rate" { axes() } else { edges() };
+            for up in dirs(about) {
                 for r in linspace(lo, hi, n) {
                     out.push(Condition {
                         f: up.map(|c| G * c),
@@ -262,7 +269,7 @@ pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
         }
         _ => {
             return Err(err(
-                "the kinds are head, tumble, sphere, rate, centrifuge, sweep and fine",
+                "the kinds are head, tumble, sphere, rate, diagonal, centrifuge, sweep and fine",
             ));
         }
     })
@@ -315,6 +322,11 @@ mod tests {
         assert!(item("tumble:7", false).is_err());
         let r = item("rate:-5:5:11", false).unwrap();
         assert_eq!(r.len(), 66);
+        let d = item("diagonal:100:200:2", false).unwrap();
+        assert_eq!(d.len(), 24);
+        // About (1, 1, 0)/sqrt(2), that direction up.
+        assert!((d[0].w[0] - 100.0 / 2f64.sqrt()).abs() < 1e-12 && d[0].w[2] == 0.0);
+        assert!((d[0].f[1] - G / 2f64.sqrt()).abs() < 1e-12);
         assert_eq!(item("rate:-5:5:11", true).unwrap().len(), 11);
         let c = item("centrifuge:1:10:4", false).unwrap();
         let last = c[3];

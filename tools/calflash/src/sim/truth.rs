@@ -2,6 +2,7 @@
 //! outputs, in counts, for a known input), the way the physics and IEEE Std 1293 write them.
 
 use serde::{Deserialize, Serialize};
+use spincal::model::rotation;
 
 /// Reference conditions at which the nominal coefficients hold.
 pub const REF_TEMP: f64 = 25.0;
@@ -100,10 +101,13 @@ impl SingleTruth {
     }
 }
 
-/// A triad: `out = b(T,V) + S(T,V) f + diag(S) (K2 f^2 + K3 f^3 + Koq f|f|) + G a + lever`,
-/// per axis, where `f` is the measured quantity at the reference point and, for a gyro, `a` the
-/// specific force (g-sensitivity); for an accelerometer each axis `i` at lever arm `r_i` also
-/// feels `[w x (w x r_i)]_i`.
+/// A triad, written as `spincal::model::rotation` writes the model under rotation: axis `i`
+/// senses `z_i = s_i . F_i` (counts; `s_i` is row `i` of `S` scaled by its temperature
+/// coefficient) and outputs `b_i(T,V) + z_i + S_ii (K2 x^2 + K3 x^3 + Koq x|x|)` with
+/// `x = z_i / S_ii`, what it senses in SI units. For an accelerometer `F_i` is the specific
+/// force at the axis' lever arm `r_i`, centripetal and tangential terms included; for a gyro
+/// `z_i = s_i . w + g_i . f` with `f` the specific force at the reference point
+/// (g-sensitivity).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TriadTruth {
@@ -192,30 +196,40 @@ impl TriadTruth {
         }
     }
 
-    /// Noise-free outputs for the measured quantity `x` at the reference point, specific force
-    /// `f` (g-sensitivity), rate `w` (lever arm), temperature and supply voltage.
+    /// Noise-free accelerometer outputs for the specific force `f` at the reference point, the
+    /// rate `w` and angular acceleration `dw`, temperature `t` and supply `v`.
     #[must_use]
-    pub fn output(&self, x: [f64; 3], f: [f64; 3], w: [f64; 3], t: f64, v: f64) -> [f64; 3] {
+    pub fn accel_output(&self, f: [f64; 3], w: [f64; 3], dw: [f64; 3], t: f64, v: f64) -> [f64; 3] {
+        std::array::from_fn(|i| {
+            let at = rotation::force_at(&f, &w, &dw, &self.lever[i]);
+            self.respond(i, rotation::dot(&self.row(i, t), &at), t, v)
+        })
+    }
+
+    /// Noise-free gyro outputs for the rate `w` and the specific force `f` at the reference
+    /// point (g-sensitivity), temperature `t` and supply `v`.
+    #[must_use]
+    pub fn gyro_output(&self, w: [f64; 3], f: [f64; 3], t: f64, v: f64) -> [f64; 3] {
+        std::array::from_fn(|i| {
+            let z = rotation::dot(&self.row(i, t), &w) + rotation::dot(&self.g[i], &f);
+            self.respond(i, z, t, v)
+        })
+    }
+
+    /// Row `i` of the scale-misalignment matrix at temperature `t`.
+    fn row(&self, i: usize, t: f64) -> [f64; 3] {
+        let scale = 1.0 + self.scale_temp[i] * (t - REF_TEMP);
+        self.s[i].map(|x| x * scale)
+    }
+
+    /// The output of axis `i` sensing `z` counts.
+    fn respond(&self, i: usize, z: f64, t: f64, v: f64) -> f64 {
         let dt = t - REF_TEMP;
         let dv = v - self.ref_volt;
-        let ww: f64 = w.iter().map(|c| c * c).sum();
-        std::array::from_fn(|i| {
-            let scale = 1.0 + self.scale_temp[i] * dt;
-            let r = self.lever[i];
-            let dot = w[0] * r[0] + w[1] * r[1] + w[2] * r[2];
-            // The own-axis input including the size effect at this axis' position.
-            let centripetal = w[i] * dot - r[i] * ww;
-            let xi: [f64; 3] =
-                std::array::from_fn(|j| x[j] + if j == i { centripetal } else { 0.0 });
-            let lin: f64 = (0..3).map(|j| self.s[i][j] * xi[j]).sum::<f64>();
-            let own = xi[i];
-            let nl = self.s[i][i]
-                * (self.k2[i] * own * own
-                    + self.k3[i] * own.powi(3)
-                    + self.koq[i] * own * own.abs());
-            let g: f64 = (0..3).map(|j| self.g[i][j] * f[j]).sum();
-            self.bias[i] + self.bias_temp[i] * dt + self.bias_volt[i] * dv + scale * (lin + nl) + g
-        })
+        let s = self.row(i, t)[i];
+        let x = z / s;
+        let nl = s * (self.k2[i] * x * x + self.k3[i] * x * x * x + self.koq[i] * x * x.abs());
+        self.bias[i] + self.bias_temp[i] * dt + self.bias_volt[i] * dv + z + nl
     }
 }
 
@@ -227,6 +241,65 @@ pub struct ImuTruth {
     pub accel: TriadTruth,
     /// Gyro.
     pub gyro: TriadTruth,
+}
+
+impl ImuTruth {
+    /// An IMU for a round that spins to 300 Hz: a high-g accelerometer (about +-2000 g on a
+    /// 16-bit converter, 1.67 counts per m/s^2) with lever arms of 0.5 to 3 mm, a few mrad of
+    /// misalignment and g-squared terms, and a gyro reading +-2000 rad/s (16.4 counts per
+    /// rad/s) with g-sensitivity and g-squared terms.
+    #[must_use]
+    pub fn spinning_round() -> Self {
+        let ka = 32_768.0 / (2000.0 * 9.806_65);
+        let kg = 32_768.0 / 2000.0;
+        Self {
+            accel: TriadTruth {
+                bias: [32_768.0 + 14.2, 32_768.0 - 9.6, 32_768.0 + 5.3],
+                s: [
+                    [ka * 1.003, ka * 2.0e-3, -ka * 1.2e-3],
+                    [-ka * 1.5e-3, ka * 0.998, ka * 2.5e-3],
+                    [ka * 0.9e-3, -ka * 1.8e-3, ka * 1.002],
+                ],
+                k2: [4.0e-7, -3.0e-7, 2.5e-7],
+                k3: [0.0; 3],
+                koq: [0.0; 3],
+                g: [[0.0; 3]; 3],
+                lever: [
+                    [0.0008, 0.0025, -0.0012],
+                    [-0.0030, 0.0005, 0.0018],
+                    [0.0015, -0.0021, 0.0009],
+                ],
+                bias_temp: [0.0; 3],
+                scale_temp: [0.0; 3],
+                bias_volt: [0.0; 3],
+                ref_volt: 3.3,
+                noise: [2.0, 2.0, 2.0],
+            },
+            gyro: TriadTruth {
+                bias: [32_768.0 + 3.1, 32_768.0 - 4.4, 32_768.0 + 1.7],
+                s: [
+                    [kg * 0.999, kg * 2.5e-3, kg * 1.0e-3],
+                    [-kg * 2.0e-3, kg * 1.002, kg * 3.0e-3],
+                    [kg * 1.5e-3, -kg * 2.2e-3, kg * 1.001],
+                ],
+                k2: [1.0e-6, -0.8e-6, 0.6e-6],
+                k3: [0.0; 3],
+                koq: [0.0; 3],
+                // About 0.1 deg/s per g: 1.8e-4 rad/s per m/s^2, in counts.
+                g: [
+                    [kg * 1.8e-4, -kg * 0.9e-4, kg * 0.5e-4],
+                    [kg * 0.7e-4, kg * 1.3e-4, -kg * 0.4e-4],
+                    [-kg * 0.3e-4, kg * 0.6e-4, kg * 2.0e-4],
+                ],
+                lever: [[0.0; 3]; 3],
+                bias_temp: [0.0; 3],
+                scale_temp: [0.0; 3],
+                bias_volt: [0.0; 3],
+                ref_volt: 3.3,
+                noise: [1.5, 1.5, 1.5],
+            },
+        }
+    }
 }
 
 impl Default for ImuTruth {

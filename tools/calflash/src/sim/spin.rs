@@ -1,0 +1,313 @@
+//! A spin rig: the unit turns about its roll axis (body x) at a rate that follows a profile
+//! (steady spins, spin-up and spin-down ramps), the roll axis horizontal so that gravity is
+//! transverse, with an optional coning motion; sampled at a fixed rate into raw counts through
+//! an IMU's truth (`spincal::model::rotation`), with the true specific force, rate and
+//! angular acceleration beside every sample.
+//!
+//! The attitude is `R(t) = Rx(Wt) Ry(theta) Rx(-Wt) Rx(phi(t))` (body to rig): the roll axis
+//! cones at `W` rad/s with half-angle `theta` about the rig's horizontal x axis while the body
+//! rolls by `phi`, `phi' = p(t)`. Body rates and angular accelerations are exact (no numerical
+//! differentiation): `w = W Q' e_x + (p - W) e_x` and `dw = -W (p - W) e_x x Q' e_x + p' e_x`
+//! with `Q = Ry(theta) Rx(phi - Wt)`. The rig turns about the reference point, so the specific
+//! force there is gravity's reaction alone, `R' (0, 0, g)`.
+
+use nalgebra::{Rotation3, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+use super::plan::G;
+use super::truth::ImuTruth;
+
+/// One stretch of the spin profile.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Segment {
+    /// A steady spin at `hz` revolutions per second for `seconds`.
+    Steady {
+        /// Spin rate, Hz.
+        hz: f64,
+        /// Duration, s.
+        seconds: f64,
+    },
+    /// A linear ramp of the spin rate from `from_hz` to `to_hz` over `seconds`.
+    Ramp {
+        /// Start rate, Hz.
+        from_hz: f64,
+        /// End rate, Hz.
+        to_hz: f64,
+        /// Duration, s.
+        seconds: f64,
+    },
+}
+
+impl Segment {
+    fn seconds(&self) -> f64 {
+        match *self {
+            Segment::Steady { seconds, .. } | Segment::Ramp { seconds, .. } => seconds,
+        }
+    }
+
+    /// Spin rate (Hz), its derivative (Hz/s) and the roll angle gained (revolutions) at `t`
+    /// seconds into the segment.
+    fn at(&self, t: f64) -> (f64, f64, f64) {
+        match *self {
+            Segment::Steady { hz, .. } => (hz, 0.0, hz * t),
+            Segment::Ramp {
+                from_hz,
+                to_hz,
+                seconds,
+            } => {
+                let a = (to_hz - from_hz) / seconds;
+                (from_hz + a * t, a, from_hz * t + 0.5 * a * t * t)
+            }
+        }
+    }
+}
+
+/// A profile that cannot be read.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("spin profile `{text}`: {why}")]
+pub struct ProfileError {
+    /// The text.
+    pub text: String,
+    /// What is wrong.
+    pub why: String,
+}
+
+/// Reads a profile: comma-separated `HZ:SECONDS` (steady) and `FROM-TO:SECONDS` (ramp), e.g.
+/// `50:1,150:1,300:1,150-300:0.5`.
+///
+/// # Errors
+/// A [`ProfileError`] naming the piece and what was expected.
+pub fn profile(text: &str) -> Result<Vec<Segment>, ProfileError> {
+    let err = |why: String| ProfileError {
+        text: text.into(),
+        why,
+    };
+    let num = |s: &str, what: &str| -> Result<f64, ProfileError> {
+        match s.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(err(format!("`{s}` is not a number ({what})"))),
+        }
+    };
+    let mut out = Vec::new();
+    for piece in text.split(',') {
+        let Some((rate, secs)) = piece.split_once(':') else {
+            return Err(err(format!(
+                "`{piece}`: expected HZ:SECONDS or FROM-TO:SECONDS"
+            )));
+        };
+        let seconds = num(secs, "seconds")?;
+        if seconds <= 0.0 || seconds > 3600.0 {
+            return Err(err(format!(
+                "`{piece}`: a segment lasts more than 0 and at most 3600 s"
+            )));
+        }
+        // A ramp's `-` separates two rates; a leading `-` is a sign.
+        let split = rate.get(1..).and_then(|r| r.find('-')).map(|i| i + 1);
+        let seg = match split {
+            Some(i) => Segment::Ramp {
+                from_hz: num(&rate[..i], "ramp start, Hz")?,
+                to_hz: num(&rate[i + 1..], "ramp end, Hz")?,
+                seconds,
+            },
+            None => Segment::Steady {
+                hz: num(rate, "spin rate, Hz")?,
+                seconds,
+            },
+        };
+        out.push(seg);
+    }
+    Ok(out)
+}
+
+/// A spin-rig run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpinRun {
+    /// The spin profile.
+    pub segments: Vec<Segment>,
+    /// Samples per second.
+    pub sample_rate: f64,
+    /// Coning half-angle, radians (0: none).
+    pub cone_angle: f64,
+    /// Coning rate, Hz.
+    pub cone_hz: f64,
+    /// Chamber temperature, C.
+    pub temp: f64,
+    /// Supply voltage, V.
+    pub volt: f64,
+    /// Noise seed.
+    pub seed: u64,
+}
+
+/// One sample: the truth and the raw counts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Time, s.
+    pub t: f64,
+    /// Specific force at the reference point, m/s^2.
+    pub f: [f64; 3],
+    /// Rate, rad/s.
+    pub w: [f64; 3],
+    /// Angular acceleration, rad/s^2.
+    pub dw: [f64; 3],
+    /// Raw counts: accelerometer x y z, gyro x y z (rounded, noisy).
+    pub raw: [f64; 6],
+}
+
+/// The body rate, angular acceleration and specific force at time `t` with spin rate `p`
+/// (rad/s), its derivative `dp` and roll angle `phi`.
+fn kinematics(run: &SpinRun, t: f64, p: f64, dp: f64, phi: f64) -> Sample {
+    let x = Vector3::x_axis();
+    let cone = 2.0 * std::f64::consts::PI * run.cone_hz;
+    let psi = phi - cone * t;
+    let q = Rotation3::from_axis_angle(&Vector3::y_axis(), run.cone_angle)
+        * Rotation3::from_axis_angle(&x, psi);
+    let r = Rotation3::from_axis_angle(&x, cone * t) * q;
+    let u = q.inverse() * x.into_inner();
+    let w = u * cone + x.into_inner() * (p - cone);
+    let dw = -(x.into_inner().cross(&u)) * (cone * (p - cone)) + x.into_inner() * dp;
+    let f = r.inverse() * Vector3::new(0.0, 0.0, G);
+    Sample {
+        t,
+        f: [f.x, f.y, f.z],
+        w: [w.x, w.y, w.z],
+        dw: [dw.x, dw.y, dw.z],
+        raw: [0.0; 6],
+    }
+}
+
+/// Runs the profile through `truth`: one sample every `1 / sample_rate` s, counts with the
+/// truth's noise, rounded.
+#[must_use]
+pub fn run(truth: &ImuTruth, run: &SpinRun) -> Vec<Sample> {
+    let mut rng = ChaCha8Rng::seed_from_u64(run.seed);
+    let noise = |rng: &mut ChaCha8Rng, sigma: f64| {
+        if sigma > 0.0 {
+            Normal::new(0.0, sigma).map_or(0.0, |n| n.sample(rng))
+        } else {
+            0.0
+        }
+    };
+    let tau = 2.0 * std::f64::consts::PI;
+    let mut out = Vec::new();
+    let (mut start, mut turns) = (0.0, 0.0);
+    let dt = 1.0 / run.sample_rate;
+    let mut k: u64 = 0;
+    for seg in &run.segments {
+        let end = start + seg.seconds();
+        loop {
+            let t = k as f64 * dt;
+            if t >= end {
+                break;
+            }
+            let (hz, dhz, gained) = seg.at(t - start);
+            let mut s = kinematics(run, t, tau * hz, tau * dhz, tau * (turns + gained));
+            let a = truth.accel.accel_output(s.f, s.w, s.dw, run.temp, run.volt);
+            let g = truth.gyro.gyro_output(s.w, s.f, run.temp, run.volt);
+            for i in 0..3 {
+                s.raw[i] = (a[i] + noise(&mut rng, truth.accel.noise[i])).round();
+                s.raw[i + 3] = (g[i] + noise(&mut rng, truth.gyro.noise[i])).round();
+            }
+            out.push(s);
+            k += 1;
+        }
+        turns += seg.at(seg.seconds()).2;
+        start = end;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn profiles_read_steady_spins_and_ramps() {
+        assert_eq!(
+            profile("50:1,150-300:0.5,-20:2").unwrap(),
+            vec![
+                Segment::Steady {
+                    hz: 50.0,
+                    seconds: 1.0
+                },
+                Segment::Ramp {
+                    from_hz: 150.0,
+                    to_hz: 300.0,
+                    seconds: 0.5
+                },
+                Segment::Steady {
+                    hz: -20.0,
+                    seconds: 2.0
+                },
+            ]
+        );
+        assert!(
+            profile("50")
+                .unwrap_err()
+                .to_string()
+                .contains("HZ:SECONDS")
+        );
+        assert!(profile("50:0").is_err());
+        assert!(
+            profile("x:1")
+                .unwrap_err()
+                .to_string()
+                .contains("spin rate")
+        );
+    }
+
+    #[test]
+    fn rates_and_accelerations_are_the_derivatives_of_the_attitude() {
+        let run = SpinRun {
+            segments: vec![],
+            sample_rate: 1000.0,
+            cone_angle: 0.05,
+            cone_hz: 7.0,
+            temp: 25.0,
+            volt: 3.3,
+            seed: 1,
+        };
+        let tau = 2.0 * std::f64::consts::PI;
+        // A ramp: p = p0 + a t.
+        let (p0, a) = (tau * 150.0, tau * 300.0);
+        let state = |t: f64| {
+            let phi = p0 * t + 0.5 * a * t * t;
+            kinematics(&run, t, p0 + a * t, a, phi)
+        };
+        let attitude = |t: f64| {
+            let phi = p0 * t + 0.5 * a * t * t;
+            let cone = tau * run.cone_hz;
+            Rotation3::from_axis_angle(&Vector3::x_axis(), cone * t)
+                * Rotation3::from_axis_angle(&Vector3::y_axis(), run.cone_angle)
+                * Rotation3::from_axis_angle(&Vector3::x_axis(), phi - cone * t)
+        };
+        let t = 0.0123;
+        let h = 1e-7;
+        // Body rate from R' dR/dt by central differences.
+        let d = (attitude(t + h).matrix() - attitude(t - h).matrix()) / (2.0 * h);
+        let omega = attitude(t).matrix().transpose() * d;
+        let s = state(t);
+        let num = [omega[(2, 1)], omega[(0, 2)], omega[(1, 0)]];
+        for k in 0..3 {
+            assert!(
+                (num[k] - s.w[k]).abs() < 1e-4 * (1.0 + s.w[k].abs()),
+                "w {k}: {num:?} {:?}",
+                s.w
+            );
+        }
+        let dw: Vec<f64> = (0..3)
+            .map(|k| (state(t + h).w[k] - state(t - h).w[k]) / (2.0 * h))
+            .collect();
+        for k in 0..3 {
+            assert!(
+                (dw[k] - s.dw[k]).abs() < 1e-3 * (1.0 + s.dw[k].abs()),
+                "dw {k}: {dw:?} {:?}",
+                s.dw
+            );
+        }
+        // Gravity is transverse to the roll axis, up to the cone.
+        let fnorm = s.f.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!((fnorm - G).abs() < 1e-9 && s.f[0].abs() <= G * run.cone_angle.sin() + 1e-9);
+    }
+}
