@@ -177,8 +177,8 @@ pub fn floats(data: &mut CalibrationData) -> Vec<FloatRef<'_>> {
             covariance(&mut out, cov, |c| {
                 c.accel
                     .iter_mut()
-                    .flatten()
-                    .chain(c.gyro.iter_mut().flatten())
+                    .chain(c.gyro.iter_mut())
+                    .flat_map(|f| f.as_flattened_mut())
                     .collect()
             });
         }

@@ -12,7 +12,7 @@ use spincal::{Error, Field, Part};
 /// invalid calibrations can be put in well-formed blobs.
 fn frame(payload: &[u8]) -> Vec<u8> {
     let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
-    let mut out = b"SCAL\x01".to_vec();
+    let mut out = b"SCAL\x02".to_vec();
     out.extend_from_slice(&(payload.len() as u16).to_le_bytes());
     let mut digest = crc.digest();
     digest.update(&out);
@@ -120,12 +120,15 @@ fn wrong_magic_version_and_length_are_refused() {
         blob::decode(&bad),
         Err(Error::HeaderBadMagic { found: *b"SCAM" })
     );
-    let mut bad = good.clone();
-    bad[4] = 2;
-    assert_eq!(
-        blob::decode(&bad),
-        Err(Error::HeaderUnsupportedVersion { found: 2 })
-    );
+    // The previous format (its IMU covariance and lever term mean other things) and the next.
+    for version in [1, 3] {
+        let mut bad = good.clone();
+        bad[4] = version;
+        assert_eq!(
+            blob::decode(&bad),
+            Err(Error::HeaderUnsupportedVersion { found: version })
+        );
+    }
     let mut bad = good.clone();
     bad[5] = bad[5].wrapping_add(1);
     assert!(matches!(
@@ -479,6 +482,7 @@ fn the_largest_calibration_fits_and_the_framing_is_small() {
     let mut buf = vec![0u8; MAX_BLOB_LEN];
     let n = blob::encode(&cal, &mut buf).unwrap();
     assert!(n <= MAX_BLOB_LEN);
+    println!("largest calibration: {n} bytes");
     let floats = fields::floats(&mut data).len();
     // The 16-byte serial, the largest time and version add 28 bytes to the examples' framing.
     assert!(

@@ -1,11 +1,6 @@
 //! The f32 correction against the independent f64 reference, every code of a 16-bit channel,
 //! environment sweeps beyond the tables, the identity fallback, batch against single samples,
 //! and the 1-sigma calibration error.
-#![expect(
-    clippy::needless_range_loop,
-    reason = "index loops mirror the formulas they check"
-)]
-
 use host_tests::golden::{Kind, Runner};
 use host_tests::reference::{self, Value};
 use proptest::collection::vec;
@@ -292,7 +287,7 @@ fn identity_fallback_flags_every_sample() {
             ([raw as f32; 6], Flags::NO_CALIBRATION)
         );
     }
-    assert_eq!(imu.sigma([0; 6]), None);
+    assert_eq!(imu.sigma(&[0.0; 6]), None);
 }
 
 #[test]
@@ -454,55 +449,79 @@ fn lever_arm_removes_what_each_axis_senses_of_a_steady_spin() {
 }
 
 #[test]
-fn sigma_matches_the_quadratic_form_of_the_covariance() {
+fn sigma_is_the_quadratic_form_of_the_covariance_over_each_outputs_features() {
     let data = CalibrationData::example_imu();
     let cal = Calibration::new(data.clone()).unwrap();
     let mut c = ImuCorrector::new(&cal, 1000.0).unwrap();
     c.set_environment(30.0, 3.3); // a breakpoint: the set is used as stored
     let Sensor::Imu {
-        accel,
         sets,
+        lever_arm: Some(r),
         covariance: Some(cov),
         ..
     } = &data.sensor
     else {
         unreachable!()
     };
-    let set = &sets[4].accel;
-    let raw = [34_000, 31_000, 36_000, 32_786, 32_430, 32_517];
-    let sigma = c.sigma(raw).unwrap();
-    // u for a set whose nonlinearity is evaluated in f64, then f' L L' f.
+    let set = &sets[4];
+    // A spinning sample (about 28 rad/s about z, the gyro's range).
+    let raw = [34_000, 31_000, 36_000, 32_786, 32_430, 32_517 + 25_000];
+    let _ = c.correct(raw);
+    let out = c.correct(raw);
+    let sigma = c.sigma(&out.values).unwrap();
+    let v = out.values.map(f64::from);
+    let (f, w) = ([v[0], v[1], v[2]], [v[3], v[4], v[5]]);
+    assert!(w[2] > 20.0, "{w:?}");
+    // Sensitive directions: rows of M^-1 over their diagonal.
+    let dirs = |m: &[[f32; 3]; 3]| {
+        let inv = nalgebra::Matrix3::from_fn(|i, j| f64::from(m[i][j]))
+            .try_inverse()
+            .unwrap();
+        std::array::from_fn::<[f64; 3], 3, _>(|i| {
+            std::array::from_fn(|j| inv[(i, j)] / inv[(i, i)])
+        })
+    };
+    let (na, ng) = (dirs(&set.accel.matrix), dirs(&set.gyro.matrix));
+    let dot = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let quad = |packed: &[f32], phi: &[f64; 8]| -> f64 {
+        // |L' phi| for packed row-major lower-triangular L.
+        let l = |r: usize, k: usize| f64::from(packed[r * (r + 1) / 2 + k]);
+        (0..8)
+            .map(|k| (k..8).map(|r| l(r, k) * phi[r]).sum::<f64>().powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let gf: [f64; 3] = std::array::from_fn(|i| {
+        (0..3)
+            .map(|j| f64::from(set.g_sensitivity[i][j]) * f[j])
+            .sum()
+    });
     for i in 0..3 {
-        let l = cov[4].accel[i].map(f64::from);
-        let u: Vec<f64> = (0..3)
-            .map(|j| {
-                let v = f64::from(raw[j]) - f64::from(accel[j].center);
-                let n = set.axes[j];
-                v + f64::from(n.quadratic) * v * v
-                    + f64::from(n.cubic) * v * v * v
-                    + f64::from(n.odd_quadratic) * v * v.abs()
-                    + f64::from(n.asymmetry) * (v - f64::from(n.asymmetry_break)).abs()
-            })
-            .collect();
-        let f = [1.0, u[0], u[1], u[2]];
-        let mut c = [[0.0; 4]; 4];
-        let idx = |r: usize, k: usize| r * (r + 1) / 2 + k;
-        for r in 0..4 {
-            for s in 0..4 {
-                c[r][s] = (0..=r.min(s)).map(|k| l[idx(r, k)] * l[idx(s, k)]).sum();
-            }
-        }
-        let q: f64 = (0..4)
-            .flat_map(|r| (0..4).map(move |s| (r, s)))
-            .map(|(r, s)| f[r] * c[r][s] * f[s])
-            .sum();
-        let want = q.sqrt();
+        let ri = r[i].map(f64::from);
+        let at = spincal::model::rotation::force_at(&f, &w, &[0.0; 3], &ri);
+        let g = spincal::model::rotation::lever_gradient(&na[i], &w, &[0.0; 3]);
+        let x = dot(&na[i], &at);
+        let phi = [1.0, at[0], at[1], at[2], g[0], g[1], g[2], x * x];
+        let want = quad(cov[4].accel[i].as_flattened(), &phi);
         assert!(
-            (f64::from(sigma[i]) - want).abs() < 1e-5 * want,
-            "{} vs {want}",
+            (f64::from(sigma[i]) - want).abs() < 1e-4 * want,
+            "accel {i}: {} vs {want}",
             sigma[i]
+        );
+        let xg = dot(&ng[i], &[w[0] + gf[0], w[1] + gf[1], w[2] + gf[2]]);
+        let phi = [1.0, w[0], w[1], w[2], f[0], f[1], f[2], xg * xg];
+        let want = quad(cov[4].gyro[i].as_flattened(), &phi);
+        assert!(
+            (f64::from(sigma[i + 3]) - want).abs() < 1e-4 * want,
+            "gyro {i}: {} vs {want}",
+            sigma[i + 3]
         );
     }
     let no_cov = Calibration::new(CalibrationData::example_imu_linear()).unwrap();
-    assert_eq!(ImuCorrector::new(&no_cov, 1000.0).unwrap().sigma(raw), None);
+    assert_eq!(
+        ImuCorrector::new(&no_cov, 1000.0)
+            .unwrap()
+            .sigma(&out.values),
+        None
+    );
 }

@@ -101,7 +101,7 @@ fn held_after_reboot(mut flash: Flash) -> Option<Vec<u8>> {
     flash.reboot();
     let d = tcp_unit::device(flash, UNIT);
     d.calibration().map(|c| {
-        let mut out = vec![0u8; 8192];
+        let mut out = vec![0u8; spincal::blob::MAX_BLOB_LEN];
         let n = spincal::blob::encode(c, &mut out).unwrap();
         out.truncate(n);
         out

@@ -367,7 +367,8 @@ fn a_slot_image_is_what_an_update_writes() {
 /// slot; it once made `scan` and `load` fail with `BufferTooSmall` instead, losing both.
 #[test]
 fn a_header_claiming_an_impossible_length_is_an_invalid_slot() {
-    const BIG_SLOT: u32 = 12 * ERASE as u32;
+    // A slot with room for a length beyond the boot buffer.
+    const BIG_SLOT: u32 = ((spincal::protocol::SLOT_BUFFER / ERASE + 2) * ERASE) as u32;
     let region = 2 * BIG_SLOT as usize + ERASE;
     let [old, new, ..] = &blobs()[..] else {
         unreachable!()

@@ -3,7 +3,7 @@
 //! ```text
 //! offset  size  field
 //!      0     4  magic "SCAL"
-//!      4     1  format version (1)
+//!      4     1  format version (2; 1 had the IMU covariance over [1, u] and the own-axis lever term)
 //!      5     2  payload length, little-endian
 //!      7     4  CRC-32C (Castagnoli), little-endian, over bytes 0..7 and the payload
 //!     11     n  payload: postcard encoding of `CalibrationData`
@@ -20,7 +20,7 @@
 //! let cal = Calibration::new(CalibrationData::example_triad())?;
 //! let mut buf = [0u8; blob::MAX_BLOB_LEN];
 //! let n = blob::encode(&cal, &mut buf)?;
-//! assert_eq!(&buf[..5], b"SCAL\x01");
+//! assert_eq!(&buf[..5], b"SCAL\x02");
 //! assert_eq!(blob::decode(&buf[..n])?, cal);
 //! // One flipped bit anywhere is caught before decoding.
 //! buf[20] ^= 0x10;
@@ -36,12 +36,12 @@ use crate::model::{Calibration, CalibrationData};
 /// The first four bytes of every blob.
 pub const MAGIC: [u8; 4] = *b"SCAL";
 /// The format version this crate writes and reads.
-pub const FORMAT_VERSION: u8 = 1;
+pub const FORMAT_VERSION: u8 = 2;
 /// Bytes in the fixed header.
 pub const HEADER_LEN: usize = 11;
 /// Upper bound on the encoded length of any valid calibration (the largest IMU table with
 /// covariance factors and a full-length serial fits; a test checks it).
-pub const MAX_BLOB_LEN: usize = 8_704;
+pub const MAX_BLOB_LEN: usize = 18_432;
 
 const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
 

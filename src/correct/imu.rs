@@ -9,7 +9,7 @@ use super::kernel::{Shape, TriadKernel, affine, range_bounds};
 use super::{Corrected, Flags, factor_norm};
 use crate::Error;
 use crate::model::interval::{Bound, affine_bound};
-use crate::model::rotation::LeverTerms;
+use crate::model::rotation::{self, LeverTerms};
 use crate::model::{Calibration, Channel, Environment, ImuCovariance, ImuSet, Rails, Sensor};
 
 pub use crate::model::MAX_SAMPLE_RATE_HZ;
@@ -66,6 +66,9 @@ pub struct ImuCorrector<'a> {
     /// The lever term's coefficients at the environment, the sample rate folded into the
     /// tangential ones.
     terms: LeverTerms<f32>,
+    /// The sensitive directions `n_i` of the accelerometer and the gyro at the environment
+    /// (for [`sigma`](Self::sigma)).
+    directions: [[[f32; 3]; 3]; 2],
     /// The previous corrected gyro rate.
     prev_rate: [f32; 3],
     /// The previous lever term `e` (m/s^2), fed to the g-sensitivity.
@@ -139,6 +142,7 @@ impl<'a> ImuCorrector<'a> {
             lever,
             rate: sample_rate_hz,
             terms: LeverTerms::NONE,
+            directions: [[[0.0; 3]; 3]; 2],
             prev_rate: [0.0; 3],
             prev_lever: [0.0; 3],
             primed: false,
@@ -169,6 +173,7 @@ impl<'a> ImuCorrector<'a> {
             lever: [[0.0; 3]; 3],
             rate: 1.0,
             terms: LeverTerms::NONE,
+            directions: [[[0.0; 3]; 3]; 2],
             prev_rate: [0.0; 3],
             prev_lever: [0.0; 3],
             primed: false,
@@ -221,6 +226,10 @@ impl<'a> ImuCorrector<'a> {
         }
         self.neg_g = neg_g;
         self.terms = terms;
+        if src.covariance.is_some() {
+            let unit = |m: &[[f32; 3]; 3]| rotation::directions(m).map_or([[0.0; 3]; 3], |d| d.0);
+            self.directions = [unit(&set.accel.matrix), unit(&set.gyro.matrix)];
+        }
         self.env_flags = flags;
         self.covariance = src
             .covariance
@@ -302,26 +311,48 @@ impl<'a> ImuCorrector<'a> {
         }
     }
 
-    /// The 1-sigma calibration error of each output for `raw` at the current environment
-    /// (bias, scale and misalignment; not the nonlinear terms, g-sensitivity or lever arm);
-    /// `None` when the calibration has no covariance factors.
+    /// The 1-sigma calibration error of each output of a corrected sample `values`
+    /// (`[ax, ay, az, wx, wy, wz]`, as [`correct`](Self::correct) gave them) at the current
+    /// environment: bias, sensitivity and misalignment, lever arm, g-sensitivity and g-squared
+    /// terms, over the features of [`IMU_FEATURES`](crate::model::IMU_FEATURES) (the
+    /// tangential term is left out of them: it is a small part of the spin's at any rate a
+    /// round spins up at). `None` when the calibration has no covariance factors.
     #[must_use]
-    pub fn sigma(&self, raw: [i32; 6]) -> Option<[f32; 6]> {
+    pub fn sigma(&self, values: &[f32; 6]) -> Option<[f32; 6]> {
         let ImuCovariance {
             accel: ca,
             gyro: cg,
         } = self.covariance.as_ref()?;
-        let (ra, rg) = split(raw);
-        let features = |k: &TriadKernel, r: [i32; 3]| {
-            let (w, _) = k.offsets(k.clamp(r));
-            let [u0, u1, u2] = k.linearized::<true>(w);
-            [1.0, u0, u1, u2]
+        let [f0, f1, f2, w0, w1, w2] = *values;
+        let (f, w) = ([f0, f1, f2], [w0, w1, w2]);
+        let [na, ng] = &self.directions;
+        let zero = [0.0; 3];
+        let accel = |i: usize| -> [f32; 8] {
+            let (Some(n), Some(r)) = (na.get(i), self.lever.get(i)) else {
+                return [0.0; 8];
+            };
+            let at = rotation::force_at(&f, &w, &zero, r);
+            let [g0, g1, g2] = rotation::lever_gradient(n, &w, &zero);
+            let x = rotation::dot(n, &at);
+            let [a0, a1, a2] = at;
+            [1.0, a0, a1, a2, g0, g1, g2, x * x]
         };
-        let fa = features(&self.accel, ra);
-        let fg = features(&self.gyro, rg);
-        let [a0, a1, a2] = ca.map(|l| factor_norm(&l, &fa));
-        let [g0, g1, g2] = cg.map(|l| factor_norm(&l, &fg));
-        Some([a0, a1, a2, g0, g1, g2])
+        let [h0, h1, h2] = self.g_sensitivity(zero, &f).map(|x| -x);
+        let sensed_rate = [w0 + h0, w1 + h1, w2 + h2];
+        let gyro = |i: usize| -> [f32; 8] {
+            let x = ng.get(i).map_or(0.0, |n| rotation::dot(n, &sensed_rate));
+            [1.0, w0, w1, w2, f0, f1, f2, x * x]
+        };
+        let [a0, a1, a2] = ca;
+        let [g0, g1, g2] = cg;
+        Some([
+            factor_norm(a0.as_flattened(), &accel(0)),
+            factor_norm(a1.as_flattened(), &accel(1)),
+            factor_norm(a2.as_flattened(), &accel(2)),
+            factor_norm(g0.as_flattened(), &gyro(0)),
+            factor_norm(g1.as_flattened(), &gyro(1)),
+            factor_norm(g2.as_flattened(), &gyro(2)),
+        ])
     }
 
     /// The sensor-domain specific force and the gyro's rate before g-sensitivity.

@@ -65,23 +65,6 @@ fn gyro_channels() -> [Channel; 3] {
     ]
 }
 
-/// Packed Cholesky factor over `[1, u0, u1, u2]` for an output with bias sigma `b` and scale
-/// sigma `s` (relative to the nominal `scale`).
-fn triad_factor(b: f32, s: f32, scale: f32) -> [[f32; 10]; 3] {
-    let row = |i: usize| -> [f32; 10] {
-        let mut l = [0.0; 10];
-        // L00 (bias), then a small correlation of bias and own scale.
-        l[0] = b;
-        for j in 0..3 {
-            let diag = [2, 5, 9][j];
-            l[diag] = if j == i { s * scale } else { 0.2 * s * scale };
-        }
-        l[1 + i * (i + 3) / 2] = -0.1 * b / 30_000.0;
-        l
-    };
-    [row(0), row(1), row(2)]
-}
-
 fn accel_set(t: f32, nonlinear: bool) -> TriadSet {
     let dt = t - 25.0;
     let s = 1.0 / 412.0 * (1.0 + 80e-6 * dt);
@@ -117,11 +100,45 @@ fn accel_set(t: f32, nonlinear: bool) -> TriadSet {
     }
 }
 
+/// A packed factor over the [`IMU_FEATURES`](super::IMU_FEATURES) features of output `i`:
+/// independent sigmas for bias, the own and the cross components of the sensitivity row, the
+/// lever arm (or g-sensitivity) row and the g-squared term, and a correlation of the bias with
+/// the g-squared term.
+fn imu_output_factor(i: usize, sigma: [f32; 5]) -> super::ImuOutputCovariance {
+    let [bias, own, cross, lever, k2] = sigma;
+    let diag = [
+        bias,
+        if i == 0 { own } else { cross },
+        if i == 1 { own } else { cross },
+        if i == 2 { own } else { cross },
+        lever,
+        lever,
+        lever,
+        k2,
+    ];
+    let mut packed = [0.0f32; 36];
+    for (r, d) in diag.iter().enumerate() {
+        packed[r * (r + 1) / 2 + r] = *d;
+    }
+    // Row 7 (x^2), column 0 (bias).
+    packed[28] = -0.3 * k2;
+    let mut out = [[0.0; 6]; 6];
+    for (k, v) in packed.iter().enumerate() {
+        out[k / 6][k % 6] = *v;
+    }
+    out
+}
+
 fn imu_covariance(t: f32) -> ImuCovariance {
     let dt = t - 25.0;
+    let grow = 1.0 + 0.004 * dt.abs();
     ImuCovariance {
-        accel: triad_factor(2.0e-3, 1.5e-4, 1.0 / 412.0 * (1.0 + 80e-6 * dt)),
-        gyro: triad_factor(1.0e-3, 2.0e-4, 1.0 / 900.0 * (1.0 - 120e-6 * dt)),
+        accel: core::array::from_fn(|i| {
+            imu_output_factor(i, [2.0e-2 * grow, 1.5e-4, 3.0e-5, 2.0e-7, 1.0e-9])
+        }),
+        gyro: core::array::from_fn(|i| {
+            imu_output_factor(i, [1.0e-3 * grow, 2.0e-4, 5.0e-5, 1.0e-6, 2.0e-9])
+        }),
     }
 }
 

@@ -43,7 +43,8 @@ pub(crate) mod validate;
 pub use bounded::{BoundedVec, Serial};
 pub(crate) use sets::Blend;
 pub use sets::{
-    AxisNonlinearity, ImuCovariance, ImuSet, SingleCovariance, SingleSet, TriadCovariance, TriadSet,
+    AxisNonlinearity, IMU_FEATURES, ImuCovariance, ImuOutputCovariance, ImuSet, SingleCovariance,
+    SingleSet, TriadCovariance, TriadSet,
 };
 
 use ref_cast::{RefCastCustom, ref_cast_custom};

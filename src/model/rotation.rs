@@ -136,6 +136,23 @@ pub fn force_at<T: Real>(f: &[T; 3], w: &[T; 3], dw: &[T; 3], r: &[T; 3]) -> [T;
     [f0 + c0 + t0, f1 + c1 + t1, f2 + c2 + t2]
 }
 
+/// The gradient in the lever arm `r` of what an axis sensing along `s` senses of the spin,
+/// `s . (w x (w x r) + dw x r)`: `w (s . w) - s |w|^2 + s x dw` (the expression is linear in
+/// `r`, so it equals `gradient . r`).
+#[must_use]
+pub fn lever_gradient<T: Real>(s: &[T; 3], w: &[T; 3], dw: &[T; 3]) -> [T; 3] {
+    let sw = dot(s, w);
+    let ww = dot(w, w);
+    let [t0, t1, t2] = cross(s, dw);
+    let [w0, w1, w2] = *w;
+    let [s0, s1, s2] = *s;
+    [
+        w0 * sw - s0 * ww + t0,
+        w1 * sw - s1 * ww + t1,
+        w2 * sw - s2 * ww + t2,
+    ]
+}
+
 /// The quadratic monomials of `w` the lever term uses: `w0^2, w1^2, w2^2, w0 w1, w0 w2, w1 w2`.
 #[must_use]
 pub fn monomials<T: Real>(w: &[T; 3]) -> [T; 6] {
@@ -161,6 +178,30 @@ pub fn inverse3<T: Real + PartialEq>(m: &[[T; 3]; 3]) -> Option<[[T; 3]; 3]> {
         [inv(c01), inv(a * i - c * g), inv(c * d - a * f)],
         [inv(c02), inv(b * g - a * h), inv(a * e - b * d)],
     ])
+}
+
+/// The sensitive directions `n_i` of a triad whose device matrix is `m` (`S^-1` up to a
+/// diagonal): the rows of `m^-1` over their diagonal elements, which are returned too (so that
+/// `N^-1 = m diag(m^-1)`). `None` when `m` is singular or a diagonal element of `m^-1` is zero.
+#[must_use]
+pub fn directions<T: Real + PartialEq>(m: &[[T; 3]; 3]) -> Option<([[T; 3]; 3], [T; 3])> {
+    let minv = inverse3(m)?;
+    let mut n = [[T::ZERO; 3]; 3];
+    let mut diag = [T::ZERO; 3];
+    for (i, ((row, d), out)) in minv
+        .iter()
+        .zip(diag.iter_mut())
+        .zip(n.iter_mut())
+        .enumerate()
+    {
+        let ii = *row.get(i)?;
+        if ii == T::ZERO {
+            return None;
+        }
+        *d = ii;
+        *out = row.map(|x| x.div(ii));
+    }
+    Some((n, diag))
 }
 
 /// The lever-arm term `e(w, dw)` of the device's inverse for one accelerometer matrix and set
@@ -189,20 +230,7 @@ impl<T: Real + PartialEq> LeverTerms<T> {
     /// along itself (a diagonal element of `m^-1` is zero).
     #[must_use]
     pub fn new(m: &[[T; 3]; 3], lever: &[[T; 3]; 3], rate_scale: T) -> Option<Self> {
-        let minv = inverse3(m)?;
-        // n_i = row i of M^-1 over its diagonal; N^-1 = M diag(M^-1).
-        let mut n = [[T::ZERO; 3]; 3];
-        let mut diag = [T::ZERO; 3];
-        for (i, (row, d)) in minv.iter().zip(diag.iter_mut()).enumerate() {
-            let ii = *row.get(i)?;
-            if ii == T::ZERO {
-                return None;
-            }
-            *d = ii;
-            if let Some(out) = n.get_mut(i) {
-                *out = row.map(|x| x.div(ii));
-            }
-        }
+        let (n, diag) = directions(m)?;
         // Per axis i: the centripetal part n_i . (w x (w x r_i)) = (n_i . w)(r_i . w) -
         // (n_i . r_i)|w|^2 on the monomials, and the tangential n_i . (dw x r_i) =
         // dw . (r_i x n_i).

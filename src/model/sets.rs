@@ -96,14 +96,36 @@ impl TriadSet {
     }
 }
 
-/// Covariance factors of an IMU at one table point (see [`TriadCovariance`]).
+/// Features of one IMU output's 1-sigma (SI units), [`IMU_FEATURES`] of them.
+///
+/// - Accelerometer output `i`: `[1, F_i0, F_i1, F_i2, G_i0, G_i1, G_i2, x_i^2]`, with `F_i` the
+///   specific force at axis `i`'s position (reference force plus what the spin adds there),
+///   `G_i = w (n_i . w) - n_i |w|^2` the gradient of what the axis senses of the spin in its
+///   lever arm, and `x_i = n_i . F_i` what it senses along itself
+///   ([`rotation`](super::rotation)).
+/// - Gyro output `i`: `[1, w_0, w_1, w_2, f_0, f_1, f_2, x_i^2]`, with `f` the specific force at
+///   the reference point (g-sensitivity) and `x_i = n_i . (w + G f)` what it senses.
+///
+/// Their coefficients are the axis' forward parameters: bias, sensitivity row, lever arm or
+/// g-sensitivity row, g-squared term; the factor holds their covariance scaled to the output.
+pub const IMU_FEATURES: usize = 8;
+
+/// The packed lower-triangular Cholesky factor `L` (row-major, `L00; L10 L11; ...`, 36 values
+/// for [`IMU_FEATURES`] features) of the covariance of one IMU output over its features: the
+/// output's 1-sigma calibration error is `|L' phi|`. Stored as six rows of six (serde's arrays
+/// stop at 32); read it flat with `as_flattened`.
+pub type ImuOutputCovariance = [[f32; 6]; 6];
+
+/// Covariance factors of an IMU at one table point: per output, over that output's features
+/// (see [`IMU_FEATURES`]), so that the stated 1-sigma covers the lever arm and the g-squared
+/// terms of a spinning unit. The cubic and odd-quadratic terms' uncertainty is not included.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ImuCovariance {
     /// The accelerometer outputs.
-    pub accel: TriadCovariance,
-    /// The gyro outputs (before g-sensitivity).
-    pub gyro: TriadCovariance,
+    pub accel: [ImuOutputCovariance; 3],
+    /// The gyro outputs.
+    pub gyro: [ImuOutputCovariance; 3],
 }
 
 /// Coefficients of an IMU at one table point.
@@ -175,10 +197,16 @@ impl<const N: usize, const M: usize> Blend for [[f32; N]; M] {
 
 impl Blend for ImuCovariance {
     fn blend(&self, other: &Self, t: f32) -> Self {
-        Self {
-            accel: self.accel.blend(&other.accel, t),
-            gyro: self.gyro.blend(&other.gyro, t),
+        let mut out = *self;
+        for (o, (a, b)) in out.accel.iter_mut().chain(out.gyro.iter_mut()).zip(
+            self.accel
+                .iter()
+                .chain(&self.gyro)
+                .zip(other.accel.iter().chain(&other.gyro)),
+        ) {
+            *o = a.blend(b, t);
         }
+        out
     }
 }
 

@@ -91,7 +91,7 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
                 validate_lever_feedback(sets, arm, (accel, accel_rails), (gyro, gyro_rails))?;
             }
             validate_covariance(covariance.as_ref(), sets.len(), Part::Accelerometer, |c| {
-                c.accel.iter().flatten().chain(c.gyro.iter().flatten())
+                c.accel.iter().chain(&c.gyro).flat_map(|f| f.as_flattened())
             })
         }
     }

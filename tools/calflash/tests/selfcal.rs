@@ -391,9 +391,12 @@ fn the_selfcal_blob_carries_the_calibration_uncertainty() {
 
     // At (about) the zero-input codes: the offsets' standard errors.
     let at = |a: [i32; 3], g: [i32; 3]| [a[0], a[1], a[2], g[0], g[1], g[2]];
-    let s = dev
-        .sigma(at(center, bias))
-        .expect("the blob has covariance factors");
+    // The 1-sigma of the corrected outputs of a raw sample.
+    let mut sigma = |raw: [i32; 6]| {
+        let v = dev.correct(raw).values;
+        dev.sigma(&v)
+    };
+    let s = sigma(at(center, bias)).expect("the blob has covariance factors");
     for i in 0..3 {
         // The codes are within half a count of the centers: the offset terms dominate.
         assert!(
@@ -416,7 +419,7 @@ fn the_selfcal_blob_carries_the_calibration_uncertainty() {
     // 4000 counts along x: sigma_x^2 = var(o1) + 2 d cov(o1, M11) + d^2 var(M11).
     let mut a = center;
     a[0] += 4000;
-    let s = dev.sigma(at(a, bias)).unwrap();
+    let s = sigma(at(a, bias)).unwrap();
     let u = {
         let v = f64::from(a[0]) - c.accel.model.center[0];
         v + c.accel.model.quadratic[0] * v * v
@@ -429,7 +432,7 @@ fn the_selfcal_blob_carries_the_calibration_uncertainty() {
         let m = calflash::nonlinear::statics::mean(&rec.acc, p);
         let raw = at(m.map(|x| x.round() as i32), bias);
         let out = dev.correct(raw).values;
-        let s = dev.sigma(raw).unwrap();
+        let s = dev.sigma(&out).unwrap();
         let r = nalgebra::Vector3::from_fn(|j, _| f64::from(raw[j]) - truth.accel_center);
         let a_true = truth.accel_matrix * r + truth.accel_offset;
         for i in 0..3 {

@@ -274,7 +274,7 @@ fn imu_on_tumble_rate_table_and_centrifuge_with_lever_arms() {
         dev.reset();
         let _ = dev.correct(raw);
         let out = dev.correct(raw);
-        let sigma = dev.sigma(raw).unwrap();
+        let sigma = dev.sigma(&out.values).unwrap();
         for k in 0..3 {
             let tol_a = 5.0 * f64::from(sigma[k])
                 + 0.5 / 412.0

@@ -220,7 +220,11 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
             Any::Imu(c) => {
                 let r = [raw[0], raw[1], raw[2], raw[3], raw[4], raw[5]];
                 let o = c.correct(r);
-                (o.values.to_vec(), o.flags, c.sigma(r).map(|s| s.to_vec()))
+                (
+                    o.values.to_vec(),
+                    o.flags,
+                    c.sigma(&o.values).map(|s| s.to_vec()),
+                )
             }
         };
         flagged += usize::from(!flags.is_clean());

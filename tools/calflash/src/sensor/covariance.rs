@@ -1,7 +1,8 @@
 //! The covariance factor the device stores: the calibration error of a corrected output as a
 //! quadratic form in the device's features `[1, u...]`, from the forward fits' covariances.
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, Matrix3};
+use spincal::model::{IMU_FEATURES, ImuOutputCovariance};
 
 /// Packed lower-triangular Cholesky factor (row-major) of a symmetric positive semidefinite
 /// matrix; a tiny diagonal jitter is added when rounding leaves it indefinite.
@@ -67,4 +68,59 @@ pub fn triad(
 pub fn single(c: &DMatrix<f64>, slope: f64, off: f64, scale: f64) -> Vec<f64> {
     let t = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, off, scale]);
     packed_cholesky(&(t.transpose() * c * &t / (slope * slope)))
+}
+
+/// An IMU output's factor (`spincal::model::IMU_FEATURES`) from the covariance `q` of its
+/// forward parameters, `names[k]` naming the parameter of feature `k` (`None`: not in the
+/// model) and `scale[k]` the feature's regressor over the device's feature, all over the
+/// axis' sensitivity `slope` (the output is `z / S_ii` to first order in the misalignment).
+#[must_use]
+pub fn imu_output(
+    fit: &crate::stats::Fit,
+    names: &[Option<&str>; IMU_FEATURES],
+    scale: &[f64; IMU_FEATURES],
+    slope: f64,
+) -> ImuOutputCovariance {
+    let idx = names.map(|n| n.and_then(|n| fit.names.iter().position(|m| m == n)));
+    let q = DMatrix::from_fn(IMU_FEATURES, IMU_FEATURES, |r, c| match (idx[r], idx[c]) {
+        (Some(a), Some(b)) => fit.covariance[(a, b)] * scale[r] * scale[c] / (slope * slope),
+        _ => 0.0,
+    });
+    imu_packed(&q)
+}
+
+/// An IMU output's factor from the covariance `q` (4x4) of its offset and matrix row over the
+/// device features `[1, u0, u1, u2]` of a triad whose outputs are `y = M u + off`: the same
+/// covariance over `[1, y]` (`u = M^-1 (y - off)`), in the first four of the IMU's features
+/// (a unit with no lever arm, g-sensitivity or g-squared term to account for).
+#[must_use]
+pub fn imu_output_from_triad(
+    q: &DMatrix<f64>,
+    m: &Matrix3<f64>,
+    off: &[f64; 3],
+) -> ImuOutputCovariance {
+    let inv = m.try_inverse().unwrap_or_else(Matrix3::zeros);
+    // [1, u] = T [1, y].
+    let mut t = DMatrix::zeros(4, 4);
+    t[(0, 0)] = 1.0;
+    for j in 0..3 {
+        t[(j + 1, 0)] = -(0..3).map(|k| inv[(j, k)] * off[k]).sum::<f64>();
+        for k in 0..3 {
+            t[(j + 1, k + 1)] = inv[(j, k)];
+        }
+    }
+    let qy = t.transpose() * q * &t;
+    let full = DMatrix::from_fn(IMU_FEATURES, IMU_FEATURES, |r, c| {
+        if r < 4 && c < 4 { qy[(r, c)] } else { 0.0 }
+    });
+    imu_packed(&full)
+}
+
+fn imu_packed(q: &DMatrix<f64>) -> ImuOutputCovariance {
+    let l = packed_cholesky(q);
+    let mut out = [[0.0f32; 6]; 6];
+    for (k, v) in l.iter().enumerate().take(36) {
+        out[k / 6][k % 6] = *v as f32;
+    }
+    out
 }

@@ -10,7 +10,7 @@
 //! of its Jacobian. A gyro axis outputs `b_i + s_i . w + g_i . f + S_ii n_i(x_i)`, linear but for
 //! `x_i = (s_i . w + g_i . f) / S_ii`, refreshed each step the same way.
 
-use spincal::model::rotation::{cross, dot, force_at};
+use spincal::model::rotation::{dot, force_at, lever_gradient};
 
 use crate::columns as col;
 use crate::obs::Table;
@@ -32,14 +32,11 @@ pub fn column(i: usize, k: usize) -> String {
 /// The column of what an axis senses, SI units: the argument of its nonlinear terms.
 pub const SENSED: &str = "sensed";
 
-/// `A' s` for `A = C(w) + [dw]x`: the gradient of `s . (w x (w x r) + dw x r)` in `r`.
+/// `A' s` for `A = C(w) + [dw]x`: the gradient of `s . (w x (w x r) + dw x r)` in `r`
+/// ([`spincal::model::rotation::lever_gradient`]).
 #[must_use]
 pub fn gradient(s: &[f64; 3], w: &[f64; 3], dw: &[f64; 3]) -> [f64; 3] {
-    // s . (w x (w x r)) = (s . w)(w . r) - (s . r)|w|^2 and s . (dw x r) = r . (s x dw).
-    let sw = dot(s, w);
-    let ww = dot(w, w);
-    let t = cross(s, dw);
-    std::array::from_fn(|k| w[k] * sw - s[k] * ww + t[k])
+    lever_gradient(s, w, dw)
 }
 
 /// Which lever-arm components (row: accelerometer axis, column: component) the plan's rates

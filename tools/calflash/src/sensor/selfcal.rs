@@ -10,7 +10,7 @@
 
 use std::path::Path;
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, Matrix3};
 use spincal::blob;
 use spincal::correct::ImuCorrector;
 use spincal::model::{
@@ -18,6 +18,7 @@ use spincal::model::{
     ImuCovariance, ImuSet, Rails, Sensor, Span, TriadSet,
 };
 
+use super::covariance;
 use crate::nonlinear::selfcal::SelfCal;
 use crate::obs::recording::Recording;
 
@@ -118,12 +119,13 @@ pub fn calibration_data(
     }
 }
 
-/// The covariance factors the device stores (see [`spincal::model::TriadCovariance`]): per
-/// output, the covariance of its offset and matrix row over the features `[1, u0, u1, u2]`.
-/// Accelerometer: from the fit's covariance (the structural zeros of the upper-triangular `M`
-/// have none). Gyro: the matrix rows from the fit's covariance, and the offset from the stored
-/// bias's error (the pose means' RMS about it, [`SelfCal::gyro_bias_rms`]) through `G`, as
-/// `w = G (raw - bias)`. `None` when a fit has no covariance.
+/// The covariance factors the device stores (see [`spincal::model::ImuCovariance`]): per
+/// output, the covariance of its offset and matrix row, over the features `[1, u0, u1, u2]` of
+/// the correction form and then over the output's own features. Accelerometer: from the fit's
+/// covariance (the structural zeros of the upper-triangular `M` have none). Gyro: the matrix
+/// rows from the fit's covariance, and the offset from the stored bias's error (the pose means'
+/// RMS about it, [`SelfCal::gyro_bias_rms`]) through `G`, as `w = G (raw - bias)`. `None` when
+/// a fit has no covariance.
 #[must_use]
 pub fn covariance_factors(c: &SelfCal) -> Option<ImuCovariance> {
     let ca = c.accel.covariance.as_ref()?;
@@ -134,15 +136,17 @@ pub fn covariance_factors(c: &SelfCal) -> Option<ImuCovariance> {
         [Some(7), None, Some(3), Some(4)],
         [Some(8), None, None, Some(5)],
     ];
+    let ma = Matrix3::from_fn(|i, j| c.accel.model.matrix[i][j]);
     let accel = accel_index.map(|idx| {
         let q = DMatrix::from_fn(4, 4, |r, s| match (idx[r], idx[s]) {
             (Some(a), Some(b)) => ca[(a, b)],
             _ => 0.0,
         });
-        packed(&q)
+        covariance::imu_output_from_triad(&q, &ma, &c.accel.model.offset)
     });
     let g = c.gyro.matrix;
-    let gyro: [[f32; 10]; 3] = std::array::from_fn(|i| {
+    let mg = Matrix3::from_fn(|i, j| g[i][j]);
+    let gyro = std::array::from_fn(|i| {
         let mut q = DMatrix::zeros(4, 4);
         q[(0, 0)] = (0..3)
             .map(|j| (g[i][j] * c.gyro_bias_rms[j]).powi(2))
@@ -152,14 +156,9 @@ pub fn covariance_factors(c: &SelfCal) -> Option<ImuCovariance> {
                 q[(r + 1, s + 1)] = cg[(3 * i + r, 3 * i + s)];
             }
         }
-        packed(&q)
+        covariance::imu_output_from_triad(&q, &mg, &[0.0; 3])
     });
     Some(ImuCovariance { accel, gyro })
-}
-
-fn packed(q: &DMatrix<f64>) -> [f32; 10] {
-    let l = super::covariance::packed_cholesky(q);
-    std::array::from_fn(|k| l.get(k).copied().unwrap_or(0.0) as f32)
 }
 
 /// What the device computes, checked: the blob, and the largest differences between the

@@ -12,8 +12,8 @@
 
 use nalgebra::{DMatrix, Matrix3};
 use spincal::model::{
-    AxisNonlinearity, BoundedVec, CalibrationData, Channel, ImuCovariance, ImuSet, Quantity,
-    Sensor, Span, TriadCovariance, TriadSet,
+    AxisNonlinearity, BoundedVec, CalibrationData, Channel, ImuCovariance, ImuOutputCovariance,
+    ImuSet, Quantity, Sensor, Span, TriadCovariance, TriadSet,
 };
 
 use super::invert::{Own, linearization, linearize};
@@ -41,6 +41,8 @@ struct TriadResult {
     fits: Vec<[AxisFit; 3]>,
     sets: Vec<TriadSet>,
     covs: Vec<TriadCovariance>,
+    /// Per point, the IMU form of the covariance factors (`spincal::model::IMU_FEATURES`).
+    imu_covs: Vec<[ImuOutputCovariance; 3]>,
     errors: Vec<[f64; 3]>,
     noise: Vec<[f64; 3]>,
     /// g-sensitivity per point (device form), gyro only.
@@ -306,6 +308,7 @@ fn triad(
         fits: Vec::new(),
         sets: Vec::new(),
         covs: Vec::new(),
+        imu_covs: Vec::new(),
         errors: Vec::new(),
         noise: Vec::new(),
         g: Vec::new(),
@@ -383,6 +386,8 @@ fn triad(
         let md = DMatrix::from_fn(3, 3, |i, j| m[(i, j)]);
         let inv_d = DMatrix::from_fn(3, 3, |i, j| inv[(i, j)]);
         let factors = covariance::triad(&inv_d, &[cov_of(0), cov_of(1), cov_of(2)], &md, &off);
+        out.imu_covs
+            .push(std::array::from_fn(|i| imu_covariance(spec, &f[i], i)));
         out.covs.push(std::array::from_fn(|i| {
             std::array::from_fn(|k| factors[i][k] as f32)
         }));
@@ -410,6 +415,47 @@ fn triad(
     }
     out.fits = fits;
     Ok(out)
+}
+
+/// Axis `i`'s factor over the IMU's features of its output
+/// (`spincal::model::IMU_FEATURES`): bias, sensitivity row, lever arm (its regressor is
+/// `S_ii` times the device's feature) or g-sensitivity row, g-squared term.
+fn imu_covariance(spec: &Spec<'_>, fit: &AxisFit, i: usize) -> ImuOutputCovariance {
+    let slope = fit.coef(spec.inputs[i]);
+    let sq = format!("{}^2", lever::SENSED);
+    let levers: [String; 3] = std::array::from_fn(|k| lever::column(i, k));
+    let [i0, i1, i2] = spec.inputs;
+    let (names, scale) = if spec.gyro {
+        let [f0, f1, f2] = col::F;
+        (
+            [
+                Some("1"),
+                Some(i0),
+                Some(i1),
+                Some(i2),
+                Some(f0),
+                Some(f1),
+                Some(f2),
+                Some(sq.as_str()),
+            ],
+            [1.0; 8],
+        )
+    } else {
+        (
+            [
+                Some("1"),
+                Some(i0),
+                Some(i1),
+                Some(i2),
+                Some(levers[0].as_str()),
+                Some(levers[1].as_str()),
+                Some(levers[2].as_str()),
+                Some(sq.as_str()),
+            ],
+            [1.0, 1.0, 1.0, 1.0, slope, slope, slope, 1.0],
+        )
+    };
+    covariance::imu_output(&fit.fit, &names, &scale, slope)
 }
 
 /// What axis `i` sensed (SI, along itself) at each observation of `t`, under its fit.
@@ -632,16 +678,16 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             .ok_or_else(|| bv(a.sets.len()))?,
             covariance: Some(
                 BoundedVec::from_slice(
-                    &a.covs
+                    &a.imu_covs
                         .iter()
-                        .zip(&g.covs)
+                        .zip(&g.imu_covs)
                         .map(|(ca, cg)| ImuCovariance {
                             accel: *ca,
                             gyro: *cg,
                         })
                         .collect::<Vec<_>>(),
                 )
-                .ok_or_else(|| bv(a.covs.len()))?,
+                .ok_or_else(|| bv(a.imu_covs.len()))?,
             ),
         },
         (Some(t), None) | (None, Some(t)) => Sensor::Triad {
