@@ -90,7 +90,46 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
             without_lever(CalibrationData::example_imu_polynomial()),
             Kind::Imu(1000.0),
         ),
+        (
+            SPIN_CASE,
+            spin_case(),
+            Kind::Imu(crate::spin_rig::SAMPLE_RATE as f32),
+        ),
     ]
+}
+
+/// The case of the spinning round (`spin_rig`): its calibration is `calflash`'s fit of the
+/// spin-rig plan, kept in `imu_spin.blob` (written again by [`refit_spin_case`]) so that a
+/// change in the fitting code does not move the device's vectors; its samples are a flight.
+pub const SPIN_CASE: &str = "imu_spin";
+
+fn spin_case() -> CalibrationData {
+    let path = dir().join(format!("{SPIN_CASE}.blob"));
+    match std::fs::read(&path) {
+        Ok(bytes) => spincal::blob::decode(&bytes)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+            .into_data(),
+        Err(_) => fit_spin_case(),
+    }
+}
+
+fn fit_spin_case() -> CalibrationData {
+    let truth = calflash::sim::truth::ImuTruth::spinning_round();
+    crate::spin_rig::calibrate(&truth, 0x5eed, false).data
+}
+
+/// Fits the spin case's calibration again and writes its blob (when golden files are
+/// accepted), once per process.
+///
+/// # Panics
+/// When the file cannot be written.
+pub fn refit_spin_case() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let path = dir().join(format!("{SPIN_CASE}.blob"));
+        std::fs::write(&path, encode(&fit_spin_case()))
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    });
 }
 
 /// `data` (an IMU) with its accelerometer at the reference point: no lever arm.
@@ -228,15 +267,24 @@ fn samples(data: &CalibrationData, rng: &mut Lcg) -> Vec<Vec<i32>> {
     rows
 }
 
-/// Runs a case's inputs through the host build of the correction and records the outputs.
+/// Runs a case's inputs through the host build of the correction and records the outputs: a
+/// flight for the spin case, samples across and beyond the ranges for the others.
 ///
 /// # Panics
 /// When the data does not fit the kind.
 #[must_use]
-pub fn compute(data: &CalibrationData, kind: Kind, blob: &str) -> Case {
+pub fn compute(name: &str, data: &CalibrationData, kind: Kind) -> Case {
+    let blob = format!("{name}.blob");
     let cal = Calibration::new(data.clone()).expect("valid");
     let mut rng = Lcg(0x5eed_0000_0000_0001);
-    let inputs = samples(data, &mut rng);
+    let inputs = if name == SPIN_CASE {
+        crate::spin_rig::golden_flight()
+            .iter()
+            .map(|s| s.raw.iter().map(|x| *x as i32).collect())
+            .collect()
+    } else {
+        samples(data, &mut rng)
+    };
     let mut steps = Vec::new();
     let mut runner = Runner::new(&cal, kind);
     for (t, v) in environments(data) {
@@ -251,11 +299,7 @@ pub fn compute(data: &CalibrationData, kind: Kind, blob: &str) -> Case {
             });
         }
     }
-    Case {
-        blob: blob.to_string(),
-        kind,
-        steps,
-    }
+    Case { blob, kind, steps }
 }
 
 /// Any of the three correctors behind one interface.

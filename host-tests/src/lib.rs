@@ -8,5 +8,6 @@ pub mod mainjob;
 pub mod nor;
 pub mod qemu;
 pub mod reference;
+pub mod spin_rig;
 pub mod tcp_unit;
 pub mod unit;

@@ -1,6 +1,6 @@
-//! Golden byte vectors of the example blobs (single axis, triad, and five IMUs: full, linear,
-//! without asymmetry, and both of those without the lever arm) and the correction outputs they
-//! must produce.
+//! Golden byte vectors of the example blobs (single axis, triad, and six IMUs: full, linear,
+//! without asymmetry, both of those without the lever arm, and the spinning round fitted by
+//! `calflash`, flown at up to 300 Hz) and the correction outputs they must produce.
 //!
 //! A format or arithmetic change shows up here as a diff of checked-in files; accept a
 //! deliberate change with `SPINCAL_ACCEPT=1 cargo test -p host-tests --test golden` and commit
@@ -15,6 +15,9 @@ fn accept() -> bool {
 
 #[test]
 fn blobs_match_their_golden_bytes() {
+    if accept() {
+        golden::refit_spin_case();
+    }
     for (name, data, _) in golden::examples() {
         let bytes = golden::encode(&data);
         let path = golden::dir().join(format!("{name}.blob"));
@@ -39,8 +42,11 @@ fn blobs_match_their_golden_bytes() {
 
 #[test]
 fn vectors_match_the_host_correction() {
+    if accept() {
+        golden::refit_spin_case();
+    }
     for (name, data, kind) in golden::examples() {
-        let case = golden::compute(&data, kind, &format!("{name}.blob"));
+        let case = golden::compute(name, &data, kind);
         let path = golden::dir().join(format!("{name}.vectors"));
         if accept() {
             std::fs::write(&path, golden::render(&case)).unwrap();

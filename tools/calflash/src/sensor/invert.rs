@@ -8,7 +8,7 @@
 //! coefficients are fitted by least squares over a dense grid of the calibrated range, and the
 //! worst error on a finer grid is the inversion error reported against the residual noise.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix3};
 
 /// One axis's own forward polynomial (counts).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -149,6 +149,60 @@ pub fn linearization(own: &Own, center: f64, lo: f64, hi: f64) -> Fitted {
     }
 }
 
+/// A triad's fitted forward model: axis `i` senses `s_i . x` (counts, `s_i` row `i` of `s`)
+/// and outputs `own[i].output(z_i / S_ii)` (`spincal::model::rotation`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TriadForward {
+    /// Scale-misalignment matrix, counts per SI unit.
+    pub s: Matrix3<f64>,
+    /// Each axis' own polynomial in what it senses (SI).
+    pub own: [Own; 3],
+}
+
+/// A triad's correction as the device applies it, in f64: `u = linearize(out - center)`,
+/// `y = m u + off`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TriadDevice {
+    /// Per-axis linearisation.
+    pub lins: [Linearization; 3],
+    /// Per-axis zero-input code.
+    pub centers: [f64; 3],
+    /// The device's matrix.
+    pub m: Matrix3<f64>,
+    /// The device's offset.
+    pub off: [f64; 3],
+}
+
+/// The inversion check of a triad: the worst `|y - x|` per output over 1000 points spread
+/// through the box `ranges` (SI), each sensed through the forward model and corrected by the
+/// device's form. It must be far below the noise; a correction that is not the inverse of the
+/// fitted model (a missing term, a wrong axis) shows here.
+#[must_use]
+pub fn triad_inversion_error(
+    fwd: &TriadForward,
+    dev: &TriadDevice,
+    ranges: &[(f64, f64); 3],
+) -> [f64; 3] {
+    let s = &fwd.s;
+    let mut err = [0.0f64; 3];
+    for k in 0..1000u32 {
+        let x: [f64; 3] = std::array::from_fn(|j| {
+            let frac = (f64::from(k) * [0.618_034, 0.754_878, 0.569_840][j]).fract();
+            ranges[j].0 + (ranges[j].1 - ranges[j].0) * frac
+        });
+        let u: [f64; 3] = std::array::from_fn(|i| {
+            let z: f64 = (0..3).map(|j| s[(i, j)] * x[j]).sum();
+            let out = fwd.own[i].output(z / s[(i, i)]);
+            linearize(&dev.lins[i], out - dev.centers[i])
+        });
+        for i in 0..3 {
+            let y = dev.off[i] + (0..3).map(|j| dev.m[(i, j)] * u[j]).sum::<f64>();
+            err[i] = err[i].max((y - x[i]).abs());
+        }
+    }
+    err
+}
+
 #[allow(clippy::too_many_arguments)]
 fn max_error(
     own: &Own,
@@ -222,6 +276,58 @@ mod tests {
             |x| own.bias - 32_768.0 + own.slope * x,
         );
         assert!(q_only > 100.0 * f.error, "{q_only} vs {}", f.error);
+    }
+
+    #[test]
+    fn the_triad_check_passes_the_inverse_and_catches_a_wrong_correction() {
+        // A high-rate gyro triad with misalignment and K2 on every axis, +-1900 rad/s.
+        let k = 16.4;
+        let s = Matrix3::new(
+            k * 0.999,
+            k * 2.5e-3,
+            k * 1.0e-3,
+            -k * 2.0e-3,
+            k * 1.002,
+            k * 3.0e-3,
+            k * 1.5e-3,
+            -k * 2.2e-3,
+            k * 1.001,
+        );
+        let own: [Own; 3] = std::array::from_fn(|i| Own {
+            bias: 32_768.0 + [3.0, -4.0, 1.5][i],
+            slope: s[(i, i)],
+            c2: s[(i, i)] * [1.0e-6, -0.8e-6, 0.6e-6][i],
+            ..Own::default()
+        });
+        let ranges = [(-1900.0, 1900.0); 3];
+        let centers: [f64; 3] = std::array::from_fn(|i| own[i].bias);
+        // Each axis senses up to |s_i| times the box (cross-axis included).
+        let fitted: [Fitted; 3] = std::array::from_fn(|i| {
+            let reach: f64 = (0..3).map(|j| s[(i, j)].abs() * 1900.0).sum::<f64>() / s[(i, i)];
+            linearization(&own[i], centers[i], -reach, reach)
+        });
+        let inv = s.try_inverse().unwrap();
+        let dev = TriadDevice {
+            lins: fitted.map(|f| f.n),
+            centers,
+            m: Matrix3::from_fn(|i, j| inv[(i, j)] * fitted[j].gamma),
+            off: std::array::from_fn(|i| (0..3).map(|k| inv[(i, k)] * fitted[k].alpha).sum()),
+        };
+        let fwd = TriadForward { s, own };
+        let good = triad_inversion_error(&fwd, &dev, &ranges);
+        assert!(good.iter().all(|e| *e < 1e-3), "{good:?}");
+        // Without the inverse's cubic term: off by about 1e-2 rad/s at the ends.
+        let mut no_cubic = dev;
+        for l in &mut no_cubic.lins {
+            l[1] = 0.0;
+        }
+        let bad = triad_inversion_error(&fwd, &no_cubic, &ranges);
+        assert!(bad.iter().all(|e| *e > 3e-3), "{bad:?}");
+        // A linearisation applied to the wrong axis.
+        let mut swapped = dev;
+        swapped.lins.swap(0, 1);
+        let bad = triad_inversion_error(&fwd, &swapped, &ranges);
+        assert!(bad[0] > 1e-2 && bad[1] > 1e-2, "{bad:?}");
     }
 
     #[test]

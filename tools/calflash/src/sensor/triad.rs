@@ -16,7 +16,7 @@ use spincal::model::{
     ImuSet, Quantity, Sensor, Span, TriadCovariance, TriadSet,
 };
 
-use super::invert::{Own, linearization, linearize};
+use super::invert::{Own, TriadDevice, TriadForward, linearization, triad_inversion_error};
 use super::table::{self, Layout};
 use super::{AxisFit, Calibrated, Options, PointFit, WorkflowError, covariance, device, lever};
 use crate::columns as col;
@@ -357,25 +357,19 @@ fn triad(
                 .map(|k| inv[(i, k)] * (fitted[k].alpha - (b[k] - centers[k])))
                 .sum::<f64>()
         });
-        // Inversion error over the calibrated box: each axis senses s_i . x and responds with
-        // its fitted nonlinearity (model/rotation.rs); the device's correction, in f64, must
-        // give x back.
-        let mut err = [0.0f64; 3];
-        for k in 0..1000u32 {
-            let x: [f64; 3] = std::array::from_fn(|j| {
-                let frac = (f64::from(k) * [0.618_034, 0.754_878, 0.569_840][j]).fract();
-                f64::from(ranges[j].lo) + (f64::from(ranges[j].hi) - f64::from(ranges[j].lo)) * frac
-            });
-            let out: [f64; 3] = std::array::from_fn(|i| {
-                let z: f64 = (0..3).map(|j| s[(i, j)] * x[j]).sum();
-                own(i).output(z / s[(i, i)])
-            });
-            let u: [f64; 3] = std::array::from_fn(|i| linearize(&lins[i], out[i] - centers[i]));
-            for i in 0..3 {
-                let y = off[i] + (0..3).map(|j| m[(i, j)] * u[j]).sum::<f64>();
-                err[i] = err[i].max((y - x[i]).abs());
-            }
-        }
+        let err = triad_inversion_error(
+            &TriadForward {
+                s,
+                own: std::array::from_fn(own),
+            },
+            &TriadDevice {
+                lins,
+                centers,
+                m,
+                off,
+            },
+            &ranges.map(|r| (f64::from(r.lo), f64::from(r.hi))),
+        );
         let cov_of = |i: usize| {
             let idx: Vec<usize> = std::iter::once("1")
                 .chain(spec.inputs)
