@@ -9,8 +9,10 @@ use spincal::correct::{AxisCorrector, Flags, ImuCorrector, TriadCorrector};
 use spincal::model::Sensor;
 
 use crate::columns as col;
+use crate::obs::timing::{Timing, TimingError};
 use crate::obs::{self, Format};
 use crate::report;
+use crate::sensor::accuracy::Accuracy;
 
 /// Run a file of raw counts through the device's correction.
 #[derive(Debug, Args)]
@@ -41,9 +43,20 @@ pub struct ApplyArgs {
     /// Supply voltage, V (default: the middle of the calibrated span).
     #[arg(long)]
     pub volt: Option<f32>,
-    /// Sample rate, Hz (the IMU's lever-arm derivative).
-    #[arg(long, default_value_t = 1000.0)]
-    pub rate: f32,
+    /// Sample rate, Hz. An IMU calibration with lever arms needs it (its tangential term
+    /// takes the rate derivative by backward difference) or the timestamps: `--time-column`,
+    /// or a recording's.
+    #[arg(long)]
+    pub rate: Option<f64>,
+    /// A column with each sample's time in seconds: the rate, when `--rate` is not given, and
+    /// a sample after a step that is not the rate is flagged (its rate derivative is unknown).
+    #[arg(long, conflicts_with = "recording")]
+    pub time_column: Option<String>,
+    /// Hold the corrected values against the reference columns of the input (`f_*`, `w_*`, or
+    /// `input` for a single axis): mean and RMS error of the unflagged samples against the
+    /// stated 1-sigma, per output.
+    #[arg(long)]
+    pub reference: bool,
     /// Also write the 1-sigma calibration error of each value.
     #[arg(long)]
     pub sigma: bool,
@@ -61,6 +74,10 @@ struct Input {
     labels: Vec<String>,
     raw: Vec<Vec<i32>>,
     temps: Option<Vec<f64>>,
+    /// Timestamps, s.
+    times: Option<Vec<f64>>,
+    /// The reference inputs per sample (`--reference`).
+    reference: Option<Vec<Vec<f64>>>,
 }
 
 fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
@@ -102,6 +119,8 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
             })
             .collect(),
         temps: None,
+        times: Some(rec.t.clone()),
+        reference: None,
     })
 }
 
@@ -143,15 +162,34 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
             cols.len()
         ));
     }
+    let reference_cols: Vec<&str> = match &data.sensor {
+        Sensor::Single { .. } => vec![col::INPUT],
+        Sensor::Triad {
+            quantity: spincal::model::Quantity::Acceleration,
+            ..
+        } => col::F.to_vec(),
+        Sensor::Triad { .. } => col::W.to_vec(),
+        Sensor::Imu { .. } => col::F.iter().chain(&col::W).copied().collect(),
+    };
     let input = if args.recording {
+        if args.reference {
+            return Err("--reference: a raw recording has no reference columns".into());
+        }
         recording_input(args, default_cols.len())?
     } else {
         let mut wanted = cols.clone();
-        if let Some(t) = &args.temp_column {
-            wanted.push(t.clone());
+        wanted.extend(args.temp_column.iter().cloned());
+        wanted.extend(args.time_column.iter().cloned());
+        if args.reference {
+            wanted.extend(reference_cols.iter().map(|c| c.to_string()));
         }
         let table =
             obs::read_columns(&args.input, &wanted, args.format).map_err(|e| e.to_string())?;
+        let named = |c: &Option<String>| {
+            c.as_ref()
+                .and_then(|t| table.column(t))
+                .map(<[f64]>::to_vec)
+        };
         Input {
             header: "line".into(),
             labels: table.lines.iter().map(ToString::to_string).collect(),
@@ -162,12 +200,40 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
                         .collect()
                 })
                 .collect(),
-            temps: args
-                .temp_column
-                .as_ref()
-                .and_then(|t| table.column(t))
-                .map(<[f64]>::to_vec),
+            temps: named(&args.temp_column),
+            times: named(&args.time_column),
+            reference: args.reference.then(|| {
+                (0..table.len())
+                    .map(|i| {
+                        reference_cols
+                            .iter()
+                            .map(|c| table.column(c).map_or(f64::NAN, |v| v[i]))
+                            .collect()
+                    })
+                    .collect()
+            }),
         }
+    };
+    // The rate: an IMU with lever arms needs it; a stream with timestamps has its off-rate
+    // steps flagged.
+    let lever = matches!(
+        &data.sensor,
+        Sensor::Imu {
+            lever_arm: Some(_),
+            ..
+        }
+    );
+    let timing = match Timing::new(args.rate, input.times.as_deref()) {
+        Ok(t) => Some(t),
+        Err(TimingError::Missing) if !lever => None,
+        Err(TimingError::Missing) => {
+            return Err(format!(
+                "{}: unit {}'s calibration has lever arms, whose tangential term needs the sample rate: give --rate HZ, or the timestamps with --time-column NAME",
+                args.blob.display(),
+                data.identity.serial
+            ));
+        }
+        Err(e) => return Err(format!("{}: {e}", args.input.display())),
     };
     let env = &data.environment;
     let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
@@ -179,7 +245,8 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
             TriadCorrector::new(&cal).map_err(|e| e.to_string())?,
         )),
         Sensor::Imu { .. } => Any::Imu(Box::new(
-            ImuCorrector::new(&cal, args.rate).map_err(|e| e.to_string())?,
+            ImuCorrector::new(&cal, timing.as_ref().map_or(1000.0, |t| t.rate as f32))
+                .map_err(|e| format!("--rate: {e}"))?,
         )),
     };
     let set_env = |c: &mut Any<'_>, t: f32| match c {
@@ -199,7 +266,16 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
     let mut rows = String::new();
     use std::fmt::Write as _;
     let mut flagged = 0usize;
+    let off_rate: std::collections::HashSet<usize> = timing
+        .iter()
+        .flat_map(|t| t.off_rate.iter().copied())
+        .collect();
+    let mut accuracy = input.reference.as_ref().map(|_| Accuracy::new(&out_names));
     for (i, raw) in input.raw.iter().enumerate() {
+        if let (true, Any::Imu(c)) = (off_rate.contains(&i), &mut corrector) {
+            // The step before this sample is not the rate: its derivative is unknown.
+            c.reset();
+        }
         if let Some(t) = temps {
             let t = t[i] as f32;
             if t != last_temp {
@@ -228,6 +304,11 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
             }
         };
         flagged += usize::from(!flags.is_clean());
+        if let (Some(acc), Some(reference)) = (&mut accuracy, &input.reference)
+            && flags.is_clean()
+        {
+            acc.add(&values, &reference[i], sigma.as_deref());
+        }
         let _ = write!(rows, "{}", input.labels[i]);
         for v in &values {
             let _ = write!(rows, ",{v}");
@@ -254,5 +335,36 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
         flagged,
         args.output.display()
     );
+    if let Some(t) = &timing {
+        println!("  sample rate {}", t.source);
+        if !t.off_rate.is_empty() {
+            println!(
+                "  {} time steps are not the rate (first before line {}): {}",
+                t.off_rate.len(),
+                input.labels[t.off_rate[0]].split(',').next().unwrap_or(""),
+                if lever {
+                    "the samples after them are flagged, their rate derivative unknown"
+                } else {
+                    "no term of this calibration depends on the rate"
+                }
+            );
+        }
+    }
+    if let Some(acc) = &accuracy {
+        println!(
+            "  against the reference columns, {} unflagged samples:",
+            acc.count()
+        );
+        println!("  | output | mean error | RMS error | stated 1-sigma |");
+        for r in acc.rows() {
+            println!(
+                "  | {} | {:.4e} | {:.4e} | {} |",
+                r.name,
+                r.mean,
+                r.rms,
+                r.sigma.map_or("(none)".to_string(), |s| format!("{s:.4e}"))
+            );
+        }
+    }
     Ok(())
 }

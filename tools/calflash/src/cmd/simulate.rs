@@ -15,9 +15,23 @@ pub struct SimulateArgs {
     #[arg(long, value_enum)]
     pub sensor: SensorKind,
     /// Plan items (repeatable): head:N, tumble:6|12|18|24|26, sphere:N, rate:LO:HI:N (rad/s),
-    /// centrifuge:LO:HI:N (g), sweep:LO:HI:N, fine:LO:HI:N.
-    #[arg(long, required_unless_present = "plan_file")]
+    /// diagonal:LO:HI:N (rad/s, about the 45-degree diagonals), centrifuge:LO:HI:N (g),
+    /// sweep:LO:HI:N, fine:LO:HI:N.
+    #[arg(long, required_unless_present_any = ["plan_file", "spin"])]
     pub plan: Vec<String>,
+    /// A spin-rig flight of an IMU instead of a plan: the unit rolls about its x axis, held
+    /// horizontal (gravity transverse), through comma-separated segments `HZ:SECONDS` (steady)
+    /// and `FROM-TO:SECONDS` (spin-up or spin-down), e.g. `50:1,150:1,300:1,150-300:0.5`. The
+    /// file has a row per sample: `t`, the true `f_*`, `w_*`, `dw_*` and the raw `a_*`, `g_*`
+    /// counts (noisy, rounded), for `calflash apply --time-column t --reference`.
+    #[arg(long, conflicts_with_all = ["plan", "plan_file"])]
+    pub spin: Option<String>,
+    /// Samples per second of a spin-rig flight.
+    #[arg(long, default_value_t = 2000.0, requires = "spin")]
+    pub sample_rate: f64,
+    /// Coning of a spin-rig flight: `DEGREES:HZ`, the roll axis' half-angle and its rate.
+    #[arg(long, requires = "spin")]
+    pub coning: Option<String>,
     /// A plan file instead (CSV with a header; columns f_x f_y f_z w_x w_y w_z for triads or
     /// input input_p input_o for a single axis, temp, volt; missing ones are 0, 25 C, 5 V), as
     /// `calflash design optimize` writes it. Each row is one observation.
@@ -97,11 +111,77 @@ fn plan_file(
     Ok((0..repeat).flat_map(|_| once.iter().copied()).collect())
 }
 
+/// Reads `DEGREES:HZ`.
+fn coning(text: &str) -> Result<(f64, f64), String> {
+    let err = || format!("--coning `{text}`: expected DEGREES:HZ, e.g. 1:10");
+    let (a, f) = text.split_once(':').ok_or_else(err)?;
+    let a: f64 = a.trim().parse().map_err(|_| err())?;
+    let f: f64 = f.trim().parse().map_err(|_| err())?;
+    if !(a.is_finite() && (0.0..=45.0).contains(&a) && f.is_finite() && f.abs() <= 1e4) {
+        return Err(format!(
+            "--coning `{text}`: the half-angle is 0 to 45 degrees and the rate at most 10 kHz"
+        ));
+    }
+    Ok((a.to_radians(), f))
+}
+
+/// A spin-rig flight of an IMU, written as CSV.
+fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
+    use crate::sim::spin;
+    if args.sensor != SensorKind::Imu {
+        return Err("--spin: a spin-rig flight is of an IMU (--sensor imu)".into());
+    }
+    if !(args.sample_rate.is_finite() && args.sample_rate > 0.0 && args.sample_rate <= 1e6) {
+        return Err(format!(
+            "--sample-rate {}: a rate above 0 and at most 1 MHz",
+            args.sample_rate
+        ));
+    }
+    let segments = spin::profile(profile).map_err(|e| format!("--spin: {e}"))?;
+    let seconds: f64 = segments.iter().map(spin::Segment::seconds).sum();
+    if seconds * args.sample_rate > 1e8 {
+        return Err(format!(
+            "--spin: {seconds} s at {} Hz is more than 10^8 samples",
+            args.sample_rate
+        ));
+    }
+    let (cone_angle, cone_hz) = match &args.coning {
+        Some(c) => coning(c)?,
+        None => (0.0, 0.0),
+    };
+    let truth = load::<truth::ImuTruth>(args.truth.as_ref())?;
+    let run = spin::SpinRun {
+        segments,
+        sample_rate: args.sample_rate,
+        cone_angle,
+        cone_hz,
+        temp: args.temps.first().copied().unwrap_or(25.0),
+        volt: args.volts.first().copied().unwrap_or(3.3),
+        seed: args.seed,
+    };
+    let samples = spin::run(&truth, &run);
+    report::write_atomically(&args.output, |w| spin::write_csv(&samples, w))?;
+    if let Some(p) = &args.write_truth {
+        let json = serde_json::to_string_pretty(&truth).map_err(|e| e.to_string())?;
+        report::write_atomically(p, |w| w.write_all(json.as_bytes()))?;
+    }
+    println!(
+        "calflash simulate: a {seconds} s spin-rig flight, {} samples at {} Hz, written to {}",
+        samples.len(),
+        args.sample_rate,
+        args.output.display()
+    );
+    Ok(())
+}
+
 /// Runs `calflash simulate`.
 ///
 /// # Errors
 /// A bad plan item or truth file.
 pub fn run(args: &SimulateArgs) -> Result<(), String> {
+    if let Some(profile) = &args.spin {
+        return flight(args, profile);
+    }
     let single = matches!(
         args.sensor,
         SensorKind::SingleAccel | SensorKind::SingleGyro

@@ -4,6 +4,7 @@
 //! column.
 
 pub mod recording;
+pub mod timing;
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};

@@ -6,6 +6,7 @@
 //! derives the device's correction, measures how far that correction is from the exact
 //! inverse over the calibrated range, and builds a `spincal` calibration.
 
+pub mod accuracy;
 pub mod compare;
 pub mod covariance;
 pub mod device;

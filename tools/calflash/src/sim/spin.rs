@@ -41,7 +41,9 @@ pub enum Segment {
 }
 
 impl Segment {
-    fn seconds(&self) -> f64 {
+    /// Its duration, s.
+    #[must_use]
+    pub fn seconds(&self) -> f64 {
         match *self {
             Segment::Steady { seconds, .. } | Segment::Ramp { seconds, .. } => seconds,
         }
@@ -175,6 +177,33 @@ fn kinematics(run: &SpinRun, t: f64, p: f64, dp: f64, phi: f64) -> Sample {
         dw: [dw.x, dw.y, dw.z],
         raw: [0.0; 6],
     }
+}
+
+/// Writes a flight as CSV: `t`, the true `f_*`, `w_*`, `dw_*`, then the raw `a_*`, `g_*`.
+///
+/// # Errors
+/// The writer's.
+pub fn write_csv(samples: &[Sample], mut w: impl std::io::Write) -> std::io::Result<()> {
+    use crate::columns as col;
+    let names: Vec<&str> = std::iter::once("t")
+        .chain(col::F)
+        .chain(col::W)
+        .chain(col::DW)
+        .chain(col::A)
+        .chain(col::GYRO)
+        .collect();
+    writeln!(w, "{}", names.join(","))?;
+    let mut line = String::new();
+    for s in samples {
+        use std::fmt::Write as _;
+        line.clear();
+        let _ = write!(line, "{}", s.t);
+        for v in s.f.iter().chain(&s.w).chain(&s.dw).chain(&s.raw) {
+            let _ = write!(line, ",{v}");
+        }
+        writeln!(w, "{line}")?;
+    }
+    Ok(())
 }
 
 /// Runs the profile through `truth`: one sample every `1 / sample_rate` s, counts with the

@@ -310,3 +310,25 @@ impl Default for ImuTruth {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `examples/data/spinning_round.truth.json` is [`ImuTruth::spinning_round`], so the
+    /// README's spin-rig commands simulate the unit the tests calibrate. Written again with
+    /// `SPINCAL_ACCEPT=1`.
+    #[test]
+    fn the_spinning_round_example_file_is_the_constructor() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/data/spinning_round.truth.json");
+        let want = serde_json::to_string_pretty(&ImuTruth::spinning_round()).unwrap() + "\n";
+        if std::env::var("SPINCAL_ACCEPT").is_ok_and(|v| v == "1") {
+            std::fs::write(&path, &want).unwrap();
+        }
+        let got = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(got, want, "{} differs", path.display());
+        // And it reads as a truth (to the last digit serde_json prints).
+        let _: ImuTruth = serde_json::from_str(&got).unwrap();
+    }
+}

@@ -1,0 +1,275 @@
+//! The spinning round from the command line, as the README shows it: a spin-rig calibration,
+//! a simulated flight, and `apply` holding the corrected flight against its truth; `apply`
+//! refuses to guess a lever-arm calibration's sample rate and flags a sample after a time step
+//! that is not the rate.
+
+mod common;
+
+use std::path::Path;
+
+use common::calflash;
+
+fn ok(dir: &Path, args: &[&str]) -> String {
+    let (code, out, err) = calflash(dir, args);
+    assert_eq!(code, 0, "{args:?}: {err}{out}");
+    out
+}
+
+fn truth() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/data/spinning_round.truth.json")
+        .display()
+        .to_string()
+}
+
+/// The `| name | mean | rms | sigma |` rows of `apply --reference`.
+fn figures(out: &str) -> Vec<(String, f64, f64, f64)> {
+    out.lines()
+        .filter_map(|l| {
+            let cells: Vec<&str> = l
+                .trim()
+                .trim_matches('|')
+                .split('|')
+                .map(str::trim)
+                .collect();
+            let [name, mean, rms, sigma] = cells[..] else {
+                return None;
+            };
+            Some((
+                name.to_string(),
+                mean.parse().ok()?,
+                rms.parse().ok()?,
+                sigma.parse().ok()?,
+            ))
+        })
+        .collect()
+}
+
+#[test]
+fn a_spin_rig_calibration_flies_at_300_hz_within_three_sigma() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let truth = truth();
+    ok(
+        d,
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            &truth,
+            "--plan",
+            "tumble:24",
+            "--plan",
+            "rate:-1900:1900:9",
+            "--plan",
+            "diagonal:-1900:1900:9",
+            "--plan",
+            "centrifuge:1:1500:6",
+            "--seed",
+            "4",
+            "-o",
+            "rig.csv",
+        ],
+    );
+    let out = ok(
+        d,
+        &[
+            "calibrate",
+            "rig.csv",
+            "--sensor",
+            "imu",
+            "--nonlinear",
+            "--serial",
+            "ROUND-0300",
+            "--blob",
+            "round.blob",
+            "--no-db",
+        ],
+    );
+    assert!(out.contains("unit ROUND-0300: ACCEPT"), "{out}");
+    assert!(out.contains("all nine lever-arm components"), "{out}");
+    let out = ok(
+        d,
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            &truth,
+            "--spin",
+            "300:0.5",
+            "--sample-rate",
+            "2000",
+            "--coning",
+            "1:10",
+            "--seed",
+            "8",
+            "-o",
+            "flight.csv",
+        ],
+    );
+    assert!(out.contains("1000 samples at 2000 Hz"), "{out}");
+    let out = ok(
+        d,
+        &[
+            "apply",
+            "--blob",
+            "round.blob",
+            "flight.csv",
+            "--time-column",
+            "t",
+            "--reference",
+            "-o",
+            "si.csv",
+        ],
+    );
+    assert!(out.contains("(1 flagged)"), "{out}");
+    assert!(out.contains("2000.000000 Hz from the timestamps"), "{out}");
+    let rows = figures(&out);
+    assert_eq!(rows.len(), 6, "{out}");
+    for (name, mean, _, sigma) in &rows {
+        // The mean over 999 samples: the calibration's error and the noise's share of it.
+        let noise = if name.starts_with('a') { 1.2 } else { 0.09 } / 999f64.sqrt();
+        assert!(
+            mean.abs() <= 3.0 * sigma.hypot(noise),
+            "{name}: mean error {mean} against 1-sigma {sigma}\n{out}"
+        );
+    }
+    // The corrected file: one row per sample, flags, the first sample's derivative unknown.
+    let si = std::fs::read_to_string(d.join("si.csv")).unwrap();
+    let mut lines = si.lines();
+    assert_eq!(
+        lines.next(),
+        Some("line,ax,ay,az,wx,wy,wz,flags,flag_names")
+    );
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .ends_with(",32,rate-derivative-unknown"),
+        "{si:.300}"
+    );
+    assert_eq!(si.lines().count(), 1001);
+}
+
+#[test]
+fn a_lever_arm_calibration_needs_the_rate_and_flags_off_rate_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let truth = truth();
+    ok(
+        d,
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            &truth,
+            "--plan",
+            "tumble:24",
+            "--plan",
+            "rate:-1900:1900:5",
+            "--plan",
+            "diagonal:-1900:1900:5",
+            "--plan",
+            "centrifuge:1:1500:4",
+            "-o",
+            "rig.csv",
+        ],
+    );
+    ok(
+        d,
+        &[
+            "calibrate",
+            "rig.csv",
+            "--sensor",
+            "imu",
+            "--serial",
+            "R-1",
+            "--blob",
+            "r.blob",
+            "--no-db",
+        ],
+    );
+    ok(
+        d,
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            &truth,
+            "--spin",
+            "150:0.05",
+            "--sample-rate",
+            "1000",
+            "-o",
+            "f.csv",
+        ],
+    );
+    // No rate and no timestamps: refused, saying what to give.
+    let (code, out, err) = calflash(d, &["apply", "--blob", "r.blob", "f.csv", "-o", "si.csv"]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(
+        err.contains("has lever arms")
+            && err.contains("--rate HZ")
+            && err.contains("--time-column"),
+        "{err}"
+    );
+    assert!(!d.join("si.csv").exists());
+    // A stated rate the timestamps contradict.
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "apply",
+            "--blob",
+            "r.blob",
+            "f.csv",
+            "--rate",
+            "2000",
+            "--time-column",
+            "t",
+            "-o",
+            "si.csv",
+        ],
+    );
+    assert_eq!(code, 1);
+    assert!(err.contains("disagrees with the timestamps"), "{err}");
+    // A dropped sample: the one after the gap is flagged.
+    let text = std::fs::read_to_string(d.join("f.csv")).unwrap();
+    let kept: Vec<&str> = text
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| *i != 21)
+        .map(|(_, l)| l)
+        .collect();
+    std::fs::write(d.join("gap.csv"), kept.join("\n") + "\n").unwrap();
+    let out = ok(
+        d,
+        &[
+            "apply",
+            "--blob",
+            "r.blob",
+            "gap.csv",
+            "--rate",
+            "1000",
+            "--time-column",
+            "t",
+            "-o",
+            "si.csv",
+        ],
+    );
+    assert!(out.contains("(2 flagged)"), "{out}");
+    assert!(
+        out.contains("1 time steps are not the rate (first before line 22)"),
+        "{out}"
+    );
+    let si = std::fs::read_to_string(d.join("si.csv")).unwrap();
+    let row: Vec<&str> = si.lines().nth(21).unwrap().split(',').collect();
+    assert_eq!(
+        (row[0], row[8]),
+        ("22", "rate-derivative-unknown"),
+        "{si:.2000}"
+    );
+}
