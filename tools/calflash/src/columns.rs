@@ -7,7 +7,8 @@
 //! Triads and IMUs, in the unit's axes: `f_x f_y f_z` (reference specific force, m/s^2),
 //! `w_x w_y w_z` (reference rate, rad/s), `a_x a_y a_z` (accelerometer counts), `g_x g_y g_z`
 //! (gyro counts), and optionally `dw_x dw_y dw_z` (angular acceleration, rad/s^2: spin-up and
-//! spin-down), `temp`, `volt`.
+//! spin-down), `h_x h_y h_z` (the fixture's reference mark, for the Earth's rate: `crate::earth`),
+//! `temp`, `volt`.
 
 /// Reference input of a single axis.
 pub const INPUT: &str = "input";
@@ -29,6 +30,9 @@ pub const F: [&str; 3] = ["f_x", "f_y", "f_z"];
 pub const W: [&str; 3] = ["w_x", "w_y", "w_z"];
 /// Reference angular acceleration.
 pub const DW: [&str; 3] = ["dw_x", "dw_y", "dw_z"];
+/// The direction of the fixture's reference mark in the unit's axes, for the Earth's rate of a
+/// still observation (`crate::earth`).
+pub const H: [&str; 3] = ["h_x", "h_y", "h_z"];
 /// Accelerometer counts.
 pub const A: [&str; 3] = ["a_x", "a_y", "a_z"];
 /// Gyro counts.

@@ -9,6 +9,7 @@ pub mod columns;
 pub mod db;
 pub mod design;
 pub mod device;
+pub mod earth;
 pub mod formula;
 pub mod noise;
 pub mod nonlinear;

@@ -87,6 +87,14 @@ pub struct CalibrateArgs {
     /// Field separator of the data.
     #[arg(long, value_enum, default_value = "auto")]
     pub format: Format,
+    /// Triads and IMUs: the station's latitude, degrees: the Earth's rate becomes a known
+    /// input of the gyro fits (with --heading and, for still positions, the fixture's mark
+    /// `h_x h_y h_z` in the data).
+    #[arg(long, requires = "heading", allow_negative_numbers = true)]
+    pub latitude: Option<f64>,
+    /// The azimuth of the fixture's reference mark from true north, degrees clockwise.
+    #[arg(long, requires = "latitude", allow_negative_numbers = true)]
+    pub heading: Option<f64>,
 }
 
 pub(crate) fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
@@ -134,6 +142,15 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         None if (2..=24).contains(&args.adc_bits) => Rails::unsigned(args.adc_bits),
         None => return Err(format!("--adc-bits {}: between 2 and 24", args.adc_bits)),
     };
+    if let (Some(lat), Some(heading)) = (args.latitude, args.heading) {
+        if matches!(
+            args.sensor,
+            SensorKind::SingleAccel | SensorKind::SingleGyro | SensorKind::Accel
+        ) {
+            return Err("--latitude: the Earth's rate is a gyro triad's or an IMU's input".into());
+        }
+        opts.earth = Some(crate::earth::Station::new(lat, heading)?);
+    }
     let (t0, t1) = pair(&args.temp_span, "--temp-span")?;
     opts.temp_span = Span::new(t0 as f32, t1 as f32);
     let (v0, v1) = pair(&args.volt_span, "--volt-span")?;

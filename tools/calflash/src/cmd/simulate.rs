@@ -32,6 +32,18 @@ pub struct SimulateArgs {
     /// Coning of a spin-rig flight: `DEGREES:HZ`, the roll axis' half-angle and its rate.
     #[arg(long, requires = "spin")]
     pub coning: Option<String>,
+    /// The station's latitude, degrees: triads and IMUs sense the Earth's rate too, and the
+    /// file carries the fixture's mark `h_*` of each still position.
+    #[arg(
+        long,
+        requires = "heading",
+        conflicts_with = "spin",
+        allow_negative_numbers = true
+    )]
+    pub latitude: Option<f64>,
+    /// The azimuth of the fixture's reference mark from true north, degrees clockwise.
+    #[arg(long, requires = "latitude", allow_negative_numbers = true)]
+    pub heading: Option<f64>,
     /// A plan file instead (CSV with a header; columns f_x f_y f_z w_x w_y w_z for triads or
     /// input input_p input_o for a single axis, temp, volt; missing ones are 0, 25 C, 5 V), as
     /// `calflash design optimize` writes it. Each row is one observation.
@@ -214,7 +226,23 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         }),
         SensorKind::Imu => Sensor::Imu(Box::new(load::<truth::ImuTruth>(t)?)),
     };
-    let obs = sim::simulate(&sensor, &conditions, args.seed, args.quantize);
+    let station = match (args.latitude, args.heading) {
+        (Some(lat), Some(heading)) => {
+            if matches!(sensor, Sensor::Single { .. }) {
+                return Err("--latitude: the Earth's rate is simulated for triads and IMUs".into());
+            }
+            Some(crate::earth::Station::new(lat, heading)?)
+        }
+        _ => None,
+    };
+    let obs = sim::simulate_at(
+        &sensor,
+        &conditions,
+        args.seed,
+        args.quantize,
+        station.as_ref(),
+    )
+    .map_err(|e| format!("--latitude: {e}"))?;
     report::write_atomically(&args.output, |w| obs.write_csv(w))?;
     if let Some(p) = &args.write_truth {
         let json = match &sensor {

@@ -90,6 +90,7 @@ pub fn conditions(points: &Points, unit: Unit) -> Vec<Condition> {
                 f,
                 w,
                 dw: col::DW.map(v),
+                h: col::H.map(v),
                 temp: v(col::TEMP),
                 volt: v(col::VOLT),
                 dir: 0.0,

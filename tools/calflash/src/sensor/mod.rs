@@ -79,6 +79,9 @@ pub struct Options {
     pub max_noise: Option<f64>,
     /// Creation time, seconds since 1970 (now if `None`).
     pub created: Option<u64>,
+    /// The station, when the Earth's rate is a known input of the gyro fits
+    /// (`crate::earth`).
+    pub earth: Option<crate::earth::Station>,
 }
 
 impl Options {
@@ -99,6 +102,7 @@ impl Options {
             model: None,
             max_noise: None,
             created: None,
+            earth: None,
         }
     }
 }
@@ -272,6 +276,8 @@ pub struct Calibrated {
     pub device_error: f64,
     /// The acceptance summary.
     pub findings: Vec<Finding>,
+    /// The station whose Earth rate the gyro fits took as known, if any.
+    pub earth: Option<crate::earth::Station>,
 }
 
 impl Calibrated {

@@ -79,6 +79,9 @@ pub struct Record {
     pub device_error: f64,
     /// The blob, hex.
     pub blob: String,
+    /// The station whose Earth rate was a known input of the gyro fits.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub earth: Option<crate::earth::Station>,
 }
 
 fn hex(b: &[u8]) -> String {
@@ -141,6 +144,7 @@ impl Record {
                 .collect(),
             device_error: c.device_error,
             blob: hex(&c.blob),
+            earth: c.earth,
         }
     }
 

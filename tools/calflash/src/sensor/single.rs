@@ -404,5 +404,6 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         units: vec![unit],
         device_error,
         findings,
+        earth: None,
     })
 }

@@ -467,6 +467,75 @@ fn sensed_values(spec: &Spec<'_>, t: &Table, i: usize, fit: &AxisFit) -> Vec<f64
     at.column(lever::SENSED).unwrap_or_default().to_vec()
 }
 
+/// Adds the Earth's rate at `station` to the reference rate of every observation
+/// (`crate::earth`): a still one needs the fixture's mark `h_*`.
+fn add_earth_rate(
+    table: &mut Table,
+    station: &crate::earth::Station,
+    path: &std::path::Path,
+) -> Result<(), WorkflowError> {
+    let get = |t: &Table, names: [&str; 3], r: usize| -> [f64; 3] {
+        std::array::from_fn(|k| t.column(names[k]).map_or(0.0, |c| c[r]))
+    };
+    let mut w: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::with_capacity(table.len()));
+    for r in 0..table.len() {
+        let (f, wr, h) = (
+            get(table, col::F, r),
+            get(table, col::W, r),
+            get(table, col::H, r),
+        );
+        let e = station.rate_in_body(f, wr, h).map_err(|why| {
+            WorkflowError::msg(
+                path,
+                format!(
+                    "line {}: {why}; --latitude needs the columns {} for still positions",
+                    table.lines[r],
+                    col::H.join(" ")
+                ),
+            )
+        })?;
+        for k in 0..3 {
+            w[k].push(wr[k] + e[k]);
+        }
+    }
+    for (name, values) in col::W.iter().zip(w) {
+        table.set_column(name, values);
+    }
+    Ok(())
+}
+
+/// Without a station the Earth's rate is left out of the gyro's reference: how large it is
+/// against the gyro bias's standard error. A REVIEW when the gyro resolves it.
+fn earth_neglected(fits: &[AxisFit; 3]) -> super::Finding {
+    let (axis, se) = fits
+        .iter()
+        .map(|f| {
+            let i = f.index("1").unwrap_or(0);
+            (f.output.clone(), f.fit.std_errors[i] / f.coef(&f.own).abs())
+        })
+        .fold((String::new(), f64::INFINITY), |best, x| {
+            if x.1 < best.1 { x } else { best }
+        });
+    let ratio = crate::earth::RATE / se;
+    let text = format!(
+        "{axis}: the Earth's rate ({:.3e} rad/s, 15.04 deg/h), not in the model, is {ratio:.2} times the gyro bias's standard error ({se:.2e} rad/s)",
+        crate::earth::RATE
+    );
+    if ratio >= 1.0 {
+        super::Finding {
+            verdict: super::Verdict::Review,
+            text: format!(
+                "{text}: the bias and misalignment absorb it; give --latitude and --heading, and the fixture's mark h_x h_y h_z of each still position"
+            ),
+        }
+    } else {
+        super::Finding {
+            verdict: super::Verdict::Accept,
+            text: format!("{text}: below what this gyro resolves"),
+        }
+    }
+}
+
 /// The eight corners of the calibrated box.
 fn box_corners(ranges: &[Span; 3]) -> Vec<[f64; 3]> {
     (0..8)
@@ -557,14 +626,24 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         .iter()
         .chain(&col::W)
         .chain(&col::DW)
+        .chain(&col::H)
         .chain(&[col::TEMP, col::VOLT])
     {
         if has(c) && !wanted.iter().any(|w| w == c) {
             wanted.push(c.to_string());
         }
     }
-    let table = obs::read_columns(path, &wanted, opts.format)?;
+    let mut table = obs::read_columns(path, &wanted, opts.format)?;
     let mut notes = Vec::new();
+    if let Some(station) = &opts.earth {
+        add_earth_rate(&mut table, station, path)?;
+        notes.push(format!(
+            "the Earth's rate at latitude {} deg with the fixture's mark at heading {} deg ({:.3e} rad/s) is in every observation's reference rate",
+            station.latitude_deg,
+            station.heading_deg,
+            crate::earth::RATE
+        ));
+    }
     let spin = table.column(col::W[0]).is_some()
         && (0..table.len()).any(|r| {
             col::W
@@ -746,7 +825,10 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             r.map(|row| row.map(|v| (v * 1e5).round() / 1e5))
         ));
     }
-    let findings = super::findings(&points, &names, &units, opts, &output_errors);
+    let mut findings = super::findings(&points, &names, &units, opts, &output_errors);
+    if let (Some(g), None) = (&gyro, &opts.earth) {
+        findings.push(earth_neglected(&g.fits[layout.reference()]));
+    }
     Ok(Calibrated {
         data,
         blob,
@@ -761,5 +843,6 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         units,
         device_error,
         findings,
+        earth: opts.earth,
     })
 }

@@ -102,6 +102,33 @@ pub fn simulate(
     seed: u64,
     quantize: bool,
 ) -> Observations {
+    simulate_at(sensor, conditions, seed, quantize, None)
+        .expect("only the Earth's rate can make a condition fail, and there is no station")
+}
+
+/// A condition whose Earth rate the station cannot know.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("plan row {row}: {why}")]
+pub struct EarthRowError {
+    /// The condition's index, from 1.
+    pub row: usize,
+    /// Why.
+    pub why: crate::earth::EarthError,
+}
+
+/// [`simulate`] at a station: with `earth`, the gyros sense the Earth's rate on top of the
+/// table's (the files' `w_*` stay the table's rates, as a station records them) and the files
+/// carry the fixture's reference mark `h_*`.
+///
+/// # Errors
+/// A condition whose Earth rate cannot be known (`crate::earth`).
+pub fn simulate_at(
+    sensor: &Sensor,
+    conditions: &[Condition],
+    seed: u64,
+    quantize: bool,
+    earth: Option<&crate::earth::Station>,
+) -> Result<Observations, EarthRowError> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut names: Vec<String> = Vec::new();
     let mut rows = Vec::with_capacity(conditions.len());
@@ -143,12 +170,13 @@ pub fn simulate(
                 Sensor::Imu(t) => (Some(&t.accel), Some(&t.gyro)),
                 Sensor::Single { .. } => (None, None),
             };
-            let inputs = col::F.iter().chain(&col::W);
-            let inputs: Vec<&str> = if spins_up {
-                inputs.chain(&col::DW).copied().collect()
-            } else {
-                inputs.copied().collect()
-            };
+            let mut inputs: Vec<&str> = col::F.iter().chain(&col::W).copied().collect();
+            if spins_up {
+                inputs.extend(col::DW);
+            }
+            if earth.is_some() {
+                inputs.extend(col::H);
+            }
             names.extend(
                 inputs
                     .iter()
@@ -157,23 +185,32 @@ pub fn simulate(
                     .chain(gyro.map_or(&[][..], |_| &col::GYRO[..]))
                     .map(|s| s.to_string()),
             );
-            for c in conditions {
+            for (n, c) in conditions.iter().enumerate() {
                 let mut row: Vec<f64> = c.f.iter().chain(&c.w).copied().collect();
                 if spins_up {
                     row.extend(c.dw);
                 }
+                // The inertial rate: the table's plus the Earth's.
+                let mut w = c.w;
+                if let Some(station) = earth {
+                    row.extend(c.h);
+                    let e = station
+                        .rate_in_body(c.f, c.w, c.h)
+                        .map_err(|why| EarthRowError { row: n + 1, why })?;
+                    w = std::array::from_fn(|k| w[k] + e[k]);
+                }
                 row.extend(env(c));
                 if let Some(t) = accel {
-                    let a = t.accel_output(c.f, c.w, c.dw, c.temp, c.volt);
+                    let a = t.accel_output(c.f, w, c.dw, c.temp, c.volt);
                     row.extend((0..3).map(|i| noisy(&mut rng, a[i], t.noise[i], quantize)));
                 }
                 if let Some(t) = gyro {
-                    let g = t.gyro_output(c.w, c.f, c.temp, c.volt);
+                    let g = t.gyro_output(w, c.f, c.temp, c.volt);
                     row.extend((0..3).map(|i| noisy(&mut rng, g[i], t.noise[i], quantize)));
                 }
                 rows.push(row);
             }
         }
     }
-    Observations { names, rows }
+    Ok(Observations { names, rows })
 }

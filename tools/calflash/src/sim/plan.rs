@@ -39,6 +39,10 @@ pub struct Condition {
     /// Angular acceleration, rad/s^2 (spin-up, spin-down).
     #[serde(default)]
     pub dw: [f64; 3],
+    /// The direction of the fixture's reference mark in the unit's axes (`crate::earth`):
+    /// what gives a still position's Earth rate; ignored while the unit turns.
+    #[serde(default)]
+    pub h: [f64; 3],
     /// Chamber temperature, degrees C.
     pub temp: f64,
     /// Supply voltage, volts.
@@ -137,11 +141,13 @@ fn linspace(lo: f64, hi: f64, n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// A still position with the specific force `f`, laid on the fixture as `earth::mark_for` says.
 fn still(f: [f64; 3]) -> Condition {
     Condition {
         f,
         w: [0.0; 3],
         dw: [0.0; 3],
+        h: crate::earth::mark_for(f),
         temp: 25.0,
         volt: 0.0,
         dir: 0.0,
@@ -198,14 +204,26 @@ pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
             (0..n)
                 .map(|i| {
                     let t = 2.0 * std::f64::consts::PI * i as f64 / n as f64;
-                    still([G * t.cos(), 0.0, G * t.sin()])
+                    // The dividing head turns about its horizontal axis, y.
+                    Condition {
+                        h: [0.0, 1.0, 0.0],
+                        ..still([G * t.cos(), 0.0, G * t.sin()])
+                    }
                 })
                 .collect()
         }
         "tumble" => {
             let n = count()?;
             let d = tumble(n).ok_or_else(|| err("tumbles have 6, 12, 18, 24 or 26 positions"))?;
-            d.into_iter().map(|u| still(u.map(|c| G * c))).collect()
+            let mut out: Vec<Condition> = d.into_iter().map(|u| still(u.map(|c| G * c))).collect();
+            if n == 24 {
+                // Each up direction at four headings: the fixture turned by 90 degrees.
+                for (i, c) in out.iter_mut().enumerate() {
+                    let up = c.f.map(|x| x / G);
+                    c.h = crate::earth::turn(c.h, up, (i % 4) as f64 * std::f64::consts::FRAC_PI_2);
+                }
+            }
+            out
         }
         "sphere" => sphere(count()?)
             .into_iter()
@@ -217,10 +235,10 @@ pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
             let about = if kind == "rate" { axes() } else { edges() };
             for up in dirs(about) {
                 for r in linspace(lo, hi, n) {
+                    // The table's mark matters at rest (a step of 0 rad/s).
                     out.push(Condition {
-                        f: up.map(|c| G * c),
                         w: up.map(|c| r * c),
-                        ..still([0.0; 3])
+                        ..still(up.map(|c| G * c))
                     });
                 }
             }
@@ -238,6 +256,7 @@ pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
                     out.push(Condition {
                         f: std::array::from_fn(|j| level * G * radial[j] + G * vertical[j]),
                         w: vertical.map(|c| spin * c),
+                        h: [0.0; 3],
                         ..still([0.0; 3])
                     });
                 }
