@@ -273,3 +273,70 @@ fn a_lever_arm_calibration_needs_the_rate_and_flags_off_rate_steps() {
         "{si:.2000}"
     );
 }
+
+#[test]
+fn design_evaluate_names_the_lever_components_a_plan_cannot_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ok(
+        dir.path(),
+        &[
+            "design",
+            "evaluate",
+            "--sensor",
+            "accel",
+            "--model",
+            "accel-lever",
+            "--plan",
+            "tumble:24,rate:-1900:1900:9",
+            "--plan",
+            "tumble:24,rate:-1900:1900:9,diagonal:-1900:1900:9",
+            "--noise",
+            "2",
+            "--scale",
+            "1.67",
+        ],
+    );
+    assert!(
+        out.contains("plan tumble:24,rate:-1900:1900:9: estimates 3 of the nine components; r_xy, r_xz, r_yx, r_yz, r_zx, r_zy cannot be"),
+        "{out}"
+    );
+    assert!(
+        out.contains("a diagonal:LO:HI:N item, the rate table's 45-degree fixture"),
+        "{out}"
+    );
+    assert!(
+        out.contains("plan tumble:24,rate:-1900:1900:9,diagonal:-1900:1900:9: estimates 9 of the nine components"),
+        "{out}"
+    );
+    // Standard errors in micrometres: 2 counts of noise at 1.67 counts per m/s^2.
+    let sd: Vec<f64> = out
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("sd(r_yz) "))
+        .filter_map(|l| l.split_whitespace().next()?.parse().ok())
+        .collect();
+    assert_eq!(sd.len(), 1, "{out}");
+    assert!(sd[0] > 0.05 && sd[0] < 1.0, "{sd:?}");
+    // The two plans share no model: one report would compare nothing.
+    let (code, _, err) = calflash(
+        dir.path(),
+        &[
+            "design",
+            "evaluate",
+            "--sensor",
+            "accel",
+            "--model",
+            "accel-lever",
+            "--plan",
+            "rate:-1900:1900:9",
+            "--plan",
+            "rate:-1900:1900:9,diagonal:-1900:1900:9",
+            "--json",
+            "d.json",
+        ],
+    );
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("estimate different lever-arm components"),
+        "{err}"
+    );
+}

@@ -273,7 +273,7 @@ fn candidates(items: &[String], grid_specs: &[String], m: &ModelArgs) -> Result<
 /// the region (variables the points leave out take their defaults only when `strict` is off).
 fn check_variables(blocks: &[Block], pts: &Points, what: &str) -> Result<(), String> {
     for v in models::variables(blocks) {
-        if !pts.names.contains(&v) {
+        if !pts.sets(&v) {
             return Err(format!(
                 "{what}: the model reads `{v}`, which it does not set (it sets {}); name the variable as the plan does, or add a grid {v}=LO:HI:N",
                 if pts.names.is_empty() {
@@ -352,6 +352,9 @@ fn evaluate(a: &EvaluateArgs) -> Result<(), String> {
     }
     // Without --region, every plan is judged over all the plans' points together.
     let union = union(loaded.iter().map(|(_, p)| p), &vars);
+    if models::has_lever(&blocks) {
+        return evaluate_spin_rig(a, &blocks, loaded, &union);
+    }
     let mut plans = Vec::new();
     for (spec, pts) in loaded {
         let crit = evaluate_plan(&spec, &pts, &blocks, &a.model, &union)?;
@@ -409,6 +412,67 @@ fn evaluate(a: &EvaluateArgs) -> Result<(), String> {
     if let Some(path) = &a.report {
         let html = show::evaluate_html(&a.model.model, &blocks, &plans, curve.as_ref())?;
         report::write_atomically(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
+    }
+    Ok(())
+}
+
+/// `design evaluate` of the spin-rig model: each plan on the lever-arm components it can
+/// estimate (plans that estimate the same ones side by side), saying which it cannot and, with
+/// --noise and --scale, how well it estimates the others.
+fn evaluate_spin_rig(
+    a: &EvaluateArgs,
+    blocks: &[Block],
+    loaded: Vec<(String, Points)>,
+    union: &Points,
+) -> Result<(), String> {
+    if a.fixture_error.is_some() {
+        return Err("--fixture-error: not with the lever-arm model".into());
+    }
+    let mut groups: Vec<([[bool; 3]; 3], Vec<Block>, Vec<show::PlanResult>)> = Vec::new();
+    for (spec, pts) in loaded {
+        let (reduced, estimable) = models::lever_blocks(blocks, &pts);
+        let criteria = evaluate_plan(&spec, &pts, &reduced, &a.model, union)?;
+        let plan = show::PlanResult {
+            name: spec,
+            points: pts,
+            criteria,
+            fixture: None,
+        };
+        match groups.iter_mut().find(|g| g.0 == estimable) {
+            Some(g) => g.2.push(plan),
+            None => groups.push((estimable, reduced, vec![plan])),
+        }
+    }
+    let per = match (a.noise, a.scale) {
+        (Some(n), Some(s)) => Some(n / s),
+        _ => None,
+    };
+    for (estimable, reduced, plans) in &groups {
+        print!(
+            "{}",
+            show::evaluate_text(&a.model.model, reduced, plans, None)
+        );
+        for p in plans {
+            print!("{}", show::lever_text(p, reduced, estimable, per));
+        }
+    }
+    if (a.json.is_some() || a.report.is_some()) && groups.len() > 1 {
+        return Err(
+            "--json, --report: these plans estimate different lever-arm components, so they have no model in common; write one per plan (or per group of plans that estimate the same)".into(),
+        );
+    }
+    if let Some((_, reduced, plans)) = groups.first() {
+        if let Some(path) = &a.json {
+            let v = show::evaluate_json(reduced, plans);
+            report::write_atomically(path, |w| {
+                serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+            })?;
+        }
+        if let Some(path) = &a.report {
+            let curve = a.curve.as_deref().map(points::grid).transpose()?;
+            let html = show::evaluate_html(&a.model.model, reduced, plans, curve.as_ref())?;
+            report::write_atomically(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
+        }
     }
     Ok(())
 }

@@ -7,7 +7,8 @@ use crate::formula::{self, Formula};
 /// The presets, for messages.
 pub const PRESETS: &str = "single (IEEE 1293 single axis: 1 + input + input^2 + input^3 + input:abs(input)), \
 triad (per axis: 1 + x + y + z inputs), triad-nonlinear (+ own^2 + own^3 + own:abs(own)), \
-gyro-gsens (gyro triad + f_x + f_y + f_z)";
+gyro-gsens (gyro triad + f_x + f_y + f_z), \
+accel-lever (accelerometer triad + lever_ix + lever_iy + lever_iz, the spin-rig model)";
 
 /// One model to design for.
 #[derive(Debug, Clone)]
@@ -54,6 +55,15 @@ pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, String> {
         }
         "triad" => triad(&|_| String::new()),
         "triad-nonlinear" => triad(&|i| format!(" + {0}^2 + {0}^3 + {0}:abs({0})", inputs[i])),
+        "accel-lever" => {
+            if gyro {
+                return Err("--model accel-lever: the lever-arm preset is for an accelerometer triad (--sensor accel or imu)".into());
+            }
+            triad(&|i| {
+                let a = ["x", "y", "z"][i];
+                format!(" + lever_{a}x + lever_{a}y + lever_{a}z")
+            })
+        }
         "gyro-gsens" => {
             if !gyro {
                 return Err("--model gyro-gsens: the g-sensitivity preset is for a gyro triad (--sensor gyro)".into());
@@ -88,4 +98,47 @@ pub fn variables(blocks: &[Block]) -> Vec<String> {
         }
     }
     out
+}
+
+/// True when a block has lever-arm terms (`lever_ik`, the spin-rig model).
+#[must_use]
+pub fn has_lever(blocks: &[Block]) -> bool {
+    blocks.iter().any(|b| {
+        b.formula
+            .terms
+            .iter()
+            .any(|t| t.name().starts_with("lever_"))
+    })
+}
+
+/// The lever-arm components a plan's rates and angular accelerations estimate
+/// (`sensor::lever::estimable`), and the blocks without the others.
+#[must_use]
+pub fn lever_blocks(blocks: &[Block], pts: &super::points::Points) -> (Vec<Block>, [[bool; 3]; 3]) {
+    let motion = (0..pts.rows.len()).map(|r| {
+        (
+            col::W.map(|n| pts.value(r, n)),
+            col::DW.map(|n| pts.value(r, n)),
+        )
+    });
+    let estimable = crate::sensor::lever::estimable(motion);
+    let reduced = blocks
+        .iter()
+        .map(|b| {
+            let mut f = b.formula.clone();
+            for i in 0..3 {
+                for k in 0..3 {
+                    let name = crate::sensor::lever::column(i, k);
+                    if !estimable[i][k] && f.terms.iter().any(|t| t.name() == name) {
+                        f = f.without(&name);
+                    }
+                }
+            }
+            Block {
+                label: b.label.clone(),
+                formula: f,
+            }
+        })
+        .collect();
+    (reduced, estimable)
 }

@@ -24,6 +24,21 @@ pub fn default_value(name: &str) -> f64 {
     }
 }
 
+/// `lever_ik` as `(i, k)`.
+fn lever_name(name: &str) -> Option<(usize, usize)> {
+    let rest = name.strip_prefix("lever_")?.as_bytes();
+    let axis = |c: u8| match c {
+        b'x' => Some(0),
+        b'y' => Some(1),
+        b'z' => Some(2),
+        _ => None,
+    };
+    match rest {
+        [a, b] => Some((axis(*a)?, axis(*b)?)),
+        _ => None,
+    }
+}
+
 /// A set of points: variable names and one row of values per point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Points {
@@ -34,13 +49,30 @@ pub struct Points {
 }
 
 impl Points {
-    /// The value of `name` at row `r` (the default when the set lacks the variable).
+    /// The value of `name` at row `r` (the default when the set lacks the variable). The
+    /// lever-arm regressors `lever_ik` (`sensor::lever`) are made from the point's rates and
+    /// angular accelerations when the set does not list them.
     #[must_use]
     pub fn value(&self, r: usize, name: &str) -> f64 {
-        self.names
-            .iter()
-            .position(|n| n == name)
-            .map_or_else(|| default_value(name), |k| self.rows[r][k])
+        if let Some(k) = self.names.iter().position(|n| n == name) {
+            return self.rows[r][k];
+        }
+        if let Some((i, k)) = lever_name(name) {
+            let get = |names: [&str; 3]| names.map(|n| self.value(r, n));
+            let mut e = [0.0; 3];
+            e[i] = 1.0;
+            return crate::sensor::lever::gradient(&e, &get(col::W), &get(col::DW))[k];
+        }
+        default_value(name)
+    }
+
+    /// True when the set gives `name`: a variable it lists, or a lever-arm regressor it has the
+    /// rates for.
+    #[must_use]
+    pub fn sets(&self, name: &str) -> bool {
+        self.names.iter().any(|n| n == name)
+            || (lever_name(name).is_some()
+                && col::W.iter().all(|w| self.names.iter().any(|n| n == w)))
     }
 
     /// The model rows of `formula` at every point.

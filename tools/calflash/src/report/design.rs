@@ -159,6 +159,65 @@ pub fn evaluate_text(
     s
 }
 
+/// What a spin-rig plan tells of the lever arms: which components it estimates (the others
+/// need the rate table's 45-degree fixture) and, with the noise (counts) over the scale
+/// (counts per m/s^2), each one's standard error and what it leaves at a 300 Hz roll.
+#[must_use]
+pub fn lever_text(
+    plan: &PlanResult,
+    blocks: &[Block],
+    estimable: &[[bool; 3]; 3],
+    noise_over_scale: Option<f64>,
+) -> String {
+    let axes = ["x", "y", "z"];
+    let name = |i: usize, k: usize| format!("r_{}{}", axes[i], axes[k]);
+    let (mut yes, mut no) = (Vec::new(), Vec::new());
+    for i in 0..3 {
+        for k in 0..3 {
+            if estimable[i][k] {
+                yes.push(name(i, k));
+            } else {
+                no.push(name(i, k));
+            }
+        }
+    }
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        "  lever arms, plan {}: estimates {} of the nine components",
+        plan.name,
+        yes.len()
+    );
+    if no.is_empty() {
+        let _ = writeln!(s, " (spins about the axes and the 45-degree diagonals)");
+    } else {
+        let _ = writeln!(
+            s,
+            "; {} cannot be (component k of axis i needs a spin with rate along both i and k, or an angular acceleration about the third axis): a diagonal:LO:HI:N item, the rate table's 45-degree fixture, estimates them",
+            no.join(", ")
+        );
+    }
+    if let Some(per) = noise_over_scale {
+        let roll = (2.0 * std::f64::consts::PI * 300.0).powi(2);
+        for ((i, b), c) in blocks.iter().enumerate().zip(&plan.criteria) {
+            for (j, t) in b.formula.term_names().iter().enumerate() {
+                let Some(k) = (0..3).find(|k| *t == crate::sensor::lever::column(i, *k)) else {
+                    continue;
+                };
+                let sd = per * c.unscaled_covariance[(j, j)].sqrt();
+                let _ = writeln!(
+                    s,
+                    "    sd({}) {:.3} um: up to {:.3} m/s^2 at a 300 Hz roll",
+                    name(i, k),
+                    sd * 1e6,
+                    sd * roll
+                );
+            }
+        }
+    }
+    s
+}
+
 /// `design evaluate`'s JSON.
 #[must_use]
 pub fn evaluate_json(blocks: &[Block], plans: &[PlanResult]) -> Value {
