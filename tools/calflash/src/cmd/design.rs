@@ -428,7 +428,13 @@ fn evaluate_spin_rig(
     if a.fixture_error.is_some() {
         return Err("--fixture-error: not with the lever-arm model".into());
     }
-    let mut groups: Vec<([[bool; 3]; 3], Vec<Block>, Vec<show::PlanResult>)> = Vec::new();
+    /// Plans that estimate the same lever-arm components, on the model of those.
+    struct Group {
+        estimable: [[bool; 3]; 3],
+        blocks: Vec<Block>,
+        plans: Vec<show::PlanResult>,
+    }
+    let mut groups: Vec<Group> = Vec::new();
     for (spec, pts) in loaded {
         let (reduced, estimable) = models::lever_blocks(blocks, &pts);
         let criteria = evaluate_plan(&spec, &pts, &reduced, &a.model, union)?;
@@ -438,22 +444,26 @@ fn evaluate_spin_rig(
             criteria,
             fixture: None,
         };
-        match groups.iter_mut().find(|g| g.0 == estimable) {
-            Some(g) => g.2.push(plan),
-            None => groups.push((estimable, reduced, vec![plan])),
+        match groups.iter_mut().find(|g| g.estimable == estimable) {
+            Some(g) => g.plans.push(plan),
+            None => groups.push(Group {
+                estimable,
+                blocks: reduced,
+                plans: vec![plan],
+            }),
         }
     }
     let per = match (a.noise, a.scale) {
         (Some(n), Some(s)) => Some(n / s),
         _ => None,
     };
-    for (estimable, reduced, plans) in &groups {
+    for g in &groups {
         print!(
             "{}",
-            show::evaluate_text(&a.model.model, reduced, plans, None)
+            show::evaluate_text(&a.model.model, &g.blocks, &g.plans, None)
         );
-        for p in plans {
-            print!("{}", show::lever_text(p, reduced, estimable, per));
+        for p in &g.plans {
+            print!("{}", show::lever_text(p, &g.blocks, &g.estimable, per));
         }
     }
     if (a.json.is_some() || a.report.is_some()) && groups.len() > 1 {
@@ -461,7 +471,12 @@ fn evaluate_spin_rig(
             "--json, --report: these plans estimate different lever-arm components, so they have no model in common; write one per plan (or per group of plans that estimate the same)".into(),
         );
     }
-    if let Some((_, reduced, plans)) = groups.first() {
+    if let Some(Group {
+        blocks: reduced,
+        plans,
+        ..
+    }) = groups.first()
+    {
         if let Some(path) = &a.json {
             let v = show::evaluate_json(reduced, plans);
             report::write_atomically(path, |w| {

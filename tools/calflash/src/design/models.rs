@@ -126,10 +126,10 @@ pub fn lever_blocks(blocks: &[Block], pts: &super::points::Points) -> (Vec<Block
         .iter()
         .map(|b| {
             let mut f = b.formula.clone();
-            for i in 0..3 {
-                for k in 0..3 {
+            for (i, row) in estimable.iter().enumerate() {
+                for (k, ok) in row.iter().enumerate() {
                     let name = crate::sensor::lever::column(i, k);
-                    if !estimable[i][k] && f.terms.iter().any(|t| t.name() == name) {
+                    if !ok && f.terms.iter().any(|t| t.name() == name) {
                         f = f.without(&name);
                     }
                 }

@@ -172,9 +172,9 @@ pub fn lever_text(
     let axes = ["x", "y", "z"];
     let name = |i: usize, k: usize| format!("r_{}{}", axes[i], axes[k]);
     let (mut yes, mut no) = (Vec::new(), Vec::new());
-    for i in 0..3 {
-        for k in 0..3 {
-            if estimable[i][k] {
+    for (i, row) in estimable.iter().enumerate() {
+        for (k, ok) in row.iter().enumerate() {
+            if *ok {
                 yes.push(name(i, k));
             } else {
                 no.push(name(i, k));
