@@ -2,7 +2,7 @@
 //! breakpoints, clamp (and flag) outside the calibrated span, blend the sets bilinearly.
 
 use super::Flags;
-use crate::model::{Blend, Environment, Span};
+use crate::model::{Blend, Environment, ImuCovariance, Span};
 
 /// Where a value falls in a list of breakpoints.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,6 +76,39 @@ pub(crate) fn effective_set<S: Blend>(
         .with_if(Flags::TEMPERATURE_CLAMPED, tb.clamped)
         .with_if(Flags::VOLTAGE_CLAMPED, vb.clamped);
     Some((lo.blend(&hi, tb.t), flags))
+}
+
+/// [`effective_set`] for the IMU's covariance factors, blended in place into `out` (they are
+/// 864 bytes: the by-value blend would hold several copies on the stack). Returns false, and
+/// leaves `out` alone, if the table does not have the shape validation guarantees.
+pub(crate) fn effective_covariance_into(
+    env: &Environment,
+    sets: &[ImuCovariance],
+    temperature: f32,
+    voltage: f32,
+    out: &mut ImuCovariance,
+) -> bool {
+    let tb = bracket(&env.temperatures, &env.temperature_span, temperature);
+    let vb = bracket(&env.voltages, &env.voltage_span, voltage);
+    let nv = env.voltage_points();
+    let at = |t: usize, v: usize| sets.get(t * nv + v);
+    let (Some(a), Some(b), Some(c), Some(d)) = (
+        at(tb.lo, vb.lo),
+        at(tb.lo, vb.hi),
+        at(tb.hi, vb.lo),
+        at(tb.hi, vb.hi),
+    ) else {
+        return false;
+    };
+    // The same arithmetic as `Blend`: lo and hi along voltage, then along temperature.
+    let lerp = |x: f32, y: f32, t: f32| x + (y - x) * t;
+    for (o, (((a, b), c), d)) in out
+        .floats_mut()
+        .zip(a.floats().zip(b.floats()).zip(c.floats()).zip(d.floats()))
+    {
+        *o = lerp(lerp(*a, *b, vb.t), lerp(*c, *d, vb.t), tb.t);
+    }
+    true
 }
 
 #[cfg(test)]

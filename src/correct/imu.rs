@@ -4,7 +4,7 @@
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 mod fast;
 
-use super::environment::effective_set;
+use super::environment::{effective_covariance_into, effective_set};
 use super::kernel::{Shape, TriadKernel, affine, range_bounds};
 use super::{Corrected, Flags, factor_norm};
 use crate::Error;
@@ -231,10 +231,18 @@ impl<'a> ImuCorrector<'a> {
             self.directions = [unit(&set.accel.matrix), unit(&set.gyro.matrix)];
         }
         self.env_flags = flags;
-        self.covariance = src
-            .covariance
-            .and_then(|table| effective_set(src.env, table, temperature, voltage))
-            .map(|(c, _)| c);
+        match src.covariance {
+            Some(table) => {
+                let c = self.covariance.get_or_insert(ImuCovariance {
+                    accel: [[[0.0; 6]; 6]; 3],
+                    gyro: [[[0.0; 6]; 6]; 3],
+                });
+                if !effective_covariance_into(src.env, table, temperature, voltage, c) {
+                    self.covariance = None;
+                }
+            }
+            None => self.covariance = None,
+        }
         #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
         self.refresh_m4f();
     }

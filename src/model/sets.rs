@@ -195,18 +195,21 @@ impl<const N: usize, const M: usize> Blend for [[f32; N]; M] {
     }
 }
 
-impl Blend for ImuCovariance {
-    fn blend(&self, other: &Self, t: f32) -> Self {
-        let mut out = *self;
-        for (o, (a, b)) in out.accel.iter_mut().chain(out.gyro.iter_mut()).zip(
-            self.accel
-                .iter()
-                .chain(&self.gyro)
-                .zip(other.accel.iter().chain(&other.gyro)),
-        ) {
-            *o = a.blend(b, t);
-        }
-        out
+impl ImuCovariance {
+    /// Every value, accelerometer outputs then gyro outputs.
+    pub(crate) fn floats(&self) -> impl Iterator<Item = &f32> {
+        self.accel
+            .iter()
+            .chain(&self.gyro)
+            .flat_map(|f| f.as_flattened())
+    }
+
+    /// Every value, mutably, in the order of [`floats`](Self::floats).
+    pub(crate) fn floats_mut(&mut self) -> impl Iterator<Item = &mut f32> {
+        self.accel
+            .iter_mut()
+            .chain(self.gyro.iter_mut())
+            .flat_map(|f| f.as_flattened_mut())
     }
 }
 
