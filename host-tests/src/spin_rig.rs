@@ -52,8 +52,18 @@ pub fn calibrate(truth: &ImuTruth, seed: u64, keep_all: bool) -> Calibrated {
 /// On a bad profile.
 #[must_use]
 pub fn fly(truth: &ImuTruth, profile: &str, seed: u64) -> Vec<spin::Sample> {
+    fly_about(truth, profile, [1.0, 0.0, 0.0], seed)
+}
+
+/// [`fly`] about another axis of the unit.
+///
+/// # Panics
+/// On a bad profile.
+#[must_use]
+pub fn fly_about(truth: &ImuTruth, profile: &str, axis: [f64; 3], seed: u64) -> Vec<spin::Sample> {
     let run = spin::SpinRun {
         segments: spin::profile(profile).expect("profile"),
+        axis,
         sample_rate: SAMPLE_RATE,
         cone_angle: CONING.0.to_radians(),
         cone_hz: CONING.1,

@@ -265,6 +265,35 @@ fn the_round_at_50_150_and_300_hz_and_spinning_up_is_within_three_sigma() {
 }
 
 #[test]
+fn a_spin_about_any_axis_of_the_unit_is_undone_too() {
+    // The same calibration, the unit turned about a skew axis and about its z axis: every
+    // accelerometer axis and every lever-arm component takes part.
+    let truth = ImuTruth::spinning_round();
+    let c = spin_rig::calibrate(&truth, 21, false);
+    let cal = blob::decode(&c.blob).unwrap();
+    for (axis, profile) in [
+        ([0.0, 0.6, -0.8], "150:0.1"),
+        ([0.0, 0.0, 1.0], "200-250:0.2"),
+    ] {
+        let seg = segment(
+            &cal,
+            &spin_rig::fly_about(&truth, profile, axis, 4),
+            &noise(&c),
+            None,
+        );
+        for (k, name) in NAMES.iter().enumerate() {
+            assert!(
+                seg.z(k) <= 3.0,
+                "{axis:?} {profile} {name}: error {:.4} against 1-sigma {:.4} (noise {:.4})",
+                seg.error[k],
+                seg.sigma[k],
+                seg.noise[k]
+            );
+        }
+    }
+}
+
+#[test]
 fn a_200_g_centrifuge_and_a_rate_table_calibrate_the_range_a_300_hz_roll_needs() {
     // At 300 Hz of roll the z axis, 0.9 mm off the roll axis, senses 3,200 m/s^2 (330 g). A
     // 200 g centrifuge does not reach that, but the rate table's spins to 1900 rad/s drove the

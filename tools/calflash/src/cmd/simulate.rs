@@ -29,6 +29,14 @@ pub struct SimulateArgs {
     /// Samples per second of a spin-rig flight.
     #[arg(long, default_value_t = 2000.0, requires = "spin")]
     pub sample_rate: f64,
+    /// The unit's axis a spin-rig flight turns it about, `X,Y,Z` in its own axes.
+    #[arg(
+        long,
+        default_value = "1,0,0",
+        requires = "spin",
+        allow_negative_numbers = true
+    )]
+    pub spin_axis: String,
     /// Coning of a spin-rig flight: `DEGREES:HZ`, the roll axis' half-angle and its rate.
     #[arg(long, requires = "spin")]
     pub coning: Option<String>,
@@ -161,9 +169,27 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
         Some(c) => coning(c)?,
         None => (0.0, 0.0),
     };
+    let axis: Vec<f64> = args
+        .spin_axis
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--spin-axis `{}`: expected X,Y,Z", args.spin_axis))?;
+    let axis: [f64; 3] = match axis[..] {
+        [x, y, z] if [x, y, z].iter().all(|v| v.is_finite()) && x * x + y * y + z * z > 0.0 => {
+            [x, y, z]
+        }
+        _ => {
+            return Err(format!(
+                "--spin-axis `{}`: three finite numbers, not all zero",
+                args.spin_axis
+            ));
+        }
+    };
     let truth = load::<truth::ImuTruth>(args.truth.as_ref())?;
     let run = spin::SpinRun {
         segments,
+        axis,
         sample_rate: args.sample_rate,
         cone_angle,
         cone_hz,

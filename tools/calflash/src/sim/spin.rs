@@ -1,8 +1,8 @@
-//! A spin rig: the unit turns about its roll axis (body x) at a rate that follows a profile
-//! (steady spins, spin-up and spin-down ramps), the roll axis horizontal so that gravity is
-//! transverse, with an optional coning motion; sampled at a fixed rate into raw counts through
-//! an IMU's truth (`spincal::model::rotation`), with the true specific force, rate and
-//! angular acceleration beside every sample.
+//! A spin rig: the unit turns about an axis of its own (its roll axis, x, unless told another)
+//! at a rate that follows a profile (steady spins, spin-up and spin-down ramps), that axis
+//! horizontal so that gravity is transverse, with an optional coning motion; sampled at a fixed
+//! rate into raw counts through an IMU's truth (`spincal::model::rotation`), with the true
+//! specific force, rate and angular acceleration beside every sample.
 //!
 //! The attitude is `R(t) = Rx(Wt) Ry(theta) Rx(-Wt) Rx(phi(t))` (body to rig): the roll axis
 //! cones at `W` rad/s with half-angle `theta` about the rig's horizontal x axis while the body
@@ -128,6 +128,8 @@ pub fn profile(text: &str) -> Result<Vec<Segment>, ProfileError> {
 pub struct SpinRun {
     /// The spin profile.
     pub segments: Vec<Segment>,
+    /// The unit's axis it spins about, in its own axes (any direction; normalised).
+    pub axis: [f64; 3],
     /// Samples per second.
     pub sample_rate: f64,
     /// Coning half-angle, radians (0: none).
@@ -157,9 +159,35 @@ pub struct Sample {
     pub raw: [f64; 6],
 }
 
+/// A fixed rotation taking the unit's spin axis to the rig frame's x (the spin frame); the
+/// identity for a roll about x.
+fn mount(axis: [f64; 3]) -> Rotation3<f64> {
+    let a = Vector3::from(axis);
+    Rotation3::rotation_between(&a, &Vector3::x()).unwrap_or_else(|| {
+        // Antiparallel: half a turn about an axis perpendicular to x.
+        Rotation3::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI)
+    })
+}
+
 /// The body rate, angular acceleration and specific force at time `t` with spin rate `p`
-/// (rad/s), its derivative `dp` and roll angle `phi`.
+/// (rad/s), its derivative `dp` and roll angle `phi`, in the unit's axes.
 fn kinematics(run: &SpinRun, t: f64, p: f64, dp: f64, phi: f64) -> Sample {
+    let s = spin_frame(run, t, p, dp, phi);
+    let back = mount(run.axis).inverse();
+    let to_body = |v: [f64; 3]| {
+        let b = back * Vector3::from(v);
+        [b.x, b.y, b.z]
+    };
+    Sample {
+        f: to_body(s.f),
+        w: to_body(s.w),
+        dw: to_body(s.dw),
+        ..s
+    }
+}
+
+/// [`kinematics`] in the spin frame, whose x is the spin axis.
+fn spin_frame(run: &SpinRun, t: f64, p: f64, dp: f64, phi: f64) -> Sample {
     let x = Vector3::x_axis();
     let cone = 2.0 * std::f64::consts::PI * run.cone_hz;
     let psi = phi - cone * t;
@@ -290,6 +318,7 @@ mod tests {
     fn rates_and_accelerations_are_the_derivatives_of_the_attitude() {
         let run = SpinRun {
             segments: vec![],
+            axis: [1.0, 0.0, 0.0],
             sample_rate: 1000.0,
             cone_angle: 0.05,
             cone_hz: 7.0,
@@ -338,5 +367,24 @@ mod tests {
         // Gravity is transverse to the roll axis, up to the cone.
         let fnorm = s.f.iter().map(|x| x * x).sum::<f64>().sqrt();
         assert!((fnorm - G).abs() < 1e-9 && s.f[0].abs() <= G * run.cone_angle.sin() + 1e-9);
+        // About another axis of the unit: the same motion, seen in its axes.
+        let axis = [0.0, 0.6, -0.8];
+        let tilted = SpinRun {
+            axis,
+            ..run.clone()
+        };
+        let phi = p0 * t + 0.5 * a * t * t;
+        let u = kinematics(&tilted, t, p0 + a * t, a, phi);
+        let along = |v: [f64; 3]| v[0] * axis[0] + v[1] * axis[1] + v[2] * axis[2];
+        assert!(
+            (along(u.w) - s.w[0]).abs() < 1e-9 * s.w[0].abs(),
+            "{:?} {:?}",
+            u.w,
+            s.w
+        );
+        assert!((along(u.dw) - s.dw[0]).abs() < 1e-6 * (1.0 + s.dw[0].abs()));
+        let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        assert!((norm(u.w) - norm(s.w)).abs() < 1e-9 * norm(s.w));
+        assert!((along(u.f) - s.f[0]).abs() < 1e-9);
     }
 }
