@@ -1,7 +1,8 @@
 //! The device's protocol handler driven through whole sessions: the input is a program of
 //! requests (identify, begin a transfer of one of three blobs, send the next chunk, possibly
-//! damaged, commit, read back, run vectors, lock, or a raw garbage frame). A model tracks what a
-//! correct unit holds: the last blob whose commit was answered `Committed`. After every step the
+//! damaged, commit, read back, run vectors, lock, or a raw garbage frame). The unit is an IMU:
+//! the single-axis and triad blobs must be refused. A model tracks what a correct unit holds:
+//! the last blob whose commit was answered `Committed`. After every step the
 //! device holds exactly that, read-back returns its bytes, and a reboot loads it again.
 #![no_main]
 
@@ -11,6 +12,12 @@ use spincal::model::{Calibration, CalibrationData, Serial};
 use spincal::protocol::{self, Device, MAX_CHUNK, MAX_FRAME, Request, Response};
 use spincal::store::Store;
 use spincal_fuzz::RamNor;
+
+/// The unit's sensor: the IMU examples' (the single-axis and triad blobs are refused).
+const IMU: protocol::UnitSensor = protocol::UnitSensor::Imu {
+    accel_rails: spincal::model::Rails::unsigned(16),
+    gyro_rails: spincal::model::Rails::unsigned(16),
+};
 
 const SLOT: u32 = 12 * 1024;
 
@@ -57,6 +64,7 @@ fuzz_target!(|data: &[u8]| {
     let mut d = Box::new(Device::new(
         store,
         Serial::new("FUZZ-1").expect("serial"),
+        IMU,
         [0, 1, 0],
     ));
     let mut expected: Option<usize> = None;
@@ -121,12 +129,22 @@ fuzz_target!(|data: &[u8]| {
                 match (transfer, r) {
                     (Some((k, at)), Response::Committed { .. }) => {
                         assert_eq!(at, blobs[k].len());
+                        assert_eq!(k, 2, "committed a blob for another sensor");
                         expected = Some(k);
                     }
                     (_, Response::Committed { .. }) => {
                         panic!("committed an incomplete or damaged transfer")
                     }
-                    (Some((k, at)), r) => assert!(at < blobs[k].len() || locked, "{r:?}"),
+                    (Some((k, at)), r) => assert!(
+                        at < blobs[k].len()
+                            || locked
+                            || (k != 2
+                                && matches!(
+                                    r,
+                                    Response::Error(protocol::Status::WrongSensor { .. })
+                                )),
+                        "{r:?}"
+                    ),
                     _ => {}
                 }
                 transfer = None;
@@ -186,6 +204,7 @@ fuzz_target!(|data: &[u8]| {
     let d = Box::new(Device::new(
         Store::new(flash, 0, SLOT).expect("layout"),
         Serial::new("FUZZ-1").expect("serial"),
+        IMU,
         [0, 1, 0],
     ));
     assert_eq!(held(&d), expect);

@@ -10,6 +10,12 @@ use spincal::protocol::{self, Device, MAX_FRAME, Request, Response};
 use spincal::store::Store;
 use spincal_fuzz::RamNor;
 
+/// The unit's sensor: the IMU examples' (the single-axis and triad blobs are refused).
+const IMU: protocol::UnitSensor = protocol::UnitSensor::Imu {
+    accel_rails: spincal::model::Rails::unsigned(16),
+    gyro_rails: spincal::model::Rails::unsigned(16),
+};
+
 const SLOT: u32 = 12 * 1024;
 
 fuzz_target!(|data: &[u8]| {
@@ -24,6 +30,7 @@ fuzz_target!(|data: &[u8]| {
     let mut device = Box::new(Device::new(
         store,
         Serial::new("FUZZ-1").expect("serial"),
+        IMU,
         [0, 1, 0],
     ));
     for frame in data.split(|b| *b == 0).take(64) {

@@ -124,8 +124,14 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
             .map_or("no calibration", |s| s.as_str()),
         flash_file.display()
     ));
-    let flash = device::flash(&mut client, &c.blob, &FlashOptions::default(), |_, _| {})
-        .map_err(|e| e.to_string())?;
+    let flash = device::flash(
+        &mut client,
+        &before,
+        &c.blob,
+        &FlashOptions::default(),
+        |_, _| {},
+    )
+    .map_err(|e| e.to_string())?;
     drop(client);
     unit.power_off()?;
     let flash_id = db.record_flash(

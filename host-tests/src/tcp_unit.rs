@@ -6,8 +6,8 @@ use std::io::{Read, Write};
 use std::net::TcpListener;
 use std::thread::JoinHandle;
 
-use spincal::model::Serial;
-use spincal::protocol::{Device, MAX_FRAME};
+use spincal::model::{Rails, Serial};
+use spincal::protocol::{Device, MAX_FRAME, UnitSensor};
 use spincal::store::Store;
 
 use crate::nor::SimFlash;
@@ -24,7 +24,13 @@ pub fn blank_flash() -> Flash {
     Flash::new(2 * SLOT as usize + 1024)
 }
 
-/// A device over `flash` with serial `unit`.
+/// The sensor of the bench units: an IMU with the examples' 16-bit converters.
+pub const IMU_16_BIT: UnitSensor = UnitSensor::Imu {
+    accel_rails: Rails::unsigned(16),
+    gyro_rails: Rails::unsigned(16),
+};
+
+/// A device over `flash` with serial `unit`, carrying [`IMU_16_BIT`].
 ///
 /// # Panics
 /// When the flash is too small for the store.
@@ -34,6 +40,7 @@ pub fn device(flash: Flash, unit: &str) -> Box<Device<Flash>> {
     Box::new(Device::new(
         store,
         Serial::new(unit).expect("a short serial"),
+        IMU_16_BIT,
         [0, 1, 0],
     ))
 }

@@ -486,7 +486,7 @@ fn the_largest_calibration_fits_and_the_framing_is_small() {
     let floats = fields::floats(&mut data).len();
     // The 16-byte serial, the largest time and version add 28 bytes to the examples' framing.
     assert!(
-        n - 4 * floats <= 64 + 28,
+        n - 4 * floats <= 65 + 28,
         "framing {} bytes",
         n - 4 * floats
     );
@@ -502,13 +502,14 @@ fn the_largest_calibration_fits_and_the_framing_is_small() {
 }
 
 #[test]
-fn framing_overhead_of_the_examples_is_at_most_64_bytes() {
+fn framing_overhead_of_the_examples_is_at_most_65_bytes() {
     for (name, mut data) in examples() {
         let n = golden::encode(&data).len();
         let floats = fields::floats(&mut data).len();
         let overhead = n - 4 * floats;
         println!("{name}: {n} bytes, {floats} floats, {overhead} bytes over the raw payload");
-        assert!(overhead <= 64, "{name}: {overhead}");
+        // 64 until the identity said whether the fit was rejected (one byte).
+        assert!(overhead <= 65, "{name}: {overhead}");
     }
 }
 

@@ -63,6 +63,7 @@ impl Bench {
             blob: blob.to_path_buf(),
             port: u.address(),
             force,
+            force_rejected: false,
             timeout: 0.3,
             vectors: 4,
             db: Some(self.path("units.sqlite")),

@@ -13,7 +13,12 @@ type Flash = SimFlash<4, 1024>;
 
 fn device() -> Device<Flash> {
     let store = Store::new(Flash::new(2 * 16384 + 1024), 0, 16384).unwrap();
-    Device::new(store, Serial::new("UNIT-1").unwrap(), [0, 1, 0])
+    Device::new(
+        store,
+        Serial::new("UNIT-1").unwrap(),
+        host_tests::tcp_unit::IMU_16_BIT,
+        [0, 1, 0],
+    )
 }
 
 /// Sends a request through the frame encoder and the device's frame handler.
@@ -124,18 +129,47 @@ fn update_read_back_and_vectors() {
         assert_eq!(h.flags.bits(), *f);
     }
     // A second update goes to the other slot.
-    let blob2 = golden::encode(&CalibrationData::example_triad());
+    let blob2 = golden::encode(&CalibrationData::example_imu_polynomial());
     assert_eq!(write(&mut d, &blob2), Response::Committed { seq: 2 });
-    assert_eq!(identity(&mut d).calibration.unwrap().as_str(), "TRI-7");
+    assert_eq!(
+        identity(&mut d).calibration.unwrap().as_str(),
+        "IMU-POLY-0042"
+    );
+}
+
+#[test]
+fn a_blob_for_another_sensor_is_never_committed() {
+    let mut d = device();
+    let good = golden::encode(&CalibrationData::example_imu());
+    assert_eq!(write(&mut d, &good), Response::Committed { seq: 1 });
+    let before = identity(&mut d);
+    assert_eq!(before.sensor, host_tests::tcp_unit::IMU_16_BIT);
+    // A triad, a single axis, and an IMU of other converters.
+    let mut other_rails = CalibrationData::example_imu_linear();
+    if let spincal::model::Sensor::Imu { gyro_rails, .. } = &mut other_rails.sensor {
+        *gyro_rails = spincal::model::Rails::unsigned(18);
+    }
+    for data in [
+        CalibrationData::example_triad(),
+        CalibrationData::example_single(),
+        other_rails,
+    ] {
+        let kind = protocol::UnitSensor::of(&data);
+        assert_eq!(
+            write(&mut d, &golden::encode(&data)),
+            Response::Error(Status::WrongSensor { blob: kind })
+        );
+        assert_eq!(identity(&mut d), before, "{kind}");
+    }
 }
 
 #[test]
 fn refusals_change_nothing() {
     let mut d = device();
-    let old = golden::encode(&CalibrationData::example_single());
+    let old = golden::encode(&CalibrationData::example_imu_linear());
     assert_eq!(write(&mut d, &old), Response::Committed { seq: 1 });
     let before = identity(&mut d);
-    let new = golden::encode(&CalibrationData::example_triad());
+    let new = golden::encode(&CalibrationData::example_imu_polynomial());
 
     // Corrupt, truncated and unknown frames.
     let mut frame = [0u8; MAX_FRAME];

@@ -24,6 +24,7 @@ fn identity(serial: &str) -> Identity {
             0x91, 0x0b,
         ],
         tool_version: [0, 1, 0],
+        fit_rejected: false,
     }
 }
 

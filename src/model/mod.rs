@@ -194,6 +194,9 @@ pub struct Identity {
     pub data_hash: [u8; 16],
     /// Version (major, minor, patch) of the tool that made the calibration.
     pub tool_version: [u16; 3],
+    /// The fit behind it was judged REJECT and the blob written all the same
+    /// (`calflash calibrate --force-blob`): a flasher refuses it unless told otherwise.
+    pub fit_rejected: bool,
 }
 
 /// The sensor, its fixed per-axis data, and its table of coefficient sets.
@@ -286,6 +289,7 @@ impl CalibrationData {
                 created_unix_s: 0,
                 data_hash: [0; 16],
                 tool_version: [0; 3],
+                fit_rejected: false,
             },
             environment: Environment::fixed(Span::new(0.0, 0.0), Span::new(0.0, 0.0)),
             sensor: Sensor::Single {

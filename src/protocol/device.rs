@@ -4,6 +4,7 @@ use embedded_storage::nor_flash::NorFlash;
 
 use super::{
     FrameError, Identity, MAX_CHUNK, MAX_FRAME, PROTOCOL_VERSION, Request, Response, Status,
+    UnitSensor,
 };
 use crate::blob::{self, MAX_BLOB_LEN};
 use crate::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
@@ -17,11 +18,12 @@ pub const SLOT_BUFFER: usize = MAX_BLOB_LEN + 16;
 const VECTOR_RATE_HZ: f32 = 1000.0;
 
 /// The device: its store, the validated RAM copy of the current calibration, and the state of
-/// a transfer. About 35 KB: keep it in a `static`.
+/// a transfer. About 75 KB: keep it in a `static`.
 #[derive(Debug)]
 pub struct Device<F> {
     store: Store<F>,
     unit: Serial,
+    sensor: UnitSensor,
     firmware: [u16; 3],
     cal: CalibrationData,
     loaded: Option<SlotInfo>,
@@ -34,11 +36,13 @@ pub struct Device<F> {
 }
 
 impl<F: NorFlash> Device<F> {
-    /// A device over `store`, loading the current calibration (if any).
-    pub fn new(store: Store<F>, unit: Serial, firmware: [u16; 3]) -> Self {
+    /// A device over `store` for the unit `unit` carrying `sensor` (it commits only
+    /// calibrations of that sensor), loading the current calibration (if any).
+    pub fn new(store: Store<F>, unit: Serial, sensor: UnitSensor, firmware: [u16; 3]) -> Self {
         let mut d = Self {
             store,
             unit,
+            sensor,
             firmware,
             cal: CalibrationData::empty(),
             loaded: None,
@@ -119,6 +123,7 @@ impl<F: NorFlash> Device<F> {
         };
         Response::Identity(Identity {
             unit: self.unit.clone(),
+            sensor: self.sensor,
             firmware: self.firmware,
             format: blob::FORMAT_VERSION,
             protocol: PROTOCOL_VERSION,
@@ -188,6 +193,16 @@ impl<F: NorFlash> Device<F> {
         let blob = self.rx.get(..len as usize).unwrap_or_default();
         if super::checksum(blob) != crc {
             return Response::Error(Status::CrcMismatch);
+        }
+        // A calibration for another sensor never reaches the store.
+        match blob::decode_in(blob, &mut self.scratch) {
+            Ok(cal) => {
+                let kind = UnitSensor::of(cal.data());
+                if kind != self.sensor {
+                    return Response::Error(Status::WrongSensor { blob: kind });
+                }
+            }
+            Err(e) => return Response::Error(Status::InvalidBlob(e)),
         }
         match self.store.update(blob, &mut self.buf, &mut self.scratch) {
             Ok(info) => {

@@ -22,8 +22,97 @@ pub use device::{Device, SLOT_BUFFER, vector_rate_hz};
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::Serial;
+use crate::model::{CalibrationData, Quantity, Rails, Sensor, Serial};
 use crate::store::SlotState;
+
+/// The sensor a unit carries, fixed in its firmware: the only kind of calibration it takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum UnitSensor {
+    /// One axis.
+    Single {
+        /// What it measures.
+        quantity: Quantity,
+        /// Its converter's code range.
+        rails: Rails,
+    },
+    /// A triad.
+    Triad {
+        /// What it measures.
+        quantity: Quantity,
+        /// Its converters' code range.
+        rails: Rails,
+    },
+    /// An accelerometer and a gyro triad.
+    Imu {
+        /// The accelerometer converters' code range.
+        accel_rails: Rails,
+        /// The gyro converters' code range.
+        gyro_rails: Rails,
+    },
+}
+
+impl UnitSensor {
+    /// The sensor a calibration is for.
+    #[must_use]
+    pub fn of(data: &CalibrationData) -> Self {
+        match &data.sensor {
+            Sensor::Single {
+                quantity, rails, ..
+            } => Self::Single {
+                quantity: *quantity,
+                rails: *rails,
+            },
+            Sensor::Triad {
+                quantity, rails, ..
+            } => Self::Triad {
+                quantity: *quantity,
+                rails: *rails,
+            },
+            Sensor::Imu {
+                accel_rails,
+                gyro_rails,
+                ..
+            } => Self::Imu {
+                accel_rails: *accel_rails,
+                gyro_rails: *gyro_rails,
+            },
+        }
+    }
+}
+
+impl core::fmt::Display for UnitSensor {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let what = |q: &Quantity| match q {
+            Quantity::Acceleration => "accelerometer",
+            Quantity::AngularRate => "gyro",
+        };
+        match self {
+            Self::Single { quantity, rails } => write!(
+                f,
+                "a single-axis {} (codes {} to {})",
+                what(quantity),
+                rails.lo,
+                rails.hi
+            ),
+            Self::Triad { quantity, rails } => write!(
+                f,
+                "a {} triad (codes {} to {})",
+                what(quantity),
+                rails.lo,
+                rails.hi
+            ),
+            Self::Imu {
+                accel_rails,
+                gyro_rails,
+            } => write!(
+                f,
+                "an IMU (accelerometer codes {} to {}, gyro codes {} to {})",
+                accel_rails.lo, accel_rails.hi, gyro_rails.lo, gyro_rails.hi
+            ),
+        }
+    }
+}
 
 /// Bytes of blob per chunk.
 pub const MAX_CHUNK: usize = 256;
@@ -31,8 +120,8 @@ pub const MAX_CHUNK: usize = 256;
 pub const MAX_VECTORS: usize = 16;
 /// Largest encoded frame, terminator included.
 pub const MAX_FRAME: usize = 640;
-/// The protocol's version (in [`Identity`]).
-pub const PROTOCOL_VERSION: u8 = 1;
+/// The protocol's version (in [`Identity`]); 2 added the unit's [`UnitSensor`].
+pub const PROTOCOL_VERSION: u8 = 2;
 
 /// What the host asks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -104,6 +193,12 @@ pub enum Status {
     NoCalibration,
     /// The requested range is outside the blob.
     OutOfRange,
+    /// The blob is for another kind of sensor (or other code ranges) than the unit carries;
+    /// nothing was committed.
+    WrongSensor {
+        /// What the blob is for.
+        blob: UnitSensor,
+    },
 }
 
 /// The device's answer to [`Request::Identify`].
@@ -111,6 +206,8 @@ pub enum Status {
 pub struct Identity {
     /// The unit's serial number (fixed in the unit).
     pub unit: Serial,
+    /// The sensor it carries (fixed in the unit): the only kind of calibration it takes.
+    pub sensor: UnitSensor,
     /// Firmware version (major, minor, patch).
     pub firmware: [u16; 3],
     /// Blob format version the firmware reads.

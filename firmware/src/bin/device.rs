@@ -7,8 +7,8 @@
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use spincal::correct::{AxisCorrector, Flags, ImuCorrector, TriadCorrector};
-use spincal::model::{Sensor, Serial};
-use spincal::protocol::{Device, MAX_FRAME};
+use spincal::model::{Rails, Sensor, Serial};
+use spincal::protocol::{Device, MAX_FRAME, UnitSensor};
 use spincal::store::Store;
 use spincal_firmware::{RamFlash, Uart};
 
@@ -16,6 +16,13 @@ use spincal_firmware::{RamFlash, Uart};
 const UNIT_SERIAL: &str = match option_env!("SPINCAL_UNIT_SERIAL") {
     Some(s) => s,
     None => "QEMU-0001",
+};
+
+/// The sensor this unit carries: an IMU on 16-bit converters (the main job's). The unit commits
+/// no calibration of another kind.
+const SENSOR: UnitSensor = UnitSensor::Imu {
+    accel_rails: Rails::unsigned(16),
+    gyro_rails: Rails::unsigned(16),
 };
 
 /// Corrects a stream of raw samples with whatever is loaded and reports how many were clean.
@@ -85,7 +92,8 @@ fn main() -> ! {
         spincal_firmware::exit(false)
     };
     let unit = Serial::new(UNIT_SERIAL).unwrap_or_default();
-    let device = cortex_m::singleton!(: Device<RamFlash> = Device::new(store, unit, [0, 1, 0]));
+    let device =
+        cortex_m::singleton!(: Device<RamFlash> = Device::new(store, unit, SENSOR, [0, 1, 0]));
     let Some(device) = device else {
         spincal_firmware::exit(false)
     };

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use rusqlite::{Connection, ErrorCode, OptionalExtension, params};
+use rusqlite::{Connection, ErrorCode, OpenFlags, OptionalExtension, params};
 
 use crate::sensor::record::Record;
 
@@ -66,7 +66,7 @@ pub fn record_or_save(
             let file = beside.join(format!("calflash-unrecorded-{safe}-{nanos}.json"));
             let body = serde_json::to_vec_pretty(fallback).unwrap_or_default();
             let saved =
-                crate::report::write_atomically(&file, |w| std::io::Write::write_all(w, &body));
+                crate::files::write_atomically(&file, |w| std::io::Write::write_all(w, &body));
             Err(match saved {
                 Ok(()) => format!(
                     "NOT recorded: {e}; the record is saved in {} instead",
@@ -145,6 +145,59 @@ CREATE TABLE IF NOT EXISTS records (
 CREATE INDEX IF NOT EXISTS records_serial ON records (serial, time);
 ";
 
+/// The schema version this calflash reads and writes (`PRAGMA user_version`). Version 0 is a
+/// database of the releases before versioning: the same table, migrated by setting the
+/// version.
+pub const SCHEMA_VERSION: i64 = 1;
+
+/// The columns of `records` the code reads and writes.
+const COLUMNS: [&str; 13] = [
+    "id",
+    "serial",
+    "kind",
+    "time",
+    "data_hash",
+    "model",
+    "coefficients",
+    "covariance",
+    "report",
+    "blob",
+    "verification",
+    "outcome",
+    "record",
+];
+
+/// Checks the schema of an existing database; migrates version 0 when `write`.
+fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<(), String> {
+    let version: i64 = conn
+        .query_row("PRAGMA user_version", [], |r| r.get(0))
+        .map_err(|e| explain(path, &e))?;
+    if version > SCHEMA_VERSION {
+        return Err(format!(
+            "the unit history database {}: written by a newer calflash (schema {version}); this one reads schema {SCHEMA_VERSION} and changes nothing in it",
+            path.display()
+        ));
+    }
+    let mut stmt = conn
+        .prepare("SELECT name FROM pragma_table_info('records')")
+        .map_err(|e| explain(path, &e))?;
+    let have: Vec<String> = stmt
+        .query_map([], |r| r.get(0))
+        .and_then(Iterator::collect)
+        .map_err(|e| explain(path, &e))?;
+    if let Some(missing) = COLUMNS.iter().find(|c| !have.iter().any(|h| h == *c)) {
+        return Err(format!(
+            "the unit history database {}: its table `records` has no column `{missing}`: it was altered or is not calflash's; nothing was read or written",
+            path.display()
+        ));
+    }
+    if version < SCHEMA_VERSION && write {
+        conn.execute_batch(&format!("PRAGMA user_version = {SCHEMA_VERSION}"))
+            .map_err(|e| explain(path, &e))?;
+    }
+    Ok(())
+}
+
 /// One row of `records`.
 struct Row<'a> {
     serial: &'a str,
@@ -202,9 +255,37 @@ impl Db {
             )
             .map_err(|e| explain(path, &e))?
             > 0;
-        if !exists {
-            conn.execute_batch(SCHEMA).map_err(|e| explain(path, &e))?;
+        if exists {
+            check_schema(&conn, path, true)?;
+        } else {
+            conn.execute_batch(&format!(
+                "BEGIN; {SCHEMA} PRAGMA user_version = {SCHEMA_VERSION}; COMMIT;"
+            ))
+            .map_err(|e| explain(path, &e))?;
         }
+        Ok(Self {
+            conn,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Opens an existing database to read it (`history`, `compare db:ID`): never creates one,
+    /// never writes.
+    ///
+    /// # Errors
+    /// A missing file, or one that is not a calflash database of a schema this calflash reads.
+    pub fn open_existing(path: &Path) -> Result<Self, String> {
+        if !path.is_file() {
+            return Err(format!(
+                "the unit history database {}: there is none (give the one the station records in with --db, or $CALFLASH_DB)",
+                path.display()
+            ));
+        }
+        let conn = Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY)
+            .map_err(|e| explain(path, &e))?;
+        conn.busy_timeout(std::time::Duration::from_secs(5))
+            .map_err(|e| explain(path, &e))?;
+        check_schema(&conn, path, false)?;
         Ok(Self {
             conn,
             path: path.to_path_buf(),
@@ -485,5 +566,53 @@ mod tests {
                 path.display()
             )
         );
+    }
+
+    #[test]
+    fn the_schema_version_is_checked_and_reading_creates_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        // Reading a database that is not there creates nothing.
+        let e = Db::open_existing(&path).err().unwrap();
+        assert!(e.contains("there is none"), "{e}");
+        assert!(!path.exists());
+        let deep = dir.path().join("a/b/units.sqlite");
+        assert!(Db::open_existing(&deep).is_err());
+        assert!(!dir.path().join("a").exists());
+        // A new database carries the version.
+        flash(&mut Db::open(&path).unwrap()).unwrap();
+        let conn = Connection::open(&path).unwrap();
+        let v: i64 = conn
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .unwrap();
+        assert_eq!(v, SCHEMA_VERSION);
+        // A database of the releases before versioning (version 0) is migrated on write.
+        conn.execute_batch("PRAGMA user_version = 0").unwrap();
+        assert_eq!(
+            Db::open_existing(&path)
+                .unwrap()
+                .history("UNIT-1")
+                .unwrap()
+                .len(),
+            1
+        );
+        flash(&mut Db::open(&path).unwrap()).unwrap();
+        let v: i64 = conn
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .unwrap();
+        assert_eq!(v, SCHEMA_VERSION);
+        // A newer schema is refused, written into by nobody.
+        conn.execute_batch("PRAGMA user_version = 7").unwrap();
+        for e in [
+            Db::open(&path).err().unwrap(),
+            Db::open_existing(&path).err().unwrap(),
+        ] {
+            assert!(e.contains("newer calflash (schema 7)"), "{e}");
+        }
+        // An altered table is named, not answered with raw SQL.
+        conn.execute_batch("PRAGMA user_version = 1; ALTER TABLE records RENAME COLUMN time TO t")
+            .unwrap();
+        let e = Db::open_existing(&path).err().unwrap();
+        assert!(e.contains("no column `time`"), "{e}");
     }
 }

@@ -10,6 +10,7 @@ pub mod db;
 pub mod design;
 pub mod device;
 pub mod earth;
+pub mod files;
 pub mod formula;
 pub mod noise;
 pub mod nonlinear;

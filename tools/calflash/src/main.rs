@@ -4,7 +4,7 @@
 use std::process::ExitCode;
 
 use calflash::cmd;
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Calibration of inertial sensors: fit, report, write, flash and verify.
 #[derive(Debug, Parser)]
@@ -42,8 +42,28 @@ enum Command {
     History(cmd::history::HistoryArgs),
 }
 
+/// Every command takes negative numbers as option values (`--latitude -33.9`), lists of them
+/// too (`--temps -40,25,85`), without an `=`.
+fn negative_numbers(cmd: clap::Command) -> clap::Command {
+    cmd.allow_negative_numbers(true)
+        .mut_args(|a| {
+            if a.get_value_delimiter().is_some() {
+                a.allow_hyphen_values(true)
+            } else {
+                a
+            }
+        })
+        .mut_subcommands(negative_numbers)
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // A closed pipe (`calflash ... | head`) ends the process quietly, as it does any Unix tool.
+    sigpipe::reset();
+    let matches = negative_numbers(Cli::command()).get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     let result = match &cli.command {
         Command::Fit(args) => cmd::fit::run(args),
         Command::Calibrate(args) => match cmd::calibrate::run(args) {

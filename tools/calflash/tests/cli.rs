@@ -231,10 +231,6 @@ fn bad_options_are_refused() {
             "calflash: --compare: volts ~ 1 + rate + other is not nested in volts ~ 1 + rate + temp (same response, and only terms the full model has)",
         ),
         (
-            vec!["--alpha", "1.5"],
-            "calflash: --alpha 1.5 is not between 0 and 1",
-        ),
-        (
             vec!["--holdout-every", "100"],
             "calflash: --holdout-every 100: only 6 observations, none held out",
         ),
@@ -253,4 +249,16 @@ fn bad_options_are_refused() {
         assert_eq!((code, stderr.trim_end()), (1, expected), "{extra:?}");
         assert!(!dir.path().join("o.json").exists());
     }
+    // Options outside their domain are refused as the command line is read (usage, exit 2).
+    let (code, _, stderr) = calflash(
+        dir.path(),
+        &["fit", "d.csv", "--model", "volts ~ rate", "--alpha", "1.5"],
+    );
+    assert_eq!(code, 2);
+    assert!(
+        stderr.starts_with(
+            "error: invalid value '1.5' for '--alpha <ALPHA>': a significance level between 0 and 1"
+        ),
+        "{stderr}"
+    );
 }

@@ -248,9 +248,9 @@ fn the_command_line_refuses_bad_input_with_one_clear_line() {
     );
     assert!(!dir.path().join("x.blob").exists(), "nothing written");
     let (code, err) = run(&["--g", "981", "--serial", "SIM-1"]);
-    assert_eq!(code, Some(1));
+    assert_eq!(code, Some(2), "a usage error");
     assert!(
-        err.contains("--g 981: local gravity is between 9.78 and 9.84 m/s^2"),
+        err.contains("'981' for '--g <G>': local gravity is between 9.78 and 9.84 m/s^2"),
         "{err}"
     );
 }
@@ -372,6 +372,7 @@ fn the_selfcal_blob_carries_the_calibration_uncertainty() {
         created_unix_s: 0,
         data_hash: [0; 16],
         tool_version: [0, 1, 0],
+        fit_rejected: false,
     };
     let data = build::calibration_data(
         &c,

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use super::values;
 use clap::Args;
 use spincal::model::Rails;
 
@@ -31,16 +32,16 @@ pub struct AllanArgs {
     pub sensor: Which,
     /// Counts per SI unit (per rad/s or per m/s^2), one for all axes or three; without it the
     /// deviation is in counts.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_parser = values::positive)]
     pub scale: Vec<f64>,
     /// Use only samples from this time on, s from the start.
-    #[arg(long)]
+    #[arg(long, value_parser = values::positive)]
     pub from: Option<f64>,
     /// Up to this time, s from the start.
-    #[arg(long)]
+    #[arg(long, value_parser = values::positive)]
     pub to: Option<f64>,
     /// Cluster sizes per doubling of tau.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| values::count_in(s, 1, 64))]
     pub per_octave: usize,
     /// Write the log-log figure (SVG) here.
     #[arg(long)]
@@ -55,6 +56,12 @@ pub struct AllanArgs {
 /// # Errors
 /// Bad input or too short a recording.
 pub fn run(args: &AllanArgs) -> Result<(), String> {
+    crate::files::Paths::new()
+        .input("the recording", Some(&args.acc))
+        .input("--gyro", args.gyro.as_deref())
+        .output("--plot", args.plot.as_deref())
+        .output("--json", args.json.as_deref())
+        .check()?;
     let rec = recording::read(
         &args.acc,
         args.gyro.as_deref(),
@@ -165,11 +172,11 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
             zero_line: false,
         };
         let svg = report::plot::svg_loglog(&fig)?;
-        report::write_atomically(p, |w| w.write_all(svg.as_bytes()))?;
+        crate::files::write_atomically(p, |w| w.write_all(svg.as_bytes()))?;
     }
     if let Some(p) = &args.json {
         let v = serde_json::json!({"schema": "calflash.allan/1", "source": rec.source, "unit": unit, "axes": axes.iter().zip(&curves).zip(&terms).map(|((a, c), t)| serde_json::json!({"axis": a, "curve": c, "terms": t})).collect::<Vec<_>>()});
-        report::write_atomically(p, |w| {
+        crate::files::write_atomically(p, |w| {
             serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
         })?;
     }

@@ -3,15 +3,16 @@
 
 use std::path::PathBuf;
 
+use super::values;
 use clap::Args;
 use spincal::blob;
 use spincal::correct::{AxisCorrector, Flags, ImuCorrector, TriadCorrector};
 use spincal::model::Sensor;
 
 use crate::columns as col;
+use crate::files::Paths;
 use crate::obs::timing::{Timing, TimingError};
 use crate::obs::{self, Format};
-use crate::report;
 use crate::sensor::accuracy::Accuracy;
 
 /// Run a file of raw counts through the device's correction.
@@ -35,18 +36,18 @@ pub struct ApplyArgs {
     #[arg(long, value_delimiter = ',')]
     pub columns: Vec<String>,
     /// Temperature, C, for every sample (default: the middle of the calibrated span).
-    #[arg(long, conflicts_with = "temp_column")]
+    #[arg(long, conflicts_with = "temp_column", value_parser = values::finite_f32)]
     pub temp: Option<f32>,
     /// A column with the temperature of each sample.
     #[arg(long)]
     pub temp_column: Option<String>,
     /// Supply voltage, V (default: the middle of the calibrated span).
-    #[arg(long)]
+    #[arg(long, value_parser = values::finite_f32)]
     pub volt: Option<f32>,
     /// Sample rate, Hz. An IMU calibration with lever arms needs it (its tangential term
     /// takes the rate derivative by backward difference) or the timestamps: `--time-column`,
     /// or a recording's.
-    #[arg(long)]
+    #[arg(long, value_parser = values::positive)]
     pub rate: Option<f64>,
     /// A column with each sample's time in seconds: the rate, when `--rate` is not given, and
     /// a sample after a step that is not the rate is flagged (its rate derivative is unknown).
@@ -135,6 +136,12 @@ enum Any<'a> {
 /// # Errors
 /// A bad blob or input file.
 pub fn run(args: &ApplyArgs) -> Result<(), String> {
+    Paths::new()
+        .input("--blob", Some(&args.blob))
+        .input("the raw file", Some(&args.input))
+        .input("--gyro", args.gyro.as_deref())
+        .output("-o", Some(&args.output))
+        .check()?;
     let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let cal = blob::decode(&bytes).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let data = cal.data();
@@ -324,7 +331,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
         }
         rows.push('\n');
     }
-    report::write_atomically(&args.output, |w| {
+    crate::files::write_atomically(&args.output, |w| {
         writeln!(w, "{}", header.join(","))?;
         w.write_all(rows.as_bytes())
     })?;

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use super::values;
+use crate::files::Paths;
 use clap::{Args, ValueEnum};
 use spincal::model::{Quantity, Rails, Span};
 
@@ -64,10 +66,10 @@ pub struct CalibrateArgs {
     #[arg(long, value_enum, default_value = "auto")]
     pub asymmetry: Asymmetry,
     /// Single axis: the asymmetry breakpoint (input units).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = values::finite)]
     pub breakpoint: f64,
     /// ADC resolution: rails at 0 and 2^bits - 1.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=24))]
     pub adc_bits: u32,
     /// ADC rails LO:HI (instead of --adc-bits).
     #[arg(long, value_name = "LO:HI")]
@@ -79,10 +81,10 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "LO:HI", default_value = "0:100")]
     pub volt_span: String,
     /// Reject when the residual noise of an axis exceeds this (input units).
-    #[arg(long)]
+    #[arg(long, value_parser = values::positive)]
     pub max_noise: Option<f64>,
     /// Significance level.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, value_parser = values::level)]
     pub alpha: f64,
     /// Field separator of the data.
     #[arg(long, value_enum, default_value = "auto")]
@@ -90,10 +92,10 @@ pub struct CalibrateArgs {
     /// Triads and IMUs: the station's latitude, degrees: the Earth's rate becomes a known
     /// input of the gyro fits (with --heading and, for still positions, the fixture's mark
     /// `h_x h_y h_z` in the data).
-    #[arg(long, requires = "heading", allow_negative_numbers = true)]
+    #[arg(long, requires = "heading", value_parser = values::finite)]
     pub latitude: Option<f64>,
     /// The azimuth of the fixture's reference mark from true north, degrees clockwise.
-    #[arg(long, requires = "latitude", allow_negative_numbers = true)]
+    #[arg(long, requires = "latitude", value_parser = values::finite)]
     pub heading: Option<f64>,
 }
 
@@ -119,6 +121,8 @@ pub(crate) fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
 /// A message naming the file, column, term or table point.
 pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
     sensor::device::serial(&args.serial)?;
+    args.out
+        .check(Paths::new().input("the data", Some(&args.data)))?;
     let mut opts = Options::new(&args.data, &args.serial);
     opts.format = args.format;
     opts.alpha = args.alpha;
@@ -139,8 +143,7 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
                 hi: hi as i32,
             }
         }
-        None if (2..=24).contains(&args.adc_bits) => Rails::unsigned(args.adc_bits),
-        None => return Err(format!("--adc-bits {}: between 2 and 24", args.adc_bits)),
+        None => Rails::unsigned(args.adc_bits),
     };
     if let (Some(lat), Some(heading)) = (args.latitude, args.heading) {
         if matches!(
@@ -172,20 +175,44 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
     }
     .map_err(|e| e.to_string())?;
     let data_name = args.data.display().to_string();
-    let record = Record::new(&c, &data_name);
-    args.out
-        .write(&c.blob, &record, || report::html::render(&c, &data_name))?;
-    print!("{}", summary(&c, args));
+    // A rejected calibration has no blob, unless forced; a forced one says so in its identity.
+    let blob = match (c.verdict(), args.out.force_blob) {
+        (Verdict::Reject, false) => None,
+        (Verdict::Reject, true) => Some(rejected_blob(&c)?),
+        _ => Some(c.blob.clone()),
+    };
+    let mut record = Record::new(&c, &data_name);
+    record.blob = blob.as_deref().map(hex).unwrap_or_default();
+    args.out.write(blob.as_deref(), &record, || {
+        report::html::render(&c, &data_name)
+    })?;
+    print!("{}", summary(&c, args, blob.is_some()));
     let serial = c.data.identity.serial.as_str();
     let fallback = serde_json::to_value(&record).unwrap_or_default();
     let report_path = args.out.report.as_deref();
     args.out.record(serial, &fallback, |d| {
-        d.record_fit(&record, report_path, &c.blob)
+        d.record_fit(&record, report_path, blob.as_deref().unwrap_or_default())
     })?;
     Ok(c.verdict())
 }
 
-fn summary(c: &sensor::Calibrated, args: &CalibrateArgs) -> String {
+fn hex(b: &[u8]) -> String {
+    b.iter().map(|x| format!("{x:02x}")).collect()
+}
+
+/// The blob of a calibration judged REJECT, written because `--force-blob` asked: the same
+/// coefficients, its identity marked, so that a flasher refuses it unless told otherwise.
+fn rejected_blob(c: &sensor::Calibrated) -> Result<Vec<u8>, String> {
+    let mut data = c.data.clone();
+    data.identity.fit_rejected = true;
+    let cal = spincal::model::Calibration::new(data).map_err(|e| e.to_string())?;
+    let mut buf = vec![0u8; spincal::blob::MAX_BLOB_LEN];
+    let n = spincal::blob::encode(&cal, &mut buf).map_err(|e| e.to_string())?;
+    buf.truncate(n);
+    Ok(buf)
+}
+
+fn summary(c: &sensor::Calibrated, args: &CalibrateArgs, blob_written: bool) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
     let word = |v: Verdict| match v {
@@ -247,8 +274,25 @@ fn summary(c: &sensor::Calibrated, args: &CalibrateArgs) -> String {
         (&args.out.report, "report"),
         (&args.out.json, "record"),
     ] {
-        if let Some(p) = p {
-            let _ = writeln!(s, "  {what}: {}", p.display());
+        match p {
+            Some(p) if what == "blob" && !blob_written => {
+                let _ = writeln!(
+                    s,
+                    "  blob: none written to {}: the calibration is judged REJECT (--force-blob writes it, marked so that `flash` refuses it)",
+                    p.display()
+                );
+            }
+            Some(p) if what == "blob" && c.verdict() == Verdict::Reject => {
+                let _ = writeln!(
+                    s,
+                    "  blob: {} (of a rejected fit, marked: `flash` refuses it without --force-rejected)",
+                    p.display()
+                );
+            }
+            Some(p) => {
+                let _ = writeln!(s, "  {what}: {}", p.display());
+            }
+            None => {}
         }
     }
     s

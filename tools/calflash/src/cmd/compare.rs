@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::report::{self, terminal::num, terminal::pval};
+use crate::report::{terminal::num, terminal::pval};
 use crate::sensor::compare::{self, Estimates};
 
 /// Compare two calibration records of one unit (Wald tests per term, chi-square per output).
@@ -20,7 +20,7 @@ pub struct CompareArgs {
     #[arg(long)]
     pub db: Option<PathBuf>,
     /// Significance level.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, value_parser = super::values::level)]
     pub alpha: f64,
     /// Write the comparison as JSON.
     #[arg(long)]
@@ -32,6 +32,14 @@ pub struct CompareArgs {
 /// # Errors
 /// Unreadable or incomparable records.
 pub fn run(args: &CompareArgs) -> Result<(), String> {
+    let file = |r: &str| (!r.starts_with("db:")).then(|| std::path::PathBuf::from(r));
+    let (before, after) = (file(&args.before), file(&args.after));
+    crate::files::Paths::new()
+        .input("the earlier record", before.as_deref())
+        .input("the later record", after.as_deref())
+        .input("--db", args.db.as_deref())
+        .output("--json", args.json.as_deref())
+        .check()?;
     let load = |r: &str| -> Result<Estimates, String> {
         match r.strip_prefix("db:") {
             Some(id) => {
@@ -39,7 +47,7 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
                     .parse()
                     .map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
                 let path = args.db.clone().unwrap_or_else(crate::db::default_path);
-                let text = crate::db::Db::open(&path)?.record(id)?;
+                let text = crate::db::Db::open_existing(&path)?.record(id)?;
                 Estimates::parse(&text, &format!("{} record {id}", path.display()))
             }
             None => {
@@ -93,7 +101,7 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
         println!("  no term moved beyond its uncertainty at {}", args.alpha);
     }
     if let Some(p) = &args.json {
-        report::write_atomically(p, |w| {
+        crate::files::write_atomically(p, |w| {
             serde_json::to_writer_pretty(&mut *w, &changes).map_err(std::io::Error::other)
         })?;
     }

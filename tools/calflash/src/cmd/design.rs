@@ -2,6 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::files::{Paths, Staged};
 use clap::{Args, Subcommand};
 use nalgebra::DMatrix;
 
@@ -12,7 +13,6 @@ use crate::design::exchange::{self, Criterion};
 use crate::design::models::{self, Block};
 use crate::design::points::{self, Points, Unit};
 use crate::design::predict;
-use crate::report;
 use crate::report::design as show;
 use crate::sim::{self, truth};
 
@@ -52,10 +52,10 @@ pub struct ModelArgs {
     #[arg(long)]
     pub region: Vec<String>,
     /// Chamber temperatures for plan items, C.
-    #[arg(long, default_value = "25", value_delimiter = ',')]
+    #[arg(long, default_value = "25", value_delimiter = ',', value_parser = super::values::finite)]
     pub temps: Vec<f64>,
     /// Supply voltages for plan items, V.
-    #[arg(long, default_value = "5", value_delimiter = ',')]
+    #[arg(long, default_value = "5", value_delimiter = ',', value_parser = super::values::finite)]
     pub volts: Vec<f64>,
     /// The equipment's limits NAME=LO:HI (repeatable): a plan or candidate beyond them is
     /// refused.
@@ -107,13 +107,13 @@ pub struct EvaluateArgs {
     pub curve: Option<String>,
     /// Orientation error of the fixture, degrees (1 sigma about each axis): the standard errors
     /// with it, for triads (needs --noise and --scale).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::non_negative)]
     pub fixture_error: Option<f64>,
     /// Output noise, counts (1 sigma), for standard errors in counts.
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::positive)]
     pub noise: Option<f64>,
     /// Counts per SI unit of the input (for the fixture error).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::positive)]
     pub scale: Option<f64>,
     /// Write the figures and tables as HTML here.
     #[arg(long)]
@@ -123,13 +123,18 @@ pub struct EvaluateArgs {
     pub json: Option<PathBuf>,
 }
 
+/// Most observations an optimised plan may have.
+pub const MAX_PLAN: usize = 100_000;
+/// Most Monte Carlo runs of `predict`.
+pub const MAX_MONTE_CARLO: usize = 100_000;
+
 /// `calflash design optimize`.
 #[derive(Debug, Args)]
 pub struct OptimizeArgs {
     #[command(flatten)]
     pub model: ModelArgs,
     /// Observations in the plan.
-    #[arg(long)]
+    #[arg(long, value_parser = |s: &str| super::values::count_in(s, 1, MAX_PLAN))]
     pub n: usize,
     /// The criterion.
     #[arg(long, value_enum, default_value = "d")]
@@ -142,7 +147,7 @@ pub struct OptimizeArgs {
     #[arg(long)]
     pub grid: Vec<String>,
     /// Random restarts of the exchange.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = |s: &str| super::values::count_in(s, 1, 1000))]
     pub restarts: usize,
     /// The search.
     #[arg(long, value_enum, default_value = "auto")]
@@ -168,16 +173,16 @@ pub struct PredictArgs {
     #[arg(long)]
     pub plan: Option<String>,
     /// Output noise, counts (1 sigma); default: the simulator's unit's.
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::positive)]
     pub noise: Option<f64>,
     /// Operating points NAME=VALUE[,NAME=VALUE...] (repeatable).
     #[arg(long)]
     pub at: Vec<String>,
     /// Confirm with this many simulated calibrations (single-axis sensors and triads).
-    #[arg(long)]
+    #[arg(long, value_parser = |s: &str| super::values::count_in(s, 2, MAX_MONTE_CARLO))]
     pub monte_carlo: Option<usize>,
     /// The largest acceptable expected error at the operating points (counts).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::positive)]
     pub target: Option<f64>,
     /// Candidates for --target (plan items).
     #[arg(long)]
@@ -339,7 +344,26 @@ fn to_table(pts: &Points, f: &crate::formula::Formula) -> crate::obs::Table {
     }
 }
 
+/// The plan files among plan specifications (the rest are plan items).
+fn plan_files<'a>(
+    specs: impl IntoIterator<Item = &'a String>,
+    what: &str,
+    mut paths: Paths,
+) -> Paths {
+    for s in specs {
+        let p = Path::new(s);
+        if p.is_file() {
+            paths = paths.input(what, Some(p));
+        }
+    }
+    paths
+}
+
 fn evaluate(a: &EvaluateArgs) -> Result<(), String> {
+    plan_files(&a.plan, "--plan", Paths::new())
+        .output("--json", a.json.as_deref())
+        .output("--report", a.report.as_deref())
+        .check()?;
     let (u, gyro) = unit(a.model.sensor);
     let blocks = models::blocks(&a.model.model, gyro)?;
     let vars = models::variables(&blocks);
@@ -403,17 +427,28 @@ fn evaluate(a: &EvaluateArgs) -> Result<(), String> {
         "{}",
         show::evaluate_text(&a.model.model, &blocks, &plans, a.fixture_error)
     );
+    write_evaluation(a, &blocks, &plans, curve.as_ref())
+}
+
+/// `design evaluate`'s files, all or none.
+fn write_evaluation(
+    a: &EvaluateArgs,
+    blocks: &[Block],
+    plans: &[show::PlanResult],
+    curve: Option<&Points>,
+) -> Result<(), String> {
+    let mut staged = Staged::new();
     if let Some(path) = &a.json {
-        let v = show::evaluate_json(&blocks, &plans);
-        report::write_atomically(path, |w| {
+        let v = show::evaluate_json(blocks, plans);
+        staged.write(path, |w| {
             serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
         })?;
     }
     if let Some(path) = &a.report {
-        let html = show::evaluate_html(&a.model.model, &blocks, &plans, curve.as_ref())?;
-        report::write_atomically(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
+        let html = show::evaluate_html(&a.model.model, blocks, plans, curve)?;
+        staged.write(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
     }
-    Ok(())
+    staged.commit()
 }
 
 /// `design evaluate` of the spin-rig model: each plan on the lever-arm components it can
@@ -471,23 +506,9 @@ fn evaluate_spin_rig(
             "--json, --report: these plans estimate different lever-arm components, so they have no model in common; write one per plan (or per group of plans that estimate the same)".into(),
         );
     }
-    if let Some(Group {
-        blocks: reduced,
-        plans,
-        ..
-    }) = groups.first()
-    {
-        if let Some(path) = &a.json {
-            let v = show::evaluate_json(reduced, plans);
-            report::write_atomically(path, |w| {
-                serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
-            })?;
-        }
-        if let Some(path) = &a.report {
-            let curve = a.curve.as_deref().map(points::grid).transpose()?;
-            let html = show::evaluate_html(&a.model.model, reduced, plans, curve.as_ref())?;
-            report::write_atomically(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
-        }
+    if let Some(g) = groups.first() {
+        let curve = a.curve.as_deref().map(points::grid).transpose()?;
+        write_evaluation(a, &g.blocks, &g.plans, curve.as_ref())?;
     }
     Ok(())
 }
@@ -732,6 +753,9 @@ fn search_coordinate(
 }
 
 fn optimize(o: &OptimizeArgs) -> Result<(), String> {
+    plan_files(&o.candidates, "--candidates", Paths::new())
+        .output("-o", Some(&o.output))
+        .check()?;
     let (u, gyro) = unit(o.model.sensor);
     let blocks = models::blocks(&o.model.model, gyro)?;
     let vars = models::variables(&blocks);
@@ -806,7 +830,7 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
             keep.push(n.clone());
         }
     }
-    report::write_atomically(&o.output, |w| {
+    crate::files::write_atomically(&o.output, |w| {
         std::io::Write::write_all(w, points::to_csv(&searched.plan, &keep).as_bytes())
     })?;
     let head = show::Search {
@@ -825,6 +849,9 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
 }
 
 fn predict(a: &PredictArgs) -> Result<(), String> {
+    plan_files(a.plan.iter(), "--plan", Paths::new())
+        .output("--json", a.json.as_deref())
+        .check()?;
     let (u, gyro) = unit(a.model.sensor);
     let blocks = models::blocks(&a.model.model, gyro)?;
     let vars = models::variables(&blocks);
@@ -964,7 +991,7 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
     print!("{text}");
     if let Some(path) = &a.json {
         let v = show::predict_json(spec, noise, &at, &results);
-        report::write_atomically(path, |w| {
+        crate::files::write_atomically(path, |w| {
             serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
         })?;
     }

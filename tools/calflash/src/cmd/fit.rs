@@ -33,7 +33,7 @@ pub struct FitArgs {
     #[arg(long, value_name = "VAR=FROM:TO:N[,NAME=VALUE...]")]
     pub curve: Option<String>,
     /// Significance level for intervals, tests and flags.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, value_parser = super::values::level)]
     pub alpha: f64,
     /// Drop terms that are not significant, one at a time (never the intercept, nor a term
     /// that a kept term contains), and report why.
@@ -43,7 +43,7 @@ pub struct FitArgs {
     #[arg(long, value_name = "FORMULA")]
     pub compare: Option<String>,
     /// Hold every K-th observation out of the fit and report the error predicting it.
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", value_parser = |s: &str| super::values::count_in(s, 2, 1_000_000_000))]
     pub holdout_every: Option<usize>,
 }
 
@@ -95,9 +95,10 @@ fn parse_curve(text: &str) -> Result<CurveSpec, String> {
 /// # Errors
 /// A one-line message naming the file, line and column or the term.
 pub fn run(args: &FitArgs) -> Result<(), String> {
-    if !(args.alpha > 0.0 && args.alpha < 1.0) {
-        return Err(format!("--alpha {} is not between 0 and 1", args.alpha));
-    }
+    crate::files::Paths::new()
+        .input("the data", Some(&args.file))
+        .output("--json", args.json.as_deref())
+        .check()?;
     let formula = formula::parse(&args.model).map_err(|e| e.to_string())?;
     let compare = args
         .compare
@@ -130,7 +131,7 @@ pub fn run(args: &FitArgs) -> Result<(), String> {
             println!();
         }
         Some(p) => {
-            report::write_atomically(p, |w| {
+            crate::files::write_atomically(p, |w| {
                 report::json::write(&reg, w).map_err(std::io::Error::other)
             })?;
             print!("{}", report::terminal::render(&reg));

@@ -20,11 +20,14 @@ pub struct FlashArgs {
     /// Write even when the blob's serial differs from the unit's.
     #[arg(long)]
     pub force: bool,
+    /// Write a blob whose fit was judged REJECT (made with `calibrate --force-blob`).
+    #[arg(long)]
+    pub force_rejected: bool,
     /// Seconds to wait for each answer.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_parser = timeout)]
     pub timeout: f64,
     /// Test-vector batches (16 samples each).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = |s: &str| super::values::count_in(s, 1, 256))]
     pub vectors: usize,
     /// The unit history database (default: $CALFLASH_DB, else the user's data directory).
     #[arg(long)]
@@ -34,15 +37,22 @@ pub struct FlashArgs {
     pub no_db: bool,
 }
 
+/// A link timeout, seconds: from 0.1 to 3600.
+fn timeout(s: &str) -> Result<f64, String> {
+    super::values::in_range(s, 0.1, 3600.0)
+}
+
 /// Runs `calflash flash`.
 ///
 /// # Errors
 /// A message saying what failed and what the unit holds.
 pub fn run(args: &FlashArgs) -> Result<(), String> {
     let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
-    let timeout = Duration::from_secs_f64(args.timeout.max(0.05));
+    let timeout = Duration::from_secs_f64(args.timeout);
     let link = Link::open(&args.port, timeout)?;
     let mut client = Client::new(link, timeout);
+    // Who answers: a unit that does not says so and nothing is recorded.
+    let id = client.identify().map_err(|e| e.to_string())?;
     let bar = indicatif::ProgressBar::new(bytes.len() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("  writing {bar:40} {bytes}/{total_bytes}")
@@ -50,9 +60,10 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
     );
     let opts = FlashOptions {
         force: args.force,
+        rejected_fit: args.force_rejected,
         vector_batches: args.vectors,
     };
-    let result = device::flash(&mut client, &bytes, &opts, |done, _| {
+    let result = device::flash(&mut client, &id, &bytes, &opts, |done, _| {
         bar.set_position(done as u64)
     });
     bar.finish_and_clear();
@@ -61,10 +72,8 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
         || std::path::PathBuf::from("."),
         std::path::Path::to_path_buf,
     );
-    let unit = spincal::blob::decode(&bytes).map_or_else(
-        |_| "?".into(),
-        |c| c.data().identity.serial.as_str().to_string(),
-    );
+    // Everything is recorded under the unit that answered, whatever the blob says.
+    let unit = id.unit.as_str().to_string();
     match result {
         Ok(report) => {
             println!(
@@ -99,13 +108,14 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
         }
         Err(e) => {
             let msg = e.to_string();
-            if !args.no_db
-                && !matches!(
-                    e,
-                    device::flash::FlashError::Device(device::DeviceError::Io { .. })
-                )
-            {
-                let v = serde_json::json!({"error": msg, "port": args.port});
+            if !args.no_db {
+                let v = serde_json::json!({
+                    "error": msg,
+                    "port": args.port,
+                    "blob_serial": spincal::blob::decode(&bytes)
+                        .ok()
+                        .map(|c| c.data().identity.serial.as_str().to_string()),
+                });
                 match db::record_or_save(
                     &db_path,
                     |d| d.record_flash(&unit, &bytes, &v, "failed"),

@@ -25,7 +25,7 @@ pub struct HistoryArgs {
 /// An unreadable database.
 pub fn run(args: &HistoryArgs) -> Result<(), String> {
     let path = args.db.clone().unwrap_or_else(db::default_path);
-    let d = Db::open(&path)?;
+    let d = Db::open_existing(&path)?;
     let rows = d.history(&args.serial)?;
     if args.json {
         println!(

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::device::image::{self, Region};
-use crate::report;
 
 /// Write the calibration region (slot 0 committed with the blob) as Intel HEX and raw binary at
 /// the address of memory.x, or program it over SWD with probe-rs (feature `probe`).
@@ -31,6 +30,11 @@ pub struct ImageArgs {
 /// # Errors
 /// A bad blob, an unwritable file, or a probe failure.
 pub fn run(args: &ImageArgs) -> Result<(), String> {
+    crate::files::Paths::new()
+        .input("--blob", Some(&args.blob))
+        .output("--hex", args.hex.as_deref())
+        .output("--bin", args.bin.as_deref())
+        .check()?;
     let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let region = Region::from_memory_x();
     let image =
@@ -39,7 +43,7 @@ pub fn run(args: &ImageArgs) -> Result<(), String> {
         return Err("give --hex, --bin or --probe".into());
     }
     if let Some(p) = &args.bin {
-        report::write_atomically(p, |w| w.write_all(&image))?;
+        crate::files::write_atomically(p, |w| w.write_all(&image))?;
         println!(
             "calflash image: {} bytes for address {:#010x} in {}",
             image.len(),
@@ -49,7 +53,7 @@ pub fn run(args: &ImageArgs) -> Result<(), String> {
     }
     if let Some(p) = &args.hex {
         let hex = image::intel_hex(&image, region.start)?;
-        report::write_atomically(p, |w| w.write_all(hex.as_bytes()))?;
+        crate::files::write_atomically(p, |w| w.write_all(hex.as_bytes()))?;
         println!(
             "calflash image: Intel HEX at {:#010x} in {}",
             region.start,

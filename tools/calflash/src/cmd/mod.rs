@@ -13,3 +13,4 @@ pub mod outputs;
 pub mod selfcal;
 pub mod simulate;
 pub mod threshold;
+pub mod values;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::db::{self, Db};
-use crate::report;
+use crate::files::{Paths, Staged};
 
 /// Where a calibration goes.
 #[derive(Debug, Args)]
@@ -26,33 +26,54 @@ pub struct Outputs {
     /// Do not record the calibration.
     #[arg(long)]
     pub no_db: bool,
+    /// Write the blob even when the calibration is judged REJECT; its identity then says so, and
+    /// `calflash flash` refuses it without `--force-rejected`.
+    #[arg(long)]
+    pub force_blob: bool,
 }
 
 impl Outputs {
-    /// Writes the files asked for, each atomically; the report is rendered (only when asked
-    /// for) before anything is written, so a report that cannot be drawn leaves no file.
+    /// Checks, before any work, that no output is one of `inputs` or another output.
+    ///
+    /// # Errors
+    /// The two options that name one file.
+    pub fn check(&self, inputs: Paths) -> Result<(), String> {
+        let db = (!self.no_db).then(|| self.db.clone().unwrap_or_else(db::default_path));
+        inputs
+            .output("--blob", self.blob.as_deref())
+            .output("--report", self.report.as_deref())
+            .output("--json", self.json.as_deref())
+            .output("the unit history", db.as_deref())
+            .check()
+    }
+
+    /// Writes the files asked for, all or none: each is staged beside its destination and
+    /// they are renamed into place together, so a report that cannot be drawn or a directory
+    /// that does not exist leaves no file. `blob` is `None` when none may be written (a
+    /// REJECT without `--force-blob`).
     ///
     /// # Errors
     /// A file that cannot be written, or the report's error.
     pub fn write(
         &self,
-        blob: &[u8],
+        blob: Option<&[u8]>,
         record: &impl serde::Serialize,
         html: impl FnOnce() -> Result<String, String>,
     ) -> Result<(), String> {
         let html = self.report.as_ref().map(|_| html()).transpose()?;
-        if let Some(p) = &self.blob {
-            report::write_atomically(p, |w| w.write_all(blob))?;
+        let mut staged = Staged::new();
+        if let (Some(p), Some(blob)) = (&self.blob, blob) {
+            staged.write(p, |w| w.write_all(blob))?;
         }
         if let (Some(p), Some(html)) = (&self.report, &html) {
-            report::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
+            staged.write(p, |w| w.write_all(html.as_bytes()))?;
         }
         if let Some(p) = &self.json {
-            report::write_atomically(p, |w| {
+            staged.write(p, |w| {
                 serde_json::to_writer_pretty(&mut *w, record).map_err(std::io::Error::other)
             })?;
         }
-        Ok(())
+        staged.commit()
     }
 
     /// Records the calibration in the unit history with `save` (unless `--no-db`) and prints

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use crate::files::Paths;
 use clap::Args;
 use spincal::model::{Rails, Span};
 
@@ -20,19 +21,19 @@ pub struct SelfcalArgs {
     /// The gyro recording, when separate (same timestamps, line for line).
     pub gyro: Option<PathBuf>,
     /// Local gravity, m/s^2 (look it up for the site: it varies by 0.5 % over the Earth).
-    #[arg(long)]
+    #[arg(long, value_parser = gravity)]
     pub g: f64,
     /// The unit's serial number.
     #[arg(long)]
     pub serial: String,
     /// Length of the rest at the start of the recording, s.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = super::values::positive)]
     pub init_rest: f64,
     /// Window of the still measure, s.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::values::positive)]
     pub window: f64,
     /// Shortest still pose, s.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::values::positive)]
     pub min_still: f64,
     /// The accelerometer's quadratic terms.
     #[arg(long, value_enum, default_value = "auto")]
@@ -41,7 +42,7 @@ pub struct SelfcalArgs {
     #[arg(long, value_enum, default_value = "poses")]
     pub gyro_bias: GyroBias,
     /// ADC bits (rails at 0 and 2^bits - 1; samples there are excluded).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=31))]
     pub bits: u32,
     /// Calibrated temperature span, C (LO:HI), stored for the device's flags.
     #[arg(long, default_value = "20:30")]
@@ -54,20 +55,24 @@ pub struct SelfcalArgs {
     pub out: Outputs,
 }
 
+/// Local gravity, m/s^2: between 9.7 and 9.9 on the Earth's surface.
+fn gravity(s: &str) -> Result<f64, String> {
+    super::values::in_range(s, 9.7, 9.9).map_err(|_| {
+        "local gravity is between 9.78 and 9.84 m/s^2 on the Earth's surface; give it in m/s^2"
+            .into()
+    })
+}
+
 /// Runs `calflash selfcal`.
 ///
 /// # Errors
 /// Bad input, or a recording that cannot calibrate the unit (the message says what to do).
 pub fn run(args: &SelfcalArgs) -> Result<(), String> {
-    if !(args.g.is_finite() && (9.7..=9.9).contains(&args.g)) {
-        return Err(format!(
-            "--g {}: local gravity is between 9.78 and 9.84 m/s^2 on the Earth's surface; give it in m/s^2",
-            args.g
-        ));
-    }
-    if !(1..=31).contains(&args.bits) {
-        return Err(format!("--bits {}: expected 1 to 31", args.bits));
-    }
+    args.out.check(
+        Paths::new()
+            .input("the accelerometer recording", Some(&args.acc))
+            .input("--gyro", args.gyro.as_deref()),
+    )?;
     let serial = device::serial(&args.serial)?;
     let (t0, t1) = super::calibrate::pair(&args.temp_span, "--temp-span")?;
     let (v0, v1) = super::calibrate::pair(&args.volt_span, "--volt-span")?;
@@ -96,6 +101,7 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
             .map_or(0, |d| d.as_secs()),
         data_hash: build::files_hash(&files)?,
         tool_version: [version[0], version[1], version[2]],
+        fit_rejected: false,
     };
     let data = build::calibration_data(
         &c,
@@ -108,7 +114,7 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
     let check = build::build_and_check(&data, &c, &rec)?;
     let name = serial.as_str();
     let record = report::selfcal::record(&c, &rec, &check, name);
-    args.out.write(&check.blob, &record, || {
+    args.out.write(Some(&check.blob), &record, || {
         report::selfcal::html(&c, &rec, &check, name)
     })?;
     print!("{}", report::selfcal::summary(&c, &rec, &check, name));

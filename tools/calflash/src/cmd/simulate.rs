@@ -2,10 +2,10 @@
 
 use std::path::PathBuf;
 
+use crate::files::{Paths, Staged};
 use clap::Args;
 
 use super::calibrate::SensorKind;
-use crate::report;
 use crate::sim::{self, Sensor, plan, truth};
 
 /// Simulate a sensor with known true coefficients and noise through a test plan.
@@ -27,7 +27,7 @@ pub struct SimulateArgs {
     #[arg(long, conflicts_with_all = ["plan", "plan_file"])]
     pub spin: Option<String>,
     /// Samples per second of a spin-rig flight.
-    #[arg(long, default_value_t = 2000.0, requires = "spin")]
+    #[arg(long, default_value_t = 2000.0, requires = "spin", value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
     pub sample_rate: f64,
     /// The unit's axis a spin-rig flight turns it about, `X,Y,Z` in its own axes.
     #[arg(
@@ -42,15 +42,10 @@ pub struct SimulateArgs {
     pub coning: Option<String>,
     /// The station's latitude, degrees: triads and IMUs sense the Earth's rate too, and the
     /// file carries the fixture's mark `h_*` of each still position.
-    #[arg(
-        long,
-        requires = "heading",
-        conflicts_with = "spin",
-        allow_negative_numbers = true
-    )]
+    #[arg(long, requires = "heading", conflicts_with = "spin", value_parser = super::values::finite)]
     pub latitude: Option<f64>,
     /// The azimuth of the fixture's reference mark from true north, degrees clockwise.
-    #[arg(long, requires = "latitude", allow_negative_numbers = true)]
+    #[arg(long, requires = "latitude", value_parser = super::values::finite)]
     pub heading: Option<f64>,
     /// A plan file instead (CSV with a header; columns f_x f_y f_z w_x w_y w_z for triads or
     /// input input_p input_o for a single axis, temp, volt; missing ones are 0, 25 C, 5 V), as
@@ -58,13 +53,13 @@ pub struct SimulateArgs {
     #[arg(long, conflicts_with = "plan")]
     pub plan_file: Option<PathBuf>,
     /// Chamber temperatures, C (comma-separated).
-    #[arg(long, default_value = "25", value_delimiter = ',')]
+    #[arg(long, default_value = "25", value_delimiter = ',', value_parser = super::values::finite)]
     pub temps: Vec<f64>,
     /// Supply voltages, V (comma-separated).
-    #[arg(long, default_value = "5", value_delimiter = ',')]
+    #[arg(long, default_value = "5", value_delimiter = ',', value_parser = super::values::finite)]
     pub volts: Vec<f64>,
     /// Repetitions of the whole plan at each temperature and voltage.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::values::at_least_one)]
     pub repeat: usize,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
@@ -151,12 +146,6 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     if args.sensor != SensorKind::Imu {
         return Err("--spin: a spin-rig flight is of an IMU (--sensor imu)".into());
     }
-    if !(args.sample_rate.is_finite() && args.sample_rate > 0.0 && args.sample_rate <= 1e6) {
-        return Err(format!(
-            "--sample-rate {}: a rate above 0 and at most 1 MHz",
-            args.sample_rate
-        ));
-    }
     let segments = spin::profile(profile).map_err(|e| format!("--spin: {e}"))?;
     let seconds: f64 = segments.iter().map(spin::Segment::seconds).sum();
     if seconds * args.sample_rate > 1e8 {
@@ -198,11 +187,13 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
         seed: args.seed,
     };
     let samples = spin::run(&truth, &run);
-    report::write_atomically(&args.output, |w| spin::write_csv(&samples, w))?;
+    let mut staged = Staged::new();
+    staged.write(&args.output, |w| spin::write_csv(&samples, w))?;
     if let Some(p) = &args.write_truth {
         let json = serde_json::to_string_pretty(&truth).map_err(|e| e.to_string())?;
-        report::write_atomically(p, |w| w.write_all(json.as_bytes()))?;
+        staged.write(p, |w| w.write_all(json.as_bytes()))?;
     }
+    staged.commit()?;
     println!(
         "calflash simulate: a {seconds} s spin-rig flight, {} samples at {} Hz, written to {}",
         samples.len(),
@@ -217,6 +208,12 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
 /// # Errors
 /// A bad plan item or truth file.
 pub fn run(args: &SimulateArgs) -> Result<(), String> {
+    Paths::new()
+        .input("--plan-file", args.plan_file.as_deref())
+        .input("--truth", args.truth.as_deref())
+        .output("-o", Some(&args.output))
+        .output("--write-truth", args.write_truth.as_deref())
+        .check()?;
     if let Some(profile) = &args.spin {
         return flight(args, profile);
     }
@@ -224,9 +221,6 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         args.sensor,
         SensorKind::SingleAccel | SensorKind::SingleGyro
     );
-    if args.repeat == 0 {
-        return Err("--repeat: at least 1".into());
-    }
     let conditions = match &args.plan_file {
         Some(path) => plan_file(path, args.sensor, args.repeat)?,
         None => plan::plan(&args.plan, &args.temps, &args.volts, args.repeat, single)
@@ -269,7 +263,8 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         station.as_ref(),
     )
     .map_err(|e| format!("--latitude: {e}"))?;
-    report::write_atomically(&args.output, |w| obs.write_csv(w))?;
+    let mut staged = Staged::new();
+    staged.write(&args.output, |w| obs.write_csv(w))?;
     if let Some(p) = &args.write_truth {
         let json = match &sensor {
             Sensor::Single { truth, .. } => serde_json::to_string_pretty(truth),
@@ -277,8 +272,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
             Sensor::Imu(t) => serde_json::to_string_pretty(t),
         }
         .map_err(|e| e.to_string())?;
-        report::write_atomically(p, |w| w.write_all(json.as_bytes()))?;
+        staged.write(p, |w| w.write_all(json.as_bytes()))?;
     }
+    staged.commit()?;
     println!(
         "calflash simulate: {} observations written to {}",
         obs.rows.len(),

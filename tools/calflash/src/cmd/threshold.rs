@@ -15,10 +15,10 @@ pub struct ThresholdArgs {
     /// The fine-step run (columns input, output).
     pub data: PathBuf,
     /// The accepted scale factor, counts per input unit.
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::non_zero)]
     pub scale: f64,
     /// Output at zero input, counts (default: the mean output at input 0).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::finite)]
     pub bias: Option<f64>,
     /// Field separator.
     #[arg(long, value_enum, default_value = "auto")]

@@ -106,7 +106,10 @@ impl<'a, R: Fn(&[f64]) -> DVector<f64>> Info<'a, R> {
         match criterion {
             Criterion::D => {
                 let p = self.m_inv.nrows();
-                let ev = self.m_inv.clone().symmetric_eigenvalues();
+                let Ok(ev) = crate::stats::decompose::symmetric_eigenvalues(self.m_inv.clone())
+                else {
+                    return f64::NAN;
+                };
                 (-ev.iter().map(|v| v.ln()).sum::<f64>() / p as f64).exp() / n
             }
             _ => self.phi() * n,

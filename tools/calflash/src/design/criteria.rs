@@ -67,7 +67,9 @@ pub fn first_dependent(x: &DMatrix<f64>) -> Option<Dependent> {
             continue;
         }
         let earlier = x.columns(0, j).into_owned();
-        let svd = earlier.clone().svd(true, true);
+        let Ok(svd) = crate::stats::decompose::svd(earlier.clone(), true, true) else {
+            continue;
+        };
         let Ok(coef) = svd.solve(&col, 1e-12 * svd.singular_values.max()) else {
             continue;
         };
@@ -113,8 +115,16 @@ pub fn evaluate(
     if let Some(dep) = first_dependent(x) {
         return Err(dep);
     }
-    let svd = x.clone().svd(false, true);
-    let v_t = svd.v_t.as_ref().expect("requested");
+    // A plan's points are finite (plan items and files are checked): a failure here names the
+    // first column that is not.
+    let not_finite = || Dependent {
+        column: (0..p)
+            .find(|j| x.column(*j).iter().any(|v| !v.is_finite()))
+            .unwrap_or(0),
+        combination: Vec::new(),
+    };
+    let svd = crate::stats::decompose::svd(x.clone(), false, true).map_err(|_| not_finite())?;
+    let v_t = svd.v_t.as_ref().ok_or_else(not_finite)?;
     let s = &svd.singular_values;
     let mut unscaled = DMatrix::zeros(p, p);
     for k in 0..p {

@@ -199,7 +199,10 @@ impl<'a> State<'a> {
             Criterion::D => {
                 let p = self.f.ncols();
                 // det(M^-1)^(-1/p) / n from the inverse's eigenvalues (it is symmetric).
-                let ev = self.m_inv.clone().symmetric_eigenvalues();
+                let Ok(ev) = crate::stats::decompose::symmetric_eigenvalues(self.m_inv.clone())
+                else {
+                    return f64::NAN;
+                };
                 (-ev.iter().map(|v| v.ln()).sum::<f64>() / p as f64).exp() / n
             }
             _ => (self.w.expect("A and I have a weight") * &self.m_inv).trace() * n,
@@ -448,7 +451,7 @@ pub(super) fn inverse_information(x: DMatrix<f64>) -> Option<DMatrix<f64>> {
     if x.nrows() < p {
         return None;
     }
-    let svd = x.svd(false, true);
+    let svd = crate::stats::decompose::svd(x, false, true).ok()?;
     let v_t = svd.v_t?;
     let s = &svd.singular_values;
     if s.min() <= 1e-10 * s.max() {

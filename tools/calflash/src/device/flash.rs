@@ -15,6 +15,8 @@ use super::client::{Client, DeviceError};
 pub struct FlashOptions {
     /// Write even when the blob's serial differs from the unit's.
     pub force: bool,
+    /// Write a blob whose fit was judged REJECT (written with `--force-blob`).
+    pub rejected_fit: bool,
     /// Test-vector batches of 16 samples (each batch at another temperature and voltage).
     pub vector_batches: usize,
 }
@@ -23,6 +25,7 @@ impl Default for FlashOptions {
     fn default() -> Self {
         Self {
             force: false,
+            rejected_fit: false,
             vector_batches: 4,
         }
     }
@@ -68,6 +71,21 @@ pub enum FlashError {
         blob: String,
         /// Unit serial.
         unit: String,
+    },
+    /// The blob's fit was judged REJECT.
+    #[error(
+        "the blob's fit was judged REJECT (it was written with --force-blob); nothing was written (use --force-rejected to write it anyway)"
+    )]
+    RejectedFit,
+    /// The blob is for another sensor than the unit carries.
+    #[error("the blob is for {blob} but unit {unit} carries {carries}; nothing was written")]
+    WrongSensor {
+        /// The unit.
+        unit: String,
+        /// What it carries.
+        carries: protocol::UnitSensor,
+        /// What the blob is for.
+        blob: protocol::UnitSensor,
     },
     /// The unit is locked.
     #[error("unit {unit} is locked against writes; it keeps its calibration {current}")]
@@ -227,25 +245,38 @@ fn crc(b: &[u8]) -> u32 {
     protocol::checksum(b)
 }
 
-/// Writes `bytes` into the unit behind `client` and verifies it. `progress(done, total)` is
-/// called as the transfer goes.
+/// Writes `bytes` into the unit behind `client`, which answered `id` to Identify, and
+/// verifies it. Nothing is written when the blob is not valid, its fit was rejected (unless
+/// `opts.rejected_fit`), it is for another sensor than the unit carries, or for another unit
+/// (unless `opts.force`). `progress(done, total)` is called as the transfer goes.
 ///
 /// # Errors
 /// A [`FlashError`] that says what the unit holds afterwards.
 pub fn flash<L: Read + Write>(
     client: &mut Client<L>,
+    id: &protocol::Identity,
     bytes: &[u8],
     opts: &FlashOptions,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<FlashReport, FlashError> {
     let cal = blob::decode(bytes).map_err(FlashError::Blob)?;
     let serial = cal.data().identity.serial.as_str().to_string();
-    let id = client.identify()?;
     let unit = id.unit.as_str().to_string();
     let previous = id.calibration.as_ref().map(|s| s.as_str().to_string());
     let current = previous.clone().unwrap_or_else(|| "(none)".into());
     if id.locked {
         return Err(FlashError::Locked { unit, current });
+    }
+    if cal.data().identity.fit_rejected && !opts.rejected_fit {
+        return Err(FlashError::RejectedFit);
+    }
+    let kind = protocol::UnitSensor::of(cal.data());
+    if kind != id.sensor {
+        return Err(FlashError::WrongSensor {
+            unit,
+            carries: id.sensor,
+            blob: kind,
+        });
     }
     if serial != unit && !opts.force {
         return Err(FlashError::WrongSerial { blob: serial, unit });

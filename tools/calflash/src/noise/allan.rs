@@ -152,7 +152,10 @@ pub fn noise_terms(curve: &[Point]) -> NoiseTerms {
         let b = DVector::from_fn(rows.len(), |i, _| {
             rows[i].0.adev * rows[i].0.adev * rows[i].1
         });
-        let Ok(x) = a.clone().svd(true, true).solve(&b, 1e-12) else {
+        let Some(x) = crate::stats::decompose::svd(a.clone(), true, true)
+            .ok()
+            .and_then(|svd| svd.solve(&b, 1e-12).ok())
+        else {
             continue;
         };
         if x.iter().any(|v| *v < 0.0 || !v.is_finite()) {

@@ -181,7 +181,7 @@ pub fn covariance(sol: &Solution) -> Option<DMatrix<f64>> {
         return None;
     }
     let s2 = sol.rss / (n - np) as f64;
-    let svd = sol.jacobian.clone().svd(false, true);
+    let svd = crate::stats::decompose::svd(sol.jacobian.clone(), false, true).ok()?;
     let v_t = svd.v_t?;
     let smax = svd.singular_values.max();
     if svd.singular_values.iter().any(|s| *s <= 1e-12 * smax) {

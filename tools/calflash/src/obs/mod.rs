@@ -257,7 +257,7 @@ impl<'a> Collector<'a> {
                 line,
                 column: i + 1,
                 name: self.wanted[k].clone(),
-                text: text.into(),
+                text: shorten(text),
             })?;
             if !value.is_finite() {
                 return Err(ObsError::NotFinite {
@@ -265,7 +265,7 @@ impl<'a> Collector<'a> {
                     line,
                     column: i + 1,
                     name: self.wanted[k].clone(),
-                    text: text.into(),
+                    text: shorten(text),
                 });
             }
             self.table.columns[k].push(value);
@@ -284,6 +284,46 @@ impl<'a> Collector<'a> {
     }
 }
 
+/// A cell as an error message quotes it: at most 40 characters (a line of megabytes without a
+/// separator is one cell).
+pub(crate) fn shorten(text: &str) -> String {
+    if text.chars().count() <= 40 {
+        text.to_string()
+    } else {
+        let head: String = text.chars().take(40).collect();
+        format!("{head}... ({} bytes)", text.len())
+    }
+}
+
+/// Says, once per file, that the UTF-8 byte-order mark it starts with is ignored (editors on
+/// some systems write one; it is invisible, and would otherwise stick to the first name).
+pub(crate) fn note_bom(path: &Path) {
+    use std::sync::Mutex;
+    static NOTED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    if let Ok(mut noted) = NOTED.lock()
+        && !noted.iter().any(|p| p == path)
+    {
+        eprintln!(
+            "calflash: note: {} starts with a UTF-8 byte-order mark; it is ignored",
+            path.display()
+        );
+        noted.push(path.to_path_buf());
+    }
+}
+
+/// Skips a UTF-8 byte-order mark at the start of `reader`.
+fn skip_bom(path: &Path, reader: &mut BufReader<File>) -> Result<(), ObsError> {
+    if reader
+        .fill_buf()
+        .map_err(io(path))?
+        .starts_with(b"\xef\xbb\xbf")
+    {
+        reader.consume(3);
+        note_bom(path);
+    }
+    Ok(())
+}
+
 fn io(path: &Path) -> impl Fn(std::io::Error) -> ObsError + '_ {
     move |source| ObsError::Io {
         path: path.into(),
@@ -298,6 +338,7 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> ObsError + '_ {
 pub fn header(path: &Path, format: Format) -> Result<Vec<String>, ObsError> {
     let file = File::open(path).map_err(io(path))?;
     let mut reader = BufReader::new(file);
+    skip_bom(path, &mut reader)?;
     let format = match format {
         Format::Auto => sniff(path, &mut reader)?,
         f => f,
@@ -338,6 +379,7 @@ pub fn header(path: &Path, format: Format) -> Result<Vec<String>, ObsError> {
 pub fn read_columns(path: &Path, wanted: &[String], format: Format) -> Result<Table, ObsError> {
     let file = File::open(path).map_err(io(path))?;
     let mut reader = BufReader::with_capacity(1 << 16, file);
+    skip_bom(path, &mut reader)?;
     let format = match format {
         Format::Auto => sniff(path, &mut reader)?,
         f => f,

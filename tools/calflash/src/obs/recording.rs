@@ -179,6 +179,13 @@ fn read_rows(path: &Path, widths: &[usize]) -> Result<Rows, RecordingError> {
             .count()
             + 1,
     })?;
+    let text = match text.strip_prefix('\u{feff}') {
+        Some(rest) => {
+            super::note_bom(path);
+            rest
+        }
+        None => text,
+    };
     let mut rows = Rows {
         t: Vec::new(),
         v: Vec::new(),
@@ -232,7 +239,7 @@ fn read_rows(path: &Path, widths: &[usize]) -> Result<Rows, RecordingError> {
                     line,
                     field: k + 1,
                     what: NAMES[k.min(6)],
-                    text: (*f).to_string(),
+                    text: super::shorten(f),
                 })?;
             if k == 0 {
                 if let Some(&prev) = rows.t.last()

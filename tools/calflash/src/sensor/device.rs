@@ -90,6 +90,7 @@ pub fn identity(opts: &Options) -> Result<Identity, WorkflowError> {
             v(version.next().unwrap_or("0")),
             v(version.next().unwrap_or("0")),
         ],
+        fit_rejected: false,
     })
 }
 

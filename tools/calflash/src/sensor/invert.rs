@@ -122,10 +122,10 @@ pub fn linearization(own: &Own, center: f64, lo: f64, hi: f64) -> Fitted {
         _ => (cols[j - 2].1)(vs[i] / scale, wb),
     });
     let b = DVector::from_iterator(xs.len(), xs.iter().map(|x| lin(*x)));
-    let sol = a
-        .svd(true, true)
-        .solve(&b, 1e-14)
-        .unwrap_or_else(|_| DVector::zeros(cols.len() + 2));
+    let sol = crate::stats::decompose::svd(a, true, true)
+        .ok()
+        .and_then(|svd| svd.solve(&b, 1e-14).ok())
+        .unwrap_or_else(|| DVector::zeros(cols.len() + 2));
     let alpha = sol[0];
     let gamma = sol[1] / scale;
     let mut n = [0.0, 0.0, 0.0, 0.0, vb];

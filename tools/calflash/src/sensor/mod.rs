@@ -390,6 +390,66 @@ pub(crate) fn findings(
     out
 }
 
+/// Removes the observations whose outputs are at or beyond the ADC rails (saturated codes, or
+/// values no converter of these rails can give: a typing slip, a logger's sentinel) so that
+/// none is ever fitted. Returns the finding that names them (`None` when there are none).
+///
+/// # Errors
+/// When no observation is left.
+pub(crate) fn exclude_beyond_rails(
+    table: &mut crate::obs::Table,
+    outputs: &[&str],
+    rails: &Rails,
+    path: &Path,
+) -> Result<Option<Finding>, WorkflowError> {
+    let bad: Vec<usize> = (0..table.len())
+        .filter(|&r| {
+            outputs.iter().any(|c| {
+                table.column(c).is_some_and(|v| {
+                    let x = v[r];
+                    !(x > f64::from(rails.lo) && x < f64::from(rails.hi))
+                })
+            })
+        })
+        .collect();
+    if bad.is_empty() {
+        return Ok(None);
+    }
+    let lines: Vec<String> = bad
+        .iter()
+        .take(10)
+        .map(|r| table.lines[*r].to_string())
+        .collect();
+    let more = if bad.len() > 10 {
+        format!(" and {} more", bad.len() - 10)
+    } else {
+        String::new()
+    };
+    if bad.len() == table.len() {
+        return Err(WorkflowError::msg(
+            path,
+            format!(
+                "every observation has an output at or beyond the ADC rails {} and {} (lines {}{more}): check --adc-bits or --rails",
+                rails.lo,
+                rails.hi,
+                lines.join(", ")
+            ),
+        ));
+    }
+    let keep: Vec<usize> = (0..table.len()).filter(|r| !bad.contains(r)).collect();
+    *table = table.select(&keep);
+    Ok(Some(Finding {
+        verdict: Verdict::Review,
+        text: format!(
+            "{} observation(s) with an output at or beyond the ADC rails {} and {} were left out of the fit: line {}{more}",
+            bad.len(),
+            rails.lo,
+            rails.hi,
+            lines.join(", ")
+        ),
+    }))
+}
+
 /// First 16 bytes of the SHA-256 of a file.
 ///
 /// # Errors

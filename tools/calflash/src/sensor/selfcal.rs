@@ -15,7 +15,7 @@ use spincal::blob;
 use spincal::correct::ImuCorrector;
 use spincal::model::{
     AxisNonlinearity, BoundedVec, Calibration, CalibrationData, Channel, Environment, Identity,
-    ImuCovariance, ImuSet, Rails, Sensor, Span, TriadSet,
+    ImuCovariance, ImuOutputCovariance, ImuSet, Rails, Sensor, Span, TriadSet,
 };
 
 use super::covariance;
@@ -142,7 +142,7 @@ pub fn covariance_factors(c: &SelfCal) -> Option<ImuCovariance> {
             (Some(a), Some(b)) => ca[(a, b)],
             _ => 0.0,
         });
-        covariance::imu_output_from_triad(&q, &ma, &c.accel.model.offset)
+        covariance::imu_output_from_triad(&q, &ma, &c.accel.model.offset).ok()
     });
     let g = c.gyro.matrix;
     let mg = Matrix3::from_fn(|i, j| g[i][j]);
@@ -156,9 +156,16 @@ pub fn covariance_factors(c: &SelfCal) -> Option<ImuCovariance> {
                 q[(r + 1, s + 1)] = cg[(3 * i + r, 3 * i + s)];
             }
         }
-        covariance::imu_output_from_triad(&q, &mg, &[0.0; 3])
+        covariance::imu_output_from_triad(&q, &mg, &[0.0; 3]).ok()
     });
-    Some(ImuCovariance { accel, gyro })
+    let all = |f: [Option<ImuOutputCovariance>; 3]| -> Option<[ImuOutputCovariance; 3]> {
+        let [a, b, c] = f;
+        Some([a?, b?, c?])
+    };
+    Some(ImuCovariance {
+        accel: all(accel)?,
+        gyro: all(gyro)?,
+    })
 }
 
 /// What the device computes, checked: the blob, and the largest differences between the

@@ -166,6 +166,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         }
     }
     let mut table = obs::read_columns(path, &wanted, opts.format)?;
+    let beyond = super::exclude_beyond_rails(&mut table, &[col::OUTPUT], &opts.rails, path)?;
     let varies = |t: &Table, c: &str| t.column(c).is_some_and(|v| v.iter().any(|x| *x != v[0]));
     let input = table.column(col::INPUT).unwrap_or_default().to_vec();
     let bp = opts.breakpoint;
@@ -187,6 +188,18 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             (formula::parse(&text)?, true)
         }
     };
+    if model.response != col::OUTPUT {
+        return Err(WorkflowError::Message(format!(
+            "--model `{model}`: the single-axis workflow's response is the `{}` column (counts); fit models of other responses with `calflash fit`",
+            col::OUTPUT
+        )));
+    }
+    if !model.terms.iter().any(|t| t.name() == col::INPUT) {
+        return Err(WorkflowError::Message(format!(
+            "--model `{model}`: without the term `{}` the model has no scale factor, and the device has nothing to correct with",
+            col::INPUT
+        )));
+    }
     for t in &model.terms {
         let name = t.name();
         if t.variables()
@@ -340,7 +353,12 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         let offset = (lin.alpha - (o.bias - center)) / o.slope;
         let (i0, i1) = (f.index("1").unwrap_or(0), f.index(col::INPUT).unwrap_or(0));
         let c = DMatrix::from_fn(2, 2, |r, k| f.fit.covariance[([i0, i1][r], [i0, i1][k])]);
-        let factor = covariance::single(&c, o.slope, offset, scale);
+        let factor = covariance::single(&c, o.slope, offset, scale).map_err(|e| {
+            WorkflowError::msg(
+                &opts.file,
+                format!("{} at {}: {e}", f.output, table::describe(p)),
+            )
+        })?;
         covs.push([factor[0] as f32, factor[1] as f32, factor[2] as f32]);
         sets.push(SingleSet {
             axis: AxisNonlinearity {
@@ -383,13 +401,14 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     let (blob, output_errors) = device::build_and_check(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);
     let unit = device::unit(quantity);
-    let findings = super::findings(
+    let mut findings = super::findings(
         &points,
         &["output".to_string()],
         &[unit],
         opts,
         &output_errors,
     );
+    findings.extend(beyond);
     Ok(Calibrated {
         data,
         blob,

@@ -379,9 +379,17 @@ fn triad(
         };
         let md = DMatrix::from_fn(3, 3, |i, j| m[(i, j)]);
         let inv_d = DMatrix::from_fn(3, 3, |i, j| inv[(i, j)]);
-        let factors = covariance::triad(&inv_d, &[cov_of(0), cov_of(1), cov_of(2)], &md, &off);
-        out.imu_covs
-            .push(std::array::from_fn(|i| imu_covariance(spec, &f[i], i)));
+        let at = table::describe(p);
+        let located = |e: covariance::CovarianceError| {
+            WorkflowError::msg(path, format!("{} at {at}: {e}", spec.outputs.join(" ")))
+        };
+        let factors = covariance::triad(&inv_d, &[cov_of(0), cov_of(1), cov_of(2)], &md, &off)
+            .map_err(located)?;
+        out.imu_covs.push([
+            imu_covariance(spec, &f[0], 0).map_err(located)?,
+            imu_covariance(spec, &f[1], 1).map_err(located)?,
+            imu_covariance(spec, &f[2], 2).map_err(located)?,
+        ]);
         out.covs.push(std::array::from_fn(|i| {
             std::array::from_fn(|k| factors[i][k] as f32)
         }));
@@ -414,7 +422,11 @@ fn triad(
 /// Axis `i`'s factor over the IMU's features of its output
 /// (`spincal::model::IMU_FEATURES`): bias, sensitivity row, lever arm (its regressor is
 /// `S_ii` times the device's feature) or g-sensitivity row, g-squared term.
-fn imu_covariance(spec: &Spec<'_>, fit: &AxisFit, i: usize) -> ImuOutputCovariance {
+fn imu_covariance(
+    spec: &Spec<'_>,
+    fit: &AxisFit,
+    i: usize,
+) -> Result<ImuOutputCovariance, covariance::CovarianceError> {
     let slope = fit.coef(spec.inputs[i]);
     let sq = format!("{}^2", lever::SENSED);
     let levers: [String; 3] = std::array::from_fn(|k| lever::column(i, k));
@@ -634,6 +646,12 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         }
     }
     let mut table = obs::read_columns(path, &wanted, opts.format)?;
+    let outputs: Vec<&str> = need
+        .iter()
+        .copied()
+        .filter(|c| col::A.contains(c) || col::GYRO.contains(c))
+        .collect();
+    let beyond = super::exclude_beyond_rails(&mut table, &outputs, &opts.rails, path)?;
     let mut notes = Vec::new();
     if let Some(station) = &opts.earth {
         add_earth_rate(&mut table, station, path)?;
@@ -826,6 +844,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         ));
     }
     let mut findings = super::findings(&points, &names, &units, opts, &output_errors);
+    findings.extend(beyond);
     if let (Some(g), None) = (&gyro, &opts.earth) {
         findings.push(earth_neglected(&g.fits[layout.reference()]));
     }

@@ -1,0 +1,146 @@
+//! The one place numeric options are checked: every one is parsed by a function here, so
+//! that a value outside its domain is refused at parse time with the option named (clap puts
+//! `invalid value '...' for '--option'` before the reason).
+
+/// A finite number.
+///
+/// # Errors
+/// Not a number, or NaN or infinite.
+pub fn finite(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err("a finite number is expected".into())
+    }
+}
+
+/// A finite single-precision number (the device's temperature and voltage).
+///
+/// # Errors
+/// As [`finite`], or beyond single precision.
+pub fn finite_f32(s: &str) -> Result<f32, String> {
+    let v = finite(s)?;
+    let f = v as f32;
+    if f.is_finite() {
+        Ok(f)
+    } else {
+        Err(format!("{v} is beyond single precision"))
+    }
+}
+
+/// A finite number above zero.
+///
+/// # Errors
+/// As [`finite`], or zero or negative.
+pub fn positive(s: &str) -> Result<f64, String> {
+    let v = finite(s)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err("a number above 0 is expected".into())
+    }
+}
+
+/// A finite number, zero or above.
+///
+/// # Errors
+/// As [`finite`], or negative.
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    let v = finite(s)?;
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        Err("a number of 0 or more is expected".into())
+    }
+}
+
+/// A finite number other than zero (a scale factor may be negative).
+///
+/// # Errors
+/// As [`finite`], or zero.
+pub fn non_zero(s: &str) -> Result<f64, String> {
+    let v = finite(s)?;
+    if v == 0.0 {
+        Err("a number other than 0 is expected".into())
+    } else {
+        Ok(v)
+    }
+}
+
+/// A finite number from `lo` to `hi`.
+///
+/// # Errors
+/// As [`finite`], or outside `[lo, hi]`.
+pub fn in_range(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
+    let v = finite(s)?;
+    if (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("a number from {lo} to {hi} is expected"))
+    }
+}
+
+/// A significance level: strictly between 0 and 1.
+///
+/// # Errors
+/// As [`finite`], or outside (0, 1).
+pub fn level(s: &str) -> Result<f64, String> {
+    let v = finite(s)?;
+    if v > 0.0 && v < 1.0 {
+        Ok(v)
+    } else {
+        Err("a significance level between 0 and 1 (exclusive, e.g. 0.05) is expected".into())
+    }
+}
+
+/// A count from `lo` to `hi`.
+///
+/// # Errors
+/// Not a whole number, or outside `[lo, hi]`.
+pub fn count_in(s: &str, lo: usize, hi: usize) -> Result<usize, String> {
+    let v: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a whole number"))?;
+    if (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("a count from {lo} to {hi} is expected"))
+    }
+}
+
+/// A count of at least 1 (and at most 10^9).
+///
+/// # Errors
+/// As [`count_in`].
+pub fn at_least_one(s: &str) -> Result<usize, String> {
+    count_in(s, 1, 1_000_000_000)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_domain_refuses_what_is_outside_it() {
+        assert_eq!(finite("-3.5"), Ok(-3.5));
+        for bad in ["nan", "inf", "-inf", "x", ""] {
+            assert!(finite(bad).is_err(), "{bad}");
+        }
+        assert!(positive("0").is_err() && positive("-1").is_err() && positive("1e-9").is_ok());
+        assert!(non_negative("-0.1").is_err() && non_negative("0").is_ok());
+        assert!(non_zero("0").is_err() && non_zero("-408").is_ok());
+        for bad in ["0", "1", "2", "-1", "nan"] {
+            assert!(level(bad).is_err(), "{bad}");
+        }
+        assert_eq!(level("0.05"), Ok(0.05));
+        assert!(finite_f32("1e39").is_err() && finite_f32("25").is_ok());
+        assert_eq!(count_in("3", 1, 5), Ok(3));
+        assert!(count_in("0", 1, 5).is_err() && count_in("-1", 1, 5).is_err());
+        assert!(at_least_one("0").is_err());
+    }
+}
