@@ -272,3 +272,95 @@ fn an_unwritable_database_loses_no_record() {
     std::fs::remove_dir(b.path("units.sqlite-journal")).unwrap();
     assert!(b.history().is_empty());
 }
+
+/// The old blob as `calflash calibrate --force-blob` writes it after a REJECT.
+fn rejected_blob() -> Vec<u8> {
+    let mut d = CalibrationData::example_imu();
+    d.identity.fit_rejected = true;
+    golden::encode(&d)
+}
+
+#[test]
+fn a_blob_whose_fit_was_rejected_is_refused_unless_forced() {
+    let b = Bench::new();
+    let blob = b.blob("rejected.blob", &rejected_blob());
+    let held = b.unit_with_old();
+    let (r, flash) = b.flash(held.clone(), UNIT, &blob, Fault::None, false);
+    assert_eq!(
+        r.unwrap_err(),
+        "the blob's fit was judged REJECT (it was written with --force-blob); nothing was written (use --force-rejected to write it anyway)"
+    );
+    assert_eq!(flash.mem, held.mem, "nothing written");
+    // The refusal is recorded under the unit, beside the flash that put the old one there.
+    assert_eq!(
+        b.history(),
+        [
+            ("flash".into(), "verified".into()),
+            ("flash".into(), "failed".into())
+        ]
+    );
+    // Forced, it goes in.
+    let u = TcpUnit::serve(tcp_unit::device(held, UNIT), Fault::None);
+    let args = FlashArgs {
+        blob: blob.clone(),
+        port: u.address(),
+        force: false,
+        force_rejected: true,
+        timeout: 0.3,
+        vectors: 4,
+        db: Some(b.path("units.sqlite")),
+        no_db: false,
+    };
+    run(&args).unwrap();
+    assert_eq!(
+        held_after_reboot(u.finish().into_store().into_inner()),
+        Some(rejected_blob())
+    );
+}
+
+#[test]
+fn a_blob_for_another_sensor_is_refused_before_anything_is_written() {
+    let b = Bench::new();
+    // A single-axis calibration carrying the IMU unit's serial.
+    let mut single = CalibrationData::example_single();
+    single.identity.serial = spincal::model::Serial::new(UNIT).unwrap();
+    let blob = b.blob("single.blob", &golden::encode(&single));
+    let held = b.unit_with_old();
+    for force in [false, true] {
+        let (r, flash) = b.flash(held.clone(), UNIT, &blob, Fault::None, force);
+        let e = r.unwrap_err();
+        assert!(
+            e.starts_with("the blob is for a single-axis")
+                && e.contains(&format!("but unit {UNIT} carries an IMU"))
+                && e.ends_with("nothing was written"),
+            "{e}"
+        );
+        assert_eq!(flash.mem, held.mem, "nothing written, even with --force");
+    }
+}
+
+#[test]
+fn a_refused_flash_is_recorded_under_the_unit_that_answered() {
+    let b = Bench::new();
+    // The blob of another unit, and a blob that is not one at all.
+    let other = {
+        let mut d = CalibrationData::example_imu();
+        d.identity.serial = spincal::model::Serial::new("IMU-OTHER-7").unwrap();
+        golden::encode(&d)
+    };
+    let held = b.unit_with_old();
+    for (name, bytes) in [("other.blob", other), ("garbage.blob", vec![0x55; 300])] {
+        let (r, _) = b.flash(
+            held.clone(),
+            UNIT,
+            &b.blob(name, &bytes),
+            Fault::None,
+            false,
+        );
+        assert!(r.is_err(), "{name}");
+    }
+    let db = Db::open(&b.path("units.sqlite")).unwrap();
+    assert_eq!(db.history(UNIT).unwrap().len(), 3, "all three under {UNIT}");
+    assert!(db.history("IMU-OTHER-7").unwrap().is_empty());
+    assert!(db.history("?").unwrap().is_empty());
+}

@@ -258,6 +258,26 @@ impl Db {
         if exists {
             check_schema(&conn, path, true)?;
         } else {
+            // No calflash table: a new file, or a database that is not ours to write into.
+            let version: i64 = conn
+                .query_row("PRAGMA user_version", [], |r| r.get(0))
+                .map_err(|e| explain(path, &e))?;
+            let others: i64 = conn
+                .query_row("SELECT count(*) FROM sqlite_master", [], |r| r.get(0))
+                .map_err(|e| explain(path, &e))?;
+            if version != 0 || others > 0 {
+                return Err(format!(
+                    "the unit history database {}: it has no table `records` but {} (schema \
+                     {version}, {others} other object(s)): it is not a calflash history this \
+                     version can write; nothing was written",
+                    path.display(),
+                    if version > SCHEMA_VERSION {
+                        "was written by a newer program"
+                    } else {
+                        "is not empty"
+                    }
+                ));
+            }
             conn.execute_batch(&format!(
                 "BEGIN; {SCHEMA} PRAGMA user_version = {SCHEMA_VERSION}; COMMIT;"
             ))
@@ -614,5 +634,24 @@ mod tests {
             .unwrap();
         let e = Db::open_existing(&path).err().unwrap();
         assert!(e.contains("no column `time`"), "{e}");
+        // Another program's database, and a newer one without our table, are left alone.
+        for (name, sql) in [
+            ("other.sqlite", "CREATE TABLE parts (id INTEGER)"),
+            ("newer.sqlite", "PRAGMA user_version = 9"),
+        ] {
+            let p = dir.path().join(name);
+            Connection::open(&p).unwrap().execute_batch(sql).unwrap();
+            let e = Db::open(&p).err().unwrap();
+            assert!(e.contains("it has no table `records`"), "{e}");
+            let c = Connection::open(&p).unwrap();
+            let tables: i64 = c
+                .query_row(
+                    "SELECT count(*) FROM sqlite_master WHERE name = 'records'",
+                    [],
+                    |r| r.get(0),
+                )
+                .unwrap();
+            assert_eq!(tables, 0, "{name}: nothing written");
+        }
     }
 }

@@ -14,6 +14,8 @@ use std::path::{Path, PathBuf};
 pub struct Paths {
     inputs: Vec<(String, PathBuf)>,
     outputs: Vec<(String, PathBuf)>,
+    /// The outputs whose directories the command creates (the unit history).
+    creates_dir: Vec<bool>,
 }
 
 /// Where a path would be: its canonical form, or its canonical directory and its name when
@@ -66,16 +68,42 @@ impl Paths {
     pub fn output(mut self, what: &str, path: Option<&Path>) -> Self {
         if let Some(p) = path {
             self.outputs.push((what.into(), p.to_path_buf()));
+            self.creates_dir.push(false);
         }
         self
     }
 
-    /// Checks that no output is an input or another output.
+    /// A file the command writes, creating its directory when needed (the unit history).
+    #[must_use]
+    pub fn created(mut self, what: &str, path: Option<&Path>) -> Self {
+        if let Some(p) = path {
+            self.outputs.push((what.into(), p.to_path_buf()));
+            self.creates_dir.push(true);
+        }
+        self
+    }
+
+    /// Checks that no output is an input or another output, and that each output's directory
+    /// exists (unless the command creates it) and the output is not a directory.
     ///
     /// # Errors
     /// The two options that name one file.
     pub fn check(&self) -> Result<(), String> {
         for (i, (what, out)) in self.outputs.iter().enumerate() {
+            let dir = dir_of(out);
+            if !self.creates_dir[i] && !dir.is_dir() {
+                return Err(format!(
+                    "{what} {}: the directory {} does not exist; create it first",
+                    out.display(),
+                    dir.display()
+                ));
+            }
+            if out.is_dir() {
+                return Err(format!(
+                    "{what} {}: that is a directory; give a file name",
+                    out.display()
+                ));
+            }
             if let Some((src, _)) = self.inputs.iter().find(|(_, p)| same_file(p, out)) {
                 return Err(format!(
                     "{what} {}: that is the file {src} reads; the command would replace its own input",
@@ -224,9 +252,10 @@ mod tests {
         let e = Paths::new()
             .output("--blob", Some(&n))
             .output("--json", Some(&dir.path().join("sub/../new.json")))
-            .check();
-        // `sub` does not exist, so that path cannot be resolved: it is another path.
-        assert!(e.is_ok());
+            .check()
+            .unwrap_err();
+        // `sub` does not exist, so that output cannot be written at all.
+        assert!(e.contains("sub/.. does not exist"), "{e}");
         std::fs::create_dir(dir.path().join("sub")).unwrap();
         let e = Paths::new()
             .output("--blob", Some(&n))

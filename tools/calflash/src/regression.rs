@@ -80,6 +80,14 @@ pub enum RegressionError {
         /// The explanation, naming the term.
         why: String,
     },
+    /// Values too large to fit, located.
+    #[error("{file}: {why}")]
+    Values {
+        /// File.
+        file: PathBuf,
+        /// The explanation, naming the line.
+        why: String,
+    },
     /// Not enough observations.
     #[error("{file}: {source}")]
     Fit {
@@ -194,6 +202,12 @@ fn fit_design(
         } => RegressionError::NotObservable {
             file: table.path.clone(),
             why: formula.explain_rank_deficiency(table, column, &combination),
+        },
+        e @ (FitError::NotFinite { .. } | FitError::Overflow { .. }) => RegressionError::Values {
+            file: table.path.clone(),
+            why: formula
+                .explain_values(table, &e)
+                .unwrap_or_else(|| e.to_string()),
         },
         source => RegressionError::Fit {
             file: table.path.clone(),

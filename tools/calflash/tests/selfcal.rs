@@ -442,3 +442,57 @@ fn the_selfcal_blob_carries_the_calibration_uncertainty() {
         }
     }
 }
+
+/// A byte-order mark at the start of a recording is stripped (and said): a seven-column file
+/// keeps its first sample, two files keep their line counts in step, and the calibration is
+/// the one the same recording gives without the mark.
+#[test]
+fn a_byte_order_mark_changes_nothing_but_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rec = Tumble::default().record();
+    let (a, g) = write(&rec, d);
+    let bom = |text: &str| [b"\xEF\xBB\xBF".as_slice(), text.as_bytes()].concat();
+    let seven: String = rec
+        .t
+        .iter()
+        .zip(rec.acc.iter().zip(&rec.gyro))
+        .map(|(t, (x, w))| {
+            format!(
+                "{t:.6} {} {} {} {} {} {}\n",
+                x[0], x[1], x[2], w[0], w[1], w[2]
+            )
+        })
+        .collect();
+    std::fs::write(d.join("seven.txt"), bom(&seven)).unwrap();
+    std::fs::write(
+        d.join("acc_bom.txt"),
+        bom(&std::fs::read_to_string(&a).unwrap()),
+    )
+    .unwrap();
+    let run = |files: &[&str]| {
+        let mut args = vec!["selfcal"];
+        args.extend(files);
+        args.extend(["--g", "9.81", "--serial", "SIM-7", "--no-db"]);
+        let (code, out, err) = calflash(d, &args);
+        assert_eq!(code, 0, "{files:?}: {out}{err}");
+        // The first line names the files.
+        (out.lines().skip(1).collect::<Vec<_>>().join("\n"), err)
+    };
+    let (plain, quiet) = run(&[a.to_str().unwrap(), g.to_str().unwrap()]);
+    assert!(!quiet.contains("byte-order mark"), "{quiet}");
+    for files in [
+        &["seven.txt"][..],
+        &["acc_bom.txt", g.to_str().unwrap()][..],
+    ] {
+        let (out, err) = run(files);
+        assert!(
+            err.contains(&format!(
+                "{} starts with a UTF-8 byte-order mark; it is ignored",
+                files[0]
+            )),
+            "{err}"
+        );
+        assert_eq!(out, plain, "{files:?}");
+    }
+}

@@ -129,6 +129,26 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
     for j in 0..3 {
         let y: Vec<f64> = idx.iter().map(|&i| if args.sensor == Which::Gyro { rec.gyro[i][j] } else { rec.acc[i][j] } / scale[j]).collect();
         let c = allan::overlapping(&y, rec.period, args.per_octave);
+        if c.iter().any(|p| !p.adev.is_finite()) {
+            // Squares of the cluster differences overflow: name the sample that makes them.
+            let k = (0..y.len())
+                .max_by(|&p, &q| y[p].abs().total_cmp(&y[q].abs()))
+                .unwrap_or(0);
+            return Err(format!(
+                "{}:{}: {} axis {} = {:e}: too large for the Allan deviation (its squares \
+                 overflow); a value that large is a misread: fix the line or take a part \
+                 without it (--from/--to)",
+                rec.source,
+                rec.line[idx[k]],
+                if args.sensor == Which::Gyro {
+                    "gyro"
+                } else {
+                    "accelerometer"
+                },
+                axes[j],
+                y[k]
+            ));
+        }
         let t = allan::noise_terms(&c);
         println!("  {}: {}", axes[j], describe(&t, args.sensor, unit, si));
         curves.push(c);

@@ -49,7 +49,7 @@ pub struct ModelArgs {
     pub sensor: SensorKind,
     /// The operating region for the G and I criteria (repeatable grids NAME=LO:HI:N, combined);
     /// default: the candidates or the plan's own points.
-    #[arg(long)]
+    #[arg(long, value_parser = grid_spec)]
     pub region: Vec<String>,
     /// Chamber temperatures for plan items, C.
     #[arg(long, default_value = "25", value_delimiter = ',', value_parser = super::values::finite)]
@@ -127,6 +127,9 @@ pub struct EvaluateArgs {
 pub const MAX_PLAN: usize = 100_000;
 /// Most Monte Carlo runs of `predict`.
 pub const MAX_MONTE_CARLO: usize = 100_000;
+/// The most observations a Monte Carlo check simulates in all (runs x plan size): about ten
+/// minutes.
+pub const MAX_SIMULATED: usize = 1_000_000_000;
 
 /// `calflash design optimize`.
 #[derive(Debug, Args)]
@@ -144,7 +147,7 @@ pub struct OptimizeArgs {
     #[arg(long)]
     pub candidates: Vec<String>,
     /// Candidate grids NAME=LO:HI:N (repeatable; combined with each other and with the items).
-    #[arg(long)]
+    #[arg(long, value_parser = grid_spec)]
     pub grid: Vec<String>,
     /// Random restarts of the exchange.
     #[arg(long, default_value_t = 10, value_parser = |s: &str| super::values::count_in(s, 1, 1000))]
@@ -179,7 +182,7 @@ pub struct PredictArgs {
     #[arg(long)]
     pub at: Vec<String>,
     /// Confirm with this many simulated calibrations (single-axis sensors and triads).
-    #[arg(long, value_parser = |s: &str| super::values::count_in(s, 2, MAX_MONTE_CARLO))]
+    #[arg(long, value_parser = |s: &str| super::values::count_in(s, 10, MAX_MONTE_CARLO))]
     pub monte_carlo: Option<usize>,
     /// The largest acceptable expected error at the operating points (counts).
     #[arg(long, value_parser = super::values::positive)]
@@ -188,7 +191,7 @@ pub struct PredictArgs {
     #[arg(long)]
     pub candidates: Vec<String>,
     /// Candidate grids for --target.
-    #[arg(long)]
+    #[arg(long, value_parser = grid_spec)]
     pub grid: Vec<String>,
     /// The criterion of the plans for --target.
     #[arg(long, value_enum, default_value = "i")]
@@ -208,6 +211,11 @@ pub fn run(args: &DesignArgs) -> Result<(), String> {
         Action::Optimize(a) => optimize(a),
         Action::Predict(a) => predict(a),
     }
+}
+
+/// A grid option (`--region`, `--grid`), checked as it is parsed.
+fn grid_spec(s: &str) -> Result<String, String> {
+    points::grid(s).map(|_| s.to_string())
 }
 
 fn unit(kind: SensorKind) -> (Unit, bool) {
@@ -236,7 +244,16 @@ fn grids(specs: &[String]) -> Result<Points, String> {
         rows: Vec::new(),
     };
     for g in specs {
-        p = p.product(&points::grid(g)?);
+        let g = points::grid(g)?;
+        let n = p.rows.len().max(1).saturating_mul(g.rows.len());
+        if n > crate::sim::plan::MAX_CONDITIONS {
+            return Err(format!(
+                "the grids {} make {n} points; a region or grid holds at most {}",
+                specs.join(" "),
+                crate::sim::plan::MAX_CONDITIONS
+            ));
+        }
+        p = p.product(&g);
     }
     Ok(p)
 }
@@ -608,10 +625,10 @@ fn search_fedorov(
     let ws: Vec<Option<DMatrix<f64>>> = blocks
         .iter()
         .map(|b| {
-            let r = region_rows(&o.model, &cands, b).ok()?;
-            Some(r.transpose() * &r / r.nrows() as f64)
+            let r = region_rows(&o.model, &cands, b)?;
+            Ok::<_, String>(Some(r.transpose() * &r / r.nrows() as f64))
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     let opts = exchange::Options {
         n: o.n,
         restarts: o.restarts,
@@ -797,8 +814,10 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
         compare.extend(usual_plans(o, cands));
     }
     let mut rows = Vec::new();
-    for (name, pts) in &compare {
+    for (i, (name, pts)) in compare.iter().enumerate() {
         match evaluate_plan(name, pts, &blocks, &o.model, &searched.region) {
+            // The plan found is the answer: failing to evaluate it is the command's failure.
+            Err(e) if i == 0 => return Err(e),
             Ok(c) => rows.push(show::PlanResult {
                 name: name.clone(),
                 points: pts.clone(),
@@ -892,11 +911,21 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
             let (k, v) = kv
                 .split_once('=')
                 .ok_or_else(|| format!("--at `{spec}`: expected NAME=VALUE[,NAME=VALUE...]"))?;
-            names.push(k.trim().to_string());
+            let k = k.trim();
+            let read = models::variables(&blocks);
+            if !read.iter().any(|r| r == k) {
+                return Err(format!(
+                    "--at `{spec}`: the model reads no `{k}`; it reads {}",
+                    read.join(", ")
+                ));
+            }
+            names.push(k.to_string());
             row.push(
                 v.trim()
                     .parse::<f64>()
-                    .map_err(|_| format!("--at `{spec}`: `{v}` is not a number"))?,
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| format!("--at `{spec}`: `{v}` is not a finite number"))?,
             );
         }
         if at.rows.is_empty() {
@@ -971,7 +1000,7 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
         let at_rows = at.model_rows(&b.formula);
         let e = predict::expected(&c.unscaled_covariance, noises[k], &at_rows);
         let mc = match a.monte_carlo {
-            Some(runs) if runs >= 10 => {
+            Some(runs) => {
                 let x = pts.model_rows(&b.formula);
                 let sim = predict::Simulation {
                     sensor: &sensor,
@@ -980,9 +1009,28 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
                     runs,
                     seed: 7,
                 };
-                Some(predict::monte_carlo(&pts, &sim, &x, &at_rows)?)
+                let work = runs.saturating_mul(pts.rows.len());
+                if work > MAX_SIMULATED {
+                    return Err(format!(
+                        "--monte-carlo {runs}: {runs} runs of {} observations is {work} simulated \
+                         observations; at most {MAX_SIMULATED:e} (fewer runs: 1,000 give the \
+                         standard errors to about 2 %)",
+                        pts.rows.len()
+                    ));
+                }
+                let bar = indicatif::ProgressBar::new(runs as u64);
+                bar.set_style(
+                    indicatif::ProgressStyle::with_template(
+                        "  simulating {bar:30} {pos}/{len} calibrations, {eta} left",
+                    )
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+                );
+                let mc = predict::monte_carlo(&pts, &sim, &x, &at_rows, |r| {
+                    bar.set_position(r as u64);
+                });
+                bar.finish_and_clear();
+                Some(mc?)
             }
-            Some(runs) => return Err(format!("--monte-carlo {runs}: at least 10 runs")),
             None => None,
         };
         results.push((b.clone(), e, mc));

@@ -43,7 +43,7 @@ impl Outputs {
             .output("--blob", self.blob.as_deref())
             .output("--report", self.report.as_deref())
             .output("--json", self.json.as_deref())
-            .output("the unit history", db.as_deref())
+            .created("the unit history", db.as_deref())
             .check()
     }
 

@@ -67,6 +67,9 @@ pub struct SimulateArgs {
     /// Round outputs to whole counts (single readings rather than averages).
     #[arg(long)]
     pub quantize: bool,
+    /// ADC bits: outputs saturate at the rails 0 and 2^bits - 1, as the converter's do.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=31))]
+    pub bits: u32,
     /// True coefficients (JSON, the fields of the sensor's truth); default: a typical unit.
     #[arg(long)]
     pub truth: Option<PathBuf>,
@@ -141,6 +144,9 @@ fn coning(text: &str) -> Result<(f64, f64), String> {
 }
 
 /// A spin-rig flight of an IMU, written as CSV.
+/// The most samples a simulated flight holds (about 2 GB of CSV).
+const MAX_FLIGHT_SAMPLES: f64 = 1e7;
+
 fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     use crate::sim::spin;
     if args.sensor != SensorKind::Imu {
@@ -148,10 +154,12 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     }
     let segments = spin::profile(profile).map_err(|e| format!("--spin: {e}"))?;
     let seconds: f64 = segments.iter().map(spin::Segment::seconds).sum();
-    if seconds * args.sample_rate > 1e8 {
+    if seconds * args.sample_rate > MAX_FLIGHT_SAMPLES {
         return Err(format!(
-            "--spin: {seconds} s at {} Hz is more than 10^8 samples",
-            args.sample_rate
+            "--spin: {seconds} s at {} Hz is {:.3e} samples; a flight holds at most {MAX_FLIGHT_SAMPLES:e} \
+             (shorten the profile or lower --sample-rate)",
+            args.sample_rate,
+            seconds * args.sample_rate
         ));
     }
     let (cone_angle, cone_hz) = match &args.coning {
@@ -186,7 +194,14 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
         volt: args.volts.first().copied().unwrap_or(3.3),
         seed: args.seed,
     };
-    let samples = spin::run(&truth, &run);
+    let mut samples = spin::run(&truth, &run);
+    let rails = spincal::model::Rails::unsigned(args.bits);
+    let mut saturated = 0;
+    for code in samples.iter_mut().flat_map(|s| s.raw.iter_mut()) {
+        let v = code.clamp(f64::from(rails.lo), f64::from(rails.hi));
+        saturated += usize::from(v != *code);
+        *code = v;
+    }
     let mut staged = Staged::new();
     staged.write(&args.output, |w| spin::write_csv(&samples, w))?;
     if let Some(p) = &args.write_truth {
@@ -200,6 +215,12 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
         args.sample_rate,
         args.output.display()
     );
+    if saturated > 0 {
+        println!(
+            "  {saturated} code(s) saturated at the {}-bit converter's rails 0 and {}",
+            args.bits, rails.hi
+        );
+    }
     Ok(())
 }
 
@@ -255,7 +276,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         }
         _ => None,
     };
-    let obs = sim::simulate_at(
+    let mut obs = sim::simulate_at(
         &sensor,
         &conditions,
         args.seed,
@@ -263,6 +284,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         station.as_ref(),
     )
     .map_err(|e| format!("--latitude: {e}"))?;
+    let saturated = obs.saturate(spincal::model::Rails::unsigned(args.bits));
     let mut staged = Staged::new();
     staged.write(&args.output, |w| obs.write_csv(w))?;
     if let Some(p) = &args.write_truth {
@@ -280,5 +302,12 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         obs.rows.len(),
         args.output.display()
     );
+    if saturated > 0 {
+        println!(
+            "  {saturated} output(s) saturated at the {}-bit converter's rails 0 and {}",
+            args.bits,
+            spincal::model::Rails::unsigned(args.bits).hi
+        );
+    }
     Ok(())
 }

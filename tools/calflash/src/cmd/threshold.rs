@@ -30,9 +30,6 @@ pub struct ThresholdArgs {
 /// # Errors
 /// A bad file or a run that cannot give the figures.
 pub fn run(args: &ThresholdArgs) -> Result<(), String> {
-    if !(args.scale.is_finite() && args.scale != 0.0) {
-        return Err("--scale: a finite, non-zero scale factor".into());
-    }
     let t = obs::read_columns(
         &args.data,
         &[col::INPUT.into(), col::OUTPUT.into()],
@@ -48,7 +45,18 @@ pub fn run(args: &ThresholdArgs) -> Result<(), String> {
     .map_err(|e| format!("{}: {e}", args.data.display()))?;
     let opt = |v: Option<f64>| v.map_or("not reached".into(), num);
     println!("calflash threshold  {}", args.data.display());
-    println!("  output at zero input  {} counts", num(r.zero));
+    match (args.bias, r.measured_zero) {
+        (Some(_), Some(m)) => println!(
+            "  output at zero input  {} counts (--bias; the run's mean at input 0 is {})",
+            num(r.zero),
+            num(m)
+        ),
+        (Some(_), None) => println!("  output at zero input  {} counts (--bias)", num(r.zero)),
+        _ => println!(
+            "  output at zero input  {} counts (the run's mean at input 0)",
+            num(r.zero)
+        ),
+    }
     println!(
         "  threshold             {} (positive), {} (negative)",
         opt(r.positive),

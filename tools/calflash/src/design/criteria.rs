@@ -146,7 +146,7 @@ pub fn evaluate(
             c /= norm;
         }
     }
-    let sv = scaled.singular_values();
+    let sv = crate::stats::decompose::singular_values(scaled).map_err(|_| not_finite())?;
     let condition_number = sv.max() / sv.min();
     let vif = (0..p)
         .map(|j| {

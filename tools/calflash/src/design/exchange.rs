@@ -67,6 +67,9 @@ pub enum ExchangeError {
         /// Parameters.
         p: usize,
     },
+    /// A candidate's model row overflows.
+    #[error("a candidate's model row is not finite: its values are too large for the model")]
+    NotFinite,
 }
 
 /// What replacing design row `x_i` by `x_j` depends on, with `u = M^-1 x`: `d_i = x_i' u_i`,
@@ -328,7 +331,8 @@ pub fn optimize_blocks(
         if opts.n < p {
             return Err(ExchangeError::TooFew { n: opts.n, p });
         }
-        let sv = f.singular_values();
+        let sv = crate::stats::decompose::singular_values(f.clone())
+            .map_err(|_| ExchangeError::NotFinite)?;
         let rank = sv.iter().filter(|s| **s > 1e-10 * sv.max()).count();
         if rank < p {
             return Err(ExchangeError::Singular { rank, p });

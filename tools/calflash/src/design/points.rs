@@ -194,6 +194,9 @@ pub fn grid(text: &str) -> Result<Points, String> {
         .trim()
         .parse()
         .map_err(|_| bad("N must be a whole number"))?;
+    if n > plan::MAX_CONDITIONS {
+        return Err(bad(&format!("N is at most {}", plan::MAX_CONDITIONS)));
+    }
     if n == 0 || (n == 1 && lo != hi) || lo > hi {
         return Err(bad(
             "N must be at least 2 (1 when LO = HI) and LO at most HI",

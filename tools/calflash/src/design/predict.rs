@@ -142,6 +142,7 @@ pub fn monte_carlo(
     sim: &Simulation<'_>,
     x: &DMatrix<f64>,
     at: &DMatrix<f64>,
+    mut progress: impl FnMut(usize),
 ) -> Result<MonteCarlo, String> {
     let (sensor, output, runs, seed) = (sim.sensor, sim.output, sim.runs, sim.seed);
     let conds = conditions(points, sim.unit);
@@ -166,6 +167,7 @@ pub fn monte_carlo(
             .collect();
         coefs.push(fit.coefficients);
         preds.push(p);
+        progress(r + 1);
     }
     Ok(MonteCarlo {
         runs,

@@ -64,6 +64,49 @@ impl Formula {
         self.terms.get(k)
     }
 
+    /// Where a fit of this formula over `table` met a value it cannot square: one sentence
+    /// naming the file line, the term and the values behind it. `None` for other failures.
+    #[must_use]
+    pub fn explain_values(&self, table: &Table, error: &crate::stats::FitError) -> Option<String> {
+        use crate::stats::FitError;
+        let (row, column) = match *error {
+            FitError::NotFinite { row, column } => (row, column),
+            FitError::Overflow { row } => (row, None),
+            _ => return None,
+        };
+        let line = table.lines.get(row).copied().unwrap_or(row as u64 + 1);
+        let mut vars: Vec<&str> = vec![self.response.as_str()];
+        if let Some(t) = column.and_then(|j| self.term_at(j)) {
+            vars = t.variables();
+        } else {
+            for t in &self.terms {
+                vars.extend(t.variables());
+            }
+            vars.dedup();
+        }
+        let values = vars
+            .iter()
+            .filter_map(|v| Some(format!("{v} = {:e}", table.column(v)?.get(row)?)))
+            .collect::<Vec<_>>()
+            .join(", ");
+        Some(match (error, column) {
+            (FitError::NotFinite { .. }, Some(j)) => format!(
+                "line {line}: the term {} overflows to {} ({values}); a value that large is a \
+                 misread or a unit error: fix the line or leave it out",
+                self.term_names()[j],
+                self.design(table).x[(row, j)],
+            ),
+            (FitError::NotFinite { .. }, None) => {
+                format!("line {line}: the response is not finite ({values})")
+            }
+            _ => format!(
+                "the fit overflows: its sums of squares exceed the largest f64, and the largest \
+                 value is at line {line} ({values}); a value that large is a misread or a unit \
+                 error: fix the line or leave it out"
+            ),
+        })
+    }
+
     /// Why model column `column` cannot be estimated from `table`, in one sentence naming the
     /// term. `combination` is the fit's approximation of the column by earlier columns.
     #[must_use]

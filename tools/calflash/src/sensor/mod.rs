@@ -168,7 +168,12 @@ impl AxisFit {
                     p + 1
                 ),
             ),
-            FitError::NotFinite => WorkflowError::msg(path, "a value is not finite"),
+            e @ (FitError::NotFinite { .. } | FitError::Overflow { .. }) => WorkflowError::msg(
+                path,
+                formula
+                    .explain_values(table, &e)
+                    .unwrap_or_else(|| e.to_string()),
+            ),
         })?;
         Ok(Self {
             output: formula.response.clone(),

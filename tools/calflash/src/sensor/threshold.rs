@@ -10,8 +10,10 @@
 /// The result of a fine-step analysis.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Threshold {
-    /// Output at zero input (counts).
+    /// Output at zero input (counts): `--bias` when given, else the run's mean at input 0.
     pub zero: f64,
+    /// The run's mean output at input 0, when it has that input.
+    pub measured_zero: Option<f64>,
     /// Inputs, mean response and ratio to the expected response, per distinct input.
     pub steps: Vec<(f64, f64, f64)>,
     /// Positive threshold, SI (`None`: never reached).
@@ -25,7 +27,7 @@ pub struct Threshold {
 }
 
 /// Analyses `(input, output)` pairs with the accepted scale factor (counts per SI unit); the
-/// zero-input output is the mean at input 0, or `bias` when there is none.
+/// zero-input output is `bias` when given, else the mean at input 0.
 ///
 /// # Errors
 /// When there is neither an input of 0 nor a bias, or no inputs on one side.
@@ -45,12 +47,10 @@ pub fn analyse(
         }
     }
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-    let zero = match groups.iter().find(|(x, _)| *x == 0.0) {
-        Some((_, v)) => mean(v),
-        None => bias.ok_or(
-            "the run has no input of 0 and no --bias was given: the zero-input output is unknown",
-        )?,
-    };
+    let measured_zero = groups.iter().find(|(x, _)| *x == 0.0).map(|(_, v)| mean(v));
+    let zero = bias.or(measured_zero).ok_or(
+        "the run has no input of 0 and no --bias was given: the zero-input output is unknown",
+    )?;
     let steps: Vec<(f64, f64, f64)> = groups
         .iter()
         .filter(|(x, _)| *x != 0.0)
@@ -95,6 +95,7 @@ pub fn analyse(
         .min_by(f64::total_cmp);
     Ok(Threshold {
         zero,
+        measured_zero,
         steps,
         positive,
         negative,
@@ -121,5 +122,9 @@ mod tests {
         assert!((t.negative.unwrap() + 0.0125).abs() < 1e-12);
         assert!((t.resolution.unwrap() - 0.0025).abs() < 1e-12);
         assert!(analyse(&[1.0, 2.0], &[1.0, 2.0], 1.0, None).is_err());
+        // A given bias is used even where the run has an input of 0, and the run's is kept.
+        let b = analyse(&input, &output, 400.0, Some(1002.0)).unwrap();
+        assert_eq!((b.zero, b.measured_zero), (1002.0, Some(1000.0)));
+        assert_ne!(b.steps, t.steps);
     }
 }

@@ -76,6 +76,32 @@ impl Observations {
         }
     }
 
+    /// Saturates the sensor's outputs (`output`, `a_*`, `g_*`) at the converter's rails, as
+    /// its ADC would; returns how many values it changed.
+    pub fn saturate(&mut self, rails: spincal::model::Rails) -> usize {
+        let outputs: Vec<usize> = self
+            .names
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| {
+                *n == col::OUTPUT || col::A.contains(&n.as_str()) || col::GYRO.contains(&n.as_str())
+            })
+            .map(|(i, _)| i)
+            .collect();
+        let (lo, hi) = (f64::from(rails.lo), f64::from(rails.hi));
+        let mut changed = 0;
+        for row in &mut self.rows {
+            for &i in &outputs {
+                let v = row[i].clamp(lo, hi);
+                if v != row[i] {
+                    row[i] = v;
+                    changed += 1;
+                }
+            }
+        }
+        changed
+    }
+
     /// A column's values.
     #[must_use]
     pub fn column(&self, name: &str) -> Option<Vec<f64>> {

@@ -166,27 +166,41 @@ pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
     let mut parts = text.split(':');
     let kind = parts.next().unwrap_or_default();
     let nums: Vec<&str> = parts.collect();
+    let parse_count = |n: &str| -> Result<usize, PlanError> {
+        match n.parse::<usize>() {
+            Ok(0) => Err(err("the count must be at least 1")),
+            Ok(c) if c <= MAX_CONDITIONS => Ok(c),
+            _ => Err(err(&format!(
+                "`{n}` is not a count from 1 to {MAX_CONDITIONS}"
+            ))),
+        }
+    };
     let range = || -> Result<(f64, f64, usize), PlanError> {
         let [lo, hi, n] = nums[..] else {
             return Err(err("expected KIND:LO:HI:N"));
         };
-        let num = |s: &str| {
-            s.parse::<f64>()
-                .map_err(|_| err(&format!("`{s}` is not a number")))
+        let (limit, unit) = match kind {
+            "rate" | "diagonal" => (MAX_RATE, "rad/s"),
+            "centrifuge" => (MAX_CENTRIFUGE_G, "g"),
+            _ => (MAX_FORCE, "m/s^2"),
         };
-        let n: usize = n
-            .parse()
-            .map_err(|_| err(&format!("`{n}` is not a count")))?;
-        if n == 0 {
-            return Err(err("the count must be at least 1"));
+        let num = |s: &str| match s.parse::<f64>() {
+            Ok(v) if v.is_finite() && v.abs() <= limit => Ok(v),
+            _ => Err(err(&format!(
+                "`{s}` is not a number from -{limit} to {limit} {unit}"
+            ))),
+        };
+        let (lo, hi) = (num(lo)?, num(hi)?);
+        if kind == "centrifuge" && lo.min(hi) < 0.0 {
+            return Err(err("a centrifuge's radial levels are 0 g or more"));
         }
-        Ok((num(lo)?, num(hi)?, n))
+        Ok((lo, hi, parse_count(n)?))
     };
     let count = || -> Result<usize, PlanError> {
         let [n] = nums[..] else {
             return Err(err("expected KIND:N"));
         };
-        n.parse().map_err(|_| err(&format!("`{n}` is not a count")))
+        parse_count(n)
     };
     let dirs = |all: Vec<[f64; 3]>| {
         if single {
@@ -198,9 +212,6 @@ pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
     Ok(match kind {
         "head" => {
             let n = count()?;
-            if n == 0 {
-                return Err(err("the count must be at least 1"));
-            }
             (0..n)
                 .map(|i| {
                     let t = 2.0 * std::f64::consts::PI * i as f64 / n as f64;
@@ -294,6 +305,26 @@ pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
     })
 }
 
+/// The most conditions a plan may hold, counting every temperature, voltage and repeat: far
+/// beyond any test run, and about 200 MB to simulate.
+pub const MAX_CONDITIONS: usize = 1_000_000;
+/// The largest rate a plan item may name, rad/s (about 16,000 rev/s).
+pub const MAX_RATE: f64 = 1.0e5;
+/// The largest centrifuge level, g.
+pub const MAX_CENTRIFUGE_G: f64 = 1.0e5;
+/// The largest specific force a sweep or fine item may name, m/s^2 (about 100,000 g).
+pub const MAX_FORCE: f64 = 1.0e6;
+
+fn too_many(items: &[String], n: usize) -> PlanError {
+    PlanError {
+        item: items.join(" "),
+        why: format!(
+            "{n} conditions with every temperature, voltage and repeat; a plan holds at most \
+             {MAX_CONDITIONS}"
+        ),
+    }
+}
+
 /// A whole plan: every item, at every temperature and supply voltage, `repeat` times.
 ///
 /// # Errors
@@ -308,8 +339,24 @@ pub fn plan(
     let mut base = Vec::new();
     for i in items {
         base.extend(item(i, single)?);
+        if base.len() > MAX_CONDITIONS {
+            return Err(too_many(items, base.len()));
+        }
     }
-    let mut out = Vec::with_capacity(base.len() * temps.len() * volts.len() * repeat);
+    let total = [temps.len(), volts.len(), repeat]
+        .into_iter()
+        .try_fold(base.len(), usize::checked_mul)
+        .filter(|n| *n <= MAX_CONDITIONS)
+        .ok_or_else(|| {
+            too_many(
+                items,
+                base.len()
+                    .saturating_mul(temps.len())
+                    .saturating_mul(volts.len())
+                    .saturating_mul(repeat),
+            )
+        })?;
+    let mut out = Vec::with_capacity(total);
     for &t in temps {
         for &v in volts {
             for _ in 0..repeat {

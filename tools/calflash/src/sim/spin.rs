@@ -118,10 +118,22 @@ pub fn profile(text: &str) -> Result<Vec<Segment>, ProfileError> {
                 seconds,
             },
         };
+        let fastest = match seg {
+            Segment::Steady { hz, .. } => hz.abs(),
+            Segment::Ramp { from_hz, to_hz, .. } => from_hz.abs().max(to_hz.abs()),
+        };
+        if fastest > MAX_SPIN_HZ {
+            return Err(err(format!(
+                "`{piece}`: a spin rig turns at most {MAX_SPIN_HZ} Hz"
+            )));
+        }
         out.push(seg);
     }
     Ok(out)
 }
+
+/// The fastest spin a profile may ask for, Hz: several times a spin-stabilised shell's.
+pub const MAX_SPIN_HZ: f64 = 2_000.0;
 
 /// A spin-rig run.
 #[derive(Debug, Clone, PartialEq)]

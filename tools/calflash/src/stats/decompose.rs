@@ -44,6 +44,14 @@ pub fn svd(
     SVD::try_new(m, u, v_t, f64::EPSILON, n).ok_or(DecomposeError::NoConvergence(n))
 }
 
+/// The singular values of `m`.
+///
+/// # Errors
+/// A [`DecomposeError`].
+pub fn singular_values(m: DMatrix<f64>) -> Result<DVector<f64>, DecomposeError> {
+    svd(m, false, false).map(|s| s.singular_values)
+}
+
 /// The eigenvalues of the symmetric matrix `m`.
 ///
 /// # Errors

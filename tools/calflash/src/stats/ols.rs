@@ -48,9 +48,21 @@ pub enum FitError {
         /// Its approximation by earlier columns: `(index, coefficient)`.
         combination: Vec<(usize, f64)>,
     },
-    /// NaN or infinity in the data.
-    #[error("the data hold a value that is not finite")]
-    NotFinite,
+    /// NaN or infinity in the data: in model column `column` (`None`: the response) of
+    /// observation `row`.
+    #[error("observation {row} holds a value that is not finite")]
+    NotFinite {
+        /// The observation (0-based).
+        row: usize,
+        /// The model column, or `None` for the response.
+        column: Option<usize>,
+    },
+    /// Finite data whose sums of squares overflow: values near the largest `f64`.
+    #[error("the sums of squares overflow; the largest value is at observation {row}")]
+    Overflow {
+        /// The observation holding the largest absolute value (0-based).
+        row: usize,
+    },
 }
 
 /// Everything a fit reports. Vectors over terms are in the order of `names`; vectors over
@@ -162,6 +174,19 @@ impl Fit {
     }
 }
 
+/// The observation holding the largest absolute value of the response or any column.
+fn largest_row(x: &DMatrix<f64>, y: &[f64]) -> usize {
+    let magnitude = |i: usize| {
+        x.row(i)
+            .iter()
+            .chain(std::iter::once(&y[i]))
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+    };
+    (0..y.len())
+        .max_by(|&a, &b| magnitude(a).total_cmp(&magnitude(b)))
+        .unwrap_or(0)
+}
+
 /// Fits `y = X b + e` by least squares.
 ///
 /// # Errors
@@ -180,8 +205,15 @@ pub fn fit(
     if n <= p {
         return Err(FitError::TooFewObservations { n, p });
     }
-    if !y.iter().chain(x.iter()).all(|v| v.is_finite()) {
-        return Err(FitError::NotFinite);
+    if let Some(row) = y.iter().position(|v| !v.is_finite()) {
+        return Err(FitError::NotFinite { row, column: None });
+    }
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        // Column-major: element i is row i % n of column i / n.
+        return Err(FitError::NotFinite {
+            row: i % n,
+            column: Some(i / n),
+        });
     }
     // Scale the columns to unit length: the factorisation then sees the geometry, not units.
     let norms: Vec<f64> = x.column_iter().map(|c| c.norm()).collect();
@@ -225,6 +257,16 @@ pub fn fit(
     let unscaled = &factor * factor.transpose();
     let covariance = &unscaled * sigma2;
     let std_errors: Vec<f64> = (0..p).map(|j| covariance[(j, j)].sqrt()).collect();
+    if !sigma2.is_finite()
+        || coefficients
+            .iter()
+            .chain(&std_errors)
+            .any(|v| !v.is_finite())
+    {
+        return Err(FitError::Overflow {
+            row: largest_row(x, y),
+        });
+    }
     let t: Vec<f64> = coefficients
         .iter()
         .zip(&std_errors)
@@ -272,7 +314,9 @@ pub fn fit(
     for (j, mut c) in rd.column_iter_mut().enumerate() {
         c *= norms[j];
     }
-    let sv = rd.singular_values();
+    let sv = crate::stats::decompose::singular_values(rd).map_err(|_| FitError::Overflow {
+        row: largest_row(x, y),
+    })?;
     let condition_number = sv.max() / sv.min();
 
     let vif = (0..p)
