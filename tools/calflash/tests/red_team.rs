@@ -1,6 +1,8 @@
 //! The tool tried as a careless user and a hostile one would (issue 13; the list is kept in
 //! `RELIABILITY.md`). Every command runs under a watchdog: one that does not finish within
 //! [`LIMIT`] is killed and the test fails naming it, so a hang is a failure, not a stuck CI.
+//! Command lines are written as one string split at spaces (`cli`), or as arguments (`calflash`)
+//! where one holds a space.
 
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
@@ -21,6 +23,18 @@ impl Ran {
     fn code(&self) -> Option<i32> {
         self.status.code()
     }
+
+    /// Asserts the exit code and that stderr holds `says`.
+    fn expect(&self, code: i32, says: &str, what: &str) {
+        assert_eq!(self.code(), Some(code), "{what}: {}{}", self.out, self.err);
+        assert!(self.err.contains(says), "{what}: {}", self.err);
+        assert!(!self.err.contains("panicked"), "{what}: {}", self.err);
+    }
+}
+
+/// Runs `calflash` with the arguments of `line` (split at spaces) in `dir`.
+fn cli(dir: &Path, line: &str) -> Ran {
+    calflash(dir, &line.split_whitespace().collect::<Vec<_>>())
 }
 
 /// Runs `calflash args` in `dir` under the watchdog.
@@ -70,33 +84,24 @@ fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data")
 }
 
-/// The single-axis example with line `line`'s `column` (0-based) replaced by `value`.
-fn single_with(dir: &Path, name: &str, line: usize, column: usize, value: &str) -> PathBuf {
-    edited(
-        &examples().join("single_accel.csv"),
-        dir,
-        name,
-        line,
-        column,
-        value,
-    )
-}
-
-fn edited(src: &Path, dir: &Path, name: &str, line: usize, column: usize, value: &str) -> PathBuf {
-    let text = std::fs::read_to_string(src).unwrap();
+/// A copy of example `src` in `dir` as `name`, with line `line`'s field `column` (0-based)
+/// replaced by `value`.
+fn edited(src: &str, dir: &Path, name: &str, line: usize, column: usize, value: &str) {
+    let text = std::fs::read_to_string(examples().join(src)).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let mut fields: Vec<&str> = lines[line - 1].split(',').collect();
     fields[column] = value;
     lines[line - 1] = fields.join(",");
-    let p = dir.join(name);
-    std::fs::write(&p, lines.join("\n") + "\n").unwrap();
-    p
+    std::fs::write(dir.join(name), lines.join("\n") + "\n").unwrap();
 }
 
-fn copy_example(dir: &Path, name: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::copy(examples().join(name), &p).unwrap();
-    p
+/// A fresh directory holding a copy of the examples `names`.
+fn bench(names: &[&str]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for n in names {
+        std::fs::copy(examples().join(n), dir.path().join(n)).unwrap();
+    }
+    dir
 }
 
 /// Every file in `dir`, hidden ones included.
@@ -109,36 +114,26 @@ fn listing(dir: &Path) -> Vec<String> {
     v
 }
 
-fn calibrate_single(dir: &Path, data: &Path, extra: &[&str]) -> Ran {
-    let mut args = vec![
-        "calibrate",
-        data.to_str().unwrap(),
-        "--sensor",
-        "single-accel",
-        "--serial",
-        "RT-1",
-        "--no-db",
-    ];
-    args.extend(extra);
-    calflash(dir, &args)
+/// `calflash calibrate` of a single-axis file as unit RT-1, unrecorded, with `extra`.
+fn calibrate_single(dir: &Path, data: &str, extra: &str) -> Ran {
+    cli(
+        dir,
+        &format!("calibrate {data} --sensor single-accel --serial RT-1 --no-db {extra}"),
+    )
+}
+
+fn blob_in(dir: &Path, name: &str) -> spincal::model::Calibration {
+    spincal::blob::decode(&std::fs::read(dir.join(name)).unwrap()).unwrap()
 }
 
 // ---- A unit can be given a calibration that should never reach it ----
 
 #[test]
 fn a_rejected_fit_writes_no_blob_unless_forced_and_then_says_so() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = bench(&["single_accel.csv"]);
     let d = dir.path();
-    let data = copy_example(d, "single_accel.csv");
-    let strict = [
-        "--max-noise",
-        "1e-6",
-        "--blob",
-        "r.blob",
-        "--json",
-        "r.json",
-    ];
-    let r = calibrate_single(d, &data, &strict);
+    let strict = "--max-noise 1e-6 --blob r.blob --json r.json";
+    let r = calibrate_single(d, "single_accel.csv", strict);
     assert_eq!(r.code(), Some(3), "{}{}", r.out, r.err);
     assert!(r.out.contains("unit RT-1: REJECT"), "{}", r.out);
     assert!(!d.join("r.blob").exists(), "no blob for a REJECT");
@@ -152,73 +147,46 @@ fn a_rejected_fit_writes_no_blob_unless_forced_and_then_says_so() {
         serde_json::from_slice(&std::fs::read(d.join("r.json")).unwrap()).unwrap();
     assert_eq!(record["blob"], "", "the record holds no blob");
 
-    let mut forced = strict.to_vec();
-    forced.push("--force-blob");
-    let r = calibrate_single(d, &data, &forced);
+    let r = calibrate_single(d, "single_accel.csv", &format!("{strict} --force-blob"));
     assert_eq!(r.code(), Some(3));
-    let bytes = std::fs::read(d.join("r.blob")).unwrap();
-    let cal = spincal::blob::decode(&bytes).unwrap();
-    assert!(
-        cal.data().identity.fit_rejected,
-        "the blob says its fit was rejected"
-    );
-    // An accepted fit's blob does not.
-    let r = calibrate_single(d, &data, &["--blob", "ok.blob"]);
+    assert!(blob_in(d, "r.blob").data().identity.fit_rejected);
+    // An accepted fit's blob is not marked.
+    let r = calibrate_single(d, "single_accel.csv", "--blob ok.blob");
     assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
-    let ok = spincal::blob::decode(&std::fs::read(d.join("ok.blob")).unwrap()).unwrap();
-    assert!(!ok.data().identity.fit_rejected);
+    assert!(!blob_in(d, "ok.blob").data().identity.fit_rejected);
 }
 
 #[test]
 fn outputs_at_or_beyond_the_rails_are_left_out_of_the_fit_and_named() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = bench(&["single_accel.csv"]);
     let d = dir.path();
-    let clean = calibrate_single(
-        d,
-        &copy_example(d, "single_accel.csv"),
-        &["--blob", "c.blob"],
+    assert_eq!(
+        calibrate_single(d, "single_accel.csv", "--blob c.blob").code(),
+        Some(0)
     );
-    assert_eq!(clean.code(), Some(0));
-    let good = spincal::blob::decode(&std::fs::read(d.join("c.blob")).unwrap()).unwrap();
     let center = |c: &spincal::model::Calibration| match &c.data().sensor {
         spincal::model::Sensor::Single { channel, .. } => channel.center,
         _ => unreachable!(),
     };
-    for (i, value) in ["1e20", "70000", "65535", "-3", "1e308", "1e200"]
-        .into_iter()
-        .enumerate()
-    {
-        let data = single_with(d, &format!("rail{i}.csv"), 6, 6, value);
-        let blob = format!("rail{i}.blob");
-        let r = calibrate_single(d, &data, &["--blob", &blob]);
+    let good = center(&blob_in(d, "c.blob"));
+    for value in ["1e20", "70000", "65535", "-3", "1e308", "1e200"] {
+        edited("single_accel.csv", d, "rail.csv", 6, 6, value);
+        let r = calibrate_single(d, "rail.csv", "--blob rail.blob");
         assert_eq!(r.code(), Some(0), "{value}: {}{}", r.out, r.err);
         assert!(
             r.out.contains(
-                "REVIEW 1 observation(s) with an output at or beyond the ADC rails 0 and 65535 were left out of the fit: line 6"
+                "REVIEW 1 observation(s) with an output at or beyond the ADC rails 0 and 65535 \
+                 were left out of the fit: line 6"
             ),
             "{value}: {}",
             r.out
         );
-        let cal = spincal::blob::decode(&std::fs::read(d.join(&blob)).unwrap()).unwrap();
-        assert!(
-            (center(&cal) - center(&good)).abs() < 1.0,
-            "{value}: centre {} against {}",
-            center(&cal),
-            center(&good)
-        );
+        let c = center(&blob_in(d, "rail.blob"));
+        assert!((c - good).abs() < 1.0, "{value}: centre {c} against {good}");
         // Applied, its corrections follow the input (not one constant for every sample).
-        let r = calflash(
+        let r = cli(
             d,
-            &[
-                "apply",
-                data.to_str().unwrap(),
-                "--blob",
-                &blob,
-                "--temp-column",
-                "temp",
-                "-o",
-                "applied.csv",
-            ],
+            "apply rail.csv --blob rail.blob --temp-column temp -o applied.csv",
         );
         assert_eq!(r.code(), Some(0), "{}", r.err);
         let text = std::fs::read_to_string(d.join("applied.csv")).unwrap();
@@ -227,27 +195,21 @@ fn outputs_at_or_beyond_the_rails_are_left_out_of_the_fit_and_named() {
             .skip(1)
             .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
             .collect();
-        let spread = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        assert!(spread > 9.0, "{value}: corrections {values:?}");
+        let largest = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(largest > 9.0, "{value}: corrections {values:?}");
     }
     // Every output on a rail: nothing to fit, and the message says why.
-    let text = std::fs::read_to_string(examples().join("single_accel.csv")).unwrap();
+    let text = std::fs::read_to_string(d.join("single_accel.csv")).unwrap();
     let railed: String = text
         .lines()
         .enumerate()
-        .map(|(i, l)| {
-            if i == 0 {
-                format!("{l}\n")
-            } else {
-                let (head, _) = l.rsplit_once(',').unwrap();
-                format!("{head},65535\n")
-            }
+        .map(|(i, l)| match (i, l.rsplit_once(',')) {
+            (0, _) | (_, None) => format!("{l}\n"),
+            (_, Some((head, _))) => format!("{head},65535\n"),
         })
         .collect();
     std::fs::write(d.join("all_railed.csv"), railed).unwrap();
-    let r = calibrate_single(d, &d.join("all_railed.csv"), &["--blob", "x.blob"]);
-    assert_eq!(r.code(), Some(1));
-    assert!(r.err.contains("rails"), "{}", r.err);
+    calibrate_single(d, "all_railed.csv", "--blob x.blob").expect(1, "rails", "all railed");
     assert!(!d.join("x.blob").exists());
 }
 
@@ -255,49 +217,32 @@ fn outputs_at_or_beyond_the_rails_are_left_out_of_the_fit_and_named() {
 fn a_triad_count_beyond_the_rails_is_left_out() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let data = edited(
-        &examples().join("imu_bench.csv"),
+    edited("imu_bench.csv", d, "imu.csv", 4, 9, "1e308");
+    let r = cli(
         d,
-        "imu.csv",
-        4,
-        9,
-        "1e308",
-    );
-    let r = calflash(
-        d,
-        &[
-            "calibrate",
-            data.to_str().unwrap(),
-            "--sensor",
-            "accel",
-            "--serial",
-            "RT-3",
-            "--no-db",
-            "--blob",
-            "t.blob",
-        ],
+        "calibrate imu.csv --sensor accel --serial RT-3 --no-db --blob t.blob",
     );
     assert_ne!(r.code(), Some(1), "{}{}", r.out, r.err);
-    assert!(r.out.contains("line 4"), "{}", r.out);
-    assert!(r.out.contains("ADC rails"), "{}", r.out);
+    assert!(
+        r.out.contains("ADC rails") && r.out.contains("line 4"),
+        "{}",
+        r.out
+    );
 }
 
 #[test]
 fn a_command_that_fails_leaves_none_of_its_outputs() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = bench(&["single_accel.csv"]);
     let d = dir.path();
-    let data = copy_example(d, "single_accel.csv");
-    let r = calibrate_single(
+    calibrate_single(
         d,
-        &data,
-        &["--blob", "b.blob", "--report", "missing_dir/x.html"],
-    );
-    assert_eq!(r.code(), Some(1));
-    assert!(
-        r.err
-            .contains("--report missing_dir/x.html: the directory missing_dir does not exist"),
-        "{}",
-        r.err
+        "single_accel.csv",
+        "--blob b.blob --report missing_dir/x.html",
+    )
+    .expect(
+        1,
+        "--report missing_dir/x.html: the directory missing_dir does not exist",
+        "report into a missing directory",
     );
     assert_eq!(listing(d), ["single_accel.csv"], "nothing written");
 }
@@ -308,78 +253,57 @@ fn a_command_that_fails_leaves_none_of_its_outputs() {
 fn values_too_large_to_square_get_a_located_error_not_a_hang() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let big = single_with(d, "big.csv", 6, 6, "1e308");
-    let r = calflash(
+    edited("single_accel.csv", d, "big.csv", 6, 6, "1e308");
+    calflash(d, &["fit", "big.csv", "--model", "output ~ 1 + input"]).expect(
+        1,
+        "the fit overflows: its sums of squares exceed the largest f64, and the largest value is \
+         at line 6 (output = 1e308, input = ",
+        "fit 1e308",
+    );
+    edited("single_accel.csv", d, "wide.csv", 6, 0, "1e200");
+    let says = "wide.csv: line 6: the term input^2 overflows to inf (input = 1e200)";
+    calflash(
         d,
-        &[
-            "fit",
-            big.to_str().unwrap(),
-            "--model",
-            "output ~ 1 + input",
-        ],
-    );
-    assert_eq!(r.code(), Some(1), "{}", r.out);
-    assert!(
-        r.err.contains("the fit overflows") && r.err.contains("line 6 (output = 1e308, input = "),
-        "{}",
-        r.err
-    );
-    let wide = single_with(d, "wide.csv", 6, 0, "1e200");
-    let r = calflash(
-        d,
-        &[
-            "fit",
-            wide.to_str().unwrap(),
-            "--model",
-            "output ~ 1 + input + input^2",
-        ],
-    );
-    assert_eq!(r.code(), Some(1));
-    assert!(
-        r.err
-            .contains("wide.csv: line 6: the term input^2 overflows to inf (input = 1e200)"),
-        "{}",
-        r.err
-    );
-    let r = calibrate_single(d, &wide, &[]);
-    assert_eq!(r.code(), Some(1));
-    assert!(
-        r.err.contains("line 6: the term input^2 overflows"),
-        "{}",
-        r.err
-    );
+        &["fit", "wide.csv", "--model", "output ~ 1 + input + input^2"],
+    )
+    .expect(1, says, "fit 1e200");
+    calibrate_single(d, "wide.csv", "").expect(1, says, "calibrate 1e200");
 }
 
 #[test]
 fn models_and_options_that_used_to_hang_or_panic_are_refused() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = bench(&["single_accel.csv"]);
     let d = dir.path();
-    let data = copy_example(d, "single_accel.csv");
-    let cases: [(&[&str], i32, &str); 6] = [
-        (
-            &["--model", "output ~ 1"],
-            1,
-            "without the term `input` the model has no scale factor",
-        ),
-        (
-            &["--breakpoint", "nan"],
-            2,
-            "'nan' for '--breakpoint <BREAKPOINT>': a finite number is expected",
-        ),
-        (&["--alpha", "nan"], 2, "'nan' for '--alpha <ALPHA>'"),
-        (&["--alpha=-1"], 2, "'-1' for '--alpha <ALPHA>'"),
-        (&["--alpha", "-1"], 2, "'-1' for '--alpha <ALPHA>'"),
-        (
-            &["--model", "volts ~ 1 + input"],
-            1,
-            "the single-axis workflow's response is the `output` column",
-        ),
-    ];
-    for (args, code, says) in cases {
-        let r = calibrate_single(d, &data, args);
-        assert_eq!(r.code(), Some(code), "{args:?}: {}{}", r.out, r.err);
-        assert!(r.err.contains(says), "{args:?}: {}", r.err);
-        assert!(!r.err.contains("panicked"), "{args:?}: {}", r.err);
+    let cal = |extra: &[&str]| {
+        let mut args = vec![
+            "calibrate",
+            "single_accel.csv",
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "RT-1",
+            "--no-db",
+        ];
+        args.extend(extra);
+        calflash(d, &args)
+    };
+    cal(&["--model", "output ~ 1"]).expect(
+        1,
+        "without the term `input` the model has no scale factor",
+        "output ~ 1",
+    );
+    cal(&["--model", "volts ~ 1 + input"]).expect(
+        1,
+        "the single-axis workflow's response is the `output` column",
+        "volts ~",
+    );
+    for (option, says) in [
+        ("--breakpoint nan", "'nan' for '--breakpoint <BREAKPOINT>'"),
+        ("--alpha nan", "'nan' for '--alpha <ALPHA>'"),
+        ("--alpha=-1", "'-1' for '--alpha <ALPHA>'"),
+        ("--alpha -1", "'-1' for '--alpha <ALPHA>'"),
+    ] {
+        calibrate_single(d, "single_accel.csv", option).expect(2, says, option);
     }
 }
 
@@ -387,27 +311,13 @@ fn models_and_options_that_used_to_hang_or_panic_are_refused() {
 #[test]
 fn a_closed_pipe_ends_the_command_quietly() {
     use std::os::unix::process::ExitStatusExt as _;
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let data = copy_example(d, "single_accel.csv");
+    let dir = bench(&["single_accel.csv"]);
     // A pipe whose reader is gone before calflash writes a byte, as `| head -0` leaves it.
     let (reader, writer) = std::io::pipe().unwrap();
     drop(reader);
-    let r = calflash_with(
-        d,
-        &[
-            "calibrate",
-            data.to_str().unwrap(),
-            "--sensor",
-            "single-accel",
-            "--serial",
-            "RT-2",
-            "--no-db",
-            "--blob",
-            "p.blob",
-        ],
-        Stdio::from(writer),
-    );
+    let line = "calibrate single_accel.csv --sensor single-accel --serial RT-2 --no-db";
+    let args: Vec<&str> = line.split_whitespace().collect();
+    let r = calflash_with(dir.path(), &args, Stdio::from(writer));
     assert_eq!(r.status.signal(), Some(13), "ended by SIGPIPE, as `cat` is");
     assert_eq!(r.err, "", "no 'failed printing to stdout'");
 }
@@ -418,250 +328,103 @@ fn sizes_beyond_reason_are_refused_before_allocating() {
     let d = dir.path();
     // A staging file a killed run left behind goes the next time a command writes here.
     std::fs::write(d.join(".calflash-4000000000-abc.tmp"), "stale").unwrap();
-    let cases: [(&[&str], i32, &str); 8] = [
+    let single = "--model single";
+    let at = "--at input=1";
+    for (line, code, says) in [
         (
-            &[
-                "design",
-                "evaluate",
-                "--model",
-                "single",
-                "--plan",
-                "head:1000000000",
-            ],
+            format!("design evaluate {single} --plan head:1000000000"),
             1,
             "`1000000000` is not a count from 1 to 1000000",
         ),
         (
-            &[
-                "design",
-                "evaluate",
-                "--model",
-                "single",
-                "--plan",
-                "head:1000000,head:1000",
-            ],
+            format!("design evaluate {single} --plan head:1000000,head:1000"),
             1,
-            "1001000 conditions with every temperature, voltage and repeat; a plan holds at most 1000000",
+            "1001000 conditions with every temperature, voltage and repeat; a plan holds at \
+             most 1000000",
         ),
         (
-            &[
-                "simulate",
-                "--sensor",
-                "single-accel",
-                "--plan",
-                "head:100000000",
-                "-o",
-                "s.csv",
-            ],
+            "simulate --sensor single-accel --plan head:100000000 -o s.csv".into(),
             1,
             "`100000000` is not a count from 1 to 1000000",
         ),
         (
-            &[
-                "simulate",
-                "--sensor",
-                "single-accel",
-                "--plan",
-                "head:1000",
-                "--repeat",
-                "10000",
-                "-o",
-                "s.csv",
-            ],
+            "simulate --sensor single-accel --plan head:1000 --repeat 10000 -o s.csv".into(),
             1,
             "a plan holds at most 1000000",
         ),
         (
-            &[
-                "design", "optimize", "--model", "single", "--n", "1000000", "--output", "p.csv",
-            ],
+            "simulate --sensor imu --spin 300:3600 --sample-rate 10000 -o f.csv".into(),
+            1,
+            "a flight holds at most 1e7",
+        ),
+        (
+            format!("design optimize {single} --n 1000000 --output p.csv"),
             2,
             "'1000000' for '--n <N>': a count from 1 to 100000 is expected",
         ),
         (
-            &[
-                "design",
-                "predict",
-                "--model",
-                "single",
-                "--plan",
-                "head:10",
-                "--at",
-                "input=1",
-                "--monte-carlo",
-                "100000000",
-            ],
+            format!("design predict {single} --plan head:10 {at} --monte-carlo 100000000"),
             2,
             "a count from 10 to 100000 is expected",
         ),
         (
-            &[
-                "design",
-                "predict",
-                "--model",
-                "single",
-                "--plan",
-                "head:100000",
-                "--at",
-                "input=1",
-                "--monte-carlo",
-                "100000",
-            ],
+            format!("design predict {single} --plan head:100000 {at} --monte-carlo 100000"),
             1,
             "is 10000000000 simulated observations; at most 1e9",
         ),
         (
-            &[
-                "design",
-                "optimize",
-                "--model",
-                "single",
-                "--grid",
-                "input=-1:1:1000",
-                "--region",
-                "input=-1:1:1000000000000",
-                "--n",
-                "10",
-                "--output",
-                "p.csv",
-            ],
+            format!(
+                "design optimize {single} --grid input=-1:1:1000 \
+                 --region input=-1:1:1000000000000 --n 10 --output p.csv"
+            ),
             2,
             "N is at most 1000000",
         ),
-    ];
-    for (args, code, says) in cases {
-        let r = calflash(d, args);
-        assert_eq!(r.code(), Some(code), "{args:?}: {}{}", r.out, r.err);
-        assert!(r.err.contains(says), "{args:?}: {}", r.err);
+    ] {
+        cli(d, &line).expect(code, says, &line);
     }
-    let r = calflash(
-        d,
-        &[
-            "simulate",
-            "--sensor",
-            "single-accel",
-            "--plan",
-            "head:10",
-            "-o",
-            "s.csv",
-        ],
-    );
+    let r = cli(d, "simulate --sensor single-accel --plan head:10 -o s.csv");
     assert_eq!(r.code(), Some(0), "{}", r.err);
     assert_eq!(listing(d), ["s.csv"], "the stale staging file is gone");
-    let r = calflash(
-        d,
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--spin",
-            "300:3600",
-            "--sample-rate",
-            "10000",
-            "-o",
-            "f.csv",
-        ],
-    );
-    assert_eq!(r.code(), Some(1));
-    assert!(r.err.contains("a flight holds at most 1e7"), "{}", r.err);
 }
 
 // ---- It destroys or misfiles the user's work ----
 
 #[test]
 fn no_output_may_be_an_input_or_another_output() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = bench(&["single_accel.csv"]);
     let d = dir.path();
-    let data = copy_example(d, "single_accel.csv");
-    let original = std::fs::read(&data).unwrap();
-    let r = calibrate_single(d, &data, &["--blob", "b.blob", "--json", "a.json"]);
+    let original = std::fs::read(d.join("single_accel.csv")).unwrap();
+    let r = calibrate_single(d, "single_accel.csv", "--blob b.blob --json a.json");
     assert_eq!(r.code(), Some(0), "{}", r.err);
     std::fs::copy(d.join("a.json"), d.join("b.json")).unwrap();
-    std::fs::hard_link(&data, d.join("link.csv")).unwrap();
+    std::fs::hard_link(d.join("single_accel.csv"), d.join("link.csv")).unwrap();
     let before = listing(d);
-    let cases: [&[&str]; 8] = [
-        &[
-            "calibrate",
-            "single_accel.csv",
-            "--sensor",
-            "single-accel",
-            "--serial",
-            "RT-1",
-            "--no-db",
-            "--blob",
-            "single_accel.csv",
-        ],
-        &[
-            "calibrate",
-            "single_accel.csv",
-            "--sensor",
-            "single-accel",
-            "--serial",
-            "RT-1",
-            "--no-db",
-            "--blob",
-            "./sub/../link.csv",
-        ],
-        &[
-            "calibrate",
-            "single_accel.csv",
-            "--sensor",
-            "single-accel",
-            "--serial",
-            "RT-1",
-            "--no-db",
-            "--blob",
-            "x.out",
-            "--json",
-            "./x.out",
-        ],
-        &[
-            "apply",
-            "single_accel.csv",
-            "--blob",
-            "b.blob",
-            "-o",
-            "link.csv",
-        ],
-        &["image", "--blob", "b.blob", "--hex", "b.blob"],
-        &["compare", "a.json", "b.json", "--json", "a.json"],
-        &[
-            "simulate",
-            "--sensor",
-            "single-accel",
-            "--plan",
-            "head:5",
-            "-o",
-            "t",
-            "--write-truth",
-            "t",
-        ],
-        &[
-            "calibrate",
-            "single_accel.csv",
-            "--sensor",
-            "single-accel",
-            "--serial",
-            "RT-1",
-            "--db",
-            "single_accel.csv",
-        ],
-    ];
     std::fs::create_dir(d.join("sub")).unwrap();
-    for args in cases {
-        let r = calflash(d, args);
-        assert_eq!(r.code(), Some(1), "{args:?}: {}{}", r.out, r.err);
+    let cal = "calibrate single_accel.csv --sensor single-accel --serial RT-1";
+    for line in [
+        format!("{cal} --no-db --blob single_accel.csv"),
+        format!("{cal} --no-db --blob ./sub/../link.csv"),
+        format!("{cal} --no-db --blob x.out --json ./x.out"),
+        format!("{cal} --db single_accel.csv"),
+        "apply single_accel.csv --blob b.blob -o link.csv".into(),
+        "image --blob b.blob --hex b.blob".into(),
+        "compare a.json b.json --json a.json".into(),
+        "simulate --sensor single-accel --plan head:5 -o t --write-truth t".into(),
+    ] {
+        let r = cli(d, &line);
+        assert_eq!(r.code(), Some(1), "{line}: {}{}", r.out, r.err);
         assert!(
             r.err.contains("the command would replace its own input")
                 || r.err.contains("name one file"),
-            "{args:?}: {}",
+            "{line}: {}",
             r.err
         );
     }
     std::fs::remove_dir(d.join("sub")).unwrap();
     assert_eq!(listing(d), before, "nothing added");
     assert_eq!(
-        std::fs::read(&data).unwrap(),
+        std::fs::read(d.join("single_accel.csv")).unwrap(),
         original,
         "the input is intact"
     );
@@ -671,241 +434,99 @@ fn no_output_may_be_an_input_or_another_output() {
 fn history_and_compare_never_create_a_database_and_a_newer_schema_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let r = calflash(d, &["history", "RT-1", "--db", "nowhere/units.sqlite"]);
-    assert_eq!(r.code(), Some(1));
-    assert!(r.err.contains("nowhere/units.sqlite"), "{}", r.err);
-    let r = calflash(d, &["compare", "db:1", "db:2", "--db", "none.sqlite"]);
+    cli(d, "history RT-1 --db nowhere/units.sqlite").expect(1, "nowhere/units.sqlite", "history");
+    let r = cli(d, "compare db:1 db:2 --db none.sqlite");
     assert_eq!(r.code(), Some(1));
     assert_eq!(listing(d), Vec::<String>::new(), "no database created");
 
     // A database written by a newer calflash.
-    let db = d.join("newer.sqlite");
-    let c = rusqlite::Connection::open(&db).unwrap();
+    let c = rusqlite::Connection::open(d.join("newer.sqlite")).unwrap();
     c.execute_batch("PRAGMA user_version = 99;").unwrap();
     drop(c);
-    let r = calflash(d, &["history", "RT-1", "--db", "newer.sqlite"]);
-    assert_eq!(r.code(), Some(1));
-    assert!(r.err.contains("99"), "{}", r.err);
-    let data = copy_example(d, "single_accel.csv");
-    let r = calflash(
+    cli(d, "history RT-1 --db newer.sqlite").expect(1, "99", "history of a newer database");
+    std::fs::copy(
+        examples().join("single_accel.csv"),
+        d.join("single_accel.csv"),
+    )
+    .unwrap();
+    cli(
         d,
-        &[
-            "calibrate",
-            data.to_str().unwrap(),
-            "--sensor",
-            "single-accel",
-            "--serial",
-            "RT-1",
-            "--db",
-            "newer.sqlite",
-        ],
-    );
-    assert_ne!(r.code(), Some(0));
-    assert!(r.err.contains("99"), "{}", r.err);
+        "calibrate single_accel.csv --sensor single-accel --serial RT-1 --db newer.sqlite",
+    )
+    .expect(1, "99", "calibrate into a newer database");
 }
 
 // ---- It accepts nonsense and answers with confident output ----
 
 #[test]
 fn nonsense_options_are_refused_naming_the_option() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = bench(&["single_accel.csv", "fine_steps.csv"]);
     let d = dir.path();
-    copy_example(d, "single_accel.csv");
-    copy_example(d, "fine_steps.csv");
-    let cal = [
-        "calibrate",
-        "single_accel.csv",
-        "--sensor",
-        "single-accel",
-        "--serial",
-        "RT-1",
-        "--no-db",
-    ];
-    let with = |extra: &[&'static str]| -> Vec<&'static str> {
-        cal.iter().chain(extra).copied().collect()
-    };
-    let cases: Vec<(Vec<&str>, &str)> = vec![
-        (with(&["--alpha", "2"]), "--alpha <ALPHA>"),
-        (with(&["--alpha", "0"]), "--alpha <ALPHA>"),
-        (with(&["--alpha", "1"]), "--alpha <ALPHA>"),
-        (with(&["--max-noise", "nan"]), "--max-noise <MAX_NOISE>"),
+    let cal = "calibrate single_accel.csv --sensor single-accel --serial RT-1 --no-db";
+    let selfcal = "selfcal r.txt --g 9.81 --serial A";
+    let predict = "design predict --model single --at input=1";
+    let flash = "flash --blob b.blob --port tcp:127.0.0.1:9";
+    let before = listing(d);
+    for (line, option) in [
+        (format!("{cal} --alpha 2"), "--alpha <ALPHA>"),
+        (format!("{cal} --alpha 0"), "--alpha <ALPHA>"),
+        (format!("{cal} --alpha 1"), "--alpha <ALPHA>"),
+        (format!("{cal} --max-noise nan"), "--max-noise <MAX_NOISE>"),
+        ("compare a.json b.json --alpha 2".into(), "--alpha <ALPHA>"),
         (
-            vec!["compare", "a.json", "b.json", "--alpha", "2"],
-            "--alpha <ALPHA>",
-        ),
-        (
-            vec![
-                "selfcal",
-                "r.txt",
-                "--g",
-                "9.81",
-                "--serial",
-                "A",
-                "--init-rest=-5",
-            ],
+            format!("{selfcal} --init-rest=-5"),
             "--init-rest <INIT_REST>",
         ),
         (
-            vec![
-                "selfcal",
-                "r.txt",
-                "--g",
-                "9.81",
-                "--serial",
-                "A",
-                "--init-rest",
-                "nan",
-            ],
+            format!("{selfcal} --init-rest nan"),
             "--init-rest <INIT_REST>",
         ),
+        (format!("{selfcal} --window 0"), "--window <WINDOW>"),
         (
-            vec![
-                "selfcal", "r.txt", "--g", "9.81", "--serial", "A", "--window", "0",
-            ],
-            "--window <WINDOW>",
-        ),
-        (
-            vec![
-                "design",
-                "predict",
-                "--model",
-                "single",
-                "--plan",
-                "head:10",
-                "--at",
-                "input=1",
-                "--noise=-1",
-            ],
+            format!("{predict} --plan head:10 --noise=-1"),
             "--noise <NOISE>",
         ),
         (
-            vec![
-                "design",
-                "evaluate",
-                "--model",
-                "single",
-                "--plan",
-                "head:10",
-                "--noise=-2",
-            ],
+            "design evaluate --model single --plan head:10 --noise=-2".into(),
             "--noise <NOISE>",
         ),
         (
-            vec![
-                "design", "evaluate", "--model", "single", "--plan", "head:10", "--scale", "0",
-            ],
+            "design evaluate --model single --plan head:10 --scale 0".into(),
             "--scale <SCALE>",
         ),
         (
-            vec![
-                "design",
-                "predict",
-                "--model",
-                "single",
-                "--grid",
-                "input=-9:9:11",
-                "--at",
-                "input=1",
-                "--target",
-                "nan",
-            ],
+            format!("{predict} --grid input=-9:9:11 --target nan"),
             "--target <TARGET>",
         ),
         (
-            vec![
-                "design",
-                "predict",
-                "--model",
-                "single",
-                "--grid",
-                "input=-9:9:11",
-                "--at",
-                "input=1",
-                "--target=-1",
-            ],
+            format!("{predict} --grid input=-9:9:11 --target=-1"),
             "--target <TARGET>",
         ),
         (
-            vec![
-                "design",
-                "optimize",
-                "--model",
-                "single",
-                "--grid",
-                "input=-1:1:11",
-                "--region",
-                "input=-1:1:0",
-                "--n",
-                "10",
-                "--output",
-                "p.csv",
-            ],
+            "design optimize --model single --grid input=-1:1:11 --region input=-1:1:0 --n 10 \
+             --output p.csv"
+                .into(),
             "--region <REGION>",
         ),
+        (format!("{flash} --timeout 0"), "--timeout <TIMEOUT>"),
+        (format!("{flash} --vectors 0"), "--vectors <VECTORS>"),
         (
-            vec![
-                "flash",
-                "--blob",
-                "b.blob",
-                "--port",
-                "tcp:127.0.0.1:9",
-                "--timeout",
-                "0",
-            ],
-            "--timeout <TIMEOUT>",
-        ),
-        (
-            vec![
-                "flash",
-                "--blob",
-                "b.blob",
-                "--port",
-                "tcp:127.0.0.1:9",
-                "--vectors",
-                "0",
-            ],
-            "--vectors <VECTORS>",
-        ),
-        (
-            vec![
-                "simulate",
-                "--sensor",
-                "single-accel",
-                "--plan",
-                "head:5",
-                "--temps",
-                "nan",
-                "-o",
-                "s.csv",
-            ],
+            "simulate --sensor single-accel --plan head:5 --temps nan -o s.csv".into(),
             "--temps <TEMPS>",
         ),
         (
-            vec!["threshold", "fine_steps.csv", "--scale", "0"],
+            "threshold fine_steps.csv --scale 0".into(),
             "--scale <SCALE>",
         ),
         (
-            vec![
-                "threshold",
-                "fine_steps.csv",
-                "--scale",
-                "400",
-                "--bias",
-                "inf",
-            ],
+            "threshold fine_steps.csv --scale 400 --bias inf".into(),
             "--bias <BIAS>",
         ),
-    ];
-    let before = listing(d);
-    for (args, option) in cases {
-        let r = calflash(d, &args);
-        assert_eq!(r.code(), Some(2), "{args:?}: {}{}", r.out, r.err);
-        assert!(
-            r.err.starts_with("error: invalid value") && r.err.contains(option),
-            "{args:?}: {}",
-            r.err
-        );
-        assert_eq!(r.out, "", "{args:?}: nothing confident on stdout");
+    ] {
+        let r = cli(d, &line);
+        r.expect(2, "error: invalid value", &line);
+        assert!(r.err.contains(option), "{line}: {}", r.err);
+        assert_eq!(r.out, "", "{line}: nothing confident on stdout");
     }
     assert_eq!(listing(d), before, "nothing written");
 }
@@ -913,37 +534,31 @@ fn nonsense_options_are_refused_naming_the_option() {
 #[test]
 fn design_answers_only_about_what_the_model_reads() {
     let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let r = calflash(
-        d,
-        &[
-            "design", "predict", "--model", "single", "--plan", "head:10", "--at", "nope=1",
-        ],
+    let r = cli(
+        dir.path(),
+        "design predict --model single --plan head:10 --at nope=1",
     );
-    assert_eq!(r.code(), Some(1), "{}", r.out);
-    assert!(
-        r.err
-            .contains("--at `nope=1`: the model reads no `nope`; it reads input"),
-        "{}",
-        r.err
+    r.expect(
+        1,
+        "--at `nope=1`: the model reads no `nope`; it reads input",
+        "--at nope=1",
     );
     assert_eq!(r.out, "");
 }
 
 #[test]
 fn a_given_bias_is_used_even_when_the_run_has_an_input_of_zero() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    copy_example(d, "fine_steps.csv");
-    let run = |extra: &[&str]| {
-        let mut args = vec!["threshold", "fine_steps.csv", "--scale", "400"];
-        args.extend(extra);
-        let r = calflash(d, &args);
+    let dir = bench(&["fine_steps.csv"]);
+    let run = |extra: &str| {
+        let r = cli(
+            dir.path(),
+            &format!("threshold fine_steps.csv --scale 400 {extra}"),
+        );
         assert_eq!(r.code(), Some(0), "{}", r.err);
         r.out
     };
-    let own = run(&[]);
-    let given = run(&["--bias", "32000"]);
+    let own = run("");
+    let given = run("--bias 32000");
     assert!(own.contains("(the run's mean at input 0)"), "{own}");
     assert!(
         given.contains("output at zero input  32000 counts (--bias; the run's mean at input 0 is "),
@@ -956,37 +571,18 @@ fn a_given_bias_is_used_even_when_the_run_has_an_input_of_zero() {
 fn simulated_values_are_finite_and_codes_stay_within_the_rails() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let r = calflash(
+    cli(
         d,
-        &[
-            "simulate",
-            "--sensor",
-            "single-accel",
-            "--plan",
-            "centrifuge:0:1e308:5",
-            "-o",
-            "c.csv",
-        ],
+        "simulate --sensor single-accel --plan centrifuge:0:1e308:5 -o c.csv",
+    )
+    .expect(
+        1,
+        "`1e308` is not a number from -100000 to 100000 g",
+        "centrifuge",
     );
-    assert_eq!(r.code(), Some(1));
-    assert!(
-        r.err
-            .contains("`1e308` is not a number from -100000 to 100000 g"),
-        "{}",
-        r.err
-    );
-    let r = calflash(
+    let r = cli(
         d,
-        &[
-            "simulate",
-            "--sensor",
-            "single-accel",
-            "--plan",
-            "fine:-2000:2000:41",
-            "--quantize",
-            "-o",
-            "q.csv",
-        ],
+        "simulate --sensor single-accel --plan fine:-2000:2000:41 --quantize -o q.csv",
     );
     assert_eq!(r.code(), Some(0), "{}", r.err);
     assert!(
@@ -1006,26 +602,22 @@ fn simulated_values_are_finite_and_codes_stay_within_the_rails() {
 fn an_allan_sample_too_large_to_square_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let mut text = String::new();
-    for i in 0..400 {
-        let g = if i == 150 {
-            "1e300".to_string()
-        } else {
-            format!("{}", 32768 + i % 7)
-        };
-        text.push_str(&format!(
-            "{:.2},32768,32770,36000,{g},32769,32767\n",
-            f64::from(i) * 0.01
-        ));
-    }
+    let text: String = (0..400)
+        .map(|i| {
+            let g = if i == 150 {
+                "1e300".to_string()
+            } else {
+                format!("{}", 32768 + i % 7)
+            };
+            let t = f64::from(i) * 0.01;
+            format!("{t:.2},32768,32770,36000,{g},32769,32767\n")
+        })
+        .collect();
     std::fs::write(d.join("still.csv"), text).unwrap();
-    let r = calflash(d, &["allan", "still.csv", "--sensor", "gyro"]);
-    assert_eq!(r.code(), Some(1), "{}", r.out);
-    assert!(
-        r.err
-            .contains("still.csv:151: gyro axis x = 1e300: too large for the Allan deviation"),
-        "{}",
-        r.err
+    cli(d, "allan still.csv --sensor gyro").expect(
+        1,
+        "still.csv:151: gyro axis x = 1e300: too large for the Allan deviation",
+        "allan",
     );
 }
 
@@ -1033,14 +625,13 @@ fn an_allan_sample_too_large_to_square_is_named() {
 
 #[test]
 fn a_byte_order_mark_is_stripped_and_said() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = bench(&["single_accel.csv"]);
     let d = dir.path();
-    let plain = copy_example(d, "single_accel.csv");
     let mut bom = b"\xEF\xBB\xBF".to_vec();
-    bom.extend(std::fs::read(&plain).unwrap());
+    bom.extend(std::fs::read(d.join("single_accel.csv")).unwrap());
     std::fs::write(d.join("bom.csv"), bom).unwrap();
-    let a = calibrate_single(d, &plain, &[]);
-    let b = calibrate_single(d, &d.join("bom.csv"), &[]);
+    let a = calibrate_single(d, "single_accel.csv", "");
+    let b = calibrate_single(d, "bom.csv", "");
     assert_eq!(b.code(), Some(0), "{}", b.err);
     assert!(
         b.err
@@ -1055,13 +646,9 @@ fn a_byte_order_mark_is_stripped_and_said() {
 #[test]
 fn negative_option_values_need_no_equals_sign() {
     let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let r = calflash(
-        d,
-        &[
-            "simulate", "--sensor", "accel", "--plan", "tumble:6", "--temps", "-40,25", "-o",
-            "t.csv",
-        ],
+    let r = cli(
+        dir.path(),
+        "simulate --sensor accel --plan tumble:6 --temps -40,25 -o t.csv",
     );
     assert_eq!(r.code(), Some(0), "{}", r.err);
     assert!(r.out.contains("12 observations"), "{}", r.out);
@@ -1071,17 +658,10 @@ fn negative_option_values_need_no_equals_sign() {
 fn a_huge_line_is_not_echoed_whole() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    std::fs::write(
-        d.join("long.csv"),
-        format!("input,output\n1,{}\n", "7".repeat(20_000_000)),
-    )
-    .unwrap();
-    let r = calibrate_single(d, &d.join("long.csv"), &[]);
-    assert_eq!(r.code(), Some(1));
+    let line = "7".repeat(20_000_000);
+    std::fs::write(d.join("long.csv"), format!("input,output\n1,{line}\n")).unwrap();
+    let r = calibrate_single(d, "long.csv", "");
+    r.expect(1, "long.csv:2:2:", "a 20 MB line");
     assert!(r.err.len() < 400, "{} bytes of error", r.err.len());
-    assert!(
-        r.err.contains("long.csv:2:2:") && r.err.contains("(20000000 bytes)"),
-        "{}",
-        r.err
-    );
+    assert!(r.err.contains("(20000000 bytes)"), "{}", r.err);
 }
