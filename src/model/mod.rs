@@ -121,6 +121,17 @@ impl Rails {
         }
     }
 
+    /// The rails of a signed (two's-complement) `bits`-bit converter: `-2^(bits-1)` and
+    /// `2^(bits-1) - 1`.
+    #[must_use]
+    pub const fn signed(bits: u32) -> Self {
+        let half = 1i64 << (bits - 1);
+        Self {
+            lo: -half as i32,
+            hi: (half - 1) as i32,
+        }
+    }
+
     /// True when `raw` is at or beyond a rail.
     #[must_use]
     pub const fn saturated(&self, raw: i32) -> bool {

@@ -587,7 +587,7 @@ fn simulated_values_are_finite_and_codes_stay_within_the_rails() {
     assert_eq!(r.code(), Some(0), "{}", r.err);
     assert!(
         r.out
-            .contains("saturated at the 16-bit converter's rails 0 and 65535"),
+            .contains("saturated at the unsigned16 converter's rails 0 and 65535"),
         "{}",
         r.out
     );

@@ -23,10 +23,14 @@ pub enum Which {
 /// Allan deviation of a still recording.
 #[derive(Debug, Args)]
 pub struct AllanArgs {
-    /// The recording (as `calflash selfcal` reads it).
+    /// The recording (as `calflash selfcal` reads it), or a file of the one sensor `--sensor`
+    /// names (a timestamp, or none with `--rate`, and three counts a line).
     pub acc: PathBuf,
     /// The gyro file, when separate.
     pub gyro: Option<PathBuf>,
+    /// The sample rate, Hz, of a recording without timestamps (checked against them otherwise).
+    #[arg(long, value_parser = |s: &str| values::in_range(s, 1.0e-3, 1.0e6))]
+    pub rate: Option<f64>,
     /// Which sensor.
     #[arg(long, value_enum, default_value = "gyro")]
     pub sensor: Which,
@@ -62,14 +66,23 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
         .output("--plot", args.plot.as_deref())
         .output("--json", args.json.as_deref())
         .check()?;
-    let rec = recording::read(
-        &args.acc,
-        args.gyro.as_deref(),
-        Rails {
+    let opts = recording::Options {
+        rails: Rails {
             lo: i32::MIN,
             hi: i32::MAX,
         },
-    )
+        rate: args.rate,
+    };
+    let rec = match &args.gyro {
+        Some(g) => recording::read_with(&args.acc, Some(g), &opts),
+        // Both sensors in one file, or the one sensor --sensor names (read as both halves).
+        None => recording::read_with(&args.acc, None, &opts).or_else(|both| match both {
+            recording::RecordingError::Fields { .. } => {
+                recording::read_with(&args.acc, Some(&args.acc), &opts).map_err(|_| both)
+            }
+            e => Err(e),
+        }),
+    }
     .map_err(|e| e.to_string())?;
     let t0 = rec.t[0];
     let (a, b) = (args.from.unwrap_or(0.0), args.to.unwrap_or(f64::INFINITY));

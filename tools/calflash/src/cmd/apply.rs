@@ -97,7 +97,11 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
             ));
         }
     };
-    let rec = crate::obs::recording::read(acc, gyro, rails).map_err(|e| e.to_string())?;
+    let opts = crate::obs::recording::Options {
+        rails,
+        rate: args.rate,
+    };
+    let rec = crate::obs::recording::read_with(acc, gyro, &opts).map_err(|e| e.to_string())?;
     Ok(Input {
         header: "line,t".into(),
         labels: rec

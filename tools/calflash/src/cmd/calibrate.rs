@@ -68,12 +68,10 @@ pub struct CalibrateArgs {
     /// Single axis: the asymmetry breakpoint (input units).
     #[arg(long, default_value_t = 0.0, value_parser = values::finite)]
     pub breakpoint: f64,
-    /// ADC resolution: rails at 0 and 2^bits - 1.
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=24))]
-    pub adc_bits: u32,
-    /// ADC rails LO:HI (instead of --adc-bits).
-    #[arg(long, value_name = "LO:HI")]
-    pub rails: Option<String>,
+    /// The converter's codes: unsigned16 (also offset binary), signed16 (two's complement), any
+    /// width from 8 to 32 bits, or the rails LO:HI. Outputs at or beyond a rail are left out.
+    #[arg(long, default_value = "unsigned16", value_parser = values::codes)]
+    pub codes: Rails,
     /// Calibrated temperature span when the data have no temp column.
     #[arg(long, value_name = "LO:HI", default_value = "20:30")]
     pub temp_span: String,
@@ -135,16 +133,7 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
     opts.breakpoint = args.breakpoint;
     opts.model.clone_from(&args.model);
     opts.max_noise = args.max_noise;
-    opts.rails = match &args.rails {
-        Some(r) => {
-            let (lo, hi) = pair(r, "--rails")?;
-            Rails {
-                lo: lo as i32,
-                hi: hi as i32,
-            }
-        }
-        None => Rails::unsigned(args.adc_bits),
-    };
+    opts.rails = args.codes;
     if let (Some(lat), Some(heading)) = (args.latitude, args.heading) {
         if matches!(
             args.sensor,

@@ -26,9 +26,13 @@ pub struct SelfcalArgs {
     /// The unit's serial number.
     #[arg(long)]
     pub serial: String,
-    /// Length of the rest at the start of the recording, s.
-    #[arg(long, default_value_t = 30.0, value_parser = super::values::positive)]
-    pub init_rest: f64,
+    /// Length of the rest at the start of the recording, s (default: what the logger's
+    /// preamble states, else 30).
+    #[arg(long, value_parser = super::values::positive)]
+    pub init_rest: Option<f64>,
+    /// The sample rate, Hz, of a recording without timestamps (checked against them otherwise).
+    #[arg(long, value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
+    pub rate: Option<f64>,
     /// Window of the still measure, s.
     #[arg(long, default_value_t = 1.0, value_parser = super::values::positive)]
     pub window: f64,
@@ -41,9 +45,10 @@ pub struct SelfcalArgs {
     /// Where the gyro bias during rotations comes from.
     #[arg(long, value_enum, default_value = "poses")]
     pub gyro_bias: GyroBias,
-    /// ADC bits (rails at 0 and 2^bits - 1; samples there are excluded).
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=31))]
-    pub bits: u32,
+    /// The converter's codes: unsigned16 (also offset binary), signed16 (two's complement), any
+    /// width from 8 to 32 bits, or the rails LO:HI. Samples at a rail are excluded.
+    #[arg(long, default_value = "unsigned16", value_parser = super::values::codes)]
+    pub codes: Rails,
     /// Calibrated temperature span, C (LO:HI), stored for the device's flags.
     #[arg(long, default_value = "20:30")]
     pub temp_span: String,
@@ -54,6 +59,9 @@ pub struct SelfcalArgs {
     #[command(flatten)]
     pub out: Outputs,
 }
+
+/// The initial rest assumed when neither `--init-rest` nor the recording states one, s.
+const DEFAULT_REST: f64 = 30.0;
 
 /// Local gravity, m/s^2: between 9.7 and 9.9 on the Earth's surface.
 fn gravity(s: &str) -> Result<f64, String> {
@@ -76,11 +84,24 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
     let serial = device::serial(&args.serial)?;
     let (t0, t1) = super::calibrate::pair(&args.temp_span, "--temp-span")?;
     let (v0, v1) = super::calibrate::pair(&args.volt_span, "--volt-span")?;
-    let rails = Rails::unsigned(args.bits);
-    let rec = recording::read(&args.acc, args.gyro.as_deref(), rails).map_err(|e| e.to_string())?;
+    let rails = args.codes;
+    let rec = recording::read_with(
+        &args.acc,
+        args.gyro.as_deref(),
+        &recording::Options {
+            rails,
+            rate: args.rate,
+        },
+    )
+    .map_err(|e| e.to_string())?;
+    let init_rest = match (args.init_rest, rec.rest) {
+        (Some(r), _) => r,
+        (None, Some(r)) => r,
+        (None, None) => DEFAULT_REST,
+    };
     let opts = Options {
         g: args.g,
-        init_rest: args.init_rest,
+        init_rest,
         window: args.window,
         min_still: args.min_still,
         quadratic: args.quadratic,

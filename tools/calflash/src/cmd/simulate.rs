@@ -67,9 +67,10 @@ pub struct SimulateArgs {
     /// Round outputs to whole counts (single readings rather than averages).
     #[arg(long)]
     pub quantize: bool,
-    /// ADC bits: outputs saturate at the rails 0 and 2^bits - 1, as the converter's do.
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=31))]
-    pub bits: u32,
+    /// The converter's codes (unsigned16, signed16, any width from 8 to 32 bits, or LO:HI):
+    /// outputs saturate at its rails, as the converter's do.
+    #[arg(long, default_value = "unsigned16", value_parser = super::values::codes)]
+    pub codes: spincal::model::Rails,
     /// True coefficients (JSON, the fields of the sensor's truth); default: a typical unit.
     #[arg(long)]
     pub truth: Option<PathBuf>,
@@ -195,7 +196,7 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
         seed: args.seed,
     };
     let mut samples = spin::run(&truth, &run);
-    let rails = spincal::model::Rails::unsigned(args.bits);
+    let rails = args.codes;
     let mut saturated = 0;
     for code in samples.iter_mut().flat_map(|s| s.raw.iter_mut()) {
         let v = code.clamp(f64::from(rails.lo), f64::from(rails.hi));
@@ -217,8 +218,10 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     );
     if saturated > 0 {
         println!(
-            "  {saturated} code(s) saturated at the {}-bit converter's rails 0 and {}",
-            args.bits, rails.hi
+            "  {saturated} code(s) saturated at the {} converter's rails {} and {}",
+            crate::obs::codes::name(rails),
+            rails.lo,
+            rails.hi
         );
     }
     Ok(())
@@ -284,7 +287,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         station.as_ref(),
     )
     .map_err(|e| format!("--latitude: {e}"))?;
-    let saturated = obs.saturate(spincal::model::Rails::unsigned(args.bits));
+    let saturated = obs.saturate(args.codes);
     let mut staged = Staged::new();
     staged.write(&args.output, |w| obs.write_csv(w))?;
     if let Some(p) = &args.write_truth {
@@ -304,9 +307,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     );
     if saturated > 0 {
         println!(
-            "  {saturated} output(s) saturated at the {}-bit converter's rails 0 and {}",
-            args.bits,
-            spincal::model::Rails::unsigned(args.bits).hi
+            "  {saturated} output(s) saturated at the {} converter's rails {} and {}",
+            crate::obs::codes::name(args.codes),
+            args.codes.lo,
+            args.codes.hi
         );
     }
     Ok(())

@@ -121,6 +121,49 @@ pub fn at_least_one(s: &str) -> Result<usize, String> {
     count_in(s, 1, 1_000_000_000)
 }
 
+/// The converter's code format: `unsigned16` (also offset binary), `signed16` (two's
+/// complement), any width from 8 to 32 bits; or the rails `LO:HI` of another converter.
+///
+/// # Errors
+/// Anything else, with the forms that are understood.
+pub fn codes(s: &str) -> Result<spincal::model::Rails, String> {
+    use spincal::model::Rails;
+    let expected = "expected unsigned16, signed16 (any width from 8 to 32 bits; unsigned is \
+                    also offset binary) or the rails LO:HI";
+    let t = s.trim();
+    let width = |w: &str| {
+        w.parse::<u32>()
+            .ok()
+            .filter(|b| (8..=32).contains(b))
+            .ok_or_else(|| format!("`{s}`: {expected}"))
+    };
+    if let Some(w) = t.strip_prefix("unsigned") {
+        let bits = width(w)?;
+        // The rails are i32: a 32-bit unsigned converter's top half is beyond them.
+        return if bits == 32 {
+            Err(format!(
+                "`{s}`: unsigned codes of up to 31 bits are supported"
+            ))
+        } else {
+            Ok(Rails::unsigned(bits))
+        };
+    }
+    if let Some(w) = t.strip_prefix("signed") {
+        return Ok(Rails::signed(width(w)?));
+    }
+    if let Some((lo, hi)) = t.split_once(':') {
+        let (Ok(lo), Ok(hi)) = (lo.trim().parse::<i32>(), hi.trim().parse::<i32>()) else {
+            return Err(format!("`{s}`: {expected}"));
+        };
+        return if lo < hi {
+            Ok(Rails { lo, hi })
+        } else {
+            Err(format!("`{s}`: the low rail must be below the high one"))
+        };
+    }
+    Err(format!("`{s}`: {expected}"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -142,5 +185,48 @@ mod tests {
         assert_eq!(count_in("3", 1, 5), Ok(3));
         assert!(count_in("0", 1, 5).is_err() && count_in("-1", 1, 5).is_err());
         assert!(at_least_one("0").is_err());
+    }
+
+    use spincal::model::Rails;
+
+    #[test]
+    fn code_formats_read_and_name_themselves() {
+        assert_eq!(
+            codes("signed16"),
+            Ok(Rails {
+                lo: -32768,
+                hi: 32767
+            })
+        );
+        assert_eq!(codes("unsigned12"), Ok(Rails { lo: 0, hi: 4095 }));
+        assert_eq!(
+            codes("signed32"),
+            Ok(Rails {
+                lo: i32::MIN,
+                hi: i32::MAX
+            })
+        );
+        assert_eq!(codes("signed8"), Ok(Rails { lo: -128, hi: 127 }));
+        assert_eq!(codes("-100:100"), Ok(Rails { lo: -100, hi: 100 }));
+        for bad in [
+            "signed7",
+            "unsigned33",
+            "unsigned32",
+            "16",
+            "5:5",
+            "x:1",
+            "int16",
+        ] {
+            assert!(codes(bad).is_err(), "{bad}");
+        }
+        for name in [
+            "signed16",
+            "unsigned16",
+            "signed24",
+            "unsigned12",
+            "-100:100",
+        ] {
+            assert_eq!(crate::obs::codes::name(codes(name).unwrap()), name);
+        }
     }
 }

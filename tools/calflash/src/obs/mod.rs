@@ -3,6 +3,8 @@
 //! millions of rows streams through in one pass. Every error names the file, the line and the
 //! column.
 
+pub mod codes;
+pub mod layout;
 pub mod recording;
 pub mod timing;
 

@@ -1,7 +1,8 @@
-//! Raw IMU recordings: a timestamp and three ADC counts per line for each sensor, as
+//! Raw IMU recordings: ADC counts of each sensor, with a timestamp or at a stated rate, as
 //! whitespace-separated text (the layout of the Xsens MTi test data) or CSV; separate
-//! accelerometer and gyro files, or one file of seven columns (t, ax, ay, az, gx, gy, gz).
-//! Lines starting with `#` and a leading header line of names are skipped.
+//! accelerometer and gyro files, or one file of both (t, ax, ay, az, gx, gy, gz, or without t).
+//! A preamble of logger settings and a header naming the columns are read as
+//! [`super::layout`] says; lines starting with `#` are skipped.
 //!
 //! Every error names the file and line (and the field); timestamps must increase; gaps (a step
 //! longer than 1.5 sampling periods) are reported, as are samples at the converter's rails,
@@ -10,6 +11,8 @@
 use std::path::{Path, PathBuf};
 
 use spincal::model::Rails;
+
+use super::layout;
 
 /// A failure to read a recording.
 #[derive(Debug, thiserror::Error)]
@@ -86,6 +89,42 @@ pub enum RecordingError {
         /// What differs.
         what: String,
     },
+    /// Codes that show the recording is in another format than the one given.
+    #[error(
+        "{path}:{line}: {advice} (the first is {value}, field {field}; the format given is {format})"
+    )]
+    WrongCodes {
+        /// File.
+        path: PathBuf,
+        /// Line of the first code beyond the rails.
+        line: usize,
+        /// Its 1-based field.
+        field: usize,
+        /// Its value.
+        value: f64,
+        /// The format given.
+        format: String,
+        /// What the codes look like, and the option to give.
+        advice: String,
+    },
+    /// No timestamps and no rate.
+    #[error(
+        "{path}: no timestamp column and no sample rate: give --rate HZ (or a preamble line `Fs,HZ`)"
+    )]
+    NoRate {
+        /// File.
+        path: PathBuf,
+    },
+    /// A stated rate that the timestamps or another statement contradict.
+    #[error("{path}:{line}: {what}")]
+    RateConflict {
+        /// File.
+        path: PathBuf,
+        /// The line of the statement (the preamble's, or the first sample's).
+        line: usize,
+        /// What disagrees.
+        what: String,
+    },
     /// Nothing in the file.
     #[error("{path}: no samples; expected a timestamp and three counts per line")]
     Empty {
@@ -128,6 +167,18 @@ pub struct Recording {
     pub gaps: Vec<Gap>,
     /// Median sampling period, s.
     pub period: f64,
+    /// The initial rest a logger's preamble states, s.
+    pub rest: Option<f64>,
+}
+
+/// How to read a recording.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// The converter's rails: samples at or beyond them are marked saturated, and codes well
+    /// beyond them show another format (refused, naming it).
+    pub rails: Rails,
+    /// The sample rate, Hz, for files without timestamps (checked against them otherwise).
+    pub rate: Option<f64>,
 }
 
 impl Recording {
@@ -150,130 +201,15 @@ impl Recording {
     }
 }
 
-struct Rows {
-    t: Vec<f64>,
-    v: Vec<Vec<f64>>,
-    line: Vec<usize>,
-}
-
-const NAMES: [&str; 7] = [
-    "timestamp",
-    "x count",
-    "y count",
-    "z count",
-    "gyro x count",
-    "gyro y count",
-    "gyro z count",
-];
-
-fn read_rows(path: &Path, widths: &[usize]) -> Result<Rows, RecordingError> {
-    let bytes = std::fs::read(path).map_err(|source| RecordingError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| RecordingError::NotText {
-        path: path.to_path_buf(),
-        line: bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|b| **b == b'\n')
-            .count()
-            + 1,
-    })?;
-    let text = match text.strip_prefix('\u{feff}') {
-        Some(rest) => {
-            super::note_bom(path);
-            rest
-        }
-        None => text,
-    };
-    let mut rows = Rows {
-        t: Vec::new(),
-        v: Vec::new(),
-        line: Vec::new(),
-    };
-    let mut width = None;
-    let mut seen_data = false;
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let s = raw.trim();
-        if s.is_empty() || s.starts_with('#') {
-            continue;
-        }
-        let fields: Vec<&str> = if s.contains(',') {
-            s.split(',').map(str::trim).collect()
-        } else {
-            s.split_ascii_whitespace().collect()
-        };
-        // A header line of names before the first sample.
-        if !seen_data
-            && fields.first().is_some_and(|f| f.parse::<f64>().is_err())
-            && fields.iter().any(|f| f.chars().any(char::is_alphabetic))
-        {
-            continue;
-        }
-        seen_data = true;
-        let w = *width.get_or_insert(fields.len());
-        if fields.len() != w || !widths.contains(&w) {
-            let expected = if fields.len() != w {
-                format!("{w}, as on the first sample line")
-            } else if widths == [7] {
-                "7 (timestamp, accelerometer x, y, z, gyro x, y, z counts), or give the gyro file too".into()
-            } else {
-                "4 (timestamp, x, y, z counts)".into()
-            };
-            return Err(RecordingError::Fields {
-                path: path.to_path_buf(),
-                line,
-                found: fields.len(),
-                expected,
-            });
-        }
-        let mut vals = Vec::with_capacity(w - 1);
-        for (k, f) in fields.iter().enumerate() {
-            let x: f64 = f
-                .parse()
-                .ok()
-                .filter(|x: &f64| x.is_finite())
-                .ok_or_else(|| RecordingError::Number {
-                    path: path.to_path_buf(),
-                    line,
-                    field: k + 1,
-                    what: NAMES[k.min(6)],
-                    text: super::shorten(f),
-                })?;
-            if k == 0 {
-                if let Some(&prev) = rows.t.last()
-                    && x <= prev
-                {
-                    return Err(RecordingError::NotIncreasing {
-                        path: path.to_path_buf(),
-                        line,
-                        t: x,
-                        prev,
-                    });
-                }
-                rows.t.push(x);
-            } else {
-                vals.push(x);
-            }
-        }
-        rows.v.push(vals);
-        rows.line.push(line);
-    }
-    if rows.t.is_empty() {
-        return Err(RecordingError::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    Ok(rows)
-}
-
 struct Parsed {
+    /// Where each count is: its file and 1-based field (accelerometer x, y, z, gyro x, y, z).
+    places: [(PathBuf, usize); 6],
     t: Vec<f64>,
     acc: Vec<[f64; 3]>,
     gyro: Vec<[f64; 3]>,
     line: Vec<usize>,
     source: String,
+    rest: Option<f64>,
 }
 
 fn triple(v: &[f64], from: usize) -> [f64; 3] {
@@ -286,38 +222,154 @@ fn triple(v: &[f64], from: usize) -> [f64; 3] {
 /// # Errors
 /// A [`RecordingError`] naming the file and line.
 pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, RecordingError> {
+    read_with(acc, gyro, &Options { rails, rate: None })
+}
+
+/// The timestamps of a file: its own, checked against a stated rate, or made from the rate.
+fn timing(rows: &layout::Rows, path: &Path, rate: Option<f64>) -> Result<Vec<f64>, RecordingError> {
+    let pre = rows.preamble.rate;
+    let conflict = |line: usize, what: String| RecordingError::RateConflict {
+        path: path.to_path_buf(),
+        line,
+        what,
+    };
+    let differ = |a: f64, b: f64| (a - b).abs() > 0.01 * b.abs();
+    if let (Some(r), Some(p)) = (rate, pre)
+        && differ(r, p.value)
+    {
+        return Err(conflict(
+            p.line,
+            format!(
+                "the preamble states {} Hz and --rate {r} Hz; drop --rate or fix the file",
+                p.value
+            ),
+        ));
+    }
+    let stated = rate
+        .map(|r| (r, "--rate".to_string()))
+        .or_else(|| pre.map(|p| (p.value, format!("the preamble (line {})", p.line))));
+    if let Some((r, _)) = stated
+        && !(r.is_finite() && r > 0.0)
+    {
+        return Err(conflict(
+            pre.map_or(rows.line[0], |p| p.line),
+            format!("a sample rate of {r} Hz; expected a number above 0"),
+        ));
+    }
+    match (&rows.t, stated) {
+        (Some(t), Some((r, who))) if t.len() > 1 => {
+            let period = median_step(t);
+            if differ(1.0 / period, r) {
+                return Err(conflict(
+                    rows.line[0],
+                    format!(
+                        "the timestamps step by {period} s ({:.4} Hz) where {who} states {r} Hz",
+                        1.0 / period
+                    ),
+                ));
+            }
+            Ok(t.clone())
+        }
+        (Some(t), _) => Ok(t.clone()),
+        (None, Some((r, _))) => Ok((0..rows.v.len()).map(|k| k as f64 / r).collect()),
+        (None, None) => Err(RecordingError::NoRate {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+fn median_step(t: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return f64::NAN;
+    }
+    let mid = steps.len() / 2;
+    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// Says what a file's preamble gave.
+fn note_preamble(path: &Path, p: &layout::Preamble) {
+    let mut used = Vec::new();
+    if let Some(r) = p.rate {
+        used.push(format!("a rate of {} Hz (line {})", r.value, r.line));
+    }
+    if let Some(r) = p.rest {
+        used.push(format!(
+            "an initial rest of {} s (line {})",
+            r.value, r.line
+        ));
+    }
+    if used.is_empty() && p.ignored.is_empty() {
+        return;
+    }
+    let mut text = format!("calflash: note: {}: a logger's preamble", path.display());
+    if !used.is_empty() {
+        text.push_str(&format!(" states {}", used.join(" and ")));
+    }
+    if !p.ignored.is_empty() {
+        text.push_str(&format!("; not used: {}", p.ignored.join(", ")));
+    }
+    eprintln!("{text}");
+}
+
+/// Reads a recording: `acc` holding both sensors, or `acc` and `gyro` one each, as `opts` say.
+///
+/// # Errors
+/// A [`RecordingError`] naming the file and line.
+pub fn read_with(
+    acc: &Path,
+    gyro: Option<&Path>,
+    opts: &Options,
+) -> Result<Recording, RecordingError> {
+    let rails = opts.rails;
     let Parsed {
+        places,
         t,
         acc: a,
         gyro: g,
         line,
         source,
+        rest,
     } = match gyro {
         None => {
-            let r = read_rows(acc, &[7])?;
+            let r = layout::read(acc, layout::Holds::Both)?;
+            note_preamble(acc, &r.preamble);
+            let t = timing(&r, acc, opts.rate)?;
             let a = r.v.iter().map(|v| triple(v, 0)).collect();
             let g = r.v.iter().map(|v| triple(v, 3)).collect();
             Parsed {
-                t: r.t,
+                places: std::array::from_fn(|k| (acc.to_path_buf(), r.fields[k])),
+                t,
                 acc: a,
                 gyro: g,
                 line: r.line,
                 source: acc.display().to_string(),
+                rest: r.preamble.rest.map(|s| s.value),
             }
         }
         Some(gp) => {
-            let ra = read_rows(acc, &[4])?;
-            let rg = read_rows(gp, &[4])?;
+            let ra = layout::read(acc, layout::Holds::One)?;
+            let rg = if gp == acc {
+                ra.clone()
+            } else {
+                layout::read(gp, layout::Holds::One)?
+            };
+            note_preamble(acc, &ra.preamble);
+            if gp != acc {
+                note_preamble(gp, &rg.preamble);
+            }
+            let ta = timing(&ra, acc, opts.rate)?;
+            let tg = timing(&rg, gp, opts.rate)?;
             let mismatch = |line: usize, what: String| RecordingError::Mismatch {
                 acc: acc.to_path_buf(),
                 gyro: gp.to_path_buf(),
                 line,
                 what,
             };
-            if ra.t.len() != rg.t.len() {
+            if ta.len() != tg.len() {
                 let line = rg
                     .line
-                    .get(ra.t.len().min(rg.t.len()))
+                    .get(ta.len().min(tg.len()))
                     .or(rg.line.last())
                     .copied()
                     .unwrap_or(1);
@@ -325,39 +377,45 @@ pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, 
                     line,
                     format!(
                         "{} gyro samples against {} accelerometer samples",
-                        rg.t.len(),
-                        ra.t.len()
+                        tg.len(),
+                        ta.len()
                     ),
                 ));
             }
-            let tol = 1e-6 * ra.t.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-            if let Some(k) = (0..ra.t.len()).find(|&k| (ra.t[k] - rg.t[k]).abs() > tol) {
+            let tol = 1e-6 * ta.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+            if let Some(k) = (0..ta.len()).find(|&k| (ta[k] - tg[k]).abs() > tol) {
                 return Err(mismatch(
                     rg.line[k],
                     format!(
                         "timestamp {} s where the accelerometer's is {} s",
-                        rg.t[k], ra.t[k]
+                        tg[k], ta[k]
                     ),
                 ));
             }
             let a = ra.v.iter().map(|v| triple(v, 0)).collect();
             let g = rg.v.iter().map(|v| triple(v, 0)).collect();
             Parsed {
-                t: ra.t,
+                places: std::array::from_fn(|k| {
+                    if k < 3 {
+                        (acc.to_path_buf(), ra.fields[k])
+                    } else {
+                        (gp.to_path_buf(), rg.fields[k - 3])
+                    }
+                }),
+                t: ta,
                 acc: a,
                 gyro: g,
                 line: ra.line,
-                source: format!("{} + {}", acc.display(), gp.display()),
+                source: if gp == acc {
+                    acc.display().to_string()
+                } else {
+                    format!("{} + {}", acc.display(), gp.display())
+                },
+                rest: ra.preamble.rest.or(rg.preamble.rest).map(|s| s.value),
             }
         }
     };
-    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    let period = if steps.is_empty() {
-        f64::NAN
-    } else {
-        let mid = steps.len() / 2;
-        *steps.select_nth_unstable_by(mid, f64::total_cmp).1
-    };
+    let period = median_step(&t);
     let gaps = t
         .windows(2)
         .enumerate()
@@ -369,6 +427,7 @@ pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, 
             missing: ((w[1] - w[0]) / period).round() as usize - 1,
         })
         .collect();
+    check_codes(&a, &g, &line, rails, &places)?;
     let at_rail = |s: &[f64; 3]| {
         s.iter()
             .any(|x| *x <= f64::from(rails.lo) || *x >= f64::from(rails.hi))
@@ -390,6 +449,42 @@ pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, 
         saturated_count,
         gaps,
         period,
+        rest,
+    })
+}
+
+/// Refuses a recording whose codes beyond the rails show another format of the same width
+/// (signed codes read as unsigned, or the reverse); a few damaged codes stay, marked saturated.
+fn check_codes(
+    a: &[[f64; 3]],
+    g: &[[f64; 3]],
+    line: &[usize],
+    rails: Rails,
+    places: &[(PathBuf, usize); 6],
+) -> Result<(), RecordingError> {
+    let (lo, hi) = (f64::from(rails.lo), f64::from(rails.hi));
+    let codes = || {
+        a.iter()
+            .zip(g)
+            .enumerate()
+            .flat_map(|(k, (x, w))| x.iter().chain(w).enumerate().map(move |(j, v)| (k, j, *v)))
+    };
+    let below = codes().filter(|c| c.2 < lo).count();
+    let above = codes().filter(|c| c.2 > hi).count();
+    let Some(advice) = super::codes::mismatch(below, above, rails) else {
+        return Ok(());
+    };
+    let (k, j, value) = codes()
+        .find(|c| c.2 < lo || c.2 > hi)
+        .expect("mismatch counts codes beyond the rails");
+    let (path, field) = &places[j];
+    Err(RecordingError::WrongCodes {
+        path: path.clone(),
+        line: line[k],
+        field: *field,
+        value,
+        format: super::codes::name(rails),
+        advice,
     })
 }
 
@@ -440,6 +535,76 @@ mod tests {
     }
 
     #[test]
+    fn the_rate_is_stated_or_read_and_never_contradicted() {
+        let d = tempfile::tempdir().unwrap();
+        let signed = Rails::signed(16);
+        let opts = |rate| Options {
+            rails: signed,
+            rate,
+        };
+        let six = "-12 -812 15032 -447 156 -86\n-208 -828 14796 -398 132 -63\n-1 -2 -3 -4 -5 -6\n";
+        let bare = write(d.path(), "bare.txt", six);
+        assert_eq!(
+            read_with(&bare, None, &opts(None)).unwrap_err().to_string(),
+            format!(
+                "{}: no timestamp column and no sample rate: give --rate HZ (or a preamble line `Fs,HZ`)",
+                bare.display()
+            )
+        );
+        let r = read_with(&bare, None, &opts(Some(50.0))).unwrap();
+        assert_eq!(r.t, [0.0, 0.02, 0.04]);
+        assert_eq!(r.acc[0], [-12.0, -812.0, 15032.0]);
+        // The preamble's rate, and an option that contradicts it.
+        let pre = write(
+            d.path(),
+            "pre.csv",
+            &format!("Fs,100\nax,ay,az,gx,gy,gz\n{}", six.replace(' ', ",")),
+        );
+        assert_eq!(read_with(&pre, None, &opts(None)).unwrap().period, 0.01);
+        assert_eq!(
+            read_with(&pre, None, &opts(Some(200.0)))
+                .unwrap_err()
+                .to_string(),
+            format!(
+                "{}:1: the preamble states 100 Hz and --rate 200 Hz; drop --rate or fix the file",
+                pre.display()
+            )
+        );
+        // Timestamps that disagree with the stated rate.
+        let timed = write(
+            d.path(),
+            "timed.txt",
+            "0 1 2 3 4 5 6\n0.01 1 2 3 4 5 6\n0.02 1 2 3 4 5 6\n",
+        );
+        assert!(
+            read_with(&timed, None, &opts(Some(50.0)))
+                .unwrap_err()
+                .to_string()
+                .ends_with(
+                    ":1: the timestamps step by 0.01 s (100.0000 Hz) where --rate states 50 Hz"
+                )
+        );
+        // Signed codes read as unsigned are named, with the option that reads them.
+        let e = read_with(
+            &bare,
+            None,
+            &Options {
+                rails: Rails::unsigned(16),
+                rate: Some(100.0),
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(
+            e,
+            format!(
+                "{}:1: 14 codes below zero: the codes look signed; add --codes signed16 (the first is -12, field 1; the format given is unsigned16)",
+                bare.display()
+            )
+        );
+    }
+
+    #[test]
     fn bad_input_names_file_line_and_field() {
         let d = tempfile::tempdir().unwrap();
         let rails = Rails::unsigned(16);
@@ -481,7 +646,7 @@ mod tests {
         assert_eq!(
             msg(&ok, None),
             format!(
-                "{}:1: 4 fields; expected 7 (timestamp, accelerometer x, y, z, gyro x, y, z counts), or give the gyro file too",
+                "{}:1: 4 fields; expected 7 (timestamp, accelerometer x, y, z, gyro x, y, z counts) or 6 without the timestamp (then give --rate), or give the gyro file too",
                 ok.display()
             )
         );

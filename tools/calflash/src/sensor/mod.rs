@@ -407,6 +407,29 @@ pub(crate) fn exclude_beyond_rails(
     rails: &Rails,
     path: &Path,
 ) -> Result<Option<Finding>, WorkflowError> {
+    let beyond = |below: bool| {
+        outputs
+            .iter()
+            .filter_map(|c| table.column(c))
+            .flatten()
+            .filter(|x| {
+                if below {
+                    **x < f64::from(rails.lo)
+                } else {
+                    **x > f64::from(rails.hi)
+                }
+            })
+            .count()
+    };
+    if let Some(advice) = crate::obs::codes::mismatch(beyond(true), beyond(false), *rails) {
+        return Err(WorkflowError::msg(
+            path,
+            format!(
+                "{advice} (the format given is {})",
+                crate::obs::codes::name(*rails)
+            ),
+        ));
+    }
     let bad: Vec<usize> = (0..table.len())
         .filter(|&r| {
             outputs.iter().any(|c| {
@@ -434,7 +457,7 @@ pub(crate) fn exclude_beyond_rails(
         return Err(WorkflowError::msg(
             path,
             format!(
-                "every observation has an output at or beyond the ADC rails {} and {} (lines {}{more}): check --adc-bits or --rails",
+                "every observation has an output at or beyond the ADC rails {} and {} (lines {}{more}): check --codes",
                 rails.lo,
                 rails.hi,
                 lines.join(", ")

@@ -146,6 +146,7 @@ impl Tumble {
             gyro,
             gaps: Vec::new(),
             period: dt,
+            rest: None,
         }
     }
 }

@@ -1,0 +1,426 @@
+//! The text layout of one recording file: CSV or whitespace fields; before the samples, an
+//! optional preamble of `key,value` lines (a logger's settings: the sample rate and the initial
+//! rest are used, the others named as ignored) and an optional header naming the columns. A
+//! header whose names are recognised (`t`, `time_us`, `ax`, `acc_x`, `gyro_z`, `wx`, ...) picks the
+//! columns by name, in any order, with other columns beside them; otherwise the columns are
+//! positional: an optional timestamp, then the counts. Timestamps are seconds, or ms, us or ns
+//! when the header's name says so.
+
+use std::path::Path;
+
+use super::recording::RecordingError;
+
+/// What a file holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Holds {
+    /// Accelerometer and gyro: six counts a line.
+    Both,
+    /// One triad: three counts a line.
+    One,
+}
+
+impl Holds {
+    fn counts(self) -> usize {
+        match self {
+            Holds::Both => 6,
+            Holds::One => 3,
+        }
+    }
+}
+
+/// A setting a preamble line gave, with its line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Setting {
+    /// The value, in Hz or s.
+    pub value: f64,
+    /// The file line.
+    pub line: usize,
+}
+
+/// What the preamble said.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Preamble {
+    /// The sample rate, Hz (`Fs`, `rate`, `sample rate`, `frequency`).
+    pub rate: Option<Setting>,
+    /// The initial rest, s (`Initialization time`, `initial rest`, `rest`; absent when not
+    /// above 0).
+    pub rest: Option<Setting>,
+    /// The keys read but not used.
+    pub ignored: Vec<String>,
+}
+
+/// The samples of one file.
+#[derive(Debug, Clone)]
+pub struct Rows {
+    /// Timestamps, s, increasing; `None` when the file has no timestamp column.
+    pub t: Option<Vec<f64>>,
+    /// The counts of each sample: six (accelerometer x, y, z, gyro x, y, z) or three.
+    pub v: Vec<Vec<f64>>,
+    /// The file line of each sample.
+    pub line: Vec<usize>,
+    /// The 1-based field of each count.
+    pub fields: Vec<usize>,
+    /// The preamble.
+    pub preamble: Preamble,
+}
+
+/// The meaning of each field, as the error messages name it.
+const NAMES: [&str; 6] = [
+    "x count",
+    "y count",
+    "z count",
+    "gyro x count",
+    "gyro y count",
+    "gyro z count",
+];
+
+/// Which fields hold what.
+#[derive(Debug, Clone, PartialEq)]
+struct Columns {
+    /// The timestamp's field and its scale to seconds.
+    t: Option<(usize, f64)>,
+    /// The fields of the counts, in order.
+    counts: Vec<usize>,
+    /// The number of fields every line has (from the header, or the first sample line).
+    width: usize,
+    /// The header's line, when the columns are chosen by its names.
+    header: Option<usize>,
+}
+
+/// A name reduced to its letters and digits, lower case.
+fn squash(name: &str) -> String {
+    name.chars()
+        .filter(char::is_ascii_alphanumeric)
+        .map(|c| c.to_ascii_lowercase())
+        .collect()
+}
+
+/// The scale to seconds of a timestamp column named `name`, if it is one.
+fn timestamp(name: &str) -> Option<f64> {
+    let s = squash(name);
+    let rest = ["timestamp", "time", "t"]
+        .iter()
+        .find_map(|p| s.strip_prefix(p))?;
+    match rest {
+        "" | "s" | "sec" => Some(1.0),
+        "ms" => Some(1e-3),
+        "us" => Some(1e-6),
+        "ns" => Some(1e-9),
+        _ => None,
+    }
+}
+
+/// The axis (0, 1, 2) of a count column of the sensor named by `prefixes`, if it is one:
+/// a prefix, the axis letter, and nothing more (`ax`, `acc_x`, `AccelX`, `gyro_z`, `wz`).
+fn axis(name: &str, prefixes: &[&str]) -> Option<usize> {
+    let s = squash(name);
+    prefixes.iter().find_map(|p| {
+        let rest = s.strip_prefix(p)?;
+        ["x", "y", "z"].iter().position(|a| *a == rest)
+    })
+}
+
+const ACCEL: [&str; 5] = ["accelerometer", "accel", "acc", "a", "raw_a"];
+const GYRO: [&str; 6] = ["gyroscope", "gyro", "gyr", "g", "w", "omega"];
+
+/// The columns a header on line `line` names, when it names all the counts `holds` needs.
+fn named(header: &[&str], line: usize, holds: Holds) -> Option<Columns> {
+    let find = |prefixes: &[&str]| -> Option<[usize; 3]> {
+        let mut out = [None; 3];
+        for (i, h) in header.iter().enumerate() {
+            if let Some(k) = axis(h, prefixes) {
+                out[k].get_or_insert(i);
+            }
+        }
+        Some([out[0]?, out[1]?, out[2]?])
+    };
+    let t = header
+        .iter()
+        .enumerate()
+        .find_map(|(i, h)| timestamp(h).map(|s| (i, s)));
+    let counts: Vec<usize> = match holds {
+        Holds::Both => find(&ACCEL)?.into_iter().chain(find(&GYRO)?).collect(),
+        Holds::One => find(&ACCEL).or_else(|| find(&GYRO))?.to_vec(),
+    };
+    Some(Columns {
+        t,
+        counts,
+        width: header.len(),
+        header: Some(line),
+    })
+}
+
+/// The columns of a file without a recognised header, from its first sample line's width.
+fn positional(width: usize, holds: Holds) -> Option<Columns> {
+    let n = holds.counts();
+    let t = if width == n + 1 {
+        Some((0, 1.0))
+    } else if width == n {
+        None
+    } else {
+        return None;
+    };
+    let first = usize::from(t.is_some());
+    Some(Columns {
+        t,
+        counts: (first..first + n).collect(),
+        width,
+        header: None,
+    })
+}
+
+/// A preamble line: two fields, a name and a number.
+fn setting(fields: &[&str]) -> Option<(String, f64)> {
+    let [key, value] = fields else { return None };
+    if key.parse::<f64>().is_ok() || !key.chars().any(char::is_alphabetic) {
+        return None;
+    }
+    Some(((*key).to_string(), value.parse().ok()?))
+}
+
+fn split(s: &str) -> Vec<&str> {
+    if s.contains(',') {
+        s.split(',').map(str::trim).collect()
+    } else {
+        s.split_ascii_whitespace().collect()
+    }
+}
+
+/// Reads the file's text (a UTF-8 byte-order mark is dropped, with a note).
+fn text(path: &Path) -> Result<String, RecordingError> {
+    let bytes = std::fs::read(path).map_err(|source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| RecordingError::NotText {
+        path: path.to_path_buf(),
+        line: e.as_bytes()[..e.utf8_error().valid_up_to()]
+            .iter()
+            .filter(|b| **b == b'\n')
+            .count()
+            + 1,
+    })?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => {
+            super::note_bom(path);
+            rest.to_string()
+        }
+        None => text,
+    })
+}
+
+fn expected(holds: Holds) -> String {
+    match holds {
+        Holds::Both => "7 (timestamp, accelerometer x, y, z, gyro x, y, z counts) or 6 without \
+                        the timestamp (then give --rate), or give the gyro file too"
+            .into(),
+        Holds::One => "4 (timestamp, x, y, z counts), or 3 without the timestamp (then give \
+                       --rate)"
+            .into(),
+    }
+}
+
+/// Reads one recording file holding `holds`.
+///
+/// # Errors
+/// A [`RecordingError`] naming the file, line and field.
+pub fn read(path: &Path, holds: Holds) -> Result<Rows, RecordingError> {
+    let text = text(path)?;
+    let mut rows = Rows {
+        t: None,
+        v: Vec::new(),
+        line: Vec::new(),
+        fields: Vec::new(),
+        preamble: Preamble::default(),
+    };
+    let mut times = Vec::new();
+    let mut columns: Option<Columns> = None;
+    let mut header: Option<(usize, String)> = None;
+    let bad = |line: usize, found: usize, expected: String| RecordingError::Fields {
+        path: path.to_path_buf(),
+        line,
+        found,
+        expected,
+    };
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let s = raw.trim();
+        if s.is_empty() || s.starts_with('#') {
+            continue;
+        }
+        let fields = split(s);
+        let is_text = fields.first().is_some_and(|f| f.parse::<f64>().is_err())
+            && fields.iter().any(|f| f.chars().any(char::is_alphabetic));
+        if rows.line.is_empty() && columns.is_none() && header.is_none() && is_text {
+            if let Some((key, value)) = setting(&fields) {
+                let here = Setting { value, line };
+                match squash(&key).as_str() {
+                    "fs" | "rate" | "samplerate" | "samplingrate" | "frequency" | "hz" => {
+                        rows.preamble.rate = Some(here);
+                    }
+                    "initializationtime" | "initialrest" | "rest" | "inittime" => {
+                        rows.preamble.rest = (value > 0.0).then_some(here);
+                    }
+                    _ => rows.preamble.ignored.push(key),
+                }
+                continue;
+            }
+            // The header: the columns by name when it names them.
+            columns = named(&fields, line, holds);
+            header = Some((line, s.to_string()));
+            continue;
+        }
+        let cols = match &columns {
+            Some(c) => c,
+            None => columns.insert(
+                positional(fields.len(), holds)
+                    .ok_or_else(|| bad(line, fields.len(), expected(holds)))?,
+            ),
+        };
+        if fields.len() != cols.width {
+            let why = match cols.header {
+                Some(hl) => format!("{}, as the header on line {hl} names", cols.width),
+                None => format!("{}, as on the first sample line", cols.width),
+            };
+            return Err(bad(line, fields.len(), why));
+        }
+        let number = |field: usize, what: &'static str| {
+            fields[field]
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| RecordingError::Number {
+                    path: path.to_path_buf(),
+                    line,
+                    field: field + 1,
+                    what,
+                    text: super::shorten(fields[field]),
+                })
+        };
+        if let Some((k, scale)) = cols.t {
+            let x = number(k, "timestamp")? * scale;
+            if let Some(&prev) = times.last()
+                && x <= prev
+            {
+                return Err(RecordingError::NotIncreasing {
+                    path: path.to_path_buf(),
+                    line,
+                    t: x,
+                    prev,
+                });
+            }
+            times.push(x);
+        }
+        let mut vals = Vec::with_capacity(cols.counts.len());
+        for (j, &k) in cols.counts.iter().enumerate() {
+            let what = if holds == Holds::Both {
+                NAMES[j]
+            } else {
+                NAMES[j % 3]
+            };
+            vals.push(number(k, what)?);
+        }
+        rows.v.push(vals);
+        rows.line.push(line);
+    }
+    if rows.v.is_empty() {
+        return Err(RecordingError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    if let (Some((hl, h)), Some(c)) = (&header, &columns)
+        && c.header.is_some()
+        && c.t.is_none()
+        && timestamp_like(h)
+    {
+        // A header naming a time column whose unit cannot be read.
+        return Err(RecordingError::Fields {
+            path: path.to_path_buf(),
+            line: *hl,
+            found: split(h).len(),
+            expected: "a time column named t, time or timestamp, with _s, _ms, _us or _ns".into(),
+        });
+    }
+    if let Some(c) = &columns {
+        rows.fields = c.counts.iter().map(|k| k + 1).collect();
+        if c.t.is_some() {
+            rows.t = Some(times);
+        }
+    }
+    Ok(rows)
+}
+
+/// True when a header names something time-like that [`timestamp`] does not read.
+fn timestamp_like(header: &str) -> bool {
+    split(header)
+        .iter()
+        .any(|h| squash(h).starts_with("time") && timestamp(h).is_none())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn names_units_and_preambles() {
+        assert_eq!(timestamp("time_us"), Some(1e-6));
+        assert_eq!(timestamp("Timestamp"), Some(1.0));
+        assert_eq!(timestamp("t[ms]"), Some(1e-3));
+        assert_eq!(timestamp("temp"), None);
+        assert_eq!(axis("acc_x", &ACCEL), Some(0));
+        assert_eq!(axis("AccelZ", &ACCEL), Some(2));
+        assert_eq!(axis("gyro_y", &GYRO), Some(1));
+        assert_eq!(axis("gx", &ACCEL), None);
+        let d = tempfile::tempdir().unwrap();
+        // An MPU-6050 logger's layout: a preamble, a header, signed counts, no timestamp.
+        let p = write(
+            d.path(),
+            "mpu.csv",
+            "Fs,100\nLogging Type,0\nInitialization time,36.5\nax,ay,az,gx,gy,gz\n-12,-812,15032,-447,156,-86\n-208,-828,14796,-398,132,-63\n",
+        );
+        let r = read(&p, Holds::Both).unwrap();
+        assert_eq!(r.t, None);
+        assert_eq!(r.v[0], [-12.0, -812.0, 15032.0, -447.0, 156.0, -86.0]);
+        assert_eq!(r.line, [5, 6]);
+        assert_eq!(
+            r.preamble.rate,
+            Some(Setting {
+                value: 100.0,
+                line: 1
+            })
+        );
+        assert_eq!(
+            r.preamble.rest,
+            Some(Setting {
+                value: 36.5,
+                line: 3
+            })
+        );
+        assert_eq!(r.preamble.ignored, ["Logging Type"]);
+        // Columns by name, in another order, with a temperature beside them and microseconds.
+        let p = write(
+            d.path(),
+            "named.csv",
+            "gyro_x,gyro_y,gyro_z,temp,time_us,acc_x,acc_y,acc_z\n4,5,6,25,1000,1,2,3\n4,5,6,25,2000,1,2,3\n",
+        );
+        let r = read(&p, Holds::Both).unwrap();
+        assert_eq!(r.t, Some(vec![1e-3, 2e-3]));
+        assert_eq!(r.v[1], [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        // A line short of the header's names.
+        let p = write(d.path(), "short.csv", "t,ax,ay,az,gx,gy,gz\n0,1,2,3,4,5\n");
+        assert_eq!(
+            read(&p, Holds::Both).unwrap_err().to_string(),
+            format!(
+                "{}:2: 6 fields; expected 7, as the header on line 1 names",
+                p.display()
+            )
+        );
+    }
+}

@@ -1,0 +1,207 @@
+//! Recordings as other IMUs and loggers write them (issue 14): signed codes, a logger's
+//! preamble, a header, no timestamps; the real MPU-6050 recordings in `../shared/data/`
+//! (skipped with a notice when they are absent, as in a user's clone) and signed-code
+//! observation files made from the examples.
+
+use std::path::{Path, PathBuf};
+
+mod common;
+
+use common::calflash;
+
+fn mpu6050() -> Option<PathBuf> {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/mpu6050-imucalibration");
+    if d.join("example_data_calibration.csv").is_file() {
+        Some(d)
+    } else {
+        println!(
+            "MPU-6050 recordings: SKIPPED, {} is absent (it lives beside the checkout in CI)",
+            d.display()
+        );
+        None
+    }
+}
+
+fn arg(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The MPU-6050 logger's file (a preamble, a header, signed counts, no timestamps, about ten
+/// poses): read as unsigned it is named signed; read as signed, the preamble's rate and rest
+/// are used and the answer is "too few still poses", saying what was found.
+#[test]
+fn the_mpu6050_calibration_file_is_read_and_answered() {
+    let Some(d) = mpu6050() else { return };
+    let out = tempfile::tempdir().unwrap();
+    let file = d.join("example_data_calibration.csv");
+    let base = [
+        "selfcal",
+        arg(&file),
+        "--g",
+        "9.81",
+        "--serial",
+        "MPU-6050",
+        "--no-db",
+    ];
+    let (code, _, err) = calflash(out.path(), &base);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("example_data_calibration.csv:6: ")
+            && err.contains("codes below zero: the codes look signed; add --codes signed16"),
+        "{err}"
+    );
+    let mut signed = base.to_vec();
+    signed.extend(["--codes", "signed16", "--blob", "m.blob"]);
+    let (code, said, err) = calflash(out.path(), &signed);
+    println!("{said}{err}");
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("a logger's preamble states a rate of 100 Hz (line 1) and an initial rest of 36.5 s (line 3); not used: Logging Type, Waiting time"),
+        "{err}"
+    );
+    assert!(err.contains("too few still poses: "), "{err}");
+    assert!(!out.path().join("m.blob").exists());
+    // A rate on the command line that contradicts the preamble is named.
+    signed.extend(["--rate", "200"]);
+    let (code, _, err) = calflash(out.path(), &signed);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains(":1: the preamble states 100 Hz and --rate 200 Hz"),
+        "{err}"
+    );
+}
+
+/// The MPU-6050's long still file, one file of six signed counts and no timestamps, gives an
+/// Allan deviation in rad/s with its scale (131 counts per deg/s); the MEMS gyro's angle random
+/// walk is a fraction of a degree per root hour.
+#[test]
+fn the_mpu6050_still_file_gives_an_allan_deviation_in_stated_units() {
+    let Some(d) = mpu6050() else { return };
+    let out = tempfile::tempdir().unwrap();
+    let file = d.join("example_data_tinit_calc.csv");
+    let per_rad_s = format!("{}", 131.0 * 180.0 / std::f64::consts::PI);
+    let json = out.path().join("allan.json");
+    let (code, said, err) = calflash(
+        out.path(),
+        &[
+            "allan",
+            arg(&file),
+            "--sensor",
+            "gyro",
+            "--scale",
+            &per_rad_s,
+            "--json",
+            arg(&json),
+        ],
+    );
+    println!("{said}{err}");
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        said.contains("44930 samples at 100.00 Hz (449.3 s), gyro in rad/s"),
+        "{said}"
+    );
+    for line in said.lines().skip(1) {
+        let arw: f64 = line
+            .split(" rad/s/sqrt(Hz) = ")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("{line}"));
+        assert!((0.1..2.0).contains(&arw), "{line}");
+    }
+}
+
+/// A single-axis accelerometer logged in signed codes: read as unsigned the tool names the
+/// format; with `--codes signed16` it calibrates as the unsigned original does, and the blob
+/// keeps the signed rails.
+#[test]
+fn signed_observation_codes_are_named_and_calibrate_with_codes_signed16() {
+    let out = tempfile::tempdir().unwrap();
+    let d = out.path();
+    let src =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/single_accel.csv");
+    let text = std::fs::read_to_string(&src).unwrap();
+    let signed: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match (i, l.rsplit_once(',')) {
+            (0, _) | (_, None) => format!("{l}\n"),
+            (_, Some((head, v))) => {
+                format!("{head},{}\n", v.parse::<f64>().unwrap() - 32768.0)
+            }
+        })
+        .collect();
+    std::fs::write(d.join("signed.csv"), signed).unwrap();
+    std::fs::copy(&src, d.join("unsigned.csv")).unwrap();
+    let cal = |file: &str, extra: &[&str]| {
+        let mut args = vec![
+            "calibrate",
+            file,
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "S-16",
+            "--no-db",
+        ];
+        args.extend(extra);
+        calflash(d, &args)
+    };
+    let (code, _, err) = cal("signed.csv", &[]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("codes below zero: the codes look signed; add --codes signed16 (the format given is unsigned16)"),
+        "{err}"
+    );
+    let (code, said, err) = cal("signed.csv", &["--codes", "signed16", "--blob", "s.blob"]);
+    assert_eq!(code, 0, "{said}{err}");
+    let (code, plain, _) = cal("unsigned.csv", &[]);
+    assert_eq!(code, 0);
+    // The same verdict and coefficients but the bias, which moves by 32768 counts.
+    let verdict = |s: &str| {
+        s.lines()
+            .next()
+            .unwrap()
+            .rsplit(':')
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(verdict(&said), verdict(&plain));
+    let blob = spincal::blob::decode(&std::fs::read(d.join("s.blob")).unwrap()).unwrap();
+    match &blob.data().sensor {
+        spincal::model::Sensor::Single { rails, channel, .. } => {
+            assert_eq!(*rails, spincal::model::Rails::signed(16));
+            assert!(channel.center.abs() < 1000.0, "{}", channel.center);
+        }
+        _ => panic!("a single axis"),
+    }
+    // Applied to the signed codes, the correction gives the inputs back.
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "apply",
+            "signed.csv",
+            "--blob",
+            "s.blob",
+            "--temp-column",
+            "temp",
+            "-o",
+            "si.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let si = std::fs::read_to_string(d.join("si.csv")).unwrap();
+    let inputs: Vec<f64> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    let worst = si
+        .lines()
+        .skip(1)
+        .zip(&inputs)
+        .map(|(l, x)| (l.split(',').nth(1).unwrap().parse::<f64>().unwrap() - x).abs())
+        .fold(0.0f64, f64::max);
+    assert!(worst < 0.05, "largest error {worst} m/s^2");
+}
