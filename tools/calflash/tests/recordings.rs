@@ -61,6 +61,11 @@ fn the_mpu6050_calibration_file_is_read_and_answered() {
         "{err}"
     );
     assert!(err.contains("too few still poses: "), "{err}");
+    assert!(
+        err.contains("Found: 10 pose(s) facing 10 distinct directions held ")
+            && err.contains(" at 100.0 Hz over 65.9 s after a 36.5 s rest. Record it again with 12 or more poses"),
+        "{err}"
+    );
     assert!(!out.path().join("m.blob").exists());
     // A rate on the command line that contradicts the preamble is named.
     signed.extend(["--rate", "200"]);

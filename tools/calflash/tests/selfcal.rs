@@ -100,6 +100,29 @@ fn a_simulated_unit_comes_back_within_its_standard_errors() {
     assert!(c.gyro.rms_deg() < 0.1, "{}", c.gyro.rms_deg());
 }
 
+/// Poses held for less than `--min-still`: the answer names the shorter hold that would find
+/// enough of them, and that hold does calibrate the unit.
+#[test]
+fn short_holds_are_answered_with_the_min_still_that_finds_them() {
+    let rec = Tumble {
+        hold: 0.8,
+        ..Tumble::default()
+    }
+    .record();
+    let e = selfcal::calibrate(&rec, &opts()).unwrap_err().to_string();
+    assert!(
+        e.contains("Holds of 0.5 s would give ")
+            && e.contains("run again with --min-still 0.5 --window 0.5"),
+        "{e}"
+    );
+    let shorter = Options {
+        min_still: 0.5,
+        window: 0.5,
+        ..opts()
+    };
+    selfcal::calibrate(&rec, &shorter).unwrap();
+}
+
 #[test]
 fn too_few_poses_says_how_many_and_what_to_do() {
     let rec = Tumble {
@@ -118,7 +141,18 @@ fn too_few_poses_says_how_many_and_what_to_do() {
         msg.contains("the accelerometer fit needs at least 12"),
         "{msg}"
     );
-    assert!(msg.contains("turn the unit through more poses"), "{msg}");
+    // What was found (the poses, how long they hold, the rate) and what would work.
+    assert!(
+        msg.contains("Found: 8 pose(s) facing ")
+            && msg.contains(" at 100.0 Hz over 42.0 s after a 30.0 s rest"),
+        "{msg}"
+    );
+    assert!(
+        msg.ends_with(
+            "Record it again with 12 or more poses (30 are better), spread over all directions, each held still for at least 1.0 s (--min-still)"
+        ),
+        "{msg}"
+    );
 }
 
 #[test]

@@ -106,17 +106,19 @@ pub enum SelfCalError {
     },
     /// Too few still poses at every threshold.
     #[error(
-        "{file}: too few still poses: {tried}; the accelerometer fit needs at least {needed}. Hold each pose still for longer (at least {min_still:.1} s, --min-still), turn the unit through more poses (30 or more, spread over all directions), or lower --min-still if the poses are shorter"
+        "{file}: too few still poses: {tried}; the accelerometer fit needs at least {needed}. Found: {found}. {advice}"
     )]
     TooFewPoses {
         /// File(s).
         file: String,
         /// What each threshold found.
         tried: String,
+        /// The poses the most the thresholds found: how long they hold, at what rate.
+        found: String,
+        /// What would work: shorter holds accepted, or more poses recorded.
+        advice: String,
         /// How many are needed.
         needed: usize,
-        /// The shortest pose accepted, s.
-        min_still: f64,
     },
     /// Too few usable rotations.
     #[error(
@@ -395,11 +397,78 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
             .collect::<Vec<_>>()
             .join(", ")
             + " the initial rest's level";
+        // The poses of the threshold that found the most directions, and how long they hold.
+        let most = opts
+            .multipliers
+            .iter()
+            .map(|&m| statics::intervals(&measure, &rec.saturated, m * rest_level, min_len))
+            .max_by_key(|p| {
+                let means: Vec<[f64; 3]> = p.iter().map(|r| statics::mean(&rec.acc, r)).collect();
+                (directions(&means, rest_level), p.len())
+            })
+            .unwrap_or_default();
+        let mut holds: Vec<f64> = most.iter().map(|r| r.len() as f64 * rec.period).collect();
+        holds.sort_by(f64::total_cmp);
+        let most_means: Vec<[f64; 3]> = most.iter().map(|r| statics::mean(&rec.acc, r)).collect();
+        let found = format!(
+            "{} pose(s) facing {} distinct directions{} at {:.1} Hz over {:.1} s after a {:.1} s rest",
+            most.len(),
+            directions(&most_means, rest_level),
+            match (holds.first(), holds.last()) {
+                (Some(a), Some(b)) => format!(" held {a:.1} to {b:.1} s"),
+                _ => String::new(),
+            },
+            rec.rate(),
+            rec.t.last().copied().unwrap_or(t0) - t0 - opts.init_rest,
+            opts.init_rest
+        );
+        // Would shorter holds do? Only if they give poses the fit takes (not a rest split by
+        // noise into poses that all face one way).
+        let fits = |poses: &[Range<usize>]| {
+            let means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
+            let (center, start) = gravity::center_and_start(&means, opts.g);
+            poses.len() >= MIN_POSES
+                && directions(&means, rest_level) >= MIN_POSES
+                && gravity::fit(&means, opts.g, center, &start, false).is_ok()
+        };
+        let shorter = [0.5, 0.25]
+            .into_iter()
+            .filter(|s| *s < opts.min_still)
+            .find_map(|s| {
+                // The still measure's window no longer than the hold.
+                let measure = statics::measure(&rec.acc, samples(s.min(opts.window)) | 1);
+                opts.multipliers
+                    .iter()
+                    .map(|&m| {
+                        statics::intervals(&measure, &rec.saturated, m * rest_level, samples(s))
+                    })
+                    .filter(|p| fits(p))
+                    .map(|p| p.len())
+                    .max()
+                    .map(|n| (s, n))
+            });
+        let advice = match shorter {
+            Some((s, n)) => format!(
+                "Holds of {s} s would give {n}: run again with --min-still {s}{} (shorter \
+                 holds average less noise), or record more poses",
+                if s < opts.window {
+                    format!(" --window {s}")
+                } else {
+                    String::new()
+                }
+            ),
+            None => format!(
+                "Record it again with {MIN_POSES} or more poses (30 are better), spread over all \
+                 directions, each held still for at least {:.1} s (--min-still)",
+                opts.min_still
+            ),
+        };
         return Err(SelfCalError::TooFewPoses {
             file: source.into(),
             tried,
+            found,
+            advice,
             needed: MIN_POSES,
-            min_still: opts.min_still,
         });
     };
     let pose_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
@@ -618,4 +687,45 @@ fn gyro_start(segments: &[Segment]) -> [[f64; 3]; 3] {
         search(&grid, &mut best);
     }
     std::array::from_fn(|i| std::array::from_fn(|j| best.1[(i, j)]))
+}
+
+/// How many of the pose means `means` (counts) face directions at least 10 degrees from each
+/// other: the poses a fit can tell apart. The directions are taken about the middle of the
+/// means' range; means that spread less than 100 times the noise (`rest_level`, a variance)
+/// face one direction.
+fn directions(means: &[[f64; 3]], rest_level: f64) -> usize {
+    if means.is_empty() {
+        return 0;
+    }
+    let span = |j: usize| {
+        let (lo, hi) = means
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| {
+                (lo.min(m[j]), hi.max(m[j]))
+            });
+        (lo, hi)
+    };
+    let ranges: [(f64, f64); 3] = std::array::from_fn(span);
+    let widest = ranges.iter().map(|(lo, hi)| hi - lo).fold(0.0f64, f64::max);
+    if widest < 100.0 * rest_level.sqrt().max(1.0) {
+        return 1;
+    }
+    let center: [f64; 3] = std::array::from_fn(|j| (ranges[j].0 + ranges[j].1) / 2.0);
+    let cos_limit = 10f64.to_radians().cos();
+    let mut seen: Vec<[f64; 3]> = Vec::new();
+    for m in means {
+        let d: [f64; 3] = std::array::from_fn(|j| m[j] - center[j]);
+        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if n == 0.0 {
+            continue;
+        }
+        let u = d.map(|x| x / n);
+        if seen
+            .iter()
+            .all(|s| s[0] * u[0] + s[1] * u[1] + s[2] * u[2] < cos_limit)
+        {
+            seen.push(u);
+        }
+    }
+    seen.len().max(1)
 }
