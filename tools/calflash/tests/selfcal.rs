@@ -134,7 +134,7 @@ fn too_few_poses_says_how_many_and_what_to_do() {
     assert!(matches!(e, SelfCalError::TooFewPoses { .. }));
     let msg = e.to_string();
     assert!(
-        msg.contains("too few still poses: 7 at 1 x, 8 at 2 x to 10 x the initial rest's level; "),
+        msg.contains("too few still poses: 9 at 1 x, 8 at 2 x to 10 x the initial rest's level; "),
         "{msg}"
     );
     assert!(
@@ -277,7 +277,7 @@ fn the_command_line_refuses_bad_input_with_one_clear_line() {
     ]);
     assert_eq!(code, Some(1));
     assert!(
-        err.contains("too few still poses: 7 at 1 x, 6 at 2 x to 10 x the initial rest's level; "),
+        err.contains("too few still poses: 9 at 1 x, 6 at 2 x to 10 x the initial rest's level; "),
         "{err}"
     );
     assert!(!dir.path().join("x.blob").exists(), "nothing written");

@@ -324,13 +324,15 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
             rest: opts.init_rest,
         });
     }
+    // The quantisation's variance floors every variance: identical codes are not silence.
+    let floor = statics::floor(statics::quantum(&rec.acc));
     // The rest must be still: no second of it far noisier than its quietest.
     let second = samples(1.0);
     let blocks: Vec<(usize, f64)> = (0..rest_end / second)
         .map(|b| {
             (
                 b * second,
-                statics::rest_level(&rec.acc[b * second..(b + 1) * second]),
+                statics::rest_level(&rec.acc[b * second..(b + 1) * second], floor),
             )
         })
         .collect();
@@ -347,15 +349,29 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
             ratio: level / quietest,
         });
     }
-    let rest_level = statics::rest_level(&rec.acc[..rest_end]);
-    let measure = statics::measure(&rec.acc, samples(opts.window) | 1);
+    let rest_level = statics::rest_level(&rec.acc[..rest_end], floor);
+    // Two still runs whose means agree within 8 sigma of the rest's noise, a window apart at
+    // most, are one hold.
+    let tol = statics::variances(&rec.acc[..rest_end], floor).map(|v| 8.0 * v.sqrt());
+    let find = |measure: &[f64], threshold: f64, min_len: usize, window: usize| {
+        statics::poses(
+            measure,
+            &rec.saturated,
+            threshold,
+            min_len,
+            &rec.acc,
+            window,
+            tol,
+        )
+    };
+    let measure = statics::measure(&rec.acc, samples(opts.window) | 1, floor);
     let min_len = samples(opts.min_still);
 
     // The threshold: the multiple whose poses give the best linear accelerometer fit.
     let mut trials = Vec::new();
     let mut best: Option<(usize, f64, Vec<Range<usize>>)> = None;
     for &m in &opts.multipliers {
-        let poses = statics::intervals(&measure, &rec.saturated, m * rest_level, min_len);
+        let poses = find(&measure, m * rest_level, min_len, samples(opts.window));
         let rms_m = if poses.len() >= MIN_POSES {
             let means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
             let (center, start) = gravity::center_and_start(&means, opts.g);
@@ -401,7 +417,7 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         let most = opts
             .multipliers
             .iter()
-            .map(|&m| statics::intervals(&measure, &rec.saturated, m * rest_level, min_len))
+            .map(|&m| find(&measure, m * rest_level, min_len, samples(opts.window)))
             .max_by_key(|p| {
                 let means: Vec<[f64; 3]> = p.iter().map(|r| statics::mean(&rec.acc, r)).collect();
                 (directions(&means, rest_level), p.len())
@@ -436,11 +452,16 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
             .filter(|s| *s < opts.min_still)
             .find_map(|s| {
                 // The still measure's window no longer than the hold.
-                let measure = statics::measure(&rec.acc, samples(s.min(opts.window)) | 1);
+                let measure = statics::measure(&rec.acc, samples(s.min(opts.window)) | 1, floor);
                 opts.multipliers
                     .iter()
                     .map(|&m| {
-                        statics::intervals(&measure, &rec.saturated, m * rest_level, samples(s))
+                        find(
+                            &measure,
+                            m * rest_level,
+                            samples(s),
+                            samples(s.min(opts.window)),
+                        )
                     })
                     .filter(|p| fits(p))
                     .map(|p| p.len())

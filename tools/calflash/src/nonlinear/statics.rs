@@ -5,10 +5,33 @@
 
 use std::ops::Range;
 
-/// Per-sample still measure: the norm of the per-axis variances of `acc` over a window of
-/// `window` samples centred on the sample (shortened at the ends). O(n) with prefix sums.
+/// The data's quantisation step on each axis: the smallest change between consecutive samples
+/// (one count for raw codes; the logger's resolution for data in physical units), or 1 for an
+/// axis that never changes.
 #[must_use]
-pub fn measure(acc: &[[f64; 3]], window: usize) -> Vec<f64> {
+pub fn quantum(acc: &[[f64; 3]]) -> [f64; 3] {
+    std::array::from_fn(|j| {
+        let q = acc
+            .windows(2)
+            .map(|w| (w[1][j] - w[0][j]).abs())
+            .filter(|d| *d > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        if q.is_finite() { q } else { 1.0 }
+    })
+}
+
+/// The variance the quantisation adds to each axis, `q^2 / 12`: the floor under every
+/// variance here, so that a run of identical codes is not infinitely quiet.
+#[must_use]
+pub fn floor(quantum: [f64; 3]) -> [f64; 3] {
+    quantum.map(|q| q * q / 12.0)
+}
+
+/// Per-sample still measure: the norm of the per-axis variances of `acc` over a window of
+/// `window` samples centred on the sample (shortened at the ends), each with the quantisation
+/// `floor` added. O(n) with prefix sums.
+#[must_use]
+pub fn measure(acc: &[[f64; 3]], window: usize, floor: [f64; 3]) -> Vec<f64> {
     let n = acc.len();
     if n == 0 {
         return Vec::new();
@@ -31,21 +54,18 @@ pub fn measure(acc: &[[f64; 3]], window: usize) -> Vec<f64> {
             let m = (hi - lo) as f64;
             let v: [f64; 3] = std::array::from_fn(|j| {
                 let mean = (s1[hi][j] - s1[lo][j]) / m;
-                ((s2[hi][j] - s2[lo][j]) / m - mean * mean).max(0.0)
+                ((s2[hi][j] - s2[lo][j]) / m - mean * mean).max(0.0) + floor[j]
             });
             (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
         })
         .collect()
 }
 
-/// The same measure over a whole span (the initial rest): the norm of its per-axis variances.
+/// The same measure over a whole span (the initial rest): the norm of its per-axis variances,
+/// each with the quantisation `floor` added.
 #[must_use]
-pub fn rest_level(acc: &[[f64; 3]]) -> f64 {
-    let n = acc.len() as f64;
-    let v: [f64; 3] = std::array::from_fn(|j| {
-        let mean = acc.iter().map(|a| a[j]).sum::<f64>() / n;
-        acc.iter().map(|a| (a[j] - mean).powi(2)).sum::<f64>() / n
-    });
+pub fn rest_level(acc: &[[f64; 3]], floor: [f64; 3]) -> f64 {
+    let v = variances(acc, floor);
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
@@ -78,6 +98,49 @@ pub fn intervals(
     out
 }
 
+/// The still poses: runs of [`intervals`], with two runs joined when only a short stretch
+/// (at most `gap` samples, none excluded) separates them and their means differ by no more
+/// than `tol` on every axis: one hold that noise split, not two poses. Runs shorter than
+/// `min_len` are then dropped.
+#[must_use]
+pub fn poses(
+    measure: &[f64],
+    excluded: &[bool],
+    threshold: f64,
+    min_len: usize,
+    acc: &[[f64; 3]],
+    gap: usize,
+    tol: [f64; 3],
+) -> Vec<Range<usize>> {
+    let runs = intervals(measure, excluded, threshold, 1);
+    let mut out: Vec<Range<usize>> = Vec::with_capacity(runs.len());
+    for r in runs {
+        if let Some(last) = out.last_mut()
+            && r.start - last.end <= gap
+            && !excluded[last.end..r.start].iter().any(|x| *x)
+        {
+            let (a, b) = (mean(acc, last), mean(acc, &r));
+            if (0..3).all(|j| (a[j] - b[j]).abs() <= tol[j]) {
+                last.end = r.end;
+                continue;
+            }
+        }
+        out.push(r);
+    }
+    out.retain(|r| r.len() >= min_len);
+    out
+}
+
+/// Per-axis variances of `acc` (the initial rest's), each with the quantisation `floor`.
+#[must_use]
+pub fn variances(acc: &[[f64; 3]], floor: [f64; 3]) -> [f64; 3] {
+    let n = acc.len() as f64;
+    std::array::from_fn(|j| {
+        let mean = acc.iter().map(|a| a[j]).sum::<f64>() / n;
+        acc.iter().map(|a| (a[j] - mean).powi(2)).sum::<f64>() / n + floor[j]
+    })
+}
+
 /// Mean of `x` over `r`.
 #[must_use]
 pub fn mean(x: &[[f64; 3]], r: &Range<usize>) -> [f64; 3] {
@@ -107,8 +170,8 @@ mod tests {
             };
             acc.push([base + noise(), 400.0 + noise(), -base + noise()]);
         }
-        let m = measure(&acc, 101);
-        let level = rest_level(&acc[..800]);
+        let m = measure(&acc, 101, [0.0; 3]);
+        let level = rest_level(&acc[..800], [0.0; 3]);
         let found = intervals(&m, &vec![false; acc.len()], 4.0 * level, 100);
         assert_eq!(found.len(), 2, "{found:?}");
         assert!(
@@ -123,5 +186,28 @@ mod tests {
         let mut ex = vec![false; acc.len()];
         ex[2000] = true;
         assert_eq!(intervals(&m, &ex, 4.0 * level, 100).len(), 3);
+    }
+
+    #[test]
+    fn identical_codes_are_as_quiet_as_their_quantisation() {
+        // A quantised logger: one count of 0.038 m/s^2, a rest whose codes never change.
+        let q = 0.0383;
+        let still = vec![[0.0, 0.0, 9.81 / q * q]; 20];
+        assert_eq!(
+            quantum(&[[0.0, 1.0, 5.0], [0.0, 3.0, 5.5]]),
+            [1.0, 2.0, 0.5]
+        );
+        let f = floor([q; 3]);
+        let level = rest_level(&still, f);
+        assert!(
+            (level - 3f64.sqrt() * q * q / 12.0).abs() < 1e-15,
+            "{level}"
+        );
+        // One count of flicker is a few times that, not infinitely more.
+        let mut flicker = still.clone();
+        flicker[10][0] = q;
+        let ratio = rest_level(&flicker, f) / level;
+        assert!((1.0..10.0).contains(&ratio), "{ratio}");
+        assert!(measure(&still, 5, f).iter().all(|m| *m == level));
     }
 }
