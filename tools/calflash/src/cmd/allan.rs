@@ -72,6 +72,11 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
             hi: i32::MAX,
         },
         rate: args.rate,
+        // Only the sensor asked for is read and kept.
+        keep: match args.sensor {
+            Which::Gyro => crate::obs::layout::Keep::Gyro,
+            Which::Accel => crate::obs::layout::Keep::Accel,
+        },
     };
     let rec = match &args.gyro {
         Some(g) => recording::read_with(&args.acc, Some(g), &opts),
@@ -86,9 +91,8 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
     .map_err(|e| e.to_string())?;
     let t0 = rec.t[0];
     let (a, b) = (args.from.unwrap_or(0.0), args.to.unwrap_or(f64::INFINITY));
-    let idx: Vec<usize> = (0..rec.len())
-        .filter(|&i| (a..=b).contains(&(rec.t[i] - t0)))
-        .collect();
+    // Timestamps increase: the samples in [a, b] are one run.
+    let idx = rec.t.partition_point(|t| t - t0 < a)..rec.t.partition_point(|t| t - t0 <= b);
     if idx.len() < 100 {
         return Err(format!(
             "{}: {} samples between {a} s and {b} s; the Allan deviation needs a still recording of at least 100 (many thousands for the slow terms)",
@@ -140,7 +144,12 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
         }
     );
     for j in 0..3 {
-        let y: Vec<f64> = idx.iter().map(|&i| if args.sensor == Which::Gyro { rec.gyro[i][j] } else { rec.acc[i][j] } / scale[j]).collect();
+        let kept = if args.sensor == Which::Gyro {
+            &rec.gyro
+        } else {
+            &rec.acc
+        };
+        let y: Vec<f64> = kept[idx.clone()].iter().map(|v| v[j] / scale[j]).collect();
         let c = allan::overlapping(&y, rec.period, args.per_octave);
         if c.iter().any(|p| !p.adev.is_finite()) {
             // Squares of the cluster differences overflow: name the sample that makes them.
@@ -152,7 +161,7 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
                  overflow); a value that large is a misread: fix the line or take a part \
                  without it (--from/--to)",
                 rec.source,
-                rec.line[idx[k]],
+                rec.line[idx.start + k],
                 if args.sensor == Which::Gyro {
                     "gyro"
                 } else {

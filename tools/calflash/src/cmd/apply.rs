@@ -100,6 +100,7 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
     let opts = crate::obs::recording::Options {
         rails,
         rate: args.rate,
+        keep: crate::obs::layout::Keep::Both,
     };
     let rec = crate::obs::recording::read_with(acc, gyro, &opts).map_err(|e| e.to_string())?;
     Ok(Input {

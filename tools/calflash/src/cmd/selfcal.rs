@@ -91,6 +91,7 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
         &recording::Options {
             rails,
             rate: args.rate,
+            keep: crate::obs::layout::Keep::Both,
         },
     )
     .map_err(|e| e.to_string())?;

@@ -49,20 +49,48 @@ pub struct Preamble {
     pub ignored: Vec<String>,
 }
 
+/// Which triads of a file of both sensors to keep (a file of one keeps its one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Keep {
+    /// Accelerometer and gyro.
+    Both,
+    /// The accelerometer's three counts.
+    Accel,
+    /// The gyro's.
+    Gyro,
+}
+
 /// The samples of one file.
 #[derive(Debug, Clone)]
 pub struct Rows {
     /// Timestamps, s, increasing; `None` when the file has no timestamp column.
     pub t: Option<Vec<f64>>,
-    /// The counts of each sample: six (accelerometer x, y, z, gyro x, y, z) or three.
-    pub v: Vec<Vec<f64>>,
+    /// The kept triads: accelerometer then gyro, or the one kept (or the file's one).
+    pub triads: Vec<Vec<[f64; 3]>>,
     /// The file line of each sample.
-    pub line: Vec<usize>,
-    /// The 1-based field of each count.
+    pub line: Vec<u32>,
+    /// The 1-based field of each kept count.
     pub fields: Vec<usize>,
     /// The preamble.
     pub preamble: Preamble,
 }
+
+impl Rows {
+    /// Number of samples.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.line.len()
+    }
+
+    /// True when there are none.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.line.is_empty()
+    }
+}
+
+/// The most fields a line may hold (more are counted, for the message, but not read).
+const MAX_FIELDS: usize = 64;
 
 /// The meaning of each field, as the error messages name it.
 const NAMES: [&str; 6] = [
@@ -186,27 +214,103 @@ fn split(s: &str) -> Vec<&str> {
     }
 }
 
-/// Reads the file's text (a UTF-8 byte-order mark is dropped, with a note).
-fn text(path: &Path) -> Result<String, RecordingError> {
-    let bytes = std::fs::read(path).map_err(|source| RecordingError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let text = String::from_utf8(bytes).map_err(|e| RecordingError::NotText {
-        path: path.to_path_buf(),
-        line: e.as_bytes()[..e.utf8_error().valid_up_to()]
-            .iter()
-            .filter(|b| **b == b'\n')
-            .count()
-            + 1,
-    })?;
-    Ok(match text.strip_prefix('\u{feff}') {
-        Some(rest) => {
-            super::note_bom(path);
-            rest.to_string()
+/// The byte range of each field of a line.
+type Spans = [(usize, usize); MAX_FIELDS];
+
+/// Splits a sample line into `spans` (at commas, trimmed, or at runs of whitespace) and
+/// returns the number of fields; fields beyond the store's length are counted, not kept.
+fn split_bytes(bytes: &[u8], comma: bool, spans: &mut Spans) -> usize {
+    let mut count = 0;
+    let mut keep = |start: usize, end: usize| {
+        if let Some(slot) = spans.get_mut(count) {
+            *slot = (start, end);
         }
-        None => text,
-    })
+        count += 1;
+    };
+    let n = bytes.len();
+    if comma {
+        let mut start = 0;
+        loop {
+            let end = bytes[start..]
+                .iter()
+                .position(|&b| b == b',')
+                .map_or(n, |k| start + k);
+            let (mut a, mut b) = (start, end);
+            while a < b && bytes[a].is_ascii_whitespace() {
+                a += 1;
+            }
+            while b > a && bytes[b - 1].is_ascii_whitespace() {
+                b -= 1;
+            }
+            keep(a, b);
+            if end == n {
+                break;
+            }
+            start = end + 1;
+        }
+    } else {
+        let mut i = 0;
+        while i < n {
+            while i < n && (bytes[i] == b' ' || bytes[i] == b'\t') {
+                i += 1;
+            }
+            let start = i;
+            while i < n && bytes[i] != b' ' && bytes[i] != b'\t' {
+                i += 1;
+            }
+            if i > start {
+                keep(start, i);
+            }
+        }
+    }
+    count
+}
+
+/// The error of a field that is not a number (or not text).
+#[cold]
+fn not_a_number(
+    path: &Path,
+    line: usize,
+    k: usize,
+    what: &'static str,
+    field: &[u8],
+) -> RecordingError {
+    match std::str::from_utf8(field) {
+        Ok(text) => RecordingError::Number {
+            path: path.to_path_buf(),
+            line,
+            field: k + 1,
+            what,
+            text: super::shorten(text),
+        },
+        Err(_) => RecordingError::NotText {
+            path: path.to_path_buf(),
+            line,
+        },
+    }
+}
+
+/// A field as a number: a short integer (what most loggers write) directly, anything else
+/// by `fast_float2`; `None` when it is not a finite number.
+#[inline]
+fn number(field: &[u8]) -> Option<f64> {
+    let (negative, digits) = match field {
+        [b'-', rest @ ..] => (true, rest),
+        [b'+', rest @ ..] => (false, rest),
+        _ => (false, field),
+    };
+    if !digits.is_empty() && digits.len() <= 15 && digits.iter().all(u8::is_ascii_digit) {
+        let v = digits
+            .iter()
+            .fold(0i64, |v, &d| v * 10 + i64::from(d - b'0'));
+        // Exact: below 10^15 every integer is an f64.
+        #[allow(clippy::cast_precision_loss)]
+        let x = v as f64;
+        return Some(if negative { -x } else { x });
+    }
+    fast_float2::parse::<f64, _>(field)
+        .ok()
+        .filter(|x| x.is_finite())
 }
 
 fn expected(holds: Holds) -> String {
@@ -220,15 +324,28 @@ fn expected(holds: Holds) -> String {
     }
 }
 
-/// Reads one recording file holding `holds`.
+/// Reads one recording file holding `holds`, keeping the triads `keep` names. The file is
+/// streamed: memory holds the kept values and little more.
 ///
 /// # Errors
 /// A [`RecordingError`] naming the file, line and field.
-pub fn read(path: &Path, holds: Holds) -> Result<Rows, RecordingError> {
-    let text = text(path)?;
+pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingError> {
+    use std::io::BufRead as _;
+    let io = |source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut reader = std::io::BufReader::with_capacity(1 << 20, file);
+    // Which of the file's counts are kept.
+    let kept: Vec<usize> = match (holds, keep) {
+        (Holds::Both, Keep::Accel) => (0..3).collect(),
+        (Holds::Both, Keep::Gyro) => (3..6).collect(),
+        _ => (0..holds.counts()).collect(),
+    };
     let mut rows = Rows {
         t: None,
-        v: Vec::new(),
+        triads: vec![Vec::new(); kept.len() / 3],
         line: Vec::new(),
         fields: Vec::new(),
         preamble: Preamble::default(),
@@ -242,63 +359,81 @@ pub fn read(path: &Path, holds: Holds) -> Result<Rows, RecordingError> {
         found,
         expected,
     };
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let s = raw.trim();
-        if s.is_empty() || s.starts_with('#') {
+    let not_text = |line| RecordingError::NotText {
+        path: path.to_path_buf(),
+        line,
+    };
+    let mut buf = Vec::with_capacity(256);
+    let mut line = 0usize;
+    // The separator, fixed by the first sample line (`None` until then).
+    let mut comma: Option<bool> = None;
+    let mut spans: Spans = [(0, 0); MAX_FIELDS];
+    loop {
+        buf.clear();
+        if reader.read_until(b'\n', &mut buf).map_err(io)? == 0 {
+            break;
+        }
+        line += 1;
+        let mut bytes = &buf[..];
+        if line == 1
+            && let Some(rest) = bytes.strip_prefix(b"\xEF\xBB\xBF")
+        {
+            super::note_bom(path);
+            bytes = rest;
+        }
+        let bytes = bytes.trim_ascii();
+        if bytes.is_empty() || bytes[0] == b'#' {
             continue;
         }
-        let fields = split(s);
-        let is_text = fields.first().is_some_and(|f| f.parse::<f64>().is_err())
-            && fields.iter().any(|f| f.chars().any(char::is_alphabetic));
-        if rows.line.is_empty() && columns.is_none() && header.is_none() && is_text {
-            if let Some((key, value)) = setting(&fields) {
-                let here = Setting { value, line };
-                match squash(&key).as_str() {
-                    "fs" | "rate" | "samplerate" | "samplingrate" | "frequency" | "hz" => {
-                        rows.preamble.rate = Some(here);
+        // Before the first sample: a preamble line, or the header (read as text).
+        if columns.is_none() && header.is_none() {
+            let s = std::str::from_utf8(bytes).map_err(|_| not_text(line))?;
+            let fields = split(s);
+            if fields.first().is_some_and(|f| f.parse::<f64>().is_err())
+                && fields.iter().any(|f| f.chars().any(char::is_alphabetic))
+            {
+                if let Some((key, value)) = setting(&fields) {
+                    let here = Setting { value, line };
+                    match squash(&key).as_str() {
+                        "fs" | "rate" | "samplerate" | "samplingrate" | "frequency" | "hz" => {
+                            rows.preamble.rate = Some(here);
+                        }
+                        "initializationtime" | "initialrest" | "rest" | "inittime" => {
+                            rows.preamble.rest = (value > 0.0).then_some(here);
+                        }
+                        _ => rows.preamble.ignored.push(key),
                     }
-                    "initializationtime" | "initialrest" | "rest" | "inittime" => {
-                        rows.preamble.rest = (value > 0.0).then_some(here);
-                    }
-                    _ => rows.preamble.ignored.push(key),
+                    continue;
                 }
+                // The header: the columns by name when it names them.
+                columns = named(&fields, line, holds);
+                header = Some((line, s.to_string()));
                 continue;
             }
-            // The header: the columns by name when it names them.
-            columns = named(&fields, line, holds);
-            header = Some((line, s.to_string()));
-            continue;
         }
+        // A sample line, split without allocating: a line of more than MAX_FIELDS fields is
+        // counted, not kept.
+        let comma = *comma.get_or_insert_with(|| bytes.contains(&b','));
+        let count = split_bytes(bytes, comma, &mut spans);
+        let field = |k: usize| &bytes[spans[k].0..spans[k].1];
         let cols = match &columns {
             Some(c) => c,
-            None => columns.insert(
-                positional(fields.len(), holds)
-                    .ok_or_else(|| bad(line, fields.len(), expected(holds)))?,
-            ),
+            None => columns
+                .insert(positional(count, holds).ok_or_else(|| bad(line, count, expected(holds)))?),
         };
-        if fields.len() != cols.width {
+        if count != cols.width {
             let why = match cols.header {
                 Some(hl) => format!("{}, as the header on line {hl} names", cols.width),
                 None => format!("{}, as on the first sample line", cols.width),
             };
-            return Err(bad(line, fields.len(), why));
+            return Err(bad(line, count, why));
         }
-        let number = |field: usize, what: &'static str| {
-            fields[field]
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| RecordingError::Number {
-                    path: path.to_path_buf(),
-                    line,
-                    field: field + 1,
-                    what,
-                    text: super::shorten(fields[field]),
-                })
+        let value = |k: usize, what: &'static str| match number(field(k)) {
+            Some(x) => Ok(x),
+            None => Err(not_a_number(path, line, k, what, field(k))),
         };
         if let Some((k, scale)) = cols.t {
-            let x = number(k, "timestamp")? * scale;
+            let x = value(k, "timestamp")? * scale;
             if let Some(&prev) = times.last()
                 && x <= prev
             {
@@ -311,19 +446,22 @@ pub fn read(path: &Path, holds: Holds) -> Result<Rows, RecordingError> {
             }
             times.push(x);
         }
-        let mut vals = Vec::with_capacity(cols.counts.len());
-        for (j, &k) in cols.counts.iter().enumerate() {
-            let what = if holds == Holds::Both {
-                NAMES[j]
-            } else {
-                NAMES[j % 3]
-            };
-            vals.push(number(k, what)?);
+        for (n, triad) in rows.triads.iter_mut().enumerate() {
+            let mut v = [0.0; 3];
+            for (a, x) in v.iter_mut().enumerate() {
+                let j = kept[3 * n + a];
+                let what = if holds == Holds::Both {
+                    NAMES[j]
+                } else {
+                    NAMES[j % 3]
+                };
+                *x = value(cols.counts[j], what)?;
+            }
+            triad.push(v);
         }
-        rows.v.push(vals);
-        rows.line.push(line);
+        rows.line.push(u32::try_from(line).unwrap_or(u32::MAX));
     }
-    if rows.v.is_empty() {
+    if rows.line.is_empty() {
         return Err(RecordingError::Empty {
             path: path.to_path_buf(),
         });
@@ -342,7 +480,7 @@ pub fn read(path: &Path, holds: Holds) -> Result<Rows, RecordingError> {
         });
     }
     if let Some(c) = &columns {
-        rows.fields = c.counts.iter().map(|k| k + 1).collect();
+        rows.fields = kept.iter().map(|&j| c.counts[j] + 1).collect();
         if c.t.is_some() {
             rows.t = Some(times);
         }
@@ -385,9 +523,12 @@ mod tests {
             "mpu.csv",
             "Fs,100\nLogging Type,0\nInitialization time,36.5\nax,ay,az,gx,gy,gz\n-12,-812,15032,-447,156,-86\n-208,-828,14796,-398,132,-63\n",
         );
-        let r = read(&p, Holds::Both).unwrap();
+        let r = read(&p, Holds::Both, Keep::Both).unwrap();
         assert_eq!(r.t, None);
-        assert_eq!(r.v[0], [-12.0, -812.0, 15032.0, -447.0, 156.0, -86.0]);
+        assert_eq!(
+            (r.triads[0][0], r.triads[1][0]),
+            ([-12.0, -812.0, 15032.0], [-447.0, 156.0, -86.0])
+        );
         assert_eq!(r.line, [5, 6]);
         assert_eq!(
             r.preamble.rate,
@@ -410,13 +551,16 @@ mod tests {
             "named.csv",
             "gyro_x,gyro_y,gyro_z,temp,time_us,acc_x,acc_y,acc_z\n4,5,6,25,1000,1,2,3\n4,5,6,25,2000,1,2,3\n",
         );
-        let r = read(&p, Holds::Both).unwrap();
+        let r = read(&p, Holds::Both, Keep::Both).unwrap();
         assert_eq!(r.t, Some(vec![1e-3, 2e-3]));
-        assert_eq!(r.v[1], [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        assert_eq!(
+            (r.triads[0][1], r.triads[1][1]),
+            ([1.0, 2.0, 3.0], [4.0, 5.0, 6.0])
+        );
         // A line short of the header's names.
         let p = write(d.path(), "short.csv", "t,ax,ay,az,gx,gy,gz\n0,1,2,3,4,5\n");
         assert_eq!(
-            read(&p, Holds::Both).unwrap_err().to_string(),
+            read(&p, Holds::Both, Keep::Both).unwrap_err().to_string(),
             format!(
                 "{}:2: 6 fields; expected 7, as the header on line 1 names",
                 p.display()

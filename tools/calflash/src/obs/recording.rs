@@ -153,12 +153,12 @@ pub struct Recording {
     pub source: String,
     /// Timestamps, s, increasing.
     pub t: Vec<f64>,
-    /// Accelerometer counts.
+    /// Accelerometer counts (empty when [`Options::keep`] left them out).
     pub acc: Vec<[f64; 3]>,
-    /// Gyro counts.
+    /// Gyro counts (likewise).
     pub gyro: Vec<[f64; 3]>,
     /// Line in the (accelerometer) file of each sample.
-    pub line: Vec<usize>,
+    pub line: Vec<u32>,
     /// Samples with an axis at or beyond a rail (any sensor).
     pub saturated: Vec<bool>,
     /// How many were saturated, accelerometer and gyro.
@@ -179,6 +179,9 @@ pub struct Options {
     pub rails: Rails,
     /// The sample rate, Hz, for files without timestamps (checked against them otherwise).
     pub rate: Option<f64>,
+    /// The sensors to keep: a command that needs one reads only its file, or only its
+    /// columns of a file of both.
+    pub keep: layout::Keep,
 }
 
 impl Recording {
@@ -201,32 +204,30 @@ impl Recording {
     }
 }
 
-struct Parsed {
-    /// Where each count is: its file and 1-based field (accelerometer x, y, z, gyro x, y, z).
-    places: [(PathBuf, usize); 6],
-    t: Vec<f64>,
-    acc: Vec<[f64; 3]>,
-    gyro: Vec<[f64; 3]>,
-    line: Vec<usize>,
-    source: String,
-    rest: Option<f64>,
-}
-
-fn triple(v: &[f64], from: usize) -> [f64; 3] {
-    [v[from], v[from + 1], v[from + 2]]
-}
-
 /// Reads a recording: `acc` with seven columns, or `acc` and `gyro` with four each. Samples at or
 /// beyond `rails` are marked saturated.
 ///
 /// # Errors
 /// A [`RecordingError`] naming the file and line.
 pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, RecordingError> {
-    read_with(acc, gyro, &Options { rails, rate: None })
+    read_with(
+        acc,
+        gyro,
+        &Options {
+            rails,
+            rate: None,
+            keep: layout::Keep::Both,
+        },
+    )
 }
 
-/// The timestamps of a file: its own, checked against a stated rate, or made from the rate.
-fn timing(rows: &layout::Rows, path: &Path, rate: Option<f64>) -> Result<Vec<f64>, RecordingError> {
+/// The timestamps of a file: its own (taken out of `rows`), checked against a stated rate, or
+/// made from the rate.
+fn timing(
+    rows: &mut layout::Rows,
+    path: &Path,
+    rate: Option<f64>,
+) -> Result<Vec<f64>, RecordingError> {
     let pre = rows.preamble.rate;
     let conflict = |line: usize, what: String| RecordingError::RateConflict {
         path: path.to_path_buf(),
@@ -252,26 +253,26 @@ fn timing(rows: &layout::Rows, path: &Path, rate: Option<f64>) -> Result<Vec<f64
         && !(r.is_finite() && r > 0.0)
     {
         return Err(conflict(
-            pre.map_or(rows.line[0], |p| p.line),
+            pre.map_or(rows.line[0] as usize, |p| p.line),
             format!("a sample rate of {r} Hz; expected a number above 0"),
         ));
     }
-    match (&rows.t, stated) {
+    match (rows.t.take(), stated) {
         (Some(t), Some((r, who))) if t.len() > 1 => {
-            let period = median_step(t);
+            let period = median_step(&t);
             if differ(1.0 / period, r) {
                 return Err(conflict(
-                    rows.line[0],
+                    rows.line[0] as usize,
                     format!(
                         "the timestamps step by {period} s ({:.4} Hz) where {who} states {r} Hz",
                         1.0 / period
                     ),
                 ));
             }
-            Ok(t.clone())
+            Ok(t)
         }
-        (Some(t), _) => Ok(t.clone()),
-        (None, Some((r, _))) => Ok((0..rows.v.len()).map(|k| k as f64 / r).collect()),
+        (Some(t), _) => Ok(t),
+        (None, Some((r, _))) => Ok((0..rows.len()).map(|k| k as f64 / r).collect()),
         (None, None) => Err(RecordingError::NoRate {
             path: path.to_path_buf(),
         }),
@@ -322,97 +323,126 @@ pub fn read_with(
     opts: &Options,
 ) -> Result<Recording, RecordingError> {
     let rails = opts.rails;
-    let Parsed {
-        places,
-        t,
-        acc: a,
-        gyro: g,
-        line,
-        source,
-        rest,
-    } = match gyro {
+    let (want_acc, want_gyro) = match opts.keep {
+        layout::Keep::Both => (true, true),
+        layout::Keep::Accel => (true, false),
+        layout::Keep::Gyro => (false, true),
+    };
+    // Where each kept count is: its file and 1-based field.
+    let mut places: Vec<(PathBuf, usize)> = Vec::with_capacity(6);
+    let (t, a, g, line, source, rest) = match gyro {
         None => {
-            let r = layout::read(acc, layout::Holds::Both)?;
+            let mut r = layout::read(acc, layout::Holds::Both, opts.keep)?;
             note_preamble(acc, &r.preamble);
-            let t = timing(&r, acc, opts.rate)?;
-            let a = r.v.iter().map(|v| triple(v, 0)).collect();
-            let g = r.v.iter().map(|v| triple(v, 3)).collect();
-            Parsed {
-                places: std::array::from_fn(|k| (acc.to_path_buf(), r.fields[k])),
-                t,
-                acc: a,
-                gyro: g,
-                line: r.line,
-                source: acc.display().to_string(),
-                rest: r.preamble.rest.map(|s| s.value),
-            }
+            let t = timing(&mut r, acc, opts.rate)?;
+            places.extend(r.fields.iter().map(|f| (acc.to_path_buf(), *f)));
+            let mut kept = std::mem::take(&mut r.triads).into_iter();
+            let a = if want_acc {
+                kept.next().unwrap_or_default()
+            } else {
+                Vec::new()
+            };
+            let g = if want_gyro {
+                kept.next().unwrap_or_default()
+            } else {
+                Vec::new()
+            };
+            let rest = r.preamble.rest.map(|s| s.value);
+            (t, a, g, r.line, acc.display().to_string(), rest)
         }
         Some(gp) => {
-            let ra = layout::read(acc, layout::Holds::One)?;
-            let rg = if gp == acc {
-                ra.clone()
+            let one = |p: &Path| -> Result<(layout::Rows, Vec<f64>), RecordingError> {
+                let mut r = layout::read(p, layout::Holds::One, layout::Keep::Both)?;
+                note_preamble(p, &r.preamble);
+                let t = timing(&mut r, p, opts.rate)?;
+                Ok((r, t))
+            };
+            // One file of one triad read as both halves: read once, used for what is kept.
+            let same = gp == acc;
+            let mut ra = if want_acc || same {
+                Some(one(acc)?)
             } else {
-                layout::read(gp, layout::Holds::One)?
+                None
             };
-            note_preamble(acc, &ra.preamble);
-            if gp != acc {
-                note_preamble(gp, &rg.preamble);
-            }
-            let ta = timing(&ra, acc, opts.rate)?;
-            let tg = timing(&rg, gp, opts.rate)?;
-            let mismatch = |line: usize, what: String| RecordingError::Mismatch {
-                acc: acc.to_path_buf(),
-                gyro: gp.to_path_buf(),
-                line,
-                what,
+            let mut rg = if want_gyro && !same {
+                Some(one(gp)?)
+            } else {
+                None
             };
-            if ta.len() != tg.len() {
-                let line = rg
-                    .line
-                    .get(ta.len().min(tg.len()))
-                    .or(rg.line.last())
-                    .copied()
-                    .unwrap_or(1);
-                return Err(mismatch(
+            if let (Some((ra, ta)), Some((rg, tg))) = (&ra, &rg) {
+                let mismatch = |line: usize, what: String| RecordingError::Mismatch {
+                    acc: acc.to_path_buf(),
+                    gyro: gp.to_path_buf(),
                     line,
-                    format!(
-                        "{} gyro samples against {} accelerometer samples",
-                        tg.len(),
-                        ta.len()
-                    ),
-                ));
+                    what,
+                };
+                if ta.len() != tg.len() {
+                    let line = rg
+                        .line
+                        .get(ta.len().min(tg.len()))
+                        .or(rg.line.last())
+                        .map_or(1, |l| *l as usize);
+                    return Err(mismatch(
+                        line,
+                        format!(
+                            "{} gyro samples against {} accelerometer samples",
+                            tg.len(),
+                            ta.len()
+                        ),
+                    ));
+                }
+                let tol = 1e-6 * ta.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+                if let Some(k) = (0..ta.len()).find(|&k| (ta[k] - tg[k]).abs() > tol) {
+                    return Err(mismatch(
+                        rg.line[k] as usize,
+                        format!(
+                            "timestamp {} s where the accelerometer's is {} s",
+                            tg[k], ta[k]
+                        ),
+                    ));
+                }
+                let _ = ra;
             }
-            let tol = 1e-6 * ta.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-            if let Some(k) = (0..ta.len()).find(|&k| (ta[k] - tg[k]).abs() > tol) {
-                return Err(mismatch(
-                    rg.line[k],
-                    format!(
-                        "timestamp {} s where the accelerometer's is {} s",
-                        tg[k], ta[k]
-                    ),
-                ));
-            }
-            let a = ra.v.iter().map(|v| triple(v, 0)).collect();
-            let g = rg.v.iter().map(|v| triple(v, 0)).collect();
-            Parsed {
-                places: std::array::from_fn(|k| {
-                    if k < 3 {
-                        (acc.to_path_buf(), ra.fields[k])
-                    } else {
-                        (gp.to_path_buf(), rg.fields[k - 3])
+            let mut a = Vec::new();
+            let mut g = Vec::new();
+            let mut place = |r: &layout::Rows, p: &Path| {
+                places.extend(r.fields.iter().map(|f| (p.to_path_buf(), *f)));
+            };
+            if let Some((r, _)) = &mut ra {
+                if want_acc {
+                    place(r, acc);
+                }
+                if same && want_gyro {
+                    place(r, gp);
+                }
+                let triad = std::mem::take(&mut r.triads[0]);
+                match (want_acc, same && want_gyro) {
+                    // One file read as both halves, both wanted: the one copy it needs.
+                    (true, true) => {
+                        g = triad.clone();
+                        a = triad;
                     }
-                }),
-                t: ta,
-                acc: a,
-                gyro: g,
-                line: ra.line,
-                source: if gp == acc {
-                    acc.display().to_string()
-                } else {
-                    format!("{} + {}", acc.display(), gp.display())
-                },
-                rest: ra.preamble.rest.or(rg.preamble.rest).map(|s| s.value),
+                    (true, false) => a = triad,
+                    (false, true) => g = triad,
+                    (false, false) => {}
+                }
             }
+            if let Some((r, _)) = &mut rg {
+                place(r, gp);
+                g = std::mem::take(&mut r.triads[0]);
+            }
+            let source = match (&ra, &rg) {
+                (Some(_), Some(_)) => format!("{} + {}", acc.display(), gp.display()),
+                (None, Some(_)) => gp.display().to_string(),
+                _ => acc.display().to_string(),
+            };
+            let rest = [&ra, &rg]
+                .iter()
+                .find_map(|r| r.as_ref().and_then(|(r, _)| r.preamble.rest))
+                .map(|s| s.value);
+            // Lines and times from the accelerometer's file when it was read.
+            let (r, t) = ra.or(rg).expect("at least one file is read");
+            (t, a, g, r.line, source, rest)
         }
     };
     let period = median_step(&t);
@@ -421,13 +451,13 @@ pub fn read_with(
         .enumerate()
         .filter(|(_, w)| w[1] - w[0] > 1.5 * period)
         .map(|(k, w)| Gap {
-            line: line[k + 1],
+            line: line[k + 1] as usize,
             from: w[0],
             to: w[1],
             missing: ((w[1] - w[0]) / period).round() as usize - 1,
         })
         .collect();
-    check_codes(&a, &g, &line, rails, &places)?;
+    check_codes(&[&a, &g], &line, rails, &places)?;
     let at_rail = |s: &[f64; 3]| {
         s.iter()
             .any(|x| *x <= f64::from(rails.lo) || *x >= f64::from(rails.hi))
@@ -438,7 +468,9 @@ pub fn read_with(
         sa.iter().filter(|x| **x).count(),
         sg.iter().filter(|x| **x).count(),
     );
-    let saturated = sa.iter().zip(&sg).map(|(x, y)| *x || *y).collect();
+    let saturated = (0..t.len())
+        .map(|k| sa.get(k).copied().unwrap_or(false) || sg.get(k).copied().unwrap_or(false))
+        .collect();
     Ok(Recording {
         source,
         t,
@@ -456,18 +488,23 @@ pub fn read_with(
 /// Refuses a recording whose codes beyond the rails show another format of the same width
 /// (signed codes read as unsigned, or the reverse); a few damaged codes stay, marked saturated.
 fn check_codes(
-    a: &[[f64; 3]],
-    g: &[[f64; 3]],
-    line: &[usize],
+    triads: &[&Vec<[f64; 3]>],
+    line: &[u32],
     rails: Rails,
-    places: &[(PathBuf, usize); 6],
+    places: &[(PathBuf, usize)],
 ) -> Result<(), RecordingError> {
     let (lo, hi) = (f64::from(rails.lo), f64::from(rails.hi));
+    // Every kept count as (sample, count index among the kept, value).
     let codes = || {
-        a.iter()
-            .zip(g)
+        triads
+            .iter()
+            .filter(|t| !t.is_empty())
             .enumerate()
-            .flat_map(|(k, (x, w))| x.iter().chain(w).enumerate().map(move |(j, v)| (k, j, *v)))
+            .flat_map(|(n, t)| {
+                t.iter().enumerate().flat_map(move |(k, x)| {
+                    x.iter().enumerate().map(move |(j, v)| (k, 3 * n + j, *v))
+                })
+            })
     };
     let below = codes().filter(|c| c.2 < lo).count();
     let above = codes().filter(|c| c.2 > hi).count();
@@ -480,7 +517,7 @@ fn check_codes(
     let (path, field) = &places[j];
     Err(RecordingError::WrongCodes {
         path: path.clone(),
-        line: line[k],
+        line: line[k] as usize,
         field: *field,
         value,
         format: super::codes::name(rails),
@@ -541,6 +578,7 @@ mod tests {
         let opts = |rate| Options {
             rails: signed,
             rate,
+            keep: layout::Keep::Both,
         };
         let six = "-12 -812 15032 -447 156 -86\n-208 -828 14796 -398 132 -63\n-1 -2 -3 -4 -5 -6\n";
         let bare = write(d.path(), "bare.txt", six);
@@ -591,6 +629,7 @@ mod tests {
             &Options {
                 rails: Rails::unsigned(16),
                 rate: Some(100.0),
+                keep: layout::Keep::Both,
             },
         )
         .unwrap_err()

@@ -135,7 +135,9 @@ impl Tumble {
         let sg: Vec<bool> = gyro.iter().map(at_rail).collect();
         Recording {
             source: format!("simulated tumble (seed {})", self.seed),
-            line: (1..=t.len()).collect(),
+            line: (1..=t.len())
+                .map(|k| u32::try_from(k).unwrap_or(u32::MAX))
+                .collect(),
             saturated: sa.iter().zip(&sg).map(|(a, b)| *a || *b).collect(),
             saturated_count: (
                 sa.iter().filter(|x| **x).count(),
