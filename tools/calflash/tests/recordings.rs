@@ -210,3 +210,186 @@ fn signed_observation_codes_are_named_and_calibrate_with_codes_signed16() {
         .fold(0.0f64, f64::max);
     assert!(worst < 0.05, "largest error {worst} m/s^2");
 }
+
+fn mpu9150() -> Option<PathBuf> {
+    let d =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/mpu9150-imu-calib");
+    if d.join("imu1.log").is_file() {
+        Some(d)
+    } else {
+        println!(
+            "MPU-9150 recordings: SKIPPED, {} is absent (it lives beside the checkout in CI)",
+            d.display()
+        );
+        None
+    }
+}
+
+/// The two MPU-9150 units log m/s^2 and rad/s as their driver delivers them (six columns, no
+/// header, no timestamp, 100 Hz, a 7 s rest). Read as counts they are named as not counts;
+/// with `--units m/s2,rad/s` both calibrate in SI, the JSON states the units, and no blob is
+/// written (the device corrects codes) unless the value of one code is given.
+#[test]
+fn the_mpu9150_recordings_calibrate_in_physical_units() {
+    let Some(d) = mpu9150() else { return };
+    let out = tempfile::tempdir().unwrap();
+    for unit in ["imu1", "imu2"] {
+        let file = d.join(format!("{unit}.log"));
+        let base = [
+            "selfcal",
+            arg(&file),
+            "--rate",
+            "100",
+            "--g",
+            "9.8204",
+            "--init-rest",
+            "6",
+            "--serial",
+            unit,
+            "--no-db",
+        ];
+        let (code, _, err) = calflash(out.path(), &base);
+        assert_eq!(code, 1);
+        assert!(err.contains("codes below zero"), "{err}");
+        let mut si = base.to_vec();
+        si.extend(["--units", "m/s2,rad/s", "--json", "r.json"]);
+        let (code, said, err) = calflash(out.path(), &si);
+        assert_eq!(code, 0, "{said}{err}");
+        assert!(said.contains(": ACCEPT"), "{said}");
+        assert!(
+            said.contains("inputs  accelerometer in m/s^2, gyro in rad/s"),
+            "{said}"
+        );
+        assert!(
+            said.contains("device  no blob: the values are physical"),
+            "{said}"
+        );
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.path().join("r.json")).unwrap())
+                .unwrap();
+        assert_eq!(r["inputs"]["accel"], "m/s^2");
+        assert_eq!(r["inputs"]["gyro_file_unit"], "rad/s");
+        // The fit is of a unit already near SI: scale within 1 %, |a| - g within 5 mm/s^2 RMS.
+        let m = &r["accel"]["matrix_m_s2_per_count"];
+        for i in 0..3 {
+            let s = m[i][i].as_f64().unwrap();
+            assert!((s - 1.0).abs() < 0.01, "{unit} M[{i}][{i}] = {s}");
+        }
+        assert!(r["accel"]["rms_m_s2"].as_f64().unwrap() < 5e-3);
+        assert!(r["gyro"]["rms_deg"].as_f64().unwrap() < 1.0);
+        // A blob needs codes.
+        let mut blob = si.clone();
+        blob.extend(["--blob", "u.blob"]);
+        let (code, _, err) = calflash(out.path(), &blob);
+        assert_eq!(code, 1);
+        assert!(err.contains("--blob: the values are physical"), "{err}");
+        assert!(!out.path().join("u.blob").exists());
+        // With the value of one code (a +-8 g and +-500 deg/s setting: the gyro reaches 272
+        // deg/s) the codes are calibrated, the blob written, and `apply` corrects the file
+        // read the same way, and refuses it read as SI.
+        let lsb = [
+            "--lsb",
+            "9.80665/4096,0.01745329/65.5",
+            "--codes",
+            "signed16",
+        ];
+        blob.extend(lsb);
+        let (code, said, err) = calflash(out.path(), &blob);
+        assert_eq!(code, 0, "{said}{err}");
+        assert!(
+            said.contains("inputs  accelerometer in codes of "),
+            "{said}"
+        );
+        assert!(out.path().join("u.blob").is_file());
+        let apply = [
+            "apply",
+            "--blob",
+            "u.blob",
+            "--recording",
+            arg(&file),
+            "--rate",
+            "100",
+            "--units",
+            "m/s2,rad/s",
+            "--output",
+            "c.csv",
+        ];
+        let (code, _, err) = calflash(out.path(), &apply);
+        assert_eq!(code, 1);
+        assert!(
+            err.contains("the values are physical and the blob corrects converter codes"),
+            "{err}"
+        );
+        let mut apply = apply.to_vec();
+        apply.extend(&lsb[..2]);
+        let (code, said, err) = calflash(out.path(), &apply);
+        assert_eq!(code, 0, "{said}{err}");
+        std::fs::remove_file(out.path().join("u.blob")).unwrap();
+    }
+}
+
+/// Units in a header's names (`ax_g`, `gx_dps`) are read and converted to SI; names in mixed
+/// units, and `--units` that contradicts the header, are refused at the header's line.
+#[test]
+fn units_in_a_header_are_read_and_contradictions_named() {
+    let out = tempfile::tempdir().unwrap();
+    let p = out.path();
+    let mut text = String::from("t_ms,ax_g,ay_g,az_g,gx_dps,gy_dps,gz_dps\n");
+    for k in 0..400 {
+        text.push_str(&format!(
+            "{},{:.5},{:.5},{:.5},{:.4},{:.4},{:.4}\n",
+            10 * k,
+            0.001 * f64::from(k % 3),
+            -0.002,
+            1.0 + 0.0005 * f64::from(k % 2),
+            0.1 * f64::from(k % 5),
+            -0.2,
+            0.3
+        ));
+    }
+    std::fs::write(p.join("g.csv"), &text).unwrap();
+    let (code, said, err) = calflash(
+        p,
+        &["allan", "g.csv", "--sensor", "gyro", "--json", "a.json"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(said.contains("gyro in rad/s"), "{said}");
+    let (code, _, err) = calflash(
+        p,
+        &["allan", "g.csv", "--sensor", "gyro", "--units", "g,rad/s"],
+    );
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("g.csv:1: --units gives the gyro in rad/s where the header names deg/s"),
+        "{err}"
+    );
+    std::fs::write(p.join("m.csv"), text.replacen("ay_g", "ay_mg", 1)).unwrap();
+    let (code, _, err) = calflash(p, &["allan", "m.csv", "--sensor", "accel"]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains(
+            "m.csv:1: the header names the accelerometer's axes in mixed units (g, mg, g)"
+        ),
+        "{err}"
+    );
+    let (code, _, err) = calflash(
+        p,
+        &[
+            "allan",
+            "g.csv",
+            "--sensor",
+            "gyro",
+            "--units",
+            "counts,counts",
+        ],
+    );
+    assert_eq!(code, 1);
+    assert!(err.contains("where the header names deg/s"), "{err}");
+    std::fs::write(p.join("c.txt"), "0 1 2 3\n0.01 1 2 3\n").unwrap();
+    let (code, _, err) = calflash(p, &["allan", "c.txt", "--lsb", "1/16384,1/131"]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("c.txt:1: --lsb gives the value of one code, for values in a physical unit; the gyro is in counts"),
+        "{err}"
+    );
+}

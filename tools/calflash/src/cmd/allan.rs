@@ -9,6 +9,7 @@ use spincal::model::Rails;
 
 use crate::noise::allan::{self, NoiseTerms, Point};
 use crate::obs::recording;
+use crate::obs::units::{self, Sensor};
 use crate::report;
 
 /// Which sensor of the recording.
@@ -31,6 +32,9 @@ pub struct AllanArgs {
     /// The sample rate, Hz, of a recording without timestamps (checked against them otherwise).
     #[arg(long, value_parser = |s: &str| values::in_range(s, 1.0e-3, 1.0e6))]
     pub rate: Option<f64>,
+    /// The units of the values (counts unless stated).
+    #[command(flatten)]
+    pub units: super::units::UnitArgs,
     /// Which sensor.
     #[arg(long, value_enum, default_value = "gyro")]
     pub sensor: Which,
@@ -77,13 +81,18 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
             Which::Gyro => crate::obs::layout::Keep::Gyro,
             Which::Accel => crate::obs::layout::Keep::Accel,
         },
+        units: args.units.units(),
     };
     let rec = match &args.gyro {
         Some(g) => recording::read_with(&args.acc, Some(g), &opts),
         // Both sensors in one file, or the one sensor --sensor names (read as both halves).
         None => recording::read_with(&args.acc, None, &opts).or_else(|both| match both {
             recording::RecordingError::Fields { .. } => {
-                recording::read_with(&args.acc, Some(&args.acc), &opts).map_err(|_| both)
+                // Its own error when it reads as one sensor but is wrong otherwise.
+                recording::read_with(&args.acc, Some(&args.acc), &opts).map_err(|one| match one {
+                    recording::RecordingError::Fields { .. } => both,
+                    e => e,
+                })
             }
             e => Err(e),
         }),
@@ -123,10 +132,21 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
     if scale.iter().any(|s| !(s.is_finite() && *s != 0.0)) {
         return Err("--scale: counts per unit must be finite and non-zero".into());
     }
-    let (unit, si) = match (args.sensor, args.scale.is_empty()) {
-        (_, true) => ("counts", false),
-        (Which::Gyro, false) => ("rad/s", true),
-        (Which::Accel, false) => ("m/s^2", true),
+    let (sensor, read) = match args.sensor {
+        Which::Gyro => (Sensor::Gyro, rec.units[1]),
+        Which::Accel => (Sensor::Accel, rec.units[0]),
+    };
+    if read.is_si() && !args.scale.is_empty() {
+        return Err(format!(
+            "--scale: the values are already in {} (read from {}); --scale is for counts",
+            units::si(sensor),
+            read.file.name()
+        ));
+    }
+    let (unit, si) = match (read.is_si(), args.scale.is_empty()) {
+        (true, _) => (units::si(sensor), true),
+        (false, true) => ("counts", false),
+        (false, false) => (units::si(sensor), true),
     };
     let axes = ["x", "y", "z"];
     let mut curves: Vec<Vec<Point>> = Vec::new();

@@ -49,6 +49,9 @@ pub struct ApplyArgs {
     /// or a recording's.
     #[arg(long, value_parser = values::positive)]
     pub rate: Option<f64>,
+    /// The units of the values (counts unless stated).
+    #[command(flatten)]
+    pub units: super::units::UnitArgs,
     /// A column with each sample's time in seconds: the rate, when `--rate` is not given, and
     /// a sample after a step that is not the rate is flagged (its rate derivative is unknown).
     #[arg(long, conflicts_with = "recording")]
@@ -101,8 +104,16 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
         rails,
         rate: args.rate,
         keep: crate::obs::layout::Keep::Both,
+        units: args.units.units(),
     };
     let rec = crate::obs::recording::read_with(acc, gyro, &opts).map_err(|e| e.to_string())?;
+    if rec.units.iter().any(|u| u.is_si()) {
+        return Err(format!(
+            "{}: the values are physical and the blob corrects converter codes; give --lsb \
+             ACCEL,GYRO (the value of one code, as the calibration was made with)",
+            rec.source
+        ));
+    }
     Ok(Input {
         header: "line,t".into(),
         labels: rec

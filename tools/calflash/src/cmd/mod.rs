@@ -13,4 +13,5 @@ pub mod outputs;
 pub mod selfcal;
 pub mod simulate;
 pub mod threshold;
+pub mod units;
 pub mod values;

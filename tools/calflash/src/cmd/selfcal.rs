@@ -33,6 +33,9 @@ pub struct SelfcalArgs {
     /// The sample rate, Hz, of a recording without timestamps (checked against them otherwise).
     #[arg(long, value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
     pub rate: Option<f64>,
+    /// The units of the values (counts unless stated).
+    #[command(flatten)]
+    pub units: super::units::UnitArgs,
     /// Window of the still measure, s.
     #[arg(long, default_value_t = 1.0, value_parser = super::values::positive)]
     pub window: f64,
@@ -92,6 +95,7 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
             rails,
             rate: args.rate,
             keep: crate::obs::layout::Keep::Both,
+            units: args.units.units(),
         },
     )
     .map_err(|e| e.to_string())?;
@@ -125,24 +129,43 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
         tool_version: [version[0], version[1], version[2]],
         fit_rejected: false,
     };
-    let data = build::calibration_data(
-        &c,
-        &rec,
-        identity,
-        rails,
-        Span::new(t0 as f32, t1 as f32),
-        Span::new(v0 as f32, v1 as f32),
-    );
-    let check = build::build_and_check(&data, &c, &rec)?;
+    // SI values cannot make a blob: the device corrects converter codes.
+    let si = rec.units.iter().any(|u| u.is_si());
+    let check = if si {
+        None
+    } else {
+        let data = build::calibration_data(
+            &c,
+            &rec,
+            identity,
+            rails,
+            Span::new(t0 as f32, t1 as f32),
+            Span::new(v0 as f32, v1 as f32),
+        );
+        Some(build::build_and_check(&data, &c, &rec)?)
+    };
+    let check = check.as_ref();
+    if si && args.out.blob.is_some() {
+        return Err(format!(
+            "--blob: {}",
+            report::selfcal::NO_BLOB.trim_start_matches("no blob: ")
+        ));
+    }
     let name = serial.as_str();
-    let record = report::selfcal::record(&c, &rec, &check, name);
-    args.out.write(Some(&check.blob), &record, || {
-        report::selfcal::html(&c, &rec, &check, name)
-    })?;
-    print!("{}", report::selfcal::summary(&c, &rec, &check, name));
+    let record = report::selfcal::record(&c, &rec, check, name);
+    args.out
+        .write(check.map(|c| c.blob.as_slice()), &record, || {
+            report::selfcal::html(&c, &rec, check, name)
+        })?;
+    print!("{}", report::selfcal::summary(&c, &rec, check, name));
     let report_path = args.out.report.as_deref();
     args.out.record(name, &record, |d| {
-        d.record_selfcal(name, &record, report_path, &check.blob)
+        d.record_selfcal(
+            name,
+            &record,
+            report_path,
+            check.map_or(&[][..], |c| &c.blob),
+        )
     })?;
     Ok(())
 }

@@ -121,6 +121,16 @@ pub fn at_least_one(s: &str) -> Result<usize, String> {
     count_in(s, 1, 1_000_000_000)
 }
 
+/// A number, or a fraction `A/B` of two (a datasheet's `1/16384`).
+#[must_use]
+pub fn number_of(s: &str) -> Option<f64> {
+    let t = s.trim();
+    match t.split_once('/') {
+        Some((a, b)) => Some(a.trim().parse::<f64>().ok()? / b.trim().parse::<f64>().ok()?),
+        None => t.parse().ok(),
+    }
+}
+
 /// The converter's code format: `unsigned16` (also offset binary), `signed16` (two's
 /// complement), any width from 8 to 32 bits; or the rails `LO:HI` of another converter.
 ///

@@ -9,6 +9,7 @@
 use std::path::Path;
 
 use super::recording::RecordingError;
+use super::units::{Sensor, Unit};
 
 /// What a file holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -71,6 +72,12 @@ pub struct Rows {
     pub line: Vec<u32>,
     /// The 1-based field of each kept count.
     pub fields: Vec<usize>,
+    /// The unit the header names for each kept count (`None`: not stated).
+    pub units: Vec<Option<Unit>>,
+    /// The header's line, when it named the columns.
+    pub header: Option<usize>,
+    /// The sensor a file of one sensor's header names.
+    pub sensor: Option<Sensor>,
     /// The preamble.
     pub preamble: Preamble,
 }
@@ -109,6 +116,10 @@ struct Columns {
     t: Option<(usize, f64)>,
     /// The fields of the counts, in order.
     counts: Vec<usize>,
+    /// The unit each count column's name states.
+    units: Vec<Option<Unit>>,
+    /// The sensor of the first triad named (a file of one sensor names which).
+    sensor: Option<Sensor>,
     /// The number of fields every line has (from the header, or the first sample line).
     width: usize,
     /// The header's line, when the columns are chosen by its names.
@@ -138,13 +149,15 @@ fn timestamp(name: &str) -> Option<f64> {
     }
 }
 
-/// The axis (0, 1, 2) of a count column of the sensor named by `prefixes`, if it is one:
-/// a prefix, the axis letter, and nothing more (`ax`, `acc_x`, `AccelX`, `gyro_z`, `wz`).
-fn axis(name: &str, prefixes: &[&str]) -> Option<usize> {
+/// The axis (0, 1, 2) of a column of `sensor` named by `prefixes`, if it is one, with the unit
+/// its name states: a prefix, the axis letter, and a unit or nothing (`ax`, `acc_x`, `AccelX`,
+/// `gyro_z`, `wz`, `ax_mps2`, `gyro_x[dps]`).
+fn axis(name: &str, prefixes: &[&str], sensor: Sensor) -> Option<(usize, Option<Unit>)> {
     let s = squash(name);
     prefixes.iter().find_map(|p| {
         let rest = s.strip_prefix(p)?;
-        ["x", "y", "z"].iter().position(|a| *a == rest)
+        let k = ["x", "y", "z"].iter().position(|a| rest.starts_with(a))?;
+        Some((k, Unit::suffix(&rest[1..], sensor)?))
     })
 }
 
@@ -153,11 +166,11 @@ const GYRO: [&str; 6] = ["gyroscope", "gyro", "gyr", "g", "w", "omega"];
 
 /// The columns a header on line `line` names, when it names all the counts `holds` needs.
 fn named(header: &[&str], line: usize, holds: Holds) -> Option<Columns> {
-    let find = |prefixes: &[&str]| -> Option<[usize; 3]> {
+    let find = |prefixes: &[&str], sensor: Sensor| -> Option<[(usize, Option<Unit>, Sensor); 3]> {
         let mut out = [None; 3];
         for (i, h) in header.iter().enumerate() {
-            if let Some(k) = axis(h, prefixes) {
-                out[k].get_or_insert(i);
+            if let Some((k, unit)) = axis(h, prefixes, sensor) {
+                out[k].get_or_insert((i, unit, sensor));
             }
         }
         Some([out[0]?, out[1]?, out[2]?])
@@ -166,13 +179,20 @@ fn named(header: &[&str], line: usize, holds: Holds) -> Option<Columns> {
         .iter()
         .enumerate()
         .find_map(|(i, h)| timestamp(h).map(|s| (i, s)));
-    let counts: Vec<usize> = match holds {
-        Holds::Both => find(&ACCEL)?.into_iter().chain(find(&GYRO)?).collect(),
-        Holds::One => find(&ACCEL).or_else(|| find(&GYRO))?.to_vec(),
+    let found: Vec<(usize, Option<Unit>, Sensor)> = match holds {
+        Holds::Both => find(&ACCEL, Sensor::Accel)?
+            .into_iter()
+            .chain(find(&GYRO, Sensor::Gyro)?)
+            .collect(),
+        Holds::One => find(&ACCEL, Sensor::Accel)
+            .or_else(|| find(&GYRO, Sensor::Gyro))?
+            .to_vec(),
     };
     Some(Columns {
         t,
-        counts,
+        counts: found.iter().map(|f| f.0).collect(),
+        units: found.iter().map(|f| f.1).collect(),
+        sensor: found.first().map(|f| f.2),
         width: header.len(),
         header: Some(line),
     })
@@ -192,6 +212,8 @@ fn positional(width: usize, holds: Holds) -> Option<Columns> {
     Some(Columns {
         t,
         counts: (first..first + n).collect(),
+        units: vec![None; n],
+        sensor: None,
         width,
         header: None,
     })
@@ -348,6 +370,9 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
         triads: vec![Vec::new(); kept.len() / 3],
         line: Vec::new(),
         fields: Vec::new(),
+        units: Vec::new(),
+        header: None,
+        sensor: None,
         preamble: Preamble::default(),
     };
     let mut times = Vec::new();
@@ -481,6 +506,9 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
     }
     if let Some(c) = &columns {
         rows.fields = kept.iter().map(|&j| c.counts[j] + 1).collect();
+        rows.units = kept.iter().map(|&j| c.units[j]).collect();
+        rows.header = c.header;
+        rows.sensor = c.sensor;
         if c.t.is_some() {
             rows.t = Some(times);
         }
@@ -512,10 +540,15 @@ mod tests {
         assert_eq!(timestamp("Timestamp"), Some(1.0));
         assert_eq!(timestamp("t[ms]"), Some(1e-3));
         assert_eq!(timestamp("temp"), None);
-        assert_eq!(axis("acc_x", &ACCEL), Some(0));
-        assert_eq!(axis("AccelZ", &ACCEL), Some(2));
-        assert_eq!(axis("gyro_y", &GYRO), Some(1));
-        assert_eq!(axis("gx", &ACCEL), None);
+        assert_eq!(axis("acc_x", &ACCEL, Sensor::Accel), Some((0, None)));
+        assert_eq!(axis("AccelZ", &ACCEL, Sensor::Accel), Some((2, None)));
+        assert_eq!(axis("gyro_y", &GYRO, Sensor::Gyro), Some((1, None)));
+        assert_eq!(axis("gx", &ACCEL, Sensor::Accel), None);
+        let mps2 = Unit::parse("m/s^2", Sensor::Accel);
+        assert_eq!(axis("ax_mps2", &ACCEL, Sensor::Accel), Some((0, mps2)));
+        let dps = Unit::parse("deg/s", Sensor::Gyro);
+        assert_eq!(axis("gyro_z[dps]", &GYRO, Sensor::Gyro), Some((2, dps)));
+        assert_eq!(axis("ax_filtered", &ACCEL, Sensor::Accel), None);
         let d = tempfile::tempdir().unwrap();
         // An MPU-6050 logger's layout: a preamble, a header, signed counts, no timestamp.
         let p = write(

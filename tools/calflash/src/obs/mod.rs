@@ -7,6 +7,7 @@ pub mod codes;
 pub mod layout;
 pub mod recording;
 pub mod timing;
+pub mod units;
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};

@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use spincal::model::Rails;
 
 use super::layout;
+use super::units::{self, Sensor, Unit};
 
 /// A failure to read a recording.
 #[derive(Debug, thiserror::Error)]
@@ -125,6 +126,16 @@ pub enum RecordingError {
         /// What disagrees.
         what: String,
     },
+    /// Units that disagree, or an LSB for codes.
+    #[error("{path}:{line}: {what}")]
+    Units {
+        /// File.
+        path: PathBuf,
+        /// The header's line (or 1).
+        line: usize,
+        /// What disagrees.
+        what: String,
+    },
     /// Nothing in the file.
     #[error("{path}: no samples; expected a timestamp and three counts per line")]
     Empty {
@@ -169,6 +180,9 @@ pub struct Recording {
     pub period: f64,
     /// The initial rest a logger's preamble states, s.
     pub rest: Option<f64>,
+    /// What the accelerometer's and the gyro's values are: counts, or SI values read from a
+    /// physical unit (or codes made from one with a stated LSB).
+    pub units: [units::Read; 2],
 }
 
 /// How to read a recording.
@@ -182,6 +196,8 @@ pub struct Options {
     /// The sensors to keep: a command that needs one reads only its file, or only its
     /// columns of a file of both.
     pub keep: layout::Keep,
+    /// The units of the files' values, as the user states them.
+    pub units: units::Units,
 }
 
 impl Recording {
@@ -217,6 +233,7 @@ pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, 
             rails,
             rate: None,
             keep: layout::Keep::Both,
+            units: units::Units::DEFAULT,
         },
     )
 }
@@ -328,6 +345,8 @@ pub fn read_with(
         layout::Keep::Accel => (true, false),
         layout::Keep::Gyro => (false, true),
     };
+    // The units each kept sensor's header names, with its file and the header's line.
+    let mut header_units: [Option<Stated>; 2] = [None, None];
     // Where each kept count is: its file and 1-based field.
     let mut places: Vec<(PathBuf, usize)> = Vec::with_capacity(6);
     let (t, a, g, line, source, rest) = match gyro {
@@ -348,6 +367,21 @@ pub fn read_with(
                 Vec::new()
             };
             let rest = r.preamble.rest.map(|s| s.value);
+            let mut stated = r.units.chunks(3);
+            if want_acc {
+                header_units[0] = Some((
+                    stated.next().unwrap_or_default().to_vec(),
+                    acc.to_path_buf(),
+                    r.header,
+                ));
+            }
+            if want_gyro {
+                header_units[1] = Some((
+                    stated.next().unwrap_or_default().to_vec(),
+                    acc.to_path_buf(),
+                    r.header,
+                ));
+            }
             (t, a, g, r.line, acc.display().to_string(), rest)
         }
         Some(gp) => {
@@ -408,6 +442,18 @@ pub fn read_with(
             let mut place = |r: &layout::Rows, p: &Path| {
                 places.extend(r.fields.iter().map(|f| (p.to_path_buf(), *f)));
             };
+            if let Some((r, _)) = &ra {
+                let named = (r.units.clone(), acc.to_path_buf(), r.header);
+                if want_acc {
+                    header_units[0] = Some(named.clone());
+                }
+                if same && want_gyro {
+                    header_units[1] = Some(named);
+                }
+            }
+            if let Some((r, _)) = &rg {
+                header_units[1] = Some((r.units.clone(), gp.to_path_buf(), r.header));
+            }
             if let Some((r, _)) = &mut ra {
                 if want_acc {
                     place(r, acc);
@@ -457,13 +503,56 @@ pub fn read_with(
             missing: ((w[1] - w[0]) / period).round() as usize - 1,
         })
         .collect();
-    check_codes(&[&a, &g], &line, rails, &places)?;
+    let read = [
+        if want_acc {
+            resolve(Sensor::Accel, opts, header_units[0].as_ref(), acc)?
+        } else {
+            units::Read::COUNTS
+        },
+        if want_gyro {
+            resolve(
+                Sensor::Gyro,
+                opts,
+                header_units[1].as_ref(),
+                gyro.unwrap_or(acc),
+            )?
+        } else {
+            units::Read::COUNTS
+        },
+    ];
+    let (mut a, mut g) = (a, g);
+    for (values, r) in [(&mut a, read[0]), (&mut g, read[1])] {
+        let f = r.factor();
+        if f != 1.0 {
+            values.iter_mut().flatten().for_each(|x| *x *= f);
+        }
+    }
+    // Rails and formats are the converter's: SI values have none.
+    let codes_only =
+        |v: &Vec<[f64; 3]>, r: units::Read| if r.is_si() { Vec::new() } else { v.clone() };
+    let (ca, cg) = (codes_only(&a, read[0]), codes_only(&g, read[1]));
+    let code_places: Vec<(PathBuf, usize)> = {
+        let n_acc = if a.is_empty() { 0 } else { 3 };
+        places
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| {
+                if *i < n_acc {
+                    !read[0].is_si()
+                } else {
+                    !read[1].is_si()
+                }
+            })
+            .map(|(_, p)| p.clone())
+            .collect()
+    };
+    check_codes(&[&ca, &cg], &line, rails, &code_places)?;
     let at_rail = |s: &[f64; 3]| {
         s.iter()
             .any(|x| *x <= f64::from(rails.lo) || *x >= f64::from(rails.hi))
     };
-    let sa: Vec<bool> = a.iter().map(at_rail).collect();
-    let sg: Vec<bool> = g.iter().map(at_rail).collect();
+    let sa: Vec<bool> = ca.iter().map(at_rail).collect();
+    let sg: Vec<bool> = cg.iter().map(at_rail).collect();
     let saturated_count = (
         sa.iter().filter(|x| **x).count(),
         sg.iter().filter(|x| **x).count(),
@@ -482,7 +571,70 @@ pub fn read_with(
         gaps,
         period,
         rest,
+        units: read,
     })
+}
+
+/// The units a header named for one sensor's three axes, its file and the header's line.
+type Stated = (Vec<Option<Unit>>, PathBuf, Option<usize>);
+
+/// What one sensor's values are: the unit the user gave or the header named (they must agree,
+/// and a header must name one unit for the three axes), counts when neither says, and the LSB
+/// the user gave (for physical units only).
+fn resolve(
+    sensor: Sensor,
+    opts: &Options,
+    stated: Option<&Stated>,
+    fallback: &Path,
+) -> Result<units::Read, RecordingError> {
+    let k = usize::from(sensor == Sensor::Gyro);
+    let what = match sensor {
+        Sensor::Accel => "accelerometer",
+        Sensor::Gyro => "gyro",
+    };
+    let (path, line) = stated.map_or((fallback.to_path_buf(), 1), |(_, p, l)| {
+        (p.clone(), l.unwrap_or(1))
+    });
+    let err = |what: String| RecordingError::Units {
+        path: path.clone(),
+        line,
+        what,
+    };
+    let header = match stated {
+        Some((u, _, _)) if u.iter().any(Option::is_some) => {
+            let first = u[0];
+            if u.iter().any(|x| *x != first) {
+                let names: Vec<&str> = u.iter().map(|x| x.map_or("no unit", Unit::name)).collect();
+                return Err(err(format!(
+                    "the header names the {what}'s axes in mixed units ({}); expected one unit \
+                     for the three",
+                    names.join(", ")
+                )));
+            }
+            first
+        }
+        _ => None,
+    };
+    let given = opts.units.given[k];
+    if let (Some(g), Some(h)) = (given, header)
+        && g != h
+    {
+        return Err(err(format!(
+            "--units gives the {what} in {} where the header names {}; drop --units or fix \
+             the header",
+            g.name(),
+            h.name()
+        )));
+    }
+    let file = given.or(header).unwrap_or(Unit::Counts);
+    let lsb = opts.units.lsb[k];
+    if lsb.is_some() && !file.is_physical() {
+        return Err(err(format!(
+            "--lsb gives the value of one code, for values in a physical unit; the {what} is \
+             in counts"
+        )));
+    }
+    Ok(units::Read { file, lsb })
 }
 
 /// Refuses a recording whose codes beyond the rails show another format of the same width
@@ -579,6 +731,7 @@ mod tests {
             rails: signed,
             rate,
             keep: layout::Keep::Both,
+            units: units::Units::DEFAULT,
         };
         let six = "-12 -812 15032 -447 156 -86\n-208 -828 14796 -398 132 -63\n-1 -2 -3 -4 -5 -6\n";
         let bare = write(d.path(), "bare.txt", six);
@@ -630,6 +783,7 @@ mod tests {
                 rails: Rails::unsigned(16),
                 rate: Some(100.0),
                 keep: layout::Keep::Both,
+                units: units::Units::DEFAULT,
             },
         )
         .unwrap_err()

@@ -10,10 +10,11 @@ use super::plot::{Figure, Series, svg};
 use super::terminal::{num, pval};
 use crate::nonlinear::selfcal::SelfCal;
 use crate::obs::recording::Recording;
+use crate::obs::units::Sensor;
 use crate::sensor::selfcal::DeviceCheck;
 
 /// The convention of the stored coefficients, for users applying them elsewhere.
-pub const CONVENTION: &str = "raw counts r per axis, v = r - center (counts); accelerometer a = M (v + q * v^2) + o in m/s^2, \
+pub const CONVENTION: &str = "raw counts r per axis (or SI values, as `inputs` says: then read `count` as that unit), v = r - center (counts); accelerometer a = M (v + q * v^2) + o in m/s^2, \
 M upper triangular (m/s^2 per count), rows and columns in x, y, z order, q per axis (1/count), o in m/s^2; \
 gyro w = G v in rad/s, G full 3x3 (rad/s per count) that also rotates the gyro axes into the body frame, \
 center = the gyro bias in counts; body frame = accelerometer frame: x along the accelerometer's x axis, y in its x-y plane, z completing a right-handed frame. \
@@ -21,7 +22,7 @@ Matrices are row-major: M[i][j] multiplies v[j] into output i.";
 
 /// Whether the result can be used as it is.
 #[must_use]
-pub fn verdict(c: &SelfCal, check: &DeviceCheck) -> (&'static str, Vec<String>) {
+pub fn verdict(c: &SelfCal, check: Option<&DeviceCheck>) -> (&'static str, Vec<String>) {
     let mut notes = Vec::new();
     if c.accel.covariance.is_none() {
         notes.push("the accelerometer's parameters are not all observable from these poses: turn the unit through more directions".to_string());
@@ -42,7 +43,9 @@ pub fn verdict(c: &SelfCal, check: &DeviceCheck) -> (&'static str, Vec<String>) 
         ));
     }
     let limit = 1e-3 * c.accel.sigma();
-    if check.accel > limit.max(1e-5) {
+    if let Some(check) = check
+        && check.accel > limit.max(1e-5)
+    {
         notes.push(format!(
             "the device's f32 correction differs from the fit by {:.2e} m/s^2",
             check.accel
@@ -111,7 +114,7 @@ fn rms_deg(a: &[f64]) -> f64 {
 
 /// The terminal summary.
 #[must_use]
-pub fn summary(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) -> String {
+pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial: &str) -> String {
     let mut s = String::new();
     let (word, notes) = verdict(c, check);
     let _ = writeln!(s, "calflash selfcal  {}  unit {serial}: {word}", rec.source);
@@ -178,11 +181,19 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) 
     }
     let sd = accel_sd(c);
     let m = &c.accel.model;
+    let [ua, ug] = rec.units;
+    let (pa, pg) = (ua.per(Sensor::Accel), ug.per(Sensor::Gyro));
+    let _ = writeln!(
+        s,
+        "  inputs  accelerometer in {}, gyro in {}",
+        ua.describe(Sensor::Accel),
+        ug.describe(Sensor::Gyro)
+    );
     s.push_str(&matrix_lines(
         "M",
         &m.matrix,
         sd.as_ref().map(|x| &x.0),
-        "m/s^2 per count",
+        &format!("m/s^2 per {pa}"),
     ));
     let _ = writeln!(
         s,
@@ -199,7 +210,7 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) 
     if c.accel.params.len() == 12 {
         let _ = writeln!(
             s,
-            "    q   {} 1/count",
+            "    q   {} 1/({pa})",
             (0..3)
                 .map(|j| format!(
                     "{} ± {}",
@@ -212,8 +223,9 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) 
     }
     let _ = writeln!(
         s,
-        "    center {} counts",
-        m.center.map(|x| format!("{x}")).join(", ")
+        "    center {} {}",
+        m.center.map(|x| format!("{x}")).join(", "),
+        plural(pa)
     );
     let bias_word = match c.options.gyro_bias {
         crate::nonlinear::selfcal::GyroBias::Poses => "bias from the poses on either side",
@@ -231,13 +243,14 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) 
         "G",
         &c.gyro.matrix,
         gyro_sd(c).as_ref(),
-        "rad/s per count",
+        &format!("rad/s per {pg}"),
     ));
     let _ = writeln!(
         s,
-        "    bias {} counts (stored as the gyro center); spread of the bias between poses {} counts",
-        c.gyro_bias.map(|x| format!("{x:.2}")).join(", "),
-        c.gyro_bias_spread.map(|x| format!("{x:.2}")).join(", ")
+        "    bias {} {u} (stored as the gyro center); spread of the bias between poses {} {u}",
+        c.gyro_bias.map(|x| format!("{x:.5}")).join(", "),
+        c.gyro_bias_spread.map(|x| format!("{x:.5}")).join(", "),
+        u = plural(pg)
     );
     for k in &c.skipped {
         let _ = writeln!(
@@ -247,20 +260,37 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) 
             k.why
         );
     }
-    let _ = writeln!(
-        s,
-        "  device  blob {} bytes; its f32 correction against the f64 fit: {:.1e} m/s^2, {:.1e} rad/s; |a| - g from its corrected samples: RMS {:.3} mm/s^2",
-        check.blob.len(),
-        check.accel,
-        check.gyro,
-        check.device_accel_rms * 1e3
-    );
+    match check {
+        Some(check) => {
+            let _ = writeln!(
+                s,
+                "  device  blob {} bytes; its f32 correction against the f64 fit: {:.1e} m/s^2, {:.1e} rad/s; |a| - g from its corrected samples: RMS {:.3} mm/s^2",
+                check.blob.len(),
+                check.accel,
+                check.gyro,
+                check.device_accel_rms * 1e3
+            );
+        }
+        None => {
+            let _ = writeln!(s, "  device  {NO_BLOB}");
+        }
+    }
     s
+}
+
+/// Why a calibration of physical values has no blob.
+pub const NO_BLOB: &str = "no blob: the values are physical (SI) and the device corrects converter \
+codes; give --lsb ACCEL,GYRO (the value of one code, from the part's datasheet) to calibrate the \
+codes and write one";
+
+/// `count` -> `counts`; a unit stays as it is.
+fn plural(per: &str) -> &str {
+    if per == "count" { "counts" } else { per }
 }
 
 /// The JSON record.
 #[must_use]
-pub fn record(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) -> Value {
+pub fn record(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial: &str) -> Value {
     let (word, notes) = verdict(c, check);
     let t0 = rec.t[0];
     let poses: Vec<Value> = c
@@ -316,7 +346,11 @@ pub fn record(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) -
             "rotations": rotations,
             "skipped": c.skipped,
         },
-        "device": {"blob_bytes": check.blob.len(), "accel_f32_vs_f64_m_s2": check.accel, "gyro_f32_vs_f64_rad_s": check.gyro, "accel_rms_m_s2": check.device_accel_rms},
+        "inputs": {"accel": rec.units[0].describe(Sensor::Accel), "gyro": rec.units[1].describe(Sensor::Gyro), "accel_file_unit": rec.units[0].file.name(), "gyro_file_unit": rec.units[1].file.name(), "lsb": rec.units.map(|u| u.lsb)},
+        "device": check.map_or_else(
+            || json!({"blob_bytes": Value::Null, "not_written": NO_BLOB}),
+            |check| json!({"blob_bytes": check.blob.len(), "accel_f32_vs_f64_m_s2": check.accel, "gyro_f32_vs_f64_rad_s": check.gyro, "accel_rms_m_s2": check.device_accel_rms}),
+        ),
     })
 }
 
@@ -327,7 +361,7 @@ pub fn record(c: &SelfCal, rec: &Recording, check: &DeviceCheck, serial: &str) -
 pub fn html(
     c: &SelfCal,
     rec: &Recording,
-    check: &DeviceCheck,
+    check: Option<&DeviceCheck>,
     serial: &str,
 ) -> Result<String, String> {
     let (word, notes) = verdict(c, check);
@@ -362,9 +396,9 @@ pub fn html(
         .map(|r| (rec.t[r.start] - t0, rec.t[r.end - 1] - t0))
         .collect();
     let fig = Figure {
-        title: "Accelerometer counts and the still poses found",
+        title: "Accelerometer values and the still poses found",
         x: "time [s]",
-        y: "counts",
+        y: rec.units[0].per(Sensor::Accel),
         series: (0..3)
             .map(|j| Series::curve(names[j], &sig[j], j))
             .collect(),
@@ -389,7 +423,7 @@ pub fn html(
     let fig = Figure {
         title: "Still measure (norm of the windowed variances) and the threshold",
         x: "time [s]",
-        y: "log10 of counts^2",
+        y: "log10 of the variance",
         series: vec![
             Series::curve("still measure", &meas, 0),
             Series::curve("threshold", &th, 3),

@@ -149,6 +149,7 @@ impl Tumble {
             gaps: Vec::new(),
             period: dt,
             rest: None,
+            units: [crate::obs::units::Read::COUNTS; 2],
         }
     }
 }
