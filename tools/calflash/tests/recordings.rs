@@ -393,3 +393,96 @@ fn units_in_a_header_are_read_and_contradictions_named() {
         "{err}"
     );
 }
+
+/// A logger's CSV whose names the tool does not know (a millisecond stamp, `A1..A3`,
+/// `R1..R3`, a die temperature, in another order): `--columns` picks them, the tumble
+/// calibrates as the same recording with known names does, and the temperature is carried
+/// into the record; a name the header does not have lists the ones it has, and `--columns` on
+/// a file without a header is refused.
+#[test]
+fn columns_chosen_by_name_are_read_and_a_wrong_name_lists_the_header() {
+    use calflash::sim::recording::Tumble;
+    let out = tempfile::tempdir().unwrap();
+    let p = out.path();
+    let rec = Tumble::default().record();
+    let mut text = String::from("R1,R2,R3,die_c,stamp,A1,A2,A3\n");
+    for k in 0..rec.len() {
+        let (a, g) = (rec.acc[k], rec.gyro[k]);
+        text.push_str(&format!(
+            "{},{},{},{:.2},{:.3},{},{},{}\n",
+            g[0],
+            g[1],
+            g[2],
+            25.0 + 0.001 * k as f64,
+            rec.t[k] * 1e3,
+            a[0],
+            a[1],
+            a[2]
+        ));
+    }
+    std::fs::write(p.join("log.csv"), &text).unwrap();
+    let columns = "t=stamp:ms,ax=A1,ay=A2,az=A3,gx=R1,gy=R2,gz=R3,temp=die_c";
+    let base = [
+        "selfcal", "log.csv", "--g", "9.81", "--serial", "T1", "--no-db", "--json", "r.json",
+    ];
+    let (code, _, err) = calflash(p, &base);
+    assert_eq!(code, 1);
+    assert!(err.contains("log.csv:2: 8 fields; expected 7"), "{err}");
+    let mut chosen = base.to_vec();
+    chosen.extend(["--columns", columns]);
+    let (code, said, err) = calflash(p, &chosen);
+    assert_eq!(code, 0, "{said}{err}");
+    assert!(said.contains(": ACCEPT"), "{said}");
+    assert!(said.contains("temperature  column die_c: 25 to "), "{said}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p.join("r.json")).unwrap()).unwrap();
+    assert_eq!(r["recording"]["temperature"]["column"], "die_c");
+    assert!((r["recording"]["rate_hz"].as_f64().unwrap() - rec.rate()).abs() < 1e-6);
+    // The same samples with names the tool knows give the same fit.
+    let known = text.replacen(
+        "R1,R2,R3,die_c,stamp,A1,A2,A3",
+        "gx,gy,gz,temperature,time_ms,ax,ay,az",
+        1,
+    );
+    std::fs::write(p.join("known.csv"), known).unwrap();
+    let mut plain = base.to_vec();
+    plain[1] = "known.csv";
+    plain[8] = "k.json";
+    let (code, said, err) = calflash(p, &plain);
+    assert_eq!(code, 0, "{said}{err}");
+    let k: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p.join("k.json")).unwrap()).unwrap();
+    assert_eq!(r["accel"]["parameters"], k["accel"]["parameters"]);
+    assert_eq!(
+        r["gyro"]["matrix_rad_s_per_count"],
+        k["gyro"]["matrix_rad_s_per_count"]
+    );
+    // A name the header does not have.
+    let mut wrong = base.to_vec();
+    wrong.extend(["--columns", "t=stamp:ms,ax=A1,ay=A2,az=A4"]);
+    let (code, _, err) = calflash(p, &wrong);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains(
+            "log.csv:1: --columns names `A4`, which is not in the header; its columns are: R1, R2, R3, die_c, stamp, A1, A2, A3"
+        ),
+        "{err}"
+    );
+    // No header at all.
+    std::fs::write(p.join("bare.txt"), "0 1 2 3 4 5 6\n0.01 1 2 3 4 5 6\n").unwrap();
+    let mut bare = base.to_vec();
+    bare[1] = "bare.txt";
+    bare.extend(["--columns", columns]);
+    let (code, _, err) = calflash(p, &bare);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("bare.txt:1: --columns names columns, but the file has no header line"),
+        "{err}"
+    );
+    // A role that is not one.
+    let mut role = base.to_vec();
+    role.extend(["--columns", "accel_x=A1"]);
+    let (code, _, err) = calflash(p, &role);
+    assert_eq!(code, 2);
+    assert!(err.contains("`accel_x` is not a role"), "{err}");
+}

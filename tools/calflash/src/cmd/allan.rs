@@ -35,6 +35,9 @@ pub struct AllanArgs {
     /// The units of the values (counts unless stated).
     #[command(flatten)]
     pub units: super::units::UnitArgs,
+    /// Columns chosen by name.
+    #[command(flatten)]
+    pub columns: super::units::ColumnArgs,
     /// Which sensor.
     #[arg(long, value_enum, default_value = "gyro")]
     pub sensor: Which,
@@ -82,6 +85,7 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
             Which::Accel => crate::obs::layout::Keep::Accel,
         },
         units: args.units.units(),
+        columns: args.columns.chosen(),
     };
     let rec = match &args.gyro {
         Some(g) => recording::read_with(&args.acc, Some(g), &opts),

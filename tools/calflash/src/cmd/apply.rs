@@ -105,6 +105,7 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
         rate: args.rate,
         keep: crate::obs::layout::Keep::Both,
         units: args.units.units(),
+        columns: crate::obs::layout::Chosen::default(),
     };
     let rec = crate::obs::recording::read_with(acc, gyro, &opts).map_err(|e| e.to_string())?;
     if rec.units.iter().any(|u| u.is_si()) {

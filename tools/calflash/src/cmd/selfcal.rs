@@ -36,6 +36,9 @@ pub struct SelfcalArgs {
     /// The units of the values (counts unless stated).
     #[command(flatten)]
     pub units: super::units::UnitArgs,
+    /// Columns chosen by name.
+    #[command(flatten)]
+    pub columns: super::units::ColumnArgs,
     /// Window of the still measure, s.
     #[arg(long, default_value_t = 1.0, value_parser = super::values::positive)]
     pub window: f64,
@@ -96,6 +99,7 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
             rate: args.rate,
             keep: crate::obs::layout::Keep::Both,
             units: args.units.units(),
+            columns: args.columns.chosen(),
         },
     )
     .map_err(|e| e.to_string())?;

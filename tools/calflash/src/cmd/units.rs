@@ -1,5 +1,5 @@
-//! The options that say what a recording's values are: `--units` and `--lsb`, shared by the
-//! commands that read recordings (`selfcal`, `allan`, `apply`).
+//! The options that say what a recording holds: `--units` and `--lsb` (shared by the commands
+//! that read recordings: `selfcal`, `allan`, `apply`) and `--columns` (`selfcal`, `allan`).
 
 use clap::Args;
 
@@ -19,6 +19,25 @@ pub struct UnitArgs {
     /// values are read back into codes, and the blob corrects the codes.
     #[arg(long, value_parser = lsb)]
     pub lsb: Option<[f64; 2]>,
+}
+
+/// Columns chosen by name.
+#[derive(Debug, Clone, Default, Args)]
+pub struct ColumnArgs {
+    /// Choose columns by their header names, `t=time_us,ax=acc_x,ay=acc_y,az=acc_z,gx=...,
+    /// temp=die_c`: the roles not given are found by the recognised names (t, time_ms, ax,
+    /// acc_x, gyro_z, ...); the time column's unit from its name or `t=stamp:ms`; a temperature
+    /// column is carried into the record.
+    #[arg(long, value_parser = |s: &str| crate::obs::layout::Chosen::parse(s))]
+    pub columns: Option<crate::obs::layout::Chosen>,
+}
+
+impl ColumnArgs {
+    /// What the readers are told.
+    #[must_use]
+    pub fn chosen(&self) -> crate::obs::layout::Chosen {
+        self.columns.clone().unwrap_or_default()
+    }
 }
 
 impl UnitArgs {

@@ -78,6 +78,8 @@ pub struct Rows {
     pub header: Option<usize>,
     /// The sensor a file of one sensor's header names.
     pub sensor: Option<Sensor>,
+    /// The temperature column's values and its name, when the file has one.
+    pub temp: Option<(String, Vec<f64>)>,
     /// The preamble.
     pub preamble: Preamble,
 }
@@ -120,6 +122,8 @@ struct Columns {
     units: Vec<Option<Unit>>,
     /// The sensor of the first triad named (a file of one sensor names which).
     sensor: Option<Sensor>,
+    /// A temperature column.
+    temp: Option<usize>,
     /// The number of fields every line has (from the header, or the first sample line).
     width: usize,
     /// The header's line, when the columns are chosen by its names.
@@ -164,38 +168,166 @@ fn axis(name: &str, prefixes: &[&str], sensor: Sensor) -> Option<(usize, Option<
 const ACCEL: [&str; 5] = ["accelerometer", "accel", "acc", "a", "raw_a"];
 const GYRO: [&str; 6] = ["gyroscope", "gyro", "gyr", "g", "w", "omega"];
 
+/// Columns the user chose by name (`--columns t=time_us,ax=acc_x,...,temp=die_c`): each role's
+/// header name; roles not given are found by the recognised names.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Chosen {
+    /// The timestamp's column, with its scale to seconds.
+    pub t: Option<(String, f64)>,
+    /// The accelerometer's x, y, z columns.
+    pub accel: [Option<String>; 3],
+    /// The gyro's.
+    pub gyro: [Option<String>; 3],
+    /// A temperature column, carried into the record.
+    pub temp: Option<String>,
+}
+
+impl Chosen {
+    /// True when nothing is chosen.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Reads `t=NAME,ax=NAME,ay=...,gz=NAME,temp=NAME`; the time column's unit comes from its
+    /// name (`time_us`) or a suffix (`t=stamp:ms`).
+    ///
+    /// # Errors
+    /// A role or a unit that is not known, or a role given twice.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let mut c = Self::default();
+        for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let Some((role, name)) = item.split_once('=') else {
+                return Err(format!(
+                    "`{item}`: expected ROLE=NAME (t, ax, ay, az, gx, gy, gz or temp)"
+                ));
+            };
+            let (role, name) = (role.trim().to_ascii_lowercase(), name.trim().to_string());
+            let slot: &mut Option<String> = match role.as_str() {
+                "ax" => &mut c.accel[0],
+                "ay" => &mut c.accel[1],
+                "az" => &mut c.accel[2],
+                "gx" => &mut c.gyro[0],
+                "gy" => &mut c.gyro[1],
+                "gz" => &mut c.gyro[2],
+                "temp" => &mut c.temp,
+                "t" => {
+                    let (column, scale) = match name.rsplit_once(':') {
+                        Some((n, u)) => (
+                            n.trim().to_string(),
+                            timestamp(&format!("t{u}")).ok_or_else(|| {
+                                format!("`{item}`: the time unit `{u}` is not s, ms, us or ns")
+                            })?,
+                        ),
+                        None => (
+                            name.clone(),
+                            timestamp(&name).ok_or_else(|| {
+                                format!(
+                                    "`{item}`: the unit of `{name}` cannot be read from its name; \
+                                     give it: t={name}:s (or ms, us, ns)"
+                                )
+                            })?,
+                        ),
+                    };
+                    if c.t.replace((column, scale)).is_some() {
+                        return Err(format!("`{item}`: t is given twice"));
+                    }
+                    continue;
+                }
+                other => {
+                    return Err(format!(
+                        "`{item}`: `{other}` is not a role; expected t, ax, ay, az, gx, gy, gz or temp"
+                    ));
+                }
+            };
+            if slot.replace(name).is_some() {
+                return Err(format!("`{item}`: {role} is given twice"));
+            }
+        }
+        Ok(c)
+    }
+}
+
+/// A count column found: its field, the unit its name states, its sensor.
+type Found = (usize, Option<Unit>, Sensor);
+
+/// The index of the header field named `name` (case aside).
+fn position(header: &[&str], name: &str) -> Option<usize> {
+    header.iter().position(|h| h.eq_ignore_ascii_case(name))
+}
+
 /// The columns a header on line `line` names, when it names all the counts `holds` needs.
-fn named(header: &[&str], line: usize, holds: Holds) -> Option<Columns> {
-    let find = |prefixes: &[&str], sensor: Sensor| -> Option<[(usize, Option<Unit>, Sensor); 3]> {
+fn named(
+    header: &[&str],
+    line: usize,
+    holds: Holds,
+    chosen: &Chosen,
+) -> Result<Option<Columns>, String> {
+    let missing = |name: &str| {
+        format!(
+            "--columns names `{name}`, which is not in the header; its columns are: {}",
+            header.join(", ")
+        )
+    };
+    // A sensor's three columns: the chosen names where given (`None` when a file of one sensor
+    // has none of them: it is the other sensor's file), the recognised names otherwise.
+    let find = |prefixes: &[&str],
+                sensor: Sensor,
+                names: &[Option<String>; 3]|
+     -> Result<Option<[Found; 3]>, String> {
+        let given: Vec<&String> = names.iter().flatten().collect();
+        if holds == Holds::One
+            && !given.is_empty()
+            && given.iter().all(|n| position(header, n).is_none())
+        {
+            return Ok(None);
+        }
         let mut out = [None; 3];
         for (i, h) in header.iter().enumerate() {
             if let Some((k, unit)) = axis(h, prefixes, sensor) {
                 out[k].get_or_insert((i, unit, sensor));
             }
         }
-        Some([out[0]?, out[1]?, out[2]?])
+        for (k, name) in names.iter().enumerate() {
+            if let Some(name) = name {
+                let i = position(header, name).ok_or_else(|| missing(name))?;
+                let unit = axis(name, prefixes, sensor).and_then(|(_, u)| u);
+                out[k] = Some((i, unit, sensor));
+            }
+        }
+        Ok(match out {
+            [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+            _ => None,
+        })
     };
-    let t = header
-        .iter()
-        .enumerate()
-        .find_map(|(i, h)| timestamp(h).map(|s| (i, s)));
-    let found: Vec<(usize, Option<Unit>, Sensor)> = match holds {
-        Holds::Both => find(&ACCEL, Sensor::Accel)?
-            .into_iter()
-            .chain(find(&GYRO, Sensor::Gyro)?)
-            .collect(),
-        Holds::One => find(&ACCEL, Sensor::Accel)
-            .or_else(|| find(&GYRO, Sensor::Gyro))?
-            .to_vec(),
+    let t = match &chosen.t {
+        Some((name, scale)) => Some((position(header, name).ok_or_else(|| missing(name))?, *scale)),
+        None => header
+            .iter()
+            .enumerate()
+            .find_map(|(i, h)| timestamp(h).map(|s| (i, s))),
     };
-    Some(Columns {
+    let temp = match &chosen.temp {
+        Some(name) => Some(position(header, name).ok_or_else(|| missing(name))?),
+        None => header.iter().position(|h| squash(h).starts_with("temp")),
+    };
+    let a = find(&ACCEL, Sensor::Accel, &chosen.accel)?;
+    let g = find(&GYRO, Sensor::Gyro, &chosen.gyro)?;
+    let found: Vec<Found> = match (holds, a, g) {
+        (Holds::Both, Some(a), Some(g)) => a.into_iter().chain(g).collect(),
+        (Holds::One, Some(a), _) => a.to_vec(),
+        (Holds::One, None, Some(g)) => g.to_vec(),
+        _ => return Ok(None),
+    };
+    Ok(Some(Columns {
         t,
         counts: found.iter().map(|f| f.0).collect(),
         units: found.iter().map(|f| f.1).collect(),
         sensor: found.first().map(|f| f.2),
+        temp,
         width: header.len(),
         header: Some(line),
-    })
+    }))
 }
 
 /// The columns of a file without a recognised header, from its first sample line's width.
@@ -214,6 +346,7 @@ fn positional(width: usize, holds: Holds) -> Option<Columns> {
         counts: (first..first + n).collect(),
         units: vec![None; n],
         sensor: None,
+        temp: None,
         width,
         header: None,
     })
@@ -352,6 +485,19 @@ fn expected(holds: Holds) -> String {
 /// # Errors
 /// A [`RecordingError`] naming the file, line and field.
 pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingError> {
+    read_chosen(path, holds, keep, &Chosen::default())
+}
+
+/// [`read`], with the columns `chosen` names.
+///
+/// # Errors
+/// As [`read`]; a chosen name that is not in the header lists the ones that are.
+pub fn read_chosen(
+    path: &Path,
+    holds: Holds,
+    keep: Keep,
+    chosen: &Chosen,
+) -> Result<Rows, RecordingError> {
     use std::io::BufRead as _;
     let io = |source| RecordingError::Io {
         path: path.to_path_buf(),
@@ -373,9 +519,11 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
         units: Vec::new(),
         header: None,
         sensor: None,
+        temp: None,
         preamble: Preamble::default(),
     };
     let mut times = Vec::new();
+    let mut temps = Vec::new();
     let mut columns: Option<Columns> = None;
     let mut header: Option<(usize, String)> = None;
     let bad = |line: usize, found: usize, expected: String| RecordingError::Fields {
@@ -431,7 +579,13 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
                     continue;
                 }
                 // The header: the columns by name when it names them.
-                columns = named(&fields, line, holds);
+                columns = named(&fields, line, holds, chosen).map_err(|what| {
+                    RecordingError::Columns {
+                        path: path.to_path_buf(),
+                        line,
+                        what,
+                    }
+                })?;
                 header = Some((line, s.to_string()));
                 continue;
             }
@@ -441,6 +595,16 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
         let comma = *comma.get_or_insert_with(|| bytes.contains(&b','));
         let count = split_bytes(bytes, comma, &mut spans);
         let field = |k: usize| &bytes[spans[k].0..spans[k].1];
+        if columns.is_none() && !chosen.is_empty() {
+            return Err(RecordingError::Columns {
+                path: path.to_path_buf(),
+                line,
+                what: match &header {
+                    Some((hl, _)) => format!("--columns: the header on line {hl} does not name the counts"),
+                    None => "--columns names columns, but the file has no header line before its first sample".into(),
+                },
+            });
+        }
         let cols = match &columns {
             Some(c) => c,
             None => columns
@@ -484,6 +648,9 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
             }
             triad.push(v);
         }
+        if let Some(k) = cols.temp {
+            temps.push(value(k, "temperature")?);
+        }
         rows.line.push(u32::try_from(line).unwrap_or(u32::MAX));
     }
     if rows.line.is_empty() {
@@ -509,6 +676,13 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
         rows.units = kept.iter().map(|&j| c.units[j]).collect();
         rows.header = c.header;
         rows.sensor = c.sensor;
+        if let Some(k) = c.temp {
+            let name = header
+                .as_ref()
+                .and_then(|(_, h)| split(h).get(k).map(|s| (*s).to_string()))
+                .unwrap_or_default();
+            rows.temp = Some((name, temps));
+        }
         if c.t.is_some() {
             rows.t = Some(times);
         }

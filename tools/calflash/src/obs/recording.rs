@@ -126,6 +126,16 @@ pub enum RecordingError {
         /// What disagrees.
         what: String,
     },
+    /// Columns chosen by name that the header does not have.
+    #[error("{path}:{line}: {what}")]
+    Columns {
+        /// File.
+        path: PathBuf,
+        /// The header's line (or the first sample's).
+        line: usize,
+        /// What is wrong.
+        what: String,
+    },
     /// Units that disagree, or an LSB for codes.
     #[error("{path}:{line}: {what}")]
     Units {
@@ -183,10 +193,12 @@ pub struct Recording {
     /// What the accelerometer's and the gyro's values are: counts, or SI values read from a
     /// physical unit (or codes made from one with a stated LSB).
     pub units: [units::Read; 2],
+    /// A temperature column's name and values (from the accelerometer's file, or the one file).
+    pub temperature: Option<(String, Vec<f64>)>,
 }
 
 /// How to read a recording.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Options {
     /// The converter's rails: samples at or beyond them are marked saturated, and codes well
     /// beyond them show another format (refused, naming it).
@@ -198,6 +210,8 @@ pub struct Options {
     pub keep: layout::Keep,
     /// The units of the files' values, as the user states them.
     pub units: units::Units,
+    /// Columns the user chose by name.
+    pub columns: layout::Chosen,
 }
 
 impl Recording {
@@ -234,6 +248,7 @@ pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, 
             rate: None,
             keep: layout::Keep::Both,
             units: units::Units::DEFAULT,
+            columns: layout::Chosen::default(),
         },
     )
 }
@@ -347,11 +362,12 @@ pub fn read_with(
     };
     // The units each kept sensor's header names, with its file and the header's line.
     let mut header_units: [Option<Stated>; 2] = [None, None];
+    let temperature;
     // Where each kept count is: its file and 1-based field.
     let mut places: Vec<(PathBuf, usize)> = Vec::with_capacity(6);
     let (t, a, g, line, source, rest) = match gyro {
         None => {
-            let mut r = layout::read(acc, layout::Holds::Both, opts.keep)?;
+            let mut r = layout::read_chosen(acc, layout::Holds::Both, opts.keep, &opts.columns)?;
             note_preamble(acc, &r.preamble);
             let t = timing(&mut r, acc, opts.rate)?;
             places.extend(r.fields.iter().map(|f| (acc.to_path_buf(), *f)));
@@ -367,6 +383,7 @@ pub fn read_with(
                 Vec::new()
             };
             let rest = r.preamble.rest.map(|s| s.value);
+            temperature = r.temp.take();
             let mut stated = r.units.chunks(3);
             if want_acc {
                 header_units[0] = Some((
@@ -386,7 +403,8 @@ pub fn read_with(
         }
         Some(gp) => {
             let one = |p: &Path| -> Result<(layout::Rows, Vec<f64>), RecordingError> {
-                let mut r = layout::read(p, layout::Holds::One, layout::Keep::Both)?;
+                let mut r =
+                    layout::read_chosen(p, layout::Holds::One, layout::Keep::Both, &opts.columns)?;
                 note_preamble(p, &r.preamble);
                 let t = timing(&mut r, p, opts.rate)?;
                 Ok((r, t))
@@ -454,6 +472,9 @@ pub fn read_with(
             if let Some((r, _)) = &rg {
                 header_units[1] = Some((r.units.clone(), gp.to_path_buf(), r.header));
             }
+            temperature = [&mut ra, &mut rg]
+                .into_iter()
+                .find_map(|r| r.as_mut().and_then(|(r, _)| r.temp.take()));
             if let Some((r, _)) = &mut ra {
                 if want_acc {
                     place(r, acc);
@@ -572,6 +593,7 @@ pub fn read_with(
         period,
         rest,
         units: read,
+        temperature,
     })
 }
 
@@ -732,6 +754,7 @@ mod tests {
             rate,
             keep: layout::Keep::Both,
             units: units::Units::DEFAULT,
+            columns: layout::Chosen::default(),
         };
         let six = "-12 -812 15032 -447 156 -86\n-208 -828 14796 -398 132 -63\n-1 -2 -3 -4 -5 -6\n";
         let bare = write(d.path(), "bare.txt", six);
@@ -784,6 +807,7 @@ mod tests {
                 rate: Some(100.0),
                 keep: layout::Keep::Both,
                 units: units::Units::DEFAULT,
+                columns: layout::Chosen::default(),
             },
         )
         .unwrap_err()

@@ -133,6 +133,12 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
         rec.saturated_count.0,
         rec.saturated_count.1
     );
+    if let Some((name, lo, mean, hi)) = temperature(rec) {
+        let _ = writeln!(
+            s,
+            "  temperature  column {name}: {lo} to {hi}, mean {mean:.2} (carried into the record)"
+        );
+    }
     let trials: Vec<String> = c
         .trials
         .iter()
@@ -283,6 +289,17 @@ pub const NO_BLOB: &str = "no blob: the values are physical (SI) and the device 
 codes; give --lsb ACCEL,GYRO (the value of one code, from the part's datasheet) to calibrate the \
 codes and write one";
 
+/// A temperature column's name, least, mean and largest value.
+fn temperature(rec: &Recording) -> Option<(&str, f64, f64, f64)> {
+    let (name, v) = rec.temperature.as_ref()?;
+    if v.is_empty() {
+        return None;
+    }
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Some((name, lo, v.iter().sum::<f64>() / v.len() as f64, hi))
+}
+
 /// `count` -> `counts`; a unit stays as it is.
 fn plural(per: &str) -> &str {
     if per == "count" { "counts" } else { per }
@@ -314,7 +331,7 @@ pub fn record(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial:
         "verdict": word,
         "notes": notes,
         "convention": CONVENTION,
-        "recording": {"source": rec.source, "samples": rec.len(), "rate_hz": rec.rate(), "gaps": rec.gaps, "saturated": {"accel": rec.saturated_count.0, "gyro": rec.saturated_count.1}},
+        "recording": {"source": rec.source, "samples": rec.len(), "rate_hz": rec.rate(), "gaps": rec.gaps, "saturated": {"accel": rec.saturated_count.0, "gyro": rec.saturated_count.1}, "temperature": temperature(rec).map(|(name, lo, mean, hi)| json!({"column": name, "min": lo, "mean": mean, "max": hi}))},
         "options": c.options,
         "threshold_search": c.trials,
         "chosen_multiplier": c.trials[c.chosen].multiplier,

@@ -150,6 +150,7 @@ impl Tumble {
             period: dt,
             rest: None,
             units: [crate::obs::units::Read::COUNTS; 2],
+            temperature: None,
         }
     }
 }
