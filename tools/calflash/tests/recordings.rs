@@ -486,3 +486,131 @@ fn columns_chosen_by_name_are_read_and_a_wrong_name_lists_the_header() {
     assert_eq!(code, 2);
     assert!(err.contains("`accel_x` is not a role"), "{err}");
 }
+
+/// A MATLAB level-5 file of double matrices (uncompressed), as `save -v6` writes one.
+fn mat_file(arrays: &[(&str, usize, usize, Vec<f64>)]) -> Vec<u8> {
+    let pad = |v: &mut Vec<u8>| {
+        while !v.len().is_multiple_of(8) {
+            v.push(0);
+        }
+    };
+    let mut out = Vec::new();
+    let mut text = b"MATLAB 5.0 MAT-file, written by the calflash tests".to_vec();
+    text.resize(116, b' ');
+    out.extend(text);
+    out.extend([0u8; 8]);
+    out.extend(0x0100u16.to_le_bytes());
+    out.extend(b"IM");
+    for (name, rows, cols, data) in arrays {
+        assert_eq!(data.len(), rows * cols);
+        let mut body = Vec::new();
+        // Array flags: class double (6).
+        body.extend(6u32.to_le_bytes());
+        body.extend(8u32.to_le_bytes());
+        body.extend(6u32.to_le_bytes());
+        body.extend(0u32.to_le_bytes());
+        // Dimensions.
+        body.extend(5u32.to_le_bytes());
+        body.extend(8u32.to_le_bytes());
+        body.extend((*rows as i32).to_le_bytes());
+        body.extend((*cols as i32).to_le_bytes());
+        // Name.
+        body.extend(1u32.to_le_bytes());
+        body.extend((name.len() as u32).to_le_bytes());
+        body.extend(name.as_bytes());
+        pad(&mut body);
+        // Real part, column-major.
+        body.extend(9u32.to_le_bytes());
+        body.extend(((data.len() * 8) as u32).to_le_bytes());
+        for x in data {
+            body.extend(x.to_le_bytes());
+        }
+        pad(&mut body);
+        out.extend(14u32.to_le_bytes());
+        out.extend((body.len() as u32).to_le_bytes());
+        out.extend(body);
+    }
+    out
+}
+
+/// The simulated tumble kept as MATLAB files: one N x 7 matrix (time and six counts), and
+/// variables named `time_ms`, `acc` and `gyro` (N x 3 each), both calibrate as the text file
+/// does; a file without such arrays lists what it holds.
+#[test]
+fn matlab_files_are_read_as_recordings() {
+    use calflash::sim::recording::Tumble;
+    let out = tempfile::tempdir().unwrap();
+    let p = out.path();
+    let rec = Tumble::default().record();
+    let n = rec.len();
+    // Column-major N x 7.
+    let mut whole = Vec::with_capacity(7 * n);
+    whole.extend(rec.t.iter().copied());
+    for j in 0..3 {
+        whole.extend(rec.acc.iter().map(|v| v[j]));
+    }
+    for j in 0..3 {
+        whole.extend(rec.gyro.iter().map(|v| v[j]));
+    }
+    std::fs::write(p.join("whole.mat"), mat_file(&[("imu", n, 7, whole)])).unwrap();
+    let col = |x: &[[f64; 3]]| (0..3).flat_map(|j| x.iter().map(move |v| v[j])).collect();
+    std::fs::write(
+        p.join("named.mat"),
+        mat_file(&[
+            ("acc", n, 3, col(&rec.acc)),
+            ("gyro", n, 3, col(&rec.gyro)),
+            ("time_ms", n, 1, rec.t.iter().map(|t| t * 1e3).collect()),
+        ]),
+    )
+    .unwrap();
+    let mut text = String::new();
+    for k in 0..n {
+        let (a, g) = (rec.acc[k], rec.gyro[k]);
+        text.push_str(&format!(
+            "{} {} {} {} {} {} {}\n",
+            rec.t[k], a[0], a[1], a[2], g[0], g[1], g[2]
+        ));
+    }
+    std::fs::write(p.join("text.txt"), text).unwrap();
+    let run = |file: &str| {
+        let json = format!("{file}.json");
+        let (code, said, err) = calflash(
+            p,
+            &[
+                "selfcal", file, "--g", "9.81", "--serial", "M1", "--no-db", "--json", &json,
+            ],
+        );
+        assert_eq!(code, 0, "{file}: {said}{err}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(p.join(&json)).unwrap()).unwrap();
+        v
+    };
+    let text = run("text.txt");
+    for file in ["whole.mat", "named.mat"] {
+        let m = run(file);
+        assert_eq!(m["verdict"], text["verdict"], "{file}");
+        let (a, b) = (&m["accel"]["parameters"], &text["accel"]["parameters"]);
+        for k in 0..a.as_array().unwrap().len() {
+            let (x, y) = (a[k].as_f64().unwrap(), b[k].as_f64().unwrap());
+            assert!(
+                (x - y).abs() <= 1e-9 * y.abs().max(1.0),
+                "{file}: {x} vs {y}"
+            );
+        }
+    }
+    std::fs::write(
+        p.join("other.mat"),
+        mat_file(&[("pressure", 4, 2, vec![1.0; 8])]),
+    )
+    .unwrap();
+    let (code, _, err) = calflash(
+        p,
+        &["selfcal", "other.mat", "--g", "9.81", "--serial", "M1"],
+    );
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("other.mat: no matrix of 7 or 6 columns")
+            && err.contains("the file holds: pressure [4, 2]"),
+        "{err}"
+    );
+}

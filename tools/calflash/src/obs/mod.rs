@@ -5,6 +5,7 @@
 
 pub mod codes;
 pub mod layout;
+pub mod mat;
 pub mod recording;
 pub mod timing;
 pub mod units;

@@ -126,6 +126,14 @@ pub enum RecordingError {
         /// What disagrees.
         what: String,
     },
+    /// A MATLAB file that cannot be read as a recording.
+    #[error("{path}: {what}")]
+    Mat {
+        /// File.
+        path: PathBuf,
+        /// What is wrong, and what the file holds.
+        what: String,
+    },
     /// Columns chosen by name that the header does not have.
     #[error("{path}:{line}: {what}")]
     Columns {
@@ -367,7 +375,7 @@ pub fn read_with(
     let mut places: Vec<(PathBuf, usize)> = Vec::with_capacity(6);
     let (t, a, g, line, source, rest) = match gyro {
         None => {
-            let mut r = layout::read_chosen(acc, layout::Holds::Both, opts.keep, &opts.columns)?;
+            let mut r = read_file(acc, layout::Holds::Both, opts.keep, &opts.columns)?;
             note_preamble(acc, &r.preamble);
             let t = timing(&mut r, acc, opts.rate)?;
             places.extend(r.fields.iter().map(|f| (acc.to_path_buf(), *f)));
@@ -595,6 +603,27 @@ pub fn read_with(
         units: read,
         temperature,
     })
+}
+
+/// One file's rows: a MATLAB file by its variables, text by its layout.
+fn read_file(
+    path: &Path,
+    holds: layout::Holds,
+    keep: layout::Keep,
+    columns: &layout::Chosen,
+) -> Result<layout::Rows, RecordingError> {
+    if super::mat::is_mat(path) {
+        if !columns.is_empty() {
+            return Err(RecordingError::Mat {
+                path: path.to_path_buf(),
+                what: "--columns chooses a text file's columns by their header names; a MATLAB \
+                       file's variables are found by their names (t, acc, gyro) or shape"
+                    .into(),
+            });
+        }
+        return super::mat::read(path, holds, keep);
+    }
+    layout::read_chosen(path, holds, keep, columns)
 }
 
 /// The units a header named for one sensor's three axes, its file and the header's line.
