@@ -2,6 +2,8 @@
 //! timer used to count instructions under `-icount`, and a runner over the three correctors.
 #![no_std]
 
+pub mod device;
+
 use spincal::correct::{AxisCorrector, Corrected, ImuCorrector, TriadCorrector};
 use spincal::model::Calibration;
 

@@ -19,6 +19,17 @@ use crate::unit::QemuUnit;
 /// The serial number the QEMU unit is built with (`firmware/src/bin/device.rs`).
 pub const UNIT: &str = "QEMU-0001";
 
+/// The converter codes of the main job's unit unless told otherwise.
+pub const DEFAULT_CODES: spincal::model::Rails = spincal::model::Rails::unsigned(16);
+
+/// Reads `--codes` as `calflash` does (`unsigned16`, `signed16`, any width, `LO:HI`).
+///
+/// # Errors
+/// What is understood.
+pub fn codes(text: &str) -> Result<spincal::model::Rails, String> {
+    calflash::cmd::values::codes(text)
+}
+
 /// What to run.
 #[derive(Debug, Clone)]
 pub struct Job {
@@ -30,6 +41,9 @@ pub struct Job {
     pub db: PathBuf,
     /// Seed of the simulated unit.
     pub seed: u64,
+    /// The unit's converter codes (the simulated unit's biases sit at their mid-scale, and
+    /// the calibration takes them).
+    pub codes: spincal::model::Rails,
 }
 
 /// What it did.
@@ -50,6 +64,17 @@ pub struct Summary {
 /// # Errors
 /// A message saying which step failed and why.
 pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
+    // The example unit is built for two converter formats.
+    let device_bin = if job.codes == DEFAULT_CODES {
+        "device"
+    } else if job.codes == spincal::model::Rails::signed(16) {
+        "device_signed16"
+    } else {
+        return Err(format!(
+            "the QEMU unit is built with unsigned16 or signed16 converters, not {}",
+            calflash::obs::codes::name(job.codes)
+        ));
+    };
     std::fs::create_dir_all(&job.workdir).map_err(|e| format!("{}: {e}", job.workdir.display()))?;
     let w = |name: &str| job.workdir.join(name);
     let data = match &job.data {
@@ -69,14 +94,16 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
             .map_err(|e| e.to_string())?;
             let mut truth = ImuTruth::default();
             truth.accel.lever = [[0.012, 0.0, 0.0], [0.0, 0.009, 0.0], [0.0, 0.0, 0.015]];
-            let obs = sim::simulate(&Sensor::Imu(Box::new(truth)), &conds, job.seed, false);
+            let unit = Sensor::Imu(Box::new(truth)).with_codes(job.codes);
+            let obs = sim::simulate(&unit, &conds, job.seed, false);
             let path = w("observations.csv");
             obs.write_csv(
                 std::fs::File::create(&path).map_err(|e| format!("{}: {e}", path.display()))?,
             )
             .map_err(|e| e.to_string())?;
             say(&format!(
-                "1. simulated an IMU through a 26-position tumble, rate-table steps and centrifuge levels at -40, 25 and 85 C: {} observations in {}",
+                "1. simulated an IMU ({} codes) through a 26-position tumble, rate-table steps and centrifuge levels at -40, 25 and 85 C: {} observations in {}",
+                calflash::obs::codes::name(job.codes),
                 obs.rows.len(),
                 path.display()
             ));
@@ -85,6 +112,7 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     };
     let mut opts = Options::new(&data, UNIT);
     opts.temp_span = spincal::model::Span::new(-40.0, 85.0);
+    opts.rails = job.codes;
     let c = triad::calibrate(&opts, triad::Kind::Imu, false).map_err(|e| e.to_string())?;
     let record = Record::new(&c, &data.display().to_string());
     let html = calflash::report::html::render(&c, &data.display().to_string())?;
@@ -108,7 +136,7 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
 
     say("3. building the device firmware and powering the unit on: QEMU mps2-an386 (Cortex-M4F)");
     let bin = qemu::build_firmware()?;
-    let elf = bin.join("device");
+    let elf = bin.join(device_bin);
     let flash_file = w("unit-flash.bin");
     let log = w("qemu.log");
     let unit = QemuUnit::power_on(&elf, Some(&flash_file), &log)?;

@@ -16,6 +16,7 @@ fn the_main_job_runs_end_to_end() {
         workdir: dir.path().join("job"),
         db: dir.path().join("units.sqlite"),
         seed: 43,
+        codes: mainjob::DEFAULT_CODES,
     };
     let s = mainjob::run(&job, |l| println!("{l}")).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.flash.unit, mainjob::UNIT);
@@ -44,4 +45,53 @@ fn the_main_job_runs_end_to_end() {
     let flash = std::fs::read(job.workdir.join("unit-flash.bin")).unwrap();
     assert_eq!(flash.len(), host_tests::unit::region().1 as usize);
     assert_eq!(db.history(mainjob::UNIT).unwrap().len(), 4);
+}
+
+/// A unit whose converter gives signed two's-complement codes (as nearly every digital IMU
+/// does) goes through the same job: simulated in signed codes, calibrated with them, flashed
+/// and verified on the device by its test vectors.
+#[test]
+fn a_signed_code_imu_runs_the_main_job() {
+    if !qemu::available_or_skip("a_signed_code_imu_runs_the_main_job") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let job = Job {
+        data: None,
+        workdir: dir.path().join("job"),
+        db: dir.path().join("units.sqlite"),
+        seed: 44,
+        codes: mainjob::codes("signed16").unwrap(),
+    };
+    let mut said = Vec::new();
+    let s = mainjob::run(&job, |l| said.push(l.to_string())).unwrap_or_else(|e| panic!("{e}"));
+    let said = said.join("\n");
+    println!("{said}");
+    assert!(
+        said.contains("1. simulated an IMU (signed16 codes)"),
+        "{said}"
+    );
+    // The observations are signed: gravity on a negative-biased axis reads below zero.
+    let obs = std::fs::read_to_string(job.workdir.join("observations.csv")).unwrap();
+    assert!(
+        obs.lines()
+            .skip(1)
+            .any(|l| l.split(',').any(|f| f.starts_with('-') && f.len() > 6))
+    );
+    assert_eq!(s.verdict, calflash::sensor::Verdict::Accept, "{said}");
+    assert!(s.flash.read_back_identical);
+    assert!(s.flash.max_ulp <= 2, "{} ulp", s.flash.max_ulp);
+    assert_eq!(s.flash.vectors, 64);
+    let cal =
+        spincal::blob::decode(&std::fs::read(job.workdir.join("unit.blob")).unwrap()).unwrap();
+    let spincal::model::Sensor::Imu {
+        accel_rails,
+        gyro_rails,
+        ..
+    } = &cal.data().sensor
+    else {
+        panic!("an IMU calibration");
+    };
+    assert_eq!(*accel_rails, spincal::model::Rails::signed(16));
+    assert_eq!(*gyro_rails, spincal::model::Rails::signed(16));
 }

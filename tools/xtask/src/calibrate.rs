@@ -18,13 +18,16 @@ const USAGE: &str = "usage: cargo xtask calibrate [--data FILE] [--out DIR] [--d
   --out DIR    where the observations, report, blob, record and device log go
                (default target/calibrate)
   --db FILE    the unit history database (default DIR/units.sqlite)
-  --seed N     seed of the simulated unit (default 43)";
+  --seed N     seed of the simulated unit (default 43)
+  --codes C    the unit's converter codes: unsigned16 (default), signed16, any width from 8
+               to 32 bits, or LO:HI";
 
 fn parse(args: &[String]) -> Result<Job, String> {
     let mut data = None;
     let mut out = crate::root().join("target").join("calibrate");
     let mut db = None;
     let mut seed = 43;
+    let mut codes = mainjob::DEFAULT_CODES;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut value = |name: &str| {
@@ -42,6 +45,9 @@ fn parse(args: &[String]) -> Result<Job, String> {
                     .parse()
                     .map_err(|_| format!("--seed: expected a whole number, found `{v}`"))?;
             }
+            "--codes" => {
+                codes = mainjob::codes(&value("--codes")?).map_err(|e| format!("--codes: {e}"))?;
+            }
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown option `{other}`\n\n{USAGE}")),
         }
@@ -52,6 +58,7 @@ fn parse(args: &[String]) -> Result<Job, String> {
         workdir: out,
         db,
         seed,
+        codes,
     })
 }
 

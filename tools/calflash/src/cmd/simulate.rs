@@ -184,7 +184,12 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
             ));
         }
     };
-    let truth = load::<truth::ImuTruth>(args.truth.as_ref())?;
+    let mut truth = load::<truth::ImuTruth>(args.truth.as_ref())?;
+    if args.truth.is_none()
+        && let Sensor::Imu(t) = Sensor::Imu(Box::new(truth.clone())).with_codes(args.codes)
+    {
+        truth = *t;
+    }
     let run = spin::SpinRun {
         segments,
         axis,
@@ -269,6 +274,13 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
             None => truth::TriadTruth::gyro(),
         }),
         SensorKind::Imu => Sensor::Imu(Box::new(load::<truth::ImuTruth>(t)?)),
+    };
+    // The default unit is written for an unsigned 16-bit converter: behind another, its
+    // biases sit at that converter's mid-scale. A truth file is taken as it is.
+    let sensor = if t.is_none() {
+        sensor.with_codes(args.codes)
+    } else {
+        sensor
     };
     let station = match (args.latitude, args.heading) {
         (Some(lat), Some(heading)) => {

@@ -32,6 +32,31 @@ pub enum Sensor {
     Imu(Box<ImuTruth>),
 }
 
+/// The code the default units' biases are centred on: mid-scale of an unsigned 16-bit
+/// converter.
+const DEFAULT_MID: f64 = 32_768.0;
+
+impl Sensor {
+    /// The same unit behind a converter with `rails`: the biases move from mid-scale of the
+    /// unsigned 16-bit converter the default units are written for to mid-scale of `rails`
+    /// (zero for signed codes), everything else as it is.
+    #[must_use]
+    pub fn with_codes(mut self, rails: spincal::model::Rails) -> Self {
+        let mid = (f64::from(rails.lo) + f64::from(rails.hi) + 1.0) / 2.0;
+        let shift = mid.floor() - DEFAULT_MID;
+        let triad = |t: &mut truth::TriadTruth| t.bias.iter_mut().for_each(|b| *b += shift);
+        match &mut self {
+            Self::Single { truth, .. } => truth.k0 += shift,
+            Self::Accel(t) | Self::Gyro(t) => triad(t),
+            Self::Imu(t) => {
+                triad(&mut t.accel);
+                triad(&mut t.gyro);
+            }
+        }
+        self
+    }
+}
+
 /// Simulated observations: column names and rows.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Observations {
@@ -239,4 +264,32 @@ pub fn simulate_at(
         }
     }
     Ok(Observations { names, rows })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spincal::model::Rails;
+
+    #[test]
+    fn the_default_unit_moves_to_the_middle_of_another_converter() {
+        let imu = || Sensor::Imu(Box::default());
+        let Sensor::Imu(u) = imu() else { unreachable!() };
+        let Sensor::Imu(s) = imu().with_codes(Rails::signed(16)) else {
+            unreachable!()
+        };
+        let Sensor::Imu(t) = imu().with_codes(Rails::unsigned(12)) else {
+            unreachable!()
+        };
+        for j in 0..3 {
+            assert_eq!(s.accel.bias[j], u.accel.bias[j] - 32_768.0);
+            assert_eq!(s.gyro.bias[j], u.gyro.bias[j] - 32_768.0);
+            assert_eq!(t.accel.bias[j], u.accel.bias[j] - 32_768.0 + 2_048.0);
+        }
+        assert_eq!(s.accel.s, u.accel.s);
+        let Sensor::Imu(same) = imu().with_codes(Rails::unsigned(16)) else {
+            unreachable!()
+        };
+        assert_eq!(*same, *u);
+    }
 }

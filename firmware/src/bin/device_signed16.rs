@@ -1,0 +1,25 @@
+//! The example device on QEMU mps2-an386 with 16-bit signed (two's-complement) converters,
+//! as nearly every digital IMU has; the body is `spincal_firmware::device`.
+#![no_std]
+#![no_main]
+
+use cortex_m_rt::entry;
+use spincal::model::Rails;
+use spincal::protocol::UnitSensor;
+
+/// The unit's serial number, fixed at build time.
+const UNIT_SERIAL: &str = match option_env!("SPINCAL_UNIT_SERIAL") {
+    Some(s) => s,
+    None => "QEMU-0001",
+};
+
+#[entry]
+fn main() -> ! {
+    spincal_firmware::device::run(
+        UNIT_SERIAL,
+        UnitSensor::Imu {
+            accel_rails: Rails::signed(16),
+            gyro_rails: Rails::signed(16),
+        },
+    )
+}
