@@ -274,7 +274,9 @@ mod tests {
     #[test]
     fn the_default_unit_moves_to_the_middle_of_another_converter() {
         let imu = || Sensor::Imu(Box::default());
-        let Sensor::Imu(u) = imu() else { unreachable!() };
+        let Sensor::Imu(u) = imu() else {
+            unreachable!()
+        };
         let Sensor::Imu(s) = imu().with_codes(Rails::signed(16)) else {
             unreachable!()
         };
