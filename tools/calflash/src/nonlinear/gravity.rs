@@ -45,7 +45,9 @@ impl AccelModel {
         })
     }
 
-    fn from_params(center: [f64; 3], p: &[f64]) -> Self {
+    /// The model of parameters `p` (the fit's order) about `center`.
+    #[must_use]
+    pub fn from_params(center: [f64; 3], p: &[f64]) -> Self {
         let n = p.len();
         let p = |k: usize| p.get(k).copied().unwrap_or(0.0);
         Self {

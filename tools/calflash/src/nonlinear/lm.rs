@@ -177,10 +177,18 @@ pub fn solve(
 #[must_use]
 pub fn covariance(sol: &Solution) -> Option<DMatrix<f64>> {
     let (n, np) = sol.jacobian.shape();
-    if n <= np {
+    covariance_with(sol, n.checked_sub(np)?)
+}
+
+/// [`covariance`] with the residual variance on `dof` degrees of freedom, for residuals that
+/// do not each carry one (`None` when `dof` is zero).
+#[must_use]
+pub fn covariance_with(sol: &Solution, dof: usize) -> Option<DMatrix<f64>> {
+    let np = sol.jacobian.ncols();
+    if dof == 0 {
         return None;
     }
-    let s2 = sol.rss / (n - np) as f64;
+    let s2 = sol.rss / dof as f64;
     let svd = crate::stats::decompose::svd(sol.jacobian.clone(), false, true).ok()?;
     let v_t = svd.v_t?;
     let smax = svd.singular_values.max();

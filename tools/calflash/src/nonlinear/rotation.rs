@@ -185,7 +185,12 @@ pub fn fit(segments: &[Segment], start: [[f64; 3]; 3]) -> Result<GyroFit, LmErro
     let problem = Rotations { segments };
     let p0: Vec<f64> = start.iter().flatten().copied().collect();
     let sol = lm::solve(&problem, &p0, 100)?;
-    let covariance = lm::covariance(&sol);
+    // Each segment's residual is the difference of two unit vectors: its component along the
+    // measured direction is second order, so a segment carries two degrees of freedom, not
+    // three.
+    let covariance = (2 * segments.len())
+        .checked_sub(9)
+        .and_then(|dof| lm::covariance_with(&sol, dof));
     let m = matrix(&sol.p);
     Ok(GyroFit {
         matrix: std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)])),
@@ -193,6 +198,59 @@ pub fn fit(segments: &[Segment], start: [[f64; 3]; 3]) -> Result<GyroFit, LmErro
         angles: segments.iter().map(|s| angle(&m, s)).collect(),
         iterations: sol.iterations,
     })
+}
+
+/// The gyro fit's covariance with the error of the gravity directions carried in. The
+/// directions at the ends of every segment come from the accelerometer's calibration, so an
+/// error in its parameters `p` (covariance `cov_p`) moves them all together; `ends(q)` gives
+/// every segment's (from, to) for parameters `q`. The matrix moves by `X dp`, `X` the
+/// least-squares solution of `J X = -dr/dp` (SVD), `J` the fit's Jacobian and `dr/dp` by central
+/// differences; the result is `cov + X cov_p X^T`.
+#[must_use]
+pub fn with_direction_error(
+    segments: &[Segment],
+    fit: &GyroFit,
+    p: &[f64],
+    cov_p: &DMatrix<f64>,
+    ends: impl Fn(&[f64]) -> Vec<([f64; 3], [f64; 3])>,
+) -> Option<DMatrix<f64>> {
+    let cov = fit.covariance.as_ref()?;
+    let g: Vec<f64> = fit.matrix.iter().flatten().copied().collect();
+    let problem = Rotations { segments };
+    let n = problem.residual_count();
+    let mut r0 = vec![0.0; n];
+    problem.residuals(&g, &mut r0);
+    let mut jac = DMatrix::zeros(n, g.len());
+    problem.jacobian(&g, &r0, &mut jac);
+    // Only the ends move: each segment's rotation is integrated once, with the fitted matrix.
+    let m = matrix(&g);
+    let rotations: Vec<Matrix3<f64>> = segments.iter().map(|s| integrate(&m, s)).collect();
+    let residuals_at = |q: &[f64]| -> Vec<f64> {
+        let mut out = vec![0.0; n];
+        for (k, (r, (from, to))) in rotations.iter().zip(ends(q)).enumerate() {
+            let pred = r.transpose() * Vector3::from(from);
+            for i in 0..3 {
+                out[3 * k + i] = to[i] - pred[i];
+            }
+        }
+        out
+    };
+    let mut dr = DMatrix::zeros(n, p.len());
+    let mut q = p.to_vec();
+    for k in 0..p.len() {
+        let h = 1e-3 * cov_p[(k, k)].sqrt().max(1e-12 * p[k].abs().max(1e-300));
+        q[k] = p[k] + h;
+        let up = residuals_at(&q);
+        q[k] = p[k] - h;
+        let down = residuals_at(&q);
+        q[k] = p[k];
+        for i in 0..n {
+            dr[(i, k)] = -(up[i] - down[i]) / (2.0 * h);
+        }
+    }
+    let svd = crate::stats::decompose::svd(jac, true, true).ok()?;
+    let x = svd.solve(&dr, 1e-12 * svd.singular_values.max()).ok()?;
+    Some(cov + &x * cov_p * x.transpose())
 }
 
 #[cfg(test)]

@@ -307,6 +307,13 @@ fn unit(a: [f64; 3]) -> [f64; 3] {
     [a[0] / n, a[1] / n, a[2] / n]
 }
 
+/// How much more than the accelerometer, relative to each one's rest, the gyro must vary for
+/// its motion to end a pose.
+const GYRO_MARGIN: f64 = 100.0;
+
+/// The gyro's still-measure window, s.
+const GYRO_WINDOW: f64 = 0.2;
+
 /// Calibrates the IMU of `rec`.
 ///
 /// # Errors
@@ -353,27 +360,45 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
     // Two still runs whose means agree within 8 sigma of the rest's noise, a window apart at
     // most, are one hold.
     let tol = statics::variances(&rec.acc[..rest_end], floor).map(|v| 8.0 * v.sqrt());
+    // A turn about the vertical barely moves the accelerometer, but the gyro sees it: the
+    // gyro's measure, put in the accelerometer's units by the ratio of the two rest levels and
+    // divided by GYRO_MARGIN (a hand holding a pose trembles: the gyro sees that too, and it
+    // is not a turn), counts where it is the larger, and marks where the unit turned.
+    let window = samples(opts.window) | 1;
+    let gfloor = statics::floor(statics::quantum(&rec.gyro));
+    let scale = rest_level / statics::rest_level(&rec.gyro[..rest_end], gfloor) / GYRO_MARGIN;
+    // A short window: a turn's edges must not bleed into a short hold.
+    let gyro: Vec<f64> = statics::measure(&rec.gyro, samples(GYRO_WINDOW) | 1, gfloor)
+        .into_iter()
+        .map(|g| g * scale)
+        .collect();
+    let turned: Vec<bool> = gyro.iter().map(|g| *g > 10.0 * rest_level).collect();
+    let measure: Vec<f64> = statics::measure(&rec.acc, window, floor)
+        .into_iter()
+        .zip(&gyro)
+        .map(|(a, g)| a.max(*g))
+        .collect();
     let find = |measure: &[f64], threshold: f64, min_len: usize, window: usize| {
-        statics::poses(
-            measure,
-            &rec.saturated,
-            threshold,
-            min_len,
-            &rec.acc,
-            window,
+        let join = statics::Join {
+            acc: &rec.acc,
+            gap: window,
             tol,
-        )
+            turned: &turned,
+        };
+        statics::poses(measure, &rec.saturated, threshold, min_len, &join)
     };
-    let measure = statics::measure(&rec.acc, samples(opts.window) | 1, floor);
     let min_len = samples(opts.min_still);
 
-    // The threshold: the multiple whose poses give the best linear accelerometer fit.
+    // The threshold: the multiple whose poses face the most distinct directions (a threshold
+    // too low for the noise misses holds, and the fit of fewer poses looks better only because
+    // it has fewer to fit; one too high merges holds across short turns); ties go to the best
+    // linear accelerometer fit.
     let mut trials = Vec::new();
-    let mut best: Option<(usize, f64, Vec<Range<usize>>)> = None;
+    let mut found: Vec<(usize, f64, usize, Vec<Range<usize>>)> = Vec::new();
     for &m in &opts.multipliers {
         let poses = find(&measure, m * rest_level, min_len, samples(opts.window));
+        let means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
         let rms_m = if poses.len() >= MIN_POSES {
-            let means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
             let (center, start) = gravity::center_and_start(&means, opts.g);
             gravity::fit(&means, opts.g, center, &start, false)
                 .ok()
@@ -381,17 +406,20 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         } else {
             None
         };
-        if let Some(r) = rms_m
-            && best.as_ref().is_none_or(|b| r < b.1)
-        {
-            best = Some((trials.len(), r, poses.clone()));
+        let count = poses.len();
+        if let Some(r) = rms_m {
+            found.push((trials.len(), r, directions(&means, rest_level), poses));
         }
         trials.push(Trial {
             multiplier: m,
-            poses: poses.len(),
+            poses: count,
             rms: rms_m,
         });
     }
+    let best = found
+        .into_iter()
+        .max_by(|a, b| a.2.cmp(&b.2).then(b.1.total_cmp(&a.1)))
+        .map(|(k, r, _, poses)| (k, r, poses));
     let Some((chosen, _, poses)) = best else {
         // Runs of thresholds that found the same number: "7 at 1 x, 8 at 2 x to 10 x".
         let mut runs: Vec<(usize, f64, f64)> = Vec::new();
@@ -618,7 +646,28 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         });
     }
     let start = gyro_start(&segments);
-    let gyro = rotation::fit(&segments, start).map_err(fit_err(source, "gyro"))?;
+    let mut gyro = rotation::fit(&segments, start).map_err(fit_err(source, "gyro"))?;
+    // The rotations' ends are the accelerometer's gravity directions: its error is the gyro's.
+    if let Some(cov_a) = &accel.covariance {
+        let center = accel.model.center;
+        let ends = |q: &[f64]| {
+            let model = gravity::AccelModel::from_params(center, q);
+            rotations
+                .iter()
+                .map(|&k| {
+                    (
+                        unit(model.apply(pose_means[k])),
+                        unit(model.apply(pose_means[k + 1])),
+                    )
+                })
+                .collect::<Vec<_>>()
+        };
+        if let Some(c) =
+            rotation::with_direction_error(&segments, &gyro, &accel.params, cov_a, ends)
+        {
+            gyro.covariance = Some(c);
+        }
+    }
     let m = Matrix3::from_fn(|i, j| gyro.matrix[i][j]);
     let constant_bias_angles = const_segments
         .iter()

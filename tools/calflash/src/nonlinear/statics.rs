@@ -98,26 +98,46 @@ pub fn intervals(
     out
 }
 
-/// The still poses: runs of [`intervals`], with two runs joined when only a short stretch
-/// (at most `gap` samples, none excluded) separates them and their means differ by no more
-/// than `tol` on every axis: one hold that noise split, not two poses. Runs shorter than
-/// `min_len` are then dropped.
+/// When two still runs are one hold that noise split.
+#[derive(Debug, Clone, Copy)]
+pub struct Join<'a> {
+    /// The accelerometer samples whose means are compared.
+    pub acc: &'a [[f64; 3]],
+    /// The longest stretch between them, samples.
+    pub gap: usize,
+    /// The largest difference of their means per axis.
+    pub tol: [f64; 3],
+    /// Samples where the gyro turned (a turn about the vertical leaves the accelerometer's
+    /// means alike): never inside the stretch.
+    pub turned: &'a [bool],
+}
+
+/// The still poses: runs of [`intervals`], with two runs joined as `join` says (only a short
+/// stretch separates them, none of it excluded or turning, and their means agree): one hold
+/// that noise split, not two poses. Runs shorter than `min_len` are then dropped.
 #[must_use]
 pub fn poses(
     measure: &[f64],
     excluded: &[bool],
     threshold: f64,
     min_len: usize,
-    acc: &[[f64; 3]],
-    gap: usize,
-    tol: [f64; 3],
+    join: &Join<'_>,
 ) -> Vec<Range<usize>> {
+    let Join {
+        acc,
+        gap,
+        tol,
+        turned,
+    } = *join;
     let runs = intervals(measure, excluded, threshold, 1);
     let mut out: Vec<Range<usize>> = Vec::with_capacity(runs.len());
     for r in runs {
         if let Some(last) = out.last_mut()
             && r.start - last.end <= gap
             && !excluded[last.end..r.start].iter().any(|x| *x)
+            && !turned
+                .get(last.end..r.start)
+                .is_some_and(|t| t.iter().any(|x| *x))
         {
             let (a, b) = (mean(acc, last), mean(acc, &r));
             if (0..3).all(|j| (a[j] - b[j]).abs() <= tol[j]) {
