@@ -71,7 +71,11 @@ fn main() -> ExitCode {
             Ok(calflash::sensor::Verdict::Reject) => return ExitCode::from(3),
             other => other.map(|_| ()),
         },
-        Command::Selfcal(args) => cmd::selfcal::run(args),
+        Command::Selfcal(args) => match cmd::selfcal::run(args) {
+            // As for `calibrate`: a rejected unit has its own exit code.
+            Ok(true) => return ExitCode::from(3),
+            other => other.map(|_| ()),
+        },
         Command::Allan(args) => cmd::allan::run(args),
         Command::Design(args) => cmd::design::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),

@@ -530,3 +530,55 @@ fn a_byte_order_mark_changes_nothing_but_a_note() {
         assert_eq!(out, plain, "{files:?}");
     }
 }
+
+/// A fit that cannot be trusted is judged REJECT with the reason and exit code 3, and writes no
+/// blob unless `--force-blob` (which marks it): here five of the 36 turns are recorded
+/// backwards by the gyro, so the fit cannot explain them.
+#[test]
+fn a_fit_that_cannot_be_trusted_is_rejected_and_writes_no_blob() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = Tumble::default();
+    let mut rec = truth.record();
+    let rate = truth.rate as usize;
+    let bias = truth.gyro_bias;
+    for k in [3usize, 9, 15, 21, 27] {
+        let start = (truth.rest as usize + k * (truth.turn + truth.hold) as usize) * rate;
+        for g in &mut rec.gyro[start..start + truth.turn as usize * rate] {
+            for j in 0..3 {
+                g[j] = 2.0 * bias[j] - g[j];
+            }
+        }
+    }
+    let (a, g) = write(&rec, dir.path());
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "selfcal",
+            a.to_str().unwrap(),
+            g.to_str().unwrap(),
+            "--g",
+            "9.81",
+            "--serial",
+            "R1",
+            "--no-db",
+            "--blob",
+            "r.blob",
+        ];
+        args.extend(extra);
+        calflash(dir.path(), &args)
+    };
+    let (code, said, err) = run(&[]);
+    assert_eq!(code, 3, "{said}{err}");
+    assert!(said.contains("unit R1: REJECT"), "{said}");
+    assert!(
+        said.contains("REJECT the gyro fit predicts the gravity direction after each rotation")
+            || said.contains("REJECT the gyro's parameters are not all observable"),
+        "{said}"
+    );
+    assert!(said.contains("blob: none written"), "{said}");
+    assert!(!dir.path().join("r.blob").exists());
+    let (code, said, err) = run(&["--force-blob"]);
+    assert_eq!(code, 3, "{said}{err}");
+    let blob = std::fs::read(dir.path().join("r.blob")).unwrap();
+    let cal = spincal::blob::decode(&blob).unwrap();
+    assert!(cal.data().identity.fit_rejected);
+}

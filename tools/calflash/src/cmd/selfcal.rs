@@ -77,11 +77,11 @@ fn gravity(s: &str) -> Result<f64, String> {
     })
 }
 
-/// Runs `calflash selfcal`.
+/// Runs `calflash selfcal`; true when the calibration is judged REJECT.
 ///
 /// # Errors
 /// Bad input, or a recording that cannot calibrate the unit (the message says what to do).
-pub fn run(args: &SelfcalArgs) -> Result<(), String> {
+pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
     args.out.check(
         Paths::new()
             .input("the accelerometer recording", Some(&args.acc))
@@ -118,6 +118,7 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
         ..Options::default()
     };
     let c = selfcal::calibrate(&rec, &opts).map_err(|e| e.to_string())?;
+    let reject = !report::selfcal::rejected(&c).is_empty();
     let mut files = vec![args.acc.as_path()];
     files.extend(args.gyro.as_deref());
     let version: Vec<u16> = env!("CARGO_PKG_VERSION")
@@ -131,7 +132,8 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
             .map_or(0, |d| d.as_secs()),
         data_hash: build::files_hash(&files)?,
         tool_version: [version[0], version[1], version[2]],
-        fit_rejected: false,
+        // A rejected calibration writes no blob unless forced; a forced one says so.
+        fit_rejected: reject,
     };
     // SI values cannot make a blob: the device corrects converter codes.
     let si = rec.units.iter().any(|u| u.is_si());
@@ -157,19 +159,21 @@ pub fn run(args: &SelfcalArgs) -> Result<(), String> {
     }
     let name = serial.as_str();
     let record = report::selfcal::record(&c, &rec, check, name);
-    args.out
-        .write(check.map(|c| c.blob.as_slice()), &record, || {
-            report::selfcal::html(&c, &rec, check, name)
-        })?;
+    let blob = check
+        .map(|c| c.blob.as_slice())
+        .filter(|_| !reject || args.out.force_blob);
+    args.out.write(blob, &record, || {
+        report::selfcal::html(&c, &rec, check, name)
+    })?;
     print!("{}", report::selfcal::summary(&c, &rec, check, name));
+    if reject && check.is_some() && blob.is_none() {
+        println!(
+            "  blob: none written: the calibration is judged REJECT (--force-blob writes it, marked so that `flash` refuses it)"
+        );
+    }
     let report_path = args.out.report.as_deref();
     args.out.record(name, &record, |d| {
-        d.record_selfcal(
-            name,
-            &record,
-            report_path,
-            check.map_or(&[][..], |c| &c.blob),
-        )
+        d.record_selfcal(name, &record, report_path, blob.unwrap_or_default())
     })?;
-    Ok(())
+    Ok(reject)
 }

@@ -20,16 +20,52 @@ gyro w = G v in rad/s, G full 3x3 (rad/s per count) that also rotates the gyro a
 center = the gyro bias in counts; body frame = accelerometer frame: x along the accelerometer's x axis, y in its x-y plane, z completing a right-handed frame. \
 Matrices are row-major: M[i][j] multiplies v[j] into output i.";
 
-/// Whether the result can be used as it is.
+/// The gyro fit's RMS angle error above which it explains the rotations too badly to be
+/// trusted, degrees (good hand tumbles leave a few tenths).
+pub const GYRO_REJECT_DEG: f64 = 3.0;
+
+/// The accelerometer fit's RMS of |a| - g above which it cannot be trusted, as a fraction of g
+/// (good tumbles leave a few parts in 10^4).
+pub const ACCEL_REJECT: f64 = 0.01;
+
+/// Why the calibration cannot be trusted (empty when it can): parameters a fit cannot observe,
+/// or fits that do not explain the recording. Such a calibration is judged REJECT and writes no
+/// blob unless `--force-blob`.
 #[must_use]
-pub fn verdict(c: &SelfCal, check: Option<&DeviceCheck>) -> (&'static str, Vec<String>) {
-    let mut notes = Vec::new();
+pub fn rejected(c: &SelfCal) -> Vec<String> {
+    let mut why = Vec::new();
     if c.accel.covariance.is_none() {
-        notes.push("the accelerometer's parameters are not all observable from these poses: turn the unit through more directions".to_string());
+        why.push("the accelerometer's parameters are not all observable from these poses: turn the unit through more directions".to_string());
     }
     if c.gyro.covariance.is_none() {
-        notes.push("the gyro's parameters are not all observable from these rotations: rotate about all three axes".to_string());
+        why.push("the gyro's parameters are not all observable from these rotations: rotate about all three axes".to_string());
     }
+    if c.accel.rms() > ACCEL_REJECT * c.options.g {
+        why.push(format!(
+            "the accelerometer fit leaves |a| - g of {:.4} m/s^2 RMS ({:.2} % of g, more than {} %): poses that moved, or a --g far from the site's",
+            c.accel.rms(),
+            100.0 * c.accel.rms() / c.options.g,
+            100.0 * ACCEL_REJECT
+        ));
+    }
+    if c.gyro.rms_deg() > GYRO_REJECT_DEG {
+        why.push(format!(
+            "the gyro fit predicts the gravity direction after each rotation {:.1} degrees RMS off (more than {GYRO_REJECT_DEG}): the rotations are not what the gyro measured (a wrong --rate, a gyro file of another recording, poses that moved)",
+            c.gyro.rms_deg()
+        ));
+    }
+    why
+}
+
+/// Whether the result can be used as it is: REJECT with the reasons of [`rejected`], else
+/// REVIEW with what to look at, else ACCEPT.
+#[must_use]
+pub fn verdict(c: &SelfCal, check: Option<&DeviceCheck>) -> (&'static str, Vec<String>) {
+    let why = rejected(c);
+    if !why.is_empty() {
+        return ("REJECT", why);
+    }
+    let mut notes = Vec::new();
     if c.holdout.rms > 2.0 * c.accel.rms() {
         notes.push(format!(
             "poses left out are predicted {:.1} times worse than the fit: too few poses for the model, or a pose that moved",
@@ -119,7 +155,7 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
     let (word, notes) = verdict(c, check);
     let _ = writeln!(s, "calflash selfcal  {}  unit {serial}: {word}", rec.source);
     for n in &notes {
-        let _ = writeln!(s, "  REVIEW {n}");
+        let _ = writeln!(s, "  {word} {n}");
     }
     let dur = rec.t[rec.len() - 1] - rec.t[0];
     let _ = writeln!(
@@ -394,7 +430,7 @@ pub fn html(
     );
     let _ = writeln!(h, "<pre>{}</pre>", esc(&summary(c, rec, check, serial)));
     for n in &notes {
-        let _ = writeln!(h, "<p><b>REVIEW</b>: {}</p>", esc(n));
+        let _ = writeln!(h, "<p><b>{word}</b>: {}</p>", esc(n));
     }
     // The signal and the poses found. Every k-th sample keeps the figure small.
     let step = (rec.len() / 3000).max(1);
