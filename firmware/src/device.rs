@@ -11,6 +11,12 @@ use spincal::store::Store;
 
 use crate::{RamFlash, Uart};
 
+/// The unit's serial number, fixed at build time (`SPINCAL_UNIT_SERIAL`).
+pub const UNIT_SERIAL: &str = match option_env!("SPINCAL_UNIT_SERIAL") {
+    Some(s) => s,
+    None => "QEMU-0001",
+};
+
 /// Corrects a stream of raw samples with whatever is loaded and reports how many were clean.
 fn self_test(device: &Device<RamFlash>, mid: i32) {
     let mut clean = 0u32;

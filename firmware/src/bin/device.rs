@@ -3,20 +3,13 @@
 #![no_std]
 #![no_main]
 
-use cortex_m_rt::entry;
 use spincal::model::Rails;
 use spincal::protocol::UnitSensor;
 
-/// The unit's serial number, fixed at build time.
-const UNIT_SERIAL: &str = match option_env!("SPINCAL_UNIT_SERIAL") {
-    Some(s) => s,
-    None => "QEMU-0001",
-};
-
-#[entry]
+#[cortex_m_rt::entry]
 fn main() -> ! {
     spincal_firmware::device::run(
-        UNIT_SERIAL,
+        spincal_firmware::device::UNIT_SERIAL,
         UnitSensor::Imu {
             accel_rails: Rails::unsigned(16),
             gyro_rails: Rails::unsigned(16),

@@ -45,26 +45,7 @@ fn a_simulated_unit_comes_back_within_its_standard_errors() {
     // Accelerometer: the truth's matrix and offset, referred to the fitted center.
     let cov = c.accel.covariance.as_ref().unwrap();
     let m = &c.accel.model;
-    let shift: Vec<f64> = (0..3).map(|j| m.center[j] - truth.accel_center).collect();
-    let o_true: Vec<f64> = (0..3)
-        .map(|i| {
-            truth.accel_offset[i]
-                + (0..3)
-                    .map(|j| truth.accel_matrix[(i, j)] * shift[j])
-                    .sum::<f64>()
-        })
-        .collect();
-    let want = [
-        truth.accel_matrix[(0, 0)],
-        truth.accel_matrix[(0, 1)],
-        truth.accel_matrix[(0, 2)],
-        truth.accel_matrix[(1, 1)],
-        truth.accel_matrix[(1, 2)],
-        truth.accel_matrix[(2, 2)],
-        o_true[0],
-        o_true[1],
-        o_true[2],
-    ];
+    let want = truth.accel_parameters(m.center);
     for (k, w) in want.iter().enumerate() {
         let z = (c.accel.params[k] - w) / cov[(k, k)].sqrt();
         assert!(

@@ -103,26 +103,7 @@ fn one(seed: u64, opts: &Options, t: &mut Tally) {
         }
     }
     let m = &c.accel.model;
-    let shift: Vec<f64> = (0..3).map(|j| m.center[j] - truth.accel_center).collect();
-    let o: Vec<f64> = (0..3)
-        .map(|i| {
-            truth.accel_offset[i]
-                + (0..3)
-                    .map(|j| truth.accel_matrix[(i, j)] * shift[j])
-                    .sum::<f64>()
-        })
-        .collect();
-    let want = [
-        truth.accel_matrix[(0, 0)],
-        truth.accel_matrix[(0, 1)],
-        truth.accel_matrix[(0, 2)],
-        truth.accel_matrix[(1, 1)],
-        truth.accel_matrix[(1, 2)],
-        truth.accel_matrix[(2, 2)],
-        o[0],
-        o[1],
-        o[2],
-    ];
+    let want = truth.accel_parameters(m.center);
     // 95 % intervals: Student's t on the fits' residual degrees of freedom (each pose one;
     // each rotation two, its residual along gravity being second order).
     let np = c.accel.params.len();

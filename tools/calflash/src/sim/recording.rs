@@ -75,6 +75,26 @@ impl Default for Tumble {
 }
 
 impl Tumble {
+    /// The true accelerometer parameters in the order the fit gives them (the upper
+    /// triangular matrix by rows, then the offset), referred to the fit's `center`.
+    #[must_use]
+    pub fn accel_parameters(&self, center: [f64; 3]) -> [f64; 9] {
+        let m = &self.accel_matrix;
+        let shift = Vector3::from_fn(|j, _| center[j] - self.accel_center);
+        let o = self.accel_offset + m * shift;
+        [
+            m[(0, 0)],
+            m[(0, 1)],
+            m[(0, 2)],
+            m[(1, 1)],
+            m[(1, 2)],
+            m[(2, 2)],
+            o[0],
+            o[1],
+            o[2],
+        ]
+    }
+
     /// The recording.
     #[must_use]
     pub fn record(&self) -> Recording {
