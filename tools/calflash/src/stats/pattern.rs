@@ -64,15 +64,44 @@ pub fn runs_test(residuals: &[f64], order: &[usize]) -> RunsTest {
 /// Indices that sort `values` ascending (stable, so ties keep data order).
 #[must_use]
 pub fn order_by(values: &[f64]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..values.len()).collect();
-    // Ties broken by index: the same order as a stable sort, at the speed of an unstable one.
-    idx.sort_unstable_by(|&a, &b| values[a].total_cmp(&values[b]).then(a.cmp(&b)));
-    idx
+    // Each value as an integer key in `f64::total_cmp`'s order, sorted with its index: ties
+    // broken by index give the order of a stable sort, and sorting the pairs themselves reads
+    // memory in order (an index sort that looks each value up jumps about the array).
+    let key = |v: f64| {
+        let b = v.to_bits() as i64;
+        ((b ^ (((b >> 63) as u64) >> 1) as i64) as u64) ^ (1 << 63)
+    };
+    let mut pairs: Vec<(u64, usize)> = values
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (key(*v), i))
+        .collect();
+    pairs.sort_unstable();
+    pairs.into_iter().map(|(_, i)| i).collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_order_is_total_cmp_with_ties_by_index() {
+        let v = [
+            0.5,
+            -0.0,
+            f64::NAN,
+            0.0,
+            -1e300,
+            0.5,
+            f64::INFINITY,
+            -f64::NAN,
+            f64::NEG_INFINITY,
+            1e-310,
+        ];
+        let mut want: Vec<usize> = (0..v.len()).collect();
+        want.sort_by(|&a, &b| v[a].total_cmp(&v[b]));
+        assert_eq!(order_by(&v), want);
+    }
 
     #[test]
     fn alternating_and_curved_residuals() {
