@@ -6,6 +6,7 @@
 //! positional: an optional timestamp, then the counts. Timestamps are seconds, or ms, us or ns
 //! when the header's name says so.
 
+use super::squash;
 use std::path::Path;
 
 use super::recording::RecordingError;
@@ -128,14 +129,6 @@ struct Columns {
     width: usize,
     /// The header's line, when the columns are chosen by its names.
     header: Option<usize>,
-}
-
-/// A name reduced to its letters and digits, lower case.
-fn squash(name: &str) -> String {
-    name.chars()
-        .filter(char::is_ascii_alphanumeric)
-        .map(|c| c.to_ascii_lowercase())
-        .collect()
 }
 
 /// The scale to seconds of a timestamp column named `name`, if it is one.

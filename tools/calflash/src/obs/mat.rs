@@ -9,6 +9,7 @@ use matfile::{Array, MatFile, NumericData};
 
 use super::layout::{Holds, Keep, Preamble, Rows};
 use super::recording::RecordingError;
+use super::squash;
 
 /// True when `path` names a `.mat` file.
 #[must_use]
@@ -61,13 +62,6 @@ fn rows_of(a: &Array, width: usize) -> Option<Vec<Vec<f64>>> {
     } else {
         None
     }
-}
-
-fn squash(name: &str) -> String {
-    name.chars()
-        .filter(char::is_ascii_alphanumeric)
-        .map(|c| c.to_ascii_lowercase())
-        .collect()
 }
 
 /// Reads a `.mat` recording of what `holds` says, keeping `keep`, as [`super::layout::read`]

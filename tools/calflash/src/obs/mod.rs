@@ -288,6 +288,15 @@ impl<'a> Collector<'a> {
     }
 }
 
+/// A name reduced to its letters and digits, lower case, as names are compared (`Acc_X` and
+/// `accx`, `m/s^2` and `ms2`).
+pub(crate) fn squash(name: &str) -> String {
+    name.chars()
+        .filter(char::is_ascii_alphanumeric)
+        .map(|c| c.to_ascii_lowercase())
+        .collect()
+}
+
 /// A cell as an error message quotes it: at most 40 characters (a line of megabytes without a
 /// separator is one cell).
 pub(crate) fn shorten(text: &str) -> String {

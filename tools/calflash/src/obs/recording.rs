@@ -557,9 +557,9 @@ pub fn read_with(
         }
     }
     // Rails and formats are the converter's: SI values have none.
-    let codes_only =
-        |v: &Vec<[f64; 3]>, r: units::Read| if r.is_si() { Vec::new() } else { v.clone() };
-    let (ca, cg) = (codes_only(&a, read[0]), codes_only(&g, read[1]));
+    let none = Vec::new();
+    let ca = if read[0].is_si() { &none } else { &a };
+    let cg = if read[1].is_si() { &none } else { &g };
     let code_places: Vec<(PathBuf, usize)> = {
         let n_acc = if a.is_empty() { 0 } else { 3 };
         places
@@ -575,7 +575,7 @@ pub fn read_with(
             .map(|(_, p)| p.clone())
             .collect()
     };
-    check_codes(&[&ca, &cg], &line, rails, &code_places)?;
+    check_codes(&[ca, cg], &line, rails, &code_places)?;
     let at_rail = |s: &[f64; 3]| {
         s.iter()
             .any(|x| *x <= f64::from(rails.lo) || *x >= f64::from(rails.hi))

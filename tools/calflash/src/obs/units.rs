@@ -2,6 +2,8 @@
 //! driver delivers it. Physical values are read into SI (m/s^2, rad/s); a stated LSB (the value
 //! of one code, in the file's unit) turns them back into codes for a device blob.
 
+use super::squash;
+
 /// The unit of one sensor's columns.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Unit {
@@ -79,13 +81,6 @@ const GYRO: [(&[&str], Unit); 3] = [
 ];
 
 const COUNTS: [&str; 5] = ["counts", "count", "raw", "lsb", "adc"];
-
-fn squash(s: &str) -> String {
-    s.chars()
-        .filter(char::is_ascii_alphanumeric)
-        .map(|c| c.to_ascii_lowercase())
-        .collect()
-}
 
 impl Unit {
     /// The unit named `text` for `sensor` (`counts`, `m/s^2`, `g`, `mg`; `rad/s`, `deg/s`,
