@@ -164,11 +164,15 @@ pub enum Error {
         /// Sets found.
         found: usize,
     },
-    /// ADC rails that leave no unsaturated code (`lo + 1 < hi` is required).
+    /// ADC rails that leave no unsaturated code (`lo + 1 < hi` is required) or lie beyond
+    /// their sample format's limits.
     InvalidRails {
         /// The sensor.
         part: Part,
     },
+    /// An IMU whose gyro codes come in another sample format than its accelerometer's (one
+    /// sample carries both).
+    InvalidMixedFormats,
     /// An axis center (the zero-input code) not strictly inside the ADC rails.
     InvalidCenter {
         /// The sensor.
@@ -218,6 +222,13 @@ pub enum Error {
         set: u8,
         /// The accelerometer axis.
         axis: u8,
+    },
+    /// The calibration expects samples in another format than the corrector's.
+    CorrectorWrongFormat {
+        /// The format the calibration states.
+        expected: crate::model::SampleFormat,
+        /// The corrector's sample format.
+        found: crate::model::SampleFormat,
     },
 }
 
@@ -337,8 +348,15 @@ impl fmt::Display for Error {
                 "the breakpoints need {expected} coefficient sets but {found} are present"
             ),
             Error::InvalidRails { part } => {
-                write!(f, "the ADC rails of the {part} leave no unsaturated code")
+                write!(
+                    f,
+                    "the ADC rails of the {part} leave no unsaturated code or lie beyond \
+                     their sample format"
+                )
             }
+            Error::InvalidMixedFormats => f.write_str(
+                "the gyro's codes come in another sample format than the accelerometer's",
+            ),
             Error::InvalidCenter { part, axis } => write!(
                 f,
                 "the center of {part} axis {axis} is not strictly inside its ADC rails"
@@ -384,6 +402,12 @@ impl fmt::Display for Error {
                 f,
                 "accelerometer axis {axis} in coefficient set {set} does not sense mainly \
                  along itself, so its lever arm cannot be removed"
+            ),
+            Error::CorrectorWrongFormat { expected, found } => write!(
+                f,
+                "the calibration expects {} samples; this corrector takes {}",
+                expected.name(),
+                found.name()
             ),
         }
     }

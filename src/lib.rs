@@ -51,7 +51,11 @@
 //!
 //! // On the device: decode once, keep the validated copy, correct every sample.
 //! let cal = blob::decode(&bytes[..n])?;
-//! let mut corrector = TriadCorrector::new(&cal)?;
+//! // The converter delivers unsigned 16-bit codes, as the calibration states; a corrector
+//! // for another sample type refuses it here, never per sample.
+//! assert_eq!(cal.data().sensor.sample_format(), SampleFormat::U16);
+//! assert!(TriadCorrector::<i16>::new(&cal).is_err());
+//! let mut corrector = TriadCorrector::<u16>::new(&cal)?;
 //! corrector.set_environment(25.0, 3.3);
 //! let out = corrector.correct([32768 + 981, 32768, 32768]);
 //! assert!((out.values[0] - 9.81).abs() < 1e-3);

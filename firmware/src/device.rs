@@ -4,7 +4,7 @@
 //! protocol on UART0.
 
 use cortex_m_semihosting::hprintln;
-use spincal::correct::{AxisCorrector, Flags, ImuCorrector, TriadCorrector};
+use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Flags};
 use spincal::model::{Sensor, Serial};
 use spincal::protocol::{Device, MAX_FRAME, UnitSensor};
 use spincal::store::Store;
@@ -31,7 +31,7 @@ fn self_test(device: &Device<RamFlash>, mid: i32) {
     let raw = |k: i32, a: i32| mid + ((k * 37 + a * 101) % 400) - 200;
     match device.calibration() {
         None => {
-            let c = ImuCorrector::identity();
+            let c = AnyImuCorrector::identity();
             let mut c = c;
             for k in 0..1000 {
                 count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags);
@@ -44,13 +44,13 @@ fn self_test(device: &Device<RamFlash>, mid: i32) {
         Some(cal) => {
             match &cal.data().sensor {
                 Sensor::Single { .. } => {
-                    if let Ok(mut c) = AxisCorrector::new(cal) {
+                    if let Ok(mut c) = AnyAxisCorrector::new(cal) {
                         c.set_environment(25.0, 3.3);
                         (0..1000).for_each(|k| count(c.correct(raw(k, 0)).flags));
                     }
                 }
                 Sensor::Triad { .. } => {
-                    if let Ok(mut c) = TriadCorrector::new(cal) {
+                    if let Ok(mut c) = AnyTriadCorrector::new(cal) {
                         c.set_environment(25.0, 3.3);
                         (0..1000).for_each(|k| {
                             count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags)
@@ -58,7 +58,7 @@ fn self_test(device: &Device<RamFlash>, mid: i32) {
                     }
                 }
                 Sensor::Imu { .. } => {
-                    if let Ok(mut c) = ImuCorrector::new(cal, 1000.0) {
+                    if let Ok(mut c) = AnyImuCorrector::new(cal, 1000.0) {
                         c.set_environment(25.0, 3.3);
                         (0..1000).for_each(|k| {
                             count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags)

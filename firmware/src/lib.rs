@@ -4,7 +4,7 @@
 
 pub mod device;
 
-use spincal::correct::{AxisCorrector, Corrected, ImuCorrector, TriadCorrector};
+use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Corrected};
 use spincal::model::Calibration;
 
 /// The sensor kind of a golden case.
@@ -47,27 +47,28 @@ pub struct Case {
 
 include!(concat!(env!("OUT_DIR"), "/golden_cases.rs"));
 
-/// Any of the three correctors.
+/// Any of the three correctors, of the calibration's sample format (the golden codes are
+/// `i32`; a code beyond the format's container is clamped to it).
 #[expect(
     clippy::large_enum_variant,
     reason = "one runner per test, never moved in a loop"
 )]
 pub enum Runner<'a> {
     /// Single axis.
-    Single(AxisCorrector<'a>),
+    Single(AnyAxisCorrector<'a>),
     /// Triad.
-    Triad(TriadCorrector<'a>),
+    Triad(AnyTriadCorrector<'a>),
     /// IMU.
-    Imu(ImuCorrector<'a>),
+    Imu(AnyImuCorrector<'a>),
 }
 
 impl<'a> Runner<'a> {
     /// The corrector for `kind`, or `None` if the calibration is of another kind.
     pub fn new(cal: &'a Calibration, kind: Kind) -> Option<Self> {
         Some(match kind {
-            Kind::Single => Self::Single(AxisCorrector::new(cal).ok()?),
-            Kind::Triad => Self::Triad(TriadCorrector::new(cal).ok()?),
-            Kind::Imu(rate) => Self::Imu(ImuCorrector::new(cal, rate).ok()?),
+            Kind::Single => Self::Single(AnyAxisCorrector::new(cal).ok()?),
+            Kind::Triad => Self::Triad(AnyTriadCorrector::new(cal).ok()?),
+            Kind::Imu(rate) => Self::Imu(AnyImuCorrector::new(cal, rate).ok()?),
         })
     }
 

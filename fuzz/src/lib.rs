@@ -5,7 +5,7 @@ use embedded_storage::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
 use spincal::blob::{FORMAT_VERSION, HEADER_LEN, MAGIC};
-use spincal::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
+use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
 use spincal::model::{Calibration, Sensor};
 
 /// A NOR flash in RAM: erase sets 0xFF, programming clears bits (AND), 4-byte writes, 1 KiB
@@ -38,7 +38,7 @@ impl RamNor {
         align: usize,
     ) -> Result<core::ops::Range<usize>, RamNorError> {
         let o = offset as usize;
-        if o % align != 0 || len % align != 0 {
+        if !o.is_multiple_of(align) || !len.is_multiple_of(align) {
             return Err(RamNorError(NorFlashErrorKind::NotAligned));
         }
         match o.checked_add(len) {
@@ -103,8 +103,8 @@ pub fn seal(payload: &[u8]) -> Vec<u8> {
     out
 }
 
-/// Runs raw samples derived from `seed` through the correction `cal` builds; every output must
-/// be finite or flagged.
+/// Runs raw samples derived from `seed` (as `i32`, clamped to the calibration's sample format)
+/// through the correction `cal` builds; every output must be finite or flagged.
 pub fn exercise(cal: &Calibration, seed: &[u8]) {
     let raw = |k: usize, a: usize| -> i32 {
         let b = |i: usize| {
@@ -117,39 +117,36 @@ pub fn exercise(cal: &Calibration, seed: &[u8]) {
     let env = |k: usize| (f32::from(seed.get(k).copied().unwrap_or(25)) - 100.0, 3.3);
     match &cal.data().sensor {
         Sensor::Single { .. } => {
-            if let Ok(mut c) = AxisCorrector::new(cal) {
-                let (t, v) = env(0);
-                c.set_environment(t, v);
-                for k in 0..8 {
-                    let o = c.correct(raw(k, 0));
-                    assert!(o.values[0].is_finite() || !o.flags.is_clean(), "{o:?}");
-                }
+            let mut c = AnyAxisCorrector::new(cal).expect("a valid calibration's corrector");
+            let (t, v) = env(0);
+            c.set_environment(t, v);
+            for k in 0..8 {
+                let o = c.correct(raw(k, 0));
+                assert!(o.values[0].is_finite() || !o.flags.is_clean(), "{o:?}");
             }
         }
         Sensor::Triad { .. } => {
-            if let Ok(mut c) = TriadCorrector::new(cal) {
-                let (t, v) = env(1);
-                c.set_environment(t, v);
-                for k in 0..8 {
-                    let o = c.correct(core::array::from_fn(|a| raw(k, a)));
-                    assert!(
-                        o.values.iter().all(|x| x.is_finite()) || !o.flags.is_clean(),
-                        "{o:?}"
-                    );
-                }
+            let mut c = AnyTriadCorrector::new(cal).expect("a valid calibration's corrector");
+            let (t, v) = env(1);
+            c.set_environment(t, v);
+            for k in 0..8 {
+                let o = c.correct(core::array::from_fn(|a| raw(k, a)));
+                assert!(
+                    o.values.iter().all(|x| x.is_finite()) || !o.flags.is_clean(),
+                    "{o:?}"
+                );
             }
         }
         Sensor::Imu { .. } => {
-            if let Ok(mut c) = ImuCorrector::new(cal, 1000.0) {
-                let (t, v) = env(2);
-                c.set_environment(t, v);
-                for k in 0..8 {
-                    let o = c.correct(core::array::from_fn(|a| raw(k, a)));
-                    assert!(
-                        o.values.iter().all(|x| x.is_finite()) || !o.flags.is_clean(),
-                        "{o:?}"
-                    );
-                }
+            let mut c = AnyImuCorrector::new(cal, 1000.0).expect("a valid calibration's corrector");
+            let (t, v) = env(2);
+            c.set_environment(t, v);
+            for k in 0..8 {
+                let o = c.correct(core::array::from_fn(|a| raw(k, a)));
+                assert!(
+                    o.values.iter().all(|x| x.is_finite()) || !o.flags.is_clean(),
+                    "{o:?}"
+                );
             }
         }
     }

@@ -8,11 +8,11 @@ use spincal::blob;
 use spincal::correct::{Corrected, ImuCorrector};
 use spincal::model::{Calibration, CalibrationData};
 
-fn samples() -> Vec<[i32; 6]> {
+fn samples() -> Vec<[u16; 6]> {
     let centers = [33_109, 33_329, 36_427, 32_786, 32_430, 32_517];
     (0..1024)
         .map(|i| {
-            std::array::from_fn(|a| centers[a] + ((i * 7919 + a * 104_729) % 4_000) as i32 - 2_000)
+            std::array::from_fn(|a| centers[a] + ((i * 7919 + a * 104_729) % 4_000) as u16 - 2_000)
         })
         .collect()
 }
@@ -45,7 +45,7 @@ fn bench(c: &mut Criterion) {
     group.finish();
 
     let full = Calibration::new(CalibrationData::example_imu()).unwrap();
-    let mut imu = ImuCorrector::new(&full, 1000.0).unwrap();
+    let mut imu = ImuCorrector::<u16>::new(&full, 1000.0).unwrap();
     c.bench_function("set_environment_8pt", |b| {
         let mut t = -40.0f32;
         b.iter(|| {

@@ -16,8 +16,8 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use spincal::correct::{AxisCorrector, Corrected, ImuCorrector, TriadCorrector};
-use spincal::model::{Calibration, CalibrationData, Rails, Sensor};
+use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Corrected};
+use spincal::model::{Calibration, CalibrationData, Rails, SampleFormat, Sensor};
 
 /// The sensor kind of a case.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -63,10 +63,13 @@ pub fn dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("golden")
 }
 
+/// An example calibration.
+type Example = fn() -> CalibrationData;
+
 /// The golden cases: name, calibration, kind.
 #[must_use]
 pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
-    vec![
+    let mut cases = vec![
         ("single", CalibrationData::example_single(), Kind::Single),
         ("triad", CalibrationData::example_triad(), Kind::Triad),
         ("imu", CalibrationData::example_imu(), Kind::Imu(1000.0)),
@@ -95,7 +98,92 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
             spin_case(),
             Kind::Imu(crate::spin_rig::SAMPLE_RATE as f32),
         ),
-    ]
+        // The single axis and the triad in one other format each; every kernel again below.
+        (
+            "single_i32",
+            in_format(CalibrationData::example_single(), SampleFormat::I32),
+            Kind::Single,
+        ),
+        (
+            "triad_i16",
+            in_format(CalibrationData::example_triad(), SampleFormat::I16),
+            Kind::Triad,
+        ),
+    ];
+    // Every kernel again for samples delivered as `i16` and as `i32`.
+    let kernels: [(Example, [&'static str; 2]); 5] = [
+        (CalibrationData::example_imu, ["imu_i16", "imu_i32"]),
+        (
+            CalibrationData::example_imu_linear,
+            ["imu_linear_i16", "imu_linear_i32"],
+        ),
+        (
+            CalibrationData::example_imu_polynomial,
+            ["imu_polynomial_i16", "imu_polynomial_i32"],
+        ),
+        (
+            || without_lever(CalibrationData::example_imu()),
+            ["imu_no_lever_i16", "imu_no_lever_i32"],
+        ),
+        (
+            || without_lever(CalibrationData::example_imu_polynomial()),
+            ["imu_polynomial_no_lever_i16", "imu_polynomial_no_lever_i32"],
+        ),
+    ];
+    for (k, format) in [SampleFormat::I16, SampleFormat::I32]
+        .into_iter()
+        .enumerate()
+    {
+        for (data, names) in &kernels {
+            cases.push((names[k], in_format(data(), format), Kind::Imu(1000.0)));
+        }
+    }
+    cases
+}
+
+/// `data` (an example on an unsigned 16-bit converter) for a converter whose codes come in
+/// `format`: two's complement (every center moved down by 32768) on a 16-bit converter for
+/// `i16`, on an 18-bit one for `i32`. The coefficients are per count from the center, so
+/// inside the 16-bit rails the outputs are those of the unsigned example.
+#[must_use]
+pub fn in_format(mut data: CalibrationData, format: SampleFormat) -> CalibrationData {
+    let rails = match format {
+        SampleFormat::U16 => return data,
+        SampleFormat::I16 => Rails::signed(16),
+        SampleFormat::I32 => Rails::signed(18),
+    };
+    let recenter = |channels: &mut [spincal::model::Channel]| {
+        for c in channels {
+            c.center -= 32768.0;
+        }
+    };
+    match &mut data.sensor {
+        Sensor::Single {
+            rails: r, channel, ..
+        } => {
+            *r = rails;
+            recenter(std::slice::from_mut(channel));
+        }
+        Sensor::Triad {
+            rails: r, channels, ..
+        } => {
+            *r = rails;
+            recenter(channels);
+        }
+        Sensor::Imu {
+            accel_rails,
+            gyro_rails,
+            accel,
+            gyro,
+            ..
+        } => {
+            *accel_rails = rails;
+            *gyro_rails = rails;
+            recenter(accel);
+            recenter(gyro);
+        }
+    }
+    data
 }
 
 /// The case of the spinning round (`spin_rig`): its calibration is `calflash`'s fit of the
@@ -309,24 +397,25 @@ pub fn compute(name: &str, data: &CalibrationData, kind: Kind) -> Case {
 )]
 pub enum Runner<'a> {
     /// Single axis.
-    Single(AxisCorrector<'a>),
+    Single(AnyAxisCorrector<'a>),
     /// Triad.
-    Triad(TriadCorrector<'a>),
+    Triad(AnyTriadCorrector<'a>),
     /// IMU.
-    Imu(ImuCorrector<'a>),
+    Imu(AnyImuCorrector<'a>),
 }
 
 impl<'a> Runner<'a> {
-    /// The corrector for `kind`.
+    /// The corrector for `kind`, of the calibration's sample format (codes beyond it are
+    /// clamped to it).
     ///
     /// # Panics
     /// When the calibration does not fit the kind.
     #[must_use]
     pub fn new(cal: &'a Calibration, kind: Kind) -> Self {
         match kind {
-            Kind::Single => Self::Single(AxisCorrector::new(cal).expect("single")),
-            Kind::Triad => Self::Triad(TriadCorrector::new(cal).expect("triad")),
-            Kind::Imu(rate) => Self::Imu(ImuCorrector::new(cal, rate).expect("imu")),
+            Kind::Single => Self::Single(AnyAxisCorrector::new(cal).expect("single")),
+            Kind::Triad => Self::Triad(AnyTriadCorrector::new(cal).expect("triad")),
+            Kind::Imu(rate) => Self::Imu(AnyImuCorrector::new(cal, rate).expect("imu")),
         }
     }
 

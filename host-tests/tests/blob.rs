@@ -12,7 +12,7 @@ use spincal::{Error, Field, Part};
 /// invalid calibrations can be put in well-formed blobs.
 fn frame(payload: &[u8]) -> Vec<u8> {
     let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
-    let mut out = b"SCAL\x02".to_vec();
+    let mut out = b"SCAL\x03".to_vec();
     out.extend_from_slice(&(payload.len() as u16).to_le_bytes());
     let mut digest = crc.digest();
     digest.update(&out);
@@ -121,7 +121,7 @@ fn wrong_magic_version_and_length_are_refused() {
         Err(Error::HeaderBadMagic { found: *b"SCAM" })
     );
     // The previous format (its IMU covariance and lever term mean other things) and the next.
-    for version in [1, 3] {
+    for version in [1, 2, 4] {
         let mut bad = good.clone();
         bad[4] = version;
         assert_eq!(
@@ -243,6 +243,26 @@ fn each_validation_rule_has_its_own_error() {
                 }
             }),
             Error::InvalidRails { part: Part::Gyro },
+        ),
+        (
+            "rails beyond the sample format",
+            Box::new(|d| {
+                if let Sensor::Imu { accel_rails, .. } = &mut d.sensor {
+                    accel_rails.hi = 70_000;
+                }
+            }),
+            Error::InvalidRails {
+                part: Part::Accelerometer,
+            },
+        ),
+        (
+            "gyro samples in another format",
+            Box::new(|d| {
+                if let Sensor::Imu { gyro_rails, .. } = &mut d.sensor {
+                    *gyro_rails = gyro_rails.in_format(spincal::model::SampleFormat::I32);
+                }
+            }),
+            Error::InvalidMixedFormats,
         ),
         (
             "center outside rails",
@@ -486,7 +506,7 @@ fn the_largest_calibration_fits_and_the_framing_is_small() {
     let floats = fields::floats(&mut data).len();
     // The 16-byte serial, the largest time and version add 28 bytes to the examples' framing.
     assert!(
-        n - 4 * floats <= 65 + 28,
+        n - 4 * floats <= 71 + 28,
         "framing {} bytes",
         n - 4 * floats
     );
@@ -502,14 +522,16 @@ fn the_largest_calibration_fits_and_the_framing_is_small() {
 }
 
 #[test]
-fn framing_overhead_of_the_examples_is_at_most_65_bytes() {
+fn framing_overhead_of_the_examples_is_at_most_71_bytes() {
     for (name, mut data) in examples() {
         let n = golden::encode(&data).len();
         let floats = fields::floats(&mut data).len();
         let overhead = n - 4 * floats;
         println!("{name}: {n} bytes, {floats} floats, {overhead} bytes over the raw payload");
-        // 64 until the identity said whether the fit was rejected (one byte).
-        assert!(overhead <= 65, "{name}: {overhead}");
+        // 64 until the identity said whether the fit was rejected (one byte), 65 until each
+        // of the IMU's rails stated its sample format (one byte each); a two's-complement
+        // rail at -32768 takes three varint bytes where 0 takes one (71 for an i16 IMU).
+        assert!(overhead <= 71, "{name}: {overhead}");
     }
 }
 

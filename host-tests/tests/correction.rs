@@ -5,7 +5,7 @@ use host_tests::golden::{Kind, Runner};
 use host_tests::reference::{self, Value};
 use proptest::collection::vec;
 use proptest::prelude::*;
-use spincal::correct::{AxisCorrector, Flags, ImuCorrector, TriadCorrector};
+use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Flags};
 use spincal::model::{Calibration, CalibrationData, Sensor};
 
 /// The stated bound: the f32 output differs from the f64 reference by at most
@@ -150,7 +150,7 @@ fn every_code_of_a_16_bit_channel_is_finite_and_flagged_exactly() {
     // Single axis: all 65,536 codes.
     let data = CalibrationData::example_single();
     let cal = Calibration::new(data.clone()).unwrap();
-    let mut c = AxisCorrector::new(&cal).unwrap();
+    let mut c = AnyAxisCorrector::new(&cal).unwrap();
     c.set_environment(25.0, 5.0);
     let Sensor::Single { channel, .. } = &data.sensor else {
         unreachable!()
@@ -187,7 +187,7 @@ fn every_code_of_a_16_bit_channel_is_finite_and_flagged_exactly() {
     // Each axis of the full IMU: all codes on one axis, the others at their centers.
     let data = CalibrationData::example_imu();
     let cal = Calibration::new(data.clone()).unwrap();
-    let mut c = ImuCorrector::new(&cal, 1000.0).unwrap();
+    let mut c = AnyImuCorrector::new(&cal, 1000.0).unwrap();
     c.set_environment(20.0, 3.3);
     let centers: Vec<i32> = rails_and_centers(&data)
         .iter()
@@ -215,7 +215,7 @@ fn every_code_of_a_16_bit_channel_is_finite_and_flagged_exactly() {
 fn temperature_and_voltage_beyond_the_table_are_clamped_and_flagged() {
     let data = CalibrationData::example_single();
     let cal = Calibration::new(data).unwrap();
-    let mut c = AxisCorrector::new(&cal).unwrap();
+    let mut c = AnyAxisCorrector::new(&cal).unwrap();
     let raw = 40_000;
     c.set_environment(-40.0, 4.5);
     let edge = c.correct(raw);
@@ -263,7 +263,7 @@ fn temperature_and_voltage_beyond_the_table_are_clamped_and_flagged() {
         Flags::TEMPERATURE_CLAMPED | Flags::VOLTAGE_CLAMPED
     );
     // A fresh corrector flags until it is told the environment.
-    let fresh = AxisCorrector::new(&cal).unwrap();
+    let fresh = AnyAxisCorrector::new(&cal).unwrap();
     assert_eq!(
         fresh.correct(raw).flags,
         Flags::TEMPERATURE_CLAMPED | Flags::VOLTAGE_CLAMPED
@@ -272,9 +272,9 @@ fn temperature_and_voltage_beyond_the_table_are_clamped_and_flagged() {
 
 #[test]
 fn identity_fallback_flags_every_sample() {
-    let axis = AxisCorrector::identity();
-    let triad = TriadCorrector::identity();
-    let mut imu = ImuCorrector::identity();
+    let axis = spincal::correct::AxisCorrector::<i32>::identity();
+    let triad = spincal::correct::TriadCorrector::<i32>::identity();
+    let mut imu = AnyImuCorrector::identity();
     imu.set_environment(25.0, 3.3);
     for raw in [0, 1, 32_768, 65_535, -5, i32::MAX] {
         let a = axis.correct(raw);
@@ -294,21 +294,21 @@ fn identity_fallback_flags_every_sample() {
 fn wrong_sensor_kind_and_bad_rate_are_refused() {
     let triad = Calibration::new(CalibrationData::example_triad()).unwrap();
     assert_eq!(
-        AxisCorrector::new(&triad).err(),
+        AnyAxisCorrector::new(&triad).err(),
         Some(spincal::Error::CorrectorWrongSensor)
     );
     assert_eq!(
-        ImuCorrector::new(&triad, 100.0).err(),
+        AnyImuCorrector::new(&triad, 100.0).err(),
         Some(spincal::Error::CorrectorWrongSensor)
     );
     let imu = Calibration::new(CalibrationData::example_imu()).unwrap();
     assert_eq!(
-        TriadCorrector::new(&imu).err(),
+        AnyTriadCorrector::new(&imu).err(),
         Some(spincal::Error::CorrectorWrongSensor)
     );
     for rate in [0.0, -1.0, f32::NAN, f32::INFINITY, 2.0e5] {
         assert_eq!(
-            ImuCorrector::new(&imu, rate).err(),
+            AnyImuCorrector::new(&imu, rate).err(),
             Some(spincal::Error::CorrectorBadSampleRate)
         );
     }
@@ -339,7 +339,7 @@ fn a_lever_feedback_without_bound_is_refused_at_the_gate() {
     ));
     let imu = Calibration::new(CalibrationData::example_imu()).unwrap();
     for rate in [1.0, 1000.0, spincal::correct::MAX_SAMPLE_RATE_HZ] {
-        assert!(ImuCorrector::new(&imu, rate).is_ok(), "{rate} Hz");
+        assert!(AnyImuCorrector::new(&imu, rate).is_ok(), "{rate} Hz");
     }
 }
 
@@ -347,7 +347,7 @@ fn a_lever_feedback_without_bound_is_refused_at_the_gate() {
 fn batch_equals_sample_by_sample() {
     let data = CalibrationData::example_imu();
     let cal = Calibration::new(data).unwrap();
-    let mut one = ImuCorrector::new(&cal, 800.0).unwrap();
+    let mut one = AnyImuCorrector::new(&cal, 800.0).unwrap();
     let mut many = one.clone();
     one.set_environment(12.0, 3.2);
     many.set_environment(12.0, 3.2);
@@ -366,7 +366,7 @@ fn batch_equals_sample_by_sample() {
 #[test]
 fn lever_arm_first_sample_is_flagged_and_reset_flags_again() {
     let cal = Calibration::new(CalibrationData::example_imu()).unwrap();
-    let mut c = ImuCorrector::new(&cal, 1000.0).unwrap();
+    let mut c = AnyImuCorrector::new(&cal, 1000.0).unwrap();
     c.set_environment(25.0, 3.3);
     let raw = [33_109, 33_329, 36_427, 34_000, 32_430, 32_517];
     assert_eq!(c.correct(raw).flags, Flags::RATE_DERIVATIVE_UNKNOWN);
@@ -376,7 +376,7 @@ fn lever_arm_first_sample_is_flagged_and_reset_flags_again() {
     assert!(c.correct(raw).flags.is_clean());
     // Linear IMUs have no lever arm and never need priming.
     let lin = Calibration::new(CalibrationData::example_imu_linear()).unwrap();
-    let mut c = ImuCorrector::new(&lin, 1000.0).unwrap();
+    let mut c = AnyImuCorrector::new(&lin, 1000.0).unwrap();
     c.set_environment(25.0, 3.3);
     assert!(c.correct(raw).flags.is_clean());
 }
@@ -388,13 +388,13 @@ fn lever_arm_removes_what_each_axis_senses_of_a_steady_spin() {
     // corrected output must not, and the gyro's g-sensitivity must see the reference force.
     let data = CalibrationData::example_imu();
     let cal = Calibration::new(data.clone()).unwrap();
-    let mut with = ImuCorrector::new(&cal, 1000.0).unwrap();
+    let mut with = AnyImuCorrector::new(&cal, 1000.0).unwrap();
     let mut without_data = data.clone();
     if let Sensor::Imu { lever_arm, .. } = &mut without_data.sensor {
         *lever_arm = None;
     }
     let without_cal = Calibration::new(without_data).unwrap();
-    let mut without = ImuCorrector::new(&without_cal, 1000.0).unwrap();
+    let mut without = AnyImuCorrector::new(&without_cal, 1000.0).unwrap();
     with.set_environment(30.0, 3.3); // a breakpoint: set 4 as stored
     without.set_environment(30.0, 3.3);
     let raw = [33_109, 33_329, 36_427, 32_786, 32_430, 32_517 + 20_000];
@@ -452,7 +452,7 @@ fn lever_arm_removes_what_each_axis_senses_of_a_steady_spin() {
 fn sigma_is_the_quadratic_form_of_the_covariance_over_each_outputs_features() {
     let data = CalibrationData::example_imu();
     let cal = Calibration::new(data.clone()).unwrap();
-    let mut c = ImuCorrector::new(&cal, 1000.0).unwrap();
+    let mut c = AnyImuCorrector::new(&cal, 1000.0).unwrap();
     c.set_environment(30.0, 3.3); // a breakpoint: the set is used as stored
     let Sensor::Imu {
         sets,
@@ -519,9 +519,87 @@ fn sigma_is_the_quadratic_form_of_the_covariance_over_each_outputs_features() {
     }
     let no_cov = Calibration::new(CalibrationData::example_imu_linear()).unwrap();
     assert_eq!(
-        ImuCorrector::new(&no_cov, 1000.0)
+        AnyImuCorrector::new(&no_cov, 1000.0)
             .unwrap()
             .sigma(&out.values),
         None
     );
+}
+
+/// The device takes samples in the container the part delivers them in; a calibration states
+/// which, and a corrector of another refuses it when it is built. The same motion read as
+/// `u16`, `i16` and `i32` codes is corrected alike.
+#[test]
+fn each_sample_format_is_taken_as_the_part_delivers_it() {
+    use host_tests::golden::in_format;
+    use spincal::Error;
+    use spincal::correct::ImuCorrector;
+    use spincal::model::SampleFormat::{I16, I32, U16};
+    let data = CalibrationData::example_imu_polynomial();
+    let u = Calibration::new(data.clone()).unwrap();
+    let s = Calibration::new(in_format(data.clone(), I16)).unwrap();
+    let w = Calibration::new(in_format(data, I32)).unwrap();
+    for (cal, format) in [(&u, U16), (&s, I16), (&w, I32)] {
+        assert_eq!(cal.data().sensor.sample_format(), format);
+    }
+    let refused = |expected, found| Some(Error::CorrectorWrongFormat { expected, found });
+    assert_eq!(ImuCorrector::<i16>::new(&u, 1e3).err(), refused(U16, I16));
+    assert_eq!(ImuCorrector::<i32>::new(&u, 1e3).err(), refused(U16, I32));
+    assert_eq!(ImuCorrector::<u16>::new(&s, 1e3).err(), refused(I16, U16));
+    assert_eq!(ImuCorrector::<i16>::new(&w, 1e3).err(), refused(I32, I16));
+    assert_eq!(
+        spincal::correct::TriadCorrector::<i32>::new(
+            &Calibration::new(CalibrationData::example_triad()).unwrap()
+        )
+        .err(),
+        refused(U16, I32)
+    );
+
+    let mut cu = ImuCorrector::<u16>::new(&u, 1e3).unwrap();
+    let mut cs = ImuCorrector::<i16>::new(&s, 1e3).unwrap();
+    let mut cw = ImuCorrector::<i32>::new(&w, 1e3).unwrap();
+    cu.set_environment(22.5, 3.3);
+    cs.set_environment(22.5, 3.3);
+    cw.set_environment(22.5, 3.3);
+    let Sensor::Imu { accel, gyro, .. } = &u.data().sensor else {
+        unreachable!()
+    };
+    let centers: Vec<f32> = accel.iter().chain(gyro).map(|c| c.center).collect();
+    let mut batch_s = Vec::new();
+    let mut outs = Vec::new();
+    for k in 0..400u32 {
+        let raw: [u16; 6] = std::array::from_fn(|a| {
+            let wiggle = ((k * 7919 + a as u32 * 104_729) % 6_000) as f32 - 3_000.0;
+            (centers[a] + wiggle).round() as u16
+        });
+        let signed = raw.map(|x| (i32::from(x) - 32_768) as i16);
+        let (a, b, c) = (
+            cu.correct(raw),
+            cs.correct(signed),
+            cw.correct(signed.map(i32::from)),
+        );
+        assert_eq!((a.flags, b.flags, c.flags), (a.flags, a.flags, a.flags));
+        for ((x, y), z) in a.values.iter().zip(&b.values).zip(&c.values) {
+            let tol = 1e-5 * x.abs().max(1.0);
+            assert!(
+                (x - y).abs() <= tol && (x - z).abs() <= tol,
+                "{k}: {x} {y} {z}"
+            );
+        }
+        batch_s.push(signed);
+        outs.push(b);
+    }
+    // The batch path of the i16 corrector gives the bits of its one-at-a-time path.
+    let mut cs = ImuCorrector::<i16>::new(&s, 1e3).unwrap();
+    cs.set_environment(22.5, 3.3);
+    let mut got = vec![spincal::correct::Corrected::<6>::default(); batch_s.len()];
+    assert_eq!(cs.correct_batch(&batch_s, &mut got), batch_s.len());
+    assert_eq!(got, outs);
+    // Each format saturates at its own rails: the top code of 16 bits is a rail for `u16` and
+    // `i16`, an ordinary code of the 18-bit converter delivered as `i32`.
+    let top_u = cu.correct([u16::MAX; 6]).flags;
+    let top_s = cs.correct([i16::MAX; 6]).flags;
+    let top_w = cw.correct([i32::from(i16::MAX); 6]).flags;
+    assert!(top_u.contains(Flags::SATURATED) && top_s.contains(Flags::SATURATED));
+    assert!(!top_w.contains(Flags::SATURATED));
 }

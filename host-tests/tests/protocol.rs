@@ -121,7 +121,8 @@ fn update_read_back_and_vectors() {
         panic!("{resp:?}")
     };
     let cal = Calibration::new(CalibrationData::example_imu()).unwrap();
-    let mut host = spincal::correct::ImuCorrector::new(&cal, protocol::vector_rate_hz()).unwrap();
+    let mut host =
+        spincal::correct::AnyImuCorrector::new(&cal, protocol::vector_rate_hz()).unwrap();
     host.set_environment(31.5, 3.3);
     for (r, (v, f)) in raw.iter().zip(&out) {
         let h = host.correct(*r);
@@ -144,15 +145,25 @@ fn a_blob_for_another_sensor_is_never_committed() {
     assert_eq!(write(&mut d, &good), Response::Committed { seq: 1 });
     let before = identity(&mut d);
     assert_eq!(before.sensor, host_tests::tcp_unit::IMU_16_BIT);
-    // A triad, a single axis, and an IMU of other converters.
+    // A triad, a single axis, an IMU of 18-bit converters and one whose codes come as i16.
     let mut other_rails = CalibrationData::example_imu_linear();
-    if let spincal::model::Sensor::Imu { gyro_rails, .. } = &mut other_rails.sensor {
+    if let spincal::model::Sensor::Imu {
+        accel_rails,
+        gyro_rails,
+        ..
+    } = &mut other_rails.sensor
+    {
+        *accel_rails = spincal::model::Rails::unsigned(18);
         *gyro_rails = spincal::model::Rails::unsigned(18);
     }
     for data in [
         CalibrationData::example_triad(),
         CalibrationData::example_single(),
         other_rails,
+        golden::in_format(
+            CalibrationData::example_imu_linear(),
+            spincal::model::SampleFormat::I16,
+        ),
     ] {
         let kind = protocol::UnitSensor::of(&data);
         assert_eq!(

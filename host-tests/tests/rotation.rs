@@ -13,7 +13,7 @@ use calflash::sim::truth::ImuTruth;
 use host_tests::golden::{self, Step};
 use host_tests::spin_rig;
 use spincal::blob;
-use spincal::correct::{Flags, ImuCorrector};
+use spincal::correct::{AnyImuCorrector, Flags};
 use spincal::model::Calibration;
 
 /// Per output over a segment: the mean error of the clean samples, the mean stated 1-sigma,
@@ -41,7 +41,7 @@ fn segment(
     noise: &[f64; 6],
     given: Option<&[[f32; 6]]>,
 ) -> Segment {
-    let mut dev = ImuCorrector::new(cal, spin_rig::SAMPLE_RATE as f32).unwrap();
+    let mut dev = AnyImuCorrector::new(cal, spin_rig::SAMPLE_RATE as f32).unwrap();
     dev.set_environment(25.0, 3.3);
     let mut error = [0.0; 6];
     let mut sigma = [0.0; 6];

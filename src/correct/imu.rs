@@ -6,7 +6,10 @@ mod fast;
 
 use super::environment::{effective_covariance_into, effective_set};
 use super::kernel::{Shape, TriadKernel, affine, range_bounds};
+use super::sample::{self, Sample};
 use super::{Corrected, Flags, factor_norm};
+use core::marker::PhantomData;
+
 use crate::Error;
 use crate::model::interval::{Bound, affine_bound};
 use crate::model::rotation::{self, LeverTerms};
@@ -49,8 +52,9 @@ struct Source<'a> {
 /// calibrated accelerometer range applies to the specific force the axes sense, before that
 /// correction.
 #[derive(Debug, Clone)]
-pub struct ImuCorrector<'a> {
+pub struct ImuCorrector<'a, S: Sample> {
     source: Option<Source<'a>>,
+    sample: PhantomData<fn(S)>,
     mode: Mode,
     accel: TriadKernel,
     gyro: TriadKernel,
@@ -84,12 +88,13 @@ pub struct ImuCorrector<'a> {
     hot: super::m4f::Hot,
 }
 
-impl<'a> ImuCorrector<'a> {
-    /// A corrector for an IMU calibration sampled at `sample_rate_hz`, at an unknown
-    /// environment.
+impl<'a, S: Sample> ImuCorrector<'a, S> {
+    /// A corrector for an IMU calibration whose samples come as `[S; 6]` at
+    /// `sample_rate_hz`, at an unknown environment.
     ///
     /// # Errors
     /// [`Error::CorrectorWrongSensor`] when `cal` is not an IMU;
+    /// [`Error::CorrectorWrongFormat`] when it states another sample format than `S`;
     /// [`Error::CorrectorBadSampleRate`] when the rate is not finite, positive and at most
     /// [`MAX_SAMPLE_RATE_HZ`].
     pub fn new(cal: &'a Calibration, sample_rate_hz: f32) -> Result<Self, Error> {
@@ -106,6 +111,7 @@ impl<'a> ImuCorrector<'a> {
         else {
             return Err(Error::CorrectorWrongSensor);
         };
+        sample::check::<S>(accel_rails)?;
         if !(sample_rate_hz > 0.0 && sample_rate_hz <= MAX_SAMPLE_RATE_HZ) {
             return Err(Error::CorrectorBadSampleRate);
         }
@@ -125,6 +131,7 @@ impl<'a> ImuCorrector<'a> {
         let mode = Mode { shape, lever };
         let lever = lever_arm.unwrap_or([[0.0; 3]; 3]);
         let mut out = Self {
+            sample: PhantomData,
             source: Some(Source {
                 env: &data.environment,
                 sets,
@@ -162,6 +169,7 @@ impl<'a> ImuCorrector<'a> {
     pub const fn identity() -> Self {
         Self {
             source: None,
+            sample: PhantomData,
             mode: Mode {
                 shape: Shape::Identity,
                 lever: false,
@@ -265,12 +273,13 @@ impl<'a> ImuCorrector<'a> {
     /// Corrects one sample `[ax, ay, az, gx, gy, gz]`.
     #[must_use]
     #[inline]
-    pub fn correct(&mut self, raw: [i32; 6]) -> Corrected<6> {
+    pub fn correct(&mut self, raw: [S; 6]) -> Corrected<6> {
         let mut out = Corrected::default();
         #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
         if self.one_m4f(raw, &mut out) {
             return out;
         }
+        let raw = sample::codes(raw);
         let o = &mut out;
         match (self.mode.shape, self.mode.lever) {
             (Shape::Linear, _) => self.step::<false, false, false>(raw, o),
@@ -284,29 +293,29 @@ impl<'a> ImuCorrector<'a> {
     }
 
     /// Corrects `raw` into `out`, in order, and returns how many samples were corrected.
-    pub fn correct_batch(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
+    pub fn correct_batch(&mut self, raw: &[[S; 6]], out: &mut [Corrected<6>]) -> usize {
         let n = raw.len().min(out.len());
         #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
         if self.batch_m4f(raw, out) {
             return n;
         }
-        let pairs = raw.iter().zip(out.iter_mut());
+        let pairs = raw.iter().map(|r| sample::codes(*r)).zip(out.iter_mut());
         let Mode { shape, lever } = self.mode;
         match (shape, lever) {
-            (Shape::Linear, _) => pairs.for_each(|(r, o)| self.step::<false, false, false>(*r, o)),
+            (Shape::Linear, _) => pairs.for_each(|(r, o)| self.step::<false, false, false>(r, o)),
             (Shape::Polynomial, false) => {
-                pairs.for_each(|(r, o)| self.step::<true, false, false>(*r, o));
+                pairs.for_each(|(r, o)| self.step::<true, false, false>(r, o));
             }
             (Shape::Polynomial, true) => {
-                pairs.for_each(|(r, o)| self.step::<true, false, true>(*r, o));
+                pairs.for_each(|(r, o)| self.step::<true, false, true>(r, o));
             }
             (Shape::Asymmetric, false) => {
-                pairs.for_each(|(r, o)| self.step::<true, true, false>(*r, o));
+                pairs.for_each(|(r, o)| self.step::<true, true, false>(r, o));
             }
             (Shape::Asymmetric, true) => {
-                pairs.for_each(|(r, o)| self.step::<true, true, true>(*r, o));
+                pairs.for_each(|(r, o)| self.step::<true, true, true>(r, o));
             }
-            (Shape::Identity, _) => pairs.for_each(|(r, o)| *o = self.passthrough(*r)),
+            (Shape::Identity, _) => pairs.for_each(|(r, o)| *o = self.passthrough(r)),
         }
         n
     }

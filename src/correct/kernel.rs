@@ -76,10 +76,7 @@ impl TriadKernel {
         nl: [[0.0; 5]; 3],
         range_lo: [f32::NEG_INFINITY; 3],
         range_hi: [f32::INFINITY; 3],
-        rails: Rails {
-            lo: i32::MIN,
-            hi: i32::MAX,
-        },
+        rails: Rails::new(i32::MIN, i32::MAX),
     };
 
     /// The kernel of `set` for the given channels and rails; `extra` adds a bound to each

@@ -32,6 +32,8 @@ use core::mem::{offset_of, size_of};
 
 use super::Corrected;
 use super::kernel::TriadKernel;
+use super::sample::Sample;
+use crate::model::SampleFormat;
 use crate::model::rotation::LeverTerms;
 
 /// The block of the current environment's kernel, if its shape has one.
@@ -49,35 +51,46 @@ pub(crate) enum Hot {
     Full(FullBlock, Full),
 }
 
-/// A full kernel's entry point.
+/// A full kernel's entry point (the samples are `[S; 6]` of the kernel's format).
 type FullKernel =
-    unsafe extern "C" fn(*mut FullBlock, *const [i32; 6], *mut Corrected<6>, usize) -> usize;
+    unsafe extern "C" fn(*mut FullBlock, *const u8, *mut Corrected<6>, usize) -> usize;
 
 /// Which full kernel, chosen once with the environment.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Full(FullKernel);
 
 impl Full {
-    /// The kernel with (or without) the asymmetry term `s |v - b|` and the lever arm (which
-    /// reads and writes `prev_rate`).
-    pub fn new(asym: bool, lever: bool) -> Self {
-        Self(match (asym, lever) {
-            (false, true) => spincal_imu_full_m4f,
-            (true, true) => spincal_imu_full_asym_m4f,
-            (false, false) => spincal_imu_poly_m4f,
-            (true, false) => spincal_imu_poly_asym_m4f,
+    /// The kernel for samples `[S; 6]` with (or without) the asymmetry term `s |v - b|` and
+    /// the lever arm (which reads and writes `prev_rate`).
+    pub fn new<S: Sample>(asym: bool, lever: bool) -> Self {
+        use SampleFormat::{I16, I32, U16};
+        Self(match (S::FORMAT, asym, lever) {
+            (I32, false, true) => spincal_imu_full_m4f,
+            (I32, true, true) => spincal_imu_full_asym_m4f,
+            (I32, false, false) => spincal_imu_poly_m4f,
+            (I32, true, false) => spincal_imu_poly_asym_m4f,
+            (I16, false, true) => spincal_imu_full_i16_m4f,
+            (I16, true, true) => spincal_imu_full_asym_i16_m4f,
+            (I16, false, false) => spincal_imu_poly_i16_m4f,
+            (I16, true, false) => spincal_imu_poly_asym_i16_m4f,
+            (U16, false, true) => spincal_imu_full_u16_m4f,
+            (U16, true, true) => spincal_imu_full_asym_u16_m4f,
+            (U16, false, false) => spincal_imu_poly_u16_m4f,
+            (U16, true, false) => spincal_imu_poly_asym_u16_m4f,
         })
     }
 }
 
-/// Window bases and limits of both triads and the environment flags (36 bytes).
+/// Negated window bases and limits of both triads and the environment flags (36 bytes). The
+/// bases are negated so that the 16-bit kernels add them while they widen each code
+/// (`sxtah`/`uxtah`), at no cost over the `i32` kernels' subtraction.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Header {
-    accel_base: [i32; 3],
+    accel_neg_base: [i32; 3],
     /// Accelerometer window limit (0 until the lever arm is primed).
     pub accel_limit: u32,
-    gyro_base: [i32; 3],
+    gyro_neg_base: [i32; 3],
     gyro_limit: u32,
     flags: u32,
 }
@@ -85,9 +98,9 @@ pub(crate) struct Header {
 impl Header {
     fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8) -> Self {
         Self {
-            accel_base: accel.base,
+            accel_neg_base: accel.base.map(i32::wrapping_neg),
             accel_limit: accel.limit,
-            gyro_base: gyro.base,
+            gyro_neg_base: gyro.base.map(i32::wrapping_neg),
             gyro_limit: gyro.limit,
             flags: u32::from(flags),
         }
@@ -203,7 +216,7 @@ fn matrices(accel: &TriadKernel, gyro: &TriadKernel) -> [f32; 18] {
 // The offsets the assembly below uses.
 const _: () = {
     assert!(offset_of!(Header, accel_limit) == 12);
-    assert!(offset_of!(Header, gyro_base) == 16);
+    assert!(offset_of!(Header, gyro_neg_base) == 16);
     assert!(offset_of!(Header, gyro_limit) == 28);
     assert!(offset_of!(Header, flags) == 32);
     assert!(size_of::<Header>() == 36);
@@ -225,12 +238,13 @@ const _: () = {
     assert!(size_of::<Corrected<6>>() == 28);
 };
 
-// Both kernels: r0 = block, r1 = raw samples, r2 = outputs, r3 = count. They return in r0 the
+// Every kernel: r0 = block, r1 = raw samples, r2 = outputs, r3 = count. They return in r0 the
 // number of samples corrected before the first one outside a window (the count when none is).
 // The window test is the Rust one: `(w0 | w1 | w2) < limit` (unsigned) for both triads, with
 // `w_j = raw_j - base_j` (wrapping). Registers: r4-r9 the six codes, then the offsets w; r10,
-// r11, r12, lr a triad's bases and limit; r3 the samples left, whose starting value is saved on
-// the stack. s16-s31 are callee-saved and pushed.
+// r11, r12, lr a triad's negated bases and limit; r3 the samples left, whose starting value is
+// saved on the stack. s16-s31 are callee-saved and pushed. Each kernel exists for the three
+// sample formats (`_i16`, `_u16`, and `i32` unsuffixed), which differ only in spincal_codes.
 core::arch::global_asm!(
     ".syntax unified",
     ".thumb",
@@ -242,22 +256,56 @@ core::arch::global_asm!(
     "vpush {{s16-s31}}",
     ".endm",
     // The next sample: load its six codes, leave for 3f when either triad is outside its
-    // window, else convert the offsets w to f32 in s0-s5.
-    ".macro spincal_codes",
+    // window, else convert the offsets w to f32 in s0-s5. `fmt`: 0 `[i32; 6]` (one `ldm`,
+    // `w = raw + (-base)` by `add`), 1 `[i16; 6]` and 2 `[u16; 6]` (three `ldr`, which need
+    // no word alignment, then `sxtah`/`uxtah` widen each halfword and add the negated base in
+    // one instruction). Little-endian: code 2k is the low half of word k.
+    ".macro spincal_widen fmt, rd, rn, rm, hi",
+    ".if \\fmt == 1",
+    ".if \\hi",
+    "sxtah \\rd, \\rn, \\rm, ror #16",
+    ".else",
+    "sxtah \\rd, \\rn, \\rm",
+    ".endif",
+    ".else",
+    ".if \\hi",
+    "uxtah \\rd, \\rn, \\rm, ror #16",
+    ".else",
+    "uxtah \\rd, \\rn, \\rm",
+    ".endif",
+    ".endif",
+    ".endm",
+    ".macro spincal_codes fmt",
+    ".if \\fmt == 0",
     "ldm r1!, {{r4-r9}}",
     "ldm r0, {{r10-r12, lr}}",
-    "sub r4, r4, r10",
-    "sub r5, r5, r11",
-    "sub r6, r6, r12",
+    "add r4, r4, r10",
+    "add r5, r5, r11",
+    "add r6, r6, r12",
+    ".else",
+    "ldr r8, [r1, #4]",
+    "ldr r9, [r1, #8]",
+    "ldr r7, [r1], #12",
+    "ldm r0, {{r10-r12, lr}}",
+    "spincal_widen \\fmt, r4, r10, r7, 0",
+    "spincal_widen \\fmt, r5, r11, r7, 1",
+    "spincal_widen \\fmt, r6, r12, r8, 0",
+    ".endif",
     "orr r10, r4, r5",
     "orr r10, r10, r6",
     "cmp r10, lr",
     "bhs 3f",
     "ldrd r10, r11, [r0, #16]",
     "ldrd r12, lr, [r0, #24]",
-    "sub r7, r7, r10",
-    "sub r8, r8, r11",
-    "sub r9, r9, r12",
+    ".if \\fmt == 0",
+    "add r7, r7, r10",
+    "add r8, r8, r11",
+    "add r9, r9, r12",
+    ".else",
+    "spincal_widen \\fmt, r7, r10, r8, 1",
+    "spincal_widen \\fmt, r8, r11, r9, 0",
+    "spincal_widen \\fmt, r9, r12, r9, 1",
+    ".endif",
     "orr r10, r7, r8",
     "orr r10, r10, r9",
     "cmp r10, lr",
@@ -288,19 +336,14 @@ core::arch::global_asm!(
     ".endm",
     //
     // Linear: y = off_lin + M w per triad. The matrices stay in s14-s31 for the whole batch.
-    ".section .text.spincal_imu_linear_m4f,\"ax\",%progbits",
-    ".global spincal_imu_linear_m4f",
-    ".type spincal_imu_linear_m4f,%function",
-    ".p2align 2",
-    ".thumb_func",
-    "spincal_imu_linear_m4f:",
+    ".macro spincal_linear fmt",
     "spincal_entry",
     "add r4, r0, #60",
     "vldm r4, {{s14-s31}}",
     "cmp r3, #0",
     "beq 3f",
     "1:",
-    "spincal_codes",
+    "spincal_codes \\fmt",
     "add r4, r0, #36",
     "vldm r4, {{s6-s11}}",
     "vmla.f32 s6, s14, s0",
@@ -322,18 +365,18 @@ core::arch::global_asm!(
     "vmla.f32 s11, s30, s4",
     "vmla.f32 s11, s31, s5",
     "spincal_store_and_return",
-    ".size spincal_imu_linear_m4f, . - spincal_imu_linear_m4f",
+    ".endm",
     //
     // Full: per axis v = w - delta, u = v + v (v (q + k v) + o |v|) (+ s |v - b| with `asym`);
     // y = off + M u per triad; gyro w_i += (-g_i) . x; with `lever`, x = a - e_prev and the
     // accelerometer output a - e(w, w - w_prev) (model/rotation.rs). r4 walks the block from
     // `q` to the lever coefficients.
-    ".macro spincal_full asym, lever",
+    ".macro spincal_full fmt, asym, lever",
     "spincal_entry",
     "cmp r3, #0",
     "beq 3f",
     "1:",
-    "spincal_codes",
+    "spincal_codes \\fmt",
     // q -> s6-s11 (the accumulators t), delta -> s12-s17, k -> s18-s23, o -> s24-s29.
     "add r4, r0, #36",
     "vldm r4!, {{s6-s29}}",
@@ -499,71 +542,127 @@ core::arch::global_asm!(
     "spincal_store_and_return",
     ".endm",
     //
-    ".section .text.spincal_imu_full_m4f,\"ax\",%progbits",
-    ".global spincal_imu_full_m4f",
-    ".type spincal_imu_full_m4f,%function",
+    // One kernel: its own section (unused ones are dropped by the linker), `linear` or the
+    // full model with `asym` and `lever`, for samples of format `fmt` (see spincal_codes).
+    ".macro spincal_define name, fmt, linear, asym, lever",
+    ".section .text.\\name,\"ax\",%progbits",
+    ".global \\name",
+    ".type \\name,%function",
     ".p2align 2",
     ".thumb_func",
-    "spincal_imu_full_m4f:",
-    "spincal_full 0, 1",
-    ".size spincal_imu_full_m4f, . - spincal_imu_full_m4f",
-    //
-    ".section .text.spincal_imu_full_asym_m4f,\"ax\",%progbits",
-    ".global spincal_imu_full_asym_m4f",
-    ".type spincal_imu_full_asym_m4f,%function",
-    ".p2align 2",
-    ".thumb_func",
-    "spincal_imu_full_asym_m4f:",
-    "spincal_full 1, 1",
-    ".size spincal_imu_full_asym_m4f, . - spincal_imu_full_asym_m4f",
-    //
-    ".section .text.spincal_imu_poly_m4f,\"ax\",%progbits",
-    ".global spincal_imu_poly_m4f",
-    ".type spincal_imu_poly_m4f,%function",
-    ".p2align 2",
-    ".thumb_func",
-    "spincal_imu_poly_m4f:",
-    "spincal_full 0, 0",
-    ".size spincal_imu_poly_m4f, . - spincal_imu_poly_m4f",
-    //
-    ".section .text.spincal_imu_poly_asym_m4f,\"ax\",%progbits",
-    ".global spincal_imu_poly_asym_m4f",
-    ".type spincal_imu_poly_asym_m4f,%function",
-    ".p2align 2",
-    ".thumb_func",
-    "spincal_imu_poly_asym_m4f:",
-    "spincal_full 1, 0",
-    ".size spincal_imu_poly_asym_m4f, . - spincal_imu_poly_asym_m4f",
+    "\\name:",
+    ".if \\linear",
+    "spincal_linear \\fmt",
+    ".else",
+    "spincal_full \\fmt, \\asym, \\lever",
+    ".endif",
+    ".size \\name, . - \\name",
+    ".endm",
+    "spincal_define spincal_imu_linear_m4f, 0, 1, 0, 0",
+    "spincal_define spincal_imu_full_m4f, 0, 0, 0, 1",
+    "spincal_define spincal_imu_full_asym_m4f, 0, 0, 1, 1",
+    "spincal_define spincal_imu_poly_m4f, 0, 0, 0, 0",
+    "spincal_define spincal_imu_poly_asym_m4f, 0, 0, 1, 0",
+    "spincal_define spincal_imu_linear_i16_m4f, 1, 1, 0, 0",
+    "spincal_define spincal_imu_full_i16_m4f, 1, 0, 0, 1",
+    "spincal_define spincal_imu_full_asym_i16_m4f, 1, 0, 1, 1",
+    "spincal_define spincal_imu_poly_i16_m4f, 1, 0, 0, 0",
+    "spincal_define spincal_imu_poly_asym_i16_m4f, 1, 0, 1, 0",
+    "spincal_define spincal_imu_linear_u16_m4f, 2, 1, 0, 0",
+    "spincal_define spincal_imu_full_u16_m4f, 2, 0, 0, 1",
+    "spincal_define spincal_imu_full_asym_u16_m4f, 2, 0, 1, 1",
+    "spincal_define spincal_imu_poly_u16_m4f, 2, 0, 0, 0",
+    "spincal_define spincal_imu_poly_asym_u16_m4f, 2, 0, 1, 0",
 );
 
 unsafe extern "C" {
     fn spincal_imu_linear_m4f(
-        block: *const LinearBlock,
-        raw: *const [i32; 6],
-        out: *mut Corrected<6>,
+        b: *const LinearBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
     fn spincal_imu_full_m4f(
         b: *mut FullBlock,
-        r: *const [i32; 6],
+        r: *const u8,
         o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
     fn spincal_imu_full_asym_m4f(
         b: *mut FullBlock,
-        r: *const [i32; 6],
+        r: *const u8,
         o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
     fn spincal_imu_poly_m4f(
         b: *mut FullBlock,
-        r: *const [i32; 6],
+        r: *const u8,
         o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
     fn spincal_imu_poly_asym_m4f(
         b: *mut FullBlock,
-        r: *const [i32; 6],
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_linear_i16_m4f(
+        b: *const LinearBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_full_i16_m4f(
+        b: *mut FullBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_full_asym_i16_m4f(
+        b: *mut FullBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_poly_i16_m4f(
+        b: *mut FullBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_poly_asym_i16_m4f(
+        b: *mut FullBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_linear_u16_m4f(
+        b: *const LinearBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_full_u16_m4f(
+        b: *mut FullBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_full_asym_u16_m4f(
+        b: *mut FullBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_poly_u16_m4f(
+        b: *mut FullBlock,
+        r: *const u8,
+        o: *mut Corrected<6>,
+        n: usize,
+    ) -> usize;
+    fn spincal_imu_poly_asym_u16_m4f(
+        b: *mut FullBlock,
+        r: *const u8,
         o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
@@ -571,26 +670,36 @@ unsafe extern "C" {
 
 /// Corrects samples with the linear kernel until the first one outside a window; returns how
 /// many it corrected.
-pub(crate) fn linear(block: &LinearBlock, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
+pub(crate) fn linear<S: Sample>(
+    block: &LinearBlock,
+    raw: &[[S; 6]],
+    out: &mut [Corrected<6>],
+) -> usize {
     let n = raw.len().min(out.len());
-    // SAFETY: the kernel reads `n` samples from `raw` and writes `n` outputs (28 bytes each:
-    // the values and the flag byte) to `out`, reads only `block`, saves every callee-saved
+    let kernel = match S::FORMAT {
+        SampleFormat::I32 => spincal_imu_linear_m4f,
+        SampleFormat::I16 => spincal_imu_linear_i16_m4f,
+        SampleFormat::U16 => spincal_imu_linear_u16_m4f,
+    };
+    // SAFETY: the kernel for `S`'s format reads `n` samples `[S; 6]` from `raw` (the 16-bit
+    // ones by word loads that need no alignment) and writes `n` outputs (28 bytes each: the
+    // values and the flag byte) to `out`, reads only `block`, saves every callee-saved
     // register it uses and returns at most `n`. The layouts are pinned by the assertions above.
-    unsafe { spincal_imu_linear_m4f(block, raw.as_ptr(), out.as_mut_ptr(), n) }
+    unsafe { kernel(block, raw.as_ptr().cast(), out.as_mut_ptr(), n) }
 }
 
 /// Corrects samples with the `kind` full kernel until the first one outside a window; returns
 /// how many it corrected. With the lever arm it leaves the last corrected rate and lever term
 /// in `block.prev_rate` and `block.prev_lever`.
 #[inline(always)]
-pub(crate) fn full(
+pub(crate) fn full<S: Sample>(
     kind: Full,
     block: &mut FullBlock,
-    raw: &[[i32; 6]],
+    raw: &[[S; 6]],
     out: &mut [Corrected<6>],
 ) -> usize {
     let n = raw.len().min(out.len());
-    // SAFETY: as for `linear`; these kernels also write `block.prev_rate` and
-    // `block.prev_lever` (with the lever arm).
-    unsafe { (kind.0)(block, raw.as_ptr(), out.as_mut_ptr(), n) }
+    // SAFETY: as for `linear` (`kind` was chosen by `Full::new::<S>`); these kernels also
+    // write `block.prev_rate` and `block.prev_lever` (with the lever arm).
+    unsafe { (kind.0)(block, raw.as_ptr().cast(), out.as_mut_ptr(), n) }
 }

@@ -9,11 +9,17 @@
 //! middle of the calibrated spans are used). Then call `correct` per sample, or
 //! `correct_batch` over a DMA block.
 //!
-//! | sensor      | corrector           | raw        | output                      |
-//! |-------------|---------------------|------------|-----------------------------|
-//! | single axis | [`AxisCorrector`]   | `i32`      | `[f32; 1]`                  |
-//! | triad       | [`TriadCorrector`]  | `[i32; 3]` | `[f32; 3]`                  |
-//! | IMU         | [`ImuCorrector`]    | `[i32; 6]` | `[f32; 6]`: ax ay az gx gy gz |
+//! | sensor      | corrector              | raw      | output                        |
+//! |-------------|------------------------|----------|-------------------------------|
+//! | single axis | [`AxisCorrector<S>`]   | `S`      | `[f32; 1]`                    |
+//! | triad       | [`TriadCorrector<S>`]  | `[S; 3]` | `[f32; 3]`                    |
+//! | IMU         | [`ImuCorrector<S>`]    | `[S; 6]` | `[f32; 6]`: ax ay az gx gy gz |
+//!
+//! The sample type `S` ([`Sample`]) is the container the part delivers its codes in: `u16`,
+//! `i16` or `i32`. The calibration states it ([`SampleFormat`](crate::model::SampleFormat), in
+//! its rails); a corrector of another type refuses the calibration when it is built
+//! ([`Error::CorrectorWrongFormat`](crate::Error::CorrectorWrongFormat)), never per sample.
+//! Hosts holding every format's codes as `i32` use [`AnyImuCorrector`] and its siblings.
 //!
 //! On hard-float Arm targets (the Cortex-M4F), `ImuCorrector::correct` and `correct_batch` run
 //! hand-scheduled kernels for every IMU shape; they give the same bits as the compiled path
@@ -29,13 +35,17 @@ mod imu;
 mod kernel;
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 mod m4f;
+mod sample;
 mod single;
 mod triad;
+mod widened;
 
 pub use flags::Flags;
 pub use imu::{ImuCorrector, MAX_SAMPLE_RATE_HZ};
+pub use sample::Sample;
 pub use single::AxisCorrector;
 pub use triad::TriadCorrector;
+pub use widened::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, format_of};
 
 /// A corrected sample: `N` values in SI units (m/s^2, rad/s) and the flags that apply.
 ///

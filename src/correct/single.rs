@@ -2,7 +2,10 @@
 
 use super::environment::effective_set;
 use super::kernel::{Shape, linearize, search_window};
+use super::sample::{self, Sample};
 use super::{Corrected, Flags, factor_norm};
+use core::marker::PhantomData;
+
 use crate::Error;
 use crate::model::interval::{Bound, axis_bound};
 use crate::model::{Calibration, Channel, Environment, Rails, Sensor, SingleCovariance, SingleSet};
@@ -32,10 +35,7 @@ impl AxisKernel {
         nl: [0.0; 5],
         range_lo: f32::NEG_INFINITY,
         range_hi: f32::INFINITY,
-        rails: Rails {
-            lo: i32::MIN,
-            hi: i32::MAX,
-        },
+        rails: Rails::new(i32::MIN, i32::MAX),
     };
 
     fn new(set: &SingleSet, channel: &Channel, rails: &Rails) -> Self {
@@ -83,19 +83,22 @@ struct Source<'a> {
 
 /// Corrects a single-axis sensor (see the [module docs](super)).
 #[derive(Debug, Clone)]
-pub struct AxisCorrector<'a> {
+pub struct AxisCorrector<'a, S: Sample> {
     source: Option<Source<'a>>,
+    sample: PhantomData<fn(S)>,
     shape: Shape,
     kernel: AxisKernel,
     env_flags: Flags,
     covariance: Option<SingleCovariance>,
 }
 
-impl<'a> AxisCorrector<'a> {
-    /// A corrector for a single-axis calibration, at an unknown environment.
+impl<'a, S: Sample> AxisCorrector<'a, S> {
+    /// A corrector for a single-axis calibration whose samples come as `S`, at an unknown
+    /// environment.
     ///
     /// # Errors
-    /// [`Error::CorrectorWrongSensor`] when `cal` is not a single axis.
+    /// [`Error::CorrectorWrongSensor`] when `cal` is not a single axis;
+    /// [`Error::CorrectorWrongFormat`] when it states another sample format than `S`.
     pub fn new(cal: &'a Calibration) -> Result<Self, Error> {
         let data = cal.data();
         let Sensor::Single {
@@ -108,7 +111,9 @@ impl<'a> AxisCorrector<'a> {
         else {
             return Err(Error::CorrectorWrongSensor);
         };
+        sample::check::<S>(rails)?;
         let mut out = Self {
+            sample: PhantomData,
             source: Some(Source {
                 env: &data.environment,
                 sets,
@@ -131,6 +136,7 @@ impl<'a> AxisCorrector<'a> {
     pub const fn identity() -> Self {
         Self {
             source: None,
+            sample: PhantomData,
             shape: Shape::Identity,
             kernel: AxisKernel::IDENTITY,
             env_flags: Flags::NO_CALIBRATION,
@@ -165,20 +171,20 @@ impl<'a> AxisCorrector<'a> {
     /// Corrects one sample.
     #[must_use]
     #[inline]
-    pub fn correct(&self, raw: i32) -> Corrected<1> {
+    pub fn correct(&self, raw: S) -> Corrected<1> {
         let mut out = Corrected::default();
         self.correct_batch(core::slice::from_ref(&raw), core::slice::from_mut(&mut out));
         out
     }
 
     /// Corrects `raw` into `out` and returns how many samples were corrected.
-    pub fn correct_batch(&self, raw: &[i32], out: &mut [Corrected<1>]) -> usize {
-        let pairs = raw.iter().zip(out.iter_mut());
+    pub fn correct_batch(&self, raw: &[S], out: &mut [Corrected<1>]) -> usize {
+        let pairs = raw.iter().map(|r| r.code()).zip(out.iter_mut());
         let n = pairs.len();
         match self.shape {
-            Shape::Linear => pairs.for_each(|(r, o)| self.step::<false, false>(*r, o)),
-            Shape::Polynomial => pairs.for_each(|(r, o)| self.step::<true, false>(*r, o)),
-            Shape::Asymmetric => pairs.for_each(|(r, o)| self.step::<true, true>(*r, o)),
+            Shape::Linear => pairs.for_each(|(r, o)| self.step::<false, false>(r, o)),
+            Shape::Polynomial => pairs.for_each(|(r, o)| self.step::<true, false>(r, o)),
+            Shape::Asymmetric => pairs.for_each(|(r, o)| self.step::<true, true>(r, o)),
             Shape::Identity => pairs.for_each(|(r, o)| *o = self.passthrough(r)),
         }
         n
@@ -187,8 +193,9 @@ impl<'a> AxisCorrector<'a> {
     /// The 1-sigma calibration error for `raw` at the current environment; `None` without a
     /// covariance factor.
     #[must_use]
-    pub fn sigma(&self, raw: i32) -> Option<f32> {
+    pub fn sigma(&self, raw: S) -> Option<f32> {
         let cov = self.covariance.as_ref()?;
+        let raw = raw.code();
         let k = &self.kernel;
         let clamped = raw.max(k.rails.lo).min(k.rails.hi);
         let u = linearize::<true>(&k.nl, k.delta, clamped.wrapping_sub(k.base));
@@ -196,9 +203,9 @@ impl<'a> AxisCorrector<'a> {
     }
 
     #[inline(always)]
-    fn passthrough(&self, r: &i32) -> Corrected<1> {
+    fn passthrough(&self, r: i32) -> Corrected<1> {
         Corrected {
-            values: [*r as f32],
+            values: [r as f32],
             flags: self.env_flags,
         }
     }

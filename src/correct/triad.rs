@@ -2,7 +2,10 @@
 
 use super::environment::effective_set;
 use super::kernel::{Shape, TriadKernel};
+use super::sample::{self, Sample};
 use super::{Corrected, Flags, factor_norm};
+use core::marker::PhantomData;
+
 use crate::Error;
 use crate::model::interval::Bound;
 use crate::model::{Calibration, Channel, Environment, Rails, Sensor, TriadCovariance, TriadSet};
@@ -18,19 +21,22 @@ struct Source<'a> {
 
 /// Corrects an accelerometer or gyro triad (see the [module docs](super)).
 #[derive(Debug, Clone)]
-pub struct TriadCorrector<'a> {
+pub struct TriadCorrector<'a, S: Sample> {
     source: Option<Source<'a>>,
+    sample: PhantomData<fn(S)>,
     shape: Shape,
     kernel: TriadKernel,
     env_flags: Flags,
     covariance: Option<TriadCovariance>,
 }
 
-impl<'a> TriadCorrector<'a> {
-    /// A corrector for a triad calibration, at an unknown environment (see the module docs).
+impl<'a, S: Sample> TriadCorrector<'a, S> {
+    /// A corrector for a triad calibration whose samples come as `[S; 3]`, at an unknown
+    /// environment (see the module docs).
     ///
     /// # Errors
-    /// [`Error::CorrectorWrongSensor`] when `cal` is not a triad.
+    /// [`Error::CorrectorWrongSensor`] when `cal` is not a triad;
+    /// [`Error::CorrectorWrongFormat`] when it states another sample format than `S`.
     pub fn new(cal: &'a Calibration) -> Result<Self, Error> {
         let data = cal.data();
         let Sensor::Triad {
@@ -43,7 +49,9 @@ impl<'a> TriadCorrector<'a> {
         else {
             return Err(Error::CorrectorWrongSensor);
         };
+        sample::check::<S>(rails)?;
         let mut out = Self {
+            sample: PhantomData,
             source: Some(Source {
                 env: &data.environment,
                 sets,
@@ -66,6 +74,7 @@ impl<'a> TriadCorrector<'a> {
     pub const fn identity() -> Self {
         Self {
             source: None,
+            sample: PhantomData,
             shape: Shape::Identity,
             kernel: TriadKernel::IDENTITY,
             env_flags: Flags::NO_CALIBRATION,
@@ -101,7 +110,8 @@ impl<'a> TriadCorrector<'a> {
     /// Corrects one sample.
     #[must_use]
     #[inline]
-    pub fn correct(&self, raw: [i32; 3]) -> Corrected<3> {
+    pub fn correct(&self, raw: [S; 3]) -> Corrected<3> {
+        let raw = sample::codes(raw);
         let mut out = Corrected::default();
         let o = &mut out;
         match self.shape {
@@ -115,14 +125,14 @@ impl<'a> TriadCorrector<'a> {
 
     /// Corrects `raw` into `out`, sample by sample, and returns how many were corrected (the
     /// shorter of the two lengths).
-    pub fn correct_batch(&self, raw: &[[i32; 3]], out: &mut [Corrected<3>]) -> usize {
-        let pairs = raw.iter().zip(out.iter_mut());
+    pub fn correct_batch(&self, raw: &[[S; 3]], out: &mut [Corrected<3>]) -> usize {
+        let pairs = raw.iter().map(|r| sample::codes(*r)).zip(out.iter_mut());
         let n = pairs.len();
         match self.shape {
-            Shape::Linear => pairs.for_each(|(r, o)| self.step::<false, false>(*r, o)),
-            Shape::Polynomial => pairs.for_each(|(r, o)| self.step::<true, false>(*r, o)),
-            Shape::Asymmetric => pairs.for_each(|(r, o)| self.step::<true, true>(*r, o)),
-            Shape::Identity => pairs.for_each(|(r, o)| *o = self.passthrough(r)),
+            Shape::Linear => pairs.for_each(|(r, o)| self.step::<false, false>(r, o)),
+            Shape::Polynomial => pairs.for_each(|(r, o)| self.step::<true, false>(r, o)),
+            Shape::Asymmetric => pairs.for_each(|(r, o)| self.step::<true, true>(r, o)),
+            Shape::Identity => pairs.for_each(|(r, o)| *o = self.passthrough(&r)),
         }
         n
     }
@@ -130,8 +140,9 @@ impl<'a> TriadCorrector<'a> {
     /// The 1-sigma calibration error of each output for `raw` at the current environment, from
     /// the stored covariance factor; `None` when the calibration has none.
     #[must_use]
-    pub fn sigma(&self, raw: [i32; 3]) -> Option<[f32; 3]> {
+    pub fn sigma(&self, raw: [S; 3]) -> Option<[f32; 3]> {
         let cov = self.covariance.as_ref()?;
+        let raw = sample::codes(raw);
         let (w, _) = self.kernel.offsets(self.kernel.clamp(raw));
         let [u0, u1, u2] = self.kernel.linearized::<true>(w);
         let f = [1.0, u0, u1, u2];

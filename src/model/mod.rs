@@ -101,7 +101,44 @@ impl Span {
     }
 }
 
-/// The ADC's limits: a sample at or beyond a rail (`raw <= lo` or `raw >= hi`) is saturated.
+/// The container the part delivers its codes in, which a corrector's samples must have: the
+/// blob states it and a corrector for another refuses it when it is built
+/// ([`Error::CorrectorWrongFormat`]), never per sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SampleFormat {
+    /// `u16`: unsigned (offset-binary) codes of up to 16 bits.
+    U16,
+    /// `i16`: two's-complement codes of up to 16 bits.
+    I16,
+    /// `i32`: codes of up to 32 bits (signed) or 31 bits (unsigned).
+    I32,
+}
+
+impl SampleFormat {
+    /// The smallest and largest code the container holds.
+    #[must_use]
+    pub const fn limits(self) -> (i32, i32) {
+        match self {
+            SampleFormat::U16 => (0, u16::MAX as i32),
+            SampleFormat::I16 => (i16::MIN as i32, i16::MAX as i32),
+            SampleFormat::I32 => (i32::MIN, i32::MAX),
+        }
+    }
+
+    /// The container's name in Rust: `u16`, `i16` or `i32`.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            SampleFormat::U16 => "u16",
+            SampleFormat::I16 => "i16",
+            SampleFormat::I32 => "i32",
+        }
+    }
+}
+
+/// The converter's codes: the container they come in and the ADC's limits. A sample at or
+/// beyond a rail (`raw <= lo` or `raw >= hi`) is saturated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Rails {
@@ -109,27 +146,45 @@ pub struct Rails {
     pub lo: i32,
     /// Highest code; codes at or above it are saturated.
     pub hi: i32,
+    /// The container the samples come in; `lo` and `hi` lie within its limits.
+    pub format: SampleFormat,
 }
 
 impl Rails {
-    /// The rails of an unsigned `bits`-bit converter: `0` and `2^bits - 1`.
+    /// The rails `lo` and `hi` in the smallest container that holds them: `u16` when both
+    /// lie in `0..=65535`, else `i16` when both lie in `-32768..=32767`, else `i32`.
     #[must_use]
-    pub const fn unsigned(bits: u32) -> Self {
-        Self {
-            lo: 0,
-            hi: ((1i64 << bits) - 1) as i32,
-        }
+    pub const fn new(lo: i32, hi: i32) -> Self {
+        let format = if lo >= 0 && hi <= u16::MAX as i32 {
+            SampleFormat::U16
+        } else if lo >= i16::MIN as i32 && hi <= i16::MAX as i32 {
+            SampleFormat::I16
+        } else {
+            SampleFormat::I32
+        };
+        Self { lo, hi, format }
     }
 
-    /// The rails of a signed (two's-complement) `bits`-bit converter: `-2^(bits-1)` and
-    /// `2^(bits-1) - 1`.
+    /// The rails of an unsigned `bits`-bit converter (`bits` from 1 to 31): `0` and
+    /// `2^bits - 1`, in `u16` up to 16 bits and `i32` above.
+    #[must_use]
+    pub const fn unsigned(bits: u32) -> Self {
+        Self::new(0, ((1i64 << bits) - 1) as i32)
+    }
+
+    /// The rails of a signed (two's-complement) `bits`-bit converter (`bits` from 2 to 32):
+    /// `-2^(bits-1)` and `2^(bits-1) - 1`, in `i16` up to 16 bits and `i32` above.
     #[must_use]
     pub const fn signed(bits: u32) -> Self {
         let half = 1i64 << (bits - 1);
-        Self {
-            lo: -half as i32,
-            hi: (half - 1) as i32,
-        }
+        Self::new(-half as i32, (half - 1) as i32)
+    }
+
+    /// The same rails for samples delivered in `format` (a 12-bit unsigned converter read
+    /// into `i16`, say). Validation refuses rails beyond the container's limits.
+    #[must_use]
+    pub const fn in_format(self, format: SampleFormat) -> Self {
+        Self { format, ..self }
     }
 
     /// True when `raw` is at or beyond a rail.
@@ -265,6 +320,22 @@ pub enum Sensor {
 }
 
 impl Sensor {
+    /// The rails of its codes (the accelerometer's for an IMU).
+    #[must_use]
+    pub const fn rails(&self) -> Rails {
+        match self {
+            Sensor::Single { rails, .. } | Sensor::Triad { rails, .. } => *rails,
+            Sensor::Imu { accel_rails, .. } => *accel_rails,
+        }
+    }
+
+    /// The sample format its codes come in (for an IMU, validation makes the gyro's the same
+    /// as the accelerometer's).
+    #[must_use]
+    pub const fn sample_format(&self) -> SampleFormat {
+        self.rails().format
+    }
+
     /// Number of coefficient sets.
     #[must_use]
     pub fn set_count(&self) -> usize {
@@ -305,7 +376,7 @@ impl CalibrationData {
             environment: Environment::fixed(Span::new(0.0, 0.0), Span::new(0.0, 0.0)),
             sensor: Sensor::Single {
                 quantity: Quantity::Acceleration,
-                rails: Rails { lo: 0, hi: 0 },
+                rails: Rails::new(0, 0),
                 channel: Channel {
                     center: 0.0,
                     range: Span::new(0.0, 0.0),

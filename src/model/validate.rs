@@ -75,6 +75,9 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
         } => {
             validate_rails(accel_rails, Part::Accelerometer)?;
             validate_rails(gyro_rails, Part::Gyro)?;
+            if accel_rails.format != gyro_rails.format {
+                return Err(Error::InvalidMixedFormats);
+            }
             validate_channels(accel, accel_rails, Part::Accelerometer)?;
             validate_channels(gyro, gyro_rails, Part::Gyro)?;
             if let Some(arm) = lever_arm {
@@ -184,7 +187,8 @@ fn validate_environment(env: &Environment) -> Result<(), Error> {
 }
 
 fn validate_rails(rails: &Rails, part: Part) -> Result<(), Error> {
-    if i64::from(rails.lo) + 1 >= i64::from(rails.hi) {
+    let (min, max) = rails.format.limits();
+    if i64::from(rails.lo) + 1 >= i64::from(rails.hi) || rails.lo < min || rails.hi > max {
         return Err(Error::InvalidRails { part });
     }
     Ok(())

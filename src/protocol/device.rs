@@ -7,7 +7,7 @@ use super::{
     UnitSensor,
 };
 use crate::blob::{self, MAX_BLOB_LEN};
-use crate::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
+use crate::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
 use crate::model::{Calibration, CalibrationData, Sensor, Serial};
 use crate::store::{SlotInfo, Store, StoreError};
 
@@ -227,7 +227,7 @@ impl<F: NorFlash> Device<F> {
         let mut out = heapless::Vec::new();
         match &cal.data().sensor {
             Sensor::Single { .. } => {
-                let Ok(mut c) = AxisCorrector::new(cal) else {
+                let Ok(mut c) = AnyAxisCorrector::new(cal) else {
                     return Response::Error(Status::NoCalibration);
                 };
                 c.set_environment(temperature, voltage);
@@ -238,7 +238,7 @@ impl<F: NorFlash> Device<F> {
                 }
             }
             Sensor::Triad { .. } => {
-                let Ok(mut c) = TriadCorrector::new(cal) else {
+                let Ok(mut c) = AnyTriadCorrector::new(cal) else {
                     return Response::Error(Status::NoCalibration);
                 };
                 c.set_environment(temperature, voltage);
@@ -249,7 +249,7 @@ impl<F: NorFlash> Device<F> {
                 }
             }
             Sensor::Imu { .. } => {
-                let Ok(mut c) = ImuCorrector::new(cal, VECTOR_RATE_HZ) else {
+                let Ok(mut c) = AnyImuCorrector::new(cal, VECTOR_RATE_HZ) else {
                     return Response::Error(Status::NoCalibration);
                 };
                 c.set_environment(temperature, voltage);

@@ -12,7 +12,7 @@ use core::hint::black_box;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use spincal::blob;
-use spincal::correct::{Corrected, ImuCorrector};
+use spincal::correct::{Corrected, ImuCorrector, Sample};
 use spincal::model::{Calibration, CalibrationData, Sensor};
 use spincal_firmware::{stack, timer};
 
@@ -20,9 +20,30 @@ const N: usize = 256;
 
 static IMU_BLOB: &[u8] = include_bytes!("../../../host-tests/golden/imu.blob");
 
-/// Raw samples around the zero-input codes (well inside the calibrated range), or all at the
-/// rails when `saturated`.
-fn samples(saturated: bool) -> [[i32; 6]; N] {
+/// The linear and the full (polynomial) example for samples delivered as `i16` and as `i32`
+/// (the golden cases of those formats: the unsigned examples moved to two's complement).
+static FORMAT_BLOBS: [([&str; 2], &[u8]); 4] = [
+    (
+        ["imu_linear_i16_batch", "imu_linear_i16_call"],
+        include_bytes!("../../../host-tests/golden/imu_linear_i16.blob"),
+    ),
+    (
+        ["imu_linear_i32_batch", "imu_linear_i32_call"],
+        include_bytes!("../../../host-tests/golden/imu_linear_i32.blob"),
+    ),
+    (
+        ["imu_full_i16_batch", "imu_full_i16_call"],
+        include_bytes!("../../../host-tests/golden/imu_polynomial_i16.blob"),
+    ),
+    (
+        ["imu_full_i32_batch", "imu_full_i32_call"],
+        include_bytes!("../../../host-tests/golden/imu_polynomial_i32.blob"),
+    ),
+];
+
+/// Raw unsigned 16-bit samples around the zero-input codes (well inside the calibrated range),
+/// or all at the rails when `saturated`.
+fn samples(saturated: bool) -> [[u16; 6]; N] {
     let mut state: u32 = 0x1234_5678;
     core::array::from_fn(|i| {
         core::array::from_fn(|a| {
@@ -31,10 +52,15 @@ fn samples(saturated: bool) -> [[i32; 6]; N] {
                 if (i + a) % 2 == 0 { 0 } else { 65_535 }
             } else {
                 let center = [33_109, 33_329, 36_427, 32_786, 32_430, 32_517][a];
-                center + ((state >> 16) as i32 % 4_000) - 2_000
+                center + ((state >> 16) as u16 % 4_000) - 2_000
             }
         })
     })
+}
+
+/// The same samples in two's complement (`u - 32768`).
+fn signed<S: Sample>(raw: &[[u16; 6]; N], convert: impl Fn(i32) -> S) -> [[S; 6]; N] {
+    core::array::from_fn(|i| core::array::from_fn(|a| convert(i32::from(raw[i][a]) - 32_768)))
 }
 
 fn instructions_per(ticks: u32, ops: usize) -> (u64, u64) {
@@ -57,16 +83,20 @@ fn report(name: &str, ticks: u32, ops: usize) {
 }
 
 #[inline(never)]
-fn batch(c: &mut ImuCorrector<'_>, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> usize {
+fn batch<S: Sample>(
+    c: &mut ImuCorrector<'_, S>,
+    raw: &[[S; 6]],
+    out: &mut [Corrected<6>],
+) -> usize {
     c.correct_batch(raw, out)
 }
 
 #[inline(never)]
-fn one(c: &mut ImuCorrector<'_>, raw: [i32; 6]) -> Corrected<6> {
+fn one<S: Sample>(c: &mut ImuCorrector<'_, S>, raw: [S; 6]) -> Corrected<6> {
     c.correct(raw)
 }
 
-fn bench_batch(name: &str, c: &mut ImuCorrector<'_>, raw: &[[i32; 6]; N]) {
+fn bench_batch<S: Sample>(name: &str, c: &mut ImuCorrector<'_, S>, raw: &[[S; 6]; N]) {
     let mut out = [Corrected::<6>::default(); N];
     // Warm up (the first lever-arm sample primes the rate derivative).
     batch(c, black_box(raw), &mut out);
@@ -77,7 +107,7 @@ fn bench_batch(name: &str, c: &mut ImuCorrector<'_>, raw: &[[i32; 6]; N]) {
     report(name, t0.wrapping_sub(t1), n);
 }
 
-fn bench_one(name: &str, c: &mut ImuCorrector<'_>, raw: &[[i32; 6]; N]) {
+fn bench_one<S: Sample>(name: &str, c: &mut ImuCorrector<'_, S>, raw: &[[S; 6]; N]) {
     let mut out = [Corrected::<6>::default(); N];
     let t0 = timer::now();
     for (r, o) in raw.iter().zip(out.iter_mut()) {
@@ -180,17 +210,61 @@ fn main() -> ! {
     });
     let (_, env_stack) = stack::high_water(|| c.set_environment(black_box(41.0), 3.3));
     black_box(&one_out);
+    // The linear and the full kernel for samples delivered as `i16` and `i32`.
+    let inside_i16 = signed(&inside, |x| x as i16);
+    let inside_i32 = signed(&inside, |x| x);
+    for (names, bytes) in FORMAT_BLOBS {
+        let Ok(cal) = blob::decode(bytes) else {
+            fail(names[0])
+        };
+        let env = if names[0].starts_with("imu_linear") {
+            25.0
+        } else {
+            22.5
+        };
+        if names[0].contains("i16") {
+            bench_format(names, &cal, env, &inside_i16);
+        } else {
+            bench_format(names, &cal, env, &inside_i32);
+        }
+    }
+    // A fresh corrector's first sample takes the slow path (it primes the lever-arm state).
+    let Ok(mut fresh) = ImuCorrector::<u16>::new(&full, 1000.0) else {
+        fail("full corrector")
+    };
+    fresh.set_environment(22.5, 3.3);
+    let (_, first_stack) = stack::high_water(|| {
+        one_out = one(&mut fresh, black_box(inside[3]));
+    });
+    black_box(&one_out);
     hprintln!("stack correct {}", correct_stack);
+    hprintln!("stack correct_first_sample {}", first_stack);
     hprintln!("stack correct_batch {}", batch_stack);
     hprintln!("stack set_environment {}", env_stack);
     hprintln!("stack decode {}", decode_stack);
     hprintln!("size calibration {}", core::mem::size_of::<Calibration>());
     hprintln!(
         "size imu_corrector {}",
-        core::mem::size_of::<ImuCorrector<'_>>()
+        core::mem::size_of::<ImuCorrector<'_, u16>>()
     );
     hprintln!("size imu_blob {}", IMU_BLOB.len());
     spincal_firmware::exit(true)
+}
+
+/// `correct_batch` and `correct` of `cal` (samples `[S; 6]`) at `temperature`, under the
+/// names `[batch, call]`.
+fn bench_format<S: Sample>(
+    [batch_name, call_name]: [&str; 2],
+    cal: &Calibration,
+    temperature: f32,
+    raw: &[[S; 6]; N],
+) {
+    let Ok(mut c) = ImuCorrector::<S>::new(cal, 1000.0) else {
+        fail(batch_name)
+    };
+    c.set_environment(temperature, 3.3);
+    bench_batch(batch_name, &mut c, raw);
+    bench_one(call_name, &mut c, raw);
 }
 
 fn fail(what: &str) -> ! {

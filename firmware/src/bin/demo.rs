@@ -57,8 +57,8 @@ fn main() -> ! {
             gyro[i - 3].center
         }
     });
-    let Ok(mut imu) = ImuCorrector::new(&cal, RATE_HZ) else {
-        hprintln!("not an IMU calibration");
+    let Ok(mut imu) = ImuCorrector::<u16>::new(&cal, RATE_HZ) else {
+        hprintln!("not an IMU calibration of unsigned 16-bit samples");
         spincal_firmware::exit(false)
     };
 
@@ -92,14 +92,14 @@ fn main() -> ! {
             }
             None => truth[i],
         });
-        let raw: [i32; 6] = core::array::from_fn(|i| {
+        let raw: [u16; 6] = core::array::from_fn(|i| {
             let counts = if i < 3 {
                 ACCEL_COUNTS_PER_MS2
             } else {
                 GYRO_COUNTS_PER_RADS
             };
             let code = centers[i] + sensed[i] * counts;
-            libm::roundf(libm::fminf(libm::fmaxf(code, 0.0), 65_535.0)) as i32
+            libm::roundf(libm::fminf(libm::fmaxf(code, 0.0), 65_535.0)) as u16
         });
         let out = imu.correct(raw);
         for (bit, c) in counts.iter_mut().enumerate() {

@@ -1,14 +1,15 @@
 //! How [`ImuCorrector`] uses the Cortex-M4F kernels ([`m4f`](super::super::m4f)): the
 //! coefficient block is built with the environment, `correct` runs the kernel on one sample and
 //! `correct_batch` on the whole batch; a sample outside a window, and any outside samples after
-//! it, take the Rust slow path.
+//! it, take the Rust slow path. The kernel is the one for the corrector's sample type.
 
 use super::super::Corrected;
 use super::super::kernel::Shape;
 use super::super::m4f::{self, Full, FullBlock, Hot, LinearBlock};
+use super::super::sample::{self, Sample};
 use super::{ImuCorrector, split};
 
-impl ImuCorrector<'_> {
+impl<S: Sample> ImuCorrector<'_, S> {
     /// Builds the kernel's block for the current effective coefficients (none for a shape
     /// without a kernel).
     pub(super) fn refresh_m4f(&mut self) {
@@ -17,7 +18,7 @@ impl ImuCorrector<'_> {
             (Shape::Linear, _) => Hot::Linear(LinearBlock::new(&self.accel, &self.gyro, flags)),
             (shape @ (Shape::Polynomial | Shape::Asymmetric), lever) => Hot::Full(
                 self.full_block(),
-                Full::new(shape == Shape::Asymmetric, lever),
+                Full::new::<S>(shape == Shape::Asymmetric, lever),
             ),
             _ => Hot::None,
         };
@@ -40,7 +41,7 @@ impl ImuCorrector<'_> {
     /// kernel. The lever-arm state (previous rate and lever term, whether the accelerometer
     /// window is open) lives in the corrector and is handed to the kernel's block and back.
     #[inline(always)]
-    fn kernel(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> Option<usize> {
+    fn kernel(&mut self, raw: &[[S; 6]], out: &mut [Corrected<6>]) -> Option<usize> {
         match &mut self.hot {
             Hot::None => None,
             Hot::Linear(block) => Some(m4f::linear(block, raw, out)),
@@ -64,12 +65,12 @@ impl ImuCorrector<'_> {
 
     /// `correct` on the kernel; false when the shape has none.
     #[inline(always)]
-    pub(super) fn one_m4f(&mut self, raw: [i32; 6], out: &mut Corrected<6>) -> bool {
+    pub(super) fn one_m4f(&mut self, raw: [S; 6], out: &mut Corrected<6>) -> bool {
         match self.kernel(core::slice::from_ref(&raw), core::slice::from_mut(out)) {
             None => false,
             Some(1) => true,
             Some(_) => {
-                self.slow_m4f(raw, out);
+                self.slow_m4f(sample::codes(raw), out);
                 true
             }
         }
@@ -78,7 +79,7 @@ impl ImuCorrector<'_> {
     /// `correct_batch` on the kernel; false (nothing done) when the shape has none. A run of
     /// samples outside the windows (a saturated burst) stays on the slow path until a sample is
     /// inside again.
-    pub(super) fn batch_m4f(&mut self, raw: &[[i32; 6]], out: &mut [Corrected<6>]) -> bool {
+    pub(super) fn batch_m4f(&mut self, raw: &[[S; 6]], out: &mut [Corrected<6>]) -> bool {
         if matches!(self.hot, Hot::None) {
             return false;
         }
@@ -91,7 +92,7 @@ impl ImuCorrector<'_> {
                 if self.inside(r) {
                     break;
                 }
-                self.slow_m4f(*r, o);
+                self.slow_m4f(sample::codes(*r), o);
                 slow += 1;
             }
             if slow == 0 {
@@ -103,8 +104,8 @@ impl ImuCorrector<'_> {
 
     /// The fast path's window test.
     #[inline(always)]
-    fn inside(&self, raw: &[i32; 6]) -> bool {
-        let (ra, rg) = split(*raw);
+    fn inside(&self, raw: &[S; 6]) -> bool {
+        let (ra, rg) = split(sample::codes(*raw));
         let (_, acc_a) = self.accel.offsets(ra);
         let (_, acc_g) = self.gyro.offsets(rg);
         (acc_a < self.accel.limit) & (acc_g < self.gyro.limit)
@@ -115,11 +116,11 @@ impl ImuCorrector<'_> {
 /// (handed in and back) and the accelerometer window's limit (0 until the lever state is
 /// primed and inside its bound).
 #[inline(always)]
-fn with_lever_state(
+fn with_lever_state<S: Sample>(
     block: &mut FullBlock,
     (prev_rate, prev_lever, accel_limit): (&mut [f32; 3], &mut [f32; 3], u32),
     kind: Full,
-    raw: &[[i32; 6]],
+    raw: &[[S; 6]],
     out: &mut [Corrected<6>],
 ) -> usize {
     block.prev_rate = *prev_rate;
@@ -132,11 +133,11 @@ fn with_lever_state(
 }
 
 /// Both slices without their first `k` items.
-fn after<'r, 'o>(
-    raw: &'r [[i32; 6]],
+fn after<'r, 'o, S>(
+    raw: &'r [[S; 6]],
     out: &'o mut [Corrected<6>],
     k: usize,
-) -> (&'r [[i32; 6]], &'o mut [Corrected<6>]) {
+) -> (&'r [[S; 6]], &'o mut [Corrected<6>]) {
     (
         raw.get(k..).unwrap_or_default(),
         out.get_mut(k..).unwrap_or_default(),

@@ -1,8 +1,11 @@
 //! Reading a recording: one 7-column text file (timestamp and six counts) of 10^6 lines,
 //! whitespace-separated and as CSV, streamed by `obs::layout::read` (what `calflash selfcal`,
-//! `allan` and `apply` read through), against the reference `polars.read_csv` on one thread
-//! (`POLARS_MAX_THREADS=1`) on the same files in the same run, when Python has polars (a
-//! notice otherwise). Run with `cargo bench -p calflash --bench reader`.
+//! `allan` and `apply` read through); and an observation file, a CSV of 10^6 rows of a
+//! response and five inputs with nine digits each (the design of `calflash fit`'s benchmark),
+//! read by `obs::read_columns` (what `fit` and `calibrate` read through). Each against the
+//! reference `polars.read_csv` on one thread (`POLARS_MAX_THREADS=1`) on the same file in the
+//! same run, when Python has polars (a notice otherwise). calflash reads with every core (two
+//! on the machine of `BENCHMARKS.md`). Run with `cargo bench -p calflash --bench reader`.
 
 use std::hint::black_box;
 use std::io::Write as _;
@@ -11,6 +14,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use calflash::obs::layout::{self, Holds, Keep};
+use calflash::obs::{Format, read_columns};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 const LINES: usize = 1_000_000;
@@ -47,17 +51,48 @@ fn file(sep: &str) -> PathBuf {
     path
 }
 
+/// The observation file: a header `y,a,b,c,d,e`, then 10^6 rows of nine-digit decimals.
+fn observations() -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("observations-1e6.csv");
+    if path.is_file() {
+        return path;
+    }
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut uniform = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        #[allow(clippy::cast_precision_loss)]
+        let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+        u * 2.0 - 1.0
+    };
+    let mut out = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+    writeln!(out, "y,a,b,c,d,e").unwrap();
+    for _ in 0..LINES {
+        let v: [f64; 5] = std::array::from_fn(|_| uniform());
+        let y = 2.5 + 0.4 * v[0] - 0.3 * v[1] + 0.05 * v[2] + 1e-3 * uniform();
+        write!(out, "{y:.9}").unwrap();
+        for x in v {
+            write!(out, ",{x:.9}").unwrap();
+        }
+        writeln!(out).unwrap();
+    }
+    out.flush().unwrap();
+    path
+}
+
 /// polars' single-thread rate on `path`, MB/s, or why it could not be measured.
-fn polars(path: &Path, sep: &str) -> Result<f64, String> {
+fn polars(path: &Path, sep: &str, header: bool) -> Result<f64, String> {
     let script = format!(
         "import time, polars as pl\n\
          best = 1e9\n\
          for _ in range(5):\n    \
              t = time.perf_counter()\n    \
-             pl.read_csv({path:?}, separator={sep:?}, has_header=False)\n    \
+             pl.read_csv({path:?}, separator={sep:?}, has_header={header})\n    \
              best = min(best, time.perf_counter() - t)\n\
          print(best)",
         path = path.display().to_string(),
+        header = if header { "True" } else { "False" },
     );
     let out = Command::new("python3")
         .args(["-c", &script])
@@ -79,18 +114,34 @@ fn polars(path: &Path, sep: &str) -> Result<f64, String> {
     Ok(std::fs::metadata(path).unwrap().len() as f64 / secs / 1e6)
 }
 
-/// calflash's best rate over five reads, MB/s, measured as polars' is.
-fn ours(path: &Path) -> f64 {
+/// calflash's best rate over five reads by `read`, MB/s, measured as polars' is.
+fn ours(path: &Path, read: impl Fn(&Path)) -> f64 {
     let best = (0..5)
         .map(|_| {
             let t = Instant::now();
-            black_box(layout::read(path, Holds::Both, Keep::Both).unwrap());
+            read(path);
             t.elapsed().as_secs_f64()
         })
         .fold(f64::INFINITY, f64::min);
     #[allow(clippy::cast_precision_loss)]
     let bytes = std::fs::metadata(path).unwrap().len() as f64;
     bytes / best / 1e6
+}
+
+fn compare(what: &str, path: &Path, sep: &str, header: bool, read: impl Fn(&Path)) {
+    let bytes = std::fs::metadata(path).unwrap().len();
+    let mine = ours(path, read);
+    match polars(path, sep, header) {
+        Ok(theirs) => println!(
+            "reader, {what}: calflash {mine:.0} MB/s, polars.read_csv on one thread \
+             {theirs:.0} MB/s (best of 5 each, {bytes} bytes): {:.2}x",
+            mine / theirs
+        ),
+        Err(why) => println!(
+            "reader, {what}: calflash {mine:.0} MB/s; the reference polars.read_csv could \
+             not be measured here: {why}"
+        ),
+    }
 }
 
 fn reader(c: &mut Criterion) {
@@ -109,19 +160,20 @@ fn reader(c: &mut Criterion) {
         g.bench_function(format!("10^6 lines x 7 fields, {what}, gyro only"), |b| {
             b.iter(|| black_box(layout::read(&path, Holds::Both, Keep::Gyro).unwrap()));
         });
-        let mine = ours(&path);
-        match polars(&path, sep) {
-            Ok(theirs) => println!(
-                "reader, {what}: calflash {mine:.0} MB/s, polars.read_csv on one thread \
-                 {theirs:.0} MB/s (best of 5 each, {bytes} bytes): {:.2}x",
-                mine / theirs
-            ),
-            Err(why) => println!(
-                "reader, {what}: calflash {mine:.0} MB/s; the reference polars.read_csv could \
-                 not be measured here: {why}"
-            ),
-        }
+        compare(what, &path, sep, false, |p| {
+            black_box(layout::read(p, Holds::Both, Keep::Both).unwrap());
+        });
     }
+    let path = observations();
+    let names: Vec<String> = ["y", "a", "b", "c", "d", "e"].map(String::from).to_vec();
+    let read = |p: &Path| {
+        black_box(read_columns(p, &names, Format::Auto).unwrap());
+    };
+    g.throughput(Throughput::Bytes(std::fs::metadata(&path).unwrap().len()));
+    g.bench_function("observations, 10^6 rows x 6 columns, csv", |b| {
+        b.iter(|| read(&path));
+    });
+    compare("observations, csv", &path, ",", true, read);
     g.finish();
 }
 

@@ -332,20 +332,33 @@ pub fn run(req: &Request) -> Result<Regression, RegressionError> {
             protected: e.protected,
         });
     }
-    let design = formula.design(&table);
-    let f = fit_design(&design, &formula, &table, opts)?;
-
+    // The design and the fit take one core: the inputs' orders for the runs tests are sorted
+    // on the other.
+    let inputs: Vec<String> = formula.columns().into_iter().skip(1).collect();
+    let ((design, f), orders) = rayon::join(
+        || {
+            let design = formula.design(&table);
+            let f = fit_design(&design, &formula, &table, opts);
+            (design, f)
+        },
+        || {
+            use rayon::prelude::*;
+            inputs
+                .par_iter()
+                .map(|v| pattern::order_by(table.column(v).unwrap_or_default()))
+                .collect::<Vec<_>>()
+        },
+    );
+    let f = f?;
+    let by_input = inputs
+        .iter()
+        .zip(&orders)
+        .map(|(v, order)| (v.clone(), pattern::runs_test(&f.residuals, order)));
     let mut runs = vec![("data order".to_string(), {
         let order: Vec<usize> = (0..f.n).collect();
         pattern::runs_test(&f.residuals, &order)
     })];
-    for v in formula.columns().into_iter().skip(1) {
-        let col = table.column(&v).unwrap_or_default();
-        runs.push((
-            v.clone(),
-            pattern::runs_test(&f.residuals, &pattern::order_by(col)),
-        ));
-    }
+    runs.extend(by_input);
     let warnings = warnings(&f, &runs);
 
     let predictions = req

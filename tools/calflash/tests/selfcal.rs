@@ -376,7 +376,7 @@ fn compare_reads_selfcal_records() {
 #[test]
 fn the_selfcal_blob_carries_the_calibration_uncertainty() {
     use calflash::sensor::selfcal as build;
-    use spincal::correct::ImuCorrector;
+    use spincal::correct::AnyImuCorrector;
     use spincal::model::{Calibration, Identity, Serial, Span};
 
     let truth = Tumble::default();
@@ -398,7 +398,7 @@ fn the_selfcal_blob_carries_the_calibration_uncertainty() {
         Span::new(3.0, 3.6),
     );
     let cal = Calibration::new(data).unwrap();
-    let mut dev = ImuCorrector::new(&cal, rec.rate() as f32).unwrap();
+    let mut dev = AnyImuCorrector::new(&cal, rec.rate() as f32).unwrap();
     dev.set_environment(25.0, 3.3);
     let ca = c.accel.covariance.as_ref().unwrap();
     let center = c.accel.model.center.map(|x| x.round() as i32);
@@ -562,4 +562,137 @@ fn a_fit_that_cannot_be_trusted_is_rejected_and_writes_no_blob() {
     let blob = std::fs::read(dir.path().join("r.blob")).unwrap();
     let cal = spincal::blob::decode(&blob).unwrap();
     assert!(cal.data().identity.fit_rejected);
+}
+
+/// Still detection, the rest check and the fits from 10 Hz to 10 kHz: every pose is found and
+/// the unit comes back as well at each rate (the 10 kHz tumble is shorter, to keep the test
+/// quick: 8.2 x 10^5 samples).
+#[test]
+fn poses_are_found_from_10_hz_to_10_khz() {
+    for (rate, rest, hold, turn, poses) in [
+        (10.0, 30.0, 4.0, 2.0, 36),
+        (100.0, 30.0, 4.0, 2.0, 36),
+        (1_000.0, 30.0, 4.0, 2.0, 36),
+        (10_000.0, 10.0, 2.0, 1.0, 24),
+    ] {
+        let truth = Tumble {
+            rate,
+            rest,
+            hold,
+            turn,
+            poses,
+            ..Tumble::default()
+        };
+        let rec = truth.record();
+        let options = Options {
+            init_rest: rest,
+            ..opts()
+        };
+        let c = selfcal::calibrate(&rec, &options).unwrap_or_else(|e| panic!("{rate} Hz: {e}"));
+        let angles = c.gyro.angles.iter().map(|a| a * a).sum::<f64>() / c.gyro.angles.len() as f64;
+        println!(
+            "{rate} Hz: {} poses, {} rotations, |a| - g {:.2e} m/s^2 RMS, gyro {:.3} deg RMS",
+            c.poses.len(),
+            c.rotations.len(),
+            c.accel.rms(),
+            angles.sqrt().to_degrees()
+        );
+        assert_eq!(
+            c.poses.len(),
+            poses + 1,
+            "{rate} Hz: the rest and every pose"
+        );
+        assert_eq!(c.rotations.len(), poses, "{rate} Hz");
+        // Each pose's mean holds hold x rate samples of 3 counts of noise (about 1/410 m/s^2
+        // a count): |a| - g follows it down to what the model leaves.
+        let noise = 3.0 / 410.0 / (hold * rate).sqrt();
+        assert!(
+            c.accel.rms() < (4.0 * noise).max(1e-4),
+            "{rate} Hz: {}",
+            c.accel.rms()
+        );
+        assert!(angles.sqrt().to_degrees() < 0.1, "{rate} Hz: {angles}");
+    }
+}
+
+/// `apply --recording` takes the columns by header name as `selfcal` does, and a temperature
+/// column sets each sample's temperature: samples logged beyond the calibrated span are flagged.
+#[test]
+fn apply_takes_a_recording_by_column_names_with_its_temperature() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let truth = Tumble::default();
+    let rec = truth.record();
+    let (a, g) = write(&rec, d);
+    let (code, said, err) = calflash(
+        d,
+        &[
+            "selfcal",
+            a.to_str().unwrap(),
+            g.to_str().unwrap(),
+            "--g",
+            "9.81",
+            "--serial",
+            "SIM-7",
+            "--no-db",
+            "--blob",
+            "u.blob",
+        ],
+    );
+    assert_eq!(code, 0, "{said}{err}");
+    // The same samples under names no reader knows, the gyro first, and a die temperature
+    // that leaves the calibrated span (about 25 C here) in the second half.
+    let mut text = String::from("stamp,R1,R2,R3,A1,A2,A3,die\n");
+    let n = rec.t.len();
+    for (k, ((t, acc), gyro)) in rec.t.iter().zip(&rec.acc).zip(&rec.gyro).enumerate() {
+        let die = if k < n / 2 { 25.0 } else { 150.0 };
+        text.push_str(&format!(
+            "{:.0},{},{},{},{},{},{},{die}\n",
+            t * 1e3,
+            gyro[0],
+            gyro[1],
+            gyro[2],
+            acc[0],
+            acc[1],
+            acc[2]
+        ));
+    }
+    std::fs::write(d.join("named.csv"), text).unwrap();
+    let apply = |columns: &str| {
+        calflash(
+            d,
+            &[
+                "apply",
+                "--recording",
+                "named.csv",
+                "--blob",
+                "u.blob",
+                "--columns",
+                columns,
+                "-o",
+                "out.csv",
+            ],
+        )
+    };
+    let (code, said, err) = apply("t=stamp:ms,ax=A1,ay=A2,az=A3,gx=R1,gy=R2,gz=R3,temp=die");
+    assert_eq!(code, 0, "{said}{err}");
+    let out = std::fs::read_to_string(d.join("out.csv")).unwrap();
+    let rows: Vec<&str> = out.lines().skip(1).collect();
+    assert_eq!(rows.len(), n);
+    let clamped = |row: &str| row.contains("temperature");
+    assert!(!clamped(rows[n / 4]), "{}", rows[n / 4]);
+    assert!(clamped(rows[3 * n / 4]), "{}", rows[3 * n / 4]);
+    // At rest the corrected accelerometer reads gravity.
+    let a: Vec<f64> = rows[10]
+        .split(',')
+        .skip(2)
+        .take(3)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!((norm - 9.81).abs() < 0.02, "{}", rows[10]);
+    // A role that is not one is refused with the ones that are.
+    let (code, _, err) = apply("t=stamp:ms,bx=A1");
+    assert_eq!(code, 1);
+    assert!(err.contains("--columns: `bx=A1`"), "{err}");
 }

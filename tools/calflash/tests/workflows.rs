@@ -13,7 +13,7 @@ use calflash::sim::{
     truth::{ImuTruth, SingleTruth, TriadTruth},
 };
 use spincal::blob;
-use spincal::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
+use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
 use spincal::model::Quantity;
 
 fn write(dir: &std::path::Path, obs: &sim::Observations) -> std::path::PathBuf {
@@ -89,7 +89,7 @@ fn single_axis_recovers_truth_across_a_temperature_table() {
     }
     // Through the device.
     let cal = blob::decode(&c.blob).unwrap();
-    let mut dev = AxisCorrector::new(&cal).unwrap();
+    let mut dev = AnyAxisCorrector::new(&cal).unwrap();
     for t in [-40.0, 0.0, 25.0, 60.0, 85.0] {
         dev.set_environment(t as f32, 5.0);
         for k in 0..=40 {
@@ -145,7 +145,7 @@ fn asymmetry_is_found_and_applied() {
         .unwrap();
     assert!(d.kept && d.test.p < 1e-4, "{}: p = {}", d.name, d.test.p);
     let cal = blob::decode(&c.blob).unwrap();
-    let mut dev = AxisCorrector::new(&cal).unwrap();
+    let mut dev = AnyAxisCorrector::new(&cal).unwrap();
     dev.set_environment(25.0, 5.0);
     for x in [-9.0, -4.0, 0.0, 3.0, 9.0] {
         let raw = truth.output(x, 0.0, 0.0, 25.0, 5.0, 0.0).round() as i32;
@@ -261,7 +261,7 @@ fn imu_on_tumble_rate_table_and_centrifuge_with_lever_arms() {
     }
     // Through the device: a still unit and a steady spin.
     let cal = blob::decode(&c.blob).unwrap();
-    let mut dev = ImuCorrector::new(&cal, 1000.0).unwrap();
+    let mut dev = AnyImuCorrector::new(&cal, 1000.0).unwrap();
     dev.set_environment(25.0, 3.3);
     for (f, w) in [
         ([0.0, 0.0, 9.80665], [0.0, 0.0, 0.0]),
@@ -319,7 +319,7 @@ fn lone_accelerometer_triad_with_own_axis_nonlinearity() {
     .unwrap();
     check_triad(&c, &truth, ["f_x", "f_y", "f_z"], 0);
     let cal = blob::decode(&c.blob).unwrap();
-    let mut dev = TriadCorrector::new(&cal).unwrap();
+    let mut dev = AnyTriadCorrector::new(&cal).unwrap();
     dev.set_environment(25.0, 3.3);
     for f in [[30.0, 0.0, 9.8], [-20.0, 10.0, -9.8], [0.0, -35.0, 0.0]] {
         let raw = truth

@@ -74,10 +74,7 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
         .output("--json", args.json.as_deref())
         .check()?;
     let opts = recording::Options {
-        rails: Rails {
-            lo: i32::MIN,
-            hi: i32::MAX,
-        },
+        rails: Rails::new(i32::MIN, i32::MAX),
         rate: args.rate,
         // Only the sensor asked for is read and kept.
         keep: match args.sensor {

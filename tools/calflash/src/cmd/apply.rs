@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use super::values;
 use clap::Args;
 use spincal::blob;
-use spincal::correct::{AxisCorrector, Flags, ImuCorrector, TriadCorrector};
+use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Flags};
 use spincal::model::Sensor;
 
 use crate::columns as col;
@@ -32,7 +32,9 @@ pub struct ApplyArgs {
     #[arg(long, requires = "recording")]
     pub gyro: Option<PathBuf>,
     /// The raw columns, comma-separated (default: output; a_x,a_y,a_z; g_x,g_y,g_z; or all six
-    /// for an IMU).
+    /// for an IMU). With `--recording`, roles by header name as `selfcal` takes them:
+    /// `t=stamp:ms,ax=A1,...,gz=R3,temp=die_c` (a temperature column then sets each sample's
+    /// temperature).
     #[arg(long, value_delimiter = ',')]
     pub columns: Vec<String>,
     /// Temperature, C, for every sample (default: the middle of the calibrated span).
@@ -85,10 +87,7 @@ struct Input {
 }
 
 fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
-    let rails = spincal::model::Rails {
-        lo: i32::MIN,
-        hi: i32::MAX,
-    };
+    let rails = spincal::model::Rails::new(i32::MIN, i32::MAX);
     let (acc, gyro) = match (channels, &args.gyro) {
         (6, Some(g)) => (args.input.as_path(), Some(g.as_path())),
         (6, None) => (args.input.as_path(), None),
@@ -100,12 +99,18 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
             ));
         }
     };
+    let columns = if args.columns.is_empty() {
+        crate::obs::layout::Chosen::default()
+    } else {
+        crate::obs::layout::Chosen::parse(&args.columns.join(","))
+            .map_err(|e| format!("--columns: {e}"))?
+    };
     let opts = crate::obs::recording::Options {
         rails,
         rate: args.rate,
         keep: crate::obs::layout::Keep::Both,
         units: args.units.units(),
-        columns: crate::obs::layout::Chosen::default(),
+        columns,
     };
     let rec = crate::obs::recording::read_with(acc, gyro, &opts).map_err(|e| e.to_string())?;
     if rec.units.iter().any(|u| u.is_si()) {
@@ -136,16 +141,21 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
                 }
             })
             .collect(),
-        temps: None,
+        // A temperature column sets each sample's temperature, unless --temp fixes one.
+        temps: args
+            .temp
+            .is_none()
+            .then(|| rec.temperature.as_ref().map(|(_, v)| v.clone()))
+            .flatten(),
         times: Some(rec.t.clone()),
         reference: None,
     })
 }
 
 enum Any<'a> {
-    Single(AxisCorrector<'a>),
-    Triad(Box<TriadCorrector<'a>>),
-    Imu(Box<ImuCorrector<'a>>),
+    Single(AnyAxisCorrector<'a>),
+    Triad(Box<AnyTriadCorrector<'a>>),
+    Imu(Box<AnyImuCorrector<'a>>),
 }
 
 /// Runs `calflash apply`.
@@ -179,7 +189,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
     } else {
         args.columns.clone()
     };
-    if cols.len() != default_cols.len() {
+    if cols.len() != default_cols.len() && !args.recording {
         return Err(format!(
             "--columns: the calibration corrects {} channel(s), {} columns given",
             default_cols.len(),
@@ -264,12 +274,14 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
     let volt = args.volt.unwrap_or_else(|| mid(env.voltage_span));
     let temp0 = args.temp.unwrap_or_else(|| mid(env.temperature_span));
     let mut corrector = match &data.sensor {
-        Sensor::Single { .. } => Any::Single(AxisCorrector::new(&cal).map_err(|e| e.to_string())?),
+        Sensor::Single { .. } => {
+            Any::Single(AnyAxisCorrector::new(&cal).map_err(|e| e.to_string())?)
+        }
         Sensor::Triad { .. } => Any::Triad(Box::new(
-            TriadCorrector::new(&cal).map_err(|e| e.to_string())?,
+            AnyTriadCorrector::new(&cal).map_err(|e| e.to_string())?,
         )),
         Sensor::Imu { .. } => Any::Imu(Box::new(
-            ImuCorrector::new(&cal, timing.as_ref().map_or(1000.0, |t| t.rate as f32))
+            AnyImuCorrector::new(&cal, timing.as_ref().map_or(1000.0, |t| t.rate as f32))
                 .map_err(|e| format!("--rate: {e}"))?,
         )),
     };

@@ -166,7 +166,7 @@ pub fn codes(s: &str) -> Result<spincal::model::Rails, String> {
             return Err(format!("`{s}`: {expected}"));
         };
         return if lo < hi {
-            Ok(Rails { lo, hi })
+            Ok(Rails::new(lo, hi))
         } else {
             Err(format!("`{s}`: the low rail must be below the high one"))
         };
@@ -201,23 +201,11 @@ mod tests {
 
     #[test]
     fn code_formats_read_and_name_themselves() {
-        assert_eq!(
-            codes("signed16"),
-            Ok(Rails {
-                lo: -32768,
-                hi: 32767
-            })
-        );
-        assert_eq!(codes("unsigned12"), Ok(Rails { lo: 0, hi: 4095 }));
-        assert_eq!(
-            codes("signed32"),
-            Ok(Rails {
-                lo: i32::MIN,
-                hi: i32::MAX
-            })
-        );
-        assert_eq!(codes("signed8"), Ok(Rails { lo: -128, hi: 127 }));
-        assert_eq!(codes("-100:100"), Ok(Rails { lo: -100, hi: 100 }));
+        assert_eq!(codes("signed16"), Ok(Rails::new(-32768, 32767)));
+        assert_eq!(codes("unsigned12"), Ok(Rails::new(0, 4095)));
+        assert_eq!(codes("signed32"), Ok(Rails::new(i32::MIN, i32::MAX)));
+        assert_eq!(codes("signed8"), Ok(Rails::new(-128, 127)));
+        assert_eq!(codes("-100:100"), Ok(Rails::new(-100, 100)));
         for bad in [
             "signed7",
             "unsigned33",

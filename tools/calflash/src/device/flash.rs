@@ -4,7 +4,7 @@
 use std::io::{Read, Write};
 
 use spincal::blob;
-use spincal::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
+use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
 use spincal::model::{Calibration, Sensor};
 use spincal::protocol::{self, MAX_CHUNK, MAX_VECTORS, Request, Response};
 
@@ -208,7 +208,7 @@ fn samples(cal: &Calibration, batch: usize) -> Vec<[i32; 6]> {
 fn host_vectors(cal: &Calibration, t: f32, v: f32, raw: &[[i32; 6]]) -> Vec<([f32; 6], u8)> {
     match &cal.data().sensor {
         Sensor::Single { .. } => {
-            let mut c = AxisCorrector::new(cal).expect("single");
+            let mut c = AnyAxisCorrector::new(cal).expect("single");
             c.set_environment(t, v);
             raw.iter()
                 .map(|r| {
@@ -218,7 +218,7 @@ fn host_vectors(cal: &Calibration, t: f32, v: f32, raw: &[[i32; 6]]) -> Vec<([f3
                 .collect()
         }
         Sensor::Triad { .. } => {
-            let mut c = TriadCorrector::new(cal).expect("triad");
+            let mut c = AnyTriadCorrector::new(cal).expect("triad");
             c.set_environment(t, v);
             raw.iter()
                 .map(|r| {
@@ -229,7 +229,7 @@ fn host_vectors(cal: &Calibration, t: f32, v: f32, raw: &[[i32; 6]]) -> Vec<([f3
                 .collect()
         }
         Sensor::Imu { .. } => {
-            let mut c = ImuCorrector::new(cal, protocol::vector_rate_hz()).expect("imu");
+            let mut c = AnyImuCorrector::new(cal, protocol::vector_rate_hz()).expect("imu");
             c.set_environment(t, v);
             raw.iter()
                 .map(|r| {

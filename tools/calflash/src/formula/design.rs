@@ -2,6 +2,7 @@
 //! to a sentence that names the term and says why.
 
 use nalgebra::DMatrix;
+use rayon::prelude::*;
 
 use super::{Formula, INTERCEPT, Term};
 use crate::obs::Table;
@@ -34,21 +35,22 @@ impl Formula {
                 .expect("the reader read every model column")
         };
         let mut x = DMatrix::zeros(n, self.width());
-        let mut j = 0;
-        if self.intercept {
-            x.column_mut(0).fill(1.0);
-            j = 1;
-        }
-        for t in &self.terms {
-            let mut c = x.column_mut(j);
-            c.fill(1.0);
-            for f in &t.factors {
-                for (v, xi) in c.iter_mut().zip(col(&f.var)) {
-                    *v *= f.eval(*xi);
+        let first = usize::from(self.intercept);
+        // Column-major: each model column is one contiguous run of `n`, filled on its own core.
+        x.as_mut_slice()
+            .par_chunks_mut(n.max(1))
+            .enumerate()
+            .for_each(|(j, c)| {
+                c.fill(1.0);
+                let Some(t) = j.checked_sub(first).and_then(|k| self.terms.get(k)) else {
+                    return;
+                };
+                for f in &t.factors {
+                    for (v, xi) in c.iter_mut().zip(col(&f.var)) {
+                        *v *= f.eval(*xi);
+                    }
                 }
-            }
-            j += 1;
-        }
+            });
         Design {
             names: self.term_names(),
             x,

@@ -51,7 +51,7 @@ mod tests {
     fn a_format_read_as_the_other_is_named() {
         assert_eq!(name(Rails::signed(16)), "signed16");
         assert_eq!(name(Rails::unsigned(12)), "unsigned12");
-        assert_eq!(name(Rails { lo: -5, hi: 5 }), "-5:5");
+        assert_eq!(name(Rails::new(-5, 5)), "-5:5");
         assert_eq!(
             mismatch(1812, 0, Rails::unsigned(16)).unwrap(),
             "1812 codes below zero: the codes look signed; add --codes signed16"
@@ -64,6 +64,6 @@ mod tests {
         // A few damaged values, or codes beyond both rails, are not a format.
         assert_eq!(mismatch(3, 0, Rails::unsigned(16)), None);
         assert_eq!(mismatch(20, 20, Rails::unsigned(16)), None);
-        assert_eq!(mismatch(20, 0, Rails { lo: -5, hi: 5 }), None);
+        assert_eq!(mismatch(20, 0, Rails::new(-5, 5)), None);
     }
 }

@@ -6,6 +6,7 @@
 //! positional: an optional timestamp, then the counts. Timestamps are seconds, or ms, us or ns
 //! when the header's name says so.
 
+use super::fields::{MAX_FIELDS, Spans, number, split_bytes};
 use super::squash;
 use std::path::Path;
 
@@ -98,9 +99,6 @@ impl Rows {
         self.line.is_empty()
     }
 }
-
-/// The most fields a line may hold (more are counted, for the message, but not read).
-const MAX_FIELDS: usize = 64;
 
 /// The meaning of each field, as the error messages name it.
 const NAMES: [&str; 6] = [
@@ -362,58 +360,6 @@ fn split(s: &str) -> Vec<&str> {
     }
 }
 
-/// The byte range of each field of a line.
-type Spans = [(usize, usize); MAX_FIELDS];
-
-/// Splits a sample line into `spans` (at commas, trimmed, or at runs of whitespace) and
-/// returns the number of fields; fields beyond the store's length are counted, not kept.
-fn split_bytes(bytes: &[u8], comma: bool, spans: &mut Spans) -> usize {
-    let mut count = 0;
-    let mut keep = |start: usize, end: usize| {
-        if let Some(slot) = spans.get_mut(count) {
-            *slot = (start, end);
-        }
-        count += 1;
-    };
-    let n = bytes.len();
-    if comma {
-        let mut start = 0;
-        loop {
-            let end = bytes[start..]
-                .iter()
-                .position(|&b| b == b',')
-                .map_or(n, |k| start + k);
-            let (mut a, mut b) = (start, end);
-            while a < b && bytes[a].is_ascii_whitespace() {
-                a += 1;
-            }
-            while b > a && bytes[b - 1].is_ascii_whitespace() {
-                b -= 1;
-            }
-            keep(a, b);
-            if end == n {
-                break;
-            }
-            start = end + 1;
-        }
-    } else {
-        let mut i = 0;
-        while i < n {
-            while i < n && (bytes[i] == b' ' || bytes[i] == b'\t') {
-                i += 1;
-            }
-            let start = i;
-            while i < n && bytes[i] != b' ' && bytes[i] != b'\t' {
-                i += 1;
-            }
-            if i > start {
-                keep(start, i);
-            }
-        }
-    }
-    count
-}
-
 /// The error of a field that is not a number (or not text).
 #[cold]
 fn not_a_number(
@@ -438,27 +384,134 @@ fn not_a_number(
     }
 }
 
-/// A field as a number: a short integer (what most loggers write) directly, anything else
-/// by `fast_float2`; `None` when it is not a finite number.
-#[inline]
-fn number(field: &[u8]) -> Option<f64> {
-    let (negative, digits) = match field {
-        [b'-', rest @ ..] => (true, rest),
-        [b'+', rest @ ..] => (false, rest),
-        _ => (false, field),
-    };
-    if !digits.is_empty() && digits.len() <= 15 && digits.iter().all(u8::is_ascii_digit) {
-        let v = digits
-            .iter()
-            .fold(0i64, |v, &d| v * 10 + i64::from(d - b'0'));
-        // Exact: below 10^15 every integer is an f64.
-        #[allow(clippy::cast_precision_loss)]
-        let x = v as f64;
-        return Some(if negative { -x } else { x });
+/// The samples of one block of lines (and the first error in it, after them).
+struct Part {
+    times: Vec<f64>,
+    triads: Vec<Vec<[f64; 3]>>,
+    temps: Vec<f64>,
+    lines: Vec<u32>,
+    error: Option<RecordingError>,
+}
+
+/// Reads sample lines once the columns and the separator are known.
+struct Sampler<'a> {
+    path: &'a Path,
+    cols: &'a Columns,
+    /// Which of the file's counts are kept.
+    kept: &'a [usize],
+    holds: Holds,
+    comma: bool,
+}
+
+impl Sampler<'_> {
+    /// Field `k` (at `span` of the line `bytes`) as a number.
+    #[inline(always)]
+    fn value(
+        &self,
+        line: usize,
+        bytes: &[u8],
+        span: (usize, usize),
+        k: usize,
+        what: &'static str,
+    ) -> Result<f64, RecordingError> {
+        let field = &bytes[span.0..span.1];
+        match number(field) {
+            Some(x) => Ok(x),
+            None => Err(not_a_number(self.path, line, k, what, field)),
+        }
     }
-    fast_float2::parse::<f64, _>(field)
-        .ok()
-        .filter(|x| x.is_finite())
+
+    fn part(&self, lines: usize) -> Part {
+        Part {
+            times: Vec::with_capacity(if self.cols.t.is_some() { lines } else { 0 }),
+            triads: vec![Vec::with_capacity(lines); self.kept.len() / 3],
+            temps: Vec::new(),
+            lines: Vec::with_capacity(lines),
+            error: None,
+        }
+    }
+
+    /// The samples of a block of whole lines (`before` lines precede it), up to its first
+    /// error.
+    fn block(&self, block: &[u8], before: u64) -> Part {
+        let mut part = self.part(block.len() / 24);
+        let mut spans: Spans = [(0, 0); MAX_FIELDS];
+        for (line, bytes) in super::fields::lines(block, before) {
+            let bytes = bytes.trim_ascii();
+            if bytes.is_empty() || bytes[0] == b'#' {
+                continue;
+            }
+            let line = usize::try_from(line).unwrap_or(usize::MAX);
+            if let Err(e) = self.take(line, bytes, &mut spans, &mut part) {
+                part.error = Some(e);
+                break;
+            }
+        }
+        part
+    }
+
+    /// One sample line (trimmed, not blank, not a comment) into `part`.
+    fn take(
+        &self,
+        line: usize,
+        bytes: &[u8],
+        spans: &mut Spans,
+        part: &mut Part,
+    ) -> Result<(), RecordingError> {
+        let count = split_bytes(bytes, self.comma, spans);
+        let cols = self.cols;
+        if count != cols.width {
+            let why = match cols.header {
+                Some(hl) => format!("{}, as the header on line {hl} names", cols.width),
+                None => format!("{}, as on the first sample line", cols.width),
+            };
+            return Err(RecordingError::Fields {
+                path: self.path.to_path_buf(),
+                line,
+                found: count,
+                expected: why,
+            });
+        }
+        let value = |k: usize, what: &'static str| self.value(line, bytes, spans[k], k, what);
+        // Everything is read before anything is kept, so that the part's columns stay aligned.
+        let t = match cols.t {
+            Some((k, scale)) => {
+                let x = value(k, "timestamp")? * scale;
+                if let Some(&prev) = part.times.last()
+                    && x <= prev
+                {
+                    return Err(RecordingError::NotIncreasing {
+                        path: self.path.to_path_buf(),
+                        line,
+                        t: x,
+                        prev,
+                    });
+                }
+                Some(x)
+            }
+            None => None,
+        };
+        let mut counts = [[0.0; 3]; 2];
+        for (n, v) in counts.iter_mut().take(part.triads.len()).enumerate() {
+            for (a, x) in v.iter_mut().enumerate() {
+                let j = self.kept[3 * n + a];
+                let what = if self.holds == Holds::Both {
+                    NAMES[j]
+                } else {
+                    NAMES[j % 3]
+                };
+                *x = value(cols.counts[j], what)?;
+            }
+        }
+        let temp = cols.temp.map(|k| value(k, "temperature")).transpose()?;
+        part.times.extend(t);
+        for (triad, v) in part.triads.iter_mut().zip(counts) {
+            triad.push(v);
+        }
+        part.temps.extend(temp);
+        part.lines.push(u32::try_from(line).unwrap_or(u32::MAX));
+        Ok(())
+    }
 }
 
 fn expected(holds: Holds) -> String {
@@ -534,10 +587,11 @@ pub fn read_chosen(
     // The separator, fixed by the first sample line (`None` until then).
     let mut comma: Option<bool> = None;
     let mut spans: Spans = [(0, 0); MAX_FIELDS];
-    loop {
+    // The head: preamble and header lines, up to the first sample line.
+    let first = loop {
         buf.clear();
         if reader.read_until(b'\n', &mut buf).map_err(io)? == 0 {
-            break;
+            break None;
         }
         line += 1;
         let mut bytes = &buf[..];
@@ -583,11 +637,9 @@ pub fn read_chosen(
                 continue;
             }
         }
-        // A sample line, split without allocating: a line of more than MAX_FIELDS fields is
-        // counted, not kept.
+        // The first sample line fixes the separator and, without a header, the columns.
         let comma = *comma.get_or_insert_with(|| bytes.contains(&b','));
         let count = split_bytes(bytes, comma, &mut spans);
-        let field = |k: usize| &bytes[spans[k].0..spans[k].1];
         if columns.is_none() && !chosen.is_empty() {
             return Err(RecordingError::Columns {
                 path: path.to_path_buf(),
@@ -598,53 +650,52 @@ pub fn read_chosen(
                 },
             });
         }
-        let cols = match &columns {
-            Some(c) => c,
-            None => columns
-                .insert(positional(count, holds).ok_or_else(|| bad(line, count, expected(holds)))?),
-        };
-        if count != cols.width {
-            let why = match cols.header {
-                Some(hl) => format!("{}, as the header on line {hl} names", cols.width),
-                None => format!("{}, as on the first sample line", cols.width),
-            };
-            return Err(bad(line, count, why));
+        if columns.is_none() {
+            columns =
+                Some(positional(count, holds).ok_or_else(|| bad(line, count, expected(holds)))?);
         }
-        let value = |k: usize, what: &'static str| match number(field(k)) {
-            Some(x) => Ok(x),
-            None => Err(not_a_number(path, line, k, what, field(k))),
+        break Some((line, comma, bytes.to_vec()));
+    };
+    if let (Some((first, comma, bytes)), Some(cols)) = (first, &columns) {
+        let sampler = Sampler {
+            path,
+            cols,
+            kept: &kept,
+            holds,
+            comma,
         };
-        if let Some((k, scale)) = cols.t {
-            let x = value(k, "timestamp")? * scale;
-            if let Some(&prev) = times.last()
-                && x <= prev
+        let mut merge = |part: Part| {
+            if let (Some(&t), Some(&prev)) = (part.times.first(), times.last())
+                && t <= prev
             {
                 return Err(RecordingError::NotIncreasing {
                     path: path.to_path_buf(),
-                    line,
-                    t: x,
+                    line: part.lines.first().map_or(0, |l| *l as usize),
+                    t,
                     prev,
                 });
             }
-            times.push(x);
-        }
-        for (n, triad) in rows.triads.iter_mut().enumerate() {
-            let mut v = [0.0; 3];
-            for (a, x) in v.iter_mut().enumerate() {
-                let j = kept[3 * n + a];
-                let what = if holds == Holds::Both {
-                    NAMES[j]
-                } else {
-                    NAMES[j % 3]
-                };
-                *x = value(cols.counts[j], what)?;
+            times.extend(part.times);
+            for (triad, values) in rows.triads.iter_mut().zip(part.triads) {
+                triad.extend(values);
             }
-            triad.push(v);
+            temps.extend(part.temps);
+            rows.line.extend(part.lines);
+            part.error.map_or(Ok(()), Err)
+        };
+        // The first sample line, then the rest a block of lines at a time on every core.
+        let mut head = sampler.part(0);
+        if let Err(e) = sampler.take(first, &bytes, &mut spans, &mut head) {
+            head.error = Some(e);
         }
-        if let Some(k) = cols.temp {
-            temps.push(value(k, "temperature")?);
-        }
-        rows.line.push(u32::try_from(line).unwrap_or(u32::MAX));
+        merge(head)?;
+        super::fields::parse_blocks(
+            &mut reader,
+            first as u64,
+            |block, before| Ok(sampler.block(block, before)),
+            &mut merge,
+            io,
+        )?;
     }
     if rows.line.is_empty() {
         return Err(RecordingError::Empty {

@@ -4,6 +4,7 @@
 //! column.
 
 pub mod codes;
+pub(crate) mod fields;
 pub mod layout;
 pub mod mat;
 pub mod recording;
@@ -11,7 +12,7 @@ pub mod timing;
 pub mod units;
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 /// How a file separates its fields.
@@ -188,22 +189,29 @@ impl Table {
     }
 }
 
-/// Collects the wanted fields of each row into columns.
-struct Collector<'a> {
+/// Where the wanted fields of each row are, and how a row is split.
+struct Layout<'a> {
     path: &'a Path,
     wanted: &'a [String],
     /// For each wanted column, its field index in the file.
     index: Vec<usize>,
     header_len: usize,
-    table: Table,
+    comma: bool,
 }
 
-impl<'a> Collector<'a> {
+/// The wanted columns of one block of rows, and each row's line.
+struct Part {
+    columns: Vec<Vec<f64>>,
+    lines: Vec<u64>,
+}
+
+impl<'a> Layout<'a> {
     fn new(
         path: &'a Path,
         wanted: &'a [String],
         header: &[String],
         line: u64,
+        comma: bool,
     ) -> Result<Self, ObsError> {
         for (i, name) in header.iter().enumerate() {
             if header[..i].contains(name) {
@@ -232,59 +240,124 @@ impl<'a> Collector<'a> {
             wanted,
             index,
             header_len: header.len(),
-            table: Table {
-                path: path.into(),
-                names: wanted.to_vec(),
-                columns: vec![Vec::new(); wanted.len()],
-                lines: Vec::new(),
-            },
+            comma,
         })
     }
 
-    fn row<'f>(
-        &mut self,
-        line: u64,
-        fields: impl ExactSizeIterator<Item = &'f str> + Clone,
-    ) -> Result<(), ObsError> {
-        if fields.len() != self.header_len {
-            return Err(ObsError::Ragged {
-                path: self.path.into(),
-                line,
-                found: fields.len(),
-                expected: self.header_len,
-            });
+    /// The rows of a block of whole lines (`before` lines precede it).
+    fn parse(&self, block: &[u8], before: u64) -> Result<Part, ObsError> {
+        let mut part = Part {
+            columns: vec![Vec::new(); self.wanted.len()],
+            lines: Vec::new(),
+        };
+        // Rows up to the line where the text ends are read first: an error before it is the
+        // first in the file.
+        let bad = fields::not_text_at(block);
+        let text = &block[..bad.map_or(block.len(), |at| {
+            block[..at]
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |p| p + 1)
+        })];
+        let mut spans = vec![(0, 0); self.header_len + 1];
+        let quotes = self.comma && memchr::memchr(b'"', text).is_some();
+        let rows = text.len() / 16;
+        for column in &mut part.columns {
+            column.reserve(rows);
         }
-        for (k, &i) in self.index.iter().enumerate() {
-            let text = fields.clone().nth(i).unwrap_or_default().trim();
-            let value: f64 = text.parse().map_err(|_| ObsError::NotNumber {
-                path: self.path.into(),
-                line,
-                column: i + 1,
-                name: self.wanted[k].clone(),
-                text: shorten(text),
-            })?;
-            if !value.is_finite() {
-                return Err(ObsError::NotFinite {
-                    path: self.path.into(),
-                    line,
-                    column: i + 1,
-                    name: self.wanted[k].clone(),
-                    text: shorten(text),
-                });
+        for (line, bytes) in fields::lines(text, before) {
+            let row = bytes.trim_ascii();
+            if row.is_empty() || row[0] == b'#' {
+                continue;
             }
-            self.table.columns[k].push(value);
+            if quotes && row.contains(&b'"') {
+                self.quoted_row(line, row, &mut part)?;
+                continue;
+            }
+            let count = fields::split_bytes(row, self.comma, &mut spans);
+            self.check_width(line, count)?;
+            for (k, &i) in self.index.iter().enumerate() {
+                let (a, b) = spans[i];
+                let field = &row[a..b];
+                match fields::number(field) {
+                    Some(x) => part.columns[k].push(x),
+                    None => return Err(self.bad_cell(line, k, i, field)),
+                }
+            }
+            part.lines.push(line);
         }
-        self.table.lines.push(line);
+        match bad {
+            Some(at) => Err(ObsError::NotText {
+                path: self.path.into(),
+                line: fields::line_of(block, before, at),
+            }),
+            None => Ok(part),
+        }
+    }
+
+    fn check_width(&self, line: u64, found: usize) -> Result<(), ObsError> {
+        if found == self.header_len {
+            Ok(())
+        } else {
+            Err(ObsError::Ragged {
+                path: self.path.into(),
+                line,
+                found,
+                expected: self.header_len,
+            })
+        }
+    }
+
+    /// A CSV row with quotes, read as RFC 4180 says (by the csv crate).
+    #[cold]
+    fn quoted_row(&self, line: u64, row: &[u8], part: &mut Part) -> Result<(), ObsError> {
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .from_reader(row);
+        let mut record = csv::ByteRecord::new();
+        let read = reader.read_byte_record(&mut record).unwrap_or(false);
+        let not_text = || ObsError::NotText {
+            path: self.path.into(),
+            line,
+        };
+        if !read {
+            return Err(not_text());
+        }
+        self.check_width(line, record.len())?;
+        for (k, &i) in self.index.iter().enumerate() {
+            let field = record.get(i).unwrap_or_default();
+            match fields::number(field) {
+                Some(x) => part.columns[k].push(x),
+                None => return Err(self.bad_cell(line, k, i, field)),
+            }
+        }
+        part.lines.push(line);
         Ok(())
     }
 
-    fn finish(self) -> Result<Table, ObsError> {
-        if self.table.is_empty() {
-            return Err(ObsError::NoRows {
-                path: self.path.into(),
-            });
+    /// The error of wanted column `k` (field `i`) that is not a finite number.
+    #[cold]
+    fn bad_cell(&self, line: u64, k: usize, i: usize, field: &[u8]) -> ObsError {
+        let text = shorten(&String::from_utf8_lossy(field));
+        let (path, column, name) = (self.path.into(), i + 1, self.wanted[k].clone());
+        match fast_float2::parse::<f64, _>(field) {
+            Ok(x) if !x.is_finite() => ObsError::NotFinite {
+                path,
+                line,
+                column,
+                name,
+                text,
+            },
+            _ => ObsError::NotNumber {
+                path,
+                line,
+                column,
+                name,
+                text,
+            },
         }
-        Ok(self.table)
     }
 }
 
@@ -397,9 +470,78 @@ pub fn read_columns(path: &Path, wanted: &[String], format: Format) -> Result<Ta
         Format::Auto => sniff(path, &mut reader)?,
         f => f,
     };
-    match format {
-        Format::Csv => read_csv(path, reader, wanted),
-        _ => read_whitespace(path, reader, wanted),
+    read_text(path, reader, wanted, format == Format::Csv)
+}
+
+/// The header (the first line that is neither blank nor a comment), then the rows, parsed a
+/// block of lines at a time on every core.
+fn read_text(
+    path: &Path,
+    mut reader: BufReader<File>,
+    wanted: &[String],
+    comma: bool,
+) -> Result<Table, ObsError> {
+    let mut buf = Vec::new();
+    let mut line = 0u64;
+    let header = loop {
+        buf.clear();
+        if reader.read_until(b'\n', &mut buf).map_err(io(path))? == 0 {
+            return Err(ObsError::Empty { path: path.into() });
+        }
+        line += 1;
+        let text = std::str::from_utf8(&buf)
+            .ok()
+            .filter(|_| !buf.contains(&0))
+            .ok_or(ObsError::NotText {
+                path: path.into(),
+                line,
+            })?
+            .trim();
+        if text.is_empty() || text.starts_with('#') {
+            continue;
+        }
+        break header_names(text, comma);
+    };
+    let layout = Layout::new(path, wanted, &header, line, comma)?;
+    let mut table = Table {
+        path: path.into(),
+        names: wanted.to_vec(),
+        columns: vec![Vec::new(); wanted.len()],
+        lines: Vec::new(),
+    };
+    fields::parse_blocks(
+        &mut reader,
+        line,
+        |block, before| layout.parse(block, before),
+        |part| {
+            for (column, values) in table.columns.iter_mut().zip(part.columns) {
+                column.extend(values);
+            }
+            table.lines.extend(part.lines);
+            Ok(())
+        },
+        io(path),
+    )?;
+    if table.is_empty() {
+        return Err(ObsError::NoRows { path: path.into() });
+    }
+    Ok(table)
+}
+
+/// The names of a header line: CSV fields (quoted as RFC 4180 allows) or whitespace-separated.
+fn header_names(text: &str, comma: bool) -> Vec<String> {
+    if !comma {
+        return text.split_whitespace().map(str::to_string).collect();
+    }
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let mut record = csv::StringRecord::new();
+    match reader.read_record(&mut record) {
+        Ok(true) => record.iter().map(str::to_string).collect(),
+        _ => text.split(',').map(|s| s.trim().to_string()).collect(),
     }
 }
 
@@ -417,151 +559,6 @@ fn sniff(path: &Path, reader: &mut BufReader<File>) -> Result<Format, ObsError> 
     } else {
         Format::Whitespace
     })
-}
-
-/// Counts lines in the bytes passing through, so that a record's byte offset can be turned
-/// into its line (the csv crate does not count blank lines).
-struct LineCounter<R> {
-    inner: R,
-    offset: u64,
-    /// Byte offsets of newlines read but not yet passed by a record.
-    newlines: std::rc::Rc<std::cell::RefCell<std::collections::VecDeque<u64>>>,
-}
-
-impl<R: Read> Read for LineCounter<R> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let n = self.inner.read(buf)?;
-        let mut q = self.newlines.borrow_mut();
-        for (i, b) in buf[..n].iter().enumerate() {
-            if *b == b'\n' {
-                q.push_back(self.offset + i as u64);
-            }
-        }
-        self.offset += n as u64;
-        Ok(n)
-    }
-}
-
-fn read_csv(path: &Path, reader: impl Read, wanted: &[String]) -> Result<Table, ObsError> {
-    let newlines = std::rc::Rc::new(std::cell::RefCell::new(std::collections::VecDeque::new()));
-    let reader = LineCounter {
-        inner: reader,
-        offset: 0,
-        newlines: newlines.clone(),
-    };
-    let mut lines_before = 0u64;
-    let mut line_of = |byte: u64| {
-        let mut q = newlines.borrow_mut();
-        while q.front().is_some_and(|&nl| nl < byte) {
-            q.pop_front();
-            lines_before += 1;
-        }
-        lines_before + 1
-    };
-    let mut csv = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .from_reader(reader);
-    let mut record = csv::ByteRecord::new();
-    let mut collector: Option<Collector<'_>> = None;
-    loop {
-        let more = csv
-            .read_byte_record(&mut record)
-            .map_err(|e| csv_error(path, &e))?;
-        if !more {
-            break;
-        }
-        // The line of a record is that of its last byte: blank lines before it belong to it
-        // in the csv crate's positions.
-        let line = line_of(csv.position().byte().saturating_sub(1));
-        if record.iter().any(|f| f.contains(&0)) {
-            return Err(ObsError::NotText {
-                path: path.into(),
-                line,
-            });
-        }
-        let fields: Vec<&str> = record
-            .iter()
-            .map(std::str::from_utf8)
-            .collect::<Result<_, _>>()
-            .map_err(|_| ObsError::NotText {
-                path: path.into(),
-                line,
-            })?;
-        if fields.len() == 1 && fields[0].is_empty() {
-            continue;
-        }
-        match &mut collector {
-            None => {
-                let header: Vec<String> = fields.iter().map(|s| s.to_string()).collect();
-                collector = Some(Collector::new(path, wanted, &header, line)?);
-            }
-            Some(c) => c.row(line, fields.iter().copied())?,
-        }
-    }
-    collector
-        .ok_or(ObsError::Empty { path: path.into() })?
-        .finish()
-}
-
-fn csv_error(path: &Path, e: &csv::Error) -> ObsError {
-    match e.kind() {
-        csv::ErrorKind::Io(err) => ObsError::Io {
-            path: path.into(),
-            source: std::io::Error::new(err.kind(), err.to_string()),
-        },
-        _ => ObsError::NotText {
-            path: path.into(),
-            line: e.position().map_or(0, csv::Position::line),
-        },
-    }
-}
-
-fn read_whitespace(
-    path: &Path,
-    mut reader: impl BufRead,
-    wanted: &[String],
-) -> Result<Table, ObsError> {
-    let mut buf = Vec::with_capacity(256);
-    let mut line = 0u64;
-    let mut collector: Option<Collector<'_>> = None;
-    loop {
-        buf.clear();
-        if reader.read_until(b'\n', &mut buf).map_err(io(path))? == 0 {
-            break;
-        }
-        line += 1;
-        if buf.contains(&0) {
-            return Err(ObsError::NotText {
-                path: path.into(),
-                line,
-            });
-        }
-        let text = std::str::from_utf8(&buf).map_err(|_| ObsError::NotText {
-            path: path.into(),
-            line,
-        })?;
-        let text = text.trim();
-        if text.is_empty() || text.starts_with('#') {
-            continue;
-        }
-        let fields = text.split_whitespace();
-        match &mut collector {
-            None => {
-                let header: Vec<String> = fields.map(str::to_string).collect();
-                collector = Some(Collector::new(path, wanted, &header, line)?);
-            }
-            Some(c) => {
-                let fields: Vec<&str> = fields.collect();
-                c.row(line, fields.iter().copied())?;
-            }
-        }
-    }
-    collector
-        .ok_or(ObsError::Empty { path: path.into() })?
-        .finish()
 }
 
 #[cfg(test)]

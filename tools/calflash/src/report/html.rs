@@ -46,6 +46,15 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
         "<h1>Calibration of unit {}</h1>",
         esc(id.serial.as_str())
     );
+    let rails = c.data.sensor.rails();
+    let _ = writeln!(
+        h,
+        "<p>Codes {} (rails {} and {}); the device takes the samples as <code>{}</code>.</p>",
+        esc(&crate::obs::codes::name(rails)),
+        rails.lo,
+        rails.hi,
+        rails.format.name()
+    );
     let _ = writeln!(
         h,
         "<p class=\"verdict {}\">{}</p>",

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use spincal::blob;
-use spincal::correct::{AxisCorrector, ImuCorrector, TriadCorrector};
+use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
 use spincal::model::{
     BoundedVec, Calibration, CalibrationData, Environment, Identity, Quantity, Sensor, Serial,
     Span, TriadSet, rotation,
@@ -189,7 +189,7 @@ pub fn build_and_check(
     match &data.sensor {
         Sensor::Single { channel, sets, .. } => {
             let mut c =
-                AxisCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
+                AnyAxisCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
             for (p, set) in points.iter().zip(sets.iter()) {
                 let (t, v) = at(p);
                 c.set_environment(t, v);
@@ -211,7 +211,7 @@ pub fn build_and_check(
         }
         Sensor::Triad { channels, sets, .. } => {
             let mut c =
-                TriadCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
+                AnyTriadCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
             for (p, set) in points.iter().zip(sets.iter()) {
                 let (t, v) = at(p);
                 c.set_environment(t, v);
@@ -232,7 +232,7 @@ pub fn build_and_check(
         Sensor::Imu {
             accel, gyro, sets, ..
         } => {
-            let mut c = ImuCorrector::new(&back, 1000.0)
+            let mut c = AnyImuCorrector::new(&back, 1000.0)
                 .map_err(|e| WorkflowError::Message(e.to_string()))?;
             for (p, set) in points.iter().zip(sets.iter()) {
                 let (t, v) = at(p);

@@ -57,6 +57,13 @@ pub struct Record {
     pub serial: String,
     /// `single`, `triad` or `imu`.
     pub sensor: String,
+    /// The converter's codes (`unsigned16`, `signed16`, ... or `LO:HI`).
+    #[serde(default)]
+    pub codes: String,
+    /// The container the device takes the samples in (`u16`, `i16`, `i32`), as the blob
+    /// states.
+    #[serde(default)]
+    pub sample_format: String,
     /// Seconds since 1970.
     pub created_unix_s: u64,
     /// The observation file.
@@ -98,10 +105,13 @@ impl Record {
             spincal::model::Sensor::Triad { .. } => "triad",
             spincal::model::Sensor::Imu { .. } => "imu",
         };
+        let rails = c.data.sensor.rails();
         Self {
             schema: SCHEMA.into(),
             serial: id.serial.as_str().into(),
             sensor: sensor.into(),
+            codes: crate::obs::codes::name(rails),
+            sample_format: rails.format.name().into(),
             created_unix_s: id.created_unix_s,
             data_file: data_file.into(),
             data_hash: hex(&id.data_hash),

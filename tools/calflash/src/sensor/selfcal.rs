@@ -12,7 +12,7 @@ use std::path::Path;
 
 use nalgebra::{DMatrix, Matrix3};
 use spincal::blob;
-use spincal::correct::ImuCorrector;
+use spincal::correct::AnyImuCorrector;
 use spincal::model::{
     AxisNonlinearity, BoundedVec, Calibration, CalibrationData, Channel, Environment, Identity,
     ImuCovariance, ImuOutputCovariance, ImuSet, Rails, Sensor, Span, TriadSet,
@@ -200,7 +200,7 @@ pub fn build_and_check(
     buf.truncate(n);
     let back =
         blob::decode(&buf).map_err(|e| format!("the written blob does not read back: {e}"))?;
-    let mut dev = ImuCorrector::new(&back, rec.rate() as f32).map_err(|e| e.to_string())?;
+    let mut dev = AnyImuCorrector::new(&back, rec.rate() as f32).map_err(|e| e.to_string())?;
     let env = &data.environment;
     dev.set_environment(
         0.5 * (env.temperature_span.lo + env.temperature_span.hi),
