@@ -39,6 +39,20 @@ pub enum Asymmetry {
     Drop,
 }
 
+/// How the coefficients follow the temperature.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ThermalArg {
+    /// A fit per temperature setpoint when the observations fall into well-filled setpoints
+    /// (at most 16, each with more than twice the model's terms), the continuous model
+    /// otherwise (a ramp).
+    Auto,
+    /// A fit per temperature setpoint.
+    Table,
+    /// Every coefficient a polynomial in the temperature, fitted with all the observations;
+    /// the device gets a table at breakpoints chosen to follow it.
+    Continuous,
+}
+
 /// Calibrate a sensor: fit, decide, invert, and write the blob, the report and the record.
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
@@ -72,6 +86,13 @@ pub struct CalibrateArgs {
     /// width from 8 to 32 bits, or the rails LO:HI. Outputs at or beyond a rail are left out.
     #[arg(long, default_value = "unsigned16", value_parser = values::codes)]
     pub codes: Rails,
+    /// Single axis: how the coefficients follow the temperature (`temp` column).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub thermal: ThermalArg,
+    /// Single axis, continuous temperature model: the order of every coefficient's temperature
+    /// polynomial (0 to 5) instead of choosing each from the data.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=5))]
+    pub thermal_order: Option<u32>,
     /// Calibrated temperature span when the data have no temp column.
     #[arg(long, value_name = "LO:HI", default_value = "20:30")]
     pub temp_span: String,
@@ -131,6 +152,12 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         Asymmetry::Drop => Some(false),
     };
     opts.breakpoint = args.breakpoint;
+    opts.thermal = match args.thermal {
+        ThermalArg::Auto => sensor::Thermal::Auto,
+        ThermalArg::Table => sensor::Thermal::Table,
+        ThermalArg::Continuous => sensor::Thermal::Continuous,
+    };
+    opts.thermal_order = args.thermal_order;
     opts.model.clone_from(&args.model);
     opts.max_noise = args.max_noise;
     opts.rails = args.codes;

@@ -6,7 +6,7 @@ use crate::files::{Paths, Staged};
 use clap::Args;
 
 use super::calibrate::SensorKind;
-use crate::sim::{self, Sensor, plan, truth};
+use crate::sim::{self, Sensor, plan, ramp, truth};
 
 /// Simulate a sensor with known true coefficients and noise through a test plan.
 #[derive(Debug, Args)]
@@ -55,6 +55,28 @@ pub struct SimulateArgs {
     /// Chamber temperatures, C (comma-separated).
     #[arg(long, default_value = "25", value_delimiter = ',', value_parser = super::values::finite)]
     pub temps: Vec<f64>,
+    /// A chamber ramp instead of fixed temperatures, `FROM:TO` in C: the plan (repeated
+    /// `--repeat` times) is run while the chamber sweeps, each observation at its own
+    /// temperature; the file gets `time` (s) and `chamber_temp` columns, and `temp` is the
+    /// sensor's own reading.
+    #[arg(long, conflicts_with_all = ["temps", "spin"], allow_hyphen_values = true)]
+    pub ramp: Option<String>,
+    /// The ramp's duration, minutes.
+    #[arg(long, default_value_t = 120.0, requires = "ramp", value_parser = |s: &str| super::values::in_range(s, 0.1, 1.0e5))]
+    pub ramp_minutes: f64,
+    /// An uneven ramp: fast at first, slow at the end (the observations crowd at the end).
+    #[arg(long, requires = "ramp")]
+    pub uneven: bool,
+    /// The sensor's thermal time constant behind the chamber, seconds.
+    #[arg(long, default_value_t = 0.0, requires = "ramp", value_parser = |s: &str| super::values::in_range(s, 0.0, 1.0e5))]
+    pub lag: f64,
+    /// Self-heating after power-on, `RISE:SECONDS`: the sensor rises RISE C above its
+    /// surroundings with that time constant.
+    #[arg(long, requires = "ramp")]
+    pub self_heating: Option<String>,
+    /// The sensor reports its temperature in steps of this many C (1: whole degrees).
+    #[arg(long, requires = "ramp", value_parser = super::values::positive)]
+    pub temp_step: Option<f64>,
     /// Supply voltages, V (comma-separated).
     #[arg(long, default_value = "5", value_delimiter = ',', value_parser = super::values::finite)]
     pub volts: Vec<f64>,
@@ -232,6 +254,41 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// The ramp the options describe.
+fn ramp_of(args: &SimulateArgs, text: &str) -> Result<ramp::Ramp, String> {
+    let (from, to) = ramp::span(text)?;
+    let self_heating = args
+        .self_heating
+        .as_deref()
+        .map(ramp::self_heating)
+        .transpose()?;
+    Ok(ramp::Ramp {
+        from,
+        to,
+        seconds: args.ramp_minutes * 60.0,
+        uneven: args.uneven,
+        lag: args.lag,
+        self_heating,
+        step: args.temp_step,
+    })
+}
+
+/// The ramp's columns: `temp` becomes the sensor's reading, with `time` and `chamber_temp`.
+fn ramp_columns(obs: &mut sim::Observations, temps: &ramp::Temperatures) {
+    use crate::columns as col;
+    if let Some(i) = obs.names.iter().position(|n| n == col::TEMP) {
+        for (row, t) in obs.rows.iter_mut().zip(&temps.reported) {
+            row[i] = *t;
+        }
+    }
+    obs.names.insert(0, "time".into());
+    obs.names.push("chamber_temp".into());
+    for (k, row) in obs.rows.iter_mut().enumerate() {
+        row.insert(0, temps.time[k]);
+        row.push(temps.chamber[k]);
+    }
+}
+
 /// Runs `calflash simulate`.
 ///
 /// # Errors
@@ -250,10 +307,21 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         args.sensor,
         SensorKind::SingleAccel | SensorKind::SingleGyro
     );
-    let conditions = match &args.plan_file {
+    let mut conditions = match &args.plan_file {
         Some(path) => plan_file(path, args.sensor, args.repeat)?,
         None => plan::plan(&args.plan, &args.temps, &args.volts, args.repeat, single)
             .map_err(|e| e.to_string())?,
+    };
+    let ramp = match &args.ramp {
+        Some(text) => {
+            let r = ramp_of(args, text)?;
+            let temps = r.temperatures(conditions.len());
+            for (c, t) in conditions.iter_mut().zip(&temps.sensor) {
+                c.temp = *t;
+            }
+            Some(temps)
+        }
+        None => None,
     };
     let t = args.truth.as_ref();
     let sensor = match args.sensor {
@@ -299,6 +367,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         station.as_ref(),
     )
     .map_err(|e| format!("--latitude: {e}"))?;
+    if let Some(r) = &ramp {
+        ramp_columns(&mut obs, r);
+    }
     let saturated = obs.saturate(args.codes);
     let mut staged = Staged::new();
     staged.write(&args.output, |w| obs.write_csv(w))?;

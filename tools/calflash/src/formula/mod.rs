@@ -101,6 +101,30 @@ impl Term {
         v
     }
 
+    /// This term times `var^power` (`power` at least 1), in canonical form.
+    #[must_use]
+    pub fn times(&self, var: &str, power: u32) -> Self {
+        let mut factors = self.factors.clone();
+        factors.push(Factor {
+            var: var.into(),
+            abs: false,
+            power,
+        });
+        Self::normalise(factors)
+    }
+
+    /// A term of `var^power` alone (`power` at least 1).
+    #[must_use]
+    pub fn power(var: &str, power: u32) -> Self {
+        Self {
+            factors: vec![Factor {
+                var: var.into(),
+                abs: false,
+                power,
+            }],
+        }
+    }
+
     /// Multiplies factors into a canonical term: same variable and kind add their powers.
     fn normalise(mut factors: Vec<Factor>) -> Self {
         factors.sort();

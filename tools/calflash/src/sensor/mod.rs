@@ -17,6 +17,7 @@ pub mod record;
 pub mod selfcal;
 pub mod single;
 pub mod table;
+pub mod thermal;
 pub mod threshold;
 pub mod triad;
 
@@ -82,6 +83,24 @@ pub struct Options {
     /// The station, when the Earth's rate is a known input of the gyro fits
     /// (`crate::earth`).
     pub earth: Option<crate::earth::Station>,
+    /// How the coefficients vary with temperature.
+    pub thermal: Thermal,
+    /// The order of every coefficient's temperature polynomial, instead of choosing each from
+    /// the data.
+    pub thermal_order: Option<u32>,
+}
+
+/// How the coefficients vary with temperature.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Thermal {
+    /// A table of separate fits when the temperatures fall into well-filled setpoints, the
+    /// continuous model otherwise.
+    #[default]
+    Auto,
+    /// A separate fit at each temperature setpoint.
+    Table,
+    /// Every coefficient a polynomial in the temperature (`sensor::thermal`).
+    Continuous,
 }
 
 impl Options {
@@ -103,6 +122,8 @@ impl Options {
             max_noise: None,
             created: None,
             earth: None,
+            thermal: Thermal::Auto,
+            thermal_order: None,
         }
     }
 }
@@ -283,6 +304,8 @@ pub struct Calibrated {
     pub findings: Vec<Finding>,
     /// The station whose Earth rate the gyro fits took as known, if any.
     pub earth: Option<crate::earth::Station>,
+    /// The continuous temperature model the table was made from, if any.
+    pub thermal: Option<thermal::ThermalFit>,
 }
 
 impl Calibrated {
@@ -307,6 +330,12 @@ pub(crate) fn findings(
 ) -> Vec<Finding> {
     let mut out = Vec::new();
     for (a, name) in axis_names.iter().enumerate() {
+        // Points of one continuous model share its outliers: each is named once.
+        let mut named: Vec<Vec<u64>> = Vec::new();
+        let shared = points.len() > 1
+            && points
+                .windows(2)
+                .all(|w| w[0].axes[a].lines == w[1].axes[a].lines);
         let noise = points.iter().map(|p| p.noise[a]).fold(0.0, f64::max);
         let inv = points
             .iter()
@@ -351,13 +380,20 @@ pub(crate) fn findings(
                 volt: p.volt,
                 rows: vec![],
             });
-            if !f.influence.outliers.is_empty() {
-                let lines: Vec<String> = f
-                    .influence
-                    .outliers
-                    .iter()
-                    .map(|(i, _)| p.axes[a].lines[*i].to_string())
-                    .collect();
+            let at: Vec<u64> = f
+                .influence
+                .outliers
+                .iter()
+                .map(|(i, _)| p.axes[a].lines[*i])
+                .collect();
+            if !at.is_empty() && !named.contains(&at) {
+                let lines: Vec<String> = at.iter().map(u64::to_string).collect();
+                named.push(at);
+                let where_ = if shared {
+                    "all temperatures".to_string()
+                } else {
+                    where_
+                };
                 out.push(Finding {
                     verdict: Verdict::Review,
                     text: format!("{name} at {where_}: outliers at line {}", lines.join(", ")),

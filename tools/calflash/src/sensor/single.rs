@@ -3,12 +3,17 @@
 
 use nalgebra::DMatrix;
 use spincal::model::{
-    AxisNonlinearity, BoundedVec, CalibrationData, Channel, Quantity, Sensor, SingleSet, Span,
+    AxisNonlinearity, BoundedVec, CalibrationData, Channel, MAX_TEMPERATURES, Quantity, Sensor,
+    SingleSet, Span,
 };
 
-use super::invert::{Own, linearization};
+use super::invert::{Own, linearization, linearize};
 use super::table::{self, Layout};
-use super::{AxisFit, Calibrated, Decision, Options, PointFit, WorkflowError, covariance, device};
+use super::thermal::{self, ThermalFit};
+use super::{
+    AxisFit, Calibrated, Decision, Finding, Options, PointFit, Thermal, Verdict, WorkflowError,
+    covariance, device,
+};
 use crate::columns as col;
 use crate::formula::{self, Formula};
 use crate::obs::{self, Table};
@@ -70,7 +75,7 @@ fn select_terms(
         alpha,
         |names, j| {
             let name = &names[j];
-            if name == "1" || name == col::INPUT {
+            if name == "1" || name == col::INPUT || thermal::is_thermal(name) {
                 return false;
             }
             let Some(t) = formula.terms.iter().find(|t| &t.name() == name) else {
@@ -212,20 +217,92 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             ));
         }
     }
-    let layout: Layout = table::layout(
+    let mut layout = table::layout(
         &table,
         has(col::TEMP).then_some(col::TEMP),
         has(col::VOLT).then_some(col::VOLT),
-    )
-    .map_err(|e| WorkflowError::msg(path, e))?;
+    );
+    let continuous = match opts.thermal {
+        Thermal::Table => false,
+        Thermal::Continuous => true,
+        Thermal::Auto => {
+            varies(&table, col::TEMP)
+                && layout.as_ref().map_or(true, |l| {
+                    l.temps.len() > MAX_TEMPERATURES
+                        || l.points.iter().any(|p| p.rows.len() <= 2 * model.width())
+                })
+        }
+    };
+    let support = if continuous {
+        if varies(&table, col::VOLT) {
+            return Err(WorkflowError::msg(
+                path,
+                "the supply voltage varies: a continuous temperature model is fitted at one supply voltage; give the observations at each voltage setpoint at exact temperatures (--thermal table), or one voltage",
+            ));
+        }
+        let s = thermal::check(&table, col::TEMP)?;
+        let x = thermal::dtemp(&table, col::TEMP, &s.scale);
+        table.push_column(thermal::DTEMP, x);
+        notes.push(format!(
+            "continuous temperature model over {} to {} C ({} distinct temperatures{}): every coefficient is a polynomial in dtemp = (temp - {:.2}) / {:.2}",
+            s.scale.lo,
+            s.scale.hi,
+            s.distinct,
+            s.quantum
+                .map_or(String::new(), |q| format!(", read in steps of {q} C")),
+            s.scale.center(),
+            s.scale.half()
+        ));
+        layout = Ok(Layout {
+            temps: Vec::new(),
+            volts: Vec::new(),
+            points: vec![table::Point {
+                temp: None,
+                volt: None,
+                rows: (0..table.len()).collect(),
+            }],
+        });
+        Some(s)
+    } else {
+        None
+    };
+    let layout = layout.map_err(|e| WorkflowError::msg(path, e))?;
+    // While terms and tests are decided, the bias and the scale factor follow the temperature
+    // at the highest order it supports.
+    let provisional = |m: &Formula| match &support {
+        Some(s) => {
+            let orders: Vec<u32> = m
+                .term_names()
+                .iter()
+                .map(|n| {
+                    if n == "1" || n == col::INPUT {
+                        s.max_order
+                    } else {
+                        0
+                    }
+                })
+                .collect();
+            thermal::expand(m, &orders)
+        }
+        None => m.clone(),
+    };
     let reference = layout.reference();
     let ref_rows = &layout.points[reference].rows;
     let ref_table = sub(&table, ref_rows);
-    let ref_where = table::describe(&layout.points[reference]);
+    let ref_where = match &support {
+        Some(_) => "all temperatures".to_string(),
+        None => table::describe(&layout.points[reference]),
+    };
+    let decide = |m: &Formula| fit_axis(&provisional(m), &ref_table, opts.alpha, path, &ref_where);
     // Check the full model can be estimated, then keep the terms the data support.
-    fit_axis(&model, &ref_table, opts.alpha, path, &ref_where)?;
+    decide(&model)?;
     if chosen && !opts.keep_all_terms {
-        model = select_terms(&model, &ref_table, opts.alpha, &mut notes)?;
+        model = thermal::base_of(&select_terms(
+            &provisional(&model),
+            &ref_table,
+            opts.alpha,
+            &mut notes,
+        )?);
         notes.push(format!(
             "model after term selection at {ref_where}: {model}"
         ));
@@ -241,8 +318,8 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     let below = input.iter().filter(|x| **x < bp).count();
     let above = input.len() - below;
     if below >= 2 && above >= 2 {
-        let full = fit_axis(&with_kink, &ref_table, opts.alpha, path, &ref_where)?;
-        let reduced = fit_axis(&model, &ref_table, opts.alpha, path, &ref_where)?;
+        let full = decide(&with_kink)?;
+        let reduced = decide(&model)?;
         let test = select::partial_f(&full.fit, &reduced.fit);
         let k1 = full.coef(col::INPUT);
         let ca = full.coef(KINK);
@@ -288,8 +365,8 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     if varies(&table, col::DIR) {
         let mut m = model.clone();
         m.terms.push(formula::Term::var(col::DIR));
-        let full = fit_axis(&m, &ref_table, opts.alpha, path, &ref_where)?;
-        let reduced = fit_axis(&model, &ref_table, opts.alpha, path, &ref_where)?;
+        let full = decide(&m)?;
+        let reduced = decide(&model)?;
         let test = select::partial_f(&full.fit, &reduced.fit);
         let h = full.coef(col::DIR);
         let se = full.fit.std_errors[full.index(col::DIR).unwrap_or(0)];
@@ -323,59 +400,74 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         }
     }
 
-    // A fit per table point with the chosen terms.
+    // The model at each table point: a fit per setpoint, or the continuous model at the
+    // breakpoints that keep the device's interpolation close to it.
     let lo = input.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = input.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let mut fits = Vec::with_capacity(layout.points.len());
-    for p in &layout.points {
-        let t = sub(&table, &p.rows);
-        fits.push(fit_axis(&model, &t, opts.alpha, path, &table::describe(p))?);
-    }
-    let own = |f: &AxisFit| Own {
-        bias: f.coef("1"),
-        slope: f.coef(col::INPUT),
-        c2: f.coef("input^2"),
-        c3: f.coef("input^3"),
-        coq: f.coef("input:abs(input)"),
-        ca: f.coef(KINK),
-        bp,
+    let own = |f: &AxisFit| own_of(&f.fit.names, &f.fit.coefficients, bp);
+    let mut findings_extra = Vec::new();
+    let (layout, fits, center, thermal_fit) = match &support {
+        None => {
+            let mut fits = Vec::with_capacity(layout.points.len());
+            for p in &layout.points {
+                let t = sub(&table, &p.rows);
+                fits.push(fit_axis(&model, &t, opts.alpha, path, &table::describe(p))?);
+            }
+            let center = own(&fits[reference]).bias;
+            (layout, fits, center, None)
+        }
+        Some(s) => {
+            let tf = thermal::choose(&model, s, opts.alpha, opts.thermal_order, &|f| {
+                fit_axis(f, &table, opts.alpha, path, "all temperatures")
+            })?;
+            notes.extend(
+                tf.reasons
+                    .iter()
+                    .map(|r| format!("temperature order of {r}")),
+            );
+            let (c0, _) = tf.coefficients_at(s.scale.center());
+            let center = own_of(&tf.base.term_names(), &c0, bp).bias;
+            let (temps, ratio, worst_at) = table_of(&tf, center, (lo, hi), bp);
+            findings_extra.push(table_finding(temps.len(), ratio, worst_at, &s.scale));
+            let fits: Vec<AxisFit> = temps.iter().map(|t| tf.at(*t)).collect();
+            let points = temps
+                .iter()
+                .map(|t| table::Point {
+                    temp: Some(*t),
+                    volt: None,
+                    rows: Vec::new(),
+                })
+                .collect();
+            let layout = Layout {
+                temps,
+                volts: Vec::new(),
+                points,
+            };
+            (layout, fits, center, Some(tf))
+        }
     };
-    let center = own(&fits[reference]).bias;
+    let reference = layout.reference();
     let mut sets = Vec::new();
     let mut covs = Vec::new();
     let mut points = Vec::new();
     for (p, f) in layout.points.iter().zip(fits) {
         let o = own(&f);
-        let lin = linearization(&o, center, lo, hi);
-        let (n, err) = (lin.n, lin.error);
-        // x = (L - (bias - center)) / slope with L = alpha + gamma u.
-        let scale = lin.gamma / o.slope;
-        let offset = (lin.alpha - (o.bias - center)) / o.slope;
+        let d = DeviceSet::of(&o, center, lo, hi);
         let (i0, i1) = (f.index("1").unwrap_or(0), f.index(col::INPUT).unwrap_or(0));
         let c = DMatrix::from_fn(2, 2, |r, k| f.fit.covariance[([i0, i1][r], [i0, i1][k])]);
-        let factor = covariance::single(&c, o.slope, offset, scale).map_err(|e| {
+        let factor = covariance::single(&c, o.slope, d.offset, d.scale).map_err(|e| {
             WorkflowError::msg(
                 &opts.file,
                 format!("{} at {}: {e}", f.output, table::describe(p)),
             )
         })?;
         covs.push([factor[0] as f32, factor[1] as f32, factor[2] as f32]);
-        sets.push(SingleSet {
-            axis: AxisNonlinearity {
-                quadratic: n[0] as f32,
-                cubic: n[1] as f32,
-                odd_quadratic: n[2] as f32,
-                asymmetry: n[3] as f32,
-                asymmetry_break: n[4] as f32,
-            },
-            scale: scale as f32,
-            offset: offset as f32,
-        });
+        sets.push(d.set());
         points.push(PointFit {
             temp: p.temp,
             volt: p.volt,
             noise: vec![f.fit.sigma2.sqrt() / o.slope.abs()],
-            inversion_error: vec![err],
+            inversion_error: vec![d.error],
             axes: vec![f],
         });
     }
@@ -408,6 +500,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         opts,
         &output_errors,
     );
+    findings.extend(findings_extra);
     findings.extend(beyond);
     Ok(Calibrated {
         data,
@@ -424,5 +517,156 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         device_error,
         findings,
         earth: None,
+        thermal: thermal_fit,
     })
+}
+
+/// The own-axis polynomial from named coefficients.
+fn own_of(names: &[String], coefficients: &[f64], bp: f64) -> Own {
+    let c = |term: &str| {
+        names
+            .iter()
+            .position(|n| n == term)
+            .map_or(0.0, |i| coefficients[i])
+    };
+    Own {
+        bias: c("1"),
+        slope: c(col::INPUT),
+        c2: c("input^2"),
+        c3: c("input^3"),
+        coq: c("input:abs(input)"),
+        ca: c(KINK),
+        bp,
+    }
+}
+
+/// What the device applies for one forward model, in f64: the linearisation `n`, then
+/// `x = offset + scale u`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct DeviceSet {
+    n: [f64; 5],
+    scale: f64,
+    offset: f64,
+    /// Worst inversion error over the calibrated range, SI.
+    error: f64,
+}
+
+impl DeviceSet {
+    fn of(o: &Own, center: f64, lo: f64, hi: f64) -> Self {
+        let lin = linearization(o, center, lo, hi);
+        // x = (L - (bias - center)) / slope with L = alpha + gamma u.
+        Self {
+            n: lin.n,
+            scale: lin.gamma / o.slope,
+            offset: (lin.alpha - (o.bias - center)) / o.slope,
+            error: lin.error,
+        }
+    }
+
+    /// The correction of `v = code - center`.
+    fn correct(&self, v: f64) -> f64 {
+        self.offset + self.scale * linearize(&self.n, v)
+    }
+
+    /// The device's blend: each coefficient linearly.
+    fn blend(&self, other: &Self, t: f64) -> Self {
+        let mix = |a: f64, b: f64| a + (b - a) * t;
+        Self {
+            n: std::array::from_fn(|i| mix(self.n[i], other.n[i])),
+            scale: mix(self.scale, other.scale),
+            offset: mix(self.offset, other.offset),
+            error: self.error.max(other.error),
+        }
+    }
+
+    fn set(&self) -> SingleSet {
+        let n = self.n;
+        SingleSet {
+            axis: AxisNonlinearity {
+                quadratic: n[0] as f32,
+                cubic: n[1] as f32,
+                odd_quadratic: n[2] as f32,
+                asymmetry: n[3] as f32,
+                asymmetry_break: n[4] as f32,
+            },
+            scale: self.scale as f32,
+            offset: self.offset as f32,
+        }
+    }
+}
+
+/// Temperatures of the grid the table is checked on.
+const TABLE_GRID: usize = 221;
+
+/// The device's temperature table for a continuous model: breakpoints where interpolating the
+/// device's sets departs from the model's own correction by at most a tenth of the model's
+/// 1-sigma (of the corrected input, from the bias and scale-factor covariance), over inputs
+/// `lo..hi` and the calibrated temperatures. Returns the breakpoints, the worst departure in
+/// tenths of the 1-sigma and where it is.
+fn table_of(tf: &ThermalFit, center: f64, (lo, hi): (f64, f64), bp: f64) -> (Vec<f64>, f64, f64) {
+    let names = tf.base.term_names();
+    let idx = |t: &str| names.iter().position(|n| n == t).unwrap_or(0);
+    let (i0, i1) = (idx("1"), idx(col::INPUT));
+    let scale = tf.scale;
+    let at = |t: f64| {
+        let (c, cov) = tf.coefficients_at(t);
+        let o = own_of(&names, &c, bp);
+        (DeviceSet::of(&o, center, lo, hi), o, cov)
+    };
+    let grid: Vec<(f64, DeviceSet, Own, DMatrix<f64>)> = (0..TABLE_GRID)
+        .map(|i| {
+            let t = scale.lo + (scale.hi - scale.lo) * i as f64 / (TABLE_GRID - 1) as f64;
+            let (d, o, c) = at(t);
+            (t, d, o, c)
+        })
+        .collect();
+    let inputs: Vec<f64> = (0..=40)
+        .map(|k| lo + (hi - lo) * f64::from(k) / 40.0)
+        .collect();
+    let ratio = |points: &[f64]| {
+        let sets: Vec<DeviceSet> = points.iter().map(|t| at(*t).0).collect();
+        let mut worst = (0.0f64, scale.lo);
+        for (t, exact, o, c) in &grid {
+            let k = points
+                .partition_point(|p| p <= t)
+                .clamp(1, points.len() - 1);
+            let (a, b) = (points[k - 1], points[k]);
+            let blended = sets[k - 1].blend(&sets[k], ((t - a) / (b - a)).clamp(0.0, 1.0));
+            for x in &inputs {
+                let v = o.output(*x) - center;
+                let sd = ((c[(i0, i0)] + 2.0 * x * c[(i0, i1)] + x * x * c[(i1, i1)]).max(0.0))
+                    .sqrt()
+                    / o.slope.abs();
+                let r = (blended.correct(v) - exact.correct(v)).abs() / (0.1 * sd);
+                if r > worst.0 {
+                    worst = (r, *t);
+                }
+            }
+        }
+        worst
+    };
+    let (points, r) = thermal::breakpoints(&scale, MAX_TEMPERATURES, ratio);
+    let worst_at = ratio(&points).1;
+    (points, r, worst_at)
+}
+
+fn table_finding(n: usize, ratio: f64, at: f64, scale: &thermal::Scale) -> Finding {
+    let range = format!("{} to {} C", scale.lo, scale.hi);
+    if ratio <= 1.0 {
+        Finding {
+            verdict: Verdict::Accept,
+            text: format!(
+                "the device's table of {n} temperatures follows the continuous temperature model within {:.2} of its 1-sigma over {range}",
+                0.1 * ratio
+            ),
+        }
+    } else {
+        Finding {
+            verdict: Verdict::Review,
+            text: format!(
+                "the device's table of {n} temperatures (the most it holds) departs from the continuous temperature model by up to {:.2} of its 1-sigma (at {at:.1} C) over {range}: the temperature curve bends more than the table can follow",
+                0.1 * ratio
+            ),
+        }
+    }
 }

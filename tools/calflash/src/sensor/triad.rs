@@ -863,5 +863,6 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         device_error,
         findings,
         earth: opts.earth,
+        thermal: None,
     })
 }

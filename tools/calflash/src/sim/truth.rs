@@ -43,6 +43,19 @@ pub struct SingleTruth {
     pub k1_temp: f64,
     /// Quadratic bias temperature coefficient, counts per degree C^2.
     pub k0_temp2: f64,
+    /// Cubic bias temperature coefficient, counts per degree C^3.
+    pub k0_temp3: f64,
+    /// Quadratic scale-factor temperature coefficient, relative per degree C^2.
+    pub k1_temp2: f64,
+    /// A step in the bias that no low-order polynomial follows: `k0_tanh tanh((T - tanh_center)
+    /// / tanh_width)` counts.
+    pub k0_tanh: f64,
+    /// The same in the scale factor, relative.
+    pub k1_tanh: f64,
+    /// Where the steps are, C.
+    pub tanh_center: f64,
+    /// How wide they are, C.
+    pub tanh_width: f64,
     /// Bias supply-voltage coefficient, counts per volt (from `ref_volt`).
     pub k0_volt: f64,
     /// Scale-factor supply-voltage coefficient, relative per volt.
@@ -71,6 +84,12 @@ impl Default for SingleTruth {
             k0_temp: 0.6,
             k1_temp: 80e-6,
             k0_temp2: 0.0,
+            k0_temp3: 0.0,
+            k1_temp2: 0.0,
+            k0_tanh: 0.0,
+            k1_tanh: 0.0,
+            tanh_center: 10.0,
+            tanh_width: 15.0,
             k0_volt: 0.0,
             k1_volt: 0.0,
             ref_volt: 5.0,
@@ -86,8 +105,23 @@ impl SingleTruth {
     pub fn output(&self, a: f64, ap: f64, ao: f64, t: f64, v: f64, dir: f64) -> f64 {
         let dt = t - REF_TEMP;
         let dv = v - self.ref_volt;
-        let k0 = self.k0 + self.k0_temp * dt + self.k0_temp2 * dt * dt + self.k0_volt * dv;
-        let k1 = self.k1 * (1.0 + self.k1_temp * dt + self.k1_volt * dv);
+        let step = if self.k0_tanh == 0.0 && self.k1_tanh == 0.0 {
+            0.0
+        } else {
+            ((t - self.tanh_center) / self.tanh_width).tanh()
+        };
+        let k0 = self.k0
+            + self.k0_temp * dt
+            + self.k0_temp2 * dt * dt
+            + self.k0_temp3 * dt * dt * dt
+            + self.k0_tanh * step
+            + self.k0_volt * dv;
+        let k1 = self.k1
+            * (1.0
+                + self.k1_temp * dt
+                + self.k1_temp2 * dt * dt
+                + self.k1_tanh * step
+                + self.k1_volt * dv);
         let a = if a.abs() <= self.dead_band { 0.0 } else { a };
         k0 + k1
             * (a + self.k2 * a * a

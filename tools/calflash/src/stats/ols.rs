@@ -155,8 +155,8 @@ impl Fit {
         let value = x.iter().zip(&self.coefficients).map(|(a, b)| a * b).sum();
         // A' x, then its squared length.
         let mut q = 0.0;
-        for j in 0..self.p {
-            let s: f64 = (0..=j).map(|i| self.factor[(i, j)] * x[i]).sum();
+        for j in 0..self.factor.ncols() {
+            let s: f64 = (0..self.p).map(|i| self.factor[(i, j)] * x[i]).sum();
             q += s * s;
         }
         let variance = self.sigma2 * q;
@@ -171,6 +171,69 @@ impl Fit {
     #[must_use]
     pub fn unscaled_covariance(&self) -> DMatrix<f64> {
         &self.factor * self.factor.transpose()
+    }
+
+    /// The fit of linear combinations of the coefficients, `c = J b` (one row of `j` per new
+    /// coefficient, named by `names`), with their covariance `J C J'`, standard errors, t
+    /// statistics, p-values and intervals on this fit's degrees of freedom. The residuals,
+    /// the goodness of fit and the influence measures stay this fit's (DFBETAS carried over to
+    /// the new coefficients); a thermal model evaluated at one temperature is such a fit.
+    ///
+    /// # Panics
+    /// When `j` does not have one column per coefficient and one row per name.
+    #[must_use]
+    pub fn combined(&self, names: Vec<String>, j: &DMatrix<f64>) -> Fit {
+        assert_eq!(j.ncols(), self.p, "one column per coefficient");
+        assert_eq!(j.nrows(), names.len(), "one row per new coefficient");
+        let p = names.len();
+        let beta = DVector::from_column_slice(&self.coefficients);
+        let coefficients: Vec<f64> = (j * beta).iter().copied().collect();
+        let factor = j * &self.factor;
+        let covariance = &factor * factor.transpose() * self.sigma2;
+        let std_errors: Vec<f64> = (0..p).map(|k| covariance[(k, k)].sqrt()).collect();
+        let t: Vec<f64> = coefficients
+            .iter()
+            .zip(&std_errors)
+            .map(|(b, s)| b / s)
+            .collect();
+        let p_values = t
+            .iter()
+            .map(|&t| dist::t_two_sided(t, self.dof as f64))
+            .collect();
+        let crit = dist::t_upper_quantile(self.alpha / 2.0, self.dof as f64);
+        let interval = |sign: f64| -> Vec<f64> {
+            coefficients
+                .iter()
+                .zip(&std_errors)
+                .map(|(b, s)| b + sign * crit * s)
+                .collect()
+        };
+        let (ci_lower, ci_upper) = (interval(-1.0), interval(1.0));
+        // DFBETAS_ij = (b_j - b_j(i)) / (s_(i) sqrt(C_jj)): the changes map through J, the
+        // scale s_(i) is common to all coefficients.
+        let mut influence = self.influence.clone();
+        let old = &self.influence.dfbetas;
+        influence.dfbetas = DMatrix::from_fn(old.nrows(), p, |i, k| {
+            (0..self.p)
+                .map(|m| old[(i, m)] * self.std_errors[m] * j[(k, m)])
+                .sum::<f64>()
+                / std_errors[k]
+        });
+        Fit {
+            names,
+            p,
+            coefficients,
+            std_errors,
+            t,
+            p_values,
+            ci_lower,
+            ci_upper,
+            covariance,
+            vif: vec![None; p],
+            influence,
+            factor,
+            ..self.clone()
+        }
     }
 }
 

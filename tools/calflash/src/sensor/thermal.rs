@@ -1,0 +1,498 @@
+//! Continuous temperature models: every coefficient of a sensor's model as a polynomial in the
+//! temperature, fitted in one regression with all the observations wherever their
+//! temperatures fall (a chamber ramp, a unit warming up, or a few exact setpoints, which are a
+//! special case of the same thing).
+//!
+//! The regressor is the scaled temperature `dtemp = (temp - t0) / half`, from -1 to 1 over the
+//! calibrated range. A coefficient `c(T) = c0 + c1 dtemp + ... + ck dtemp^k` adds the terms
+//! `term:dtemp^i` to the model. Each coefficient's order `k` is chosen from the data by forward
+//! partial F tests (one or two powers at a time, so that an odd curve such as a tanh is not
+//! stopped by its missing even power), at a Bonferroni level over the candidates of each step,
+//! up to what the spread of the temperatures supports. The model at one temperature is the
+//! linear combination of the coefficients `J(T) b`, with covariance `J C J'`
+//! ([`crate::stats::Fit::combined`]).
+
+use nalgebra::DMatrix;
+
+use super::{AxisFit, WorkflowError};
+use crate::formula::{Formula, INTERCEPT, Term};
+use crate::obs::Table;
+use crate::stats::select;
+
+/// The scaled temperature column.
+pub const DTEMP: &str = "dtemp";
+/// The highest order of a coefficient's temperature polynomial.
+pub const MAX_ORDER: u32 = 5;
+/// The smallest temperature span a temperature model is fitted over, C.
+pub const MIN_SPAN: f64 = 5.0;
+/// Temperatures a unit under test can plausibly be at, C.
+pub const PLAUSIBLE: (f64, f64) = (-100.0, 200.0);
+/// Readings closer than this are one temperature when counting the distinct ones, C.
+const DISTINCT: f64 = 0.5;
+
+/// The calibrated temperature range and the scaling of `dtemp`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scale {
+    /// Lowest temperature, C.
+    pub lo: f64,
+    /// Highest temperature, C.
+    pub hi: f64,
+}
+
+impl Scale {
+    /// The middle of the range, `t0`.
+    #[must_use]
+    pub fn center(&self) -> f64 {
+        0.5 * (self.lo + self.hi)
+    }
+
+    /// Half the span.
+    #[must_use]
+    pub fn half(&self) -> f64 {
+        0.5 * (self.hi - self.lo)
+    }
+
+    /// `dtemp` at temperature `t`.
+    #[must_use]
+    pub fn x(&self, t: f64) -> f64 {
+        (t - self.center()) / self.half()
+    }
+}
+
+/// What a temperature column supports.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Support {
+    /// The range.
+    pub scale: Scale,
+    /// Distinct temperatures (readings within 0.5 C counted once).
+    pub distinct: usize,
+    /// The highest order the temperatures support.
+    pub max_order: u32,
+    /// The reading step when the temperatures are reported in steps (whole degrees, say).
+    pub quantum: Option<f64>,
+}
+
+/// The step all readings are whole multiples of (at least 0.05 C), if there is one.
+fn quantum(temps: &[f64]) -> Option<f64> {
+    [0.05, 0.1, 0.25, 0.5, 1.0, 2.0]
+        .into_iter()
+        .rev()
+        .find(|q| temps.iter().all(|t| ((t / q).round() * q - t).abs() < 1e-9))
+}
+
+/// Checks the temperature column of `table` for a temperature model and says what it supports.
+///
+/// # Errors
+/// A message naming the line: a reading that is not a temperature (non-finite, or outside
+/// [`PLAUSIBLE`]); a span under [`MIN_SPAN`] (which supports no temperature term); readings that
+/// jump back and forth as no chamber does (a column mix-up).
+pub fn check(table: &Table, column: &str) -> Result<Support, WorkflowError> {
+    let path = std::path::Path::new(&table.path);
+    let Some(temps) = table.column(column) else {
+        return Err(WorkflowError::msg(
+            path,
+            format!(
+                "a temperature model needs the column `{column}` (the sensor's temperature, C); the file has: {}",
+                table.names.join(", ")
+            ),
+        ));
+    };
+    for (i, t) in temps.iter().enumerate() {
+        if !(t.is_finite() && (PLAUSIBLE.0..=PLAUSIBLE.1).contains(t)) {
+            return Err(WorkflowError::msg(
+                path,
+                format!(
+                    "line {}: {column} = {t} is not a temperature a unit is calibrated at; expected {} to {} C",
+                    table.lines[i], PLAUSIBLE.0, PLAUSIBLE.1
+                ),
+            ));
+        }
+    }
+    let lo = temps.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if hi - lo < MIN_SPAN {
+        return Err(WorkflowError::msg(
+            path,
+            format!(
+                "the temperatures span {:.1} C ({lo} to {hi} C); a temperature model needs at least {MIN_SPAN} C, and this spread supports temperature terms of order: none (calibrate at one temperature without a temperature model, or widen the ramp)",
+                hi - lo
+            ),
+        ));
+    }
+    jumps(temps, &table.lines, hi - lo).map_err(|e| WorkflowError::msg(path, e))?;
+    let mut sorted = temps.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let mut distinct = 0usize;
+    let mut last = f64::NEG_INFINITY;
+    for t in sorted {
+        if t - last > DISTINCT {
+            distinct += 1;
+            last = t;
+        }
+    }
+    let max_order = MAX_ORDER.min(distinct.saturating_sub(1) as u32);
+    Ok(Support {
+        scale: Scale { lo, hi },
+        distinct,
+        max_order,
+        quantum: quantum(temps),
+    })
+}
+
+/// Readings in file order that jump back and forth by more than a tenth of the span, more often
+/// than a chamber's cycles could (at least 3 reversals and 5 % of the readings): the column
+/// holds something else.
+fn jumps(temps: &[f64], lines: &[u64], span: f64) -> Result<(), String> {
+    let big = 0.1 * span;
+    let mut last_sign = 0.0;
+    let mut reversals = Vec::new();
+    for (i, w) in temps.windows(2).enumerate() {
+        let d = w[1] - w[0];
+        if d.abs() > big {
+            if last_sign != 0.0 && d.signum() != last_sign {
+                reversals.push(i + 1);
+            }
+            last_sign = d.signum();
+        }
+    }
+    if reversals.len() >= 3 && reversals.len() * 20 >= temps.len() {
+        let at: Vec<String> = reversals
+            .iter()
+            .take(3)
+            .map(|&i| format!("line {} ({} after {})", lines[i], temps[i], temps[i - 1]))
+            .collect();
+        return Err(format!(
+            "the temperatures jump back and forth by more than {big:.1} C {} times in {} readings, as no chamber does ({}, ...): is the temperature column holding another quantity?",
+            reversals.len(),
+            temps.len(),
+            at.join(", ")
+        ));
+    }
+    Ok(())
+}
+
+/// The `dtemp` column for `table`'s temperatures.
+#[must_use]
+pub fn dtemp(table: &Table, column: &str, scale: &Scale) -> Vec<f64> {
+    table
+        .column(column)
+        .unwrap_or_default()
+        .iter()
+        .map(|t| scale.x(*t))
+        .collect()
+}
+
+/// Term `j` of `base` (in `term_names` order) times `dtemp^k`; `k` at least 1.
+fn thermal_term(base: &Formula, j: usize, k: u32) -> Term {
+    let shift = usize::from(base.intercept);
+    if base.intercept && j == 0 {
+        Term::power(DTEMP, k)
+    } else {
+        base.terms[j - shift].times(DTEMP, k)
+    }
+}
+
+/// `base` with `term:dtemp^1 ... term:dtemp^k` for each term's order `k` (`orders` in
+/// `term_names` order): the base terms first, so their coefficients are the values at `t0`.
+#[must_use]
+pub fn expand(base: &Formula, orders: &[u32]) -> Formula {
+    let mut f = base.clone();
+    for (j, &k) in orders.iter().enumerate() {
+        for i in 1..=k {
+            f.terms.push(thermal_term(base, j, i));
+        }
+    }
+    f
+}
+
+/// `formula` without its temperature terms.
+#[must_use]
+pub fn base_of(formula: &Formula) -> Formula {
+    let mut f = formula.clone();
+    f.terms.retain(|t| t.degree_in(DTEMP) == 0);
+    f
+}
+
+/// Whether a term name is a temperature term.
+#[must_use]
+pub fn is_thermal(name: &str) -> bool {
+    name.split(':')
+        .any(|f| f == DTEMP || f.starts_with("dtemp^"))
+}
+
+/// A model whose coefficients vary with temperature, fitted over every observation.
+#[derive(Debug, Clone)]
+pub struct ThermalFit {
+    /// The model at one temperature.
+    pub base: Formula,
+    /// Each coefficient's order (`base.term_names()` order).
+    pub orders: Vec<u32>,
+    /// The calibrated range.
+    pub scale: Scale,
+    /// The fit of the expanded model.
+    pub fit: AxisFit,
+    /// How each order was chosen, in words.
+    pub reasons: Vec<String>,
+}
+
+impl ThermalFit {
+    /// `J(T)`: row `r` gives base coefficient `r` at temperature `t` from the expanded ones.
+    fn jacobian(&self, t: f64) -> DMatrix<f64> {
+        let names = self.base.term_names();
+        let x = self.scale.x(t);
+        let mut j = DMatrix::zeros(names.len(), self.fit.fit.p);
+        for (r, name) in names.iter().enumerate() {
+            if let Some(c) = self.fit.index(name) {
+                j[(r, c)] = 1.0;
+            }
+            for k in 1..=self.orders[r] {
+                let n = thermal_term(&self.base, r, k).name();
+                if let Some(c) = self.fit.index(&n) {
+                    j[(r, c)] = x.powi(k as i32);
+                }
+            }
+        }
+        j
+    }
+
+    /// The model at temperature `t`: the base model's coefficients there, with their
+    /// covariance and tests (the residuals and influence stay the whole fit's).
+    #[must_use]
+    pub fn at(&self, t: f64) -> AxisFit {
+        let j = self.jacobian(t);
+        AxisFit {
+            formula: self.base.clone(),
+            fit: self.fit.fit.combined(self.base.term_names(), &j),
+            ..self.fit.clone()
+        }
+    }
+
+    /// The coefficients at `t` and their covariance, without the rest of a fit (cheap).
+    #[must_use]
+    pub fn coefficients_at(&self, t: f64) -> (Vec<f64>, DMatrix<f64>) {
+        let j = self.jacobian(t);
+        let b = nalgebra::DVector::from_column_slice(&self.fit.fit.coefficients);
+        let c = &j * &self.fit.fit.covariance * j.transpose();
+        ((&j * b).iter().copied().collect(), c)
+    }
+}
+
+/// Fits `base` with each coefficient's temperature order chosen from the data (or `fixed` for
+/// every coefficient), at most `support.max_order`; `fit` fits a formula over the observations
+/// (which have the `dtemp` column).
+///
+/// # Errors
+/// The fit's, for the model with every order at 0 (the others are candidates only).
+pub fn choose(
+    base: &Formula,
+    support: &Support,
+    alpha: f64,
+    fixed: Option<u32>,
+    fit: &dyn Fn(&Formula) -> Result<AxisFit, WorkflowError>,
+) -> Result<ThermalFit, WorkflowError> {
+    let names = base.term_names();
+    let max = support.max_order;
+    let scale = support.scale;
+    let supported = format!(
+        "the most {} distinct temperatures over {:.1} C support",
+        support.distinct,
+        scale.hi - scale.lo
+    );
+    if let Some(k) = fixed {
+        let k = k.min(max);
+        let orders = vec![k; names.len()];
+        let f = fit(&expand(base, &orders))?;
+        return Ok(ThermalFit {
+            base: base.clone(),
+            reasons: vec![format!(
+                "every coefficient's temperature polynomial has order {k} (--thermal-order{})",
+                if k == max {
+                    format!(", {supported}")
+                } else {
+                    String::new()
+                }
+            )],
+            orders,
+            scale,
+            fit: f,
+        });
+    }
+    let mut orders = vec![0u32; names.len()];
+    let mut current = fit(&expand(base, &orders))?;
+    let mut last_p: Vec<Option<f64>> = vec![None; names.len()];
+    loop {
+        // Every candidate: one more power of one coefficient, or two (an odd or even curve).
+        let mut candidates = Vec::new();
+        for j in 0..names.len() {
+            for step in 1..=2 {
+                if orders[j] + step <= max {
+                    let mut o = orders.clone();
+                    o[j] += step;
+                    if let Ok(f) = fit(&expand(base, &o)) {
+                        let test = select::partial_f(&f.fit, &current.fit);
+                        candidates.push((j, step, test, f));
+                    }
+                }
+            }
+        }
+        let m = candidates.len().max(1) as f64;
+        for (j, step, test, _) in &candidates {
+            if *step == 1 {
+                last_p[*j] = Some(test.p);
+            }
+        }
+        // The most significant at the Bonferroni level; one power before two.
+        let best = candidates
+            .into_iter()
+            .filter(|c| c.2.p < alpha / m)
+            .min_by(|a, b| {
+                (a.1, a.2.p)
+                    .partial_cmp(&(b.1, b.2.p))
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            });
+        let Some((j, step, _, f)) = best else { break };
+        orders[j] += step;
+        current = f;
+    }
+    let reasons = names
+        .iter()
+        .enumerate()
+        .map(|(j, n)| {
+            let what = if n == INTERCEPT {
+                "bias (1)".to_string()
+            } else {
+                n.clone()
+            };
+            let k = orders[j];
+            if k == max {
+                format!("{what}: order {k}, {supported}")
+            } else {
+                match last_p[j] {
+                    Some(p) => format!(
+                        "{what}: order {k} (one more power of the temperature: p = {p:.3}, not significant)"
+                    ),
+                    None => format!("{what}: order {k}"),
+                }
+            }
+        })
+        .collect();
+    Ok(ThermalFit {
+        base: base.clone(),
+        orders,
+        scale,
+        fit: current,
+        reasons,
+    })
+}
+
+/// Breakpoints for the device's table over `scale`: from the two ends, the temperature where
+/// `ratio` is worst is added until `ratio(points)` is at most 1 or `max` points are used.
+/// `ratio(points)` gives the worst departure of the interpolated table from the continuous
+/// model (against what is allowed) and the temperature where it is.
+pub fn breakpoints(
+    scale: &Scale,
+    max: usize,
+    ratio: impl Fn(&[f64]) -> (f64, f64),
+) -> (Vec<f64>, f64) {
+    let mut points = vec![scale.lo, scale.hi];
+    loop {
+        let (r, at) = ratio(&points);
+        if r <= 1.0 || points.len() >= max || points.iter().any(|p| (p - at).abs() < 1e-9) {
+            return (points, r);
+        }
+        let i = points.partition_point(|p| *p < at);
+        points.insert(i, at);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(temps: Vec<f64>) -> Table {
+        let n = temps.len();
+        Table {
+            path: "ramp.csv".into(),
+            names: vec!["temp".into()],
+            columns: vec![temps],
+            lines: (2..n as u64 + 2).collect(),
+        }
+    }
+
+    #[test]
+    fn a_ramp_supports_high_orders_and_a_narrow_one_none() {
+        let ramp = table(
+            (0..400)
+                .map(|i| -40.0 + 110.0 * f64::from(i) / 399.0)
+                .collect(),
+        );
+        let s = check(&ramp, "temp").unwrap();
+        assert_eq!(s.max_order, MAX_ORDER);
+        assert_eq!(s.scale.x(-40.0), -1.0);
+        let narrow = table((0..100).map(|i| 24.0 + 3.0 * f64::from(i) / 99.0).collect());
+        let e = check(&narrow, "temp").unwrap_err().to_string();
+        assert!(e.contains("span 3.0 C") && e.contains("order: none"), "{e}");
+        let whole = table((0..400).map(|i| (f64::from(i) / 4.0).round()).collect());
+        assert_eq!(check(&whole, "temp").unwrap().quantum, Some(1.0));
+    }
+
+    #[test]
+    fn readings_that_are_not_temperatures_are_located() {
+        let mut t: Vec<f64> = (0..50).map(f64::from).collect();
+        t[7] = -300.0;
+        let e = check(&table(t), "temp").unwrap_err().to_string();
+        assert!(e.contains("line 9: temp = -300"), "{e}");
+        let mixed = table(
+            (0..200)
+                .map(|i| if i % 2 == 0 { 9.8 } else { -9.8 })
+                .collect(),
+        );
+        let e = check(&mixed, "temp").unwrap_err().to_string();
+        assert!(
+            e.contains("jump back and forth") && e.contains("line 4"),
+            "{e}"
+        );
+        // A chamber cycling three times between soaks is not a mix-up.
+        let cycles = table(
+            (0..600)
+                .map(|i| if (i / 100) % 2 == 0 { -40.0 } else { 85.0 })
+                .collect(),
+        );
+        assert!(check(&cycles, "temp").is_ok());
+    }
+
+    #[test]
+    fn expanded_terms_and_the_model_at_a_temperature() {
+        let base = crate::formula::parse("output ~ 1 + input").unwrap();
+        let f = expand(&base, &[2, 1]);
+        assert_eq!(
+            f.term_names(),
+            ["1", "input", "dtemp", "dtemp^2", "dtemp:input"]
+        );
+        assert!(f.terms.iter().skip(1).all(|t| is_thermal(&t.name())));
+        assert_eq!(base_of(&f), base);
+    }
+
+    #[test]
+    fn breakpoints_are_added_where_the_table_is_worst() {
+        // A kink at 10 C: the table needs a point there and nowhere else.
+        let scale = Scale {
+            lo: -40.0,
+            hi: 70.0,
+        };
+        let curve = |t: f64| (t - 10.0).abs();
+        let (p, r) = breakpoints(&scale, 16, |pts: &[f64]| {
+            (0..=110)
+                .map(|i| {
+                    let t = -40.0 + f64::from(i);
+                    let k = pts.partition_point(|p| *p <= t).clamp(1, pts.len() - 1);
+                    let (a, b) = (pts[k - 1], pts[k]);
+                    let lin = curve(a) + (curve(b) - curve(a)) * (t - a) / (b - a);
+                    ((lin - curve(t)).abs() / 0.01, t)
+                })
+                .fold((0.0, 0.0), |m, x| if x.0 > m.0 { x } else { m })
+        });
+        assert_eq!(p, [-40.0, 10.0, 70.0]);
+        assert!(r <= 1.0);
+    }
+}
