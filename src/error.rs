@@ -173,6 +173,9 @@ pub enum Error {
     /// An IMU whose gyro codes come in another sample format than its accelerometer's (one
     /// sample carries both).
     InvalidMixedFormats,
+    /// A temperature series with no terms or more than the sets the device holds, alongside
+    /// breakpoints, or over a temperature span of zero width.
+    InvalidTemperatureSeries,
     /// An axis center (the zero-input code) not strictly inside the ADC rails.
     InvalidCenter {
         /// The sensor.
@@ -356,6 +359,10 @@ impl fmt::Display for Error {
             }
             Error::InvalidMixedFormats => f.write_str(
                 "the gyro's codes come in another sample format than the accelerometer's",
+            ),
+            Error::InvalidTemperatureSeries => f.write_str(
+                "the temperature series has no terms or too many, comes with breakpoints, or \
+                 spans no temperatures",
             ),
             Error::InvalidCenter { part, axis } => write!(
                 f,

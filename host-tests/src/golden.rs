@@ -138,6 +138,12 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
             cases.push((names[k], in_format(data(), format), Kind::Imu(1000.0)));
         }
     }
+    // A single axis whose sets are a temperature series.
+    cases.push((
+        "single_series",
+        CalibrationData::example_single_series(),
+        Kind::Single,
+    ));
     cases
 }
 
@@ -284,7 +290,7 @@ fn axis_inputs(rails: Rails, center: f32, rng: &mut Lcg, n: usize) -> Vec<i32> {
 }
 
 /// Environments each case is run at: the nominal point, a table edge, between breakpoints,
-/// beyond the span, and NaN.
+/// beyond the span, NaN, and between breakpoints again.
 fn environments(data: &CalibrationData) -> Vec<(f32, f32)> {
     let env = &data.environment;
     let tmid = 0.5 * (env.temperature_span.lo + env.temperature_span.hi);
@@ -298,6 +304,8 @@ fn environments(data: &CalibrationData) -> Vec<(f32, f32)> {
         ),
         (env.temperature_span.hi + 15.0, env.voltage_span.lo - 0.5),
         (f32::NAN, f32::NAN),
+        // Between a temperature series' nodes (and between table breakpoints).
+        (-21.7, vmid),
     ]
 }
 

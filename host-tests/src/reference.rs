@@ -4,7 +4,7 @@
 
 use spincal::model::{
     AxisNonlinearity, CalibrationData, Channel, Environment, ImuSet, Rails, Sensor, SingleSet,
-    TriadSet,
+    TemperatureModel, TriadSet,
 };
 
 /// Where `x` falls among `points` (clamped), as `(lo, hi, t)`; NaN goes to the middle of `span`.
@@ -29,9 +29,30 @@ fn bracket(points: &[f32], lo: f32, hi: f32, x: f64) -> (usize, usize, f64) {
     (i, i + 1, (x - p[i]) / (p[i + 1] - p[i]))
 }
 
-/// Bilinear weights over the table: `(set index, weight)` for up to four sets.
+/// Weights of the sets: bilinear over a table (up to four sets); for a Chebyshev series,
+/// `T_k(x) = cos(k acos x)` of the clamped scaled temperature for each term, blended along
+/// voltage. `(set index, weight)`.
 #[must_use]
 pub fn weights(env: &Environment, t: f64, v: f64) -> Vec<(usize, f64)> {
+    if let TemperatureModel::Chebyshev(n) = env.temperature_model {
+        let (lo, hi) = (
+            f64::from(env.temperature_span.lo),
+            f64::from(env.temperature_span.hi),
+        );
+        let x = if t.is_nan() {
+            0.0
+        } else {
+            ((t - 0.5 * (lo + hi)) / (0.5 * (hi - lo))).clamp(-1.0, 1.0)
+        };
+        let (v0, v1, fv) = bracket(&env.voltages, env.voltage_span.lo, env.voltage_span.hi, v);
+        let nv = env.voltage_points();
+        return (0..usize::from(n))
+            .flat_map(|k| {
+                let tk = (k as f64 * x.acos()).cos();
+                [(k * nv + v0, tk * (1.0 - fv)), (k * nv + v1, tk * fv)]
+            })
+            .collect();
+    }
     let (t0, t1, ft) = bracket(
         &env.temperatures,
         env.temperature_span.lo,

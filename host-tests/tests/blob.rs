@@ -12,7 +12,7 @@ use spincal::{Error, Field, Part};
 /// invalid calibrations can be put in well-formed blobs.
 fn frame(payload: &[u8]) -> Vec<u8> {
     let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
-    let mut out = b"SCAL\x03".to_vec();
+    let mut out = b"SCAL\x04".to_vec();
     out.extend_from_slice(&(payload.len() as u16).to_le_bytes());
     let mut digest = crc.digest();
     digest.update(&out);
@@ -121,7 +121,7 @@ fn wrong_magic_version_and_length_are_refused() {
         Err(Error::HeaderBadMagic { found: *b"SCAM" })
     );
     // The previous format (its IMU covariance and lever term mean other things) and the next.
-    for version in [1, 2, 4] {
+    for version in [1, 2, 3, 5] {
         let mut bad = good.clone();
         bad[4] = version;
         assert_eq!(
@@ -376,6 +376,77 @@ fn each_validation_rule_has_its_own_error() {
             "{what}: Calibration::new"
         );
     }
+    // Temperature series: the scale factor must stay away from zero at every temperature,
+    // the output bounded, the shape right, and only a single axis has one.
+    use spincal::model::TemperatureModel;
+    let series: Vec<Corruption> = vec![
+        (
+            "a series term that can cancel the scale factor",
+            Box::new(|d| {
+                if let Sensor::Single { sets, .. } = &mut d.sensor {
+                    let s = sets.as_slice()[0].scale;
+                    sets.as_mut_slice()[5].scale = -1.1 * s;
+                }
+            }),
+            Error::InvalidSingularMatrix {
+                part: Part::Sensor,
+                set: 1,
+            },
+        ),
+        (
+            "a series term that makes the output unbounded",
+            Box::new(|d| {
+                if let Sensor::Single { sets, .. } = &mut d.sensor {
+                    sets.as_mut_slice()[7].axis.cubic = 1e10;
+                }
+            }),
+            Error::InvalidUnboundedOutput {
+                part: Part::Sensor,
+                set: 1,
+            },
+        ),
+        (
+            "a series with breakpoints",
+            Box::new(|d| {
+                let _ = d.environment.temperatures.push(0.0);
+            }),
+            Error::InvalidTemperatureSeries,
+        ),
+        (
+            "a series of no terms",
+            Box::new(|d| d.environment.temperature_model = TemperatureModel::Chebyshev(0)),
+            Error::InvalidTemperatureSeries,
+        ),
+        (
+            "a series over a span of no width",
+            Box::new(|d| d.environment.temperature_span = spincal::model::Span::new(25.0, 25.0)),
+            Error::InvalidTemperatureSeries,
+        ),
+        (
+            "a series of the wrong length",
+            Box::new(|d| d.environment.temperature_model = TemperatureModel::Chebyshev(5)),
+            Error::InvalidTableShape {
+                expected: 10,
+                found: 12,
+            },
+        ),
+    ];
+    for (what, corrupt, expected) in series {
+        let mut data = CalibrationData::example_single_series();
+        assert!(
+            Calibration::new(data.clone()).is_ok(),
+            "the example is valid"
+        );
+        corrupt(&mut data);
+        assert_eq!(blob::decode(&framed(&data)), Err(expected), "{what}");
+    }
+    let mut triad = CalibrationData::example_triad();
+    triad.environment.temperature_model = TemperatureModel::Chebyshev(1);
+    assert_eq!(
+        Calibration::new(triad),
+        Err(Error::InvalidTemperatureSeries),
+        "a triad's series"
+    );
     // A zero scale factor of a single axis.
     let mut data = CalibrationData::example_single();
     if let Sensor::Single { sets, .. } = &mut data.sensor {
@@ -399,6 +470,7 @@ fn capacities_are_enforced_with_their_own_error() {
         voltage_span: spincal::model::Span,
         temperatures: Vec<f32>,
         voltages: Vec<f32>,
+        temperature_model: spincal::model::TemperatureModel,
     }
     #[derive(serde::Serialize)]
     struct Data<'a> {
@@ -412,6 +484,7 @@ fn capacities_are_enforced_with_their_own_error() {
         voltage_span: spincal::model::Span::new(0.0, 100.0),
         temperatures: (0..t).map(|i| i as f32).collect(),
         voltages: (0..v).map(|i| i as f32).collect(),
+        temperature_model: spincal::model::TemperatureModel::Table,
     };
     let blob_of = |environment| {
         frame(
@@ -506,7 +579,7 @@ fn the_largest_calibration_fits_and_the_framing_is_small() {
     let floats = fields::floats(&mut data).len();
     // The 16-byte serial, the largest time and version add 28 bytes to the examples' framing.
     assert!(
-        n - 4 * floats <= 71 + 28,
+        n - 4 * floats <= 72 + 28,
         "framing {} bytes",
         n - 4 * floats
     );
@@ -522,7 +595,7 @@ fn the_largest_calibration_fits_and_the_framing_is_small() {
 }
 
 #[test]
-fn framing_overhead_of_the_examples_is_at_most_71_bytes() {
+fn framing_overhead_of_the_examples_is_at_most_72_bytes() {
     for (name, mut data) in examples() {
         let n = golden::encode(&data).len();
         let floats = fields::floats(&mut data).len();
@@ -530,8 +603,9 @@ fn framing_overhead_of_the_examples_is_at_most_71_bytes() {
         println!("{name}: {n} bytes, {floats} floats, {overhead} bytes over the raw payload");
         // 64 until the identity said whether the fit was rejected (one byte), 65 until each
         // of the IMU's rails stated its sample format (one byte each); a two's-complement
-        // rail at -32768 takes three varint bytes where 0 takes one (71 for an i16 IMU).
-        assert!(overhead <= 71, "{name}: {overhead}");
+        // rail at -32768 takes three varint bytes where 0 takes one (71 for an i16 IMU), and
+        // one more since the environment says how the sets follow the temperature.
+        assert!(overhead <= 72, "{name}: {overhead}");
     }
 }
 

@@ -2,7 +2,7 @@
 //! breakpoints, clamp (and flag) outside the calibrated span, blend the sets bilinearly.
 
 use super::Flags;
-use crate::model::{Blend, Environment, ImuCovariance, Span};
+use crate::model::{Blend, Environment, ImuCovariance, Span, TemperatureModel};
 
 /// Where a value falls in a list of breakpoints.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,16 +66,65 @@ pub(crate) fn effective_set<S: Blend>(
     temperature: f32,
     voltage: f32,
 ) -> Option<(S, Flags)> {
-    let tb = bracket(&env.temperatures, &env.temperature_span, temperature);
     let vb = bracket(&env.voltages, &env.voltage_span, voltage);
     let nv = env.voltage_points();
     let at = |t: usize, v: usize| sets.get(t * nv + v);
+    if let TemperatureModel::Chebyshev(n) = env.temperature_model {
+        // Only a single axis' sets have series (validation refuses the others'): the others
+        // keep no code, and no stack, for them.
+        if !S::SERIES {
+            return None;
+        }
+        let (x, clamped) = series_x(&env.temperature_span, temperature);
+        let coefficient = |k: usize| Some(at(k, vb.lo)?.blend(at(k, vb.hi)?, vb.t));
+        let flags = Flags::NONE
+            .with_if(Flags::TEMPERATURE_CLAMPED, clamped)
+            .with_if(Flags::VOLTAGE_CLAMPED, vb.clamped);
+        return Some((clenshaw(usize::from(n), x, coefficient)?, flags));
+    }
+    let tb = bracket(&env.temperatures, &env.temperature_span, temperature);
     let lo = at(tb.lo, vb.lo)?.blend(at(tb.lo, vb.hi)?, vb.t);
     let hi = at(tb.hi, vb.lo)?.blend(at(tb.hi, vb.hi)?, vb.t);
     let flags = Flags::NONE
         .with_if(Flags::TEMPERATURE_CLAMPED, tb.clamped)
         .with_if(Flags::VOLTAGE_CLAMPED, vb.clamped);
     Some((lo.blend(&hi, tb.t), flags))
+}
+
+/// Where a temperature falls in a series' span: `x` in [-1, 1] (clamped, and a NaN reading at
+/// the middle) and whether it was clamped.
+fn series_x(span: &Span, temperature: f32) -> (f32, bool) {
+    let clamped = !span.contains(temperature);
+    let half = 0.5 * (span.hi - span.lo);
+    let x = (temperature - 0.5 * (span.lo + span.hi)) / half;
+    let x = if x.is_nan() { 0.0 } else { x.clamp(-1.0, 1.0) };
+    (x, clamped)
+}
+
+/// `sum c_k T_k(x)` for `k < n` by Clenshaw's recurrence, `b_k = c_k + 2x b_(k+1) - b_(k+2)`,
+/// the sum `c_0 + x b_1 - b_2`; `None` if a coefficient is missing or `n` is 0.
+fn clenshaw<S: Blend>(n: usize, x: f32, c: impl Fn(usize) -> Option<S>) -> Option<S> {
+    let last = n.checked_sub(1)?;
+    if last == 0 {
+        return c(0);
+    }
+    // (b_(k+1), b_(k+2)), starting from b_last = c_last.
+    let mut b1 = c(last)?;
+    let mut b2: Option<S> = None;
+    for k in (1..last).rev() {
+        let twice = match &b2 {
+            Some(b2) => b1.lincomb(2.0 * x, b2, -1.0),
+            None => b1.lincomb(2.0 * x, &b1, 0.0),
+        };
+        let bk = c(k)?.lincomb(1.0, &twice, 1.0);
+        b2 = Some(b1);
+        b1 = bk;
+    }
+    let head = match &b2 {
+        Some(b2) => b1.lincomb(x, b2, -1.0),
+        None => b1.lincomb(x, &b1, 0.0),
+    };
+    Some(c(0)?.lincomb(1.0, &head, 1.0))
 }
 
 /// [`effective_set`] for the IMU's covariance factors, blended in place into `out` (they are
@@ -88,10 +137,14 @@ pub(crate) fn effective_covariance_into(
     voltage: f32,
     out: &mut ImuCovariance,
 ) -> bool {
-    let tb = bracket(&env.temperatures, &env.temperature_span, temperature);
     let vb = bracket(&env.voltages, &env.voltage_span, voltage);
     let nv = env.voltage_points();
     let at = |t: usize, v: usize| sets.get(t * nv + v);
+    if env.temperature_model != TemperatureModel::Table {
+        // An IMU has no temperature series (validation refuses one).
+        return false;
+    }
+    let tb = bracket(&env.temperatures, &env.temperature_span, temperature);
     let (Some(a), Some(b), Some(c), Some(d)) = (
         at(tb.lo, vb.lo),
         at(tb.lo, vb.hi),

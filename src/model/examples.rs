@@ -10,7 +10,7 @@
 
 use super::{
     AxisNonlinearity, BoundedVec, CalibrationData, Channel, Environment, Identity, ImuCovariance,
-    ImuSet, Quantity, Rails, Sensor, Serial, SingleSet, Span, TriadSet,
+    ImuSet, Quantity, Rails, Sensor, Serial, SingleSet, Span, TemperatureModel, TriadSet,
 };
 
 const G: f32 = 9.806_65;
@@ -227,6 +227,7 @@ impl CalibrationData {
                 voltage_span: Span::new(4.5, 5.5),
                 temperatures: table(&temperatures),
                 voltages: table(&voltages),
+                temperature_model: TemperatureModel::Table,
             },
             sensor: Sensor::Single {
                 quantity: Quantity::Acceleration,
@@ -237,6 +238,72 @@ impl CalibrationData {
                 },
                 sets: table(&sets),
                 covariance: Some(table(&[[0.02, 1.0e-6, 3.0e-7]; 6])),
+            },
+        }
+    }
+
+    /// A single-axis accelerometer whose coefficients follow the temperature as a Chebyshev
+    /// series of 6 terms over -40 to 70 C (a bias with a step near 10 C, a drifting scale
+    /// factor and g-squared term), at 2 supply voltages, with covariance factors alike.
+    #[must_use]
+    pub fn example_single_series() -> Self {
+        let voltages = [4.5, 5.5];
+        let scale = 50.0 * G / 32_000.0;
+        // Per term: relative scale, offset (SI), quadratic.
+        let terms: [(f32, f32, f32); 6] = [
+            (1.0, -0.35, 2.0e-7),
+            (3.3e-3, 0.21, 4.0e-9),
+            (-4.0e-4, -0.02, -1.0e-9),
+            (1.5e-4, -0.045, 0.0),
+            (-2.0e-5, 0.006, 0.0),
+            (6.0e-6, 0.011, 0.0),
+        ];
+        let mut sets = [SingleSet {
+            axis: AxisNonlinearity::LINEAR,
+            scale: 0.0,
+            offset: 0.0,
+        }; 12];
+        let mut covariance = [[0.0f32; 3]; 12];
+        for (k, (s, o, q)) in terms.iter().enumerate() {
+            for (vi, v) in voltages.iter().enumerate() {
+                let dv = v - 5.0;
+                let first = k == 0;
+                sets[k * 2 + vi] = SingleSet {
+                    axis: AxisNonlinearity {
+                        quadratic: *q,
+                        cubic: if first { 1.0e-12 } else { 0.0 },
+                        odd_quadratic: 0.0,
+                        asymmetry: 0.0,
+                        asymmetry_break: 0.0,
+                    },
+                    scale: scale * s * if first { 1.0 + 2e-3 * dv } else { 1.0 },
+                    offset: o + if first { -0.08 * dv } else { 0.0 },
+                };
+                covariance[k * 2 + vi] = if first {
+                    [0.02, 1.0e-6, 3.0e-7]
+                } else {
+                    [0.002 / (k as f32), 1.0e-7, 0.0]
+                };
+            }
+        }
+        CalibrationData {
+            identity: identity("SPN-T-000042"),
+            environment: Environment {
+                temperature_span: Span::new(-40.0, 70.0),
+                voltage_span: Span::new(4.5, 5.5),
+                temperatures: BoundedVec::new(),
+                voltages: table(&voltages),
+                temperature_model: TemperatureModel::Chebyshev(6),
+            },
+            sensor: Sensor::Single {
+                quantity: Quantity::Acceleration,
+                rails: Rails::unsigned(16),
+                channel: Channel {
+                    center: 32_768.0 - 97.5,
+                    range: Span::new(-45.0 * G, 45.0 * G),
+                },
+                sets: table(&sets),
+                covariance: Some(table(&covariance)),
             },
         }
     }
@@ -320,6 +387,7 @@ impl CalibrationData {
                 voltage_span: Span::new(3.0, 3.6),
                 temperatures: table(points),
                 voltages: BoundedVec::new(),
+                temperature_model: TemperatureModel::Table,
             },
             sensor: Sensor::Imu {
                 accel_rails: Rails::unsigned(16),

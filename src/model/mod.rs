@@ -221,6 +221,23 @@ pub struct Environment {
     pub temperatures: BoundedVec<f32, MAX_TEMPERATURES>,
     /// Voltage breakpoints, strictly increasing, inside `voltage_span`.
     pub voltages: BoundedVec<f32, MAX_VOLTAGES>,
+    /// How the sets follow the temperature: a table at `temperatures`, or a series over
+    /// `temperature_span`.
+    pub temperature_model: TemperatureModel,
+}
+
+/// How the coefficient sets follow the temperature.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TemperatureModel {
+    /// One set per temperature breakpoint, blended linearly between them (one set when there
+    /// are no breakpoints).
+    Table,
+    /// A Chebyshev series of this many terms over the calibrated temperature span: the sets (per
+    /// voltage point) are the coefficients of `T_0(x) ... T_(n-1)(x)`,
+    /// `x = (T - mid) / half` clamped to [-1, 1], summed by Clenshaw's recurrence. The
+    /// breakpoint list is empty. Single-axis calibrations only.
+    Chebyshev(u8),
 }
 
 impl Environment {
@@ -232,13 +249,17 @@ impl Environment {
             voltage_span,
             temperatures: BoundedVec::new(),
             voltages: BoundedVec::new(),
+            temperature_model: TemperatureModel::Table,
         }
     }
 
     /// Temperature points of the table (at least 1).
     #[must_use]
     pub fn temperature_points(&self) -> usize {
-        self.temperatures.len().max(1)
+        match self.temperature_model {
+            TemperatureModel::Table => self.temperatures.len().max(1),
+            TemperatureModel::Chebyshev(n) => usize::from(n),
+        }
     }
 
     /// Voltage points of the table (at least 1).

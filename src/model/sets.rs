@@ -144,11 +144,37 @@ pub struct ImuSet {
 pub(crate) trait Blend: Copy {
     /// `self + (other - self) * t`.
     fn blend(&self, other: &Self, t: f32) -> Self;
+    /// `a self + b other`, field by field (a temperature series' recurrence).
+    fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self;
+    /// Whether sets of this kind may be a temperature series (a single axis' sets and
+    /// covariance factors).
+    const SERIES: bool = false;
 }
 
 #[inline]
 fn lerp(a: f32, b: f32, t: f32) -> f32 {
     a + (b - a) * t
+}
+
+fn comb_array<const N: usize>(x: &[f32; N], a: f32, y: &[f32; N], b: f32) -> [f32; N] {
+    let mut out = *x;
+    for (o, (p, q)) in out.iter_mut().zip(x.iter().zip(y.iter())) {
+        *o = a * p + b * q;
+    }
+    out
+}
+
+fn comb_matrix<const R: usize, const C: usize>(
+    x: &[[f32; C]; R],
+    a: f32,
+    y: &[[f32; C]; R],
+    b: f32,
+) -> [[f32; C]; R] {
+    let mut out = *x;
+    for (o, (p, q)) in out.iter_mut().zip(x.iter().zip(y.iter())) {
+        *o = comb_array(p, a, q, b);
+    }
+    out
 }
 
 fn lerp_array<const N: usize>(a: &[f32; N], b: &[f32; N], t: f32) -> [f32; N] {
@@ -181,17 +207,37 @@ impl Blend for AxisNonlinearity {
             asymmetry_break: lerp(self.asymmetry_break, other.asymmetry_break, t),
         }
     }
+
+    fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self {
+        Self {
+            quadratic: a * self.quadratic + b * other.quadratic,
+            cubic: a * self.cubic + b * other.cubic,
+            odd_quadratic: a * self.odd_quadratic + b * other.odd_quadratic,
+            asymmetry: a * self.asymmetry + b * other.asymmetry,
+            asymmetry_break: a * self.asymmetry_break + b * other.asymmetry_break,
+        }
+    }
 }
 
 impl<const N: usize> Blend for [f32; N] {
+    const SERIES: bool = true;
+
     fn blend(&self, other: &Self, t: f32) -> Self {
         lerp_array(self, other, t)
+    }
+
+    fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self {
+        comb_array(self, a, other, b)
     }
 }
 
 impl<const N: usize, const M: usize> Blend for [[f32; N]; M] {
     fn blend(&self, other: &Self, t: f32) -> Self {
         lerp_matrix(self, other, t)
+    }
+
+    fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self {
+        comb_matrix(self, a, other, b)
     }
 }
 
@@ -214,11 +260,21 @@ impl ImuCovariance {
 }
 
 impl Blend for SingleSet {
+    const SERIES: bool = true;
+
     fn blend(&self, other: &Self, t: f32) -> Self {
         Self {
             axis: self.axis.blend(&other.axis, t),
             scale: lerp(self.scale, other.scale, t),
             offset: lerp(self.offset, other.offset, t),
+        }
+    }
+
+    fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self {
+        Self {
+            axis: self.axis.lincomb(a, &other.axis, b),
+            scale: a * self.scale + b * other.scale,
+            offset: a * self.offset + b * other.offset,
         }
     }
 }
@@ -235,6 +291,18 @@ impl Blend for TriadSet {
             offset: lerp_array(&self.offset, &other.offset, t),
         }
     }
+
+    fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self {
+        let mut axes = self.axes;
+        for (o, (p, q)) in axes.iter_mut().zip(self.axes.iter().zip(other.axes.iter())) {
+            *o = p.lincomb(a, q, b);
+        }
+        Self {
+            axes,
+            matrix: comb_matrix(&self.matrix, a, &other.matrix, b),
+            offset: comb_array(&self.offset, a, &other.offset, b),
+        }
+    }
 }
 
 impl Blend for ImuSet {
@@ -243,6 +311,14 @@ impl Blend for ImuSet {
             accel: self.accel.blend(&other.accel, t),
             gyro: self.gyro.blend(&other.gyro, t),
             g_sensitivity: lerp_matrix(&self.g_sensitivity, &other.g_sensitivity, t),
+        }
+    }
+
+    fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self {
+        Self {
+            accel: self.accel.lincomb(a, &other.accel, b),
+            gyro: self.gyro.lincomb(a, &other.gyro, b),
+            g_sensitivity: comb_matrix(&self.g_sensitivity, a, &other.g_sensitivity, b),
         }
     }
 }

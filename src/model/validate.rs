@@ -6,6 +6,7 @@ use super::rotation::LeverTerms;
 use super::sets::{AxisNonlinearity, ImuSet, SingleSet, TriadSet};
 use super::{
     BoundedVec, CalibrationData, Channel, Environment, MAX_LEVER_ARM_M, Rails, Sensor, Span,
+    TemperatureModel,
 };
 use crate::Error;
 use crate::error::{Field, Part};
@@ -40,10 +41,19 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
             validate_rails(rails, Part::Sensor)?;
             validate_channels(core::slice::from_ref(channel), rails, Part::Sensor)?;
             validate_table(sets, expected)?;
-            for (i, set) in sets.iter().enumerate() {
-                validate_single_set(set, i as u8, rails, channel)?;
+            if data.environment.temperature_model == TemperatureModel::Table {
+                for (i, set) in sets.iter().enumerate() {
+                    validate_single_set(set, i as u8, rails, channel)?;
+                }
+            } else {
+                validate_single_series(sets, data.environment.voltage_points(), rails, channel)?;
             }
             validate_covariance(covariance.as_ref(), sets.len(), Part::Sensor, |c| c.iter())
+        }
+        Sensor::Triad { .. } | Sensor::Imu { .. }
+            if data.environment.temperature_model != TemperatureModel::Table =>
+        {
+            Err(Error::InvalidTemperatureSeries)
         }
         Sensor::Triad {
             rails,
@@ -183,7 +193,22 @@ fn validate_environment(env: &Environment) -> Result<(), Error> {
         &env.temperature_span,
         Field::TemperatureBreakpoint,
     )?;
-    validate_breakpoints(&env.voltages, &env.voltage_span, Field::VoltageBreakpoint)
+    validate_breakpoints(&env.voltages, &env.voltage_span, Field::VoltageBreakpoint)?;
+    match env.temperature_model {
+        TemperatureModel::Table => Ok(()),
+        TemperatureModel::Chebyshev(n) => {
+            let span = &env.temperature_span;
+            if n == 0
+                || usize::from(n) > super::MAX_SETS
+                || !env.temperatures.is_empty()
+                || span.hi - span.lo <= 0.0
+            {
+                Err(Error::InvalidTemperatureSeries)
+            } else {
+                Ok(())
+            }
+        }
+    }
 }
 
 fn validate_rails(rails: &Rails, part: Part) -> Result<(), Error> {
@@ -300,6 +325,58 @@ fn validate_single_set(
     let (v_lo, v_hi) = rail_offsets(rails, channel);
     let bound = Bound::point(set.offset).add(axis_bound(&set.axis, v_lo, v_hi).scale(set.scale));
     check_bounded(&[bound], part, i)
+}
+
+/// A single axis' temperature series (the sets of each voltage point are the coefficients of
+/// `T_0 ... T_(n-1)`): every coefficient finite, and for every temperature, since
+/// `|T_k(x)| <= 1`, a scale factor that cannot reach zero (`|scale_0|` above the sum of the
+/// others' magnitudes) and an output bounded over the rails (offset, scale and nonlinearity
+/// each bounded by the sum of their coefficients' magnitudes).
+fn validate_single_series(
+    sets: &[SingleSet],
+    voltages: usize,
+    rails: &Rails,
+    channel: &Channel,
+) -> Result<(), Error> {
+    let part = Part::Sensor;
+    for (i, set) in sets.iter().enumerate() {
+        validate_axis(&set.axis, part, i as u8, 0)?;
+        finite(set.scale, Field::Scale, Some(part), Some(i as u8), None)?;
+        finite(set.offset, Field::Offset, Some(part), Some(i as u8), None)?;
+    }
+    let (v_lo, v_hi) = rail_offsets(rails, channel);
+    for v in 0..voltages {
+        let series = sets.iter().skip(v).step_by(voltages.max(1));
+        let first = v as u8;
+        let sum = |f: fn(&SingleSet) -> f32| series.clone().map(|s| libm::fabsf(f(s))).sum::<f32>();
+        let head = sets.get(v).map_or(0.0, |s| libm::fabsf(s.scale));
+        // Values are finite here, so the comparison is total.
+        let others = sum(|s| s.scale) - head;
+        if head <= others {
+            return Err(Error::InvalidSingularMatrix { part, set: first });
+        }
+        let envelope = AxisNonlinearity {
+            quadratic: sum(|s| s.axis.quadratic),
+            cubic: sum(|s| s.axis.cubic),
+            odd_quadratic: sum(|s| s.axis.odd_quadratic),
+            asymmetry: sum(|s| s.axis.asymmetry),
+            asymmetry_break: 0.0,
+        };
+        // |v - b| <= |v| + |b|: the kink's share of the break is added apart.
+        let u = axis_bound(&envelope, v_lo, v_hi).mag
+            + envelope.asymmetry * sum(|s| s.axis.asymmetry_break);
+        let mag = sum(|s| s.offset) + sum(|s| s.scale) * u;
+        check_bounded(
+            &[Bound {
+                lo: -mag,
+                hi: mag,
+                mag,
+            }],
+            part,
+            first,
+        )?;
+    }
+    Ok(())
 }
 
 fn validate_triad_set(set: &TriadSet, i: u8, part: Part) -> Result<(), Error> {

@@ -12,7 +12,7 @@ use core::hint::black_box;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use spincal::blob;
-use spincal::correct::{Corrected, ImuCorrector, Sample};
+use spincal::correct::{AxisCorrector, Corrected, ImuCorrector, Sample};
 use spincal::model::{Calibration, CalibrationData, Sensor};
 use spincal_firmware::{stack, timer};
 
@@ -191,6 +191,33 @@ fn main() -> ! {
     let t1 = timer::now();
     black_box(&c);
     report("set_environment_8pt", t0.wrapping_sub(t1), temps.len());
+
+    // A single axis' temperature dependence as a 3-point table and as a 6-term Chebyshev
+    // series, each at 2 supply voltages, over the same temperatures.
+    for (name, data) in [
+        (
+            "set_environment_single_table3",
+            CalibrationData::example_single(),
+        ),
+        (
+            "set_environment_single_series6",
+            CalibrationData::example_single_series(),
+        ),
+    ] {
+        let Ok(cal) = Calibration::new(data) else {
+            fail(name)
+        };
+        let Ok(mut a) = AxisCorrector::<u16>::new(&cal) else {
+            fail(name)
+        };
+        let t0 = timer::now();
+        for t in temps {
+            a.set_environment(black_box(t), black_box(5.0));
+        }
+        let t1 = timer::now();
+        black_box(&a);
+        report(name, t0.wrapping_sub(t1), temps.len());
+    }
 
     // Decode + validate the full IMU blob into a slot, as the device does at boot.
     let mut slot = CalibrationData::empty();

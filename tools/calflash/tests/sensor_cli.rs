@@ -418,8 +418,29 @@ fn plans_and_data_that_cannot_support_the_workflow_are_refused() {
             "single-accel",
             "--serial",
             "X",
+            "--thermal",
+            "table",
+            "--no-db",
         ],
         "85.0 C has 3 observations; the model output ~ 1 + input + input^2 + input_o",
+    );
+    // By default the setpoints are one continuous model, which the three readings at 85 C
+    // extend there.
+    let out = ok(
+        d,
+        &[
+            "calibrate",
+            "t.csv",
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "X",
+            "--no-db",
+        ],
+    );
+    assert!(
+        out.contains("continuous temperature model over -40 to 85 C (3 distinct temperatures)"),
+        "{out}"
     );
     // A plan item that is not one.
     refused(

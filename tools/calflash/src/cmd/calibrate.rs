@@ -90,8 +90,8 @@ pub struct CalibrateArgs {
     #[arg(long, value_enum, default_value = "auto")]
     pub thermal: ThermalArg,
     /// Single axis, continuous temperature model: the order of every coefficient's temperature
-    /// polynomial (0 to 5) instead of choosing each from the data.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=5))]
+    /// polynomial (0 to 9) instead of choosing each from the data.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=9))]
     pub thermal_order: Option<u32>,
     /// Calibrated temperature span when the data have no temp column.
     #[arg(long, value_name = "LO:HI", default_value = "20:30")]
@@ -174,6 +174,16 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
     opts.temp_span = Span::new(t0 as f32, t1 as f32);
     let (v0, v1) = pair(&args.volt_span, "--volt-span")?;
     opts.volt_span = Span::new(v0 as f32, v1 as f32);
+    let single = matches!(
+        args.sensor,
+        SensorKind::SingleAccel | SensorKind::SingleGyro
+    );
+    if !single && (args.thermal == ThermalArg::Continuous || args.thermal_order.is_some()) {
+        return Err(
+            "--thermal continuous and --thermal-order: the continuous temperature model is fitted for single-axis sensors; triads and IMUs take a fit per temperature setpoint"
+                .into(),
+        );
+    }
     if args.model.is_some()
         && !matches!(
             args.sensor,
@@ -279,12 +289,21 @@ fn summary(c: &sensor::Calibrated, args: &CalibrateArgs, blob_written: bool) -> 
             c.units[a]
         );
     }
-    let _ = writeln!(
-        s,
-        "  table: {} point(s); blob {} bytes",
-        c.points.len(),
-        c.blob.len()
-    );
+    let _ = match c.data.environment.temperature_model {
+        spincal::model::TemperatureModel::Chebyshev(n) => writeln!(
+            s,
+            "  temperature series: {n} terms over {} to {} C; blob {} bytes",
+            c.data.environment.temperature_span.lo,
+            c.data.environment.temperature_span.hi,
+            c.blob.len()
+        ),
+        spincal::model::TemperatureModel::Table => writeln!(
+            s,
+            "  table: {} point(s); blob {} bytes",
+            c.points.len(),
+            c.blob.len()
+        ),
+    };
     for (p, what) in [
         (&args.out.blob, "blob"),
         (&args.out.report, "report"),

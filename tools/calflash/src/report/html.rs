@@ -317,6 +317,7 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
             }
         }
     }
+    h.push_str(&super::thermal::section(c)?);
     let _ = writeln!(
         h,
         "<h2>Device</h2>\n<p>The blob holds {} coefficient set{} with covariance factors; the device's f32 correction differs from the f64 correction by at most {}.</p>",

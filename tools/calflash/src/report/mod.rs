@@ -6,3 +6,4 @@ pub mod json;
 pub mod plot;
 pub mod selfcal;
 pub mod terminal;
+pub mod thermal;

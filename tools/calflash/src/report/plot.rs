@@ -182,8 +182,11 @@ where
         chart.draw_series(pts.iter().map(|p| Circle::new(*p, radius, color.filled())))
     }
     .map_err(|e| e.to_string())?;
-    anno.label(s.name)
-        .legend(move |(x, y)| Rectangle::new([(x, y - 3), (x + 12, y + 3)], color.filled()));
+    // A series without a name (the second edge of a band) has no legend entry.
+    if !s.name.is_empty() {
+        anno.label(s.name)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 3), (x + 12, y + 3)], color.filled()));
+    }
     Ok(())
 }
 

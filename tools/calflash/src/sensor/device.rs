@@ -8,7 +8,7 @@ use spincal::blob;
 use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
 use spincal::model::{
     BoundedVec, Calibration, CalibrationData, Environment, Identity, Quantity, Sensor, Serial,
-    Span, TriadSet, rotation,
+    SingleSet, Span, TemperatureModel, TriadSet, rotation,
 };
 
 use super::invert::linearize;
@@ -128,6 +128,7 @@ pub fn environment(
         voltage_span: span(col::VOLT, opts.volt_span),
         temperatures: points(&layout.temps, "temperature", opts)?,
         voltages: points(&layout.volts, "voltage", opts)?,
+        temperature_model: spincal::model::TemperatureModel::Table,
     })
 }
 
@@ -139,6 +140,55 @@ fn f64_triad(set: &TriadSet, v: [f64; 3]) -> [f64; 3] {
             + (0..3)
                 .map(|j| f64::from(set.matrix[i][j]) * u[j])
                 .sum::<f64>()
+    })
+}
+
+/// The single-axis set the device uses at table point `k` (temperature `t`): the stored set,
+/// or for a temperature series its sum at `t` in f64 (`spincal::model::TemperatureModel`);
+/// `None` when the series is of another shape than this check knows (several voltages).
+fn single_set_at(env: &Environment, sets: &[SingleSet], k: usize, t: f32) -> Option<SingleSet> {
+    let TemperatureModel::Chebyshev(n) = env.temperature_model else {
+        return sets.get(k).copied();
+    };
+    if sets.len() != usize::from(n) || env.voltage_points() != 1 {
+        return None;
+    }
+    let span = &env.temperature_span;
+    let x = ((f64::from(t) - 0.5 * (f64::from(span.lo) + f64::from(span.hi)))
+        / (0.5 * (f64::from(span.hi) - f64::from(span.lo))))
+    .clamp(-1.0, 1.0);
+    let fields = |s: &SingleSet| {
+        let a = s.axis.to_array().map(f64::from);
+        [
+            a[0],
+            a[1],
+            a[2],
+            a[3],
+            a[4],
+            f64::from(s.scale),
+            f64::from(s.offset),
+        ]
+    };
+    let mut sum = [0.0f64; 7];
+    for (i, v) in sum.iter_mut().enumerate() {
+        let (mut b1, mut b2) = (0.0, 0.0);
+        for s in sets.iter().skip(1).rev() {
+            let b = fields(s)[i] + 2.0 * x * b1 - b2;
+            b2 = b1;
+            b1 = b;
+        }
+        *v = fields(&sets[0])[i] + x * b1 - b2;
+    }
+    Some(SingleSet {
+        axis: spincal::model::AxisNonlinearity {
+            quadratic: sum[0] as f32,
+            cubic: sum[1] as f32,
+            odd_quadratic: sum[2] as f32,
+            asymmetry: sum[3] as f32,
+            asymmetry_break: sum[4] as f32,
+        },
+        scale: sum[5] as f32,
+        offset: sum[6] as f32,
     })
 }
 
@@ -186,12 +236,27 @@ pub fn build_and_check(
                 }),
         )
     };
+    if env.temperature_model != TemperatureModel::Table
+        && !matches!(data.sensor, Sensor::Single { .. })
+    {
+        return Err(WorkflowError::msg(
+            path,
+            "a temperature series is checked for single-axis sensors only",
+        ));
+    }
     match &data.sensor {
         Sensor::Single { channel, sets, .. } => {
             let mut c =
                 AnyAxisCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
-            for (p, set) in points.iter().zip(sets.iter()) {
+            for (k, p) in points.iter().enumerate() {
                 let (t, v) = at(p);
+                let Some(set) = single_set_at(env, sets, k, t) else {
+                    return Err(WorkflowError::msg(
+                        path,
+                        "the calibration's temperature series is not for this sensor",
+                    ));
+                };
+                let set = &set;
                 c.set_environment(t, v);
                 let f = &p.axes[0];
                 let own = |x: f64| f.coef("1") + f.coef(col::INPUT) * x;

@@ -41,6 +41,26 @@ impl Own {
             + self.ca * ((x - self.bp).abs() - self.bp.abs())
     }
 
+    /// The input whose output is `out` (Newton's method from `guess`): the exact inverse the
+    /// device's correction approximates.
+    #[must_use]
+    pub fn input_for(&self, out: f64, guess: f64) -> f64 {
+        let mut x = guess;
+        for _ in 0..50 {
+            let h = 1e-4 * (1.0 + x.abs());
+            let d = (self.output(x + h) - self.output(x - h)) / (2.0 * h);
+            let step = (self.output(x) - out) / d;
+            if !step.is_finite() {
+                break;
+            }
+            x -= step;
+            if step.abs() <= 1e-13 * (1.0 + x.abs()) {
+                break;
+            }
+        }
+        x
+    }
+
     fn is_linear(&self) -> bool {
         self.c2 == 0.0 && self.c3 == 0.0 && self.coq == 0.0 && self.ca == 0.0
     }

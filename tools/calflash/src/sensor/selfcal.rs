@@ -106,6 +106,7 @@ pub fn calibration_data(
             voltage_span: volt,
             temperatures: BoundedVec::new(),
             voltages: BoundedVec::new(),
+            temperature_model: spincal::model::TemperatureModel::Table,
         },
         sensor: Sensor::Imu {
             accel_rails: rails,

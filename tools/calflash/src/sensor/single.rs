@@ -3,16 +3,16 @@
 
 use nalgebra::DMatrix;
 use spincal::model::{
-    AxisNonlinearity, BoundedVec, CalibrationData, Channel, MAX_TEMPERATURES, Quantity, Sensor,
-    SingleSet, Span,
+    BoundedVec, CalibrationData, Channel, MAX_TEMPERATURES, Quantity, Sensor, Span,
+    TemperatureModel,
 };
 
-use super::invert::{Own, linearization, linearize};
+use super::invert::Own;
 use super::table::{self, Layout};
-use super::thermal::{self, ThermalFit};
+use super::thermal;
+use super::thermal_device::{self, DeviceSet};
 use super::{
-    AxisFit, Calibrated, Decision, Finding, Options, PointFit, Thermal, Verdict, WorkflowError,
-    covariance, device,
+    AxisFit, Calibrated, Decision, Options, PointFit, Thermal, WorkflowError, covariance, device,
 };
 use crate::columns as col;
 use crate::formula::{self, Formula};
@@ -230,6 +230,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
                 && layout.as_ref().map_or(true, |l| {
                     l.temps.len() > MAX_TEMPERATURES
                         || l.points.iter().any(|p| p.rows.len() <= 2 * model.width())
+                        || !table::exact_setpoints(&table, col::TEMP, l)
                 })
         }
     };
@@ -241,10 +242,9 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             ));
         }
         let s = thermal::check(&table, col::TEMP)?;
-        let x = thermal::dtemp(&table, col::TEMP, &s.scale);
-        table.push_column(thermal::DTEMP, x);
+        thermal::push_columns(&mut table, col::TEMP, &s.scale, s.max_order);
         notes.push(format!(
-            "continuous temperature model over {} to {} C ({} distinct temperatures{}): every coefficient is a polynomial in dtemp = (temp - {:.2}) / {:.2}",
+            "continuous temperature model over {} to {} C ({} distinct temperatures{}): every coefficient is a series of Legendre polynomials temp_legK of x = (temp - {:.2}) / {:.2}",
             s.scale.lo,
             s.scale.hi,
             s.distinct,
@@ -406,7 +406,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     let hi = input.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let own = |f: &AxisFit| own_of(&f.fit.names, &f.fit.coefficients, bp);
     let mut findings_extra = Vec::new();
-    let (layout, fits, center, thermal_fit) = match &support {
+    let (layout, fits, center, thermal_fit, device_temp) = match &support {
         None => {
             let mut fits = Vec::with_capacity(layout.points.len());
             for p in &layout.points {
@@ -414,10 +414,11 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
                 fits.push(fit_axis(&model, &t, opts.alpha, path, &table::describe(p))?);
             }
             let center = own(&fits[reference]).bias;
-            (layout, fits, center, None)
+            (layout, fits, center, None, None)
         }
         Some(s) => {
-            let tf = thermal::choose(&model, s, opts.alpha, opts.thermal_order, &|f| {
+            let temps = table.column(col::TEMP).unwrap_or_default();
+            let tf = thermal::choose(&model, (s, temps), opts.alpha, opts.thermal_order, &|f| {
                 fit_axis(f, &table, opts.alpha, path, "all temperatures")
             })?;
             notes.extend(
@@ -427,10 +428,17 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             );
             let (c0, _) = tf.coefficients_at(s.scale.center());
             let center = own_of(&tf.base.term_names(), &c0, bp).bias;
-            let (temps, ratio, worst_at) = table_of(&tf, center, (lo, hi), bp);
-            findings_extra.push(table_finding(temps.len(), ratio, worst_at, &s.scale));
-            let fits: Vec<AxisFit> = temps.iter().map(|t| tf.at(*t)).collect();
-            let points = temps
+            // The span as the device holds it (f32), which its series is evaluated over.
+            let held = thermal::Scale {
+                lo: f64::from(s.scale.lo as f32),
+                hi: f64::from(s.scale.hi as f32),
+            };
+            let dt = thermal_device::choose(&tf, &held, center, (lo, hi), bp)
+                .map_err(|e| WorkflowError::msg(path, e))?;
+            findings_extra.push(thermal_device::finding(&dt, &held));
+            let fits: Vec<AxisFit> = dt.temps.iter().map(|t| tf.at(*t)).collect();
+            let points = dt
+                .temps
                 .iter()
                 .map(|t| table::Point {
                     temp: Some(*t),
@@ -439,11 +447,11 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
                 })
                 .collect();
             let layout = Layout {
-                temps,
+                temps: dt.temps.clone(),
                 volts: Vec::new(),
                 points,
             };
-            (layout, fits, center, Some(tf))
+            (layout, fits, center, Some(tf), Some(dt))
         }
     };
     let reference = layout.reference();
@@ -471,7 +479,15 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             axes: vec![f],
         });
     }
-    let env = device::environment(&table, &layout, opts)?;
+    let mut env = device::environment(&table, &layout, opts)?;
+    if let Some(dt) = &device_temp {
+        sets.clone_from(&dt.sets);
+        covs.clone_from(&dt.covariances);
+        if let Some(n) = dt.series {
+            env.temperatures = BoundedVec::new();
+            env.temperature_model = TemperatureModel::Chebyshev(n as u8);
+        }
+    }
     let range = Span::new(lo as f32, hi as f32);
     let data = CalibrationData {
         identity: device::identity(opts)?,
@@ -522,7 +538,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
 }
 
 /// The own-axis polynomial from named coefficients.
-fn own_of(names: &[String], coefficients: &[f64], bp: f64) -> Own {
+pub fn own_of(names: &[String], coefficients: &[f64], bp: f64) -> Own {
     let c = |term: &str| {
         names
             .iter()
@@ -537,136 +553,5 @@ fn own_of(names: &[String], coefficients: &[f64], bp: f64) -> Own {
         coq: c("input:abs(input)"),
         ca: c(KINK),
         bp,
-    }
-}
-
-/// What the device applies for one forward model, in f64: the linearisation `n`, then
-/// `x = offset + scale u`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct DeviceSet {
-    n: [f64; 5],
-    scale: f64,
-    offset: f64,
-    /// Worst inversion error over the calibrated range, SI.
-    error: f64,
-}
-
-impl DeviceSet {
-    fn of(o: &Own, center: f64, lo: f64, hi: f64) -> Self {
-        let lin = linearization(o, center, lo, hi);
-        // x = (L - (bias - center)) / slope with L = alpha + gamma u.
-        Self {
-            n: lin.n,
-            scale: lin.gamma / o.slope,
-            offset: (lin.alpha - (o.bias - center)) / o.slope,
-            error: lin.error,
-        }
-    }
-
-    /// The correction of `v = code - center`.
-    fn correct(&self, v: f64) -> f64 {
-        self.offset + self.scale * linearize(&self.n, v)
-    }
-
-    /// The device's blend: each coefficient linearly.
-    fn blend(&self, other: &Self, t: f64) -> Self {
-        let mix = |a: f64, b: f64| a + (b - a) * t;
-        Self {
-            n: std::array::from_fn(|i| mix(self.n[i], other.n[i])),
-            scale: mix(self.scale, other.scale),
-            offset: mix(self.offset, other.offset),
-            error: self.error.max(other.error),
-        }
-    }
-
-    fn set(&self) -> SingleSet {
-        let n = self.n;
-        SingleSet {
-            axis: AxisNonlinearity {
-                quadratic: n[0] as f32,
-                cubic: n[1] as f32,
-                odd_quadratic: n[2] as f32,
-                asymmetry: n[3] as f32,
-                asymmetry_break: n[4] as f32,
-            },
-            scale: self.scale as f32,
-            offset: self.offset as f32,
-        }
-    }
-}
-
-/// Temperatures of the grid the table is checked on.
-const TABLE_GRID: usize = 221;
-
-/// The device's temperature table for a continuous model: breakpoints where interpolating the
-/// device's sets departs from the model's own correction by at most a tenth of the model's
-/// 1-sigma (of the corrected input, from the bias and scale-factor covariance), over inputs
-/// `lo..hi` and the calibrated temperatures. Returns the breakpoints, the worst departure in
-/// tenths of the 1-sigma and where it is.
-fn table_of(tf: &ThermalFit, center: f64, (lo, hi): (f64, f64), bp: f64) -> (Vec<f64>, f64, f64) {
-    let names = tf.base.term_names();
-    let idx = |t: &str| names.iter().position(|n| n == t).unwrap_or(0);
-    let (i0, i1) = (idx("1"), idx(col::INPUT));
-    let scale = tf.scale;
-    let at = |t: f64| {
-        let (c, cov) = tf.coefficients_at(t);
-        let o = own_of(&names, &c, bp);
-        (DeviceSet::of(&o, center, lo, hi), o, cov)
-    };
-    let grid: Vec<(f64, DeviceSet, Own, DMatrix<f64>)> = (0..TABLE_GRID)
-        .map(|i| {
-            let t = scale.lo + (scale.hi - scale.lo) * i as f64 / (TABLE_GRID - 1) as f64;
-            let (d, o, c) = at(t);
-            (t, d, o, c)
-        })
-        .collect();
-    let inputs: Vec<f64> = (0..=40)
-        .map(|k| lo + (hi - lo) * f64::from(k) / 40.0)
-        .collect();
-    let ratio = |points: &[f64]| {
-        let sets: Vec<DeviceSet> = points.iter().map(|t| at(*t).0).collect();
-        let mut worst = (0.0f64, scale.lo);
-        for (t, exact, o, c) in &grid {
-            let k = points
-                .partition_point(|p| p <= t)
-                .clamp(1, points.len() - 1);
-            let (a, b) = (points[k - 1], points[k]);
-            let blended = sets[k - 1].blend(&sets[k], ((t - a) / (b - a)).clamp(0.0, 1.0));
-            for x in &inputs {
-                let v = o.output(*x) - center;
-                let sd = ((c[(i0, i0)] + 2.0 * x * c[(i0, i1)] + x * x * c[(i1, i1)]).max(0.0))
-                    .sqrt()
-                    / o.slope.abs();
-                let r = (blended.correct(v) - exact.correct(v)).abs() / (0.1 * sd);
-                if r > worst.0 {
-                    worst = (r, *t);
-                }
-            }
-        }
-        worst
-    };
-    let (points, r) = thermal::breakpoints(&scale, MAX_TEMPERATURES, ratio);
-    let worst_at = ratio(&points).1;
-    (points, r, worst_at)
-}
-
-fn table_finding(n: usize, ratio: f64, at: f64, scale: &thermal::Scale) -> Finding {
-    let range = format!("{} to {} C", scale.lo, scale.hi);
-    if ratio <= 1.0 {
-        Finding {
-            verdict: Verdict::Accept,
-            text: format!(
-                "the device's table of {n} temperatures follows the continuous temperature model within {:.2} of its 1-sigma over {range}",
-                0.1 * ratio
-            ),
-        }
-    } else {
-        Finding {
-            verdict: Verdict::Review,
-            text: format!(
-                "the device's table of {n} temperatures (the most it holds) departs from the continuous temperature model by up to {:.2} of its 1-sigma (at {at:.1} C) over {range}: the temperature curve bends more than the table can follow",
-                0.1 * ratio
-            ),
-        }
     }
 }

@@ -103,6 +103,27 @@ pub fn layout(table: &Table, temp: Option<&str>, volt: Option<&str>) -> Result<L
     })
 }
 
+/// Whether the readings of `column` sit at exact setpoints, as a chamber held at a few
+/// temperatures gives them (each reading within 1 C of its setpoint, the setpoints at least
+/// 3 C apart), rather than spread along a ramp.
+#[must_use]
+pub fn exact_setpoints(table: &Table, column: &str, layout: &Layout) -> bool {
+    let Some(values) = table.column(column) else {
+        return true;
+    };
+    let near = layout.points.iter().all(|p| {
+        p.temp.is_none_or(|t| {
+            p.rows
+                .iter()
+                .all(|r| (values[*r] - t).abs() <= TEMP_TOLERANCE)
+        })
+    });
+    near && layout
+        .temps
+        .windows(2)
+        .all(|w| w[1] - w[0] >= 3.0 * TEMP_TOLERANCE)
+}
+
 /// "25 C, 3.3 V" for messages.
 #[must_use]
 pub fn describe(p: &Point) -> String {

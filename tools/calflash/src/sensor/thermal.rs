@@ -3,14 +3,18 @@
 //! temperatures fall (a chamber ramp, a unit warming up, or a few exact setpoints, which are a
 //! special case of the same thing).
 //!
-//! The regressor is the scaled temperature `dtemp = (temp - t0) / half`, from -1 to 1 over the
-//! calibrated range. A coefficient `c(T) = c0 + c1 dtemp + ... + ck dtemp^k` adds the terms
-//! `term:dtemp^i` to the model. Each coefficient's order `k` is chosen from the data by forward
-//! partial F tests (one or two powers at a time, so that an odd curve such as a tanh is not
-//! stopped by its missing even power), at a Bonferroni level over the candidates of each step,
-//! up to what the spread of the temperatures supports. The model at one temperature is the
-//! linear combination of the coefficients `J(T) b`, with covariance `J C J'`
-//! ([`crate::stats::Fit::combined`]).
+//! The scaled temperature is `x = (temp - t0) / half`, from -1 to 1 over the calibrated range,
+//! and a coefficient is a series of Legendre polynomials in it,
+//! `c(T) = c0 + c1 P1(x) + ... + ck Pk(x)`: the model gains the columns `temp_leg1 ...
+//! temp_legk` (`P_i(x)`) and the terms `term:temp_leg_i`. Legendre polynomials are orthogonal
+//! over an even ramp, so the estimate of one order hardly moves when the next is tested (with
+//! powers of `x`, `x` and `x^3` are 92 % correlated and a test that keeps `x^3` out biases the
+//! stated error of `x`'s coefficient), and the fit stays well conditioned up to order 9. Each
+//! coefficient's order `k` is chosen from the data by forward partial F tests (one or two
+//! orders at a time, so that an odd curve such as a tanh is not stopped by its missing even
+//! order), at a Bonferroni level over the candidates of each step, up to what the spread of
+//! the temperatures supports. The model at one temperature is the linear combination of the
+//! coefficients `J(T) b`, with covariance `J C J'` ([`crate::stats::Fit::combined`]).
 
 use nalgebra::DMatrix;
 
@@ -19,10 +23,32 @@ use crate::formula::{Formula, INTERCEPT, Term};
 use crate::obs::Table;
 use crate::stats::select;
 
-/// The scaled temperature column.
-pub const DTEMP: &str = "dtemp";
+/// The prefix of the temperature columns: `temp_leg3` is `P3(x)`.
+pub const PREFIX: &str = "temp_leg";
+
+/// The column of the Legendre polynomial of order `k` in the scaled temperature.
+#[must_use]
+pub fn column(k: u32) -> String {
+    format!("{PREFIX}{k}")
+}
+
+/// `P_k(x)` by Bonnet's recurrence.
+#[must_use]
+pub fn legendre(k: u32, x: f64) -> f64 {
+    let (mut p0, mut p1) = (1.0, x);
+    if k == 0 {
+        return p0;
+    }
+    for n in 1..k {
+        let n = f64::from(n);
+        let p2 = ((2.0 * n + 1.0) * x * p1 - n * p0) / (n + 1.0);
+        p0 = p1;
+        p1 = p2;
+    }
+    p1
+}
 /// The highest order of a coefficient's temperature polynomial.
-pub const MAX_ORDER: u32 = 5;
+pub const MAX_ORDER: u32 = 9;
 /// The smallest temperature span a temperature model is fitted over, C.
 pub const MIN_SPAN: f64 = 5.0;
 /// Temperatures a unit under test can plausibly be at, C.
@@ -30,7 +56,7 @@ pub const PLAUSIBLE: (f64, f64) = (-100.0, 200.0);
 /// Readings closer than this are one temperature when counting the distinct ones, C.
 const DISTINCT: f64 = 0.5;
 
-/// The calibrated temperature range and the scaling of `dtemp`.
+/// The calibrated temperature range and the scaled temperature `x` over it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Scale {
     /// Lowest temperature, C.
@@ -52,7 +78,7 @@ impl Scale {
         0.5 * (self.hi - self.lo)
     }
 
-    /// `dtemp` at temperature `t`.
+    /// `x` at temperature `t`.
     #[must_use]
     pub fn x(&self, t: f64) -> f64 {
         (t - self.center()) / self.half()
@@ -68,7 +94,7 @@ pub struct Support {
     pub distinct: usize,
     /// The highest order the temperatures support.
     pub max_order: u32,
-    /// The reading step when the temperatures are reported in steps (whole degrees, say).
+    /// The reading step when a ramp's temperatures are reported in steps (whole degrees, say).
     pub quantum: Option<f64>,
 }
 
@@ -135,7 +161,8 @@ pub fn check(table: &Table, column: &str) -> Result<Support, WorkflowError> {
         scale: Scale { lo, hi },
         distinct,
         max_order,
-        quantum: quantum(temps),
+        // Steps matter along a ramp; a few setpoints are whole numbers by choice.
+        quantum: if distinct >= 10 { quantum(temps) } else { None },
     })
 }
 
@@ -171,28 +198,30 @@ fn jumps(temps: &[f64], lines: &[u64], span: f64) -> Result<(), String> {
     Ok(())
 }
 
-/// The `dtemp` column for `table`'s temperatures.
-#[must_use]
-pub fn dtemp(table: &Table, column: &str, scale: &Scale) -> Vec<f64> {
-    table
-        .column(column)
+/// Adds the temperature columns `P_1(x) ... P_max(x)` of `table`'s column `temp`.
+pub fn push_columns(table: &mut Table, temp: &str, scale: &Scale, max: u32) {
+    let x: Vec<f64> = table
+        .column(temp)
         .unwrap_or_default()
         .iter()
         .map(|t| scale.x(*t))
-        .collect()
-}
-
-/// Term `j` of `base` (in `term_names` order) times `dtemp^k`; `k` at least 1.
-fn thermal_term(base: &Formula, j: usize, k: u32) -> Term {
-    let shift = usize::from(base.intercept);
-    if base.intercept && j == 0 {
-        Term::power(DTEMP, k)
-    } else {
-        base.terms[j - shift].times(DTEMP, k)
+        .collect();
+    for k in 1..=max {
+        table.push_column(&column(k), x.iter().map(|v| legendre(k, *v)).collect());
     }
 }
 
-/// `base` with `term:dtemp^1 ... term:dtemp^k` for each term's order `k` (`orders` in
+/// Term `j` of `base` (in `term_names` order) times `P_k`; `k` at least 1.
+fn thermal_term(base: &Formula, j: usize, k: u32) -> Term {
+    let shift = usize::from(base.intercept);
+    if base.intercept && j == 0 {
+        Term::var(&column(k))
+    } else {
+        base.terms[j - shift].times(&column(k), 1)
+    }
+}
+
+/// `base` with `term:temp_leg1 ... term:temp_legk` for each term's order `k` (`orders` in
 /// `term_names` order): the base terms first, so their coefficients are the values at `t0`.
 #[must_use]
 pub fn expand(base: &Formula, orders: &[u32]) -> Formula {
@@ -209,15 +238,17 @@ pub fn expand(base: &Formula, orders: &[u32]) -> Formula {
 #[must_use]
 pub fn base_of(formula: &Formula) -> Formula {
     let mut f = formula.clone();
-    f.terms.retain(|t| t.degree_in(DTEMP) == 0);
+    f.terms.retain(|t| !is_thermal(&t.name()));
     f
 }
 
 /// Whether a term name is a temperature term.
 #[must_use]
 pub fn is_thermal(name: &str) -> bool {
-    name.split(':')
-        .any(|f| f == DTEMP || f.starts_with("dtemp^"))
+    name.split(':').any(|f| {
+        f.strip_prefix(PREFIX)
+            .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+    })
 }
 
 /// A model whose coefficients vary with temperature, fitted over every observation.
@@ -233,6 +264,8 @@ pub struct ThermalFit {
     pub fit: AxisFit,
     /// How each order was chosen, in words.
     pub reasons: Vec<String>,
+    /// The observations' temperatures, in the fit's order.
+    pub temps: Vec<f64>,
 }
 
 impl ThermalFit {
@@ -248,7 +281,7 @@ impl ThermalFit {
             for k in 1..=self.orders[r] {
                 let n = thermal_term(&self.base, r, k).name();
                 if let Some(c) = self.fit.index(&n) {
-                    j[(r, c)] = x.powi(k as i32);
+                    j[(r, c)] = legendre(k, x);
                 }
             }
         }
@@ -278,14 +311,15 @@ impl ThermalFit {
 }
 
 /// Fits `base` with each coefficient's temperature order chosen from the data (or `fixed` for
-/// every coefficient), at most `support.max_order`; `fit` fits a formula over the observations
-/// (which have the `dtemp` column).
+/// every coefficient), at most `support.max_order`, over observations at `temps`; `fit` fits a
+/// formula over the observations
+/// (which have the temperature columns, [`push_columns`]).
 ///
 /// # Errors
 /// The fit's, for the model with every order at 0 (the others are candidates only).
 pub fn choose(
     base: &Formula,
-    support: &Support,
+    (support, temps): (&Support, &[f64]),
     alpha: f64,
     fixed: Option<u32>,
     fit: &dyn Fn(&Formula) -> Result<AxisFit, WorkflowError>,
@@ -315,6 +349,7 @@ pub fn choose(
             orders,
             scale,
             fit: f,
+            temps: temps.to_vec(),
         });
     }
     let mut orders = vec![0u32; names.len()];
@@ -382,23 +417,24 @@ pub fn choose(
         scale,
         fit: current,
         reasons,
+        temps: temps.to_vec(),
     })
 }
 
 /// Breakpoints for the device's table over `scale`: from the two ends, the temperature where
 /// `ratio` is worst is added until `ratio(points)` is at most 1 or `max` points are used.
 /// `ratio(points)` gives the worst departure of the interpolated table from the continuous
-/// model (against what is allowed) and the temperature where it is.
+/// model (against what is allowed) and the temperature where it is; the last is returned.
 pub fn breakpoints(
     scale: &Scale,
     max: usize,
     ratio: impl Fn(&[f64]) -> (f64, f64),
-) -> (Vec<f64>, f64) {
+) -> (Vec<f64>, (f64, f64)) {
     let mut points = vec![scale.lo, scale.hi];
     loop {
         let (r, at) = ratio(&points);
         if r <= 1.0 || points.len() >= max || points.iter().any(|p| (p - at).abs() < 1e-9) {
-            return (points, r);
+            return (points, (r, at));
         }
         let i = points.partition_point(|p| *p < at);
         points.insert(i, at);
@@ -467,8 +503,10 @@ mod tests {
         let f = expand(&base, &[2, 1]);
         assert_eq!(
             f.term_names(),
-            ["1", "input", "dtemp", "dtemp^2", "dtemp:input"]
+            ["1", "input", "temp_leg1", "temp_leg2", "input:temp_leg1"]
         );
+        assert!(!is_thermal("input") && !is_thermal("temp_leg"));
+        assert!((legendre(3, 0.5) - 0.5 * (5.0 * 0.125 - 1.5)).abs() < 1e-15);
         assert!(f.terms.iter().skip(1).all(|t| is_thermal(&t.name())));
         assert_eq!(base_of(&f), base);
     }
@@ -493,6 +531,6 @@ mod tests {
                 .fold((0.0, 0.0), |m, x| if x.0 > m.0 { x } else { m })
         });
         assert_eq!(p, [-40.0, 10.0, 70.0]);
-        assert!(r <= 1.0);
+        assert!(r.0 <= 1.0);
     }
 }

@@ -2,6 +2,7 @@
 //! through a test plan, writing an observation file the workflows read.
 
 pub mod plan;
+pub mod px4;
 pub mod ramp;
 pub mod recording;
 pub mod spin;

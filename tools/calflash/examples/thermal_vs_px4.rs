@@ -1,0 +1,49 @@
+//! The continuous temperature model against PX4's per-axis cubic bias, on simulated ramps with
+//! known truth (`calflash::sim::px4`): RMS error of the corrected input on held-out
+//! temperatures, averaged over seeds.
+//!
+//! `cargo run --release -p calflash --example thermal_vs_px4 -- [SEEDS]`
+
+use calflash::sim::px4;
+
+fn main() {
+    let seeds: u64 = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(50);
+    let dir = std::env::temp_dir().join(format!("thermal_vs_px4-{}", std::process::id()));
+    if let Err(e) = std::fs::create_dir_all(&dir) {
+        eprintln!("{}: {e}", dir.display());
+        std::process::exit(1);
+    }
+    println!("RMS error of the corrected input on held-out temperatures, mm/s^2, {seeds} seeds");
+    println!();
+    println!("| scenario | calflash (model) | calflash (device) | PX4 cubic | device / PX4 |");
+    println!("|---|---:|---:|---:|---:|");
+    for s in px4::scenarios() {
+        let mut sum = [0.0f64; 3];
+        for seed in 1..=seeds {
+            match px4::run(&s, seed, &dir) {
+                Ok(e) => {
+                    for (a, v) in sum.iter_mut().zip([e.model, e.device, e.px4]) {
+                        *a += v * v;
+                    }
+                }
+                Err(e) => {
+                    eprintln!("{} seed {seed}: {e}", s.name);
+                    std::process::exit(1);
+                }
+            }
+        }
+        let rms = sum.map(|v| (v / seeds as f64).sqrt() * 1e3);
+        println!(
+            "| {} | {:.3} | {:.3} | {:.3} | {:.2} |",
+            s.name,
+            rms[0],
+            rms[1],
+            rms[2],
+            rms[1] / rms[2]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

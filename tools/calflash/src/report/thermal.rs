@@ -1,0 +1,180 @@
+//! The report's section on a continuous temperature model: each coefficient against the
+//! temperature with its 95 % band (the bias with the observations' partial residuals), the
+//! corrected input's 1-sigma over the temperature with the calibrated range marked, and how far
+//! the device's series or table departs from the model.
+
+use std::fmt::Write as _;
+
+use spincal::correct::AnyAxisCorrector;
+use spincal::model::TemperatureModel;
+
+use super::html::esc;
+use super::plot::{Figure, Series, svg};
+use super::terminal::num;
+use crate::sensor::Calibrated;
+use crate::sensor::single::own_of;
+use crate::sensor::thermal::ThermalFit;
+
+/// Temperatures each curve is drawn at.
+const STEPS: usize = 160;
+
+fn grid(tf: &ThermalFit, beyond: f64) -> Vec<f64> {
+    let (lo, hi) = (tf.scale.lo, tf.scale.hi);
+    let pad = beyond * (hi - lo);
+    (0..=STEPS)
+        .map(|i| lo - pad + (hi - lo + 2.0 * pad) * i as f64 / STEPS as f64)
+        .collect()
+}
+
+/// The section, or an empty string when the calibration has no continuous model.
+///
+/// # Errors
+/// A figure that cannot be drawn.
+pub fn section(c: &Calibrated) -> Result<String, String> {
+    let Some(tf) = &c.thermal else {
+        return Ok(String::new());
+    };
+    let mut h = String::new();
+    let _ = writeln!(h, "<h2>Temperature</h2>");
+    let _ = writeln!(h, "<ul>");
+    for r in &tf.reasons {
+        let _ = writeln!(h, "<li>temperature order of {}</li>", esc(r));
+    }
+    let _ = writeln!(h, "</ul>");
+    let names = tf.base.term_names();
+    let temps = grid(tf, 0.0);
+    let range = vec![(tf.scale.lo, tf.scale.hi)];
+    for (j, name) in names.iter().enumerate() {
+        let mut mid = Vec::new();
+        let mut upper = Vec::new();
+        let mut lower = Vec::new();
+        for t in &temps {
+            let (b, cov) = tf.coefficients_at(*t);
+            let se = cov[(j, j)].max(0.0).sqrt();
+            mid.push((*t, b[j]));
+            upper.push((*t, b[j] + 1.96 * se));
+            lower.push((*t, b[j] - 1.96 * se));
+        }
+        // The bias with each observation's partial residual: its residual about the model
+        // plus the bias at its temperature.
+        let observed: Vec<(f64, f64)> = if name == "1" {
+            tf.temps
+                .iter()
+                .zip(&tf.fit.fit.residuals)
+                .map(|(t, e)| (*t, tf.coefficients_at(*t).0[j] + e))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let what = if name == "1" {
+            "bias (counts)".to_string()
+        } else {
+            format!("{name} coefficient")
+        };
+        let mut series = vec![
+            Series::curve("model", &mid, 0),
+            Series::curve("95 % band", &upper, 1),
+            Series::curve("", &lower, 1),
+        ];
+        if !observed.is_empty() {
+            series.push(Series::dots("observations", &observed, 2));
+        }
+        let _ = writeln!(
+            h,
+            "<div class=\"fig\">{}</div>",
+            svg(&Figure {
+                title: &format!("{what} against temperature"),
+                x: "temperature (C)",
+                y: &what,
+                series,
+                bands: Vec::new(),
+                band_label: "",
+                zero_line: false,
+            })?
+        );
+    }
+    let unit = c.units.first().copied().unwrap_or("");
+    let range_in = c
+        .ranges
+        .first()
+        .map_or((0.0, 0.0), |r| (f64::from(r.lo), f64::from(r.hi)));
+    let names_ref = &names;
+    let sigma_at = |t: f64, x: f64| {
+        let (b, cov) = tf.coefficients_at(t);
+        let own = own_of(names_ref, &b, c.breakpoint);
+        let (i0, i1) = (
+            names.iter().position(|n| n == "1").unwrap_or(0),
+            names.iter().position(|n| n == "input").unwrap_or(0),
+        );
+        (cov[(i0, i0)] + 2.0 * x * cov[(i0, i1)] + x * x * cov[(i1, i1)])
+            .max(0.0)
+            .sqrt()
+            / own.slope.abs()
+    };
+    let wide = grid(tf, 0.15);
+    let at_zero: Vec<(f64, f64)> = wide.iter().map(|t| (*t, sigma_at(*t, 0.0))).collect();
+    let at_top: Vec<(f64, f64)> = wide
+        .iter()
+        .map(|t| (*t, sigma_at(*t, range_in.1)))
+        .collect();
+    let top = format!("input {}", num(range_in.1));
+    let _ = writeln!(
+        h,
+        "<div class=\"fig\">{}</div>",
+        svg(&Figure {
+            title: "1-sigma calibration error of the corrected input over the temperature",
+            x: "temperature (C)",
+            y: &format!("1-sigma ({unit})"),
+            series: vec![
+                Series::curve("input 0", &at_zero, 0),
+                Series::curve(&top, &at_top, 1),
+            ],
+            bands: range.clone(),
+            band_label: "calibrated range",
+            zero_line: true,
+        })?
+    );
+    // The device against the model: its correction of the model's own codes.
+    let cal = spincal::blob::decode(&c.blob).map_err(|e| e.to_string())?;
+    let mut device = AnyAxisCorrector::new(&cal).map_err(|e| e.to_string())?;
+    let volt =
+        0.5 * (cal.data().environment.voltage_span.lo + cal.data().environment.voltage_span.hi);
+    let departure: Vec<(f64, f64)> = temps
+        .iter()
+        .map(|t| {
+            let (b, _) = tf.coefficients_at(*t);
+            let own = own_of(&names, &b, c.breakpoint);
+            device.set_environment(*t as f32, volt);
+            let worst = (0..=20)
+                .map(|k| {
+                    let x = range_in.0 + (range_in.1 - range_in.0) * f64::from(k) / 20.0;
+                    let code = own.output(x).round();
+                    let want = own.input_for(code, x);
+                    let got = f64::from(device.correct(code as i32).values[0]);
+                    (got - want).abs() / sigma_at(*t, want)
+                })
+                .fold(0.0, f64::max);
+            (*t, worst)
+        })
+        .collect();
+    let what = match cal.data().environment.temperature_model {
+        TemperatureModel::Chebyshev(n) => format!("Chebyshev series of {n} terms"),
+        TemperatureModel::Table => format!("table of {} temperatures", c.temps.len()),
+    };
+    let _ = writeln!(
+        h,
+        "<div class=\"fig\">{}</div>",
+        svg(&Figure {
+            title: &format!(
+                "the device's {what} against the model: worst departure over the inputs, in the model's 1-sigma"
+            ),
+            x: "temperature (C)",
+            y: "departure / 1-sigma",
+            series: vec![Series::curve("device - model", &departure, 3)],
+            bands: Vec::new(),
+            band_label: "",
+            zero_line: true,
+        })?
+    );
+    Ok(h)
+}
