@@ -20,6 +20,10 @@ pub const INPUT_O: &str = "input_o";
 pub const OUTPUT: &str = "output";
 /// Temperature.
 pub const TEMP: &str = "temp";
+/// The chamber's temperature, when the sensor's own is in `temp` (reported, not fitted).
+pub const CHAMBER_TEMP: &str = "chamber_temp";
+/// Time of an observation, seconds.
+pub const TIME: &str = "time";
 /// Supply voltage.
 pub const VOLT: &str = "volt";
 /// Sweep direction.

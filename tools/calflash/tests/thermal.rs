@@ -124,6 +124,10 @@ fn a_chamber_ramp_calibrates_and_the_device_gets_a_temperature_series() {
         out.contains("ACCEPT the device's Chebyshev series of"),
         "{out}"
     );
+    assert!(
+        out.contains("the sensor's temperature differs from the chamber's by"),
+        "{out}"
+    );
     let blob = std::fs::read(d.join("r.bin")).unwrap();
     let cal = spincal::blob::decode(&blob).unwrap();
     assert!(matches!(
@@ -511,6 +515,91 @@ fn against_px4_the_error_is_halved_where_the_curve_is_not_a_cubic() {
             assert!(device <= 1.05 * reference, "{}", s.name);
         } else {
             assert!(device <= 0.5 * reference, "{}", s.name);
+        }
+    }
+}
+
+#[test]
+fn a_still_unit_in_a_ramp_and_a_bench_run_at_one_temperature_make_one_calibration() {
+    // PX4's procedure: the unit still (input +1 g) while the chamber ramps gives the bias
+    // against temperature; a dividing head at 25 C gives the scale factor and the rest.
+    let truth = SingleTruth {
+        k3: 0.0,
+        kp: 0.0,
+        ko: 0.0,
+        k0_temp: 0.6,
+        k0_temp2: -0.01,
+        k0_temp3: 2e-4,
+        k1_temp: 0.0,
+        ..SingleTruth::default()
+    };
+    let ramp = Ramp {
+        from: -40.0,
+        to: 70.0,
+        seconds: 7200.0,
+        uneven: false,
+        lag: 0.0,
+        self_heating: None,
+        step: None,
+    };
+    let still = plan::plan(&["head:1".into()], &[25.0], &[5.0], 300, true).unwrap();
+    let temps = ramp.temperatures(still.len());
+    let mut conditions: Vec<plan::Condition> = still
+        .iter()
+        .zip(&temps.sensor)
+        .map(|(c, t)| plan::Condition { temp: *t, ..*c })
+        .collect();
+    conditions.extend(plan::plan(&["head:16".into()], &[25.0], &[5.0], 3, true).unwrap());
+    let obs = sim::simulate(
+        &Sensor::Single {
+            gyro: false,
+            truth: truth.clone(),
+        },
+        &conditions,
+        11,
+        false,
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("still.csv");
+    obs.write_csv(std::fs::File::create(&path).unwrap())
+        .unwrap();
+    let mut opts = Options::new(&path, "STILL");
+    opts.created = Some(0);
+    let c = single::calibrate(&opts, Quantity::Acceleration).unwrap();
+    let tf = c.thermal.as_ref().expect("a continuous model");
+    assert_eq!(tf.orders[0], 3, "{:?}", tf.reasons);
+    let input = tf
+        .base
+        .term_names()
+        .iter()
+        .position(|n| n == "input")
+        .unwrap();
+    assert_eq!(tf.orders[input], 0);
+    assert!(
+        tf.reasons[input].contains("the most these observations can estimate"),
+        "{}",
+        tf.reasons[input]
+    );
+    // The device, between the ramp's temperatures, within 3 of its own 1-sigma.
+    let cal = spincal::blob::decode(&c.blob).unwrap();
+    let mut dev = AnyAxisCorrector::new(&cal).unwrap();
+    for k in 0..20 {
+        let t = -38.0 + 5.6 * f64::from(k);
+        dev.set_environment(t as f32, 5.0);
+        for i in 0..=8 {
+            let x = plan::G * (f64::from(i) / 4.0 - 1.0);
+            let code = truth.output(x, 0.0, 0.0, t, 5.0, 0.0).round();
+            let f = |x: f64| truth.output(x, 0.0, 0.0, t, 5.0, 0.0);
+            let mut want = x;
+            for _ in 0..20 {
+                want -= (f(want) - code) / ((f(want + 1e-3) - f(want - 1e-3)) / 2e-3);
+            }
+            let got = f64::from(dev.correct(code as i32).values[0]);
+            let sigma = f64::from(dev.sigma(code as i32).unwrap());
+            assert!(
+                (got - want).abs() <= 3.0 * sigma,
+                "{t} C, {x}: {got} vs {want} (1-sigma {sigma})"
+            );
         }
     }
 }

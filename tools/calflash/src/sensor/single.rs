@@ -165,7 +165,15 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     }
     let has = |c: &str| header.iter().any(|h| h == c);
     let mut wanted: Vec<String> = vec![col::INPUT.into(), col::OUTPUT.into()];
-    for c in [col::INPUT_P, col::INPUT_O, col::TEMP, col::VOLT, col::DIR] {
+    for c in [
+        col::INPUT_P,
+        col::INPUT_O,
+        col::TEMP,
+        col::VOLT,
+        col::DIR,
+        col::CHAMBER_TEMP,
+        col::TIME,
+    ] {
         if has(c) {
             wanted.push(c.into());
         }
@@ -243,8 +251,11 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         }
         let s = thermal::check(&table, col::TEMP)?;
         thermal::push_columns(&mut table, col::TEMP, &s.scale, s.max_order);
+        if let Some(lag) = thermal::lag(&table) {
+            notes.push(lag);
+        }
         notes.push(format!(
-            "continuous temperature model over {} to {} C ({} distinct temperatures{}): every coefficient is a series of Legendre polynomials temp_legK of x = (temp - {:.2}) / {:.2}",
+            "continuous temperature model over {:.1} to {:.1} C ({} distinct temperatures{}): every coefficient is a series of Legendre polynomials temp_legK of x = (temp - {:.2}) / {:.2}",
             s.scale.lo,
             s.scale.hi,
             s.distinct,
@@ -268,18 +279,28 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     };
     let layout = layout.map_err(|e| WorkflowError::msg(path, e))?;
     // While terms and tests are decided, the bias and the scale factor follow the temperature
-    // at the highest order it supports.
-    let provisional = |m: &Formula| match &support {
+    // at the highest order the observations can estimate.
+    let caps = match &support {
         Some(s) => {
+            let all = |f: &Formula| fit_axis(f, &table, opts.alpha, path, "all temperatures");
+            let base = formula::parse(&format!("{} ~ 1 + {}", col::OUTPUT, col::INPUT))?;
+            let bias = thermal::estimable(&base, 0, s.max_order, &[], &all);
+            (
+                bias,
+                thermal::estimable(&base, 1, s.max_order, &[bias], &all),
+            )
+        }
+        None => (0, 0),
+    };
+    let provisional = |m: &Formula| match &support {
+        Some(_) => {
             let orders: Vec<u32> = m
                 .term_names()
                 .iter()
-                .map(|n| {
-                    if n == "1" || n == col::INPUT {
-                        s.max_order
-                    } else {
-                        0
-                    }
+                .map(|n| match n.as_str() {
+                    "1" => caps.0,
+                    col::INPUT => caps.1,
+                    _ => 0,
                 })
                 .collect();
             thermal::expand(m, &orders)

@@ -16,6 +16,8 @@
 //! the temperatures supports. The model at one temperature is the linear combination of the
 //! coefficients `J(T) b`, with covariance `J C J'` ([`crate::stats::Fit::combined`]).
 
+use std::fmt::Write as _;
+
 use nalgebra::DMatrix;
 
 use super::{AxisFit, WorkflowError};
@@ -332,9 +334,17 @@ pub fn choose(
         support.distinct,
         scale.hi - scale.lo
     );
+    // What the observations can estimate of each coefficient's temperature dependence (a
+    // still unit in a ramp, with a multi-position run at one temperature, says nothing of
+    // how the scale factor changes).
+    // In term order, each given the ones before it at theirs: the bias first.
+    let mut caps = vec![0u32; names.len()];
+    for j in 0..names.len() {
+        caps[j] = estimable(base, j, max, &caps, fit);
+    }
     if let Some(k) = fixed {
+        let orders: Vec<u32> = caps.iter().map(|c| k.min(max).min(*c)).collect();
         let k = k.min(max);
-        let orders = vec![k; names.len()];
         let f = fit(&expand(base, &orders))?;
         return Ok(ThermalFit {
             base: base.clone(),
@@ -360,7 +370,7 @@ pub fn choose(
         let mut candidates = Vec::new();
         for j in 0..names.len() {
             for step in 1..=2 {
-                if orders[j] + step <= max {
+                if orders[j] + step <= caps[j] {
                     let mut o = orders.clone();
                     o[j] += step;
                     if let Ok(f) = fit(&expand(base, &o)) {
@@ -401,6 +411,10 @@ pub fn choose(
             let k = orders[j];
             if k == max {
                 format!("{what}: order {k}, {supported}")
+            } else if k == caps[j] {
+                format!(
+                    "{what}: order {k}, the most these observations can estimate (its temperature terms of higher order are combinations of the other terms: the temperature does not vary where this term does)"
+                )
             } else {
                 match last_p[j] {
                     Some(p) => format!(
@@ -419,6 +433,85 @@ pub fn choose(
         reasons,
         temps: temps.to_vec(),
     })
+}
+
+/// The highest order (at most `max`) of coefficient `j`'s temperature polynomial that the
+/// observations can estimate, the other coefficients at `given` orders.
+pub fn estimable(
+    base: &Formula,
+    j: usize,
+    max: u32,
+    given: &[u32],
+    fit: &dyn Fn(&Formula) -> Result<AxisFit, WorkflowError>,
+) -> u32 {
+    let mut orders = given.to_vec();
+    orders.resize(base.width(), 0);
+    (1..=max)
+        .rev()
+        .find(|k| {
+            orders[j] = *k;
+            fit(&expand(base, &orders)).is_ok()
+        })
+        .unwrap_or(0)
+}
+
+/// How the sensor's temperature (`temp`, the one fitted) follows the chamber's
+/// (`chamber_temp`), in words, when both are given: the median of their difference, and with a
+/// `time` column the median delay after which the chamber had the sensor's temperature (a
+/// first-order lag behind a ramp shows as that delay; self-heating as the difference).
+#[must_use]
+pub fn lag(table: &Table) -> Option<String> {
+    use crate::columns as col;
+    let sensor = table.column(col::TEMP)?;
+    let chamber = table.column(col::CHAMBER_TEMP)?;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied()
+    };
+    let offset = median(sensor.iter().zip(chamber).map(|(s, c)| s - c).collect())?;
+    let mut text = format!(
+        "the sensor's temperature differs from the chamber's by {offset:+.2} C (median); the fit uses the sensor's"
+    );
+    if let Some(time) = table.column(col::TIME) {
+        // Where the chamber ramps monotonically, the time it had each sensor reading.
+        let rising = chamber.windows(2).all(|w| w[1] >= w[0]);
+        let falling = chamber.windows(2).all(|w| w[1] <= w[0]);
+        if rising || falling {
+            let sign = if rising { 1.0 } else { -1.0 };
+            let delays: Vec<f64> = sensor
+                .iter()
+                .zip(time)
+                .filter_map(|(s, t)| {
+                    let k = chamber.partition_point(|c| sign * c < sign * s);
+                    let (c0, c1) = (chamber.get(k.checked_sub(1)?)?, chamber.get(k)?);
+                    let (t0, t1) = (time[k - 1], time[k]);
+                    let at = if c1 == c0 {
+                        t0
+                    } else {
+                        t0 + (t1 - t0) * (s - c0) / (c1 - c0)
+                    };
+                    Some(t - at)
+                })
+                .collect();
+            match median(delays) {
+                Some(d) if d >= 0.0 => {
+                    let _ = write!(
+                        text,
+                        "; it reads what the chamber read {d:.0} s earlier (median lag)"
+                    );
+                }
+                Some(d) => {
+                    let _ = write!(
+                        text,
+                        "; it reads what the chamber reaches {:.0} s later (self-heating, or a warmer mount)",
+                        -d
+                    );
+                }
+                None => {}
+            }
+        }
+    }
+    Some(text)
 }
 
 /// Breakpoints for the device's table over `scale`: from the two ends, the temperature where
