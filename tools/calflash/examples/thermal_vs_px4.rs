@@ -2,7 +2,8 @@
 //! known truth (`calflash::sim::px4`): RMS error of the corrected input on held-out
 //! temperatures, averaged over seeds.
 //!
-//! `cargo run --release -p calflash --example thermal_vs_px4 -- [SEEDS]`
+//! `cargo run --release -p calflash --example thermal_vs_px4 -- [SEEDS] [MODEL]`: with a
+//! MODEL (say `"output ~ 1 + input"`), calflash fits that instead of its preset.
 
 use calflash::sim::px4;
 
@@ -11,19 +12,23 @@ fn main() {
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(50);
+    let model = std::env::args().nth(2);
     let dir = std::env::temp_dir().join(format!("thermal_vs_px4-{}", std::process::id()));
     if let Err(e) = std::fs::create_dir_all(&dir) {
         eprintln!("{}: {e}", dir.display());
         std::process::exit(1);
     }
-    println!("RMS error of the corrected input on held-out temperatures, mm/s^2, {seeds} seeds");
+    println!(
+        "RMS error of the corrected input on held-out temperatures, mm/s^2, {seeds} seeds, calflash fitting {}",
+        model.as_deref().unwrap_or("its preset")
+    );
     println!();
     println!("| scenario | calflash (model) | calflash (device) | PX4 cubic | device / PX4 |");
     println!("|---|---:|---:|---:|---:|");
     for s in px4::scenarios() {
         let mut sum = [0.0f64; 3];
         for seed in 1..=seeds {
-            match px4::run(&s, seed, &dir) {
+            match px4::run(&s, seed, &dir, model.as_deref()) {
                 Ok(e) => {
                     for (a, v) in sum.iter_mut().zip([e.model, e.device, e.px4]) {
                         *a += v * v;

@@ -245,6 +245,17 @@ fn in_x(p: &[f64], scale: &Scale) -> Vec<f64> {
 
 #[test]
 fn stated_errors_cover_the_truth_over_200_ramps() {
+    coverage(false);
+}
+
+#[test]
+fn stated_errors_cover_the_truth_over_200_uneven_ramps_fitted_with_weights() {
+    coverage(true);
+}
+
+/// 200 simulated ramps (even, or fast at first and slow at the end, where the fit is weighted
+/// and its covariance is the sandwich estimate).
+fn coverage(uneven: bool) {
     let truth = SingleTruth {
         k2: 0.0,
         k3: 0.0,
@@ -260,7 +271,7 @@ fn stated_errors_cover_the_truth_over_200_ramps() {
         from: -40.0,
         to: 70.0,
         seconds: 7200.0,
-        uneven: false,
+        uneven,
         lag: 0.0,
         self_heating: None,
         step: None,
@@ -499,7 +510,7 @@ fn against_px4_the_error_is_halved_where_the_curve_is_not_a_cubic() {
     for s in &scenarios {
         let errors: Vec<px4::Errors> = (1..=3u64)
             .into_par_iter()
-            .map(|seed| px4::run(s, seed, dir.path()).unwrap())
+            .map(|seed| px4::run(s, seed, dir.path(), None).unwrap())
             .collect();
         let rms = |f: fn(&px4::Errors) -> f64| {
             (errors.iter().map(|e| f(e).powi(2)).sum::<f64>() / errors.len() as f64).sqrt()
@@ -512,7 +523,10 @@ fn against_px4_the_error_is_halved_where_the_curve_is_not_a_cubic() {
             reference * 1e3
         );
         if s.name.starts_with("cubic") {
-            assert!(device <= 1.05 * reference, "{}", s.name);
+            // PX4's own model, which calflash must find among the terms its preset tests
+            // (nonlinearity, asymmetry, cross-axis): 1.07 times PX4's error over 50 seeds
+            // (BENCHMARKS.md), 1.03 with the sensor's model given; 3 seeds vary more.
+            assert!(device <= 1.15 * reference, "{}", s.name);
         } else {
             assert!(device <= 0.5 * reference, "{}", s.name);
         }

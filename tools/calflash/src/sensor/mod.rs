@@ -161,8 +161,29 @@ impl AxisFit {
         table: &crate::obs::Table,
         own: &str,
         alpha: f64,
+        at: (&Path, &str),
+        name_response: bool,
+    ) -> Result<Self, WorkflowError> {
+        Self::fit_weighted(formula, table, own, alpha, at, name_response, None)
+    }
+
+    /// [`fit`](Self::fit) by weighted least squares when `weights` are given (one per
+    /// observation, mean 1): sampling weights that even out where the observations crowd, not
+    /// precisions, so the coefficients' covariance is the sandwich
+    /// `s^2 (X'WX)^-1 X'W^2X (X'WX)^-1` with `s^2` the unweighted residual variance; the
+    /// residuals and fitted values stay in the response's units, and `rss` is the weighted sum
+    /// the fit minimised (the partial F tests between weighted fits compare it).
+    ///
+    /// # Errors
+    /// As [`fit`](Self::fit).
+    pub fn fit_weighted(
+        formula: &Formula,
+        table: &crate::obs::Table,
+        own: &str,
+        alpha: f64,
         (path, where_): (&Path, &str),
         name_response: bool,
+        weights: Option<&[f64]>,
     ) -> Result<Self, WorkflowError> {
         use crate::stats::{self, FitError};
         let d = formula.design(table);
@@ -170,7 +191,18 @@ impl AxisFit {
             alpha,
             ..stats::Options::default()
         };
-        let fit = stats::fit(&d.x, &d.y, d.names, d.intercept, &opts).map_err(|e| match e {
+        let (x, y) = match weights {
+            Some(w) => {
+                let mut x = d.x.clone();
+                for (mut row, wi) in x.row_iter_mut().zip(w) {
+                    row *= wi.sqrt();
+                }
+                let y: Vec<f64> = d.y.iter().zip(w).map(|(v, wi)| v * wi.sqrt()).collect();
+                (x, y)
+            }
+            None => (d.x.clone(), d.y.clone()),
+        };
+        let fit = stats::fit(&x, &y, d.names, d.intercept, &opts).map_err(|e| match e {
             FitError::RankDeficient {
                 column,
                 combination,
@@ -197,6 +229,35 @@ impl AxisFit {
                     .unwrap_or_else(|| e.to_string()),
             ),
         })?;
+        let fit = match weights {
+            Some(w) => {
+                let beta = nalgebra::DVector::from_column_slice(&fit.coefficients);
+                let fitted: Vec<f64> = (&d.x * beta).iter().copied().collect();
+                let residuals: Vec<f64> = d.y.iter().zip(&fitted).map(|(a, b)| a - b).collect();
+                let sigma2 = residuals.iter().map(|e| e * e).sum::<f64>() / fit.dof as f64;
+                let bread = fit.unscaled_covariance();
+                // X'W^2X: the weighted rows weighted once more.
+                let mut xw = x.clone();
+                for (mut row, wi) in xw.row_iter_mut().zip(w) {
+                    row *= wi.sqrt();
+                }
+                let sandwich = &bread * xw.tr_mul(&xw) * &bread;
+                let mut f = fit.with_covariance(sigma2, &sandwich).ok_or_else(|| {
+                    WorkflowError::msg(
+                        path,
+                        format!(
+                            "at {where_}: the weighted fit's covariance is not positive definite"
+                        ),
+                    )
+                })?;
+                // The weighted residual sum of squares stays: it is what the partial F tests
+                // between weighted fits compare.
+                f.fitted = fitted;
+                f.residuals = residuals;
+                f
+            }
+            None => fit,
+        };
         Ok(Self {
             output: formula.response.clone(),
             own: own.into(),

@@ -48,7 +48,17 @@ fn fit_axis(
     path: &std::path::Path,
     where_: &str,
 ) -> Result<AxisFit, WorkflowError> {
-    let mut fit = AxisFit::fit(formula, table, col::INPUT, alpha, (path, where_), false)?;
+    fit_axis_weighted(formula, table, alpha, (path, where_), None)
+}
+
+fn fit_axis_weighted(
+    formula: &Formula,
+    table: &Table,
+    alpha: f64,
+    at: (&std::path::Path, &str),
+    weights: Option<&[f64]>,
+) -> Result<AxisFit, WorkflowError> {
+    let mut fit = AxisFit::fit_weighted(formula, table, col::INPUT, alpha, at, false, weights)?;
     fit.dir = table.column(col::DIR).map(<[f64]>::to_vec);
     Ok(fit)
 }
@@ -242,6 +252,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
                 })
         }
     };
+    let mut weights: Option<Vec<f64>> = None;
     let support = if continuous {
         if varies(&table, col::VOLT) {
             return Err(WorkflowError::msg(
@@ -253,6 +264,15 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         thermal::push_columns(&mut table, col::TEMP, &s.scale, s.max_order);
         if let Some(lag) = thermal::lag(&table) {
             notes.push(lag);
+        }
+        weights = thermal::density_weights(table.column(col::TEMP).unwrap_or_default(), &s.scale);
+        if let Some(w) = &weights {
+            let (lo, hi) = w
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+            notes.push(format!(
+                "the observations crowd in part of the temperature range: the temperature model is fitted with weights that even out their density ({lo:.2} to {hi:.2}), its covariance the sandwich estimate"
+            ));
         }
         notes.push(format!(
             "continuous temperature model over {:.1} to {:.1} C ({} distinct temperatures{}): every coefficient is a series of Legendre polynomials temp_legK of x = (temp - {:.2}) / {:.2}",
@@ -282,7 +302,15 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     // at the highest order the observations can estimate.
     let caps = match &support {
         Some(s) => {
-            let all = |f: &Formula| fit_axis(f, &table, opts.alpha, path, "all temperatures");
+            let all = |f: &Formula| {
+                fit_axis_weighted(
+                    f,
+                    &table,
+                    opts.alpha,
+                    (path, "all temperatures"),
+                    weights.as_deref(),
+                )
+            };
             let base = formula::parse(&format!("{} ~ 1 + {}", col::OUTPUT, col::INPUT))?;
             let bias = thermal::estimable(&base, 0, s.max_order, &[], &all);
             (
@@ -440,7 +468,13 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         Some(s) => {
             let temps = table.column(col::TEMP).unwrap_or_default();
             let tf = thermal::choose(&model, (s, temps), opts.alpha, opts.thermal_order, &|f| {
-                fit_axis(f, &table, opts.alpha, path, "all temperatures")
+                fit_axis_weighted(
+                    f,
+                    &table,
+                    opts.alpha,
+                    (path, "all temperatures"),
+                    weights.as_deref(),
+                )
             })?;
             notes.extend(
                 tf.reasons

@@ -374,8 +374,14 @@ pub fn choose(
                     let mut o = orders.clone();
                     o[j] += step;
                     if let Ok(f) = fit(&expand(base, &o)) {
-                        let test = select::partial_f(&f.fit, &current.fit);
-                        candidates.push((j, step, test, f));
+                        // The Wald test of the added orders: the partial F test for least
+                        // squares, and still valid for a weighted fit's sandwich covariance.
+                        let added: Vec<String> = (orders[j] + 1..=o[j])
+                            .map(|k| thermal_term(base, j, k).name())
+                            .collect();
+                        if let Some(test) = select::wald(&f.fit, &added) {
+                            candidates.push((j, step, test, f));
+                        }
                     }
                 }
             }
@@ -433,6 +439,32 @@ pub fn choose(
         reasons,
         temps: temps.to_vec(),
     })
+}
+
+/// Weights that even out the observations' density over the temperature range, or `None`
+/// when it is even enough (the fullest of 10 bins at most twice the emptiest, counting only
+/// bins with observations): each observation weighs the inverse of its bin's share, scaled to
+/// a mean of 1 and kept within 0.1 to 10. Where a ramp crowds the observations, an unweighted
+/// fit would follow the curve there at the expense of the sparse part of the range.
+#[must_use]
+pub fn density_weights(temps: &[f64], scale: &Scale) -> Option<Vec<f64>> {
+    const BINS: usize = 10;
+    let bin = |t: f64| {
+        let u = (t - scale.lo) / (scale.hi - scale.lo);
+        ((u * BINS as f64) as usize).min(BINS - 1)
+    };
+    let mut counts = [0usize; BINS];
+    for t in temps {
+        counts[bin(*t)] += 1;
+    }
+    let filled: Vec<usize> = counts.iter().copied().filter(|c| *c > 0).collect();
+    let (lo, hi) = (filled.iter().min()?, filled.iter().max()?);
+    if *hi <= 2 * *lo {
+        return None;
+    }
+    let raw: Vec<f64> = temps.iter().map(|t| 1.0 / counts[bin(*t)] as f64).collect();
+    let mean = raw.iter().sum::<f64>() / raw.len() as f64;
+    Some(raw.iter().map(|w| (w / mean).clamp(0.1, 10.0)).collect())
 }
 
 /// The highest order (at most `max`) of coefficient `j`'s temperature polynomial that the
@@ -602,6 +634,32 @@ mod tests {
         assert!((legendre(3, 0.5) - 0.5 * (5.0 * 0.125 - 1.5)).abs() < 1e-15);
         assert!(f.terms.iter().skip(1).all(|t| is_thermal(&t.name())));
         assert_eq!(base_of(&f), base);
+    }
+
+    #[test]
+    fn weights_even_out_a_crowded_ramp_only() {
+        let scale = Scale {
+            lo: -40.0,
+            hi: 70.0,
+        };
+        let even: Vec<f64> = (0..400)
+            .map(|i| -40.0 + 110.0 * f64::from(i) / 399.0)
+            .collect();
+        assert!(density_weights(&even, &scale).is_none());
+        // Fast at first, slow at the end: the hot end is crowded.
+        let r = crate::sim::ramp::Ramp {
+            from: -40.0,
+            to: 70.0,
+            seconds: 7200.0,
+            uneven: true,
+            lag: 0.0,
+            self_heating: None,
+            step: None,
+        };
+        let temps = r.temperatures(400).sensor;
+        let w = density_weights(&temps, &scale).unwrap();
+        assert!((w.iter().sum::<f64>() / 400.0 - 1.0).abs() < 0.05);
+        assert!(w[0] > 3.0 * w[399], "{} {}", w[0], w[399]);
     }
 
     #[test]

@@ -104,12 +104,13 @@ fn invert(truth: &SingleTruth, out: f64, t: f64) -> f64 {
 }
 
 /// Runs one seed of a scenario: simulates the ramp into `dir`, calibrates it with `calflash
-/// calibrate`'s single-axis workflow and with PX4's model, and scores both on 37 temperatures
-/// between the observations' and 21 inputs over +-1 g, at the unit's true temperature.
+/// calibrate`'s single-axis workflow (its preset, or `model`) and with PX4's model, and scores
+/// both on 37 temperatures between the observations' and 21 inputs over +-1 g, at the unit's
+/// true temperature.
 ///
 /// # Errors
 /// A calibration that fails, in words.
-pub fn run(s: &Scenario, seed: u64, dir: &Path) -> Result<Errors, String> {
+pub fn run(s: &Scenario, seed: u64, dir: &Path, model: Option<&str>) -> Result<Errors, String> {
     let conditions = plan::plan(
         &["head:16".into()],
         &[25.0],
@@ -143,6 +144,7 @@ pub fn run(s: &Scenario, seed: u64, dir: &Path) -> Result<Errors, String> {
     std::fs::write(&path, buf).map_err(|e| e.to_string())?;
     let mut opts = Options::new(&path, "PX4CMP");
     opts.created = Some(0);
+    opts.model = model.map(String::from);
     let c = single::calibrate(&opts, Quantity::Acceleration).map_err(|e| e.to_string())?;
     let _ = std::fs::remove_file(&path);
     let tf = c

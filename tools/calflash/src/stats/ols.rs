@@ -173,6 +173,44 @@ impl Fit {
         &self.factor * self.factor.transpose()
     }
 
+    /// The same fit with the coefficients' covariance `sigma2 unscaled` (a sandwich estimate,
+    /// say) and the residual variance `sigma2`, with the standard errors, tests and intervals
+    /// that follow; `None` when `unscaled` is not positive definite.
+    #[must_use]
+    pub fn with_covariance(&self, sigma2: f64, unscaled: &DMatrix<f64>) -> Option<Fit> {
+        let factor = unscaled.clone().cholesky()?.l();
+        let covariance = unscaled * sigma2;
+        let std_errors: Vec<f64> = (0..self.p).map(|j| covariance[(j, j)].sqrt()).collect();
+        let t: Vec<f64> = self
+            .coefficients
+            .iter()
+            .zip(&std_errors)
+            .map(|(b, s)| b / s)
+            .collect();
+        let crit = dist::t_upper_quantile(self.alpha / 2.0, self.dof as f64);
+        let interval = |sign: f64| -> Vec<f64> {
+            self.coefficients
+                .iter()
+                .zip(&std_errors)
+                .map(|(b, s)| b + sign * crit * s)
+                .collect()
+        };
+        Some(Fit {
+            p_values: t
+                .iter()
+                .map(|&t| dist::t_two_sided(t, self.dof as f64))
+                .collect(),
+            ci_lower: interval(-1.0),
+            ci_upper: interval(1.0),
+            t,
+            std_errors,
+            covariance,
+            sigma2,
+            factor,
+            ..self.clone()
+        })
+    }
+
     /// The fit of linear combinations of the coefficients, `c = J b` (one row of `j` per new
     /// coefficient, named by `names`), with their covariance `J C J'`, standard errors, t
     /// statistics, p-values and intervals on this fit's degrees of freedom. The residuals,

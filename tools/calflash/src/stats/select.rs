@@ -33,6 +33,29 @@ pub fn partial_f(full: &Fit, reduced: &Fit) -> PartialF {
     }
 }
 
+/// The Wald test that the coefficients of `terms` are all zero, from `fit`'s own covariance
+/// (for least squares the same statistic as the partial F test of dropping them; for a fit
+/// whose covariance is a sandwich estimate, the test that remains valid). `None` when a term
+/// is missing or their covariance is singular.
+#[must_use]
+pub fn wald(fit: &Fit, terms: &[String]) -> Option<PartialF> {
+    let idx: Vec<usize> = terms
+        .iter()
+        .map(|t| fit.names.iter().position(|n| n == t))
+        .collect::<Option<_>>()?;
+    let q = idx.len();
+    let b = nalgebra::DVector::from_iterator(q, idx.iter().map(|&i| fit.coefficients[i]));
+    let c = DMatrix::from_fn(q, q, |r, k| fit.covariance[(idx[r], idx[k])]);
+    let solved = c.cholesky()?.solve(&b);
+    let f = b.dot(&solved) / q as f64;
+    Some(PartialF {
+        f,
+        df_num: q,
+        df_den: fit.dof,
+        p: dist::f_upper(f, q as f64, fit.dof as f64),
+    })
+}
+
 /// One step of backward elimination.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Step {
