@@ -329,12 +329,12 @@ pub fn finding(d: &DeviceTemperature, scale: &Scale) -> Finding {
     };
     let other = match d.series {
         Some(_) => format!(
-            "a table of {} temperatures would depart by {:.2}",
+            "a table of {} temperatures would depart by up to {:.2} of it",
             d.other.0,
             0.1 * d.other.1
         ),
         None => format!(
-            "a series of {} terms would depart by {:.2}",
+            "a series of {} terms would depart by up to {:.2} of it",
             d.other.0,
             0.1 * d.other.1
         ),
