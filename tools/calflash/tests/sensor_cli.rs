@@ -439,7 +439,7 @@ fn plans_and_data_that_cannot_support_the_workflow_are_refused() {
         ],
     );
     assert!(
-        out.contains("continuous temperature model over -40 to 85 C (3 distinct temperatures)"),
+        out.contains("continuous temperature model over -40.0 to 85.0 C (3 distinct temperatures)"),
         "{out}"
     );
     // A plan item that is not one.

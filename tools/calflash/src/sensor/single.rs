@@ -261,19 +261,6 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             ));
         }
         let s = thermal::check(&table, col::TEMP)?;
-        thermal::push_columns(&mut table, col::TEMP, &s.scale, s.max_order);
-        if let Some(lag) = thermal::lag(&table) {
-            notes.push(lag);
-        }
-        weights = thermal::density_weights(table.column(col::TEMP).unwrap_or_default(), &s.scale);
-        if let Some(w) = &weights {
-            let (lo, hi) = w
-                .iter()
-                .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
-            notes.push(format!(
-                "the observations crowd in part of the temperature range: the temperature model is fitted with weights that even out their density ({lo:.2} to {hi:.2}), its covariance the sandwich estimate"
-            ));
-        }
         notes.push(format!(
             "continuous temperature model over {:.1} to {:.1} C ({} distinct temperatures{}): every coefficient is a series of Legendre polynomials temp_legK of x = (temp - {:.2}) / {:.2}",
             s.scale.lo,
@@ -284,6 +271,23 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             s.scale.center(),
             s.scale.half()
         ));
+        thermal::push_columns(&mut table, col::TEMP, &s.scale, s.max_order);
+        if let Some(lag) = thermal::lag(&table) {
+            notes.push(lag);
+        }
+        // A ramp's density is evened out; a few setpoints are what they are.
+        if s.distinct >= 10 {
+            weights =
+                thermal::density_weights(table.column(col::TEMP).unwrap_or_default(), &s.scale);
+        }
+        if let Some(w) = &weights {
+            let (lo, hi) = w
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+            notes.push(format!(
+                "the observations crowd in part of the temperature range: the temperature model is fitted with weights that even out their density ({lo:.2} to {hi:.2}), its covariance the sandwich estimate"
+            ));
+        }
         layout = Ok(Layout {
             temps: Vec::new(),
             volts: Vec::new(),
