@@ -17,6 +17,19 @@ use rayon::prelude::*;
 use spincal::correct::AnyAxisCorrector;
 use spincal::model::{Quantity, TemperatureModel};
 
+/// The chamber of the tests: -40 to 70 C in two hours, as even as asked.
+fn chamber(uneven: bool) -> Ramp {
+    Ramp {
+        from: -40.0,
+        to: 70.0,
+        seconds: 7200.0,
+        uneven,
+        lag: 0.0,
+        self_heating: None,
+        step: None,
+    }
+}
+
 fn simulate_ramp(dir: &std::path::Path, name: &str, extra: &[&str]) -> std::path::PathBuf {
     let mut args = vec![
         "simulate",
@@ -267,23 +280,10 @@ fn coverage(uneven: bool) {
         k1_temp: 80e-6,
         ..SingleTruth::default()
     };
-    let ramp = Ramp {
-        from: -40.0,
-        to: 70.0,
-        seconds: 7200.0,
-        uneven,
-        lag: 0.0,
-        self_heating: None,
-        step: None,
-    };
+    let ramp = chamber(uneven);
     let dir = tempfile::tempdir().unwrap();
     let conditions = plan::plan(&["head:16".into()], &[25.0], &[5.0], 25, true).unwrap();
-    let temps = ramp.temperatures(conditions.len());
-    let conditions: Vec<plan::Condition> = conditions
-        .iter()
-        .zip(&temps.sensor)
-        .map(|(c, t)| plan::Condition { temp: *t, ..*c })
-        .collect();
+    let (conditions, _) = sim::ramp::run(&ramp, &conditions);
     struct Seed {
         orders: Vec<u32>,
         covered: Vec<(String, bool)>,
@@ -433,19 +433,10 @@ fn the_model_at_a_temperature_is_a_refit_about_that_temperature() {
     let ramp = Ramp {
         from: -20.0,
         to: 60.0,
-        seconds: 3600.0,
-        uneven: false,
-        lag: 0.0,
-        self_heating: None,
-        step: None,
+        ..chamber(false)
     };
     let conditions = plan::plan(&["head:12".into()], &[25.0], &[5.0], 10, true).unwrap();
-    let temps = ramp.temperatures(conditions.len());
-    let conditions: Vec<plan::Condition> = conditions
-        .iter()
-        .zip(&temps.sensor)
-        .map(|(c, t)| plan::Condition { temp: *t, ..*c })
-        .collect();
+    let (conditions, _) = sim::ramp::run(&ramp, &conditions);
     let obs = sim::simulate(
         &Sensor::Single { gyro: false, truth },
         &conditions,
@@ -547,22 +538,9 @@ fn a_still_unit_in_a_ramp_and_a_bench_run_at_one_temperature_make_one_calibratio
         k1_temp: 0.0,
         ..SingleTruth::default()
     };
-    let ramp = Ramp {
-        from: -40.0,
-        to: 70.0,
-        seconds: 7200.0,
-        uneven: false,
-        lag: 0.0,
-        self_heating: None,
-        step: None,
-    };
+    let ramp = chamber(false);
     let still = plan::plan(&["head:1".into()], &[25.0], &[5.0], 300, true).unwrap();
-    let temps = ramp.temperatures(still.len());
-    let mut conditions: Vec<plan::Condition> = still
-        .iter()
-        .zip(&temps.sensor)
-        .map(|(c, t)| plan::Condition { temp: *t, ..*c })
-        .collect();
+    let (mut conditions, _) = sim::ramp::run(&ramp, &still);
     conditions.extend(plan::plan(&["head:16".into()], &[25.0], &[5.0], 3, true).unwrap());
     let obs = sim::simulate(
         &Sensor::Single {

@@ -314,11 +314,8 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     };
     let ramp = match &args.ramp {
         Some(text) => {
-            let r = ramp_of(args, text)?;
-            let temps = r.temperatures(conditions.len());
-            for (c, t) in conditions.iter_mut().zip(&temps.sensor) {
-                c.temp = *t;
-            }
+            let (ramped, temps) = ramp::run(&ramp_of(args, text)?, &conditions);
+            conditions = ramped;
             Some(temps)
         }
         None => None,

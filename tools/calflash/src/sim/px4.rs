@@ -119,12 +119,7 @@ pub fn run(s: &Scenario, seed: u64, dir: &Path, model: Option<&str>) -> Result<E
         true,
     )
     .map_err(|e| e.to_string())?;
-    let temps = s.ramp.temperatures(conditions.len());
-    let conditions: Vec<plan::Condition> = conditions
-        .iter()
-        .zip(&temps.sensor)
-        .map(|(c, t)| plan::Condition { temp: *t, ..*c })
-        .collect();
+    let (conditions, temps) = super::ramp::run(&s.ramp, &conditions);
     let sensor = Sensor::Single {
         gyro: false,
         truth: s.truth.clone(),

@@ -104,6 +104,22 @@ impl Ramp {
     }
 }
 
+/// A plan's conditions run through a ramp: each at its sensor's true temperature, in order,
+/// evenly spaced in time; with the ramp's temperatures.
+#[must_use]
+pub fn run(
+    ramp: &Ramp,
+    conditions: &[super::plan::Condition],
+) -> (Vec<super::plan::Condition>, Temperatures) {
+    let temps = ramp.temperatures(conditions.len());
+    let out = conditions
+        .iter()
+        .zip(&temps.sensor)
+        .map(|(c, t)| super::plan::Condition { temp: *t, ..*c })
+        .collect();
+    (out, temps)
+}
+
 /// Reads `FROM:TO` (C).
 ///
 /// # Errors

@@ -181,28 +181,12 @@ impl Fit {
         let factor = unscaled.clone().cholesky()?.l();
         let covariance = unscaled * sigma2;
         let std_errors: Vec<f64> = (0..self.p).map(|j| covariance[(j, j)].sqrt()).collect();
-        let t: Vec<f64> = self
-            .coefficients
-            .iter()
-            .zip(&std_errors)
-            .map(|(b, s)| b / s)
-            .collect();
-        let crit = dist::t_upper_quantile(self.alpha / 2.0, self.dof as f64);
-        let interval = |sign: f64| -> Vec<f64> {
-            self.coefficients
-                .iter()
-                .zip(&std_errors)
-                .map(|(b, s)| b + sign * crit * s)
-                .collect()
-        };
+        let i = inference(&self.coefficients, &std_errors, self.alpha, self.dof);
         Some(Fit {
-            p_values: t
-                .iter()
-                .map(|&t| dist::t_two_sided(t, self.dof as f64))
-                .collect(),
-            ci_lower: interval(-1.0),
-            ci_upper: interval(1.0),
-            t,
+            t: i.t,
+            p_values: i.p_values,
+            ci_lower: i.ci_lower,
+            ci_upper: i.ci_upper,
             std_errors,
             covariance,
             sigma2,
@@ -229,24 +213,7 @@ impl Fit {
         let factor = j * &self.factor;
         let covariance = &factor * factor.transpose() * self.sigma2;
         let std_errors: Vec<f64> = (0..p).map(|k| covariance[(k, k)].sqrt()).collect();
-        let t: Vec<f64> = coefficients
-            .iter()
-            .zip(&std_errors)
-            .map(|(b, s)| b / s)
-            .collect();
-        let p_values = t
-            .iter()
-            .map(|&t| dist::t_two_sided(t, self.dof as f64))
-            .collect();
-        let crit = dist::t_upper_quantile(self.alpha / 2.0, self.dof as f64);
-        let interval = |sign: f64| -> Vec<f64> {
-            coefficients
-                .iter()
-                .zip(&std_errors)
-                .map(|(b, s)| b + sign * crit * s)
-                .collect()
-        };
-        let (ci_lower, ci_upper) = (interval(-1.0), interval(1.0));
+        let i = inference(&coefficients, &std_errors, self.alpha, self.dof);
         // DFBETAS_ij = (b_j - b_j(i)) / (s_(i) sqrt(C_jj)): the changes map through J, the
         // scale s_(i) is common to all coefficients.
         let mut influence = self.influence.clone();
@@ -262,16 +229,50 @@ impl Fit {
             p,
             coefficients,
             std_errors,
-            t,
-            p_values,
-            ci_lower,
-            ci_upper,
+            t: i.t,
+            p_values: i.p_values,
+            ci_lower: i.ci_lower,
+            ci_upper: i.ci_upper,
             covariance,
             vif: vec![None; p],
             influence,
             factor,
             ..self.clone()
         }
+    }
+}
+
+/// The t statistics, two-sided p-values and `1 - alpha` intervals of coefficients with their
+/// standard errors, on `dof` degrees of freedom.
+struct Inference {
+    t: Vec<f64>,
+    p_values: Vec<f64>,
+    ci_lower: Vec<f64>,
+    ci_upper: Vec<f64>,
+}
+
+fn inference(coefficients: &[f64], std_errors: &[f64], alpha: f64, dof: usize) -> Inference {
+    let t: Vec<f64> = coefficients
+        .iter()
+        .zip(std_errors)
+        .map(|(b, s)| b / s)
+        .collect();
+    let crit = dist::t_upper_quantile(alpha / 2.0, dof as f64);
+    let interval = |sign: f64| -> Vec<f64> {
+        coefficients
+            .iter()
+            .zip(std_errors)
+            .map(|(b, s)| b + sign * crit * s)
+            .collect()
+    };
+    Inference {
+        p_values: t
+            .iter()
+            .map(|&t| dist::t_two_sided(t, dof as f64))
+            .collect(),
+        ci_lower: interval(-1.0),
+        ci_upper: interval(1.0),
+        t,
     }
 }
 
@@ -368,26 +369,12 @@ pub fn fit(
             row: largest_row(x, y),
         });
     }
-    let t: Vec<f64> = coefficients
-        .iter()
-        .zip(&std_errors)
-        .map(|(b, s)| b / s)
-        .collect();
-    let p_values: Vec<f64> = t
-        .iter()
-        .map(|&t| dist::t_two_sided(t, dof as f64))
-        .collect();
-    let crit = dist::t_upper_quantile(opts.alpha / 2.0, dof as f64);
-    let ci_lower = coefficients
-        .iter()
-        .zip(&std_errors)
-        .map(|(b, s)| b - crit * s)
-        .collect();
-    let ci_upper = coefficients
-        .iter()
-        .zip(&std_errors)
-        .map(|(b, s)| b + crit * s)
-        .collect();
+    let Inference {
+        t,
+        p_values,
+        ci_lower,
+        ci_upper,
+    } = inference(&coefficients, &std_errors, opts.alpha, dof);
 
     let k = usize::from(intercept);
     let tss = if intercept {
