@@ -171,12 +171,12 @@ fn rewrite(path: &std::path::Path, name: &str, f: impl Fn(usize, &[&str]) -> Opt
 fn bad_temperature_columns_are_located_and_nothing_is_written() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let run = |file: &str, extra: &[&str]| {
+    let run_with = |file: &str, sensor: &str, extra: &[&str]| {
         let mut args = vec![
             "calibrate",
             file,
             "--sensor",
-            "single-accel",
+            sensor,
             "--serial",
             "R1",
             "--blob",
@@ -189,6 +189,8 @@ fn bad_temperature_columns_are_located_and_nothing_is_written() {
         assert!(!d.join("bad.bin").exists(), "{file}: a blob was written");
         err
     };
+    let run = |file: &str, extra: &[&str]| run_with(file, "single-accel", extra);
+    let run_as = |file: &str, sensor: &str| run_with(file, sensor, &[]);
     // No temperature column when a continuous model is asked for.
     simulate_ramp(d, "none.csv", &["--ramp", "-40:70"]);
     let text = std::fs::read_to_string(d.join("none.csv")).unwrap();
@@ -217,6 +219,28 @@ fn bad_temperature_columns_are_located_and_nothing_is_written() {
     simulate_ramp(d, "narrow.csv", &["--ramp", "24:27"]);
     let e = run("narrow.csv", &[]);
     assert!(e.contains("span 3.0 C") && e.contains("order: none"), "{e}");
+    // A triad's ramp: said plainly, not as a setpoint short of observations.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "simulate",
+            "--sensor",
+            "accel",
+            "--plan",
+            "tumble:24",
+            "--repeat",
+            "10",
+            "--ramp=-40:70",
+            "-o",
+            "triad.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let e = run_as("triad.csv", "accel");
+    assert!(
+        e.contains("spread from -40.0 to 70.0 C") && e.contains("single-axis sensors so far"),
+        "{e}"
+    );
     // The input column pasted into the temperature's place.
     simulate_ramp(d, "mixed.csv", &["--ramp", "-40:70"]);
     rewrite(&d.join("mixed.csv"), "temp", |_, f| Some(f[1].to_string()));

@@ -685,6 +685,20 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         has(col::VOLT).then_some(col::VOLT),
     )
     .map_err(|e| WorkflowError::msg(path, e))?;
+    if !table::exact_setpoints(&table, col::TEMP, &layout) {
+        let temps = table.column(col::TEMP).unwrap_or_default();
+        let (lo, hi) = temps
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                (a.min(*t), b.max(*t))
+            });
+        return Err(WorkflowError::msg(
+            path,
+            format!(
+                "the temperatures are spread from {lo:.1} to {hi:.1} C, as along a ramp, not held at setpoints: the continuous temperature model is fitted for single-axis sensors so far; a triad or an IMU needs its observations at a few exact temperatures (each reading within 1 C of its setpoint, the setpoints at least 3 C apart)"
+            ),
+        ));
+    }
     let accel = (kind != Kind::Gyro)
         .then(|| {
             triad(
