@@ -18,7 +18,6 @@ pub mod selfcal;
 pub mod single;
 pub mod table;
 pub mod thermal;
-pub mod thermal_device;
 pub mod threshold;
 pub mod triad;
 

@@ -10,7 +10,7 @@ use spincal::model::{
 use super::invert::Own;
 use super::table::{self, Layout};
 use super::thermal;
-use super::thermal_device::{self, DeviceSet};
+use super::thermal::device::{self as thermal_device, DeviceSet};
 use super::{
     AxisFit, Calibrated, Decision, Options, PointFit, Thermal, WorkflowError, covariance, device,
 };
@@ -254,40 +254,8 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     };
     let mut weights: Option<Vec<f64>> = None;
     let support = if continuous {
-        if varies(&table, col::VOLT) {
-            return Err(WorkflowError::msg(
-                path,
-                "the supply voltage varies: a continuous temperature model is fitted at one supply voltage; give the observations at each voltage setpoint at exact temperatures (--thermal table), or one voltage",
-            ));
-        }
-        let s = thermal::check(&table, col::TEMP)?;
-        notes.push(format!(
-            "continuous temperature model over {:.1} to {:.1} C ({} distinct temperatures{}): every coefficient is a series of Legendre polynomials temp_legK of x = (temp - {:.2}) / {:.2}",
-            s.scale.lo,
-            s.scale.hi,
-            s.distinct,
-            s.quantum
-                .map_or(String::new(), |q| format!(", read in steps of {q} C")),
-            s.scale.center(),
-            s.scale.half()
-        ));
-        thermal::push_columns(&mut table, col::TEMP, &s.scale, s.max_order);
-        if let Some(lag) = thermal::lag(&table) {
-            notes.push(lag);
-        }
-        // A ramp's density is evened out; a few setpoints are what they are.
-        if s.distinct >= 10 {
-            weights =
-                thermal::density_weights(table.column(col::TEMP).unwrap_or_default(), &s.scale);
-        }
-        if let Some(w) = &weights {
-            let (lo, hi) = w
-                .iter()
-                .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
-            notes.push(format!(
-                "the observations crowd in part of the temperature range: the temperature model is fitted with weights that even out their density ({lo:.2} to {hi:.2}), its covariance the sandwich estimate"
-            ));
-        }
+        let (s, w) = thermal::prepare(&mut table, &mut notes)?;
+        weights = w;
         layout = Ok(Layout {
             temps: Vec::new(),
             volts: Vec::new(),
@@ -361,89 +329,13 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         ));
     }
 
-    // Asymmetry: does a kink at the breakpoint improve the model?
     let mut decisions = Vec::new();
-    let with_kink = {
-        let mut m = model.clone();
-        m.terms.push(formula::Term::var(KINK));
-        m
-    };
-    let below = input.iter().filter(|x| **x < bp).count();
-    let above = input.len() - below;
-    if below >= 2 && above >= 2 {
-        let full = decide(&with_kink)?;
-        let reduced = decide(&model)?;
-        let test = select::partial_f(&full.fit, &reduced.fit);
-        let k1 = full.coef(col::INPUT);
-        let ca = full.coef(KINK);
-        let kept = opts.asymmetry.unwrap_or(test.p < opts.alpha);
-        let side = |below: bool| -> Vec<(f64, f64)> {
-            reduced
-                .input
-                .iter()
-                .zip(&reduced.fit.residuals)
-                .filter(|(x, _)| (**x < bp) == below)
-                .map(|(x, e)| (*x, *e))
-                .collect()
-        };
-        decisions.push(Decision {
-            figure: vec![
-                (format!("below {bp}"), side(true)),
-                (format!("above {bp}"), side(false)),
-            ],
-            name: format!("asymmetry about {bp}"),
-            test,
-            detail: format!(
-                "scale factor {:.6e} above and {:.6e} below the breakpoint ({:+.3e} relative){}",
-                k1 + ca,
-                k1 - ca,
-                2.0 * ca / k1,
-                chow(&model, &ref_table, bp, opts.alpha, path, &ref_where)
-            ),
-            kept,
-        });
-        if kept {
-            model = with_kink;
-        }
-    } else if opts.asymmetry == Some(true) {
-        return Err(WorkflowError::msg(
-            path,
-            format!(
-                "asymmetry about {bp} is not observable: {below} inputs below and {above} above it; each side needs at least 2"
-            ),
-        ));
+    if let Some((d, m)) = asymmetry(&model, &input, opts, &decide, (&ref_table, &ref_where))? {
+        decisions.push(d);
+        model = m;
     }
-
-    // Hysteresis: an offset by sweep direction (reported; the device cannot know the direction).
     if varies(&table, col::DIR) {
-        let mut m = model.clone();
-        m.terms.push(formula::Term::var(col::DIR));
-        let full = decide(&m)?;
-        let reduced = decide(&model)?;
-        let test = select::partial_f(&full.fit, &reduced.fit);
-        let h = full.coef(col::DIR);
-        let se = full.fit.std_errors[full.index(col::DIR).unwrap_or(0)];
-        let figure = super::hysteresis::by_direction(&reduced)
-            .map(|(up, down)| {
-                vec![
-                    ("ascending".to_string(), up),
-                    ("descending".to_string(), down),
-                ]
-            })
-            .unwrap_or_default();
-        decisions.push(Decision {
-            figure,
-            name: "hysteresis".into(),
-            test,
-            detail: format!(
-                "output {:+.4} counts ascending, {:+.4} descending (+-{:.2}); {:.3e} input units",
-                h,
-                -h,
-                se,
-                h / full.coef(col::INPUT)
-            ),
-            kept: false,
-        });
+        decisions.push(hysteresis(&model, &decide)?);
     }
     for t in &model.terms {
         if !applied(&t.name()) {
@@ -593,6 +485,107 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         findings,
         earth: None,
         thermal: thermal_fit,
+    })
+}
+
+type Decide<'a> = dyn Fn(&Formula) -> Result<AxisFit, WorkflowError> + 'a;
+
+/// Asymmetry: does a kink at the breakpoint improve the model (`decide` fits a model where the
+/// decisions are taken)? The decision and the model to go on with; `None` when a side has too
+/// few inputs (an error if asymmetry was asked for).
+fn asymmetry(
+    model: &Formula,
+    input: &[f64],
+    opts: &Options,
+    decide: &Decide<'_>,
+    (ref_table, ref_where): (&Table, &str),
+) -> Result<Option<(Decision, Formula)>, WorkflowError> {
+    let path = &opts.file;
+    let bp = opts.breakpoint;
+    let with_kink = {
+        let mut m = model.clone();
+        m.terms.push(formula::Term::var(KINK));
+        m
+    };
+    let below = input.iter().filter(|x| **x < bp).count();
+    let above = input.len() - below;
+    if below < 2 || above < 2 {
+        if opts.asymmetry == Some(true) {
+            return Err(WorkflowError::msg(
+                path,
+                format!(
+                    "asymmetry about {bp} is not observable: {below} inputs below and {above} above it; each side needs at least 2"
+                ),
+            ));
+        }
+        return Ok(None);
+    }
+    let full = decide(&with_kink)?;
+    let reduced = decide(model)?;
+    let test = select::partial_f(&full.fit, &reduced.fit);
+    let k1 = full.coef(col::INPUT);
+    let ca = full.coef(KINK);
+    let kept = opts.asymmetry.unwrap_or(test.p < opts.alpha);
+    let side = |below: bool| -> Vec<(f64, f64)> {
+        reduced
+            .input
+            .iter()
+            .zip(&reduced.fit.residuals)
+            .filter(|(x, _)| (**x < bp) == below)
+            .map(|(x, e)| (*x, *e))
+            .collect()
+    };
+    let decision = Decision {
+        figure: vec![
+            (format!("below {bp}"), side(true)),
+            (format!("above {bp}"), side(false)),
+        ],
+        name: format!("asymmetry about {bp}"),
+        test,
+        detail: format!(
+            "scale factor {:.6e} above and {:.6e} below the breakpoint ({:+.3e} relative){}",
+            k1 + ca,
+            k1 - ca,
+            2.0 * ca / k1,
+            chow(model, ref_table, bp, opts.alpha, path, ref_where)
+        ),
+        kept,
+    };
+    Ok(Some((
+        decision,
+        if kept { with_kink } else { model.clone() },
+    )))
+}
+
+/// Hysteresis: an offset by sweep direction (reported; the device cannot know the direction).
+fn hysteresis(model: &Formula, decide: &Decide<'_>) -> Result<Decision, WorkflowError> {
+    let mut m = model.clone();
+    m.terms.push(formula::Term::var(col::DIR));
+    let full = decide(&m)?;
+    let reduced = decide(model)?;
+    let test = select::partial_f(&full.fit, &reduced.fit);
+    let h = full.coef(col::DIR);
+    let se = full.fit.std_errors[full.index(col::DIR).unwrap_or(0)];
+    let figure = super::hysteresis::by_direction(&reduced)
+        .map(|(up, down)| {
+            vec![
+                ("ascending".to_string(), up),
+                ("descending".to_string(), down),
+            ]
+        })
+        .unwrap_or_default();
+    Ok(Decision {
+        figure,
+        name: "hysteresis".into(),
+        test,
+        detail: format!(
+            "output {:+.4} counts ascending, {:+.4} descending (+-{:.2}); {:.3e} input units",
+            h,
+            -h,
+            se,
+            h / full.coef(col::INPUT)
+        ),
+        kept: false,
     })
 }
 

@@ -8,12 +8,12 @@
 use nalgebra::DMatrix;
 use spincal::model::{AxisNonlinearity, MAX_SETS, MAX_TEMPERATURES, SingleSet};
 
-use super::covariance;
-use super::invert::{Own, linearization, linearize};
-use super::single::own_of;
-use super::thermal::{self, Scale, ThermalFit};
-use super::{Finding, Verdict};
+use super::{Scale, ThermalFit};
 use crate::columns as col;
+use crate::sensor::covariance;
+use crate::sensor::invert::{Own, linearization, linearize};
+use crate::sensor::single::own_of;
+use crate::sensor::{Finding, Verdict};
 
 /// What the device applies for one forward model, in f64: the linearisation `n`, then
 /// `x = offset + scale u`.
@@ -238,7 +238,7 @@ pub fn choose(
     let grid = Grid::new(tf, center, (lo, hi), bp);
     let at = |t: f64| model_at(tf, t, center, (lo, hi), bp);
     // The table: breakpoints where it departs most, until it meets the standard or is full.
-    let (breaks, table_ratio) = thermal::breakpoints(scale, MAX_TEMPERATURES, |points| {
+    let (breaks, table_ratio) = breakpoints(scale, MAX_TEMPERATURES, |points| {
         let sets: Vec<DeviceSet> = points.iter().map(|t| at(*t).0).collect();
         grid.ratio(|t| {
             let k = points
@@ -358,6 +358,26 @@ pub fn finding(d: &DeviceTemperature, scale: &Scale) -> Finding {
     }
 }
 
+/// Breakpoints for the device's table over `scale`: from the two ends, the temperature where
+/// `ratio` is worst is added until `ratio(points)` is at most 1 or `max` points are used.
+/// `ratio(points)` gives the worst departure of the interpolated table from the continuous
+/// model (against what is allowed) and the temperature where it is; the last is returned.
+pub fn breakpoints(
+    scale: &Scale,
+    max: usize,
+    ratio: impl Fn(&[f64]) -> (f64, f64),
+) -> (Vec<f64>, (f64, f64)) {
+    let mut points = vec![scale.lo, scale.hi];
+    loop {
+        let (r, at) = ratio(&points);
+        if r <= 1.0 || points.len() >= max || points.iter().any(|p| (p - at).abs() < 1e-9) {
+            return (points, (r, at));
+        }
+        let i = points.partition_point(|p| *p < at);
+        points.insert(i, at);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -377,5 +397,28 @@ mod tests {
         for t in [-40.0, -3.3, 12.0, 70.0] {
             assert!((clenshaw(&c, scale.x(t))[0] - f(t)[0]).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn breakpoints_are_added_where_the_table_is_worst() {
+        // A kink at 10 C: the table needs a point there and nowhere else.
+        let scale = Scale {
+            lo: -40.0,
+            hi: 70.0,
+        };
+        let curve = |t: f64| (t - 10.0).abs();
+        let (p, r) = breakpoints(&scale, 16, |pts: &[f64]| {
+            (0..=110)
+                .map(|i| {
+                    let t = -40.0 + f64::from(i);
+                    let k = pts.partition_point(|p| *p <= t).clamp(1, pts.len() - 1);
+                    let (a, b) = (pts[k - 1], pts[k]);
+                    let lin = curve(a) + (curve(b) - curve(a)) * (t - a) / (b - a);
+                    ((lin - curve(t)).abs() / 0.01, t)
+                })
+                .fold((0.0, 0.0), |m, x| if x.0 > m.0 { x } else { m })
+        });
+        assert_eq!(p, [-40.0, 10.0, 70.0]);
+        assert!(r.0 <= 1.0);
     }
 }
