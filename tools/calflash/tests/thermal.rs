@@ -619,3 +619,59 @@ fn a_still_unit_in_a_ramp_and_a_bench_run_at_one_temperature_make_one_calibratio
         }
     }
 }
+
+#[test]
+fn two_ramp_calibrations_of_a_unit_compare_at_common_temperatures() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("cubic.json"),
+        r#"{"k2":0,"k3":0,"kp":0,"ko":0,"k0_temp":0.6,"k0_temp2":-0.01,"k0_temp3":2e-4,"k1_temp":0}"#,
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("shocked.json"),
+        r#"{"k2":0,"k3":0,"kp":0,"ko":0,"k0":32915.4,"k0_temp":0.6,"k0_temp2":-0.01,"k0_temp3":2e-4,"k1_temp":0}"#,
+    )
+    .unwrap();
+    let cal = |name: &str, truth: &str, seed: &str| {
+        simulate_ramp(
+            d,
+            &format!("{name}.csv"),
+            &["--ramp=-40:70", "--truth", truth, "--seed", seed],
+        );
+        let (code, out, err) = calflash(
+            d,
+            &[
+                "calibrate",
+                &format!("{name}.csv"),
+                "--sensor",
+                "single-accel",
+                "--serial",
+                "U-7",
+                "--blob",
+                &format!("{name}.bin"),
+                "--json",
+                &format!("{name}.json"),
+                "--no-db",
+            ],
+        );
+        assert_eq!(code, 0, "{out}{err}");
+    };
+    cal("first", "cubic.json", "2");
+    cal("again", "cubic.json", "5");
+    cal("shocked", "shocked.json", "6");
+    let compared = |a: &str, b: &str| {
+        let (code, out, err) = calflash(d, &["compare", a, b]);
+        assert_eq!(code, 0, "{out}{err}");
+        out
+    };
+    // The same unit again: the models agree at every 5 C of the range.
+    let same = compared("first.json", "again.json");
+    let points = same.matches("output at ").count();
+    assert_eq!(points, 23, "{same}");
+    assert!(!same.contains("<1e-300"), "{same}");
+    // A bias shifted by 10 counts (25 times its standard error) moves everywhere.
+    let moved = compared("first.json", "shocked.json");
+    assert_eq!(moved.matches(": CHANGED").count(), 23, "{moved}");
+}

@@ -91,6 +91,39 @@ pub struct Record {
     pub earth: Option<crate::earth::Station>,
 }
 
+/// The points a record holds: the table's; for a continuous temperature model, the model at
+/// every multiple of 5 C in the calibrated range (and its ends when it holds none), so that
+/// two records of one unit meet at common temperatures whatever their device's series or
+/// table.
+fn model_points(c: &Calibrated) -> Vec<super::PointFit> {
+    let Some(tf) = &c.thermal else {
+        return c.points.clone();
+    };
+    let (lo, hi) = (tf.scale.lo, tf.scale.hi);
+    let mut temps: Vec<f64> = ((lo / 5.0).ceil() as i64..=(hi / 5.0).floor() as i64)
+        .map(|k| 5.0 * k as f64)
+        .collect();
+    if temps.is_empty() {
+        temps = vec![lo, hi];
+    }
+    let noise = c.points.iter().map(|p| p.noise[0]).fold(0.0, f64::max);
+    let inversion = c
+        .points
+        .iter()
+        .map(|p| p.inversion_error[0])
+        .fold(0.0, f64::max);
+    temps
+        .iter()
+        .map(|t| super::PointFit {
+            temp: Some(*t),
+            volt: None,
+            axes: vec![tf.at(*t)],
+            inversion_error: vec![inversion],
+            noise: vec![noise],
+        })
+        .collect()
+}
+
 fn hex(b: &[u8]) -> String {
     b.iter().map(|x| format!("{x:02x}")).collect()
 }
@@ -126,8 +159,7 @@ impl Record {
                     serde_json::json!({"name": d.name, "f": d.test.f, "df_num": d.test.df_num, "df_den": d.test.df_den, "p": d.test.p, "kept": d.kept, "detail": d.detail})
                 })
                 .collect(),
-            points: c
-                .points
+            points: model_points(c)
                 .iter()
                 .map(|p| PointRecord {
                     temp: p.temp,
