@@ -675,3 +675,70 @@ fn two_ramp_calibrations_of_a_unit_compare_at_common_temperatures() {
     let moved = compared("first.json", "shocked.json");
     assert_eq!(moved.matches(": CHANGED").count(), 23, "{moved}");
 }
+
+#[test]
+fn a_ramp_at_two_supply_voltages_gives_a_series_the_device_blends_between_them() {
+    let truth = SingleTruth {
+        k2: 0.0,
+        k3: 0.0,
+        kp: 0.0,
+        ko: 0.0,
+        k0_temp: 0.6,
+        k0_temp2: -0.01,
+        k0_temp3: 2e-4,
+        k1_temp: 80e-6,
+        k0_volt: 3.0,
+        k1_volt: 2e-3,
+        ..SingleTruth::default()
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("volt.json"), serde_json::to_string(&truth).unwrap()).unwrap();
+    let path = simulate_ramp(
+        d,
+        "volt.csv",
+        &[
+            "--ramp=-40:70",
+            "--volts",
+            "4.5,5.5",
+            "--truth",
+            "volt.json",
+        ],
+    );
+    let mut opts = Options::new(&path, "VOLT");
+    opts.created = Some(0);
+    let c = single::calibrate(&opts, Quantity::Acceleration).unwrap();
+    assert!(
+        c.notes
+            .iter()
+            .any(|n| n.contains("the supply voltage varies from 4.5 to 5.5 V")),
+        "{:?}",
+        c.notes
+    );
+    let cal = spincal::blob::decode(&c.blob).unwrap();
+    assert_eq!(cal.data().environment.voltages.as_slice(), &[4.5, 5.5]);
+    let mut dev = AnyAxisCorrector::new(&cal).unwrap();
+    for k in 0..12 {
+        let t = -37.0 + 9.3 * f64::from(k);
+        for v in [4.5, 4.8, 5.0, 5.5] {
+            dev.set_environment(t as f32, v as f32);
+            for i in 0..=4 {
+                let x = 0.9 * plan::G * (f64::from(i) / 2.0 - 1.0);
+                let f = |x: f64| truth.output(x, 0.0, 0.0, t, v, 0.0);
+                let code = f(x).round();
+                let mut want = x;
+                for _ in 0..20 {
+                    want -= (f(want) - code) / ((f(want + 1e-3) - f(want - 1e-3)) / 2e-3);
+                }
+                let got = dev.correct(code as i32);
+                assert!(got.flags.is_clean(), "{t} C, {v} V: {:?}", got.flags);
+                let sigma = f64::from(dev.sigma(code as i32).unwrap());
+                let err = f64::from(got.values[0]) - want;
+                assert!(
+                    err.abs() <= 3.0 * sigma,
+                    "{t} C, {v} V, {x}: error {err} against 1-sigma {sigma}"
+                );
+            }
+        }
+    }
+}

@@ -309,6 +309,22 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     );
     let mut conditions = match &args.plan_file {
         Some(path) => plan_file(path, args.sensor, args.repeat)?,
+        // Along a ramp, each repeat runs the plan at every voltage in turn, so that the
+        // voltages share the temperatures.
+        None if args.ramp.is_some() => {
+            let once = plan::plan(&args.plan, &args.temps, &args.volts, 1, single)
+                .map_err(|e| e.to_string())?;
+            if once.len().saturating_mul(args.repeat) > plan::MAX_CONDITIONS {
+                return Err(format!(
+                    "{} conditions with every voltage and repeat; a plan holds at most {}",
+                    once.len().saturating_mul(args.repeat),
+                    plan::MAX_CONDITIONS
+                ));
+            }
+            (0..args.repeat)
+                .flat_map(|_| once.iter().copied())
+                .collect()
+        }
         None => plan::plan(&args.plan, &args.temps, &args.volts, args.repeat, single)
             .map_err(|e| e.to_string())?,
     };

@@ -143,16 +143,32 @@ fn f64_triad(set: &TriadSet, v: [f64; 3]) -> [f64; 3] {
     })
 }
 
-/// The single-axis set the device uses at table point `k` (temperature `t`): the stored set,
-/// or for a temperature series its sum at `t` in f64 (`spincal::model::TemperatureModel`);
-/// `None` when the series is of another shape than this check knows (several voltages).
-fn single_set_at(env: &Environment, sets: &[SingleSet], k: usize, t: f32) -> Option<SingleSet> {
+/// The single-axis set the device uses at table point `k` (temperature and voltage `at`): the
+/// stored set, or for a temperature series its sum at that temperature in f64 after the blend
+/// along voltage (`spincal::model::TemperatureModel`); `None` when the series does not have a
+/// set per term and voltage point.
+fn single_set_at(
+    env: &Environment,
+    sets: &[SingleSet],
+    k: usize,
+    (t, volt): (f32, f32),
+) -> Option<SingleSet> {
     let TemperatureModel::Chebyshev(n) = env.temperature_model else {
         return sets.get(k).copied();
     };
-    if sets.len() != usize::from(n) || env.voltage_points() != 1 {
+    let (n, nv) = (usize::from(n), env.voltage_points());
+    if sets.len() != n * nv {
         return None;
     }
+    let (v0, v1, w) = match env.voltages.iter().position(|v| *v >= volt) {
+        _ if nv == 1 => (0, 0, 0.0),
+        Some(0) => (0, 0, 0.0),
+        Some(i) => {
+            let (a, b) = (f64::from(env.voltages[i - 1]), f64::from(env.voltages[i]));
+            (i - 1, i, (f64::from(volt) - a) / (b - a))
+        }
+        None => (nv - 1, nv - 1, 0.0),
+    };
     let span = &env.temperature_span;
     let x = ((f64::from(t) - 0.5 * (f64::from(span.lo) + f64::from(span.hi)))
         / (0.5 * (f64::from(span.hi) - f64::from(span.lo))))
@@ -169,15 +185,19 @@ fn single_set_at(env: &Environment, sets: &[SingleSet], k: usize, t: f32) -> Opt
             f64::from(s.offset),
         ]
     };
+    let term = |k: usize| -> [f64; 7] {
+        let (a, b) = (fields(&sets[k * nv + v0]), fields(&sets[k * nv + v1]));
+        std::array::from_fn(|i| a[i] + (b[i] - a[i]) * w)
+    };
     let mut sum = [0.0f64; 7];
     for (i, v) in sum.iter_mut().enumerate() {
         let (mut b1, mut b2) = (0.0, 0.0);
-        for s in sets.iter().skip(1).rev() {
-            let b = fields(s)[i] + 2.0 * x * b1 - b2;
+        for k in (1..n).rev() {
+            let b = term(k)[i] + 2.0 * x * b1 - b2;
             b2 = b1;
             b1 = b;
         }
-        *v = fields(&sets[0])[i] + x * b1 - b2;
+        *v = term(0)[i] + x * b1 - b2;
     }
     Some(SingleSet {
         axis: spincal::model::AxisNonlinearity {
@@ -250,7 +270,7 @@ pub fn build_and_check(
                 AnyAxisCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
             for (k, p) in points.iter().enumerate() {
                 let (t, v) = at(p);
-                let Some(set) = single_set_at(env, sets, k, t) else {
+                let Some(set) = single_set_at(env, sets, k, (t, v)) else {
                     return Err(WorkflowError::msg(
                         path,
                         "the calibration's temperature series is not for this sensor",

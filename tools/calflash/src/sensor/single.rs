@@ -253,9 +253,12 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         }
     };
     let mut weights: Option<Vec<f64>> = None;
+    let mut volts: Option<thermal::Scale> = None;
     let support = if continuous {
-        let (s, w) = thermal::prepare(&mut table, &mut notes)?;
-        weights = w;
+        let prepared = thermal::prepare(&mut table, &mut notes)?;
+        weights = prepared.weights;
+        volts = prepared.volts;
+        let s = prepared.support;
         layout = Ok(Layout {
             temps: Vec::new(),
             volts: Vec::new(),
@@ -362,6 +365,16 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             (layout, fits, center, None, None)
         }
         Some(s) => {
+            if volts.is_some() {
+                for t in [
+                    formula::Term::var(thermal::VOLT),
+                    formula::Term::var(col::INPUT).times(thermal::VOLT, 1),
+                ] {
+                    if !model.terms.contains(&t) {
+                        model.terms.push(t);
+                    }
+                }
+            }
             let temps = table.column(col::TEMP).unwrap_or_default();
             let tf = thermal::choose(&model, (s, temps), opts.alpha, opts.thermal_order, &|f| {
                 fit_axis_weighted(
@@ -384,22 +397,34 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
                 lo: f64::from(s.scale.lo as f32),
                 hi: f64::from(s.scale.hi as f32),
             };
-            let dt = thermal_device::choose(&tf, &held, center, (lo, hi), bp)
+            // The device's voltage points: the two ends of the supply's span.
+            let (vs, ys) = match &volts {
+                Some(v) => (vec![v.lo, v.hi], vec![-1.0, 1.0]),
+                None => (Vec::new(), vec![0.0]),
+            };
+            let dt = thermal_device::choose(&tf, &held, center, (lo, hi), bp, &ys)
                 .map_err(|e| WorkflowError::msg(path, e))?;
             findings_extra.push(thermal_device::finding(&dt, &held));
-            let fits: Vec<AxisFit> = dt.temps.iter().map(|t| tf.at(*t)).collect();
-            let points = dt
-                .temps
-                .iter()
-                .map(|t| table::Point {
-                    temp: Some(*t),
-                    volt: None,
-                    rows: Vec::new(),
-                })
-                .collect();
+            let mut fits = Vec::new();
+            let mut points = Vec::new();
+            for t in &dt.temps {
+                let f = tf.at(*t);
+                for v in vs
+                    .iter()
+                    .map(|v| Some(*v))
+                    .chain(vs.is_empty().then_some(None))
+                {
+                    fits.push(f.clone());
+                    points.push(table::Point {
+                        temp: Some(*t),
+                        volt: v,
+                        rows: Vec::new(),
+                    });
+                }
+            }
             let layout = Layout {
                 temps: dt.temps.clone(),
-                volts: Vec::new(),
+                volts: vs,
                 points,
             };
             (layout, fits, center, Some(tf), Some(dt))
@@ -410,10 +435,15 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     let mut covs = Vec::new();
     let mut points = Vec::new();
     for (p, f) in layout.points.iter().zip(fits) {
-        let o = own(&f);
+        // The scaled supply voltage of the point, for a model with voltage terms.
+        let y = match (&volts, p.volt) {
+            (Some(s), Some(v)) => s.x(v),
+            _ => 0.0,
+        };
+        let o = own_at(&f.fit.names, &f.fit.coefficients, bp, y);
         let d = DeviceSet::of(&o, center, lo, hi);
-        let (i0, i1) = (f.index("1").unwrap_or(0), f.index(col::INPUT).unwrap_or(0));
-        let c = DMatrix::from_fn(2, 2, |r, k| f.fit.covariance[([i0, i1][r], [i0, i1][k])]);
+        let [vb, cbs, vs] = bias_slope_cov(&f.fit.names, &f.fit.covariance, y);
+        let c = DMatrix::from_row_slice(2, 2, &[vb, cbs, cbs, vs]);
         let factor = covariance::single(&c, o.slope, d.offset, d.scale).map_err(|e| {
             WorkflowError::msg(
                 &opts.file,
@@ -589,8 +619,15 @@ fn hysteresis(model: &Formula, decide: &Decide<'_>) -> Result<Decision, Workflow
     })
 }
 
-/// The own-axis polynomial from named coefficients.
+/// The own-axis polynomial from named coefficients (at the middle of the supply voltage's
+/// span, when the model has voltage terms).
 pub fn own_of(names: &[String], coefficients: &[f64], bp: f64) -> Own {
+    own_at(names, coefficients, bp, 0.0)
+}
+
+/// The own-axis polynomial from named coefficients at scaled supply voltage `y`
+/// ([`thermal::VOLT`]): the bias and the scale factor are linear in it.
+pub fn own_at(names: &[String], coefficients: &[f64], bp: f64, y: f64) -> Own {
     let c = |term: &str| {
         names
             .iter()
@@ -598,12 +635,35 @@ pub fn own_of(names: &[String], coefficients: &[f64], bp: f64) -> Own {
             .map_or(0.0, |i| coefficients[i])
     };
     Own {
-        bias: c("1"),
-        slope: c(col::INPUT),
+        bias: c("1") + y * c(thermal::VOLT),
+        slope: c(col::INPUT) + y * c(&thermal::volt_term(col::INPUT)),
         c2: c("input^2"),
         c3: c("input^3"),
         coq: c("input:abs(input)"),
         ca: c(KINK),
         bp,
     }
+}
+
+/// The covariance `[var b, cov(b, s), var s]` of the bias and the scale factor at scaled
+/// supply voltage `y`, from the covariance `cov` of the coefficients `names`.
+#[must_use]
+pub fn bias_slope_cov(names: &[String], cov: &DMatrix<f64>, y: f64) -> [f64; 3] {
+    let idx = |n: &str| names.iter().position(|m| m == n);
+    // b = c_1 + y c_v, s = c_in + y c_in:v: rows of weights over the coefficients.
+    let row = |base: &str, volt: &str| -> Vec<(usize, f64)> {
+        idx(base)
+            .map(|i| (i, 1.0))
+            .into_iter()
+            .chain(idx(volt).map(|i| (i, y)))
+            .collect()
+    };
+    let b = row("1", thermal::VOLT);
+    let sl = row(col::INPUT, &thermal::volt_term(col::INPUT));
+    let q = |u: &[(usize, f64)], v: &[(usize, f64)]| {
+        u.iter()
+            .flat_map(|(i, a)| v.iter().map(move |(j, c)| a * c * cov[(*i, *j)]))
+            .sum::<f64>()
+    };
+    [q(&b, &b), q(&b, &sl), q(&sl, &sl)]
 }

@@ -128,6 +128,32 @@ fn jumps(temps: &[f64], lines: &[u64], span: f64) -> Result<(), String> {
     Ok(())
 }
 
+/// The span of the `volt` column, checked: every reading a supply voltage (finite, 0 to
+/// 1000 V).
+///
+/// # Errors
+/// The first reading that is not, by line.
+pub fn supply(table: &Table) -> Result<(f64, f64), WorkflowError> {
+    use crate::columns as col;
+    let path = std::path::Path::new(&table.path);
+    let v = table.column(col::VOLT).unwrap_or_default();
+    if let Some(i) = v
+        .iter()
+        .position(|x| !(x.is_finite() && *x > 0.0 && *x <= 1000.0))
+    {
+        return Err(WorkflowError::msg(
+            path,
+            format!(
+                "line {}: volt = {} is not a supply voltage; expected 0 to 1000 V",
+                table.lines[i], v[i]
+            ),
+        ));
+    }
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Ok((lo, hi))
+}
+
 /// Weights that even out the observations' density over the temperature range, or `None`
 /// when it is even enough (the fullest of 10 bins at most twice the emptiest, counting only
 /// bins with observations): each observation weighs the inverse of its bin's share, scaled to

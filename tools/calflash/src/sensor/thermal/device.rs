@@ -9,10 +9,9 @@ use nalgebra::DMatrix;
 use spincal::model::{AxisNonlinearity, MAX_SETS, MAX_TEMPERATURES, SingleSet};
 
 use super::{Scale, ThermalFit};
-use crate::columns as col;
 use crate::sensor::covariance;
 use crate::sensor::invert::{Own, linearization, linearize};
-use crate::sensor::single::own_of;
+use crate::sensor::single::{bias_slope_cov, own_at};
 use crate::sensor::{Finding, Verdict};
 
 /// What the device applies for one forward model, in f64: the linearisation `n`, then
@@ -103,12 +102,12 @@ struct Grid {
 }
 
 impl Grid {
-    fn new(tf: &ThermalFit, center: f64, (lo, hi): (f64, f64), bp: f64) -> Self {
+    fn new(tf: &ThermalFit, center: f64, (lo, hi): (f64, f64), bp: f64, y: f64) -> Self {
         let scale = tf.scale;
         let points = (0..GRID)
             .map(|i| {
                 let t = scale.lo + (scale.hi - scale.lo) * i as f64 / (GRID - 1) as f64;
-                let (d, o, c) = model_at(tf, t, center, (lo, hi), bp);
+                let (d, o, c) = model_at(tf, (t, y), center, (lo, hi), bp);
                 (t, d, o, c[0], c[1], c[2])
             })
             .collect();
@@ -140,24 +139,22 @@ impl Grid {
     }
 }
 
-/// The device set at `t` and the covariance of the bias and scale factor there
-/// (`[var b, cov, var s]`).
+/// The device set at temperature `t` and scaled supply voltage `y`, and the covariance of the
+/// bias and scale factor there (`[var b, cov, var s]`).
 fn model_at(
     tf: &ThermalFit,
-    t: f64,
+    (t, y): (f64, f64),
     center: f64,
     (lo, hi): (f64, f64),
     bp: f64,
 ) -> (DeviceSet, Own, [f64; 3]) {
     let names = tf.base.term_names();
-    let idx = |n: &str| names.iter().position(|m| m == n).unwrap_or(0);
-    let (i0, i1) = (idx("1"), idx(col::INPUT));
     let (c, cov) = tf.coefficients_at(t);
-    let o = own_of(&names, &c, bp);
+    let o = own_at(&names, &c, bp, y);
     (
         DeviceSet::of(&o, center, lo, hi),
         o,
-        [cov[(i0, i0)], cov[(i0, i1)], cov[(i1, i1)]],
+        bias_slope_cov(&names, &cov, y),
     )
 }
 
@@ -169,7 +166,8 @@ pub struct DeviceTemperature {
     pub temps: Vec<f64>,
     /// `Some(n)`: the sets are an n-term Chebyshev series; `None`: a table at `temps`.
     pub series: Option<usize>,
-    /// The sets: one per breakpoint, or one per series term.
+    /// The sets: one per breakpoint, or one per series term, each at every voltage point
+    /// (temperature-major).
     pub sets: Vec<SingleSet>,
     /// Their covariance factors, alike.
     pub covariances: Vec<[f32; 3]>,
@@ -222,9 +220,11 @@ fn clenshaw<const K: usize>(c: &[[f64; K]], x: f64) -> [f64; K] {
 }
 
 /// The device's temperature dependence for a continuous model of one axis (inputs `lo..hi`,
-/// codes about `center`), over `scale` (the calibrated span as the device holds it, in f32):
-/// the smallest Chebyshev series that meets the standard, or the table if it meets it with
-/// fewer sets; when neither does, the one that comes closer.
+/// codes about `center`), over `scale` (the calibrated span as the device holds it, in f32),
+/// at each of the device's voltage points `ys` (scaled supply voltages; `[0.0]` without a
+/// voltage axis): the smallest Chebyshev series that meets the standard at every voltage
+/// point, or the table if it meets it with fewer sets; when neither does, the one that comes
+/// closer. The sets are temperature-major, as the blob stores them.
 ///
 /// # Errors
 /// A covariance factor that cannot be formed, in words.
@@ -234,34 +234,67 @@ pub fn choose(
     center: f64,
     (lo, hi): (f64, f64),
     bp: f64,
+    ys: &[f64],
 ) -> Result<DeviceTemperature, String> {
-    let grid = Grid::new(tf, center, (lo, hi), bp);
-    let at = |t: f64| model_at(tf, t, center, (lo, hi), bp);
+    let grids: Vec<Grid> = ys
+        .iter()
+        .map(|y| Grid::new(tf, center, (lo, hi), bp, *y))
+        .collect();
+    let at = |t: f64, y: f64| model_at(tf, (t, y), center, (lo, hi), bp);
+    let worst = |r: Vec<(f64, f64)>| {
+        r.into_iter()
+            .fold((0.0f64, scale.lo), |m, x| if x.0 > m.0 { x } else { m })
+    };
     // The table: breakpoints where it departs most, until it meets the standard or is full.
     let (breaks, table_ratio) = breakpoints(scale, MAX_TEMPERATURES, |points| {
-        let sets: Vec<DeviceSet> = points.iter().map(|t| at(*t).0).collect();
-        grid.ratio(|t| {
-            let k = points
-                .partition_point(|p| *p <= t)
-                .clamp(1, points.len() - 1);
-            let (a, b) = (points[k - 1], points[k]);
-            sets[k - 1].blend(&sets[k], ((t - a) / (b - a)).clamp(0.0, 1.0))
-        })
+        worst(
+            ys.iter()
+                .zip(&grids)
+                .map(|(y, grid)| {
+                    let sets: Vec<DeviceSet> = points.iter().map(|t| at(*t, *y).0).collect();
+                    grid.ratio(|t| {
+                        let k = points
+                            .partition_point(|p| *p <= t)
+                            .clamp(1, points.len() - 1);
+                        let (a, b) = (points[k - 1], points[k]);
+                        sets[k - 1].blend(&sets[k], ((t - a) / (b - a)).clamp(0.0, 1.0))
+                    })
+                })
+                .collect(),
+        )
     });
     // The series: terms until it meets the standard.
-    let mut series = None;
-    for n in 1..=MAX_SETS {
+    type Series = (
+        Vec<f64>,
+        Vec<Vec<(DeviceSet, Own, [f64; 3])>>,
+        Vec<Vec<[f64; 7]>>,
+        (f64, f64),
+    );
+    let mut series: Option<Series> = None;
+    for n in 1..=MAX_SETS / ys.len().max(1) {
         let temps = nodes(scale, n);
-        let models: Vec<_> = temps.iter().map(|t| at(*t)).collect();
-        let coefficients = chebyshev(&models.iter().map(|m| m.0.to_array()).collect::<Vec<_>>());
-        let error = models.iter().map(|m| m.0.error).fold(0.0, f64::max);
-        let ratio = grid.ratio(|t| {
-            DeviceSet::from_array(clenshaw(&coefficients, scale.x(t).clamp(-1.0, 1.0)), error)
-        });
-        let better = series
-            .as_ref()
-            .is_none_or(|(_, _, _, r): &(_, _, _, (f64, f64))| ratio.0 < r.0);
-        if better {
+        let models: Vec<Vec<_>> = ys
+            .iter()
+            .map(|y| temps.iter().map(|t| at(*t, *y)).collect())
+            .collect();
+        let coefficients: Vec<Vec<[f64; 7]>> = models
+            .iter()
+            .map(|m| chebyshev(&m.iter().map(|m| m.0.to_array()).collect::<Vec<_>>()))
+            .collect();
+        let ratio = worst(
+            grids
+                .iter()
+                .zip(&coefficients)
+                .zip(&models)
+                .map(|((grid, c), m)| {
+                    let error = m.iter().map(|m| m.0.error).fold(0.0, f64::max);
+                    grid.ratio(|t| {
+                        DeviceSet::from_array(clenshaw(c, scale.x(t).clamp(-1.0, 1.0)), error)
+                    })
+                })
+                .collect(),
+        );
+        if series.as_ref().is_none_or(|s| ratio.0 < s.3.0) {
             series = Some((temps, models, coefficients, ratio));
         }
         if ratio.0 <= 1.0 {
@@ -277,15 +310,18 @@ pub fn choose(
             .map(|f| [f[0], f[1], f[2]])
             .map_err(|e| format!("output at {t:.1} C: {e}"))
     };
-    let table_wins = table_ratio.0 <= 1.0 && breaks.len() < coefficients.len()
+    let n = temps.len();
+    let table_wins = table_ratio.0 <= 1.0 && breaks.len() < n
         || table_ratio.0 > 1.0 && series_ratio.0 > 1.0 && table_ratio.0 < series_ratio.0;
     if table_wins {
         let mut sets = Vec::new();
         let mut covariances = Vec::new();
         for t in &breaks {
-            let (d, o, c) = at(*t);
-            sets.push(d.set());
-            covariances.push(factor(*t, &d, &o, &c)?.map(|v| v as f32));
+            for y in ys {
+                let (d, o, c) = at(*t, *y);
+                sets.push(d.set());
+                covariances.push(factor(*t, &d, &o, &c)?.map(|v| v as f32));
+            }
         }
         return Ok(DeviceTemperature {
             temps: breaks,
@@ -293,26 +329,31 @@ pub fn choose(
             sets,
             covariances,
             ratio: table_ratio,
-            other: (coefficients.len(), series_ratio.0),
+            other: (n, series_ratio.0),
         });
     }
-    let factors = models
-        .iter()
-        .zip(&temps)
-        .map(|((d, o, c), t)| factor(*t, d, o, c))
-        .collect::<Result<Vec<_>, _>>()?;
-    let n = coefficients.len();
+    let mut factors = Vec::new();
+    for m in &models {
+        let f = m
+            .iter()
+            .zip(&temps)
+            .map(|((d, o, c), t)| factor(*t, d, o, c))
+            .collect::<Result<Vec<_>, _>>()?;
+        factors.push(chebyshev(&f));
+    }
+    let mut sets = Vec::new();
+    let mut covariances = Vec::new();
+    for k in 0..n {
+        for (c, f) in coefficients.iter().zip(&factors) {
+            sets.push(DeviceSet::from_array(c[k], 0.0).set());
+            covariances.push(f[k].map(|v| v as f32));
+        }
+    }
     Ok(DeviceTemperature {
         temps,
         series: Some(n),
-        sets: coefficients
-            .iter()
-            .map(|c| DeviceSet::from_array(*c, 0.0).set())
-            .collect(),
-        covariances: chebyshev(&factors)
-            .iter()
-            .map(|f| f.map(|v| v as f32))
-            .collect(),
+        sets,
+        covariances,
         ratio: series_ratio,
         other: (breaks.len(), table_ratio.0),
     })

@@ -28,6 +28,17 @@ use crate::formula::{Formula, INTERCEPT, Term};
 use crate::obs::Table;
 use crate::stats::select;
 
+/// The scaled supply voltage column, -1 to 1 over the voltages observed: the bias and the
+/// scale factor of a continuous model are linear in it (`1 ... + volt_leg1` and
+/// `input:volt_leg1`), so the device's blend between the two ends is exact.
+pub const VOLT: &str = "volt_leg1";
+
+/// `term:volt_leg1`.
+#[must_use]
+pub fn volt_term(term: &str) -> String {
+    Term::var(term).times(VOLT, 1).name()
+}
+
 /// The prefix of the temperature columns: `temp_leg3` is `P3(x)`.
 pub const PREFIX: &str = "temp_leg";
 
@@ -84,26 +95,29 @@ impl Scale {
 }
 
 /// Readies `table` for a continuous temperature model: checks its temperature column
-/// ([`check`]), adds the temperature columns, and says in `notes` what it found (the range,
-/// the reading step, the lag behind the chamber, the weights). Returns what the temperatures
-/// support and, along a ramp that crowds its observations, the weights that even them out.
+/// ([`check`]), adds the temperature columns (and the scaled supply voltage when it varies),
+/// and says in `notes` what it found (the range, the reading step, the lag behind the chamber,
+/// the weights, the voltage span).
 ///
 /// # Errors
-/// [`check`]'s, and a supply voltage that varies (the model is fitted at one voltage).
-pub fn prepare(
-    table: &mut Table,
-    notes: &mut Vec<String>,
-) -> Result<(Support, Option<Vec<f64>>), WorkflowError> {
+/// [`check`]'s, and supply voltages that are not ([`data::supply`]).
+pub fn prepare(table: &mut Table, notes: &mut Vec<String>) -> Result<Prepared, WorkflowError> {
     use crate::columns as col;
-    if table
-        .column(col::VOLT)
-        .is_some_and(|v| v.iter().any(|x| *x != v[0]))
-    {
-        return Err(WorkflowError::msg(
-            std::path::Path::new(&table.path),
-            "the supply voltage varies: a continuous temperature model is fitted at one supply voltage; give the observations at each voltage setpoint at exact temperatures (--thermal table), or one voltage",
-        ));
-    }
+    let volts = match table.column(col::VOLT) {
+        Some(v) if v.iter().any(|x| *x != v[0]) => {
+            let (lo, hi) = data::supply(table)?;
+            let scale = Scale { lo, hi };
+            let y: Vec<f64> = v.iter().map(|x| scale.x(*x)).collect();
+            table.push_column(VOLT, y);
+            notes.push(format!(
+                "the supply voltage varies from {lo} to {hi} V: the bias and the scale factor are linear in it ({VOLT} = (volt - {:.3}) / {:.3}), and the device blends between the two ends",
+                scale.center(),
+                scale.half()
+            ));
+            Some(scale)
+        }
+        _ => None,
+    };
     let s = check(table, col::TEMP)?;
     notes.push(format!(
         "continuous temperature model over {:.1} to {:.1} C ({} distinct temperatures{}): every coefficient is a series of Legendre polynomials temp_legK of x = (temp - {:.2}) / {:.2}",
@@ -133,7 +147,22 @@ pub fn prepare(
             "the observations crowd in part of the temperature range: the temperature model is fitted with weights that even out their density ({lo:.2} to {hi:.2}), its covariance the sandwich estimate"
         ));
     }
-    Ok((s, weights))
+    Ok(Prepared {
+        support: s,
+        weights,
+        volts,
+    })
+}
+
+/// What [`prepare`] found.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// What the temperatures support.
+    pub support: Support,
+    /// Weights that even out a crowded ramp.
+    pub weights: Option<Vec<f64>>,
+    /// The supply voltage's span, when it varies.
+    pub volts: Option<Scale>,
 }
 
 /// Adds the temperature columns `P_1(x) ... P_max(x)` of `table`'s column `temp`.
