@@ -194,16 +194,16 @@ pub fn lag(table: &Table) -> Option<String> {
         v.get(v.len() / 2).copied()
     };
     let offset = median(sensor.iter().zip(chamber).map(|(s, c)| s - c).collect())?;
-    let mut text = format!(
-        "the sensor's temperature differs from the chamber's by {offset:+.2} C (median); the fit uses the sensor's"
-    );
-    if let Some(time) = table.column(col::TIME) {
-        // Where the chamber ramps monotonically, the time it had each sensor reading.
+    // Where the chamber ramps monotonically, the time it had each sensor reading.
+    let delay = table.column(col::TIME).and_then(|time| {
         let rising = chamber.windows(2).all(|w| w[1] >= w[0]);
         let falling = chamber.windows(2).all(|w| w[1] <= w[0]);
-        if rising || falling {
-            let sign = if rising { 1.0 } else { -1.0 };
-            let delays: Vec<f64> = sensor
+        if !(rising || falling) {
+            return None;
+        }
+        let sign = if rising { 1.0 } else { -1.0 };
+        median(
+            sensor
                 .iter()
                 .zip(time)
                 .filter_map(|(s, t)| {
@@ -217,24 +217,33 @@ pub fn lag(table: &Table) -> Option<String> {
                     };
                     Some(t - at)
                 })
-                .collect();
-            match median(delays) {
-                Some(d) if d >= 0.0 => {
-                    let _ = write!(
-                        text,
-                        "; it reads what the chamber read {d:.0} s earlier (median lag)"
-                    );
-                }
-                Some(d) => {
-                    let _ = write!(
-                        text,
-                        "; it reads what the chamber reaches {:.0} s later (self-heating, or a warmer mount)",
-                        -d
-                    );
-                }
-                None => {}
-            }
+                .collect(),
+        )
+    });
+    if offset.abs() < 0.005 && delay.is_none_or(|d| d.abs() < 0.5) {
+        return Some(
+            "the sensor's temperature follows the chamber's (median difference under 0.01 C)"
+                .into(),
+        );
+    }
+    let mut text = format!(
+        "the sensor's temperature differs from the chamber's by {offset:+.2} C (median); the fit uses the sensor's"
+    );
+    match delay {
+        Some(d) if d >= 0.0 => {
+            let _ = write!(
+                text,
+                "; it reads what the chamber read {d:.0} s earlier (median lag)"
+            );
         }
+        Some(d) => {
+            let _ = write!(
+                text,
+                "; it reads what the chamber reaches {:.0} s later (self-heating, or a warmer mount)",
+                -d
+            );
+        }
+        None => {}
     }
     Some(text)
 }
@@ -319,5 +328,36 @@ mod tests {
         let w = density_weights(&temps, &scale).unwrap();
         assert!((w.iter().sum::<f64>() / 400.0 - 1.0).abs() < 0.05);
         assert!(w[0] > 3.0 * w[399], "{} {}", w[0], w[399]);
+    }
+
+    #[test]
+    fn the_lag_behind_the_chamber_is_measured() {
+        let ramp = |lag: f64| {
+            let r = crate::sim::ramp::Ramp {
+                from: -40.0,
+                to: 70.0,
+                seconds: 7200.0,
+                uneven: false,
+                lag,
+                self_heating: None,
+                step: None,
+            }
+            .temperatures(400);
+            Table {
+                path: "ramp.csv".into(),
+                names: vec!["temp".into(), "chamber_temp".into(), "time".into()],
+                columns: vec![r.sensor, r.chamber, r.time],
+                lines: (2..402).collect(),
+            }
+        };
+        let text = lag(&ramp(120.0)).unwrap();
+        let secs: f64 = text
+            .split("read ")
+            .nth(1)
+            .and_then(|t| t.split(" s").next())
+            .and_then(|t| t.parse().ok())
+            .unwrap();
+        assert!((100.0..=125.0).contains(&secs), "{text}");
+        assert!(lag(&ramp(0.0)).unwrap().contains("follows the chamber's"));
     }
 }
