@@ -16,7 +16,7 @@
 //! the temperatures supports. The model at one temperature is the linear combination of the
 //! coefficients `J(T) b`, with covariance `J C J'` ([`crate::stats::Fit::combined`]).
 
-mod data;
+pub mod data;
 pub mod device;
 
 pub use data::{MIN_SPAN, PLAUSIBLE, Support, check, density_weights, lag};
