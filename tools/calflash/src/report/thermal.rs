@@ -12,7 +12,7 @@ use super::html::esc;
 use super::plot::{Figure, Series, svg};
 use super::terminal::num;
 use crate::sensor::Calibrated;
-use crate::sensor::single::own_of;
+use crate::sensor::single::{bias_slope_cov, own_of};
 use crate::sensor::thermal::ThermalFit;
 
 /// Temperatures each curve is drawn at.
@@ -102,14 +102,9 @@ pub fn section(c: &Calibrated) -> Result<String, String> {
     let sigma_at = |t: f64, x: f64| {
         let (b, cov) = tf.coefficients_at(t);
         let own = own_of(names_ref, &b, c.breakpoint);
-        let (i0, i1) = (
-            names.iter().position(|n| n == "1").unwrap_or(0),
-            names.iter().position(|n| n == "input").unwrap_or(0),
-        );
-        (cov[(i0, i0)] + 2.0 * x * cov[(i0, i1)] + x * x * cov[(i1, i1)])
-            .max(0.0)
-            .sqrt()
-            / own.slope.abs()
+        // At the middle of the supply's span, as `own_of`.
+        let [vb, cbs, vs] = bias_slope_cov(names_ref, &cov, 0.0);
+        (vb + 2.0 * x * cbs + x * x * vs).max(0.0).sqrt() / own.slope.abs()
     };
     let wide = grid(tf, 0.15);
     let at_zero: Vec<(f64, f64)> = wide.iter().map(|t| (*t, sigma_at(*t, 0.0))).collect();

@@ -13,6 +13,7 @@ use spincal::model::{
 
 use super::invert::linearize;
 use super::table::Layout;
+use super::thermal::device::{DeviceSet, clenshaw};
 use super::{Options, PointFit, WorkflowError};
 use crate::columns as col;
 use crate::obs::Table;
@@ -173,43 +174,14 @@ fn single_set_at(
     let x = ((f64::from(t) - 0.5 * (f64::from(span.lo) + f64::from(span.hi)))
         / (0.5 * (f64::from(span.hi) - f64::from(span.lo))))
     .clamp(-1.0, 1.0);
-    let fields = |s: &SingleSet| {
-        let a = s.axis.to_array().map(f64::from);
-        [
-            a[0],
-            a[1],
-            a[2],
-            a[3],
-            a[4],
-            f64::from(s.scale),
-            f64::from(s.offset),
-        ]
-    };
-    let term = |k: usize| -> [f64; 7] {
-        let (a, b) = (fields(&sets[k * nv + v0]), fields(&sets[k * nv + v1]));
-        std::array::from_fn(|i| a[i] + (b[i] - a[i]) * w)
-    };
-    let mut sum = [0.0f64; 7];
-    for (i, v) in sum.iter_mut().enumerate() {
-        let (mut b1, mut b2) = (0.0, 0.0);
-        for k in (1..n).rev() {
-            let b = term(k)[i] + 2.0 * x * b1 - b2;
-            b2 = b1;
-            b1 = b;
-        }
-        *v = term(0)[i] + x * b1 - b2;
-    }
-    Some(SingleSet {
-        axis: spincal::model::AxisNonlinearity {
-            quadratic: sum[0] as f32,
-            cubic: sum[1] as f32,
-            odd_quadratic: sum[2] as f32,
-            asymmetry: sum[3] as f32,
-            asymmetry_break: sum[4] as f32,
-        },
-        scale: sum[5] as f32,
-        offset: sum[6] as f32,
-    })
+    let fields = |s: &SingleSet| DeviceSet::from_set(s).to_array();
+    let terms: Vec<[f64; 7]> = (0..n)
+        .map(|k| {
+            let (a, b) = (fields(&sets[k * nv + v0]), fields(&sets[k * nv + v1]));
+            std::array::from_fn(|i| a[i] + (b[i] - a[i]) * w)
+        })
+        .collect();
+    Some(DeviceSet::from_array(clenshaw(&terms, x), 0.0).set())
 }
 
 /// Validates and encodes `data`, decodes the blob back as the device does, and runs the

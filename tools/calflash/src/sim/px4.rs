@@ -87,22 +87,6 @@ pub struct Errors {
     pub px4: f64,
 }
 
-/// The input whose noise-free output at `t` is `out` (Newton's method on the truth).
-fn invert(truth: &SingleTruth, out: f64, t: f64) -> f64 {
-    let f = |x: f64| truth.output(x, 0.0, 0.0, t, truth.ref_volt, 0.0);
-    let mut x = (out - f(0.0)) / (f(1.0) - f(0.0));
-    for _ in 0..30 {
-        let h = 1e-3;
-        let d = (f(x + h) - f(x - h)) / (2.0 * h);
-        let step = (f(x) - out) / d;
-        x -= step;
-        if step.abs() < 1e-13 {
-            break;
-        }
-    }
-    x
-}
-
 /// Runs one seed of a scenario: simulates the ramp into `dir`, calibrates it with `calflash
 /// calibrate`'s single-axis workflow (its preset, or `model`) and with PX4's model, and scores
 /// both on 37 temperatures between the observations' and 21 inputs over +-1 g, at the unit's
@@ -167,7 +151,7 @@ pub fn run(s: &Scenario, seed: u64, dir: &Path, model: Option<&str>) -> Result<E
                 .truth
                 .output(x, 0.0, 0.0, t, s.truth.ref_volt, 0.0)
                 .round();
-            let truth = invert(&s.truth, code, t);
+            let truth = s.truth.input(code, t, s.truth.ref_volt);
             let model = own.input_for(code, (code - own.bias) / own.slope);
             let dev = f64::from(device.correct(code as i32).values[0]);
             for (sum, e) in

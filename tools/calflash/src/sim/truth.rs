@@ -99,6 +99,24 @@ impl Default for SingleTruth {
 }
 
 impl SingleTruth {
+    /// The input (no cross inputs, no sweep) whose noise-free output at temperature `t` and
+    /// supply `v` is `out`: Newton's method on [`output`](Self::output), the truth a corrected
+    /// code is held against.
+    #[must_use]
+    pub fn input(&self, out: f64, t: f64, v: f64) -> f64 {
+        let f = |x: f64| self.output(x, 0.0, 0.0, t, v, 0.0);
+        let mut x = (out - f(0.0)) / (f(1.0) - f(0.0));
+        for _ in 0..30 {
+            let h = 1e-3;
+            let step = (f(x) - out) / ((f(x + h) - f(x - h)) / (2.0 * h));
+            x -= step;
+            if step.abs() < 1e-13 {
+                break;
+            }
+        }
+        x
+    }
+
     /// The noise-free output for input `a` (cross inputs `ap`, `ao`), temperature `t`, supply
     /// `v`, and direction `dir` (+1 ascending, -1 descending, 0 unknown).
     #[must_use]

@@ -48,12 +48,24 @@ impl DeviceSet {
         self.offset + self.scale * linearize(&self.n, v)
     }
 
-    fn to_array(self) -> [f64; 7] {
+    /// The device's coefficients in f64.
+    #[must_use]
+    pub fn from_set(s: &SingleSet) -> Self {
+        let n = s.axis.to_array().map(f64::from);
+        Self {
+            n,
+            scale: f64::from(s.scale),
+            offset: f64::from(s.offset),
+            error: 0.0,
+        }
+    }
+
+    pub(crate) fn to_array(self) -> [f64; 7] {
         let n = self.n;
         [n[0], n[1], n[2], n[3], n[4], self.scale, self.offset]
     }
 
-    fn from_array(a: [f64; 7], error: f64) -> Self {
+    pub(crate) fn from_array(a: [f64; 7], error: f64) -> Self {
         Self {
             n: [a[0], a[1], a[2], a[3], a[4]],
             scale: a[5],
@@ -207,7 +219,7 @@ fn chebyshev<const K: usize>(values: &[[f64; K]]) -> Vec<[f64; K]> {
 }
 
 /// `sum c_k T_k(x)`, as the device sums it.
-fn clenshaw<const K: usize>(c: &[[f64; K]], x: f64) -> [f64; K] {
+pub(crate) fn clenshaw<const K: usize>(c: &[[f64; K]], x: f64) -> [f64; K] {
     std::array::from_fn(|i| {
         let (mut b1, mut b2) = (0.0, 0.0);
         for ck in c.iter().skip(1).rev() {
