@@ -113,18 +113,6 @@ impl Term {
         Self::normalise(factors)
     }
 
-    /// A term of `var^power` alone (`power` at least 1).
-    #[must_use]
-    pub fn power(var: &str, power: u32) -> Self {
-        Self {
-            factors: vec![Factor {
-                var: var.into(),
-                abs: false,
-                power,
-            }],
-        }
-    }
-
     /// Multiplies factors into a canonical term: same variable and kind add their powers.
     fn normalise(mut factors: Vec<Factor>) -> Self {
         factors.sort();

@@ -190,18 +190,19 @@ impl AxisFit {
             alpha,
             ..stats::Options::default()
         };
-        let (x, y) = match weights {
-            Some(w) => {
-                let mut x = d.x.clone();
-                for (mut row, wi) in x.row_iter_mut().zip(w) {
-                    row *= wi.sqrt();
-                }
-                let y: Vec<f64> = d.y.iter().zip(w).map(|(v, wi)| v * wi.sqrt()).collect();
-                (x, y)
+        // The rows scaled by the square roots of the weights (the design itself unweighted).
+        let scaled = weights.map(|w| {
+            let mut x = d.x.clone();
+            for (mut row, wi) in x.row_iter_mut().zip(w) {
+                row *= wi.sqrt();
             }
-            None => (d.x.clone(), d.y.clone()),
-        };
-        let fit = stats::fit(&x, &y, d.names, d.intercept, &opts).map_err(|e| match e {
+            let y: Vec<f64> = d.y.iter().zip(w).map(|(v, wi)| v * wi.sqrt()).collect();
+            (x, y)
+        });
+        let (x, y) = scaled
+            .as_ref()
+            .map_or((&d.x, &d.y[..]), |(x, y)| (x, &y[..]));
+        let fit = stats::fit(x, y, d.names, d.intercept, &opts).map_err(|e| match e {
             FitError::RankDeficient {
                 column,
                 combination,
