@@ -241,6 +241,16 @@ fn bad_temperature_columns_are_located_and_nothing_is_written() {
         e.contains("spread from -40.0 to 70.0 C") && e.contains("single-axis sensors so far"),
         "{e}"
     );
+    // A supply voltage that is not one, in a ramp at two voltages.
+    simulate_ramp(d, "volts.csv", &["--ramp=-40:70", "--volts", "4.5,5.5"]);
+    rewrite(&d.join("volts.csv"), "volt", |r, _| {
+        (r == 10).then(|| "-5".to_string())
+    });
+    let e = run("volts.csv", &[]);
+    assert!(
+        e.contains("volts.csv: line 12: volt = -5 is not a supply voltage"),
+        "{e}"
+    );
     // The input column pasted into the temperature's place.
     simulate_ramp(d, "mixed.csv", &["--ramp", "-40:70"]);
     rewrite(&d.join("mixed.csv"), "temp", |_, f| Some(f[1].to_string()));
