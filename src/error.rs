@@ -174,7 +174,8 @@ pub enum Error {
     /// sample carries both).
     InvalidMixedFormats,
     /// A temperature series with no terms or more than the sets the device holds, alongside
-    /// breakpoints, or over a temperature span of zero width.
+    /// breakpoints, over a temperature span of zero width, or for an IMU with a lever arm
+    /// (whose sensing directions are proven per set of a table).
     InvalidTemperatureSeries,
     /// An axis center (the zero-input code) not strictly inside the ADC rails.
     InvalidCenter {
@@ -361,8 +362,8 @@ impl fmt::Display for Error {
                 "the gyro's codes come in another sample format than the accelerometer's",
             ),
             Error::InvalidTemperatureSeries => f.write_str(
-                "the temperature series has no terms or too many, comes with breakpoints, or \
-                 spans no temperatures",
+                "the temperature series has no terms or too many, comes with breakpoints, \
+                 spans no temperatures, or is an IMU's with a lever arm (a table is needed)",
             ),
             Error::InvalidCenter { part, axis } => write!(
                 f,

@@ -144,6 +144,12 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
         CalibrationData::example_single_series(),
         Kind::Single,
     ));
+    // An IMU whose sets and covariance factors are a temperature series.
+    cases.push((
+        "imu_series",
+        CalibrationData::example_imu_series(),
+        Kind::Imu(1000.0),
+    ));
     cases
 }
 

@@ -377,7 +377,7 @@ fn each_validation_rule_has_its_own_error() {
         );
     }
     // Temperature series: the scale factor must stay away from zero at every temperature,
-    // the output bounded, the shape right, and only a single axis has one.
+    // the output bounded, the shape right.
     use spincal::model::TemperatureModel;
     let series: Vec<Corruption> = vec![
         (
@@ -440,13 +440,84 @@ fn each_validation_rule_has_its_own_error() {
         corrupt(&mut data);
         assert_eq!(blob::decode(&framed(&data)), Err(expected), "{what}");
     }
+    // A triad's and an IMU's series: invertible and bounded at every temperature, or refused.
     let mut triad = CalibrationData::example_triad();
-    triad.environment.temperature_model = TemperatureModel::Chebyshev(1);
+    triad.environment.temperature_model = TemperatureModel::Chebyshev(2);
+    if let Sensor::Triad { sets, .. } = &mut triad.sensor {
+        let mut second = sets.as_slice()[0];
+        second.matrix = second.matrix.map(|r| r.map(|v| 0.01 * v));
+        let _ = sets.push(second);
+    }
+    assert!(Calibration::new(triad.clone()).is_ok(), "a triad's series");
+    if let Sensor::Triad { sets, .. } = &mut triad.sensor {
+        let head = sets.as_slice()[0].matrix;
+        sets.as_mut_slice()[1].matrix = head.map(|r| r.map(|v| -1.2 * v));
+    }
     assert_eq!(
         Calibration::new(triad),
-        Err(Error::InvalidTemperatureSeries),
-        "a triad's series"
+        Err(Error::InvalidSingularMatrix {
+            part: Part::Sensor,
+            set: 0
+        }),
+        "a triad's series term that can cancel its matrix"
     );
+    let imu: Vec<Corruption> = vec![
+        (
+            "an accelerometer term that can cancel the matrix",
+            Box::new(|d| {
+                if let Sensor::Imu { sets, .. } = &mut d.sensor {
+                    let head = sets.as_slice()[0].accel.matrix;
+                    sets.as_mut_slice()[3].accel.matrix = head.map(|r| r.map(|v| 1.5 * v));
+                }
+            }),
+            Error::InvalidSingularMatrix {
+                part: Part::Accelerometer,
+                set: 0,
+            },
+        ),
+        (
+            "a gyro term that makes the output unbounded",
+            Box::new(|d| {
+                if let Sensor::Imu { sets, .. } = &mut d.sensor {
+                    sets.as_mut_slice()[4].gyro.axes[1].cubic = 1e10;
+                }
+            }),
+            Error::InvalidUnboundedOutput {
+                part: Part::Gyro,
+                set: 0,
+            },
+        ),
+        (
+            "a g-sensitivity term that makes the rate unbounded",
+            Box::new(|d| {
+                if let Sensor::Imu { sets, .. } = &mut d.sensor {
+                    sets.as_mut_slice()[2].g_sensitivity[0][0] = 1e14;
+                }
+            }),
+            Error::InvalidUnboundedOutput {
+                part: Part::Gyro,
+                set: 0,
+            },
+        ),
+        (
+            "an IMU's series with a lever arm",
+            Box::new(|d| {
+                if let Sensor::Imu { lever_arm, .. } = &mut d.sensor {
+                    *lever_arm = Some([[0.002, 0.0, 0.0], [0.0, 0.002, 0.0], [0.0, 0.0, 0.002]]);
+                }
+            }),
+            Error::InvalidTemperatureSeries,
+        ),
+    ];
+    for (what, corrupt, expected) in imu {
+        let mut data = CalibrationData::example_imu_series();
+        assert!(
+            Calibration::new(data.clone()).is_ok(),
+            "the example is valid"
+        );
+        corrupt(&mut data);
+        assert_eq!(blob::decode(&framed(&data)), Err(expected), "{what}");
+    }
     // A zero scale factor of a single axis.
     let mut data = CalibrationData::example_single();
     if let Sensor::Single { sets, .. } = &mut data.sensor {

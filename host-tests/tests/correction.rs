@@ -526,6 +526,137 @@ fn sigma_is_the_quadratic_form_of_the_covariance_over_each_outputs_features() {
     );
 }
 
+#[test]
+fn an_imu_series_sigma_is_its_covariance_factors_summed_with_the_reference_weights() {
+    // The device sums the series of covariance factors in place; the reference weights
+    // (`cos(k acos x)`) give the same factors, which a table of one set holds as stored.
+    let data = CalibrationData::example_imu_series();
+    let cal = Calibration::new(data.clone()).unwrap();
+    let mut series = AnyImuCorrector::new(&cal, 1000.0).unwrap();
+    let Sensor::Imu {
+        sets,
+        covariance: Some(cov),
+        ..
+    } = &data.sensor
+    else {
+        unreachable!()
+    };
+    let raw = [34_000, 31_000, 36_000, 32_786, 32_430, 32_517 + 9_000];
+    for t in [-40.0f32, -12.5, 3.0, 31.7, 66.0, 85.0, 100.0] {
+        let w = reference::weights(&data.environment, f64::from(t), 3.3);
+        let mut one_set = sets[0];
+        let mut one_cov = cov[0];
+        let floats = |c: &spincal::model::ImuCovariance| -> Vec<f32> {
+            c.accel
+                .iter()
+                .chain(&c.gyro)
+                .flat_map(|f| f.as_flattened().iter().copied())
+                .collect()
+        };
+        let summed: Vec<f32> = (0..floats(&cov[0]).len())
+            .map(|k| {
+                w.iter()
+                    .map(|(i, wi)| wi * f64::from(floats(&cov[*i])[k]))
+                    .sum::<f64>() as f32
+            })
+            .collect();
+        for (o, v) in one_cov
+            .accel
+            .iter_mut()
+            .chain(one_cov.gyro.iter_mut())
+            .flat_map(|f| f.as_flattened_mut().iter_mut())
+            .zip(summed)
+        {
+            *o = v;
+        }
+        let blend = |f: &dyn Fn(&spincal::model::ImuSet) -> Vec<f32>| -> Vec<f32> {
+            (0..f(&sets[0]).len())
+                .map(|k| {
+                    w.iter()
+                        .map(|(i, wi)| wi * f64::from(f(&sets[*i])[k]))
+                        .sum::<f64>() as f32
+                })
+                .collect()
+        };
+        let flat = |s: &spincal::model::ImuSet| -> Vec<f32> {
+            let mut v = Vec::new();
+            for t in [&s.accel, &s.gyro] {
+                for a in &t.axes {
+                    v.extend([
+                        a.quadratic,
+                        a.cubic,
+                        a.odd_quadratic,
+                        a.asymmetry,
+                        a.asymmetry_break,
+                    ]);
+                }
+                v.extend(t.matrix.as_flattened());
+                v.extend(t.offset);
+            }
+            v.extend(s.g_sensitivity.as_flattened());
+            v
+        };
+        let b = blend(&flat);
+        let mut it = b.into_iter();
+        for t in [&mut one_set.accel, &mut one_set.gyro] {
+            for a in &mut t.axes {
+                for x in [
+                    &mut a.quadratic,
+                    &mut a.cubic,
+                    &mut a.odd_quadratic,
+                    &mut a.asymmetry,
+                    &mut a.asymmetry_break,
+                ] {
+                    *x = it.next().unwrap();
+                }
+            }
+            for x in t
+                .matrix
+                .as_flattened_mut()
+                .iter_mut()
+                .chain(t.offset.iter_mut())
+            {
+                *x = it.next().unwrap();
+            }
+        }
+        for x in one_set.g_sensitivity.as_flattened_mut() {
+            *x = it.next().unwrap();
+        }
+        let mut table = data.clone();
+        table.environment.temperature_model = spincal::model::TemperatureModel::Table;
+        if let Sensor::Imu {
+            sets, covariance, ..
+        } = &mut table.sensor
+        {
+            *sets = spincal::model::BoundedVec::from_slice(&[one_set]).unwrap();
+            *covariance = Some(spincal::model::BoundedVec::from_slice(&[one_cov]).unwrap());
+        }
+        let table = Calibration::new(table).unwrap();
+        let mut one = AnyImuCorrector::new(&table, 1000.0).unwrap();
+        series.set_environment(t, 3.3);
+        one.set_environment(t, 3.3);
+        let (a, b) = (series.correct(raw), one.correct(raw));
+        let (sa, sb) = (
+            series.sigma(&a.values).unwrap(),
+            one.sigma(&a.values).unwrap(),
+        );
+        for i in 0..6 {
+            let close = |x: f32, y: f32| (x - y).abs() <= 1e-4 * x.abs().max(y.abs()) + 1e-9;
+            assert!(
+                close(a.values[i], b.values[i]),
+                "{t} C output {i}: {a:?} vs {b:?}"
+            );
+            assert!(close(sa[i], sb[i]), "{t} C sigma {i}: {sa:?} vs {sb:?}");
+        }
+        assert_eq!(
+            a.flags.is_clean(),
+            (-40.0..=85.0).contains(&t),
+            "{t}: {}",
+            a.flags
+        );
+    }
+}
+
 /// The device takes samples in the container the part delivers them in; a calibration states
 /// which, and a corrector of another refuses it when it is built. The same motion read as
 /// `u16`, `i16` and `i32` codes is corrected alike.

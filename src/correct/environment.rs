@@ -70,17 +70,11 @@ pub(crate) fn effective_set<S: Blend>(
     let nv = env.voltage_points();
     let at = |t: usize, v: usize| sets.get(t * nv + v);
     if let TemperatureModel::Chebyshev(n) = env.temperature_model {
-        // Only a single axis' sets have series (validation refuses the others'): the others
-        // keep no code, and no stack, for them.
+        // Kinds of set that are never a series keep no code, and no stack, for one.
         if !S::SERIES {
             return None;
         }
-        let (x, clamped) = series_x(&env.temperature_span, temperature);
-        let coefficient = |k: usize| Some(at(k, vb.lo)?.blend(at(k, vb.hi)?, vb.t));
-        let flags = Flags::NONE
-            .with_if(Flags::TEMPERATURE_CLAMPED, clamped)
-            .with_if(Flags::VOLTAGE_CLAMPED, vb.clamped);
-        return Some((clenshaw(usize::from(n), x, coefficient)?, flags));
+        return series_set(env, sets, usize::from(n), temperature, &vb);
     }
     let tb = bracket(&env.temperatures, &env.temperature_span, temperature);
     let lo = at(tb.lo, vb.lo)?.blend(at(tb.lo, vb.hi)?, vb.t);
@@ -89,6 +83,27 @@ pub(crate) fn effective_set<S: Blend>(
         .with_if(Flags::TEMPERATURE_CLAMPED, tb.clamped)
         .with_if(Flags::VOLTAGE_CLAMPED, vb.clamped);
     Some((lo.blend(&hi, tb.t), flags))
+}
+
+/// [`effective_set`] of a series of `n` terms, voltage bracket `vb`. Kept out of line: the
+/// recurrence's copies of a set (an IMU's are 252 bytes) would otherwise be in the stack
+/// frame of every table's blend too.
+#[inline(never)]
+fn series_set<S: Blend>(
+    env: &Environment,
+    sets: &[S],
+    n: usize,
+    temperature: f32,
+    vb: &Bracket,
+) -> Option<(S, Flags)> {
+    let nv = env.voltage_points();
+    let at = |t: usize, v: usize| sets.get(t * nv + v);
+    let (x, clamped) = series_x(&env.temperature_span, temperature);
+    let coefficient = |k: usize| Some(at(k, vb.lo)?.blend(at(k, vb.hi)?, vb.t));
+    let flags = Flags::NONE
+        .with_if(Flags::TEMPERATURE_CLAMPED, clamped)
+        .with_if(Flags::VOLTAGE_CLAMPED, vb.clamped);
+    Some((clenshaw(n, x, coefficient)?, flags))
 }
 
 /// Where a temperature falls in a series' span: `x` in [-1, 1] (clamped, and a NaN reading at
@@ -140,9 +155,37 @@ pub(crate) fn effective_covariance_into(
     let vb = bracket(&env.voltages, &env.voltage_span, voltage);
     let nv = env.voltage_points();
     let at = |t: usize, v: usize| sets.get(t * nv + v);
-    if env.temperature_model != TemperatureModel::Table {
-        // An IMU has no temperature series (validation refuses one).
-        return false;
+    // The same arithmetic as `Blend`: lo and hi along voltage, then along temperature.
+    let lerp = |x: f32, y: f32, t: f32| x + (y - x) * t;
+    if let TemperatureModel::Chebyshev(n) = env.temperature_model {
+        let n = usize::from(n);
+        if n == 0 || sets.len() < n * nv {
+            return false;
+        }
+        // `sum_k T_k(x) c_k`, summed in place term by term (`T_k` by its recurrence, each
+        // `|T_k| <= 1`): no copy of the factors on the stack.
+        let (x, _) = series_x(&env.temperature_span, temperature);
+        out.floats_mut().for_each(|o| *o = 0.0);
+        let (mut previous, mut current) = (1.0f32, x);
+        for k in 0..n {
+            let tk = match k {
+                0 => 1.0,
+                1 => x,
+                _ => {
+                    let next = 2.0 * x * current - previous;
+                    previous = current;
+                    current = next;
+                    next
+                }
+            };
+            let (Some(a), Some(b)) = (at(k, vb.lo), at(k, vb.hi)) else {
+                return false;
+            };
+            for (o, (a, b)) in out.floats_mut().zip(a.floats().zip(b.floats())) {
+                *o += tk * lerp(*a, *b, vb.t);
+            }
+        }
+        return true;
     }
     let tb = bracket(&env.temperatures, &env.temperature_span, temperature);
     let (Some(a), Some(b), Some(c), Some(d)) = (
@@ -153,8 +196,6 @@ pub(crate) fn effective_covariance_into(
     ) else {
         return false;
     };
-    // The same arithmetic as `Blend`: lo and hi along voltage, then along temperature.
-    let lerp = |x: f32, y: f32, t: f32| x + (y - x) * t;
     for (o, (((a, b), c), d)) in out
         .floats_mut()
         .zip(a.floats().zip(b.floats()).zip(c.floats()).zip(d.floats()))

@@ -13,6 +13,8 @@ use super::{
     ImuSet, Quantity, Rails, Sensor, Serial, SingleSet, Span, TemperatureModel, TriadSet,
 };
 
+use super::sets::Blend;
+
 const G: f32 = 9.806_65;
 
 fn identity(serial: &str) -> Identity {
@@ -357,6 +359,58 @@ impl CalibrationData {
                     axis.asymmetry_break = 0.0;
                 }
             }
+        }
+        data
+    }
+
+    /// [`example_imu`](Self::example_imu) without the lever arm, its temperature dependence a
+    /// 5-term Chebyshev series over -40 to 85 C (the interpolant of the table's sets and
+    /// covariance factors at the series' nodes) instead of a table.
+    #[must_use]
+    pub fn example_imu_series() -> Self {
+        const TERMS: usize = 5;
+        let (lo, hi) = (-40.0f32, 85.0f32);
+        let angle =
+            |k: usize, j: usize| core::f32::consts::PI * k as f32 * (j as f32 + 0.5) / TERMS as f32;
+        let node = |j: usize| 0.5 * (lo + hi) + 0.5 * (hi - lo) * libm::cosf(angle(1, j));
+        let weight = |k: usize, j: usize| {
+            (if k == 0 { 1.0 } else { 2.0 }) / TERMS as f32 * libm::cosf(angle(k, j))
+        };
+        let values: [ImuSet; TERMS] = core::array::from_fn(|j| imu_set(node(j), true));
+        let factors: [ImuCovariance; TERMS] = core::array::from_fn(|j| imu_covariance(node(j)));
+        let sets: [ImuSet; TERMS] = core::array::from_fn(|k| {
+            values.iter().enumerate().skip(1).fold(
+                values[0].lincomb(weight(k, 0), &values[0], 0.0),
+                |acc, (j, v)| acc.lincomb(1.0, v, weight(k, j)),
+            )
+        });
+        let covariance: [ImuCovariance; TERMS] = core::array::from_fn(|k| {
+            let mut c = factors[0];
+            for (o, f) in c.floats_mut().zip(factors[0].floats()) {
+                *o = weight(k, 0) * f;
+            }
+            for (j, fj) in factors.iter().enumerate().skip(1) {
+                for (o, f) in c.floats_mut().zip(fj.floats()) {
+                    *o += weight(k, j) * f;
+                }
+            }
+            c
+        });
+        let mut data = Self::imu(true);
+        data.identity = identity("IMU-SERIES-0042");
+        data.environment.temperatures = BoundedVec::new();
+        data.environment.temperature_span = Span::new(lo, hi);
+        data.environment.temperature_model = TemperatureModel::Chebyshev(TERMS as u8);
+        if let Sensor::Imu {
+            lever_arm,
+            sets: s,
+            covariance: c,
+            ..
+        } = &mut data.sensor
+        {
+            *lever_arm = None;
+            *s = table(&sets);
+            *c = Some(table(&covariance));
         }
         data
     }

@@ -37,6 +37,7 @@ mod bounded;
 pub mod examples;
 pub(crate) mod interval;
 pub mod rotation;
+mod series;
 mod sets;
 pub(crate) mod validate;
 

@@ -146,8 +146,7 @@ pub(crate) trait Blend: Copy {
     fn blend(&self, other: &Self, t: f32) -> Self;
     /// `a self + b other`, field by field (a temperature series' recurrence).
     fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self;
-    /// Whether sets of this kind may be a temperature series (a single axis' sets and
-    /// covariance factors).
+    /// Whether sets of this kind may be a temperature series.
     const SERIES: bool = false;
 }
 
@@ -232,6 +231,8 @@ impl<const N: usize> Blend for [f32; N] {
 }
 
 impl<const N: usize, const M: usize> Blend for [[f32; N]; M] {
+    const SERIES: bool = true;
+
     fn blend(&self, other: &Self, t: f32) -> Self {
         lerp_matrix(self, other, t)
     }
@@ -280,6 +281,8 @@ impl Blend for SingleSet {
 }
 
 impl Blend for TriadSet {
+    const SERIES: bool = true;
+
     fn blend(&self, other: &Self, t: f32) -> Self {
         let mut axes = self.axes;
         for (o, (a, b)) in axes.iter_mut().zip(self.axes.iter().zip(other.axes.iter())) {
@@ -292,6 +295,8 @@ impl Blend for TriadSet {
         }
     }
 
+    // Only a temperature series' recurrence calls it: one copy, not one per call site.
+    #[inline(never)]
     fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self {
         let mut axes = self.axes;
         for (o, (p, q)) in axes.iter_mut().zip(self.axes.iter().zip(other.axes.iter())) {
@@ -306,6 +311,8 @@ impl Blend for TriadSet {
 }
 
 impl Blend for ImuSet {
+    const SERIES: bool = true;
+
     fn blend(&self, other: &Self, t: f32) -> Self {
         Self {
             accel: self.accel.blend(&other.accel, t),
@@ -314,6 +321,8 @@ impl Blend for ImuSet {
         }
     }
 
+    // Only a temperature series' recurrence calls it: one copy, not one per call site.
+    #[inline(never)]
     fn lincomb(&self, a: f32, other: &Self, b: f32) -> Self {
         Self {
             accel: self.accel.lincomb(a, &other.accel, b),

@@ -3,6 +3,7 @@
 
 use super::interval::{Bound, affine_bound, axis_bound};
 use super::rotation::LeverTerms;
+use super::series;
 use super::sets::{AxisNonlinearity, ImuSet, SingleSet, TriadSet};
 use super::{
     BoundedVec, CalibrationData, Channel, Environment, MAX_LEVER_ARM_M, Rails, Sensor, Span,
@@ -50,11 +51,6 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
             }
             validate_covariance(covariance.as_ref(), sets.len(), Part::Sensor, |c| c.iter())
         }
-        Sensor::Triad { .. } | Sensor::Imu { .. }
-            if data.environment.temperature_model != TemperatureModel::Table =>
-        {
-            Err(Error::InvalidTemperatureSeries)
-        }
         Sensor::Triad {
             rails,
             channels,
@@ -65,14 +61,32 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
             validate_rails(rails, Part::Sensor)?;
             validate_channels(channels, rails, Part::Sensor)?;
             validate_table(sets, expected)?;
+            let table = data.environment.temperature_model == TemperatureModel::Table;
             for (i, set) in sets.iter().enumerate() {
-                validate_triad_set(set, i as u8, Part::Sensor)?;
-                let bound = triad_output_bound(set, channels, rails);
-                check_bounded(&bound, Part::Sensor, i as u8)?;
+                validate_triad_terms(set, i as u8, Part::Sensor, table)?;
+                if table {
+                    let bound = triad_output_bound(set, channels, rails);
+                    check_bounded(&bound, Part::Sensor, i as u8)?;
+                }
+            }
+            if !table {
+                let nv = data.environment.voltage_points();
+                for v in 0..nv {
+                    let at = (Part::Sensor, v as u8);
+                    let series = series::terms(sets, v, nv);
+                    let bound = series::triad_bound(series, channels, rails, at)?;
+                    check_bounded(&bound, Part::Sensor, v as u8)?;
+                }
             }
             validate_covariance(covariance.as_ref(), sets.len(), Part::Sensor, |c| {
                 c.iter().flatten()
             })
+        }
+        Sensor::Imu {
+            lever_arm: Some(_), ..
+        } if data.environment.temperature_model != TemperatureModel::Table => {
+            // The lever term's sensing directions are proven per set of a table.
+            Err(Error::InvalidTemperatureSeries)
         }
         Sensor::Imu {
             accel_rails,
@@ -94,11 +108,22 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
                 validate_lever_arm(arm)?;
             }
             validate_table(sets, expected)?;
-            for (i, set) in sets.iter().enumerate() {
-                validate_imu_set(set, i as u8, accel, accel_rails, gyro, gyro_rails)?;
-                if lever_arm.is_some() {
-                    validate_sensing_directions(&set.accel.matrix, i as u8)?;
+            if data.environment.temperature_model == TemperatureModel::Table {
+                for (i, set) in sets.iter().enumerate() {
+                    validate_imu_set(set, i as u8, accel, accel_rails, gyro, gyro_rails)?;
+                    if lever_arm.is_some() {
+                        validate_sensing_directions(&set.accel.matrix, i as u8)?;
+                    }
                 }
+            } else {
+                validate_imu_series(
+                    sets,
+                    data.environment.voltage_points(),
+                    accel,
+                    accel_rails,
+                    gyro,
+                    gyro_rails,
+                )?;
             }
             if let Some(arm) = lever_arm {
                 validate_lever_feedback(sets, arm, (accel, accel_rails), (gyro, gyro_rails))?;
@@ -346,40 +371,30 @@ fn validate_single_series(
     }
     let (v_lo, v_hi) = rail_offsets(rails, channel);
     for v in 0..voltages {
-        let series = sets.iter().skip(v).step_by(voltages.max(1));
+        let series = series::terms(sets, v, voltages);
         let first = v as u8;
         let sum = |f: fn(&SingleSet) -> f32| series.clone().map(|s| libm::fabsf(f(s))).sum::<f32>();
         let head = sets.get(v).map_or(0.0, |s| libm::fabsf(s.scale));
         // Values are finite here, so the comparison is total.
-        let others = sum(|s| s.scale) - head;
-        if head <= others {
+        if head <= sum(|s| s.scale) - head {
             return Err(Error::InvalidSingularMatrix { part, set: first });
         }
-        let envelope = AxisNonlinearity {
-            quadratic: sum(|s| s.axis.quadratic),
-            cubic: sum(|s| s.axis.cubic),
-            odd_quadratic: sum(|s| s.axis.odd_quadratic),
-            asymmetry: sum(|s| s.axis.asymmetry),
-            asymmetry_break: 0.0,
-        };
-        // |v - b| <= |v| + |b|: the kink's share of the break is added apart.
-        let u = axis_bound(&envelope, v_lo, v_hi).mag
-            + envelope.asymmetry * sum(|s| s.axis.asymmetry_break);
+        let axes = series.clone().map(|s| &s.axis);
+        let u = series::axis_magnitude(
+            &series::axis_envelope(axes.clone()),
+            series::break_sum(axes),
+            v_lo,
+            v_hi,
+        );
         let mag = sum(|s| s.offset) + sum(|s| s.scale) * u;
-        check_bounded(
-            &[Bound {
-                lo: -mag,
-                hi: mag,
-                mag,
-            }],
-            part,
-            first,
-        )?;
+        check_bounded(&[series::symmetric(mag)], part, first)?;
     }
     Ok(())
 }
 
-fn validate_triad_set(set: &TriadSet, i: u8, part: Part) -> Result<(), Error> {
+/// A triad set's values finite and, in a table, its matrix invertible (a series' terms are
+/// proven together, [`series::triad_bound`]).
+fn validate_triad_terms(set: &TriadSet, i: u8, part: Part, table: bool) -> Result<(), Error> {
     for (a, axis) in set.axes.iter().enumerate() {
         validate_axis(axis, part, i, a as u8)?;
     }
@@ -390,8 +405,50 @@ fn validate_triad_set(set: &TriadSet, i: u8, part: Part) -> Result<(), Error> {
         Some(i),
     )?;
     finite_all(set.offset.iter(), Field::Offset, Some(part), Some(i))?;
-    if !invertible(&set.matrix) {
+    if table && !invertible(&set.matrix) {
         return Err(Error::InvalidSingularMatrix { part, set: i });
+    }
+    Ok(())
+}
+
+/// An IMU's series: every term finite, and at each voltage point both triads invertible and
+/// bounded at any temperature, the gyro's bound with the g-sensitivity's envelope.
+fn validate_imu_series(
+    sets: &[ImuSet],
+    voltages: usize,
+    accel: &[Channel; 3],
+    accel_rails: &Rails,
+    gyro: &[Channel; 3],
+    gyro_rails: &Rails,
+) -> Result<(), Error> {
+    for (i, set) in sets.iter().enumerate() {
+        validate_triad_terms(&set.accel, i as u8, Part::Accelerometer, false)?;
+        validate_triad_terms(&set.gyro, i as u8, Part::Gyro, false)?;
+        finite_all(
+            set.g_sensitivity.iter().flatten(),
+            Field::GSensitivity,
+            Some(Part::Gyro),
+            Some(i as u8),
+        )?;
+    }
+    for v in 0..voltages {
+        let series = series::terms(sets, v, voltages);
+        let at = |part| (part, v as u8);
+        let a = series::triad_bound(
+            series.clone().map(|s| &s.accel),
+            accel,
+            accel_rails,
+            at(Part::Accelerometer),
+        )?;
+        check_bounded(&a, Part::Accelerometer, v as u8)?;
+        let w = series::triad_bound(
+            series.clone().map(|s| &s.gyro),
+            gyro,
+            gyro_rails,
+            at(Part::Gyro),
+        )?;
+        let w = series::g_sensitivity_bound(series, w, &a);
+        check_bounded(&w, Part::Gyro, v as u8)?;
     }
     Ok(())
 }
@@ -404,8 +461,8 @@ fn validate_imu_set(
     gyro: &[Channel; 3],
     gyro_rails: &Rails,
 ) -> Result<(), Error> {
-    validate_triad_set(&set.accel, i, Part::Accelerometer)?;
-    validate_triad_set(&set.gyro, i, Part::Gyro)?;
+    validate_triad_terms(&set.accel, i, Part::Accelerometer, true)?;
+    validate_triad_terms(&set.gyro, i, Part::Gyro, true)?;
     finite_all(
         set.g_sensitivity.iter().flatten(),
         Field::GSensitivity,

@@ -192,6 +192,27 @@ fn main() -> ! {
     black_box(&c);
     report("set_environment_8pt", t0.wrapping_sub(t1), temps.len());
 
+    // An IMU's temperature dependence as a 5-term Chebyshev series (no lever arm), over the
+    // same temperatures.
+    let Ok(series) = Calibration::new(CalibrationData::example_imu_series()) else {
+        fail("IMU series example invalid")
+    };
+    let Ok(mut s) = ImuCorrector::<u16>::new(&series, 1000.0) else {
+        fail("IMU series corrector")
+    };
+    let t0 = timer::now();
+    for t in temps {
+        s.set_environment(black_box(t), black_box(3.3));
+    }
+    let t1 = timer::now();
+    black_box(&s);
+    report(
+        "set_environment_imu_series5",
+        t0.wrapping_sub(t1),
+        temps.len(),
+    );
+    let (_, series_env_stack) = stack::high_water(|| s.set_environment(black_box(41.0), 3.3));
+
     // A single axis' temperature dependence as a 3-point table and as a 6-term Chebyshev
     // series, each at 2 supply voltages, over the same temperatures.
     for (name, data) in [
@@ -268,6 +289,7 @@ fn main() -> ! {
     hprintln!("stack correct_first_sample {}", first_stack);
     hprintln!("stack correct_batch {}", batch_stack);
     hprintln!("stack set_environment {}", env_stack);
+    hprintln!("stack set_environment_imu_series5 {}", series_env_stack);
     hprintln!("stack decode {}", decode_stack);
     hprintln!("size calibration {}", core::mem::size_of::<Calibration>());
     hprintln!(

@@ -113,6 +113,7 @@ fn gyro_triad_with_g_sensitivity_on_a_rate_table() {
     let truth = TriadTruth {
         bias_temp: [0.0; 3],
         scale_temp: [0.0; 3],
+        bias_temp2: [0.0; 3],
         ..TriadTruth::gyro()
     };
     let conds = plan::plan(
@@ -149,6 +150,7 @@ fn accelerometer_triad_with_lever_arms_on_a_centrifuge() {
     let mut truth = TriadTruth {
         bias_temp: [0.0; 3],
         scale_temp: [0.0; 3],
+        bias_temp2: [0.0; 3],
         ..TriadTruth::accelerometer()
     };
     truth.lever = [[0.02, 0.0, 0.0], [0.0, 0.015, 0.0], [0.0, 0.0, 0.01]];

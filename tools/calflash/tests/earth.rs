@@ -23,6 +23,7 @@ fn tactical() -> TriadTruth {
         g: [[0.0; 3]; 3],
         bias_temp: [0.0; 3],
         scale_temp: [0.0; 3],
+        bias_temp2: [0.0; 3],
         noise: [0.3; 3],
         ..TriadTruth::gyro()
     }

@@ -13,6 +13,7 @@ use calflash::sim::ramp::Ramp;
 use calflash::sim::truth::SingleTruth;
 use calflash::sim::{self, Sensor, plan, px4};
 use common::calflash;
+use common::truth_in_legendre::{in_x, legendre_of};
 use rayon::prelude::*;
 use spincal::correct::AnyAxisCorrector;
 use spincal::model::{Quantity, TemperatureModel};
@@ -219,7 +220,32 @@ fn bad_temperature_columns_are_located_and_nothing_is_written() {
     simulate_ramp(d, "narrow.csv", &["--ramp", "24:27"]);
     let e = run("narrow.csv", &[]);
     assert!(e.contains("span 3.0 C") && e.contains("order: none"), "{e}");
-    // A triad's ramp: said plainly, not as a setpoint short of observations.
+    // A triad's ramp at two supply voltages: its continuous model follows the temperature
+    // only, and says so.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "simulate",
+            "--sensor",
+            "accel",
+            "--plan",
+            "tumble:24",
+            "--repeat",
+            "10",
+            "--ramp=-40:70",
+            "--volts",
+            "3.0,3.6",
+            "-o",
+            "triad.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let e = run_as("triad.csv", "accel");
+    assert!(
+        e.contains("triad.csv") && e.contains("the supply voltage varies"),
+        "{e}"
+    );
+    // A ramp where a table of setpoints is asked for.
     let (code, out, err) = calflash(
         d,
         &[
@@ -232,13 +258,13 @@ fn bad_temperature_columns_are_located_and_nothing_is_written() {
             "10",
             "--ramp=-40:70",
             "-o",
-            "triad.csv",
+            "triad1.csv",
         ],
     );
     assert_eq!(code, 0, "{out}{err}");
-    let e = run_as("triad.csv", "accel");
+    let e = run_with("triad1.csv", "accel", &["--thermal", "table"]);
     assert!(
-        e.contains("spread from -40.0 to 70.0 C") && e.contains("single-axis sensors so far"),
+        e.contains("spread from -40.0 to 70.0 C") && e.contains("--thermal continuous"),
         "{e}"
     );
     // A supply voltage that is not one, in a ramp at two voltages.
@@ -259,35 +285,6 @@ fn bad_temperature_columns_are_located_and_nothing_is_written() {
         e.contains("jump back and forth") && e.contains("line "),
         "{e}"
     );
-}
-
-/// Monomial coefficients in `x` (up to `x^3`) as Legendre coefficients:
-/// `x^2 = (2 P2 + P0) / 3`, `x^3 = (2 P3 + 3 P1) / 5`.
-fn legendre_of(m: &[f64]) -> Vec<f64> {
-    let c = |k: usize| m.get(k).copied().unwrap_or(0.0);
-    let mut out = vec![
-        c(0) + c(2) / 3.0,
-        c(1) + 0.6 * c(3),
-        2.0 * c(2) / 3.0,
-        0.4 * c(3),
-    ];
-    out.truncate(m.len());
-    out
-}
-
-/// The truth's polynomial `sum p_m dt^m` (dt = T - 25) written in `x = (T - t0) / half`.
-fn in_x(p: &[f64], scale: &Scale) -> Vec<f64> {
-    // dt = a + h x
-    let (a, h) = (scale.center() - 25.0, scale.half());
-    let mut out = vec![0.0; p.len()];
-    let binomial =
-        |n: usize, k: usize| (0..k).fold(1.0, |c, i| c * (n - i) as f64 / (i + 1) as f64);
-    for (m, pm) in p.iter().enumerate() {
-        for (k, o) in out.iter_mut().enumerate().take(m + 1) {
-            *o += pm * binomial(m, k) * a.powi((m - k) as i32) * h.powi(k as i32);
-        }
-    }
-    out
 }
 
 #[test]
@@ -344,7 +341,7 @@ fn coverage(uneven: bool) {
             opts.thermal = Thermal::Continuous;
             opts.created = Some(0);
             let c = single::calibrate(&opts, Quantity::Acceleration).unwrap();
-            let tf = c.thermal.as_ref().unwrap();
+            let tf = c.thermal.first().unwrap();
             // The truth in the fit's terms: the bias and the scale factor in x.
             let bias = legendre_of(&in_x(
                 &[truth.k0, truth.k0_temp, truth.k0_temp2, truth.k0_temp3],
@@ -584,7 +581,7 @@ fn a_still_unit_in_a_ramp_and_a_bench_run_at_one_temperature_make_one_calibratio
     let mut opts = Options::new(&path, "STILL");
     opts.created = Some(0);
     let c = single::calibrate(&opts, Quantity::Acceleration).unwrap();
-    let tf = c.thermal.as_ref().expect("a continuous model");
+    let tf = c.thermal.first().expect("a continuous model");
     assert_eq!(tf.orders[0], 3, "{:?}", tf.reasons);
     let input = tf
         .base

@@ -31,68 +31,34 @@ fn grid(tf: &ThermalFit, beyond: f64) -> Vec<f64> {
 /// # Errors
 /// A figure that cannot be drawn.
 pub fn section(c: &Calibrated) -> Result<String, String> {
-    let Some(tf) = &c.thermal else {
+    let Some(first) = c.thermal.first() else {
         return Ok(String::new());
     };
     let mut h = String::new();
     let _ = writeln!(h, "<h2>Temperature</h2>");
-    let _ = writeln!(h, "<ul>");
-    for r in &tf.reasons {
-        let _ = writeln!(h, "<li>temperature order of {}</li>", esc(r));
+    let several = c.thermal.len() > 1;
+    for tf in &c.thermal {
+        let axis = if several {
+            format!("{}: ", tf.fit.output)
+        } else {
+            String::new()
+        };
+        let _ = writeln!(h, "<ul>");
+        for r in &tf.reasons {
+            let _ = writeln!(h, "<li>{}temperature order of {}</li>", esc(&axis), esc(r));
+        }
+        let _ = writeln!(h, "</ul>");
+        coefficient_figures(&mut h, tf, &axis)?;
     }
-    let _ = writeln!(h, "</ul>");
+    // The corrected input's 1-sigma and the device's departure are drawn for a single axis;
+    // a triad's table is held to the same standard in the findings.
+    if several || !matches!(c.data.sensor, spincal::model::Sensor::Single { .. }) {
+        return Ok(h);
+    }
+    let tf = first;
     let names = tf.base.term_names();
     let temps = grid(tf, 0.0);
     let range = vec![(tf.scale.lo, tf.scale.hi)];
-    for (j, name) in names.iter().enumerate() {
-        let mut mid = Vec::new();
-        let mut upper = Vec::new();
-        let mut lower = Vec::new();
-        for t in &temps {
-            let (b, cov) = tf.coefficients_at(*t);
-            let se = cov[(j, j)].max(0.0).sqrt();
-            mid.push((*t, b[j]));
-            upper.push((*t, b[j] + 1.96 * se));
-            lower.push((*t, b[j] - 1.96 * se));
-        }
-        // The bias with each observation's partial residual: its residual about the model
-        // plus the bias at its temperature.
-        let observed: Vec<(f64, f64)> = if name == "1" {
-            tf.temps
-                .iter()
-                .zip(&tf.fit.fit.residuals)
-                .map(|(t, e)| (*t, tf.coefficients_at(*t).0[j] + e))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let what = if name == "1" {
-            "bias (counts)".to_string()
-        } else {
-            format!("{name} coefficient")
-        };
-        let mut series = vec![
-            Series::curve("model", &mid, 0),
-            Series::curve("95 % band", &upper, 1),
-            Series::curve("", &lower, 1),
-        ];
-        if !observed.is_empty() {
-            series.push(Series::dots("observations", &observed, 2));
-        }
-        let _ = writeln!(
-            h,
-            "<div class=\"fig\">{}</div>",
-            svg(&Figure {
-                title: &format!("{what} against temperature"),
-                x: "temperature (C)",
-                y: &what,
-                series,
-                bands: Vec::new(),
-                band_label: "",
-                zero_line: false,
-            })?
-        );
-    }
     let unit = c.units.first().copied().unwrap_or("");
     let range_in = c
         .ranges
@@ -172,4 +138,62 @@ pub fn section(c: &Calibrated) -> Result<String, String> {
         })?
     );
     Ok(h)
+}
+
+/// Each coefficient of `tf` against the temperature with its 95 % band (the bias with the
+/// observations' partial residuals), titled with `axis`.
+fn coefficient_figures(h: &mut String, tf: &ThermalFit, axis: &str) -> Result<(), String> {
+    let names = tf.base.term_names();
+    let temps = grid(tf, 0.0);
+    for (j, name) in names.iter().enumerate() {
+        let mut mid = Vec::new();
+        let mut upper = Vec::new();
+        let mut lower = Vec::new();
+        for t in &temps {
+            let (b, cov) = tf.coefficients_at(*t);
+            let se = cov[(j, j)].max(0.0).sqrt();
+            mid.push((*t, b[j]));
+            upper.push((*t, b[j] + 1.96 * se));
+            lower.push((*t, b[j] - 1.96 * se));
+        }
+        // The bias with each observation's partial residual: its residual about the model
+        // plus the bias at its temperature.
+        let observed: Vec<(f64, f64)> = if name == "1" {
+            tf.temps
+                .iter()
+                .zip(&tf.fit.fit.residuals)
+                .map(|(t, e)| (*t, tf.coefficients_at(*t).0[j] + e))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let what = if name == "1" {
+            "bias (counts)".to_string()
+        } else {
+            format!("{name} coefficient")
+        };
+        let title = format!("{axis}{what} against temperature");
+        let mut series = vec![
+            Series::curve("model", &mid, 0),
+            Series::curve("95 % band", &upper, 1),
+            Series::curve("", &lower, 1),
+        ];
+        if !observed.is_empty() {
+            series.push(Series::dots("observations", &observed, 2));
+        }
+        let _ = writeln!(
+            h,
+            "<div class=\"fig\">{}</div>",
+            svg(&Figure {
+                title: &title,
+                x: "temperature (C)",
+                y: &what,
+                series,
+                bands: Vec::new(),
+                band_label: "",
+                zero_line: false,
+            })?
+        );
+    }
+    Ok(())
 }

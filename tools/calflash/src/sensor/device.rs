@@ -7,13 +7,13 @@ use std::path::Path;
 use spincal::blob;
 use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
 use spincal::model::{
-    BoundedVec, Calibration, CalibrationData, Environment, Identity, Quantity, Sensor, Serial,
-    SingleSet, Span, TemperatureModel, TriadSet, rotation,
+    AxisNonlinearity, BoundedVec, Calibration, CalibrationData, Environment, Identity, ImuSet,
+    Quantity, Sensor, Serial, SingleSet, Span, TemperatureModel, TriadSet, rotation,
 };
 
 use super::invert::linearize;
 use super::table::Layout;
-use super::thermal::device::{DeviceSet, clenshaw};
+use super::thermal::device::{DeviceSet, clenshaw_rows};
 use super::{Options, PointFit, WorkflowError};
 use crate::columns as col;
 use crate::obs::Table;
@@ -148,12 +148,19 @@ fn f64_triad(set: &TriadSet, v: [f64; 3]) -> [f64; 3] {
 /// stored set, or for a temperature series its sum at that temperature in f64 after the blend
 /// along voltage (`spincal::model::TemperatureModel`); `None` when the series does not have a
 /// set per term and voltage point.
-fn single_set_at(
+/// A kind of set as a row of numbers, and back.
+type Row<T> = (fn(&T) -> Vec<f64>, fn(&[f64]) -> T);
+
+/// The set the device uses at `(t, volt)`: table point `k`'s as stored, or a series summed
+/// by Clenshaw in f64 (each coefficient through its row of numbers, `flat` and `back`);
+/// `None` when the series does not have the environment's shape.
+fn set_at<T: Copy>(
     env: &Environment,
-    sets: &[SingleSet],
+    sets: &[T],
     k: usize,
     (t, volt): (f32, f32),
-) -> Option<SingleSet> {
+    (flat, back): Row<T>,
+) -> Option<T> {
     let TemperatureModel::Chebyshev(n) = env.temperature_model else {
         return sets.get(k).copied();
     };
@@ -174,14 +181,78 @@ fn single_set_at(
     let x = ((f64::from(t) - 0.5 * (f64::from(span.lo) + f64::from(span.hi)))
         / (0.5 * (f64::from(span.hi) - f64::from(span.lo))))
     .clamp(-1.0, 1.0);
-    let fields = |s: &SingleSet| DeviceSet::from_set(s).to_array();
-    let terms: Vec<[f64; 7]> = (0..n)
+    let terms: Vec<Vec<f64>> = (0..n)
         .map(|k| {
-            let (a, b) = (fields(&sets[k * nv + v0]), fields(&sets[k * nv + v1]));
-            std::array::from_fn(|i| a[i] + (b[i] - a[i]) * w)
+            let (a, b) = (flat(&sets[k * nv + v0]), flat(&sets[k * nv + v1]));
+            a.iter().zip(&b).map(|(a, b)| a + (b - a) * w).collect()
         })
         .collect();
-    Some(DeviceSet::from_array(clenshaw(&terms, x), 0.0).set())
+    let rows: Vec<&[f64]> = terms.iter().map(|r| &r[..]).collect();
+    Some(back(&clenshaw_rows(&rows, x)))
+}
+
+/// A single axis' set as numbers, and back.
+const SINGLE_ROW: Row<SingleSet> = (
+    |s| DeviceSet::from_set(s).to_array().to_vec(),
+    |v| DeviceSet::from_array(std::array::from_fn(|i| v[i]), 0.0).set(),
+);
+
+/// A triad's set as numbers: per axis its five nonlinear terms, then the matrix by rows, then
+/// the offsets.
+#[must_use]
+pub fn triad_row(t: &TriadSet) -> Vec<f64> {
+    let mut v: Vec<f64> = Vec::with_capacity(27);
+    for a in &t.axes {
+        v.extend(
+            [
+                a.quadratic,
+                a.cubic,
+                a.odd_quadratic,
+                a.asymmetry,
+                a.asymmetry_break,
+            ]
+            .map(f64::from),
+        );
+    }
+    v.extend(t.matrix.as_flattened().iter().map(|x| f64::from(*x)));
+    v.extend(t.offset.map(f64::from));
+    v
+}
+
+/// [`triad_row`]'s inverse.
+#[must_use]
+pub fn triad_of_row(v: &[f64]) -> TriadSet {
+    TriadSet {
+        axes: std::array::from_fn(|i| {
+            let a = &v[5 * i..5 * i + 5];
+            AxisNonlinearity {
+                quadratic: a[0] as f32,
+                cubic: a[1] as f32,
+                odd_quadratic: a[2] as f32,
+                asymmetry: a[3] as f32,
+                asymmetry_break: a[4] as f32,
+            }
+        }),
+        matrix: std::array::from_fn(|i| std::array::from_fn(|j| v[15 + 3 * i + j] as f32)),
+        offset: std::array::from_fn(|i| v[24 + i] as f32),
+    }
+}
+
+/// An IMU's set as numbers: the accelerometer's and the gyro's [`triad_row`], then the
+/// g-sensitivity by rows.
+fn imu_row(s: &ImuSet) -> Vec<f64> {
+    let mut v = triad_row(&s.accel);
+    v.extend(triad_row(&s.gyro));
+    v.extend(s.g_sensitivity.as_flattened().iter().map(|x| f64::from(*x)));
+    v
+}
+
+fn imu_of_row(v: &[f64]) -> ImuSet {
+    ImuSet {
+        accel: triad_of_row(&v[..27]),
+        gyro: triad_of_row(&v[27..54]),
+        g_sensitivity: std::array::from_fn(|i| std::array::from_fn(|j| v[54 + 3 * i + j] as f32)),
+    }
 }
 
 /// Validates and encodes `data`, decodes the blob back as the device does, and runs the
@@ -228,26 +299,19 @@ pub fn build_and_check(
                 }),
         )
     };
-    if env.temperature_model != TemperatureModel::Table
-        && !matches!(data.sensor, Sensor::Single { .. })
-    {
-        return Err(WorkflowError::msg(
+    let not_this = || {
+        WorkflowError::msg(
             path,
-            "a temperature series is checked for single-axis sensors only",
-        ));
-    }
+            "the calibration's temperature series is not for this sensor",
+        )
+    };
     match &data.sensor {
         Sensor::Single { channel, sets, .. } => {
             let mut c =
                 AnyAxisCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
             for (k, p) in points.iter().enumerate() {
                 let (t, v) = at(p);
-                let Some(set) = single_set_at(env, sets, k, (t, v)) else {
-                    return Err(WorkflowError::msg(
-                        path,
-                        "the calibration's temperature series is not for this sensor",
-                    ));
-                };
+                let set = set_at(env, sets, k, (t, v), SINGLE_ROW).ok_or_else(not_this)?;
                 let set = &set;
                 c.set_environment(t, v);
                 let f = &p.axes[0];
@@ -269,8 +333,10 @@ pub fn build_and_check(
         Sensor::Triad { channels, sets, .. } => {
             let mut c =
                 AnyTriadCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
-            for (p, set) in points.iter().zip(sets.iter()) {
+            for (k, p) in points.iter().enumerate() {
                 let (t, v) = at(p);
+                let set = &set_at(env, sets, k, (t, v), (triad_row, triad_of_row))
+                    .ok_or_else(not_this)?;
                 c.set_environment(t, v);
                 for k in 0..500u32 {
                     let code: [i32; 3] =
@@ -291,8 +357,10 @@ pub fn build_and_check(
         } => {
             let mut c = AnyImuCorrector::new(&back, 1000.0)
                 .map_err(|e| WorkflowError::Message(e.to_string()))?;
-            for (p, set) in points.iter().zip(sets.iter()) {
+            for (k, p) in points.iter().enumerate() {
                 let (t, v) = at(p);
+                let set =
+                    &set_at(env, sets, k, (t, v), (imu_row, imu_of_row)).ok_or_else(not_this)?;
                 c.set_environment(t, v);
                 for k in 0..500u32 {
                     c.reset();

@@ -96,30 +96,37 @@ pub struct Record {
 /// two records of one unit meet at common temperatures whatever their device's series or
 /// table.
 fn model_points(c: &Calibrated) -> Vec<super::PointFit> {
-    let Some(tf) = &c.thermal else {
+    let Some(first) = c.thermal.first() else {
         return c.points.clone();
     };
-    let (lo, hi) = (tf.scale.lo, tf.scale.hi);
+    let (lo, hi) = (first.scale.lo, first.scale.hi);
     let mut temps: Vec<f64> = ((lo / 5.0).ceil() as i64..=(hi / 5.0).floor() as i64)
         .map(|k| 5.0 * k as f64)
         .collect();
     if temps.is_empty() {
         temps = vec![lo, hi];
     }
-    let noise = c.points.iter().map(|p| p.noise[0]).fold(0.0, f64::max);
-    let inversion = c
-        .points
-        .iter()
-        .map(|p| p.inversion_error[0])
-        .fold(0.0, f64::max);
+    // Per axis, the largest over the device's points.
+    let worst = |of: fn(&super::PointFit) -> &Vec<f64>| -> Vec<f64> {
+        (0..c.thermal.len())
+            .map(|k| {
+                c.points
+                    .iter()
+                    .filter_map(|p| of(p).get(k).copied())
+                    .fold(0.0, f64::max)
+            })
+            .collect()
+    };
+    let noise = worst(|p| &p.noise);
+    let inversion = worst(|p| &p.inversion_error);
     temps
         .iter()
         .map(|t| super::PointFit {
             temp: Some(*t),
             volt: None,
-            axes: vec![tf.at(*t)],
-            inversion_error: vec![inversion],
-            noise: vec![noise],
+            axes: c.thermal.iter().map(|tf| tf.at(*t)).collect(),
+            inversion_error: inversion.clone(),
+            noise: noise.clone(),
         })
         .collect()
 }

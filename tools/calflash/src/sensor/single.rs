@@ -514,7 +514,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         device_error,
         findings,
         earth: None,
-        thermal: thermal_fit,
+        thermal: thermal_fit.into_iter().collect(),
     })
 }
 

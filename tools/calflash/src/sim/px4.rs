@@ -128,7 +128,7 @@ pub fn run(s: &Scenario, seed: u64, dir: &Path, model: Option<&str>) -> Result<E
     let _ = std::fs::remove_file(&path);
     let tf = c
         .thermal
-        .as_ref()
+        .first()
         .ok_or("the ramp was not fitted with a continuous temperature model")?;
     let col = |n: &str| obs.column(n).unwrap_or_default();
     let px4 = Px4::fit(

@@ -181,6 +181,9 @@ pub struct TriadTruth {
     pub bias_temp: [f64; 3],
     /// Scale temperature coefficients, relative per degree C.
     pub scale_temp: [f64; 3],
+    /// Bias curvature in temperature, counts per degree C squared (`(T - 25)^2`).
+    #[serde(default, skip_serializing_if = "all_zero")]
+    pub bias_temp2: [f64; 3],
     /// Bias supply-voltage coefficients, counts per volt.
     pub bias_volt: [f64; 3],
     /// Supply voltage of the nominal coefficients.
@@ -214,6 +217,7 @@ impl TriadTruth {
             lever: [[0.0; 3]; 3],
             bias_temp: [0.35, 0.2, -0.5],
             scale_temp: [80e-6, 60e-6, -40e-6],
+            bias_temp2: [0.0; 3],
             bias_volt: [0.0; 3],
             ref_volt: 3.3,
             noise: [3.0, 3.0, 3.5],
@@ -242,6 +246,7 @@ impl TriadTruth {
             lever: [[0.0; 3]; 3],
             bias_temp: [0.8, -0.3, 0.1],
             scale_temp: [-120e-6, -100e-6, -90e-6],
+            bias_temp2: [0.0; 3],
             bias_volt: [0.0; 3],
             ref_volt: 3.3,
             noise: [2.0, 2.0, 2.0],
@@ -281,8 +286,18 @@ impl TriadTruth {
         let s = self.row(i, t)[i];
         let x = z / s;
         let nl = s * (self.k2[i] * x * x + self.k3[i] * x * x * x + self.koq[i] * x * x.abs());
-        self.bias[i] + self.bias_temp[i] * dt + self.bias_volt[i] * dv + z + nl
+        self.bias[i]
+            + self.bias_temp[i] * dt
+            + self.bias_temp2[i] * dt * dt
+            + self.bias_volt[i] * dv
+            + z
+            + nl
     }
+}
+
+/// Whether every element is zero (a term the truth file need not name).
+fn all_zero(v: &[f64; 3]) -> bool {
+    v.iter().all(|x| *x == 0.0)
 }
 
 /// An IMU: an accelerometer triad and a gyro triad.
@@ -323,6 +338,7 @@ impl ImuTruth {
                 ],
                 bias_temp: [0.0; 3],
                 scale_temp: [0.0; 3],
+                bias_temp2: [0.0; 3],
                 bias_volt: [0.0; 3],
                 ref_volt: 3.3,
                 noise: [2.0, 2.0, 2.0],
@@ -346,6 +362,7 @@ impl ImuTruth {
                 lever: [[0.0; 3]; 3],
                 bias_temp: [0.0; 3],
                 scale_temp: [0.0; 3],
+                bias_temp2: [0.0; 3],
                 bias_volt: [0.0; 3],
                 ref_volt: 3.3,
                 noise: [1.5, 1.5, 1.5],

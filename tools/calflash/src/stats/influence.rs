@@ -109,12 +109,7 @@ pub(super) fn compute(
         cooks_distance: dist::f_upper_quantile(0.5, pf, dof as f64),
         dffits: 2.0 * (pf / nf).sqrt(),
     };
-    let outliers = student_external
-        .iter()
-        .enumerate()
-        .filter(|(_, t)| t.abs() > thresholds.outlier)
-        .map(|(i, t)| (i, (nf * dist::t_two_sided(*t, dof as f64 - 1.0)).min(1.0)))
-        .collect();
+    let outliers = outlier_test(&student_external, thresholds.outlier, dof);
     let influential = (0..n)
         .filter_map(|i| {
             let mut rules = Vec::new();
@@ -143,5 +138,35 @@ pub(super) fn compute(
         outliers,
         influential,
         thresholds,
+    }
+}
+
+/// The Bonferroni outlier test of externally studentized residuals on `dof` residual degrees of
+/// freedom.
+fn outlier_test(student_external: &[f64], threshold: f64, dof: usize) -> Vec<(usize, f64)> {
+    let nf = student_external.len() as f64;
+    student_external
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t.abs() > threshold)
+        .map(|(i, t)| (i, (nf * dist::t_two_sided(*t, dof as f64 - 1.0)).min(1.0)))
+        .collect()
+}
+
+impl Influence {
+    /// Studentizes `residuals` again, and tests them for outliers, where residual `i` has
+    /// variance `s2 * variance[i]`: for a fit with sampling weights (the errors equal in
+    /// variance, the rows weighted to even out where observations crowd) the weighted fit's own
+    /// studentized residuals would treat a heavily weighted observation's residual as that
+    /// many times larger. The externally studentized residual uses the leave-one-out variance
+    /// `s2 (dof - r^2) / (dof - 1)`, exact for least squares and close for a weighted fit.
+    pub fn restudentize(&mut self, residuals: &[f64], variance: &[f64], s2: f64, dof: usize) {
+        let d = dof as f64;
+        for (i, (e, v)) in residuals.iter().zip(variance).enumerate() {
+            let r = e / (s2 * v).sqrt();
+            self.student_internal[i] = r;
+            self.student_external[i] = r * ((d - 1.0) / (d - r * r)).max(0.0).sqrt();
+        }
+        self.outliers = outlier_test(&self.student_external, self.thresholds.outlier, dof);
     }
 }

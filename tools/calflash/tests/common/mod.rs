@@ -16,3 +16,38 @@ pub fn calflash(dir: &Path, args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// A simulated truth's temperature polynomials in the terms of a continuous model's fit.
+#[allow(dead_code)] // used by the thermal tests only
+pub mod truth_in_legendre {
+    use calflash::sensor::thermal::Scale;
+
+    /// Monomial coefficients in `x` (up to `x^3`) as Legendre coefficients:
+    /// `x^2 = (2 P2 + P0) / 3`, `x^3 = (2 P3 + 3 P1) / 5`.
+    pub fn legendre_of(m: &[f64]) -> Vec<f64> {
+        let c = |k: usize| m.get(k).copied().unwrap_or(0.0);
+        let mut out = vec![
+            c(0) + c(2) / 3.0,
+            c(1) + 0.6 * c(3),
+            2.0 * c(2) / 3.0,
+            0.4 * c(3),
+        ];
+        out.truncate(m.len());
+        out
+    }
+
+    /// The truth's polynomial `sum p_m dt^m` (dt = T - 25) written in `x = (T - t0) / half`.
+    pub fn in_x(p: &[f64], scale: &Scale) -> Vec<f64> {
+        // dt = a + h x
+        let (a, h) = (scale.center() - 25.0, scale.half());
+        let mut out = vec![0.0; p.len()];
+        let binomial =
+            |n: usize, k: usize| (0..k).fold(1.0, |c, i| c * (n - i) as f64 / (i + 1) as f64);
+        for (m, pm) in p.iter().enumerate() {
+            for (k, o) in out.iter_mut().enumerate().take(m + 1) {
+                *o += pm * binomial(m, k) * a.powi((m - k) as i32) * h.powi(k as i32);
+            }
+        }
+        out
+    }
+}

@@ -185,12 +185,16 @@ pub struct DeviceTemperature {
     pub covariances: Vec<[f32; 3]>,
     /// The worst departure from the model in tenths of its 1-sigma, and where.
     pub ratio: (f64, f64),
-    /// The other form's figures, for the note: (sets, ratio).
-    pub other: (usize, f64),
+    /// The worst relative error of the device's stated 1-sigma against the model's, where it
+    /// is checked (a triad's or an IMU's form).
+    pub sigma_error: Option<f64>,
+    /// The other form's figures, for the note: (sets, ratio); `None` where the device holds
+    /// only tables (an IMU with lever arms).
+    pub other: Option<(usize, f64)>,
 }
 
 /// The `n` Chebyshev nodes over `scale`.
-fn nodes(scale: &Scale, n: usize) -> Vec<f64> {
+pub(crate) fn nodes(scale: &Scale, n: usize) -> Vec<f64> {
     (0..n)
         .map(|j| {
             let x = (std::f64::consts::PI * (j as f64 + 0.5) / n as f64).cos();
@@ -199,36 +203,60 @@ fn nodes(scale: &Scale, n: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Chebyshev coefficients of values at the `n` nodes (interpolation at the nodes).
-fn chebyshev<const K: usize>(values: &[[f64; K]]) -> Vec<[f64; K]> {
+/// Chebyshev coefficients of values at the `n` nodes (interpolation at the nodes), each value
+/// a row of numbers.
+pub(crate) fn chebyshev_rows(values: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let n = values.len();
+    let width = values.first().map_or(0, Vec::len);
     (0..n)
         .map(|k| {
             let w = if k == 0 { 1.0 } else { 2.0 } / n as f64;
-            std::array::from_fn(|i| {
-                w * values
-                    .iter()
-                    .enumerate()
-                    .map(|(j, v)| {
-                        v[i] * (std::f64::consts::PI * k as f64 * (j as f64 + 0.5) / n as f64).cos()
-                    })
-                    .sum::<f64>()
-            })
+            (0..width)
+                .map(|i| {
+                    w * values
+                        .iter()
+                        .enumerate()
+                        .map(|(j, v)| {
+                            v[i] * (std::f64::consts::PI * k as f64 * (j as f64 + 0.5) / n as f64)
+                                .cos()
+                        })
+                        .sum::<f64>()
+                })
+                .collect()
         })
+        .collect()
+}
+
+/// [`chebyshev_rows`] of fixed-width values.
+fn chebyshev<const K: usize>(values: &[[f64; K]]) -> Vec<[f64; K]> {
+    let rows: Vec<Vec<f64>> = values.iter().map(|v| v.to_vec()).collect();
+    chebyshev_rows(&rows)
+        .into_iter()
+        .map(|c| std::array::from_fn(|i| c[i]))
         .collect()
 }
 
 /// `sum c_k T_k(x)`, as the device sums it.
 pub(crate) fn clenshaw<const K: usize>(c: &[[f64; K]], x: f64) -> [f64; K] {
-    std::array::from_fn(|i| {
-        let (mut b1, mut b2) = (0.0, 0.0);
-        for ck in c.iter().skip(1).rev() {
-            let b = ck[i] + 2.0 * x * b1 - b2;
-            b2 = b1;
-            b1 = b;
-        }
-        c.first().map_or(0.0, |c0| c0[i]) + x * b1 - b2
-    })
+    let rows: Vec<&[f64]> = c.iter().map(|r| &r[..]).collect();
+    let v = clenshaw_rows(&rows, x);
+    std::array::from_fn(|i| v[i])
+}
+
+/// [`clenshaw`] of rows of numbers.
+pub(crate) fn clenshaw_rows(c: &[&[f64]], x: f64) -> Vec<f64> {
+    let width = c.first().map_or(0, |r| r.len());
+    (0..width)
+        .map(|i| {
+            let (mut b1, mut b2) = (0.0, 0.0);
+            for ck in c.iter().skip(1).rev() {
+                let b = ck[i] + 2.0 * x * b1 - b2;
+                b2 = b1;
+                b1 = b;
+            }
+            c.first().map_or(0.0, |c0| c0[i]) + x * b1 - b2
+        })
+        .collect()
 }
 
 /// The device's temperature dependence for a continuous model of one axis (inputs `lo..hi`,
@@ -341,7 +369,8 @@ pub fn choose(
             sets,
             covariances,
             ratio: table_ratio,
-            other: (n, series_ratio.0),
+            sigma_error: None,
+            other: Some((n, series_ratio.0)),
         });
     }
     let mut factors = Vec::new();
@@ -367,7 +396,8 @@ pub fn choose(
         sets,
         covariances,
         ratio: series_ratio,
-        other: (breaks.len(), table_ratio.0),
+        sigma_error: None,
+        other: Some((breaks.len(), table_ratio.0)),
     })
 }
 
@@ -380,23 +410,29 @@ pub fn finding(d: &DeviceTemperature, scale: &Scale) -> Finding {
         Some(n) => format!("Chebyshev series of {n} terms"),
         None => format!("table of {} temperatures", d.temps.len()),
     };
-    let other = match d.series {
-        Some(_) => format!(
-            "a table of {} temperatures would depart by up to {:.2} of it",
-            d.other.0,
-            0.1 * d.other.1
+    let other = match (d.series, d.other) {
+        (Some(_), Some((n, r))) => format!(
+            "a table of {n} temperatures would depart by up to {:.2} of it",
+            0.1 * r
         ),
-        None => format!(
-            "a series of {} terms would depart by up to {:.2} of it",
-            d.other.0,
-            0.1 * d.other.1
+        (None, Some((n, r))) => format!(
+            "a series of {n} terms would depart by up to {:.2} of it",
+            0.1 * r
         ),
+        (_, None) => "an IMU with lever arms gets a table".to_string(),
     };
-    if ratio <= 1.0 {
+    let stated = d.sigma_error.map_or(String::new(), |e| {
+        format!(
+            ", and states its 1-sigma within {:.1} % of the model's",
+            100.0 * e
+        )
+    });
+    let sigma_ok = d.sigma_error.is_none_or(|e| e <= 0.1);
+    if ratio <= 1.0 && sigma_ok {
         Finding {
             verdict: Verdict::Accept,
             text: format!(
-                "the device's {what} follows the continuous temperature model within {:.3} of its 1-sigma over {range} ({other})",
+                "the device's {what} follows the continuous temperature model within {:.3} of its 1-sigma over {range}{stated} ({other})",
                 0.1 * ratio
             ),
         }
@@ -404,7 +440,7 @@ pub fn finding(d: &DeviceTemperature, scale: &Scale) -> Finding {
         Finding {
             verdict: Verdict::Review,
             text: format!(
-                "the device's {what} (the most it holds) departs from the continuous temperature model by up to {:.2} of its 1-sigma (at {at:.1} C) over {range} ({other}): the temperature curve bends more than the device can follow",
+                "the device's {what} (the most it holds) departs from the continuous temperature model by up to {:.2} of its 1-sigma (at {at:.1} C) over {range}{stated} ({other}): the temperature curve bends more than the device can follow",
                 0.1 * ratio
             ),
         }
@@ -418,7 +454,7 @@ pub fn finding(d: &DeviceTemperature, scale: &Scale) -> Finding {
 pub fn breakpoints(
     scale: &Scale,
     max: usize,
-    ratio: impl Fn(&[f64]) -> (f64, f64),
+    mut ratio: impl FnMut(&[f64]) -> (f64, f64),
 ) -> (Vec<f64>, (f64, f64)) {
     let mut points = vec![scale.lo, scale.hi];
     loop {

@@ -10,15 +10,19 @@
 //! regressions (Gauss-Newton for the lever arms). The device applies
 //! `y = S^-1 (u - (b - center))`, `G = S^-1 g`, and the lever arms `r_i` as fitted.
 
-use nalgebra::{DMatrix, Matrix3};
+use nalgebra::Matrix3;
 use spincal::model::{
-    AxisNonlinearity, BoundedVec, CalibrationData, Channel, ImuCovariance, ImuOutputCovariance,
-    ImuSet, Quantity, Sensor, Span, TriadCovariance, TriadSet,
+    BoundedVec, CalibrationData, Channel, ImuCovariance, ImuOutputCovariance, ImuSet,
+    MAX_TEMPERATURES, Quantity, Sensor, Span, TemperatureModel, TriadCovariance, TriadSet,
 };
 
-use super::invert::{Own, TriadDevice, TriadForward, linearization, triad_inversion_error};
+mod sets;
+mod thermal;
+
+use self::sets::device_sets;
 use super::table::{self, Layout};
-use super::{AxisFit, Calibrated, Options, PointFit, WorkflowError, covariance, device, lever};
+use super::thermal::{self as continuous, ThermalFit};
+use super::{AxisFit, Calibrated, Options, PointFit, Thermal, WorkflowError, device, lever};
 use crate::columns as col;
 use crate::formula::{self, Formula};
 use crate::obs::{self, Table};
@@ -51,6 +55,8 @@ struct TriadResult {
     lever: Option<[[f64; 3]; 3]>,
     centers: [f64; 3],
     ranges: [Span; 3],
+    /// Per axis, the continuous temperature model.
+    thermal: Option<[ThermalFit; 3]>,
 }
 
 struct Spec<'a> {
@@ -76,11 +82,19 @@ fn fit_one(
     formula: &Formula,
     t: &Table,
     own: &str,
-    alpha: f64,
-    path: &std::path::Path,
+    opts: &Options,
     where_: &str,
+    weights: Option<&[f64]>,
 ) -> Result<AxisFit, WorkflowError> {
-    AxisFit::fit(formula, t, own, alpha, (path, where_), true)
+    AxisFit::fit_weighted(
+        formula,
+        t,
+        own,
+        opts.alpha,
+        (&opts.file, where_),
+        true,
+        weights,
+    )
 }
 
 /// Fits axis `i` of a triad at one table point: one regression when the model is linear in
@@ -94,7 +108,7 @@ fn fit_axis(
     i: usize,
     lever_use: Option<&[bool; 3]>,
     opts: &Options,
-    where_: &str,
+    (where_, weights): (&str, Option<&[f64]>),
 ) -> Result<AxisFit, WorkflowError> {
     let iterate = lever_use.is_some() || spec.nonlinear;
     let mut est = lever::Estimate::start(i);
@@ -108,7 +122,7 @@ fn fit_axis(
             lever_use,
             spec.nonlinear,
         );
-        let fit = fit_one(formula, &at, spec.inputs[i], opts.alpha, &opts.file, where_)?;
+        let fit = fit_one(formula, &at, spec.inputs[i], opts, where_, weights)?;
         if !iterate {
             return Ok(fit);
         }
@@ -168,17 +182,155 @@ fn lever_notes(estimable: &[[bool; 3]; 3], notes: &mut Vec<String>) {
     }
 }
 
-fn triad(
+/// How a triad's coefficients follow the temperature.
+#[derive(Clone, Copy)]
+enum Temperature<'a> {
+    /// A fit at each point of the table.
+    Points(&'a Layout),
+    /// One fit over every observation, each coefficient a polynomial in the temperature
+    /// (`sensor::thermal`).
+    Continuous(&'a continuous::Prepared),
+}
+
+/// Where a continuous model's fits are said to be.
+const ALL: &str = "all temperatures";
+
+/// A triad's fitted model, before the device's sets.
+struct TriadModel {
+    /// Per table point, per axis; empty for a continuous model.
+    fits: Vec<[AxisFit; 3]>,
+    /// Per axis, the continuous temperature model.
+    thermal: Option<[ThermalFit; 3]>,
+    /// Lever arms (reference point), accelerometer only.
+    lever: Option<[[f64; 3]; 3]>,
+    centers: [f64; 3],
+    ranges: [Span; 3],
+}
+
+/// Axis `i`'s preset formula, its terms chosen on the first step's regressors at the reference
+/// (`ref_table`, every observation for a continuous model, whose bias and own scale factor
+/// meanwhile follow the temperature at the highest order the observations can estimate).
+#[allow(clippy::too_many_arguments)]
+fn axis_formula(
     spec: &Spec<'_>,
-    table: &Table,
-    layout: &Layout,
+    i: usize,
+    ref_table: &Table,
+    (ref_where, weights): (&str, Option<&[f64]>),
+    estimable: Option<&[[bool; 3]; 3]>,
+    support: Option<&continuous::Support>,
     opts: &Options,
     notes: &mut Vec<String>,
-) -> Result<TriadResult, WorkflowError> {
+) -> Result<Formula, WorkflowError> {
+    let inputs = format!(
+        "{} + {} + {}",
+        spec.inputs[0], spec.inputs[1], spec.inputs[2]
+    );
+    let mut text = format!("{} ~ 1 + {inputs}", spec.outputs[i]);
+    if spec.nonlinear {
+        let n = lever::SENSED;
+        text.push_str(&format!(" + {n}^2 + {n}^3 + {n}:abs({n})"));
+    }
+    if spec.g_sens {
+        text.push_str(&format!(" + {} + {} + {}", col::F[0], col::F[1], col::F[2]));
+    }
+    if let Some(e) = estimable {
+        for k in (0..3).filter(|k| e[i][*k]) {
+            text.push_str(&format!(" + {}", lever::column(i, k)));
+        }
+    }
+    notes.push(format!("preset expands {} to: {text}", spec.outputs[i]));
+    let base = formula::parse(&text)?;
+    let first = lever::axis_table(
+        ref_table,
+        spec.gyro,
+        i,
+        spec.outputs[i],
+        &lever::Estimate::start(i),
+        estimable.map(|e| &e[i]),
+        spec.nonlinear,
+    );
+    let fit = |f: &Formula| fit_one(f, &first, spec.inputs[i], opts, ref_where, weights);
+    let mut f = match support {
+        Some(s) => {
+            let linear = formula::parse(&format!("{} ~ 1 + {inputs}", spec.outputs[i]))?;
+            let bias = continuous::estimable(&linear, 0, s.max_order, &[], &fit);
+            let own = continuous::estimable(&linear, 1 + i, s.max_order, &[bias], &fit);
+            let orders: Vec<u32> = base
+                .term_names()
+                .iter()
+                .map(|n| match n.as_str() {
+                    "1" => bias,
+                    n if n == spec.inputs[i] => own,
+                    _ => 0,
+                })
+                .collect();
+            continuous::expand(&base, &orders)
+        }
+        None => base,
+    };
+    fit(&f)?;
+    if !opts.keep_all_terms {
+        let d = f.design(&first);
+        let sopts = stats::Options {
+            alpha: opts.alpha,
+            ..stats::Options::default()
+        };
+        let ff = f.clone();
+        let e = select::backward(
+            &d.x,
+            &d.y,
+            &d.names,
+            true,
+            &sopts,
+            opts.alpha,
+            |names, j| {
+                let n = &names[j];
+                if n == "1" || spec.inputs.contains(&n.as_str()) || continuous::is_thermal(n) {
+                    return false;
+                }
+                let Some(t) = ff.terms.iter().find(|t| &t.name() == n) else {
+                    return false;
+                };
+                !ff.terms
+                    .iter()
+                    .filter(|o| names.contains(&o.name()))
+                    .any(|o| Formula::contains(o, t))
+            },
+        )
+        .map_err(|e| WorkflowError::Message(e.to_string()))?;
+        for s in &e.steps {
+            notes.push(format!(
+                "{}: dropped {} (p = {:.3} > {})",
+                spec.outputs[i], s.dropped, s.p_value, opts.alpha
+            ));
+            f = f.without(&s.dropped);
+        }
+    }
+    Ok(continuous::base_of(&f))
+}
+
+/// Fits a triad: its terms, then a fit at each table point or one continuous temperature model
+/// per axis, and the channels (centres and calibrated ranges) from the reference.
+fn fit_triad(
+    spec: &Spec<'_>,
+    table: &Table,
+    temperature: Temperature<'_>,
+    opts: &Options,
+    notes: &mut Vec<String>,
+) -> Result<TriadModel, WorkflowError> {
     let path = &opts.file;
-    let reference = layout.reference();
-    let ref_table = table.select(&layout.points[reference].rows);
-    let ref_where = table::describe(&layout.points[reference]);
+    let (ref_table, ref_where, weights, support) = match temperature {
+        Temperature::Points(layout) => {
+            let p = &layout.points[layout.reference()];
+            (table.select(&p.rows), table::describe(p), None, None)
+        }
+        Temperature::Continuous(prep) => (
+            table.clone(),
+            ALL.to_string(),
+            prep.weights.as_deref(),
+            Some(&prep.support),
+        ),
+    };
     let estimable = spec
         .lever
         .then(|| lever::estimable(lever::motion(table).into_iter()));
@@ -187,74 +339,16 @@ fn triad(
     }
     let mut formulas = Vec::new();
     for i in 0..3 {
-        let mut text = format!(
-            "{} ~ 1 + {} + {} + {}",
-            spec.outputs[i], spec.inputs[0], spec.inputs[1], spec.inputs[2]
-        );
-        if spec.nonlinear {
-            let n = lever::SENSED;
-            text.push_str(&format!(" + {n}^2 + {n}^3 + {n}:abs({n})"));
-        }
-        if spec.g_sens {
-            text.push_str(&format!(" + {} + {} + {}", col::F[0], col::F[1], col::F[2]));
-        }
-        if let Some(e) = &estimable {
-            for k in (0..3).filter(|k| e[i][*k]) {
-                text.push_str(&format!(" + {}", lever::column(i, k)));
-            }
-        }
-        notes.push(format!("preset expands {} to: {text}", spec.outputs[i]));
-        let mut f = formula::parse(&text)?;
-        // Terms are chosen on the first step's regressors at the reference point.
-        let first = lever::axis_table(
-            &ref_table,
-            spec.gyro,
+        formulas.push(axis_formula(
+            spec,
             i,
-            spec.outputs[i],
-            &lever::Estimate::start(i),
-            estimable.as_ref().map(|e| &e[i]),
-            spec.nonlinear,
-        );
-        fit_one(&f, &first, spec.inputs[i], opts.alpha, path, &ref_where)?;
-        if !opts.keep_all_terms {
-            let d = f.design(&first);
-            let sopts = stats::Options {
-                alpha: opts.alpha,
-                ..stats::Options::default()
-            };
-            let linear: Vec<String> = spec.inputs.iter().map(|s| s.to_string()).collect();
-            let ff = f.clone();
-            let e = select::backward(
-                &d.x,
-                &d.y,
-                &d.names,
-                true,
-                &sopts,
-                opts.alpha,
-                |names, j| {
-                    let n = &names[j];
-                    if n == "1" || linear.contains(n) {
-                        return false;
-                    }
-                    let Some(t) = ff.terms.iter().find(|t| &t.name() == n) else {
-                        return false;
-                    };
-                    !ff.terms
-                        .iter()
-                        .filter(|o| names.contains(&o.name()))
-                        .any(|o| Formula::contains(o, t))
-                },
-            )
-            .map_err(|e| WorkflowError::Message(e.to_string()))?;
-            for s in &e.steps {
-                notes.push(format!(
-                    "{}: dropped {} (p = {:.3} > {})",
-                    spec.outputs[i], s.dropped, s.p_value, opts.alpha
-                ));
-                f = f.without(&s.dropped);
-            }
-        }
-        formulas.push(f);
+            &ref_table,
+            (&ref_where, weights),
+            estimable.as_ref(),
+            support,
+            opts,
+            notes,
+        )?);
     }
     // The lever components each axis' formula kept.
     let lever_use: Option<[[bool; 3]; 3]> = estimable.map(|_| {
@@ -267,31 +361,51 @@ fn triad(
             })
         })
     });
-
-    let mut fits: Vec<[AxisFit; 3]> = Vec::new();
-    for p in &layout.points {
-        let t = table.select(&p.rows);
-        let w = table::describe(p);
-        let one = |i: usize| {
-            fit_axis(
-                spec,
-                &formulas[i],
-                &t,
-                i,
-                lever_use.as_ref().map(|u| &u[i]),
-                opts,
-                &w,
-            )
-        };
-        fits.push([one(0)?, one(1)?, one(2)?]);
-    }
-    let s_of = |f: &[AxisFit; 3]| Matrix3::from_fn(|i, j| f[i].coef(spec.inputs[j]));
-    let b_of = |f: &[AxisFit; 3]| [f[0].coef("1"), f[1].coef("1"), f[2].coef("1")];
-    let lever_of = |f: &[AxisFit; 3]| -> [[f64; 3]; 3] {
-        std::array::from_fn(|i| std::array::from_fn(|k| f[i].coef(&lever::column(i, k))))
+    let one = |f: &Formula, t: &Table, i: usize, at: (&str, Option<&[f64]>)| {
+        fit_axis(spec, f, t, i, lever_use.as_ref().map(|u| &u[i]), opts, at)
     };
-    let lever_arm = lever_use.map(|_| lever_of(&fits[reference]));
-    let ranges = calibrated_ranges(spec, table, &s_of(&fits[reference]), lever_arm.as_ref());
+    let mut fits: Vec<[AxisFit; 3]> = Vec::new();
+    // The model the channels are taken from: the reference point's, or the continuous model's
+    // at the middle of the calibrated temperatures.
+    let (thermal_fits, reference) = match temperature {
+        Temperature::Points(layout) => {
+            for p in &layout.points {
+                let t = table.select(&p.rows);
+                let w = table::describe(p);
+                let at = |i: usize| one(&formulas[i], &t, i, (&w, None));
+                fits.push([at(0)?, at(1)?, at(2)?]);
+            }
+            let reference = fits[layout.reference()].clone();
+            (None, reference)
+        }
+        Temperature::Continuous(prep) => {
+            let temps = table.column(col::TEMP).unwrap_or_default();
+            let axis = |i: usize, notes: &mut Vec<String>| {
+                let tf = continuous::choose(
+                    &formulas[i],
+                    (&prep.support, temps),
+                    opts.alpha,
+                    opts.thermal_order,
+                    &|f| one(f, table, i, (ALL, weights)),
+                )?;
+                notes.extend(
+                    tf.reasons
+                        .iter()
+                        .map(|r| format!("{}: temperature order of {r}", spec.outputs[i])),
+                );
+                Ok::<_, WorkflowError>(tf)
+            };
+            let tfs = [axis(0, notes)?, axis(1, notes)?, axis(2, notes)?];
+            let mid = prep.support.scale.center();
+            let reference = [tfs[0].at(mid), tfs[1].at(mid), tfs[2].at(mid)];
+            (Some(tfs), reference)
+        }
+    };
+    // No lever arm when the plan estimates none or every component was dropped.
+    let lever_arm = lever_use
+        .filter(|u| u.iter().flatten().any(|kept| *kept))
+        .map(|_| lever_of(&reference));
+    let ranges = calibrated_ranges(spec, table, &s_of(spec, &reference), lever_arm.as_ref());
     for (j, r) in ranges.iter().enumerate() {
         if r.lo >= r.hi {
             return Err(WorkflowError::msg(
@@ -303,180 +417,25 @@ fn triad(
             ));
         }
     }
-    let centers = b_of(&fits[reference]);
-    let mut out = TriadResult {
-        fits: Vec::new(),
-        sets: Vec::new(),
-        covs: Vec::new(),
-        imu_covs: Vec::new(),
-        errors: Vec::new(),
-        noise: Vec::new(),
-        g: Vec::new(),
+    Ok(TriadModel {
+        fits,
+        thermal: thermal_fits,
         lever: lever_arm,
-        centers,
+        centers: b_of(&reference),
         ranges,
-    };
-    for (f, p) in fits.iter().zip(&layout.points) {
-        let s = s_of(f);
-        let b = b_of(f);
-        let t = table.select(&p.rows);
-        let inv = s.try_inverse().ok_or_else(|| {
-            WorkflowError::msg(
-                path,
-                "the fitted sensitivity matrix is singular: the plan does not separate the axes",
-            )
-        })?;
-        let own = |i: usize| Own {
-            bias: b[i],
-            slope: s[(i, i)],
-            c2: f[i].coef(&format!("{}^2", lever::SENSED)),
-            c3: f[i].coef(&format!("{}^3", lever::SENSED)),
-            coq: f[i].coef(&format!("{0}:abs({0})", lever::SENSED)),
-            ..Own::default()
-        };
-        // What each axis senses (SI, along itself) over the calibrated box, the data's own
-        // sensed inputs included: the span its linearisation must cover.
-        let corners = box_corners(&ranges);
-        let fitted: [_; 3] = std::array::from_fn(|i| {
-            let sensed = |x: &[f64; 3]| (0..3).map(|j| s[(i, j)] * x[j]).sum::<f64>() / s[(i, i)];
-            let (lo, hi) = corners
-                .iter()
-                .map(sensed)
-                .chain(sensed_values(spec, &t, i, &f[i]))
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                    (lo.min(v), hi.max(v))
-                });
-            linearization(&own(i), centers[i], lo, hi)
-        });
-        let lins: [[f64; 5]; 3] = fitted.map(|f| f.n);
-        // y = S^-1 (L - (b - center)), L_j = alpha_j + gamma_j u_j: the device's matrix is
-        // S^-1 diag(gamma) and its offset S^-1 (alpha - (b - center)).
-        let m = Matrix3::from_fn(|i, j| inv[(i, j)] * fitted[j].gamma);
-        let off: [f64; 3] = std::array::from_fn(|i| {
-            (0..3)
-                .map(|k| inv[(i, k)] * (fitted[k].alpha - (b[k] - centers[k])))
-                .sum::<f64>()
-        });
-        let err = triad_inversion_error(
-            &TriadForward {
-                s,
-                own: std::array::from_fn(own),
-            },
-            &TriadDevice {
-                lins,
-                centers,
-                m,
-                off,
-            },
-            &ranges.map(|r| (f64::from(r.lo), f64::from(r.hi))),
-        );
-        let cov_of = |i: usize| {
-            let idx: Vec<usize> = std::iter::once("1")
-                .chain(spec.inputs)
-                .map(|t| f[i].index(t).unwrap_or(0))
-                .collect();
-            DMatrix::from_fn(4, 4, |r, c| f[i].fit.covariance[(idx[r], idx[c])])
-        };
-        let md = DMatrix::from_fn(3, 3, |i, j| m[(i, j)]);
-        let inv_d = DMatrix::from_fn(3, 3, |i, j| inv[(i, j)]);
-        let at = table::describe(p);
-        let located = |e: covariance::CovarianceError| {
-            WorkflowError::msg(path, format!("{} at {at}: {e}", spec.outputs.join(" ")))
-        };
-        let factors = covariance::triad(&inv_d, &[cov_of(0), cov_of(1), cov_of(2)], &md, &off)
-            .map_err(located)?;
-        out.imu_covs.push([
-            imu_covariance(spec, &f[0], 0).map_err(located)?,
-            imu_covariance(spec, &f[1], 1).map_err(located)?,
-            imu_covariance(spec, &f[2], 2).map_err(located)?,
-        ]);
-        out.covs.push(std::array::from_fn(|i| {
-            std::array::from_fn(|k| factors[i][k] as f32)
-        }));
-        out.sets.push(TriadSet {
-            axes: std::array::from_fn(|i| AxisNonlinearity {
-                quadratic: lins[i][0] as f32,
-                cubic: lins[i][1] as f32,
-                odd_quadratic: lins[i][2] as f32,
-                asymmetry: 0.0,
-                asymmetry_break: 0.0,
-            }),
-            matrix: std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)] as f32)),
-            offset: off.map(|o| o as f32),
-        });
-        out.errors.push(err);
-        out.noise.push(std::array::from_fn(|i| {
-            f[i].fit.sigma2.sqrt() / s[(i, i)].abs()
-        }));
-        if spec.g_sens {
-            let gout = Matrix3::from_fn(|i, j| f[i].coef(col::F[j]));
-            let g = inv * gout;
-            out.g
-                .push(std::array::from_fn(|i| std::array::from_fn(|j| g[(i, j)])));
-        }
-    }
-    out.fits = fits;
-    Ok(out)
+    })
 }
 
-/// Axis `i`'s factor over the IMU's features of its output
-/// (`spincal::model::IMU_FEATURES`): bias, sensitivity row, lever arm (its regressor is
-/// `S_ii` times the device's feature) or g-sensitivity row, g-squared term.
-fn imu_covariance(
-    spec: &Spec<'_>,
-    fit: &AxisFit,
-    i: usize,
-) -> Result<ImuOutputCovariance, covariance::CovarianceError> {
-    let slope = fit.coef(spec.inputs[i]);
-    let sq = format!("{}^2", lever::SENSED);
-    let levers: [String; 3] = std::array::from_fn(|k| lever::column(i, k));
-    let [i0, i1, i2] = spec.inputs;
-    let (names, scale) = if spec.gyro {
-        let [f0, f1, f2] = col::F;
-        (
-            [
-                Some("1"),
-                Some(i0),
-                Some(i1),
-                Some(i2),
-                Some(f0),
-                Some(f1),
-                Some(f2),
-                Some(sq.as_str()),
-            ],
-            [1.0; 8],
-        )
-    } else {
-        (
-            [
-                Some("1"),
-                Some(i0),
-                Some(i1),
-                Some(i2),
-                Some(levers[0].as_str()),
-                Some(levers[1].as_str()),
-                Some(levers[2].as_str()),
-                Some(sq.as_str()),
-            ],
-            [1.0, 1.0, 1.0, 1.0, slope, slope, slope, 1.0],
-        )
-    };
-    covariance::imu_output(&fit.fit, &names, &scale, slope)
+fn s_of(spec: &Spec<'_>, f: &[AxisFit; 3]) -> Matrix3<f64> {
+    Matrix3::from_fn(|i, j| f[i].coef(spec.inputs[j]))
 }
 
-/// What axis `i` sensed (SI, along itself) at each observation of `t`, under its fit.
-fn sensed_values(spec: &Spec<'_>, t: &Table, i: usize, fit: &AxisFit) -> Vec<f64> {
-    let est = lever::Estimate {
-        s: spec.inputs.map(|n| fit.coef(n)),
-        r: std::array::from_fn(|k| fit.coef(&lever::column(i, k))),
-        g: if spec.gyro {
-            col::F.map(|n| fit.coef(n))
-        } else {
-            [0.0; 3]
-        },
-    };
-    let at = lever::axis_table(t, spec.gyro, i, spec.outputs[i], &est, None, true);
-    at.column(lever::SENSED).unwrap_or_default().to_vec()
+fn b_of(f: &[AxisFit; 3]) -> [f64; 3] {
+    [f[0].coef("1"), f[1].coef("1"), f[2].coef("1")]
+}
+
+fn lever_of(f: &[AxisFit; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|k| f[i].coef(&lever::column(i, k))))
 }
 
 /// Adds the Earth's rate at `station` to the reference rate of every observation
@@ -546,18 +505,6 @@ fn earth_neglected(fits: &[AxisFit; 3]) -> super::Finding {
             text: format!("{text}: below what this gyro resolves"),
         }
     }
-}
-
-/// The eight corners of the calibrated box.
-fn box_corners(ranges: &[Span; 3]) -> Vec<[f64; 3]> {
-    (0..8)
-        .map(|c| {
-            std::array::from_fn(|j| {
-                let r = ranges[j];
-                f64::from(if c & (1 << j) == 0 { r.lo } else { r.hi })
-            })
-        })
-        .collect()
 }
 
 /// The calibrated range of each output: what the device range-checks. For a gyro, the
@@ -683,39 +630,69 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         &table,
         has(col::TEMP).then_some(col::TEMP),
         has(col::VOLT).then_some(col::VOLT),
-    )
-    .map_err(|e| WorkflowError::msg(path, e))?;
-    if !table::exact_setpoints(&table, col::TEMP, &layout) {
+    );
+    let varies = |c: &str| {
+        table
+            .column(c)
+            .is_some_and(|v| v.iter().any(|x| *x != v[0]))
+    };
+    let spread = || {
         let temps = table.column(col::TEMP).unwrap_or_default();
-        let (lo, hi) = temps
+        temps
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
                 (a.min(*t), b.max(*t))
-            });
-        return Err(WorkflowError::msg(
-            path,
-            format!(
-                "the temperatures are spread from {lo:.1} to {hi:.1} C, as along a ramp, not held at setpoints: the continuous temperature model is fitted for single-axis sensors so far; a triad or an IMU needs its observations at a few exact temperatures (each reading within 1 C of its setpoint, the setpoints at least 3 C apart)"
-            ),
-        ));
-    }
+            })
+    };
+    let setpoints = layout.as_ref().is_ok_and(|l| {
+        l.temps.len() <= MAX_TEMPERATURES && table::exact_setpoints(&table, col::TEMP, l)
+    });
+    let continuous = match opts.thermal {
+        Thermal::Table => {
+            if !setpoints && varies(col::TEMP) {
+                let (lo, hi) = spread();
+                return Err(WorkflowError::msg(
+                    path,
+                    format!(
+                        "--thermal table: the temperatures are spread from {lo:.1} to {hi:.1} C, as along a ramp, not held at setpoints (each reading within 1 C of its setpoint, the setpoints at least 3 C apart); give --thermal continuous for a model that follows the temperature wherever the observations fall"
+                    ),
+                ));
+            }
+            false
+        }
+        Thermal::Continuous => true,
+        Thermal::Auto => varies(col::TEMP) && !setpoints,
+    };
+    let prepared = if continuous {
+        if varies(col::VOLT) {
+            return Err(WorkflowError::msg(
+                path,
+                "the supply voltage varies: a triad's or an IMU's continuous temperature model does not follow the voltage (a single axis' does); hold the supply at one voltage along the ramp, or take the observations at a few exact temperature and voltage setpoints",
+            ));
+        }
+        Some(continuous::prepare(&mut table, &mut notes)?)
+    } else {
+        None
+    };
+    let layout = match &prepared {
+        Some(_) => None,
+        None => Some(layout.map_err(|e| WorkflowError::msg(path, e))?),
+    };
+    let temperature = match (&prepared, &layout) {
+        (Some(p), _) => Temperature::Continuous(p),
+        (None, Some(l)) => Temperature::Points(l),
+        (None, None) => return Err(WorkflowError::Message("no temperature layout".into())),
+    };
+    let accel_spec = Spec {
+        outputs: col::A,
+        inputs: col::F,
+        gyro: false,
+        g_sens: false,
+        lever: accel_lever,
+        nonlinear,
+    };
     let accel = (kind != Kind::Gyro)
-        .then(|| {
-            triad(
-                &Spec {
-                    outputs: col::A,
-                    inputs: col::F,
-                    gyro: false,
-                    g_sens: false,
-                    lever: accel_lever,
-                    nonlinear,
-                },
-                &table,
-                &layout,
-                opts,
-                &mut notes,
-            )
-        })
+        .then(|| fit_triad(&accel_spec, &table, temperature, opts, &mut notes))
         .transpose()?;
     let gyro_g = kind != Kind::Accel && f_varies;
     if kind != Kind::Accel && !f_varies {
@@ -730,26 +707,109 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
                 .into(),
         );
     }
+    let gyro_spec = Spec {
+        outputs: col::GYRO,
+        inputs: col::W,
+        gyro: true,
+        g_sens: gyro_g,
+        lever: false,
+        nonlinear,
+    };
     let gyro = (kind != Kind::Accel)
-        .then(|| {
-            triad(
-                &Spec {
-                    outputs: col::GYRO,
-                    inputs: col::W,
-                    gyro: true,
-                    g_sens: gyro_g,
-                    lever: false,
-                    nonlinear,
+        .then(|| fit_triad(&gyro_spec, &table, temperature, opts, &mut notes))
+        .transpose()?;
+    let mut extra_findings = Vec::new();
+    let mut series_terms: Option<usize> = None;
+    // The points the device holds: the table's, or the temperatures its interpolation of the
+    // continuous model needs.
+    let layout = match (&prepared, layout) {
+        (_, Some(l)) => l,
+        (Some(p), None) => {
+            let held = continuous::Scale {
+                lo: f64::from(p.support.scale.lo as f32),
+                hi: f64::from(p.support.scale.hi as f32),
+            };
+            let parts: Vec<(&Spec<'_>, &TriadModel)> = accel
+                .iter()
+                .map(|m| (&accel_spec, m))
+                .chain(gyro.iter().map(|m| (&gyro_spec, m)))
+                .collect();
+            // The device proves an IMU's lever-arm directions per set of a table.
+            let series = accel
+                .as_ref()
+                .is_none_or(|a| a.lever.is_none() || gyro.is_none());
+            let choice = thermal::choose(&parts, &held, series, path)?;
+            extra_findings.push(continuous::device::finding(
+                &continuous::device::DeviceTemperature {
+                    temps: choice.temps.clone(),
+                    series: choice.series,
+                    sets: Vec::new(),
+                    covariances: Vec::new(),
+                    ratio: (choice.worst.departure, choice.worst.at),
+                    sigma_error: Some(choice.worst.sigma),
+                    other: choice.other,
                 },
-                &table,
-                &layout,
-                opts,
-                &mut notes,
-            )
-        })
+                &held,
+            ));
+            if !series {
+                notes.push("an IMU with lever arms: the device gets a table (it proves the lever term's sensing directions per set of one)".into());
+            }
+            series_terms = choice.series;
+            let temps = choice.temps;
+            Layout {
+                points: temps
+                    .iter()
+                    .map(|t| table::Point {
+                        temp: Some(*t),
+                        volt: None,
+                        rows: Vec::new(),
+                    })
+                    .collect(),
+                temps,
+                volts: Vec::new(),
+            }
+        }
+        (None, None) => return Err(WorkflowError::Message("no temperature layout".into())),
+    };
+    let sets_of = |spec: &Spec<'_>, model: TriadModel| {
+        let points = match &model.thermal {
+            Some(tfs) => layout
+                .points
+                .iter()
+                .map(|p| {
+                    let t = p.temp.unwrap_or_default();
+                    (
+                        [tfs[0].at(t), tfs[1].at(t), tfs[2].at(t)],
+                        table::describe(p),
+                        table.clone(),
+                    )
+                })
+                .collect(),
+            None => model
+                .fits
+                .iter()
+                .zip(&layout.points)
+                .map(|(f, p)| (f.clone(), table::describe(p), table.select(&p.rows)))
+                .collect(),
+        };
+        device_sets(spec, model, points, path)
+    };
+    let as_series = |r: TriadResult| match series_terms {
+        Some(_) => r.into_series(),
+        None => r,
+    };
+    let accel = accel
+        .map(|m| sets_of(&accel_spec, m).map(as_series))
+        .transpose()?;
+    let gyro = gyro
+        .map(|m| sets_of(&gyro_spec, m).map(as_series))
         .transpose()?;
 
-    let env = device::environment(&table, &layout, opts)?;
+    let mut env = device::environment(&table, &layout, opts)?;
+    if let Some(n) = series_terms {
+        env.temperatures = BoundedVec::new();
+        env.temperature_model = TemperatureModel::Chebyshev(n as u8);
+    }
     let identity = device::identity(opts)?;
     let channels = |t: &TriadResult| -> [Channel; 3] {
         std::array::from_fn(|j| Channel {
@@ -859,6 +919,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
     }
     let mut findings = super::findings(&points, &names, &units, opts, &output_errors);
     findings.extend(beyond);
+    findings.extend(extra_findings);
     if let (Some(g), None) = (&gyro, &opts.earth) {
         findings.push(earth_neglected(&g.fits[layout.reference()]));
     }
@@ -877,6 +938,11 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         device_error,
         findings,
         earth: opts.earth,
-        thermal: None,
+        thermal: accel
+            .iter()
+            .chain(gyro.iter())
+            .filter_map(|t| t.thermal.clone())
+            .flatten()
+            .collect(),
     })
 }
