@@ -12,8 +12,8 @@ use calflash::sensor::{AxisFit, Options, Thermal, single};
 use calflash::sim::ramp::Ramp;
 use calflash::sim::truth::SingleTruth;
 use calflash::sim::{self, Sensor, plan, px4};
-use common::calflash;
 use common::truth_in_legendre::{in_x, legendre_of};
+use common::{calflash, stated};
 use rayon::prelude::*;
 use spincal::correct::AnyAxisCorrector;
 use spincal::model::{Quantity, TemperatureModel};
@@ -21,13 +21,8 @@ use spincal::model::{Quantity, TemperatureModel};
 /// The chamber of the tests: -40 to 70 C in two hours, as even as asked.
 fn chamber(uneven: bool) -> Ramp {
     Ramp {
-        from: -40.0,
-        to: 70.0,
-        seconds: 7200.0,
         uneven,
-        lag: 0.0,
-        self_heating: None,
-        step: None,
+        ..Ramp::even(-40.0, 70.0, 7200.0)
     }
 }
 
@@ -409,18 +404,15 @@ fn coverage(uneven: bool) {
         "input:temp_leg1",
     ];
     for name in names {
-        let (n, hits) = seeds
-            .iter()
-            .flat_map(|s| &s.covered)
-            .filter(|(t, _)| t == name)
-            .fold((0, 0), |(n, h), (_, ok)| (n + 1, h + usize::from(*ok)));
+        let (n, hits) = stated::covered(seeds.iter().flat_map(|s| &s.covered), name);
         let rate = hits as f64 / n as f64;
-        let (n1, h1) = seeds
-            .iter()
-            .filter(|s| s.orders == [3, 1])
-            .flat_map(|s| &s.covered)
-            .filter(|(t, _)| t == name)
-            .fold((0, 0), |(n, h), (_, ok)| (n + 1, h + usize::from(*ok)));
+        let (n1, h1) = stated::covered(
+            seeds
+                .iter()
+                .filter(|s| s.orders == [3, 1])
+                .flat_map(|s| &s.covered),
+            name,
+        );
         println!(
             "{name}: 95 % intervals cover the truth in {hits} of {n} fits ({rate:.3}); {h1} of {n1} where the orders are right"
         );
@@ -430,15 +422,7 @@ fn coverage(uneven: bool) {
         }
     }
     let z: Vec<f64> = seeds.iter().flat_map(|s| s.z.iter().copied()).collect();
-    let within = |k: f64| z.iter().filter(|v| v.abs() <= k).count() as f64 / z.len() as f64;
-    println!(
-        "device between its nodes: {:.3} within 1 sigma, {:.3} within 1.96 sigma ({} samples)",
-        within(1.0),
-        within(1.96),
-        z.len()
-    );
-    assert!((within(1.96) - 0.95).abs() <= 0.035, "{}", within(1.96));
-    assert!((within(1.0) - 0.683).abs() <= 0.06, "{}", within(1.0));
+    stated::assert_normal("device between its nodes", &z);
 }
 
 #[test]

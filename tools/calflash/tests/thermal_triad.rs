@@ -11,8 +11,8 @@ use calflash::sensor::{Options, Thermal, Verdict};
 use calflash::sim::ramp::Ramp;
 use calflash::sim::truth::{ImuTruth, TriadTruth};
 use calflash::sim::{self, Sensor, plan};
-use common::calflash;
 use common::truth_in_legendre::{in_x, legendre_of};
+use common::{calflash, stated};
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 use spincal::correct::AnyTriadCorrector;
@@ -260,15 +260,7 @@ fn check(tf: &ThermalFit, name: &str, want: f64, covered: &mut Vec<(String, bool
 #[test]
 fn a_triads_stated_errors_cover_the_truth_over_200_ramps() {
     let truth = truth();
-    let ramp = Ramp {
-        from: -40.0,
-        to: 70.0,
-        seconds: 7200.0,
-        uneven: false,
-        lag: 0.0,
-        self_heating: None,
-        step: None,
-    };
+    let ramp = Ramp::even(-40.0, 70.0, 7200.0);
     let dir = tempfile::tempdir().unwrap();
     let conditions = plan::plan(&["tumble:24".into()], &[25.0], &[5.0], 10, false).unwrap();
     let (conditions, _) = sim::ramp::run(&ramp, &conditions);
@@ -286,24 +278,15 @@ fn a_triads_stated_errors_cover_the_truth_over_200_ramps() {
     );
     assert!(right as f64 >= 0.8 * n_seeds as f64, "{right}");
     for what in ["bias:temp_leg1", "bias:temp_leg2", "scale:temp_leg1"] {
-        let (n, hits) = seeds
-            .iter()
-            .flat_map(|s| &s.covered)
-            .filter(|(t, _)| t == what)
-            .fold((0, 0), |(n, h), (_, ok)| (n + 1, h + usize::from(*ok)));
+        let (n, hits) = stated::covered(seeds.iter().flat_map(|s| &s.covered), what);
         let rate = hits as f64 / n as f64;
         println!("{what}: 95 % intervals cover the truth in {hits} of {n} fits ({rate:.3})");
         assert!(n as u64 >= 3 * n_seeds * 9 / 10, "{what}: estimated in {n}");
         assert!((rate - 0.95).abs() <= 0.035, "{what}: coverage {rate:.3}");
     }
     let z: Vec<f64> = seeds.iter().flat_map(|s| s.z.iter().copied()).collect();
-    let within = |k: f64| z.iter().filter(|v| v.abs() <= k).count() as f64 / z.len() as f64;
-    println!(
-        "device between its series' nodes or table's temperatures: {:.3} within 1 sigma, {:.3} within 1.96 sigma ({} outputs)",
-        within(1.0),
-        within(1.96),
-        z.len()
+    stated::assert_normal(
+        "device between its series' nodes or table's temperatures",
+        &z,
     );
-    assert!((within(1.96) - 0.95).abs() <= 0.035, "{}", within(1.96));
-    assert!((within(1.0) - 0.683).abs() <= 0.06, "{}", within(1.0));
 }

@@ -199,15 +199,7 @@ pub fn scenarios() -> Vec<Scenario> {
         tanh_width: 12.0,
         ..linear
     };
-    let ramp = Ramp {
-        from: -40.0,
-        to: 70.0,
-        seconds: 7200.0,
-        uneven: false,
-        lag: 0.0,
-        self_heating: None,
-        step: None,
-    };
+    let ramp = Ramp::even(-40.0, 70.0, 7200.0);
     let one = |name, truth: &SingleTruth, ramp| Scenario {
         name,
         truth: truth.clone(),

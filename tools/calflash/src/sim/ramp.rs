@@ -38,6 +38,21 @@ pub struct Temperatures {
 }
 
 impl Ramp {
+    /// An even ramp from `from` to `to` C over `seconds`, the sensor at the chamber's
+    /// temperature and reading it exactly.
+    #[must_use]
+    pub fn even(from: f64, to: f64, seconds: f64) -> Self {
+        Self {
+            from,
+            to,
+            seconds,
+            uneven: false,
+            lag: 0.0,
+            self_heating: None,
+            step: None,
+        }
+    }
+
     /// The chamber's temperature at `u` of the ramp's time (0 to 1).
     #[must_use]
     pub fn chamber(&self, u: f64) -> f64 {

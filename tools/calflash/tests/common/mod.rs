@@ -51,3 +51,39 @@ pub mod truth_in_legendre {
         out
     }
 }
+
+/// Stated errors against simulated truths, pooled over seeds.
+#[allow(dead_code)] // used by the thermal tests only
+pub mod stated {
+    /// `(fits, covered)`: of the `(name, covered)` records, those of `name`.
+    pub fn covered<'a>(
+        records: impl Iterator<Item = &'a (String, bool)>,
+        name: &str,
+    ) -> (usize, usize) {
+        records
+            .filter(|(t, _)| t == name)
+            .fold((0, 0), |(n, h), (_, ok)| (n + 1, h + usize::from(*ok)))
+    }
+
+    /// Errors in their own stated 1-sigma (`z`) are normal: within 1 for 0.683 +- 0.06 of them
+    /// and within 1.96 for 0.95 +- 0.035; printed under `what`.
+    pub fn assert_normal(what: &str, z: &[f64]) {
+        let within = |k: f64| z.iter().filter(|v| v.abs() <= k).count() as f64 / z.len() as f64;
+        println!(
+            "{what}: {:.3} within 1 sigma, {:.3} within 1.96 sigma ({} outputs)",
+            within(1.0),
+            within(1.96),
+            z.len()
+        );
+        assert!(
+            (within(1.96) - 0.95).abs() <= 0.035,
+            "{what}: {}",
+            within(1.96)
+        );
+        assert!(
+            (within(1.0) - 0.683).abs() <= 0.06,
+            "{what}: {}",
+            within(1.0)
+        );
+    }
+}
