@@ -290,3 +290,141 @@ fn a_triads_stated_errors_cover_the_truth_over_200_ramps() {
         &z,
     );
 }
+
+/// A recording of `truth` at rest with gravity along `f` while the chamber ramps from -40 to
+/// 70 C, 10 samples a second for 20 minutes: `t`, the six counts and the temperature; `moved`
+/// turns the unit over from that sample on.
+fn still_recording(path: &std::path::Path, truth: &ImuTruth, moved: Option<usize>) {
+    let n = 12_000;
+    let pose = plan::Condition {
+        f: [0.0, 0.0, plan::G],
+        w: [0.0; 3],
+        dw: [0.0; 3],
+        h: [0.0; 3],
+        temp: 25.0,
+        volt: 5.0,
+        dir: 0.0,
+    };
+    let conditions: Vec<plan::Condition> = (0..n)
+        .map(|k| plan::Condition {
+            f: if moved.is_some_and(|m| k >= m) {
+                [plan::G, 0.0, 0.0]
+            } else {
+                pose.f
+            },
+            ..pose
+        })
+        .collect();
+    let (conditions, temps) = sim::ramp::run(&Ramp::even(-40.0, 70.0, 1200.0), &conditions);
+    let obs = sim::simulate(&Sensor::Imu(Box::new(truth.clone())), &conditions, 5, true);
+    let col = |name: &str| obs.names.iter().position(|n| n == name).unwrap();
+    let counts = ["a_x", "a_y", "a_z", "g_x", "g_y", "g_z"].map(col);
+    let mut text = String::from("t,ax,ay,az,gx,gy,gz,temp\n");
+    for (k, row) in obs.rows.iter().enumerate() {
+        let c: Vec<String> = counts
+            .iter()
+            .map(|i| format!("{}", row[*i].round()))
+            .collect();
+        text.push_str(&format!(
+            "{:.1},{},{:.3}\n",
+            temps.time[k],
+            c.join(","),
+            temps.reported[k]
+        ));
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn a_still_unit_recorded_in_a_ramp_and_a_bench_run_make_one_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Curved biases on both triads, drifting scale factors.
+    let mut truth = ImuTruth::default();
+    truth.accel.bias_temp2 = [-0.004, 0.003, 0.002];
+    truth.gyro.bias_temp2 = [0.003, -0.002, 0.001];
+    let bench = plan::plan(
+        &["tumble:24".into(), "rate:-10:10:5".into()],
+        &[25.0],
+        &[5.0],
+        3,
+        false,
+    )
+    .unwrap();
+    let obs = sim::simulate(&Sensor::Imu(Box::new(truth.clone())), &bench, 4, false);
+    obs.write_csv(std::fs::File::create(d.join("bench.csv")).unwrap())
+        .unwrap();
+    still_recording(&d.join("still.csv"), &truth, None);
+    let mut opts = Options::new(d.join("bench.csv"), "STILL-RAMP");
+    opts.created = Some(0);
+    opts.still_ramp = Some(d.join("still.csv"));
+    let c = triad::calibrate(&opts, Kind::Imu, false).unwrap();
+    assert!(c.verdict() <= Verdict::Review, "{:?}", c.findings);
+    assert!(
+        c.notes
+            .iter()
+            .any(|n| n.contains("the still pose's specific force")),
+        "{:?}",
+        c.notes
+    );
+    assert_eq!(c.thermal.len(), 6);
+    // Each axis' bias follows the truth's curve through the ramp (the accelerometer's z axis
+    // carries its scale factor's drift times g: one pose cannot tell them apart).
+    for t in [-30.0, 0.0, 40.0, 65.0] {
+        let dt = t - sim::truth::REF_TEMP;
+        for (k, tf) in c.thermal.iter().enumerate() {
+            let (triad, i) = if k < 3 {
+                (&truth.accel, k)
+            } else {
+                (&truth.gyro, k - 3)
+            };
+            let mut want = triad.bias[i] + triad.bias_temp[i] * dt + triad.bias_temp2[i] * dt * dt;
+            if k == 2 {
+                want += triad.s[2][2] * triad.scale_temp[2] * dt * plan::G;
+            }
+            let f = tf.at(t);
+            let i0 = f.index("1").unwrap();
+            let (got, se) = (f.fit.coefficients[i0], f.fit.std_errors[i0]);
+            assert!(
+                (got - want).abs() <= 4.0 * se,
+                "{} at {t} C: bias {got} vs truth {want} ({:.1} standard errors)",
+                tf.fit.output,
+                (got - want) / se
+            );
+        }
+    }
+    // What a still recording cannot be.
+    let run = |still: &str, bench: &str| {
+        let mut o = Options::new(d.join(bench), "STILL-RAMP");
+        o.still_ramp = Some(d.join(still));
+        triad::calibrate(&o, Kind::Imu, false)
+            .unwrap_err()
+            .to_string()
+    };
+    still_recording(&d.join("moved.csv"), &truth, Some(7000));
+    let e = run("moved.csv", "bench.csv");
+    assert!(
+        e.contains("moved.csv") && e.contains("line 7002") && e.contains("one still pose"),
+        "{e}"
+    );
+    let text = std::fs::read_to_string(d.join("still.csv")).unwrap();
+    let no_temp: String = text
+        .lines()
+        .map(|l| l.rsplit_once(',').unwrap().0.to_string() + "\n")
+        .collect();
+    std::fs::write(d.join("no_temp.csv"), no_temp).unwrap();
+    let e = run("no_temp.csv", "bench.csv");
+    assert!(
+        e.contains("no_temp.csv") && e.contains("no temperature column"),
+        "{e}"
+    );
+    let two = plan::plan(&["tumble:24".into()], &[25.0, 40.0], &[5.0], 1, false).unwrap();
+    sim::simulate(&Sensor::Imu(Box::new(truth.clone())), &two, 4, false)
+        .write_csv(std::fs::File::create(d.join("two.csv")).unwrap())
+        .unwrap();
+    let e = run("still.csv", "two.csv");
+    assert!(
+        e.contains("two.csv") && e.contains("span 25.0 to 40.0 C"),
+        "{e}"
+    );
+}

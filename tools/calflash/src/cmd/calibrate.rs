@@ -86,13 +86,20 @@ pub struct CalibrateArgs {
     /// width from 8 to 32 bits, or the rails LO:HI. Outputs at or beyond a rail are left out.
     #[arg(long, default_value = "unsigned16", value_parser = values::codes)]
     pub codes: Rails,
-    /// Single axis: how the coefficients follow the temperature (`temp` column).
+    /// How the coefficients follow the temperature (`temp` column).
     #[arg(long, value_enum, default_value = "auto")]
     pub thermal: ThermalArg,
-    /// Single axis, continuous temperature model: the order of every coefficient's temperature
-    /// polynomial (0 to 9) instead of choosing each from the data.
+    /// Continuous temperature model: the order of every coefficient's temperature polynomial
+    /// (0 to 9) instead of choosing each from the data.
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=9))]
     pub thermal_order: Option<u32>,
+    /// Triads and IMUs: a recording of the unit at rest in one pose while the temperature
+    /// sweeps (a timestamp, the counts and a temperature column, as `selfcal` reads them),
+    /// calibrated with DATA, a bench run at one temperature that passes through the ramp, into
+    /// one continuous temperature model: the biases follow the temperature, the scale factors
+    /// are the bench's.
+    #[arg(long, value_name = "FILE")]
+    pub still_ramp: Option<PathBuf>,
     /// Calibrated temperature span when the data have no temp column.
     #[arg(long, value_name = "LO:HI", default_value = "20:30")]
     pub temp_span: String,
@@ -158,6 +165,7 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         ThermalArg::Continuous => sensor::Thermal::Continuous,
     };
     opts.thermal_order = args.thermal_order;
+    opts.still_ramp.clone_from(&args.still_ramp);
     opts.model.clone_from(&args.model);
     opts.max_noise = args.max_noise;
     opts.rails = args.codes;
@@ -178,9 +186,9 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         args.sensor,
         SensorKind::SingleAccel | SensorKind::SingleGyro
     );
-    if !single && (args.thermal == ThermalArg::Continuous || args.thermal_order.is_some()) {
+    if single && args.still_ramp.is_some() {
         return Err(
-            "--thermal continuous and --thermal-order: the continuous temperature model is fitted for single-axis sensors; triads and IMUs take a fit per temperature setpoint"
+            "--still-ramp is for triads and IMUs; a single axis' still ramp goes in its observation file, with `input` at the still pose's value"
                 .into(),
         );
     }
@@ -292,7 +300,7 @@ fn summary(c: &sensor::Calibrated, args: &CalibrateArgs, blob_written: bool) -> 
     let _ = match c.data.environment.temperature_model {
         spincal::model::TemperatureModel::Chebyshev(n) => writeln!(
             s,
-            "  temperature series: {n} terms over {} to {} C; blob {} bytes",
+            "  temperature series: {n} terms over {:.1} to {:.1} C; blob {} bytes",
             c.data.environment.temperature_span.lo,
             c.data.environment.temperature_span.hi,
             c.blob.len()

@@ -137,6 +137,21 @@ pub struct Table {
 }
 
 impl Table {
+    /// Appends the rows of `other`, whose columns are this table's (by name); its lines are
+    /// its file's.
+    ///
+    /// # Panics
+    /// When `other` lacks one of this table's columns.
+    pub fn append(&mut self, other: &Table) {
+        for (name, column) in self.names.iter().zip(self.columns.iter_mut()) {
+            let theirs = other
+                .column(name)
+                .unwrap_or_else(|| panic!("appended table lacks the column {name}"));
+            column.extend_from_slice(theirs);
+        }
+        self.lines.extend_from_slice(&other.lines);
+    }
+
     /// Adds a derived column.
     pub fn push_column(&mut self, name: &str, values: Vec<f64>) {
         debug_assert_eq!(values.len(), self.len());

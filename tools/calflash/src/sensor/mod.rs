@@ -88,6 +88,9 @@ pub struct Options {
     /// The order of every coefficient's temperature polynomial, instead of choosing each from
     /// the data.
     pub thermal_order: Option<u32>,
+    /// A triad's or an IMU's recording at rest in one pose while the temperature sweeps,
+    /// calibrated with the file's bench run at one temperature (`triad::still`).
+    pub still_ramp: Option<PathBuf>,
 }
 
 /// How the coefficients vary with temperature.
@@ -124,6 +127,7 @@ impl Options {
             earth: None,
             thermal: Thermal::Auto,
             thermal_order: None,
+            still_ramp: None,
         }
     }
 }

@@ -404,7 +404,7 @@ pub fn choose(
 /// The finding on how closely the device follows the model.
 #[must_use]
 pub fn finding(d: &DeviceTemperature, scale: &Scale) -> Finding {
-    let range = format!("{} to {} C", scale.lo, scale.hi);
+    let range = format!("{:.1} to {:.1} C", scale.lo, scale.hi);
     let (ratio, at) = d.ratio;
     let what = match d.series {
         Some(n) => format!("Chebyshev series of {n} terms"),

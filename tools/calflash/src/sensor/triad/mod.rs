@@ -17,6 +17,7 @@ use spincal::model::{
 };
 
 mod sets;
+pub mod still;
 mod thermal;
 
 use self::sets::device_sets;
@@ -600,6 +601,16 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         .collect();
     let beyond = super::exclude_beyond_rails(&mut table, &outputs, &opts.rails, path)?;
     let mut notes = Vec::new();
+    if let Some(recording) = &opts.still_ramp {
+        if opts.earth.is_some() {
+            return Err(WorkflowError::msg(
+                recording,
+                "--still-ramp with --latitude: the still pose's heading is not known, so neither is the Earth's rate it senses; leave --latitude out (the gyro biases absorb it)",
+            ));
+        }
+        let still = still::observations(recording, kind, &table, opts, &mut notes)?;
+        table.append(&still);
+    }
     if let Some(station) = &opts.earth {
         add_earth_rate(&mut table, station, path)?;
         notes.push(format!(
