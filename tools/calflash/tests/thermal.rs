@@ -508,7 +508,7 @@ fn against_px4_the_error_is_halved_where_the_curve_is_not_a_cubic() {
     for s in &scenarios {
         let errors: Vec<px4::Errors> = (1..=3u64)
             .into_par_iter()
-            .map(|seed| px4::run(s, seed, dir.path(), None).unwrap())
+            .map(|seed| px4::run(s, seed, dir.path(), px4::Told::default()).unwrap())
             .collect();
         let rms = |f: fn(&px4::Errors) -> f64| {
             (errors.iter().map(|e| f(e).powi(2)).sum::<f64>() / errors.len() as f64).sqrt()

@@ -87,14 +87,23 @@ pub struct Errors {
     pub px4: f64,
 }
 
+/// What calflash is told of the sensor's model.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Told<'a> {
+    /// The model to fit instead of the preset.
+    pub model: Option<&'a str>,
+    /// Whether an asymmetric scale is left out instead of tested.
+    pub no_asymmetry: bool,
+}
+
 /// Runs one seed of a scenario: simulates the ramp into `dir`, calibrates it with `calflash
-/// calibrate`'s single-axis workflow (its preset, or `model`) and with PX4's model, and scores
-/// both on 37 temperatures between the observations' and 21 inputs over +-1 g, at the unit's
-/// true temperature.
+/// calibrate`'s single-axis workflow (its preset, or what it is `told`) and with PX4's model,
+/// and scores both on 37 temperatures between the observations' and 21 inputs over +-1 g, at
+/// the unit's true temperature.
 ///
 /// # Errors
 /// A calibration that fails, in words.
-pub fn run(s: &Scenario, seed: u64, dir: &Path, model: Option<&str>) -> Result<Errors, String> {
+pub fn run(s: &Scenario, seed: u64, dir: &Path, told: Told<'_>) -> Result<Errors, String> {
     let conditions = plan::plan(
         &["head:16".into()],
         &[25.0],
@@ -123,7 +132,10 @@ pub fn run(s: &Scenario, seed: u64, dir: &Path, model: Option<&str>) -> Result<E
     std::fs::write(&path, buf).map_err(|e| e.to_string())?;
     let mut opts = Options::new(&path, "PX4CMP");
     opts.created = Some(0);
-    opts.model = model.map(String::from);
+    opts.model = told.model.map(String::from);
+    if told.no_asymmetry {
+        opts.asymmetry = Some(false);
+    }
     let c = single::calibrate(&opts, Quantity::Acceleration).map_err(|e| e.to_string())?;
     let _ = std::fs::remove_file(&path);
     let tf = c
