@@ -103,6 +103,11 @@ fn an_imu_ramp_calibrates_into_a_series_or_with_lever_arms_a_table() {
     assert_eq!(env.temperature_span.lo, -40.0);
     let html = std::fs::read_to_string(d.join("imu.html")).unwrap();
     assert!(html.contains("<h2>Temperature</h2>") && html.contains("g_z: temperature order"));
+    assert!(html.contains("1-sigma calibration error of each corrected output"));
+    assert!(
+        html.contains("the device&#39;s Chebyshev series of")
+            || html.contains("the device's Chebyshev series of")
+    );
     let json = std::fs::read_to_string(d.join("imu.json")).unwrap();
     assert!(
         json.contains("\"temp\": 20.0"),

@@ -1,7 +1,8 @@
 //! The report's section on a continuous temperature model: each coefficient against the
 //! temperature with its 95 % band (the bias with the observations' partial residuals), the
 //! corrected input's 1-sigma over the temperature with the calibrated range marked, and how far
-//! the device's series or table departs from the model.
+//! the device's series or table departs from the model (a triad's or an IMU's: each output
+//! along its own axis; the departure for models without nonlinear terms or lever arms).
 
 use std::fmt::Write as _;
 
@@ -50,9 +51,8 @@ pub fn section(c: &Calibrated) -> Result<String, String> {
         let _ = writeln!(h, "</ul>");
         coefficient_figures(&mut h, tf, &axis)?;
     }
-    // The corrected input's 1-sigma and the device's departure are drawn for a single axis;
-    // a triad's table is held to the same standard in the findings.
     if several || !matches!(c.data.sensor, spincal::model::Sensor::Single { .. }) {
+        h.push_str(&triad_figures(c)?);
         return Ok(h);
     }
     let tf = first;
@@ -196,4 +196,169 @@ fn coefficient_figures(h: &mut String, tf: &ThermalFit, axis: &str) -> Result<()
         );
     }
     Ok(())
+}
+
+/// A triad's or an IMU's model at temperature `t`: per output axis its bias, its sensitivity
+/// row over its triad's inputs, and the 1-sigma of its corrected input along its own axis at
+/// `x`. `None` when a model has other terms than the bias, the sensitivity row and the
+/// g-sensitivity (nonlinear terms, lever arms): the device's departure is drawn for linear
+/// models only.
+fn linear_at(tf: &ThermalFit, t: f64) -> Option<([f64; 4], impl Fn(f64) -> f64)> {
+    use crate::columns as col;
+    let names = tf.base.term_names();
+    let inputs = if col::F.contains(&tf.fit.own.as_str()) {
+        col::F
+    } else {
+        col::W
+    };
+    let linear = names
+        .iter()
+        .all(|n| n == "1" || inputs.contains(&n.as_str()) || col::F.contains(&n.as_str()));
+    if !linear {
+        return None;
+    }
+    let (b, cov) = tf.coefficients_at(t);
+    let at = |n: &str| names.iter().position(|m| m == n);
+    let (i1, io) = (at("1")?, at(&tf.fit.own)?);
+    let row = [
+        b[i1],
+        b[at(inputs[0])?],
+        b[at(inputs[1])?],
+        b[at(inputs[2])?],
+    ];
+    // The g-sensitivity's terms stay at rest (no specific force).
+    let slope = b[io];
+    let (c11, c1o, coo) = (cov[(i1, i1)], cov[(i1, io)], cov[(io, io)]);
+    Some((row, move |x: f64| {
+        (c11 + 2.0 * x * c1o + x * x * coo).max(0.0).sqrt() / slope.abs()
+    }))
+}
+
+/// A triad's or an IMU's figures: each output's 1-sigma along its own axis over the
+/// temperature (at the top of its range), and the device's departure from the model.
+fn triad_figures(c: &Calibrated) -> Result<String, String> {
+    let mut h = String::new();
+    let Some(first) = c.thermal.first() else {
+        return Ok(h);
+    };
+    let wide = grid(first, 0.15);
+    let top = |k: usize| c.ranges.get(k).map_or(0.0, |r| f64::from(r.hi));
+    let sigma: Vec<(String, Vec<(f64, f64)>)> = c
+        .thermal
+        .iter()
+        .enumerate()
+        .filter_map(|(k, tf)| {
+            let points = wide
+                .iter()
+                .map(|t| linear_at(tf, *t).map(|(_, s)| (*t, s(top(k)))))
+                .collect::<Option<Vec<_>>>()?;
+            Some((
+                format!("{} ({})", tf.fit.output, c.units.get(k).unwrap_or(&"")),
+                points,
+            ))
+        })
+        .collect();
+    if sigma.len() == c.thermal.len() {
+        let _ = writeln!(
+            h,
+            "<div class=\"fig\">{}</div>",
+            svg(&Figure {
+                title: "1-sigma calibration error of each corrected output along its own axis, at the top of its range",
+                x: "temperature (C)",
+                y: "1-sigma (output units)",
+                series: sigma
+                    .iter()
+                    .enumerate()
+                    .map(|(k, (name, p))| Series::curve(name, p, k))
+                    .collect(),
+                bands: vec![(first.scale.lo, first.scale.hi)],
+                band_label: "calibrated range",
+                zero_line: true,
+            })?
+        );
+    }
+    let cal = spincal::blob::decode(&c.blob).map_err(|e| e.to_string())?;
+    let env = &cal.data().environment;
+    let volt = 0.5 * (env.voltage_span.lo + env.voltage_span.hi);
+    if matches!(cal.data().sensor, spincal::model::Sensor::Single { .. }) {
+        return Ok(h);
+    }
+    let mut triad = spincal::correct::AnyTriadCorrector::new(&cal).ok();
+    let mut imu = spincal::correct::AnyImuCorrector::new(&cal, 1000.0).ok();
+    let temps = grid(first, 0.0);
+    let mut departure = Vec::new();
+    for t in &temps {
+        let Some(models) = c
+            .thermal
+            .iter()
+            .map(|tf| linear_at(tf, *t))
+            .collect::<Option<Vec<_>>>()
+        else {
+            return Ok(h);
+        };
+        if let Some(d) = triad.as_mut() {
+            d.set_environment(*t as f32, volt);
+        }
+        if let Some(d) = imu.as_mut() {
+            d.set_environment(*t as f32, volt);
+        }
+        let mut worst = 0.0f64;
+        for k in 0..models.len() {
+            let part = k / 3 * 3;
+            for x in [f64::from(c.ranges[k].lo), f64::from(c.ranges[k].hi)] {
+                // Codes for input x along axis k alone (the other triad at rest).
+                let codes: Vec<i32> = (0..models.len())
+                    .map(|j| {
+                        let (row, _) = &models[j];
+                        let u = if j / 3 * 3 == part {
+                            row[0] + row[1 + k - part] * x
+                        } else {
+                            row[0]
+                        };
+                        u.round() as i32
+                    })
+                    .collect();
+                let got = if let Some(d) = triad.as_ref() {
+                    f64::from(d.correct([codes[0], codes[1], codes[2]]).values[k])
+                } else if let Some(d) = imu.as_mut() {
+                    let raw = [codes[0], codes[1], codes[2], codes[3], codes[4], codes[5]];
+                    d.reset();
+                    let _ = d.correct(raw);
+                    f64::from(d.correct(raw).values[k])
+                } else {
+                    return Ok(h);
+                };
+                // The model's own correction of the rounded codes.
+                let s = nalgebra::Matrix3::from_fn(|i, j| models[part + i].0[1 + j]);
+                let b = nalgebra::Vector3::from_fn(|i, _| models[part + i].0[0]);
+                let u = nalgebra::Vector3::from_fn(|i, _| f64::from(codes[part + i]));
+                let Some(inv) = s.try_inverse() else {
+                    return Ok(h);
+                };
+                let want = (inv * (u - b))[k - part];
+                worst = worst.max((got - want).abs() / (models[k].1)(want));
+            }
+        }
+        departure.push((*t, worst));
+    }
+    let what = match env.temperature_model {
+        TemperatureModel::Chebyshev(n) => format!("Chebyshev series of {n} terms"),
+        TemperatureModel::Table => format!("table of {} temperatures", c.temps.len()),
+    };
+    let _ = writeln!(
+        h,
+        "<div class=\"fig\">{}</div>",
+        svg(&Figure {
+            title: &format!(
+                "the device's {what} against the model: worst departure over the outputs and the ends of their ranges, in the model's 1-sigma"
+            ),
+            x: "temperature (C)",
+            y: "departure / 1-sigma",
+            series: vec![Series::curve("device - model", &departure, 3)],
+            bands: Vec::new(),
+            band_label: "",
+            zero_line: true,
+        })?
+    );
+    Ok(h)
 }
