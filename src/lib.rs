@@ -33,6 +33,8 @@
 //! - [`correct`]: effective coefficients per environment, raw counts to SI units, flags,
 //!   lever arm, 1-sigma calibration error.
 //! - [`store`]: two power-fail-safe slots over an `embedded-storage` NOR flash.
+//! - [`driver`]: real parts over `embedded-hal` 1.0 (the MPU-6050), raw samples for the
+//!   correctors.
 //!
 //! # Features
 //!
@@ -77,6 +79,7 @@
 
 pub mod blob;
 pub mod correct;
+pub mod driver;
 pub mod model;
 pub mod protocol;
 pub mod store;
