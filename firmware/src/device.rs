@@ -4,11 +4,15 @@
 //! protocol on UART0.
 
 use cortex_m_semihosting::hprintln;
-use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Flags};
-use spincal::model::{Sensor, Serial};
+use spincal::correct::{
+    AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Corrected, Flags, ImuCorrector,
+};
+use spincal::driver::mpu6050::{ADDRESS, Config, Mpu6050};
+use spincal::model::{Calibration, SampleFormat, Sensor, Serial};
 use spincal::protocol::{Device, MAX_FRAME, UnitSensor};
 use spincal::store::Store;
 
+use crate::simulated_mpu6050::SimulatedMpu6050;
 use crate::{RamFlash, Uart};
 
 /// The unit's serial number, fixed at build time (`SPINCAL_UNIT_SERIAL`).
@@ -28,7 +32,7 @@ fn self_test(device: &Device<RamFlash>, mid: i32) {
             flagged += 1
         }
     };
-    let raw = |k: i32, a: i32| mid + ((k * 37 + a * 101) % 400) - 200;
+    let raw = |k: i32, a: i32| raw(mid, k, a);
     match device.calibration() {
         None => {
             let c = AnyImuCorrector::identity();
@@ -57,6 +61,16 @@ fn self_test(device: &Device<RamFlash>, mid: i32) {
                         });
                     }
                 }
+                Sensor::Imu { accel_rails, .. } if accel_rails.format == SampleFormat::I16 => {
+                    // A unit with an MPU-6050: its samples come through the driver.
+                    let (c, f) = mpu6050_self_test(cal);
+                    clean += c;
+                    flagged += f;
+                    hprintln!(
+                        "device: {} samples read from the MPU-6050 over I2C (spincal::driver) and corrected in blocks",
+                        c + f
+                    );
+                }
                 Sensor::Imu { .. } => {
                     if let Ok(mut c) = AnyImuCorrector::new(cal, 1000.0) {
                         c.set_environment(25.0, 3.3);
@@ -74,6 +88,47 @@ fn self_test(device: &Device<RamFlash>, mid: i32) {
             );
         }
     }
+}
+
+/// The self-test's sample `k` on axis `a` about the converter's middle `mid`.
+fn raw(mid: i32, k: i32, a: i32) -> i32 {
+    mid + ((k * 37 + a * 101) % 400) - 200
+}
+
+/// The self-test of a unit whose IMU is an MPU-6050: the driver sets the (simulated) part up
+/// and reads 1000 samples in blocks of 20, each block corrected by `correct_batch` at the die
+/// temperature. Clean and flagged samples.
+fn mpu6050_self_test(cal: &Calibration) -> (u32, u32) {
+    const BLOCK: usize = 20;
+    // The part's two's complement codes are about 0.
+    let codes = |k: i32| core::array::from_fn(|a| raw(0, k, a as i32) as i16);
+    let mut part = Mpu6050::new(SimulatedMpu6050::new(codes), ADDRESS, Config::default());
+    let Ok(()) = part.init() else {
+        hprintln!("device: the MPU-6050 does not answer");
+        return (0, 0);
+    };
+    let Ok(mut c) = ImuCorrector::<i16>::new(cal, part.config().sample_rate_hz()) else {
+        return (0, 0);
+    };
+    let (mut clean, mut flagged) = (0u32, 0u32);
+    let mut block = [[0i16; 6]; BLOCK];
+    let mut out = [Corrected::<6>::default(); BLOCK];
+    for _ in 0..1000 / BLOCK {
+        let Ok(temperature) = part.read_block(&mut block) else {
+            hprintln!("device: an I2C read from the MPU-6050 failed");
+            break;
+        };
+        c.set_environment(temperature, 3.3);
+        let n = c.correct_batch(&block, &mut out);
+        for o in out.iter().take(n) {
+            if o.flags.is_clean() {
+                clean += 1;
+            } else {
+                flagged += 1;
+            }
+        }
+    }
+    (clean, flagged)
 }
 
 /// Runs the example device: unit `serial` carrying `sensor` (it commits no calibration of

@@ -1,8 +1,10 @@
 //! Shared by the QEMU test binaries: the golden cases compiled in by `build.rs`, the CMSDK
-//! timer used to count instructions under `-icount`, and a runner over the three correctors.
+//! timer used to count instructions under `-icount`, a runner over the three correctors, the
+//! example device, and a simulated MPU-6050 behind the `embedded-hal` I2C trait.
 #![no_std]
 
 pub mod device;
+pub mod simulated_mpu6050;
 
 use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Corrected};
 use spincal::model::Calibration;

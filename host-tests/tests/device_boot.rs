@@ -16,10 +16,19 @@ fn boot_with(
     image: &[u8],
     dir: &std::path::Path,
 ) -> (spincal::protocol::Identity, Vec<u8>, String) {
+    boot_unit("device", image, dir)
+}
+
+/// Boots the example device binary `name` with the region `image` loaded.
+fn boot_unit(
+    name: &str,
+    image: &[u8],
+    dir: &std::path::Path,
+) -> (spincal::protocol::Identity, Vec<u8>, String) {
     let bin = qemu::build_firmware().unwrap_or_else(|e| panic!("{e}"));
     let (flash, log) = (dir.join("flash.bin"), dir.join("qemu.log"));
     std::fs::write(&flash, image).unwrap();
-    let unit = QemuUnit::power_on(&bin.join("device"), Some(&flash), &log).unwrap();
+    let unit = QemuUnit::power_on(&bin.join(name), Some(&flash), &log).unwrap();
     let mut client = unit.connect(Duration::from_secs(5)).unwrap();
     let id = client.identify().unwrap();
     let mut back = Vec::new();
@@ -76,6 +85,37 @@ fn the_unit_boots_with_the_image_a_flasher_wrote() {
         log.contains(
             "device: no valid calibration; 1000 samples passed through and flagged (1000 flagged)"
         ),
+        "{log}"
+    );
+}
+
+#[test]
+fn a_unit_with_an_mpu6050_reads_its_samples_through_the_driver() {
+    if !qemu::available_or_skip("a_unit_with_an_mpu6050_reads_its_samples_through_the_driver") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    // The signed 16-bit unit: an IMU whose codes come as the MPU-6050 delivers them.
+    let data = golden::in_format(
+        CalibrationData::example_imu(),
+        spincal::model::SampleFormat::I16,
+    );
+    let blob = golden::encode(&data);
+    let image = region_image(&blob, Region::from_memory_x()).unwrap();
+    let (id, _, log) = boot_unit("device_signed16", &image, dir.path());
+    assert_eq!(
+        id.calibration.as_ref().map(|s| s.as_str()),
+        Some("IMU-FULL-0042"),
+        "{log}"
+    );
+    assert!(
+        log.contains(
+            "device: 1000 samples read from the MPU-6050 over I2C (spincal::driver) and corrected in blocks"
+        ),
+        "{log}"
+    );
+    assert!(
+        log.contains("device: calibration IMU-FULL-0042 loaded; 1000 raw samples corrected"),
         "{log}"
     );
 }
