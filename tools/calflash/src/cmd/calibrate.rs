@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use super::values;
+use super::values::{self, SensorKind};
 use crate::files::Paths;
 use clap::{Args, ValueEnum};
 use spincal::model::{Quantity, Rails, Span};
@@ -12,21 +12,6 @@ use super::outputs::Outputs;
 use crate::obs::Format;
 use crate::report::{self, terminal::num, terminal::pval};
 use crate::sensor::{self, Options, Verdict, record::Record, single, triad};
-
-/// The sensor of a workflow.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SensorKind {
-    /// Single-axis accelerometer (columns input, output).
-    SingleAccel,
-    /// Single-axis gyro.
-    SingleGyro,
-    /// Accelerometer triad (f_*, a_*).
-    Accel,
-    /// Gyro triad (w_*, g_*; f_* for g-sensitivity).
-    Gyro,
-    /// IMU (f_*, w_*, a_*, g_*).
-    Imu,
-}
 
 /// Asymmetry handling.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -125,22 +110,6 @@ pub struct CalibrateArgs {
     pub heading: Option<f64>,
 }
 
-pub(crate) fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
-    let (a, b) = text
-        .split_once(':')
-        .ok_or_else(|| format!("{what}: `{text}` is not LO:HI"))?;
-    let n = |s: &str| {
-        s.trim()
-            .parse::<f64>()
-            .map_err(|_| format!("{what}: `{s}` is not a number"))
-    };
-    let (a, b) = (n(a)?, n(b)?);
-    if a > b {
-        return Err(format!("{what}: {a} is above {b}"));
-    }
-    Ok((a, b))
-}
-
 /// Runs `calflash calibrate`; returns the verdict (the process exits 3 on reject).
 ///
 /// # Errors
@@ -178,9 +147,9 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         }
         opts.earth = Some(crate::earth::Station::new(lat, heading)?);
     }
-    let (t0, t1) = pair(&args.temp_span, "--temp-span")?;
+    let (t0, t1) = values::pair(&args.temp_span, "--temp-span")?;
     opts.temp_span = Span::new(t0 as f32, t1 as f32);
-    let (v0, v1) = pair(&args.volt_span, "--volt-span")?;
+    let (v0, v1) = values::pair(&args.volt_span, "--volt-span")?;
     opts.volt_span = Span::new(v0 as f32, v1 as f32);
     let single = matches!(
         args.sensor,

@@ -6,7 +6,7 @@ use crate::files::{Paths, Staged};
 use clap::{Args, Subcommand};
 use nalgebra::DMatrix;
 
-use super::calibrate::SensorKind;
+use super::values::SensorKind;
 use crate::design::coordinate;
 use crate::design::criteria::{self, Criteria};
 use crate::design::exchange::{self, Criterion};

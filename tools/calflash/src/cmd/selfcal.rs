@@ -88,8 +88,8 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
             .input("--gyro", args.gyro.as_deref()),
     )?;
     let serial = device::serial(&args.serial)?;
-    let (t0, t1) = super::calibrate::pair(&args.temp_span, "--temp-span")?;
-    let (v0, v1) = super::calibrate::pair(&args.volt_span, "--volt-span")?;
+    let (t0, t1) = super::values::pair(&args.temp_span, "--temp-span")?;
+    let (v0, v1) = super::values::pair(&args.volt_span, "--volt-span")?;
     let rails = args.codes;
     let rec = recording::read_with(
         &args.acc,

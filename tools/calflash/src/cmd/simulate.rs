@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use crate::files::{Paths, Staged};
 use clap::Args;
 
-use super::calibrate::SensorKind;
+use super::values::SensorKind;
 use crate::sim::{self, Sensor, plan, ramp, truth};
 
 /// Simulate a sensor with known true coefficients and noise through a test plan.

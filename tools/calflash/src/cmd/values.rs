@@ -2,6 +2,8 @@
 //! that a value outside its domain is refused at parse time with the option named (clap puts
 //! `invalid value '...' for '--option'` before the reason).
 
+use clap::ValueEnum;
+
 /// A finite number.
 ///
 /// # Errors
@@ -172,6 +174,41 @@ pub fn codes(s: &str) -> Result<spincal::model::Rails, String> {
         };
     }
     Err(format!("`{s}`: {expected}"))
+}
+
+/// The sensor of a workflow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SensorKind {
+    /// Single-axis accelerometer (columns input, output).
+    SingleAccel,
+    /// Single-axis gyro.
+    SingleGyro,
+    /// Accelerometer triad (f_*, a_*).
+    Accel,
+    /// Gyro triad (w_*, g_*; f_* for g-sensitivity).
+    Gyro,
+    /// IMU (f_*, w_*, a_*, g_*).
+    Imu,
+}
+
+/// `LO:HI`, two numbers, the first not above the second (`what` names the option).
+///
+/// # Errors
+/// Not two numbers, or LO above HI.
+pub fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
+    let (a, b) = text
+        .split_once(':')
+        .ok_or_else(|| format!("{what}: `{text}` is not LO:HI"))?;
+    let n = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .map_err(|_| format!("{what}: `{s}` is not a number"))
+    };
+    let (a, b) = (n(a)?, n(b)?);
+    if a > b {
+        return Err(format!("{what}: {a} is above {b}"));
+    }
+    Ok((a, b))
 }
 
 #[cfg(test)]
