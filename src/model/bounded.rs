@@ -175,6 +175,22 @@ impl Serial {
         &self.text
     }
 
+    /// The one rule for a serial a calibration may carry: 1 to
+    /// [`SERIAL_CAPACITY`](super::SERIAL_CAPACITY) printable ASCII characters (spaces allowed),
+    /// not cut when it was decoded.
+    #[must_use]
+    pub fn is_valid(&self) -> bool {
+        !self.overflowed
+            && !self.text.is_empty()
+            && self.text.bytes().all(|b| b.is_ascii_graphic() || b == b' ')
+    }
+
+    /// A serial from text that obeys [the rule](Self::is_valid), or `None`.
+    #[must_use]
+    pub fn parse(text: &str) -> Option<Self> {
+        Self::new(text).filter(Self::is_valid)
+    }
+
     /// True when a decoded serial was longer than the capacity (it was cut).
     #[must_use]
     pub const fn overflowed(&self) -> bool {

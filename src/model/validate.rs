@@ -25,8 +25,7 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
             capacity: super::SERIAL_CAPACITY,
         });
     }
-    let text = serial.as_str();
-    if text.is_empty() || !text.bytes().all(|b| b.is_ascii_graphic() || b == b' ') {
+    if !serial.is_valid() {
         return Err(Error::InvalidSerial);
     }
     validate_environment(&data.environment)?;

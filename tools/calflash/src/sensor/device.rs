@@ -42,19 +42,12 @@ pub(crate) fn too_many(path: &Path, n: usize) -> WorkflowError {
 /// # Errors
 /// What is wrong with it.
 pub fn serial(text: &str) -> Result<Serial, String> {
-    Serial::new(text)
-        .filter(|s| {
-            !s.as_str().is_empty()
-                && s.as_str()
-                    .bytes()
-                    .all(|b| b.is_ascii_graphic() || b == b' ')
-        })
-        .ok_or_else(|| {
-            format!(
-                "--serial `{text}`: the device stores 1 to {} printable ASCII characters",
-                spincal::model::SERIAL_CAPACITY
-            )
-        })
+    Serial::parse(text).ok_or_else(|| {
+        format!(
+            "--serial `{text}`: the device stores 1 to {} printable ASCII characters",
+            spincal::model::SERIAL_CAPACITY
+        )
+    })
 }
 
 /// The unit's identity: serial, now, the data's hash, this tool's version.
@@ -62,20 +55,7 @@ pub fn serial(text: &str) -> Result<Serial, String> {
 /// # Errors
 /// A serial the device cannot store.
 pub fn identity(opts: &Options) -> Result<Identity, WorkflowError> {
-    let serial = Serial::new(&opts.serial)
-        .filter(|s| {
-            !s.as_str().is_empty()
-                && s.as_str()
-                    .bytes()
-                    .all(|b| b.is_ascii_graphic() || b == b' ')
-        })
-        .ok_or_else(|| {
-            WorkflowError::Message(format!(
-                "--serial `{}`: the device stores 1 to {} printable ASCII characters",
-                opts.serial,
-                spincal::model::SERIAL_CAPACITY
-            ))
-        })?;
+    let serial = serial(&opts.serial).map_err(WorkflowError::Message)?;
     let v = |s: &str| s.parse::<u16>().unwrap_or(0);
     let mut version = env!("CARGO_PKG_VERSION").split('.');
     Ok(Identity {
