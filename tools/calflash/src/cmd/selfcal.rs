@@ -121,20 +121,13 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
     let reject = !report::selfcal::rejected(&c).is_empty();
     let mut files = vec![args.acc.as_path()];
     files.extend(args.gyro.as_deref());
-    let version: Vec<u16> = env!("CARGO_PKG_VERSION")
-        .split('.')
-        .map(|v| v.parse().unwrap_or(0))
-        .collect();
-    let identity = spincal::model::Identity {
-        serial: serial.clone(),
-        created_unix_s: std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_secs()),
-        data_hash: build::files_hash(&files)?,
-        tool_version: [version[0], version[1], version[2]],
-        // A rejected calibration writes no blob unless forced; a forced one says so.
-        fit_rejected: reject,
-    };
+    // A rejected calibration writes no blob unless forced; a forced one says so.
+    let identity = crate::sensor::device::new_identity(
+        serial.clone(),
+        None,
+        crate::sensor::data_hash(&files).map_err(|e| e.to_string())?,
+        reject,
+    );
     // SI values cannot make a blob: the device corrects converter codes.
     let si = rec.units.iter().any(|u| u.is_si());
     let check = if si {

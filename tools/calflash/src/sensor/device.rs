@@ -56,23 +56,65 @@ pub fn serial(text: &str) -> Result<Serial, String> {
 /// A serial the device cannot store.
 pub fn identity(opts: &Options) -> Result<Identity, WorkflowError> {
     let serial = serial(&opts.serial).map_err(WorkflowError::Message)?;
+    let hash = super::data_hash(&[opts.file.as_path()])?;
+    Ok(new_identity(serial, opts.created, hash, false))
+}
+
+/// A calibration's identity: the unit's `serial`, made at `created` (now when `None`) from
+/// data whose hash is `data_hash`, by this tool's version; `fit_rejected` when the blob is
+/// forced out of a rejected fit.
+#[must_use]
+pub fn new_identity(
+    serial: Serial,
+    created: Option<u64>,
+    data_hash: [u8; 16],
+    fit_rejected: bool,
+) -> Identity {
     let v = |s: &str| s.parse::<u16>().unwrap_or(0);
     let mut version = env!("CARGO_PKG_VERSION").split('.');
-    Ok(Identity {
+    Identity {
         serial,
-        created_unix_s: opts.created.unwrap_or_else(|| {
+        created_unix_s: created.unwrap_or_else(|| {
             std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_secs())
         }),
-        data_hash: super::data_hash(&opts.file)?,
+        data_hash,
         tool_version: [
             v(version.next().unwrap_or("0")),
             v(version.next().unwrap_or("0")),
             v(version.next().unwrap_or("0")),
         ],
-        fit_rejected: false,
-    })
+        fit_rejected,
+    }
+}
+
+/// Why a calibration does not become a blob the device reads back.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BlobError {
+    /// Validation refused it.
+    #[error("the calibration is not valid for the device: {0}")]
+    Invalid(spincal::Error),
+    /// The encoder refused it.
+    #[error("cannot write the blob: {0}")]
+    Encode(spincal::Error),
+    /// The bytes do not decode.
+    #[error("the written blob does not read back: {0}")]
+    ReadBack(spincal::Error),
+}
+
+/// Validates and encodes `data`, and decodes the blob back as the device does: the bytes and
+/// the device's calibration.
+///
+/// # Errors
+/// A [`BlobError`].
+pub fn encode_checked(data: &CalibrationData) -> Result<(Vec<u8>, Calibration), BlobError> {
+    let cal = Calibration::new(data.clone()).map_err(BlobError::Invalid)?;
+    let mut buf = vec![0u8; blob::MAX_BLOB_LEN];
+    let n = blob::encode(&cal, &mut buf).map_err(BlobError::Encode)?;
+    buf.truncate(n);
+    let back = blob::decode(&buf).map_err(BlobError::ReadBack)?;
+    Ok((buf, back))
 }
 
 /// Calibrated spans (observed, or the options' when a column is absent) and breakpoints.
@@ -247,19 +289,7 @@ pub fn build_and_check(
     data: &CalibrationData,
     points: &[PointFit],
 ) -> Result<(Vec<u8>, Vec<f64>), WorkflowError> {
-    let cal = Calibration::new(data.clone()).map_err(|e| {
-        WorkflowError::msg(
-            path,
-            format!("the calibration is not valid for the device: {e}"),
-        )
-    })?;
-    let mut buf = vec![0u8; blob::MAX_BLOB_LEN];
-    let n = blob::encode(&cal, &mut buf)
-        .map_err(|e| WorkflowError::msg(path, format!("cannot write the blob: {e}")))?;
-    buf.truncate(n);
-    let back = blob::decode(&buf).map_err(|e| {
-        WorkflowError::msg(path, format!("the written blob does not read back: {e}"))
-    })?;
+    let (buf, back) = encode_checked(data).map_err(|e| WorkflowError::msg(path, e.to_string()))?;
     let env = &data.environment;
     let mut worst = vec![0.0f64; points.first().map_or(0, |p| p.axes.len())];
     let mut note = |j: usize, e: f64| {

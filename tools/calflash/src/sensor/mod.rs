@@ -593,19 +593,23 @@ pub(crate) fn exclude_beyond_rails(
     }))
 }
 
-/// First 16 bytes of the SHA-256 of a file.
+/// First 16 bytes of the SHA-256 of the files' bytes, in order (the calibration's
+/// `data_hash`).
 ///
 /// # Errors
 /// The read error.
-pub fn data_hash(path: &Path) -> Result<[u8; 16], ObsError> {
+pub fn data_hash(paths: &[&Path]) -> Result<[u8; 16], ObsError> {
     use sha2::Digest as _;
-    let bytes = std::fs::read(path).map_err(|source| ObsError::Io {
-        path: path.into(),
-        source,
-    })?;
-    let digest = sha2::Sha256::digest(&bytes);
+    let mut h = sha2::Sha256::new();
+    for path in paths {
+        let bytes = std::fs::read(path).map_err(|source| ObsError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        h.update(&bytes);
+    }
     let mut out = [0u8; 16];
-    out.copy_from_slice(&digest[..16]);
+    out.copy_from_slice(&h.finalize()[..16]);
     Ok(out)
 }
 

@@ -8,34 +8,16 @@
 //! axis, y in its x-y plane); gyro `w = G v` in rad/s with `G` full (it also rotates the gyro
 //! axes into the body frame) and `center` the gyro bias in counts.
 
-use std::path::Path;
-
 use nalgebra::{DMatrix, Matrix3};
-use spincal::blob;
 use spincal::correct::AnyImuCorrector;
 use spincal::model::{
-    AxisNonlinearity, BoundedVec, Calibration, CalibrationData, Channel, Environment, Identity,
-    ImuCovariance, ImuOutputCovariance, ImuSet, Rails, Sensor, Span, TriadSet,
+    AxisNonlinearity, BoundedVec, CalibrationData, Channel, Environment, Identity, ImuCovariance,
+    ImuOutputCovariance, ImuSet, Rails, Sensor, Span, TriadSet,
 };
 
 use super::covariance;
 use crate::nonlinear::selfcal::SelfCal;
 use crate::obs::recording::Recording;
-
-/// First 16 bytes of the SHA-256 of the files, in order.
-///
-/// # Errors
-/// A file that cannot be read.
-pub fn files_hash(paths: &[&Path]) -> Result<[u8; 16], String> {
-    use sha2::Digest as _;
-    let mut h = sha2::Sha256::new();
-    for p in paths {
-        h.update(std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))?);
-    }
-    let mut out = [0u8; 16];
-    out.copy_from_slice(&h.finalize()[..16]);
-    Ok(out)
-}
 
 fn f32s<const N: usize>(x: [f64; N]) -> [f32; N] {
     x.map(|v| v as f32)
@@ -194,13 +176,7 @@ pub fn build_and_check(
     c: &SelfCal,
     rec: &Recording,
 ) -> Result<DeviceCheck, String> {
-    let cal = Calibration::new(data.clone())
-        .map_err(|e| format!("the calibration is not valid for the device: {e}"))?;
-    let mut buf = vec![0u8; blob::MAX_BLOB_LEN];
-    let n = blob::encode(&cal, &mut buf).map_err(|e| format!("cannot write the blob: {e}"))?;
-    buf.truncate(n);
-    let back =
-        blob::decode(&buf).map_err(|e| format!("the written blob does not read back: {e}"))?;
+    let (buf, back) = super::device::encode_checked(data).map_err(|e| e.to_string())?;
     let mut dev = AnyImuCorrector::new(&back, rec.rate() as f32).map_err(|e| e.to_string())?;
     let env = &data.environment;
     dev.set_environment(
