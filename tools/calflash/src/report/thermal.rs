@@ -118,25 +118,13 @@ pub fn section(c: &Calibrated) -> Result<String, String> {
             (*t, worst)
         })
         .collect();
-    let what = match cal.data().environment.temperature_model {
-        TemperatureModel::Chebyshev(n) => format!("Chebyshev series of {n} terms"),
-        TemperatureModel::Table => format!("table of {} temperatures", c.temps.len()),
-    };
-    let _ = writeln!(
-        h,
-        "<div class=\"fig\">{}</div>",
-        svg(&Figure {
-            title: &format!(
-                "the device's {what} against the model: worst departure over the inputs, in the model's 1-sigma"
-            ),
-            x: "temperature (C)",
-            y: "departure / 1-sigma",
-            series: vec![Series::curve("device - model", &departure, 3)],
-            bands: Vec::new(),
-            band_label: "",
-            zero_line: true,
-        })?
-    );
+    departure_figure(
+        &mut h,
+        c,
+        cal.data().environment.temperature_model,
+        "the inputs",
+        &departure,
+    )?;
     Ok(h)
 }
 
@@ -341,7 +329,26 @@ fn triad_figures(c: &Calibrated) -> Result<String, String> {
         }
         departure.push((*t, worst));
     }
-    let what = match env.temperature_model {
+    departure_figure(
+        &mut h,
+        c,
+        env.temperature_model,
+        "the outputs and the ends of their ranges",
+        &departure,
+    )?;
+    Ok(h)
+}
+
+/// The figure of the device's departure from the model over the temperature (worst over
+/// `over`, in the model's 1-sigma).
+fn departure_figure(
+    h: &mut String,
+    c: &Calibrated,
+    model: TemperatureModel,
+    over: &str,
+    departure: &[(f64, f64)],
+) -> Result<(), String> {
+    let what = match model {
         TemperatureModel::Chebyshev(n) => format!("Chebyshev series of {n} terms"),
         TemperatureModel::Table => format!("table of {} temperatures", c.temps.len()),
     };
@@ -350,15 +357,15 @@ fn triad_figures(c: &Calibrated) -> Result<String, String> {
         "<div class=\"fig\">{}</div>",
         svg(&Figure {
             title: &format!(
-                "the device's {what} against the model: worst departure over the outputs and the ends of their ranges, in the model's 1-sigma"
+                "the device's {what} against the model: worst departure over {over}, in the model's 1-sigma"
             ),
             x: "temperature (C)",
             y: "departure / 1-sigma",
-            series: vec![Series::curve("device - model", &departure, 3)],
+            series: vec![Series::curve("device - model", departure, 3)],
             bands: Vec::new(),
             band_label: "",
             zero_line: true,
         })?
     );
-    Ok(h)
+    Ok(())
 }
