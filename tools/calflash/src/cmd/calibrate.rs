@@ -218,11 +218,7 @@ fn rejected_blob(c: &sensor::Calibrated) -> Result<Vec<u8>, String> {
 fn summary(c: &sensor::Calibrated, args: &CalibrateArgs, blob_written: bool) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
-    let word = |v: Verdict| match v {
-        Verdict::Accept => "ACCEPT",
-        Verdict::Review => "REVIEW",
-        Verdict::Reject => "REJECT",
-    };
+    let word = Verdict::word;
     let _ = writeln!(
         s,
         "calflash calibrate  {}  unit {}: {}",

@@ -4,21 +4,13 @@ use std::fmt::Write as _;
 
 use super::plot::{COLORS, Figure, Series, svg};
 use super::terminal::{num, pval};
-use crate::sensor::{Calibrated, Verdict};
+use crate::sensor::Calibrated;
 
 pub(crate) fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
-}
-
-fn verdict_word(v: Verdict) -> &'static str {
-    match v {
-        Verdict::Accept => "ACCEPT",
-        Verdict::Review => "REVIEW",
-        Verdict::Reject => "REJECT",
-    }
 }
 
 pub(crate) const STYLE: &str = "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}\
@@ -58,17 +50,12 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
     let _ = writeln!(
         h,
         "<p class=\"verdict {}\">{}</p>",
-        verdict_word(verdict).to_lowercase(),
-        verdict_word(verdict)
+        verdict.word().to_lowercase(),
+        verdict.word()
     );
     let _ = writeln!(h, "<ul>");
     for f in &c.findings {
-        let _ = writeln!(
-            h,
-            "<li><b>{}</b>: {}</li>",
-            verdict_word(f.verdict),
-            esc(&f.text)
-        );
+        let _ = writeln!(h, "<li><b>{}</b>: {}</li>", f.verdict.word(), esc(&f.text));
     }
     let _ = writeln!(h, "</ul>");
     let hash: String = id.data_hash.iter().map(|b| format!("{b:02x}")).collect();

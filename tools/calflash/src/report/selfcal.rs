@@ -11,6 +11,7 @@ use super::terminal::{num, pval};
 use crate::nonlinear::selfcal::SelfCal;
 use crate::obs::recording::Recording;
 use crate::obs::units::Sensor;
+use crate::sensor::Verdict;
 use crate::sensor::selfcal::DeviceCheck;
 
 /// The convention of the stored coefficients, for users applying them elsewhere.
@@ -60,10 +61,10 @@ pub fn rejected(c: &SelfCal) -> Vec<String> {
 /// Whether the result can be used as it is: REJECT with the reasons of [`rejected`], else
 /// REVIEW with what to look at, else ACCEPT.
 #[must_use]
-pub fn verdict(c: &SelfCal, check: Option<&DeviceCheck>) -> (&'static str, Vec<String>) {
+pub fn verdict(c: &SelfCal, check: Option<&DeviceCheck>) -> (Verdict, Vec<String>) {
     let why = rejected(c);
     if !why.is_empty() {
-        return ("REJECT", why);
+        return (Verdict::Reject, why);
     }
     let mut notes = Vec::new();
     if c.holdout.rms > 2.0 * c.accel.rms() {
@@ -87,7 +88,12 @@ pub fn verdict(c: &SelfCal, check: Option<&DeviceCheck>) -> (&'static str, Vec<S
             check.accel
         ));
     }
-    (if notes.is_empty() { "ACCEPT" } else { "REVIEW" }, notes)
+    let v = if notes.is_empty() {
+        Verdict::Accept
+    } else {
+        Verdict::Review
+    };
+    (v, notes)
 }
 
 fn matrix_lines(name: &str, m: &[[f64; 3]; 3], sd: Option<&[[f64; 3]; 3]>, unit: &str) -> String {
@@ -152,7 +158,8 @@ fn rms_deg(a: &[f64]) -> f64 {
 #[must_use]
 pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial: &str) -> String {
     let mut s = String::new();
-    let (word, notes) = verdict(c, check);
+    let (v, notes) = verdict(c, check);
+    let word = v.word();
     let _ = writeln!(s, "calflash selfcal  {}  unit {serial}: {word}", rec.source);
     for n in &notes {
         let _ = writeln!(s, "  {word} {n}");
@@ -344,7 +351,8 @@ fn plural(per: &str) -> &str {
 /// The JSON record.
 #[must_use]
 pub fn record(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial: &str) -> Value {
-    let (word, notes) = verdict(c, check);
+    let (v, notes) = verdict(c, check);
+    let word = v.word();
     let t0 = rec.t[0];
     let poses: Vec<Value> = c
         .poses
@@ -417,7 +425,8 @@ pub fn html(
     check: Option<&DeviceCheck>,
     serial: &str,
 ) -> Result<String, String> {
-    let (word, notes) = verdict(c, check);
+    let (v, notes) = verdict(c, check);
+    let word = v.word();
     let t0 = rec.t[0];
     let mut h = String::new();
     let _ = write!(

@@ -342,6 +342,18 @@ pub enum Verdict {
     Reject,
 }
 
+impl Verdict {
+    /// The word the reports print: `ACCEPT`, `REVIEW` or `REJECT`.
+    #[must_use]
+    pub fn word(self) -> &'static str {
+        match self {
+            Self::Accept => "ACCEPT",
+            Self::Review => "REVIEW",
+            Self::Reject => "REJECT",
+        }
+    }
+}
+
 /// One check of the acceptance summary.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Finding {
