@@ -4,9 +4,7 @@
 //! protocol on UART0.
 
 use cortex_m_semihosting::hprintln;
-use spincal::correct::{
-    AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Corrected, Flags, ImuCorrector,
-};
+use spincal::correct::{AnyCorrector, AnyImuCorrector, Corrected, Flags, ImuCorrector};
 use spincal::driver::mpu6050::{ADDRESS, Config, Mpu6050};
 use spincal::model::{Calibration, SampleFormat, Sensor, Serial};
 use spincal::protocol::{Device, MAX_FRAME, UnitSensor};
@@ -47,20 +45,6 @@ fn self_test(device: &Device<RamFlash>, mid: i32) {
         }
         Some(cal) => {
             match &cal.data().sensor {
-                Sensor::Single { .. } => {
-                    if let Ok(mut c) = AnyAxisCorrector::new(cal) {
-                        c.set_environment(25.0, 3.3);
-                        (0..1000).for_each(|k| count(c.correct(raw(k, 0)).flags));
-                    }
-                }
-                Sensor::Triad { .. } => {
-                    if let Ok(mut c) = AnyTriadCorrector::new(cal) {
-                        c.set_environment(25.0, 3.3);
-                        (0..1000).for_each(|k| {
-                            count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags)
-                        });
-                    }
-                }
                 Sensor::Imu { accel_rails, .. } if accel_rails.format == SampleFormat::I16 => {
                     // A unit with an MPU-6050: its samples come through the driver.
                     let (c, f) = mpu6050_self_test(cal);
@@ -71,12 +55,16 @@ fn self_test(device: &Device<RamFlash>, mid: i32) {
                         c + f
                     );
                 }
-                Sensor::Imu { .. } => {
-                    if let Ok(mut c) = AnyImuCorrector::new(cal, 1000.0) {
+                _ => {
+                    if let Ok(mut c) = AnyCorrector::new(cal, 1000.0) {
                         c.set_environment(25.0, 3.3);
-                        (0..1000).for_each(|k| {
-                            count(c.correct(core::array::from_fn(|a| raw(k, a as i32))).flags)
-                        });
+                        let n = c.outputs();
+                        for k in 0..1000 {
+                            let codes: [i32; 6] = core::array::from_fn(|a| raw(k, a as i32));
+                            if let Some(o) = codes.get(..n).and_then(|r| c.correct(r)) {
+                                count(o.flags);
+                            }
+                        }
                     }
                 }
             }

@@ -6,7 +6,7 @@
 pub mod device;
 pub mod simulated_mpu6050;
 
-use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Corrected};
+use spincal::correct::AnyCorrector;
 use spincal::model::Calibration;
 
 /// The sensor kind of a golden case.
@@ -49,54 +49,41 @@ pub struct Case {
 
 include!(concat!(env!("OUT_DIR"), "/golden_cases.rs"));
 
-/// Any of the three correctors, of the calibration's sample format (the golden codes are
-/// `i32`; a code beyond the format's container is clamped to it).
-#[expect(
-    clippy::large_enum_variant,
-    reason = "one runner per test, never moved in a loop"
-)]
-pub enum Runner<'a> {
-    /// Single axis.
-    Single(AnyAxisCorrector<'a>),
-    /// Triad.
-    Triad(AnyTriadCorrector<'a>),
-    /// IMU.
-    Imu(AnyImuCorrector<'a>),
-}
+/// The corrector of a golden case: the crate's [`AnyCorrector`] for the calibration's kind and
+/// sample format (the golden codes are `i32`; a code beyond the format's container is clamped
+/// to it).
+pub struct Runner<'a>(AnyCorrector<'a>);
 
 impl<'a> Runner<'a> {
     /// The corrector for `kind`, or `None` if the calibration is of another kind.
     pub fn new(cal: &'a Calibration, kind: Kind) -> Option<Self> {
-        Some(match kind {
-            Kind::Single => Self::Single(AnyAxisCorrector::new(cal).ok()?),
-            Kind::Triad => Self::Triad(AnyTriadCorrector::new(cal).ok()?),
-            Kind::Imu(rate) => Self::Imu(AnyImuCorrector::new(cal, rate).ok()?),
-        })
+        let rate = match kind {
+            Kind::Imu(rate) => rate,
+            Kind::Single | Kind::Triad => 1000.0,
+        };
+        let c = AnyCorrector::new(cal, rate).ok()?;
+        let same = matches!(
+            (&c, kind),
+            (AnyCorrector::Axis(_), Kind::Single)
+                | (AnyCorrector::Triad(_), Kind::Triad)
+                | (AnyCorrector::Imu(_), Kind::Imu(_))
+        );
+        same.then_some(Self(c))
     }
 
     /// Sets the environment.
     pub fn set_environment(&mut self, t: f32, v: f32) {
-        match self {
-            Self::Single(c) => c.set_environment(t, v),
-            Self::Triad(c) => c.set_environment(t, v),
-            Self::Imu(c) => c.set_environment(t, v),
-        }
+        self.0.set_environment(t, v);
     }
 
     /// Corrects `raw` into `out` (as bits); returns the number of outputs and the flags, or
     /// `None` on a wrong length.
     pub fn correct(&mut self, raw: &[i32], out: &mut [u32; 6]) -> Option<(usize, u8)> {
-        fn put<const N: usize>(c: Corrected<N>, out: &mut [u32; 6]) -> (usize, u8) {
-            for (o, v) in out.iter_mut().zip(c.values.iter()) {
-                *o = v.to_bits();
-            }
-            (N, c.flags.bits())
+        let c = self.0.correct(raw)?;
+        for (o, v) in out.iter_mut().zip(c.values.iter()) {
+            *o = v.to_bits();
         }
-        Some(match self {
-            Self::Single(c) => put(c.correct(*raw.first()?), out),
-            Self::Triad(c) => put(c.correct(raw.try_into().ok()?), out),
-            Self::Imu(c) => put(c.correct(raw.try_into().ok()?), out),
-        })
+        Some((self.0.outputs(), c.flags.bits()))
     }
 }
 

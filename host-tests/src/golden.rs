@@ -16,7 +16,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Corrected};
+use spincal::correct::AnyCorrector;
 use spincal::model::{Calibration, CalibrationData, Rails, SampleFormat, Sensor};
 
 /// The sensor kind of a case.
@@ -404,42 +404,37 @@ pub fn compute(name: &str, data: &CalibrationData, kind: Kind) -> Case {
     Case { blob, kind, steps }
 }
 
-/// Any of the three correctors behind one interface.
-#[expect(
-    clippy::large_enum_variant,
-    reason = "one runner per test, never moved in a loop"
-)]
-pub enum Runner<'a> {
-    /// Single axis.
-    Single(AnyAxisCorrector<'a>),
-    /// Triad.
-    Triad(AnyTriadCorrector<'a>),
-    /// IMU.
-    Imu(AnyImuCorrector<'a>),
-}
+/// The corrector of a case: the crate's [`AnyCorrector`] for the case's kind, of the
+/// calibration's sample format (codes beyond it are clamped to it).
+pub struct Runner<'a>(AnyCorrector<'a>);
 
 impl<'a> Runner<'a> {
-    /// The corrector for `kind`, of the calibration's sample format (codes beyond it are
-    /// clamped to it).
+    /// The corrector for `kind`.
     ///
     /// # Panics
     /// When the calibration does not fit the kind.
     #[must_use]
     pub fn new(cal: &'a Calibration, kind: Kind) -> Self {
-        match kind {
-            Kind::Single => Self::Single(AnyAxisCorrector::new(cal).expect("single")),
-            Kind::Triad => Self::Triad(AnyTriadCorrector::new(cal).expect("triad")),
-            Kind::Imu(rate) => Self::Imu(AnyImuCorrector::new(cal, rate).expect("imu")),
-        }
+        let rate = match kind {
+            Kind::Imu(rate) => rate,
+            Kind::Single | Kind::Triad => 1000.0,
+        };
+        let c = AnyCorrector::new(cal, rate).expect("a corrector for the case");
+        assert!(
+            matches!(
+                (&c, kind),
+                (AnyCorrector::Axis(_), Kind::Single)
+                    | (AnyCorrector::Triad(_), Kind::Triad)
+                    | (AnyCorrector::Imu(_), Kind::Imu(_))
+            ),
+            "the calibration is not of the case's kind"
+        );
+        Self(c)
     }
 
     /// Sets the environment.
     pub fn set_environment(&mut self, t: f32, v: f32) {
-        match self {
-            Self::Single(c) => c.set_environment(t, v),
-            Self::Triad(c) => c.set_environment(t, v),
-            Self::Imu(c) => c.set_environment(t, v),
-        }
+        self.0.set_environment(t, v);
     }
 
     /// Corrects one sample given as a slice of the right length.
@@ -447,14 +442,8 @@ impl<'a> Runner<'a> {
     /// # Panics
     /// On a wrong length.
     pub fn correct(&mut self, raw: &[i32]) -> (Vec<f32>, u8) {
-        fn parts<const N: usize>(c: Corrected<N>) -> (Vec<f32>, u8) {
-            (c.values.to_vec(), c.flags.bits())
-        }
-        match self {
-            Self::Single(c) => parts(c.correct(raw[0])),
-            Self::Triad(c) => parts(c.correct(raw.try_into().expect("3 codes"))),
-            Self::Imu(c) => parts(c.correct(raw.try_into().expect("6 codes"))),
-        }
+        let c = self.0.correct(raw).expect("a sample of the case's length");
+        (c.values[..self.0.outputs()].to_vec(), c.flags.bits())
     }
 }
 

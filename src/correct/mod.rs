@@ -29,6 +29,7 @@
 //! The `f32` outputs are finite for every raw code inside the ADC rails; a code beyond a rail is
 //! corrected as if it were at the rail, and flagged.
 
+mod any;
 mod environment;
 mod flags;
 mod imu;
@@ -40,6 +41,7 @@ mod single;
 mod triad;
 mod widened;
 
+pub use any::AnyCorrector;
 pub use flags::Flags;
 pub use imu::{ImuCorrector, MAX_SAMPLE_RATE_HZ};
 pub use sample::Sample;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use super::values;
 use clap::Args;
 use spincal::blob;
-use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Flags};
+use spincal::correct::{AnyCorrector, Flags};
 use spincal::model::Sensor;
 
 use crate::columns as col;
@@ -152,12 +152,6 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
     })
 }
 
-enum Any<'a> {
-    Single(AnyAxisCorrector<'a>),
-    Triad(Box<AnyTriadCorrector<'a>>),
-    Imu(Box<AnyImuCorrector<'a>>),
-}
-
 /// Runs `calflash apply`.
 ///
 /// # Errors
@@ -273,23 +267,17 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
     let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
     let volt = args.volt.unwrap_or_else(|| mid(env.voltage_span));
     let temp0 = args.temp.unwrap_or_else(|| mid(env.temperature_span));
-    let mut corrector = match &data.sensor {
-        Sensor::Single { .. } => {
-            Any::Single(AnyAxisCorrector::new(&cal).map_err(|e| e.to_string())?)
-        }
-        Sensor::Triad { .. } => Any::Triad(Box::new(
-            AnyTriadCorrector::new(&cal).map_err(|e| e.to_string())?,
-        )),
-        Sensor::Imu { .. } => Any::Imu(Box::new(
-            AnyImuCorrector::new(&cal, timing.as_ref().map_or(1000.0, |t| t.rate as f32))
-                .map_err(|e| format!("--rate: {e}"))?,
-        )),
-    };
-    let set_env = |c: &mut Any<'_>, t: f32| match c {
-        Any::Single(c) => c.set_environment(t, volt),
-        Any::Triad(c) => c.set_environment(t, volt),
-        Any::Imu(c) => c.set_environment(t, volt),
-    };
+    let imu = matches!(data.sensor, Sensor::Imu { .. });
+    let mut corrector = AnyCorrector::new(&cal, timing.as_ref().map_or(1000.0, |t| t.rate as f32))
+        .map_err(|e| {
+            if imu {
+                format!("--rate: {e}")
+            } else {
+                e.to_string()
+            }
+        })?;
+    let n = corrector.outputs();
+    let set_env = |c: &mut AnyCorrector<'_>, t: f32| c.set_environment(t, volt);
     set_env(&mut corrector, temp0);
     let temps = input.temps.as_deref();
     let mut last_temp = temp0;
@@ -308,9 +296,9 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
         .collect();
     let mut accuracy = input.reference.as_ref().map(|_| Accuracy::new(&out_names));
     for (i, raw) in input.raw.iter().enumerate() {
-        if let (true, Any::Imu(c)) = (off_rate.contains(&i), &mut corrector) {
+        if off_rate.contains(&i) {
             // The step before this sample is not the rate: its derivative is unknown.
-            c.reset();
+            corrector.reset();
         }
         if let Some(t) = temps {
             let t = t[i] as f32;
@@ -319,26 +307,18 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
                 last_temp = t;
             }
         }
-        let (values, flags, sigma): (Vec<f32>, Flags, Option<Vec<f32>>) = match &mut corrector {
-            Any::Single(c) => {
-                let o = c.correct(raw[0]);
-                (o.values.to_vec(), o.flags, c.sigma(raw[0]).map(|s| vec![s]))
-            }
-            Any::Triad(c) => {
-                let r = [raw[0], raw[1], raw[2]];
-                let o = c.correct(r);
-                (o.values.to_vec(), o.flags, c.sigma(r).map(|s| s.to_vec()))
-            }
-            Any::Imu(c) => {
-                let r = [raw[0], raw[1], raw[2], raw[3], raw[4], raw[5]];
-                let o = c.correct(r);
-                (
-                    o.values.to_vec(),
-                    o.flags,
-                    c.sigma(&o.values).map(|s| s.to_vec()),
-                )
-            }
+        let codes = raw.get(..n).unwrap_or_default();
+        let Some(o) = corrector.correct(codes) else {
+            return Err(format!(
+                "{}: sample {} has {} codes; the calibration's sensor takes {n}",
+                args.input.display(),
+                input.labels[i],
+                raw.len()
+            ));
         };
+        let values = o.values[..n].to_vec();
+        let flags: Flags = o.flags;
+        let sigma = corrector.sigma(codes, &o.values).map(|s| s[..n].to_vec());
         flagged += usize::from(!flags.is_clean());
         if let (Some(acc), Some(reference)) = (&mut accuracy, &input.reference)
             && flags.is_clean()
