@@ -8,12 +8,12 @@
 //! Every linear-in-parameters sensor model can be written this way; [`Formula::design`] turns
 //! one into a design matrix over a table of observations.
 
-mod design;
+mod matrix;
 mod parse;
 
 use std::fmt;
 
-pub use design::Design;
+pub use matrix::Design;
 pub use parse::{FormulaError, parse};
 
 /// One factor of a term: a column, or its absolute value, to a power.
