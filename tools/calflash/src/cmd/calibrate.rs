@@ -115,7 +115,7 @@ pub struct CalibrateArgs {
 /// # Errors
 /// A message naming the file, column, term or table point.
 pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
-    sensor::device::serial(&args.serial)?;
+    sensor::blob::serial(&args.serial)?;
     args.out
         .check(Paths::new().input("the data", Some(&args.data)))?;
     let mut opts = Options::new(&args.data, &args.serial);

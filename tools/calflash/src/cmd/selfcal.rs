@@ -10,7 +10,7 @@ use super::outputs::Outputs;
 use crate::nonlinear::selfcal::{self, GyroBias, Options, Quadratic};
 use crate::obs::recording;
 use crate::report;
-use crate::sensor::{device, selfcal as build};
+use crate::sensor::{blob, selfcal as build};
 
 /// Calibrate an IMU without equipment: still poses by hand, gravity as the only reference.
 #[derive(Debug, Args)]
@@ -87,7 +87,7 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
             .input("the accelerometer recording", Some(&args.acc))
             .input("--gyro", args.gyro.as_deref()),
     )?;
-    let serial = device::serial(&args.serial)?;
+    let serial = blob::serial(&args.serial)?;
     let (t0, t1) = super::values::pair(&args.temp_span, "--temp-span")?;
     let (v0, v1) = super::values::pair(&args.volt_span, "--volt-span")?;
     let rails = args.codes;
@@ -122,7 +122,7 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
     let mut files = vec![args.acc.as_path()];
     files.extend(args.gyro.as_deref());
     // A rejected calibration writes no blob unless forced; a forced one says so.
-    let identity = crate::sensor::device::new_identity(
+    let identity = crate::sensor::blob::new_identity(
         serial.clone(),
         None,
         crate::sensor::data_hash(&files).map_err(|e| e.to_string())?,

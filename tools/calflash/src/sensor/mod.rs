@@ -7,9 +7,9 @@
 //! inverse over the calibrated range, and builds a `spincal` calibration.
 
 pub mod accuracy;
+pub mod blob;
 pub mod compare;
 pub mod covariance;
-pub mod device;
 pub mod hysteresis;
 pub mod invert;
 pub mod lever;

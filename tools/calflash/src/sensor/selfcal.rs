@@ -176,7 +176,7 @@ pub fn build_and_check(
     c: &SelfCal,
     rec: &Recording,
 ) -> Result<DeviceCheck, String> {
-    let (buf, back) = super::device::encode_checked(data).map_err(|e| e.to_string())?;
+    let (buf, back) = super::blob::encode_checked(data).map_err(|e| e.to_string())?;
     let mut dev = AnyImuCorrector::new(&back, rec.rate() as f32).map_err(|e| e.to_string())?;
     let env = &data.environment;
     dev.set_environment(

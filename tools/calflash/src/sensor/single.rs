@@ -12,7 +12,7 @@ use super::table::{self, Layout};
 use super::thermal;
 use super::thermal::device::{self as thermal_device, DeviceSet};
 use super::{
-    AxisFit, Calibrated, Decision, Options, PointFit, Thermal, WorkflowError, covariance, device,
+    AxisFit, Calibrated, Decision, Options, PointFit, Thermal, WorkflowError, blob, covariance,
 };
 use crate::columns as col;
 use crate::formula::{self, Formula};
@@ -460,7 +460,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             axes: vec![f],
         });
     }
-    let mut env = device::environment(&table, &layout, opts)?;
+    let mut env = blob::environment(&table, &layout, opts)?;
     if let Some(dt) = &device_temp {
         sets.clone_from(&dt.sets);
         covs.clone_from(&dt.covariances);
@@ -471,7 +471,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     }
     let range = Span::new(lo as f32, hi as f32);
     let data = CalibrationData {
-        identity: device::identity(opts)?,
+        identity: blob::identity(opts)?,
         environment: env,
         sensor: Sensor::Single {
             quantity,
@@ -480,16 +480,15 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
                 center: center as f32,
                 range,
             },
-            sets: BoundedVec::from_slice(&sets)
-                .ok_or_else(|| device::too_many(path, sets.len()))?,
+            sets: BoundedVec::from_slice(&sets).ok_or_else(|| blob::too_many(path, sets.len()))?,
             covariance: Some(
-                BoundedVec::from_slice(&covs).ok_or_else(|| device::too_many(path, covs.len()))?,
+                BoundedVec::from_slice(&covs).ok_or_else(|| blob::too_many(path, covs.len()))?,
             ),
         },
     };
-    let (blob, output_errors) = device::build_and_check(path, &data, &points)?;
+    let (blob, output_errors) = blob::build_and_check(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);
-    let unit = device::unit(quantity);
+    let unit = blob::unit(quantity);
     let mut findings = super::findings(
         &points,
         &["output".to_string()],

@@ -23,7 +23,7 @@ mod thermal;
 use self::sets::device_sets;
 use super::table::{self, Layout};
 use super::thermal::{self as continuous, ThermalFit};
-use super::{AxisFit, Calibrated, Options, PointFit, Thermal, WorkflowError, device, lever};
+use super::{AxisFit, Calibrated, Options, PointFit, Thermal, WorkflowError, blob, lever};
 use crate::columns as col;
 use crate::formula::{self, Formula};
 use crate::obs::{self, Table};
@@ -816,19 +816,19 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         .map(|m| sets_of(&gyro_spec, m).map(as_series))
         .transpose()?;
 
-    let mut env = device::environment(&table, &layout, opts)?;
+    let mut env = blob::environment(&table, &layout, opts)?;
     if let Some(n) = series_terms {
         env.temperatures = BoundedVec::new();
         env.temperature_model = TemperatureModel::Chebyshev(n as u8);
     }
-    let identity = device::identity(opts)?;
+    let identity = blob::identity(opts)?;
     let channels = |t: &TriadResult| -> [Channel; 3] {
         std::array::from_fn(|j| Channel {
             center: t.centers[j] as f32,
             range: t.ranges[j],
         })
     };
-    let bv = |n: usize| device::too_many(path, n);
+    let bv = |n: usize| blob::too_many(path, n);
     let sensor = match (&accel, &gyro) {
         (Some(a), Some(g)) => Sensor::Imu {
             accel_rails: opts.rails,
@@ -901,19 +901,19 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         }
         points.push(pf);
     }
-    let (blob, output_errors) = device::build_and_check(path, &data, &points)?;
+    let (blob, output_errors) = blob::build_and_check(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);
     let mut names = Vec::new();
     let mut units = Vec::new();
     let mut ranges = Vec::new();
     if let Some(a) = &accel {
         names.extend(col::A.map(String::from));
-        units.extend([device::unit(Quantity::Acceleration); 3]);
+        units.extend([blob::unit(Quantity::Acceleration); 3]);
         ranges.extend(a.ranges);
     }
     if let Some(g) = &gyro {
         names.extend(col::GYRO.map(String::from));
-        units.extend([device::unit(Quantity::AngularRate); 3]);
+        units.extend([blob::unit(Quantity::AngularRate); 3]);
         ranges.extend(g.ranges);
         if let Some(gm) = g.g.get(layout.reference()) {
             notes.push(format!(

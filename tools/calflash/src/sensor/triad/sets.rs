@@ -13,7 +13,7 @@ use crate::sensor::invert::{
     Own, TriadDevice, TriadForward, linearization, linearize, triad_inversion_error,
 };
 use crate::sensor::thermal as continuous;
-use crate::sensor::{AxisFit, WorkflowError, covariance, device};
+use crate::sensor::{AxisFit, WorkflowError, blob, covariance};
 
 /// What the device applies at one point, in f64: `y = m L(u - center) + off`, `L` each
 /// axis' linearisation.
@@ -274,7 +274,7 @@ impl TriadResult {
     /// The device's sets, covariance factors and g-sensitivity at a series' nodes (in their
     /// order) turned into the series' coefficients; the fits stay the nodes'.
     pub(super) fn into_series(mut self) -> Self {
-        self.sets = series_of(&self.sets, device::triad_row, device::triad_of_row);
+        self.sets = series_of(&self.sets, blob::triad_row, blob::triad_of_row);
         self.covs = series_of(&self.covs, flat_f32, unflat_f32);
         self.imu_covs = series_of(
             &self.imu_covs,
