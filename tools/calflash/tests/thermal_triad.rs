@@ -398,6 +398,33 @@ fn a_still_unit_recorded_in_a_ramp_and_a_bench_run_make_one_calibration() {
             );
         }
     }
+    // An output may not overwrite the recording.
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "bench.csv",
+            "--sensor",
+            "imu",
+            "--serial",
+            "S",
+            "--still-ramp",
+            "still.csv",
+            "--blob",
+            "still.csv",
+            "--no-db",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("still.csv") && err.contains("--still-ramp"),
+        "{err}"
+    );
+    assert!(
+        std::fs::read_to_string(d.join("still.csv"))
+            .unwrap()
+            .starts_with("t,ax")
+    );
     // What a still recording cannot be.
     let run = |still: &str, bench: &str| {
         let mut o = Options::new(d.join(bench), "STILL-RAMP");

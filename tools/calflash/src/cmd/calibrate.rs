@@ -116,8 +116,11 @@ pub struct CalibrateArgs {
 /// A message naming the file, column, term or table point.
 pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
     sensor::blob::serial(&args.serial)?;
-    args.out
-        .check(Paths::new().input("the data", Some(&args.data)))?;
+    args.out.check(
+        Paths::new()
+            .input("the data", Some(&args.data))
+            .input("--still-ramp", args.still_ramp.as_deref()),
+    )?;
     let mut opts = Options::new(&args.data, &args.serial);
     opts.format = args.format;
     opts.alpha = args.alpha;
