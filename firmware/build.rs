@@ -66,5 +66,55 @@ fn main() {
         names.join("\n")
     )
     .unwrap();
+    health_cases(&dir, &mut src);
     std::fs::write(out.join("golden_cases.rs"), src).expect("write golden_cases.rs");
+}
+
+/// The health check's golden cases: raw samples, and the checks after some of them.
+fn health_cases(dir: &std::path::Path, src: &mut String) {
+    use host_tests::health_golden;
+    let mut names = Vec::new();
+    for (name, _) in health_golden::cases() {
+        let path = dir.join(format!("{name}.vectors"));
+        println!("cargo:rerun-if-changed={}", path.display());
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let case =
+            health_golden::parse(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let upper = name.to_uppercase();
+        writeln!(src, "static {upper}_RAW: &[[u16; 6]] = &[").unwrap();
+        for step in &case.steps {
+            writeln!(src, "    {:?},", step.raw).unwrap();
+        }
+        writeln!(src, "];").unwrap();
+        writeln!(src, "static {upper}_CHECKS: &[HealthCheck] = &[").unwrap();
+        for (i, step) in case.steps.iter().enumerate() {
+            if let Some(k) = &step.check {
+                writeln!(
+                    src,
+                    "    HealthCheck {{ after: {i}, verdict: {}, flags: {}, bits: {:?} }},",
+                    k.verdict,
+                    k.flags,
+                    k.bias
+                        .iter()
+                        .chain(&k.sigma)
+                        .chain(&k.statistic)
+                        .collect::<Vec<_>>()
+                )
+                .unwrap();
+            }
+        }
+        writeln!(src, "];").unwrap();
+        names.push(format!(
+            "    HealthCase {{ name: {name:?}, blob: include_bytes!({:?}), rate: f32::from_bits({:#010x}), raw: {upper}_RAW, checks: {upper}_CHECKS }},",
+            dir.join(&case.blob).display().to_string(),
+            case.rate.to_bits()
+        ));
+    }
+    writeln!(
+        src,
+        "pub static HEALTH_CASES: &[HealthCase] = &[\n{}\n];",
+        names.join("\n")
+    )
+    .unwrap();
 }

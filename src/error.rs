@@ -46,6 +46,16 @@ pub enum Field {
     Sets,
     /// The unit serial number.
     Serial,
+    /// `NoiseTerms::white`.
+    WhiteNoise,
+    /// `NoiseTerms::bias_walk`.
+    BiasWalk,
+    /// `NoiseTerms::ageing_s`.
+    Ageing,
+    /// `NoiseTerms::gravity`.
+    Gravity,
+    /// `NoiseTerms::false_alarm`.
+    FalseAlarm,
 }
 
 /// Which sensor of a calibration an error is about.
@@ -66,7 +76,8 @@ pub enum Part {
 /// The variants are named by the phase that raises them: `Header*` and `Length*` while the
 /// fixed header is read, `Checksum*` before anything is decoded, `Payload*` while the postcard
 /// payload is decoded, `Invalid*` while the decoded values are validated, `Encode*` while a
-/// blob is written, and `Corrector*` when a corrector is built.
+/// blob is written, `Corrector*` when a corrector is built, and `Health*` when the in-use
+/// health check is set up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
@@ -227,6 +238,19 @@ pub enum Error {
         /// The accelerometer axis.
         axis: u8,
     },
+    /// A noise term out of its bounds (see `NoiseTerms::validate`), or noise terms on a
+    /// sensor that is not an IMU (`field` is then `Sets`).
+    InvalidNoiseTerm {
+        /// The term.
+        field: Field,
+        /// The output (`ax, ay, az, wx, wy, wz`), for per-output terms.
+        index: Option<u8>,
+    },
+    /// The health check cannot run: the calibration carries no noise terms.
+    HealthNoNoiseTerms,
+    /// The health check cannot run: the calibration carries no covariance factors, so it
+    /// states no prior for the biases.
+    HealthNoCovariance,
     /// The calibration expects samples in another format than the corrector's.
     CorrectorWrongFormat {
         /// The format the calibration states.
@@ -258,6 +282,11 @@ impl fmt::Display for Field {
             Field::Covariance => "covariance factor",
             Field::Sets => "coefficient sets",
             Field::Serial => "serial number",
+            Field::WhiteNoise => "white-noise density",
+            Field::BiasWalk => "bias random walk",
+            Field::Ageing => "ageing time",
+            Field::Gravity => "gravity span",
+            Field::FalseAlarm => "false-alarm rate",
         };
         f.write_str(name)
     }
@@ -410,6 +439,28 @@ impl fmt::Display for Error {
                 f,
                 "accelerometer axis {axis} in coefficient set {set} does not sense mainly \
                  along itself, so its lever arm cannot be removed"
+            ),
+            Error::InvalidNoiseTerm {
+                field: Field::Sets, ..
+            } => f.write_str("noise terms are only for an IMU calibration"),
+            Error::InvalidNoiseTerm { field, index } => {
+                write!(f, "the {field}")?;
+                if let Some(i) = index {
+                    let name = ["ax", "ay", "az", "wx", "wy", "wz"];
+                    write!(f, " of output {}", name.get(usize::from(i)).unwrap_or(&"?"))?;
+                }
+                f.write_str(
+                    " is out of bounds (densities positive, walks and ageing non-negative, \
+                     gravity within 9.7..9.9 m/s^2, false-alarm rate in (0, 0.5])",
+                )
+            }
+            Error::HealthNoNoiseTerms => f.write_str(
+                "the health check cannot run: the calibration has no noise terms \
+                 (calflash calibrate --noise); the unit still corrects",
+            ),
+            Error::HealthNoCovariance => f.write_str(
+                "the health check cannot run: the calibration has no covariance factors, so \
+                 it states no prior for the biases; the unit still corrects",
             ),
             Error::CorrectorWrongFormat { expected, found } => write!(
                 f,

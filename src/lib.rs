@@ -33,6 +33,8 @@
 //! - [`correct`]: effective coefficients per environment, raw counts to SI units, flags,
 //!   lever arm, 1-sigma calibration error.
 //! - [`store`]: two power-fail-safe slots over an `embedded-storage` NOR flash.
+//! - [`health`]: the unit judges its calibration at rest (stillness, a Kalman filter over the
+//!   biases with the calibration's covariance as its prior, OK / DRIFTED / SUSPECT).
 //! - [`driver`]: real parts over `embedded-hal` 1.0 (the MPU-6050), raw samples for the
 //!   correctors.
 //!
@@ -80,6 +82,7 @@
 pub mod blob;
 pub mod correct;
 pub mod driver;
+pub mod health;
 pub mod model;
 pub mod protocol;
 pub mod store;

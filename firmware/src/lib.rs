@@ -47,6 +47,32 @@ pub struct Case {
     pub steps: &'static [Step],
 }
 
+/// What the health check must report after one sample of a health golden case.
+pub struct HealthCheck {
+    /// Index of the sample.
+    pub after: usize,
+    /// `Verdict as u8`.
+    pub verdict: u8,
+    /// That sample's flag bits.
+    pub flags: u8,
+    /// Refined biases (6), their 1-sigma (6), the two statistics, as `f32` bits.
+    pub bits: [u32; 14],
+}
+
+/// A health golden case: raw samples of a unit at rest and handled, at 25 C and 3.3 V.
+pub struct HealthCase {
+    /// Name (the file stem).
+    pub name: &'static str,
+    /// Blob bytes.
+    pub blob: &'static [u8],
+    /// Sample rate, Hz.
+    pub rate: f32,
+    /// Raw samples.
+    pub raw: &'static [[u16; 6]],
+    /// Checks, in sample order.
+    pub checks: &'static [HealthCheck],
+}
+
 include!(concat!(env!("OUT_DIR"), "/golden_cases.rs"));
 
 /// The corrector of a golden case: the crate's [`AnyCorrector`] for the calibration's kind and

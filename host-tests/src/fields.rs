@@ -183,6 +183,23 @@ pub fn floats(data: &mut CalibrationData) -> Vec<FloatRef<'_>> {
             });
         }
     }
+    if let Some(n) = &mut data.noise {
+        let terms = n.white.iter_mut().map(|v| (Field::WhiteNoise, v));
+        let terms = terms.chain(n.bias_walk.iter_mut().map(|v| (Field::BiasWalk, v)));
+        let rest = [
+            (Field::Ageing, &mut n.ageing_s),
+            (Field::Gravity, &mut n.gravity.lo),
+            (Field::Gravity, &mut n.gravity.hi),
+            (Field::FalseAlarm, &mut n.false_alarm),
+        ];
+        for (field, value) in terms.chain(rest) {
+            out.push(FloatRef {
+                field,
+                set: None,
+                value,
+            });
+        }
+    }
     out
 }
 

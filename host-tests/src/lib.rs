@@ -4,6 +4,7 @@
 
 pub mod fields;
 pub mod golden;
+pub mod health_golden;
 pub mod mainjob;
 pub mod nor;
 pub mod qemu;

@@ -12,7 +12,7 @@ use spincal::{Error, Field, Part};
 /// invalid calibrations can be put in well-formed blobs.
 fn frame(payload: &[u8]) -> Vec<u8> {
     let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
-    let mut out = b"SCAL\x04".to_vec();
+    let mut out = b"SCAL\x05".to_vec();
     out.extend_from_slice(&(payload.len() as u16).to_le_bytes());
     let mut digest = crc.digest();
     digest.update(&out);
@@ -120,8 +120,9 @@ fn wrong_magic_version_and_length_are_refused() {
         blob::decode(&bad),
         Err(Error::HeaderBadMagic { found: *b"SCAM" })
     );
-    // The previous format (its IMU covariance and lever term mean other things) and the next.
-    for version in [1, 2, 3, 5] {
+    // The previous formats (their IMU covariance and lever term mean other things, or they
+    // lack a field) and the next.
+    for version in [1, 2, 3, 4, 6] {
         let mut bad = good.clone();
         bad[4] = version;
         assert_eq!(
@@ -176,7 +177,7 @@ fn nan_and_infinity_in_every_float_field_give_that_fields_error() {
         }
     }
     // Every kind of float field was corrupted at least once.
-    assert_eq!(fields_seen.len(), 17, "{fields_seen:?}");
+    assert_eq!(fields_seen.len(), 22, "{fields_seen:?}");
 }
 
 #[test]
@@ -548,6 +549,7 @@ fn capacities_are_enforced_with_their_own_error() {
         identity: &'a spincal::model::Identity,
         environment: Env,
         sensor: &'a Sensor,
+        noise: Option<u8>,
     }
     let base = CalibrationData::example_triad();
     let env = |t: usize, v: usize| Env {
@@ -563,6 +565,7 @@ fn capacities_are_enforced_with_their_own_error() {
                 identity: &base.identity,
                 environment,
                 sensor: &base.sensor,
+                noise: None,
             })
             .unwrap(),
         )
@@ -587,16 +590,16 @@ fn capacities_are_enforced_with_their_own_error() {
         let many: Vec<_> = std::iter::repeat_n(sets[0], 17).collect();
         let bytes = postcard::to_allocvec(&data).unwrap();
         let one = postcard::to_allocvec(&sets[0]).unwrap();
-        // The sets come last but for the covariance tag (None, 0): replace their length
-        // prefix (1) and the one set.
+        // The sets come last but for the covariance and noise tags (None, 0 each): replace
+        // their length prefix (1) and the one set.
         assert_eq!(bytes.last(), Some(&0));
-        let cut = bytes.len() - one.len() - 2;
+        let cut = bytes.len() - one.len() - 3;
         let mut payload = bytes[..cut].to_vec();
         payload.push(17);
         for s in &many {
             payload.extend_from_slice(&postcard::to_allocvec(s).unwrap());
         }
-        payload.push(0);
+        payload.extend_from_slice(&[0, 0]);
         assert_eq!(
             blob::decode(&frame(&payload)),
             Err(Error::InvalidCapacity {
@@ -650,7 +653,7 @@ fn the_largest_calibration_fits_and_the_framing_is_small() {
     let floats = fields::floats(&mut data).len();
     // The 16-byte serial, the largest time and version add 28 bytes to the examples' framing.
     assert!(
-        n - 4 * floats <= 72 + 28,
+        n - 4 * floats <= 73 + 28,
         "framing {} bytes",
         n - 4 * floats
     );
@@ -666,7 +669,7 @@ fn the_largest_calibration_fits_and_the_framing_is_small() {
 }
 
 #[test]
-fn framing_overhead_of_the_examples_is_at_most_72_bytes() {
+fn framing_overhead_of_the_examples_is_at_most_73_bytes() {
     for (name, mut data) in examples() {
         let n = golden::encode(&data).len();
         let floats = fields::floats(&mut data).len();
@@ -675,8 +678,9 @@ fn framing_overhead_of_the_examples_is_at_most_72_bytes() {
         // 64 until the identity said whether the fit was rejected (one byte), 65 until each
         // of the IMU's rails stated its sample format (one byte each); a two's-complement
         // rail at -32768 takes three varint bytes where 0 takes one (71 for an i16 IMU), and
-        // one more since the environment says how the sets follow the temperature.
-        assert!(overhead <= 72, "{name}: {overhead}");
+        // one more since the environment says how the sets follow the temperature, one more
+        // since a calibration says whether it has noise terms.
+        assert!(overhead <= 73, "{name}: {overhead}");
     }
 }
 
@@ -700,6 +704,7 @@ fn perturbed(
                 | Field::TemperatureBreakpoint
                 | Field::VoltageBreakpoint
                 | Field::InputRange
+                | Field::Gravity
         ) {
             *f.value *= 1.0 + k;
         }

@@ -95,3 +95,40 @@ fn parse_reports_the_line() {
     assert_eq!(err.line, 3);
     assert!(err.message.contains("hex"), "{err}");
 }
+
+/// The health check's vectors: the host's corrector and monitor over the stored raw samples
+/// report the stored health, bit for bit; the cases reach DRIFTED (with the overlay) and
+/// SUSPECT (with the flag).
+#[test]
+fn health_vectors_match_the_host_monitor() {
+    use host_tests::health_golden;
+    for (name, shift) in health_golden::cases() {
+        let path = golden::dir().join(format!("{name}.vectors"));
+        if accept() {
+            let case = health_golden::compute(name, shift);
+            std::fs::write(&path, health_golden::render(&case)).unwrap();
+        }
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let stored =
+            health_golden::parse(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let bytes = std::fs::read(golden::dir().join(&stored.blob)).unwrap();
+        let cal = blob::decode(&bytes).unwrap();
+        let raw: Vec<[u16; 6]> = stored.steps.iter().map(|s| s.raw).collect();
+        let steps = health_golden::run(&cal, stored.rate, &raw);
+        for (i, (got, want)) in steps.iter().zip(&stored.steps).enumerate() {
+            assert_eq!(got, want, "{name} step {i}");
+        }
+        let last = stored.steps.iter().rev().find_map(|s| s.check).unwrap();
+        match name {
+            "health_drifted" => assert_eq!(last.verdict, spincal::health::Verdict::Drifted as u8),
+            _ => {
+                assert_eq!(last.verdict, spincal::health::Verdict::Suspect as u8);
+                assert_ne!(
+                    last.flags & spincal::correct::Flags::CALIBRATION_SUSPECT.bits(),
+                    0
+                );
+            }
+        }
+    }
+}

@@ -44,7 +44,17 @@ fn golden_vectors_match_on_cortex_m4f() {
                 _ => samples,
             }
         })
-        .sum();
+        .sum::<usize>()
+        + host_tests::health_golden::cases()
+            .iter()
+            .map(|(n, _)| {
+                std::fs::read_to_string(host_tests::golden::dir().join(format!("{n}.vectors")))
+                    .unwrap()
+                    .lines()
+                    .filter(|l| l.starts_with("raw "))
+                    .count()
+            })
+            .sum::<usize>();
     assert!(
         summary.contains(&format!(" {expected} samples checked")),
         "{summary}"

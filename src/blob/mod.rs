@@ -3,9 +3,9 @@
 //! ```text
 //! offset  size  field
 //!      0     4  magic "SCAL"
-//!      4     1  format version (4; 3 had no temperature series, 2 did not state the
-//!                 sample format, 1 also had the IMU covariance over [1, u] and the own-axis
-//!                 lever term)
+//!      4     1  format version (5; 4 had no noise terms, 3 no temperature series, 2 did
+//!                 not state the sample format, 1 also had the IMU covariance over [1, u] and
+//!                 the own-axis lever term)
 //!      5     2  payload length, little-endian
 //!      7     4  CRC-32C (Castagnoli), little-endian, over bytes 0..7 and the payload
 //!     11     n  payload: postcard encoding of `CalibrationData`
@@ -22,7 +22,7 @@
 //! let cal = Calibration::new(CalibrationData::example_triad())?;
 //! let mut buf = [0u8; blob::MAX_BLOB_LEN];
 //! let n = blob::encode(&cal, &mut buf)?;
-//! assert_eq!(&buf[..5], b"SCAL\x04");
+//! assert_eq!(&buf[..5], b"SCAL\x05");
 //! assert_eq!(blob::decode(&buf[..n])?, cal);
 //! // One flipped bit anywhere is caught before decoding.
 //! buf[20] ^= 0x10;
@@ -38,7 +38,7 @@ use crate::model::{Calibration, CalibrationData};
 /// The first four bytes of every blob.
 pub const MAGIC: [u8; 4] = *b"SCAL";
 /// The format version this crate writes and reads.
-pub const FORMAT_VERSION: u8 = 4;
+pub const FORMAT_VERSION: u8 = 5;
 /// Bytes in the fixed header.
 pub const HEADER_LEN: usize = 11;
 /// Upper bound on the encoded length of any valid calibration (the largest IMU table with

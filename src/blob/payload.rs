@@ -145,6 +145,7 @@ pub(super) fn read_into(payload: &[u8], slot: &mut CalibrationData) -> Result<()
         }
         _ => return Err(Error::PayloadMalformed),
     }
+    slot.noise = take(&mut rest)?;
     if rest.is_empty() {
         Ok(())
     } else {

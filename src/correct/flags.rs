@@ -28,14 +28,19 @@ impl Flags {
     /// The lever-arm correction had no previous gyro sample for the rate derivative (the first
     /// sample after construction or `reset`); the derivative term was taken as zero.
     pub const RATE_DERIVATIVE_UNKNOWN: Self = Self(1 << 5);
+    /// The unit judged at rest that its calibration no longer holds, beyond what ageing
+    /// explains (shock damage or a fault: [`crate::health`]); every sample carries it until
+    /// the unit is checked on the bench.
+    pub const CALIBRATION_SUSPECT: Self = Self(1 << 6);
 
-    const NAMES: [(Self, &'static str); 6] = [
+    const NAMES: [(Self, &'static str); 7] = [
         (Self::SATURATED, "saturated"),
         (Self::OUT_OF_RANGE, "out-of-range"),
         (Self::TEMPERATURE_CLAMPED, "temperature-clamped"),
         (Self::VOLTAGE_CLAMPED, "voltage-clamped"),
         (Self::NO_CALIBRATION, "no-calibration"),
         (Self::RATE_DERIVATIVE_UNKNOWN, "rate-derivative-unknown"),
+        (Self::CALIBRATION_SUSPECT, "calibration-suspect"),
     ];
 
     /// True when no flag is set.
@@ -59,7 +64,7 @@ impl Flags {
     /// Flags from bits; unknown bits are dropped.
     #[must_use]
     pub const fn from_bits_truncate(bits: u8) -> Self {
-        Self(bits & 0x3f)
+        Self(bits & 0x7f)
     }
 
     /// `self` with `other` added when `cond` holds (branch-free).

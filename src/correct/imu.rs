@@ -13,7 +13,9 @@ use core::marker::PhantomData;
 use crate::Error;
 use crate::model::interval::{Bound, affine_bound};
 use crate::model::rotation::{self, LeverTerms};
-use crate::model::{Calibration, Channel, Environment, ImuCovariance, ImuSet, Rails, Sensor};
+use crate::model::{
+    Calibration, Channel, Environment, ImuCovariance, ImuOutputCovariance, ImuSet, Rails, Sensor,
+};
 
 pub use crate::model::MAX_SAMPLE_RATE_HZ;
 
@@ -28,6 +30,39 @@ const PRIMING_ITERATIONS: usize = 3;
 struct Mode {
     shape: Shape,
     lever: bool,
+}
+
+/// Refined biases applied over the calibration, never written into it (the in-use health
+/// check's overlay, [`crate::health`]): the corrector subtracts them from its outputs and its
+/// [`sigma`](ImuCorrector::sigma) takes their variances in place of the factory biases'.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Overlay {
+    /// Per output `[ax, ay, az, wx, wy, wz]`, the bias subtracted (m/s^2, rad/s).
+    pub bias: [f32; 6],
+    /// Per output, that bias's variance.
+    pub variance: [f32; 6],
+}
+
+impl Overlay {
+    /// Moves the set's offsets by the refined biases: the accelerometer's straight, the
+    /// gyro's also by what the g-sensitivity sees of the accelerometer's.
+    fn apply(&self, set: &mut ImuSet) {
+        let [a0, a1, a2, g0, g1, g2] = self.bias;
+        let ba = [a0, a1, a2];
+        for (o, b) in set.accel.offset.iter_mut().zip(ba) {
+            *o -= b;
+        }
+        for ((o, b), row) in set
+            .gyro
+            .offset
+            .iter_mut()
+            .zip([g0, g1, g2])
+            .zip(&set.g_sensitivity)
+        {
+            *o -= b + rotation::dot(row, &ba);
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -52,10 +87,24 @@ struct Source<'a> {
 /// calibrated accelerometer range applies to the specific force the axes sense, before that
 /// correction.
 #[derive(Debug, Clone)]
+// The per-sample state and the kernel's block first, so that the fast path reaches them with
+// short immediate offsets; the rest (coefficients for the slow path, covariance, overlay)
+// after.
+#[repr(C)]
 pub struct ImuCorrector<'a, S: Sample> {
-    source: Option<Source<'a>>,
-    sample: PhantomData<fn(S)>,
     mode: Mode,
+    env_flags: Flags,
+    primed: bool,
+    /// The previous rate was inside the gyro's calibrated range, so the lever term lies inside
+    /// the bound the gyro window was proven with.
+    prev_in_range: bool,
+    /// The previous corrected gyro rate.
+    prev_rate: [f32; 3],
+    /// The previous lever term `e` (m/s^2), fed to the g-sensitivity.
+    prev_lever: [f32; 3],
+    /// The Cortex-M4F kernel's coefficient block for the environment (`fast.rs`).
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
+    hot: super::m4f::Hot,
     accel: TriadKernel,
     gyro: TriadKernel,
     /// Window limits computed for the environment (the accelerometer's is 0 until the lever
@@ -73,19 +122,14 @@ pub struct ImuCorrector<'a, S: Sample> {
     /// The sensitive directions `n_i` of the accelerometer and the gyro at the environment
     /// (for [`sigma`](Self::sigma)).
     directions: [[[f32; 3]; 3]; 2],
-    /// The previous corrected gyro rate.
-    prev_rate: [f32; 3],
-    /// The previous lever term `e` (m/s^2), fed to the g-sensitivity.
-    prev_lever: [f32; 3],
-    primed: bool,
-    /// The previous rate was inside the gyro's calibrated range, so the lever term lies inside
-    /// the bound the gyro window was proven with.
-    prev_in_range: bool,
-    env_flags: Flags,
     covariance: Option<ImuCovariance>,
-    /// The Cortex-M4F kernel's coefficient block for the environment (`fast.rs`).
-    #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-    hot: super::m4f::Hot,
+    /// The temperature and voltage of the last [`set_environment`](Self::set_environment).
+    environment: [f32; 2],
+    overlay: Option<Overlay>,
+    /// The health check found the calibration SUSPECT: every sample is flagged.
+    suspect: bool,
+    source: Option<Source<'a>>,
+    sample: PhantomData<fn(S)>,
 }
 
 impl<'a, S: Sample> ImuCorrector<'a, S> {
@@ -156,6 +200,9 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
             prev_in_range: false,
             env_flags: Flags::NONE,
             covariance: None,
+            environment: [f32::NAN; 2],
+            overlay: None,
+            suspect: false,
             #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
             hot: super::m4f::Hot::None,
         };
@@ -188,6 +235,9 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
             prev_in_range: false,
             env_flags: Flags::NO_CALIBRATION,
             covariance: None,
+            environment: [f32::NAN; 2],
+            overlay: None,
+            suspect: false,
             #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
             hot: super::m4f::Hot::None,
         }
@@ -199,10 +249,16 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         let Some(src) = self.source else {
             return;
         };
-        let Some((set, flags)) = effective_set(src.env, src.sets, temperature, voltage) else {
+        self.environment = [temperature, voltage];
+        let Some((mut set, mut flags)) = effective_set(src.env, src.sets, temperature, voltage)
+        else {
             *self = Self::identity();
             return;
         };
+        if let Some(overlay) = &self.overlay {
+            overlay.apply(&mut set);
+        }
+        flags = flags.with_if(Flags::CALIBRATION_SUSPECT, self.suspect);
         let terms = if self.mode.lever {
             match LeverTerms::new(&set.accel.matrix, &self.lever, self.rate) {
                 Some(t) => t,
@@ -253,6 +309,76 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         }
         #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
         self.refresh_m4f();
+    }
+
+    /// Applies refined biases over the calibration (`None` removes them); the coefficients are
+    /// rebuilt at the current environment. The calibration itself is never changed.
+    pub fn set_overlay(&mut self, overlay: Option<Overlay>) {
+        self.overlay = overlay;
+        let [t, v] = self.environment;
+        self.set_environment(t, v);
+    }
+
+    /// The refined biases applied, if any.
+    #[must_use]
+    pub const fn overlay(&self) -> Option<&Overlay> {
+        self.overlay.as_ref()
+    }
+
+    /// Flags every sample [`Flags::CALIBRATION_SUSPECT`] (or stops).
+    pub fn set_suspect(&mut self, suspect: bool) {
+        self.suspect = suspect;
+        let [t, v] = self.environment;
+        self.set_environment(t, v);
+    }
+
+    /// Whether every sample is flagged [`Flags::CALIBRATION_SUSPECT`].
+    #[must_use]
+    pub const fn suspect(&self) -> bool {
+        self.suspect
+    }
+
+    /// Per output, the variance that quantisation adds to one corrected sample:
+    /// `sum_j M_ij^2 / 12` (a code is uniform over its width).
+    #[must_use]
+    pub fn quantisation_variance(&self) -> [f32; 6] {
+        let row = |m: &[f32; 3]| m.iter().map(|x| x * x).sum::<f32>() / 12.0;
+        let [a0, a1, a2] = &self.accel.m;
+        let [g0, g1, g2] = &self.gyro.m;
+        [row(a0), row(a1), row(a2), row(g0), row(g1), row(g2)]
+    }
+
+    /// Per output, the variance of one corrected sample of a unit at rest whose outputs carry
+    /// white noise of variance `white` per sample: with quantisation, the accelerometer's
+    /// with the tangential lever term of the gyro noise's backward difference (`2 var` per
+    /// rate, through the coefficients that fold in the sample rate), the gyro's with the
+    /// g-sensitivity of the accelerometer noise.
+    #[must_use]
+    pub fn sample_variance(&self, white: &[f32; 6]) -> [f32; 6] {
+        let mut v = self.quantisation_variance();
+        for (x, w) in v.iter_mut().zip(white) {
+            *x += w;
+        }
+        let [a0, a1, a2, g0, g1, g2] = v;
+        let (accel, gyro) = ([a0, a1, a2], [g0, g1, g2]);
+        let through = |row: &[f32; 3], var: &[f32; 3], k: f32| -> f32 {
+            row.iter().zip(var).map(|(c, v)| c * c * v * k).sum()
+        };
+        let mut out = v;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o += match i {
+                0..3 => self
+                    .terms
+                    .tangential
+                    .get(i)
+                    .map_or(0.0, |t| through(t, &gyro, 2.0)),
+                _ => self
+                    .neg_g
+                    .get(i - 3)
+                    .map_or(0.0, |g| through(g, &accel, 1.0)),
+            };
+        }
+        out
     }
 
     /// Forgets the previous gyro sample (after a gap in the stream): the next sample's rate
@@ -333,9 +459,29 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
     /// environment: bias, sensitivity and misalignment, lever arm, g-sensitivity and g-squared
     /// terms, over the features of [`IMU_FEATURES`](crate::model::IMU_FEATURES) (the
     /// tangential term is left out of them: it is a small part of the spin's at any rate a
-    /// round spins up at). `None` when the calibration has no covariance factors.
+    /// round spins up at). `None` when the calibration has no covariance factors. With an
+    /// [`Overlay`], each refined bias's variance stands in for the factory bias's own.
     #[must_use]
     pub fn sigma(&self, values: &[f32; 6]) -> Option<[f32; 6]> {
+        let (mut norms, own) = self.factor_norms(values)?;
+        if let Some(overlay) = &self.overlay {
+            for ((n, b), v) in norms.iter_mut().zip(own).zip(overlay.variance) {
+                *n = libm::sqrtf((*n * *n - b * b).max(0.0) + v);
+            }
+        }
+        Some(norms)
+    }
+
+    /// Per output of the corrected sample `values`, the factory calibration's error variance
+    /// (whatever the overlay) and its bias's own part. `None` without covariance factors.
+    #[must_use]
+    pub fn factory_variances(&self, values: &[f32; 6]) -> Option<([f32; 6], [f32; 6])> {
+        let (norms, own) = self.factor_norms(values)?;
+        Some((norms.map(|x| x * x), own.map(|x| x * x)))
+    }
+
+    /// The factory 1-sigma of each output and of its bias alone.
+    fn factor_norms(&self, values: &[f32; 6]) -> Option<([f32; 6], [f32; 6])> {
         let ImuCovariance {
             accel: ca,
             gyro: cg,
@@ -362,14 +508,18 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         };
         let [a0, a1, a2] = ca;
         let [g0, g1, g2] = cg;
-        Some([
-            factor_norm(a0.as_flattened(), &accel(0)),
-            factor_norm(a1.as_flattened(), &accel(1)),
-            factor_norm(a2.as_flattened(), &accel(2)),
-            factor_norm(g0.as_flattened(), &gyro(0)),
-            factor_norm(g1.as_flattened(), &gyro(1)),
-            factor_norm(g2.as_flattened(), &gyro(2)),
-        ])
+        let own = |l: &ImuOutputCovariance| l.as_flattened().first().map_or(0.0, |x| x.abs());
+        Some((
+            [
+                factor_norm(a0.as_flattened(), &accel(0)),
+                factor_norm(a1.as_flattened(), &accel(1)),
+                factor_norm(a2.as_flattened(), &accel(2)),
+                factor_norm(g0.as_flattened(), &gyro(0)),
+                factor_norm(g1.as_flattened(), &gyro(1)),
+                factor_norm(g2.as_flattened(), &gyro(2)),
+            ],
+            [own(a0), own(a1), own(a2), own(g0), own(g1), own(g2)],
+        ))
     }
 
     /// The sensor-domain specific force and the gyro's rate before g-sensitivity.

@@ -139,6 +139,32 @@ impl<'a> AnyImuCorrector<'a> {
     pub fn sigma(&self, values: &[f32; 6]) -> Option<[f32; 6]> {
         each!(self, |c| c.sigma(values))
     }
+
+    /// See [`ImuCorrector::set_overlay`].
+    pub fn set_overlay(&mut self, overlay: Option<crate::correct::Overlay>) {
+        each!(self, |c| c.set_overlay(overlay));
+    }
+
+    /// See [`ImuCorrector::overlay`].
+    #[must_use]
+    pub fn overlay(&self) -> Option<crate::correct::Overlay> {
+        each!(self, |c| c.overlay().copied())
+    }
+
+    /// See [`ImuCorrector::set_suspect`].
+    pub fn set_suspect(&mut self, suspect: bool) {
+        each!(self, |c| c.set_suspect(suspect));
+    }
+
+    /// Gives a corrected sample to the health check
+    /// ([`RestMonitor::observe_rest`](crate::health::RestMonitor::observe_rest)).
+    pub fn observe_rest(
+        &mut self,
+        monitor: &mut crate::health::RestMonitor,
+        out: &Corrected<6>,
+    ) -> crate::health::Verdict {
+        each!(self, |c| monitor.observe_rest(c, out))
+    }
 }
 
 /// A [`TriadCorrector`] of the calibration's own format, fed `i32` codes.

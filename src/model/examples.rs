@@ -10,7 +10,8 @@
 
 use super::{
     AxisNonlinearity, BoundedVec, CalibrationData, Channel, Environment, Identity, ImuCovariance,
-    ImuSet, Quantity, Rails, Sensor, Serial, SingleSet, Span, TemperatureModel, TriadSet,
+    ImuSet, NoiseTerms, Quantity, Rails, Sensor, Serial, SingleSet, Span, TemperatureModel,
+    TriadSet,
 };
 
 use super::sets::Blend;
@@ -241,6 +242,7 @@ impl CalibrationData {
                 sets: table(&sets),
                 covariance: Some(table(&[[0.02, 1.0e-6, 3.0e-7]; 6])),
             },
+            noise: None,
         }
     }
 
@@ -307,6 +309,7 @@ impl CalibrationData {
                 sets: table(&sets),
                 covariance: Some(table(&covariance)),
             },
+            noise: None,
         }
     }
 
@@ -336,6 +339,7 @@ impl CalibrationData {
                 sets: table(&[set]),
                 covariance: None,
             },
+            noise: None,
         }
     }
 
@@ -464,6 +468,20 @@ impl CalibrationData {
                     None
                 },
             },
+            noise: full.then_some(imu_noise()),
         }
+    }
+}
+
+/// A tactical MEMS IMU's noise: white noise of 0.047 m/s^2 and 6.3e-3 rad/s per sample at
+/// 1 kHz; bias walks that move the biases by 0.8 of their stated 1-sigma at 25 C over the
+/// ageing time of about 12 days.
+fn imu_noise() -> NoiseTerms {
+    NoiseTerms {
+        white: [1.5e-3, 1.5e-3, 1.5e-3, 2.0e-4, 2.0e-4, 2.0e-4],
+        bias_walk: [1.6e-5, 1.6e-5, 1.6e-5, 8.0e-7, 8.0e-7, 8.0e-7],
+        ageing_s: 1.0e6,
+        gravity: Span::new(9.80, 9.82),
+        false_alarm: 1.0e-3,
     }
 }

@@ -36,12 +36,14 @@
 mod bounded;
 pub mod examples;
 pub(crate) mod interval;
+mod noise;
 pub mod rotation;
 mod series;
 mod sets;
 pub(crate) mod validate;
 
 pub use bounded::{BoundedVec, Serial};
+pub use noise::{IMU_OUTPUTS, NoiseTerms};
 pub(crate) use sets::Blend;
 pub use sets::{
     AxisNonlinearity, IMU_FEATURES, ImuCovariance, ImuOutputCovariance, ImuSet, SingleCovariance,
@@ -380,6 +382,9 @@ pub struct CalibrationData {
     pub environment: Environment,
     /// The sensor and its coefficients.
     pub sensor: Sensor,
+    /// The IMU's noise terms and the allowances of its health check at rest
+    /// ([`crate::health`]); `None`: the unit corrects but does not judge its calibration.
+    pub noise: Option<NoiseTerms>,
 }
 
 impl CalibrationData {
@@ -406,6 +411,7 @@ impl CalibrationData {
                 sets: BoundedVec::new(),
                 covariance: None,
             },
+            noise: None,
         }
     }
 }

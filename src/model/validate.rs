@@ -29,6 +29,15 @@ pub(super) fn validate(data: &CalibrationData) -> Result<(), Error> {
         return Err(Error::InvalidSerial);
     }
     validate_environment(&data.environment)?;
+    if let Some(noise) = &data.noise {
+        if !matches!(data.sensor, Sensor::Imu { .. }) {
+            return Err(Error::InvalidNoiseTerm {
+                field: Field::Sets,
+                index: None,
+            });
+        }
+        noise.validate()?;
+    }
     let expected = data.environment.temperature_points() * data.environment.voltage_points();
     match &data.sensor {
         Sensor::Single {

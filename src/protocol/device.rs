@@ -7,7 +7,8 @@ use super::{
     UnitSensor,
 };
 use crate::blob::{self, MAX_BLOB_LEN};
-use crate::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
+use crate::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Overlay};
+use crate::health::RestMonitor;
 use crate::model::{Calibration, CalibrationData, Sensor, Serial};
 use crate::store::{SlotInfo, Store, StoreError};
 
@@ -33,6 +34,18 @@ pub struct Device<F> {
     next: u32,
     buf: [u8; SLOT_BUFFER],
     frame: [u8; MAX_FRAME],
+    /// The health check of the running stream (in RAM only: a power cut or a new calibration
+    /// starts it afresh, and it never touches the store).
+    health: Health,
+}
+
+/// The running IMU stream's health check and what it gave the corrector: the corrector
+/// borrows the calibration, so it is rebuilt per request with this state.
+#[derive(Debug, Default)]
+struct Health {
+    monitor: Option<RestMonitor>,
+    overlay: Option<Overlay>,
+    suspect: bool,
 }
 
 impl<F: NorFlash> Device<F> {
@@ -52,6 +65,7 @@ impl<F: NorFlash> Device<F> {
             next: 0,
             buf: [0; SLOT_BUFFER],
             frame: [0; MAX_FRAME],
+            health: Health::default(),
         };
         d.reload();
         d
@@ -63,6 +77,8 @@ impl<F: NorFlash> Device<F> {
             .load(&mut self.buf, &mut self.cal)
             .ok()
             .map(|(_, info)| info);
+        // A new calibration is judged afresh.
+        self.health = Health::default();
     }
 
     /// The current calibration (the validated RAM copy), if any.
@@ -112,6 +128,62 @@ impl<F: NorFlash> Device<F> {
                 Ok(()) => Response::LockedOk,
                 Err(_) => Response::Error(Status::StoreFailed),
             },
+            Request::ObserveRest {
+                temperature,
+                voltage,
+                raw,
+            } => self.observe_rest(temperature, voltage, &raw),
+            Request::ReadHealth => self.read_health(),
+        }
+    }
+
+    /// The health check's monitor, made for the current calibration when first needed.
+    fn monitor(&mut self) -> Result<(), Status> {
+        let Some(cal) = self.calibration() else {
+            return Err(Status::NoCalibration);
+        };
+        if self.health.monitor.is_none() {
+            let monitor =
+                RestMonitor::new(cal, VECTOR_RATE_HZ).map_err(Status::HealthUnavailable)?;
+            self.health.monitor = Some(monitor);
+        }
+        Ok(())
+    }
+
+    fn observe_rest(&mut self, temperature: f32, voltage: f32, raw: &[[i32; 6]]) -> Response {
+        if let Err(status) = self.monitor() {
+            return Response::Error(status);
+        }
+        let (Some(cal), Some(monitor)) = (
+            Calibration::validate_in_place(&self.cal).ok(),
+            self.health.monitor.as_mut(),
+        ) else {
+            return Response::Error(Status::NoCalibration);
+        };
+        let Ok(mut c) = AnyImuCorrector::new(cal, VECTOR_RATE_HZ) else {
+            return Response::Error(Status::NoCalibration);
+        };
+        c.set_overlay(self.health.overlay);
+        c.set_suspect(self.health.suspect);
+        c.set_environment(temperature, voltage);
+        let mut out = heapless::Vec::new();
+        for r in raw {
+            let o = c.correct(*r);
+            c.observe_rest(monitor, &o);
+            let _ = out.push((o.values, o.flags.bits()));
+        }
+        self.health.overlay = c.overlay();
+        self.health.suspect = monitor.health().verdict == crate::health::Verdict::Suspect;
+        Response::Vectors { out }
+    }
+
+    fn read_health(&mut self) -> Response {
+        if let Err(status) = self.monitor() {
+            return Response::Error(status);
+        }
+        match &self.health.monitor {
+            Some(m) => Response::Health(m.health()),
+            None => Response::Error(Status::NoCalibration),
         }
     }
 

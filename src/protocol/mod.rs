@@ -120,8 +120,9 @@ pub const MAX_CHUNK: usize = 256;
 pub const MAX_VECTORS: usize = 16;
 /// Largest encoded frame, terminator included.
 pub const MAX_FRAME: usize = 640;
-/// The protocol's version (in [`Identity`]); 2 added the unit's [`UnitSensor`].
-pub const PROTOCOL_VERSION: u8 = 2;
+/// The protocol's version (in [`Identity`]); 2 added the unit's [`UnitSensor`], 3 the health
+/// check at rest ([`Request::ObserveRest`], [`Request::ReadHealth`]).
+pub const PROTOCOL_VERSION: u8 = 3;
 
 /// What the host asks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -163,6 +164,22 @@ pub enum Request {
     },
     /// Refuse all further writes, for good.
     Lock,
+    /// Correct raw samples of an IMU as [`Request::RunVectors`] does, with the health
+    /// check's overlay and flag, and give them to the health check at rest, whose state is kept
+    /// from one request to the next (the lever-arm state is not: each request's first sample
+    /// has no rate derivative): a unit whose own sensor stream is not running (the example
+    /// device) takes its stream this way.
+    ObserveRest {
+        /// Temperature, C.
+        temperature: f32,
+        /// Supply voltage, V.
+        voltage: f32,
+        /// Raw samples, in order.
+        raw: heapless::Vec<[i32; 6], MAX_VECTORS>,
+    },
+    /// The unit's health: its verdict on its calibration, the refined terms and their
+    /// covariance, and its time at rest ([`crate::health`]).
+    ReadHealth,
 }
 
 /// Why the device refused a request.
@@ -199,6 +216,9 @@ pub enum Status {
         /// What the blob is for.
         blob: UnitSensor,
     },
+    /// The calibration gives the health check nothing to run on (no noise terms, no
+    /// covariance, not an IMU: the error says which); the unit still corrects.
+    HealthUnavailable(crate::Error),
 }
 
 /// The device's answer to [`Request::Identify`].
@@ -258,6 +278,8 @@ pub enum Response {
     },
     /// To [`Request::Lock`].
     LockedOk,
+    /// To [`Request::ReadHealth`].
+    Health(crate::health::Health),
     /// A refusal; nothing changed.
     Error(Status),
 }
@@ -336,7 +358,7 @@ pub fn decode<'a, T: Deserialize<'a>>(
 }
 
 /// Number of request kinds (the largest known postcard variant index plus one).
-const REQUEST_KINDS: u32 = 7;
+const REQUEST_KINDS: u32 = 9;
 
 /// Whether a body that failed to decode names a request this firmware does not know.
 fn unknown_request(frame: &[u8], scratch: &mut [u8]) -> bool {

@@ -285,7 +285,13 @@ fn main() -> ! {
         one_out = one(&mut fresh, black_box(inside[3]));
     });
     black_box(&one_out);
+    let health_stack = bench_health();
     hprintln!("stack correct {}", correct_stack);
+    hprintln!("stack health_observe_rest {}", health_stack);
+    hprintln!(
+        "size rest_monitor {}",
+        core::mem::size_of::<spincal::health::RestMonitor>()
+    );
     hprintln!("stack correct_first_sample {}", first_stack);
     hprintln!("stack correct_batch {}", batch_stack);
     hprintln!("stack set_environment {}", env_stack);
@@ -319,4 +325,78 @@ fn bench_format<S: Sample>(
 fn fail(what: &str) -> ! {
     hprintln!("FAIL {}", what);
     spincal_firmware::exit(false)
+}
+
+#[inline(never)]
+fn observe(
+    m: &mut spincal::health::RestMonitor,
+    c: &mut ImuCorrector<'_, u16>,
+    out: &Corrected<6>,
+) -> spincal::health::Verdict {
+    m.observe_rest(c, out)
+}
+
+/// The health check on the `health_drifted` golden samples (rest, a turn, rest; DRIFTED with
+/// the overlay refreshed at each checkpoint): the samples corrected alone, then corrected and
+/// observed; the difference per sample is the detector's and the filter's cost, window ends
+/// and checkpoints amortised. Returns the stack high-water of one window-ending observation.
+fn bench_health() -> usize {
+    let Some(case) = spincal_firmware::HEALTH_CASES
+        .iter()
+        .find(|c| c.name == "health_drifted")
+    else {
+        fail("no health_drifted case")
+    };
+    let Ok(cal) = blob::decode(case.blob) else {
+        fail("health blob")
+    };
+    let fresh = || {
+        let Ok(mut c) = ImuCorrector::<u16>::new(&cal, case.rate) else {
+            fail("health corrector")
+        };
+        c.set_environment(25.0, 3.3);
+        c
+    };
+    let Ok(monitor) = spincal::health::RestMonitor::new(&cal, case.rate) else {
+        fail("health monitor")
+    };
+    let mut c = fresh();
+    let t0 = timer::now();
+    for r in case.raw {
+        black_box(one(&mut c, black_box(*r)));
+    }
+    let t1 = timer::now();
+    let alone = t0.wrapping_sub(t1);
+    let mut c = fresh();
+    let mut m = monitor.clone();
+    let t0 = timer::now();
+    for r in case.raw {
+        let out = one(&mut c, black_box(*r));
+        black_box(observe(&mut m, &mut c, &out));
+    }
+    let t1 = timer::now();
+    let both = t0.wrapping_sub(t1);
+    if m.health().verdict != spincal::health::Verdict::Drifted {
+        fail("health_drifted is not DRIFTED");
+    }
+    report(
+        "health_observe_rest",
+        both.wrapping_sub(alone),
+        case.raw.len(),
+    );
+    // One window's end: the last sample of a window at rest.
+    let mut c = fresh();
+    let mut m = monitor;
+    let len = usize::from(spincal::health::WINDOW);
+    let mut stack = 0;
+    for (i, r) in case.raw.iter().take(4 * len).enumerate() {
+        let out = one(&mut c, *r);
+        if i + 1 == 4 * len {
+            let (_, s) = stack::high_water(|| black_box(observe(&mut m, &mut c, &out)));
+            stack = s;
+        } else {
+            observe(&mut m, &mut c, &out);
+        }
+    }
+    stack
 }

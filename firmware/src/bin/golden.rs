@@ -8,8 +8,9 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use spincal::blob;
 use spincal::correct::{Corrected, ImuCorrector, Sample, format_of};
+use spincal::health::RestMonitor;
 use spincal::model::{Calibration, SampleFormat};
-use spincal_firmware::{CASES, Case, Kind, Runner, Step};
+use spincal_firmware::{CASES, Case, HEALTH_CASES, HealthCase, Kind, Runner, Step};
 
 /// Samples per `correct_batch` call: the steps between two environments go through in blocks
 /// of this many, so the batch path meets the window edges at every position.
@@ -74,6 +75,12 @@ fn main() -> ! {
             failures += bad;
         }
         hprintln!("case {}: {} steps", case.name, case.steps.len());
+    }
+    for case in HEALTH_CASES {
+        let (n, bad) = check_health(case);
+        checked += n;
+        failures += bad;
+        hprintln!("case {}: {} samples", case.name, case.raw.len());
     }
     hprintln!(
         "golden: {} samples checked, {} mismatches",
@@ -211,4 +218,54 @@ fn check_batch_as<S: Sample>(case: &Case, cal: &Calibration, rate: f32) -> (u32,
     }
     batch.flush(&mut imu);
     (batch.checked, batch.failures)
+}
+
+/// Runs a health case's samples through the corrector and the monitor, one `correct` at a
+/// time as the device would, and compares the health after each checked sample bit for bit.
+fn check_health(case: &HealthCase) -> (u32, u32) {
+    let Ok(cal) = blob::decode(case.blob) else {
+        hprintln!("FAIL {}: blob does not decode", case.name);
+        return (0, 1);
+    };
+    let (Ok(mut imu), Ok(mut monitor)) = (
+        ImuCorrector::<u16>::new(&cal, case.rate),
+        RestMonitor::new(&cal, case.rate),
+    ) else {
+        hprintln!("FAIL {}: no corrector or monitor", case.name);
+        return (0, 1);
+    };
+    imu.set_environment(25.0, 3.3);
+    let mut checks = case.checks.iter().peekable();
+    let mut failures = 0;
+    for (i, raw) in case.raw.iter().enumerate() {
+        let out = imu.correct(*raw);
+        monitor.observe_rest(&mut imu, &out);
+        let Some(check) = checks.next_if(|c| c.after == i) else {
+            continue;
+        };
+        let h = monitor.health();
+        let mut bits = [0u32; 14];
+        for (b, x) in bits
+            .iter_mut()
+            .zip(h.bias.iter().chain(&h.bias_sigma).chain(&h.statistic))
+        {
+            *b = x.to_bits();
+        }
+        let verdict = h.verdict as u8;
+        if bits != check.bits || verdict != check.verdict || out.flags.bits() != check.flags {
+            failures += 1;
+            hprintln!(
+                "FAIL {} sample {}: verdict {} flags {:02x} {:08x?}, expected {} {:02x} {:08x?}",
+                case.name,
+                i,
+                verdict,
+                out.flags.bits(),
+                bits,
+                check.verdict,
+                check.flags,
+                check.bits
+            );
+        }
+    }
+    (case.raw.len() as u32, failures)
 }

@@ -130,7 +130,7 @@ const SCHEMA: &str = "
 CREATE TABLE IF NOT EXISTS records (
     id INTEGER PRIMARY KEY,
     serial TEXT NOT NULL,
-    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash')),
+    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health')),
     time INTEGER NOT NULL,
     data_hash TEXT NOT NULL,
     model TEXT,
@@ -146,9 +146,40 @@ CREATE INDEX IF NOT EXISTS records_serial ON records (serial, time);
 ";
 
 /// The schema version this calflash reads and writes (`PRAGMA user_version`). Version 0 is a
-/// database of the releases before versioning: the same table, migrated by setting the
-/// version.
-pub const SCHEMA_VERSION: i64 = 1;
+/// database of the releases before versioning, version 1 one whose records are fits and
+/// flashes only; both are migrated (in one transaction) when written to: the table is rebuilt
+/// so that it also takes the unit's health reports.
+pub const SCHEMA_VERSION: i64 = 2;
+
+/// Rebuilds a version 0 or 1 table under the present schema, in one transaction.
+const MIGRATE_TO_2: &str = "
+BEGIN;
+ALTER TABLE records RENAME TO records_v1;
+DROP INDEX IF EXISTS records_serial;
+CREATE TABLE records (
+    id INTEGER PRIMARY KEY,
+    serial TEXT NOT NULL,
+    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health')),
+    time INTEGER NOT NULL,
+    data_hash TEXT NOT NULL,
+    model TEXT,
+    coefficients TEXT,
+    covariance TEXT,
+    report TEXT,
+    blob BLOB NOT NULL,
+    verification TEXT,
+    outcome TEXT NOT NULL,
+    record TEXT
+);
+INSERT INTO records (id, serial, kind, time, data_hash, model, coefficients, covariance,
+    report, blob, verification, outcome, record)
+    SELECT id, serial, kind, time, data_hash, model, coefficients, covariance, report, blob,
+    verification, outcome, record FROM records_v1;
+DROP TABLE records_v1;
+CREATE INDEX records_serial ON records (serial, time);
+PRAGMA user_version = 2;
+COMMIT;
+";
 
 /// The columns of `records` the code reads and writes.
 const COLUMNS: [&str; 13] = [
@@ -192,8 +223,10 @@ fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<(), Strin
         ));
     }
     if version < SCHEMA_VERSION && write {
-        conn.execute_batch(&format!("PRAGMA user_version = {SCHEMA_VERSION}"))
-            .map_err(|e| explain(path, &e))?;
+        conn.execute_batch(MIGRATE_TO_2).map_err(|e| {
+            let _ = conn.execute_batch("ROLLBACK;");
+            explain(path, &e)
+        })?;
     }
     Ok(())
 }
@@ -380,6 +413,37 @@ impl Db {
             blob,
             verification: None,
             outcome: record["verdict"].as_str().unwrap_or("").to_lowercase(),
+            record: Some(record.to_string()),
+        })
+    }
+
+    /// Records a health report read from the unit (`calflash health`): the verdict as the
+    /// outcome, the refined terms as the coefficients and covariance, the whole report as the
+    /// record, and the blob of the calibration it judged.
+    ///
+    /// # Errors
+    /// A message naming the file and why; nothing is written then.
+    pub fn record_health(
+        &mut self,
+        serial: &str,
+        blob: &[u8],
+        record: &serde_json::Value,
+    ) -> Result<i64, String> {
+        let health = &record["health"];
+        let coefficients = serde_json::json!({"bias": health["bias"]});
+        let covariance = serde_json::json!({"bias_sigma": health["bias_sigma"], "accel_covariance": health["accel_covariance"]});
+        self.insert(&Row {
+            serial,
+            kind: "health",
+            time: now(),
+            data_hash: blob_hash(blob).unwrap_or_default(),
+            model: Some("health at rest: refined biases (spincal::health)".into()),
+            coefficients: Some(coefficients.to_string()),
+            covariance: Some(covariance.to_string()),
+            report: None,
+            blob,
+            verification: None,
+            outcome: health["verdict"].as_str().unwrap_or("").to_lowercase(),
             record: Some(record.to_string()),
         })
     }

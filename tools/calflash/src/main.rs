@@ -40,6 +40,8 @@ enum Command {
     Image(cmd::image::ImageArgs),
     /// A unit's fits and flashes.
     History(cmd::history::HistoryArgs),
+    /// Is the unit's calibration still good? Its health check at rest, read or run.
+    Health(cmd::health::HealthArgs),
 }
 
 /// Every command takes negative numbers as option values (`--latitude -33.9`), lists of them
@@ -85,6 +87,11 @@ fn main() -> ExitCode {
         Command::Flash(args) => cmd::flash::run(args),
         Command::Image(args) => cmd::image::run(args),
         Command::History(args) => cmd::history::run(args),
+        Command::Health(args) => match cmd::health::run(args) {
+            // A SUSPECT unit has the rejected unit's exit code.
+            Ok("SUSPECT") => return ExitCode::from(3),
+            other => other.map(|_| ()),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

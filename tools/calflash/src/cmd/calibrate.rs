@@ -108,6 +108,28 @@ pub struct CalibrateArgs {
     /// The azimuth of the fixture's reference mark from true north, degrees clockwise.
     #[arg(long, requires = "latitude", value_parser = values::finite)]
     pub heading: Option<f64>,
+    /// IMUs: the accelerometer's and the gyro's noise (two `calflash allan --json` files, in
+    /// SI units) go into the blob, so that the unit can judge its calibration at rest.
+    #[arg(long, value_name = "ACCEL.json,GYRO.json", value_delimiter = ',')]
+    pub noise: Vec<PathBuf>,
+    /// With --noise: the time over which ageing may move the biases by their random walk
+    /// before the unit calls a drift SUSPECT (its shelf life, or the interval between bench
+    /// checks), in s, or with the suffix h or d.
+    #[arg(long, default_value = "365d", requires = "noise", value_parser = values::duration)]
+    pub ageing: f64,
+    /// With --noise: the magnitude of gravity wherever the unit may rest, m/s^2 (a narrower
+    /// span lets one pose test the accelerometer along gravity more sharply).
+    #[arg(
+        long,
+        value_name = "LO:HI",
+        default_value = "9.78:9.84",
+        requires = "noise"
+    )]
+    pub gravity: String,
+    /// With --noise: the probability that the unit calls a calibration that holds SUSPECT
+    /// (or one aged within the allowance) in one period at rest.
+    #[arg(long, default_value_t = 1e-3, requires = "noise", value_parser = values::level)]
+    pub false_alarm: f64,
 }
 
 /// Runs `calflash calibrate`; returns the verdict (the process exits 3 on reject).
@@ -119,8 +141,11 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
     args.out.check(
         Paths::new()
             .input("the data", Some(&args.data))
-            .input("--still-ramp", args.still_ramp.as_deref()),
+            .input("--still-ramp", args.still_ramp.as_deref())
+            .input("--noise", args.noise.first().map(PathBuf::as_path))
+            .input("--noise", args.noise.get(1).map(PathBuf::as_path)),
     )?;
+    let noise = noise_terms(args)?;
     let mut opts = Options::new(&args.data, &args.serial);
     opts.format = args.format;
     opts.alpha = args.alpha;
@@ -180,6 +205,13 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         SensorKind::Imu => triad::calibrate(&opts, triad::Kind::Imu, args.nonlinear),
     }
     .map_err(|e| e.to_string())?;
+    let mut c = c;
+    if let Some(terms) = noise {
+        c.data.noise = Some(terms);
+        c.blob = sensor::blob::encode_checked(&c.data)
+            .map_err(|e| format!("--noise: {e}"))?
+            .0;
+    }
     let data_name = args.data.display().to_string();
     // A rejected calibration has no blob, unless forced; a forced one says so in its identity.
     let blob = match (c.verdict(), args.out.force_blob) {
@@ -200,6 +232,33 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         d.record_fit(&record, report_path, blob.as_deref().unwrap_or_default())
     })?;
     Ok(c.verdict())
+}
+
+/// The noise terms `--noise` names, with the allowances; `None` without `--noise`.
+fn noise_terms(args: &CalibrateArgs) -> Result<Option<spincal::model::NoiseTerms>, String> {
+    let (accel, gyro) = match args.noise.as_slice() {
+        [] => return Ok(None),
+        [a, g] => (a, g),
+        other => {
+            return Err(format!(
+                "--noise: two files, the accelerometer's and the gyro's Allan JSON, {} given",
+                other.len()
+            ));
+        }
+    };
+    if args.sensor != SensorKind::Imu {
+        return Err(
+            "--noise: the health check at rest is an IMU's (it needs the gyros and the accelerometers)"
+                .into(),
+        );
+    }
+    let gravity = values::pair(&args.gravity, "--gravity")?;
+    let allow = crate::noise::stated::Allowances {
+        ageing_s: args.ageing,
+        gravity,
+        false_alarm: args.false_alarm,
+    };
+    crate::noise::stated::from_allan(accel, gyro, &allow).map(Some)
 }
 
 fn hex(b: &[u8]) -> String {

@@ -17,8 +17,24 @@ pub struct SimulateArgs {
     /// Plan items (repeatable): head:N, tumble:6|12|18|24|26, sphere:N, rate:LO:HI:N (rad/s),
     /// diagonal:LO:HI:N (rad/s, about the 45-degree diagonals), centrifuge:LO:HI:N (g),
     /// sweep:LO:HI:N, fine:LO:HI:N.
-    #[arg(long, required_unless_present_any = ["plan_file", "spin"])]
+    #[arg(long, required_unless_present_any = ["plan_file", "spin", "rest"])]
     pub plan: Vec<String>,
+    /// An IMU at rest and being handled, as the raw counts of this blob's device correction
+    /// (for `calflash health` and `allan`): rests of `--hold` seconds in `--poses` poses, one
+    /// second turning between them, at `--sample-rate`, its biases off the calibration by
+    /// `--shift`. The file has a row per sample: `t` and the six counts.
+    #[arg(long, value_name = "BLOB", conflicts_with_all = ["plan", "plan_file", "spin"])]
+    pub rest: Option<PathBuf>,
+    /// With --rest: how far each bias `ax,ay,az,wx,wy,wz` is off the calibration, in the
+    /// calibration's stated 1-sigma at rest (an aged or shocked unit).
+    #[arg(long, requires = "rest", value_delimiter = ',', allow_negative_numbers = true, value_parser = super::values::finite)]
+    pub shift: Vec<f64>,
+    /// With --rest: the number of rest poses.
+    #[arg(long, default_value_t = 3, requires = "rest", value_parser = |s: &str| super::values::count_in(s, 1, 24))]
+    pub poses: usize,
+    /// With --rest: seconds at rest in each pose.
+    #[arg(long, default_value_t = 5.0, requires = "rest", value_parser = |s: &str| super::values::in_range(s, 0.1, 3600.0))]
+    pub hold: f64,
     /// A spin-rig flight of an IMU instead of a plan: the unit rolls about its x axis, held
     /// horizontal (gravity transverse), through comma-separated segments `HZ:SECONDS` (steady)
     /// and `FROM-TO:SECONDS` (spin-up or spin-down), e.g. `50:1,150:1,300:1,150-300:0.5`. The
@@ -26,9 +42,9 @@ pub struct SimulateArgs {
     /// counts (noisy, rounded), for `calflash apply --time-column t --reference`.
     #[arg(long, conflicts_with_all = ["plan", "plan_file"])]
     pub spin: Option<String>,
-    /// Samples per second of a spin-rig flight.
-    #[arg(long, default_value_t = 2000.0, requires = "spin", value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
-    pub sample_rate: f64,
+    /// Samples per second of a spin-rig flight (2000 unless stated) or of a unit at rest (1000).
+    #[arg(long, value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
+    pub sample_rate: Option<f64>,
     /// The unit's axis a spin-rig flight turns it about, `X,Y,Z` in its own axes.
     #[arg(
         long,
@@ -172,17 +188,18 @@ const MAX_FLIGHT_SAMPLES: f64 = 1e7;
 
 fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     use crate::sim::spin;
+    let sample_rate = args.sample_rate.unwrap_or(2000.0);
     if args.sensor != SensorKind::Imu {
         return Err("--spin: a spin-rig flight is of an IMU (--sensor imu)".into());
     }
     let segments = spin::profile(profile).map_err(|e| format!("--spin: {e}"))?;
     let seconds: f64 = segments.iter().map(spin::Segment::seconds).sum();
-    if seconds * args.sample_rate > MAX_FLIGHT_SAMPLES {
+    if seconds * sample_rate > MAX_FLIGHT_SAMPLES {
         return Err(format!(
             "--spin: {seconds} s at {} Hz is {:.3e} samples; a flight holds at most {MAX_FLIGHT_SAMPLES:e} \
              (shorten the profile or lower --sample-rate)",
-            args.sample_rate,
-            seconds * args.sample_rate
+            sample_rate,
+            seconds * sample_rate
         ));
     }
     let (cone_angle, cone_hz) = match &args.coning {
@@ -215,7 +232,7 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     let run = spin::SpinRun {
         segments,
         axis,
-        sample_rate: args.sample_rate,
+        sample_rate: sample_rate,
         cone_angle,
         cone_hz,
         temp: args.temps.first().copied().unwrap_or(25.0),
@@ -240,7 +257,7 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     println!(
         "calflash simulate: a {seconds} s spin-rig flight, {} samples at {} Hz, written to {}",
         samples.len(),
-        args.sample_rate,
+        sample_rate,
         args.output.display()
     );
     if saturated > 0 {
@@ -289,6 +306,42 @@ fn ramp_columns(obs: &mut sim::Observations, temps: &ramp::Temperatures) {
     }
 }
 
+/// `--rest`: the unit at rest and handled, raw counts of its blob's correction.
+fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), String> {
+    if args.sensor != SensorKind::Imu {
+        return Err("--rest: a unit at rest is simulated as an IMU (--sensor imu)".into());
+    }
+    let bytes = std::fs::read(blob).map_err(|e| format!("{}: {e}", blob.display()))?;
+    let cal = spincal::blob::decode(&bytes).map_err(|e| format!("{}: {e}", blob.display()))?;
+    let rate = args.sample_rate.unwrap_or(1000.0);
+    let shift: [f64; 6] = match args.shift.as_slice() {
+        [] => [0.0; 6],
+        s => s
+            .try_into()
+            .map_err(|_| "--shift: six values, ax,ay,az,wx,wy,wz".to_string())?,
+    };
+    let session = sim::rest::Session {
+        rate,
+        shift_sigmas: shift,
+        poses: args.poses,
+        hold: args.hold,
+        seed: args.seed,
+    };
+    let raw = session
+        .record(&cal)
+        .map_err(|e| format!("{}: {e}", blob.display()))?;
+    crate::files::write_atomically(&args.output, |w| sim::rest::write_csv(&raw, rate, w))?;
+    println!(
+        "calflash simulate  unit {} at rest: {} poses of {} s, {} samples at {rate} Hz, biases off by {shift:?} sigma -> {}",
+        cal.data().identity.serial,
+        args.poses,
+        args.hold,
+        raw.len(),
+        args.output.display()
+    );
+    Ok(())
+}
+
 /// Runs `calflash simulate`.
 ///
 /// # Errors
@@ -297,9 +350,13 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
     Paths::new()
         .input("--plan-file", args.plan_file.as_deref())
         .input("--truth", args.truth.as_deref())
+        .input("--rest", args.rest.as_deref())
         .output("-o", Some(&args.output))
         .output("--write-truth", args.write_truth.as_deref())
         .check()?;
+    if let Some(blob) = &args.rest {
+        return rest(args, blob);
+    }
     if let Some(profile) = &args.spin {
         return flight(args, profile);
     }

@@ -99,6 +99,26 @@ pub fn level(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A duration in seconds, or with the suffix `h` (hours) or `d` (days): `3600`, `12h`, `365d`.
+///
+/// # Errors
+/// Not a finite non-negative number with an optional suffix.
+pub fn duration(s: &str) -> Result<f64, String> {
+    let t = s.trim();
+    let (number, unit) = match t.char_indices().last() {
+        Some((i, 'd')) => (&t[..i], 86_400.0),
+        Some((i, 'h')) => (&t[..i], 3_600.0),
+        Some((i, 's')) => (&t[..i], 1.0),
+        _ => (t, 1.0),
+    };
+    match number.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v * unit),
+        _ => Err(format!(
+            "`{s}`: a duration is expected: seconds, or a number with h or d (e.g. 365d)"
+        )),
+    }
+}
+
 /// A count from `lo` to `hi`.
 ///
 /// # Errors

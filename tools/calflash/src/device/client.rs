@@ -59,6 +59,8 @@ fn name(r: &Request) -> String {
         Request::Commit => "Commit".into(),
         Request::RunVectors { .. } => "the test vectors".into(),
         Request::Lock => "Lock".into(),
+        Request::ObserveRest { .. } => "samples for the health check".into(),
+        Request::ReadHealth => "the health read".into(),
     }
 }
 
@@ -147,6 +149,72 @@ impl<L: Read + Write> Client<L> {
                 status,
             }),
             r => Ok(r),
+        }
+    }
+
+    /// The first `total` bytes of the unit's current blob, chunk by chunk.
+    ///
+    /// # Errors
+    /// As `ask`, or an answer that is not a chunk.
+    pub fn read_blob(&mut self, total: usize) -> Result<Vec<u8>, DeviceError> {
+        let mut back = Vec::with_capacity(total);
+        while back.len() < total {
+            let len = (total - back.len()).min(protocol::MAX_CHUNK) as u16;
+            match self.ask(&Request::ReadBlob {
+                offset: back.len() as u32,
+                len,
+            })? {
+                Response::Blob { data, .. } if !data.is_empty() => back.extend_from_slice(&data),
+                other => {
+                    return Err(DeviceError::Unexpected {
+                        what: "ReadBlob".into(),
+                        got: format!("{other:?}"),
+                    });
+                }
+            }
+        }
+        Ok(back)
+    }
+
+    /// The unit's health at rest.
+    ///
+    /// # Errors
+    /// As `ask` (a unit whose calibration gives the check nothing to run on refuses with
+    /// `HealthUnavailable` and the reason).
+    pub fn health(&mut self) -> Result<spincal::health::Health, DeviceError> {
+        match self.ask(&Request::ReadHealth)? {
+            Response::Health(h) => Ok(h),
+            other => Err(DeviceError::Unexpected {
+                what: "the health read".into(),
+                got: format!("{other:?}"),
+            }),
+        }
+    }
+
+    /// Gives the unit raw samples for its health check (at most 16 per call).
+    ///
+    /// # Errors
+    /// As `ask`.
+    pub fn observe_rest(
+        &mut self,
+        temperature: f32,
+        voltage: f32,
+        raw: &[[i32; 6]],
+    ) -> Result<(), DeviceError> {
+        let raw = heapless::Vec::from_slice(raw).map_err(|_| DeviceError::Unexpected {
+            what: "samples for the health check".into(),
+            got: format!("{} samples, more than one request holds", raw.len()),
+        })?;
+        match self.ask(&Request::ObserveRest {
+            temperature,
+            voltage,
+            raw,
+        })? {
+            Response::Vectors { .. } => Ok(()),
+            other => Err(DeviceError::Unexpected {
+                what: "samples for the health check".into(),
+                got: format!("{other:?}"),
+            }),
         }
     }
 

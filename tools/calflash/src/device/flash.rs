@@ -324,25 +324,9 @@ pub fn flash<L: Read + Write>(
         Err(source) => return Err(FlashError::CommitUnknown { current, source }),
     };
     // Read back byte for byte.
-    let mut back = Vec::with_capacity(total);
-    while back.len() < total {
-        let len = (total - back.len()).min(MAX_CHUNK) as u16;
-        match client
-            .ask(&Request::ReadBlob {
-                offset: back.len() as u32,
-                len,
-            })
-            .map_err(|source| FlashError::Unverified { seq, source })?
-        {
-            Response::Blob { data, .. } => back.extend_from_slice(&data),
-            other => {
-                return Err(FlashError::Device(DeviceError::Unexpected {
-                    what: "ReadBlob".into(),
-                    got: format!("{other:?}"),
-                }));
-            }
-        }
-    }
+    let back = client
+        .read_blob(total)
+        .map_err(|source| FlashError::Unverified { seq, source })?;
     if let Some(at) = back.iter().zip(bytes).position(|(a, b)| a != b) {
         return Err(FlashError::ReadBack { at });
     }

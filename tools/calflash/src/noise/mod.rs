@@ -1,3 +1,5 @@
-//! Sensor noise: the overlapping Allan deviation and the IEEE Std 952 noise terms.
+//! Sensor noise: the overlapping Allan deviation and the IEEE Std 952 noise terms, and the
+//! noise terms a blob carries for the unit's health check.
 
 pub mod allan;
+pub mod stated;

@@ -99,6 +99,7 @@ pub fn calibration_data(
             sets,
             covariance: covariance_factors(c).and_then(|f| BoundedVec::from_slice(&[f])),
         },
+        noise: None,
     }
 }
 

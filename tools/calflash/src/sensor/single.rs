@@ -485,6 +485,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
                 BoundedVec::from_slice(&covs).ok_or_else(|| blob::too_many(path, covs.len()))?,
             ),
         },
+        noise: None,
     };
     let (blob, output_errors) = blob::build_and_check(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);

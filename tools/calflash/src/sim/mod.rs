@@ -5,6 +5,7 @@ pub mod plan;
 pub mod px4;
 pub mod ramp;
 pub mod recording;
+pub mod rest;
 pub mod spin;
 pub mod truth;
 

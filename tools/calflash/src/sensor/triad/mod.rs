@@ -883,6 +883,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         identity,
         environment: env,
         sensor,
+        noise: None,
     };
     let mut points = Vec::new();
     let parts: Vec<&TriadResult> = accel.iter().chain(gyro.iter()).collect();

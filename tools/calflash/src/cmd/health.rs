@@ -1,0 +1,245 @@
+//! `calflash health`: is the unit's calibration still good? The device's own health check at
+//! rest (`spincal::health`), read from the unit over its link, or run on the host over a raw
+//! recording with the unit's blob; shown, and recorded in the unit history.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use clap::Args;
+use spincal::blob;
+use spincal::correct::AnyImuCorrector;
+use spincal::health::{Health, RestMonitor};
+
+use super::values;
+use crate::db;
+use crate::device::{Client, link::Link};
+use crate::files::Paths;
+
+/// Judge a unit's calibration at rest.
+#[derive(Debug, Args)]
+pub struct HealthArgs {
+    /// A raw recording of the unit (a timestamp and the six counts per line, as `selfcal`
+    /// reads them): run through the device's correction and health check, on the host with
+    /// `--blob`, or in the unit with `--port`.
+    pub recording: Option<PathBuf>,
+    /// The unit's calibration blob (with a recording, without `--port`).
+    #[arg(long, conflicts_with = "port")]
+    pub blob: Option<PathBuf>,
+    /// The unit's link (a serial device or pty path, or tcp://HOST:PORT): its health is read
+    /// from it (after the recording is given to it, when there is one).
+    #[arg(long)]
+    pub port: Option<String>,
+    /// Seconds to wait for each answer.
+    #[arg(long, default_value_t = 3.0, value_parser = |s: &str| values::in_range(s, 0.1, 3600.0))]
+    pub timeout: f64,
+    /// The sample rate, Hz, of a recording without timestamps.
+    #[arg(long, value_parser = values::positive)]
+    pub rate: Option<f64>,
+    /// Temperature, C (default: the middle of the calibrated span).
+    #[arg(long, value_parser = values::finite_f32)]
+    pub temp: Option<f32>,
+    /// Supply voltage, V (default: the middle of the calibrated span).
+    #[arg(long, value_parser = values::finite_f32)]
+    pub volt: Option<f32>,
+    /// Write the health as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// The unit history database (default: $CALFLASH_DB, else the user's data directory).
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Do not record the health.
+    #[arg(long)]
+    pub no_db: bool,
+}
+
+/// Runs `calflash health`; returns the verdict's word.
+///
+/// # Errors
+/// A message naming the file, line or request that failed.
+pub fn run(args: &HealthArgs) -> Result<&'static str, String> {
+    let db_path = (!args.no_db).then(|| args.db.clone().unwrap_or_else(db::default_path));
+    Paths::new()
+        .input("the recording", args.recording.as_deref())
+        .input("--blob", args.blob.as_deref())
+        .output("--json", args.json.as_deref())
+        .created("the unit history", db_path.as_deref())
+        .check()?;
+    let (health, blob, serial, source) = match (&args.port, &args.blob, &args.recording) {
+        (Some(port), _, rec) => from_unit(args, port, rec.as_deref())?,
+        (None, Some(b), Some(rec)) => {
+            let bytes = std::fs::read(b).map_err(|e| format!("{}: {e}", b.display()))?;
+            let h = on_host(args, &bytes, rec)?;
+            let serial = serial_of(&bytes, b)?;
+            (h, bytes, serial, rec.display().to_string())
+        }
+        _ => {
+            return Err(
+                "calflash health: give --port (read the unit's health), or --blob with a recording (run the unit's check on the host)"
+                    .into(),
+            );
+        }
+    };
+    let record = serde_json::json!({
+        "schema": "calflash.health/1",
+        "serial": serial,
+        "source": source,
+        "health": json(&health),
+    });
+    print!("{}", summary(&serial, &source, &health));
+    if let Some(p) = &args.json {
+        let body = serde_json::to_vec_pretty(&record).map_err(|e| e.to_string())?;
+        crate::files::write_atomically(p, |w| std::io::Write::write_all(w, &body))?;
+        println!("  record: {}", p.display());
+    }
+    if let Some(path) = db_path {
+        let beside = db::beside(&[args.json.as_deref(), args.recording.as_deref()]);
+        let said = db::record_or_save(
+            &path,
+            |d| d.record_health(&serial, &blob, &record),
+            &record,
+            &beside,
+            &serial,
+        )?;
+        println!("  {said}");
+    }
+    Ok(health.verdict.word())
+}
+
+fn serial_of(bytes: &[u8], path: &Path) -> Result<String, String> {
+    let cal = blob::decode(bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(cal.data().identity.serial.as_str().to_string())
+}
+
+/// The recording's raw samples and the rate.
+fn samples(args: &HealthArgs, rec: &Path) -> Result<(Vec<[i32; 6]>, f64), String> {
+    let opts = crate::obs::recording::Options {
+        rails: spincal::model::Rails::new(i32::MIN, i32::MAX),
+        rate: args.rate,
+        keep: crate::obs::layout::Keep::Both,
+        units: crate::obs::units::Units::DEFAULT,
+        columns: crate::obs::layout::Chosen::default(),
+    };
+    let r = crate::obs::recording::read_with(rec, None, &opts).map_err(|e| e.to_string())?;
+    let raw = r
+        .acc
+        .iter()
+        .zip(&r.gyro)
+        .map(|(a, g)| {
+            let c = |x: f64| x.round() as i32;
+            [c(a[0]), c(a[1]), c(a[2]), c(g[0]), c(g[1]), c(g[2])]
+        })
+        .collect();
+    Ok((raw, r.rate()))
+}
+
+/// The environment: stated, or the middle of the calibrated spans.
+fn environment(args: &HealthArgs, cal: &spincal::model::Calibration) -> (f32, f32) {
+    let env = &cal.data().environment;
+    let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
+    (
+        args.temp.unwrap_or(mid(env.temperature_span)),
+        args.volt.unwrap_or(mid(env.voltage_span)),
+    )
+}
+
+/// The device's correction and health check over the recording, on the host.
+fn on_host(args: &HealthArgs, bytes: &[u8], rec: &Path) -> Result<Health, String> {
+    let name = args.blob.as_deref().unwrap_or(rec).display().to_string();
+    let cal = blob::decode(bytes).map_err(|e| format!("{name}: {e}"))?;
+    let (raw, rate) = samples(args, rec)?;
+    let mut imu = AnyImuCorrector::new(&cal, rate as f32).map_err(|e| format!("{name}: {e}"))?;
+    let mut monitor = RestMonitor::new(&cal, rate as f32).map_err(|e| format!("{name}: {e}"))?;
+    let (t, v) = environment(args, &cal);
+    imu.set_environment(t, v);
+    for r in &raw {
+        let out = imu.correct(*r);
+        imu.observe_rest(&mut monitor, &out);
+    }
+    Ok(monitor.health())
+}
+
+/// The unit's own health, after giving it the recording (if any).
+fn from_unit(
+    args: &HealthArgs,
+    port: &str,
+    rec: Option<&Path>,
+) -> Result<(Health, Vec<u8>, String, String), String> {
+    let timeout = Duration::from_secs_f64(args.timeout);
+    let link = Link::open(port, timeout)?;
+    let mut client = Client::new(link, timeout);
+    let id = client.identify().map_err(|e| e.to_string())?;
+    let blob = client
+        .read_blob(id.blob_len as usize)
+        .map_err(|e| e.to_string())?;
+    let cal = blob::decode(&blob).map_err(|e| format!("the unit's blob: {e}"))?;
+    if let Some(rec) = rec {
+        let (raw, rate) = samples(args, rec)?;
+        let device_rate = f64::from(spincal::protocol::vector_rate_hz());
+        if (rate - device_rate).abs() > 1e-6 * device_rate {
+            return Err(format!(
+                "{}: sampled at {rate} Hz; the unit's stream runs at {device_rate} Hz",
+                rec.display()
+            ));
+        }
+        let (t, v) = environment(args, &cal);
+        let bar = indicatif::ProgressBar::new(raw.len() as u64);
+        for chunk in raw.chunks(spincal::protocol::MAX_VECTORS) {
+            client
+                .observe_rest(t, v, chunk)
+                .map_err(|e| e.to_string())?;
+            bar.inc(chunk.len() as u64);
+        }
+        bar.finish_and_clear();
+    }
+    let health = client.health().map_err(|e| e.to_string())?;
+    let source = match rec {
+        Some(r) => format!("unit on {port}, given {}", r.display()),
+        None => format!("unit on {port}"),
+    };
+    Ok((health, blob, id.unit.as_str().to_string(), source))
+}
+
+fn json(h: &Health) -> serde_json::Value {
+    serde_json::json!({
+        "verdict": h.verdict.word(),
+        "bias": h.bias,
+        "bias_sigma": h.bias_sigma,
+        "accel_covariance": h.accel_covariance,
+        "gravity_error": h.gravity_error,
+        "statistic": h.statistic,
+        "threshold": h.threshold,
+        "rest_s": h.rest_s,
+        "rest_windows": h.rest_windows,
+        "moving_windows": h.moving_windows,
+        "ignored_samples": h.ignored_samples,
+    })
+}
+
+fn summary(serial: &str, source: &str, h: &Health) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "calflash health  unit {serial} ({source}): {}",
+        h.verdict.word()
+    );
+    let _ = writeln!(
+        s,
+        "  at rest {:.1} s ({} windows; {} moving; {} samples left out)",
+        h.rest_s, h.rest_windows, h.moving_windows, h.ignored_samples
+    );
+    let _ = writeln!(
+        s,
+        "  largest statistic: {:.2} under the factory prior, {:.2} with ageing (thresholds {:.2}, {:.2})",
+        h.statistic[0], h.statistic[1], h.threshold[0], h.threshold[1]
+    );
+    for (i, name) in ["ax", "ay", "az", "wx", "wy", "wz"].iter().enumerate() {
+        let unit = if i < 3 { "m/s^2" } else { "rad/s" };
+        let _ = writeln!(
+            s,
+            "  {name}: refined bias {:+.3e} +- {:.3e} {unit}",
+            h.bias[i], h.bias_sigma[i]
+        );
+    }
+    s
+}

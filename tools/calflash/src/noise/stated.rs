@@ -1,0 +1,137 @@
+//! The noise terms a calibration's blob carries for the unit's health check at rest
+//! (`spincal::health`): the white-noise densities and bias random walks of the accelerometer
+//! and the gyro from two `calflash allan --json` files (in SI units), and the allowances the
+//! unit is held to.
+
+use std::path::Path;
+
+use spincal::model::{NoiseTerms, Span};
+
+/// What the health check's allowances are, besides the measured noise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Allowances {
+    /// Seconds over which ageing may move the biases by their random walk.
+    pub ageing_s: f64,
+    /// Where the unit may rest: the magnitude of gravity, m/s^2.
+    pub gravity: (f64, f64),
+    /// The false-alarm rate per rest period.
+    pub false_alarm: f64,
+}
+
+/// One sensor's three axes: white-noise densities and rate random walks, from an Allan JSON.
+fn read_axes(path: &Path, unit: &str) -> Result<([f64; 3], [f64; 3]), String> {
+    let name = path.display();
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{name}: {e}"))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{name}: not JSON: {e}"))?;
+    if v["schema"] != "calflash.allan/1" {
+        return Err(format!(
+            "{name}: field \"schema\": expected \"calflash.allan/1\" (the file `calflash allan --json` writes)"
+        ));
+    }
+    if v["unit"] != unit {
+        return Err(format!(
+            "{name}: field \"unit\" is {}, expected \"{unit}\": run `calflash allan` with --scale (counts per {unit}) so that the terms are in SI units",
+            v["unit"]
+        ));
+    }
+    let axes = v["axes"]
+        .as_array()
+        .filter(|a| a.len() == 3)
+        .ok_or_else(|| format!("{name}: field \"axes\": expected the three axes"))?;
+    let mut white = [0.0; 3];
+    let mut walk = [0.0; 3];
+    for (j, a) in axes.iter().enumerate() {
+        let term = |key: &str| {
+            a["terms"][key]
+                .as_f64()
+                .filter(|x| x.is_finite() && *x >= 0.0)
+                .ok_or_else(|| {
+                    format!("{name}: axes[{j}].terms.{key}: expected a finite non-negative number")
+                })
+        };
+        white[j] = term("random_walk")?;
+        walk[j] = term("rate_random_walk")?;
+        if white[j] <= 0.0 {
+            return Err(format!(
+                "{name}: axes[{j}].terms.random_walk is 0: the recording shows no white noise \
+                 on axis {j} (too short, or quantisation only); record longer"
+            ));
+        }
+    }
+    Ok((white, walk))
+}
+
+/// The noise terms from the accelerometer's and the gyro's Allan JSON files.
+///
+/// # Errors
+/// A message naming the file and the field, or the allowance, that is wrong.
+pub fn from_allan(accel: &Path, gyro: &Path, allow: &Allowances) -> Result<NoiseTerms, String> {
+    let (wa, ka) = read_axes(accel, "m/s^2")?;
+    let (wg, kg) = read_axes(gyro, "rad/s")?;
+    let six = |a: [f64; 3], g: [f64; 3]| [a[0], a[1], a[2], g[0], g[1], g[2]].map(|x| x as f32);
+    let (lo, hi) = allow.gravity;
+    let terms = NoiseTerms {
+        white: six(wa, wg),
+        bias_walk: six(ka, kg),
+        ageing_s: allow.ageing_s as f32,
+        gravity: Span::new(lo as f32, hi as f32),
+        false_alarm: allow.false_alarm as f32,
+    };
+    // The device's own check, so that a bad allowance is named here and not at the flash.
+    let mut probe = spincal::model::CalibrationData::example_imu();
+    probe.noise = Some(terms);
+    spincal::model::Calibration::new(probe).map_err(|e| format!("--noise: {e}"))?;
+    Ok(terms)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn allan_file(dir: &Path, name: &str, unit: &str, n: f64, k: f64) -> std::path::PathBuf {
+        let axis = serde_json::json!({"axis": "x", "curve": [], "terms": {
+            "quantization": 0.0, "random_walk": n, "bias_instability": 0.0,
+            "rate_random_walk": k, "rate_ramp": 0.0}});
+        let v = serde_json::json!({"schema": "calflash.allan/1", "source": "r.csv", "unit": unit,
+            "axes": [axis.clone(), axis.clone(), axis]});
+        let p = dir.join(name);
+        std::fs::write(&p, v.to_string()).unwrap();
+        p
+    }
+
+    const ALLOW: Allowances = Allowances {
+        ageing_s: 3.0e7,
+        gravity: (9.80, 9.82),
+        false_alarm: 1e-3,
+    };
+
+    #[test]
+    fn reads_both_sensors_and_names_what_is_wrong() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = allan_file(dir.path(), "a.json", "m/s^2", 1.5e-3, 1e-5);
+        let g = allan_file(dir.path(), "g.json", "rad/s", 2e-4, 5e-7);
+        let t = from_allan(&a, &g, &ALLOW).unwrap();
+        assert_eq!(t.white, [1.5e-3, 1.5e-3, 1.5e-3, 2e-4, 2e-4, 2e-4]);
+        assert_eq!(t.bias_walk[5], 5e-7);
+        // Swapped files: the unit is named.
+        let e = from_allan(&g, &a, &ALLOW).unwrap_err();
+        assert!(e.contains("a.json") || e.contains("g.json"), "{e}");
+        assert!(e.contains("\"unit\""), "{e}");
+        // Counts: the unit says so.
+        let c = allan_file(dir.path(), "c.json", "counts", 1.0, 0.0);
+        let e = from_allan(&c, &g, &ALLOW).unwrap_err();
+        assert!(e.contains("--scale"), "{e}");
+        // No white noise on an axis.
+        let z = allan_file(dir.path(), "z.json", "rad/s", 0.0, 0.0);
+        let e = from_allan(&a, &z, &ALLOW).unwrap_err();
+        assert!(e.contains("axes[0].terms.random_walk is 0"), "{e}");
+        // A gravity span beyond the Earth's.
+        let bad = Allowances {
+            gravity: (9.5, 9.82),
+            ..ALLOW
+        };
+        let e = from_allan(&a, &g, &bad).unwrap_err();
+        assert!(e.contains("gravity span"), "{e}");
+    }
+}
