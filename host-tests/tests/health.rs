@@ -332,3 +332,188 @@ fn the_check_says_why_it_cannot_run() {
     data.noise = CalibrationData::example_imu().noise;
     assert!(Calibration::new(data).is_err());
 }
+
+/// `calflash health` against a unit on its link: the unit takes a rest recording through
+/// `ObserveRest` and reports DRIFTED as the host's run of the same check does; the report is
+/// recorded in the unit history; a calibration without noise terms gets the reason, and the
+/// unit keeps correcting.
+#[test]
+fn calflash_health_reads_the_unit_over_its_link() {
+    use calflash::cmd::flash::{FlashArgs, run as flash};
+    use calflash::cmd::health::{HealthArgs, run as health};
+    use host_tests::tcp_unit::{self, Fault, TcpUnit};
+
+    let dir = tempfile::tempdir().unwrap();
+    let path = |n: &str| dir.path().join(n);
+    let example = CalibrationData::example_imu();
+    let bytes = host_tests::golden::encode(&example);
+    std::fs::write(path("imu.blob"), &bytes).unwrap();
+    let cal = Calibration::new(example).unwrap();
+    let session = calflash::sim::rest::Session {
+        rate: 1000.0,
+        shift_sigmas: [0.0, 0.0, 0.0, 4.5, 0.0, 0.0],
+        poses: 2,
+        hold: 3.0,
+        seed: 3,
+    };
+    let raw = session.record(&cal).unwrap();
+    let mut csv = Vec::new();
+    calflash::sim::rest::write_csv(&raw, 1000.0, &mut csv).unwrap();
+    std::fs::write(path("rest.csv"), csv).unwrap();
+
+    let serial = cal.data().identity.serial.as_str().to_string();
+    let unit = TcpUnit::serve(
+        tcp_unit::device(tcp_unit::blank_flash(), &serial),
+        Fault::None,
+    );
+    flash(&FlashArgs {
+        blob: path("imu.blob"),
+        port: unit.address(),
+        force: false,
+        force_rejected: false,
+        timeout: 2.0,
+        vectors: 1,
+        db: Some(path("units.sqlite")),
+        no_db: false,
+    })
+    .unwrap();
+    let flashed = unit.finish().into_store().into_inner();
+    let args = |port: Option<String>, blob: Option<&str>, json: &str| HealthArgs {
+        recording: Some(path("rest.csv")),
+        blob: blob.map(path),
+        port,
+        timeout: 2.0,
+        rate: None,
+        temp: Some(25.0),
+        volt: Some(3.3),
+        json: Some(path(json)),
+        db: Some(path("units.sqlite")),
+        no_db: false,
+    };
+    let on_host = health(&args(None, Some("imu.blob"), "host.json")).unwrap();
+    let unit = TcpUnit::serve(tcp_unit::device(flashed, &serial), Fault::None);
+    let in_unit = health(&args(Some(unit.address()), None, "unit.json")).unwrap();
+    drop(unit.finish());
+    assert_eq!(on_host, "DRIFTED");
+    assert_eq!(in_unit, on_host);
+    let read = |n: &str| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(path(n)).unwrap()).unwrap()
+    };
+    let (h, u) = (read("host.json"), read("unit.json"));
+    // The unit's stream restarts its rate derivative every 16 samples; the refined gyro bias
+    // agrees with the host's to a small part of its 1-sigma.
+    let bias = |v: &serde_json::Value| v["health"]["bias"][3].as_f64().unwrap();
+    let sigma = h["health"]["bias_sigma"][3].as_f64().unwrap();
+    assert!((bias(&h) - bias(&u)).abs() < 0.1 * sigma, "{h} {u}");
+    let history = calflash::db::Db::open(&path("units.sqlite"))
+        .unwrap()
+        .history(&serial)
+        .unwrap();
+    let kinds: Vec<(String, String)> = history.into_iter().map(|e| (e.kind, e.outcome)).collect();
+    assert_eq!(
+        kinds,
+        [
+            ("flash".to_string(), "verified".to_string()),
+            ("health".to_string(), "drifted".to_string()),
+            ("health".to_string(), "drifted".to_string()),
+        ]
+    );
+
+    // Without noise terms: the unit says why.
+    let mut plain = CalibrationData::example_imu();
+    plain.noise = None;
+    std::fs::write(path("plain.blob"), host_tests::golden::encode(&plain)).unwrap();
+    let unit = TcpUnit::serve(
+        tcp_unit::device(tcp_unit::blank_flash(), &serial),
+        Fault::None,
+    );
+    flash(&FlashArgs {
+        blob: path("plain.blob"),
+        port: unit.address(),
+        force: false,
+        force_rejected: false,
+        timeout: 2.0,
+        vectors: 1,
+        db: None,
+        no_db: true,
+    })
+    .unwrap();
+    let flashed = unit.finish().into_store().into_inner();
+    let unit = TcpUnit::serve(tcp_unit::device(flashed, &serial), Fault::None);
+    let mut a = args(Some(unit.address()), None, "plain.json");
+    a.recording = None;
+    let err = health(&a).unwrap_err();
+    drop(unit.finish());
+    assert!(
+        err.contains("HealthUnavailable(HealthNoNoiseTerms)"),
+        "{err}"
+    );
+}
+
+/// The example device on the Cortex-M4F (QEMU) runs the health check over its link: given a
+/// rest recording of a unit whose gyro drifted, it reports DRIFTED with the refined bias the
+/// host's run of the same stream finds. Skips without QEMU unless SPINCAL_REQUIRE_QEMU=1.
+#[test]
+fn the_device_on_qemu_judges_its_calibration_at_rest() {
+    use calflash::device::image::{Region, region_image};
+    use host_tests::qemu;
+    use host_tests::unit::QemuUnit;
+    use spincal::correct::AnyImuCorrector;
+
+    if !qemu::available_or_skip("the_device_on_qemu_judges_its_calibration_at_rest") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let example = CalibrationData::example_imu();
+    let blob = host_tests::golden::encode(&example);
+    let cal = Calibration::new(example).unwrap();
+    let session = calflash::sim::rest::Session {
+        rate: 1000.0,
+        shift_sigmas: [0.0, 0.0, 0.0, 0.0, 4.5, 0.0],
+        poses: 1,
+        hold: 3.0,
+        seed: 11,
+    };
+    let raw: Vec<[i32; 6]> = session
+        .record(&cal)
+        .unwrap()
+        .iter()
+        .map(|r| r.map(i32::from))
+        .collect();
+    // The host: the same stream in the same blocks (each block's first sample has no rate
+    // derivative, as on the unit).
+    let mut monitor = RestMonitor::new(&cal, 1000.0).unwrap();
+    let (mut overlay, mut suspect) = (None, false);
+    for block in raw.chunks(spincal::protocol::MAX_VECTORS) {
+        let mut imu = AnyImuCorrector::new(&cal, 1000.0).unwrap();
+        imu.set_overlay(overlay);
+        imu.set_suspect(suspect);
+        imu.set_environment(25.0, 3.3);
+        for r in block {
+            let out = imu.correct(*r);
+            imu.observe_rest(&mut monitor, &out);
+        }
+        overlay = imu.overlay();
+        suspect = monitor.health().verdict == Verdict::Suspect;
+    }
+    let host = monitor.health();
+
+    let bin = qemu::build_firmware().unwrap_or_else(|e| panic!("{e}"));
+    let (flash, log) = (dir.path().join("flash.bin"), dir.path().join("qemu.log"));
+    std::fs::write(
+        &flash,
+        region_image(&blob, Region::from_memory_x()).unwrap(),
+    )
+    .unwrap();
+    let unit = QemuUnit::power_on(&bin.join("device"), Some(&flash), &log).unwrap();
+    let mut client = unit.connect(std::time::Duration::from_secs(10)).unwrap();
+    for block in raw.chunks(spincal::protocol::MAX_VECTORS) {
+        client.observe_rest(25.0, 3.3, block).unwrap();
+    }
+    let device = client.health().unwrap();
+    drop(client);
+    drop(unit);
+    assert_eq!(host.verdict, Verdict::Drifted, "{host:?}");
+    // Same arithmetic, same order: the Cortex-M4F reports the host's health bit for bit.
+    assert_eq!(device, host);
+}

@@ -1,0 +1,162 @@
+//! The health check from the command line: an IMU calibrated with its noise terms
+//! (`calibrate --noise`, from `calflash allan` files), a simulated unit at rest
+//! (`simulate --rest`), and `calflash health` judging it: OK when nothing moved, SUSPECT (exit
+//! 3) when a gyro bias moved by 6 sigma; the refusals name what is wrong.
+
+mod common;
+
+use std::path::Path;
+
+use common::calflash;
+
+fn allan(dir: &Path, name: &str, unit: &str, n: f64, k: f64) {
+    let axis = serde_json::json!({"axis": "x", "curve": [], "terms": {
+        "quantization": 0.0, "random_walk": n, "bias_instability": 0.0,
+        "rate_random_walk": k, "rate_ramp": 0.0}});
+    let v = serde_json::json!({"schema": "calflash.allan/1", "source": "still.csv",
+        "unit": unit, "axes": [axis.clone(), axis.clone(), axis]});
+    std::fs::write(dir.join(name), v.to_string()).unwrap();
+}
+
+#[test]
+fn calibrate_with_noise_then_judge_a_unit_at_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/imu_bench.csv");
+    let bench = bench.display().to_string();
+    allan(d, "accel.json", "m/s^2", 1.5e-3, 1.6e-5);
+    allan(d, "gyro.json", "rad/s", 2.0e-4, 8.0e-7);
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            &bench,
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-H-1",
+            "--blob",
+            "u.blob",
+            "--no-db",
+            "--noise",
+            "accel.json,gyro.json",
+            "--ageing",
+            "1h",
+            "--gravity",
+            "9.80:9.82",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let bytes = std::fs::read(d.join("u.blob")).unwrap();
+    let cal = spincal::blob::decode(&bytes).unwrap();
+    let noise = cal.data().noise.expect("the blob carries the noise terms");
+    assert_eq!(noise.white[3], 2.0e-4);
+    assert_eq!(noise.ageing_s, 3600.0);
+    assert_eq!(noise.false_alarm, 1e-3);
+
+    for (shift, word, exit) in [("0,0,0,0,0,0", "OK", 0), ("0,0,0,0,0,-6", "SUSPECT", 3)] {
+        let (code, out, err) = calflash(
+            d,
+            &[
+                "simulate", "--sensor", "imu", "--rest", "u.blob", "--shift", shift, "--poses",
+                "2", "--hold", "4", "-o", "rest.csv",
+            ],
+        );
+        assert_eq!(code, 0, "{out}{err}");
+        let (code, out, err) = calflash(
+            d,
+            &[
+                "health",
+                "rest.csv",
+                "--blob",
+                "u.blob",
+                "--temp",
+                "25",
+                "--volt",
+                "3.3",
+                "--db",
+                "units.sqlite",
+            ],
+        );
+        assert_eq!(code, exit, "{out}{err}");
+        assert!(
+            out.contains(&format!("unit IMU-H-1 (rest.csv): {word}")),
+            "{out}"
+        );
+        assert!(out.contains("recorded as db:"), "{out}");
+    }
+    let (_, out, _) = calflash(d, &["history", "IMU-H-1", "--db", "units.sqlite"]);
+    assert!(out.contains("health") && out.contains("suspect"), "{out}");
+
+    // Refusals.
+    let refused = |args: &[&str], expected: &str| {
+        let (code, out, err) = calflash(d, args);
+        assert_ne!(code, 0, "{args:?}: {out}");
+        assert!(err.contains(expected), "{args:?}: {err}");
+    };
+    refused(
+        &[
+            "calibrate",
+            &bench,
+            "--sensor",
+            "imu",
+            "--serial",
+            "X",
+            "--no-db",
+            "--noise",
+            "accel.json",
+        ],
+        "two files",
+    );
+    refused(
+        &[
+            "calibrate",
+            &bench,
+            "--sensor",
+            "imu",
+            "--serial",
+            "X",
+            "--no-db",
+            "--noise",
+            "gyro.json,accel.json",
+        ],
+        "gyro.json: field \"unit\"",
+    );
+    refused(
+        &[
+            "calibrate",
+            &bench,
+            "--sensor",
+            "imu",
+            "--serial",
+            "X",
+            "--no-db",
+            "--noise",
+            "accel.json,gyro.json",
+            "--gravity",
+            "9.0:9.8",
+        ],
+        "gravity span",
+    );
+    refused(&["health", "rest.csv"], "give --port");
+    // A blob without noise terms: the check says it cannot run, and why.
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            &bench,
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-H-2",
+            "--blob",
+            "plain.blob",
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    refused(
+        &["health", "rest.csv", "--blob", "plain.blob", "--no-db"],
+        "no noise terms",
+    );
+}
