@@ -1,5 +1,5 @@
 //! Golden vectors of the health check: raw samples of a simulated unit at rest and being
-//! handled ([`crate::rest`]), and the health the device must report at checkpoints along
+//! handled ([`calflash::sim::rest`]), and the health the device must report at checkpoints along
 //! them, bit for bit. Checked on the host (`tests/golden.rs`) and on the Cortex-M4F
 //! (`firmware/src/bin/golden.rs`, built in by `firmware/build.rs`).
 //!
@@ -72,7 +72,7 @@ pub struct Case {
 }
 
 /// Samples between two checks.
-const CHECK_EVERY: usize = 256;
+pub const CHECK_EVERY: usize = 256;
 
 /// The cases: name and the unit's bias shift in stated 1-sigmas `[ax .. wz]`. `health_drifted`
 /// rests, is turned, rests again (DRIFTED, the overlay applied and refreshed);
@@ -208,7 +208,7 @@ pub fn parse(text: &str) -> Result<Case, String> {
                 step.check = Some(Check {
                     verdict,
                     flags,
-                    bias: std::array::from_fn(|i| word(i)),
+                    bias: std::array::from_fn(word),
                     sigma: std::array::from_fn(|i| word(6 + i)),
                     statistic: [word(12), word(13)],
                 });

@@ -62,7 +62,7 @@ fn run(unit: &mut Unit<'_>, cal: &Calibration, poses: &[Rotation3<f64>], seconds
 /// A rest pose for unit `k`: a face up and a roll about the vertical, all from `k`.
 fn some_pose(k: u64) -> Rotation3<f64> {
     let axis = (k % 3) as usize;
-    let sign = if (k / 3) % 2 == 0 { 1.0 } else { -1.0 };
+    let sign = if (k / 3).is_multiple_of(2) { 1.0 } else { -1.0 };
     face(axis, sign, 0.7 * k as f64)
 }
 

@@ -110,7 +110,7 @@ impl Filter {
         }
         let noise: f32 = u.iter().zip(r).map(|(u, r)| u * u * r).sum();
         let s = h.iter().zip(&ph).map(|(h, p)| h * p).sum::<f32>() + noise;
-        if !(s > 0.0) {
+        if s.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
             return;
         }
         let innovation = g0 + dg - norm;

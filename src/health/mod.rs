@@ -8,7 +8,7 @@
 //! A quiet, steady window is rest: its mean gyro rate is zero and its mean specific force has
 //! the magnitude of gravity, direction unknown.
 //!
-//! Each rest window updates a Kalman filter over the biases ([`filter`]); two of them run side
+//! Each rest window updates a Kalman filter over the biases (`health/filter.rs`); two of them run side
 //! by side, one whose prior is the stored calibration's (each output's stated 1-sigma at the
 //! rest pose, Earth's rate included for the gyros), one whose prior adds what ageing may
 //! explain (the bias random walk over the stored ageing time). The process noise is the bias
@@ -236,7 +236,7 @@ impl RestMonitor {
         out: &Corrected<OUTPUTS>,
     ) -> Verdict {
         let total: f32 = out.values.iter().sum();
-        if !total.is_finite() || !(out.flags.bits() & UNUSABLE.bits() == 0) {
+        if !total.is_finite() || out.flags.bits() & UNUSABLE.bits() != 0 {
             self.ignored_samples = self.ignored_samples.saturating_add(1);
             return self.verdict;
         }

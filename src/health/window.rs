@@ -91,6 +91,7 @@ impl Window {
 }
 
 #[cfg(test)]
+#[expect(clippy::unwrap_used, reason = "a test: the window is full")]
 mod tests {
     use super::*;
 

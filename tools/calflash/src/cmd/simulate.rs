@@ -232,7 +232,7 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     let run = spin::SpinRun {
         segments,
         axis,
-        sample_rate: sample_rate,
+        sample_rate,
         cone_angle,
         cone_hz,
         temp: args.temps.first().copied().unwrap_or(25.0),
