@@ -354,6 +354,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
         shift_sigmas: [0.0, 0.0, 0.0, 4.5, 0.0, 0.0],
         poses: 2,
         hold: 3.0,
+        aged_s: 0.0,
         seed: 3,
     };
     let raw = session.record(&cal).unwrap();
@@ -391,9 +392,14 @@ fn calflash_health_reads_the_unit_over_its_link() {
         no_db: false,
     };
     let on_host = health(&args(None, Some("imu.blob"), "host.json")).unwrap();
+    let (before, ops) = (flashed.mem.clone(), flashed.ops);
     let unit = TcpUnit::serve(tcp_unit::device(flashed, &serial), Fault::None);
     let in_unit = health(&args(Some(unit.address()), None, "unit.json")).unwrap();
-    drop(unit.finish());
+    let after = unit.finish().into_store().into_inner();
+    // The refinement lives in RAM: not a byte of the store was written (a power cut loses it
+    // and the factory calibration is as it was).
+    assert_eq!(after.ops, ops, "the health session wrote to the flash");
+    assert_eq!(after.mem, before);
     assert_eq!(on_host, "DRIFTED");
     assert_eq!(in_unit, on_host);
     let read = |n: &str| -> serde_json::Value {
@@ -472,6 +478,7 @@ fn the_device_on_qemu_judges_its_calibration_at_rest() {
         shift_sigmas: [0.0, 0.0, 0.0, 0.0, 4.5, 0.0],
         poses: 1,
         hold: 3.0,
+        aged_s: 0.0,
         seed: 11,
     };
     let raw: Vec<[i32; 6]> = session

@@ -148,6 +148,11 @@ impl Filter {
         [p(0, 0), p(0, 1), p(0, 2), p(1, 1), p(1, 2), p(2, 2)]
     }
 
+    /// Each bias's prior-predictive variance: the prior and every process noise added.
+    pub fn spread(&self) -> [f32; OUTPUTS] {
+        self.spread
+    }
+
     /// The gravity error's estimate and variance.
     pub fn gravity_error(&self) -> (f32, f32) {
         let [.., dg] = self.xa;

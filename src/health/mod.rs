@@ -120,6 +120,10 @@ pub struct Health {
     pub bias: [f32; OUTPUTS],
     /// Their 1-sigma.
     pub bias_sigma: [f32; OUTPUTS],
+    /// Each bias's 1-sigma as the stored calibration states it (its covariance at the first
+    /// rest pose, Earth's rate included for the gyros, with the random walk since): what a
+    /// refined bias is held against.
+    pub stated_sigma: [f32; OUTPUTS],
     /// The accelerometer biases' covariance, packed upper triangle (`00 01 02 11 12 22`).
     pub accel_covariance: [f32; 6],
     /// The error of the assumed magnitude of gravity, m/s^2, and its 1-sigma.
@@ -249,19 +253,27 @@ impl RestMonitor {
     /// The unit's health now.
     #[must_use]
     pub fn health(&self) -> Health {
-        let (bias, variance, accel_covariance, (dg, dg_var)) = match &self.filters {
-            Some([_, aged]) => (
+        let (bias, variance, accel_covariance, (dg, dg_var), stated) = match &self.filters {
+            Some([factory, aged]) => (
                 aged.bias(),
                 reported_variance(aged),
                 aged.accel_covariance(),
                 aged.gravity_error(),
+                factory.spread(),
             ),
-            None => ([0.0; OUTPUTS], [0.0; OUTPUTS], [0.0; 6], (0.0, 0.0)),
+            None => (
+                [0.0; OUTPUTS],
+                [0.0; OUTPUTS],
+                [0.0; 6],
+                (0.0, 0.0),
+                [0.0; OUTPUTS],
+            ),
         };
         Health {
             verdict: self.verdict,
             bias,
             bias_sigma: variance.map(libm::sqrtf),
+            stated_sigma: stated.map(libm::sqrtf),
             accel_covariance,
             gravity_error: [dg, libm::sqrtf(dg_var)],
             statistic: self.statistic,

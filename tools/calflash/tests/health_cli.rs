@@ -37,6 +37,8 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
             "IMU-H-1",
             "--blob",
             "u.blob",
+            "--json",
+            "fit.json",
             "--no-db",
             "--noise",
             "accel.json,gyro.json",
@@ -85,6 +87,48 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
         );
         assert!(out.contains("recorded as db:"), "{out}");
     }
+    // Ten years of the stored random walk: far beyond the hour the calibration allows.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "simulate", "--sensor", "imu", "--rest", "u.blob", "--aged", "3650d", "--poses", "1",
+            "--hold", "3", "-o", "aged.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "health", "aged.csv", "--blob", "u.blob", "--temp", "25", "--volt", "3.3", "--no-db",
+        ],
+    );
+    assert_eq!(code, 3, "{out}{err}");
+    // The last report (gyro z 6 sigma off) held against the calibration it judged.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "health",
+            "rest.csv",
+            "--blob",
+            "u.blob",
+            "--temp",
+            "25",
+            "--volt",
+            "3.3",
+            "--no-db",
+            "--json",
+            "health.json",
+        ],
+    );
+    assert_eq!(code, 3, "{out}{err}");
+    let (code, out, err) = calflash(d, &["compare", "fit.json", "health.json"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let moved: Vec<&str> = out.lines().filter(|l| l.ends_with("MOVED")).collect();
+    assert_eq!(moved.len(), 1, "{out}");
+    assert!(moved[0].trim_start().starts_with("wz:"), "{out}");
+    let (code, _, err) = calflash(d, &["compare", "health.json", "fit.json"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("comes second"), "{err}");
     let (_, out, _) = calflash(d, &["history", "IMU-H-1", "--db", "units.sqlite"]);
     assert!(out.contains("health") && out.contains("suspect"), "{out}");
 

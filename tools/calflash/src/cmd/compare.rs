@@ -40,7 +40,7 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
         .input("--db", args.db.as_deref())
         .output("--json", args.json.as_deref())
         .check()?;
-    let load = |r: &str| -> Result<Estimates, String> {
+    let text = |r: &str| -> Result<(String, String), String> {
         match r.strip_prefix("db:") {
             Some(id) => {
                 let id: i64 = id
@@ -48,16 +48,26 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
                     .map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
                 let path = args.db.clone().unwrap_or_else(crate::db::default_path);
                 let text = crate::db::Db::open_existing(&path)?.record(id)?;
-                Estimates::parse(&text, &format!("{} record {id}", path.display()))
+                Ok((text, format!("{} record {id}", path.display())))
             }
-            None => {
-                let text = std::fs::read_to_string(r).map_err(|e| format!("{r}: {e}"))?;
-                Estimates::parse(&text, r)
-            }
+            None => Ok((
+                std::fs::read_to_string(r).map_err(|e| format!("{r}: {e}"))?,
+                r.to_string(),
+            )),
         }
     };
-    let a = load(&args.before)?;
-    let b = load(&args.after)?;
+    let (ta, sa) = text(&args.before)?;
+    let (tb, sb) = text(&args.after)?;
+    if let Some(h) = health_of(&tb, &sb)? {
+        return against_health(args, &ta, &sa, &h);
+    }
+    if health_of(&ta, &sa)?.is_some() {
+        return Err(format!(
+            "{sa}: a health report comes second, after the calibration it judged"
+        ));
+    }
+    let a = Estimates::parse(&ta, &sa)?;
+    let b = Estimates::parse(&tb, &sb)?;
     let changes = compare::compare(&a, &b, args.alpha)?;
     println!(
         "calflash compare  unit {}  {} -> {}",
@@ -103,6 +113,81 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
     if let Some(p) = &args.json {
         crate::files::write_atomically(p, |w| {
             serde_json::to_writer_pretty(&mut *w, &changes).map_err(std::io::Error::other)
+        })?;
+    }
+    Ok(())
+}
+
+/// The health record in `text`, if it is one (`calflash.health/1`).
+fn health_of(text: &str, source: &str) -> Result<Option<serde_json::Value>, String> {
+    let v: serde_json::Value = serde_json::from_str(text)
+        .map_err(|e| format!("{source}:{}:{}: not a record: {e}", e.line(), e.column()))?;
+    Ok((v["schema"] == "calflash.health/1").then_some(v))
+}
+
+/// A health report held against the calibration it judged: per bias, how far the unit at
+/// rest found it from the calibration, in the calibration's stated 1-sigma, and whether that
+/// is beyond it (chi-square with one degree of freedom at `--alpha`, Bonferroni over the six).
+fn against_health(
+    args: &CompareArgs,
+    before: &str,
+    source: &str,
+    health: &serde_json::Value,
+) -> Result<(), String> {
+    let factory: serde_json::Value =
+        serde_json::from_str(before).map_err(|e| format!("{source}: not a record: {e}"))?;
+    let serial = factory["serial"].as_str().unwrap_or_default();
+    if serial != health["serial"].as_str().unwrap_or_default() {
+        return Err(format!(
+            "{source} is of unit {serial}, the health report of unit {}: compare a unit with itself",
+            health["serial"]
+        ));
+    }
+    if let (Some(a), Some(b)) = (factory["data_hash"].as_str(), health["data_hash"].as_str())
+        && a != b
+    {
+        return Err(format!(
+            "{source}: the health report judged another calibration of unit {serial} (data {b}, this one {a}); compare it with that one"
+        ));
+    }
+    let h = &health["health"];
+    let get = |key: &str, i: usize| h[key][i].as_f64().unwrap_or(f64::NAN);
+    // Chi-square with one degree of freedom at alpha / 6: the square of the normal quantile.
+    let normal = statrs::distribution::Normal::new(0.0, 1.0).map_err(|e| e.to_string())?;
+    let z = statrs::distribution::ContinuousCDF::inverse_cdf(&normal, 1.0 - args.alpha / 12.0);
+    let limit = z * z;
+    println!(
+        "calflash compare  unit {serial}  {} -> {} (health at rest: {}, {:.1} s)",
+        args.before,
+        args.after,
+        h["verdict"].as_str().unwrap_or("?"),
+        h["rest_s"].as_f64().unwrap_or(0.0)
+    );
+    let mut rows = Vec::new();
+    for (i, name) in ["ax", "ay", "az", "wx", "wy", "wz"].iter().enumerate() {
+        let (b, s, stated) = (get("bias", i), get("bias_sigma", i), get("stated_sigma", i));
+        // The refined bias varies by stated^2 - s^2 over units whose calibration holds.
+        let spread = (stated * stated - s * s).max(f64::MIN_POSITIVE);
+        let chi2 = b * b / spread;
+        let moved = chi2 > limit && s < stated;
+        let unit = if i < 3 { "m/s^2" } else { "rad/s" };
+        println!(
+            "  {name}: {} +- {} {unit} from the calibration; stated 1-sigma {}: {:+.2} sigma{}",
+            num(b),
+            num(s),
+            num(stated),
+            b / stated,
+            if moved { "  MOVED" } else { "" }
+        );
+        rows.push(
+            serde_json::json!({"output": name, "moved_by": b, "sigma": s,
+            "stated_sigma": stated, "chi2": chi2, "moved": moved}),
+        );
+    }
+    if let Some(p) = &args.json {
+        let v = serde_json::json!({"serial": serial, "health": h, "outputs": rows});
+        crate::files::write_atomically(p, |w| {
+            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
         })?;
     }
     Ok(())

@@ -79,9 +79,20 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, String> {
             );
         }
     };
+    let data_hash = blob::decode(&blob)
+        .map(|c| {
+            c.data()
+                .identity
+                .data_hash
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect::<String>()
+        })
+        .unwrap_or_default();
     let record = serde_json::json!({
         "schema": "calflash.health/1",
         "serial": serial,
+        "data_hash": data_hash,
         "source": source,
         "health": json(&health),
     });
@@ -204,6 +215,7 @@ fn json(h: &Health) -> serde_json::Value {
         "verdict": h.verdict.word(),
         "bias": h.bias,
         "bias_sigma": h.bias_sigma,
+        "stated_sigma": h.stated_sigma,
         "accel_covariance": h.accel_covariance,
         "gravity_error": h.gravity_error,
         "statistic": h.statistic,
@@ -237,8 +249,8 @@ fn summary(serial: &str, source: &str, h: &Health) -> String {
         let unit = if i < 3 { "m/s^2" } else { "rad/s" };
         let _ = writeln!(
             s,
-            "  {name}: refined bias {:+.3e} +- {:.3e} {unit}",
-            h.bias[i], h.bias_sigma[i]
+            "  {name}: refined bias {:+.3e} +- {:.3e} {unit} (the calibration states {:.3e})",
+            h.bias[i], h.bias_sigma[i], h.stated_sigma[i]
         );
     }
     s

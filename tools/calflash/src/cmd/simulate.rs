@@ -29,6 +29,10 @@ pub struct SimulateArgs {
     /// calibration's stated 1-sigma at rest (an aged or shocked unit).
     #[arg(long, requires = "rest", value_delimiter = ',', allow_negative_numbers = true, value_parser = super::values::finite)]
     pub shift: Vec<f64>,
+    /// With --rest: the unit has aged this long since its calibration (s, or with h or d):
+    /// each bias has also wandered by a draw of its stored random walk over that time.
+    #[arg(long, default_value = "0", requires = "rest", value_parser = super::values::duration)]
+    pub aged: f64,
     /// With --rest: the number of rest poses.
     #[arg(long, default_value_t = 3, requires = "rest", value_parser = |s: &str| super::values::count_in(s, 1, 24))]
     pub poses: usize,
@@ -325,6 +329,7 @@ fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), String> {
         shift_sigmas: shift,
         poses: args.poses,
         hold: args.hold,
+        aged_s: args.aged,
         seed: args.seed,
     };
     let raw = session

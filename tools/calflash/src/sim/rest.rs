@@ -185,6 +185,9 @@ pub struct Session {
     pub poses: usize,
     /// Seconds at rest in each.
     pub hold: f64,
+    /// Seconds of ageing before the session: each bias has also wandered by its stored random
+    /// walk over them (a draw of `K sqrt(t)`).
+    pub aged_s: f64,
     /// The noise's seed.
     pub seed: u64,
 }
@@ -219,7 +222,13 @@ impl Session {
             return Err("a unit at rest is simulated for unsigned 16-bit codes".into());
         }
         let sigma = stated_sigma(cal)?;
-        let shift: [f64; 6] = std::array::from_fn(|i| self.shift_sigmas[i] * sigma[i]);
+        let walk = cal.data().noise.map_or([0.0; 6], |n| n.bias_walk);
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x5eed_a9e5);
+        let normal = Normal::new(0.0, 1.0).expect("unit normal");
+        let shift: [f64; 6] = std::array::from_fn(|i| {
+            let aged = f64::from(walk[i]) * self.aged_s.sqrt() * normal.sample(&mut rng);
+            self.shift_sigmas[i] * sigma[i] + aged
+        });
         let mut unit = Unit::new(cal, self.rate, shift, 9.81, self.seed);
         unit.recording = Some(Vec::new());
         let faces = [
