@@ -126,8 +126,10 @@ fn explain(path: &Path, e: &rusqlite::Error) -> String {
     format!("the unit history database {}: {why}", path.display())
 }
 
-const SCHEMA: &str = "
-CREATE TABLE IF NOT EXISTS records (
+/// The `records` table of the present schema.
+macro_rules! records_table {
+    () => {
+        "CREATE TABLE IF NOT EXISTS records (
     id INTEGER PRIMARY KEY,
     serial TEXT NOT NULL,
     kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health')),
@@ -143,7 +145,11 @@ CREATE TABLE IF NOT EXISTS records (
     record TEXT
 );
 CREATE INDEX IF NOT EXISTS records_serial ON records (serial, time);
-";
+"
+    };
+}
+
+const SCHEMA: &str = records_table!();
 
 /// The schema version this calflash reads and writes (`PRAGMA user_version`). Version 0 is a
 /// database of the releases before versioning, version 1 one whose records are fits and
@@ -152,34 +158,21 @@ CREATE INDEX IF NOT EXISTS records_serial ON records (serial, time);
 pub const SCHEMA_VERSION: i64 = 2;
 
 /// Rebuilds a version 0 or 1 table under the present schema, in one transaction.
-const MIGRATE_TO_2: &str = "
-BEGIN;
+const MIGRATE_TO_2: &str = concat!(
+    "BEGIN;
 ALTER TABLE records RENAME TO records_v1;
 DROP INDEX IF EXISTS records_serial;
-CREATE TABLE records (
-    id INTEGER PRIMARY KEY,
-    serial TEXT NOT NULL,
-    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health')),
-    time INTEGER NOT NULL,
-    data_hash TEXT NOT NULL,
-    model TEXT,
-    coefficients TEXT,
-    covariance TEXT,
-    report TEXT,
-    blob BLOB NOT NULL,
-    verification TEXT,
-    outcome TEXT NOT NULL,
-    record TEXT
-);
-INSERT INTO records (id, serial, kind, time, data_hash, model, coefficients, covariance,
+",
+    records_table!(),
+    "INSERT INTO records (id, serial, kind, time, data_hash, model, coefficients, covariance,
     report, blob, verification, outcome, record)
     SELECT id, serial, kind, time, data_hash, model, coefficients, covariance, report, blob,
     verification, outcome, record FROM records_v1;
 DROP TABLE records_v1;
-CREATE INDEX records_serial ON records (serial, time);
 PRAGMA user_version = 2;
 COMMIT;
-";
+"
+);
 
 /// The columns of `records` the code reads and writes.
 const COLUMNS: [&str; 13] = [
@@ -575,6 +568,56 @@ mod tests {
             &serde_json::json!({"ok": true}),
             "verified",
         )
+    }
+
+    /// A history of schema 1 (fits and flashes only) takes health reports once migrated, and
+    /// keeps every record it had.
+    #[test]
+    fn a_schema_1_history_is_migrated_and_keeps_its_records() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        {
+            let c = Connection::open(&path).unwrap();
+            let old = SCHEMA.replace("'fit', 'flash', 'health'", "'fit', 'flash'");
+            c.execute_batch(&format!("{old} PRAGMA user_version = 1;"))
+                .unwrap();
+            c.execute(
+                "INSERT INTO records (serial, kind, time, data_hash, blob, outcome) \
+                 VALUES ('UNIT-1', 'flash', 5, 'ab', x'00', 'verified')",
+                [],
+            )
+            .unwrap();
+            // Schema 1 refuses a health report.
+            assert!(
+                c.execute(
+                    "INSERT INTO records (serial, kind, time, data_hash, blob, outcome) \
+                     VALUES ('UNIT-1', 'health', 6, 'ab', x'00', 'ok')",
+                    [],
+                )
+                .is_err()
+            );
+        }
+        let mut db = Db::open(&path).unwrap();
+        let version: i64 = db
+            .conn
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .unwrap();
+        assert_eq!(version, SCHEMA_VERSION);
+        let record = serde_json::json!({"health": {"verdict": "DRIFTED", "bias": [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]}});
+        db.record_health("UNIT-1", &[0u8; 4], &record).unwrap();
+        let kinds: Vec<(String, String)> = db
+            .history("UNIT-1")
+            .unwrap()
+            .into_iter()
+            .map(|e| (e.kind, e.outcome))
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                ("flash".to_string(), "verified".to_string()),
+                ("health".to_string(), "drifted".to_string())
+            ]
+        );
     }
 
     #[test]
