@@ -85,6 +85,7 @@ pub mod driver;
 pub mod health;
 pub mod model;
 pub mod protocol;
+pub mod signed;
 pub mod store;
 
 mod error;

@@ -132,3 +132,35 @@ fn health_vectors_match_the_host_monitor() {
         }
     }
 }
+
+/// A signed blob of the example IMU (`imu.signed`, key `station.pub`, seed `[1; 32]`, counter
+/// 1): what the device's benchmark verifies. The signature is deterministic (Ed25519).
+#[test]
+fn the_signed_example_matches_its_golden_bytes() {
+    use ed25519_dalek::{Signer, SigningKey};
+    let key = SigningKey::from_bytes(&[1; 32]);
+    let public = spincal::signed::StationKey {
+        public: key.verifying_key().to_bytes(),
+    };
+    let mut bytes = golden::encode(&spincal::model::CalibrationData::example_imu());
+    bytes.extend_from_slice(&spincal::signed::MAGIC);
+    bytes.push(0);
+    bytes.extend_from_slice(&public.id());
+    bytes.extend_from_slice(&1u32.to_le_bytes());
+    let sig = key.sign(&spincal::signed::digest(&bytes));
+    bytes.extend_from_slice(&sig.to_bytes());
+    let (path, key_path) = (
+        golden::dir().join("imu.signed"),
+        golden::dir().join("station.pub"),
+    );
+    if accept() {
+        std::fs::write(&path, &bytes).unwrap();
+        std::fs::write(&key_path, public.public).unwrap();
+    }
+    assert_eq!(std::fs::read(&path).unwrap(), bytes);
+    assert_eq!(std::fs::read(&key_path).unwrap(), public.public);
+    let serial = spincal::model::CalibrationData::example_imu()
+        .identity
+        .serial;
+    assert!(spincal::signed::verify(&bytes, &[public], &serial, 0).is_ok());
+}

@@ -286,8 +286,10 @@ fn main() -> ! {
     });
     black_box(&one_out);
     let health_stack = bench_health();
+    let signed_stack = bench_signed();
     hprintln!("stack correct {}", correct_stack);
     hprintln!("stack health_observe_rest {}", health_stack);
+    hprintln!("stack signed_verify {}", signed_stack);
     hprintln!(
         "size rest_monitor {}",
         core::mem::size_of::<spincal::health::RestMonitor>()
@@ -398,5 +400,32 @@ fn bench_health() -> usize {
             observe(&mut m, &mut c, &out);
         }
     }
+    stack
+}
+
+/// Verifies the signed example IMU blob (9,292 bytes: SHA-256 over the blob and the trailer's
+/// head, then Ed25519 `verify_strict`), as a unit does at commit and at boot. Returns its stack
+/// high-water.
+fn bench_signed() -> usize {
+    static SIGNED: &[u8] = include_bytes!("../../../host-tests/golden/imu.signed");
+    static PUBLIC: &[u8; 32] = include_bytes!("../../../host-tests/golden/station.pub");
+    let keys = [spincal::signed::StationKey { public: *PUBLIC }];
+    let Some(serial) = spincal::model::Serial::new("IMU-FULL-0042") else {
+        fail("serial")
+    };
+    let t0 = timer::now();
+    let ok = spincal::signed::verify(black_box(SIGNED), &keys, &serial, 0).is_ok();
+    let t1 = timer::now();
+    if !ok {
+        fail("the signed example does not verify");
+    }
+    report("signed_verify_imu_blob", t0.wrapping_sub(t1), 1);
+    let t0 = timer::now();
+    black_box(spincal::signed::digest(black_box(SIGNED)));
+    let t1 = timer::now();
+    report("signed_digest_imu_blob", t0.wrapping_sub(t1), 1);
+    let (_, stack) = stack::high_water(|| {
+        black_box(spincal::signed::verify(black_box(SIGNED), &keys, &serial, 0)).is_ok()
+    });
     stack
 }

@@ -1,0 +1,171 @@
+//! Signed calibrations: a blob, then a trailer that binds it to the station that made it and
+//! to a counter that only grows per unit (issue 17, first step: the format and its check).
+//!
+//! ```text
+//! offset  size  field
+//!      0     n  the blob, exactly as `blob::encode` writes it (its header declares n)
+//!      n     2  magic "SG"
+//!    n+2     1  flags: bit 0 = a downgrade made for this unit (accepted below its counter)
+//!    n+3     4  key id: the first 4 bytes of SHA-256 of the station's public key
+//!    n+7     4  counter, little-endian: above the one the unit holds
+//!   n+11    64  Ed25519 signature of the SHA-256 digest of DOMAIN then bytes 0..n+11
+//!               (the blob carries the unit's serial, so the signature binds it)
+//! ```
+//!
+//! 75 bytes over the blob. [`verify`] checks, in order: the trailer's presence and shape, that
+//! the key is one the unit holds, the signature (strict: canonical encodings only), that the
+//! blob is for the unit's serial, and that the counter is above the unit's (or the blob is a
+//! downgrade signed for this unit); it decodes nothing of the payload beyond the serial. The
+//! blob itself then goes through [`crate::blob::decode`] as ever.
+
+use ed25519_dalek::{Signature, VerifyingKey};
+use sha2::{Digest, Sha256};
+
+use crate::blob::Header;
+use crate::model::{SERIAL_CAPACITY, Serial};
+
+/// The first two bytes of the trailer.
+pub const MAGIC: [u8; 2] = *b"SG";
+/// Bytes of the trailer.
+pub const TRAILER_LEN: usize = 2 + 1 + 4 + 4 + 64;
+/// The signed message starts with this, so that a signature made for anything else never
+/// verifies here.
+pub const DOMAIN: &[u8] = b"spincal signed calibration v1\0";
+/// Flag bit: a signed downgrade, accepted below the unit's counter.
+pub const FLAG_DOWNGRADE: u8 = 1;
+
+/// A station's public key, with its id.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StationKey {
+    /// The Ed25519 public key.
+    pub public: [u8; 32],
+}
+
+impl StationKey {
+    /// The key id: the first 4 bytes of SHA-256 of the public key.
+    #[must_use]
+    pub fn id(&self) -> [u8; 4] {
+        let h = Sha256::digest(self.public);
+        let mut id = [0; 4];
+        id.copy_from_slice(h.get(..4).unwrap_or(&[0; 4]));
+        id
+    }
+}
+
+/// What a signed blob's trailer says, once checked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Verified {
+    /// The counter.
+    pub counter: u32,
+    /// The key that signed it.
+    pub key_id: [u8; 4],
+    /// A downgrade signed for this unit.
+    pub downgrade: bool,
+    /// Bytes of the blob (without the trailer).
+    pub blob_len: usize,
+}
+
+/// Why a signed blob is refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SignError {
+    /// The bytes are a blob with no trailer: the unit holds station keys and takes only
+    /// signed calibrations (`calflash calibrate --sign-key`, or `calflash sign`).
+    Unsigned,
+    /// The blob's header or the trailer is cut or malformed.
+    Malformed,
+    /// Signed by a key the unit does not hold.
+    UnknownKey {
+        /// The trailer's key id.
+        key_id: [u8; 4],
+    },
+    /// The signature does not verify: the blob or the trailer was changed after signing.
+    BadSignature,
+    /// Made for another unit.
+    WrongSerial,
+    /// Not above the counter the unit holds (an older calibration put back).
+    Replay {
+        /// The blob's counter.
+        counter: u32,
+        /// The unit's.
+        held: u32,
+    },
+}
+
+/// The message the station signs: SHA-256 of [`DOMAIN`] and the blob with the trailer's first
+/// 11 bytes (so that a device hashes the blob once, in place, with no copy).
+#[must_use]
+pub fn digest(signed: &[u8]) -> [u8; 32] {
+    let mut h = Sha256::new();
+    h.update(DOMAIN);
+    h.update(signed);
+    h.finalize().into()
+}
+
+/// The serial a blob's payload starts with (postcard: the identity's serial string first).
+fn blob_serial(blob: &[u8]) -> Option<&str> {
+    let payload = blob.get(crate::blob::HEADER_LEN..)?;
+    let (&len, rest) = payload.split_first()?;
+    let len = usize::from(len);
+    if len > SERIAL_CAPACITY {
+        return None;
+    }
+    core::str::from_utf8(rest.get(..len)?).ok()
+}
+
+/// The blob and the trailer of `bytes`.
+///
+/// # Errors
+/// [`SignError::Malformed`] for a header that does not parse or bytes shorter than it declares;
+/// [`SignError::Unsigned`] when nothing or something else follows the blob.
+pub fn split(bytes: &[u8]) -> Result<(&[u8], &[u8; TRAILER_LEN]), SignError> {
+    let header = Header::parse(bytes).map_err(|_| SignError::Malformed)?;
+    let n = header.blob_len();
+    let blob = bytes.get(..n).ok_or(SignError::Malformed)?;
+    let rest = bytes.get(n..).unwrap_or_default();
+    if rest.is_empty() || rest.get(..2) != Some(MAGIC.as_slice()) {
+        return Err(SignError::Unsigned);
+    }
+    let trailer: &[u8; TRAILER_LEN] = rest.try_into().map_err(|_| SignError::Malformed)?;
+    Ok((blob, trailer))
+}
+
+/// Checks a signed blob for the unit `unit` holding `keys` and the counter `held`.
+///
+/// # Errors
+/// The first [`SignError`] found, in the order of the module docs.
+pub fn verify(
+    bytes: &[u8],
+    keys: &[StationKey],
+    unit: &Serial,
+    held: u32,
+) -> Result<Verified, SignError> {
+    let (blob, trailer) = split(bytes)?;
+    let [_, _, flags, k0, k1, k2, k3, c0, c1, c2, c3, sig @ ..] = *trailer;
+    let key_id = [k0, k1, k2, k3];
+    let key = keys
+        .iter()
+        .find(|k| k.id() == key_id)
+        .ok_or(SignError::UnknownKey { key_id })?;
+    let public =
+        VerifyingKey::from_bytes(&key.public).map_err(|_| SignError::UnknownKey { key_id })?;
+    let serial = blob_serial(blob).ok_or(SignError::Malformed)?;
+    let signed = bytes.get(..blob.len() + 11).ok_or(SignError::Malformed)?;
+    public
+        .verify_strict(&digest(signed), &Signature::from_bytes(&sig))
+        .map_err(|_| SignError::BadSignature)?;
+    if serial != unit.as_str() {
+        return Err(SignError::WrongSerial);
+    }
+    let counter = u32::from_le_bytes([c0, c1, c2, c3]);
+    let downgrade = flags & FLAG_DOWNGRADE != 0;
+    if counter <= held && !downgrade {
+        return Err(SignError::Replay { counter, held });
+    }
+    Ok(Verified {
+        counter,
+        key_id,
+        downgrade,
+        blob_len: blob.len(),
+    })
+}
