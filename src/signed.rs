@@ -5,9 +5,10 @@
 //! offset  size  field
 //!      0     n  the blob, exactly as `blob::encode` writes it (its header declares n)
 //!      n     2  magic "SG"
-//!    n+2     1  flags: bit 0 = a downgrade made for this unit (accepted below its counter)
+//!    n+2     1  flags: bit 0 = a downgrade made for this unit at its present counter
 //!    n+3     4  key id: the first 4 bytes of SHA-256 of the station's public key
-//!    n+7     4  counter, little-endian: above the one the unit holds
+//!    n+7     4  counter, little-endian: above the one the unit holds (equal to it for a
+//!               downgrade)
 //!   n+11    64  Ed25519 signature of the SHA-256 digest of DOMAIN then bytes 0..n+11
 //!               (the blob carries the unit's serial, so the signature binds it)
 //! ```
@@ -31,7 +32,7 @@ pub const TRAILER_LEN: usize = 2 + 1 + 4 + 4 + 64;
 /// The signed message starts with this, so that a signature made for anything else never
 /// verifies here.
 pub const DOMAIN: &[u8] = b"spincal signed calibration v1\0";
-/// Flag bit: a signed downgrade, accepted below the unit's counter.
+/// Flag bit: a signed downgrade, made for the unit at its present counter.
 pub const FLAG_DOWNGRADE: u8 = 1;
 
 /// A station's public key, with its id.
@@ -59,7 +60,7 @@ pub struct Verified {
     pub counter: u32,
     /// The key that signed it.
     pub key_id: [u8; 4],
-    /// A downgrade signed for this unit.
+    /// A downgrade signed for this unit at its present counter.
     pub downgrade: bool,
     /// Bytes of the blob (without the trailer).
     pub blob_len: usize,
@@ -83,7 +84,8 @@ pub enum SignError {
     BadSignature,
     /// Made for another unit.
     WrongSerial,
-    /// Not above the counter the unit holds (an older calibration put back).
+    /// Not above the counter the unit holds (an older calibration put back), or a downgrade
+    /// made for another counter than the unit's.
     Replay {
         /// The blob's counter.
         counter: u32,
@@ -159,7 +161,12 @@ pub fn verify(
     }
     let counter = u32::from_le_bytes([c0, c1, c2, c3]);
     let downgrade = flags & FLAG_DOWNGRADE != 0;
-    if counter <= held && !downgrade {
+    let fresh = if downgrade {
+        counter == held
+    } else {
+        counter > held
+    };
+    if !fresh {
         return Err(SignError::Replay { counter, held });
     }
     Ok(Verified {

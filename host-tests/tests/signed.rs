@@ -84,7 +84,8 @@ fn keys_serials_counters_and_unsigned_blobs() {
     );
     // Either of two held keys.
     assert!(signed::verify(&by_other, &[public, other_public], &unit, 0).is_ok());
-    // Replay: not above the unit's counter; a signed downgrade is.
+    // Replay: not above the unit's counter; a signed downgrade made for the unit's present
+    // counter is accepted, one made for another counter is not.
     let old = sign(&blob, &key, 5, 0);
     assert_eq!(
         signed::verify(&old, &[public], &unit, 5),
