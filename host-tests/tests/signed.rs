@@ -94,12 +94,21 @@ fn keys_serials_counters_and_unsigned_blobs() {
             held: 5
         })
     );
-    let down = sign(&blob, &key, 3, FLAG_DOWNGRADE);
+    let down = sign(&blob, &key, 5, FLAG_DOWNGRADE);
     assert!(
         signed::verify(&down, &[public], &unit, 5)
             .unwrap()
             .downgrade
     );
+    let stale = sign(&blob, &key, 3, FLAG_DOWNGRADE);
+    assert_eq!(
+        signed::verify(&stale, &[public], &unit, 5),
+        Err(SignError::Replay {
+            counter: 3,
+            held: 5
+        })
+    );
+    assert!(signed::verify(&down, &[public], &unit, 6).is_err());
     // Another unit's calibration.
     let mut theirs = data.clone();
     theirs.identity.serial = Serial::new("OTHER-UNIT-7").unwrap();
