@@ -18,5 +18,6 @@ pub mod obs;
 pub mod regression;
 pub mod report;
 pub mod sensor;
+pub mod signing;
 pub mod sim;
 pub mod stats;

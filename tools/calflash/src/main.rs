@@ -42,6 +42,10 @@ enum Command {
     History(cmd::history::HistoryArgs),
     /// Is the unit's calibration still good? Its health check at rest, read or run.
     Health(cmd::health::HealthArgs),
+    /// Write a new station key pair for signing calibrations.
+    Keygen(cmd::keys::KeygenArgs),
+    /// Sign a calibration blob with the station's key.
+    Sign(cmd::keys::SignArgs),
 }
 
 /// Every command takes negative numbers as option values (`--latitude -33.9`), lists of them
@@ -87,6 +91,8 @@ fn main() -> ExitCode {
         Command::Flash(args) => cmd::flash::run(args),
         Command::Image(args) => cmd::image::run(args),
         Command::History(args) => cmd::history::run(args),
+        Command::Keygen(args) => cmd::keys::keygen(args),
+        Command::Sign(args) => cmd::keys::sign(args),
         Command::Health(args) => match cmd::health::run(args) {
             // A SUSPECT unit has the rejected unit's exit code.
             Ok("SUSPECT") => return ExitCode::from(3),

@@ -10,6 +10,7 @@ pub mod flash;
 pub mod health;
 pub mod history;
 pub mod image;
+pub mod keys;
 pub mod outputs;
 pub mod selfcal;
 pub mod simulate;

@@ -1,0 +1,89 @@
+//! `calflash keygen` and `calflash sign`: the station's key pair, and a blob signed with it for
+//! a unit that holds the station's public key (issue 17).
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::files::Paths;
+use crate::signing;
+
+/// Write a new station key pair: PREFIX.key (private, readable by its owner only) and
+/// PREFIX.pub.
+#[derive(Debug, Args)]
+pub struct KeygenArgs {
+    /// The files' path without extension.
+    pub prefix: PathBuf,
+}
+
+/// Runs `calflash keygen`.
+///
+/// # Errors
+/// Files that exist or cannot be written.
+pub fn keygen(args: &KeygenArgs) -> Result<(), String> {
+    let private = args.prefix.with_extension("key");
+    let public = args.prefix.with_extension("pub");
+    let id = signing::keygen(&private, &public)?;
+    println!(
+        "calflash keygen  key {}: private {} (mode 600: keep it on the station), public {}",
+        id.iter().map(|b| format!("{b:02x}")).collect::<String>(),
+        private.display(),
+        public.display()
+    );
+    Ok(())
+}
+
+/// Sign a calibration blob with the station's key, for a unit that holds its public key.
+#[derive(Debug, Args)]
+pub struct SignArgs {
+    /// The blob.
+    #[arg(long)]
+    pub blob: PathBuf,
+    /// The station's private key (default: $CALFLASH_SIGN_KEY).
+    #[arg(long)]
+    pub sign_key: Option<PathBuf>,
+    /// The counter: above the one the unit holds (its present one for a --downgrade).
+    #[arg(long)]
+    pub counter: u32,
+    /// A downgrade: an earlier calibration put back on purpose, made for the unit at its
+    /// present counter.
+    #[arg(long)]
+    pub downgrade: bool,
+    /// The signed blob to write.
+    #[arg(long, short)]
+    pub output: PathBuf,
+}
+
+/// Runs `calflash sign`.
+///
+/// # Errors
+/// Unreadable key or blob, a key readable by others, a blob already signed.
+pub fn sign(args: &SignArgs) -> Result<(), String> {
+    let key_path = args
+        .sign_key
+        .clone()
+        .or_else(|| std::env::var_os("CALFLASH_SIGN_KEY").map(PathBuf::from))
+        .ok_or(
+            "no key: give --sign-key or set $CALFLASH_SIGN_KEY (make one with `calflash keygen`)",
+        )?;
+    Paths::new()
+        .input("--blob", Some(&args.blob))
+        .input("--sign-key", Some(&key_path))
+        .output("-o", Some(&args.output))
+        .check()?;
+    let key = signing::load_private(&key_path)?;
+    let blob = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let signed = signing::sign(&blob, &key, args.counter, args.downgrade)
+        .map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    crate::files::write_atomically(&args.output, |w| w.write_all(&signed))?;
+    println!(
+        "calflash sign  {} -> {}: counter {}{}, {} bytes ({} over the blob)",
+        args.blob.display(),
+        args.output.display(),
+        args.counter,
+        if args.downgrade { " (downgrade)" } else { "" },
+        signed.len(),
+        signed.len() - blob.len()
+    );
+    Ok(())
+}

@@ -1,0 +1,178 @@
+//! The station's keys and signed calibrations (issue 17): an Ed25519 key pair in two files,
+//! and the signed blob a provisioned unit checks (`spincal::signed`).
+//!
+//! Key files are hex text: the private one holds the 32-byte seed and must be readable by its
+//! owner only; the public one the 32-byte public key.
+
+use std::io::Write;
+use std::path::Path;
+
+use ed25519_dalek::{Signer, SigningKey};
+use spincal::signed::{self, FLAG_DOWNGRADE, StationKey};
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn unhex32(text: &str, path: &Path) -> Result<[u8; 32], String> {
+    let t = text.trim();
+    let bad = || {
+        format!(
+            "{}: expected 64 hex digits (a key written by `calflash keygen`)",
+            path.display()
+        )
+    };
+    if t.len() != 64 {
+        return Err(bad());
+    }
+    let mut out = [0u8; 32];
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = u8::from_str_radix(t.get(2 * i..2 * i + 2).ok_or_else(bad)?, 16).map_err(|_| bad())?;
+    }
+    Ok(out)
+}
+
+/// Writes a new key pair: `private` (mode 0600) and `public`; returns the key id. Neither file
+/// may exist.
+///
+/// # Errors
+/// A file that exists or cannot be written, named.
+pub fn keygen(private: &Path, public: &Path) -> Result<[u8; 4], String> {
+    for p in [private, public] {
+        if p.exists() {
+            return Err(format!(
+                "{}: exists; a key is never overwritten (move it away first)",
+                p.display()
+            ));
+        }
+    }
+    let seed: [u8; 32] = rand::random();
+    let key = SigningKey::from_bytes(&seed);
+    let station = StationKey {
+        public: key.verifying_key().to_bytes(),
+    };
+    let mut opts = std::fs::OpenOptions::new();
+    opts.write(true).create_new(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::mode(&mut opts, 0o600);
+    let mut f = opts
+        .open(private)
+        .map_err(|e| format!("{}: {e}", private.display()))?;
+    writeln!(f, "{}", hex(&seed)).map_err(|e| format!("{}: {e}", private.display()))?;
+    f.sync_all()
+        .map_err(|e| format!("{}: {e}", private.display()))?;
+    crate::files::write_atomically(public, |w| writeln!(w, "{}", hex(&station.public)))?;
+    Ok(station.id())
+}
+
+/// The station's private key from `path`, refused when others may read the file.
+///
+/// # Errors
+/// A missing or malformed file, or one readable by group or others.
+pub fn load_private(path: &Path) -> Result<SigningKey, String> {
+    let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = meta.permissions().mode();
+        if mode & 0o077 != 0 {
+            return Err(format!(
+                "{}: the private key is readable by others (mode {:o}); it signs every unit's \
+                 calibration: `chmod 600 {}` and keep it so",
+                path.display(),
+                mode & 0o777,
+                path.display()
+            ));
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = meta;
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(SigningKey::from_bytes(&unhex32(&text, path)?))
+}
+
+/// A station's public key from `path`.
+///
+/// # Errors
+/// A missing or malformed file.
+pub fn load_public(path: &Path) -> Result<StationKey, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(StationKey {
+        public: unhex32(&text, path)?,
+    })
+}
+
+/// `blob` signed with `key` at `counter` (a downgrade made for the unit at that counter when
+/// `downgrade`).
+///
+/// # Errors
+/// A blob that does not decode, or one already signed.
+pub fn sign(
+    blob: &[u8],
+    key: &SigningKey,
+    counter: u32,
+    downgrade: bool,
+) -> Result<Vec<u8>, String> {
+    spincal::blob::decode(blob).map_err(|e| {
+        if signed::split(blob).is_ok() {
+            "the blob is signed already".to_string()
+        } else {
+            format!("not a calibration blob: {e}")
+        }
+    })?;
+    let station = StationKey {
+        public: key.verifying_key().to_bytes(),
+    };
+    let mut out = blob.to_vec();
+    out.extend_from_slice(&signed::MAGIC);
+    out.push(if downgrade { FLAG_DOWNGRADE } else { 0 });
+    out.extend_from_slice(&station.id());
+    out.extend_from_slice(&counter.to_le_bytes());
+    let sig = key.sign(&signed::digest(&out));
+    out.extend_from_slice(&sig.to_bytes());
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_sign_and_the_unit_check_accepts() {
+        let dir = tempfile::tempdir().unwrap();
+        let (sk, pk) = (dir.path().join("s.key"), dir.path().join("s.pub"));
+        let id = keygen(&sk, &pk).unwrap();
+        assert!(keygen(&sk, &pk).unwrap_err().contains("never overwritten"));
+        let key = load_private(&sk).unwrap();
+        let public = load_public(&pk).unwrap();
+        assert_eq!(public.id(), id);
+        let data = spincal::model::CalibrationData::example_imu();
+        let cal = spincal::model::Calibration::new(data.clone()).unwrap();
+        let mut buf = vec![0u8; spincal::blob::MAX_BLOB_LEN];
+        let n = spincal::blob::encode(&cal, &mut buf).unwrap();
+        let bytes = sign(&buf[..n], &key, 4, false).unwrap();
+        let v = signed::verify(&bytes, &[public], &data.identity.serial, 3).unwrap();
+        assert_eq!((v.counter, v.key_id), (4, id));
+        assert!(
+            sign(&bytes, &key, 5, false)
+                .unwrap_err()
+                .contains("signed already")
+        );
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            assert_eq!(
+                std::fs::metadata(&sk).unwrap().permissions().mode() & 0o777,
+                0o600
+            );
+            std::fs::set_permissions(&sk, std::fs::Permissions::from_mode(0o644)).unwrap();
+            let e = load_private(&sk).unwrap_err();
+            assert!(
+                e.contains("readable by others") && e.contains("chmod 600"),
+                "{e}"
+            );
+        }
+        std::fs::write(&pk, "zz\n").unwrap();
+        assert!(load_public(&pk).unwrap_err().contains("64 hex digits"));
+    }
+}
