@@ -11,11 +11,12 @@ use std::time::Instant;
 use crate::root;
 
 /// The targets in `fuzz/fuzz_targets/`.
-pub const TARGETS: [&str; 4] = [
+pub const TARGETS: [&str; 5] = [
     "blob_decode",
     "frame_decode",
     "store_flash",
     "device_session",
+    "signed_verify",
 ];
 
 /// What one target's run did.
