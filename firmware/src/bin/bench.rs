@@ -425,7 +425,13 @@ fn bench_signed() -> usize {
     let t1 = timer::now();
     report("signed_digest_imu_blob", t0.wrapping_sub(t1), 1);
     let (_, stack) = stack::high_water(|| {
-        black_box(spincal::signed::verify(black_box(SIGNED), &keys, &serial, 0)).is_ok()
+        black_box(spincal::signed::verify(
+            black_box(SIGNED),
+            &keys,
+            &serial,
+            0,
+        ))
+        .is_ok()
     });
     stack
 }
