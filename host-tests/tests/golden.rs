@@ -137,18 +137,12 @@ fn health_vectors_match_the_host_monitor() {
 /// 1): what the device's benchmark verifies. The signature is deterministic (Ed25519).
 #[test]
 fn the_signed_example_matches_its_golden_bytes() {
-    use ed25519_dalek::{Signer, SigningKey};
-    let key = SigningKey::from_bytes(&[1; 32]);
+    let key = ed25519_dalek::SigningKey::from_bytes(&[1; 32]);
     let public = spincal::signed::StationKey {
         public: key.verifying_key().to_bytes(),
     };
-    let mut bytes = golden::encode(&spincal::model::CalibrationData::example_imu());
-    bytes.extend_from_slice(&spincal::signed::MAGIC);
-    bytes.push(0);
-    bytes.extend_from_slice(&public.id());
-    bytes.extend_from_slice(&1u32.to_le_bytes());
-    let sig = key.sign(&spincal::signed::digest(&bytes));
-    bytes.extend_from_slice(&sig.to_bytes());
+    let blob = golden::encode(&spincal::model::CalibrationData::example_imu());
+    let bytes = calflash::signing::sign(&blob, &key, 1, false).unwrap();
     let (path, key_path) = (
         golden::dir().join("imu.signed"),
         golden::dir().join("station.pub"),

@@ -1,23 +1,13 @@
 //! Signed calibrations (`spincal::signed`): what the unit's check refuses and accepts.
 
-use ed25519_dalek::{Signer, SigningKey};
+use ed25519_dalek::SigningKey;
 use host_tests::golden;
 use spincal::model::{CalibrationData, Serial};
 use spincal::signed::{self, FLAG_DOWNGRADE, SignError, StationKey, TRAILER_LEN};
 
-/// Signs `blob` as a station with `key` does.
+/// Signs `blob` as a station does (`calflash sign`).
 fn sign(blob: &[u8], key: &SigningKey, counter: u32, flags: u8) -> Vec<u8> {
-    let public = StationKey {
-        public: key.verifying_key().to_bytes(),
-    };
-    let mut out = blob.to_vec();
-    out.extend_from_slice(&signed::MAGIC);
-    out.push(flags);
-    out.extend_from_slice(&public.id());
-    out.extend_from_slice(&counter.to_le_bytes());
-    let sig = key.sign(&signed::digest(&out));
-    out.extend_from_slice(&sig.to_bytes());
-    out
+    calflash::signing::sign(blob, key, counter, flags & FLAG_DOWNGRADE != 0).unwrap()
 }
 
 fn station(seed: u8) -> (SigningKey, StationKey) {

@@ -349,16 +349,14 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
     }
 
     /// Per output, the variance of one corrected sample of a unit at rest whose outputs carry
-    /// white noise of variance `white` per sample: with quantisation, the accelerometer's
-    /// with the tangential lever term of the gyro noise's backward difference (`2 var` per
-    /// rate, through the coefficients that fold in the sample rate), the gyro's with the
-    /// g-sensitivity of the accelerometer noise.
+    /// noise of variance `own` per sample (white noise and quantisation,
+    /// [`quantisation_variance`](Self::quantisation_variance)): the accelerometer's with the
+    /// tangential lever term of the gyro noise's backward difference (`2 var` per rate, through
+    /// the coefficients that fold in the sample rate), the gyro's with the g-sensitivity of the
+    /// accelerometer noise.
     #[must_use]
-    pub fn sample_variance(&self, white: &[f32; 6]) -> [f32; 6] {
-        let mut v = self.quantisation_variance();
-        for (x, w) in v.iter_mut().zip(white) {
-            *x += w;
-        }
+    pub fn sample_variance(&self, own: &[f32; 6]) -> [f32; 6] {
+        let v = *own;
         let [a0, a1, a2, g0, g1, g2] = v;
         let (accel, gyro) = ([a0, a1, a2], [g0, g1, g2]);
         let through = |row: &[f32; 3], var: &[f32; 3], k: f32| -> f32 {

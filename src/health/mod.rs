@@ -316,7 +316,12 @@ impl RestMonitor {
                 f.add_noise(&self.walk);
             }
         }
-        let sample_var = imu.sample_variance(&self.white_var);
+        // Each output's own noise: white and quantisation.
+        let mut own = imu.quantisation_variance();
+        for (v, w) in own.iter_mut().zip(&self.white_var) {
+            *v += w;
+        }
+        let sample_var = imu.sample_variance(&own);
         let quiet = stats
             .var
             .iter()
@@ -334,10 +339,7 @@ impl RestMonitor {
         }
         // Each mean's variance: the tangential term's differenced gyro noise cancels in it.
         let n = f32::from(self.window.len());
-        let mut mean_var = imu.quantisation_variance();
-        for (v, w) in mean_var.iter_mut().zip(&self.white_var) {
-            *v = (*v + w) / n;
-        }
+        let mean_var = own.map(|v| v / n);
         let steady = self
             .previous
             .is_some_and(|p| change(&p, &mean, &mean_var) <= self.steady_limit);

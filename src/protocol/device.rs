@@ -137,28 +137,10 @@ impl<F: NorFlash> Device<F> {
         }
     }
 
-    /// The health check's monitor, made for the current calibration when first needed.
-    fn monitor(&mut self) -> Result<(), Status> {
-        let Some(cal) = self.calibration() else {
-            return Err(Status::NoCalibration);
-        };
-        if self.health.monitor.is_none() {
-            let monitor =
-                RestMonitor::new(cal, VECTOR_RATE_HZ).map_err(Status::HealthUnavailable)?;
-            self.health.monitor = Some(monitor);
-        }
-        Ok(())
-    }
-
     fn observe_rest(&mut self, temperature: f32, voltage: f32, raw: &[[i32; 6]]) -> Response {
-        if let Err(status) = self.monitor() {
-            return Response::Error(status);
-        }
-        let (Some(cal), Some(monitor)) = (
-            Calibration::validate_in_place(&self.cal).ok(),
-            self.health.monitor.as_mut(),
-        ) else {
-            return Response::Error(Status::NoCalibration);
+        let (cal, monitor) = match health_check(&self.cal, self.loaded, &mut self.health.monitor) {
+            Ok(both) => both,
+            Err(status) => return Response::Error(status),
         };
         let Ok(mut c) = AnyImuCorrector::new(cal, VECTOR_RATE_HZ) else {
             return Response::Error(Status::NoCalibration);
@@ -178,12 +160,9 @@ impl<F: NorFlash> Device<F> {
     }
 
     fn read_health(&mut self) -> Response {
-        if let Err(status) = self.monitor() {
-            return Response::Error(status);
-        }
-        match &self.health.monitor {
-            Some(m) => Response::Health(m.health()),
-            None => Response::Error(Status::NoCalibration),
+        match health_check(&self.cal, self.loaded, &mut self.health.monitor) {
+            Ok((_, m)) => Response::Health(m.health()),
+            Err(status) => Response::Error(status),
         }
     }
 
@@ -333,6 +312,24 @@ impl<F: NorFlash> Device<F> {
         }
         Response::Vectors { out }
     }
+}
+
+/// The current calibration, validated once, and its health check's monitor, made for it when
+/// first needed.
+fn health_check<'a>(
+    cal: &'a CalibrationData,
+    loaded: Option<SlotInfo>,
+    monitor: &'a mut Option<RestMonitor>,
+) -> Result<(&'a Calibration, &'a mut RestMonitor), Status> {
+    loaded.ok_or(Status::NoCalibration)?;
+    let cal = Calibration::validate_in_place(cal).map_err(|_| Status::NoCalibration)?;
+    let monitor = match monitor {
+        Some(m) => m,
+        empty => {
+            empty.insert(RestMonitor::new(cal, VECTOR_RATE_HZ).map_err(Status::HealthUnavailable)?)
+        }
+    };
+    Ok((cal, monitor))
 }
 
 /// The sample rate the device assumes for test vectors of an IMU (the host must use the same).

@@ -18,6 +18,15 @@ fn allan(dir: &Path, name: &str, unit: &str, n: f64, k: f64) {
     std::fs::write(dir.join(name), v.to_string()).unwrap();
 }
 
+/// `calflash health RECORDING --blob u.blob` at the environment the simulator used, and `extra`.
+fn health(dir: &Path, recording: &str, extra: &[&str]) -> (i32, String, String) {
+    let mut args = vec![
+        "health", recording, "--blob", "u.blob", "--temp", "25", "--volt", "3.3",
+    ];
+    args.extend_from_slice(extra);
+    calflash(dir, &args)
+}
+
 #[test]
 fn calibrate_with_noise_then_judge_a_unit_at_rest() {
     let dir = tempfile::tempdir().unwrap();
@@ -65,21 +74,7 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
             ],
         );
         assert_eq!(code, 0, "{out}{err}");
-        let (code, out, err) = calflash(
-            d,
-            &[
-                "health",
-                "rest.csv",
-                "--blob",
-                "u.blob",
-                "--temp",
-                "25",
-                "--volt",
-                "3.3",
-                "--db",
-                "units.sqlite",
-            ],
-        );
+        let (code, out, err) = health(d, "rest.csv", &["--db", "units.sqlite"]);
         assert_eq!(code, exit, "{out}{err}");
         assert!(
             out.contains(&format!("unit IMU-H-1 (rest.csv): {word}")),
@@ -96,30 +91,10 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
         ],
     );
     assert_eq!(code, 0, "{out}{err}");
-    let (code, out, err) = calflash(
-        d,
-        &[
-            "health", "aged.csv", "--blob", "u.blob", "--temp", "25", "--volt", "3.3", "--no-db",
-        ],
-    );
+    let (code, out, err) = health(d, "aged.csv", &["--no-db"]);
     assert_eq!(code, 3, "{out}{err}");
     // The last report (gyro z 6 sigma off) held against the calibration it judged.
-    let (code, out, err) = calflash(
-        d,
-        &[
-            "health",
-            "rest.csv",
-            "--blob",
-            "u.blob",
-            "--temp",
-            "25",
-            "--volt",
-            "3.3",
-            "--no-db",
-            "--json",
-            "health.json",
-        ],
-    );
+    let (code, out, err) = health(d, "rest.csv", &["--no-db", "--json", "health.json"]);
     assert_eq!(code, 3, "{out}{err}");
     let (code, out, err) = calflash(d, &["compare", "fit.json", "health.json"]);
     assert_eq!(code, 0, "{out}{err}");
