@@ -1,5 +1,7 @@
 //! Signed calibrations: a blob, then a trailer that binds it to the station that made it and
-//! to a counter that only grows per unit (issue 17, first step: the format and its check).
+//! to a counter that only grows per unit. The store ([`crate::store`]) keeps the whole signed
+//! record in a slot; a unit provisioned with station keys commits and boots only records that
+//! [`verify`] (at commit) and [`check`] (at boot) accept.
 //!
 //! ```text
 //! offset  size  field
@@ -22,7 +24,7 @@
 use ed25519_dalek::{Signature, VerifyingKey};
 use sha2::{Digest, Sha256};
 
-use crate::blob::Header;
+use crate::blob::{Header, MAX_BLOB_LEN};
 use crate::model::{SERIAL_CAPACITY, Serial};
 
 /// The first two bytes of the trailer.
@@ -34,9 +36,11 @@ pub const TRAILER_LEN: usize = 2 + 1 + 4 + 4 + 64;
 pub const DOMAIN: &[u8] = b"spincal signed calibration v1\0";
 /// Flag bit: a signed downgrade, made for the unit at its present counter.
 pub const FLAG_DOWNGRADE: u8 = 1;
+/// The longest record a slot or a transfer holds: the longest blob and a trailer.
+pub const MAX_SIGNED_LEN: usize = MAX_BLOB_LEN + TRAILER_LEN;
 
 /// A station's public key, with its id.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct StationKey {
     /// The Ed25519 public key.
     pub public: [u8; 32],
@@ -67,7 +71,7 @@ pub struct Verified {
 }
 
 /// Why a signed blob is refused.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum SignError {
     /// The bytes are a blob with no trailer: the unit holds station keys and takes only
@@ -94,6 +98,71 @@ pub enum SignError {
     },
 }
 
+impl core::fmt::Display for SignError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Unsigned => f.write_str(
+                "the calibration is not signed, and the unit takes only signed ones: sign it with \
+                 the station's key (`calflash calibrate --sign-key KEY`, or `calflash sign`)",
+            ),
+            Self::Malformed => f.write_str("the signed calibration is cut or malformed"),
+            Self::UnknownKey { key_id } => write!(
+                f,
+                "signed by key {:02x}{:02x}{:02x}{:02x}, which the unit does not hold",
+                key_id[0], key_id[1], key_id[2], key_id[3]
+            ),
+            Self::BadSignature => f.write_str(
+                "the signature does not verify: the calibration or its trailer was changed after \
+                 signing",
+            ),
+            Self::WrongSerial => f.write_str("the calibration was signed for another unit"),
+            Self::Replay { counter, held } => write!(
+                f,
+                "counter {counter} is not above the {held} the unit holds (an older calibration, \
+                 or a downgrade made for another counter): sign it again with a counter above {held}"
+            ),
+        }
+    }
+}
+
+/// A trailer's fields, read but not checked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Trailer {
+    /// Flag bits ([`FLAG_DOWNGRADE`]).
+    pub flags: u8,
+    /// The signing key's id.
+    pub key_id: [u8; 4],
+    /// The counter.
+    pub counter: u32,
+    /// The Ed25519 signature.
+    pub signature: [u8; 64],
+}
+
+impl Trailer {
+    /// The fields of a trailer whose magic [`split`] has checked.
+    #[must_use]
+    pub fn read(trailer: &[u8; TRAILER_LEN]) -> Self {
+        let [_, _, flags, k0, k1, k2, k3, c0, c1, c2, c3, signature @ ..] = *trailer;
+        Self {
+            flags,
+            key_id: [k0, k1, k2, k3],
+            counter: u32::from_le_bytes([c0, c1, c2, c3]),
+            signature,
+        }
+    }
+}
+
+/// A record as a slot holds it: the blob, and the trailer's fields when a well-formed trailer
+/// follows it. Anything else is returned whole as the blob, for [`crate::blob::decode`] to say
+/// what is wrong with it.
+#[must_use]
+pub fn parts(bytes: &[u8]) -> (&[u8], Option<Trailer>) {
+    match split(bytes) {
+        Ok((blob, trailer)) => (blob, Some(Trailer::read(trailer))),
+        Err(_) => (bytes, None),
+    }
+}
+
 /// The message the station signs: SHA-256 of [`DOMAIN`] and the blob with the trailer's first
 /// 11 bytes (so that a device hashes the blob once, in place, with no copy).
 #[must_use]
@@ -102,6 +171,31 @@ pub fn digest(signed: &[u8]) -> [u8; 32] {
     h.update(DOMAIN);
     h.update(signed);
     h.finalize().into()
+}
+
+/// Writes `blob` signed by the station `key` into `out` (the blob, then the trailer), with
+/// `sign` making the Ed25519 signature of the digest ([`digest`]) with the key's private half;
+/// a downgrade made for the unit at `counter` when `downgrade`. Returns the bytes written, or
+/// `None` when `out` is too short. The blob is not checked here.
+pub fn seal(
+    blob: &[u8],
+    key: &StationKey,
+    counter: u32,
+    downgrade: bool,
+    out: &mut [u8],
+    sign: impl FnOnce(&[u8; 32]) -> [u8; 64],
+) -> Option<usize> {
+    let n = blob.len();
+    let record = out.get_mut(..n + TRAILER_LEN)?;
+    let (body, signature) = record.split_at_mut(n + 11);
+    let (head, trailer) = body.split_at_mut(n);
+    head.copy_from_slice(blob);
+    let [k0, k1, k2, k3] = key.id();
+    let [c0, c1, c2, c3] = counter.to_le_bytes();
+    let flags = if downgrade { FLAG_DOWNGRADE } else { 0 };
+    trailer.copy_from_slice(&[MAGIC[0], MAGIC[1], flags, k0, k1, k2, k3, c0, c1, c2, c3]);
+    signature.copy_from_slice(&sign(&digest(body)));
+    Some(n + TRAILER_LEN)
 }
 
 /// The serial a blob's payload starts with (postcard: the identity's serial string first).
@@ -132,19 +226,15 @@ pub fn split(bytes: &[u8]) -> Result<(&[u8], &[u8; TRAILER_LEN]), SignError> {
     Ok((blob, trailer))
 }
 
-/// Checks a signed blob for the unit `unit` holding `keys` and the counter `held`.
+/// Checks a signed record's key, signature and serial for the unit `unit` holding `keys`,
+/// whatever its counter (at boot: the counter was checked when it was committed).
 ///
 /// # Errors
-/// The first [`SignError`] found, in the order of the module docs.
-pub fn verify(
-    bytes: &[u8],
-    keys: &[StationKey],
-    unit: &Serial,
-    held: u32,
-) -> Result<Verified, SignError> {
+/// The first [`SignError`] found, in the order of the module docs (all but the counter).
+pub fn check(bytes: &[u8], keys: &[StationKey], unit: &Serial) -> Result<Verified, SignError> {
     let (blob, trailer) = split(bytes)?;
-    let [_, _, flags, k0, k1, k2, k3, c0, c1, c2, c3, sig @ ..] = *trailer;
-    let key_id = [k0, k1, k2, k3];
+    let t = Trailer::read(trailer);
+    let key_id = t.key_id;
     let key = keys
         .iter()
         .find(|k| k.id() == key_id)
@@ -154,25 +244,41 @@ pub fn verify(
     let serial = blob_serial(blob).ok_or(SignError::Malformed)?;
     let signed = bytes.get(..blob.len() + 11).ok_or(SignError::Malformed)?;
     public
-        .verify_strict(&digest(signed), &Signature::from_bytes(&sig))
+        .verify_strict(&digest(signed), &Signature::from_bytes(&t.signature))
         .map_err(|_| SignError::BadSignature)?;
     if serial != unit.as_str() {
         return Err(SignError::WrongSerial);
     }
-    let counter = u32::from_le_bytes([c0, c1, c2, c3]);
-    let downgrade = flags & FLAG_DOWNGRADE != 0;
-    let fresh = if downgrade {
-        counter == held
-    } else {
-        counter > held
-    };
-    if !fresh {
-        return Err(SignError::Replay { counter, held });
-    }
     Ok(Verified {
-        counter,
+        counter: t.counter,
         key_id,
-        downgrade,
+        downgrade: t.flags & FLAG_DOWNGRADE != 0,
         blob_len: blob.len(),
     })
+}
+
+/// Checks a signed blob offered to the unit `unit` holding `keys` and the counter `held`: as
+/// [`check`], and its counter is above `held` (or it is a downgrade signed at `held`).
+///
+/// # Errors
+/// The first [`SignError`] found, in the order of the module docs.
+pub fn verify(
+    bytes: &[u8],
+    keys: &[StationKey],
+    unit: &Serial,
+    held: u32,
+) -> Result<Verified, SignError> {
+    let v = check(bytes, keys, unit)?;
+    let fresh = if v.downgrade {
+        v.counter == held
+    } else {
+        v.counter > held
+    };
+    if !fresh {
+        return Err(SignError::Replay {
+            counter: v.counter,
+            held,
+        });
+    }
+    Ok(v)
 }

@@ -8,7 +8,7 @@ use spincal::correct::{AnyCorrector, AnyImuCorrector, Corrected, Flags, ImuCorre
 use spincal::driver::mpu6050::{ADDRESS, Config, Mpu6050};
 use spincal::model::{Calibration, SampleFormat, Sensor, Serial};
 use spincal::protocol::{Device, MAX_FRAME, UnitSensor};
-use spincal::store::Store;
+use spincal::store::{Provisioning, Store};
 
 use crate::simulated_mpu6050::SimulatedMpu6050;
 use crate::{RamFlash, Uart};
@@ -119,6 +119,46 @@ fn mpu6050_self_test(cal: &Calibration) -> (u32, u32) {
     (clean, flagged)
 }
 
+/// Says at boot whether the unit checks signatures, and why it holds no calibration when a
+/// slot's record was refused.
+fn report_trust(device: &Device<RamFlash>) {
+    match device.provisioning() {
+        Provisioning::Unprovisioned => hprintln!(
+            "device: UNPROVISIONED (no station keys): it takes unsigned calibrations from anyone with the cable"
+        ),
+        Provisioning::Damaged => hprintln!(
+            "device: the keys sector is DAMAGED: it trusts no station key and takes no calibration until provisioned again"
+        ),
+        Provisioning::Provisioned(keys) => {
+            hprintln!(
+                "device: provisioned with {} station key(s); it takes only calibrations signed for it",
+                keys.len()
+            );
+            for k in keys {
+                let [a, b, c, d] = k.id();
+                hprintln!("device:   station key {:02x}{:02x}{:02x}{:02x}", a, b, c, d);
+            }
+            if let Some(info) = device.loaded() {
+                let [a, b, c, d] = info.signed_by.unwrap_or_default();
+                hprintln!(
+                    "device: the calibration verified at boot: signed by {:02x}{:02x}{:02x}{:02x}, counter {}",
+                    a,
+                    b,
+                    c,
+                    d,
+                    info.counter
+                );
+            }
+        }
+    }
+    if let Some(why) = device.refused() {
+        hprintln!(
+            "device: the stored calibration is REFUSED at boot: {:?}; every sample is flagged",
+            why
+        );
+    }
+}
+
 /// Runs the example device: unit `serial` carrying `sensor` (it commits no calibration of
 /// another kind). Never returns: it serves the update protocol on UART0.
 pub fn run(serial: &'static str, sensor: UnitSensor) -> ! {
@@ -137,6 +177,7 @@ pub fn run(serial: &'static str, sensor: UnitSensor) -> ! {
         "device: unit {} up; serving the update protocol on UART0",
         serial
     );
+    report_trust(device);
     // Raw samples about the middle of the accelerometer's converter.
     let mid = match sensor {
         UnitSensor::Imu { accel_rails: r, .. }

@@ -1,9 +1,12 @@
 //! The device's protocol handler driven through whole sessions: the input is a program of
-//! requests (identify, begin a transfer of one of three blobs, send the next chunk, possibly
+//! requests (identify, begin a transfer of one of the records, send the next chunk, possibly
 //! damaged, commit, read back, run vectors, lock, or a raw garbage frame). The unit is an IMU:
-//! the single-axis and triad blobs must be refused. A model tracks what a correct unit holds:
-//! the last blob whose commit was answered `Committed`. After every step the
-//! device holds exactly that, read-back returns its bytes, and a reboot loads it again.
+//! the single-axis and triad blobs must be refused. The first byte chooses an unprovisioned
+//! unit (even) or one provisioned with a station key (odd); the records are blobs and signed
+//! blobs (growing counters, a downgrade, another station's key, another unit's serial). A model
+//! tracks what a correct unit holds: the last record whose commit was answered `Committed`,
+//! which must be one the unit's policy accepts. After every step the device holds exactly
+//! that, read-back returns its bytes, and a reboot loads it again.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -29,6 +32,66 @@ fn encode(data: CalibrationData) -> Vec<u8> {
     out
 }
 
+/// A record offered to the unit: its bytes, and what a provisioned unit makes of it.
+struct Offer {
+    bytes: Vec<u8>,
+    /// An IMU calibration (the unit's sensor).
+    imu: bool,
+    /// Signed by the unit's station for the unit: its counter and whether a downgrade.
+    signed: Option<(u32, bool)>,
+}
+
+fn offers() -> Vec<Offer> {
+    let (key, _) = spincal_fuzz::station();
+    let other = ed25519_dalek::SigningKey::from_bytes(&[3; 32]);
+    let mut imu = CalibrationData::example_imu();
+    imu.identity.serial = Serial::new("FUZZ-1").expect("serial");
+    let mut stranger = imu.clone();
+    stranger.identity.serial = Serial::new("OTHER-9").expect("serial");
+    let imu = encode(imu);
+    let stranger = encode(stranger);
+    let plain = |bytes: Vec<u8>, imu: bool| Offer {
+        bytes,
+        imu,
+        signed: None,
+    };
+    let signed = |counter: u32, downgrade: bool| Offer {
+        bytes: spincal_fuzz::sign(&imu, &key, counter, downgrade),
+        imu: true,
+        signed: Some((counter, downgrade)),
+    };
+    vec![
+        plain(encode(CalibrationData::example_single()), false),
+        plain(encode(CalibrationData::example_triad()), false),
+        plain(imu.clone(), true),
+        signed(1, false),
+        signed(2, false),
+        signed(4, false),
+        signed(2, true),
+        // Another station's key; another unit's serial.
+        plain(spincal_fuzz::sign(&imu, &other, 9, false), true),
+        plain(spincal_fuzz::sign(&stranger, &key, 9, false), true),
+    ]
+}
+
+/// Whether the unit commits `o`, holding `held` (the record's index) under its policy.
+fn accepts(offers: &[Offer], k: usize, provisioned: bool, held: Option<usize>) -> bool {
+    let o = &offers[k];
+    if !o.imu {
+        return false;
+    }
+    if !provisioned {
+        return true;
+    }
+    let counter = held.and_then(|h| offers[h].signed).map_or(0, |(c, _)| c);
+    match o.signed {
+        None => false,
+        _ if held == Some(k) => true,
+        Some((c, true)) => c == counter,
+        Some((c, false)) => c > counter,
+    }
+}
+
 fn call(d: &mut Device<RamNor>, req: &Request) -> Response {
     let mut frame = [0u8; MAX_FRAME];
     let n = protocol::encode(req, &mut frame).expect("a request frames");
@@ -40,7 +103,10 @@ fn raw(d: &mut Device<RamNor>, frame: &[u8]) -> Response {
     let n = d.handle_frame(frame, &mut out);
     assert!(n > 0 && out[n - 1] == 0);
     let mut s = [0u8; MAX_FRAME];
-    protocol::decode(&out[..n - 1], &mut s).expect("the response decodes")
+    let reply: protocol::Reply =
+        protocol::decode(&out[..n - 1], &mut s).expect("the reply decodes");
+    assert_eq!(reply.trust, d.trust());
+    reply.response
 }
 
 fn held(d: &Device<RamNor>) -> Option<CalibrationData> {
@@ -48,19 +114,25 @@ fn held(d: &Device<RamNor>) -> Option<CalibrationData> {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let blobs = [
-        encode(CalibrationData::example_single()),
-        encode(CalibrationData::example_triad()),
-        encode(CalibrationData::example_imu()),
-    ];
-    let store = Store::new(
+    let Some((&mode, data)) = data.split_first() else {
+        return;
+    };
+    let offers = offers();
+    let blobs: Vec<&[u8]> = offers.iter().map(|o| o.bytes.as_slice()).collect();
+    let provisioned = mode & 1 == 1;
+    let mut store = Store::new(
         RamNor {
-            mem: vec![0xff; 2 * SLOT as usize + 1024],
+            mem: vec![0xff; Store::<RamNor>::region_len(SLOT, 1024) as usize],
         },
         0,
         SLOT,
     )
     .expect("layout");
+    if provisioned {
+        store
+            .provision(&[spincal_fuzz::station().1])
+            .expect("a RAM flash provisions");
+    }
     let mut d = Box::new(Device::new(
         store,
         Serial::new("FUZZ-1").expect("serial"),
@@ -80,11 +152,16 @@ fuzz_target!(|data: &[u8]| {
                 };
                 assert_eq!(id.locked, locked);
                 assert_eq!(id.blob_len as usize, expected.map_or(0, |k| blobs[k].len()));
+                assert_eq!(id.trust == protocol::Trust::Provisioned, provisioned);
+                let counter = expected.map_or(0, |k| {
+                    spincal::signed::parts(blobs[k]).1.map_or(0, |t| t.counter)
+                });
+                assert_eq!(id.counter, counter);
             }
             1 => {
-                let k = usize::from(arg()) % 3;
+                let k = usize::from(arg()) % blobs.len();
                 let damage = arg();
-                let crc = protocol::checksum(&blobs[k]) ^ u32::from(damage == 0xAA);
+                let crc = protocol::checksum(blobs[k]) ^ u32::from(damage == 0xAA);
                 let r = call(
                     &mut d,
                     &Request::WriteBegin {
@@ -102,7 +179,7 @@ fuzz_target!(|data: &[u8]| {
             2 => {
                 let skew = arg();
                 if let Some((k, at)) = transfer {
-                    let b = &blobs[k];
+                    let b = blobs[k];
                     let end = (at + MAX_CHUNK).min(b.len());
                     let mut chunk = b[at..end].to_vec();
                     let offset = if skew == 0x55 { at + 1 } else { at };
@@ -129,7 +206,10 @@ fuzz_target!(|data: &[u8]| {
                 match (transfer, r) {
                     (Some((k, at)), Response::Committed { .. }) => {
                         assert_eq!(at, blobs[k].len());
-                        assert_eq!(k, 2, "committed a blob for another sensor");
+                        assert!(
+                            accepts(&offers, k, provisioned, expected),
+                            "committed record {k} (provisioned: {provisioned}, holding {expected:?})"
+                        );
                         expected = Some(k);
                     }
                     (_, Response::Committed { .. }) => {
@@ -138,12 +218,15 @@ fuzz_target!(|data: &[u8]| {
                     (Some((k, at)), r) => assert!(
                         at < blobs[k].len()
                             || locked
-                            || (k != 2
+                            || (!accepts(&offers, k, provisioned, expected)
                                 && matches!(
                                     r,
-                                    Response::Error(protocol::Status::WrongSensor { .. })
+                                    Response::Error(
+                                        protocol::Status::WrongSensor { .. }
+                                            | protocol::Status::Refused(_)
+                                    )
                                 )),
-                        "{r:?}"
+                        "record {k}: {r:?}"
                     ),
                     _ => {}
                 }
@@ -195,7 +278,12 @@ fuzz_target!(|data: &[u8]| {
         }
         assert_eq!(
             held(&d),
-            expected.map(|k| blob::decode(&blobs[k]).expect("blob").data().clone())
+            expected.map(|k| {
+                blob::decode(spincal::signed::parts(blobs[k]).0)
+                    .expect("blob")
+                    .data()
+                    .clone()
+            })
         );
     }
     // A reboot loads the same.

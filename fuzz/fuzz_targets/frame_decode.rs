@@ -6,7 +6,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use spincal::model::{CalibrationData, Serial};
-use spincal::protocol::{self, Device, MAX_FRAME, Request, Response};
+use spincal::protocol::{self, Device, MAX_FRAME, Reply, Request, Response};
 use spincal::store::Store;
 use spincal_fuzz::RamNor;
 
@@ -24,9 +24,15 @@ fuzz_target!(|data: &[u8]| {
     let _ = protocol::decode::<Response>(data, &mut scratch);
 
     let flash = RamNor {
-        mem: vec![0xff; 2 * SLOT as usize + 1024],
+        mem: vec![0xff; Store::<RamNor>::region_len(SLOT, 1024) as usize],
     };
-    let store = Store::new(flash, 0, SLOT).expect("layout");
+    let mut store = Store::new(flash, 0, SLOT).expect("layout");
+    // Half the inputs drive a provisioned unit (the first byte odd).
+    if data.first().is_some_and(|b| b & 1 == 1) {
+        store
+            .provision(&[spincal_fuzz::station().1])
+            .expect("a RAM flash provisions");
+    }
     let mut device = Box::new(Device::new(
         store,
         Serial::new("FUZZ-1").expect("serial"),
@@ -41,9 +47,13 @@ fuzz_target!(|data: &[u8]| {
             "every frame gets a response frame"
         );
         let mut s = [0u8; MAX_FRAME];
-        protocol::decode::<Response>(&out[..n - 1], &mut s).expect("the device's response decodes");
+        let reply =
+            protocol::decode::<Reply>(&out[..n - 1], &mut s).expect("the device's reply decodes");
+        assert_eq!(reply.trust, device.trust());
     }
     let loaded = device.calibration().map(|c| c.data().clone());
+    let unit = device.unit().clone();
+    let provisioning = device.provisioning().clone();
     let mut flash = device.into_store().into_inner();
     // After a reboot the store holds what the device said it held.
     let mut store = Store::new(
@@ -55,7 +65,7 @@ fuzz_target!(|data: &[u8]| {
     let mut buf = vec![0u8; spincal::protocol::SLOT_BUFFER];
     let mut slot = CalibrationData::empty();
     let reloaded = store
-        .load(&mut buf, &mut slot)
+        .load(&mut buf, &mut slot, provisioning.policy(&unit))
         .ok()
         .map(|(c, _)| c.data().clone());
     assert_eq!(reloaded, loaded);

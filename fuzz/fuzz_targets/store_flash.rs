@@ -1,18 +1,19 @@
 //! The store over random flash contents: the input is either the whole region (first byte
 //! even) or a list of (offset, xor) corruptions of a region holding two valid slots (first byte
-//! odd), so the fuzzer reaches both garbage and nearly valid states. Scanning, loading and the
-//! lock check never panic; what loads is a valid calibration equal to one of the slots'; and an
-//! update on an unlocked store returns Ok and is then exactly what loads.
+//! odd; with bit 1 set, a provisioned unit whose slots hold signed records), so the fuzzer
+//! reaches both garbage and nearly valid states. Scanning, loading and the lock check never
+//! panic; what loads is a valid calibration equal to one of the slots'; and an update on an
+//! unlocked store whose keys are sound returns Ok and is then exactly what loads.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use spincal::blob;
-use spincal::model::CalibrationData;
-use spincal::store::{SlotState, Store, StoreError};
+use spincal::model::{CalibrationData, Serial};
+use spincal::store::{Policy, Provisioning, SlotState, Store, StoreError};
 use spincal_fuzz::RamNor;
 
 const SLOT: u32 = 12 * 1024;
-const REGION: usize = 2 * SLOT as usize + 1024;
+const REGION: usize = Store::<RamNor>::region_len(SLOT, 1024) as usize;
 
 fn encode(data: CalibrationData) -> Vec<u8> {
     let cal = spincal::model::Calibration::new(data).expect("example validates");
@@ -26,10 +27,33 @@ fuzz_target!(|data: &[u8]| {
     let Some((&mode, rest)) = data.split_first() else {
         return;
     };
+    let signed = mode & 3 == 3;
+    let (key, public) = spincal_fuzz::station();
+    let unit = Serial::new("FUZZ-1").expect("serial");
+    let for_unit = |mut d: CalibrationData| {
+        d.identity.serial = unit.clone();
+        encode(d)
+    };
     let (a, b) = (
-        encode(CalibrationData::example_imu()),
-        encode(CalibrationData::example_triad()),
+        for_unit(CalibrationData::example_imu()),
+        for_unit(CalibrationData::example_triad()),
     );
+    // Signed: a and b committed at counters 1 and 2; the last update offers a at 3.
+    let (a, b, a_again) = if signed {
+        (
+            spincal_fuzz::sign(&a, &key, 1, false),
+            spincal_fuzz::sign(&b, &key, 2, false),
+            spincal_fuzz::sign(&a, &key, 3, false),
+        )
+    } else {
+        (a.clone(), b, a)
+    };
+    let blob_of = |r: &[u8]| {
+        blob::decode(spincal::signed::parts(r).0)
+            .expect("blob")
+            .data()
+            .clone()
+    };
     let mut buf = vec![0u8; spincal::protocol::SLOT_BUFFER];
     let mut scratch = CalibrationData::empty();
     let mem = if mode & 1 == 0 {
@@ -45,8 +69,20 @@ fuzz_target!(|data: &[u8]| {
             SLOT,
         )
         .expect("layout");
-        s.update(&a, &mut buf, &mut scratch).expect("first update");
-        s.update(&b, &mut buf, &mut scratch).expect("second update");
+        let keys = [public];
+        let policy = if signed {
+            s.provision(&keys).expect("provisions");
+            Policy::Signed {
+                keys: &keys,
+                unit: &unit,
+            }
+        } else {
+            Policy::Open
+        };
+        s.update(&a, &mut buf, &mut scratch, policy)
+            .expect("first update");
+        s.update(&b, &mut buf, &mut scratch, policy)
+            .expect("second update");
         let mut m = s.into_inner().mem;
         for c in rest.chunks_exact(3) {
             let at = usize::from(u16::from_le_bytes([c[0], c[1]])) % REGION;
@@ -55,19 +91,21 @@ fuzz_target!(|data: &[u8]| {
         m
     };
     let mut store = Store::new(RamNor { mem }, 0, SLOT).expect("layout");
+    let provisioning = store.provisioning().expect("a RAM flash does not fail");
+    let policy = provisioning.policy(&unit);
     let slots = store
-        .scan(&mut buf, &mut scratch)
+        .scan(&mut buf, &mut scratch, policy)
         .expect("a RAM flash does not fail");
     let locked = store.is_locked().expect("a RAM flash does not fail");
     let mut slot = CalibrationData::empty();
-    let loaded = match store.load(&mut buf, &mut slot) {
+    let loaded = match store.load(&mut buf, &mut slot, policy) {
         Ok((cal, info)) => {
             assert!(
                 matches!(slots[usize::from(info.index)], SlotState::Valid { seq, .. } if seq == info.seq)
             );
             Some(cal.data().clone())
         }
-        Err(StoreError::NoValidSlot) => {
+        Err(StoreError::NoValidSlot | StoreError::Refused(_)) => {
             assert!(
                 slots.iter().all(|s| !matches!(s, SlotState::Valid { .. })),
                 "{slots:?}"
@@ -77,18 +115,23 @@ fuzz_target!(|data: &[u8]| {
         Err(e) => panic!("load failed on a RAM flash: {e:?}"),
     };
     if mode & 1 == 1 && rest.is_empty() {
-        assert_eq!(loaded.as_ref(), Some(blob::decode(&b).expect("b").data()));
+        assert_eq!(loaded.as_ref(), Some(&blob_of(&b)));
     }
-    match store.update(&a, &mut buf, &mut scratch) {
+    match store.update(&a_again, &mut buf, &mut scratch, policy) {
         Ok(_) => {
             assert!(!locked);
             let mut slot = CalibrationData::empty();
             let (cal, _) = store
-                .load(&mut buf, &mut slot)
+                .load(&mut buf, &mut slot, policy)
                 .expect("an update that returned Ok loads");
-            assert_eq!(cal.data(), blob::decode(&a).expect("a").data());
+            assert_eq!(cal.data(), &blob_of(&a_again));
         }
         Err(StoreError::Locked) => assert!(locked),
+        // Keys damaged by the corruption (or garbage keys), or signed slots corrupted into a
+        // higher counter than the record offered: refused, nothing written.
+        Err(StoreError::Refused(_)) => {
+            assert!(!matches!(provisioning, Provisioning::Unprovisioned))
+        }
         Err(e) => panic!("update failed on a RAM flash: {e:?}"),
     }
 });

@@ -151,3 +151,37 @@ pub fn exercise(cal: &Calibration, seed: &[u8]) {
         }
     }
 }
+
+/// The station of the fuzz targets' provisioned units: its signing key and public key.
+#[must_use]
+pub fn station() -> (ed25519_dalek::SigningKey, spincal::signed::StationKey) {
+    let key = ed25519_dalek::SigningKey::from_bytes(&[9; 32]);
+    let public = spincal::signed::StationKey {
+        public: key.verifying_key().to_bytes(),
+    };
+    (key, public)
+}
+
+/// `blob` signed by `key` at `counter` (a downgrade when `downgrade`).
+///
+/// # Panics
+/// Never: the buffer holds the blob and its trailer.
+#[must_use]
+pub fn sign(
+    blob: &[u8],
+    key: &ed25519_dalek::SigningKey,
+    counter: u32,
+    downgrade: bool,
+) -> Vec<u8> {
+    use ed25519_dalek::Signer;
+    let public = spincal::signed::StationKey {
+        public: key.verifying_key().to_bytes(),
+    };
+    let mut out = vec![0u8; blob.len() + spincal::signed::TRAILER_LEN];
+    let n = spincal::signed::seal(blob, &public, counter, downgrade, &mut out, |d| {
+        key.sign(d).to_bytes()
+    })
+    .expect("room for the trailer");
+    out.truncate(n);
+    out
+}

@@ -1,10 +1,16 @@
 //! The main job, end to end: simulate a unit's test data (or take the user's), calibrate it
-//! (fit, report, blob, record), boot the example firmware in QEMU, flash the calibration over
-//! the emulated UART, verify it on the device, record it in the unit history, and summarise.
+//! (fit, report, blob, record), provision the example unit with the job's station key (made on
+//! the first run), boot the example firmware in QEMU, sign the calibration for the unit and
+//! flash it over the emulated UART (the unit verifies the signature at commit and at boot),
+//! verify it on the device, record it in the unit history, and summarise.
 //! `cargo xtask calibrate` runs it; `tests/mainjob.rs` runs it in CI.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
+
+use calflash::device::image::{Region, unit_image};
+use spincal::signed::StationKey;
+use spincal::store::{KEYS_SPAN, Provisioning, keys_record};
 
 use calflash::db::Db;
 use calflash::device::{self, FlashOptions};
@@ -138,6 +144,23 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     let bin = qemu::build_firmware()?;
     let elf = bin.join(device_bin);
     let flash_file = w("unit-flash.bin");
+    let (key_file, pub_file) = (w("station.key"), w("station.pub"));
+    if !key_file.exists() {
+        calflash::signing::keygen(&key_file, &pub_file)?;
+    }
+    let key = calflash::signing::load_private(&key_file)?;
+    let station = calflash::signing::load_public(&pub_file)?;
+    let provisioned = provision(&flash_file, station)?;
+    say(&format!(
+        "   the unit is provisioned with station key {} ({}{})",
+        device::key_hex(station.id()),
+        pub_file.display(),
+        if provisioned {
+            ", written into its keys sector now, as a flasher does at manufacture"
+        } else {
+            ""
+        }
+    ));
     let log = w("qemu.log");
     let unit = QemuUnit::power_on(&elf, Some(&flash_file), &log)?;
     let mut client = unit.connect(Duration::from_secs(5))?;
@@ -152,10 +175,15 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
             .map_or("no calibration", |s| s.as_str()),
         flash_file.display()
     ));
+    // Signed for this unit, at the counter above the one it holds.
+    let counter = before.counter + 1;
+    let signed = calflash::signing::sign(&c.blob, &key, counter, false)?;
+    let signed_path = w("unit-signed.blob");
+    std::fs::write(&signed_path, &signed).map_err(|e| format!("{}: {e}", signed_path.display()))?;
     let flash = device::flash(
         &mut client,
         &before,
-        &c.blob,
+        &signed,
         &FlashOptions::default(),
         |_, _| {},
     )
@@ -164,12 +192,14 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     unit.power_off()?;
     let flash_id = db.record_flash(
         &flash.unit,
-        &c.blob,
+        &signed,
         &serde_json::to_value(&flash).map_err(|e| e.to_string())?,
         "verified",
     )?;
     say(&format!(
-        "5. flashed over the emulated UART: committed as slot sequence {}, {} bytes read back identical, {} test vectors through the device's correction within {} ulp of the host's; recorded as db:{fit_id} (fit) and db:{flash_id} (flash) in {}",
+        "5. signed by station key {} at counter {counter} ({}) and flashed over the emulated UART: the unit verified the signature and committed it as slot sequence {}, {} bytes read back identical, {} test vectors through the device's correction within {} ulp of the host's; recorded as db:{fit_id} (fit) and db:{flash_id} (flash) in {}",
+        device::key_hex(station.id()),
+        signed_path.display(),
         flash.seq,
         flash.bytes,
         flash.vectors,
@@ -190,6 +220,8 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         .unwrap_or("device: (no self-test line)")
         .to_string();
     if after.calibration.is_none()
+        || after.signed_by != Some(station.id())
+        || after.counter != counter
         || after
             .slots
             .iter()
@@ -202,8 +234,9 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         ));
     }
     say(&format!(
-        "6. power-cycled: the unit boots holding {} (slots {:?}); its boot self-test says \"{}\"",
+        "6. power-cycled: the unit verifies the signature at boot and runs with {} (counter {}, slots {:?}); its boot self-test says \"{}\"",
         after.calibration.as_ref().map_or("nothing", |s| s.as_str()),
+        after.counter,
         after.slots,
         self_test.trim_start_matches("device: ")
     ));
@@ -211,7 +244,16 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     let lines = vec![
         format!("unit {UNIT}: {:?}", c.verdict()),
         format!("report      {}", report.display()),
-        format!("blob        {}", blob.display()),
+        format!(
+            "blob        {} (signed for the unit: {})",
+            blob.display(),
+            signed_path.display()
+        ),
+        format!(
+            "station key {} (private; mode 600), {}",
+            key_file.display(),
+            pub_file.display()
+        ),
         format!("record      {}", json.display()),
         format!(
             "history     calflash history {UNIT} --db {}",
@@ -234,4 +276,57 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         flash,
         records: (fit_id, flash_id),
     })
+}
+
+/// Makes sure the unit's flash file holds `station` in its keys sector, as a flasher writes it
+/// at manufacture: a new unit (no file) gets a region with the key; a unit from before signed
+/// calibrations (a shorter file, or an empty keys sector) gets the key added. True when the
+/// key was written now.
+///
+/// # Errors
+/// A file that cannot be read or written, or a unit provisioned with other keys (it would
+/// refuse this station's calibrations) or with a damaged keys sector.
+fn provision(flash_file: &Path, station: StationKey) -> Result<bool, String> {
+    let region = Region::from_memory_x();
+    let size = region.bytes() as usize;
+    let name = flash_file.display();
+    let mut image = match std::fs::read(flash_file) {
+        Ok(image) => image,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => unit_image(None, &[], region)?,
+        Err(e) => return Err(format!("{name}: {e}")),
+    };
+    let before_keys = region.keys_offset() as usize;
+    if image.len() == before_keys {
+        // The region before the keys sector existed: an unprovisioned unit.
+        image.resize(size, 0xff);
+    }
+    if image.len() != size {
+        return Err(format!(
+            "{name}: a flash image of {} bytes; the unit's region is {size} bytes (delete it to start a fresh unit)",
+            image.len()
+        ));
+    }
+    let sector = &mut image[before_keys..before_keys + region.lock_size as usize];
+    let record: &[u8; KEYS_SPAN] = sector[..KEYS_SPAN].try_into().map_err(|_| "keys span")?;
+    match Provisioning::read(record) {
+        Provisioning::Provisioned(keys) if keys.contains(&station) => return Ok(false),
+        Provisioning::Provisioned(keys) => {
+            return Err(format!(
+                "{name}: the unit is provisioned with other station keys ({}) and would refuse this station's calibrations; delete the file to start a fresh unit",
+                keys.iter()
+                    .map(|k| device::key_hex(k.id()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        Provisioning::Damaged => {
+            return Err(format!(
+                "{name}: the unit's keys sector is damaged; delete the file to start a fresh unit"
+            ));
+        }
+        Provisioning::Unprovisioned => {}
+    }
+    keys_record(&[station], sector).ok_or("one key fits the keys sector")?;
+    std::fs::write(flash_file, &image).map_err(|e| format!("{name}: {e}"))?;
+    Ok(true)
 }

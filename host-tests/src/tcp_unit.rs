@@ -18,10 +18,10 @@ pub type Flash = SimFlash<4, 1024>;
 /// Bytes per slot of the bench unit.
 pub const SLOT: u32 = 16 * 1024;
 
-/// A fresh flash for the bench unit (two slots and the lock sector).
+/// A fresh flash for the bench unit (two slots, the lock sector and the keys sector).
 #[must_use]
 pub fn blank_flash() -> Flash {
-    Flash::new(2 * SLOT as usize + 1024)
+    Flash::new(Store::<Flash>::region_len(SLOT, 1024) as usize)
 }
 
 /// The sensor of the bench units: an IMU with the examples' 16-bit converters.
@@ -29,6 +29,22 @@ pub const IMU_16_BIT: UnitSensor = UnitSensor::Imu {
     accel_rails: Rails::unsigned(16),
     gyro_rails: Rails::unsigned(16),
 };
+
+/// A fresh flash for the bench unit, provisioned with the station `keys` (as a flasher does
+/// at manufacture).
+///
+/// # Panics
+/// When the keys do not fit the keys sector (more than four).
+#[must_use]
+pub fn provisioned_flash(keys: &[spincal::signed::StationKey]) -> Flash {
+    let mut store = Store::new(blank_flash(), 0, SLOT).expect("the bench flash holds the store");
+    store
+        .provision(keys)
+        .expect("the bench flash takes the keys");
+    let mut flash = store.into_inner();
+    flash.reboot();
+    flash
+}
 
 /// A device over `flash` with serial `unit`, carrying [`IMU_16_BIT`].
 ///

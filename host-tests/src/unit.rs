@@ -16,11 +16,12 @@ use calflash::device::Client;
 
 use crate::qemu;
 
-/// Address and size of the calibration store (memory.x: two slots and the lock sector).
+/// Address and size of the calibration store (memory.x: two slots, the lock sector and the
+/// keys sector).
 #[must_use]
 pub fn region() -> (u32, u32) {
     let r = calflash::device::image::Region::from_memory_x();
-    (r.start, 2 * r.slot_size + r.lock_size)
+    (r.start, r.bytes())
 }
 
 /// A running QEMU unit. Dropping it kills QEMU (a power cut: nothing is saved).

@@ -119,3 +119,125 @@ fn a_unit_with_an_mpu6050_reads_its_samples_through_the_driver() {
         "{log}"
     );
 }
+
+/// Sends `record` to the unit over its UART and commits it; the commit's answer.
+fn commit_over_uart<L: std::io::Read + std::io::Write>(
+    client: &mut calflash::device::Client<L>,
+    record: &[u8],
+) -> Response {
+    let r = client
+        .call(&Request::WriteBegin {
+            len: record.len() as u32,
+            crc: spincal::protocol::checksum(record),
+        })
+        .unwrap();
+    assert_eq!(r, Response::Ready);
+    for (k, chunk) in record.chunks(MAX_CHUNK).enumerate() {
+        let r = client
+            .call(&Request::WriteChunk {
+                offset: (k * MAX_CHUNK) as u32,
+                data: heapless::Vec::from_slice(chunk).unwrap(),
+            })
+            .unwrap();
+        assert!(matches!(r, Response::ChunkOk { .. }), "{r:?}");
+    }
+    client.call(&Request::Commit).unwrap()
+}
+
+/// A unit provisioned by the flasher (`calflash image --station-key`) boots a calibration
+/// signed for it by its station and verifies it on the Cortex-M4F; one signed by another key
+/// is refused at boot (the unit flags every sample and says why) and at commit, as is an
+/// unsigned one; an unprovisioned unit takes either and says that it is unprovisioned.
+#[test]
+fn a_provisioned_unit_verifies_at_boot_and_at_commit() {
+    use calflash::device::image::unit_image;
+    use spincal::protocol::{Status, Trust};
+    use spincal::signed::{SignError, StationKey};
+    if !qemu::available_or_skip("a_provisioned_unit_verifies_at_boot_and_at_commit") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let station = |seed: u8| {
+        let k = ed25519_dalek::SigningKey::from_bytes(&[seed; 32]);
+        let public = StationKey {
+            public: k.verifying_key().to_bytes(),
+        };
+        (k, public)
+    };
+    let ((key, public), (other, other_public)) = (station(1), station(2));
+    let mut data = CalibrationData::example_imu();
+    data.identity.serial = spincal::model::Serial::new("QEMU-0001").unwrap();
+    let blob = golden::encode(&data);
+    let signed = calflash::signing::sign(&blob, &key, 4, false).unwrap();
+    let region = Region::from_memory_x();
+
+    let image = unit_image(Some(&signed), &[public], region).unwrap();
+    let (id, back, log) = boot_with(&image, dir.path());
+    assert_eq!(id.trust, Trust::Provisioned, "{log}");
+    assert_eq!((id.counter, id.signed_by), (4, Some(public.id())), "{log}");
+    assert_eq!(back, signed);
+    let hex = calflash::device::key_hex(public.id());
+    assert!(
+        log.contains(&format!(
+            "device: the calibration verified at boot: signed by {hex}, counter 4"
+        )),
+        "{log}"
+    );
+
+    // Signed by a key the unit does not hold: refused at boot.
+    let theirs = calflash::signing::sign(&blob, &other, 9, false).unwrap();
+    let image = unit_image(Some(&theirs), &[public], region).unwrap();
+    let (id, back, log) = boot_with(&image, dir.path());
+    assert_eq!(id.calibration, None, "{log}");
+    assert!(back.is_empty());
+    assert_eq!(
+        id.refused,
+        Some(SignError::UnknownKey {
+            key_id: other_public.id()
+        })
+    );
+    assert!(log.contains("REFUSED at boot"), "{log}");
+    assert!(
+        log.contains("1000 samples passed through and flagged"),
+        "{log}"
+    );
+
+    // At commit, over the UART: unsigned and foreign records refused, the signed one taken.
+    let bin = qemu::build_firmware().unwrap_or_else(|e| panic!("{e}"));
+    let (flash, log_path) = (dir.path().join("flash.bin"), dir.path().join("commit.log"));
+    std::fs::write(&flash, unit_image(None, &[public], region).unwrap()).unwrap();
+    let unit = QemuUnit::power_on(&bin.join("device"), Some(&flash), &log_path).unwrap();
+    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    assert_eq!(
+        commit_over_uart(&mut client, &blob),
+        Response::Error(Status::Refused(SignError::Unsigned))
+    );
+    assert_eq!(client.trust(), Some(Trust::Provisioned));
+    assert_eq!(
+        commit_over_uart(&mut client, &theirs),
+        Response::Error(Status::Refused(SignError::UnknownKey {
+            key_id: other_public.id()
+        }))
+    );
+    assert_eq!(
+        commit_over_uart(&mut client, &signed),
+        Response::Committed { seq: 1, counter: 4 }
+    );
+    let older = calflash::signing::sign(&blob, &key, 3, false).unwrap();
+    assert_eq!(
+        commit_over_uart(&mut client, &older),
+        Response::Error(Status::Refused(SignError::Replay {
+            counter: 3,
+            held: 4
+        }))
+    );
+    drop(client);
+    drop(unit);
+
+    // Unprovisioned: takes the signed blob as a blob, and says it checks nothing.
+    let image = unit_image(Some(&signed), &[], region).unwrap();
+    let (id, _, log) = boot_with(&image, dir.path());
+    assert_eq!(id.trust, Trust::Unprovisioned);
+    assert!(id.calibration.is_some(), "{log}");
+    assert!(log.contains("device: UNPROVISIONED"), "{log}");
+}

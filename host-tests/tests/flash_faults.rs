@@ -68,6 +68,7 @@ impl Bench {
             vectors: 4,
             db: Some(self.path("units.sqlite")),
             no_db: false,
+            sign_key: None,
         };
         let r = run(&args);
         (r, u.finish().into_store().into_inner())
@@ -310,6 +311,7 @@ fn a_blob_whose_fit_was_rejected_is_refused_unless_forced() {
         vectors: 4,
         db: Some(b.path("units.sqlite")),
         no_db: false,
+        sign_key: None,
     };
     run(&args).unwrap();
     assert_eq!(

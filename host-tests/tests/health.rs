@@ -376,6 +376,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
         vectors: 1,
         db: Some(path("units.sqlite")),
         no_db: false,
+        sign_key: None,
     })
     .unwrap();
     let flashed = unit.finish().into_store().into_inner();
@@ -442,6 +443,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
         vectors: 1,
         db: None,
         no_db: true,
+        sign_key: None,
     })
     .unwrap();
     let flashed = unit.finish().into_store().into_inner();

@@ -12,7 +12,12 @@ use spincal::store::{SlotState, Store};
 type Flash = SimFlash<4, 1024>;
 
 fn device() -> Device<Flash> {
-    let store = Store::new(Flash::new(2 * 16384 + 1024), 0, 16384).unwrap();
+    let store = Store::new(
+        host_tests::tcp_unit::blank_flash(),
+        0,
+        host_tests::tcp_unit::SLOT,
+    )
+    .unwrap();
     Device::new(
         store,
         Serial::new("UNIT-1").unwrap(),
@@ -33,7 +38,13 @@ fn raw_call(d: &mut Device<Flash>, frame: &[u8]) -> Response {
     let n = d.handle_frame(frame, &mut out);
     assert!(n > 0 && out[n - 1] == 0);
     let mut scratch = [0u8; MAX_FRAME];
-    protocol::decode(&out[..n - 1], &mut scratch).unwrap()
+    let reply: protocol::Reply = protocol::decode(&out[..n - 1], &mut scratch).unwrap();
+    assert_eq!(
+        reply.trust,
+        d.trust(),
+        "every answer says whether the unit checks signatures"
+    );
+    reply.response
 }
 
 fn crc(b: &[u8]) -> u32 {
@@ -99,7 +110,10 @@ fn update_read_back_and_vectors() {
     );
     assert_eq!(id.slots, [SlotState::Empty; 2].map(|_| SlotState::Invalid));
     let blob = golden::encode(&CalibrationData::example_imu());
-    assert_eq!(write(&mut d, &blob), Response::Committed { seq: 1 });
+    assert_eq!(
+        write(&mut d, &blob),
+        Response::Committed { seq: 1, counter: 0 }
+    );
     let id = identity(&mut d);
     assert_eq!(id.calibration.unwrap().as_str(), "IMU-FULL-0042");
     assert_eq!(id.blob_len as usize, blob.len());
@@ -131,7 +145,10 @@ fn update_read_back_and_vectors() {
     }
     // A second update goes to the other slot.
     let blob2 = golden::encode(&CalibrationData::example_imu_polynomial());
-    assert_eq!(write(&mut d, &blob2), Response::Committed { seq: 2 });
+    assert_eq!(
+        write(&mut d, &blob2),
+        Response::Committed { seq: 2, counter: 0 }
+    );
     assert_eq!(
         identity(&mut d).calibration.unwrap().as_str(),
         "IMU-POLY-0042"
@@ -142,7 +159,10 @@ fn update_read_back_and_vectors() {
 fn a_blob_for_another_sensor_is_never_committed() {
     let mut d = device();
     let good = golden::encode(&CalibrationData::example_imu());
-    assert_eq!(write(&mut d, &good), Response::Committed { seq: 1 });
+    assert_eq!(
+        write(&mut d, &good),
+        Response::Committed { seq: 1, counter: 0 }
+    );
     let before = identity(&mut d);
     assert_eq!(before.sensor, host_tests::tcp_unit::IMU_16_BIT);
     // A triad, a single axis, an IMU of 18-bit converters and one whose codes come as i16.
@@ -178,7 +198,10 @@ fn a_blob_for_another_sensor_is_never_committed() {
 fn refusals_change_nothing() {
     let mut d = device();
     let old = golden::encode(&CalibrationData::example_imu_linear());
-    assert_eq!(write(&mut d, &old), Response::Committed { seq: 1 });
+    assert_eq!(
+        write(&mut d, &old),
+        Response::Committed { seq: 1, counter: 0 }
+    );
     let before = identity(&mut d);
     let new = golden::encode(&CalibrationData::example_imu_polynomial());
 

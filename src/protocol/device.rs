@@ -3,17 +3,18 @@
 use embedded_storage::nor_flash::NorFlash;
 
 use super::{
-    FrameError, Identity, MAX_CHUNK, MAX_FRAME, PROTOCOL_VERSION, Request, Response, Status,
-    UnitSensor,
+    FrameError, Identity, MAX_CHUNK, MAX_FRAME, PROTOCOL_VERSION, Reply, Request, Response, Status,
+    Trust, UnitSensor,
 };
-use crate::blob::{self, MAX_BLOB_LEN};
+use crate::blob;
 use crate::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector, Overlay};
 use crate::health::RestMonitor;
 use crate::model::{Calibration, CalibrationData, Sensor, Serial};
-use crate::store::{SlotInfo, Store, StoreError};
+use crate::signed::{self, MAX_SIGNED_LEN, SignError};
+use crate::store::{Provisioning, SlotInfo, Store, StoreError};
 
-/// Bytes of the buffer the store needs (a blob padded to any write size).
-pub const SLOT_BUFFER: usize = MAX_BLOB_LEN + 16;
+/// Bytes of the buffer the store needs (a signed record padded to any write size).
+pub const SLOT_BUFFER: usize = MAX_SIGNED_LEN + 16;
 
 /// Sample rate assumed for the IMU's lever-arm derivative in test vectors, Hz.
 const VECTOR_RATE_HZ: f32 = 1000.0;
@@ -23,13 +24,18 @@ const VECTOR_RATE_HZ: f32 = 1000.0;
 #[derive(Debug)]
 pub struct Device<F> {
     store: Store<F>,
+    /// The station keys, read once at power-on (the keys sector is written once, at
+    /// manufacture).
+    provisioning: Provisioning,
+    /// Why no slot was trusted at the last load, when one was refused for its signature.
+    refused: Option<SignError>,
     unit: Serial,
     sensor: UnitSensor,
     firmware: [u16; 3],
     cal: CalibrationData,
     loaded: Option<SlotInfo>,
     scratch: CalibrationData,
-    rx: [u8; MAX_BLOB_LEN],
+    rx: [u8; MAX_SIGNED_LEN],
     transfer: Option<(u32, u32)>,
     next: u32,
     buf: [u8; SLOT_BUFFER],
@@ -50,17 +56,22 @@ struct Health {
 
 impl<F: NorFlash> Device<F> {
     /// A device over `store` for the unit `unit` carrying `sensor` (it commits only
-    /// calibrations of that sensor), loading the current calibration (if any).
-    pub fn new(store: Store<F>, unit: Serial, sensor: UnitSensor, firmware: [u16; 3]) -> Self {
+    /// calibrations of that sensor), reading its station keys and loading the current
+    /// calibration (if any; a provisioned unit only one signed for it by a held key). A keys
+    /// sector that cannot be read counts as damaged: the unit trusts no key.
+    pub fn new(mut store: Store<F>, unit: Serial, sensor: UnitSensor, firmware: [u16; 3]) -> Self {
+        let provisioning = store.provisioning().unwrap_or(Provisioning::Damaged);
         let mut d = Self {
             store,
+            provisioning,
+            refused: None,
             unit,
             sensor,
             firmware,
             cal: CalibrationData::empty(),
             loaded: None,
             scratch: CalibrationData::empty(),
-            rx: [0; MAX_BLOB_LEN],
+            rx: [0; MAX_SIGNED_LEN],
             transfer: None,
             next: 0,
             buf: [0; SLOT_BUFFER],
@@ -72,11 +83,13 @@ impl<F: NorFlash> Device<F> {
     }
 
     fn reload(&mut self) {
-        self.loaded = self
-            .store
-            .load(&mut self.buf, &mut self.cal)
-            .ok()
-            .map(|(_, info)| info);
+        let policy = self.provisioning.policy(&self.unit);
+        let loaded = self.store.load(&mut self.buf, &mut self.cal, policy);
+        self.refused = match loaded {
+            Err(StoreError::Refused(why)) => Some(why),
+            _ => None,
+        };
+        self.loaded = loaded.ok().map(|(_, info)| info);
         // A new calibration is judged afresh.
         self.health = Health::default();
     }
@@ -97,6 +110,32 @@ impl<F: NorFlash> Device<F> {
         &self.unit
     }
 
+    /// Whether the unit checks signatures (every answer says so).
+    pub const fn trust(&self) -> Trust {
+        match self.provisioning {
+            Provisioning::Unprovisioned => Trust::Unprovisioned,
+            Provisioning::Provisioned(_) => Trust::Provisioned,
+            Provisioning::Damaged => Trust::KeysDamaged,
+        }
+    }
+
+    /// The station keys the unit holds.
+    pub fn provisioning(&self) -> &Provisioning {
+        &self.provisioning
+    }
+
+    /// The current calibration's slot (its sequence number, record length, counter and
+    /// signing key), if one is loaded.
+    pub const fn loaded(&self) -> Option<SlotInfo> {
+        self.loaded
+    }
+
+    /// Why the unit booted with no calibration although a slot holds one: its signature,
+    /// key, serial (or none) was refused.
+    pub const fn refused(&self) -> Option<SignError> {
+        self.refused
+    }
+
     /// Handles one frame (without its terminator) and writes the response frame into `out`;
     /// returns its length (0 if `out` is too small for it).
     pub fn handle_frame(&mut self, frame: &[u8], out: &mut [u8]) -> usize {
@@ -108,7 +147,11 @@ impl<F: NorFlash> Device<F> {
             Err(FrameError::Message) => Response::Error(Status::Malformed),
             Err(_) => Response::Error(Status::BadFrame),
         };
-        super::encode(&response, out).unwrap_or(0)
+        let reply = Reply {
+            trust: self.trust(),
+            response,
+        };
+        super::encode(&reply, out).unwrap_or(0)
     }
 
     /// Handles one request.
@@ -167,7 +210,8 @@ impl<F: NorFlash> Device<F> {
     }
 
     fn identify(&mut self) -> Response {
-        let slots = self.store.scan(&mut self.buf, &mut self.scratch);
+        let policy = self.provisioning.policy(&self.unit);
+        let slots = self.store.scan(&mut self.buf, &mut self.scratch, policy);
         let locked = self.store.is_locked();
         let (Ok(slots), Ok(locked)) = (slots, locked) else {
             return Response::Error(Status::StoreFailed);
@@ -183,6 +227,16 @@ impl<F: NorFlash> Device<F> {
             blob_len: self.loaded.map_or(0, |i| i.len),
             locked,
             capacity: self.store.capacity() as u32,
+            trust: self.trust(),
+            station_keys: self
+                .provisioning
+                .keys()
+                .iter()
+                .map(crate::signed::StationKey::id)
+                .collect(),
+            counter: self.loaded.map_or(0, |i| i.counter),
+            signed_by: self.loaded.and_then(|i| i.signed_by),
+            refused: self.refused,
         })
     }
 
@@ -210,7 +264,7 @@ impl<F: NorFlash> Device<F> {
             Ok(false) => {}
             Err(_) => return Response::Error(Status::StoreFailed),
         }
-        if len as usize > MAX_BLOB_LEN || len as usize > self.store.capacity() || len == 0 {
+        if len as usize > MAX_SIGNED_LEN || len as usize > self.store.capacity() || len == 0 {
             return Response::Error(Status::TooLarge);
         }
         self.transfer = Some((len, crc));
@@ -241,12 +295,12 @@ impl<F: NorFlash> Device<F> {
         if self.next != len {
             return Response::Error(Status::OutOfOrder);
         }
-        let blob = self.rx.get(..len as usize).unwrap_or_default();
-        if super::checksum(blob) != crc {
+        let record = self.rx.get(..len as usize).unwrap_or_default();
+        if super::checksum(record) != crc {
             return Response::Error(Status::CrcMismatch);
         }
         // A calibration for another sensor never reaches the store.
-        match blob::decode_in(blob, &mut self.scratch) {
+        match blob::decode_in(signed::parts(record).0, &mut self.scratch) {
             Ok(cal) => {
                 let kind = UnitSensor::of(cal.data());
                 if kind != self.sensor {
@@ -255,12 +309,20 @@ impl<F: NorFlash> Device<F> {
             }
             Err(e) => return Response::Error(Status::InvalidBlob(e)),
         }
-        match self.store.update(blob, &mut self.buf, &mut self.scratch) {
+        let policy = self.provisioning.policy(&self.unit);
+        match self
+            .store
+            .update(record, &mut self.buf, &mut self.scratch, policy)
+        {
             Ok(info) => {
                 self.reload();
-                Response::Committed { seq: info.seq }
+                Response::Committed {
+                    seq: info.seq,
+                    counter: info.counter,
+                }
             }
             Err(StoreError::InvalidBlob(e)) => Response::Error(Status::InvalidBlob(e)),
+            Err(StoreError::Refused(why)) => Response::Error(Status::Refused(why)),
             Err(StoreError::Locked) => Response::Error(Status::Locked),
             Err(StoreError::BlobTooLarge { .. }) => Response::Error(Status::TooLarge),
             Err(_) => {

@@ -1,7 +1,8 @@
 //! The update protocol over a serial link, shared by the device and `calflash`.
 //!
 //! A frame is `COBS(postcard(message) ++ CRC-32C(postcard(message)), little-endian) ++ 0x00`.
-//! The host sends a [`Request`], the device answers with one [`Response`]. A frame that does
+//! The host sends a [`Request`], the device answers with one [`Reply`]: a [`Response`]
+//! and whether the unit checks signatures ([`Trust`]). A frame that does
 //! not decode, fails its CRC or carries an unknown request gets [`Response::Error`] and changes
 //! nothing. [`Device`] is the device's side, over any [`NorFlash`](embedded_storage::nor_flash::NorFlash).
 //!
@@ -23,7 +24,8 @@ pub use device::{Device, SLOT_BUFFER, vector_rate_hz};
 use serde::{Deserialize, Serialize};
 
 use crate::model::{CalibrationData, Quantity, Rails, Sensor, Serial};
-use crate::store::SlotState;
+use crate::signed::SignError;
+use crate::store::{MAX_KEYS, SlotState};
 
 /// The sensor a unit carries, fixed in its firmware: the only kind of calibration it takes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -121,8 +123,10 @@ pub const MAX_VECTORS: usize = 16;
 /// Largest encoded frame, terminator included.
 pub const MAX_FRAME: usize = 640;
 /// The protocol's version (in [`Identity`]); 2 added the unit's [`UnitSensor`], 3 the health
-/// check at rest ([`Request::ObserveRest`], [`Request::ReadHealth`]).
-pub const PROTOCOL_VERSION: u8 = 3;
+/// check at rest ([`Request::ObserveRest`], [`Request::ReadHealth`]), 4 signed calibrations
+/// (every answer a [`Reply`] saying whether the unit checks signatures; [`Status::Refused`];
+/// the station keys, counter and signer in [`Identity`]).
+pub const PROTOCOL_VERSION: u8 = 4;
 
 /// What the host asks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -219,6 +223,34 @@ pub enum Status {
     /// The calibration gives the health check nothing to run on (no noise terms, no
     /// covariance, not an IMU: the error says which); the unit still corrects.
     HealthUnavailable(crate::Error),
+    /// A provisioned unit refuses the record: unsigned, signed by a key it does not hold,
+    /// changed after signing, made for another unit, or not above its counter. Nothing was
+    /// committed; the previous calibration stays current.
+    Refused(SignError),
+}
+
+/// Whether a unit checks the signatures of calibrations: every answer says so.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Trust {
+    /// No station keys (a developer's board): it takes unsigned calibrations from anyone with
+    /// the cable, and keeps no counter.
+    Unprovisioned,
+    /// Provisioned with station keys: it takes only calibrations signed for it by one of them,
+    /// with a counter above the one it holds.
+    Provisioned,
+    /// Its keys sector is written but damaged: it trusts no key and takes nothing until a
+    /// flasher provisions it again.
+    KeysDamaged,
+}
+
+/// A response frame's message: the response and the unit's [`Trust`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Reply {
+    /// Whether the unit checks signatures.
+    pub trust: Trust,
+    /// The answer.
+    pub response: Response,
 }
 
 /// The device's answer to [`Request::Identify`].
@@ -244,6 +276,17 @@ pub struct Identity {
     pub locked: bool,
     /// Bytes a slot holds.
     pub capacity: u32,
+    /// Whether it checks signatures.
+    pub trust: Trust,
+    /// The ids of the station keys it holds.
+    pub station_keys: heapless::Vec<[u8; 4], MAX_KEYS>,
+    /// The current calibration's counter (0 for none or unsigned): a new one must be above it.
+    pub counter: u32,
+    /// The id of the key that signed the current calibration, when signed.
+    pub signed_by: Option<[u8; 4]>,
+    /// Why the unit runs with no calibration although a slot holds one, when it was refused
+    /// for its signature at boot.
+    pub refused: Option<SignError>,
 }
 
 /// What the device answers.
@@ -269,6 +312,8 @@ pub enum Response {
     Committed {
         /// Its slot's sequence number.
         seq: u32,
+        /// Its counter (0 when unsigned).
+        counter: u32,
     },
     /// To [`Request::RunVectors`]: outputs (as many as the sensor has, then zeros) and flag
     /// bits per sample.

@@ -3,29 +3,41 @@
 //! never a mix.
 //!
 //! ```text
-//! region:  [ slot 0 | slot 1 | lock sector ]        each slot a whole number of erase sectors
+//! region:  [ slot 0 | slot 1 | lock sector | keys sector ]   slots: whole erase sectors
 //! slot:    offset 0   commit marker (16 bytes)       written last
-//!          offset 16  header: magic, sequence, length, CRC-32C of the blob (16 bytes)
-//!          offset 32  the blob, padded to the write size with 0xFF
+//!          offset 16  header: magic, sequence, length, CRC-32C of the record (16 bytes)
+//!          offset 32  the record, padded to the write size with 0xFF
 //! ```
 //!
-//! An update validates the blob, erases the idle slot (never the current one), writes the blob,
+//! An update validates the record, erases the idle slot (never the current one), writes it,
 //! then the header with the next sequence number, reads both back and compares them, and only
 //! then programs the commit marker. A slot counts only when its marker is exactly the commit
 //! pattern (a torn program leaves extra 1 bits, so a half-written marker never matches), its
-//! header is sound and the CRC over the blob matches. Boot ([`Store::load`]) takes the valid slot
-//! with the highest sequence number whose blob also decodes and validates, reads it once into
+//! header is sound and the CRC over the record matches. Boot ([`Store::load`]) takes the valid
+//! slot with the highest sequence number whose blob also decodes and validates, reads it once into
 //! RAM and hands out only that validated copy. Boot writes nothing, so a cut during it cannot
 //! harm anything. NOR semantics are kept: erase sets 0xFF, programming only clears bits, and
 //! every byte is programmed at most once per erase.
 //!
 //! Sequence numbers are `u32`: four billion updates of one unit before they wrap.
+//!
+//! A slot holds a record: a blob, or a blob and its signature trailer ([`crate::signed`]).
+//! Under [`Policy::Signed`] (a unit provisioned with station keys, [`Provisioning`]) a slot counts only
+//! when its record is signed by a held key for the unit, and an update is committed only when
+//! it verifies and its counter is above the current slot's (or it is a downgrade signed at that
+//! counter). The counter lives in the committed records, so the A/B slots keep it across cuts:
+//! a cut leaves the old record (and its counter) or the new one.
+
+mod keys;
+
+pub use keys::{KEYS_SPAN, MAX_KEYS, Provisioning, StationKeys, keys_record};
 
 use embedded_storage::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
 
 use crate::Error;
 use crate::blob;
-use crate::model::{Calibration, CalibrationData};
+use crate::model::{Calibration, CalibrationData, Serial};
+use crate::signed::{self, MAX_SIGNED_LEN, SignError, StationKey};
 
 /// Bytes of the commit region (the largest write size supported).
 const COMMIT_SPAN: usize = 16;
@@ -66,6 +78,23 @@ pub enum StoreError {
     VerifyFailed,
     /// The unit is locked against writes.
     Locked,
+    /// The record's signature, key, serial or counter is refused by a provisioned unit; or,
+    /// at boot, no slot holds a record it trusts and this is why the newest was refused.
+    Refused(SignError),
+}
+
+/// What a slot's record must be to count.
+#[derive(Debug, Clone, Copy)]
+pub enum Policy<'a> {
+    /// An unprovisioned unit: any valid blob, signed or not (a trailer is kept, not checked).
+    Open,
+    /// A provisioned unit: records signed by one of `keys` for `unit` only (no keys: nothing).
+    Signed {
+        /// The station keys held.
+        keys: &'a [StationKey],
+        /// The unit's serial.
+        unit: &'a Serial,
+    },
 }
 
 impl core::fmt::Display for StoreError {
@@ -81,6 +110,23 @@ impl core::fmt::Display for StoreError {
             Self::InvalidBlob(e) => write!(f, "the blob is not a valid calibration: {e}"),
             Self::VerifyFailed => f.write_str("the slot read back differs from what was written"),
             Self::Locked => f.write_str("the unit is locked against writes"),
+            Self::Refused(e) => write!(f, "refused: {e}"),
+        }
+    }
+}
+
+impl Provisioning {
+    /// What the store takes on a unit so provisioned, whose serial is `unit`: anything valid
+    /// when unprovisioned; records signed for `unit` by a held key when provisioned; nothing
+    /// when the keys are damaged.
+    #[must_use]
+    pub fn policy<'a>(&'a self, unit: &'a Serial) -> Policy<'a> {
+        match self {
+            Self::Unprovisioned => Policy::Open,
+            p => Policy::Signed {
+                keys: p.keys(),
+                unit,
+            },
         }
     }
 }
@@ -112,6 +158,7 @@ impl defmt::Format for StoreError {
             Self::InvalidBlob(e) => defmt::write!(f, "InvalidBlob({})", e),
             Self::VerifyFailed => defmt::write!(f, "VerifyFailed"),
             Self::Locked => defmt::write!(f, "Locked"),
+            Self::Refused(e) => defmt::write!(f, "Refused({})", e),
         }
     }
 }
@@ -128,8 +175,12 @@ pub struct SlotInfo {
     pub index: u8,
     /// Its sequence number (higher is newer).
     pub seq: u32,
-    /// Blob bytes.
+    /// Record bytes (the blob, and its trailer when signed).
     pub len: u32,
+    /// The record's counter (0 when unsigned).
+    pub counter: u32,
+    /// The id of the key that signed it, when signed.
+    pub signed_by: Option<[u8; 4]>,
 }
 
 /// What a slot holds.
@@ -159,17 +210,18 @@ pub struct Store<F> {
 
 impl<F: NorFlash> Store<F> {
     /// A store of two slots of `slot_size` bytes from `base`, followed by one erase sector for
-    /// the lock word.
+    /// the lock word and one for the station keys ([`Store::provisioning`]).
     ///
     /// # Errors
     /// [`StoreError::Layout`] when the region is not sector-aligned or does not fit.
     pub fn new(flash: F, base: u32, slot_size: u32) -> Result<Self, StoreError> {
         let erase = F::ERASE_SIZE as u64;
-        let end = u64::from(base) + 2 * u64::from(slot_size) + erase;
+        let end = u64::from(base) + 2 * u64::from(slot_size) + 2 * erase;
         let ok = erase > 0
             && F::WRITE_SIZE > 0
             && F::WRITE_SIZE <= COMMIT_SPAN
             && COMMIT_SPAN % F::WRITE_SIZE == 0
+            && F::ERASE_SIZE >= KEYS_SPAN
             && u64::from(base) % erase == 0
             && u64::from(slot_size) % erase == 0
             && slot_size as usize > BLOB_OFFSET
@@ -182,6 +234,13 @@ impl<F: NorFlash> Store<F> {
             base,
             slot_size,
         })
+    }
+
+    /// Bytes of the whole region: two slots of `slot_size`, the lock sector and the keys sector
+    /// of `erase` bytes each.
+    #[must_use]
+    pub const fn region_len(slot_size: u32, erase: u32) -> u32 {
+        2 * slot_size + 2 * erase
     }
 
     /// The flash back (for a reboot in tests, or another use).
@@ -201,6 +260,57 @@ impl<F: NorFlash> Store<F> {
 
     fn lock_offset(&self) -> u32 {
         self.base + 2 * self.slot_size
+    }
+
+    fn keys_offset(&self) -> u32 {
+        self.lock_offset() + F::ERASE_SIZE as u32
+    }
+
+    /// What the keys sector says: unprovisioned, the station keys held, or damaged.
+    ///
+    /// # Errors
+    /// A flash error.
+    pub fn provisioning(&mut self) -> Result<Provisioning, StoreError> {
+        let mut record = [0u8; KEYS_SPAN];
+        self.flash
+            .read(self.keys_offset(), &mut record)
+            .map_err(flash_err)?;
+        Ok(Provisioning::read(&record))
+    }
+
+    /// Provisions the unit with station `keys` (manufacture; a flasher may write the same
+    /// record, [`keys_record`], instead). Once only: a unit that holds keys refuses, and the
+    /// store never erases a sound keys record; a sector that is not erased (never erased, or a
+    /// torn provisioning) is erased first. A cut while programming leaves
+    /// the sector damaged, which trusts no key ([`Provisioning::Damaged`]) until provisioned.
+    ///
+    /// # Errors
+    /// [`StoreError::Layout`] for no keys or more than [`MAX_KEYS`], [`StoreError::Locked`] when
+    /// the unit holds keys already, a flash error, or [`StoreError::VerifyFailed`].
+    pub fn provision(&mut self, keys: &[StationKey]) -> Result<(), StoreError> {
+        let at = self.keys_offset();
+        if let Provisioning::Provisioned(_) = self.provisioning()? {
+            return Err(StoreError::Locked);
+        }
+        let mut sector = [0u8; KEYS_SPAN];
+        self.flash.read(at, &mut sector).map_err(flash_err)?;
+        if sector.iter().any(|b| *b != 0xff) {
+            // Never erased, or a torn provisioning: start from an erased sector.
+            self.flash
+                .erase(at, at + F::ERASE_SIZE as u32)
+                .map_err(flash_err)?;
+        }
+        // Room for the record padded to any write size.
+        let mut record = [0u8; KEYS_SPAN + COMMIT_SPAN];
+        let n = keys_record(keys, &mut record).ok_or(StoreError::Layout)?;
+        let span = record
+            .get(..n.next_multiple_of(F::WRITE_SIZE))
+            .ok_or(StoreError::Layout)?;
+        self.flash.write(at, span).map_err(flash_err)?;
+        match self.provisioning()? {
+            Provisioning::Provisioned(k) if k.as_slice() == keys => Ok(()),
+            _ => Err(StoreError::VerifyFailed),
+        }
     }
 
     /// The header of a slot, if its commit marker and header are sound.
@@ -223,11 +333,17 @@ impl<F: NorFlash> Store<F> {
         let len = u32::from_le_bytes(word(COMMIT_SPAN + 8));
         // A length no valid blob can have (beyond the slot, or beyond the largest blob) makes
         // the slot invalid; it must never turn into an error that hides the other slot.
-        let longest = self.capacity().min(blob::MAX_BLOB_LEN);
+        let longest = self.capacity().min(MAX_SIGNED_LEN);
         if word(0) != COMMIT || magic != MAGIC || len == 0 || len as usize > longest {
             return Ok(Err(SlotState::Invalid));
         }
-        Ok(Ok(SlotInfo { index, seq, len }))
+        Ok(Ok(SlotInfo {
+            index,
+            seq,
+            len,
+            counter: 0,
+            signed_by: None,
+        }))
     }
 
     /// Reads a committed slot's blob into `buf` and checks its CRC.
@@ -252,8 +368,65 @@ impl<F: NorFlash> Store<F> {
         Ok(ok.then_some(&*dst))
     }
 
-    /// The state of both slots, each fully checked (commit marker, header, CRC, and the blob
-    /// decoding and validating into `scratch`). `buf` must hold a slot's blob.
+    /// Whether a committed slot's record counts under `policy`: its CRC; under a signed policy
+    /// its signature, key and serial ([`signed::check`]); then the blob decoding and validating
+    /// into `scratch`. `Err(Some(why))` for a record the policy refuses.
+    fn trusted(
+        &mut self,
+        info: SlotInfo,
+        buf: &mut [u8],
+        scratch: &mut CalibrationData,
+        policy: Policy<'_>,
+    ) -> Result<Result<SlotInfo, Option<SignError>>, StoreError> {
+        let Some(record) = self.read_blob(&info, buf)? else {
+            return Ok(Err(None));
+        };
+        if let Policy::Signed { keys, unit } = policy
+            && let Err(why) = signed::check(record, keys, unit)
+        {
+            return Ok(Err(Some(why)));
+        }
+        let (blob, trailer) = signed::parts(record);
+        if blob::decode_in(blob, scratch).is_err() {
+            return Ok(Err(None));
+        }
+        Ok(Ok(SlotInfo {
+            counter: trailer.map_or(0, |t| t.counter),
+            signed_by: trailer.map(|t| t.key_id),
+            ..info
+        }))
+    }
+
+    /// The committed slots, newest first.
+    fn newest_first(&mut self) -> Result<[Option<SlotInfo>; 2], StoreError> {
+        let a = self.committed(0)?.ok();
+        let b = self.committed(1)?.ok();
+        Ok(match (a, b) {
+            (Some(a), Some(b)) if b.seq > a.seq => [Some(b), Some(a)],
+            (a, b) => [a, b],
+        })
+    }
+
+    /// The newest slot that counts under `policy`, and why the newest refused one was refused.
+    fn current(
+        &mut self,
+        buf: &mut [u8],
+        scratch: &mut CalibrationData,
+        policy: Policy<'_>,
+    ) -> Result<(Option<SlotInfo>, Option<SignError>), StoreError> {
+        let mut refused = None;
+        for info in self.newest_first()?.into_iter().flatten() {
+            match self.trusted(info, buf, scratch, policy)? {
+                Ok(found) => return Ok((Some(found), refused)),
+                Err(why) => refused = refused.or(why),
+            }
+        }
+        Ok((None, refused))
+    }
+
+    /// The state of both slots, each fully checked as boot checks it (commit marker, header,
+    /// CRC, under a signed policy the signature, and the blob decoding and validating into
+    /// `scratch`). `buf` must hold a slot's record.
     ///
     /// # Errors
     /// A flash error, or a buffer too small.
@@ -261,52 +434,41 @@ impl<F: NorFlash> Store<F> {
         &mut self,
         buf: &mut [u8],
         scratch: &mut CalibrationData,
+        policy: Policy<'_>,
     ) -> Result<[SlotState; 2], StoreError> {
         let mut out = [SlotState::Empty; 2];
         for (index, state) in (0u8..).zip(out.iter_mut()) {
             *state = match self.committed(index)? {
                 Err(s) => s,
-                Ok(info) => match self.read_blob(&info, buf)? {
-                    Some(bytes) if blob::decode_in(bytes, scratch).is_ok() => SlotState::Valid {
-                        seq: info.seq,
-                        len: info.len,
+                Ok(info) => match self.trusted(info, buf, scratch, policy)? {
+                    Ok(i) => SlotState::Valid {
+                        seq: i.seq,
+                        len: i.len,
                     },
-                    _ => SlotState::Invalid,
+                    Err(_) => SlotState::Invalid,
                 },
             };
         }
         Ok(out)
     }
 
-    /// Boot: the newest slot whose blob checks, decodes and validates, read once into `buf`
-    /// and decoded into `slot`; the returned calibration is that RAM copy.
+    /// Boot: the newest slot whose record checks under `policy`, decodes and validates, read
+    /// once into `buf` and decoded into `slot`; the returned calibration is that RAM copy.
     ///
     /// # Errors
-    /// [`StoreError::NoValidSlot`] when neither slot holds a valid calibration.
+    /// [`StoreError::Refused`] when no slot holds a record the policy trusts and one was
+    /// refused for its signature (the newest such reason); [`StoreError::NoValidSlot`] when
+    /// neither slot holds a valid calibration at all.
     pub fn load<'a>(
         &mut self,
         buf: &mut [u8],
         slot: &'a mut CalibrationData,
+        policy: Policy<'_>,
     ) -> Result<(&'a Calibration, SlotInfo), StoreError> {
-        let mut candidates: [Option<SlotInfo>; 2] = [None, None];
-        for (index, c) in (0u8..).zip(candidates.iter_mut()) {
-            *c = self.committed(index)?.ok();
-        }
-        let [a, b] = candidates;
-        let order = match (a, b) {
-            (Some(a), Some(b)) if b.seq > a.seq => [Some(b), Some(a)],
-            (a, b) => [a, b],
+        let (found, refused) = self.current(buf, slot, policy)?;
+        let Some(info) = found else {
+            return Err(refused.map_or(StoreError::NoValidSlot, StoreError::Refused));
         };
-        let mut found = None;
-        for info in order.into_iter().flatten() {
-            if let Some(bytes) = self.read_blob(&info, buf)?
-                && blob::decode_in(bytes, slot).is_ok()
-            {
-                found = Some(info);
-                break;
-            }
-        }
-        let info = found.ok_or(StoreError::NoValidSlot)?;
         let cal = Calibration::validate_in_place(slot).map_err(|_| StoreError::NoValidSlot)?;
         Ok((cal, info))
     }
@@ -353,44 +515,51 @@ impl<F: NorFlash> Store<F> {
             .map_err(flash_err)
     }
 
-    /// Writes `blob` as the new current calibration. `buf` must hold the blob padded to the
-    /// write size; `scratch` is used to validate it first. A cut at any point leaves the old or
-    /// the new calibration; when this returns `Ok`, the new one is committed.
+    /// Writes `record` (a blob, or a signed blob) as the new current calibration. `buf` must
+    /// hold the record padded to the write size; `scratch` is used to validate it first. Under
+    /// [`Policy::Signed`] the record must verify for the unit with a counter above the current
+    /// slot's ([`signed::verify`]); the current record offered again is current already, and
+    /// nothing is written. A cut at any point leaves the old or the new calibration;
+    /// when this returns `Ok`, the new one is committed.
     ///
     /// # Errors
-    /// [`StoreError::Locked`], [`StoreError::InvalidBlob`] (nothing is written),
-    /// [`StoreError::BlobTooLarge`], [`StoreError::BufferTooSmall`],
+    /// [`StoreError::Locked`], [`StoreError::InvalidBlob`] and [`StoreError::Refused`] (nothing
+    /// is written), [`StoreError::BlobTooLarge`], [`StoreError::BufferTooSmall`],
     /// [`StoreError::VerifyFailed`] (the old calibration stays current), flash errors.
     pub fn update(
         &mut self,
-        blob: &[u8],
+        record: &[u8],
         buf: &mut [u8],
         scratch: &mut CalibrationData,
+        policy: Policy<'_>,
     ) -> Result<SlotInfo, StoreError> {
         if self.is_locked()? {
             return Err(StoreError::Locked);
         }
-        blob::decode_in(blob, scratch).map_err(StoreError::InvalidBlob)?;
-        if blob.len() > self.capacity() {
+        let (blob_part, trailer) = signed::parts(record);
+        blob::decode_in(blob_part, scratch).map_err(StoreError::InvalidBlob)?;
+        if record.len() > self.capacity() {
             return Err(StoreError::BlobTooLarge {
-                len: blob.len(),
+                len: record.len(),
                 capacity: self.capacity(),
             });
         }
-        let padded = blob.len().next_multiple_of(F::WRITE_SIZE);
+        let padded = record.len().next_multiple_of(F::WRITE_SIZE);
         if buf.len() < padded {
             return Err(StoreError::BufferTooSmall);
         }
-        // The current slot stays untouched; the idle one is the other, or the older.
-        let slots = [self.committed(0)?.ok(), self.committed(1)?.ok()];
-        let mut current: Option<SlotInfo> = None;
-        for info in slots.into_iter().flatten() {
-            let valid = self
-                .read_blob(&info, buf)?
-                .is_some_and(|b| blob::decode_in(b, scratch).is_ok());
-            if valid && current.is_none_or(|c| info.seq > c.seq) {
-                current = Some(info);
+        // The current slot (the one boot takes) stays untouched; the idle one is the other.
+        let (current, _) = self.current(buf, scratch, policy)?;
+        if let Policy::Signed { keys, unit } = policy {
+            // The very record that is current again (a retry after a commit whose answer was
+            // lost): done, with nothing written; its counter would refuse it as a replay.
+            if let Some(c) = current
+                && buf.get(..c.len as usize) == Some(record)
+            {
+                return Ok(c);
             }
+            let held = current.map_or(0, |c| c.counter);
+            signed::verify(record, keys, unit, held).map_err(StoreError::Refused)?;
         }
         let idle = current.map_or(0, |c| 1 - c.index);
         let seq = current.map_or(1, |c| c.seq.wrapping_add(1));
@@ -400,10 +569,10 @@ impl<F: NorFlash> Store<F> {
             .map_err(flash_err)?;
 
         let data = buf.get_mut(..padded).ok_or(StoreError::BufferTooSmall)?;
-        if let Some(d) = data.get_mut(..blob.len()) {
-            d.copy_from_slice(blob);
+        if let Some(d) = data.get_mut(..record.len()) {
+            d.copy_from_slice(record);
         }
-        if let Some(pad) = data.get_mut(blob.len()..) {
+        if let Some(pad) = data.get_mut(record.len()..) {
             pad.fill(0xff);
         }
         self.flash
@@ -413,8 +582,8 @@ impl<F: NorFlash> Store<F> {
         let fields = [
             MAGIC,
             seq.to_le_bytes(),
-            (blob.len() as u32).to_le_bytes(),
-            blob_crc(blob).to_le_bytes(),
+            (record.len() as u32).to_le_bytes(),
+            blob_crc(record).to_le_bytes(),
         ];
         for (chunk, f) in header.chunks_exact_mut(4).zip(fields) {
             chunk.copy_from_slice(&f);
@@ -434,10 +603,12 @@ impl<F: NorFlash> Store<F> {
         let info = SlotInfo {
             index: idle,
             seq,
-            len: blob.len() as u32,
+            len: record.len() as u32,
+            counter: trailer.map_or(0, |t| t.counter),
+            signed_by: trailer.map(|t| t.key_id),
         };
         match self.read_blob(&info, buf)? {
-            Some(b) if b == blob => {}
+            Some(b) if b == record => {}
             _ => return Err(StoreError::VerifyFailed),
         }
         let mut commit = [0xffu8; COMMIT_SPAN];
@@ -446,7 +617,7 @@ impl<F: NorFlash> Store<F> {
         }
         self.flash.write(start, &commit).map_err(flash_err)?;
         match self.committed(idle)? {
-            Ok(i) if i == info => Ok(info),
+            Ok(i) if (i.index, i.seq, i.len) == (info.index, info.seq, info.len) => Ok(info),
             _ => Err(StoreError::VerifyFailed),
         }
     }
@@ -467,7 +638,8 @@ impl<F: NorFlash> Store<F> {
     }
 }
 
-/// The bytes a slot holds after a committed update of `blob` with sequence number `seq`, for
+/// The bytes a slot holds after a committed update of `blob` (a record: signed or not) with
+/// sequence number `seq`, for
 /// programming a unit by other means (a debug probe, a production flasher) with exactly what an
 /// update would write. `out` is the slot: it is filled with 0xFF first. Returns the bytes used.
 ///
@@ -480,7 +652,7 @@ pub fn slot_image(
     out: &mut [u8],
     scratch: &mut CalibrationData,
 ) -> Result<usize, StoreError> {
-    blob::decode_in(blob, scratch).map_err(StoreError::InvalidBlob)?;
+    blob::decode_in(signed::parts(blob).0, scratch).map_err(StoreError::InvalidBlob)?;
     let capacity = out.len().saturating_sub(BLOB_OFFSET);
     if blob.len() > capacity {
         return Err(StoreError::BlobTooLarge {

@@ -98,8 +98,10 @@ pub struct Entry {
     pub outcome: String,
     /// The report's path, if any.
     pub report: Option<String>,
-    /// Blob bytes.
+    /// Blob bytes (a signed blob's trailer included).
     pub blob_len: usize,
+    /// The station key that signed the blob and its counter (`KEYID #COUNTER`), when signed.
+    pub signed_by: Option<String>,
 }
 
 /// The history database.
@@ -242,7 +244,7 @@ struct Row<'a> {
 
 /// The observation-data hash a blob carries, hex; `None` when it does not decode.
 fn blob_hash(blob: &[u8]) -> Option<String> {
-    let cal = spincal::blob::decode(blob).ok()?;
+    let cal = crate::signing::calibration(blob).ok()?;
     Some(
         cal.data()
             .identity
@@ -452,7 +454,7 @@ impl Db {
         verification: &serde_json::Value,
         outcome: &str,
     ) -> Result<i64, String> {
-        let sensor = spincal::blob::decode(blob)
+        let sensor = crate::signing::calibration(blob)
             .ok()
             .map(|cal| format!("{:?}", cal.data().sensor));
         self.insert(&Row {
@@ -508,7 +510,7 @@ impl Db {
     pub fn history(&self, serial: &str) -> Result<Vec<Entry>, String> {
         let mut st = self
             .conn
-            .prepare("SELECT id, kind, time, data_hash, model, outcome, report, length(blob) FROM records WHERE serial = ?1 ORDER BY time, id")
+            .prepare("SELECT id, kind, time, data_hash, model, outcome, report, blob FROM records WHERE serial = ?1 ORDER BY time, id")
             .map_err(|e| explain(&self.path, &e))?;
         let rows = st
             .query_map([serial], |r| {
@@ -520,12 +522,40 @@ impl Db {
                     model: r.get(4)?,
                     outcome: r.get(5)?,
                     report: r.get(6)?,
-                    blob_len: r.get::<_, i64>(7)? as usize,
+                    blob_len: r.get_ref(7)?.as_blob().map_or(0, <[u8]>::len),
+                    signed_by: r
+                        .get_ref(7)?
+                        .as_blob()
+                        .ok()
+                        .and_then(crate::signing::signer)
+                        .map(|(key, counter)| format!("{key} #{counter}")),
                 })
             })
             .map_err(|e| explain(&self.path, &e))?;
         rows.collect::<Result<_, _>>()
             .map_err(|e| explain(&self.path, &e))
+    }
+
+    /// The highest counter of the signed blobs recorded for unit `serial` (0 for none).
+    ///
+    /// # Errors
+    /// A message naming the file and why.
+    pub fn highest_counter(&self, serial: &str) -> Result<u32, String> {
+        let mut st = self
+            .conn
+            .prepare("SELECT blob FROM records WHERE serial = ?1")
+            .map_err(|e| explain(&self.path, &e))?;
+        let blobs = st
+            .query_map([serial], |r| r.get::<_, Vec<u8>>(0))
+            .map_err(|e| explain(&self.path, &e))?;
+        let mut highest = 0;
+        for b in blobs {
+            let b = b.map_err(|e| explain(&self.path, &e))?;
+            if let Some((_, c)) = crate::signing::signer(&b) {
+                highest = highest.max(c);
+            }
+        }
+        Ok(highest)
     }
 
     /// The JSON record of calibration `id` (of `calflash calibrate` or `calflash selfcal`).

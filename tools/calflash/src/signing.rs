@@ -8,7 +8,7 @@ use std::io::Write;
 use std::path::Path;
 
 use ed25519_dalek::{Signer, SigningKey};
-use spincal::signed::{self, FLAG_DOWNGRADE, StationKey};
+use spincal::signed::{self, StationKey};
 
 fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
@@ -102,6 +102,29 @@ pub fn load_public(path: &Path) -> Result<StationKey, String> {
     })
 }
 
+/// The station key to sign with: `given`, else `$CALFLASH_SIGN_KEY` when set.
+#[must_use]
+pub fn key_path(given: Option<&Path>) -> Option<std::path::PathBuf> {
+    given
+        .map(Path::to_path_buf)
+        .or_else(|| std::env::var_os("CALFLASH_SIGN_KEY").map(std::path::PathBuf::from))
+}
+
+/// The calibration a blob file or a unit's record holds, signed or not (a signed blob's
+/// trailer is set aside; only a unit can check it against its keys).
+///
+/// # Errors
+/// What is wrong with the blob.
+pub fn calibration(bytes: &[u8]) -> Result<spincal::model::Calibration, spincal::Error> {
+    spincal::blob::decode(signed::parts(bytes).0)
+}
+
+/// The signer's key id (hex) and counter of a signed record; `None` when unsigned.
+#[must_use]
+pub fn signer(bytes: &[u8]) -> Option<(String, u32)> {
+    signed::parts(bytes).1.map(|t| (hex(&t.key_id), t.counter))
+}
+
 /// `blob` signed with `key` at `counter` (a downgrade made for the unit at that counter when
 /// `downgrade`).
 ///
@@ -123,13 +146,12 @@ pub fn sign(
     let station = StationKey {
         public: key.verifying_key().to_bytes(),
     };
-    let mut out = blob.to_vec();
-    out.extend_from_slice(&signed::MAGIC);
-    out.push(if downgrade { FLAG_DOWNGRADE } else { 0 });
-    out.extend_from_slice(&station.id());
-    out.extend_from_slice(&counter.to_le_bytes());
-    let sig = key.sign(&signed::digest(&out));
-    out.extend_from_slice(&sig.to_bytes());
+    let mut out = vec![0u8; blob.len() + signed::TRAILER_LEN];
+    let n = signed::seal(blob, &station, counter, downgrade, &mut out, |digest| {
+        key.sign(digest).to_bytes()
+    })
+    .ok_or("the signed blob does not fit its buffer")?;
+    out.truncate(n);
     Ok(out)
 }
 

@@ -133,3 +133,114 @@ fn keygen_then_sign_and_the_units_check_accepts() {
         assert!(!d.join("y").exists());
     }
 }
+
+/// `calibrate --sign-key` signs the blob at one above the highest counter the unit's history
+/// holds (or `--counter`), never a REJECT; `image --station-key` writes the keys sector a
+/// flasher provisions the unit with, and refuses a blob such a unit would not boot.
+#[test]
+fn calibrate_signs_from_the_history_and_image_provisions_the_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/imu_bench.csv");
+    let bench = bench.display().to_string();
+    let (code, out, err) = calflash(d, &["keygen", "station"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let public = calflash::signing::load_public(&d.join("station.pub")).unwrap();
+    let unit = spincal::model::Serial::new("IMU-S-2").unwrap();
+    let calibrate = |blob: &str, extra: &[&str]| {
+        let mut args = vec![
+            "calibrate",
+            &bench,
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-S-2",
+            "--blob",
+            blob,
+            "--db",
+            "units.sqlite",
+            "--sign-key",
+            "station.key",
+        ];
+        args.extend_from_slice(extra);
+        calflash(d, &args)
+    };
+    for (blob, counter) in [("a.blob", 1), ("b.blob", 2)] {
+        let (code, out, err) = calibrate(blob, &[]);
+        assert_eq!(code, 0, "{out}{err}");
+        assert!(out.contains(&format!("counter {counter}")), "{out}");
+        let bytes = std::fs::read(d.join(blob)).unwrap();
+        let v = spincal::signed::verify(&bytes, &[public], &unit, counter - 1).unwrap();
+        assert_eq!(v.counter, counter);
+    }
+    let (code, out, err) = calibrate("c.blob", &["--counter", "40"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let bytes = std::fs::read(d.join("c.blob")).unwrap();
+    assert_eq!(
+        spincal::signed::verify(&bytes, &[public], &unit, 39)
+            .unwrap()
+            .counter,
+        40
+    );
+    let (code, out, err) = calibrate("d.blob", &["--no-db"]);
+    assert_ne!(code, 0, "{out}");
+    assert!(err.contains("give --counter"), "{err}");
+    assert!(!d.join("d.blob").exists());
+
+    // The flasher's image: keys sector and slot 0.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "image",
+            "--blob",
+            "c.blob",
+            "--station-key",
+            "station.pub",
+            "--bin",
+            "unit.bin",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let image = std::fs::read(d.join("unit.bin")).unwrap();
+    let region = calflash::device::image::Region::from_memory_x();
+    assert_eq!(image.len(), region.bytes() as usize);
+    let at = region.keys_offset() as usize;
+    let keys: &[u8; spincal::store::KEYS_SPAN] = image[at..at + spincal::store::KEYS_SPAN]
+        .try_into()
+        .unwrap();
+    assert_eq!(spincal::store::Provisioning::read(keys).keys(), &[public]);
+    // An unsigned blob for a provisioned unit: refused, nothing written.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            &bench,
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-S-2",
+            "--blob",
+            "u.blob",
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "image",
+            "--blob",
+            "u.blob",
+            "--station-key",
+            "station.pub",
+            "--bin",
+            "bad.bin",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("would not boot it") && err.contains("--sign-key"),
+        "{err}"
+    );
+    assert!(!d.join("bad.bin").exists());
+}

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use super::values;
 use clap::Args;
-use spincal::blob;
 use spincal::correct::{AnyCorrector, Flags};
 use spincal::model::Sensor;
 
@@ -164,7 +163,8 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
         .output("-o", Some(&args.output))
         .check()?;
     let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
-    let cal = blob::decode(&bytes).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let cal =
+        crate::signing::calibration(&bytes).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let data = cal.data();
     let (default_cols, out_names): (Vec<&str>, Vec<&str>) = match &data.sensor {
         Sensor::Single { .. } => (vec![col::OUTPUT], vec!["value"]),

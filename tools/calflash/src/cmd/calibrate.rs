@@ -219,13 +219,23 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         (Verdict::Reject, true) => Some(rejected_blob(&c)?),
         _ => Some(c.blob.clone()),
     };
+    let serial = c.data.identity.serial.as_str();
+    let (blob, signed_note) = match blob {
+        Some(b) => {
+            let s = args.out.sign(b, serial, c.verdict() == Verdict::Reject)?;
+            (Some(s.bytes), s.note)
+        }
+        None => (None, None),
+    };
     let mut record = Record::new(&c, &data_name);
     record.blob = blob.as_deref().map(hex).unwrap_or_default();
     args.out.write(blob.as_deref(), &record, || {
         report::html::render(&c, &data_name)
     })?;
     print!("{}", summary(&c, args, blob.is_some()));
-    let serial = c.data.identity.serial.as_str();
+    if let Some(note) = signed_note {
+        println!("{note}");
+    }
     let fallback = serde_json::to_value(&record).unwrap_or_default();
     let report_path = args.out.report.as_deref();
     args.out.record(serial, &fallback, |d| {

@@ -35,6 +35,11 @@ pub struct FlashArgs {
     /// Do not record the flash.
     #[arg(long)]
     pub no_db: bool,
+    /// Sign an unsigned blob here, for the unit that answers, at the counter above the one it
+    /// holds, with the station's private key (default: $CALFLASH_SIGN_KEY). A blob signed
+    /// already is written as it is.
+    #[arg(long)]
+    pub sign_key: Option<PathBuf>,
 }
 
 /// A link timeout, seconds: from 0.1 to 3600.
@@ -48,11 +53,36 @@ fn timeout(s: &str) -> Result<f64, String> {
 /// A message saying what failed and what the unit holds.
 pub fn run(args: &FlashArgs) -> Result<(), String> {
     let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let key = crate::signing::key_path(args.sign_key.as_deref())
+        .map(|p| crate::signing::load_private(&p))
+        .transpose()?;
     let timeout = Duration::from_secs_f64(args.timeout);
     let link = Link::open(&args.port, timeout)?;
     let mut client = Client::new(link, timeout);
     // Who answers: a unit that does not says so and nothing is recorded.
     let id = client.identify().map_err(|e| e.to_string())?;
+    if id.trust == spincal::protocol::Trust::Unprovisioned {
+        println!(
+            "  unit {} is UNPROVISIONED: it holds no station key and takes unsigned calibrations from anyone with the cable",
+            id.unit
+        );
+    }
+    let bytes = match key {
+        Some(key) if spincal::signed::parts(&bytes).1.is_none() => {
+            let counter = id
+                .counter
+                .checked_add(1)
+                .ok_or("the unit holds the highest counter there is")?;
+            let signed = crate::signing::sign(&bytes, &key, counter, false)
+                .map_err(|e| format!("{}: {e}", args.blob.display()))?;
+            println!(
+                "  signed for unit {} at counter {counter} (the unit holds {})",
+                id.unit, id.counter
+            );
+            signed
+        }
+        _ => bytes,
+    };
     let bar = indicatif::ProgressBar::new(bytes.len() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("  writing {bar:40} {bytes}/{total_bytes}")
@@ -90,6 +120,18 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
                 report.vectors,
                 report.max_ulp
             );
+            if let Some(key) = &report.signed_by {
+                println!(
+                    "  signed by station key {key}, counter {}; the unit ({}) {}",
+                    report.counter,
+                    report.trust,
+                    if report.trust == "provisioned" {
+                        "verified the signature before committing"
+                    } else {
+                        "cannot check signatures"
+                    }
+                );
+            }
             if !args.no_db {
                 let v = serde_json::to_value(&report).unwrap_or_default();
                 let said = db::record_or_save(
@@ -112,7 +154,7 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
                 let v = serde_json::json!({
                     "error": msg,
                     "port": args.port,
-                    "blob_serial": spincal::blob::decode(&bytes)
+                    "blob_serial": crate::signing::calibration(&bytes)
                         .ok()
                         .map(|c| c.data().identity.serial.as_str().to_string()),
                 });

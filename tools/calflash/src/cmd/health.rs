@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use clap::Args;
-use spincal::blob;
 use spincal::correct::AnyImuCorrector;
 use spincal::health::{Health, RestMonitor};
 
@@ -79,7 +78,7 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, String> {
             );
         }
     };
-    let data_hash = blob::decode(&blob)
+    let data_hash = crate::signing::calibration(&blob)
         .map(|c| {
             c.data()
                 .identity
@@ -117,7 +116,7 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, String> {
 }
 
 fn serial_of(bytes: &[u8], path: &Path) -> Result<String, String> {
-    let cal = blob::decode(bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    let cal = crate::signing::calibration(bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(cal.data().identity.serial.as_str().to_string())
 }
 
@@ -156,7 +155,7 @@ fn environment(args: &HealthArgs, cal: &spincal::model::Calibration) -> (f32, f3
 /// The device's correction and health check over the recording, on the host.
 fn on_host(args: &HealthArgs, bytes: &[u8], rec: &Path) -> Result<Health, String> {
     let name = args.blob.as_deref().unwrap_or(rec).display().to_string();
-    let cal = blob::decode(bytes).map_err(|e| format!("{name}: {e}"))?;
+    let cal = crate::signing::calibration(bytes).map_err(|e| format!("{name}: {e}"))?;
     let (raw, rate) = samples(args, rec)?;
     let mut imu = AnyImuCorrector::new(&cal, rate as f32).map_err(|e| format!("{name}: {e}"))?;
     let mut monitor = RestMonitor::new(&cal, rate as f32).map_err(|e| format!("{name}: {e}"))?;
@@ -182,7 +181,7 @@ fn from_unit(
     let blob = client
         .read_blob(id.blob_len as usize)
         .map_err(|e| e.to_string())?;
-    let cal = blob::decode(&blob).map_err(|e| format!("the unit's blob: {e}"))?;
+    let cal = crate::signing::calibration(&blob).map_err(|e| format!("the unit's blob: {e}"))?;
     if let Some(rec) = rec {
         let (raw, rate) = samples(args, rec)?;
         let device_rate = f64::from(spincal::protocol::vector_rate_hz());

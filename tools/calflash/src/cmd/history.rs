@@ -42,13 +42,17 @@ pub fn run(args: &HistoryArgs) -> Result<(), String> {
     );
     for r in &rows {
         println!(
-            "  db:{:<5} {:<5} {} UTC  {:<9} data {}  blob {} bytes{}{}",
+            "  db:{:<5} {:<5} {} UTC  {:<9} data {}  blob {} bytes{}{}{}",
             r.id,
             r.kind,
             format_time(r.time),
             r.outcome,
             r.data_hash.get(..12).unwrap_or(&r.data_hash),
             r.blob_len,
+            r.signed_by
+                .as_ref()
+                .map(|s| format!("  signed by key {s}"))
+                .unwrap_or_default(),
             r.model
                 .as_ref()
                 .map(|m| format!("  {m}"))

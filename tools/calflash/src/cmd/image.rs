@@ -6,13 +6,19 @@ use clap::Args;
 
 use crate::device::image::{self, Region};
 
-/// Write the calibration region (slot 0 committed with the blob) as Intel HEX and raw binary at
-/// the address of memory.x, or program it over SWD with probe-rs (feature `probe`).
+/// Write the calibration region (slot 0 committed with the blob; the keys sector provisioned
+/// with the station public keys) as Intel HEX and raw binary at the address of memory.x, or
+/// program it over SWD with probe-rs (feature `probe`).
 #[derive(Debug, Args)]
 pub struct ImageArgs {
-    /// The blob.
+    /// The blob (signed, for a provisioned unit).
     #[arg(long)]
-    pub blob: PathBuf,
+    pub blob: Option<PathBuf>,
+    /// Provision the unit with this station public key (`calflash keygen`'s PREFIX.pub;
+    /// repeat for up to 4): it then takes only calibrations signed for it by one of them.
+    /// Written once, at manufacture: a unit never changes its keys.
+    #[arg(long, value_name = "PUB")]
+    pub station_key: Vec<PathBuf>,
     /// Write Intel HEX here.
     #[arg(long)]
     pub hex: Option<PathBuf>,
@@ -30,17 +36,52 @@ pub struct ImageArgs {
 /// # Errors
 /// A bad blob, an unwritable file, or a probe failure.
 pub fn run(args: &ImageArgs) -> Result<(), String> {
-    crate::files::Paths::new()
-        .input("--blob", Some(&args.blob))
+    let mut paths = crate::files::Paths::new().input("--blob", args.blob.as_deref());
+    for k in &args.station_key {
+        paths = paths.input("--station-key", Some(k));
+    }
+    paths
         .output("--hex", args.hex.as_deref())
         .output("--bin", args.bin.as_deref())
         .check()?;
-    let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
-    let region = Region::from_memory_x();
-    let image =
-        image::region_image(&bytes, region).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    if args.blob.is_none() && args.station_key.is_empty() {
+        return Err("give --blob, --station-key or both".into());
+    }
     if args.hex.is_none() && args.bin.is_none() && args.probe.is_none() {
         return Err("give --hex, --bin or --probe".into());
+    }
+    let keys = args
+        .station_key
+        .iter()
+        .map(|p| crate::signing::load_public(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let bytes = args
+        .blob
+        .as_ref()
+        .map(|p| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display())))
+        .transpose()?;
+    if let (Some(bytes), Some(path), false) = (&bytes, &args.blob, keys.is_empty()) {
+        // A provisioned unit boots only a blob signed for it by one of its keys.
+        let cal =
+            crate::signing::calibration(bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        spincal::signed::check(bytes, &keys, &cal.data().identity.serial).map_err(|e| {
+            format!(
+                "{}: a unit provisioned with these keys would not boot it: {e}",
+                path.display()
+            )
+        })?;
+    }
+    let region = Region::from_memory_x();
+    let image =
+        image::unit_image(bytes.as_deref(), &keys, region).map_err(|e| match &args.blob {
+            Some(p) => format!("{}: {e}", p.display()),
+            None => e,
+        })?;
+    for k in &keys {
+        println!(
+            "calflash image: keys sector provisioned with station key {}",
+            crate::device::key_hex(k.id())
+        );
     }
     if let Some(p) = &args.bin {
         crate::files::write_atomically(p, |w| w.write_all(&image))?;

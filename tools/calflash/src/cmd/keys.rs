@@ -59,13 +59,9 @@ pub struct SignArgs {
 /// # Errors
 /// Unreadable key or blob, a key readable by others, a blob already signed.
 pub fn sign(args: &SignArgs) -> Result<(), String> {
-    let key_path = args
-        .sign_key
-        .clone()
-        .or_else(|| std::env::var_os("CALFLASH_SIGN_KEY").map(PathBuf::from))
-        .ok_or(
-            "no key: give --sign-key or set $CALFLASH_SIGN_KEY (make one with `calflash keygen`)",
-        )?;
+    let key_path = signing::key_path(args.sign_key.as_deref()).ok_or(
+        "no key: give --sign-key or set $CALFLASH_SIGN_KEY (make one with `calflash keygen`)",
+    )?;
     Paths::new()
         .input("--blob", Some(&args.blob))
         .input("--sign-key", Some(&key_path))

@@ -30,6 +30,23 @@ pub struct Outputs {
     /// `calflash flash` refuses it without `--force-rejected`.
     #[arg(long)]
     pub force_blob: bool,
+    /// Sign the blob with the station's private key (default: $CALFLASH_SIGN_KEY), for a
+    /// unit provisioned with its public key. A calibration judged REJECT is never signed.
+    #[arg(long)]
+    pub sign_key: Option<PathBuf>,
+    /// The signed blob's counter: above the one the unit holds (default: one above the
+    /// highest counter of the unit's blobs in the history).
+    #[arg(long)]
+    pub counter: Option<u32>,
+}
+
+/// A blob as written: signed or not, and what to say about it.
+#[derive(Debug)]
+pub struct Signed {
+    /// The bytes to write.
+    pub bytes: Vec<u8>,
+    /// A line for the summary (`None` when no key was asked for).
+    pub note: Option<String>,
 }
 
 impl Outputs {
@@ -45,6 +62,60 @@ impl Outputs {
             .output("--json", self.json.as_deref())
             .created("the unit history", db.as_deref())
             .check()
+    }
+
+    /// Signs `blob` (the calibration of unit `serial`) when a key is given, unless the
+    /// calibration is `rejected`: the counter is `--counter`, else one above the highest in
+    /// the unit's history.
+    ///
+    /// # Errors
+    /// An unreadable key or one others may read, a history that cannot be read, or no counter.
+    pub fn sign(&self, blob: Vec<u8>, serial: &str, rejected: bool) -> Result<Signed, String> {
+        let Some(key_path) = crate::signing::key_path(self.sign_key.as_deref()) else {
+            return Ok(Signed {
+                bytes: blob,
+                note: None,
+            });
+        };
+        if rejected {
+            return Ok(Signed {
+                bytes: blob,
+                note: Some(format!(
+                    "  not signed: a calibration judged REJECT is never signed with {}",
+                    key_path.display()
+                )),
+            });
+        }
+        let key = crate::signing::load_private(&key_path)?;
+        let counter = match self.counter {
+            Some(c) => c,
+            None if self.no_db => {
+                return Err(
+                    "--sign-key with --no-db: give --counter (above the one the unit holds)".into(),
+                );
+            }
+            None => {
+                let path = self.db.clone().unwrap_or_else(db::default_path);
+                let held = if path.exists() {
+                    Db::open(&path)?.highest_counter(serial)?
+                } else {
+                    0
+                };
+                held.checked_add(1)
+                    .ok_or("the unit's history holds the highest counter there is")?
+            }
+        };
+        let bytes = crate::signing::sign(&blob, &key, counter, false)?;
+        let id = crate::signing::signer(&bytes)
+            .map(|(id, _)| id)
+            .unwrap_or_default();
+        Ok(Signed {
+            note: Some(format!(
+                "  signed by station key {id} ({}), counter {counter}",
+                key_path.display()
+            )),
+            bytes,
+        })
     }
 
     /// Writes the files asked for, all or none: each is staged beside its destination and

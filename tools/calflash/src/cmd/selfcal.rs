@@ -152,13 +152,19 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
     }
     let name = serial.as_str();
     let record = report::selfcal::record(&c, &rec, check, name);
-    let blob = check
-        .map(|c| c.blob.as_slice())
-        .filter(|_| !reject || args.out.force_blob);
+    let signed = check
+        .map(|c| c.blob.clone())
+        .filter(|_| !reject || args.out.force_blob)
+        .map(|b| args.out.sign(b, name, reject))
+        .transpose()?;
+    let blob = signed.as_ref().map(|s| s.bytes.as_slice());
     args.out.write(blob, &record, || {
         report::selfcal::html(&c, &rec, check, name)
     })?;
     print!("{}", report::selfcal::summary(&c, &rec, check, name));
+    if let Some(note) = signed.as_ref().and_then(|s| s.note.as_deref()) {
+        println!("{note}");
+    }
     if reject && check.is_some() && blob.is_none() {
         println!(
             "  blob: none written: the calibration is judged REJECT (--force-blob writes it, marked so that `flash` refuses it)"

@@ -316,7 +316,8 @@ fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), String> {
         return Err("--rest: a unit at rest is simulated as an IMU (--sensor imu)".into());
     }
     let bytes = std::fs::read(blob).map_err(|e| format!("{}: {e}", blob.display()))?;
-    let cal = spincal::blob::decode(&bytes).map_err(|e| format!("{}: {e}", blob.display()))?;
+    let cal =
+        crate::signing::calibration(&bytes).map_err(|e| format!("{}: {e}", blob.display()))?;
     let rate = args.sample_rate.unwrap_or(1000.0);
     let shift: [f64; 6] = match args.shift.as_slice() {
         [] => [0.0; 6],

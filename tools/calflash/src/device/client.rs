@@ -3,7 +3,7 @@
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
 
-use spincal::protocol::{self, MAX_FRAME, Request, Response, Status};
+use spincal::protocol::{self, MAX_FRAME, Reply, Request, Response, Status, Trust};
 
 /// What can go wrong talking to a unit.
 #[derive(Debug, thiserror::Error)]
@@ -33,7 +33,7 @@ pub enum DeviceError {
         why: protocol::FrameError,
     },
     /// The unit refused.
-    #[error("the unit refused {what}: {status:?}")]
+    #[error("the unit refused {what}: {}", describe(status))]
     Refused {
         /// The request.
         what: String,
@@ -48,6 +48,14 @@ pub enum DeviceError {
         /// The answer.
         got: String,
     },
+}
+
+/// A refusal in words: a signature refusal says why and what to do.
+fn describe(status: &Status) -> String {
+    match status {
+        Status::Refused(why) => why.to_string(),
+        other => format!("{other:?}"),
+    }
 }
 
 fn name(r: &Request) -> String {
@@ -70,6 +78,8 @@ pub struct Client<L> {
     timeout: Duration,
     /// Bytes received past the last frame (kept for the next answer).
     pending: Vec<u8>,
+    /// Whether the unit checks signatures, as its last answer said.
+    trust: Option<Trust>,
 }
 
 impl<L: Read + Write> Client<L> {
@@ -79,7 +89,13 @@ impl<L: Read + Write> Client<L> {
             link,
             timeout,
             pending: Vec::new(),
+            trust: None,
         }
+    }
+
+    /// Whether the unit checks signatures, as its last answer said (`None` before one came).
+    pub const fn trust(&self) -> Option<Trust> {
+        self.trust
     }
 
     /// Sends a request and waits for its response; a refusal is an `Ok(Response::Error)`.
@@ -106,8 +122,10 @@ impl<L: Read + Write> Client<L> {
             if let Some(end) = self.pending.iter().position(|b| *b == 0) {
                 let frame: Vec<u8> = self.pending.drain(..=end).collect();
                 let mut scratch = [0u8; MAX_FRAME];
-                return protocol::decode(&frame[..frame.len() - 1], &mut scratch)
-                    .map_err(|why| DeviceError::Garbled { what, why });
+                let reply: Reply = protocol::decode(&frame[..frame.len() - 1], &mut scratch)
+                    .map_err(|why| DeviceError::Garbled { what, why })?;
+                self.trust = Some(reply.trust);
+                return Ok(reply.response);
             }
             if start.elapsed() > self.timeout {
                 return Err(DeviceError::Timeout {

@@ -6,7 +6,8 @@ use std::io::{Read, Write};
 use spincal::blob;
 use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
 use spincal::model::{Calibration, Sensor};
-use spincal::protocol::{self, MAX_CHUNK, MAX_VECTORS, Request, Response};
+use spincal::protocol::{self, MAX_CHUNK, MAX_VECTORS, Request, Response, Trust};
+use spincal::signed::{self, FLAG_DOWNGRADE, SignError};
 
 use super::client::{Client, DeviceError};
 
@@ -53,6 +54,29 @@ pub struct FlashReport {
     pub max_ulp: u32,
     /// Samples whose flags differ.
     pub flag_mismatches: usize,
+    /// Whether the unit checks signatures: `provisioned`, `unprovisioned` (it takes unsigned
+    /// calibrations from anyone with the cable) or `keys damaged`.
+    pub trust: String,
+    /// The id of the station key that signed the calibration (hex), when signed.
+    pub signed_by: Option<String>,
+    /// The calibration's counter (0 when unsigned).
+    pub counter: u32,
+}
+
+/// A key id as hex.
+#[must_use]
+pub fn key_hex(id: [u8; 4]) -> String {
+    id.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A unit's trust in words.
+#[must_use]
+pub const fn trust_name(t: Trust) -> &'static str {
+    match t {
+        Trust::Unprovisioned => "unprovisioned",
+        Trust::Provisioned => "provisioned",
+        Trust::KeysDamaged => "keys damaged",
+    }
 }
 
 /// Why a flash failed; the unit keeps its previous calibration unless the message says
@@ -86,6 +110,25 @@ pub enum FlashError {
         carries: protocol::UnitSensor,
         /// What the blob is for.
         blob: protocol::UnitSensor,
+    },
+    /// A provisioned unit would refuse the calibration's signature (checked before sending
+    /// anything, from what the unit says it holds; the unit checks again itself).
+    #[error(
+        "unit {unit} takes only calibrations signed for it by a key it holds: {why}; nothing was written"
+    )]
+    Signature {
+        /// The unit.
+        unit: String,
+        /// Why.
+        why: SignError,
+    },
+    /// The unit's keys sector is damaged: it trusts no key.
+    #[error(
+        "unit {unit} has a damaged keys sector and trusts no station key; it takes nothing until a flasher provisions it again (`calflash image --station-key`); nothing was written"
+    )]
+    KeysDamaged {
+        /// The unit.
+        unit: String,
     },
     /// The unit is locked.
     #[error("unit {unit} is locked against writes; it keeps its calibration {current}")]
@@ -259,13 +302,23 @@ pub fn flash<L: Read + Write>(
     opts: &FlashOptions,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<FlashReport, FlashError> {
-    let cal = blob::decode(bytes).map_err(FlashError::Blob)?;
+    let (blob_part, trailer) = signed::parts(bytes);
+    let cal = blob::decode(blob_part).map_err(FlashError::Blob)?;
     let serial = cal.data().identity.serial.as_str().to_string();
     let unit = id.unit.as_str().to_string();
     let previous = id.calibration.as_ref().map(|s| s.as_str().to_string());
     let current = previous.clone().unwrap_or_else(|| "(none)".into());
     if id.locked {
         return Err(FlashError::Locked { unit, current });
+    }
+    match id.trust {
+        Trust::Unprovisioned => {}
+        Trust::KeysDamaged => return Err(FlashError::KeysDamaged { unit }),
+        Trust::Provisioned => {
+            if let Err(why) = signature_precheck(trailer, id, &serial) {
+                return Err(FlashError::Signature { unit, why });
+            }
+        }
     }
     if cal.data().identity.fit_rejected && !opts.rejected_fit {
         return Err(FlashError::RejectedFit);
@@ -306,7 +359,7 @@ pub fn flash<L: Read + Write>(
         progress(offset + chunk.len(), total);
     }
     let seq = match client.ask(&Request::Commit) {
-        Ok(Response::Committed { seq }) => seq,
+        Ok(Response::Committed { seq, .. }) => seq,
         Ok(other) => {
             return Err(FlashError::Device(DeviceError::Unexpected {
                 what: "Commit".into(),
@@ -390,7 +443,39 @@ pub fn flash<L: Read + Write>(
         vectors,
         max_ulp,
         flag_mismatches,
+        trust: trust_name(id.trust).into(),
+        signed_by: trailer.map(|t| key_hex(t.key_id)),
+        counter: trailer.map_or(0, |t| t.counter),
     })
+}
+
+/// What a provisioned unit that answered `id` would refuse in a record with `trailer` for the
+/// unit `serial`, short of the signature itself (only the unit holds the keys' public halves
+/// here by id): unsigned, an unknown key, another serial, a counter not above the unit's.
+fn signature_precheck(
+    trailer: Option<signed::Trailer>,
+    id: &protocol::Identity,
+    serial: &str,
+) -> Result<(), SignError> {
+    let t = trailer.ok_or(SignError::Unsigned)?;
+    if !id.station_keys.contains(&t.key_id) {
+        return Err(SignError::UnknownKey { key_id: t.key_id });
+    }
+    if serial != id.unit.as_str() {
+        return Err(SignError::WrongSerial);
+    }
+    let fresh = if t.flags & FLAG_DOWNGRADE != 0 {
+        t.counter == id.counter
+    } else {
+        t.counter > id.counter
+    };
+    if !fresh {
+        return Err(SignError::Replay {
+            counter: t.counter,
+            held: id.counter,
+        });
+    }
+    Ok(())
 }
 
 #[cfg(test)]

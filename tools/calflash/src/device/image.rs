@@ -1,8 +1,10 @@
-//! Slot images for any flasher: the calibration region exactly as an update leaves it (slot 0
-//! committed with the blob, slot 1 and the lock sector erased), as raw binary and as Intel HEX
-//! at the region's address from `memory.x`.
+//! Region images for any flasher: the calibration region exactly as an update leaves it (slot 0
+//! committed with the blob, slot 1 and the lock sector erased) and, for a unit provisioned at
+//! manufacture, the keys sector holding the station public keys; as raw binary and as Intel
+//! HEX at the region's address from `memory.x`.
 
 use spincal::model::CalibrationData;
+use spincal::signed::StationKey;
 use spincal::store;
 
 /// The example target's memory map, as the firmware links it.
@@ -15,7 +17,7 @@ pub struct Region {
     pub start: u32,
     /// Bytes per slot.
     pub slot_size: u32,
-    /// Bytes of the lock sector after the two slots.
+    /// Bytes of the lock sector after the two slots, and of the keys sector after it.
     pub lock_size: u32,
 }
 
@@ -28,7 +30,8 @@ fn symbol(name: &str) -> Option<u32> {
 }
 
 impl Region {
-    /// The region of `memory.x` (`_calib_start`, `_calib_slot_size`; a 4 KiB lock sector).
+    /// The region of `memory.x` (`_calib_start`, `_calib_slot_size`; a 4 KiB lock sector and a
+    /// 4 KiB keys sector).
     ///
     /// # Panics
     /// When `memory.x` lacks the symbols (a build error of this repository).
@@ -40,17 +43,58 @@ impl Region {
             lock_size: 4096,
         }
     }
+
+    /// Bytes of the whole region: two slots, the lock sector and the keys sector.
+    #[must_use]
+    pub const fn bytes(&self) -> u32 {
+        2 * self.slot_size + 2 * self.lock_size
+    }
+
+    /// Offset of the keys sector in the region.
+    #[must_use]
+    pub const fn keys_offset(&self) -> u32 {
+        2 * self.slot_size + self.lock_size
+    }
 }
 
-/// The region's bytes after committing `blob` into slot 0 with sequence number 1.
+/// The region's bytes after committing `blob` into slot 0 with sequence number 1 (a signed
+/// blob keeps its trailer).
 ///
 /// # Errors
 /// When the blob is invalid or does not fit a slot.
 pub fn region_image(blob: &[u8], region: Region) -> Result<Vec<u8>, String> {
-    let mut out = vec![0xffu8; (2 * region.slot_size + region.lock_size) as usize];
-    let mut scratch = CalibrationData::empty();
-    store::slot_image(blob, 1, &mut out[..region.slot_size as usize], &mut scratch)
-        .map_err(|e| e.to_string())?;
+    unit_image(Some(blob), &[], region)
+}
+
+/// The region a flasher writes into a unit at manufacture: slot 0 committed with `blob` when
+/// given (a provisioned unit boots only a blob signed by one of `keys` for it), the other
+/// sectors erased, and the keys sector provisioned with `keys` when any.
+///
+/// # Errors
+/// An invalid blob or one that does not fit a slot; more keys than a unit holds.
+pub fn unit_image(
+    blob: Option<&[u8]>,
+    keys: &[StationKey],
+    region: Region,
+) -> Result<Vec<u8>, String> {
+    let mut out = vec![0xffu8; region.bytes() as usize];
+    if let Some(blob) = blob {
+        let mut scratch = CalibrationData::empty();
+        store::slot_image(blob, 1, &mut out[..region.slot_size as usize], &mut scratch)
+            .map_err(|e| e.to_string())?;
+    }
+    if !keys.is_empty() {
+        let at = region.keys_offset() as usize;
+        store::keys_record(keys, &mut out[at..at + region.lock_size as usize]).ok_or_else(
+            || {
+                format!(
+                    "{} station keys; a unit holds 1 to {}",
+                    keys.len(),
+                    store::MAX_KEYS
+                )
+            },
+        )?;
+    }
     Ok(out)
 }
 

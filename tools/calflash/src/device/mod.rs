@@ -7,4 +7,4 @@ pub mod image;
 pub mod link;
 
 pub use client::{Client, DeviceError};
-pub use flash::{FlashOptions, FlashReport, flash};
+pub use flash::{FlashOptions, FlashReport, flash, key_hex, trust_name};
