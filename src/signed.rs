@@ -15,11 +15,12 @@
 //!               (the blob carries the unit's serial, so the signature binds it)
 //! ```
 //!
-//! 75 bytes over the blob. [`verify`] checks, in order: the trailer's presence and shape, that
-//! the key is one the unit holds, the signature (strict: canonical encodings only), that the
-//! blob is for the unit's serial, and that the counter is above the unit's (or the blob is a
-//! downgrade signed for this unit); it decodes nothing of the payload beyond the serial. The
-//! blob itself then goes through [`crate::blob::decode`] as ever.
+//! 75 bytes over the blob. [`verify`] (at commit) checks, in order: the trailer's presence and
+//! shape, that the counter is above the unit's (or the blob is a downgrade signed for this unit
+//! at its counter), that the key is one the unit holds, the signature (strict: canonical
+//! encodings only), and that the blob is for the unit's serial; [`check`] (at boot) all but
+//! the counter. Neither decodes anything of the payload beyond the serial; the blob itself then
+//! goes through [`crate::blob::decode`] as ever.
 
 use ed25519_dalek::{Signature, VerifyingKey};
 use sha2::{Digest, Sha256};
@@ -257,8 +258,8 @@ pub fn check(bytes: &[u8], keys: &[StationKey], unit: &Serial) -> Result<Verifie
     })
 }
 
-/// Checks a signed blob offered to the unit `unit` holding `keys` and the counter `held`: as
-/// [`check`], and its counter is above `held` (or it is a downgrade signed at `held`).
+/// Checks a signed blob offered to the unit `unit` holding `keys` and the counter `held`: its
+/// counter is above `held` (or it is a downgrade signed at `held`), then as [`check`].
 ///
 /// # Errors
 /// The first [`SignError`] found, in the order of the module docs.
@@ -268,17 +269,20 @@ pub fn verify(
     unit: &Serial,
     held: u32,
 ) -> Result<Verified, SignError> {
-    let v = check(bytes, keys, unit)?;
-    let fresh = if v.downgrade {
-        v.counter == held
+    // The counter first: a replay is refused without the cost of a signature check (refusing
+    // on a trailer not yet authenticated is safe; accepting waits for the signature).
+    let (_, trailer) = split(bytes)?;
+    let t = Trailer::read(trailer);
+    let fresh = if t.flags & FLAG_DOWNGRADE != 0 {
+        t.counter == held
     } else {
-        v.counter > held
+        t.counter > held
     };
     if !fresh {
         return Err(SignError::Replay {
-            counter: v.counter,
+            counter: t.counter,
             held,
         });
     }
-    Ok(v)
+    check(bytes, keys, unit)
 }

@@ -134,7 +134,8 @@ fn health_vectors_match_the_host_monitor() {
 }
 
 /// A signed blob of the example IMU (`imu.signed`, key `station.pub`, seed `[1; 32]`, counter
-/// 1): what the device's benchmark verifies. The signature is deterministic (Ed25519).
+/// 1), and the same at counter 2 (`imu2.signed`): what the device's benchmark verifies and
+/// commits. The signature is deterministic (Ed25519).
 #[test]
 fn the_signed_example_matches_its_golden_bytes() {
     let key = ed25519_dalek::SigningKey::from_bytes(&[1; 32]);
@@ -147,11 +148,15 @@ fn the_signed_example_matches_its_golden_bytes() {
         golden::dir().join("imu.signed"),
         golden::dir().join("station.pub"),
     );
+    let second = calflash::signing::sign(&blob, &key, 2, false).unwrap();
+    let second_path = golden::dir().join("imu2.signed");
     if accept() {
         std::fs::write(&path, &bytes).unwrap();
+        std::fs::write(&second_path, &second).unwrap();
         std::fs::write(&key_path, public.public).unwrap();
     }
     assert_eq!(std::fs::read(&path).unwrap(), bytes);
+    assert_eq!(std::fs::read(&second_path).unwrap(), second);
     assert_eq!(std::fs::read(&key_path).unwrap(), public.public);
     let serial = spincal::model::CalibrationData::example_imu()
         .identity

@@ -287,7 +287,10 @@ fn main() -> ! {
     black_box(&one_out);
     let health_stack = bench_health();
     let signed_stack = bench_signed();
+    let [commit_stack, boot_stack] = bench_signed_store();
     hprintln!("stack correct {}", correct_stack);
+    hprintln!("stack store_commit_signed {}", commit_stack);
+    hprintln!("stack store_boot_signed {}", boot_stack);
     hprintln!("stack health_observe_rest {}", health_stack);
     hprintln!("stack signed_verify {}", signed_stack);
     hprintln!(
@@ -434,4 +437,70 @@ fn bench_signed() -> usize {
         .is_ok()
     });
     stack
+}
+
+/// A provisioned unit's store on the calibration region: commits the signed example at
+/// counter 1 into an empty store (one verification), then at counter 2 over it (the current
+/// record's and the new one's), and boots (the newest record verified and decoded). Returns
+/// the stack high-water of a commit and of a boot.
+fn bench_signed_store() -> [usize; 2] {
+    use spincal::protocol::SLOT_BUFFER;
+    use spincal::store::{Policy, Store};
+    use spincal_firmware::RamFlash;
+    static FIRST: &[u8] = include_bytes!("../../../host-tests/golden/imu.signed");
+    static SECOND: &[u8] = include_bytes!("../../../host-tests/golden/imu2.signed");
+    static PUBLIC: &[u8; 32] = include_bytes!("../../../host-tests/golden/station.pub");
+    let keys = [spincal::signed::StationKey { public: *PUBLIC }];
+    let Some(serial) = spincal::model::Serial::new("IMU-FULL-0042") else {
+        fail("serial")
+    };
+    let policy = Policy::Signed {
+        keys: &keys,
+        unit: &serial,
+    };
+    let Some((buf, scratch)) = cortex_m::singleton!(: ([u8; SLOT_BUFFER], CalibrationData) =
+        ([0; SLOT_BUFFER], CalibrationData::empty()))
+    else {
+        fail("buffers")
+    };
+    let Ok(mut store) = Store::new(RamFlash::calibration_region(), 0, RamFlash::SLOT_SIZE) else {
+        fail("store layout")
+    };
+    if store.provision(&keys).is_err() {
+        fail("provision");
+    }
+    let t0 = timer::now();
+    let first = store.update(black_box(FIRST), buf, scratch, policy);
+    let t1 = timer::now();
+    if first.is_err() {
+        fail("commit of the first signed record");
+    }
+    report("store_commit_signed_first", t0.wrapping_sub(t1), 1);
+    let t0 = timer::now();
+    let second = store.update(black_box(SECOND), buf, scratch, policy);
+    let t1 = timer::now();
+    if !matches!(second, Ok(i) if i.counter == 2) {
+        fail("commit of the second signed record");
+    }
+    report("store_commit_signed", t0.wrapping_sub(t1), 1);
+    let t0 = timer::now();
+    let booted = store.load(buf, scratch, policy).is_ok();
+    let t1 = timer::now();
+    if !booted {
+        fail("boot from the signed record");
+    }
+    report("store_boot_signed", t0.wrapping_sub(t1), 1);
+    // A replay costs the same checks and writes nothing.
+    let t0 = timer::now();
+    let replay = store.update(black_box(FIRST), buf, scratch, policy);
+    let t1 = timer::now();
+    if replay.is_ok() {
+        fail("a replay was committed");
+    }
+    report("store_refuse_replay", t0.wrapping_sub(t1), 1);
+    let (_, commit) = stack::high_water(|| {
+        black_box(store.update(black_box(FIRST), buf, scratch, policy)).is_ok()
+    });
+    let (_, boot) = stack::high_water(|| black_box(store.load(buf, scratch, policy)).is_ok());
+    [commit, boot]
 }
