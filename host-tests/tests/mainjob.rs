@@ -37,11 +37,24 @@ fn the_main_job_runs_end_to_end() {
         "{reboot}"
     );
     assert_eq!(s.flash.seq, 1);
+    // Signed with the station key the job made, verified by the unit at commit and at boot.
+    let station = calflash::signing::load_public(&job.workdir.join("station.pub")).unwrap();
+    let key = calflash::device::key_hex(station.id());
+    assert_eq!(s.flash.trust, "provisioned");
+    assert_eq!(s.flash.signed_by.as_deref(), Some(key.as_str()));
+    assert_eq!(s.flash.counter, 1);
+    assert!(
+        reboot.contains(&format!(
+            "device: the calibration verified at boot: signed by {key}, counter 1"
+        )),
+        "{reboot}"
+    );
 
     // The unit's flash persists between runs: the second calibration goes to the other slot
     // with the next sequence number, and the history holds both.
     let again = mainjob::run(&job, |l| println!("{l}")).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(again.flash.seq, 2);
+    assert_eq!(again.flash.counter, 2, "the counter grows per unit");
     let flash = std::fs::read(job.workdir.join("unit-flash.bin")).unwrap();
     assert_eq!(flash.len(), host_tests::unit::region().1 as usize);
     assert_eq!(db.history(mainjob::UNIT).unwrap().len(), 4);

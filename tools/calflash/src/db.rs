@@ -536,6 +536,41 @@ impl Db {
             .map_err(|e| explain(&self.path, &e))
     }
 
+    /// The newest fit of every unit whose serial starts with `prefix` (all units for an empty
+    /// one) recorded from `since` to `until` (Unix seconds, inclusive), oldest first: serial,
+    /// time and the coefficients' JSON.
+    ///
+    /// # Errors
+    /// A message naming the file and why.
+    pub fn latest_fits(
+        &self,
+        prefix: &str,
+        since: i64,
+        until: i64,
+    ) -> Result<Vec<(String, i64, String)>, String> {
+        // The newest fit per serial: the greatest (time, id) of its fits in the range.
+        let mut st = self
+            .conn
+            .prepare(
+                "SELECT r.serial, r.time, r.coefficients FROM records r
+                 JOIN (SELECT serial, max(time * 1000000000 + id) AS k FROM records
+                       WHERE kind = 'fit' AND substr(serial, 1, length(?1)) = ?1
+                         AND time BETWEEN ?2 AND ?3
+                       GROUP BY serial) n
+                   ON r.serial = n.serial AND r.time * 1000000000 + r.id = n.k
+                 WHERE r.coefficients IS NOT NULL
+                 ORDER BY r.time, r.id",
+            )
+            .map_err(|e| explain(&self.path, &e))?;
+        let rows = st
+            .query_map(rusqlite::params![prefix, since, until], |r| {
+                Ok((r.get(0)?, r.get(1)?, r.get(2)?))
+            })
+            .map_err(|e| explain(&self.path, &e))?;
+        rows.collect::<Result<_, _>>()
+            .map_err(|e| explain(&self.path, &e))
+    }
+
     /// The highest counter of the signed blobs recorded for unit `serial` (0 for none).
     ///
     /// # Errors

@@ -12,6 +12,7 @@ pub mod device;
 pub mod earth;
 pub mod files;
 pub mod formula;
+pub mod lot;
 pub mod noise;
 pub mod nonlinear;
 pub mod obs;

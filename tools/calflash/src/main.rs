@@ -46,6 +46,8 @@ enum Command {
     Keygen(cmd::keys::KeygenArgs),
     /// Sign a calibration blob with the station's key.
     Sign(cmd::keys::SignArgs),
+    /// A production lot from the history, judged as a lot: spread, outliers, control charts.
+    Lot(cmd::lot::LotArgs),
 }
 
 /// Every command takes negative numbers as option values (`--latitude -33.9`), lists of them
@@ -93,6 +95,7 @@ fn main() -> ExitCode {
         Command::History(args) => cmd::history::run(args),
         Command::Keygen(args) => cmd::keys::keygen(args),
         Command::Sign(args) => cmd::keys::sign(args),
+        Command::Lot(args) => cmd::lot::run(args),
         Command::Health(args) => match cmd::health::run(args) {
             // A SUSPECT unit has the rejected unit's exit code.
             Ok("SUSPECT") => return ExitCode::from(3),

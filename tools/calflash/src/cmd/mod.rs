@@ -11,6 +11,7 @@ pub mod health;
 pub mod history;
 pub mod image;
 pub mod keys;
+pub mod lot;
 pub mod outputs;
 pub mod selfcal;
 pub mod simulate;

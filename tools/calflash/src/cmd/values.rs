@@ -231,9 +231,45 @@ pub fn pair(text: &str, what: &str) -> Result<(f64, f64), String> {
     Ok((a, b))
 }
 
+/// A date `YYYY-MM-DD` (UTC) as Unix seconds at its midnight.
+///
+/// # Errors
+/// Anything else, named.
+pub fn date(s: &str) -> Result<i64, String> {
+    let bad = || format!("`{s}`: expected a date YYYY-MM-DD");
+    let mut parts = s.trim().splitn(3, '-');
+    let mut next = |lo: i64, hi: i64| -> Result<i64, String> {
+        let v: i64 = parts.next().ok_or_else(bad)?.parse().map_err(|_| bad())?;
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(bad())
+        }
+    };
+    let (y, m, d) = (next(1970, 9999)?, next(1, 12)?, next(1, 31)?);
+    // Days from civil (Howard Hinnant's algorithm).
+    let y = if m <= 2 { y - 1 } else { y };
+    let era = y.div_euclid(400);
+    let yoe = y - era * 400;
+    let mp = if m > 2 { m - 3 } else { m + 9 };
+    let doy = (153 * mp + 2) / 5 + d - 1;
+    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    Ok((era * 146_097 + doe - 719_468) * 86_400)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dates() {
+        assert_eq!(date("2026-11-24"), Ok(1_795_478_400));
+        assert_eq!(date("2000-02-29"), Ok(951_782_400));
+        assert_eq!(date("1970-01-01"), Ok(0));
+        for bad in ["2026-13-01", "26-11-24", "2026/11/24", "x"] {
+            assert!(date(bad).unwrap_err().contains("YYYY-MM-DD"), "{bad}");
+        }
+    }
 
     #[test]
     fn each_domain_refuses_what_is_outside_it() {

@@ -1,11 +1,14 @@
-//! The regression engine. It knows nothing of sensors: design matrices in, least-squares fits
-//! with their inference and diagnostics out.
+//! The regression engine, and the statistics of lots. It knows nothing of sensors: design
+//! matrices in, least-squares fits with their inference and diagnostics out; samples of points
+//! in, robust scatter and control charts out.
 
+pub mod chart;
 pub mod decompose;
 pub mod dist;
 pub mod influence;
 pub mod ols;
 pub mod pattern;
+pub mod robust;
 pub mod select;
 
 pub use influence::Influence;

@@ -1,0 +1,200 @@
+//! `calflash lot`: a production lot from the unit history, judged as a lot.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+use crate::db::{self, Db};
+use crate::lot::{self, Judge, Unit};
+use crate::stats::chart;
+
+/// Judge a lot: every unit's newest coefficients from the history, their spread, each unit's
+/// robust distance from the lot with the units outside named, and control charts.
+#[derive(Debug, Args)]
+pub struct LotArgs {
+    /// The lot: a serial prefix (`IMU-24-` takes IMU-24-0001, IMU-24-0002, ...); empty for
+    /// every unit.
+    pub prefix: String,
+    /// Only fits recorded from this date (YYYY-MM-DD, UTC).
+    #[arg(long, value_parser = super::values::date)]
+    pub since: Option<i64>,
+    /// Only fits recorded up to this date (inclusive).
+    #[arg(long, value_parser = super::values::date)]
+    pub until: Option<i64>,
+    /// The probability that a unit of the lot's own distribution is called outside.
+    #[arg(long, default_value_t = 0.001, value_parser = super::values::level)]
+    pub alpha: f64,
+    /// A coefficient to chart over the units in calibration order (`OUTPUT:TERM`, as listed);
+    /// repeat for more.
+    #[arg(long)]
+    pub chart: Vec<String>,
+    /// The kind of chart.
+    #[arg(long, value_enum, default_value = "individuals")]
+    pub chart_kind: ChartKind,
+    /// Write the result as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// The database (default: $CALFLASH_DB, else the user's data directory).
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+}
+
+/// A chart kind on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ChartKind {
+    /// Shewhart individuals (moving-range sigma, 3-sigma limits).
+    Individuals,
+    /// EWMA (lambda 0.2, 3-sigma limits).
+    Ewma,
+}
+
+/// The lot `prefix` from the history at `path`, judged at `alpha`.
+///
+/// # Errors
+/// An unreadable history, too few units, or no shared coefficients.
+pub fn load(
+    path: &std::path::Path,
+    prefix: &str,
+    since: Option<i64>,
+    until: Option<i64>,
+    alpha: f64,
+) -> Result<lot::Lot, String> {
+    let d = Db::open_existing(path)?;
+    let rows = d.latest_fits(
+        prefix,
+        since.unwrap_or(i64::MIN),
+        until.map_or(i64::MAX, |u| u + 86_399),
+    )?;
+    let units = rows
+        .into_iter()
+        .map(|(serial, time, json)| {
+            lot::coefficients(&json)
+                .map(|coefficients| Unit {
+                    serial: serial.clone(),
+                    time,
+                    coefficients,
+                })
+                .map_err(|e| format!("{}: the fit of {serial}: {e}", path.display()))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    lot::judge(units, alpha).map_err(|e| format!("lot `{prefix}` in {}: {e}", path.display()))
+}
+
+/// Runs `calflash lot`.
+///
+/// # Errors
+/// As [`load`], a coefficient to chart that the lot lacks, or an unwritable JSON file.
+pub fn run(args: &LotArgs) -> Result<(), String> {
+    let path = args.db.clone().unwrap_or_else(db::default_path);
+    let lot = load(&path, &args.prefix, args.since, args.until, args.alpha)?;
+    let kind = match args.chart_kind {
+        ChartKind::Individuals => chart::Kind::Individuals,
+        ChartKind::Ewma => chart::Kind::Ewma,
+    };
+    let charts = args
+        .chart
+        .iter()
+        .map(|name| lot.chart(name, kind).map(|c| (name.clone(), c)))
+        .collect::<Result<Vec<_>, _>>()?;
+    println!(
+        "calflash lot  `{}`: {} units, {} coefficients ({} in {})",
+        args.prefix,
+        lot.units.len(),
+        lot.names.len(),
+        match &lot.judge {
+            Judge::Scatter { robust, .. } => format!(
+                "robust centre and covariance of {} units kept after reweighting",
+                robust.kept
+            ),
+            Judge::Columns { why } => format!("coefficient by coefficient: {why}"),
+        },
+        path.display()
+    );
+    if !lot.left_out.is_empty() {
+        println!(
+            "  left out ({}): not in every unit, or the same in all: {}",
+            lot.left_out.len(),
+            lot.left_out.join(", ")
+        );
+    }
+    println!(
+        "  {:<28} {:>14} {:>12} {:>14} {:>14}",
+        "coefficient", "median", "MAD", "min", "max"
+    );
+    for s in &lot.spread {
+        println!(
+            "  {:<28} {:>14.6e} {:>12.3e} {:>14.6e} {:>14.6e}",
+            s.name, s.median, s.mad, s.min, s.max
+        );
+    }
+    println!(
+        "  {} of {} units outside the lot (distance beyond {:.2}, alpha {})",
+        lot.outliers.len(),
+        lot.units.len(),
+        lot.distance_limit(),
+        lot.alpha
+    );
+    for o in &lot.outliers {
+        let why: Vec<String> = o
+            .coefficients
+            .iter()
+            .map(|(k, z)| format!("{k} z={z:+.1}"))
+            .collect();
+        let jointly = o.coefficients.iter().all(|(_, z)| z.abs() <= 3.0);
+        println!(
+            "    {:<20} distance {:>8.2}  {}{}",
+            o.serial,
+            o.distance,
+            why.join(", "),
+            if jointly {
+                " (none alone beyond 3 MADs: their combination is unlike the lot's)"
+            } else {
+                ""
+            }
+        );
+    }
+    for (name, c) in &charts {
+        println!(
+            "  {:?} chart of {name}: centre {:.6e}, sigma {:.3e}; {} point(s) out of control{}",
+            c.kind,
+            c.centre,
+            c.sigma,
+            c.out_of_control.len(),
+            if c.out_of_control.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    ": {}",
+                    c.out_of_control
+                        .iter()
+                        .map(|&i| lot.units[i].serial.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            }
+        );
+    }
+    if let Some(p) = &args.json {
+        let v = serde_json::json!({
+            "schema": "calflash.lot/1",
+            "prefix": args.prefix,
+            "units": lot.units.len(),
+            "coefficients": lot.names,
+            "left_out": lot.left_out,
+            "judged_by": match &lot.judge {
+                Judge::Scatter { .. } => "robust covariance".to_string(),
+                Judge::Columns { why } => format!("coefficients: {why}"),
+            },
+            "alpha": lot.alpha,
+            "distance_limit": lot.distance_limit(),
+            "spread": lot.spread,
+            "distances": lot.units.iter().zip(&lot.distances).map(|(u, d)| serde_json::json!({"serial": u.serial, "time": u.time, "distance": d})).collect::<Vec<_>>(),
+            "outliers": lot.outliers,
+            "charts": charts.iter().map(|(n, c)| serde_json::json!({"coefficient": n, "chart": c})).collect::<Vec<_>>(),
+        });
+        crate::files::write_atomically(p, |w| {
+            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+        })?;
+    }
+    Ok(())
+}

@@ -1,0 +1,163 @@
+//! `calflash lot`: a lot from the unit history judged as a lot. Units that break the lot's
+//! correlation of bias and scale are named (each coefficient alone within the lot's spread), a
+//! unit's newest fit is the one judged, a lot too small for a covariance is judged coefficient
+//! by coefficient and says how many units it needs, and a drift shows on the control chart.
+
+mod common;
+#[path = "common/lot_history.rs"]
+mod lot_history;
+
+use common::calflash;
+
+const T0: i64 = 1_795_478_400; // 2026-11-24
+
+#[test]
+fn units_unlike_their_lot_are_named_with_the_coefficients_that_make_them_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("units.sqlite");
+    // 400 units; five whose x-axis bias is high but scale low (against the correlation),
+    // each within 2.5 MADs of the lot on its own.
+    let odd = [17, 101, 202, 303, 399];
+    lot_history::write(&db, "LOT-A-", 400, T0, 7, |i, b, k| {
+        if odd.contains(&i) {
+            b[0] = 32_768.0 + 80.0;
+            k[0] = 1_670.0 - 3.5;
+        }
+    });
+    // Another lot in the same history, and a newer fit of one unit of lot A that is odd.
+    lot_history::write(&db, "LOT-B-", 50, T0, 8, |_, b, _| b[1] += 500.0);
+    let conn = rusqlite::Connection::open(&db).unwrap();
+    conn.execute(
+        "INSERT INTO records (serial, kind, time, data_hash, coefficients, blob, outcome)
+         VALUES ('LOT-A-000050', 'fit', ?1, 'later', ?2, x'', 'accept')",
+        rusqlite::params![
+            T0 + 10_000,
+            lot_history::coefficients([32_768.0, 32_768.0 + 600.0, 32_768.0], [1_670.0; 3])
+        ],
+    )
+    .unwrap();
+    drop(conn);
+    let d = dir.path();
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "lot",
+            "LOT-A-",
+            "--db",
+            "units.sqlite",
+            "--json",
+            "lot.json",
+            "--chart",
+            "ax:1",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    println!("{out}");
+    assert!(out.contains("400 units, 6 coefficients"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("lot.json")).unwrap()).unwrap();
+    let named: Vec<&str> = v["outliers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| o["serial"].as_str().unwrap())
+        .collect();
+    for i in odd.iter().chain(&[50]) {
+        let s = format!("LOT-A-{i:06}");
+        assert!(named.contains(&s.as_str()), "{s} not named: {named:?}");
+    }
+    assert!(named.len() <= 8, "{named:?}");
+    // The newer fit of unit 50 is judged (its y bias is 15 MADs off), and said so.
+    let u50 = v["outliers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|o| o["serial"] == "LOT-A-000050")
+        .unwrap();
+    assert_eq!(u50["coefficients"][0][0], "ay:1", "{u50}");
+    assert_eq!(v["judged_by"], "robust covariance");
+    assert_eq!(v["charts"][0]["coefficient"], "ax:1");
+}
+
+#[test]
+fn a_small_lot_is_judged_coefficient_by_coefficient_and_says_how_many_it_needs() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("units.sqlite");
+    lot_history::write(&db, "SMALL-", 12, T0, 9, |i, b, _| {
+        if i == 4 {
+            b[2] += 1_000.0;
+        }
+    });
+    let (code, out, err) = calflash(dir.path(), &["lot", "SMALL-", "--db", "units.sqlite"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("coefficient by coefficient: 12 units are too few for a robust covariance of 6 coefficients: it needs at least 30"),
+        "{out}"
+    );
+    assert!(
+        out.contains("SMALL-000004") && out.contains("az:1 z="),
+        "{out}"
+    );
+    // One unit is no lot; a date range with none, neither.
+    let (code, _, err) = calflash(dir.path(), &["lot", "SMALL-000001", "--db", "units.sqlite"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("at least 2 are needed"), "{err}");
+    let (code, _, err) = calflash(
+        dir.path(),
+        &[
+            "lot",
+            "SMALL-",
+            "--db",
+            "units.sqlite",
+            "--since",
+            "2027-01-01",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(err.contains("a lot of 0 unit(s)"), "{err}");
+    let (code, _, err) = calflash(
+        dir.path(),
+        &["lot", "SMALL-", "--db", "units.sqlite", "--chart", "nope"],
+    );
+    assert_ne!(code, 0);
+    assert!(err.contains("no coefficient nope; it has ax:1"), "{err}");
+}
+
+#[test]
+fn a_drifting_process_is_out_of_control_on_its_chart() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("units.sqlite");
+    // From unit 300 on, the x-axis scale drifts up by 1.5 of its sigma.
+    lot_history::write(&db, "DRIFT-", 400, T0, 11, |i, _, k| {
+        if i >= 300 {
+            k[0] += 3.0;
+        }
+    });
+    let (code, out, err) = calflash(
+        dir.path(),
+        &[
+            "lot",
+            "DRIFT-",
+            "--db",
+            "units.sqlite",
+            "--chart",
+            "ax:input",
+            "--chart-kind",
+            "ewma",
+            "--json",
+            "d.json",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("d.json")).unwrap()).unwrap();
+    let out_of_control: Vec<u64> = v["charts"][0]["chart"]["out_of_control"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect();
+    assert!(out_of_control.len() > 20, "{out_of_control:?}");
+    let late = out_of_control.iter().filter(|&&i| i >= 300).count();
+    assert!(late * 10 >= out_of_control.len() * 8, "{out_of_control:?}");
+}
