@@ -104,6 +104,17 @@ pub struct Entry {
     pub signed_by: Option<String>,
 }
 
+/// The coefficients of a fit as the history keeps them (and `calflash lot` reads them): per
+/// table point its temperature and voltage, and per axis the output, terms, coefficients and
+/// standard errors.
+#[must_use]
+pub fn fit_coefficients(rec: &Record) -> Vec<serde_json::Value> {
+    rec.points
+        .iter()
+        .map(|p| serde_json::json!({"temp": p.temp, "volt": p.volt, "axes": p.axes.iter().map(|a| serde_json::json!({"output": a.output, "terms": a.terms, "coefficients": a.coefficients, "std_errors": a.std_errors})).collect::<Vec<_>>()}))
+        .collect()
+}
+
 /// The history database.
 pub struct Db {
     conn: Connection,
@@ -355,11 +366,7 @@ impl Db {
             .first()
             .map(|p| p.axes.iter().map(|a| a.model.as_str()).collect())
             .unwrap_or_default();
-        let coefficients: Vec<serde_json::Value> = rec
-            .points
-            .iter()
-            .map(|p| serde_json::json!({"temp": p.temp, "volt": p.volt, "axes": p.axes.iter().map(|a| serde_json::json!({"output": a.output, "terms": a.terms, "coefficients": a.coefficients, "std_errors": a.std_errors})).collect::<Vec<_>>()}))
-            .collect();
+        let coefficients = fit_coefficients(rec);
         let covariance: Vec<Vec<&Vec<Vec<f64>>>> = rec
             .points
             .iter()

@@ -161,3 +161,82 @@ fn a_drifting_process_is_out_of_control_on_its_chart() {
     let late = out_of_control.iter().filter(|&&i| i >= 300).count();
     assert!(late * 10 >= out_of_control.len() * 8, "{out_of_control:?}");
 }
+
+/// `calibrate --lot`: a unit whose bias is unlike its lot's is a REVIEW that names the bias; a
+/// unit like its lot is not; the lot is the history's other units with the prefix.
+#[test]
+fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let truth: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../examples/data/single_accel.truth.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let unit = |i: u64, bias_shift: f64| {
+        let mut t = truth.clone();
+        // Units of one process: biases and scale factors spread a little.
+        let spread = (i as f64 * 0.618_034).fract() - 0.5;
+        t["k0"] = (t["k0"].as_f64().unwrap() + 6.0 * spread + bias_shift).into();
+        t["k1"] = (t["k1"].as_f64().unwrap() * (1.0 + 0.002 * spread)).into();
+        let name = format!("t{i}.json");
+        std::fs::write(d.join(&name), t.to_string()).unwrap();
+        let obs = format!("obs{i}.csv");
+        let (code, out, err) = calflash(
+            d,
+            &[
+                "simulate",
+                "--sensor",
+                "single-accel",
+                "--plan",
+                "head:36",
+                "--temps=25",
+                "--truth",
+                &name,
+                "--seed",
+                &i.to_string(),
+                "-o",
+                &obs,
+            ],
+        );
+        assert_eq!(code, 0, "{out}{err}");
+        let serial = format!("ACC-7-{i:03}");
+        calflash(
+            d,
+            &[
+                "calibrate",
+                &obs,
+                "--sensor",
+                "single-accel",
+                "--serial",
+                &serial,
+                "--db",
+                "units.sqlite",
+                "--lot",
+                "ACC-7-",
+            ],
+        )
+    };
+    // The first unit has no lot to be compared with: said, as a REVIEW.
+    let (code, out, err) = unit(0, 0.0);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("not compared with its lot"), "{out}");
+    for i in 1..12 {
+        let (code, out, err) = unit(i, 0.0);
+        assert_eq!(code, 0, "{out}{err}");
+        if i >= 3 {
+            assert!(
+                out.contains("lot `ACC-7-`") && out.contains("within the limit"),
+                "{out}"
+            );
+        }
+    }
+    // 40 counts of bias off (about 0.1 g) is unlike the lot.
+    let (code, out, err) = unit(12, 40.0);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("REVIEW"), "{out}");
+    assert!(out.contains("unlike its lot in output:1 z=+"), "{out}");
+}

@@ -213,6 +213,17 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
             .0;
     }
     let data_name = args.data.display().to_string();
+    // Against its lot: judged on the coefficients the history keeps.
+    let provisional = Record::new(&c, &data_name);
+    let coefficients = crate::lot::coefficients(
+        &serde_json::Value::from(crate::db::fit_coefficients(&provisional)).to_string(),
+    )?;
+    if let Some(f) = args
+        .out
+        .lot_finding(c.data.identity.serial.as_str(), &coefficients, 0.001)
+    {
+        c.findings.push(f);
+    }
     // A rejected calibration has no blob, unless forced; a forced one says so in its identity.
     let blob = match (c.verdict(), args.out.force_blob) {
         (Verdict::Reject, false) => None,

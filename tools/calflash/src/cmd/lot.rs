@@ -48,6 +48,50 @@ pub enum ChartKind {
     Ewma,
 }
 
+/// The lot `prefix` from the history at `path` without the unit `serial` (a unit being
+/// calibrated is compared with the others), judged at `alpha`.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_without(
+    path: &std::path::Path,
+    prefix: &str,
+    serial: &str,
+    alpha: f64,
+) -> Result<lot::Lot, String> {
+    let units = units(path, prefix, None, None)?
+        .into_iter()
+        .filter(|u| u.serial != serial)
+        .collect();
+    lot::judge(units, alpha).map_err(|e| format!("lot `{prefix}` in {}: {e}", path.display()))
+}
+
+/// Every unit of the lot `prefix` with its newest fit in the date range.
+fn units(
+    path: &std::path::Path,
+    prefix: &str,
+    since: Option<i64>,
+    until: Option<i64>,
+) -> Result<Vec<Unit>, String> {
+    let d = Db::open_existing(path)?;
+    let rows = d.latest_fits(
+        prefix,
+        since.unwrap_or(i64::MIN),
+        until.map_or(i64::MAX, |u| u + 86_399),
+    )?;
+    rows.into_iter()
+        .map(|(serial, time, json)| {
+            lot::coefficients(&json)
+                .map(|coefficients| Unit {
+                    serial: serial.clone(),
+                    time,
+                    coefficients,
+                })
+                .map_err(|e| format!("{}: the fit of {serial}: {e}", path.display()))
+        })
+        .collect()
+}
+
 /// The lot `prefix` from the history at `path`, judged at `alpha`.
 ///
 /// # Errors
@@ -59,24 +103,7 @@ pub fn load(
     until: Option<i64>,
     alpha: f64,
 ) -> Result<lot::Lot, String> {
-    let d = Db::open_existing(path)?;
-    let rows = d.latest_fits(
-        prefix,
-        since.unwrap_or(i64::MIN),
-        until.map_or(i64::MAX, |u| u + 86_399),
-    )?;
-    let units = rows
-        .into_iter()
-        .map(|(serial, time, json)| {
-            lot::coefficients(&json)
-                .map(|coefficients| Unit {
-                    serial: serial.clone(),
-                    time,
-                    coefficients,
-                })
-                .map_err(|e| format!("{}: the fit of {serial}: {e}", path.display()))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let units = units(path, prefix, since, until)?;
     lot::judge(units, alpha).map_err(|e| format!("lot `{prefix}` in {}: {e}", path.display()))
 }
 

@@ -38,6 +38,10 @@ pub struct Outputs {
     /// highest counter of the unit's blobs in the history).
     #[arg(long)]
     pub counter: Option<u32>,
+    /// Compare the unit with its lot in the history (a serial prefix, as `calflash lot`): a
+    /// unit unlike its lot is a REVIEW that names the coefficients that make it so.
+    #[arg(long, value_name = "PREFIX")]
+    pub lot: Option<String>,
 }
 
 /// A blob as written: signed or not, and what to say about it.
@@ -62,6 +66,54 @@ impl Outputs {
             .output("--json", self.json.as_deref())
             .created("the unit history", db.as_deref())
             .check()
+    }
+
+    /// Where the unit with `coefficients` stands against its lot (`--lot`), as a finding: a
+    /// REVIEW when it is outside the lot or cannot be compared with it; `None` without `--lot`.
+    #[must_use]
+    pub fn lot_finding(
+        &self,
+        serial: &str,
+        coefficients: &std::collections::BTreeMap<String, f64>,
+        alpha: f64,
+    ) -> Option<crate::sensor::Finding> {
+        use crate::sensor::{Finding, Verdict};
+        let prefix = self.lot.as_deref()?;
+        let path = self.db.clone().unwrap_or_else(db::default_path);
+        let placed = crate::cmd::lot::load_without(&path, prefix, serial, alpha).and_then(|lot| {
+            lot.place(coefficients)
+                .map(|(o, outside)| (o, outside, lot.units.len(), lot.distance_limit()))
+        });
+        Some(match placed {
+            Ok((o, outside, n, limit)) => {
+                let why: Vec<String> = o
+                    .coefficients
+                    .iter()
+                    .map(|(k, z)| format!("{k} z={z:+.1}"))
+                    .collect();
+                Finding {
+                    verdict: if outside {
+                        Verdict::Review
+                    } else {
+                        Verdict::Accept
+                    },
+                    text: format!(
+                        "lot `{prefix}` ({n} units): distance {:.2} {} the limit {limit:.2}{}",
+                        o.distance,
+                        if outside { "beyond" } else { "within" },
+                        if outside {
+                            format!("; unlike its lot in {}", why.join(", "))
+                        } else {
+                            String::new()
+                        }
+                    ),
+                }
+            }
+            Err(e) => Finding {
+                verdict: Verdict::Review,
+                text: format!("not compared with its lot: {e}"),
+            },
+        })
     }
 
     /// Signs `blob` (the calibration of unit `serial`) when a key is given, unless the

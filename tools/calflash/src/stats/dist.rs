@@ -39,12 +39,6 @@ pub fn normal_two_sided(z: f64) -> f64 {
     libm::erfc(z.abs() / std::f64::consts::SQRT_2)
 }
 
-/// The standard normal `z` with `P(Z >= z) = upper` (`0 < upper < 1`).
-#[must_use]
-pub fn normal_upper_quantile(upper: f64) -> f64 {
-    statrs::distribution::Normal::standard().inverse_cdf(1.0 - upper)
-}
-
 /// The `t` with `P(T >= t) = upper` for `dof` degrees of freedom (`0 < upper <= 0.5`), polished
 /// by Newton steps on the tail so that it is accurate to a few ulp.
 #[must_use]

@@ -207,7 +207,7 @@ pub fn estimate(x: &DMatrix<f64>) -> Result<Robust, RobustError> {
 
 /// Per-coefficient limits, for lots too small for a scatter: each coefficient's median and
 /// MAD, and the robust z-score beyond which a unit is outside at the family-wise level
-/// `alpha` over the `p` coefficients (Bonferroni).
+/// `alpha` over the `p` coefficients (Bonferroni), for a lot of `n` units.
 #[derive(Debug, Clone)]
 pub struct ColumnLimits {
     /// Medians.
@@ -218,14 +218,22 @@ pub struct ColumnLimits {
     pub z: f64,
 }
 
-/// [`ColumnLimits`] of the rows of `x` at the family-wise level `alpha`.
+/// [`ColumnLimits`] of the rows of `x` (n points) at the family-wise level `alpha`. The limit
+/// is that of a prediction interval for one more point: Student's t with n - 1 degrees of
+/// freedom, widened by sqrt(1 + 1/n), so that a handful of points, whose scale is uncertain,
+/// do not call every new point outside.
 #[must_use]
 pub fn column_limits(x: &DMatrix<f64>, alpha: f64) -> ColumnLimits {
-    let p = x.ncols();
+    let (n, p) = x.shape();
     let (median, scale) = (0..p)
         .map(|j| median_mad(&x.column(j).iter().copied().collect::<Vec<_>>()))
         .unzip();
-    let z = super::dist::normal_upper_quantile(alpha / (2.0 * p.max(1) as f64));
+    let upper = alpha / (2.0 * p.max(1) as f64);
+    let z = if n >= 2 {
+        super::dist::t_upper_quantile(upper, (n - 1) as f64) * (1.0 + 1.0 / n as f64).sqrt()
+    } else {
+        f64::INFINITY
+    };
     ColumnLimits { median, scale, z }
 }
 
