@@ -41,17 +41,27 @@ pub enum ThermalArg {
 /// Calibrate a sensor: fit, decide, invert, and write the blob, the report and the record.
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
-    /// The observations (see `calflash::columns` for the column names).
-    pub data: PathBuf,
+    /// The observations (see `calflash::columns` for the column names). Several files, or a
+    /// directory of them, make a batch: one unit per file, whose serial is the file's name
+    /// without extension, calibrated on every core, each unit's files in `--out-dir`.
+    #[arg(required = true, num_args = 1..)]
+    pub data: Vec<PathBuf>,
     /// What the observations are of.
     #[arg(long, value_enum)]
     pub sensor: SensorKind,
-    /// The unit's serial number (1 to 16 printable ASCII characters).
+    /// The unit's serial number (1 to 16 printable ASCII characters); a batch takes each
+    /// unit's from its file name.
     #[arg(long)]
-    pub serial: String,
+    pub serial: Option<String>,
     /// Blob, report, record and unit history.
     #[command(flatten)]
     pub out: Outputs,
+    /// A batch: write each unit's blob (SERIAL.blob) and record (SERIAL.json) here.
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
+    /// A batch: also write each unit's HTML report (SERIAL.html) into `--out-dir`.
+    #[arg(long, requires = "out_dir")]
+    pub reports: bool,
     /// A single-axis model instead of the IEEE 1293 preset (e.g. "output ~ 1 + input + input^2").
     #[arg(long)]
     pub model: Option<String>,
@@ -137,16 +147,49 @@ pub struct CalibrateArgs {
 /// # Errors
 /// A message naming the file, column, term or table point.
 pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
-    sensor::blob::serial(&args.serial)?;
-    args.out.check(
+    let single = match args.data.as_slice() {
+        [one] if !one.is_dir() => Some(one),
+        _ => None,
+    };
+    let Some(data) = single else {
+        return super::batch::run(args);
+    };
+    if args.out_dir.is_some() {
+        return Err("--out-dir is for a batch (several files or a directory); one unit's files are named by --blob, --report and --json".into());
+    }
+    let serial = args
+        .serial
+        .as_deref()
+        .ok_or("--serial: the unit's serial number is required (a batch of files takes each from its file name)")?;
+    let mut said = String::new();
+    let verdict = calibrate_one(args, data, serial, &args.out, &mut said);
+    print!("{said}");
+    verdict
+}
+
+/// Calibrates the unit `serial` from `data` with the options of `args`, writing what `out`
+/// names; what a person reads goes into `said`.
+///
+/// # Errors
+/// A message naming the file, column, term or table point.
+pub fn calibrate_one(
+    args: &CalibrateArgs,
+    data: &std::path::Path,
+    serial: &str,
+    out: &Outputs,
+    said: &mut String,
+) -> Result<Verdict, String> {
+    use std::fmt::Write as _;
+    sensor::blob::serial(serial)?;
+    out.check(
         Paths::new()
-            .input("the data", Some(&args.data))
+            .input("the data", Some(data))
             .input("--still-ramp", args.still_ramp.as_deref())
             .input("--noise", args.noise.first().map(PathBuf::as_path))
             .input("--noise", args.noise.get(1).map(PathBuf::as_path)),
     )?;
     let noise = noise_terms(args)?;
-    let mut opts = Options::new(&args.data, &args.serial);
+    let mut opts = Options::new(data, serial);
     opts.format = args.format;
     opts.alpha = args.alpha;
     opts.keep_all_terms = args.keep_all_terms;
@@ -212,20 +255,17 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
             .map_err(|e| format!("--noise: {e}"))?
             .0;
     }
-    let data_name = args.data.display().to_string();
+    let data_name = data.display().to_string();
     // Against its lot: judged on the coefficients the history keeps.
     let provisional = Record::new(&c, &data_name);
     let coefficients = crate::lot::coefficients(
         &serde_json::Value::from(crate::db::fit_coefficients(&provisional)).to_string(),
     )?;
-    if let Some(f) = args
-        .out
-        .lot_finding(c.data.identity.serial.as_str(), &coefficients, 0.001)
-    {
+    if let Some(f) = out.lot_finding(c.data.identity.serial.as_str(), &coefficients, 0.001) {
         c.findings.push(f);
     }
     // A rejected calibration has no blob, unless forced; a forced one says so in its identity.
-    let blob = match (c.verdict(), args.out.force_blob) {
+    let blob = match (c.verdict(), out.force_blob) {
         (Verdict::Reject, false) => None,
         (Verdict::Reject, true) => Some(rejected_blob(&c)?),
         _ => Some(c.blob.clone()),
@@ -233,25 +273,27 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
     let serial = c.data.identity.serial.as_str();
     let (blob, signed_note) = match blob {
         Some(b) => {
-            let s = args.out.sign(b, serial, c.verdict() == Verdict::Reject)?;
+            let s = out.sign(b, serial, c.verdict() == Verdict::Reject)?;
             (Some(s.bytes), s.note)
         }
         None => (None, None),
     };
     let mut record = Record::new(&c, &data_name);
     record.blob = blob.as_deref().map(hex).unwrap_or_default();
-    args.out.write(blob.as_deref(), &record, || {
+    out.write(blob.as_deref(), &record, || {
         report::html::render(&c, &data_name)
     })?;
-    print!("{}", summary(&c, args, blob.is_some()));
+    said.push_str(&summary(&c, data, out, blob.is_some()));
     if let Some(note) = signed_note {
-        println!("{note}");
+        let _ = writeln!(said, "{note}");
     }
     let fallback = serde_json::to_value(&record).unwrap_or_default();
-    let report_path = args.out.report.as_deref();
-    args.out.record(serial, &fallback, |d| {
+    let report_path = out.report.as_deref();
+    if let Some(line) = out.record(serial, &fallback, |d| {
         d.record_fit(&record, report_path, blob.as_deref().unwrap_or_default())
-    })?;
+    })? {
+        let _ = writeln!(said, "  {line}");
+    }
     Ok(c.verdict())
 }
 
@@ -298,14 +340,19 @@ fn rejected_blob(c: &sensor::Calibrated) -> Result<Vec<u8>, String> {
     Ok(buf)
 }
 
-fn summary(c: &sensor::Calibrated, args: &CalibrateArgs, blob_written: bool) -> String {
+fn summary(
+    c: &sensor::Calibrated,
+    data: &std::path::Path,
+    out: &Outputs,
+    blob_written: bool,
+) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
     let word = Verdict::word;
     let _ = writeln!(
         s,
         "calflash calibrate  {}  unit {}: {}",
-        args.data.display(),
+        data.display(),
         c.data.identity.serial,
         word(c.verdict())
     );
@@ -361,9 +408,9 @@ fn summary(c: &sensor::Calibrated, args: &CalibrateArgs, blob_written: bool) -> 
         ),
     };
     for (p, what) in [
-        (&args.out.blob, "blob"),
-        (&args.out.report, "report"),
-        (&args.out.json, "record"),
+        (&out.blob, "blob"),
+        (&out.report, "report"),
+        (&out.json, "record"),
     ] {
         match p {
             Some(p) if what == "blob" && !blob_written => {

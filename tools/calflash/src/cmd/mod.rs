@@ -2,6 +2,7 @@
 
 pub mod allan;
 pub mod apply;
+pub mod batch;
 pub mod calibrate;
 pub mod compare;
 pub mod design;

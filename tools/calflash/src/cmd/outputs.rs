@@ -199,8 +199,9 @@ impl Outputs {
         staged.commit()
     }
 
-    /// Records the calibration in the unit history with `save` (unless `--no-db`) and prints
-    /// where; when the database cannot take it, `record` is saved as JSON beside the outputs.
+    /// Records the calibration in the unit history with `save` (unless `--no-db`) and says
+    /// where (`None` with `--no-db`); when the database cannot take it, `record` is saved as
+    /// JSON beside the outputs.
     ///
     /// # Errors
     /// The database's error, saying where the record went instead.
@@ -209,9 +210,9 @@ impl Outputs {
         serial: &str,
         record: &serde_json::Value,
         save: impl FnOnce(&mut Db) -> Result<i64, String>,
-    ) -> Result<(), String> {
+    ) -> Result<Option<String>, String> {
         if self.no_db {
-            return Ok(());
+            return Ok(None);
         }
         let path = self.db.clone().unwrap_or_else(db::default_path);
         let beside = db::beside(&[
@@ -221,7 +222,6 @@ impl Outputs {
         ]);
         let said = db::record_or_save(&path, save, record, &beside, serial)
             .map_err(|e| format!("the calibration is written but {e}"))?;
-        println!("  {said}");
-        Ok(())
+        Ok(Some(said))
     }
 }

@@ -171,8 +171,10 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
         );
     }
     let report_path = args.out.report.as_deref();
-    args.out.record(name, &record, |d| {
+    if let Some(said) = args.out.record(name, &record, |d| {
         d.record_selfcal(name, &record, report_path, blob.unwrap_or_default())
-    })?;
+    })? {
+        println!("  {said}");
+    }
     Ok(reject)
 }

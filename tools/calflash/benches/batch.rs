@@ -1,0 +1,93 @@
+//! `calflash calibrate` over a batch (issue 18): 16 IMUs, each from a 26-position tumble and
+//! rate-table steps at one temperature (as `examples/data/imu_bench.csv`), calibrated with the
+//! blob, record and history entry, with and without the HTML report, on one and on two threads.
+//! Units per second are 16 / the time. Run with `cargo bench -p calflash --bench batch`.
+
+use std::path::PathBuf;
+
+use calflash::cmd::batch::calibrate_all;
+use calflash::cmd::calibrate::CalibrateArgs;
+use calflash::sim::{self, Sensor, plan};
+use clap::Parser;
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+
+const UNITS: usize = 16;
+
+#[derive(Parser)]
+struct Cli {
+    #[command(flatten)]
+    args: CalibrateArgs,
+}
+
+/// The units' observation files, written once.
+fn units() -> Vec<(String, PathBuf)> {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("batch-imu");
+    std::fs::create_dir_all(&dir).unwrap();
+    let conds = plan::plan(
+        &["tumble:26".into(), "rate:-6:6:7".into()],
+        &[25.0],
+        &[3.3],
+        1,
+        false,
+    )
+    .unwrap();
+    (0..UNITS)
+        .map(|i| {
+            let serial = format!("IMU-B-{i:03}");
+            let path = dir.join(format!("{serial}.csv"));
+            if !path.is_file() {
+                let unit = Sensor::Imu(Box::default());
+                let obs = sim::simulate(&unit, &conds, i as u64 + 1, false);
+                obs.write_csv(std::fs::File::create(&path).unwrap())
+                    .unwrap();
+            }
+            (serial, path)
+        })
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let units = units();
+    let out = tempfile::tempdir().unwrap();
+    let db = out.path().join("units.sqlite");
+    let mut g = c.benchmark_group("batch");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(UNITS as u64));
+    for report in [false, true] {
+        let mut argv = vec![
+            "x".to_string(),
+            "unused.csv".into(),
+            "--sensor".into(),
+            "imu".into(),
+            "--out-dir".into(),
+            out.path().display().to_string(),
+            "--db".into(),
+            db.display().to_string(),
+        ];
+        if report {
+            argv.push("--reports".into());
+        }
+        let args = Cli::parse_from(&argv).args;
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let name = format!(
+                "imu_{}_{threads}_thread{}",
+                if report { "with_report" } else { "no_report" },
+                if threads == 1 { "" } else { "s" }
+            );
+            g.bench_function(name, |b| {
+                b.iter(|| {
+                    let outcomes = pool.install(|| calibrate_all(&args, &units, out.path()));
+                    assert!(outcomes.iter().all(|o| o.result.is_ok()), "{outcomes:?}");
+                });
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,204 @@
+//! A batch of units: `calflash calibrate` over several files or a directory of them, one unit
+//! per file, on every core (rayon), with a progress bar and a final table. Each unit is
+//! calibrated exactly as one file at a time would be; a unit that fails does not stop the
+//! others.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+
+use super::calibrate::{CalibrateArgs, calibrate_one};
+use super::outputs::Outputs;
+use crate::sensor::Verdict;
+
+/// One unit's outcome.
+#[derive(Debug)]
+pub struct Outcome {
+    /// The unit's serial.
+    pub serial: String,
+    /// Its observation file.
+    pub file: PathBuf,
+    /// Its verdict, or why it failed.
+    pub result: Result<Verdict, String>,
+}
+
+/// The observation files of `inputs`: files as given, and each directory's `.csv` and `.txt`
+/// files in name order.
+fn files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+    let mut out = Vec::new();
+    for p in inputs {
+        if p.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(p)
+                .map_err(|e| format!("{}: {e}", p.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| {
+                    f.is_file()
+                        && f.extension().is_some_and(|x| {
+                            x.eq_ignore_ascii_case("csv") || x.eq_ignore_ascii_case("txt")
+                        })
+                })
+                .collect();
+            found.sort();
+            if found.is_empty() {
+                return Err(format!(
+                    "{}: no .csv or .txt observation files in it",
+                    p.display()
+                ));
+            }
+            out.extend(found);
+        } else if p.is_file() {
+            out.push(p.clone());
+        } else {
+            return Err(format!("{}: no such file or directory", p.display()));
+        }
+    }
+    Ok(out)
+}
+
+/// A unit's serial: its file's name without extension.
+fn serial_of(file: &Path) -> Result<String, String> {
+    let stem = file
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .ok_or_else(|| format!("{}: a file name that is not text", file.display()))?;
+    crate::sensor::blob::serial(stem).map_err(|e| {
+        format!(
+            "{}: its name is the unit's serial in a batch: {e}",
+            file.display()
+        )
+    })?;
+    Ok(stem.to_string())
+}
+
+/// Calibrates `units` (serial, file) with the options of `args` on rayon's threads, each
+/// unit's files and summary (`SERIAL.txt`) into `out_dir`, with a progress bar; the outcomes
+/// in the order of `units`.
+pub fn calibrate_all(
+    args: &CalibrateArgs,
+    units: &[(String, PathBuf)],
+    out_dir: &Path,
+) -> Vec<Outcome> {
+    let bar = indicatif::ProgressBar::new(units.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "  calibrating {bar:40} {pos}/{len} units, {eta} left",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let outcomes: Vec<Outcome> = units
+        .par_iter()
+        .map(|(serial, file)| {
+            let out = Outputs {
+                blob: Some(out_dir.join(format!("{serial}.blob"))),
+                report: args.reports.then(|| out_dir.join(format!("{serial}.html"))),
+                json: Some(out_dir.join(format!("{serial}.json"))),
+                db: args.out.db.clone(),
+                no_db: args.out.no_db,
+                force_blob: args.out.force_blob,
+                sign_key: args.out.sign_key.clone(),
+                counter: None,
+                lot: args.out.lot.clone(),
+            };
+            let mut said = String::new();
+            let result = calibrate_one(args, file, serial, &out, &mut said);
+            // Each unit's summary beside its files, as `calibrate` prints it for one.
+            let text = match &result {
+                Ok(_) => said,
+                Err(e) => format!("{said}calflash: {e}\n"),
+            };
+            let _ = std::fs::write(out_dir.join(format!("{serial}.txt")), text);
+            bar.inc(1);
+            Outcome {
+                serial: serial.clone(),
+                file: file.clone(),
+                result,
+            }
+        })
+        .collect();
+    bar.finish_and_clear();
+    outcomes
+}
+
+/// Runs a batch; the worst verdict.
+///
+/// # Errors
+/// Options a batch cannot take, two files of one serial, or units that failed (after all
+/// the others are done: the message says how many and which).
+pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
+    let out_dir = args.out_dir.as_ref().ok_or(
+        "a batch (several files or a directory) writes each unit's files into --out-dir: give it",
+    )?;
+    for (given, name) in [
+        (args.serial.is_some(), "--serial"),
+        (args.out.blob.is_some(), "--blob"),
+        (args.out.report.is_some(), "--report"),
+        (args.out.json.is_some(), "--json"),
+        (args.out.counter.is_some(), "--counter"),
+    ] {
+        if given {
+            return Err(format!(
+                "{name} names one unit's; in a batch each unit's serial is its file's name, its files go to --out-dir, and a signed blob's counter comes from its history"
+            ));
+        }
+    }
+    if !out_dir.is_dir() {
+        return Err(format!("--out-dir {}: not a directory", out_dir.display()));
+    }
+    let files = files(&args.data)?;
+    let mut units: Vec<(String, PathBuf)> = Vec::with_capacity(files.len());
+    for f in &files {
+        let serial = serial_of(f)?;
+        if let Some((_, other)) = units.iter().find(|(s, _)| *s == serial) {
+            return Err(format!(
+                "{} and {}: two files for unit {serial}",
+                other.display(),
+                f.display()
+            ));
+        }
+        units.push((serial, f.clone()));
+    }
+    let outcomes = calibrate_all(args, &units, out_dir);
+    println!(
+        "calflash calibrate  {} units on {} threads into {}",
+        outcomes.len(),
+        rayon::current_num_threads(),
+        out_dir.display()
+    );
+    println!("  {:<18} {:<8} file", "unit", "verdict");
+    let mut failed = Vec::new();
+    let mut counts = [0usize; 3];
+    for o in &outcomes {
+        let word = match &o.result {
+            Ok(v) => {
+                counts[*v as usize] += 1;
+                v.word().to_string()
+            }
+            Err(e) => {
+                failed.push(o.serial.as_str());
+                format!("FAILED: {e}")
+            }
+        };
+        println!("  {:<18} {:<8} {}", o.serial, word, o.file.display());
+    }
+    println!(
+        "  {} ACCEPT, {} REVIEW, {} REJECT, {} failed; each unit's summary in {}/SERIAL.txt",
+        counts[0],
+        counts[1],
+        counts[2],
+        failed.len(),
+        out_dir.display()
+    );
+    if !failed.is_empty() {
+        return Err(format!(
+            "{} of {} units failed: {}",
+            failed.len(),
+            outcomes.len(),
+            failed.join(", ")
+        ));
+    }
+    Ok(outcomes
+        .iter()
+        .filter_map(|o| o.result.as_ref().ok().copied())
+        .max()
+        .unwrap_or(Verdict::Accept))
+}
