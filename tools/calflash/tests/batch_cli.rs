@@ -157,3 +157,141 @@ fn a_unit_that_fails_does_not_stop_the_others() {
         "{err}"
     );
 }
+
+/// A fixture file with three units' output columns beside the table's shared columns: each
+/// unit is calibrated exactly as from its own file; `--units` names them; a unit whose
+/// columns are incomplete is named with the missing column, before anything is written.
+#[test]
+fn a_fixture_file_of_several_units_is_calibrated_unit_by_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir_all(d.join("out")).unwrap();
+    let mut columns: Vec<Vec<String>> = Vec::new();
+    for seed in 1..=3u64 {
+        simulate(d, &format!("s{seed}.csv"), seed);
+        let text = std::fs::read_to_string(d.join(format!("s{seed}.csv"))).unwrap();
+        let rows: Vec<Vec<String>> = text
+            .lines()
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect();
+        if seed == 1 {
+            // The shared columns (the plan's inputs are the same for every seed).
+            for c in 0..rows[0].len() - 1 {
+                columns.push(rows.iter().map(|r| r[c].clone()).collect());
+            }
+        }
+        let last = rows[0].len() - 1;
+        assert_eq!(rows[0][last], "output");
+        let mut col: Vec<String> = rows.iter().map(|r| r[last].clone()).collect();
+        col[0] = format!("u{seed}_output");
+        columns.push(col);
+    }
+    let write = |name: &str, cols: &[Vec<String>]| {
+        let lines: Vec<String> = (0..cols[0].len())
+            .map(|i| {
+                cols.iter()
+                    .map(|c| c[i].as_str())
+                    .collect::<Vec<_>>()
+                    .join(",")
+            })
+            .collect();
+        std::fs::write(d.join(name), lines.join("\n") + "\n").unwrap();
+    };
+    write("fixture.csv", &columns);
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "fixture.csv",
+            "--fixture",
+            "--units",
+            "u1=ACC-F1,u2=ACC-F2",
+            "--sensor",
+            "single-accel",
+            "--out-dir",
+            "out",
+            "--reports",
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("3 units on"), "{out}");
+    assert!(d.join("out/index.html").is_file());
+    for (serial, seed) in [("ACC-F1", 1), ("ACC-F2", 2), ("u3", 3)] {
+        let (code, o, e) = calflash(
+            d,
+            &[
+                "calibrate",
+                &format!("s{seed}.csv"),
+                "--sensor",
+                "single-accel",
+                "--serial",
+                serial,
+                "--blob",
+                &format!("alone-{serial}.blob"),
+                "--no-db",
+            ],
+        );
+        assert_eq!(code, 0, "{o}{e}");
+        // The same calibration; only the hash of the data file differs (the unit's split file
+        // is not byte for byte its own simulated file).
+        let [mut split, mut alone] = [
+            calibration(&d.join(format!("out/{serial}.blob"))),
+            calibration(&d.join(format!("alone-{serial}.blob"))),
+        ];
+        split.identity.data_hash = [0; 16];
+        alone.identity.data_hash = [0; 16];
+        assert_eq!(split, alone, "{serial}");
+        assert!(d.join(format!("out/{serial}.obs.csv")).is_file());
+    }
+    // A unit with a temperature column of its own but no output.
+    let mut incomplete = columns.clone();
+    let mut t: Vec<String> = columns[3].clone();
+    t[0] = "u4_temp".into();
+    incomplete.push(t);
+    write("incomplete.csv", &incomplete);
+    std::fs::create_dir_all(d.join("out2")).unwrap();
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "incomplete.csv",
+            "--fixture",
+            "--sensor",
+            "single-accel",
+            "--out-dir",
+            "out2",
+            "--no-db",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("unit u4 is incomplete: no column u4_output (it has u4_temp)"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_dir(d.join("out2")).unwrap().count(),
+        0,
+        "nothing written"
+    );
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "fixture.csv",
+            "--fixture",
+            "--units",
+            "u9=X",
+            "--sensor",
+            "single-accel",
+            "--out-dir",
+            "out2",
+            "--no-db",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("has no unit u9; its units are u1, u2, u3"),
+        "{err}"
+    );
+}

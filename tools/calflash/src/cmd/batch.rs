@@ -119,15 +119,11 @@ pub fn calibrate_all(
     outcomes
 }
 
-/// Runs a batch; the worst verdict.
+/// Refuses the options that name one unit's files or serial in a batch.
 ///
 /// # Errors
-/// Options a batch cannot take, two files of one serial, or units that failed (after all
-/// the others are done: the message says how many and which).
-pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
-    let out_dir = args.out_dir.as_ref().ok_or(
-        "a batch (several files or a directory) writes each unit's files into --out-dir: give it",
-    )?;
+/// The option given.
+pub fn check_options(args: &CalibrateArgs) -> Result<(), String> {
     for (given, name) in [
         (args.serial.is_some(), "--serial"),
         (args.out.blob.is_some(), "--blob"),
@@ -137,10 +133,23 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
     ] {
         if given {
             return Err(format!(
-                "{name} names one unit's; in a batch each unit's serial is its file's name, its files go to --out-dir, and a signed blob's counter comes from its history"
+                "{name} names one unit's; in a batch each unit's serial is its file's name (or its fixture columns'), its files go to --out-dir, and a signed blob's counter comes from its history"
             ));
         }
     }
+    Ok(())
+}
+
+/// Runs a batch; the worst verdict.
+///
+/// # Errors
+/// Options a batch cannot take, two files of one serial, or units that failed (after all
+/// the others are done: the message says how many and which).
+pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
+    let out_dir = args.out_dir.as_ref().ok_or(
+        "a batch (several files or a directory) writes each unit's files into --out-dir: give it",
+    )?;
+    check_options(args)?;
     if !out_dir.is_dir() {
         return Err(format!("--out-dir {}: not a directory", out_dir.display()));
     }
@@ -157,7 +166,20 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         }
         units.push((serial, f.clone()));
     }
-    let outcomes = calibrate_all(args, &units, out_dir);
+    run_units(args, &units, out_dir)
+}
+
+/// Calibrates `units` as a batch into `out_dir`, prints the table (and, with `--reports`,
+/// writes `index.html` linking each unit's report); the worst verdict.
+///
+/// # Errors
+/// Units that failed, named, after all the others are done.
+pub fn run_units(
+    args: &CalibrateArgs,
+    units: &[(String, PathBuf)],
+    out_dir: &Path,
+) -> Result<Verdict, String> {
+    let outcomes = calibrate_all(args, units, out_dir);
     println!(
         "calflash calibrate  {} units on {} threads into {}",
         outcomes.len(),
@@ -188,6 +210,11 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         failed.len(),
         out_dir.display()
     );
+    if args.reports {
+        let index = out_dir.join("index.html");
+        crate::files::write_atomically(&index, |w| w.write_all(index_html(&outcomes).as_bytes()))?;
+        println!("  reports: {}", index.display());
+    }
     if !failed.is_empty() {
         return Err(format!(
             "{} of {} units failed: {}",
@@ -201,4 +228,32 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
         .filter_map(|o| o.result.as_ref().ok().copied())
         .max()
         .unwrap_or(Verdict::Accept))
+}
+
+/// The batch's report: one table, a row and a link per unit to its own page.
+fn index_html(outcomes: &[Outcome]) -> String {
+    let esc = |t: &str| {
+        t.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+            .replace('"', "&quot;")
+    };
+    let mut rows = String::new();
+    for o in outcomes {
+        let (verdict, page) = match &o.result {
+            Ok(v) => (
+                v.word().to_string(),
+                format!("<a href=\"{0}.html\">{0}</a>", esc(&o.serial)),
+            ),
+            Err(e) => (format!("FAILED: {}", esc(e)), esc(&o.serial)),
+        };
+        rows.push_str(&format!(
+            "<tr><td>{page}</td><td>{verdict}</td><td>{}</td></tr>\n",
+            esc(&o.file.display().to_string())
+        ));
+    }
+    format!(
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>calflash batch</title></head><body>\n<h1>{} units</h1>\n<table>\n<tr><th>unit</th><th>verdict</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
+        outcomes.len()
+    )
 }

@@ -59,9 +59,17 @@ pub struct CalibrateArgs {
     /// A batch: write each unit's blob (SERIAL.blob) and record (SERIAL.json) here.
     #[arg(long)]
     pub out_dir: Option<PathBuf>,
-    /// A batch: also write each unit's HTML report (SERIAL.html) into `--out-dir`.
+    /// A batch: also write each unit's HTML report (SERIAL.html) into `--out-dir`, and an
+    /// index.html with a row and a link per unit.
     #[arg(long, requires = "out_dir")]
     pub reports: bool,
+    /// The file is a fixture's: several units' columns (`PREFIX_COLUMN`, e.g. `u3_a_x`) beside
+    /// the shared ones; each unit is calibrated as in a batch.
+    #[arg(long)]
+    pub fixture: bool,
+    /// A fixture's units' serials by prefix (`u1=IMU-0001,u2=IMU-0002`; default: the prefix).
+    #[arg(long, value_delimiter = ',', requires = "fixture")]
+    pub units: Vec<String>,
     /// A single-axis model instead of the IEEE 1293 preset (e.g. "output ~ 1 + input + input^2").
     #[arg(long)]
     pub model: Option<String>,
@@ -147,6 +155,10 @@ pub struct CalibrateArgs {
 /// # Errors
 /// A message naming the file, column, term or table point.
 pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
+    if args.fixture {
+        super::batch::check_options(args)?;
+        return super::fixture::run(args);
+    }
     let single = match args.data.as_slice() {
         [one] if !one.is_dir() => Some(one),
         _ => None,

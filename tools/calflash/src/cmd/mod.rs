@@ -7,6 +7,7 @@ pub mod calibrate;
 pub mod compare;
 pub mod design;
 pub mod fit;
+pub mod fixture;
 pub mod flash;
 pub mod health;
 pub mod history;

@@ -1,0 +1,218 @@
+//! A fixture that holds several units on one table (issue 18): one observation file whose
+//! columns are per unit (`u3_a_x`, or `IMU-0007_a_x`: a prefix, `_`, a column name) beside
+//! the columns all units share (the table's `f_x`, `w_x`, `temp`, ...; a unit's own prefixed
+//! reference column, for a unit mounted another way, overrides the shared one). Each unit's
+//! columns are split into its own observation file in `--out-dir` (`SERIAL.obs.csv`, kept
+//! beside its blob for traceability) and the units are calibrated as a batch.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use super::calibrate::CalibrateArgs;
+use super::values::SensorKind;
+use crate::columns;
+
+/// Every column name a workflow reads.
+fn known() -> Vec<&'static str> {
+    let mut k = vec![
+        columns::INPUT,
+        columns::INPUT_P,
+        columns::INPUT_O,
+        columns::OUTPUT,
+        columns::TEMP,
+        columns::CHAMBER_TEMP,
+        columns::TIME,
+        columns::VOLT,
+        columns::DIR,
+    ];
+    for set in [
+        columns::F,
+        columns::W,
+        columns::DW,
+        columns::H,
+        columns::A,
+        columns::GYRO,
+    ] {
+        k.extend(set);
+    }
+    k
+}
+
+/// The count columns every unit of `sensor` must have.
+fn counts(sensor: SensorKind) -> Vec<&'static str> {
+    match sensor {
+        SensorKind::SingleAccel | SensorKind::SingleGyro => vec![columns::OUTPUT],
+        SensorKind::Accel => columns::A.to_vec(),
+        SensorKind::Gyro => columns::GYRO.to_vec(),
+        SensorKind::Imu => columns::A.iter().chain(&columns::GYRO).copied().collect(),
+    }
+}
+
+/// The units of a fixture file's header: per prefix, its columns (name without prefix ->
+/// index); and the shared columns.
+type Split = (
+    BTreeMap<String, BTreeMap<String, usize>>,
+    BTreeMap<String, usize>,
+);
+
+fn split_header(header: &csv::StringRecord) -> Split {
+    let known = known();
+    let mut units: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
+    let mut shared = BTreeMap::new();
+    for (i, name) in header.iter().enumerate() {
+        let name = name.trim();
+        if known.contains(&name) {
+            shared.insert(name.to_string(), i);
+            continue;
+        }
+        // The first `_` after which a column name follows.
+        let unit = name
+            .match_indices('_')
+            .map(|(at, _)| (&name[..at], &name[at + 1..]))
+            .find(|(prefix, rest)| !prefix.is_empty() && known.contains(rest));
+        if let Some((prefix, rest)) = unit {
+            units
+                .entry(prefix.to_string())
+                .or_default()
+                .insert(rest.to_string(), i);
+        }
+    }
+    (units, shared)
+}
+
+/// `--units u1=SERIAL,...`: prefix to serial.
+fn unit_map(text: &[String]) -> Result<BTreeMap<String, String>, String> {
+    text.iter()
+        .map(|pair| {
+            let (prefix, serial) = pair.split_once('=').ok_or_else(|| {
+                format!("--units {pair}: expected PREFIX=SERIAL, e.g. u3=IMU-0007")
+            })?;
+            crate::sensor::blob::serial(serial).map_err(|e| format!("--units {pair}: {e}"))?;
+            Ok((prefix.to_string(), serial.to_string()))
+        })
+        .collect()
+}
+
+/// Splits the fixture file `data` into one observation file per unit in `out_dir`; the units
+/// (serial, file) in prefix order.
+///
+/// # Errors
+/// A file that cannot be read, a unit whose columns are incomplete (named: the unit and the
+/// column), a `--units` prefix the file does not have, or a file with no unit columns.
+pub fn split(
+    data: &Path,
+    sensor: SensorKind,
+    units_arg: &[String],
+    out_dir: &Path,
+) -> Result<Vec<(String, PathBuf)>, String> {
+    let name = data.display();
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_path(data)
+        .map_err(|e| format!("{name}: {e}"))?;
+    let header = reader
+        .headers()
+        .map_err(|e| format!("{name}: {e}"))?
+        .clone();
+    let (units, shared) = split_header(&header);
+    if units.is_empty() {
+        return Err(format!(
+            "{name}: no unit columns (PREFIX_COLUMN, e.g. u1_a_x) in the header: a fixture file holds several units' columns"
+        ));
+    }
+    let map = unit_map(units_arg)?;
+    if let Some(p) = map.keys().find(|p| !units.contains_key(*p)) {
+        return Err(format!(
+            "--units: {name} has no unit {p}; its units are {}",
+            units.keys().cloned().collect::<Vec<_>>().join(", ")
+        ));
+    }
+    let needed = counts(sensor);
+    for (prefix, cols) in &units {
+        let missing: Vec<String> = needed
+            .iter()
+            .filter(|c| !cols.contains_key(**c))
+            .map(|c| format!("{prefix}_{c}"))
+            .collect();
+        if !missing.is_empty() {
+            return Err(format!(
+                "{name}: unit {prefix} is incomplete: no column {} (it has {})",
+                missing.join(", "),
+                cols.keys()
+                    .map(|c| format!("{prefix}_{c}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+    }
+    // Each unit's columns: the shared ones, its own overriding them.
+    let plan: Vec<(String, Vec<(String, usize)>)> = units
+        .iter()
+        .map(|(prefix, own)| {
+            let mut cols: BTreeMap<String, usize> = shared.clone();
+            cols.extend(own.iter().map(|(k, v)| (k.clone(), *v)));
+            let serial = map.get(prefix).cloned().unwrap_or_else(|| prefix.clone());
+            (serial, cols.into_iter().collect())
+        })
+        .collect();
+    for (serial, _) in &plan {
+        crate::sensor::blob::serial(serial).map_err(|e| {
+            format!("{name}: unit {serial}: {e} (name it with --units PREFIX=SERIAL)")
+        })?;
+    }
+    let mut writers = plan
+        .iter()
+        .map(|(serial, cols)| {
+            let path = out_dir.join(format!("{serial}.obs.csv"));
+            let mut w =
+                csv::Writer::from_path(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+            w.write_record(cols.iter().map(|(k, _)| k.as_str()))
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            Ok((path, w))
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    for (line, row) in reader.records().enumerate() {
+        let row = row.map_err(|e| format!("{name}: {e}"))?;
+        for ((_, cols), (path, w)) in plan.iter().zip(&mut writers) {
+            let fields = cols
+                .iter()
+                .map(|(k, i)| {
+                    row.get(*i).ok_or_else(|| {
+                        format!(
+                            "{name}:{}: no value for column {k} (the row is short)",
+                            line + 2
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>, String>>()?;
+            w.write_record(fields)
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+    }
+    let mut out = Vec::with_capacity(plan.len());
+    for ((serial, _), (path, mut w)) in plan.into_iter().zip(writers) {
+        w.flush().map_err(|e| format!("{}: {e}", path.display()))?;
+        out.push((serial, path));
+    }
+    Ok(out)
+}
+
+/// Runs `calflash calibrate FIXTURE --fixture --out-dir OUT`: splits, then the batch.
+///
+/// # Errors
+/// As [`split`] and the batch.
+pub fn run(args: &CalibrateArgs) -> Result<crate::sensor::Verdict, String> {
+    let [data] = args.data.as_slice() else {
+        return Err("--fixture: give one fixture file".into());
+    };
+    let out_dir = args
+        .out_dir
+        .as_ref()
+        .ok_or("--fixture writes each unit's files into --out-dir: give it")?;
+    if !out_dir.is_dir() {
+        return Err(format!("--out-dir {}: not a directory", out_dir.display()));
+    }
+    let units = split(data, args.sensor, &args.units, out_dir)?;
+    super::batch::run_units(args, &units, out_dir)
+}
