@@ -49,6 +49,8 @@ fn units_unlike_their_lot_are_named_with_the_coefficients_that_make_them_so() {
             "lot.json",
             "--chart",
             "ax:1",
+            "--report",
+            "lot.html",
         ],
     );
     assert_eq!(code, 0, "{out}{err}");
@@ -77,6 +79,12 @@ fn units_unlike_their_lot_are_named_with_the_coefficients_that_make_them_so() {
     assert_eq!(u50["coefficients"][0][0], "ay:1", "{u50}");
     assert_eq!(v["judged_by"], "robust covariance");
     assert_eq!(v["charts"][0]["coefficient"], "ax:1");
+    let html = std::fs::read_to_string(d.join("lot.html")).unwrap();
+    assert_eq!(html.matches("<svg").count(), 2, "distances and one chart");
+    assert!(
+        html.contains("LOT-A-000050") && html.contains("ay:1 +15.0"),
+        "the outliers' table"
+    );
 }
 
 #[test]

@@ -232,12 +232,7 @@ pub fn run_units(
 
 /// The batch's report: one table, a row and a link per unit to its own page.
 fn index_html(outcomes: &[Outcome]) -> String {
-    let esc = |t: &str| {
-        t.replace('&', "&amp;")
-            .replace('<', "&lt;")
-            .replace('>', "&gt;")
-            .replace('"', "&quot;")
-    };
+    use crate::report::html::esc;
     let mut rows = String::new();
     for o in outcomes {
         let (verdict, page) = match &o.result {

@@ -34,6 +34,9 @@ pub struct LotArgs {
     /// Write the result as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Write the HTML report (spread, distances with the limit, outliers, charts) here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     /// The database (default: $CALFLASH_DB, else the user's data directory).
     #[arg(long)]
     pub db: Option<PathBuf>,
@@ -113,6 +116,11 @@ pub fn load(
 /// As [`load`], a coefficient to chart that the lot lacks, or an unwritable JSON file.
 pub fn run(args: &LotArgs) -> Result<(), String> {
     let path = args.db.clone().unwrap_or_else(db::default_path);
+    crate::files::Paths::new()
+        .input("--db", Some(&path))
+        .output("--json", args.json.as_deref())
+        .output("--report", args.report.as_deref())
+        .check()?;
     let lot = load(&path, &args.prefix, args.since, args.until, args.alpha)?;
     let kind = match args.chart_kind {
         ChartKind::Individuals => chart::Kind::Individuals,
@@ -200,6 +208,11 @@ pub fn run(args: &LotArgs) -> Result<(), String> {
                 )
             }
         );
+    }
+    if let Some(p) = &args.report {
+        let html = crate::report::lot::render(&lot, &args.prefix, &charts)?;
+        crate::files::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
+        println!("  report: {}", p.display());
     }
     if let Some(p) = &args.json {
         let v = serde_json::json!({

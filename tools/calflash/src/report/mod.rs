@@ -3,6 +3,7 @@
 pub mod design;
 pub mod html;
 pub mod json;
+pub mod lot;
 pub mod plot;
 pub mod selfcal;
 pub mod terminal;
