@@ -35,11 +35,11 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     g.bench_function("lot_1e5_units_sqlite", |b| {
         b.iter(|| {
-            let lot = calflash::cmd::lot::load(&path, "LOT-", None, None, 0.001).unwrap();
+            let lot = calflash::cmd::lot::load(&path, "LOT-", None, None, None, 0.001).unwrap();
             assert_eq!(lot.units.len(), UNITS);
             let charts = [
-                lot.chart("ax:1", Kind::Individuals).unwrap(),
-                lot.chart("ax:input", Kind::Ewma).unwrap(),
+                lot.chart("ax:1", Kind::Individuals, None).unwrap(),
+                lot.chart("ax:input", Kind::Ewma, None).unwrap(),
             ];
             black_box((lot.outliers.len(), charts))
         });

@@ -115,10 +115,26 @@ pub fn fit_coefficients(rec: &Record) -> Vec<serde_json::Value> {
         .collect()
 }
 
+/// A unit's newest fit, for `calflash lot`.
+#[derive(Debug, Clone)]
+pub struct FitRow {
+    /// Serial.
+    pub serial: String,
+    /// When (Unix seconds).
+    pub time: i64,
+    /// The station that recorded it (empty before schema 3).
+    pub station: String,
+    /// The coefficients' JSON.
+    pub coefficients: String,
+}
+
 /// The history database.
 pub struct Db {
     conn: Connection,
     path: PathBuf,
+    /// The table has the recording station (schema 3; a version 2 file opened read-only has
+    /// not).
+    stations: bool,
 }
 
 fn explain(path: &Path, e: &rusqlite::Error) -> String {
@@ -155,7 +171,8 @@ macro_rules! records_table {
     blob BLOB NOT NULL,
     verification TEXT,
     outcome TEXT NOT NULL,
-    record TEXT
+    record TEXT,
+    station TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS records_serial ON records (serial, time);
 "
@@ -166,12 +183,14 @@ const SCHEMA: &str = records_table!();
 
 /// The schema version this calflash reads and writes (`PRAGMA user_version`). Version 0 is a
 /// database of the releases before versioning, version 1 one whose records are fits and
-/// flashes only; both are migrated (in one transaction) when written to: the table is rebuilt
-/// so that it also takes the unit's health reports.
-pub const SCHEMA_VERSION: i64 = 2;
+/// flashes only, version 2 one without the recording station; all are migrated (in one
+/// transaction) when written to: versions 0 and 1 by rebuilding the table so that it also
+/// takes the unit's health reports, version 2 by adding the `station` column (empty for the
+/// records before it). Read-only, a version 2 database reads with no stations.
+pub const SCHEMA_VERSION: i64 = 3;
 
 /// Rebuilds a version 0 or 1 table under the present schema, in one transaction.
-const MIGRATE_TO_2: &str = concat!(
+const MIGRATE_FROM_1: &str = concat!(
     "BEGIN;
 ALTER TABLE records RENAME TO records_v1;
 DROP INDEX IF EXISTS records_serial;
@@ -182,10 +201,31 @@ DROP INDEX IF EXISTS records_serial;
     SELECT id, serial, kind, time, data_hash, model, coefficients, covariance, report, blob,
     verification, outcome, record FROM records_v1;
 DROP TABLE records_v1;
-PRAGMA user_version = 2;
+PRAGMA user_version = 3;
 COMMIT;
 "
 );
+
+/// Adds the recording station to a version 2 table, in one transaction.
+const MIGRATE_FROM_2: &str = "BEGIN;
+ALTER TABLE records ADD COLUMN station TEXT NOT NULL DEFAULT '';
+PRAGMA user_version = 3;
+COMMIT;
+";
+
+/// The station recording: `$CALFLASH_STATION`, else the machine's host name, else empty.
+#[must_use]
+pub fn station() -> String {
+    std::env::var("CALFLASH_STATION")
+        .ok()
+        .filter(|s| !s.trim().is_empty())
+        .or_else(|| {
+            std::fs::read_to_string("/proc/sys/kernel/hostname")
+                .ok()
+                .map(|h| h.trim().to_string())
+        })
+        .unwrap_or_default()
+}
 
 /// The columns of `records` the code reads and writes.
 const COLUMNS: [&str; 13] = [
@@ -204,8 +244,9 @@ const COLUMNS: [&str; 13] = [
     "record",
 ];
 
-/// Checks the schema of an existing database; migrates version 0 when `write`.
-fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<(), String> {
+/// Checks the schema of an existing database; migrates older versions when `write`. Whether
+/// the table (now) has the `station` column.
+fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<bool, String> {
     let version: i64 = conn
         .query_row("PRAGMA user_version", [], |r| r.get(0))
         .map_err(|e| explain(path, &e))?;
@@ -229,12 +270,18 @@ fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<(), Strin
         ));
     }
     if version < SCHEMA_VERSION && write {
-        conn.execute_batch(MIGRATE_TO_2).map_err(|e| {
+        let migrate = if version < 2 {
+            MIGRATE_FROM_1
+        } else {
+            MIGRATE_FROM_2
+        };
+        conn.execute_batch(migrate).map_err(|e| {
             let _ = conn.execute_batch("ROLLBACK;");
             explain(path, &e)
         })?;
+        return Ok(true);
     }
-    Ok(())
+    Ok(have.iter().any(|h| h == "station"))
 }
 
 /// One row of `records`.
@@ -325,6 +372,7 @@ impl Db {
         Ok(Self {
             conn,
             path: path.to_path_buf(),
+            stations: true,
         })
     }
 
@@ -344,10 +392,11 @@ impl Db {
             .map_err(|e| explain(path, &e))?;
         conn.busy_timeout(std::time::Duration::from_secs(5))
             .map_err(|e| explain(path, &e))?;
-        check_schema(&conn, path, false)?;
+        let stations = check_schema(&conn, path, false)?;
         Ok(Self {
             conn,
             path: path.to_path_buf(),
+            stations,
         })
     }
 
@@ -487,8 +536,8 @@ impl Db {
             .transaction()
             .map_err(|e| explain(&self.path, &e))?;
         tx.execute(
-            "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record)
-             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+            "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)",
             params![
                 row.serial,
                 row.kind,
@@ -502,6 +551,7 @@ impl Db {
                 row.verification,
                 row.outcome,
                 row.record,
+                station(),
             ],
         )
         .map_err(|e| explain(&self.path, &e))?;
@@ -544,34 +594,53 @@ impl Db {
     }
 
     /// The newest fit of every unit whose serial starts with `prefix` (all units for an empty
-    /// one) recorded from `since` to `until` (Unix seconds, inclusive), oldest first: serial,
-    /// time and the coefficients' JSON.
+    /// one) recorded from `since` to `until` (Unix seconds, inclusive), at `station` when
+    /// given, oldest first.
     ///
     /// # Errors
-    /// A message naming the file and why.
+    /// A message naming the file and why; a station asked of a history without stations.
     pub fn latest_fits(
         &self,
         prefix: &str,
         since: i64,
         until: i64,
-    ) -> Result<Vec<(String, i64, String)>, String> {
+        station: Option<&str>,
+    ) -> Result<Vec<FitRow>, String> {
+        if station.is_some() && !self.stations {
+            return Err(format!(
+                "the unit history database {}: it records no stations (schema 2, opened read-only: it gains them when a calflash of schema {SCHEMA_VERSION} writes to it)",
+                self.path.display()
+            ));
+        }
+        let station_col = if self.stations { "r.station" } else { "''" };
+        let station_filter = if self.stations {
+            "AND (?4 IS NULL OR station = ?4)"
+        } else {
+            "AND ?4 IS NULL"
+        };
         // The newest fit per serial: the greatest (time, id) of its fits in the range.
+        let sql = format!(
+            "SELECT r.serial, r.time, {station_col}, r.coefficients FROM records r
+             JOIN (SELECT serial, max(time * 1000000000 + id) AS k FROM records
+                   WHERE kind = 'fit' AND substr(serial, 1, length(?1)) = ?1
+                     AND time BETWEEN ?2 AND ?3 {station_filter}
+                   GROUP BY serial) n
+               ON r.serial = n.serial AND r.time * 1000000000 + r.id = n.k
+             WHERE r.coefficients IS NOT NULL
+             ORDER BY r.time, r.id"
+        );
         let mut st = self
             .conn
-            .prepare(
-                "SELECT r.serial, r.time, r.coefficients FROM records r
-                 JOIN (SELECT serial, max(time * 1000000000 + id) AS k FROM records
-                       WHERE kind = 'fit' AND substr(serial, 1, length(?1)) = ?1
-                         AND time BETWEEN ?2 AND ?3
-                       GROUP BY serial) n
-                   ON r.serial = n.serial AND r.time * 1000000000 + r.id = n.k
-                 WHERE r.coefficients IS NOT NULL
-                 ORDER BY r.time, r.id",
-            )
+            .prepare(&sql)
             .map_err(|e| explain(&self.path, &e))?;
         let rows = st
-            .query_map(rusqlite::params![prefix, since, until], |r| {
-                Ok((r.get(0)?, r.get(1)?, r.get(2)?))
+            .query_map(rusqlite::params![prefix, since, until, station], |r| {
+                Ok(FitRow {
+                    serial: r.get(0)?,
+                    time: r.get(1)?,
+                    station: r.get(2)?,
+                    coefficients: r.get(3)?,
+                })
             })
             .map_err(|e| explain(&self.path, &e))?;
         rows.collect::<Result<_, _>>()
@@ -690,6 +759,37 @@ mod tests {
                 ("health".to_string(), "drifted".to_string())
             ]
         );
+    }
+
+    #[test]
+    fn a_schema_2_history_reads_without_stations_and_gains_them_when_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        let c = Connection::open(&path).unwrap();
+        c.execute_batch(&format!(
+            "{SCHEMA} ALTER TABLE records DROP COLUMN station; PRAGMA user_version = 2;
+             INSERT INTO records (serial, kind, time, data_hash, coefficients, blob, outcome)
+             VALUES ('U-1', 'fit', 10, 'h', '[]', x'', 'accept');"
+        ))
+        .unwrap();
+        drop(c);
+        // Read-only: no stations, and a station asked for is refused with the reason.
+        let d = Db::open_existing(&path).unwrap();
+        let rows = d.latest_fits("U-", 0, 100, None).unwrap();
+        assert_eq!((rows.len(), rows[0].station.as_str()), (1, ""));
+        let e = d.latest_fits("U-", 0, 100, Some("A")).unwrap_err();
+        assert!(e.contains("records no stations (schema 2"), "{e}");
+        drop(d);
+        // Written: migrated in one step, the old record kept with no station.
+        let d = Db::open(&path).unwrap();
+        let v: i64 = d
+            .conn
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .unwrap();
+        assert_eq!(v, SCHEMA_VERSION);
+        let rows = d.latest_fits("U-", 0, 100, Some("")).unwrap();
+        assert_eq!(rows.len(), 1);
+        assert!(d.latest_fits("U-", 0, 100, Some("A")).unwrap().is_empty());
     }
 
     #[test]

@@ -18,6 +18,8 @@ pub struct Unit {
     pub serial: String,
     /// When it was calibrated (Unix seconds).
     pub time: i64,
+    /// The station that recorded the fit.
+    pub station: String,
     /// Coefficients by name.
     pub coefficients: BTreeMap<String, f64>,
 }
@@ -313,22 +315,66 @@ impl Lot {
         }
     }
 
-    /// The control chart of coefficient `name` over the units in calibration order.
+    /// The stations that recorded the lot's fits, in name order.
+    #[must_use]
+    pub fn stations(&self) -> Vec<String> {
+        let mut s: Vec<String> = self.units.iter().map(|u| u.station.clone()).collect();
+        s.sort();
+        s.dedup();
+        s
+    }
+
+    /// The control chart of coefficient `name` over the units in calibration order (those of
+    /// `station` only, when given).
     ///
     /// # Errors
-    /// A name the lot does not have (the names it has are listed).
-    pub fn chart(&self, name: &str, kind: chart::Kind) -> Result<Chart, String> {
-        let Some(j) = self.names.iter().position(|k| k == name) else {
+    /// A name the lot does not have (the names it has are listed), or fewer than two units.
+    pub fn chart(
+        &self,
+        name: &str,
+        kind: chart::Kind,
+        station: Option<&str>,
+    ) -> Result<UnitChart, String> {
+        let Some(key) = self.names.iter().find(|k| *k == name) else {
             return Err(format!(
                 "the lot has no coefficient {name}; it has {}",
                 self.names.join(", ")
             ));
         };
-        let values: Vec<f64> = self
+        let units: Vec<&Unit> = self
             .units
             .iter()
-            .map(|u| u.coefficients[&self.names[j]])
+            .filter(|u| station.is_none_or(|s| u.station == s))
             .collect();
-        chart::chart(&values, kind).ok_or_else(|| "a chart needs two units".to_string())
+        let values: Vec<f64> = units.iter().map(|u| u.coefficients[key]).collect();
+        let chart = chart::chart(&values, kind).ok_or_else(|| {
+            format!(
+                "a chart of {name} needs two units{}",
+                station
+                    .map(|s| format!(" at station {s}"))
+                    .unwrap_or_default()
+            )
+        })?;
+        Ok(UnitChart {
+            chart,
+            serials: units.iter().map(|u| u.serial.clone()).collect(),
+        })
+    }
+}
+
+/// A control chart of a lot's units: the chart, and the unit of each point.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct UnitChart {
+    /// The chart.
+    #[serde(flatten)]
+    pub chart: Chart,
+    /// The serial of each plotted point.
+    pub serials: Vec<String>,
+}
+
+impl std::ops::Deref for UnitChart {
+    type Target = Chart;
+    fn deref(&self) -> &Chart {
+        &self.chart
     }
 }

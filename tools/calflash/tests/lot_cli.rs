@@ -248,3 +248,82 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
     assert!(out.contains("REVIEW"), "{out}");
     assert!(out.contains("unlike its lot in output:1 z=+"), "{out}");
 }
+
+/// Two stations record one lot: the charts are drawn over the lot and per station, where a
+/// drift of one station's fixture shows; `--station` takes one station's units.
+#[test]
+fn charts_per_station_show_the_station_that_drifts() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("units.sqlite");
+    // Units alternate between the stations; from unit 200 on, station B's fixture reads the
+    // x-axis scale 3 sigma high.
+    lot_history::write(&db, "TWO-", 400, T0, 13, |i, _, k| {
+        if i >= 200 && i % 2 == 1 {
+            k[0] += 6.0;
+        }
+    });
+    let conn = rusqlite::Connection::open(&db).unwrap();
+    conn.execute(
+        "UPDATE records SET station = CASE WHEN CAST(substr(serial, 5) AS INTEGER) % 2 = 1 THEN 'B' ELSE 'A' END",
+        [],
+    )
+    .unwrap();
+    drop(conn);
+    let (code, out, err) = calflash(
+        dir.path(),
+        &[
+            "lot",
+            "TWO-",
+            "--db",
+            "units.sqlite",
+            "--chart",
+            "ax:input",
+            "--chart-kind",
+            "ewma",
+            "--json",
+            "two.json",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("two.json")).unwrap())
+            .unwrap();
+    let charts = v["charts"].as_array().unwrap();
+    let names: Vec<&str> = charts
+        .iter()
+        .map(|c| c["coefficient"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["ax:input", "ax:input at A", "ax:input at B"]);
+    let out_of = |k: usize| {
+        charts[k]["chart"]["out_of_control"]
+            .as_array()
+            .unwrap()
+            .len()
+    };
+    // Station A holds: at most one false signal (an EWMA's excursion spans neighbouring
+    // points; at lambda 0.2 and 3 sigma an in-control process signals once in about 500).
+    let a_points: Vec<u64> = charts[1]["chart"]["out_of_control"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i.as_u64().unwrap())
+        .collect();
+    let signals =
+        a_points.windows(2).filter(|w| w[1] > w[0] + 5).count() + usize::from(!a_points.is_empty());
+    assert!(signals <= 1, "station A holds: {a_points:?}");
+    assert!(out_of(2) > 50, "station B drifts: {out}");
+    // Station B's points out of control are after its drift (its 100th unit).
+    let late = charts[2]["chart"]["out_of_control"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|i| i.as_u64().unwrap() >= 100)
+        .count();
+    assert_eq!(late, out_of(2), "{out}");
+    let (code, out, err) = calflash(
+        dir.path(),
+        &["lot", "TWO-", "--db", "units.sqlite", "--station", "B"],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("200 units"), "{out}");
+}

@@ -21,6 +21,10 @@ pub struct LotArgs {
     /// Only fits recorded up to this date (inclusive).
     #[arg(long, value_parser = super::values::date)]
     pub until: Option<i64>,
+    /// Only fits recorded by this station (`$CALFLASH_STATION` of the station, else its host
+    /// name). Without it, each chart is drawn per station as well when the lot has several.
+    #[arg(long)]
+    pub station: Option<String>,
     /// The probability that a unit of the lot's own distribution is called outside.
     #[arg(long, default_value_t = 0.001, value_parser = super::values::level)]
     pub alpha: f64,
@@ -62,7 +66,7 @@ pub fn load_without(
     serial: &str,
     alpha: f64,
 ) -> Result<lot::Lot, String> {
-    let units = units(path, prefix, None, None)?
+    let units = units(path, prefix, None, None, None)?
         .into_iter()
         .filter(|u| u.serial != serial)
         .collect();
@@ -75,22 +79,25 @@ fn units(
     prefix: &str,
     since: Option<i64>,
     until: Option<i64>,
+    station: Option<&str>,
 ) -> Result<Vec<Unit>, String> {
     let d = Db::open_existing(path)?;
     let rows = d.latest_fits(
         prefix,
         since.unwrap_or(i64::MIN),
         until.map_or(i64::MAX, |u| u + 86_399),
+        station,
     )?;
     rows.into_iter()
-        .map(|(serial, time, json)| {
-            lot::coefficients(&json)
+        .map(|row| {
+            lot::coefficients(&row.coefficients)
                 .map(|coefficients| Unit {
-                    serial: serial.clone(),
-                    time,
+                    serial: row.serial.clone(),
+                    time: row.time,
+                    station: row.station,
                     coefficients,
                 })
-                .map_err(|e| format!("{}: the fit of {serial}: {e}", path.display()))
+                .map_err(|e| format!("{}: the fit of {}: {e}", path.display(), row.serial))
         })
         .collect()
 }
@@ -104,9 +111,10 @@ pub fn load(
     prefix: &str,
     since: Option<i64>,
     until: Option<i64>,
+    station: Option<&str>,
     alpha: f64,
 ) -> Result<lot::Lot, String> {
-    let units = units(path, prefix, since, until)?;
+    let units = units(path, prefix, since, until, station)?;
     lot::judge(units, alpha).map_err(|e| format!("lot `{prefix}` in {}: {e}", path.display()))
 }
 
@@ -121,16 +129,29 @@ pub fn run(args: &LotArgs) -> Result<(), String> {
         .output("--json", args.json.as_deref())
         .output("--report", args.report.as_deref())
         .check()?;
-    let lot = load(&path, &args.prefix, args.since, args.until, args.alpha)?;
+    let lot = load(
+        &path,
+        &args.prefix,
+        args.since,
+        args.until,
+        args.station.as_deref(),
+        args.alpha,
+    )?;
     let kind = match args.chart_kind {
         ChartKind::Individuals => chart::Kind::Individuals,
         ChartKind::Ewma => chart::Kind::Ewma,
     };
-    let charts = args
-        .chart
-        .iter()
-        .map(|name| lot.chart(name, kind).map(|c| (name.clone(), c)))
-        .collect::<Result<Vec<_>, _>>()?;
+    // Each chart over the lot, then per station when the lot has several.
+    let stations = lot.stations();
+    let mut charts = Vec::new();
+    for name in &args.chart {
+        charts.push((name.clone(), lot.chart(name, kind, None)?));
+        if stations.len() > 1 {
+            for s in &stations {
+                charts.push((format!("{name} at {s}"), lot.chart(name, kind, Some(s))?));
+            }
+        }
+    }
     println!(
         "calflash lot  `{}`: {} units, {} coefficients ({} in {})",
         args.prefix,
@@ -189,6 +210,7 @@ pub fn run(args: &LotArgs) -> Result<(), String> {
         );
     }
     for (name, c) in &charts {
+        let serials = |i: &usize| -> String { c.serials.get(*i).cloned().unwrap_or_default() };
         println!(
             "  {:?} chart of {name}: centre {:.6e}, sigma {:.3e}; {} point(s) out of control{}",
             c.kind,
@@ -202,7 +224,7 @@ pub fn run(args: &LotArgs) -> Result<(), String> {
                     ": {}",
                     c.out_of_control
                         .iter()
-                        .map(|&i| lot.units[i].serial.as_str())
+                        .map(serials)
                         .collect::<Vec<_>>()
                         .join(", ")
                 )

@@ -6,8 +6,7 @@ use std::fmt::Write as _;
 
 use super::html::{STYLE, esc};
 use super::plot::{Figure, Series, svg};
-use crate::lot::{Judge, Lot};
-use crate::stats::chart::Chart;
+use crate::lot::{Judge, Lot, UnitChart};
 
 fn figure(title: &str, x: &str, y: &str, series: Vec<Series<'_>>) -> Result<String, String> {
     svg(&Figure {
@@ -25,7 +24,7 @@ fn figure(title: &str, x: &str, y: &str, series: Vec<Series<'_>>) -> Result<Stri
 ///
 /// # Errors
 /// A figure that cannot be drawn.
-pub fn render(lot: &Lot, prefix: &str, charts: &[(String, Chart)]) -> Result<String, String> {
+pub fn render(lot: &Lot, prefix: &str, charts: &[(String, UnitChart)]) -> Result<String, String> {
     let mut h = String::new();
     let n = lot.units.len();
     let _ = write!(

@@ -1,5 +1,8 @@
 //! Control charts of one quantity over time: individuals (Shewhart X with the moving-range
-//! sigma) and EWMA, with the points out of control marked.
+//! sigma) and EWMA, with the points out of control marked. The centre line and sigma come from
+//! a baseline, the first quarter of the points (at least 20, or all when fewer): the process as
+//! it was, against which the later points are watched (a drift in the later points does not
+//! move the limits that should catch it).
 
 /// Which chart.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -24,10 +27,12 @@ const D2: f64 = std::f64::consts::FRAC_2_SQRT_PI;
 pub struct Chart {
     /// Which chart.
     pub kind: Kind,
-    /// The centre line (the mean of the values).
+    /// The centre line (the mean of the baseline).
     pub centre: f64,
-    /// The process sigma (mean moving range / 1.128).
+    /// The process sigma (the baseline's mean moving range / 1.128).
     pub sigma: f64,
+    /// Points in the baseline (the first ones).
+    pub baseline: usize,
     /// The plotted statistic (the values themselves, or the EWMA).
     pub plotted: Vec<f64>,
     /// Lower and upper limits per point (the EWMA's widen towards their steady value).
@@ -42,9 +47,11 @@ pub fn chart(values: &[f64], kind: Kind) -> Option<Chart> {
     if values.len() < 2 {
         return None;
     }
-    let n = values.len() as f64;
-    let centre = values.iter().sum::<f64>() / n;
-    let mr = values.windows(2).map(|w| (w[1] - w[0]).abs()).sum::<f64>() / (n - 1.0);
+    let baseline = (values.len() / 4).max(20).min(values.len());
+    let base = &values[..baseline];
+    let n = baseline as f64;
+    let centre = base.iter().sum::<f64>() / n;
+    let mr = base.windows(2).map(|w| (w[1] - w[0]).abs()).sum::<f64>() / (n - 1.0);
     let sigma = mr / D2;
     let (plotted, limits): (Vec<f64>, Vec<(f64, f64)>) = match kind {
         Kind::Individuals => values
@@ -77,6 +84,7 @@ pub fn chart(values: &[f64], kind: Kind) -> Option<Chart> {
         kind,
         centre,
         sigma,
+        baseline,
         plotted,
         limits,
         out_of_control,
