@@ -295,3 +295,84 @@ fn a_fixture_file_of_several_units_is_calibrated_unit_by_unit() {
         "{err}"
     );
 }
+
+/// Two stations recording at once into one history: two `calflash calibrate` batches of 1,000
+/// units each, started together against one SQLite file, leave 2,000 whole records, each with
+/// its station.
+#[test]
+fn two_stations_recording_at_once_lose_nothing() {
+    const UNITS: usize = 1_000;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    simulate(d, "one.csv", 5);
+    let data = std::fs::read(d.join("one.csv")).unwrap();
+    for station in ["S1", "S2"] {
+        std::fs::create_dir_all(d.join(format!("in-{station}"))).unwrap();
+        std::fs::create_dir_all(d.join(format!("out-{station}"))).unwrap();
+        for i in 0..UNITS {
+            std::fs::write(d.join(format!("in-{station}/{station}-{i:04}.csv")), &data).unwrap();
+        }
+    }
+    let run = |station: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_calflash"))
+            .current_dir(d)
+            .env("CALFLASH_STATION", station)
+            .args([
+                "calibrate",
+                &format!("in-{station}"),
+                "--sensor",
+                "single-accel",
+                "--out-dir",
+                &format!("out-{station}"),
+                "--db",
+                "units.sqlite",
+            ])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (a, b) = (run("S1"), run("S2"));
+    for child in [a, b] {
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let conn = rusqlite::Connection::open(d.join("units.sqlite")).unwrap();
+    let count = |sql: &str| -> i64 { conn.query_row(sql, [], |r| r.get(0)).unwrap() };
+    assert_eq!(
+        count("SELECT count(*) FROM records WHERE kind = 'fit'"),
+        2_000
+    );
+    assert_eq!(count("SELECT count(DISTINCT serial) FROM records"), 2_000);
+    assert_eq!(
+        count(
+            "SELECT count(*) FROM records WHERE length(blob) > 0 AND record IS NOT NULL AND coefficients IS NOT NULL"
+        ),
+        2_000,
+        "every record whole"
+    );
+    assert_eq!(
+        count("SELECT count(*) FROM records WHERE station = 'S1'"),
+        1_000
+    );
+    assert_eq!(
+        count("SELECT count(*) FROM records WHERE station = 'S2'"),
+        1_000
+    );
+    // Nothing was saved beside the blobs for want of the database.
+    for station in ["S1", "S2"] {
+        let stray = std::fs::read_dir(d.join(format!("out-{station}")))
+            .unwrap()
+            .filter(|e| {
+                let n = e.as_ref().unwrap().file_name();
+                let n = n.to_string_lossy();
+                n.starts_with("calflash-unrecorded-")
+            })
+            .count();
+        assert_eq!(stray, 0);
+    }
+}
