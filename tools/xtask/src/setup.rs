@@ -1,4 +1,5 @@
-//! What a fresh machine needs: the thumb target (rustup) and qemu-system-arm (Debian).
+//! What a fresh machine needs: the thumb target (rustup), qemu-system-arm, and for the tests
+//! of the shared history a PostgreSQL server (Debian's packages).
 
 use std::process::{Command, Stdio};
 
@@ -8,6 +9,48 @@ use host_tests::qemu::TARGET;
 pub struct Setup {
     /// `None` when QEMU is there; else why not.
     pub qemu_missing: Option<String>,
+    /// `None` when a PostgreSQL server is installed (only looked for by `components` runs, the
+    /// tests'); else why not.
+    pub postgres_missing: Option<String>,
+}
+
+/// Whether Debian's PostgreSQL server is installed (`/usr/lib/postgresql/N/bin/initdb`).
+fn have_postgres() -> bool {
+    std::fs::read_dir("/usr/lib/postgresql").is_ok_and(|d| {
+        d.filter_map(Result::ok)
+            .any(|e| e.path().join("bin/initdb").is_file())
+    })
+}
+
+/// Installs Debian's `postgresql` when missing and possible; `None` when it is there.
+fn postgres() -> Option<String> {
+    if have_postgres() {
+        return None;
+    }
+    if !is_root() {
+        return Some(
+            "PostgreSQL is not installed and this user cannot install it; run `sudo apt-get install -y postgresql`"
+                .into(),
+        );
+    }
+    if !quiet(Command::new("apt-get").arg("--version")) {
+        return Some("PostgreSQL is not installed and there is no apt-get to install it".into());
+    }
+    println!("xtask: apt-get install -y postgresql");
+    let install = || {
+        Command::new("apt-get")
+            .args(["install", "-y", "--no-install-recommends", "postgresql"])
+            .env("DEBIAN_FRONTEND", "noninteractive")
+            .stdout(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    let installed = install() || (quiet(Command::new("apt-get").arg("update")) && install());
+    if installed && have_postgres() {
+        None
+    } else {
+        Some("`apt-get install -y postgresql` failed (no network to the Debian mirror?)".into())
+    }
 }
 
 fn quiet(cmd: &mut Command) -> bool {
@@ -56,8 +99,12 @@ pub fn run(components: bool) -> Result<Setup, String> {
             }
         }
     }
+    let postgres_missing = if components { postgres() } else { None };
     if have_qemu() {
-        return Ok(Setup { qemu_missing: None });
+        return Ok(Setup {
+            qemu_missing: None,
+            postgres_missing,
+        });
     }
     let why = if !is_root() {
         "qemu-system-arm is not installed and this user cannot install it; run \
@@ -84,11 +131,15 @@ pub fn run(components: bool) -> Result<Setup, String> {
         };
         let installed = install() || (quiet(Command::new("apt-get").arg("update")) && install());
         if installed && have_qemu() {
-            return Ok(Setup { qemu_missing: None });
+            return Ok(Setup {
+                qemu_missing: None,
+                postgres_missing,
+            });
         }
         "`apt-get install -y qemu-system-arm` failed (no network to the Debian mirror?)".to_string()
     };
     Ok(Setup {
         qemu_missing: Some(why),
+        postgres_missing,
     })
 }

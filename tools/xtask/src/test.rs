@@ -122,6 +122,9 @@ pub fn run() -> Result<(), String> {
             if setup.qemu_missing.is_none() {
                 s.cmd.env(REQUIRE_ENV, "1");
             }
+            if setup.postgres_missing.is_none() {
+                s.cmd.env("SPINCAL_REQUIRE_POSTGRES", "1");
+            }
             s
         },
     ];
@@ -168,6 +171,9 @@ pub fn run() -> Result<(), String> {
     println!("  {:<40} {fuzz_line}", "fuzz smoke");
     if let Some(why) = &setup.qemu_missing {
         println!("  {:<40} SKIPPED: {why}", "QEMU tests");
+    }
+    if let Some(why) = &setup.postgres_missing {
+        println!("  {:<40} SKIPPED: {why}", "PostgreSQL tests");
     }
     if failed.is_empty() {
         Ok(())

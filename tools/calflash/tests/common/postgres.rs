@@ -1,0 +1,166 @@
+//! A real PostgreSQL server for the history tests (issue 18): Debian's `postgresql` package
+//! (`cargo xtask test` installs it when missing and it can), a cluster made by `initdb` in a
+//! temporary directory, run as an unprivileged user (`nobody` when the tests run as root: the
+//! server refuses root), listening on a free port of 127.0.0.1 and on a socket in that
+//! directory, trusting local connections; stopped (and its files removed) when dropped.
+
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+
+/// A running server.
+pub struct Server {
+    dir: tempfile::TempDir,
+    bin: PathBuf,
+    /// Its TCP port on 127.0.0.1.
+    pub port: u16,
+    as_nobody: bool,
+}
+
+/// The newest installed server's `bin` directory (`/usr/lib/postgresql/N/bin`).
+fn server_bin() -> Option<PathBuf> {
+    let mut versions: Vec<(u32, PathBuf)> = std::fs::read_dir("/usr/lib/postgresql")
+        .ok()?
+        .filter_map(|e| {
+            let e = e.ok()?;
+            let v: u32 = e.file_name().to_str()?.parse().ok()?;
+            let bin = e.path().join("bin");
+            bin.join("initdb").is_file().then_some((v, bin))
+        })
+        .collect();
+    versions.sort();
+    versions.pop().map(|(_, b)| b)
+}
+
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+}
+
+impl Server {
+    /// Starts a server; `Ok(None)` (with a notice printed) when PostgreSQL is not installed,
+    /// unless `SPINCAL_REQUIRE_POSTGRES=1` (as `cargo xtask test` sets once it has installed
+    /// it), which makes that an error.
+    ///
+    /// # Errors
+    /// A server that is installed but does not start, with its log.
+    pub fn start(test: &str) -> Result<Option<Self>, String> {
+        let Some(bin) = server_bin() else {
+            if std::env::var("SPINCAL_REQUIRE_POSTGRES").is_ok_and(|v| v == "1") {
+                return Err("PostgreSQL is required (SPINCAL_REQUIRE_POSTGRES=1) but no /usr/lib/postgresql/N/bin/initdb is installed".into());
+            }
+            println!(
+                "SKIPPED {test}: PostgreSQL is not installed (Debian: apt-get install -y postgresql; `cargo xtask test` does it as root)"
+            );
+            return Ok(None);
+        };
+        let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
+        let as_nobody = is_root();
+        let data = dir.path().join("data");
+        std::fs::create_dir(&data).map_err(|e| e.to_string())?;
+        if as_nobody {
+            // The server's user must own the cluster and reach the directory.
+            let ok = Command::new("chmod")
+                .args(["755", &dir.path().display().to_string()])
+                .status()
+                .is_ok_and(|s| s.success())
+                && Command::new("chown")
+                    .args(["-R", "nobody", &dir.path().display().to_string()])
+                    .status()
+                    .is_ok_and(|s| s.success());
+            if !ok {
+                return Err(format!(
+                    "cannot give {} to the user nobody",
+                    dir.path().display()
+                ));
+            }
+        }
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .and_then(|l| l.local_addr())
+            .map_err(|e| format!("no free TCP port: {e}"))?
+            .port();
+        let s = Self {
+            dir,
+            bin,
+            port,
+            as_nobody,
+        };
+        let log = s.dir.path().join("server.log");
+        s.run(
+            "initdb",
+            &[
+                "-D",
+                &data.display().to_string(),
+                "-U",
+                "postgres",
+                "-A",
+                "trust",
+                "-E",
+                "UTF8",
+                "--no-sync",
+            ],
+        )?;
+        let options = format!(
+            "-p {port} -k {} -c listen_addresses=127.0.0.1 -c fsync=off",
+            s.dir.path().display()
+        );
+        s.run(
+            "pg_ctl",
+            &[
+                "-D",
+                &data.display().to_string(),
+                "-o",
+                &options,
+                "-l",
+                &log.display().to_string(),
+                "-w",
+                "-t",
+                "60",
+                "start",
+            ],
+        )
+        .map_err(|e| format!("{e}\n{}", std::fs::read_to_string(&log).unwrap_or_default()))?;
+        Ok(Some(s))
+    }
+
+    /// Runs one of the server's programs as the server's user.
+    fn run(&self, program: &str, args: &[&str]) -> Result<(), String> {
+        let exe = self.bin.join(program);
+        let mut cmd = if self.as_nobody {
+            let mut c = Command::new("runuser");
+            c.args(["-u", "nobody", "--"]).arg(&exe);
+            c
+        } else {
+            Command::new(&exe)
+        };
+        let out = cmd
+            .args(args)
+            .current_dir(self.dir.path())
+            .stdin(Stdio::null())
+            .output()
+            .map_err(|e| format!("{}: {e}", exe.display()))?;
+        if out.status.success() {
+            Ok(())
+        } else {
+            Err(format!(
+                "{program} failed: {}{}",
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            ))
+        }
+    }
+
+    /// A connection URL to database `db` as the superuser.
+    #[must_use]
+    pub fn url(&self, db: &str) -> String {
+        format!("postgres://postgres@127.0.0.1:{}/{db}", self.port)
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let data = self.dir.path().join("data").display().to_string();
+        let _ = self.run("pg_ctl", &["-D", &data, "-m", "immediate", "-w", "stop"]);
+    }
+}
