@@ -20,6 +20,11 @@ fn figure(title: &str, x: &str, y: &str, series: Vec<Series<'_>>) -> Result<Stri
     })
 }
 
+/// Values as points against their position (the units' calibration order).
+fn indexed(values: impl Iterator<Item = f64>) -> Vec<(f64, f64)> {
+    values.enumerate().map(|(i, v)| (i as f64, v)).collect()
+}
+
 /// Renders the report of `lot` (named `prefix`) with `charts` (coefficient, chart).
 ///
 /// # Errors
@@ -75,12 +80,7 @@ pub fn render(lot: &Lot, prefix: &str, charts: &[(String, UnitChart)]) -> Result
         );
     }
     h.push_str("</table><h2>Distance from the lot</h2>");
-    let all: Vec<(f64, f64)> = lot
-        .distances
-        .iter()
-        .enumerate()
-        .map(|(i, d)| (i as f64, *d))
-        .collect();
+    let all = indexed(lot.distances.iter().copied());
     let outside: Vec<(f64, f64)> = all
         .iter()
         .copied()
@@ -130,24 +130,9 @@ pub fn render(lot: &Lot, prefix: &str, charts: &[(String, UnitChart)]) -> Result
             c.sigma,
             c.out_of_control.len()
         );
-        let plotted: Vec<(f64, f64)> = c
-            .plotted
-            .iter()
-            .enumerate()
-            .map(|(i, v)| (i as f64, *v))
-            .collect();
-        let lo: Vec<(f64, f64)> = c
-            .limits
-            .iter()
-            .enumerate()
-            .map(|(i, l)| (i as f64, l.0))
-            .collect();
-        let hi: Vec<(f64, f64)> = c
-            .limits
-            .iter()
-            .enumerate()
-            .map(|(i, l)| (i as f64, l.1))
-            .collect();
+        let plotted = indexed(c.plotted.iter().copied());
+        let lo = indexed(c.limits.iter().map(|l| l.0));
+        let hi = indexed(c.limits.iter().map(|l| l.1));
         let out: Vec<(f64, f64)> = c.out_of_control.iter().map(|&i| plotted[i]).collect();
         h.push_str(&figure(
             name,
