@@ -151,6 +151,27 @@ impl Trailer {
             signature,
         }
     }
+
+    /// Whether a unit holding the counter `held` may take this record: its counter above
+    /// `held`, or a downgrade signed at `held`.
+    ///
+    /// # Errors
+    /// [`SignError::Replay`].
+    pub const fn fresh(&self, held: u32) -> Result<(), SignError> {
+        let fresh = if self.flags & FLAG_DOWNGRADE != 0 {
+            self.counter == held
+        } else {
+            self.counter > held
+        };
+        if fresh {
+            Ok(())
+        } else {
+            Err(SignError::Replay {
+                counter: self.counter,
+                held,
+            })
+        }
+    }
 }
 
 /// A record as a slot holds it: the blob, and the trailer's fields when a well-formed trailer
@@ -272,17 +293,6 @@ pub fn verify(
     // The counter first: a replay is refused without the cost of a signature check (refusing
     // on a trailer not yet authenticated is safe; accepting waits for the signature).
     let (_, trailer) = split(bytes)?;
-    let t = Trailer::read(trailer);
-    let fresh = if t.flags & FLAG_DOWNGRADE != 0 {
-        t.counter == held
-    } else {
-        t.counter > held
-    };
-    if !fresh {
-        return Err(SignError::Replay {
-            counter: t.counter,
-            held,
-        });
-    }
+    Trailer::read(trailer).fresh(held)?;
     check(bytes, keys, unit)
 }

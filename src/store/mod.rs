@@ -289,11 +289,11 @@ impl<F: NorFlash> Store<F> {
     /// the unit holds keys already, a flash error, or [`StoreError::VerifyFailed`].
     pub fn provision(&mut self, keys: &[StationKey]) -> Result<(), StoreError> {
         let at = self.keys_offset();
-        if let Provisioning::Provisioned(_) = self.provisioning()? {
-            return Err(StoreError::Locked);
-        }
         let mut sector = [0u8; KEYS_SPAN];
         self.flash.read(at, &mut sector).map_err(flash_err)?;
+        if let Provisioning::Provisioned(_) = Provisioning::read(&sector) {
+            return Err(StoreError::Locked);
+        }
         if sector.iter().any(|b| *b != 0xff) {
             // Never erased, or a torn provisioning: start from an erased sector.
             self.flash

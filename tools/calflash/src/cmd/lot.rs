@@ -66,10 +66,17 @@ pub fn load_without(
     serial: &str,
     alpha: f64,
 ) -> Result<lot::Lot, String> {
-    let units = units(path, prefix, None, None, None)?
-        .into_iter()
-        .filter(|u| u.serial != serial)
-        .collect();
+    let mut units = units(path, prefix, None, None, None)?;
+    units.retain(|u| u.serial != serial);
+    judge(path, prefix, units, alpha)
+}
+
+fn judge(
+    path: &std::path::Path,
+    prefix: &str,
+    units: Vec<Unit>,
+    alpha: f64,
+) -> Result<lot::Lot, String> {
     lot::judge(units, alpha).map_err(|e| format!("lot `{prefix}` in {}: {e}", path.display()))
 }
 
@@ -114,8 +121,12 @@ pub fn load(
     station: Option<&str>,
     alpha: f64,
 ) -> Result<lot::Lot, String> {
-    let units = units(path, prefix, since, until, station)?;
-    lot::judge(units, alpha).map_err(|e| format!("lot `{prefix}` in {}: {e}", path.display()))
+    judge(
+        path,
+        prefix,
+        units(path, prefix, since, until, station)?,
+        alpha,
+    )
 }
 
 /// Runs `calflash lot`.

@@ -7,7 +7,7 @@ use spincal::blob;
 use spincal::correct::{AnyAxisCorrector, AnyImuCorrector, AnyTriadCorrector};
 use spincal::model::{Calibration, Sensor};
 use spincal::protocol::{self, MAX_CHUNK, MAX_VECTORS, Request, Response, Trust};
-use spincal::signed::{self, FLAG_DOWNGRADE, SignError};
+use spincal::signed::{self, SignError};
 
 use super::client::{Client, DeviceError};
 
@@ -464,18 +464,7 @@ fn signature_precheck(
     if serial != id.unit.as_str() {
         return Err(SignError::WrongSerial);
     }
-    let fresh = if t.flags & FLAG_DOWNGRADE != 0 {
-        t.counter == id.counter
-    } else {
-        t.counter > id.counter
-    };
-    if !fresh {
-        return Err(SignError::Replay {
-            counter: t.counter,
-            held: id.counter,
-        });
-    }
-    Ok(())
+    t.fresh(id.counter)
 }
 
 #[cfg(test)]
