@@ -66,7 +66,7 @@ impl Bench {
             force_rejected: false,
             timeout: 0.3,
             vectors: 4,
-            db: Some(self.path("units.sqlite")),
+            db: Some(calflash::db::Location::File(self.path("units.sqlite"))),
             no_db: false,
             sign_key: None,
         };
@@ -309,7 +309,7 @@ fn a_blob_whose_fit_was_rejected_is_refused_unless_forced() {
         force_rejected: true,
         timeout: 0.3,
         vectors: 4,
-        db: Some(b.path("units.sqlite")),
+        db: Some(calflash::db::Location::File(b.path("units.sqlite"))),
         no_db: false,
         sign_key: None,
     };
@@ -361,7 +361,7 @@ fn a_refused_flash_is_recorded_under_the_unit_that_answered() {
         );
         assert!(r.is_err(), "{name}");
     }
-    let db = Db::open(&b.path("units.sqlite")).unwrap();
+    let mut db = Db::open(&b.path("units.sqlite")).unwrap();
     assert_eq!(db.history(UNIT).unwrap().len(), 3, "all three under {UNIT}");
     assert!(db.history("IMU-OTHER-7").unwrap().is_empty());
     assert!(db.history("?").unwrap().is_empty());

@@ -374,7 +374,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
         force_rejected: false,
         timeout: 2.0,
         vectors: 1,
-        db: Some(path("units.sqlite")),
+        db: Some(calflash::db::Location::File(path("units.sqlite"))),
         no_db: false,
         sign_key: None,
     })
@@ -389,7 +389,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
         temp: Some(25.0),
         volt: Some(3.3),
         json: Some(path(json)),
-        db: Some(path("units.sqlite")),
+        db: Some(calflash::db::Location::File(path("units.sqlite"))),
         no_db: false,
     };
     let on_host = health(&args(None, Some("imu.blob"), "host.json")).unwrap();

@@ -23,7 +23,7 @@ fn the_main_job_runs_end_to_end() {
     assert!(s.flash.read_back_identical);
     assert!(s.flash.max_ulp <= 2, "{} ulp", s.flash.max_ulp);
     assert_eq!(s.flash.vectors, 64);
-    let db = calflash::db::Db::open(&job.db).unwrap();
+    let mut db = calflash::db::Db::open(&job.db).unwrap();
     let h = db.history(mainjob::UNIT).unwrap();
     assert_eq!(h.len(), 2);
     assert_eq!((h[0].kind.as_str(), h[1].kind.as_str()), ("fit", "flash"));

@@ -263,7 +263,7 @@ fn calflash_flash_signs_for_the_unit_and_the_history_records_the_key() {
         force_rejected: false,
         timeout: 2.0,
         vectors: 1,
-        db: Some(p("units.sqlite")),
+        db: Some(calflash::db::Location::File(p("units.sqlite"))),
         no_db: false,
         sign_key,
     };
@@ -288,7 +288,7 @@ fn calflash_flash_signs_for_the_unit_and_the_history_records_the_key() {
         let i = identity(&mut d);
         assert_eq!((i.counter, i.signed_by), (expected, Some(id)));
     }
-    let db = calflash::db::Db::open(&p("units.sqlite")).unwrap();
+    let mut db = calflash::db::Db::open(&p("units.sqlite")).unwrap();
     let h = db.history(UNIT).unwrap();
     let signed: Vec<_> = h.iter().filter_map(|e| e.signed_by.clone()).collect();
     let hex = calflash::device::key_hex(id);

@@ -40,6 +40,8 @@ enum Command {
     Image(cmd::image::ImageArgs),
     /// A unit's fits and flashes.
     History(cmd::history::HistoryArgs),
+    /// The unit history itself: copy a station's history into the shared database.
+    Db(cmd::history_db::DbArgs),
     /// Is the unit's calibration still good? Its health check at rest, read or run.
     Health(cmd::health::HealthArgs),
     /// Write a new station key pair for signing calibrations.
@@ -93,6 +95,7 @@ fn main() -> ExitCode {
         Command::Flash(args) => cmd::flash::run(args),
         Command::Image(args) => cmd::image::run(args),
         Command::History(args) => cmd::history::run(args),
+        Command::Db(args) => cmd::history_db::run(args),
         Command::Keygen(args) => cmd::keys::keygen(args),
         Command::Sign(args) => cmd::keys::sign(args),
         Command::Lot(args) => cmd::lot::run(args),

@@ -3,6 +3,8 @@
 //! status and the table say which), and options of one unit are refused in a batch.
 
 mod common;
+#[path = "common/postgres.rs"]
+mod pg_server;
 
 use common::calflash;
 
@@ -86,7 +88,7 @@ fn a_batch_gives_each_unit_what_one_file_at_a_time_gives() {
             "{s}: the batch and one file at a time differ"
         );
     }
-    let db = calflash::db::Db::open(&d.join("units.sqlite")).unwrap();
+    let mut db = calflash::db::Db::open(&d.join("units.sqlite")).unwrap();
     for s in &serials {
         assert_eq!(db.history(s).unwrap().len(), 1, "{s}");
     }
@@ -301,9 +303,41 @@ fn a_fixture_file_of_several_units_is_calibrated_unit_by_unit() {
 /// its station.
 #[test]
 fn two_stations_recording_at_once_lose_nothing() {
-    const UNITS: usize = 1_000;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
+    two_stations(d, "units.sqlite", |sql| {
+        rusqlite::Connection::open(d.join("units.sqlite"))
+            .unwrap()
+            .query_row(sql, [], |r| r.get(0))
+            .unwrap()
+    });
+}
+
+/// The same against the shared history on a real PostgreSQL server.
+#[test]
+fn two_stations_recording_at_once_into_postgresql_lose_nothing() {
+    let Some(server) =
+        pg_server::Server::start("two_stations_recording_at_once_into_postgresql_lose_nothing")
+            .unwrap_or_else(|e| panic!("{e}"))
+    else {
+        return;
+    };
+    server.execute("postgres", "CREATE DATABASE shared");
+    let url = server.url("shared");
+    let dir = tempfile::tempdir().unwrap();
+    two_stations(dir.path(), &url, |sql| {
+        postgres::Client::connect(&url, postgres::NoTls)
+            .unwrap()
+            .query_one(sql, &[])
+            .unwrap()
+            .get(0)
+    });
+}
+
+/// Two batches of 1,000 units, stations S1 and S2, as two processes at once into the history
+/// `db`; `count` answers SQL `count(*)` queries on it.
+fn two_stations(d: &std::path::Path, db: &str, count: impl Fn(&str) -> i64) {
+    const UNITS: usize = 1_000;
     simulate(d, "one.csv", 5);
     let data = std::fs::read(d.join("one.csv")).unwrap();
     for station in ["S1", "S2"] {
@@ -325,7 +359,7 @@ fn two_stations_recording_at_once_lose_nothing() {
                 "--out-dir",
                 &format!("out-{station}"),
                 "--db",
-                "units.sqlite",
+                db,
             ])
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::piped())
@@ -341,8 +375,6 @@ fn two_stations_recording_at_once_lose_nothing() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
-    let conn = rusqlite::Connection::open(d.join("units.sqlite")).unwrap();
-    let count = |sql: &str| -> i64 { conn.query_row(sql, [], |r| r.get(0)).unwrap() };
     assert_eq!(
         count("SELECT count(*) FROM records WHERE kind = 'fit'"),
         2_000

@@ -16,9 +16,10 @@ pub struct CompareArgs {
     pub before: String,
     /// The later record.
     pub after: String,
-    /// The unit history database for `db:ID` records.
-    #[arg(long)]
-    pub db: Option<PathBuf>,
+    /// The unit history for `db:ID` records: a SQLite file, or a PostgreSQL database shared by stations
+    /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
+    #[arg(long, value_name = "FILE|URL")]
+    pub db: Option<crate::db::Location>,
     /// Significance level.
     #[arg(long, default_value_t = 0.05, value_parser = super::values::level)]
     pub alpha: f64,
@@ -37,7 +38,7 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
     crate::files::Paths::new()
         .input("the earlier record", before.as_deref())
         .input("the later record", after.as_deref())
-        .input("--db", args.db.as_deref())
+        .input("--db", args.db.as_ref().and_then(crate::db::Location::file))
         .output("--json", args.json.as_deref())
         .check()?;
     let text = |r: &str| -> Result<(String, String), String> {
@@ -46,9 +47,9 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
                 let id: i64 = id
                     .parse()
                     .map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
-                let path = args.db.clone().unwrap_or_else(crate::db::default_path);
+                let path = crate::db::Location::or_default(args.db.as_ref());
                 let text = crate::db::Db::open_existing(&path)?.record(id)?;
-                Ok((text, format!("{} record {id}", path.display())))
+                Ok((text, format!("{path} record {id}")))
             }
             None => Ok((
                 std::fs::read_to_string(r).map_err(|e| format!("{r}: {e}"))?,

@@ -29,9 +29,10 @@ pub struct FlashArgs {
     /// Test-vector batches (16 samples each).
     #[arg(long, default_value_t = 4, value_parser = |s: &str| super::values::count_in(s, 1, 256))]
     pub vectors: usize,
-    /// The unit history database (default: $CALFLASH_DB, else the user's data directory).
-    #[arg(long)]
-    pub db: Option<PathBuf>,
+    /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
+    /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
+    #[arg(long, value_name = "FILE|URL")]
+    pub db: Option<crate::db::Location>,
     /// Do not record the flash.
     #[arg(long)]
     pub no_db: bool,
@@ -97,7 +98,7 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
         bar.set_position(done as u64)
     });
     bar.finish_and_clear();
-    let db_path = args.db.clone().unwrap_or_else(db::default_path);
+    let db_path = crate::db::Location::or_default(args.db.as_ref());
     let beside = args.blob.parent().map_or_else(
         || std::path::PathBuf::from("."),
         std::path::Path::to_path_buf,

@@ -43,9 +43,10 @@ pub struct HealthArgs {
     /// Write the health as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
-    /// The unit history database (default: $CALFLASH_DB, else the user's data directory).
-    #[arg(long)]
-    pub db: Option<PathBuf>,
+    /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
+    /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
+    #[arg(long, value_name = "FILE|URL")]
+    pub db: Option<crate::db::Location>,
     /// Do not record the health.
     #[arg(long)]
     pub no_db: bool,
@@ -56,12 +57,15 @@ pub struct HealthArgs {
 /// # Errors
 /// A message naming the file, line or request that failed.
 pub fn run(args: &HealthArgs) -> Result<&'static str, String> {
-    let db_path = (!args.no_db).then(|| args.db.clone().unwrap_or_else(db::default_path));
+    let db_path = (!args.no_db).then(|| crate::db::Location::or_default(args.db.as_ref()));
     Paths::new()
         .input("the recording", args.recording.as_deref())
         .input("--blob", args.blob.as_deref())
         .output("--json", args.json.as_deref())
-        .created("the unit history", db_path.as_deref())
+        .created(
+            "the unit history",
+            db_path.as_ref().and_then(db::Location::file),
+        )
         .check()?;
     let (health, blob, serial, source) = match (&args.port, &args.blob, &args.recording) {
         (Some(port), _, rec) => from_unit(args, port, rec.as_deref())?,

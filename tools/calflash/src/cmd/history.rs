@@ -1,19 +1,18 @@
 //! `calflash history`: every fit and flash of a unit.
 
-use std::path::PathBuf;
-
 use clap::Args;
 
-use crate::db::{self, Db};
+use crate::db::Db;
 
 /// List a unit's fits and flashes from the unit history database.
 #[derive(Debug, Args)]
 pub struct HistoryArgs {
     /// The unit's serial.
     pub serial: String,
-    /// The database (default: $CALFLASH_DB, else the user's data directory).
-    #[arg(long)]
-    pub db: Option<PathBuf>,
+    /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
+    /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
+    #[arg(long, value_name = "FILE|URL")]
+    pub db: Option<crate::db::Location>,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -24,8 +23,8 @@ pub struct HistoryArgs {
 /// # Errors
 /// An unreadable database.
 pub fn run(args: &HistoryArgs) -> Result<(), String> {
-    let path = args.db.clone().unwrap_or_else(db::default_path);
-    let d = Db::open_existing(&path)?;
+    let path = crate::db::Location::or_default(args.db.as_ref());
+    let mut d = Db::open_existing(&path)?;
     let rows = d.history(&args.serial)?;
     if args.json {
         println!(
@@ -38,7 +37,7 @@ pub fn run(args: &HistoryArgs) -> Result<(), String> {
         "calflash history  unit {}  ({} records in {})",
         args.serial,
         rows.len(),
-        path.display()
+        path
     );
     for r in &rows {
         println!(

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use crate::db::{self, Db};
+use crate::db::{Db, Location};
 use crate::lot::{self, Judge, Unit};
 use crate::stats::chart;
 
@@ -41,9 +41,10 @@ pub struct LotArgs {
     /// Write the HTML report (spread, distances with the limit, outliers, charts) here.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// The database (default: $CALFLASH_DB, else the user's data directory).
-    #[arg(long)]
-    pub db: Option<PathBuf>,
+    /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
+    /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
+    #[arg(long, value_name = "FILE|URL")]
+    pub db: Option<crate::db::Location>,
 }
 
 /// A chart kind on the command line.
@@ -61,7 +62,7 @@ pub enum ChartKind {
 /// # Errors
 /// As [`load`].
 pub fn load_without(
-    path: &std::path::Path,
+    path: &Location,
     prefix: &str,
     serial: &str,
     alpha: f64,
@@ -71,24 +72,19 @@ pub fn load_without(
     judge(path, prefix, units, alpha)
 }
 
-fn judge(
-    path: &std::path::Path,
-    prefix: &str,
-    units: Vec<Unit>,
-    alpha: f64,
-) -> Result<lot::Lot, String> {
-    lot::judge(units, alpha).map_err(|e| format!("lot `{prefix}` in {}: {e}", path.display()))
+fn judge(path: &Location, prefix: &str, units: Vec<Unit>, alpha: f64) -> Result<lot::Lot, String> {
+    lot::judge(units, alpha).map_err(|e| format!("lot `{prefix}` in {}: {e}", path))
 }
 
 /// Every unit of the lot `prefix` with its newest fit in the date range.
 fn units(
-    path: &std::path::Path,
+    path: &Location,
     prefix: &str,
     since: Option<i64>,
     until: Option<i64>,
     station: Option<&str>,
 ) -> Result<Vec<Unit>, String> {
-    let d = Db::open_existing(path)?;
+    let mut d = Db::open_existing(path)?;
     let rows = d.latest_fits(
         prefix,
         since.unwrap_or(i64::MIN),
@@ -104,7 +100,7 @@ fn units(
                     station: row.station,
                     coefficients,
                 })
-                .map_err(|e| format!("{}: the fit of {}: {e}", path.display(), row.serial))
+                .map_err(|e| format!("{}: the fit of {}: {e}", path, row.serial))
         })
         .collect()
 }
@@ -114,7 +110,7 @@ fn units(
 /// # Errors
 /// An unreadable history, too few units, or no shared coefficients.
 pub fn load(
-    path: &std::path::Path,
+    path: &Location,
     prefix: &str,
     since: Option<i64>,
     until: Option<i64>,
@@ -134,9 +130,9 @@ pub fn load(
 /// # Errors
 /// As [`load`], a coefficient to chart that the lot lacks, or an unwritable JSON file.
 pub fn run(args: &LotArgs) -> Result<(), String> {
-    let path = args.db.clone().unwrap_or_else(db::default_path);
+    let path = crate::db::Location::or_default(args.db.as_ref());
     crate::files::Paths::new()
-        .input("--db", Some(&path))
+        .input("--db", path.file())
         .output("--json", args.json.as_deref())
         .output("--report", args.report.as_deref())
         .check()?;
@@ -175,7 +171,7 @@ pub fn run(args: &LotArgs) -> Result<(), String> {
             ),
             Judge::Columns { why } => format!("coefficient by coefficient: {why}"),
         },
-        path.display()
+        path
     );
     if !lot.left_out.is_empty() {
         println!(

@@ -11,6 +11,7 @@ pub mod fixture;
 pub mod flash;
 pub mod health;
 pub mod history;
+pub mod history_db;
 pub mod image;
 pub mod keys;
 pub mod lot;

@@ -20,9 +20,10 @@ pub struct Outputs {
     /// Write the calibration record (JSON, for `calflash compare`) here.
     #[arg(long)]
     pub json: Option<PathBuf>,
-    /// The unit history database (default: $CALFLASH_DB, else the user's data directory).
-    #[arg(long)]
-    pub db: Option<PathBuf>,
+    /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
+    /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
+    #[arg(long, value_name = "FILE|URL")]
+    pub db: Option<crate::db::Location>,
     /// Do not record the calibration.
     #[arg(long)]
     pub no_db: bool,
@@ -59,12 +60,12 @@ impl Outputs {
     /// # Errors
     /// The two options that name one file.
     pub fn check(&self, inputs: Paths) -> Result<(), String> {
-        let db = (!self.no_db).then(|| self.db.clone().unwrap_or_else(db::default_path));
+        let db = (!self.no_db).then(|| crate::db::Location::or_default(self.db.as_ref()));
         inputs
             .output("--blob", self.blob.as_deref())
             .output("--report", self.report.as_deref())
             .output("--json", self.json.as_deref())
-            .created("the unit history", db.as_deref())
+            .created("the unit history", db.as_ref().and_then(db::Location::file))
             .check()
     }
 
@@ -79,7 +80,7 @@ impl Outputs {
     ) -> Option<crate::sensor::Finding> {
         use crate::sensor::{Finding, Verdict};
         let prefix = self.lot.as_deref()?;
-        let path = self.db.clone().unwrap_or_else(db::default_path);
+        let path = crate::db::Location::or_default(self.db.as_ref());
         let placed = crate::cmd::lot::load_without(&path, prefix, serial, alpha).and_then(|lot| {
             lot.place(coefficients)
                 .map(|(o, outside)| (o, outside, lot.units.len(), lot.distance_limit()))
@@ -147,11 +148,10 @@ impl Outputs {
                 );
             }
             None => {
-                let path = self.db.clone().unwrap_or_else(db::default_path);
-                let held = if path.exists() {
-                    Db::open(&path)?.highest_counter(serial)?
-                } else {
-                    0
+                let path = crate::db::Location::or_default(self.db.as_ref());
+                let held = match path.file() {
+                    Some(f) if !f.exists() => 0,
+                    _ => Db::open(&path)?.highest_counter(serial)?,
                 };
                 held.checked_add(1)
                     .ok_or("the unit's history holds the highest counter there is")?
@@ -214,7 +214,7 @@ impl Outputs {
         if self.no_db {
             return Ok(None);
         }
-        let path = self.db.clone().unwrap_or_else(db::default_path);
+        let path = crate::db::Location::or_default(self.db.as_ref());
         let beside = db::beside(&[
             self.blob.as_deref(),
             self.json.as_deref(),

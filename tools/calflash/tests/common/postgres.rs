@@ -2,10 +2,14 @@
 //! (`cargo xtask test` installs it when missing and it can), a cluster made by `initdb` in a
 //! temporary directory, run as an unprivileged user (`nobody` when the tests run as root: the
 //! server refuses root), listening on a free port of 127.0.0.1 and on a socket in that
-//! directory, trusting local connections; stopped (and its files removed) when dropped.
+//! directory; stopped (and its files removed) when dropped. Local connections are trusted,
+//! except the logins of [`Server::login`], which must give their password (SCRAM).
 
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
+
+/// The logins that must give a password (see [`Server::login`]).
+pub const LOGINS: [&str; 2] = ["station", "reader"];
 
 /// A running server.
 pub struct Server {
@@ -101,6 +105,17 @@ impl Server {
                 "--no-sync",
             ],
         )?;
+        // Password logins first: pg_hba.conf takes the first line that matches.
+        let hba = data.join("pg_hba.conf");
+        let trusted = std::fs::read_to_string(&hba).map_err(|e| e.to_string())?;
+        std::fs::write(
+            &hba,
+            format!(
+                "host all {} 127.0.0.1/32 scram-sha-256\n{trusted}",
+                LOGINS.join(",")
+            ),
+        )
+        .map_err(|e| e.to_string())?;
         let options = format!(
             "-p {port} -k {} -c listen_addresses=127.0.0.1 -c fsync=off",
             s.dir.path().display()
@@ -155,6 +170,32 @@ impl Server {
     #[must_use]
     pub fn url(&self, db: &str) -> String {
         format!("postgres://postgres@127.0.0.1:{}/{db}", self.port)
+    }
+
+    /// Runs `sql` as the superuser in database `db`.
+    ///
+    /// # Panics
+    /// SQL the server refuses.
+    #[allow(dead_code)] // not every test file makes databases
+    pub fn execute(&self, db: &str, sql: &str) {
+        let mut c = postgres::Client::connect(&self.url(db), postgres::NoTls)
+            .unwrap_or_else(|e| panic!("{}: {e}", self.url(db)));
+        c.batch_execute(sql)
+            .unwrap_or_else(|e| panic!("{sql}: {e}"));
+    }
+
+    /// Makes login `name` (one of [`LOGINS`]) with `password`; a URL of database `db` as it.
+    ///
+    /// # Panics
+    /// SQL the server refuses.
+    #[allow(dead_code)] // not every test file makes logins
+    pub fn login(&self, name: &str, password: &str, db: &str) -> String {
+        assert!(LOGINS.contains(&name), "{name} is not a password login");
+        self.execute(
+            "postgres",
+            &format!("CREATE ROLE {name} LOGIN PASSWORD '{password}'"),
+        );
+        format!("postgres://{name}:{password}@127.0.0.1:{}/{db}", self.port)
     }
 }
 

@@ -1,0 +1,542 @@
+//! The unit history: every fit, flash and health report of every unit.
+//!
+//! In a SQLite file on the station (the default: `$CALFLASH_DB`, else
+//! `$XDG_DATA_HOME/calflash/units.sqlite`, else `~/.local/share/calflash/units.sqlite`), or in
+//! a PostgreSQL database that several stations share (`--db postgres://...`, or that URL in
+//! `$CALFLASH_DB`). Both keep one schema and the same guarantees: a record is whole or absent,
+//! two stations writing at once lose nothing, a history of a newer schema is refused, and a
+//! record the history cannot take is saved as JSON beside the outputs.
+
+mod location;
+mod postgresql;
+mod sqlite;
+
+use std::path::{Path, PathBuf};
+
+pub use location::{Location, redact};
+
+use crate::sensor::record::Record;
+
+/// Where a record that the database cannot take is saved: the directory of the first output
+/// file given, else the current directory.
+#[must_use]
+pub fn beside(outputs: &[Option<&Path>]) -> PathBuf {
+    outputs
+        .iter()
+        .flatten()
+        .find_map(|p| p.parent().map(Path::to_path_buf))
+        .unwrap_or_else(|| PathBuf::from("."))
+}
+
+/// Records with `f` in the history at `location`; when that fails, saves `fallback` as JSON
+/// in `beside` so that nothing is lost.
+///
+/// # Errors
+/// When the database could not take the record: the message says why and where the record
+/// was saved instead (or that it could not be).
+pub fn record_or_save(
+    location: &Location,
+    f: impl FnOnce(&mut Db) -> Result<i64, String>,
+    fallback: &serde_json::Value,
+    beside: &Path,
+    serial: &str,
+) -> Result<String, String> {
+    match Db::open(location).and_then(|mut d| f(&mut d)) {
+        Ok(id) => Ok(format!("recorded as db:{id} in {location}")),
+        Err(e) => {
+            let nanos = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos());
+            let safe: String = serial
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || c == '-' {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
+            let file = beside.join(format!("calflash-unrecorded-{safe}-{nanos}.json"));
+            let body = serde_json::to_vec_pretty(fallback).unwrap_or_default();
+            let saved =
+                crate::files::write_atomically(&file, |w| std::io::Write::write_all(w, &body));
+            Err(match saved {
+                Ok(()) => format!(
+                    "NOT recorded: {e}; the record is saved in {} instead",
+                    file.display()
+                ),
+                Err(why) => format!(
+                    "NOT recorded: {e}; nor could it be saved in {} ({why})",
+                    file.display()
+                ),
+            })
+        }
+    }
+}
+
+/// One row of a unit's history.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Entry {
+    /// Record id (for `calflash compare db:ID`).
+    pub id: i64,
+    /// `fit` or `flash`.
+    pub kind: String,
+    /// Seconds since 1970.
+    pub time: i64,
+    /// Hash of the observation data.
+    pub data_hash: String,
+    /// The models (fits).
+    pub model: Option<String>,
+    /// Verdict (fits) or verification outcome (flashes).
+    pub outcome: String,
+    /// The report's path, if any.
+    pub report: Option<String>,
+    /// Blob bytes (a signed blob's trailer included).
+    pub blob_len: usize,
+    /// The station key that signed the blob and its counter (`KEYID #COUNTER`), when signed.
+    pub signed_by: Option<String>,
+}
+
+/// The coefficients of a fit as the history keeps them (and `calflash lot` reads them): per
+/// table point its temperature and voltage, and per axis the output, terms, coefficients and
+/// standard errors.
+#[must_use]
+pub fn fit_coefficients(rec: &Record) -> Vec<serde_json::Value> {
+    rec.points
+        .iter()
+        .map(|p| serde_json::json!({"temp": p.temp, "volt": p.volt, "axes": p.axes.iter().map(|a| serde_json::json!({"output": a.output, "terms": a.terms, "coefficients": a.coefficients, "std_errors": a.std_errors})).collect::<Vec<_>>()}))
+        .collect()
+}
+
+/// A unit's newest fit, for `calflash lot`.
+#[derive(Debug, Clone)]
+pub struct FitRow {
+    /// Serial.
+    pub serial: String,
+    /// When (Unix seconds).
+    pub time: i64,
+    /// The station that recorded it (empty before schema 3).
+    pub station: String,
+    /// The coefficients' JSON.
+    pub coefficients: String,
+}
+
+/// The station recording: `$CALFLASH_STATION`, else the machine's host name, else empty.
+#[must_use]
+pub fn station() -> String {
+    std::env::var("CALFLASH_STATION")
+        .ok()
+        .filter(|s| !s.trim().is_empty())
+        .or_else(|| {
+            std::fs::read_to_string("/proc/sys/kernel/hostname")
+                .ok()
+                .map(|h| h.trim().to_string())
+        })
+        .unwrap_or_default()
+}
+
+/// The observation-data hash a blob carries, hex; `None` when it does not decode.
+fn blob_hash(blob: &[u8]) -> Option<String> {
+    let cal = crate::signing::calibration(blob).ok()?;
+    Some(
+        cal.data()
+            .identity
+            .data_hash
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect(),
+    )
+}
+
+fn now() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs() as i64)
+}
+
+/// The schema version this calflash reads and writes. On SQLite (`PRAGMA user_version`)
+/// version 0 is a database of the releases before versioning, version 1 one whose records are
+/// fits and flashes only, version 2 one without the recording station; all are migrated (in
+/// one transaction) when written to: versions 0 and 1 by rebuilding the table so that it also
+/// takes the unit's health reports, version 2 by adding the `station` column (empty for the
+/// records before it). Read-only, a version 2 database reads with no stations. On PostgreSQL
+/// (table `calflash_schema`) every history is of this version.
+pub const SCHEMA_VERSION: i64 = 3;
+
+/// The refusal of a history of a newer schema.
+fn newer(version: i64) -> String {
+    format!(
+        "written by a newer calflash (schema {version}); this one reads schema {SCHEMA_VERSION} and changes nothing in it"
+    )
+}
+
+/// The columns of `records` the code reads and writes.
+const COLUMNS: [&str; 13] = [
+    "id",
+    "serial",
+    "kind",
+    "time",
+    "data_hash",
+    "model",
+    "coefficients",
+    "covariance",
+    "report",
+    "blob",
+    "verification",
+    "outcome",
+    "record",
+];
+
+/// Checks that a table with columns `have` is calflash's `records`.
+fn check_columns(have: &[String]) -> Result<(), String> {
+    match COLUMNS.iter().find(|c| !have.iter().any(|h| h == *c)) {
+        Some(missing) => Err(format!(
+            "its table `records` has no column `{missing}`: it was altered or is not calflash's; nothing was read or written"
+        )),
+        None => Ok(()),
+    }
+}
+
+/// One record as both backends store it.
+#[derive(Debug, Clone, PartialEq)]
+struct Row {
+    serial: String,
+    kind: String,
+    time: i64,
+    data_hash: String,
+    model: Option<String>,
+    coefficients: Option<String>,
+    covariance: Option<String>,
+    report: Option<String>,
+    blob: Vec<u8>,
+    verification: Option<String>,
+    outcome: String,
+    record: Option<String>,
+    station: String,
+}
+
+/// One record as a unit's history lists it.
+struct Listed {
+    id: i64,
+    kind: String,
+    time: i64,
+    data_hash: String,
+    model: Option<String>,
+    outcome: String,
+    report: Option<String>,
+    blob: Vec<u8>,
+}
+
+/// What a history's store does; each failure is why, in the station's words (the caller
+/// names the history).
+trait Backend: Send {
+    /// Writes one record, whole or not at all; its id.
+    fn insert(&mut self, row: &Row) -> Result<i64, String>;
+    /// Writes `rows` in one transaction, skipping those the history held before (the same
+    /// unit, kind, time, data, outcome, station and blob); how many it wrote.
+    fn copy(&mut self, rows: &[Row]) -> Result<usize, String>;
+    /// A unit's records, oldest first.
+    fn history(&mut self, serial: &str) -> Result<Vec<Listed>, String>;
+    /// See [`Db::latest_fits`].
+    fn latest_fits(
+        &mut self,
+        prefix: &str,
+        since: i64,
+        until: i64,
+        station: Option<&str>,
+    ) -> Result<Vec<FitRow>, String>;
+    /// The blobs of a unit's records.
+    fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, String>;
+    /// The JSON record of record `id`: `None` for no such record, `Some(None)` for a flash.
+    fn record(&mut self, id: i64) -> Result<Option<Option<String>>, String>;
+    /// Every record, in the order written.
+    fn rows(&mut self) -> Result<Vec<Row>, String>;
+}
+
+/// A unit history, open.
+pub struct Db {
+    backend: Box<dyn Backend>,
+    location: Location,
+}
+
+impl Db {
+    /// Opens the history at `location`, creating it (a SQLite file, or the tables in an empty
+    /// PostgreSQL database) when needed, migrating an older SQLite schema.
+    ///
+    /// # Errors
+    /// A message naming the history (a URL without its password) and why.
+    pub fn open(location: impl Into<Location>) -> Result<Self, String> {
+        let location = location.into();
+        let backend: Result<Box<dyn Backend>, String> = match &location {
+            Location::File(p) => sqlite::Sqlite::open(p).map(|b| Box::new(b) as _),
+            Location::Server(url) => postgresql::Postgres::open(url).map(|b| Box::new(b) as _),
+        };
+        Self::opened(backend, location)
+    }
+
+    /// Opens an existing history to read it (`history`, `compare db:ID`, `lot`): never
+    /// creates one, never writes.
+    ///
+    /// # Errors
+    /// No history there, or not a calflash history of a schema this calflash reads.
+    pub fn open_existing(location: impl Into<Location>) -> Result<Self, String> {
+        let location = location.into();
+        let backend: Result<Box<dyn Backend>, String> = match &location {
+            Location::File(p) => sqlite::Sqlite::open_existing(p).map(|b| Box::new(b) as _),
+            Location::Server(url) => {
+                postgresql::Postgres::open_existing(url).map(|b| Box::new(b) as _)
+            }
+        };
+        Self::opened(backend, location)
+    }
+
+    fn opened(
+        backend: Result<Box<dyn Backend>, String>,
+        location: Location,
+    ) -> Result<Self, String> {
+        match backend {
+            Ok(backend) => Ok(Self { backend, location }),
+            Err(why) => Err(format!("the unit history database {location}: {why}")),
+        }
+    }
+
+    /// Names the history in a failure.
+    fn named<T>(&self, r: Result<T, String>) -> Result<T, String> {
+        r.map_err(|why| format!("the unit history database {}: {why}", self.location))
+    }
+
+    /// Records a fit.
+    ///
+    /// # Errors
+    /// A message naming the history and why; nothing is written then.
+    pub fn record_fit(
+        &mut self,
+        rec: &Record,
+        report: Option<&Path>,
+        blob: &[u8],
+    ) -> Result<i64, String> {
+        let models: Vec<&str> = rec
+            .points
+            .first()
+            .map(|p| p.axes.iter().map(|a| a.model.as_str()).collect())
+            .unwrap_or_default();
+        let coefficients = fit_coefficients(rec);
+        let covariance: Vec<Vec<&Vec<Vec<f64>>>> = rec
+            .points
+            .iter()
+            .map(|p| p.axes.iter().map(|a| &a.covariance).collect())
+            .collect();
+        self.insert(Row {
+            serial: rec.serial.clone(),
+            kind: "fit".into(),
+            time: rec.created_unix_s as i64,
+            data_hash: rec.data_hash.clone(),
+            model: Some(models.join("; ")),
+            coefficients: Some(serde_json::to_string(&coefficients).unwrap_or_default()),
+            covariance: Some(serde_json::to_string(&covariance).unwrap_or_default()),
+            report: report.map(|p| p.display().to_string()),
+            blob: blob.to_vec(),
+            verification: None,
+            outcome: format!("{:?}", rec.verdict).to_lowercase(),
+            record: Some(serde_json::to_string(rec).unwrap_or_default()),
+            station: station(),
+        })
+    }
+
+    /// Records a calibration without equipment (`calflash selfcal`): its JSON record
+    /// (`calflash.selfcal/1`, which `calflash compare` reads), its coefficients and covariance,
+    /// the report and the blob.
+    ///
+    /// # Errors
+    /// A message naming the history and why; nothing is written then.
+    pub fn record_selfcal(
+        &mut self,
+        serial: &str,
+        record: &serde_json::Value,
+        report: Option<&Path>,
+        blob: &[u8],
+    ) -> Result<i64, String> {
+        let coefficients = serde_json::json!({"accel": record["accel"], "gyro": record["gyro"]["matrix_rad_s_per_count"], "gyro_bias_counts": record["gyro"]["bias_counts"]});
+        let covariance = serde_json::json!({"accel": record["accel"]["covariance"], "gyro": record["gyro"]["covariance"]});
+        self.insert(Row {
+            serial: serial.into(),
+            kind: "fit".into(),
+            time: now(),
+            data_hash: blob_hash(blob).unwrap_or_default(),
+            model: Some("selfcal: accelerometer from |a| = g, gyro from rotations".into()),
+            coefficients: Some(coefficients.to_string()),
+            covariance: Some(covariance.to_string()),
+            report: report.map(|p| p.display().to_string()),
+            blob: blob.to_vec(),
+            verification: None,
+            outcome: record["verdict"].as_str().unwrap_or("").to_lowercase(),
+            record: Some(record.to_string()),
+            station: station(),
+        })
+    }
+
+    /// Records a health report read from the unit (`calflash health`): the verdict as the
+    /// outcome, the refined terms as the coefficients and covariance, the whole report as the
+    /// record, and the blob of the calibration it judged.
+    ///
+    /// # Errors
+    /// A message naming the history and why; nothing is written then.
+    pub fn record_health(
+        &mut self,
+        serial: &str,
+        blob: &[u8],
+        record: &serde_json::Value,
+    ) -> Result<i64, String> {
+        let health = &record["health"];
+        let coefficients = serde_json::json!({"bias": health["bias"]});
+        let covariance = serde_json::json!({"bias_sigma": health["bias_sigma"], "accel_covariance": health["accel_covariance"]});
+        self.insert(Row {
+            serial: serial.into(),
+            kind: "health".into(),
+            time: now(),
+            data_hash: blob_hash(blob).unwrap_or_default(),
+            model: Some("health at rest: refined biases (spincal::health)".into()),
+            coefficients: Some(coefficients.to_string()),
+            covariance: Some(covariance.to_string()),
+            report: None,
+            blob: blob.to_vec(),
+            verification: None,
+            outcome: health["verdict"].as_str().unwrap_or("").to_lowercase(),
+            record: Some(record.to_string()),
+            station: station(),
+        })
+    }
+
+    /// Records a flash (done or failed): the unit, the blob, the verification.
+    ///
+    /// # Errors
+    /// A message naming the history and why; nothing is written then.
+    pub fn record_flash(
+        &mut self,
+        unit: &str,
+        blob: &[u8],
+        verification: &serde_json::Value,
+        outcome: &str,
+    ) -> Result<i64, String> {
+        let sensor = crate::signing::calibration(blob)
+            .ok()
+            .map(|cal| format!("{:?}", cal.data().sensor));
+        self.insert(Row {
+            serial: unit.into(),
+            kind: "flash".into(),
+            time: now(),
+            data_hash: blob_hash(blob).unwrap_or_default(),
+            model: None,
+            coefficients: sensor,
+            covariance: None,
+            report: None,
+            blob: blob.to_vec(),
+            verification: Some(verification.to_string()),
+            outcome: outcome.into(),
+            record: None,
+            station: station(),
+        })
+    }
+
+    fn insert(&mut self, row: Row) -> Result<i64, String> {
+        let r = self.backend.insert(&row);
+        self.named(r)
+    }
+
+    /// A unit's history, oldest first.
+    ///
+    /// # Errors
+    /// A message naming the history and why.
+    pub fn history(&mut self, serial: &str) -> Result<Vec<Entry>, String> {
+        let r = self.backend.history(serial);
+        Ok(self
+            .named(r)?
+            .into_iter()
+            .map(|l| Entry {
+                signed_by: crate::signing::signer(&l.blob)
+                    .map(|(key, counter)| format!("{key} #{counter}")),
+                id: l.id,
+                kind: l.kind,
+                time: l.time,
+                data_hash: l.data_hash,
+                model: l.model,
+                outcome: l.outcome,
+                report: l.report,
+                blob_len: l.blob.len(),
+            })
+            .collect())
+    }
+
+    /// The newest fit of every unit whose serial starts with `prefix` (all units for an empty
+    /// one) recorded from `since` to `until` (Unix seconds, inclusive), at `station` when
+    /// given, oldest first.
+    ///
+    /// # Errors
+    /// A message naming the history and why; a station asked of a history without stations.
+    pub fn latest_fits(
+        &mut self,
+        prefix: &str,
+        since: i64,
+        until: i64,
+        station: Option<&str>,
+    ) -> Result<Vec<FitRow>, String> {
+        let r = self.backend.latest_fits(prefix, since, until, station);
+        self.named(r)
+    }
+
+    /// The highest counter of the signed blobs recorded for unit `serial` (0 for none).
+    ///
+    /// # Errors
+    /// A message naming the history and why.
+    pub fn highest_counter(&mut self, serial: &str) -> Result<u32, String> {
+        let r = self.backend.blobs(serial);
+        Ok(self
+            .named(r)?
+            .iter()
+            .filter_map(|b| crate::signing::signer(b).map(|(_, c)| c))
+            .max()
+            .unwrap_or(0))
+    }
+
+    /// The JSON record of calibration `id` (of `calflash calibrate` or `calflash selfcal`).
+    ///
+    /// # Errors
+    /// No such record, or a flash.
+    pub fn record(&mut self, id: i64) -> Result<String, String> {
+        let r = self.backend.record(id);
+        match self.named(r)? {
+            None => Err(format!("{}: no record {id}", self.location)),
+            Some(None) => Err(format!(
+                "{}: record {id} is a flash, not a calibration; compare calibrations (`calflash history` lists them)",
+                self.location
+            )),
+            Some(Some(t)) => Ok(t),
+        }
+    }
+
+    /// Copies every record of `from` that this history does not hold yet, in one transaction
+    /// (all or nothing; a second copy adds nothing); records of `from` without a station
+    /// (schema 2 and before) are given `station`. How many records `from` has and how many
+    /// were copied.
+    ///
+    /// # Errors
+    /// Either history's failure, named; nothing is written then.
+    pub fn copy_from(&mut self, from: &mut Db, station: &str) -> Result<(usize, usize), String> {
+        let r = from.backend.rows();
+        let mut rows = from.named(r)?;
+        for row in &mut rows {
+            if row.station.is_empty() {
+                row.station = station.to_string();
+            }
+        }
+        let r = self.backend.copy(&rows);
+        Ok((rows.len(), self.named(r)?))
+    }
+
+    /// Where the history is.
+    #[must_use]
+    pub fn location(&self) -> &Location {
+        &self.location
+    }
+}

@@ -1,0 +1,370 @@
+//! The unit history in a PostgreSQL database that several stations share
+//! (`--db postgres://USER:PASSWORD@HOST:PORT/DATABASE`).
+//!
+//! The same `records` table as the SQLite history, and its version in a one-row table
+//! `calflash_schema` (PostgreSQL has no `user_version`). A record is one `INSERT`, whole or
+//! absent; stations writing at once each get their own id from the table's sequence. The
+//! first station to open an empty database creates the tables, under an advisory lock so that
+//! two stations starting together do not both try. Connections are made without TLS (the
+//! plant's network or a local socket), with a 10 s timeout unless the URL sets one.
+
+use std::time::Duration;
+
+use postgres::error::SqlState;
+use postgres::types::{ToSql, Type};
+use postgres::{Client, NoTls};
+
+use super::{Backend, FitRow, Listed, Row, SCHEMA_VERSION};
+
+/// A PostgreSQL history.
+pub struct Postgres {
+    client: Client,
+}
+
+/// The tables of the present schema.
+const SCHEMA: &str = "CREATE TABLE calflash_schema (version INTEGER NOT NULL);
+CREATE TABLE records (
+    id BIGSERIAL PRIMARY KEY,
+    serial TEXT NOT NULL,
+    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health')),
+    time BIGINT NOT NULL,
+    data_hash TEXT NOT NULL,
+    model TEXT,
+    coefficients TEXT,
+    covariance TEXT,
+    report TEXT,
+    blob BYTEA NOT NULL,
+    verification TEXT,
+    outcome TEXT NOT NULL,
+    record TEXT,
+    station TEXT NOT NULL DEFAULT ''
+);
+CREATE INDEX records_serial ON records (serial, time);
+";
+
+/// The advisory lock under which a station creates the tables ("calf").
+const CREATE_LOCK: i64 = 0x6361_6c66;
+
+const COLUMNS: &str = "serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station";
+
+/// Why the server or the connection failed, in the station's words.
+fn why(e: &postgres::Error) -> String {
+    if let Some(db) = e.as_db_error() {
+        let msg = db.message();
+        let code = db.code();
+        return if *code == SqlState::INVALID_PASSWORD
+            || *code == SqlState::INVALID_AUTHORIZATION_SPECIFICATION
+        {
+            format!("the server refused the login: {msg}")
+        } else if *code == SqlState::INVALID_CATALOG_NAME {
+            format!("{msg} (the database must be created first: createdb, or CREATE DATABASE)")
+        } else if *code == SqlState::INSUFFICIENT_PRIVILEGE {
+            format!("the server refused: {msg} (the login may not read or write the history)")
+        } else if *code == SqlState::DISK_FULL {
+            format!("the server's disk is full: {msg}")
+        } else if *code == SqlState::READ_ONLY_SQL_TRANSACTION {
+            format!("the server only reads (a standby?): {msg}")
+        } else if code.code().starts_with("57") || code.code().starts_with("08") {
+            format!("the server is unavailable: {msg}")
+        } else {
+            format!("the server said: {msg}")
+        };
+    }
+    // The cause (a refused connection, a timeout) is in the error's sources.
+    let mut text = e.to_string();
+    let mut source = std::error::Error::source(e);
+    while let Some(s) = source {
+        text = format!("{text}: {s}");
+        source = s.source();
+    }
+    if text.contains("password missing") {
+        return "the server asks for a password and the URL gives none".into();
+    }
+    if e.is_closed() {
+        return format!("the connection to the server was lost ({text})");
+    }
+    format!("the server cannot be reached ({text}): is it running, and listening there?")
+}
+
+/// Connects to `url`.
+fn connect(url: &str) -> Result<Client, String> {
+    let mut config: postgres::Config = url
+        .parse()
+        .map_err(|e| format!("not a PostgreSQL URL this calflash reads: {e}"))?;
+    if config.get_connect_timeout().is_none() {
+        config.connect_timeout(Duration::from_secs(10));
+    }
+    config.application_name("calflash");
+    config.connect(NoTls).map_err(|e| why(&e))
+}
+
+/// Which of the tables are there: `(calflash_schema, records)`.
+fn tables(c: &mut impl postgres::GenericClient) -> Result<(bool, bool), String> {
+    let row = c
+        .query_one(
+            "SELECT to_regclass('calflash_schema') IS NOT NULL, to_regclass('records') IS NOT NULL",
+            &[],
+        )
+        .map_err(|e| why(&e))?;
+    Ok((row.get(0), row.get(1)))
+}
+
+/// Checks the version and columns of an existing history.
+fn check_schema(c: &mut impl postgres::GenericClient) -> Result<(), String> {
+    let version: Option<i32> = c
+        .query_one("SELECT max(version) FROM calflash_schema", &[])
+        .map_err(|e| why(&e))?
+        .get(0);
+    let version = i64::from(version.unwrap_or(0));
+    if version > SCHEMA_VERSION {
+        return Err(super::newer(version));
+    }
+    if version < SCHEMA_VERSION {
+        return Err(format!(
+            "its calflash_schema says schema {version}, which no calflash wrote on PostgreSQL \
+             (they write schema {SCHEMA_VERSION}); nothing was read or written"
+        ));
+    }
+    let have: Vec<String> = c
+        .query(
+            "SELECT column_name::text FROM information_schema.columns
+             WHERE table_name = 'records' AND table_schema = current_schema()",
+            &[],
+        )
+        .map_err(|e| why(&e))?
+        .iter()
+        .map(|r| r.get(0))
+        .collect();
+    super::check_columns(&have)
+}
+
+fn params(row: &Row) -> [&(dyn ToSql + Sync); 13] {
+    [
+        &row.serial,
+        &row.kind,
+        &row.time,
+        &row.data_hash,
+        &row.model,
+        &row.coefficients,
+        &row.covariance,
+        &row.report,
+        &row.blob,
+        &row.verification,
+        &row.outcome,
+        &row.record,
+        &row.station,
+    ]
+}
+
+impl Postgres {
+    /// Connects to the history at `url`, creating its tables in an empty database.
+    pub(super) fn open(url: &str) -> Result<Self, String> {
+        let mut client = connect(url)?;
+        let mut tx = client.transaction().map_err(|e| why(&e))?;
+        tx.execute("SELECT pg_advisory_xact_lock($1)", &[&CREATE_LOCK])
+            .map_err(|e| why(&e))?;
+        match tables(&mut tx)? {
+            (false, false) => {
+                tx.batch_execute(SCHEMA).map_err(|e| why(&e))?;
+                tx.execute(
+                    "INSERT INTO calflash_schema (version) VALUES ($1)",
+                    &[&(SCHEMA_VERSION as i32)],
+                )
+                .map_err(|e| why(&e))?;
+            }
+            (true, _) => check_schema(&mut tx)?,
+            (false, true) => return Err(not_ours()),
+        }
+        tx.commit().map_err(|e| why(&e))?;
+        Ok(Self { client })
+    }
+
+    /// Connects to the history at `url` to read it: never creates the tables.
+    pub(super) fn open_existing(url: &str) -> Result<Self, String> {
+        let mut client = connect(url)?;
+        match tables(&mut client)? {
+            (false, false) => Err(
+                "it holds no calflash history (nothing has been recorded there yet; the first \
+                 calibration recorded there creates it)"
+                    .into(),
+            ),
+            (false, true) => Err(not_ours()),
+            (true, _) => {
+                check_schema(&mut client)?;
+                Ok(Self { client })
+            }
+        }
+    }
+}
+
+fn not_ours() -> String {
+    "it has a table `records` but no `calflash_schema`: the table is not calflash's; nothing \
+     was read or written"
+        .into()
+}
+
+impl Backend for Postgres {
+    fn insert(&mut self, row: &Row) -> Result<i64, String> {
+        let sql = format!(
+            "INSERT INTO records ({COLUMNS}) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13) RETURNING id"
+        );
+        // One statement: PostgreSQL commits it whole or not at all.
+        self.client
+            .query_one(&sql, &params(row))
+            .map(|r| r.get(0))
+            .map_err(|e| why(&e))
+    }
+
+    fn copy(&mut self, rows: &[Row]) -> Result<usize, String> {
+        let mut tx = self.client.transaction().map_err(|e| why(&e))?;
+        tx.batch_execute(
+            "CREATE TEMPORARY TABLE incoming (ord BIGINT, serial TEXT, kind TEXT, time BIGINT,
+             data_hash TEXT, model TEXT, coefficients TEXT, covariance TEXT, report TEXT,
+             blob BYTEA, verification TEXT, outcome TEXT, record TEXT, station TEXT)
+             ON COMMIT DROP",
+        )
+        .map_err(|e| why(&e))?;
+        let sink = tx
+            .copy_in(&format!(
+                "COPY incoming (ord, {COLUMNS}) FROM STDIN (FORMAT binary)"
+            ))
+            .map_err(|e| why(&e))?;
+        let types = [
+            Type::INT8,
+            Type::TEXT,
+            Type::TEXT,
+            Type::INT8,
+            Type::TEXT,
+            Type::TEXT,
+            Type::TEXT,
+            Type::TEXT,
+            Type::TEXT,
+            Type::BYTEA,
+            Type::TEXT,
+            Type::TEXT,
+            Type::TEXT,
+            Type::TEXT,
+        ];
+        let mut w = postgres::binary_copy::BinaryCopyInWriter::new(sink, &types);
+        for (ord, row) in rows.iter().enumerate() {
+            let ord = ord as i64;
+            let mut values: Vec<&(dyn ToSql + Sync)> = vec![&ord];
+            values.extend(params(row));
+            w.write(&values).map_err(|e| why(&e))?;
+        }
+        w.finish().map_err(|e| why(&e))?;
+        // Only what the history did not hold before the copy: a second copy adds nothing.
+        let copied = tx
+            .execute(
+                &format!(
+                    "INSERT INTO records ({COLUMNS}) SELECT {COLUMNS} FROM incoming i
+                     WHERE NOT EXISTS (SELECT 1 FROM records r WHERE r.serial = i.serial
+                       AND r.kind = i.kind AND r.time = i.time AND r.data_hash = i.data_hash
+                       AND r.outcome = i.outcome AND r.station = i.station AND r.blob = i.blob)
+                     ORDER BY ord"
+                ),
+                &[],
+            )
+            .map_err(|e| why(&e))?;
+        tx.commit().map_err(|e| why(&e))?;
+        Ok(copied as usize)
+    }
+
+    fn history(&mut self, serial: &str) -> Result<Vec<Listed>, String> {
+        let rows = self
+            .client
+            .query(
+                "SELECT id, kind, time, data_hash, model, outcome, report, blob FROM records
+                 WHERE serial = $1 ORDER BY time, id",
+                &[&serial],
+            )
+            .map_err(|e| why(&e))?;
+        Ok(rows
+            .iter()
+            .map(|r| Listed {
+                id: r.get(0),
+                kind: r.get(1),
+                time: r.get(2),
+                data_hash: r.get(3),
+                model: r.get(4),
+                outcome: r.get(5),
+                report: r.get(6),
+                blob: r.get(7),
+            })
+            .collect())
+    }
+
+    fn latest_fits(
+        &mut self,
+        prefix: &str,
+        since: i64,
+        until: i64,
+        station: Option<&str>,
+    ) -> Result<Vec<FitRow>, String> {
+        // The newest fit per serial: the greatest (time, id) of its fits in the range.
+        let rows = self
+            .client
+            .query(
+                "SELECT serial, time, station, coefficients FROM (
+                   SELECT DISTINCT ON (serial) serial, time, id, station, coefficients
+                   FROM records
+                   WHERE kind = 'fit' AND left(serial, length($1)) = $1
+                     AND time BETWEEN $2 AND $3 AND ($4::text IS NULL OR station = $4)
+                   ORDER BY serial, time DESC, id DESC) n
+                 WHERE coefficients IS NOT NULL
+                 ORDER BY time, id",
+                &[&prefix, &since, &until, &station],
+            )
+            .map_err(|e| why(&e))?;
+        Ok(rows
+            .iter()
+            .map(|r| FitRow {
+                serial: r.get(0),
+                time: r.get(1),
+                station: r.get(2),
+                coefficients: r.get(3),
+            })
+            .collect())
+    }
+
+    fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, String> {
+        let rows = self
+            .client
+            .query("SELECT blob FROM records WHERE serial = $1", &[&serial])
+            .map_err(|e| why(&e))?;
+        Ok(rows.iter().map(|r| r.get(0)).collect())
+    }
+
+    fn record(&mut self, id: i64) -> Result<Option<Option<String>>, String> {
+        let row = self
+            .client
+            .query_opt("SELECT record FROM records WHERE id = $1", &[&id])
+            .map_err(|e| why(&e))?;
+        Ok(row.map(|r| r.get(0)))
+    }
+
+    fn rows(&mut self) -> Result<Vec<Row>, String> {
+        let rows = self
+            .client
+            .query(&format!("SELECT {COLUMNS} FROM records ORDER BY id"), &[])
+            .map_err(|e| why(&e))?;
+        Ok(rows
+            .iter()
+            .map(|r| Row {
+                serial: r.get(0),
+                kind: r.get(1),
+                time: r.get(2),
+                data_hash: r.get(3),
+                model: r.get(4),
+                coefficients: r.get(5),
+                covariance: r.get(6),
+                report: r.get(7),
+                blob: r.get(8),
+                verification: r.get(9),
+                outcome: r.get(10),
+                record: r.get(11),
+                station: r.get(12),
+            })
+            .collect())
+    }
+}

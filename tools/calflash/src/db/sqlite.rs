@@ -1,0 +1,641 @@
+//! The unit history in a SQLite file: the station's own, and the default.
+//!
+//! The schema version is SQLite's `PRAGMA user_version`. Each record is written in one
+//! transaction, so a failure (a read-only file, a full disk) leaves no half-written row; two
+//! processes writing at once wait for each other (a busy timeout of 5 s per statement).
+
+use std::path::{Path, PathBuf};
+
+use rusqlite::{Connection, ErrorCode, OpenFlags, OptionalExtension, params};
+
+use super::{Backend, FitRow, Listed, Row, SCHEMA_VERSION};
+
+/// A SQLite history.
+pub struct Sqlite {
+    pub(super) conn: Connection,
+    path: PathBuf,
+    /// The table has the recording station (schema 3; a version 2 file opened read-only has
+    /// not).
+    stations: bool,
+}
+
+/// Why SQLite failed, in the station's words.
+fn why(path: &Path, e: &rusqlite::Error) -> String {
+    match e.sqlite_error_code() {
+        Some(ErrorCode::ReadOnly) => "the database file is read-only".to_string(),
+        Some(ErrorCode::DiskFull) => "the disk (or the database's size limit) is full".to_string(),
+        Some(ErrorCode::SystemIoFailure) => format!(
+            "it cannot be written (disk I/O error: the file, or its journal {}-journal beside it, cannot be written)",
+            path.file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+        ),
+        Some(ErrorCode::CannotOpen) => {
+            "the database cannot be opened (a directory, or no permission)".to_string()
+        }
+        Some(ErrorCode::NotADatabase) => "the file is not a calflash database".to_string(),
+        _ => e.to_string(),
+    }
+}
+
+/// The `records` table of the present schema.
+macro_rules! records_table {
+    () => {
+        "CREATE TABLE IF NOT EXISTS records (
+    id INTEGER PRIMARY KEY,
+    serial TEXT NOT NULL,
+    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health')),
+    time INTEGER NOT NULL,
+    data_hash TEXT NOT NULL,
+    model TEXT,
+    coefficients TEXT,
+    covariance TEXT,
+    report TEXT,
+    blob BLOB NOT NULL,
+    verification TEXT,
+    outcome TEXT NOT NULL,
+    record TEXT,
+    station TEXT NOT NULL DEFAULT ''
+);
+CREATE INDEX IF NOT EXISTS records_serial ON records (serial, time);
+"
+    };
+}
+
+pub(super) const SCHEMA: &str = records_table!();
+
+/// Rebuilds a version 0 or 1 table under the present schema, in one transaction.
+const MIGRATE_FROM_1: &str = concat!(
+    "BEGIN;
+ALTER TABLE records RENAME TO records_v1;
+DROP INDEX IF EXISTS records_serial;
+",
+    records_table!(),
+    "INSERT INTO records (id, serial, kind, time, data_hash, model, coefficients, covariance,
+    report, blob, verification, outcome, record)
+    SELECT id, serial, kind, time, data_hash, model, coefficients, covariance, report, blob,
+    verification, outcome, record FROM records_v1;
+DROP TABLE records_v1;
+PRAGMA user_version = 3;
+COMMIT;
+"
+);
+
+/// Adds the recording station to a version 2 table, in one transaction.
+const MIGRATE_FROM_2: &str = "BEGIN;
+ALTER TABLE records ADD COLUMN station TEXT NOT NULL DEFAULT '';
+PRAGMA user_version = 3;
+COMMIT;
+";
+
+/// Checks the schema of an existing database; migrates older versions when `write`. Whether
+/// the table (now) has the `station` column.
+fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<bool, String> {
+    let version: i64 = conn
+        .query_row("PRAGMA user_version", [], |r| r.get(0))
+        .map_err(|e| why(path, &e))?;
+    if version > SCHEMA_VERSION {
+        return Err(super::newer(version));
+    }
+    let mut stmt = conn
+        .prepare("SELECT name FROM pragma_table_info('records')")
+        .map_err(|e| why(path, &e))?;
+    let have: Vec<String> = stmt
+        .query_map([], |r| r.get(0))
+        .and_then(Iterator::collect)
+        .map_err(|e| why(path, &e))?;
+    super::check_columns(&have)?;
+    if version < SCHEMA_VERSION && write {
+        let migrate = if version < 2 {
+            MIGRATE_FROM_1
+        } else {
+            MIGRATE_FROM_2
+        };
+        conn.execute_batch(migrate).map_err(|e| {
+            let _ = conn.execute_batch("ROLLBACK;");
+            why(path, &e)
+        })?;
+        return Ok(true);
+    }
+    Ok(have.iter().any(|h| h == "station"))
+}
+
+const INSERT: &str = "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station)
+     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)";
+
+fn insert_params(row: &Row) -> [&dyn rusqlite::ToSql; 13] {
+    [
+        &row.serial,
+        &row.kind,
+        &row.time,
+        &row.data_hash,
+        &row.model,
+        &row.coefficients,
+        &row.covariance,
+        &row.report,
+        &row.blob,
+        &row.verification,
+        &row.outcome,
+        &row.record,
+        &row.station,
+    ]
+}
+
+impl Sqlite {
+    /// Opens (creating when needed) the database at `path`.
+    pub(super) fn open(path: &Path) -> Result<Self, String> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+        }
+        let conn = Connection::open(path).map_err(|e| why(path, &e))?;
+        conn.busy_timeout(std::time::Duration::from_secs(5))
+            .map_err(|e| why(path, &e))?;
+        // Creating the schema writes: a read-only file fails here only if it is new.
+        let exists: bool = conn
+            .query_row(
+                "SELECT count(*) FROM sqlite_master WHERE name = 'records'",
+                [],
+                |r| r.get::<_, i64>(0),
+            )
+            .map_err(|e| why(path, &e))?
+            > 0;
+        if exists {
+            check_schema(&conn, path, true)?;
+        } else {
+            // No calflash table: a new file, or a database that is not ours to write into.
+            let version: i64 = conn
+                .query_row("PRAGMA user_version", [], |r| r.get(0))
+                .map_err(|e| why(path, &e))?;
+            let others: i64 = conn
+                .query_row("SELECT count(*) FROM sqlite_master", [], |r| r.get(0))
+                .map_err(|e| why(path, &e))?;
+            if version != 0 || others > 0 {
+                return Err(format!(
+                    "it has no table `records` but {} (schema {version}, {others} other \
+                     object(s)): it is not a calflash history this version can write; nothing \
+                     was written",
+                    if version > SCHEMA_VERSION {
+                        "was written by a newer program"
+                    } else {
+                        "is not empty"
+                    }
+                ));
+            }
+            conn.execute_batch(&format!(
+                "BEGIN; {SCHEMA} PRAGMA user_version = {SCHEMA_VERSION}; COMMIT;"
+            ))
+            .map_err(|e| why(path, &e))?;
+        }
+        Ok(Self {
+            conn,
+            path: path.to_path_buf(),
+            stations: true,
+        })
+    }
+
+    /// Opens an existing database to read it: never creates one, never writes.
+    pub(super) fn open_existing(path: &Path) -> Result<Self, String> {
+        if !path.is_file() {
+            return Err(
+                "there is none (give the one the station records in with --db, or $CALFLASH_DB)"
+                    .into(),
+            );
+        }
+        let conn = Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY)
+            .map_err(|e| why(path, &e))?;
+        conn.busy_timeout(std::time::Duration::from_secs(5))
+            .map_err(|e| why(path, &e))?;
+        let stations = check_schema(&conn, path, false)?;
+        Ok(Self {
+            conn,
+            path: path.to_path_buf(),
+            stations,
+        })
+    }
+
+    fn why(&self, e: &rusqlite::Error) -> String {
+        why(&self.path, e)
+    }
+}
+
+impl Backend for Sqlite {
+    fn insert(&mut self, row: &Row) -> Result<i64, String> {
+        let tx = self.conn.transaction().map_err(|e| why(&self.path, &e))?;
+        tx.execute(INSERT, insert_params(row).as_slice())
+            .map_err(|e| why(&self.path, &e))?;
+        let id = tx.last_insert_rowid();
+        tx.commit().map_err(|e| why(&self.path, &e))?;
+        Ok(id)
+    }
+
+    fn copy(&mut self, rows: &[Row]) -> Result<usize, String> {
+        let path = self.path.clone();
+        let tx = self.conn.transaction().map_err(|e| why(&path, &e))?;
+        let mut copied = 0;
+        // Only what the history did not hold before the copy: a second copy adds nothing.
+        let before: i64 = tx
+            .query_row("SELECT coalesce(max(id), 0) FROM records", [], |r| r.get(0))
+            .map_err(|e| why(&path, &e))?;
+        {
+            let mut present = tx
+                .prepare(
+                    "SELECT count(*) FROM records WHERE serial = ?1 AND kind = ?2 AND time = ?3
+                     AND data_hash = ?4 AND outcome = ?5 AND station = ?6 AND blob = ?7
+                     AND id <= ?8",
+                )
+                .map_err(|e| why(&path, &e))?;
+            let mut insert = tx.prepare(INSERT).map_err(|e| why(&path, &e))?;
+            for row in rows {
+                let n: i64 = present
+                    .query_row(
+                        params![
+                            row.serial,
+                            row.kind,
+                            row.time,
+                            row.data_hash,
+                            row.outcome,
+                            row.station,
+                            row.blob,
+                            before
+                        ],
+                        |r| r.get(0),
+                    )
+                    .map_err(|e| why(&path, &e))?;
+                if n == 0 {
+                    insert
+                        .execute(insert_params(row).as_slice())
+                        .map_err(|e| why(&path, &e))?;
+                    copied += 1;
+                }
+            }
+        }
+        tx.commit().map_err(|e| why(&path, &e))?;
+        Ok(copied)
+    }
+
+    fn history(&mut self, serial: &str) -> Result<Vec<Listed>, String> {
+        let mut st = self
+            .conn
+            .prepare("SELECT id, kind, time, data_hash, model, outcome, report, blob FROM records WHERE serial = ?1 ORDER BY time, id")
+            .map_err(|e| why(&self.path, &e))?;
+        let rows = st
+            .query_map([serial], |r| {
+                Ok(Listed {
+                    id: r.get(0)?,
+                    kind: r.get(1)?,
+                    time: r.get(2)?,
+                    data_hash: r.get(3)?,
+                    model: r.get(4)?,
+                    outcome: r.get(5)?,
+                    report: r.get(6)?,
+                    blob: r.get(7)?,
+                })
+            })
+            .map_err(|e| why(&self.path, &e))?;
+        rows.collect::<Result<_, _>>()
+            .map_err(|e| why(&self.path, &e))
+    }
+
+    fn latest_fits(
+        &mut self,
+        prefix: &str,
+        since: i64,
+        until: i64,
+        station: Option<&str>,
+    ) -> Result<Vec<FitRow>, String> {
+        if station.is_some() && !self.stations {
+            return Err(format!(
+                "it records no stations (schema 2, opened read-only: it gains them when a calflash of schema {SCHEMA_VERSION} writes to it)"
+            ));
+        }
+        let station_col = if self.stations { "r.station" } else { "''" };
+        let station_filter = if self.stations {
+            "AND (?4 IS NULL OR station = ?4)"
+        } else {
+            "AND ?4 IS NULL"
+        };
+        // The newest fit per serial: the greatest (time, id) of its fits in the range.
+        let sql = format!(
+            "SELECT r.serial, r.time, {station_col}, r.coefficients FROM records r
+             JOIN (SELECT serial, max(time * 1000000000 + id) AS k FROM records
+                   WHERE kind = 'fit' AND substr(serial, 1, length(?1)) = ?1
+                     AND time BETWEEN ?2 AND ?3 {station_filter}
+                   GROUP BY serial) n
+               ON r.serial = n.serial AND r.time * 1000000000 + r.id = n.k
+             WHERE r.coefficients IS NOT NULL
+             ORDER BY r.time, r.id"
+        );
+        let mut st = self.conn.prepare(&sql).map_err(|e| self.why(&e))?;
+        let rows = st
+            .query_map(params![prefix, since, until, station], |r| {
+                Ok(FitRow {
+                    serial: r.get(0)?,
+                    time: r.get(1)?,
+                    station: r.get(2)?,
+                    coefficients: r.get(3)?,
+                })
+            })
+            .map_err(|e| why(&self.path, &e))?;
+        rows.collect::<Result<_, _>>()
+            .map_err(|e| why(&self.path, &e))
+    }
+
+    fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, String> {
+        let mut st = self
+            .conn
+            .prepare("SELECT blob FROM records WHERE serial = ?1")
+            .map_err(|e| why(&self.path, &e))?;
+        let rows = st
+            .query_map([serial], |r| r.get(0))
+            .map_err(|e| why(&self.path, &e))?;
+        rows.collect::<Result<_, _>>()
+            .map_err(|e| why(&self.path, &e))
+    }
+
+    fn record(&mut self, id: i64) -> Result<Option<Option<String>>, String> {
+        self.conn
+            .query_row("SELECT record FROM records WHERE id = ?1", [id], |r| {
+                r.get(0)
+            })
+            .optional()
+            .map_err(|e| self.why(&e))
+    }
+
+    fn rows(&mut self) -> Result<Vec<Row>, String> {
+        let station = if self.stations { "station" } else { "''" };
+        let mut st = self
+            .conn
+            .prepare(&format!(
+                "SELECT serial, kind, time, data_hash, model, coefficients, covariance, report,
+                 blob, verification, outcome, record, {station} FROM records ORDER BY id"
+            ))
+            .map_err(|e| why(&self.path, &e))?;
+        let rows = st
+            .query_map([], |r| {
+                Ok(Row {
+                    serial: r.get(0)?,
+                    kind: r.get(1)?,
+                    time: r.get(2)?,
+                    data_hash: r.get(3)?,
+                    model: r.get(4)?,
+                    coefficients: r.get(5)?,
+                    covariance: r.get(6)?,
+                    report: r.get(7)?,
+                    blob: r.get(8)?,
+                    verification: r.get(9)?,
+                    outcome: r.get(10)?,
+                    record: r.get(11)?,
+                    station: r.get(12)?,
+                })
+            })
+            .map_err(|e| why(&self.path, &e))?;
+        rows.collect::<Result<_, _>>()
+            .map_err(|e| why(&self.path, &e))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Db, Location};
+    use super::*;
+
+    /// A history over the connection `s`, whose settings the test changes.
+    fn db(s: Sqlite) -> Db {
+        let location = Location::File(s.path.clone());
+        Db {
+            backend: Box::new(s),
+            location,
+        }
+    }
+
+    fn user_version(path: &Path) -> i64 {
+        Connection::open(path)
+            .unwrap()
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .unwrap()
+    }
+
+    fn flash(db: &mut Db) -> Result<i64, String> {
+        db.record_flash(
+            "UNIT-1",
+            &[0u8; 4000],
+            &serde_json::json!({"ok": true}),
+            "verified",
+        )
+    }
+
+    /// A history of schema 1 (fits and flashes only) takes health reports once migrated, and
+    /// keeps every record it had.
+    #[test]
+    fn a_schema_1_history_is_migrated_and_keeps_its_records() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        {
+            let c = Connection::open(&path).unwrap();
+            let old = SCHEMA.replace("'fit', 'flash', 'health'", "'fit', 'flash'");
+            c.execute_batch(&format!("{old} PRAGMA user_version = 1;"))
+                .unwrap();
+            c.execute(
+                "INSERT INTO records (serial, kind, time, data_hash, blob, outcome) \
+                 VALUES ('UNIT-1', 'flash', 5, 'ab', x'00', 'verified')",
+                [],
+            )
+            .unwrap();
+            // Schema 1 refuses a health report.
+            assert!(
+                c.execute(
+                    "INSERT INTO records (serial, kind, time, data_hash, blob, outcome) \
+                     VALUES ('UNIT-1', 'health', 6, 'ab', x'00', 'ok')",
+                    [],
+                )
+                .is_err()
+            );
+        }
+        let mut db = Db::open(&path).unwrap();
+        assert_eq!(user_version(&path), SCHEMA_VERSION);
+        let record = serde_json::json!({"health": {"verdict": "DRIFTED", "bias": [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]}});
+        db.record_health("UNIT-1", &[0u8; 4], &record).unwrap();
+        let kinds: Vec<(String, String)> = db
+            .history("UNIT-1")
+            .unwrap()
+            .into_iter()
+            .map(|e| (e.kind, e.outcome))
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                ("flash".to_string(), "verified".to_string()),
+                ("health".to_string(), "drifted".to_string())
+            ]
+        );
+    }
+
+    #[test]
+    fn a_schema_2_history_reads_without_stations_and_gains_them_when_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        let c = Connection::open(&path).unwrap();
+        c.execute_batch(&format!(
+            "{SCHEMA} ALTER TABLE records DROP COLUMN station; PRAGMA user_version = 2;
+             INSERT INTO records (serial, kind, time, data_hash, coefficients, blob, outcome)
+             VALUES ('U-1', 'fit', 10, 'h', '[]', x'', 'accept');"
+        ))
+        .unwrap();
+        drop(c);
+        // Read-only: no stations, and a station asked for is refused with the reason.
+        let mut d = Db::open_existing(&path).unwrap();
+        let rows = d.latest_fits("U-", 0, 100, None).unwrap();
+        assert_eq!((rows.len(), rows[0].station.as_str()), (1, ""));
+        let e = d.latest_fits("U-", 0, 100, Some("A")).unwrap_err();
+        assert!(e.contains("records no stations (schema 2"), "{e}");
+        drop(d);
+        // Written: migrated in one step, the old record kept with no station.
+        let mut d = Db::open(&path).unwrap();
+        assert_eq!(user_version(&path), SCHEMA_VERSION);
+        let rows = d.latest_fits("U-", 0, 100, Some("")).unwrap();
+        assert_eq!(rows.len(), 1);
+        assert!(d.latest_fits("U-", 0, 100, Some("A")).unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_full_database_says_so_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        flash(&mut Db::open(&path).unwrap()).unwrap();
+        let s = Sqlite::open(&path).unwrap();
+        let pages: i64 = s
+            .conn
+            .query_row("PRAGMA page_count", [], |r| r.get(0))
+            .unwrap();
+        // The size limit stands in for a full disk: SQLite reports both as SQLITE_FULL.
+        let _: i64 = s
+            .conn
+            .query_row(&format!("PRAGMA max_page_count = {pages}"), [], |r| {
+                r.get(0)
+            })
+            .unwrap();
+        let mut db = db(s);
+        let e = flash(&mut db).unwrap_err();
+        assert_eq!(
+            e,
+            format!(
+                "the unit history database {}: the disk (or the database's size limit) is full",
+                path.display()
+            )
+        );
+        assert_eq!(
+            db.history("UNIT-1").unwrap().len(),
+            1,
+            "the failed record left nothing behind"
+        );
+    }
+
+    #[test]
+    fn a_read_only_database_says_so() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        flash(&mut Db::open(&path).unwrap()).unwrap();
+        let mut perms = std::fs::metadata(&path).unwrap().permissions();
+        perms.set_readonly(true);
+        std::fs::set_permissions(&path, perms).unwrap();
+        if std::fs::OpenOptions::new().append(true).open(&path).is_ok() {
+            // Root writes read-only files; the journal test in host-tests/tests/flash_faults.rs
+            // covers an unwritable database there.
+            println!(
+                "a_read_only_database_says_so: skipped, running as a user who can write read-only files (root)"
+            );
+            return;
+        }
+        let mut db = Db::open(&path).unwrap();
+        let e = flash(&mut db).unwrap_err();
+        assert_eq!(
+            e,
+            format!(
+                "the unit history database {}: the database file is read-only",
+                path.display()
+            )
+        );
+        assert_eq!(db.history("UNIT-1").unwrap().len(), 1);
+    }
+
+    #[test]
+    fn a_file_that_is_not_a_database_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        std::fs::write(&path, b"serial,time\nUNIT-1,0\n".repeat(100)).unwrap();
+        let e = Db::open(&path).err().unwrap();
+        assert_eq!(
+            e,
+            format!(
+                "the unit history database {}: the file is not a calflash database",
+                path.display()
+            )
+        );
+    }
+
+    #[test]
+    fn the_schema_version_is_checked_and_reading_creates_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("units.sqlite");
+        // Reading a database that is not there creates nothing.
+        let e = Db::open_existing(&path).err().unwrap();
+        assert!(e.contains("there is none"), "{e}");
+        assert!(!path.exists());
+        let deep = dir.path().join("a/b/units.sqlite");
+        assert!(Db::open_existing(&deep).is_err());
+        assert!(!dir.path().join("a").exists());
+        // A new database carries the version.
+        flash(&mut Db::open(&path).unwrap()).unwrap();
+        let conn = Connection::open(&path).unwrap();
+        let v: i64 = conn
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .unwrap();
+        assert_eq!(v, SCHEMA_VERSION);
+        // A database of the releases before versioning (version 0) is migrated on write.
+        conn.execute_batch("PRAGMA user_version = 0").unwrap();
+        assert_eq!(
+            Db::open_existing(&path)
+                .unwrap()
+                .history("UNIT-1")
+                .unwrap()
+                .len(),
+            1
+        );
+        flash(&mut Db::open(&path).unwrap()).unwrap();
+        let v: i64 = conn
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .unwrap();
+        assert_eq!(v, SCHEMA_VERSION);
+        // A newer schema is refused, written into by nobody.
+        conn.execute_batch("PRAGMA user_version = 7").unwrap();
+        for e in [
+            Db::open(&path).err().unwrap(),
+            Db::open_existing(&path).err().unwrap(),
+        ] {
+            assert!(e.contains("newer calflash (schema 7)"), "{e}");
+        }
+        // An altered table is named, not answered with raw SQL.
+        conn.execute_batch("PRAGMA user_version = 1; ALTER TABLE records RENAME COLUMN time TO t")
+            .unwrap();
+        let e = Db::open_existing(&path).err().unwrap();
+        assert!(e.contains("no column `time`"), "{e}");
+        // Another program's database, and a newer one without our table, are left alone.
+        for (name, sql) in [
+            ("other.sqlite", "CREATE TABLE parts (id INTEGER)"),
+            ("newer.sqlite", "PRAGMA user_version = 9"),
+        ] {
+            let p = dir.path().join(name);
+            Connection::open(&p).unwrap().execute_batch(sql).unwrap();
+            let e = Db::open(&p).err().unwrap();
+            assert!(e.contains("it has no table `records`"), "{e}");
+            let c = Connection::open(&p).unwrap();
+            let tables: i64 = c
+                .query_row(
+                    "SELECT count(*) FROM sqlite_master WHERE name = 'records'",
+                    [],
+                    |r| r.get(0),
+                )
+                .unwrap();
+            assert_eq!(tables, 0, "{name}: nothing written");
+        }
+    }
+}
