@@ -14,7 +14,7 @@ mod pg_server;
 use std::hint::black_box;
 use std::path::PathBuf;
 
-use calflash::db::{Db, Location};
+use calflash::db::{Db, Location, Selection};
 use calflash::stats::chart::Kind;
 use criterion::{Criterion, criterion_group, criterion_main};
 
@@ -37,7 +37,11 @@ fn history() -> PathBuf {
 
 /// `calflash lot LOT- --chart ax:1 --chart ax:input --report`, without the terminal's lines.
 fn lot(location: &Location) -> usize {
-    let lot = calflash::cmd::lot::load(location, "LOT-", None, None, None, 0.001).unwrap();
+    let sel = Selection {
+        prefix: "LOT-",
+        ..Selection::all()
+    };
+    let lot = calflash::cmd::lot::load(location, &sel, 0.001).unwrap();
     assert_eq!(lot.units.len(), UNITS);
     let charts = vec![
         (
@@ -49,7 +53,7 @@ fn lot(location: &Location) -> usize {
             lot.chart("ax:input", Kind::Ewma, None).unwrap(),
         ),
     ];
-    let html = calflash::report::lot::render(&lot, "LOT-", &charts).unwrap();
+    let html = calflash::report::lot::render(&lot, &sel.to_string(), &charts).unwrap();
     black_box(lot.outliers.len() + html.len())
 }
 

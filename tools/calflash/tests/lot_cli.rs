@@ -170,8 +170,9 @@ fn a_drifting_process_is_out_of_control_on_its_chart() {
     assert!(late * 10 >= out_of_control.len() * 8, "{out_of_control:?}");
 }
 
-/// `calibrate --lot`: a unit whose bias is unlike its lot's is a REVIEW that names the bias; a
-/// unit like its lot is not; the lot is the history's other units with the prefix.
+/// `calibrate --lot NAME`: the unit is recorded in lot NAME and compared with the lot's other
+/// units: one whose bias is unlike theirs is a REVIEW that names the bias, one like them is
+/// not. A batch compares each of its units with the lot as it stood before the batch.
 #[test]
 fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
     let dir = tempfile::tempdir().unwrap();
@@ -184,7 +185,7 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
         .unwrap(),
     )
     .unwrap();
-    let unit = |i: u64, bias_shift: f64| {
+    let simulate = |i: u64, bias_shift: f64, obs: &str| {
         let mut t = truth.clone();
         // Units of one process: biases and scale factors spread a little.
         let spread = (i as f64 * 0.618_034).fract() - 0.5;
@@ -192,7 +193,6 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
         t["k1"] = (t["k1"].as_f64().unwrap() * (1.0 + 0.002 * spread)).into();
         let name = format!("t{i}.json");
         std::fs::write(d.join(&name), t.to_string()).unwrap();
-        let obs = format!("obs{i}.csv");
         let (code, out, err) = calflash(
             d,
             &[
@@ -207,10 +207,14 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
                 "--seed",
                 &i.to_string(),
                 "-o",
-                &obs,
+                obs,
             ],
         );
         assert_eq!(code, 0, "{out}{err}");
+    };
+    let unit = |i: u64, bias_shift: f64| {
+        let obs = format!("obs{i}.csv");
+        simulate(i, bias_shift, &obs);
         let serial = format!("ACC-7-{i:03}");
         calflash(
             d,
@@ -224,7 +228,7 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
                 "--db",
                 "units.sqlite",
                 "--lot",
-                "ACC-7-",
+                "L-0419",
             ],
         )
     };
@@ -237,7 +241,8 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
         assert_eq!(code, 0, "{out}{err}");
         if i >= 3 {
             assert!(
-                out.contains("lot `ACC-7-`") && out.contains("within the limit"),
+                out.contains(&format!("lot `L-0419` ({i} units)"))
+                    && out.contains("within the limit"),
                 "{out}"
             );
         }
@@ -247,6 +252,50 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("REVIEW"), "{out}");
     assert!(out.contains("unlike its lot in output:1 z=+"), "{out}");
+    // The lot is what the history says it is.
+    let (code, out, err) = calflash(d, &["lot", "--lot", "L-0419", "--db", "units.sqlite"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("calflash lot  lot `L-0419`: 13 units"),
+        "{out}"
+    );
+    let (code, out, err) = calflash(
+        d,
+        &["history", "ACC-7-012", "--db", "units.sqlite", "--json"],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let h: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(h[0]["lot"], "L-0419");
+    // A batch of three, one of them odd: each compared with the 13 units before the batch.
+    std::fs::create_dir_all(d.join("batch")).unwrap();
+    std::fs::create_dir_all(d.join("out")).unwrap();
+    for (i, shift) in [(20, 0.0), (21, 40.0), (22, 0.0)] {
+        simulate(i, shift, &format!("batch/ACC-7-{i:03}.csv"));
+    }
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "batch",
+            "--sensor",
+            "single-accel",
+            "--out-dir",
+            "out",
+            "--db",
+            "units.sqlite",
+            "--lot",
+            "L-0419",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    for (i, odd) in [(20, false), (21, true), (22, false)] {
+        let said = std::fs::read_to_string(d.join(format!("out/ACC-7-{i:03}.txt"))).unwrap();
+        assert!(said.contains("lot `L-0419` (13 units)"), "{said}");
+        assert_eq!(said.contains("unlike its lot in output:1"), odd, "{said}");
+    }
+    let (code, out, _) = calflash(d, &["lot", "--lot", "L-0419", "--db", "units.sqlite"]);
+    assert_eq!(code, 0);
+    assert!(out.contains(": 16 units"), "{out}");
 }
 
 /// Two stations record one lot: the charts are drawn over the lot and per station, where a

@@ -85,6 +85,23 @@ pub fn calibrate_all(
         )
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
+    // The lot as it stood before the batch, without the batch's units: judged once, so that
+    // every unit is compared with the same lot whatever order the threads take them in.
+    let lot_before = args.out.lot.as_deref().map(|name| {
+        let serials: std::collections::HashSet<&str> =
+            units.iter().map(|(s, _)| s.as_str()).collect();
+        let sel = crate::db::Selection {
+            lot: Some(name),
+            ..crate::db::Selection::all()
+        };
+        let path = crate::db::Location::or_default(args.out.db.as_ref());
+        std::sync::Arc::new(crate::cmd::lot::load_without(
+            &path,
+            &sel,
+            |s| serials.contains(s),
+            0.001,
+        ))
+    });
     let outcomes: Vec<Outcome> = units
         .par_iter()
         .map(|(serial, file)| {
@@ -98,6 +115,7 @@ pub fn calibrate_all(
                 sign_key: args.out.sign_key.clone(),
                 counter: None,
                 lot: args.out.lot.clone(),
+                lot_before: lot_before.clone(),
             };
             let mut said = String::new();
             let result = calibrate_one(args, file, serial, &out, &mut said);

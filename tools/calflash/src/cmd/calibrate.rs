@@ -269,7 +269,8 @@ pub fn calibrate_one(
     }
     let data_name = data.display().to_string();
     // Against its lot: judged on the coefficients the history keeps.
-    let provisional = Record::new(&c, &data_name);
+    let mut provisional = Record::new(&c, &data_name);
+    provisional.lot.clone_from(&out.lot);
     let coefficients = crate::lot::coefficients(
         &serde_json::Value::from(crate::db::fit_coefficients(&provisional)).to_string(),
     )?;
@@ -291,6 +292,7 @@ pub fn calibrate_one(
         None => (None, None),
     };
     let mut record = Record::new(&c, &data_name);
+    record.lot.clone_from(&out.lot);
     record.blob = blob.as_deref().map(hex).unwrap_or_default();
     out.write(blob.as_deref(), &record, || {
         report::html::render(&c, &data_name)

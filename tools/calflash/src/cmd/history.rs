@@ -41,13 +41,18 @@ pub fn run(args: &HistoryArgs) -> Result<(), String> {
     );
     for r in &rows {
         println!(
-            "  db:{:<5} {:<5} {} UTC  {:<9} data {}  blob {} bytes{}{}{}",
+            "  db:{:<5} {:<5} {} UTC  {:<9} data {}  blob {} bytes{}{}{}{}",
             r.id,
             r.kind,
             format_time(r.time),
             r.outcome,
             r.data_hash.get(..12).unwrap_or(&r.data_hash),
             r.blob_len,
+            if r.lot.is_empty() {
+                String::new()
+            } else {
+                format!("  lot {}", r.lot)
+            },
             r.signed_by
                 .as_ref()
                 .map(|s| format!("  signed by key {s}"))

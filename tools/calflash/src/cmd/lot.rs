@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use crate::db::{Db, Location};
+use crate::db::{Db, Location, Selection};
 use crate::lot::{self, Judge, Unit};
 use crate::stats::chart;
 
@@ -12,9 +12,13 @@ use crate::stats::chart;
 /// robust distance from the lot with the units outside named, and control charts.
 #[derive(Debug, Args)]
 pub struct LotArgs {
-    /// The lot: a serial prefix (`IMU-24-` takes IMU-24-0001, IMU-24-0002, ...); empty for
-    /// every unit.
+    /// Units whose serial starts with this (`IMU-24-` takes IMU-24-0001, IMU-24-0002, ...);
+    /// none for every unit (of the lot, with --lot).
+    #[arg(default_value = "")]
     pub prefix: String,
+    /// Units calibrated in this production lot (`calflash calibrate --lot NAME`).
+    #[arg(long, value_name = "NAME")]
+    pub lot: Option<String>,
     /// Only fits recorded from this date (YYYY-MM-DD, UTC).
     #[arg(long, value_parser = super::values::date)]
     pub since: Option<i64>,
@@ -56,41 +60,35 @@ pub enum ChartKind {
     Ewma,
 }
 
-/// The lot `prefix` from the history at `path` without the unit `serial` (a unit being
-/// calibrated is compared with the others), judged at `alpha`.
+/// The units `sel` takes from the history at `path`, without those `excluded` (the units
+/// being calibrated are compared with the others), judged at `alpha`.
 ///
 /// # Errors
 /// As [`load`].
 pub fn load_without(
     path: &Location,
-    prefix: &str,
-    serial: &str,
+    sel: &Selection<'_>,
+    excluded: impl Fn(&str) -> bool,
     alpha: f64,
 ) -> Result<lot::Lot, String> {
-    let mut units = units(path, prefix, None, None, None)?;
-    units.retain(|u| u.serial != serial);
-    judge(path, prefix, units, alpha)
+    let mut units = units(path, sel)?;
+    units.retain(|u| !excluded(&u.serial));
+    judge(path, sel, units, alpha)
 }
 
-fn judge(path: &Location, prefix: &str, units: Vec<Unit>, alpha: f64) -> Result<lot::Lot, String> {
-    lot::judge(units, alpha).map_err(|e| format!("lot `{prefix}` in {}: {e}", path))
-}
-
-/// Every unit of the lot `prefix` with its newest fit in the date range.
-fn units(
+fn judge(
     path: &Location,
-    prefix: &str,
-    since: Option<i64>,
-    until: Option<i64>,
-    station: Option<&str>,
-) -> Result<Vec<Unit>, String> {
+    sel: &Selection<'_>,
+    units: Vec<Unit>,
+    alpha: f64,
+) -> Result<lot::Lot, String> {
+    lot::judge(units, alpha).map_err(|e| format!("{sel} in {path}: {e}"))
+}
+
+/// Every unit `sel` takes, with its newest fit.
+fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, String> {
     let mut d = Db::open_existing(path)?;
-    let rows = d.latest_fits(
-        prefix,
-        since.unwrap_or(i64::MIN),
-        until.map_or(i64::MAX, |u| u + 86_399),
-        station,
-    )?;
+    let rows = d.latest_fits(sel)?;
     rows.into_iter()
         .map(|row| {
             lot::coefficients(&row.coefficients)
@@ -100,29 +98,17 @@ fn units(
                     station: row.station,
                     coefficients,
                 })
-                .map_err(|e| format!("{}: the fit of {}: {e}", path, row.serial))
+                .map_err(|e| format!("{path}: the fit of {}: {e}", row.serial))
         })
         .collect()
 }
 
-/// The lot `prefix` from the history at `path`, judged at `alpha`.
+/// The units `sel` takes from the history at `path`, judged at `alpha`.
 ///
 /// # Errors
 /// An unreadable history, too few units, or no shared coefficients.
-pub fn load(
-    path: &Location,
-    prefix: &str,
-    since: Option<i64>,
-    until: Option<i64>,
-    station: Option<&str>,
-    alpha: f64,
-) -> Result<lot::Lot, String> {
-    judge(
-        path,
-        prefix,
-        units(path, prefix, since, until, station)?,
-        alpha,
-    )
+pub fn load(path: &Location, sel: &Selection<'_>, alpha: f64) -> Result<lot::Lot, String> {
+    judge(path, sel, units(path, sel)?, alpha)
 }
 
 /// Runs `calflash lot`.
@@ -136,14 +122,14 @@ pub fn run(args: &LotArgs) -> Result<(), String> {
         .output("--json", args.json.as_deref())
         .output("--report", args.report.as_deref())
         .check()?;
-    let lot = load(
-        &path,
-        &args.prefix,
-        args.since,
-        args.until,
-        args.station.as_deref(),
-        args.alpha,
-    )?;
+    let sel = Selection {
+        prefix: &args.prefix,
+        lot: args.lot.as_deref(),
+        since: args.since.unwrap_or(i64::MIN),
+        until: args.until.map_or(i64::MAX, |u| u + 86_399),
+        station: args.station.as_deref(),
+    };
+    let lot = load(&path, &sel, args.alpha)?;
     let kind = match args.chart_kind {
         ChartKind::Individuals => chart::Kind::Individuals,
         ChartKind::Ewma => chart::Kind::Ewma,
@@ -160,8 +146,7 @@ pub fn run(args: &LotArgs) -> Result<(), String> {
         }
     }
     println!(
-        "calflash lot  `{}`: {} units, {} coefficients ({} in {})",
-        args.prefix,
+        "calflash lot  {sel}: {} units, {} coefficients ({} in {})",
         lot.units.len(),
         lot.names.len(),
         match &lot.judge {
@@ -239,7 +224,7 @@ pub fn run(args: &LotArgs) -> Result<(), String> {
         );
     }
     if let Some(p) = &args.report {
-        let html = crate::report::lot::render(&lot, &args.prefix, &charts)?;
+        let html = crate::report::lot::render(&lot, &sel.to_string(), &charts)?;
         crate::files::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
         println!("  report: {}", p.display());
     }
@@ -247,6 +232,7 @@ pub fn run(args: &LotArgs) -> Result<(), String> {
         let v = serde_json::json!({
             "schema": "calflash.lot/1",
             "prefix": args.prefix,
+            "lot": args.lot,
             "units": lot.units.len(),
             "coefficients": lot.names,
             "left_out": lot.left_out,

@@ -39,10 +39,15 @@ pub struct Outputs {
     /// highest counter of the unit's blobs in the history).
     #[arg(long)]
     pub counter: Option<u32>,
-    /// Compare the unit with its lot in the history (a serial prefix, as `calflash lot`): a
-    /// unit unlike its lot is a REVIEW that names the coefficients that make it so.
-    #[arg(long, value_name = "PREFIX")]
+    /// The unit's production lot: recorded with its calibration (`calflash lot --lot NAME`
+    /// takes the lot's units), and the unit compared with the lot's other units in the
+    /// history: one unlike them is a REVIEW that names the coefficients that make it so.
+    #[arg(long, value_name = "NAME")]
     pub lot: Option<String>,
+    /// The lot as it stood before a batch, judged once, for every unit of the batch (`None`:
+    /// read from the history for the unit).
+    #[arg(skip)]
+    pub lot_before: Option<std::sync::Arc<Result<crate::lot::Lot, String>>>,
 }
 
 /// A blob as written: signed or not, and what to say about it.
@@ -79,9 +84,21 @@ impl Outputs {
         alpha: f64,
     ) -> Option<crate::sensor::Finding> {
         use crate::sensor::{Finding, Verdict};
-        let prefix = self.lot.as_deref()?;
-        let path = crate::db::Location::or_default(self.db.as_ref());
-        let placed = crate::cmd::lot::load_without(&path, prefix, serial, alpha).and_then(|lot| {
+        let name = self.lot.as_deref()?;
+        let read;
+        let lot = match &self.lot_before {
+            Some(before) => before.as_ref().as_ref(),
+            None => {
+                let path = crate::db::Location::or_default(self.db.as_ref());
+                let sel = crate::db::Selection {
+                    lot: Some(name),
+                    ..crate::db::Selection::all()
+                };
+                read = crate::cmd::lot::load_without(&path, &sel, |s| s == serial, alpha);
+                read.as_ref()
+            }
+        };
+        let placed = lot.map_err(Clone::clone).and_then(|lot| {
             lot.place(coefficients)
                 .map(|(o, outside)| (o, outside, lot.units.len(), lot.distance_limit()))
         });
@@ -99,7 +116,7 @@ impl Outputs {
                         Verdict::Accept
                     },
                     text: format!(
-                        "lot `{prefix}` ({n} units): distance {:.2} {} the limit {limit:.2}{}",
+                        "lot `{name}` ({n} units): distance {:.2} {} the limit {limit:.2}{}",
                         o.distance,
                         if outside { "beyond" } else { "within" },
                         if outside {

@@ -82,6 +82,9 @@ fn gravity(s: &str) -> Result<f64, String> {
 /// # Errors
 /// Bad input, or a recording that cannot calibrate the unit (the message says what to do).
 pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
+    if args.out.lot.is_some() {
+        return Err("--lot: lots are judged on the coefficients of `calflash calibrate` (bias and scale per axis); a calibration without equipment has others, so it joins no lot".into());
+    }
     args.out.check(
         Paths::new()
             .input("the accelerometer recording", Some(&args.acc))

@@ -96,6 +96,8 @@ pub struct Entry {
     pub blob_len: usize,
     /// The station key that signed the blob and its counter (`KEYID #COUNTER`), when signed.
     pub signed_by: Option<String>,
+    /// The production lot the unit was calibrated in (empty: none given).
+    pub lot: String,
 }
 
 /// The coefficients of a fit as the history keeps them (and `calflash lot` reads them): per
@@ -107,6 +109,46 @@ pub fn fit_coefficients(rec: &Record) -> Vec<serde_json::Value> {
         .iter()
         .map(|p| serde_json::json!({"temp": p.temp, "volt": p.volt, "axes": p.axes.iter().map(|a| serde_json::json!({"output": a.output, "terms": a.terms, "coefficients": a.coefficients, "std_errors": a.std_errors})).collect::<Vec<_>>()}))
         .collect()
+}
+
+/// Which units' newest fits `calflash lot` takes.
+#[derive(Debug, Clone, Copy)]
+pub struct Selection<'a> {
+    /// Serials that start with this (all for an empty one).
+    pub prefix: &'a str,
+    /// Recorded in this production lot (`calibrate --lot`), when given.
+    pub lot: Option<&'a str>,
+    /// Fits recorded from this time (Unix seconds, inclusive).
+    pub since: i64,
+    /// Fits recorded up to this time (inclusive).
+    pub until: i64,
+    /// Recorded by this station, when given.
+    pub station: Option<&'a str>,
+}
+
+impl Selection<'_> {
+    /// Every unit's newest fit, ever.
+    #[must_use]
+    pub fn all() -> Selection<'static> {
+        Selection {
+            prefix: "",
+            lot: None,
+            since: i64::MIN,
+            until: i64::MAX,
+            station: None,
+        }
+    }
+}
+
+impl std::fmt::Display for Selection<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (self.lot, self.prefix) {
+            (Some(lot), "") => write!(f, "lot `{lot}`"),
+            (Some(lot), p) => write!(f, "lot `{lot}`, serials `{p}*`"),
+            (None, "") => f.write_str("every unit"),
+            (None, p) => write!(f, "`{p}`"),
+        }
+    }
 }
 
 /// A unit's newest fit, for `calflash lot`.
@@ -157,12 +199,13 @@ fn now() -> i64 {
 
 /// The schema version this calflash reads and writes. On SQLite (`PRAGMA user_version`)
 /// version 0 is a database of the releases before versioning, version 1 one whose records are
-/// fits and flashes only, version 2 one without the recording station; all are migrated (in
-/// one transaction) when written to: versions 0 and 1 by rebuilding the table so that it also
-/// takes the unit's health reports, version 2 by adding the `station` column (empty for the
-/// records before it). Read-only, a version 2 database reads with no stations. On PostgreSQL
-/// (table `calflash_schema`) every history is of this version.
-pub const SCHEMA_VERSION: i64 = 3;
+/// fits and flashes only, version 2 one without the recording station, version 3 one without
+/// the production lot; all are migrated (in one transaction) when written to: versions 0 and 1
+/// by rebuilding the table so that it also takes the unit's health reports, versions 2 and 3
+/// by adding the columns they lack (empty for the records before them). On PostgreSQL (table
+/// `calflash_schema`) version 3 lacks the lot and gains it when written to. Read-only, an
+/// older history reads with no stations or lots.
+pub const SCHEMA_VERSION: i64 = 4;
 
 /// The refusal of a history of a newer schema.
 fn newer(version: i64) -> String {
@@ -188,13 +231,55 @@ const COLUMNS: [&str; 13] = [
     "record",
 ];
 
-/// Checks that a table with columns `have` is calflash's `records`.
-fn check_columns(have: &[String]) -> Result<(), String> {
+/// The columns that older schemas lack.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Later {
+    /// `station` (schema 3).
+    station: bool,
+    /// `lot` (schema 4).
+    lot: bool,
+}
+
+impl Later {
+    /// All of them: the present schema.
+    const ALL: Self = Self {
+        station: true,
+        lot: true,
+    };
+
+    /// The SQL of column `name` (present in the table when `have`): the column, else an empty
+    /// text.
+    fn column(have: bool, name: &str) -> &str {
+        if have { name } else { "''" }
+    }
+
+    /// Refuses a selection by a column the history lacks.
+    fn check(self, sel: &Selection<'_>) -> Result<(), String> {
+        for (asked, have, what) in [
+            (sel.station.is_some(), self.station, "stations"),
+            (sel.lot.is_some(), self.lot, "lots"),
+        ] {
+            if asked && !have {
+                return Err(format!(
+                    "it records no {what} (an older schema, opened to read: it gains them when a calflash of schema {SCHEMA_VERSION} writes to it)"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Checks that a table with columns `have` is calflash's `records`; which later columns it
+/// has.
+fn check_columns(have: &[String]) -> Result<Later, String> {
     match COLUMNS.iter().find(|c| !have.iter().any(|h| h == *c)) {
         Some(missing) => Err(format!(
             "its table `records` has no column `{missing}`: it was altered or is not calflash's; nothing was read or written"
         )),
-        None => Ok(()),
+        None => Ok(Later {
+            station: have.iter().any(|h| h == "station"),
+            lot: have.iter().any(|h| h == "lot"),
+        }),
     }
 }
 
@@ -214,6 +299,7 @@ struct Row {
     outcome: String,
     record: Option<String>,
     station: String,
+    lot: String,
 }
 
 /// One record as a unit's history lists it.
@@ -226,6 +312,7 @@ struct Listed {
     outcome: String,
     report: Option<String>,
     blob: Vec<u8>,
+    lot: String,
 }
 
 /// What a history's store does; each failure is why, in the station's words (the caller
@@ -239,13 +326,7 @@ trait Backend: Send {
     /// A unit's records, oldest first.
     fn history(&mut self, serial: &str) -> Result<Vec<Listed>, String>;
     /// See [`Db::latest_fits`].
-    fn latest_fits(
-        &mut self,
-        prefix: &str,
-        since: i64,
-        until: i64,
-        station: Option<&str>,
-    ) -> Result<Vec<FitRow>, String>;
+    fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, String>;
     /// The blobs of a unit's records.
     fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, String>;
     /// The JSON record of record `id`: `None` for no such record, `Some(None)` for a flash.
@@ -341,6 +422,7 @@ impl Db {
             outcome: format!("{:?}", rec.verdict).to_lowercase(),
             record: Some(serde_json::to_string(rec).unwrap_or_default()),
             station: station(),
+            lot: rec.lot.clone().unwrap_or_default(),
         })
     }
 
@@ -373,6 +455,7 @@ impl Db {
             outcome: record["verdict"].as_str().unwrap_or("").to_lowercase(),
             record: Some(record.to_string()),
             station: station(),
+            lot: String::new(),
         })
     }
 
@@ -405,6 +488,7 @@ impl Db {
             outcome: health["verdict"].as_str().unwrap_or("").to_lowercase(),
             record: Some(record.to_string()),
             station: station(),
+            lot: String::new(),
         })
     }
 
@@ -436,6 +520,7 @@ impl Db {
             outcome: outcome.into(),
             record: None,
             station: station(),
+            lot: String::new(),
         })
     }
 
@@ -464,24 +549,18 @@ impl Db {
                 outcome: l.outcome,
                 report: l.report,
                 blob_len: l.blob.len(),
+                lot: l.lot,
             })
             .collect())
     }
 
-    /// The newest fit of every unit whose serial starts with `prefix` (all units for an empty
-    /// one) recorded from `since` to `until` (Unix seconds, inclusive), at `station` when
-    /// given, oldest first.
+    /// The newest fit in the time range of every unit `sel` takes, oldest first.
     ///
     /// # Errors
-    /// A message naming the history and why; a station asked of a history without stations.
-    pub fn latest_fits(
-        &mut self,
-        prefix: &str,
-        since: i64,
-        until: i64,
-        station: Option<&str>,
-    ) -> Result<Vec<FitRow>, String> {
-        let r = self.backend.latest_fits(prefix, since, until, station);
+    /// A message naming the history and why; a station or lot asked of a history without
+    /// them.
+    pub fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, String> {
+        let r = self.backend.latest_fits(sel);
         self.named(r)
     }
 

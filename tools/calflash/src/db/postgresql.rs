@@ -14,11 +14,14 @@ use postgres::error::SqlState;
 use postgres::types::{ToSql, Type};
 use postgres::{Client, NoTls};
 
-use super::{Backend, FitRow, Listed, Row, SCHEMA_VERSION};
+use super::{Backend, FitRow, Later, Listed, Row, SCHEMA_VERSION, Selection};
 
 /// A PostgreSQL history.
 pub struct Postgres {
     client: Client,
+    /// The columns of later schemas the table has (a version 3 history opened to read lacks
+    /// the lot).
+    later: Later,
 }
 
 /// The tables of the present schema.
@@ -37,15 +40,23 @@ CREATE TABLE records (
     verification TEXT,
     outcome TEXT NOT NULL,
     record TEXT,
-    station TEXT NOT NULL DEFAULT ''
+    station TEXT NOT NULL DEFAULT '',
+    lot TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX records_serial ON records (serial, time);
+CREATE INDEX records_lot ON records (lot);
+";
+
+/// Adds the lot to a version 3 history (the first on PostgreSQL).
+const MIGRATE_FROM_3: &str = "ALTER TABLE records ADD COLUMN lot TEXT NOT NULL DEFAULT '';
+CREATE INDEX records_lot ON records (lot);
+UPDATE calflash_schema SET version = 4;
 ";
 
 /// The advisory lock under which a station creates the tables ("calf").
 const CREATE_LOCK: i64 = 0x6361_6c66;
 
-const COLUMNS: &str = "serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station";
+const COLUMNS: &str = "serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station, lot";
 
 /// Why the server or the connection failed, in the station's words.
 fn why(e: &postgres::Error) -> String {
@@ -109,8 +120,9 @@ fn tables(c: &mut impl postgres::GenericClient) -> Result<(bool, bool), String> 
     Ok((row.get(0), row.get(1)))
 }
 
-/// Checks the version and columns of an existing history.
-fn check_schema(c: &mut impl postgres::GenericClient) -> Result<(), String> {
+/// Checks the version and columns of an existing history; migrates version 3 when `write`.
+/// Which later columns the table (now) has.
+fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<Later, String> {
     let version: Option<i32> = c
         .query_one("SELECT max(version) FROM calflash_schema", &[])
         .map_err(|e| why(&e))?
@@ -119,10 +131,10 @@ fn check_schema(c: &mut impl postgres::GenericClient) -> Result<(), String> {
     if version > SCHEMA_VERSION {
         return Err(super::newer(version));
     }
-    if version < SCHEMA_VERSION {
+    if version < 3 {
         return Err(format!(
             "its calflash_schema says schema {version}, which no calflash wrote on PostgreSQL \
-             (they write schema {SCHEMA_VERSION}); nothing was read or written"
+             (they write schema 3 and later); nothing was read or written"
         ));
     }
     let have: Vec<String> = c
@@ -135,10 +147,15 @@ fn check_schema(c: &mut impl postgres::GenericClient) -> Result<(), String> {
         .iter()
         .map(|r| r.get(0))
         .collect();
-    super::check_columns(&have)
+    let later = super::check_columns(&have)?;
+    if version < SCHEMA_VERSION && write {
+        c.batch_execute(MIGRATE_FROM_3).map_err(|e| why(&e))?;
+        return Ok(Later::ALL);
+    }
+    Ok(later)
 }
 
-fn params(row: &Row) -> [&(dyn ToSql + Sync); 13] {
+fn params(row: &Row) -> [&(dyn ToSql + Sync); 14] {
     [
         &row.serial,
         &row.kind,
@@ -153,6 +170,7 @@ fn params(row: &Row) -> [&(dyn ToSql + Sync); 13] {
         &row.outcome,
         &row.record,
         &row.station,
+        &row.lot,
     ]
 }
 
@@ -172,11 +190,16 @@ impl Postgres {
                 )
                 .map_err(|e| why(&e))?;
             }
-            (true, _) => check_schema(&mut tx)?,
+            (true, _) => {
+                check_schema(&mut tx, true)?;
+            }
             (false, true) => return Err(not_ours()),
         }
         tx.commit().map_err(|e| why(&e))?;
-        Ok(Self { client })
+        Ok(Self {
+            client,
+            later: Later::ALL,
+        })
     }
 
     /// Connects to the history at `url` to read it: never creates the tables.
@@ -190,8 +213,8 @@ impl Postgres {
             ),
             (false, true) => Err(not_ours()),
             (true, _) => {
-                check_schema(&mut client)?;
-                Ok(Self { client })
+                let later = check_schema(&mut client, false)?;
+                Ok(Self { client, later })
             }
         }
     }
@@ -206,7 +229,7 @@ fn not_ours() -> String {
 impl Backend for Postgres {
     fn insert(&mut self, row: &Row) -> Result<i64, String> {
         let sql = format!(
-            "INSERT INTO records ({COLUMNS}) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13) RETURNING id"
+            "INSERT INTO records ({COLUMNS}) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14) RETURNING id"
         );
         // One statement: PostgreSQL commits it whole or not at all.
         self.client
@@ -220,7 +243,7 @@ impl Backend for Postgres {
         tx.batch_execute(
             "CREATE TEMPORARY TABLE incoming (ord BIGINT, serial TEXT, kind TEXT, time BIGINT,
              data_hash TEXT, model TEXT, coefficients TEXT, covariance TEXT, report TEXT,
-             blob BYTEA, verification TEXT, outcome TEXT, record TEXT, station TEXT)
+             blob BYTEA, verification TEXT, outcome TEXT, record TEXT, station TEXT, lot TEXT)
              ON COMMIT DROP",
         )
         .map_err(|e| why(&e))?;
@@ -240,6 +263,7 @@ impl Backend for Postgres {
             Type::TEXT,
             Type::TEXT,
             Type::BYTEA,
+            Type::TEXT,
             Type::TEXT,
             Type::TEXT,
             Type::TEXT,
@@ -274,8 +298,11 @@ impl Backend for Postgres {
         let rows = self
             .client
             .query(
-                "SELECT id, kind, time, data_hash, model, outcome, report, blob FROM records
-                 WHERE serial = $1 ORDER BY time, id",
+                &format!(
+                    "SELECT id, kind, time, data_hash, model, outcome, report, blob, {} FROM records
+                     WHERE serial = $1 ORDER BY time, id",
+                    Later::column(self.later.lot, "lot")
+                ),
                 &[&serial],
             )
             .map_err(|e| why(&e))?;
@@ -290,30 +317,31 @@ impl Backend for Postgres {
                 outcome: r.get(5),
                 report: r.get(6),
                 blob: r.get(7),
+                lot: r.get(8),
             })
             .collect())
     }
 
-    fn latest_fits(
-        &mut self,
-        prefix: &str,
-        since: i64,
-        until: i64,
-        station: Option<&str>,
-    ) -> Result<Vec<FitRow>, String> {
+    fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, String> {
+        self.later.check(sel)?;
         // The newest fit per serial: the greatest (time, id) of its fits in the range.
+        let sql = format!(
+            "SELECT serial, time, station, coefficients FROM (
+               SELECT DISTINCT ON (serial) serial, time, id, station, coefficients
+               FROM records
+               WHERE kind = 'fit' AND left(serial, length($1)) = $1
+                 AND time BETWEEN $2 AND $3 AND ($4::text IS NULL OR station = $4)
+                 AND ($5::text IS NULL OR {} = $5)
+               ORDER BY serial, time DESC, id DESC) n
+             WHERE coefficients IS NOT NULL
+             ORDER BY time, id",
+            Later::column(self.later.lot, "lot")
+        );
         let rows = self
             .client
             .query(
-                "SELECT serial, time, station, coefficients FROM (
-                   SELECT DISTINCT ON (serial) serial, time, id, station, coefficients
-                   FROM records
-                   WHERE kind = 'fit' AND left(serial, length($1)) = $1
-                     AND time BETWEEN $2 AND $3 AND ($4::text IS NULL OR station = $4)
-                   ORDER BY serial, time DESC, id DESC) n
-                 WHERE coefficients IS NOT NULL
-                 ORDER BY time, id",
-                &[&prefix, &since, &until, &station],
+                &sql,
+                &[&sel.prefix, &sel.since, &sel.until, &sel.station, &sel.lot],
             )
             .map_err(|e| why(&e))?;
         Ok(rows
@@ -346,7 +374,16 @@ impl Backend for Postgres {
     fn rows(&mut self) -> Result<Vec<Row>, String> {
         let rows = self
             .client
-            .query(&format!("SELECT {COLUMNS} FROM records ORDER BY id"), &[])
+            .query(
+                &format!(
+                    "SELECT {} FROM records ORDER BY id",
+                    COLUMNS.replace(
+                        ", lot",
+                        &format!(", {}", Later::column(self.later.lot, "lot"))
+                    )
+                ),
+                &[],
+            )
             .map_err(|e| why(&e))?;
         Ok(rows
             .iter()
@@ -364,6 +401,7 @@ impl Backend for Postgres {
                 outcome: r.get(10),
                 record: r.get(11),
                 station: r.get(12),
+                lot: r.get(13),
             })
             .collect())
     }

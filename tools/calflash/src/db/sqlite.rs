@@ -8,15 +8,14 @@ use std::path::{Path, PathBuf};
 
 use rusqlite::{Connection, ErrorCode, OpenFlags, OptionalExtension, params};
 
-use super::{Backend, FitRow, Listed, Row, SCHEMA_VERSION};
+use super::{Backend, FitRow, Later, Listed, Row, SCHEMA_VERSION, Selection};
 
 /// A SQLite history.
 pub struct Sqlite {
     pub(super) conn: Connection,
     path: PathBuf,
-    /// The table has the recording station (schema 3; a version 2 file opened read-only has
-    /// not).
-    stations: bool,
+    /// The columns of later schemas the table has (an older file opened to read lacks some).
+    later: Later,
 }
 
 /// Why SQLite failed, in the station's words.
@@ -54,9 +53,11 @@ macro_rules! records_table {
     verification TEXT,
     outcome TEXT NOT NULL,
     record TEXT,
-    station TEXT NOT NULL DEFAULT ''
+    station TEXT NOT NULL DEFAULT '',
+    lot TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS records_serial ON records (serial, time);
+CREATE INDEX IF NOT EXISTS records_lot ON records (lot);
 "
     };
 }
@@ -75,21 +76,31 @@ DROP INDEX IF EXISTS records_serial;
     SELECT id, serial, kind, time, data_hash, model, coefficients, covariance, report, blob,
     verification, outcome, record FROM records_v1;
 DROP TABLE records_v1;
-PRAGMA user_version = 3;
+PRAGMA user_version = 4;
 COMMIT;
 "
 );
 
-/// Adds the recording station to a version 2 table, in one transaction.
+/// Adds the recording station and the lot to a version 2 table, in one transaction.
 const MIGRATE_FROM_2: &str = "BEGIN;
 ALTER TABLE records ADD COLUMN station TEXT NOT NULL DEFAULT '';
-PRAGMA user_version = 3;
+ALTER TABLE records ADD COLUMN lot TEXT NOT NULL DEFAULT '';
+CREATE INDEX IF NOT EXISTS records_lot ON records (lot);
+PRAGMA user_version = 4;
 COMMIT;
 ";
 
-/// Checks the schema of an existing database; migrates older versions when `write`. Whether
-/// the table (now) has the `station` column.
-fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<bool, String> {
+/// Adds the lot to a version 3 table, in one transaction.
+const MIGRATE_FROM_3: &str = "BEGIN;
+ALTER TABLE records ADD COLUMN lot TEXT NOT NULL DEFAULT '';
+CREATE INDEX IF NOT EXISTS records_lot ON records (lot);
+PRAGMA user_version = 4;
+COMMIT;
+";
+
+/// Checks the schema of an existing database; migrates older versions when `write`. Which
+/// later columns the table (now) has.
+fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<Later, String> {
     let version: i64 = conn
         .query_row("PRAGMA user_version", [], |r| r.get(0))
         .map_err(|e| why(path, &e))?;
@@ -103,26 +114,26 @@ fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<bool, Str
         .query_map([], |r| r.get(0))
         .and_then(Iterator::collect)
         .map_err(|e| why(path, &e))?;
-    super::check_columns(&have)?;
+    let later = super::check_columns(&have)?;
     if version < SCHEMA_VERSION && write {
-        let migrate = if version < 2 {
-            MIGRATE_FROM_1
-        } else {
-            MIGRATE_FROM_2
+        let migrate = match version {
+            ..=1 => MIGRATE_FROM_1,
+            2 => MIGRATE_FROM_2,
+            _ => MIGRATE_FROM_3,
         };
         conn.execute_batch(migrate).map_err(|e| {
             let _ = conn.execute_batch("ROLLBACK;");
             why(path, &e)
         })?;
-        return Ok(true);
+        return Ok(Later::ALL);
     }
-    Ok(have.iter().any(|h| h == "station"))
+    Ok(later)
 }
 
-const INSERT: &str = "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station)
-     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)";
+const INSERT: &str = "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station, lot)
+     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)";
 
-fn insert_params(row: &Row) -> [&dyn rusqlite::ToSql; 13] {
+fn insert_params(row: &Row) -> [&dyn rusqlite::ToSql; 14] {
     [
         &row.serial,
         &row.kind,
@@ -137,6 +148,7 @@ fn insert_params(row: &Row) -> [&dyn rusqlite::ToSql; 13] {
         &row.outcome,
         &row.record,
         &row.station,
+        &row.lot,
     ]
 }
 
@@ -188,7 +200,7 @@ impl Sqlite {
         Ok(Self {
             conn,
             path: path.to_path_buf(),
-            stations: true,
+            later: Later::ALL,
         })
     }
 
@@ -204,11 +216,11 @@ impl Sqlite {
             .map_err(|e| why(path, &e))?;
         conn.busy_timeout(std::time::Duration::from_secs(5))
             .map_err(|e| why(path, &e))?;
-        let stations = check_schema(&conn, path, false)?;
+        let later = check_schema(&conn, path, false)?;
         Ok(Self {
             conn,
             path: path.to_path_buf(),
-            stations,
+            later,
         })
     }
 
@@ -275,7 +287,11 @@ impl Backend for Sqlite {
     fn history(&mut self, serial: &str) -> Result<Vec<Listed>, String> {
         let mut st = self
             .conn
-            .prepare("SELECT id, kind, time, data_hash, model, outcome, report, blob FROM records WHERE serial = ?1 ORDER BY time, id")
+            .prepare(&format!(
+                "SELECT id, kind, time, data_hash, model, outcome, report, blob, {} FROM records
+                 WHERE serial = ?1 ORDER BY time, id",
+                Later::column(self.later.lot, "lot")
+            ))
             .map_err(|e| why(&self.path, &e))?;
         let rows = st
             .query_map([serial], |r| {
@@ -288,6 +304,7 @@ impl Backend for Sqlite {
                     outcome: r.get(5)?,
                     report: r.get(6)?,
                     blob: r.get(7)?,
+                    lot: r.get(8)?,
                 })
             })
             .map_err(|e| why(&self.path, &e))?;
@@ -295,30 +312,18 @@ impl Backend for Sqlite {
             .map_err(|e| why(&self.path, &e))
     }
 
-    fn latest_fits(
-        &mut self,
-        prefix: &str,
-        since: i64,
-        until: i64,
-        station: Option<&str>,
-    ) -> Result<Vec<FitRow>, String> {
-        if station.is_some() && !self.stations {
-            return Err(format!(
-                "it records no stations (schema 2, opened read-only: it gains them when a calflash of schema {SCHEMA_VERSION} writes to it)"
-            ));
-        }
-        let station_col = if self.stations { "r.station" } else { "''" };
-        let station_filter = if self.stations {
-            "AND (?4 IS NULL OR station = ?4)"
-        } else {
-            "AND ?4 IS NULL"
-        };
+    fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, String> {
+        self.later.check(sel)?;
+        let station = Later::column(self.later.station, "station");
+        let station_r = Later::column(self.later.station, "r.station");
+        let lot = Later::column(self.later.lot, "lot");
         // The newest fit per serial: the greatest (time, id) of its fits in the range.
         let sql = format!(
-            "SELECT r.serial, r.time, {station_col}, r.coefficients FROM records r
+            "SELECT r.serial, r.time, {station_r}, r.coefficients FROM records r
              JOIN (SELECT serial, max(time * 1000000000 + id) AS k FROM records
                    WHERE kind = 'fit' AND substr(serial, 1, length(?1)) = ?1
-                     AND time BETWEEN ?2 AND ?3 {station_filter}
+                     AND time BETWEEN ?2 AND ?3 AND (?4 IS NULL OR {station} = ?4)
+                     AND (?5 IS NULL OR {lot} = ?5)
                    GROUP BY serial) n
                ON r.serial = n.serial AND r.time * 1000000000 + r.id = n.k
              WHERE r.coefficients IS NOT NULL
@@ -326,14 +331,17 @@ impl Backend for Sqlite {
         );
         let mut st = self.conn.prepare(&sql).map_err(|e| self.why(&e))?;
         let rows = st
-            .query_map(params![prefix, since, until, station], |r| {
-                Ok(FitRow {
-                    serial: r.get(0)?,
-                    time: r.get(1)?,
-                    station: r.get(2)?,
-                    coefficients: r.get(3)?,
-                })
-            })
+            .query_map(
+                params![sel.prefix, sel.since, sel.until, sel.station, sel.lot],
+                |r| {
+                    Ok(FitRow {
+                        serial: r.get(0)?,
+                        time: r.get(1)?,
+                        station: r.get(2)?,
+                        coefficients: r.get(3)?,
+                    })
+                },
+            )
             .map_err(|e| why(&self.path, &e))?;
         rows.collect::<Result<_, _>>()
             .map_err(|e| why(&self.path, &e))
@@ -361,12 +369,13 @@ impl Backend for Sqlite {
     }
 
     fn rows(&mut self) -> Result<Vec<Row>, String> {
-        let station = if self.stations { "station" } else { "''" };
         let mut st = self
             .conn
             .prepare(&format!(
                 "SELECT serial, kind, time, data_hash, model, coefficients, covariance, report,
-                 blob, verification, outcome, record, {station} FROM records ORDER BY id"
+                 blob, verification, outcome, record, {}, {} FROM records ORDER BY id",
+                Later::column(self.later.station, "station"),
+                Later::column(self.later.lot, "lot")
             ))
             .map_err(|e| why(&self.path, &e))?;
         let rows = st
@@ -385,6 +394,7 @@ impl Backend for Sqlite {
                     outcome: r.get(10)?,
                     record: r.get(11)?,
                     station: r.get(12)?,
+                    lot: r.get(13)?,
                 })
             })
             .map_err(|e| why(&self.path, &e))?;
@@ -469,31 +479,53 @@ mod tests {
         );
     }
 
+    /// The units `U-*` with a fit from time 0 to 100, at `station` and in `lot` when given.
+    fn select<'a>(station: Option<&'a str>, lot: Option<&'a str>) -> Selection<'a> {
+        Selection {
+            prefix: "U-",
+            lot,
+            since: 0,
+            until: 100,
+            station,
+        }
+    }
+
     #[test]
-    fn a_schema_2_history_reads_without_stations_and_gains_them_when_written() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("units.sqlite");
-        let c = Connection::open(&path).unwrap();
-        c.execute_batch(&format!(
-            "{SCHEMA} ALTER TABLE records DROP COLUMN station; PRAGMA user_version = 2;
-             INSERT INTO records (serial, kind, time, data_hash, coefficients, blob, outcome)
-             VALUES ('U-1', 'fit', 10, 'h', '[]', x'', 'accept');"
-        ))
-        .unwrap();
-        drop(c);
-        // Read-only: no stations, and a station asked for is refused with the reason.
-        let mut d = Db::open_existing(&path).unwrap();
-        let rows = d.latest_fits("U-", 0, 100, None).unwrap();
-        assert_eq!((rows.len(), rows[0].station.as_str()), (1, ""));
-        let e = d.latest_fits("U-", 0, 100, Some("A")).unwrap_err();
-        assert!(e.contains("records no stations (schema 2"), "{e}");
-        drop(d);
-        // Written: migrated in one step, the old record kept with no station.
-        let mut d = Db::open(&path).unwrap();
-        assert_eq!(user_version(&path), SCHEMA_VERSION);
-        let rows = d.latest_fits("U-", 0, 100, Some("")).unwrap();
-        assert_eq!(rows.len(), 1);
-        assert!(d.latest_fits("U-", 0, 100, Some("A")).unwrap().is_empty());
+    fn older_histories_read_without_stations_or_lots_and_gain_them_when_written() {
+        for (version, dropped) in [(2, "station, lot"), (3, "lot")] {
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("units.sqlite");
+            let c = Connection::open(&path).unwrap();
+            let drops: String = dropped
+                .split(", ")
+                .map(|col| format!("ALTER TABLE records DROP COLUMN {col};"))
+                .collect();
+            c.execute_batch(&format!(
+                "{SCHEMA} DROP INDEX records_lot; {drops} PRAGMA user_version = {version};
+                 INSERT INTO records (serial, kind, time, data_hash, coefficients, blob, outcome)
+                 VALUES ('U-1', 'fit', 10, 'h', '[]', x'', 'accept');"
+            ))
+            .unwrap();
+            drop(c);
+            // Read-only: what it lacks reads empty, and asked for is refused with the reason.
+            let mut d = Db::open_existing(&path).unwrap();
+            let rows = d.latest_fits(&select(None, None)).unwrap();
+            assert_eq!((rows.len(), rows[0].station.as_str()), (1, ""));
+            let e = d.latest_fits(&select(None, Some("L1"))).unwrap_err();
+            assert!(e.contains("records no lots (an older schema"), "{e}");
+            if version == 2 {
+                let e = d.latest_fits(&select(Some("A"), None)).unwrap_err();
+                assert!(e.contains("records no stations (an older schema"), "{e}");
+            }
+            assert_eq!(d.history("U-1").unwrap()[0].lot, "");
+            drop(d);
+            // Written: migrated in one step, the old record kept with no station and no lot.
+            let mut d = Db::open(&path).unwrap();
+            assert_eq!(user_version(&path), SCHEMA_VERSION);
+            assert_eq!(d.latest_fits(&select(Some(""), Some(""))).unwrap().len(), 1);
+            assert!(d.latest_fits(&select(Some("A"), None)).unwrap().is_empty());
+            assert!(d.latest_fits(&select(None, Some("L1"))).unwrap().is_empty());
+        }
     }
 
     #[test]

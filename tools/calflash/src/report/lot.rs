@@ -25,19 +25,21 @@ fn indexed(values: impl Iterator<Item = f64>) -> Vec<(f64, f64)> {
     values.enumerate().map(|(i, v)| (i as f64, v)).collect()
 }
 
-/// Renders the report of `lot` (named `prefix`) with `charts` (coefficient, chart).
+/// Renders the report of `lot` (described by `name`, as [`crate::db::Selection`] says it)
+/// with `charts` (coefficient, chart).
 ///
 /// # Errors
 /// A figure that cannot be drawn.
-pub fn render(lot: &Lot, prefix: &str, charts: &[(String, UnitChart)]) -> Result<String, String> {
+pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<String, String> {
+    let name = name.replace('`', "");
     let mut h = String::new();
     let n = lot.units.len();
     let _ = write!(
         h,
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>lot {}</title><style>{STYLE}</style></head><body>\
-         <h1>Lot <code>{}</code>: {n} units, {} outside</h1><p>",
-        esc(prefix),
-        esc(prefix),
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>{}</title><style>{STYLE}</style></head><body>\
+         <h1>{}: {n} units, {} outside</h1><p>",
+        esc(&name),
+        esc(&name),
         lot.outliers.len()
     );
     match &lot.judge {

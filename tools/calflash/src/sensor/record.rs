@@ -89,6 +89,9 @@ pub struct Record {
     /// The station whose Earth rate was a known input of the gyro fits.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub earth: Option<crate::earth::Station>,
+    /// The production lot the unit was calibrated in (`calibrate --lot`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lot: Option<String>,
 }
 
 /// The points a record holds: the table's; for a continuous temperature model, the model at
@@ -194,6 +197,7 @@ impl Record {
             device_error: c.device_error,
             blob: hex(&c.blob),
             earth: c.earth,
+            lot: None,
         }
     }
 
