@@ -1,7 +1,13 @@
 //! `calflash calibrate` over a batch (issue 18): 16 IMUs, each from a 26-position tumble and
 //! rate-table steps at one temperature (as `examples/data/imu_bench.csv`), calibrated with the
 //! blob, record and history entry, with and without the HTML report, on one and on two threads.
-//! Units per second are 16 / the time. Run with `cargo bench -p calflash --bench batch`.
+//! Units per second are 16 / the time. The history is a SQLite file, and (without the
+//! report) a PostgreSQL database on a server the bench starts as the tests do
+//! (`tests/common/postgres.rs`; skipped with a notice where PostgreSQL is not installed). Run
+//! with `cargo bench -p calflash --bench batch`.
+
+#[path = "../tests/common/postgres.rs"]
+mod pg_server;
 
 use std::path::PathBuf;
 
@@ -49,41 +55,53 @@ fn units() -> Vec<(String, PathBuf)> {
 fn bench(c: &mut Criterion) {
     let units = units();
     let out = tempfile::tempdir().unwrap();
-    let db = out.path().join("units.sqlite");
+    let server =
+        pg_server::Server::start("batch into PostgreSQL").unwrap_or_else(|e| panic!("{e}"));
+    let mut histories = vec![(
+        "",
+        out.path().join("units.sqlite").display().to_string(),
+        [false, true].as_slice(),
+    )];
+    if let Some(s) = &server {
+        s.execute("postgres", "CREATE DATABASE batch");
+        histories.push(("_postgres", s.url("batch"), [false].as_slice()));
+    }
     let mut g = c.benchmark_group("batch");
     g.sample_size(10);
     g.throughput(Throughput::Elements(UNITS as u64));
-    for report in [false, true] {
-        let mut argv = vec![
-            "x".to_string(),
-            "unused.csv".into(),
-            "--sensor".into(),
-            "imu".into(),
-            "--out-dir".into(),
-            out.path().display().to_string(),
-            "--db".into(),
-            db.display().to_string(),
-        ];
-        if report {
-            argv.push("--reports".into());
-        }
-        let args = Cli::parse_from(&argv).args;
-        for threads in [1, 2] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let name = format!(
-                "imu_{}_{threads}_thread{}",
-                if report { "with_report" } else { "no_report" },
-                if threads == 1 { "" } else { "s" }
-            );
-            g.bench_function(name, |b| {
-                b.iter(|| {
-                    let outcomes = pool.install(|| calibrate_all(&args, &units, out.path()));
-                    assert!(outcomes.iter().all(|o| o.result.is_ok()), "{outcomes:?}");
+    for (backend, db, reports) in histories {
+        for &report in reports {
+            let mut argv = vec![
+                "x".to_string(),
+                "unused.csv".into(),
+                "--sensor".into(),
+                "imu".into(),
+                "--out-dir".into(),
+                out.path().display().to_string(),
+                "--db".into(),
+                db.clone(),
+            ];
+            if report {
+                argv.push("--reports".into());
+            }
+            let args = Cli::parse_from(&argv).args;
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let name = format!(
+                    "imu_{}_{threads}_thread{}{backend}",
+                    if report { "with_report" } else { "no_report" },
+                    if threads == 1 { "" } else { "s" }
+                );
+                g.bench_function(name, |b| {
+                    b.iter(|| {
+                        let outcomes = pool.install(|| calibrate_all(&args, &units, out.path()));
+                        assert!(outcomes.iter().all(|o| o.result.is_ok()), "{outcomes:?}");
+                    });
                 });
-            });
+            }
         }
     }
     g.finish();

@@ -399,7 +399,26 @@ fn a_server_that_is_down_or_refuses_the_login_loses_no_record_and_hides_the_pass
         assert!(d.join("out/u.blob").is_file());
     }
     // Nothing half-written: the history holds the one record it took.
-    assert_eq!(summary(&Location::Server(good), "IMU-P-1").len(), 1);
+    assert_eq!(summary(&Location::Server(good.clone()), "IMU-P-1").len(), 1);
+    // The URL may come from $CALFLASH_DB, and is shown without its password there too.
+    for (url, code, said) in [
+        (&good, 0, "1 records in postgres://station@"),
+        (&wrong, 1, "the server refused the login"),
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_calflash"))
+            .args(["history", "IMU-P-1"])
+            .env("CALFLASH_DB", url)
+            .output()
+            .unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(out.status.code(), Some(code), "{text}");
+        assert!(text.contains(said), "{text}");
+        assert!(!text.contains("pw"), "{text}");
+    }
 }
 
 #[test]

@@ -18,10 +18,61 @@ use super::{Backend, FitRow, Later, Listed, Row, SCHEMA_VERSION, Selection};
 
 /// A PostgreSQL history.
 pub struct Postgres {
-    client: Client,
-    /// The columns of later schemas the table has (a version 3 history opened to read lacks
-    /// the lot).
+    /// The connection: `Some` until it is dropped (and kept for the next history opened).
+    client: Option<Client>,
+    url: String,
+    /// The schema version and the columns of later schemas the table has (a version 3
+    /// history opened to read lacks the lot).
+    version: i64,
     later: Later,
+}
+
+/// A connection this process is done with, and the schema it found.
+struct Idle {
+    url: String,
+    client: Client,
+    version: i64,
+    later: Later,
+}
+
+/// Connections this process opened and is done with: a batch's units take them again instead
+/// of connecting (a server process each) and checking the schema once per unit.
+static IDLE: std::sync::Mutex<Vec<Idle>> = std::sync::Mutex::new(Vec::new());
+
+/// At most this many idle connections are kept.
+const MAX_IDLE: usize = 8;
+
+/// An idle connection to `url` whose schema is still `version`; `None` when there is none
+/// (or the schema changed: the connection is then dropped).
+fn reuse(url: &str) -> Option<Idle> {
+    let mut idle = {
+        let mut pool = IDLE.lock().ok()?;
+        let at = pool.iter().position(|i| i.url == url)?;
+        pool.swap_remove(at)
+    };
+    let version: Option<i32> = idle
+        .client
+        .query_one("SELECT max(version) FROM calflash_schema", &[])
+        .ok()?
+        .get(0);
+    (i64::from(version.unwrap_or(0)) == idle.version).then_some(idle)
+}
+
+impl Drop for Postgres {
+    fn drop(&mut self) {
+        if let Some(client) = self.client.take()
+            && !client.is_closed()
+            && let Ok(mut pool) = IDLE.lock()
+            && pool.len() < MAX_IDLE
+        {
+            pool.push(Idle {
+                url: std::mem::take(&mut self.url),
+                client,
+                version: self.version,
+                later: self.later,
+            });
+        }
+    }
 }
 
 /// The tables of the present schema.
@@ -121,26 +172,18 @@ fn tables(c: &mut impl postgres::GenericClient) -> Result<(bool, bool), String> 
 }
 
 /// Checks the version and columns of an existing history; migrates version 3 when `write`.
-/// Which later columns the table (now) has.
-fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<Later, String> {
+/// The version and the later columns the table (now) has.
+fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<(i64, Later), String> {
     let version: Option<i32> = c
         .query_one("SELECT max(version) FROM calflash_schema", &[])
         .map_err(|e| why(&e))?
         .get(0);
     let version = i64::from(version.unwrap_or(0));
-    if version > SCHEMA_VERSION {
-        return Err(super::newer(version));
-    }
-    if version < 3 {
-        return Err(format!(
-            "its calflash_schema says schema {version}, which no calflash wrote on PostgreSQL \
-             (they write schema 3 and later); nothing was read or written"
-        ));
-    }
+    schema_version(version)?;
     let have: Vec<String> = c
         .query(
-            "SELECT column_name::text FROM information_schema.columns
-             WHERE table_name = 'records' AND table_schema = current_schema()",
+            "SELECT attname::text FROM pg_attribute
+             WHERE attrelid = 'records'::regclass AND attnum > 0 AND NOT attisdropped",
             &[],
         )
         .map_err(|e| why(&e))?
@@ -150,9 +193,23 @@ fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<Lat
     let later = super::check_columns(&have)?;
     if version < SCHEMA_VERSION && write {
         c.batch_execute(MIGRATE_FROM_3).map_err(|e| why(&e))?;
-        return Ok(Later::ALL);
+        return Ok((SCHEMA_VERSION, Later::ALL));
     }
-    Ok(later)
+    Ok((version, later))
+}
+
+/// Refuses a schema version this calflash does not read.
+fn schema_version(version: i64) -> Result<(), String> {
+    if version > SCHEMA_VERSION {
+        return Err(super::newer(version));
+    }
+    if version < 3 {
+        return Err(format!(
+            "its calflash_schema says schema {version}, which no calflash wrote on PostgreSQL \
+             (they write schema 3 and later); nothing was read or written"
+        ));
+    }
+    Ok(())
 }
 
 fn params(row: &Row) -> [&(dyn ToSql + Sync); 14] {
@@ -177,6 +234,9 @@ fn params(row: &Row) -> [&(dyn ToSql + Sync); 14] {
 impl Postgres {
     /// Connects to the history at `url`, creating its tables in an empty database.
     pub(super) fn open(url: &str) -> Result<Self, String> {
+        if let Some(idle) = reuse(url).filter(|i| i.version == SCHEMA_VERSION) {
+            return Ok(Self::from(idle));
+        }
         let mut client = connect(url)?;
         let mut tx = client.transaction().map_err(|e| why(&e))?;
         tx.execute("SELECT pg_advisory_xact_lock($1)", &[&CREATE_LOCK])
@@ -197,13 +257,18 @@ impl Postgres {
         }
         tx.commit().map_err(|e| why(&e))?;
         Ok(Self {
-            client,
+            client: Some(client),
+            url: url.to_string(),
+            version: SCHEMA_VERSION,
             later: Later::ALL,
         })
     }
 
     /// Connects to the history at `url` to read it: never creates the tables.
     pub(super) fn open_existing(url: &str) -> Result<Self, String> {
+        if let Some(idle) = reuse(url) {
+            return Ok(Self::from(idle));
+        }
         let mut client = connect(url)?;
         match tables(&mut client)? {
             (false, false) => Err(
@@ -213,9 +278,32 @@ impl Postgres {
             ),
             (false, true) => Err(not_ours()),
             (true, _) => {
-                let later = check_schema(&mut client, false)?;
-                Ok(Self { client, later })
+                let (version, later) = check_schema(&mut client, false)?;
+                Ok(Self {
+                    client: Some(client),
+                    url: url.to_string(),
+                    version,
+                    later,
+                })
             }
+        }
+    }
+
+    /// The connection.
+    fn client(&mut self) -> &mut Client {
+        self.client
+            .as_mut()
+            .expect("a history's connection is there until it is dropped")
+    }
+}
+
+impl From<Idle> for Postgres {
+    fn from(i: Idle) -> Self {
+        Self {
+            client: Some(i.client),
+            url: i.url,
+            version: i.version,
+            later: i.later,
         }
     }
 }
@@ -232,14 +320,14 @@ impl Backend for Postgres {
             "INSERT INTO records ({COLUMNS}) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14) RETURNING id"
         );
         // One statement: PostgreSQL commits it whole or not at all.
-        self.client
+        self.client()
             .query_one(&sql, &params(row))
             .map(|r| r.get(0))
             .map_err(|e| why(&e))
     }
 
     fn copy(&mut self, rows: &[Row]) -> Result<usize, String> {
-        let mut tx = self.client.transaction().map_err(|e| why(&e))?;
+        let mut tx = self.client().transaction().map_err(|e| why(&e))?;
         tx.batch_execute(
             "CREATE TEMPORARY TABLE incoming (ord BIGINT, serial TEXT, kind TEXT, time BIGINT,
              data_hash TEXT, model TEXT, coefficients TEXT, covariance TEXT, report TEXT,
@@ -295,17 +383,12 @@ impl Backend for Postgres {
     }
 
     fn history(&mut self, serial: &str) -> Result<Vec<Listed>, String> {
-        let rows = self
-            .client
-            .query(
-                &format!(
-                    "SELECT id, kind, time, data_hash, model, outcome, report, blob, {} FROM records
-                     WHERE serial = $1 ORDER BY time, id",
-                    Later::column(self.later.lot, "lot")
-                ),
-                &[&serial],
-            )
-            .map_err(|e| why(&e))?;
+        let sql = format!(
+            "SELECT id, kind, time, data_hash, model, outcome, report, blob, {} FROM records
+             WHERE serial = $1 ORDER BY time, id",
+            Later::column(self.later.lot, "lot")
+        );
+        let rows = self.client().query(&sql, &[&serial]).map_err(|e| why(&e))?;
         Ok(rows
             .iter()
             .map(|r| Listed {
@@ -338,7 +421,7 @@ impl Backend for Postgres {
             Later::column(self.later.lot, "lot")
         );
         let rows = self
-            .client
+            .client()
             .query(
                 &sql,
                 &[&sel.prefix, &sel.since, &sel.until, &sel.station, &sel.lot],
@@ -357,7 +440,7 @@ impl Backend for Postgres {
 
     fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, String> {
         let rows = self
-            .client
+            .client()
             .query("SELECT blob FROM records WHERE serial = $1", &[&serial])
             .map_err(|e| why(&e))?;
         Ok(rows.iter().map(|r| r.get(0)).collect())
@@ -365,25 +448,20 @@ impl Backend for Postgres {
 
     fn record(&mut self, id: i64) -> Result<Option<Option<String>>, String> {
         let row = self
-            .client
+            .client()
             .query_opt("SELECT record FROM records WHERE id = $1", &[&id])
             .map_err(|e| why(&e))?;
         Ok(row.map(|r| r.get(0)))
     }
 
     fn rows(&mut self) -> Result<Vec<Row>, String> {
+        let columns = COLUMNS.replace(
+            ", lot",
+            &format!(", {}", Later::column(self.later.lot, "lot")),
+        );
         let rows = self
-            .client
-            .query(
-                &format!(
-                    "SELECT {} FROM records ORDER BY id",
-                    COLUMNS.replace(
-                        ", lot",
-                        &format!(", {}", Later::column(self.later.lot, "lot"))
-                    )
-                ),
-                &[],
-            )
+            .client()
+            .query(&format!("SELECT {columns} FROM records ORDER BY id"), &[])
             .map_err(|e| why(&e))?;
         Ok(rows
             .iter()
