@@ -283,6 +283,33 @@ fn check_columns(have: &[String]) -> Result<Later, String> {
     }
 }
 
+/// The columns a record is written in, in the order of [`row_values!`].
+const WRITTEN: &str = "serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station, lot";
+
+/// A [`Row`]'s values in the order of [`WRITTEN`], as an array of references to the backend's
+/// parameter type (the function's return type says which).
+macro_rules! row_values {
+    ($row:expr) => {
+        [
+            &$row.serial,
+            &$row.kind,
+            &$row.time,
+            &$row.data_hash,
+            &$row.model,
+            &$row.coefficients,
+            &$row.covariance,
+            &$row.report,
+            &$row.blob,
+            &$row.verification,
+            &$row.outcome,
+            &$row.record,
+            &$row.station,
+            &$row.lot,
+        ]
+    };
+}
+use row_values;
+
 /// One record as both backends store it.
 #[derive(Debug, Clone, PartialEq)]
 struct Row {

@@ -107,7 +107,7 @@ UPDATE calflash_schema SET version = 4;
 /// The advisory lock under which a station creates the tables ("calf").
 const CREATE_LOCK: i64 = 0x6361_6c66;
 
-const COLUMNS: &str = "serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station, lot";
+use super::WRITTEN as COLUMNS;
 
 /// Why the server or the connection failed, in the station's words.
 fn why(e: &postgres::Error) -> String {
@@ -213,22 +213,7 @@ fn schema_version(version: i64) -> Result<(), String> {
 }
 
 fn params(row: &Row) -> [&(dyn ToSql + Sync); 14] {
-    [
-        &row.serial,
-        &row.kind,
-        &row.time,
-        &row.data_hash,
-        &row.model,
-        &row.coefficients,
-        &row.covariance,
-        &row.report,
-        &row.blob,
-        &row.verification,
-        &row.outcome,
-        &row.record,
-        &row.station,
-        &row.lot,
-    ]
+    super::row_values!(row)
 }
 
 impl Postgres {

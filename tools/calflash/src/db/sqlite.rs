@@ -130,26 +130,16 @@ fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<Later, St
     Ok(later)
 }
 
-const INSERT: &str = "INSERT INTO records (serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station, lot)
-     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)";
+/// The statement that writes one record.
+fn insert_sql() -> String {
+    format!(
+        "INSERT INTO records ({}) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
+        super::WRITTEN
+    )
+}
 
 fn insert_params(row: &Row) -> [&dyn rusqlite::ToSql; 14] {
-    [
-        &row.serial,
-        &row.kind,
-        &row.time,
-        &row.data_hash,
-        &row.model,
-        &row.coefficients,
-        &row.covariance,
-        &row.report,
-        &row.blob,
-        &row.verification,
-        &row.outcome,
-        &row.record,
-        &row.station,
-        &row.lot,
-    ]
+    super::row_values!(row)
 }
 
 impl Sqlite {
@@ -232,7 +222,7 @@ impl Sqlite {
 impl Backend for Sqlite {
     fn insert(&mut self, row: &Row) -> Result<i64, String> {
         let tx = self.conn.transaction().map_err(|e| why(&self.path, &e))?;
-        tx.execute(INSERT, insert_params(row).as_slice())
+        tx.execute(&insert_sql(), insert_params(row).as_slice())
             .map_err(|e| why(&self.path, &e))?;
         let id = tx.last_insert_rowid();
         tx.commit().map_err(|e| why(&self.path, &e))?;
@@ -255,7 +245,7 @@ impl Backend for Sqlite {
                      AND id <= ?8",
                 )
                 .map_err(|e| why(&path, &e))?;
-            let mut insert = tx.prepare(INSERT).map_err(|e| why(&path, &e))?;
+            let mut insert = tx.prepare(&insert_sql()).map_err(|e| why(&path, &e))?;
             for row in rows {
                 let n: i64 = present
                     .query_row(
