@@ -400,16 +400,35 @@ fn a_server_that_is_down_or_refuses_the_login_loses_no_record_and_hides_the_pass
     }
     // Nothing half-written: the history holds the one record it took.
     assert_eq!(summary(&Location::Server(good.clone()), "IMU-P-1").len(), 1);
-    // The URL may come from $CALFLASH_DB, and is shown without its password there too.
-    for (url, code, said) in [
-        (&good, 0, "1 records in postgres://station@"),
-        (&wrong, 1, "the server refused the login"),
+    // The URL may come from $CALFLASH_DB, and is shown without its password there too; a
+    // URL without one takes $PGPASSWORD's; TLS is refused before connecting.
+    let bare = format!("postgres://station@127.0.0.1:{}/shared", server.port);
+    let tls = format!("{bare}?sslmode=require");
+    for (url, pgpassword, code, said) in [
+        (&good, "", 0, "1 records in postgres://station@"),
+        (&wrong, "", 1, "the server refused the login"),
+        (&bare, "s3cret-pw", 0, "1 records in postgres://station@"),
+        (
+            &bare,
+            "",
+            1,
+            "the server asks for a password and the URL gives none",
+        ),
+        (
+            &tls,
+            "s3cret-pw",
+            1,
+            "sslmode=require: this calflash connects without TLS",
+        ),
     ] {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_calflash"))
-            .args(["history", "IMU-P-1"])
-            .env("CALFLASH_DB", url)
-            .output()
-            .unwrap();
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_calflash"));
+        cmd.args(["history", "IMU-P-1"]).env("CALFLASH_DB", url);
+        if pgpassword.is_empty() {
+            cmd.env_remove("PGPASSWORD");
+        } else {
+            cmd.env("PGPASSWORD", pgpassword);
+        }
+        let out = cmd.output().unwrap();
         let text = format!(
             "{}{}",
             String::from_utf8_lossy(&out.stdout),

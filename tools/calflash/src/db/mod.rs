@@ -9,11 +9,14 @@
 
 mod location;
 mod postgresql;
+mod schema;
 mod sqlite;
 
 use std::path::{Path, PathBuf};
 
 pub use location::{Location, redact};
+pub use schema::SCHEMA_VERSION;
+use schema::{Listed, Row};
 
 use crate::sensor::record::Record;
 
@@ -195,151 +198,6 @@ fn now() -> i64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs() as i64)
-}
-
-/// The schema version this calflash reads and writes. On SQLite (`PRAGMA user_version`)
-/// version 0 is a database of the releases before versioning, version 1 one whose records are
-/// fits and flashes only, version 2 one without the recording station, version 3 one without
-/// the production lot; all are migrated (in one transaction) when written to: versions 0 and 1
-/// by rebuilding the table so that it also takes the unit's health reports, versions 2 and 3
-/// by adding the columns they lack (empty for the records before them). On PostgreSQL (table
-/// `calflash_schema`) version 3 lacks the lot and gains it when written to. Read-only, an
-/// older history reads with no stations or lots.
-pub const SCHEMA_VERSION: i64 = 4;
-
-/// The refusal of a history of a newer schema.
-fn newer(version: i64) -> String {
-    format!(
-        "written by a newer calflash (schema {version}); this one reads schema {SCHEMA_VERSION} and changes nothing in it"
-    )
-}
-
-/// The columns of `records` the code reads and writes.
-const COLUMNS: [&str; 13] = [
-    "id",
-    "serial",
-    "kind",
-    "time",
-    "data_hash",
-    "model",
-    "coefficients",
-    "covariance",
-    "report",
-    "blob",
-    "verification",
-    "outcome",
-    "record",
-];
-
-/// The columns that older schemas lack.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Later {
-    /// `station` (schema 3).
-    station: bool,
-    /// `lot` (schema 4).
-    lot: bool,
-}
-
-impl Later {
-    /// All of them: the present schema.
-    const ALL: Self = Self {
-        station: true,
-        lot: true,
-    };
-
-    /// The SQL of column `name` (present in the table when `have`): the column, else an empty
-    /// text.
-    fn column(have: bool, name: &str) -> &str {
-        if have { name } else { "''" }
-    }
-
-    /// Refuses a selection by a column the history lacks.
-    fn check(self, sel: &Selection<'_>) -> Result<(), String> {
-        for (asked, have, what) in [
-            (sel.station.is_some(), self.station, "stations"),
-            (sel.lot.is_some(), self.lot, "lots"),
-        ] {
-            if asked && !have {
-                return Err(format!(
-                    "it records no {what} (an older schema, opened to read: it gains them when a calflash of schema {SCHEMA_VERSION} writes to it)"
-                ));
-            }
-        }
-        Ok(())
-    }
-}
-
-/// Checks that a table with columns `have` is calflash's `records`; which later columns it
-/// has.
-fn check_columns(have: &[String]) -> Result<Later, String> {
-    match COLUMNS.iter().find(|c| !have.iter().any(|h| h == *c)) {
-        Some(missing) => Err(format!(
-            "its table `records` has no column `{missing}`: it was altered or is not calflash's; nothing was read or written"
-        )),
-        None => Ok(Later {
-            station: have.iter().any(|h| h == "station"),
-            lot: have.iter().any(|h| h == "lot"),
-        }),
-    }
-}
-
-/// The columns a record is written in, in the order of [`row_values!`].
-const WRITTEN: &str = "serial, kind, time, data_hash, model, coefficients, covariance, report, blob, verification, outcome, record, station, lot";
-
-/// A [`Row`]'s values in the order of [`WRITTEN`], as an array of references to the backend's
-/// parameter type (the function's return type says which).
-macro_rules! row_values {
-    ($row:expr) => {
-        [
-            &$row.serial,
-            &$row.kind,
-            &$row.time,
-            &$row.data_hash,
-            &$row.model,
-            &$row.coefficients,
-            &$row.covariance,
-            &$row.report,
-            &$row.blob,
-            &$row.verification,
-            &$row.outcome,
-            &$row.record,
-            &$row.station,
-            &$row.lot,
-        ]
-    };
-}
-use row_values;
-
-/// One record as both backends store it.
-#[derive(Debug, Clone, PartialEq)]
-struct Row {
-    serial: String,
-    kind: String,
-    time: i64,
-    data_hash: String,
-    model: Option<String>,
-    coefficients: Option<String>,
-    covariance: Option<String>,
-    report: Option<String>,
-    blob: Vec<u8>,
-    verification: Option<String>,
-    outcome: String,
-    record: Option<String>,
-    station: String,
-    lot: String,
-}
-
-/// One record as a unit's history lists it.
-struct Listed {
-    id: i64,
-    kind: String,
-    time: i64,
-    data_hash: String,
-    model: Option<String>,
-    outcome: String,
-    report: Option<String>,
-    blob: Vec<u8>,
-    lot: String,
 }
 
 /// What a history's store does; each failure is why, in the station's words (the caller

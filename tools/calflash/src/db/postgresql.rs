@@ -6,7 +6,8 @@
 //! absent; stations writing at once each get their own id from the table's sequence. The
 //! first station to open an empty database creates the tables, under an advisory lock so that
 //! two stations starting together do not both try. Connections are made without TLS (the
-//! plant's network or a local socket), with a 10 s timeout unless the URL sets one.
+//! plant's network or a local socket), with a 10 s timeout unless the URL sets one; a URL
+//! without a password takes `$PGPASSWORD`'s (`~/.pgpass` is not read).
 
 use std::time::Duration;
 
@@ -14,7 +15,8 @@ use postgres::error::SqlState;
 use postgres::types::{ToSql, Type};
 use postgres::{Client, NoTls};
 
-use super::{Backend, FitRow, Later, Listed, Row, SCHEMA_VERSION, Selection};
+use super::schema::{Later, Listed, Row};
+use super::{Backend, FitRow, SCHEMA_VERSION, Selection};
 
 /// A PostgreSQL history.
 pub struct Postgres {
@@ -107,7 +109,7 @@ UPDATE calflash_schema SET version = 4;
 /// The advisory lock under which a station creates the tables ("calf").
 const CREATE_LOCK: i64 = 0x6361_6c66;
 
-use super::WRITTEN as COLUMNS;
+use super::schema::WRITTEN as COLUMNS;
 
 /// Why the server or the connection failed, in the station's words.
 fn why(e: &postgres::Error) -> String {
@@ -148,11 +150,23 @@ fn why(e: &postgres::Error) -> String {
     format!("the server cannot be reached ({text}): is it running, and listening there?")
 }
 
-/// Connects to `url`.
+/// Connects to `url`; a URL without a password takes `$PGPASSWORD`'s, as `psql` does.
 fn connect(url: &str) -> Result<Client, String> {
     let mut config: postgres::Config = url
         .parse()
         .map_err(|e| format!("not a PostgreSQL URL this calflash reads: {e}"))?;
+    if config.get_ssl_mode() == postgres::config::SslMode::Require {
+        return Err(
+            "sslmode=require: this calflash connects without TLS (a server on the plant's \
+             network or this machine); drop sslmode or give sslmode=disable"
+                .into(),
+        );
+    }
+    if config.get_password().is_none()
+        && let Some(p) = std::env::var_os("PGPASSWORD")
+    {
+        config.password(p.as_encoded_bytes());
+    }
     if config.get_connect_timeout().is_none() {
         config.connect_timeout(Duration::from_secs(10));
     }
@@ -190,7 +204,7 @@ fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<(i6
         .iter()
         .map(|r| r.get(0))
         .collect();
-    let later = super::check_columns(&have)?;
+    let later = super::schema::check_columns(&have)?;
     if version < SCHEMA_VERSION && write {
         c.batch_execute(MIGRATE_FROM_3).map_err(|e| why(&e))?;
         return Ok((SCHEMA_VERSION, Later::ALL));
@@ -201,7 +215,7 @@ fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<(i6
 /// Refuses a schema version this calflash does not read.
 fn schema_version(version: i64) -> Result<(), String> {
     if version > SCHEMA_VERSION {
-        return Err(super::newer(version));
+        return Err(super::schema::newer(version));
     }
     if version < 3 {
         return Err(format!(
@@ -213,7 +227,7 @@ fn schema_version(version: i64) -> Result<(), String> {
 }
 
 fn params(row: &Row) -> [&(dyn ToSql + Sync); 14] {
-    super::row_values!(row)
+    super::schema::row_values!(row)
 }
 
 impl Postgres {

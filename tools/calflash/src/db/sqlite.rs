@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 
 use rusqlite::{Connection, ErrorCode, OpenFlags, OptionalExtension, params};
 
-use super::{Backend, FitRow, Later, Listed, Row, SCHEMA_VERSION, Selection};
+use super::schema::{Later, Listed, Row};
+use super::{Backend, FitRow, SCHEMA_VERSION, Selection};
 
 /// A SQLite history.
 pub struct Sqlite {
@@ -105,7 +106,7 @@ fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<Later, St
         .query_row("PRAGMA user_version", [], |r| r.get(0))
         .map_err(|e| why(path, &e))?;
     if version > SCHEMA_VERSION {
-        return Err(super::newer(version));
+        return Err(super::schema::newer(version));
     }
     let mut stmt = conn
         .prepare("SELECT name FROM pragma_table_info('records')")
@@ -114,7 +115,7 @@ fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<Later, St
         .query_map([], |r| r.get(0))
         .and_then(Iterator::collect)
         .map_err(|e| why(path, &e))?;
-    let later = super::check_columns(&have)?;
+    let later = super::schema::check_columns(&have)?;
     if version < SCHEMA_VERSION && write {
         let migrate = match version {
             ..=1 => MIGRATE_FROM_1,
@@ -134,12 +135,12 @@ fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<Later, St
 fn insert_sql() -> String {
     format!(
         "INSERT INTO records ({}) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
-        super::WRITTEN
+        super::schema::WRITTEN
     )
 }
 
 fn insert_params(row: &Row) -> [&dyn rusqlite::ToSql; 14] {
-    super::row_values!(row)
+    super::schema::row_values!(row)
 }
 
 impl Sqlite {
