@@ -546,4 +546,23 @@ fn bad_input_is_refused_clearly() {
         "{err}"
     );
     assert!(!Path::new("/tmp/never.csv").exists());
+    // So are a malformed limit and a malformed operating point.
+    for (option, value, says) in [
+        (
+            "--limit",
+            "rate=800",
+            "'rate=800' for '--limit <NAME=LO:HI>': --limit `rate=800`: expected NAME=LO:HI",
+        ),
+        (
+            "--at",
+            "input=x",
+            "'input=x' for '--at <NAME=VALUE[,...]>': --at `input=x`: `x` is not a finite number",
+        ),
+    ] {
+        let (code, _, err) = calflash(&[
+            "design", "predict", "--model", "single", "--plan", "head:10", option, value,
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains(says), "{err}");
+    }
 }

@@ -4,15 +4,14 @@ use std::path::{Path, PathBuf};
 
 use crate::files::{Paths, Staged};
 use clap::{Args, Subcommand};
-use nalgebra::DMatrix;
 
 use super::values::SensorKind;
-use crate::design::coordinate;
-use crate::design::criteria::{self, Criteria};
-use crate::design::exchange::{self, Criterion};
+use crate::design::exchange::Criterion;
 use crate::design::models::{self, Block};
 use crate::design::points::{self, Points, Unit};
 use crate::design::predict;
+use crate::design::search::{Method, Search};
+use crate::design::space::{self, Limit, Space};
 use crate::report::design as show;
 use crate::sim::{self, truth};
 
@@ -59,38 +58,22 @@ pub struct ModelArgs {
     pub volts: Vec<f64>,
     /// The equipment's limits NAME=LO:HI (repeatable): a plan or candidate beyond them is
     /// refused.
-    #[arg(long)]
-    pub limit: Vec<String>,
+    #[arg(long, value_name = "NAME=LO:HI")]
+    pub limit: Vec<Limit>,
 }
 
-/// Refuses points beyond the equipment's limits.
-fn check_limits(pts: &Points, limits: &[String], what: &str) -> Result<(), String> {
-    for l in limits {
-        let bad = || format!("--limit `{l}`: expected NAME=LO:HI, for example rate=-800:800");
-        let (name, range) = l.split_once('=').ok_or_else(bad)?;
-        let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
-        let (lo, hi): (f64, f64) = (
-            lo.trim().parse().map_err(|_| bad())?,
-            hi.trim().parse().map_err(|_| bad())?,
-        );
-        let name = name.trim();
-        if !pts.names.iter().any(|n| n == name) {
-            return Err(format!(
-                "--limit {name}: {what} has no variable {name} (it has {})",
-                pts.names.join(", ")
-            ));
-        }
-        for r in 0..pts.rows.len() {
-            let v = pts.value(r, name);
-            if !(lo..=hi).contains(&v) {
-                return Err(format!(
-                    "{what}, point {}: {name} = {v} is outside the equipment's limits {lo} to {hi}",
-                    r + 1
-                ));
-            }
+impl ModelArgs {
+    /// Where the plans live, apart from the model.
+    #[must_use]
+    pub fn space(&self) -> Space {
+        Space {
+            unit: unit(self.sensor).0,
+            temps: self.temps.clone(),
+            volts: self.volts.clone(),
+            region: self.region.clone(),
+            limits: self.limit.clone(),
         }
     }
-    Ok(())
 }
 
 /// `calflash design evaluate`.
@@ -179,8 +162,8 @@ pub struct PredictArgs {
     #[arg(long, value_parser = super::values::positive)]
     pub noise: Option<f64>,
     /// Operating points NAME=VALUE[,NAME=VALUE...] (repeatable).
-    #[arg(long)]
-    pub at: Vec<String>,
+    #[arg(long, value_name = "NAME=VALUE[,...]")]
+    pub at: Vec<points::OperatingPoint>,
     /// Confirm with this many simulated calibrations (single-axis sensors and triads).
     #[arg(long, value_parser = |s: &str| super::values::count_in(s, 10, MAX_MONTE_CARLO))]
     pub monte_carlo: Option<usize>,
@@ -227,140 +210,6 @@ fn unit(kind: SensorKind) -> (Unit, bool) {
     }
 }
 
-/// A plan from a file or from items.
-fn load_plan(spec: &str, vars: &[String], m: &ModelArgs) -> Result<Points, String> {
-    let path = Path::new(spec);
-    if path.is_file() {
-        return points::read(path, vars);
-    }
-    let items: Vec<String> = spec.split(',').map(|s| s.trim().to_string()).collect();
-    points::from_items(&items, &m.temps, &m.volts, 1, unit(m.sensor).0)
-        .map_err(|e| format!("--plan `{spec}`: not a file, and {e}"))
-}
-
-fn grids(specs: &[String]) -> Result<Points, String> {
-    let mut p = Points {
-        names: Vec::new(),
-        rows: Vec::new(),
-    };
-    for g in specs {
-        let g = points::grid(g)?;
-        let n = p.rows.len().max(1).saturating_mul(g.rows.len());
-        if n > crate::sim::plan::MAX_CONDITIONS {
-            return Err(format!(
-                "the grids {} make {n} points; a region or grid holds at most {}",
-                specs.join(" "),
-                crate::sim::plan::MAX_CONDITIONS
-            ));
-        }
-        p = p.product(&g);
-    }
-    Ok(p)
-}
-
-/// The most candidates a Fedorov exchange lists (beyond, the coordinate exchange).
-const MAX_LISTED: f64 = 2e6;
-
-fn candidates(items: &[String], grid_specs: &[String], m: &ModelArgs) -> Result<Points, String> {
-    let from_items = if items.is_empty() {
-        Points {
-            names: Vec::new(),
-            rows: Vec::new(),
-        }
-    } else {
-        points::from_items(items, &m.temps, &m.volts, 1, unit(m.sensor).0)?
-    };
-    let per_grid: Vec<Points> = grid_specs
-        .iter()
-        .map(|g| points::grid(g))
-        .collect::<Result<_, _>>()?;
-    let count = per_grid
-        .iter()
-        .map(|g| g.rows.len() as f64)
-        .product::<f64>()
-        * (from_items.rows.len().max(1) as f64);
-    if count > MAX_LISTED {
-        return Err(format!(
-            "the candidates number {count:.3e}, too many to list (at most {MAX_LISTED:.0e}); `design optimize --method coordinate` searches the levels of --grid factors without listing them"
-        ));
-    }
-    let c = per_grid.iter().fold(from_items, |acc, g| acc.product(g));
-    if c.rows.is_empty() {
-        return Err("no candidates: give --candidates plan items or --grid NAME=LO:HI:N".into());
-    }
-    Ok(c)
-}
-
-/// The model's blocks and, checked, that every variable a block reads is set by `pts` or by
-/// the region (variables the points leave out take their defaults only when `strict` is off).
-fn check_variables(blocks: &[Block], pts: &Points, what: &str) -> Result<(), String> {
-    for v in models::variables(blocks) {
-        if !pts.sets(&v) {
-            return Err(format!(
-                "{what}: the model reads `{v}`, which it does not set (it sets {}); name the variable as the plan does, or add a grid {v}=LO:HI:N",
-                if pts.names.is_empty() {
-                    "nothing".to_string()
-                } else {
-                    pts.names.join(", ")
-                }
-            ));
-        }
-    }
-    Ok(())
-}
-
-fn region_rows(m: &ModelArgs, fallback: &Points, block: &Block) -> Result<DMatrix<f64>, String> {
-    if m.region.is_empty() {
-        Ok(fallback.model_rows(&block.formula))
-    } else {
-        Ok(grids(&m.region)?.model_rows(&block.formula))
-    }
-}
-
-/// Evaluates `pts` for every block; a plan that cannot estimate a block names the term.
-fn evaluate_plan(
-    name: &str,
-    pts: &Points,
-    blocks: &[Block],
-    m: &ModelArgs,
-    region_points: &Points,
-) -> Result<Vec<Criteria>, String> {
-    blocks
-        .iter()
-        .map(|b| {
-            let x = pts.model_rows(&b.formula);
-            let region = region_rows(m, region_points, b)?;
-            criteria::evaluate(&x, &region, b.formula.intercept).map_err(|dep| {
-                let table = to_table(pts, &b.formula);
-                let why = b
-                    .formula
-                    .explain_rank_deficiency(&table, dep.column, &dep.combination);
-                format!(
-                    "plan {name} cannot estimate the model{}: {why}",
-                    if blocks.len() > 1 {
-                        format!(" of axis {}", b.label)
-                    } else {
-                        String::new()
-                    }
-                )
-            })
-        })
-        .collect()
-}
-
-fn to_table(pts: &Points, f: &crate::formula::Formula) -> crate::obs::Table {
-    let names = f.columns();
-    crate::obs::Table {
-        path: PathBuf::from("plan"),
-        columns: names
-            .iter()
-            .map(|n| (0..pts.rows.len()).map(|r| pts.value(r, n)).collect())
-            .collect(),
-        names,
-        lines: (1..=pts.rows.len() as u64).collect(),
-    }
-}
-
 /// The plan files among plan specifications (the rest are plan items).
 fn plan_files<'a>(
     specs: impl IntoIterator<Item = &'a String>,
@@ -382,23 +231,24 @@ fn evaluate(a: &EvaluateArgs) -> Result<(), String> {
         .output("--report", a.report.as_deref())
         .check()?;
     let (u, gyro) = unit(a.model.sensor);
+    let space = a.model.space();
     let blocks = models::blocks(&a.model.model, gyro)?;
     let vars = models::variables(&blocks);
     let mut loaded = Vec::new();
     for spec in &a.plan {
-        let pts = load_plan(spec, &vars, &a.model)?;
-        check_variables(&blocks, &pts, &format!("plan {spec}"))?;
-        check_limits(&pts, &a.model.limit, &format!("plan {spec}"))?;
+        let pts = space.load_plan(spec, &vars)?;
+        space::check_variables(&blocks, &pts, &format!("plan {spec}"))?;
+        space.check_limits(&pts, &format!("plan {spec}"))?;
         loaded.push((spec.clone(), pts));
     }
     // Without --region, every plan is judged over all the plans' points together.
-    let union = union(loaded.iter().map(|(_, p)| p), &vars);
+    let union = space::union(loaded.iter().map(|(_, p)| p), &vars);
     if models::has_lever(&blocks) {
         return evaluate_spin_rig(a, &blocks, loaded, &union);
     }
     let mut plans = Vec::new();
     for (spec, pts) in loaded {
-        let crit = evaluate_plan(&spec, &pts, &blocks, &a.model, &union)?;
+        let crit = space.evaluate_plan(&spec, &pts, &blocks, &union)?;
         plans.push(show::PlanResult {
             name: spec,
             points: pts,
@@ -489,7 +339,10 @@ fn evaluate_spin_rig(
     let mut groups: Vec<Group> = Vec::new();
     for (spec, pts) in loaded {
         let (reduced, estimable) = models::lever_blocks(blocks, &pts);
-        let criteria = evaluate_plan(&spec, &pts, &reduced, &a.model, union)?;
+        let criteria = a
+            .model
+            .space()
+            .evaluate_plan(&spec, &pts, &reduced, union)?;
         let plan = show::PlanResult {
             name: spec,
             points: pts,
@@ -530,269 +383,21 @@ fn evaluate_spin_rig(
     Ok(())
 }
 
-/// The points of all `plans`, on the variables `vars`.
-fn union<'a>(plans: impl Iterator<Item = &'a Points>, vars: &[String]) -> Points {
-    let mut rows = Vec::new();
-    for p in plans {
-        for r in 0..p.rows.len() {
-            rows.push(vars.iter().map(|v| p.value(r, v)).collect());
-        }
-    }
-    Points {
-        names: vars.to_vec(),
-        rows,
-    }
-}
-
-/// The usual plans to compare an optimum with: uniform spacing over each grid, and the 6, 12 and
-/// 24-position tumbles for triads.
-fn usual_plans(o: &OptimizeArgs, cands: &Points) -> Vec<(String, Points)> {
-    let mut out = Vec::new();
-    let (u, _) = unit(o.model.sensor);
-    if u == Unit::Triad {
-        for k in [6, 12, 24] {
-            if let Ok(p) = points::from_items(
-                &[format!("tumble:{k}")],
-                &o.model.temps,
-                &o.model.volts,
-                1,
-                u,
-            ) {
-                // Repeated to the plan's size, as a station would.
-                let reps = o.n.div_ceil(p.rows.len()).max(1);
-                let idx: Vec<usize> = (0..p.rows.len())
-                    .cycle()
-                    .take(reps * p.rows.len())
-                    .collect();
-                out.push((format!("tumble:{k} x{reps}"), p.select(&idx)));
-            }
-        }
-    }
-    // Uniform: n points spread evenly over the candidates in their order.
-    let m = cands.rows.len();
-    if m > 0 {
-        let idx: Vec<usize> = (0..o.n)
-            .map(|k| {
-                if o.n == 1 {
-                    0
-                } else {
-                    (k * (m - 1) + (o.n - 1) / 2) / (o.n - 1)
-                }
-            })
-            .collect();
-        out.push((
-            format!("uniform ({} points over the candidates)", o.n),
-            cands.select(&idx),
-        ));
-    }
-    out
-}
-
-/// How `optimize` searches.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Method {
-    /// Coordinate exchange when the candidates are only grids of more than 50,000 combinations,
-    /// else Fedorov.
-    Auto,
-    /// Fedorov exchange over the listed candidates.
-    Fedorov,
-    /// Coordinate exchange over the grids' levels, without listing their combinations.
-    Coordinate,
-}
-
-/// A found plan, however it was searched.
-struct Searched {
-    plan: Points,
-    hits: usize,
-    over: String,
-    region: Points,
-    listed: Option<Points>,
-}
-
-fn search_fedorov(
-    o: &OptimizeArgs,
-    blocks: &[Block],
-    bar: &indicatif::ProgressBar,
-    start: std::time::Instant,
-) -> Result<Searched, String> {
-    let cands = candidates(&o.candidates, &o.grid, &o.model)?;
-    check_variables(blocks, &cands, "the candidates")?;
-    check_limits(&cands, &o.model.limit, "the candidates")?;
-    let fs: Vec<DMatrix<f64>> = blocks
-        .iter()
-        .map(|b| cands.model_rows(&b.formula))
-        .collect();
-    let ws: Vec<Option<DMatrix<f64>>> = blocks
-        .iter()
-        .map(|b| {
-            let r = region_rows(&o.model, &cands, b)?;
-            Ok::<_, String>(Some(r.transpose() * &r / r.nrows() as f64))
-        })
-        .collect::<Result<_, _>>()?;
-    let opts = exchange::Options {
-        n: o.n,
-        restarts: o.restarts,
-        seed: o.seed,
-    };
-    let found = exchange::optimize_blocks(&fs, o.criterion, &ws, &opts, |d, _| {
-        if start.elapsed().as_secs_f64() > 0.5 {
-            bar.set_position(d as u64);
-        }
-    })
-    .map_err(|e| {
-        format!(
-            "{e}; the model's terms: {}",
-            blocks
-                .iter()
-                .map(|b| b.formula.term_names().join(", "))
-                .collect::<Vec<_>>()
-                .join(" | ")
-        )
-    })?;
-    Ok(Searched {
-        plan: cands.select(&found.points),
-        hits: found.hits,
-        over: format!("{} candidates (Fedorov exchange)", cands.rows.len()),
-        region: cands.clone(),
-        listed: Some(cands),
-    })
-}
-
-fn search_coordinate(
-    o: &OptimizeArgs,
-    blocks: &[Block],
-    bar: &indicatif::ProgressBar,
-    start: std::time::Instant,
-) -> Result<Searched, String> {
-    if !o.candidates.is_empty() {
-        return Err("--method coordinate: works on the levels of --grid factors; plan items are listed candidates (use --method fedorov)".into());
-    }
-    if blocks.len() != 1 {
-        return Err(
-            "--method coordinate: one model at a time (a formula or the single preset)".into(),
-        );
-    }
-    let factor_grids: Vec<Points> = o
-        .grid
-        .iter()
-        .map(|g| points::grid(g))
-        .collect::<Result<_, _>>()?;
-    if factor_grids.is_empty() {
-        return Err("--method coordinate: give the factors as --grid NAME=LO:HI:N".into());
-    }
-    let factors: Vec<coordinate::Factor> = factor_grids
-        .iter()
-        .map(|g| coordinate::Factor {
-            name: g.names[0].clone(),
-            levels: g.rows.iter().map(|r| r[0]).collect(),
-        })
-        .collect();
-    let names: Vec<String> = factors.iter().map(|f| f.name.clone()).collect();
-    let probe = Points {
-        names: names.clone(),
-        rows: vec![factors.iter().map(|f| f.levels[0]).collect()],
-    };
-    check_variables(blocks, &probe, "the factors")?;
-    let limits_probe = Points {
-        names: names.clone(),
-        rows: factors
-            .iter()
-            .enumerate()
-            .flat_map(|(k, f)| f.levels.iter().map(move |l| (k, *l)))
-            .map(|(k, l)| {
-                let mut r = probe.rows[0].clone();
-                r[k] = l;
-                r
-            })
-            .collect(),
-    };
-    check_limits(&limits_probe, &o.model.limit, "the factors")?;
-    let formula = blocks[0].formula.clone();
-    let row = |x: &[f64]| {
-        let mut out = Vec::new();
-        let pts = Points {
-            names: names.clone(),
-            rows: vec![x.to_vec()],
-        };
-        formula.row(|v| pts.value(0, v), &mut out);
-        nalgebra::DVector::from_vec(out)
-    };
-    // The region: the --region grids, or 20,000 random combinations of the levels.
-    let region = if o.model.region.is_empty() {
-        use rand::{RngExt, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(o.seed ^ 0x5eed);
-        Points {
-            names: names.clone(),
-            rows: (0..20_000)
-                .map(|_| {
-                    factors
-                        .iter()
-                        .map(|f| f.levels[rng.random_range(0..f.levels.len())])
-                        .collect()
-                })
-                .collect(),
-        }
-    } else {
-        grids(&o.model.region)?
-    };
-    let r = region.model_rows(&formula);
-    let w = r.transpose() * &r / r.nrows() as f64;
-    let opts = exchange::Options {
-        n: o.n,
-        restarts: o.restarts,
-        seed: o.seed,
-    };
-    let found = coordinate::optimize(&factors, &row, o.criterion, Some(&w), &opts, |d, _| {
-        if start.elapsed().as_secs_f64() > 0.5 {
-            bar.set_position(d as u64);
-        }
-    })
-    .map_err(|e| {
-        format!(
-            "{e}; the model's terms: {}",
-            formula.term_names().join(", ")
-        )
-    })?;
-    let combinations: f64 = factors.iter().map(|f| f.levels.len() as f64).product();
-    Ok(Searched {
-        plan: Points {
-            names,
-            rows: found.points,
-        },
-        hits: found.hits,
-        over: format!(
-            "{} factors, {combinations:.3e} combinations (coordinate exchange)",
-            factors.len()
-        ),
-        region,
-        listed: None,
-    })
-}
-
 fn optimize(o: &OptimizeArgs) -> Result<(), String> {
     plan_files(&o.candidates, "--candidates", Paths::new())
         .output("-o", Some(&o.output))
         .check()?;
     let (u, gyro) = unit(o.model.sensor);
+    let space = o.model.space();
     let blocks = models::blocks(&o.model.model, gyro)?;
     let vars = models::variables(&blocks);
-    let combinations: f64 = o
-        .grid
-        .iter()
-        .filter_map(|g| points::grid(g).ok())
-        .map(|g| g.rows.len() as f64)
-        .product();
-    let method = match o.method {
-        Method::Auto
-            if o.candidates.is_empty()
-                && !o.grid.is_empty()
-                && combinations > 50_000.0
-                && blocks.len() == 1 =>
-        {
-            Method::Coordinate
-        }
-        Method::Auto => Method::Fedorov,
-        m => m,
+    let search = Search {
+        n: o.n,
+        criterion: o.criterion,
+        candidates: o.candidates.clone(),
+        grid: o.grid.clone(),
+        restarts: o.restarts,
+        seed: o.seed,
     };
     let bar = indicatif::ProgressBar::new(o.restarts as u64);
     bar.set_style(
@@ -800,22 +405,23 @@ fn optimize(o: &OptimizeArgs) -> Result<(), String> {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let start = std::time::Instant::now();
-    let searched = match method {
-        Method::Coordinate => search_coordinate(o, &blocks, &bar, start)?,
-        _ => search_fedorov(o, &blocks, &bar, start)?,
-    };
+    let searched = search.run(o.method, &space, &blocks, |done| {
+        if start.elapsed().as_secs_f64() > 0.5 {
+            bar.set_position(done as u64);
+        }
+    })?;
     bar.finish_and_clear();
     let took = start.elapsed();
     let mut compare = vec![("optimal".to_string(), searched.plan.clone())];
     for spec in &o.compare {
-        compare.push((spec.clone(), load_plan(spec, &vars, &o.model)?));
+        compare.push((spec.clone(), space.load_plan(spec, &vars)?));
     }
     if let Some(cands) = &searched.listed {
-        compare.extend(usual_plans(o, cands));
+        compare.extend(search.usual_plans(&space, cands));
     }
     let mut rows = Vec::new();
     for (i, (name, pts)) in compare.iter().enumerate() {
-        match evaluate_plan(name, pts, &blocks, &o.model, &searched.region) {
+        match space.evaluate_plan(name, pts, &blocks, &searched.region) {
             // The plan found is the answer: failing to evaluate it is the command's failure.
             Err(e) if i == 0 => return Err(e),
             Ok(c) => rows.push(show::PlanResult {
@@ -872,6 +478,7 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
         .output("--json", a.json.as_deref())
         .check()?;
     let (u, gyro) = unit(a.model.sensor);
+    let space = a.model.space();
     let blocks = models::blocks(&a.model.model, gyro)?;
     let vars = models::variables(&blocks);
     let sensor = match a.model.sensor {
@@ -904,30 +511,15 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
         names: Vec::new(),
         rows: Vec::new(),
     };
-    for spec in &a.at {
-        let mut names = Vec::new();
-        let mut row = Vec::new();
-        for kv in spec.split(',') {
-            let (k, v) = kv
-                .split_once('=')
-                .ok_or_else(|| format!("--at `{spec}`: expected NAME=VALUE[,NAME=VALUE...]"))?;
-            let k = k.trim();
-            let read = models::variables(&blocks);
-            if !read.iter().any(|r| r == k) {
-                return Err(format!(
-                    "--at `{spec}`: the model reads no `{k}`; it reads {}",
-                    read.join(", ")
-                ));
-            }
-            names.push(k.to_string());
-            row.push(
-                v.trim()
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| format!("--at `{spec}`: `{v}` is not a finite number"))?,
-            );
+    for point in &a.at {
+        let spec = &point.text;
+        if let Some((k, _)) = point.values.iter().find(|(k, _)| !vars.contains(k)) {
+            return Err(format!(
+                "--at `{spec}`: the model reads no `{k}`; it reads {}",
+                vars.join(", ")
+            ));
         }
+        let names: Vec<String> = point.values.iter().map(|(k, _)| k.clone()).collect();
         if at.rows.is_empty() {
             at.names = names;
         } else if at.names != names {
@@ -936,7 +528,7 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
                 at.names.join(", ")
             ));
         }
-        at.rows.push(row);
+        at.rows.push(point.values.iter().map(|(_, v)| *v).collect());
     }
     if at.rows.is_empty() {
         return Err("--at: give at least one operating point, NAME=VALUE[,NAME=VALUE...]".into());
@@ -945,10 +537,10 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
         if blocks.len() != 1 {
             return Err("--target: one model at a time (a formula or the single preset)".into());
         }
-        let cands = candidates(&a.candidates, &a.grid, &a.model)?;
-        check_variables(&blocks, &cands, "the candidates")?;
+        let cands = space.candidates(&a.candidates, &a.grid)?;
+        space::check_variables(&blocks, &cands, "the candidates")?;
         let f = cands.model_rows(&blocks[0].formula);
-        let region = region_rows(&a.model, &cands, &blocks[0])?;
+        let region = space.region_rows(&cands, &blocks[0])?;
         let w = region.transpose() * &region / region.nrows() as f64;
         let at_rows = at.model_rows(&blocks[0].formula);
         let goal = predict::Target {
@@ -987,9 +579,9 @@ fn predict(a: &PredictArgs) -> Result<(), String> {
         .plan
         .as_deref()
         .ok_or("give --plan (or --target with --candidates)")?;
-    let pts = load_plan(spec, &vars, &a.model)?;
-    check_variables(&blocks, &pts, &format!("plan {spec}"))?;
-    let crit = evaluate_plan(spec, &pts, &blocks, &a.model, &pts)?;
+    let pts = space.load_plan(spec, &vars)?;
+    space::check_variables(&blocks, &pts, &format!("plan {spec}"))?;
+    let crit = space.evaluate_plan(spec, &pts, &blocks, &pts)?;
     let outputs: Vec<&str> = match (u, gyro) {
         (Unit::Triad, false) => crate::columns::A.to_vec(),
         (Unit::Triad, true) => crate::columns::GYRO.to_vec(),

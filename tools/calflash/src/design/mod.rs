@@ -7,3 +7,5 @@ pub mod exchange;
 pub mod models;
 pub mod points;
 pub mod predict;
+pub mod search;
+pub mod space;

@@ -292,9 +292,61 @@ pub fn tally(points: &Points) -> Vec<(Vec<f64>, usize)> {
     out
 }
 
+/// An operating point `NAME=VALUE[,NAME=VALUE...]` (`design predict --at`): variables and
+/// their finite values, in the order given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OperatingPoint {
+    /// The text it was read from.
+    pub text: String,
+    /// The variables and values.
+    pub values: Vec<(String, f64)>,
+}
+
+impl std::str::FromStr for OperatingPoint {
+    type Err = String;
+
+    fn from_str(spec: &str) -> Result<Self, String> {
+        let values = spec
+            .split(',')
+            .map(|kv| {
+                let (k, v) = kv
+                    .split_once('=')
+                    .ok_or_else(|| format!("--at `{spec}`: expected NAME=VALUE[,NAME=VALUE...]"))?;
+                let v = v
+                    .trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| {
+                        format!("--at `{spec}`: `{}` is not a finite number", v.trim())
+                    })?;
+                Ok((k.trim().to_string(), v))
+            })
+            .collect::<Result<_, String>>()?;
+        Ok(Self {
+            text: spec.to_string(),
+            values,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_operating_point_reads_names_and_finite_values() {
+        let p: OperatingPoint = "rate = 2.5, temp=-40".parse().unwrap();
+        assert_eq!(p.values, [("rate".into(), 2.5), ("temp".into(), -40.0)]);
+        assert_eq!(
+            "rate".parse::<OperatingPoint>().unwrap_err(),
+            "--at `rate`: expected NAME=VALUE[,NAME=VALUE...]"
+        );
+        assert_eq!(
+            "rate=1,temp=NaN".parse::<OperatingPoint>().unwrap_err(),
+            "--at `rate=1,temp=NaN`: `NaN` is not a finite number"
+        );
+    }
 
     #[test]
     fn grids_items_and_products() {
