@@ -1,5 +1,6 @@
 //! What a fresh machine needs: the thumb target (rustup), qemu-system-arm, and for the tests
-//! of the shared history a PostgreSQL server (Debian's packages).
+//! a PostgreSQL server (the shared history) and Chromium (the reports in a real browser), all
+//! Debian's packages.
 
 use std::process::{Command, Stdio};
 
@@ -12,6 +13,8 @@ pub struct Setup {
     /// `None` when a PostgreSQL server is installed (only looked for by `components` runs, the
     /// tests'); else why not.
     pub postgres_missing: Option<String>,
+    /// `None` when Chromium is installed (as PostgreSQL); else why not.
+    pub chromium_missing: Option<String>,
 }
 
 /// Whether Debian's PostgreSQL server is installed (`/usr/lib/postgresql/N/bin/initdb`).
@@ -22,35 +25,44 @@ fn have_postgres() -> bool {
     })
 }
 
-/// Installs Debian's `postgresql` when missing and possible; `None` when it is there.
-fn postgres() -> Option<String> {
-    if have_postgres() {
+/// Installs Debian's `package` when `present` says it is missing and it can be installed
+/// (as root, with apt-get); `None` when it is there, else why not.
+fn debian_package(package: &str, present: fn() -> bool) -> Option<String> {
+    if present() {
         return None;
     }
     if !is_root() {
-        return Some(
-            "PostgreSQL is not installed and this user cannot install it; run `sudo apt-get install -y postgresql`"
-                .into(),
-        );
+        return Some(format!(
+            "{package} is not installed and this user cannot install it; run `sudo apt-get install -y {package}`"
+        ));
     }
     if !quiet(Command::new("apt-get").arg("--version")) {
-        return Some("PostgreSQL is not installed and there is no apt-get to install it".into());
+        return Some(format!(
+            "{package} is not installed and there is no apt-get to install it"
+        ));
     }
-    println!("xtask: apt-get install -y postgresql");
+    println!("xtask: apt-get install -y {package}");
     let install = || {
         Command::new("apt-get")
-            .args(["install", "-y", "--no-install-recommends", "postgresql"])
+            .args(["install", "-y", "--no-install-recommends", package])
             .env("DEBIAN_FRONTEND", "noninteractive")
             .stdout(Stdio::null())
             .status()
             .is_ok_and(|s| s.success())
     };
     let installed = install() || (quiet(Command::new("apt-get").arg("update")) && install());
-    if installed && have_postgres() {
+    if installed && present() {
         None
     } else {
-        Some("`apt-get install -y postgresql` failed (no network to the Debian mirror?)".into())
+        Some(format!(
+            "`apt-get install -y {package}` failed (no network to the Debian mirror?)"
+        ))
     }
+}
+
+/// Whether Debian's Chromium is installed, for the reports' test in a real browser.
+fn have_chromium() -> bool {
+    std::path::Path::new("/usr/bin/chromium").is_file()
 }
 
 fn quiet(cmd: &mut Command) -> bool {
@@ -99,47 +111,23 @@ pub fn run(components: bool) -> Result<Setup, String> {
             }
         }
     }
-    let postgres_missing = if components { postgres() } else { None };
+    let postgres_missing = components
+        .then(|| debian_package("postgresql", have_postgres))
+        .flatten();
+    let chromium_missing = components
+        .then(|| debian_package("chromium", have_chromium))
+        .flatten();
     if have_qemu() {
         return Ok(Setup {
             qemu_missing: None,
             postgres_missing,
+            chromium_missing,
         });
     }
-    let why = if !is_root() {
-        "qemu-system-arm is not installed and this user cannot install it; run \
-         `sudo apt-get install -y qemu-system-arm`"
-            .to_string()
-    } else if !quiet(Command::new("apt-get").arg("--version")) {
-        "qemu-system-arm is not installed and there is no apt-get to install it; install \
-         QEMU's ARM system emulator with your package manager"
-            .to_string()
-    } else {
-        println!("xtask: apt-get install -y qemu-system-arm");
-        let install = || {
-            Command::new("apt-get")
-                .args([
-                    "install",
-                    "-y",
-                    "--no-install-recommends",
-                    "qemu-system-arm",
-                ])
-                .env("DEBIAN_FRONTEND", "noninteractive")
-                .stdout(Stdio::null())
-                .status()
-                .is_ok_and(|s| s.success())
-        };
-        let installed = install() || (quiet(Command::new("apt-get").arg("update")) && install());
-        if installed && have_qemu() {
-            return Ok(Setup {
-                qemu_missing: None,
-                postgres_missing,
-            });
-        }
-        "`apt-get install -y qemu-system-arm` failed (no network to the Debian mirror?)".to_string()
-    };
+    let why = debian_package("qemu-system-arm", have_qemu);
     Ok(Setup {
-        qemu_missing: Some(why),
+        qemu_missing: why,
         postgres_missing,
+        chromium_missing,
     })
 }

@@ -125,6 +125,9 @@ pub fn run() -> Result<(), String> {
             if setup.postgres_missing.is_none() {
                 s.cmd.env("SPINCAL_REQUIRE_POSTGRES", "1");
             }
+            if setup.chromium_missing.is_none() {
+                s.cmd.env("SPINCAL_REQUIRE_CHROMIUM", "1");
+            }
             s
         },
     ];
@@ -174,6 +177,9 @@ pub fn run() -> Result<(), String> {
     }
     if let Some(why) = &setup.postgres_missing {
         println!("  {:<40} SKIPPED: {why}", "PostgreSQL tests");
+    }
+    if let Some(why) = &setup.chromium_missing {
+        println!("  {:<40} SKIPPED: {why}", "reports in a browser");
     }
     if failed.is_empty() {
         Ok(())
