@@ -207,6 +207,7 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
             .zip(&terms)
             .map(|(c, t)| c.iter().map(|p| (p.tau, t.adev(p.tau))).collect())
             .collect();
+        let fit_names: Vec<String> = axes.iter().map(|a| format!("{a}: noise terms")).collect();
         let mut series = Vec::new();
         for j in 0..3 {
             series.push(report::plot::Series {
@@ -217,7 +218,7 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
                 errors: None,
             });
             series.push(report::plot::Series {
-                name: "noise terms",
+                name: &fit_names[j],
                 points: &fits[j],
                 color: report::plot::COLORS[j],
                 line: true,

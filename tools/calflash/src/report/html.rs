@@ -261,9 +261,10 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
         );
         // Coefficients against temperature.
         if c.temps.len() > 1 {
+            let per_unit = format!("scale factor (counts per {unit})");
             for (term, what) in [
                 ("1", "bias (counts)"),
-                (axis.own.as_str(), "scale factor (counts per unit)"),
+                (axis.own.as_str(), per_unit.as_str()),
             ] {
                 let pts: Vec<(f64, f64)> = c
                     .points

@@ -97,6 +97,77 @@ fn bounds(fig: &Figure<'_>) -> ((f64, f64), (f64, f64)) {
     (pad(x), pad(y))
 }
 
+/// The plotting area of a 720 x 360 figure, in pixels (less the caption, margins and the axes'
+/// label areas).
+const PLOT_PX: (f64, f64) = (616.0, 266.0);
+
+/// The legend's size in pixels: plotters' entries are about 18 px high, their text about 6.5
+/// px a character beside a 12 px mark.
+fn legend_px(fig: &Figure<'_>) -> Option<(f64, f64)> {
+    let mut names: Vec<&str> = fig
+        .series
+        .iter()
+        .map(|s| s.name)
+        .filter(|n| !n.is_empty())
+        .collect();
+    if !fig.bands.is_empty() {
+        names.push(fig.band_label);
+    }
+    let longest = names.iter().map(|n| n.chars().count()).max()?;
+    Some((
+        40.0 + 6.5 * longest as f64,
+        12.0 + 18.0 * names.len() as f64,
+    ))
+}
+
+/// Where the legend covers no point: the corner of the plot with none under it, else the
+/// upper right with the y range raised so that the data stay below it. The position and the
+/// (possibly raised) top of the y range.
+fn legend_spot(
+    fig: &Figure<'_>,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> (SeriesLabelPosition, f64) {
+    let Some((w, h)) = legend_px(fig) else {
+        return (SeriesLabelPosition::UpperRight, y1);
+    };
+    // The legend's share of the plot, with its 10 px from the edges.
+    let (fw, fh) = ((w + 10.0) / PLOT_PX.0, (h + 10.0) / PLOT_PX.1);
+    let under = |left: bool, top: bool| {
+        let (xa, xb) = if left {
+            (x0, x0 + fw * (x1 - x0))
+        } else {
+            (x1 - fw * (x1 - x0), x1)
+        };
+        let (ya, yb) = if top {
+            (y1 - fh * (y1 - y0), y1)
+        } else {
+            (y0, y0 + fh * (y1 - y0))
+        };
+        fig.series
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|(x, y)| (xa..=xb).contains(x) && (ya..=yb).contains(y))
+            .count()
+    };
+    for (position, left, top) in [
+        (SeriesLabelPosition::UpperRight, false, true),
+        (SeriesLabelPosition::UpperLeft, true, true),
+        (SeriesLabelPosition::LowerRight, false, false),
+        (SeriesLabelPosition::LowerLeft, true, false),
+    ] {
+        if under(left, top) == 0 {
+            return (position, y1);
+        }
+    }
+    // Room above the data: the legend takes the top fh of the raised range.
+    let fh = fh.min(0.6);
+    (
+        SeriesLabelPosition::UpperRight,
+        y1 + (y1 - y0) * fh / (1.0 - fh),
+    )
+}
+
 /// Draws a figure as an SVG document (a string).
 ///
 /// # Errors
@@ -107,6 +178,25 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
         let root = SVGBackend::with_string(&mut out, (720, 360)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let ((x0, x1), (y0, y1)) = bounds(fig);
+        let (spot, y1) = legend_spot(fig, (x0, x1), (y0, y1));
+        // Error bars too short to see are said under the axis, not left to look like no
+        // uncertainty.
+        let largest = fig
+            .series
+            .iter()
+            .filter_map(|s| s.errors)
+            .flatten()
+            .fold(0.0_f64, |m, e| m.max(*e));
+        let x_desc =
+            if fig.series.iter().any(|s| s.errors.is_some()) && 2.0 * largest < 0.02 * (y1 - y0) {
+                format!(
+                    "{}   (1-sigma error bars, at most +-{}, are within the marks)",
+                    fig.x,
+                    super::terminal::num(largest)
+                )
+            } else {
+                fig.x.to_string()
+            };
         let mut chart = ChartBuilder::on(&root)
             .caption(fig.title, ("sans-serif", 18))
             .margin(12)
@@ -116,8 +206,9 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
             .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
-            .x_desc(fig.x)
+            .x_desc(x_desc)
             .y_desc(fig.y)
+            .x_label_formatter(&|v| super::terminal::num(*v))
             .y_label_formatter(&|v| super::terminal::num(*v))
             .light_line_style(RGBColor(235, 235, 235))
             .draw()
@@ -158,7 +249,7 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
             }
             line_or_marks(&mut chart, s, &pts, 2)?;
         }
-        legend(&mut chart)?;
+        legend(&mut chart, spot)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(out)
@@ -190,14 +281,18 @@ where
     Ok(())
 }
 
-/// The legend box.
-fn legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>) -> Result<(), String>
+/// The legend box, at `position`.
+fn legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), String>
 where
     DB: DrawingBackend + 'a,
     CT: CoordTranslate,
 {
     chart
         .configure_series_labels()
+        .position(position)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.3))
         .draw()
@@ -259,7 +354,7 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, String> {
                 .collect();
             line_or_marks(&mut chart, s, &pts, 3)?;
         }
-        legend(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(out)
