@@ -387,4 +387,43 @@ mod tests {
         assert!(s.matches("<circle").count() >= 3);
         assert!(s.contains("residuals") && s.contains("calibrated range"));
     }
+
+    fn figure<'a>(pts: &'a [(f64, f64)]) -> Figure<'a> {
+        Figure {
+            title: "t",
+            x: "x",
+            y: "y",
+            series: vec![Series::dots("a series", pts, 0)],
+            bands: Vec::new(),
+            band_label: "",
+            zero_line: false,
+        }
+    }
+
+    #[test]
+    fn the_legend_goes_where_it_covers_no_point() {
+        let range = ((0.0, 10.0), (0.0, 10.0));
+        // Points in the upper right: the upper left is free.
+        let pts = [(9.5, 9.5), (5.0, 5.0)];
+        let (spot, top) = legend_spot(&figure(&pts), range.0, range.1);
+        assert!(matches!(spot, SeriesLabelPosition::UpperLeft));
+        assert_eq!(top, 10.0);
+        // Points in every corner: room is made above them.
+        let pts = [(0.2, 0.2), (9.8, 0.2), (0.2, 9.8), (9.8, 9.8)];
+        let (spot, top) = legend_spot(&figure(&pts), range.0, range.1);
+        assert!(matches!(spot, SeriesLabelPosition::UpperRight));
+        let (_, h) = legend_px(&figure(&pts)).unwrap();
+        let share = (h + 10.0) / PLOT_PX.1;
+        assert!((top - 10.0 / (1.0 - share)).abs() < 1e-9, "{top}");
+    }
+
+    #[test]
+    fn error_bars_too_short_to_see_are_said() {
+        let pts = [(0.0, 0.0), (1.0, 100.0)];
+        let mut f = figure(&pts);
+        f.series[0].errors = Some(&[0.01, 0.01]);
+        assert!(svg(&f).unwrap().contains("are within the marks"));
+        f.series[0].errors = Some(&[20.0, 20.0]);
+        assert!(!svg(&f).unwrap().contains("are within the marks"));
+    }
 }
