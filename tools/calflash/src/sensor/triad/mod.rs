@@ -12,22 +12,23 @@
 
 use nalgebra::Matrix3;
 use spincal::model::{
-    BoundedVec, CalibrationData, Channel, ImuCovariance, ImuOutputCovariance, ImuSet,
-    MAX_TEMPERATURES, Quantity, Sensor, Span, TemperatureModel, TriadCovariance, TriadSet,
+    BoundedVec, CalibrationData, ImuOutputCovariance, MAX_TEMPERATURES, Quantity, Span,
+    TemperatureModel, TriadCovariance, TriadSet,
 };
 
+mod assemble;
+mod fit;
 mod sets;
 pub mod still;
 mod thermal;
 
+use self::fit::fit_triad;
 use self::sets::device_sets;
 use super::table::{self, Layout};
 use super::thermal::{self as continuous, ThermalFit};
-use super::{AxisFit, Calibrated, Options, PointFit, Thermal, WorkflowError, blob, lever};
+use super::{AxisFit, Calibrated, Options, Thermal, WorkflowError, blob, lever};
 use crate::columns as col;
-use crate::formula::{self, Formula};
 use crate::obs::{self, Table};
-use crate::stats::{self, select};
 
 /// What is calibrated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -72,117 +73,6 @@ struct Spec<'a> {
     nonlinear: bool,
 }
 
-/// Most regression steps of one axis' fit (Gauss-Newton for the lever arms, refreshed sensed
-/// inputs for the nonlinear terms); it converges in a handful.
-const MAX_STEPS: usize = 50;
-/// Converged when no estimate moves by more than this, relative to the axis' scale factor (or
-/// in metres for the lever arm).
-const STEP_TOLERANCE: f64 = 1e-11;
-
-fn fit_one(
-    formula: &Formula,
-    t: &Table,
-    own: &str,
-    opts: &Options,
-    where_: &str,
-    weights: Option<&[f64]>,
-) -> Result<AxisFit, WorkflowError> {
-    AxisFit::fit_weighted(
-        formula,
-        t,
-        own,
-        opts.alpha,
-        (&opts.file, where_),
-        true,
-        weights,
-    )
-}
-
-/// Fits axis `i` of a triad at one table point: one regression when the model is linear in
-/// its coefficients, else regression steps from [`lever::Estimate::start`] until the estimates
-/// the regressors are made from stop moving (`sensor::lever`).
-#[allow(clippy::too_many_arguments)]
-fn fit_axis(
-    spec: &Spec<'_>,
-    formula: &Formula,
-    t: &Table,
-    i: usize,
-    lever_use: Option<&[bool; 3]>,
-    opts: &Options,
-    (where_, weights): (&str, Option<&[f64]>),
-) -> Result<AxisFit, WorkflowError> {
-    let iterate = lever_use.is_some() || spec.nonlinear;
-    let mut est = lever::Estimate::start(i);
-    for step in 0..MAX_STEPS {
-        let at = lever::axis_table(
-            t,
-            spec.gyro,
-            i,
-            spec.outputs[i],
-            &est,
-            lever_use,
-            spec.nonlinear,
-        );
-        let fit = fit_one(formula, &at, spec.inputs[i], opts, where_, weights)?;
-        if !iterate {
-            return Ok(fit);
-        }
-        let s = spec.inputs.map(|n| fit.coef(n));
-        // The first step's lever coefficients are S_ii r_ik (its regressors assume a unit
-        // sensitivity); later ones are r_ik.
-        let per = if step == 0 { s[i] } else { 1.0 };
-        let next = lever::Estimate {
-            s,
-            r: std::array::from_fn(|k| fit.coef(&lever::column(i, k)) / per),
-            g: if spec.gyro {
-                col::F.map(|n| fit.coef(n))
-            } else {
-                [0.0; 3]
-            },
-        };
-        let scale = s[i].abs().max(f64::MIN_POSITIVE);
-        let moved = (0..3)
-            .map(|k| {
-                ((next.s[k] - est.s[k]).abs() / scale)
-                    .max((next.r[k] - est.r[k]).abs())
-                    .max((next.g[k] - est.g[k]).abs() / scale)
-            })
-            .fold(0.0, f64::max);
-        if step > 0 && moved <= STEP_TOLERANCE {
-            return Ok(fit);
-        }
-        if !next.s.iter().chain(&next.r).all(|x| x.is_finite()) || s[i] == 0.0 {
-            break;
-        }
-        est = next;
-    }
-    Err(WorkflowError::msg(
-        &opts.file,
-        format!(
-            "{} at {where_}: the fit of the sensitivity and lever arm did not settle in {MAX_STEPS} steps; the plan may not separate them (spin the unit at several rates and hold it still in several positions)",
-            spec.outputs[i]
-        ),
-    ))
-}
-
-/// Notes on the lever-arm components the plan cannot estimate.
-fn lever_notes(estimable: &[[bool; 3]; 3], notes: &mut Vec<String>) {
-    let missing: Vec<String> = (0..3)
-        .flat_map(|i| (0..3).map(move |k| (i, k)))
-        .filter(|(i, k)| !estimable[*i][*k])
-        .map(|(i, k)| format!("r_{}{}", lever::AXES[i], lever::AXES[k]))
-        .collect();
-    let estimated = 9 - missing.len();
-    if missing.is_empty() {
-        notes.push("the plan spins the unit about axes and diagonals: all nine lever-arm components of the accelerometer are estimated".into());
-    } else {
-        notes.push(format!(
-            "the plan spins the unit: {estimated} of the nine lever-arm components are estimated; {} cannot be (component k of axis i needs a spin with rate along both i and k, or an angular acceleration about the third axis) and are set to 0: add a `diagonal:LO:HI:N` plan item (the rate table's 45-degree fixture) to estimate them",
-            missing.join(", ")
-        ));
-    }
-}
-
 /// How a triad's coefficients follow the temperature.
 #[derive(Clone, Copy)]
 enum Temperature<'a> {
@@ -206,237 +96,6 @@ struct TriadModel {
     lever: Option<[[f64; 3]; 3]>,
     centers: [f64; 3],
     ranges: [Span; 3],
-}
-
-/// Axis `i`'s preset formula, its terms chosen on the first step's regressors at the reference
-/// (`ref_table`, every observation for a continuous model, whose bias and own scale factor
-/// meanwhile follow the temperature at the highest order the observations can estimate).
-#[allow(clippy::too_many_arguments)]
-fn axis_formula(
-    spec: &Spec<'_>,
-    i: usize,
-    ref_table: &Table,
-    (ref_where, weights): (&str, Option<&[f64]>),
-    estimable: Option<&[[bool; 3]; 3]>,
-    support: Option<&continuous::Support>,
-    opts: &Options,
-    notes: &mut Vec<String>,
-) -> Result<Formula, WorkflowError> {
-    let inputs = format!(
-        "{} + {} + {}",
-        spec.inputs[0], spec.inputs[1], spec.inputs[2]
-    );
-    let mut text = format!("{} ~ 1 + {inputs}", spec.outputs[i]);
-    if spec.nonlinear {
-        let n = lever::SENSED;
-        text.push_str(&format!(" + {n}^2 + {n}^3 + {n}:abs({n})"));
-    }
-    if spec.g_sens {
-        text.push_str(&format!(" + {} + {} + {}", col::F[0], col::F[1], col::F[2]));
-    }
-    if let Some(e) = estimable {
-        for k in (0..3).filter(|k| e[i][*k]) {
-            text.push_str(&format!(" + {}", lever::column(i, k)));
-        }
-    }
-    notes.push(format!("preset expands {} to: {text}", spec.outputs[i]));
-    let base = formula::parse(&text)?;
-    let first = lever::axis_table(
-        ref_table,
-        spec.gyro,
-        i,
-        spec.outputs[i],
-        &lever::Estimate::start(i),
-        estimable.map(|e| &e[i]),
-        spec.nonlinear,
-    );
-    let fit = |f: &Formula| fit_one(f, &first, spec.inputs[i], opts, ref_where, weights);
-    let mut f = match support {
-        Some(s) => {
-            let linear = formula::parse(&format!("{} ~ 1 + {inputs}", spec.outputs[i]))?;
-            let bias = continuous::estimable(&linear, 0, s.max_order, &[], &fit);
-            let own = continuous::estimable(&linear, 1 + i, s.max_order, &[bias], &fit);
-            let orders: Vec<u32> = base
-                .term_names()
-                .iter()
-                .map(|n| match n.as_str() {
-                    "1" => bias,
-                    n if n == spec.inputs[i] => own,
-                    _ => 0,
-                })
-                .collect();
-            continuous::expand(&base, &orders)
-        }
-        None => base,
-    };
-    fit(&f)?;
-    if !opts.keep_all_terms {
-        let d = f.design(&first);
-        let sopts = stats::Options {
-            alpha: opts.alpha,
-            ..stats::Options::default()
-        };
-        let ff = f.clone();
-        let e = select::backward(
-            &d.x,
-            &d.y,
-            &d.names,
-            true,
-            &sopts,
-            opts.alpha,
-            |names, j| {
-                let n = &names[j];
-                if n == "1" || spec.inputs.contains(&n.as_str()) || continuous::is_thermal(n) {
-                    return false;
-                }
-                let Some(t) = ff.terms.iter().find(|t| &t.name() == n) else {
-                    return false;
-                };
-                !ff.terms
-                    .iter()
-                    .filter(|o| names.contains(&o.name()))
-                    .any(|o| Formula::contains(o, t))
-            },
-        )
-        .map_err(|e| WorkflowError::Message(e.to_string()))?;
-        for s in &e.steps {
-            notes.push(format!(
-                "{}: dropped {} (p = {:.3} > {})",
-                spec.outputs[i], s.dropped, s.p_value, opts.alpha
-            ));
-            f = f.without(&s.dropped);
-        }
-    }
-    Ok(continuous::base_of(&f))
-}
-
-/// Fits a triad: its terms, then a fit at each table point or one continuous temperature model
-/// per axis, and the channels (centres and calibrated ranges) from the reference.
-fn fit_triad(
-    spec: &Spec<'_>,
-    table: &Table,
-    temperature: Temperature<'_>,
-    opts: &Options,
-    notes: &mut Vec<String>,
-) -> Result<TriadModel, WorkflowError> {
-    let path = &opts.file;
-    let (ref_table, ref_where, weights, support) = match temperature {
-        Temperature::Points(layout) => {
-            let p = &layout.points[layout.reference()];
-            (table.select(&p.rows), table::describe(p), None, None)
-        }
-        Temperature::Continuous(prep) => (
-            table.clone(),
-            ALL.to_string(),
-            prep.weights.as_deref(),
-            Some(&prep.support),
-        ),
-    };
-    let estimable = spec
-        .lever
-        .then(|| lever::estimable(lever::motion(table).into_iter()));
-    if let Some(e) = &estimable {
-        lever_notes(e, notes);
-    }
-    let mut formulas = Vec::new();
-    for i in 0..3 {
-        formulas.push(axis_formula(
-            spec,
-            i,
-            &ref_table,
-            (&ref_where, weights),
-            estimable.as_ref(),
-            support,
-            opts,
-            notes,
-        )?);
-    }
-    // The lever components each axis' formula kept.
-    let lever_use: Option<[[bool; 3]; 3]> = estimable.map(|_| {
-        std::array::from_fn(|i| {
-            std::array::from_fn(|k| {
-                formulas[i]
-                    .terms
-                    .iter()
-                    .any(|t| t.name() == lever::column(i, k))
-            })
-        })
-    });
-    let one = |f: &Formula, t: &Table, i: usize, at: (&str, Option<&[f64]>)| {
-        fit_axis(spec, f, t, i, lever_use.as_ref().map(|u| &u[i]), opts, at)
-    };
-    let mut fits: Vec<[AxisFit; 3]> = Vec::new();
-    // The model the channels are taken from: the reference point's, or the continuous model's
-    // at the middle of the calibrated temperatures.
-    let (thermal_fits, reference) = match temperature {
-        Temperature::Points(layout) => {
-            for p in &layout.points {
-                let t = table.select(&p.rows);
-                let w = table::describe(p);
-                let at = |i: usize| one(&formulas[i], &t, i, (&w, None));
-                fits.push([at(0)?, at(1)?, at(2)?]);
-            }
-            let reference = fits[layout.reference()].clone();
-            (None, reference)
-        }
-        Temperature::Continuous(prep) => {
-            let temps = table.column(col::TEMP).unwrap_or_default();
-            let axis = |i: usize, notes: &mut Vec<String>| {
-                let tf = continuous::choose(
-                    &formulas[i],
-                    (&prep.support, temps),
-                    opts.alpha,
-                    opts.thermal_order,
-                    &|f| one(f, table, i, (ALL, weights)),
-                )?;
-                notes.extend(
-                    tf.reasons
-                        .iter()
-                        .map(|r| format!("{}: temperature order of {r}", spec.outputs[i])),
-                );
-                Ok::<_, WorkflowError>(tf)
-            };
-            let tfs = [axis(0, notes)?, axis(1, notes)?, axis(2, notes)?];
-            let mid = prep.support.scale.center();
-            let reference = [tfs[0].at(mid), tfs[1].at(mid), tfs[2].at(mid)];
-            (Some(tfs), reference)
-        }
-    };
-    // No lever arm when the plan estimates none or every component was dropped.
-    let lever_arm = lever_use
-        .filter(|u| u.iter().flatten().any(|kept| *kept))
-        .map(|_| lever_of(&reference));
-    let ranges = calibrated_ranges(spec, table, &s_of(spec, &reference), lever_arm.as_ref());
-    for (j, r) in ranges.iter().enumerate() {
-        if r.lo >= r.hi {
-            return Err(WorkflowError::msg(
-                path,
-                format!(
-                    "{} is constant over the observations: the plan gives the triad no input along it",
-                    spec.inputs[j]
-                ),
-            ));
-        }
-    }
-    Ok(TriadModel {
-        fits,
-        thermal: thermal_fits,
-        lever: lever_arm,
-        centers: b_of(&reference),
-        ranges,
-    })
-}
-
-fn s_of(spec: &Spec<'_>, f: &[AxisFit; 3]) -> Matrix3<f64> {
-    Matrix3::from_fn(|i, j| f[i].coef(spec.inputs[j]))
-}
-
-fn b_of(f: &[AxisFit; 3]) -> [f64; 3] {
-    [f[0].coef("1"), f[1].coef("1"), f[2].coef("1")]
-}
-
-fn lever_of(f: &[AxisFit; 3]) -> [[f64; 3]; 3] {
-    std::array::from_fn(|i| std::array::from_fn(|k| f[i].coef(&lever::column(i, k))))
 }
 
 /// Adds the Earth's rate at `station` to the reference rate of every observation
@@ -545,11 +204,76 @@ fn calibrated_ranges(
     std::array::from_fn(|j| Span::new(lo[j] as f32, hi[j] as f32))
 }
 
-/// Calibrates a triad or an IMU from the observations in `opts.file`.
-///
-/// # Errors
-/// A [`WorkflowError`] naming the file, column, term or table point.
-pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrated, WorkflowError> {
+/// How the temperature enters the model: along a ramp (`--thermal continuous`, or `auto` when
+/// the temperatures are not held at setpoints), with the table prepared for the continuous
+/// model; else at the table's points (temperature and voltage setpoints). `has` says whether
+/// the table has a temperature and a voltage column.
+fn temperature_points(
+    table: &mut Table,
+    opts: &Options,
+    has: (bool, bool),
+    notes: &mut Vec<String>,
+) -> Result<(Option<continuous::Prepared>, Option<Layout>), WorkflowError> {
+    let path = &opts.file;
+    let (has_temp, has_volt) = has;
+    let layout = table::layout(
+        table,
+        has_temp.then_some(col::TEMP),
+        has_volt.then_some(col::VOLT),
+    );
+    let varies = |c: &str| {
+        table
+            .column(c)
+            .is_some_and(|v| v.iter().any(|x| *x != v[0]))
+    };
+    let spread = || {
+        let temps = table.column(col::TEMP).unwrap_or_default();
+        temps
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                (a.min(*t), b.max(*t))
+            })
+    };
+    let setpoints = layout.as_ref().is_ok_and(|l| {
+        l.temps.len() <= MAX_TEMPERATURES && table::exact_setpoints(table, col::TEMP, l)
+    });
+    let continuous = match opts.thermal {
+        Thermal::Table => {
+            if !setpoints && varies(col::TEMP) {
+                let (lo, hi) = spread();
+                return Err(WorkflowError::msg(
+                    path,
+                    format!(
+                        "--thermal table: the temperatures are spread from {lo:.1} to {hi:.1} C, as along a ramp, not held at setpoints (each reading within 1 C of its setpoint, the setpoints at least 3 C apart); give --thermal continuous for a model that follows the temperature wherever the observations fall"
+                    ),
+                ));
+            }
+            false
+        }
+        Thermal::Continuous => true,
+        Thermal::Auto => varies(col::TEMP) && !setpoints,
+    };
+    let prepared = if continuous {
+        if varies(col::VOLT) {
+            return Err(WorkflowError::msg(
+                path,
+                "the supply voltage varies: a triad's or an IMU's continuous temperature model does not follow the voltage (a single axis' does); hold the supply at one voltage along the ramp, or take the observations at a few exact temperature and voltage setpoints",
+            ));
+        }
+        Some(continuous::prepare(table, notes)?)
+    } else {
+        None
+    };
+    let layout = match &prepared {
+        Some(_) => None,
+        None => Some(layout.map_err(|e| WorkflowError::msg(path, e))?),
+    };
+    Ok((prepared, layout))
+}
+
+/// The observations `kind` needs from the file, with the references, temperature and voltage
+/// it has; the outputs at or beyond the rails taken out, and said.
+fn read(opts: &Options, kind: Kind) -> Result<(Table, Option<super::Finding>), WorkflowError> {
     let path = &opts.file;
     let header = obs::header(path, opts.format)?;
     let mut need: Vec<&str> = Vec::new();
@@ -600,6 +324,20 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         .filter(|c| col::A.contains(c) || col::GYRO.contains(c))
         .collect();
     let beyond = super::exclude_beyond_rails(&mut table, &outputs, &opts.rails, path)?;
+    Ok((table, beyond))
+}
+
+/// Calibrates a triad or an IMU from the observations in `opts.file`.
+///
+/// # Errors
+/// A [`WorkflowError`] naming the file, column, term or table point.
+pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrated, WorkflowError> {
+    let path = &opts.file;
+    let (mut table, beyond) = read(opts, kind)?;
+    let (has_temp, has_volt) = (
+        table.column(col::TEMP).is_some(),
+        table.column(col::VOLT).is_some(),
+    );
     let mut notes = Vec::new();
     if let Some(recording) = &opts.still_ramp {
         if opts.earth.is_some() {
@@ -637,58 +375,8 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             .column(c)
             .is_some_and(|v| v.iter().any(|x| *x != v[0]))
     });
-    let layout = table::layout(
-        &table,
-        has(col::TEMP).then_some(col::TEMP),
-        has(col::VOLT).then_some(col::VOLT),
-    );
-    let varies = |c: &str| {
-        table
-            .column(c)
-            .is_some_and(|v| v.iter().any(|x| *x != v[0]))
-    };
-    let spread = || {
-        let temps = table.column(col::TEMP).unwrap_or_default();
-        temps
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
-                (a.min(*t), b.max(*t))
-            })
-    };
-    let setpoints = layout.as_ref().is_ok_and(|l| {
-        l.temps.len() <= MAX_TEMPERATURES && table::exact_setpoints(&table, col::TEMP, l)
-    });
-    let continuous = match opts.thermal {
-        Thermal::Table => {
-            if !setpoints && varies(col::TEMP) {
-                let (lo, hi) = spread();
-                return Err(WorkflowError::msg(
-                    path,
-                    format!(
-                        "--thermal table: the temperatures are spread from {lo:.1} to {hi:.1} C, as along a ramp, not held at setpoints (each reading within 1 C of its setpoint, the setpoints at least 3 C apart); give --thermal continuous for a model that follows the temperature wherever the observations fall"
-                    ),
-                ));
-            }
-            false
-        }
-        Thermal::Continuous => true,
-        Thermal::Auto => varies(col::TEMP) && !setpoints,
-    };
-    let prepared = if continuous {
-        if varies(col::VOLT) {
-            return Err(WorkflowError::msg(
-                path,
-                "the supply voltage varies: a triad's or an IMU's continuous temperature model does not follow the voltage (a single axis' does); hold the supply at one voltage along the ramp, or take the observations at a few exact temperature and voltage setpoints",
-            ));
-        }
-        Some(continuous::prepare(&mut table, &mut notes)?)
-    } else {
-        None
-    };
-    let layout = match &prepared {
-        Some(_) => None,
-        None => Some(layout.map_err(|e| WorkflowError::msg(path, e))?),
-    };
+    let (prepared, layout) =
+        temperature_points(&mut table, opts, (has_temp, has_volt), &mut notes)?;
     let temperature = match (&prepared, &layout) {
         (Some(p), _) => Temperature::Continuous(p),
         (None, Some(l)) => Temperature::Points(l),
@@ -822,86 +510,15 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         env.temperature_model = TemperatureModel::Chebyshev(n as u8);
     }
     let identity = blob::identity(opts)?;
-    let channels = |t: &TriadResult| -> [Channel; 3] {
-        std::array::from_fn(|j| Channel {
-            center: t.centers[j] as f32,
-            range: t.ranges[j],
-        })
-    };
-    let bv = |n: usize| blob::too_many(path, n);
-    let sensor = match (&accel, &gyro) {
-        (Some(a), Some(g)) => Sensor::Imu {
-            accel_rails: opts.rails,
-            gyro_rails: opts.rails,
-            accel: channels(a),
-            gyro: channels(g),
-            lever_arm: a.lever.map(|r| r.map(|row| row.map(|v| v as f32))),
-            sets: BoundedVec::from_slice(
-                &a.sets
-                    .iter()
-                    .zip(&g.sets)
-                    .enumerate()
-                    .map(|(k, (sa, sg))| ImuSet {
-                        accel: *sa,
-                        gyro: *sg,
-                        g_sensitivity: g
-                            .g
-                            .get(k)
-                            .map_or([[0.0; 3]; 3], |m| m.map(|r| r.map(|v| v as f32))),
-                    })
-                    .collect::<Vec<_>>(),
-            )
-            .ok_or_else(|| bv(a.sets.len()))?,
-            covariance: Some(
-                BoundedVec::from_slice(
-                    &a.imu_covs
-                        .iter()
-                        .zip(&g.imu_covs)
-                        .map(|(ca, cg)| ImuCovariance {
-                            accel: *ca,
-                            gyro: *cg,
-                        })
-                        .collect::<Vec<_>>(),
-                )
-                .ok_or_else(|| bv(a.imu_covs.len()))?,
-            ),
-        },
-        (Some(t), None) | (None, Some(t)) => Sensor::Triad {
-            quantity: if accel.is_some() {
-                Quantity::Acceleration
-            } else {
-                Quantity::AngularRate
-            },
-            rails: opts.rails,
-            channels: channels(t),
-            sets: BoundedVec::from_slice(&t.sets).ok_or_else(|| bv(t.sets.len()))?,
-            covariance: Some(BoundedVec::from_slice(&t.covs).ok_or_else(|| bv(t.covs.len()))?),
-        },
-        (None, None) => return Err(WorkflowError::Message("nothing to calibrate".into())),
-    };
+    let sensor = assemble::sensor(accel.as_ref(), gyro.as_ref(), opts)?;
     let data = CalibrationData {
         identity,
         environment: env,
         sensor,
         noise: None,
     };
-    let mut points = Vec::new();
     let parts: Vec<&TriadResult> = accel.iter().chain(gyro.iter()).collect();
-    for (k, p) in layout.points.iter().enumerate() {
-        let mut pf = PointFit {
-            temp: p.temp,
-            volt: p.volt,
-            axes: Vec::new(),
-            inversion_error: Vec::new(),
-            noise: Vec::new(),
-        };
-        for t in &parts {
-            pf.axes.extend(t.fits[k].iter().cloned());
-            pf.inversion_error.extend(t.errors[k]);
-            pf.noise.extend(t.noise[k]);
-        }
-        points.push(pf);
-    }
+    let points = assemble::point_fits(&layout, &parts);
     let (blob, output_errors) = blob::build_and_check(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);
     let mut names = Vec::new();

@@ -6,7 +6,8 @@
 use nalgebra::{DMatrix, Matrix3};
 use spincal::model::{AxisNonlinearity, ImuOutputCovariance, Span, TriadSet};
 
-use super::{Spec, TriadModel, TriadResult, b_of, lever, s_of};
+use super::fit::{b_of, s_of};
+use super::{Spec, TriadModel, TriadResult, lever};
 use crate::columns as col;
 use crate::obs::Table;
 use crate::sensor::invert::{
