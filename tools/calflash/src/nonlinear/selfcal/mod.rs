@@ -10,9 +10,12 @@ use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 
 use super::gravity::{self, AccelFit};
 use super::lm::LmError;
-use super::rotation::{self, GyroFit, Segment};
+use super::rotation::{self, GyroFit};
 use super::statics;
 use crate::obs::recording::Recording;
+
+mod few_poses;
+mod segments;
 
 /// Whether to fit the accelerometer's quadratic terms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -378,14 +381,10 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         .zip(&gyro)
         .map(|(a, g)| a.max(*g))
         .collect();
-    let find = |measure: &[f64], threshold: f64, min_len: usize, window: usize| {
-        let join = statics::Join {
-            acc: &rec.acc,
-            gap: window,
-            tol,
-            turned: &turned,
-        };
-        statics::poses(measure, &rec.saturated, threshold, min_len, &join)
+    let finder = few_poses::Finder {
+        rec,
+        tol,
+        turned: &turned,
     };
     let min_len = samples(opts.min_still);
 
@@ -396,7 +395,7 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
     let mut trials = Vec::new();
     let mut found: Vec<(usize, f64, usize, Vec<Range<usize>>)> = Vec::new();
     for &m in &opts.multipliers {
-        let poses = find(&measure, m * rest_level, min_len, samples(opts.window));
+        let poses = finder.poses(&measure, m * rest_level, min_len, samples(opts.window));
         let means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
         let rms_m = if poses.len() >= MIN_POSES {
             let (center, start) = gravity::center_and_start(&means, opts.g);
@@ -421,104 +420,9 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         .max_by(|a, b| a.2.cmp(&b.2).then(b.1.total_cmp(&a.1)))
         .map(|(k, r, _, poses)| (k, r, poses));
     let Some((chosen, _, poses)) = best else {
-        // Runs of thresholds that found the same number: "7 at 1 x, 8 at 2 x to 10 x".
-        let mut runs: Vec<(usize, f64, f64)> = Vec::new();
-        for t in &trials {
-            match runs.last_mut() {
-                Some(r) if r.0 == t.poses => r.2 = t.multiplier,
-                _ => runs.push((t.poses, t.multiplier, t.multiplier)),
-            }
-        }
-        let tried = runs
-            .iter()
-            .map(|(n, a, b)| {
-                if a == b {
-                    format!("{n} at {a} x")
-                } else {
-                    format!("{n} at {a} x to {b} x")
-                }
-            })
-            .collect::<Vec<_>>()
-            .join(", ")
-            + " the initial rest's level";
-        // The poses of the threshold that found the most directions, and how long they hold.
-        let most = opts
-            .multipliers
-            .iter()
-            .map(|&m| find(&measure, m * rest_level, min_len, samples(opts.window)))
-            .max_by_key(|p| {
-                let means: Vec<[f64; 3]> = p.iter().map(|r| statics::mean(&rec.acc, r)).collect();
-                (directions(&means, rest_level), p.len())
-            })
-            .unwrap_or_default();
-        let mut holds: Vec<f64> = most.iter().map(|r| r.len() as f64 * rec.period).collect();
-        holds.sort_by(f64::total_cmp);
-        let most_means: Vec<[f64; 3]> = most.iter().map(|r| statics::mean(&rec.acc, r)).collect();
-        let found = format!(
-            "{} pose(s) facing {} distinct directions{} at {:.1} Hz over {:.1} s after a {:.1} s rest",
-            most.len(),
-            directions(&most_means, rest_level),
-            match (holds.first(), holds.last()) {
-                (Some(a), Some(b)) => format!(" held {a:.1} to {b:.1} s"),
-                _ => String::new(),
-            },
-            rec.rate(),
-            rec.t.last().copied().unwrap_or(t0) - t0 - opts.init_rest,
-            opts.init_rest
-        );
-        // Would shorter holds do? Only if they give poses the fit takes (not a rest split by
-        // noise into poses that all face one way).
-        let fits = |poses: &[Range<usize>]| {
-            let means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
-            let (center, start) = gravity::center_and_start(&means, opts.g);
-            poses.len() >= MIN_POSES
-                && directions(&means, rest_level) >= MIN_POSES
-                && gravity::fit(&means, opts.g, center, &start, false).is_ok()
-        };
-        let shorter = [0.5, 0.25]
-            .into_iter()
-            .filter(|s| *s < opts.min_still)
-            .find_map(|s| {
-                // The still measure's window no longer than the hold.
-                let measure = statics::measure(&rec.acc, samples(s.min(opts.window)) | 1, floor);
-                opts.multipliers
-                    .iter()
-                    .map(|&m| {
-                        find(
-                            &measure,
-                            m * rest_level,
-                            samples(s),
-                            samples(s.min(opts.window)),
-                        )
-                    })
-                    .filter(|p| fits(p))
-                    .map(|p| p.len())
-                    .max()
-                    .map(|n| (s, n))
-            });
-        let advice = match shorter {
-            Some((s, n)) => format!(
-                "Holds of {s} s would give {n}: run again with --min-still {s}{} (shorter \
-                 holds average less noise), or record more poses",
-                if s < opts.window {
-                    format!(" --window {s}")
-                } else {
-                    String::new()
-                }
-            ),
-            None => format!(
-                "Record it again with {MIN_POSES} or more poses (30 are better), spread over all \
-                 directions, each held still for at least {:.1} s (--min-still)",
-                opts.min_still
-            ),
-        };
-        return Err(SelfCalError::TooFewPoses {
-            file: source.into(),
-            tried,
-            found,
-            advice,
-            needed: MIN_POSES,
-        });
+        return Err(few_poses::diagnose(
+            &finder, opts, &trials, &measure, rest_level, floor,
+        ));
     };
     let pose_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
     let (accel, quadratic_test) =
@@ -557,76 +461,24 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
             / gyro_means.len() as f64)
             .sqrt()
     });
-    let mid = |r: &Range<usize>| 0.5 * (rec.t[r.start] + rec.t[r.end - 1]);
     let dirs: Vec<[f64; 3]> = pose_means
         .iter()
         .map(|m| unit(accel.model.apply(*m)))
         .collect();
-    let mut segments = Vec::new();
-    let mut const_segments = Vec::new();
-    let mut rotations = Vec::new();
-    let mut skipped = Vec::new();
-    for k in 0..poses.len().saturating_sub(1) {
-        let span = poses[k].end - 1..poses[k + 1].start + 1;
-        if rec.saturated[span.clone()].iter().any(|s| *s) {
-            skipped.push(Skipped {
-                pose: k,
-                why: "a saturated sample".into(),
-            });
-            continue;
-        }
-        if let Some(gap) = rec
-            .gaps
-            .iter()
-            .find(|g| g.from >= rec.t[span.start] && g.to <= rec.t[span.end - 1])
-        {
-            skipped.push(Skipped {
-                pose: k,
-                why: format!("{} samples dropped at line {}", gap.missing, gap.line),
-            });
-            continue;
-        }
-        let (ta, tb) = (mid(&poses[k]), mid(&poses[k + 1]));
-        let bias_at = |t: f64| -> [f64; 3] {
-            match opts.gyro_bias {
-                GyroBias::Poses => {
-                    let w = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
-                    std::array::from_fn(|j| {
-                        gyro_means[k][j] + w * (gyro_means[k + 1][j] - gyro_means[k][j])
-                    })
-                }
-                GyroBias::Rest => rest_gyro,
-            }
-        };
-        let dt: Vec<f64> = rec.t[span.clone()]
-            .windows(2)
-            .map(|w| w[1] - w[0])
-            .collect();
-        let x: Vec<[f64; 3]> = span
-            .clone()
-            .map(|i| {
-                let b = bias_at(rec.t[i]);
-                std::array::from_fn(|j| rec.gyro[i][j] - b[j])
-            })
-            .collect();
-        let xc: Vec<[f64; 3]> = span
-            .clone()
-            .map(|i| std::array::from_fn(|j| rec.gyro[i][j] - gyro_bias[j]))
-            .collect();
-        segments.push(Segment {
-            dt: dt.clone(),
-            x,
-            from: dirs[k],
-            to: dirs[k + 1],
-        });
-        const_segments.push(Segment {
-            dt,
-            x: xc,
-            from: dirs[k],
-            to: dirs[k + 1],
-        });
-        rotations.push(k);
-    }
+    let segments::Turns {
+        segments,
+        const_segments,
+        rotations,
+        skipped,
+    } = segments::turns(
+        rec,
+        opts.gyro_bias,
+        &poses,
+        &dirs,
+        &gyro_means,
+        rest_gyro,
+        gyro_bias,
+    );
     if segments.len() < MIN_ROTATIONS {
         let why = if skipped.is_empty() {
             "none".into()
@@ -645,7 +497,7 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
             needed: MIN_ROTATIONS,
         });
     }
-    let start = gyro_start(&segments);
+    let start = segments::gyro_start(&segments);
     let mut gyro = rotation::fit(&segments, start).map_err(fit_err(source, "gyro"))?;
     // The rotations' ends are the accelerometer's gravity directions: its error is the gyro's.
     if let Some(cov_a) = &accel.covariance {
@@ -694,69 +546,6 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         rotations,
         skipped,
     })
-}
-
-/// A starting gyro matrix: a diagonal scale from the angles between the gravity directions
-/// and the integrated counts (hand rotations turn about one axis, roughly), with the axis signs
-/// that explain the first rotations best; a logarithmic search over scales if that start
-/// explains them poorly.
-fn gyro_start(segments: &[Segment]) -> [[f64; 3]; 3] {
-    let probe = &segments[..segments.len().min(8)];
-    let cost = |m: &Matrix3<f64>| {
-        probe
-            .iter()
-            .map(|s| rotation::angle(m, s).powi(2))
-            .sum::<f64>()
-    };
-    let mut ratios: Vec<f64> = segments
-        .iter()
-        .filter_map(|s| {
-            let turned = (s.from[0] * s.to[0] + s.from[1] * s.to[1] + s.from[2] * s.to[2])
-                .clamp(-1.0, 1.0)
-                .acos();
-            let sum: [f64; 3] = std::array::from_fn(|j| {
-                s.x.iter()
-                    .zip(s.dt.iter().chain([&0.0]))
-                    .map(|(x, dt)| x[j] * dt)
-                    .sum()
-            });
-            let counts = (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
-            (turned > 0.2 && counts > 0.0).then(|| turned / counts)
-        })
-        .collect();
-    ratios.sort_by(f64::total_cmp);
-    // The angle between gravity directions understates a rotation: try a little above it too.
-    let scales: Vec<f64> = ratios.get(ratios.len() / 2).map_or_else(Vec::new, |r| {
-        (-2..=6)
-            .map(|k| r * 2f64.powf(f64::from(k) / 4.0))
-            .collect()
-    });
-    let mut best = (f64::INFINITY, Matrix3::identity());
-    let search = |scales: &[f64], best: &mut (f64, Matrix3<f64>)| {
-        for signs in 0..8u32 {
-            let sign = |k: u32| if signs >> k & 1 == 1 { -1.0 } else { 1.0 };
-            for &c in scales {
-                let m = Matrix3::from_diagonal(&nalgebra::Vector3::new(
-                    sign(0) * c,
-                    sign(1) * c,
-                    sign(2) * c,
-                ));
-                let v = cost(&m);
-                if v < best.0 {
-                    *best = (v, m);
-                }
-            }
-        }
-    };
-    search(&scales, &mut best);
-    // Poorly explained (an RMS above 10 degrees): search the scale.
-    if best.0 > probe.len() as f64 * 0.03 {
-        let grid: Vec<f64> = (0..=48)
-            .map(|e| 10f64.powf(-7.0 + f64::from(e) / 8.0))
-            .collect();
-        search(&grid, &mut best);
-    }
-    std::array::from_fn(|i| std::array::from_fn(|j| best.1[(i, j)]))
 }
 
 /// How many of the pose means `means` (counts) face directions at least 10 degrees from each
