@@ -6,6 +6,7 @@
 //! derives the device's correction, measures how far that correction is from the exact
 //! inverse over the calibrated range, and builds a `spincal` calibration.
 
+mod acceptance;
 pub mod accuracy;
 pub mod blob;
 pub mod compare;
@@ -29,6 +30,8 @@ use crate::formula::{Formula, FormulaError};
 use crate::obs::{Format, ObsError};
 use crate::stats::Fit;
 use crate::stats::select::PartialF;
+
+pub(crate) use acceptance::{exclude_beyond_rails, findings};
 
 /// A workflow that cannot run on these observations, in words naming the file, the column,
 /// the term or the table point.
@@ -409,200 +412,6 @@ impl Calibrated {
             .max()
             .unwrap_or(Verdict::Accept)
     }
-}
-
-/// The acceptance checks every workflow shares.
-pub(crate) fn findings(
-    points: &[PointFit],
-    axis_names: &[String],
-    units: &[&str],
-    opts: &Options,
-    device_error: &[f64],
-) -> Vec<Finding> {
-    let mut out = Vec::new();
-    for (a, name) in axis_names.iter().enumerate() {
-        // Points of one continuous model share its outliers: each is named once.
-        let mut named: Vec<Vec<u64>> = Vec::new();
-        let shared = points.len() > 1
-            && points
-                .windows(2)
-                .all(|w| w[0].axes[a].lines == w[1].axes[a].lines);
-        let noise = points.iter().map(|p| p.noise[a]).fold(0.0, f64::max);
-        let inv = points
-            .iter()
-            .map(|p| p.inversion_error[a])
-            .fold(0.0, f64::max);
-        let unit = units[a];
-        match opts.max_noise {
-            Some(limit) if noise > limit => out.push(Finding {
-                verdict: Verdict::Reject,
-                text: format!(
-                    "{name}: residual noise {noise:.3e} {unit} exceeds the limit {limit:.3e}"
-                ),
-            }),
-            Some(limit) => out.push(Finding {
-                verdict: Verdict::Accept,
-                text: format!(
-                    "{name}: residual noise {noise:.3e} {unit} within the limit {limit:.3e}"
-                ),
-            }),
-            None => {}
-        }
-        out.push(if inv <= 0.1 * noise {
-            Finding {
-                verdict: Verdict::Accept,
-                text: format!(
-                    "{name}: the device's correction is within {inv:.2e} {unit} of the exact inverse over the calibrated range ({:.1e} of the noise)",
-                    inv / noise
-                ),
-            }
-        } else {
-            Finding {
-                verdict: Verdict::Reject,
-                text: format!(
-                    "{name}: the device's correction is {inv:.2e} {unit} from the exact inverse, more than a tenth of the noise {noise:.2e}: the forward model is too nonlinear for the device's correction form"
-                ),
-            }
-        });
-        for p in points {
-            let f = &p.axes[a].fit;
-            let where_ = table::describe(&table::Point {
-                temp: p.temp,
-                volt: p.volt,
-                rows: vec![],
-            });
-            let at: Vec<u64> = f
-                .influence
-                .outliers
-                .iter()
-                .map(|(i, _)| p.axes[a].lines[*i])
-                .collect();
-            if !at.is_empty() && !named.contains(&at) {
-                let lines: Vec<String> = at.iter().map(u64::to_string).collect();
-                named.push(at);
-                let where_ = if shared {
-                    "all temperatures".to_string()
-                } else {
-                    where_
-                };
-                out.push(Finding {
-                    verdict: Verdict::Review,
-                    text: format!("{name} at {where_}: outliers at line {}", lines.join(", ")),
-                });
-            }
-        }
-    }
-    // Each output's f32 rounding against its own noise (units differ between outputs).
-    let (ratio, worst) = device_error
-        .iter()
-        .enumerate()
-        .map(|(a, e)| {
-            let noise = points
-                .iter()
-                .filter_map(|p| p.noise.get(a))
-                .fold(f64::INFINITY, |m, v| m.min(*v));
-            (e / noise, a)
-        })
-        .fold((0.0, 0), |best, x| if x.0 > best.0 { x } else { best });
-    let (name, unit) = (
-        axis_names.get(worst).map_or("", String::as_str),
-        units.get(worst).copied().unwrap_or(""),
-    );
-    let e = device_error.get(worst).copied().unwrap_or(0.0);
-    out.push(Finding {
-        verdict: if ratio <= 0.01 {
-            Verdict::Accept
-        } else {
-            Verdict::Review
-        },
-        text: format!(
-            "the device's f32 correction matches the f64 correction to {ratio:.1e} of each output's noise at most ({name}: {e:.2e} {unit})"
-        ),
-    });
-    out
-}
-
-/// Removes the observations whose outputs are at or beyond the ADC rails (saturated codes, or
-/// values no converter of these rails can give: a typing slip, a logger's sentinel) so that
-/// none is ever fitted. Returns the finding that names them (`None` when there are none).
-///
-/// # Errors
-/// When no observation is left.
-pub(crate) fn exclude_beyond_rails(
-    table: &mut crate::obs::Table,
-    outputs: &[&str],
-    rails: &Rails,
-    path: &Path,
-) -> Result<Option<Finding>, WorkflowError> {
-    let beyond = |below: bool| {
-        outputs
-            .iter()
-            .filter_map(|c| table.column(c))
-            .flatten()
-            .filter(|x| {
-                if below {
-                    **x < f64::from(rails.lo)
-                } else {
-                    **x > f64::from(rails.hi)
-                }
-            })
-            .count()
-    };
-    if let Some(advice) = crate::obs::codes::mismatch(beyond(true), beyond(false), *rails) {
-        return Err(WorkflowError::msg(
-            path,
-            format!(
-                "{advice} (the format given is {})",
-                crate::obs::codes::name(*rails)
-            ),
-        ));
-    }
-    let bad: Vec<usize> = (0..table.len())
-        .filter(|&r| {
-            outputs.iter().any(|c| {
-                table.column(c).is_some_and(|v| {
-                    let x = v[r];
-                    !(x > f64::from(rails.lo) && x < f64::from(rails.hi))
-                })
-            })
-        })
-        .collect();
-    if bad.is_empty() {
-        return Ok(None);
-    }
-    let lines: Vec<String> = bad
-        .iter()
-        .take(10)
-        .map(|r| table.lines[*r].to_string())
-        .collect();
-    let more = if bad.len() > 10 {
-        format!(" and {} more", bad.len() - 10)
-    } else {
-        String::new()
-    };
-    if bad.len() == table.len() {
-        return Err(WorkflowError::msg(
-            path,
-            format!(
-                "every observation has an output at or beyond the ADC rails {} and {} (lines {}{more}): check --codes",
-                rails.lo,
-                rails.hi,
-                lines.join(", ")
-            ),
-        ));
-    }
-    let keep: Vec<usize> = (0..table.len()).filter(|r| !bad.contains(r)).collect();
-    *table = table.select(&keep);
-    Ok(Some(Finding {
-        verdict: Verdict::Review,
-        text: format!(
-            "{} observation(s) with an output at or beyond the ADC rails {} and {} were left out of the fit: line {}{more}",
-            bad.len(),
-            rails.lo,
-            rails.hi,
-            lines.join(", ")
-        ),
-    }))
 }
 
 /// First 16 bytes of the SHA-256 of the files' bytes, in order (the calibration's
