@@ -196,16 +196,7 @@ fn reports(d: &Path) -> Vec<PathBuf> {
         "--no-db",
     ]);
     // Without equipment: a simulated hand tumble.
-    let rec = Tumble::default().record();
-    let text = |x: &[[f64; 3]]| {
-        rec.t
-            .iter()
-            .zip(x)
-            .map(|(t, v)| format!("{t:.6} {} {} {}\n", v[0], v[1], v[2]))
-            .collect::<String>()
-    };
-    std::fs::write(d.join("acc.txt"), text(&rec.acc)).unwrap();
-    std::fs::write(d.join("gyro.txt"), text(&rec.gyro)).unwrap();
+    common::write_recording(&Tumble::default().record(), d);
     run(&[
         "selfcal",
         "acc.txt",

@@ -8,24 +8,10 @@ use std::process::Command;
 mod common;
 
 use calflash::nonlinear::selfcal::{self, Options, SelfCalError};
-use calflash::obs::recording::{self, Recording};
+use calflash::obs::recording;
 use calflash::sim::recording::Tumble;
-use common::calflash;
+use common::{calflash, write_recording as write};
 use spincal::model::Rails;
-
-fn write(rec: &Recording, dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
-    let (a, g) = (dir.join("acc.txt"), dir.join("gyro.txt"));
-    let text = |x: &[[f64; 3]]| {
-        rec.t
-            .iter()
-            .zip(x)
-            .map(|(t, v)| format!("{t:.6} {} {} {}\n", v[0], v[1], v[2]))
-            .collect::<String>()
-    };
-    std::fs::write(&a, text(&rec.acc)).unwrap();
-    std::fs::write(&g, text(&rec.gyro)).unwrap();
-    (a, g)
-}
 
 fn opts() -> Options {
     Options {

@@ -17,6 +17,26 @@ pub fn calflash(dir: &Path, args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// Writes a recording as two loggers' files, `acc.txt` and `gyro.txt` in `dir` (`t x y z` per
+/// line); their paths.
+#[allow(dead_code)] // used by the selfcal and report tests only
+pub fn write_recording(
+    rec: &calflash::obs::recording::Recording,
+    dir: &Path,
+) -> (std::path::PathBuf, std::path::PathBuf) {
+    let (a, g) = (dir.join("acc.txt"), dir.join("gyro.txt"));
+    let text = |x: &[[f64; 3]]| {
+        rec.t
+            .iter()
+            .zip(x)
+            .map(|(t, v)| format!("{t:.6} {} {} {}\n", v[0], v[1], v[2]))
+            .collect::<String>()
+    };
+    std::fs::write(&a, text(&rec.acc)).unwrap();
+    std::fs::write(&g, text(&rec.gyro)).unwrap();
+    (a, g)
+}
+
 /// A simulated truth's temperature polynomials in the terms of a continuous model's fit.
 #[allow(dead_code)] // used by the thermal tests only
 pub mod truth_in_legendre {
