@@ -682,3 +682,23 @@ fn apply_takes_a_recording_by_column_names_with_its_temperature() {
     assert_eq!(code, 1);
     assert!(err.contains("--columns: `bx=A1`"), "{err}");
 }
+
+/// A calibration without equipment joins no lot: `--lot` is refused, with the reason, before
+/// anything is read or written.
+#[test]
+fn selfcal_refuses_a_lot() {
+    let dir = tempfile::tempdir().unwrap();
+    let (code, out, err) = calflash(
+        dir.path(),
+        &[
+            "selfcal", "acc.txt", "gyro.txt", "--g", "9.81", "--serial", "SIM-L-1", "--lot", "L-1",
+            "--blob", "u.blob",
+        ],
+    );
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        err.contains("--lot: lots are judged on the coefficients of `calflash calibrate`"),
+        "{err}"
+    );
+    assert!(!dir.path().join("u.blob").exists());
+}
