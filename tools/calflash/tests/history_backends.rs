@@ -208,9 +208,12 @@ fn two_writers_at_once_lose_nothing_on_either_backend() {
                 })
             })
             .collect();
-        for w in writers {
-            w.join().unwrap();
-        }
+        // Every writer finishes before any failure is reported: the history must outlive them.
+        let failed: Vec<_> = writers
+            .into_iter()
+            .filter_map(|w| w.join().err())
+            .collect();
+        assert!(failed.is_empty(), "{l}: {} writer(s) failed", failed.len());
         let mut db = Db::open_existing(&l).unwrap();
         for w in ["A", "B"] {
             for i in 0..EACH {

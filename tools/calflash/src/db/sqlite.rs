@@ -65,10 +65,9 @@ CREATE INDEX IF NOT EXISTS records_lot ON records (lot);
 
 pub(super) const SCHEMA: &str = records_table!();
 
-/// Rebuilds a version 0 or 1 table under the present schema, in one transaction.
+/// Rebuilds a version 0 or 1 table under the present schema (run inside the write lock).
 const MIGRATE_FROM_1: &str = concat!(
-    "BEGIN;
-ALTER TABLE records RENAME TO records_v1;
+    "ALTER TABLE records RENAME TO records_v1;
 DROP INDEX IF EXISTS records_serial;
 ",
     records_table!(),
@@ -78,30 +77,25 @@ DROP INDEX IF EXISTS records_serial;
     verification, outcome, record FROM records_v1;
 DROP TABLE records_v1;
 PRAGMA user_version = 4;
-COMMIT;
 "
 );
 
-/// Adds the recording station and the lot to a version 2 table, in one transaction.
-const MIGRATE_FROM_2: &str = "BEGIN;
-ALTER TABLE records ADD COLUMN station TEXT NOT NULL DEFAULT '';
+/// Adds the recording station and the lot to a version 2 table (run inside the write lock).
+const MIGRATE_FROM_2: &str = "ALTER TABLE records ADD COLUMN station TEXT NOT NULL DEFAULT '';
 ALTER TABLE records ADD COLUMN lot TEXT NOT NULL DEFAULT '';
 CREATE INDEX IF NOT EXISTS records_lot ON records (lot);
 PRAGMA user_version = 4;
-COMMIT;
 ";
 
-/// Adds the lot to a version 3 table, in one transaction.
-const MIGRATE_FROM_3: &str = "BEGIN;
-ALTER TABLE records ADD COLUMN lot TEXT NOT NULL DEFAULT '';
+/// Adds the lot to a version 3 table (run inside the write lock).
+const MIGRATE_FROM_3: &str = "ALTER TABLE records ADD COLUMN lot TEXT NOT NULL DEFAULT '';
 CREATE INDEX IF NOT EXISTS records_lot ON records (lot);
 PRAGMA user_version = 4;
-COMMIT;
 ";
 
-/// Checks the schema of an existing database; migrates older versions when `write`. Which
-/// later columns the table (now) has.
-fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<Later, String> {
+/// Checks the schema of an existing database: its version and which later columns the table
+/// has.
+fn check_schema(conn: &Connection, path: &Path) -> Result<(i64, Later), String> {
     let version: i64 = conn
         .query_row("PRAGMA user_version", [], |r| r.get(0))
         .map_err(|e| why(path, &e))?;
@@ -115,20 +109,55 @@ fn check_schema(conn: &Connection, path: &Path, write: bool) -> Result<Later, St
         .query_map([], |r| r.get(0))
         .and_then(Iterator::collect)
         .map_err(|e| why(path, &e))?;
-    let later = super::schema::check_columns(&have)?;
-    if version < SCHEMA_VERSION && write {
+    Ok((version, super::schema::check_columns(&have)?))
+}
+
+/// Whether the database has calflash's table.
+fn has_records(conn: &Connection, path: &Path) -> Result<bool, String> {
+    conn.query_row(
+        "SELECT count(*) FROM sqlite_master WHERE name = 'records'",
+        [],
+        |r| r.get::<_, i64>(0),
+    )
+    .map(|n| n > 0)
+    .map_err(|e| why(path, &e))
+}
+
+/// Makes the database ready to take records of the present schema: creates the table in an
+/// empty file, migrates an older one, refuses anything else. Runs under the write lock, so
+/// what it sees cannot change before it acts.
+fn make_writable(conn: &Connection, path: &Path) -> Result<(), String> {
+    if has_records(conn, path)? {
+        let (version, _) = check_schema(conn, path)?;
         let migrate = match version {
+            SCHEMA_VERSION => return Ok(()),
             ..=1 => MIGRATE_FROM_1,
             2 => MIGRATE_FROM_2,
             _ => MIGRATE_FROM_3,
         };
-        conn.execute_batch(migrate).map_err(|e| {
-            let _ = conn.execute_batch("ROLLBACK;");
-            why(path, &e)
-        })?;
-        return Ok(Later::ALL);
+        return conn.execute_batch(migrate).map_err(|e| why(path, &e));
     }
-    Ok(later)
+    // No calflash table: a new file, or a database that is not ours to write into.
+    let version: i64 = conn
+        .query_row("PRAGMA user_version", [], |r| r.get(0))
+        .map_err(|e| why(path, &e))?;
+    let others: i64 = conn
+        .query_row("SELECT count(*) FROM sqlite_master", [], |r| r.get(0))
+        .map_err(|e| why(path, &e))?;
+    if version != 0 || others > 0 {
+        return Err(format!(
+            "it has no table `records` but {} (schema {version}, {others} other \
+             object(s)): it is not a calflash history this version can write; nothing \
+             was written",
+            if version > SCHEMA_VERSION {
+                "was written by a newer program"
+            } else {
+                "is not empty"
+            }
+        ));
+    }
+    conn.execute_batch(&format!("{SCHEMA} PRAGMA user_version = {SCHEMA_VERSION};"))
+        .map_err(|e| why(path, &e))
 }
 
 /// The statement that writes one record.
@@ -152,41 +181,24 @@ impl Sqlite {
         let conn = Connection::open(path).map_err(|e| why(path, &e))?;
         conn.busy_timeout(std::time::Duration::from_secs(5))
             .map_err(|e| why(path, &e))?;
-        // Creating the schema writes: a read-only file fails here only if it is new.
-        let exists: bool = conn
-            .query_row(
-                "SELECT count(*) FROM sqlite_master WHERE name = 'records'",
-                [],
-                |r| r.get::<_, i64>(0),
-            )
-            .map_err(|e| why(path, &e))?
-            > 0;
-        if exists {
-            check_schema(&conn, path, true)?;
-        } else {
-            // No calflash table: a new file, or a database that is not ours to write into.
-            let version: i64 = conn
-                .query_row("PRAGMA user_version", [], |r| r.get(0))
+        // A history of the present schema is written into as it is. Anything else (a new
+        // file, an older schema, a stranger's database) is decided again under the write lock:
+        // another station may be creating or migrating the same file at this instant, and a
+        // half-made history must not be taken for a stranger's.
+        let current = has_records(&conn, path)? && check_schema(&conn, path)?.0 == SCHEMA_VERSION;
+        if !current {
+            conn.execute_batch("BEGIN IMMEDIATE")
                 .map_err(|e| why(path, &e))?;
-            let others: i64 = conn
-                .query_row("SELECT count(*) FROM sqlite_master", [], |r| r.get(0))
-                .map_err(|e| why(path, &e))?;
-            if version != 0 || others > 0 {
-                return Err(format!(
-                    "it has no table `records` but {} (schema {version}, {others} other \
-                     object(s)): it is not a calflash history this version can write; nothing \
-                     was written",
-                    if version > SCHEMA_VERSION {
-                        "was written by a newer program"
-                    } else {
-                        "is not empty"
-                    }
-                ));
+            match make_writable(&conn, path) {
+                Ok(()) => conn.execute_batch("COMMIT").map_err(|e| {
+                    let _ = conn.execute_batch("ROLLBACK");
+                    why(path, &e)
+                })?,
+                Err(e) => {
+                    let _ = conn.execute_batch("ROLLBACK");
+                    return Err(e);
+                }
             }
-            conn.execute_batch(&format!(
-                "BEGIN; {SCHEMA} PRAGMA user_version = {SCHEMA_VERSION}; COMMIT;"
-            ))
-            .map_err(|e| why(path, &e))?;
         }
         Ok(Self {
             conn,
@@ -207,7 +219,7 @@ impl Sqlite {
             .map_err(|e| why(path, &e))?;
         conn.busy_timeout(std::time::Duration::from_secs(5))
             .map_err(|e| why(path, &e))?;
-        let later = check_schema(&conn, path, false)?;
+        let (_, later) = check_schema(&conn, path)?;
         Ok(Self {
             conn,
             path: path.to_path_buf(),
@@ -659,6 +671,41 @@ mod tests {
                 )
                 .unwrap();
             assert_eq!(tables, 0, "{name}: nothing written");
+        }
+    }
+
+    /// Many stations opening one new file at the same instant: one creates the history, every
+    /// other waits for it and writes into it; none takes the half-made file for a stranger's.
+    /// (Opened in a barrier, many times over: the race it guards lasted microseconds.)
+    #[test]
+    fn stations_opening_a_new_file_at_once_all_write_into_it() {
+        const STATIONS: usize = 6;
+        let dir = tempfile::tempdir().unwrap();
+        for round in 0..40 {
+            let path = dir.path().join(format!("new-{round}.sqlite"));
+            let start = std::sync::Arc::new(std::sync::Barrier::new(STATIONS));
+            let stations: Vec<_> = (0..STATIONS)
+                .map(|s| {
+                    let (path, start) = (path.clone(), start.clone());
+                    std::thread::spawn(move || {
+                        start.wait();
+                        let mut db = Db::open(&path).map_err(|e| format!("station {s}: {e}"))?;
+                        flash(&mut db).map_err(|e| format!("station {s}: {e}"))
+                    })
+                })
+                .collect();
+            for s in stations {
+                s.join()
+                    .unwrap()
+                    .unwrap_or_else(|e| panic!("round {round}: {e}"));
+            }
+            let n = Db::open_existing(&path)
+                .unwrap()
+                .history("UNIT-1")
+                .unwrap()
+                .len();
+            assert_eq!(n, STATIONS, "round {round}");
+            assert_eq!(user_version(&path), SCHEMA_VERSION);
         }
     }
 }
