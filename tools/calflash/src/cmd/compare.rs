@@ -48,7 +48,9 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
                     .parse()
                     .map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
                 let path = crate::db::Location::or_default(args.db.as_ref());
-                let text = crate::db::Db::open_existing(&path)?.record(id)?;
+                let text = crate::db::Db::open_existing(&path)
+                    .and_then(|mut d| d.record(id))
+                    .map_err(|e| e.to_string())?;
                 Ok((text, format!("{path} record {id}")))
             }
             None => Ok((

@@ -113,7 +113,8 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, String> {
             &record,
             &beside,
             &serial,
-        )?;
+        )
+        .map_err(|e| e.to_string())?;
         println!("  {said}");
     }
     Ok(health.verdict.word())

@@ -24,8 +24,9 @@ pub struct HistoryArgs {
 /// An unreadable database.
 pub fn run(args: &HistoryArgs) -> Result<(), String> {
     let path = crate::db::Location::or_default(args.db.as_ref());
-    let mut d = Db::open_existing(&path)?;
-    let rows = d.history(&args.serial)?;
+    let rows = Db::open_existing(&path)
+        .and_then(|mut d| d.history(&args.serial))
+        .map_err(|e| e.to_string())?;
     if args.json {
         println!(
             "{}",

@@ -53,10 +53,10 @@ fn migrate(args: &MigrateArgs) -> Result<(), String> {
             "calflash db migrate: {from} is both the history to copy and the one to copy into"
         ));
     }
-    let mut source = Db::open_existing(from)?;
-    let mut dest = Db::open(&to)?;
     let station = args.station.clone().unwrap_or_else(db::station);
-    let (records, copied) = dest.copy_from(&mut source, &station)?;
+    let (records, copied) = Db::open_existing(from)
+        .and_then(|mut source| Db::open(&to)?.copy_from(&mut source, &station))
+        .map_err(|e| e.to_string())?;
     println!(
         "calflash db migrate  {from} -> {to}: {copied} of {records} records copied{}",
         if copied < records {

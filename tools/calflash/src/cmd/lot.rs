@@ -87,8 +87,9 @@ fn judge(
 
 /// Every unit `sel` takes, with its newest fit.
 fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, String> {
-    let mut d = Db::open_existing(path)?;
-    let rows = d.latest_fits(sel)?;
+    let rows = Db::open_existing(path)
+        .and_then(|mut d| d.latest_fits(sel))
+        .map_err(|e| e.to_string())?;
     rows.into_iter()
         .map(|row| {
             lot::coefficients(&row.coefficients)

@@ -168,7 +168,9 @@ impl Outputs {
                 let path = crate::db::Location::or_default(self.db.as_ref());
                 let held = match path.file() {
                     Some(f) if !f.exists() => 0,
-                    _ => Db::open(&path)?.highest_counter(serial)?,
+                    _ => Db::open(&path)
+                        .and_then(|mut d| d.highest_counter(serial))
+                        .map_err(|e| e.to_string())?,
                 };
                 held.checked_add(1)
                     .ok_or("the unit's history holds the highest counter there is")?
@@ -226,7 +228,7 @@ impl Outputs {
         &self,
         serial: &str,
         record: &serde_json::Value,
-        save: impl FnOnce(&mut Db) -> Result<i64, String>,
+        save: impl FnOnce(&mut Db) -> Result<i64, db::Error>,
     ) -> Result<Option<String>, String> {
         if self.no_db {
             return Ok(None);

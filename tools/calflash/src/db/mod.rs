@@ -7,6 +7,7 @@
 //! two stations writing at once lose nothing, a history of a newer schema is refused, and a
 //! record the history cannot take is saved as JSON beside the outputs.
 
+mod error;
 mod location;
 mod postgresql;
 mod schema;
@@ -14,6 +15,7 @@ mod sqlite;
 
 use std::path::{Path, PathBuf};
 
+pub use error::{Cause, Error, NotRecorded};
 pub use location::{Location, redact};
 pub use schema::SCHEMA_VERSION;
 use schema::{Listed, Row};
@@ -35,18 +37,18 @@ pub fn beside(outputs: &[Option<&Path>]) -> PathBuf {
 /// in `beside` so that nothing is lost.
 ///
 /// # Errors
-/// When the database could not take the record: the message says why and where the record
-/// was saved instead (or that it could not be).
+/// When the database could not take the record: why, and where the record was saved instead
+/// (or that it could not be).
 pub fn record_or_save(
     location: &Location,
-    f: impl FnOnce(&mut Db) -> Result<i64, String>,
+    f: impl FnOnce(&mut Db) -> Result<i64, Error>,
     fallback: &serde_json::Value,
     beside: &Path,
     serial: &str,
-) -> Result<String, String> {
+) -> Result<String, NotRecorded> {
     match Db::open(location).and_then(|mut d| f(&mut d)) {
         Ok(id) => Ok(format!("recorded as db:{id} in {location}")),
-        Err(e) => {
+        Err(cause) => {
             let nanos = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_nanos());
@@ -65,14 +67,15 @@ pub fn record_or_save(
             let saved =
                 crate::files::write_atomically(&file, |w| std::io::Write::write_all(w, &body));
             Err(match saved {
-                Ok(()) => format!(
-                    "NOT recorded: {e}; the record is saved in {} instead",
-                    file.display()
-                ),
-                Err(why) => format!(
-                    "NOT recorded: {e}; nor could it be saved in {} ({why})",
-                    file.display()
-                ),
+                Ok(()) => NotRecorded::Saved {
+                    cause: Box::new(cause),
+                    saved: file,
+                },
+                Err(why) => NotRecorded::Lost {
+                    cause: Box::new(cause),
+                    file,
+                    why,
+                },
             })
         }
     }
@@ -204,20 +207,20 @@ fn now() -> i64 {
 /// names the history).
 trait Backend: Send {
     /// Writes one record, whole or not at all; its id.
-    fn insert(&mut self, row: &Row) -> Result<i64, String>;
+    fn insert(&mut self, row: &Row) -> Result<i64, Cause>;
     /// Writes `rows` in one transaction, skipping those the history held before (the same
     /// unit, kind, time, data, outcome, station and blob); how many it wrote.
-    fn copy(&mut self, rows: &[Row]) -> Result<usize, String>;
+    fn copy(&mut self, rows: &[Row]) -> Result<usize, Cause>;
     /// A unit's records, oldest first.
-    fn history(&mut self, serial: &str) -> Result<Vec<Listed>, String>;
+    fn history(&mut self, serial: &str) -> Result<Vec<Listed>, Cause>;
     /// See [`Db::latest_fits`].
-    fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, String>;
+    fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, Cause>;
     /// The blobs of a unit's records.
-    fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, String>;
+    fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, Cause>;
     /// The JSON record of record `id`: `None` for no such record, `Some(None)` for a flash.
-    fn record(&mut self, id: i64) -> Result<Option<Option<String>>, String>;
+    fn record(&mut self, id: i64) -> Result<Option<Option<String>>, Cause>;
     /// Every record, in the order written.
-    fn rows(&mut self) -> Result<Vec<Row>, String>;
+    fn rows(&mut self) -> Result<Vec<Row>, Cause>;
 }
 
 /// A unit history, open.
@@ -231,10 +234,10 @@ impl Db {
     /// PostgreSQL database) when needed, migrating an older SQLite schema.
     ///
     /// # Errors
-    /// A message naming the history (a URL without its password) and why.
-    pub fn open(location: impl Into<Location>) -> Result<Self, String> {
+    /// The history (a URL without its password) and why.
+    pub fn open(location: impl Into<Location>) -> Result<Self, Error> {
         let location = location.into();
-        let backend: Result<Box<dyn Backend>, String> = match &location {
+        let backend: Result<Box<dyn Backend>, Cause> = match &location {
             Location::File(p) => sqlite::Sqlite::open(p).map(|b| Box::new(b) as _),
             Location::Server(url) => postgresql::Postgres::open(url).map(|b| Box::new(b) as _),
         };
@@ -246,9 +249,9 @@ impl Db {
     ///
     /// # Errors
     /// No history there, or not a calflash history of a schema this calflash reads.
-    pub fn open_existing(location: impl Into<Location>) -> Result<Self, String> {
+    pub fn open_existing(location: impl Into<Location>) -> Result<Self, Error> {
         let location = location.into();
-        let backend: Result<Box<dyn Backend>, String> = match &location {
+        let backend: Result<Box<dyn Backend>, Cause> = match &location {
             Location::File(p) => sqlite::Sqlite::open_existing(p).map(|b| Box::new(b) as _),
             Location::Server(url) => {
                 postgresql::Postgres::open_existing(url).map(|b| Box::new(b) as _)
@@ -257,19 +260,16 @@ impl Db {
         Self::opened(backend, location)
     }
 
-    fn opened(
-        backend: Result<Box<dyn Backend>, String>,
-        location: Location,
-    ) -> Result<Self, String> {
+    fn opened(backend: Result<Box<dyn Backend>, Cause>, location: Location) -> Result<Self, Error> {
         match backend {
             Ok(backend) => Ok(Self { backend, location }),
-            Err(why) => Err(format!("the unit history database {location}: {why}")),
+            Err(cause) => Err(cause.at(&location)),
         }
     }
 
     /// Names the history in a failure.
-    fn named<T>(&self, r: Result<T, String>) -> Result<T, String> {
-        r.map_err(|why| format!("the unit history database {}: {why}", self.location))
+    fn named<T>(&self, r: Result<T, Cause>) -> Result<T, Error> {
+        r.map_err(|cause| cause.at(&self.location))
     }
 
     /// Records a fit.
@@ -281,7 +281,7 @@ impl Db {
         rec: &Record,
         report: Option<&Path>,
         blob: &[u8],
-    ) -> Result<i64, String> {
+    ) -> Result<i64, Error> {
         let models: Vec<&str> = rec
             .points
             .first()
@@ -323,7 +323,7 @@ impl Db {
         record: &serde_json::Value,
         report: Option<&Path>,
         blob: &[u8],
-    ) -> Result<i64, String> {
+    ) -> Result<i64, Error> {
         let coefficients = serde_json::json!({"accel": record["accel"], "gyro": record["gyro"]["matrix_rad_s_per_count"], "gyro_bias_counts": record["gyro"]["bias_counts"]});
         let covariance = serde_json::json!({"accel": record["accel"]["covariance"], "gyro": record["gyro"]["covariance"]});
         self.insert(Row {
@@ -355,7 +355,7 @@ impl Db {
         serial: &str,
         blob: &[u8],
         record: &serde_json::Value,
-    ) -> Result<i64, String> {
+    ) -> Result<i64, Error> {
         let health = &record["health"];
         let coefficients = serde_json::json!({"bias": health["bias"]});
         let covariance = serde_json::json!({"bias_sigma": health["bias_sigma"], "accel_covariance": health["accel_covariance"]});
@@ -387,7 +387,7 @@ impl Db {
         blob: &[u8],
         verification: &serde_json::Value,
         outcome: &str,
-    ) -> Result<i64, String> {
+    ) -> Result<i64, Error> {
         let sensor = crate::signing::calibration(blob)
             .ok()
             .map(|cal| format!("{:?}", cal.data().sensor));
@@ -409,7 +409,7 @@ impl Db {
         })
     }
 
-    fn insert(&mut self, row: Row) -> Result<i64, String> {
+    fn insert(&mut self, row: Row) -> Result<i64, Error> {
         let r = self.backend.insert(&row);
         self.named(r)
     }
@@ -418,7 +418,7 @@ impl Db {
     ///
     /// # Errors
     /// A message naming the history and why.
-    pub fn history(&mut self, serial: &str) -> Result<Vec<Entry>, String> {
+    pub fn history(&mut self, serial: &str) -> Result<Vec<Entry>, Error> {
         let r = self.backend.history(serial);
         Ok(self
             .named(r)?
@@ -444,7 +444,7 @@ impl Db {
     /// # Errors
     /// A message naming the history and why; a station or lot asked of a history without
     /// them.
-    pub fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, String> {
+    pub fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, Error> {
         let r = self.backend.latest_fits(sel);
         self.named(r)
     }
@@ -453,7 +453,7 @@ impl Db {
     ///
     /// # Errors
     /// A message naming the history and why.
-    pub fn highest_counter(&mut self, serial: &str) -> Result<u32, String> {
+    pub fn highest_counter(&mut self, serial: &str) -> Result<u32, Error> {
         let r = self.backend.blobs(serial);
         Ok(self
             .named(r)?
@@ -467,14 +467,17 @@ impl Db {
     ///
     /// # Errors
     /// No such record, or a flash.
-    pub fn record(&mut self, id: i64) -> Result<String, String> {
+    pub fn record(&mut self, id: i64) -> Result<String, Error> {
         let r = self.backend.record(id);
         match self.named(r)? {
-            None => Err(format!("{}: no record {id}", self.location)),
-            Some(None) => Err(format!(
-                "{}: record {id} is a flash, not a calibration; compare calibrations (`calflash history` lists them)",
-                self.location
-            )),
+            None => Err(Error::NoRecord {
+                location: self.location.clone(),
+                id,
+            }),
+            Some(None) => Err(Error::NotACalibration {
+                location: self.location.clone(),
+                id,
+            }),
             Some(Some(t)) => Ok(t),
         }
     }
@@ -486,7 +489,7 @@ impl Db {
     ///
     /// # Errors
     /// Either history's failure, named; nothing is written then.
-    pub fn copy_from(&mut self, from: &mut Db, station: &str) -> Result<(usize, usize), String> {
+    pub fn copy_from(&mut self, from: &mut Db, station: &str) -> Result<(usize, usize), Error> {
         let r = from.backend.rows();
         let mut rows = from.named(r)?;
         for row in &mut rows {

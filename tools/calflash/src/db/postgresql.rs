@@ -16,7 +16,7 @@ use postgres::types::{ToSql, Type};
 use postgres::{Client, NoTls};
 
 use super::schema::{Later, Listed, Row};
-use super::{Backend, FitRow, SCHEMA_VERSION, Selection};
+use super::{Backend, Cause, FitRow, SCHEMA_VERSION, Selection};
 
 /// A PostgreSQL history.
 pub struct Postgres {
@@ -112,7 +112,15 @@ const CREATE_LOCK: i64 = 0x6361_6c66;
 use super::schema::WRITTEN as COLUMNS;
 
 /// Why the server or the connection failed, in the station's words.
-fn why(e: &postgres::Error) -> String {
+fn why(e: postgres::Error) -> Cause {
+    Cause::Postgres {
+        why: explain(&e),
+        source: e,
+    }
+}
+
+/// What a client error means for the station.
+fn explain(e: &postgres::Error) -> String {
     if let Some(db) = e.as_db_error() {
         let msg = db.message();
         let code = db.code();
@@ -151,16 +159,10 @@ fn why(e: &postgres::Error) -> String {
 }
 
 /// Connects to `url`; a URL without a password takes `$PGPASSWORD`'s, as `psql` does.
-fn connect(url: &str) -> Result<Client, String> {
-    let mut config: postgres::Config = url
-        .parse()
-        .map_err(|e| format!("not a PostgreSQL URL this calflash reads: {e}"))?;
+fn connect(url: &str) -> Result<Client, Cause> {
+    let mut config: postgres::Config = url.parse().map_err(Cause::Url)?;
     if config.get_ssl_mode() == postgres::config::SslMode::Require {
-        return Err(
-            "sslmode=require: this calflash connects without TLS (a server on the plant's \
-             network or this machine); drop sslmode or give sslmode=disable"
-                .into(),
-        );
+        return Err(Cause::TlsRequired);
     }
     if config.get_password().is_none()
         && let Some(p) = std::env::var_os("PGPASSWORD")
@@ -171,26 +173,26 @@ fn connect(url: &str) -> Result<Client, String> {
         config.connect_timeout(Duration::from_secs(10));
     }
     config.application_name("calflash");
-    config.connect(NoTls).map_err(|e| why(&e))
+    config.connect(NoTls).map_err(why)
 }
 
 /// Which of the tables are there: `(calflash_schema, records)`.
-fn tables(c: &mut impl postgres::GenericClient) -> Result<(bool, bool), String> {
+fn tables(c: &mut impl postgres::GenericClient) -> Result<(bool, bool), Cause> {
     let row = c
         .query_one(
             "SELECT to_regclass('calflash_schema') IS NOT NULL, to_regclass('records') IS NOT NULL",
             &[],
         )
-        .map_err(|e| why(&e))?;
+        .map_err(why)?;
     Ok((row.get(0), row.get(1)))
 }
 
 /// Checks the version and columns of an existing history; migrates version 3 when `write`.
 /// The version and the later columns the table (now) has.
-fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<(i64, Later), String> {
+fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<(i64, Later), Cause> {
     let version: Option<i32> = c
         .query_one("SELECT max(version) FROM calflash_schema", &[])
-        .map_err(|e| why(&e))?
+        .map_err(why)?
         .get(0);
     let version = i64::from(version.unwrap_or(0));
     schema_version(version)?;
@@ -200,28 +202,25 @@ fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<(i6
              WHERE attrelid = 'records'::regclass AND attnum > 0 AND NOT attisdropped",
             &[],
         )
-        .map_err(|e| why(&e))?
+        .map_err(why)?
         .iter()
         .map(|r| r.get(0))
         .collect();
     let later = super::schema::check_columns(&have)?;
     if version < SCHEMA_VERSION && write {
-        c.batch_execute(MIGRATE_FROM_3).map_err(|e| why(&e))?;
+        c.batch_execute(MIGRATE_FROM_3).map_err(why)?;
         return Ok((SCHEMA_VERSION, Later::ALL));
     }
     Ok((version, later))
 }
 
 /// Refuses a schema version this calflash does not read.
-fn schema_version(version: i64) -> Result<(), String> {
+fn schema_version(version: i64) -> Result<(), Cause> {
     if version > SCHEMA_VERSION {
-        return Err(super::schema::newer(version));
+        return Err(Cause::NewerSchema(version));
     }
     if version < 3 {
-        return Err(format!(
-            "its calflash_schema says schema {version}, which no calflash wrote on PostgreSQL \
-             (they write schema 3 and later); nothing was read or written"
-        ));
+        return Err(Cause::UnknownSchema(version));
     }
     Ok(())
 }
@@ -232,29 +231,29 @@ fn params(row: &Row) -> [&(dyn ToSql + Sync); 14] {
 
 impl Postgres {
     /// Connects to the history at `url`, creating its tables in an empty database.
-    pub(super) fn open(url: &str) -> Result<Self, String> {
+    pub(super) fn open(url: &str) -> Result<Self, Cause> {
         if let Some(idle) = reuse(url).filter(|i| i.version == SCHEMA_VERSION) {
             return Ok(Self::from(idle));
         }
         let mut client = connect(url)?;
-        let mut tx = client.transaction().map_err(|e| why(&e))?;
+        let mut tx = client.transaction().map_err(why)?;
         tx.execute("SELECT pg_advisory_xact_lock($1)", &[&CREATE_LOCK])
-            .map_err(|e| why(&e))?;
+            .map_err(why)?;
         match tables(&mut tx)? {
             (false, false) => {
-                tx.batch_execute(SCHEMA).map_err(|e| why(&e))?;
+                tx.batch_execute(SCHEMA).map_err(why)?;
                 tx.execute(
                     "INSERT INTO calflash_schema (version) VALUES ($1)",
                     &[&(SCHEMA_VERSION as i32)],
                 )
-                .map_err(|e| why(&e))?;
+                .map_err(why)?;
             }
             (true, _) => {
                 check_schema(&mut tx, true)?;
             }
-            (false, true) => return Err(not_ours()),
+            (false, true) => return Err(Cause::ForeignTable),
         }
-        tx.commit().map_err(|e| why(&e))?;
+        tx.commit().map_err(why)?;
         Ok(Self {
             client: Some(client),
             url: url.to_string(),
@@ -264,18 +263,14 @@ impl Postgres {
     }
 
     /// Connects to the history at `url` to read it: never creates the tables.
-    pub(super) fn open_existing(url: &str) -> Result<Self, String> {
+    pub(super) fn open_existing(url: &str) -> Result<Self, Cause> {
         if let Some(idle) = reuse(url) {
             return Ok(Self::from(idle));
         }
         let mut client = connect(url)?;
         match tables(&mut client)? {
-            (false, false) => Err(
-                "it holds no calflash history (nothing has been recorded there yet; the first \
-                 calibration recorded there creates it)"
-                    .into(),
-            ),
-            (false, true) => Err(not_ours()),
+            (false, false) => Err(Cause::NoTables),
+            (false, true) => Err(Cause::ForeignTable),
             (true, _) => {
                 let (version, later) = check_schema(&mut client, false)?;
                 Ok(Self {
@@ -307,14 +302,8 @@ impl From<Idle> for Postgres {
     }
 }
 
-fn not_ours() -> String {
-    "it has a table `records` but no `calflash_schema`: the table is not calflash's; nothing \
-     was read or written"
-        .into()
-}
-
 impl Backend for Postgres {
-    fn insert(&mut self, row: &Row) -> Result<i64, String> {
+    fn insert(&mut self, row: &Row) -> Result<i64, Cause> {
         let sql = format!(
             "INSERT INTO records ({COLUMNS}) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14) RETURNING id"
         );
@@ -322,23 +311,23 @@ impl Backend for Postgres {
         self.client()
             .query_one(&sql, &params(row))
             .map(|r| r.get(0))
-            .map_err(|e| why(&e))
+            .map_err(why)
     }
 
-    fn copy(&mut self, rows: &[Row]) -> Result<usize, String> {
-        let mut tx = self.client().transaction().map_err(|e| why(&e))?;
+    fn copy(&mut self, rows: &[Row]) -> Result<usize, Cause> {
+        let mut tx = self.client().transaction().map_err(why)?;
         tx.batch_execute(
             "CREATE TEMPORARY TABLE incoming (ord BIGINT, serial TEXT, kind TEXT, time BIGINT,
              data_hash TEXT, model TEXT, coefficients TEXT, covariance TEXT, report TEXT,
              blob BYTEA, verification TEXT, outcome TEXT, record TEXT, station TEXT, lot TEXT)
              ON COMMIT DROP",
         )
-        .map_err(|e| why(&e))?;
+        .map_err(why)?;
         let sink = tx
             .copy_in(&format!(
                 "COPY incoming (ord, {COLUMNS}) FROM STDIN (FORMAT binary)"
             ))
-            .map_err(|e| why(&e))?;
+            .map_err(why)?;
         let types = [
             Type::INT8,
             Type::TEXT,
@@ -361,9 +350,9 @@ impl Backend for Postgres {
             let ord = ord as i64;
             let mut values: Vec<&(dyn ToSql + Sync)> = vec![&ord];
             values.extend(params(row));
-            w.write(&values).map_err(|e| why(&e))?;
+            w.write(&values).map_err(why)?;
         }
-        w.finish().map_err(|e| why(&e))?;
+        w.finish().map_err(why)?;
         // Only what the history did not hold before the copy: a second copy adds nothing.
         let copied = tx
             .execute(
@@ -376,18 +365,18 @@ impl Backend for Postgres {
                 ),
                 &[],
             )
-            .map_err(|e| why(&e))?;
-        tx.commit().map_err(|e| why(&e))?;
+            .map_err(why)?;
+        tx.commit().map_err(why)?;
         Ok(copied as usize)
     }
 
-    fn history(&mut self, serial: &str) -> Result<Vec<Listed>, String> {
+    fn history(&mut self, serial: &str) -> Result<Vec<Listed>, Cause> {
         let sql = format!(
             "SELECT id, kind, time, data_hash, model, outcome, report, blob, {} FROM records
              WHERE serial = $1 ORDER BY time, id",
             Later::column(self.later.lot, "lot")
         );
-        let rows = self.client().query(&sql, &[&serial]).map_err(|e| why(&e))?;
+        let rows = self.client().query(&sql, &[&serial]).map_err(why)?;
         Ok(rows
             .iter()
             .map(|r| Listed {
@@ -404,7 +393,7 @@ impl Backend for Postgres {
             .collect())
     }
 
-    fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, String> {
+    fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, Cause> {
         self.later.check(sel)?;
         // The newest fit per serial: the greatest (time, id) of its fits in the range.
         let sql = format!(
@@ -425,7 +414,7 @@ impl Backend for Postgres {
                 &sql,
                 &[&sel.prefix, &sel.since, &sel.until, &sel.station, &sel.lot],
             )
-            .map_err(|e| why(&e))?;
+            .map_err(why)?;
         Ok(rows
             .iter()
             .map(|r| FitRow {
@@ -437,23 +426,23 @@ impl Backend for Postgres {
             .collect())
     }
 
-    fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, String> {
+    fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, Cause> {
         let rows = self
             .client()
             .query("SELECT blob FROM records WHERE serial = $1", &[&serial])
-            .map_err(|e| why(&e))?;
+            .map_err(why)?;
         Ok(rows.iter().map(|r| r.get(0)).collect())
     }
 
-    fn record(&mut self, id: i64) -> Result<Option<Option<String>>, String> {
+    fn record(&mut self, id: i64) -> Result<Option<Option<String>>, Cause> {
         let row = self
             .client()
             .query_opt("SELECT record FROM records WHERE id = $1", &[&id])
-            .map_err(|e| why(&e))?;
+            .map_err(why)?;
         Ok(row.map(|r| r.get(0)))
     }
 
-    fn rows(&mut self) -> Result<Vec<Row>, String> {
+    fn rows(&mut self) -> Result<Vec<Row>, Cause> {
         let columns = COLUMNS.replace(
             ", lot",
             &format!(", {}", Later::column(self.later.lot, "lot")),
@@ -461,7 +450,7 @@ impl Backend for Postgres {
         let rows = self
             .client()
             .query(&format!("SELECT {columns} FROM records ORDER BY id"), &[])
-            .map_err(|e| why(&e))?;
+            .map_err(why)?;
         Ok(rows
             .iter()
             .map(|r| Row {

@@ -1,7 +1,7 @@
 //! The history's schema, shared by both backends: its version, the columns of `records` and
 //! those older versions lack, and a record as the backends write and list it.
 
-use super::Selection;
+use super::{Cause, Selection};
 
 /// The schema version this calflash reads and writes. On SQLite (`PRAGMA user_version`)
 /// version 0 is a database of the releases before versioning, version 1 one whose records are
@@ -12,13 +12,6 @@ use super::Selection;
 /// `calflash_schema`) version 3 lacks the lot and gains it when written to. Read-only, an
 /// older history reads with no stations or lots.
 pub const SCHEMA_VERSION: i64 = 4;
-
-/// The refusal of a history of a newer schema.
-pub(super) fn newer(version: i64) -> String {
-    format!(
-        "written by a newer calflash (schema {version}); this one reads schema {SCHEMA_VERSION} and changes nothing in it"
-    )
-}
 
 /// The columns of `records` the code reads and writes.
 const COLUMNS: [&str; 13] = [
@@ -60,15 +53,13 @@ impl Later {
     }
 
     /// Refuses a selection by a column the history lacks.
-    pub(super) fn check(self, sel: &Selection<'_>) -> Result<(), String> {
+    pub(super) fn check(self, sel: &Selection<'_>) -> Result<(), Cause> {
         for (asked, have, what) in [
             (sel.station.is_some(), self.station, "stations"),
             (sel.lot.is_some(), self.lot, "lots"),
         ] {
             if asked && !have {
-                return Err(format!(
-                    "it records no {what} (an older schema, opened to read: it gains them when a calflash of schema {SCHEMA_VERSION} writes to it)"
-                ));
+                return Err(Cause::Lacks(what));
             }
         }
         Ok(())
@@ -77,11 +68,9 @@ impl Later {
 
 /// Checks that a table with columns `have` is calflash's `records`; which later columns it
 /// has.
-pub(super) fn check_columns(have: &[String]) -> Result<Later, String> {
+pub(super) fn check_columns(have: &[String]) -> Result<Later, Cause> {
     match COLUMNS.iter().find(|c| !have.iter().any(|h| h == *c)) {
-        Some(missing) => Err(format!(
-            "its table `records` has no column `{missing}`: it was altered or is not calflash's; nothing was read or written"
-        )),
+        Some(missing) => Err(Cause::MissingColumn(missing)),
         None => Ok(Later {
             station: have.iter().any(|h| h == "station"),
             lot: have.iter().any(|h| h == "lot"),

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use rusqlite::{Connection, ErrorCode, OpenFlags, OptionalExtension, params};
 
 use super::schema::{Later, Listed, Row};
-use super::{Backend, FitRow, SCHEMA_VERSION, Selection};
+use super::{Backend, Cause, FitRow, SCHEMA_VERSION, Selection};
 
 /// A SQLite history.
 pub struct Sqlite {
@@ -20,8 +20,8 @@ pub struct Sqlite {
 }
 
 /// Why SQLite failed, in the station's words.
-fn why(path: &Path, e: &rusqlite::Error) -> String {
-    match e.sqlite_error_code() {
+fn why(path: &Path, e: rusqlite::Error) -> Cause {
+    let why = match e.sqlite_error_code() {
         Some(ErrorCode::ReadOnly) => "the database file is read-only".to_string(),
         Some(ErrorCode::DiskFull) => "the disk (or the database's size limit) is full".to_string(),
         Some(ErrorCode::SystemIoFailure) => format!(
@@ -34,7 +34,8 @@ fn why(path: &Path, e: &rusqlite::Error) -> String {
         }
         Some(ErrorCode::NotADatabase) => "the file is not a calflash database".to_string(),
         _ => e.to_string(),
-    }
+    };
+    Cause::Sqlite { why, source: e }
 }
 
 /// The `records` table of the present schema.
@@ -95,38 +96,38 @@ PRAGMA user_version = 4;
 
 /// Checks the schema of an existing database: its version and which later columns the table
 /// has.
-fn check_schema(conn: &Connection, path: &Path) -> Result<(i64, Later), String> {
+fn check_schema(conn: &Connection, path: &Path) -> Result<(i64, Later), Cause> {
     let version: i64 = conn
         .query_row("PRAGMA user_version", [], |r| r.get(0))
-        .map_err(|e| why(path, &e))?;
+        .map_err(|e| why(path, e))?;
     if version > SCHEMA_VERSION {
-        return Err(super::schema::newer(version));
+        return Err(Cause::NewerSchema(version));
     }
     let mut stmt = conn
         .prepare("SELECT name FROM pragma_table_info('records')")
-        .map_err(|e| why(path, &e))?;
+        .map_err(|e| why(path, e))?;
     let have: Vec<String> = stmt
         .query_map([], |r| r.get(0))
         .and_then(Iterator::collect)
-        .map_err(|e| why(path, &e))?;
+        .map_err(|e| why(path, e))?;
     Ok((version, super::schema::check_columns(&have)?))
 }
 
 /// Whether the database has calflash's table.
-fn has_records(conn: &Connection, path: &Path) -> Result<bool, String> {
+fn has_records(conn: &Connection, path: &Path) -> Result<bool, Cause> {
     conn.query_row(
         "SELECT count(*) FROM sqlite_master WHERE name = 'records'",
         [],
         |r| r.get::<_, i64>(0),
     )
     .map(|n| n > 0)
-    .map_err(|e| why(path, &e))
+    .map_err(|e| why(path, e))
 }
 
 /// Makes the database ready to take records of the present schema: creates the table in an
 /// empty file, migrates an older one, refuses anything else. Runs under the write lock, so
 /// what it sees cannot change before it acts.
-fn make_writable(conn: &Connection, path: &Path) -> Result<(), String> {
+fn make_writable(conn: &Connection, path: &Path) -> Result<(), Cause> {
     if has_records(conn, path)? {
         let (version, _) = check_schema(conn, path)?;
         let migrate = match version {
@@ -135,29 +136,23 @@ fn make_writable(conn: &Connection, path: &Path) -> Result<(), String> {
             2 => MIGRATE_FROM_2,
             _ => MIGRATE_FROM_3,
         };
-        return conn.execute_batch(migrate).map_err(|e| why(path, &e));
+        return conn.execute_batch(migrate).map_err(|e| why(path, e));
     }
     // No calflash table: a new file, or a database that is not ours to write into.
     let version: i64 = conn
         .query_row("PRAGMA user_version", [], |r| r.get(0))
-        .map_err(|e| why(path, &e))?;
+        .map_err(|e| why(path, e))?;
     let others: i64 = conn
         .query_row("SELECT count(*) FROM sqlite_master", [], |r| r.get(0))
-        .map_err(|e| why(path, &e))?;
+        .map_err(|e| why(path, e))?;
     if version != 0 || others > 0 {
-        return Err(format!(
-            "it has no table `records` but {} (schema {version}, {others} other \
-             object(s)): it is not a calflash history this version can write; nothing \
-             was written",
-            if version > SCHEMA_VERSION {
-                "was written by a newer program"
-            } else {
-                "is not empty"
-            }
-        ));
+        return Err(Cause::NotAHistory {
+            version,
+            objects: others,
+        });
     }
     conn.execute_batch(&format!("{SCHEMA} PRAGMA user_version = {SCHEMA_VERSION};"))
-        .map_err(|e| why(path, &e))
+        .map_err(|e| why(path, e))
 }
 
 /// The statement that writes one record.
@@ -174,13 +169,13 @@ fn insert_params(row: &Row) -> [&dyn rusqlite::ToSql; 14] {
 
 impl Sqlite {
     /// Opens (creating when needed) the database at `path`.
-    pub(super) fn open(path: &Path) -> Result<Self, String> {
+    pub(super) fn open(path: &Path) -> Result<Self, Cause> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+            std::fs::create_dir_all(dir).map_err(Cause::Directory)?;
         }
-        let conn = Connection::open(path).map_err(|e| why(path, &e))?;
+        let conn = Connection::open(path).map_err(|e| why(path, e))?;
         conn.busy_timeout(std::time::Duration::from_secs(5))
-            .map_err(|e| why(path, &e))?;
+            .map_err(|e| why(path, e))?;
         // A history of the present schema is written into as it is. Anything else (a new
         // file, an older schema, a stranger's database) is decided again under the write lock:
         // another station may be creating or migrating the same file at this instant, and a
@@ -188,11 +183,11 @@ impl Sqlite {
         let current = has_records(&conn, path)? && check_schema(&conn, path)?.0 == SCHEMA_VERSION;
         if !current {
             conn.execute_batch("BEGIN IMMEDIATE")
-                .map_err(|e| why(path, &e))?;
+                .map_err(|e| why(path, e))?;
             match make_writable(&conn, path) {
                 Ok(()) => conn.execute_batch("COMMIT").map_err(|e| {
                     let _ = conn.execute_batch("ROLLBACK");
-                    why(path, &e)
+                    why(path, e)
                 })?,
                 Err(e) => {
                     let _ = conn.execute_batch("ROLLBACK");
@@ -208,17 +203,14 @@ impl Sqlite {
     }
 
     /// Opens an existing database to read it: never creates one, never writes.
-    pub(super) fn open_existing(path: &Path) -> Result<Self, String> {
+    pub(super) fn open_existing(path: &Path) -> Result<Self, Cause> {
         if !path.is_file() {
-            return Err(
-                "there is none (give the one the station records in with --db, or $CALFLASH_DB)"
-                    .into(),
-            );
+            return Err(Cause::NoFile);
         }
         let conn = Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY)
-            .map_err(|e| why(path, &e))?;
+            .map_err(|e| why(path, e))?;
         conn.busy_timeout(std::time::Duration::from_secs(5))
-            .map_err(|e| why(path, &e))?;
+            .map_err(|e| why(path, e))?;
         let (_, later) = check_schema(&conn, path)?;
         Ok(Self {
             conn,
@@ -227,29 +219,29 @@ impl Sqlite {
         })
     }
 
-    fn why(&self, e: &rusqlite::Error) -> String {
+    fn why(&self, e: rusqlite::Error) -> Cause {
         why(&self.path, e)
     }
 }
 
 impl Backend for Sqlite {
-    fn insert(&mut self, row: &Row) -> Result<i64, String> {
-        let tx = self.conn.transaction().map_err(|e| why(&self.path, &e))?;
+    fn insert(&mut self, row: &Row) -> Result<i64, Cause> {
+        let tx = self.conn.transaction().map_err(|e| why(&self.path, e))?;
         tx.execute(&insert_sql(), insert_params(row).as_slice())
-            .map_err(|e| why(&self.path, &e))?;
+            .map_err(|e| why(&self.path, e))?;
         let id = tx.last_insert_rowid();
-        tx.commit().map_err(|e| why(&self.path, &e))?;
+        tx.commit().map_err(|e| why(&self.path, e))?;
         Ok(id)
     }
 
-    fn copy(&mut self, rows: &[Row]) -> Result<usize, String> {
+    fn copy(&mut self, rows: &[Row]) -> Result<usize, Cause> {
         let path = self.path.clone();
-        let tx = self.conn.transaction().map_err(|e| why(&path, &e))?;
+        let tx = self.conn.transaction().map_err(|e| why(&path, e))?;
         let mut copied = 0;
         // Only what the history did not hold before the copy: a second copy adds nothing.
         let before: i64 = tx
             .query_row("SELECT coalesce(max(id), 0) FROM records", [], |r| r.get(0))
-            .map_err(|e| why(&path, &e))?;
+            .map_err(|e| why(&path, e))?;
         {
             let mut present = tx
                 .prepare(
@@ -257,8 +249,8 @@ impl Backend for Sqlite {
                      AND data_hash = ?4 AND outcome = ?5 AND station = ?6 AND blob = ?7
                      AND id <= ?8",
                 )
-                .map_err(|e| why(&path, &e))?;
-            let mut insert = tx.prepare(&insert_sql()).map_err(|e| why(&path, &e))?;
+                .map_err(|e| why(&path, e))?;
+            let mut insert = tx.prepare(&insert_sql()).map_err(|e| why(&path, e))?;
             for row in rows {
                 let n: i64 = present
                     .query_row(
@@ -274,20 +266,20 @@ impl Backend for Sqlite {
                         ],
                         |r| r.get(0),
                     )
-                    .map_err(|e| why(&path, &e))?;
+                    .map_err(|e| why(&path, e))?;
                 if n == 0 {
                     insert
                         .execute(insert_params(row).as_slice())
-                        .map_err(|e| why(&path, &e))?;
+                        .map_err(|e| why(&path, e))?;
                     copied += 1;
                 }
             }
         }
-        tx.commit().map_err(|e| why(&path, &e))?;
+        tx.commit().map_err(|e| why(&path, e))?;
         Ok(copied)
     }
 
-    fn history(&mut self, serial: &str) -> Result<Vec<Listed>, String> {
+    fn history(&mut self, serial: &str) -> Result<Vec<Listed>, Cause> {
         let mut st = self
             .conn
             .prepare(&format!(
@@ -295,7 +287,7 @@ impl Backend for Sqlite {
                  WHERE serial = ?1 ORDER BY time, id",
                 Later::column(self.later.lot, "lot")
             ))
-            .map_err(|e| why(&self.path, &e))?;
+            .map_err(|e| why(&self.path, e))?;
         let rows = st
             .query_map([serial], |r| {
                 Ok(Listed {
@@ -310,12 +302,12 @@ impl Backend for Sqlite {
                     lot: r.get(8)?,
                 })
             })
-            .map_err(|e| why(&self.path, &e))?;
+            .map_err(|e| why(&self.path, e))?;
         rows.collect::<Result<_, _>>()
-            .map_err(|e| why(&self.path, &e))
+            .map_err(|e| why(&self.path, e))
     }
 
-    fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, String> {
+    fn latest_fits(&mut self, sel: &Selection<'_>) -> Result<Vec<FitRow>, Cause> {
         self.later.check(sel)?;
         let station = Later::column(self.later.station, "station");
         let station_r = Later::column(self.later.station, "r.station");
@@ -332,7 +324,7 @@ impl Backend for Sqlite {
              WHERE r.coefficients IS NOT NULL
              ORDER BY r.time, r.id"
         );
-        let mut st = self.conn.prepare(&sql).map_err(|e| self.why(&e))?;
+        let mut st = self.conn.prepare(&sql).map_err(|e| self.why(e))?;
         let rows = st
             .query_map(
                 params![sel.prefix, sel.since, sel.until, sel.station, sel.lot],
@@ -345,33 +337,33 @@ impl Backend for Sqlite {
                     })
                 },
             )
-            .map_err(|e| why(&self.path, &e))?;
+            .map_err(|e| why(&self.path, e))?;
         rows.collect::<Result<_, _>>()
-            .map_err(|e| why(&self.path, &e))
+            .map_err(|e| why(&self.path, e))
     }
 
-    fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, String> {
+    fn blobs(&mut self, serial: &str) -> Result<Vec<Vec<u8>>, Cause> {
         let mut st = self
             .conn
             .prepare("SELECT blob FROM records WHERE serial = ?1")
-            .map_err(|e| why(&self.path, &e))?;
+            .map_err(|e| why(&self.path, e))?;
         let rows = st
             .query_map([serial], |r| r.get(0))
-            .map_err(|e| why(&self.path, &e))?;
+            .map_err(|e| why(&self.path, e))?;
         rows.collect::<Result<_, _>>()
-            .map_err(|e| why(&self.path, &e))
+            .map_err(|e| why(&self.path, e))
     }
 
-    fn record(&mut self, id: i64) -> Result<Option<Option<String>>, String> {
+    fn record(&mut self, id: i64) -> Result<Option<Option<String>>, Cause> {
         self.conn
             .query_row("SELECT record FROM records WHERE id = ?1", [id], |r| {
                 r.get(0)
             })
             .optional()
-            .map_err(|e| self.why(&e))
+            .map_err(|e| self.why(e))
     }
 
-    fn rows(&mut self) -> Result<Vec<Row>, String> {
+    fn rows(&mut self) -> Result<Vec<Row>, Cause> {
         let mut st = self
             .conn
             .prepare(&format!(
@@ -380,7 +372,7 @@ impl Backend for Sqlite {
                 Later::column(self.later.station, "station"),
                 Later::column(self.later.lot, "lot")
             ))
-            .map_err(|e| why(&self.path, &e))?;
+            .map_err(|e| why(&self.path, e))?;
         let rows = st
             .query_map([], |r| {
                 Ok(Row {
@@ -400,15 +392,15 @@ impl Backend for Sqlite {
                     lot: r.get(13)?,
                 })
             })
-            .map_err(|e| why(&self.path, &e))?;
+            .map_err(|e| why(&self.path, e))?;
         rows.collect::<Result<_, _>>()
-            .map_err(|e| why(&self.path, &e))
+            .map_err(|e| why(&self.path, e))
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Db, Location};
+    use super::super::{Db, Error, Location};
     use super::*;
 
     /// A history over the connection `s`, whose settings the test changes.
@@ -427,7 +419,7 @@ mod tests {
             .unwrap()
     }
 
-    fn flash(db: &mut Db) -> Result<i64, String> {
+    fn flash(db: &mut Db) -> Result<i64, Error> {
         db.record_flash(
             "UNIT-1",
             &[0u8; 4000],
@@ -515,10 +507,27 @@ mod tests {
             let rows = d.latest_fits(&select(None, None)).unwrap();
             assert_eq!((rows.len(), rows[0].station.as_str()), (1, ""));
             let e = d.latest_fits(&select(None, Some("L1"))).unwrap_err();
-            assert!(e.contains("records no lots (an older schema"), "{e}");
+            assert!(
+                matches!(
+                    &e,
+                    Error::History {
+                        cause: Cause::Lacks("lots"),
+                        ..
+                    }
+                ),
+                "{e:?}"
+            );
+            assert!(
+                e.to_string().contains("records no lots (an older schema"),
+                "{e}"
+            );
             if version == 2 {
                 let e = d.latest_fits(&select(Some("A"), None)).unwrap_err();
-                assert!(e.contains("records no stations (an older schema"), "{e}");
+                assert!(
+                    e.to_string()
+                        .contains("records no stations (an older schema"),
+                    "{e}"
+                );
             }
             assert_eq!(d.history("U-1").unwrap()[0].lot, "");
             drop(d);
@@ -550,8 +559,13 @@ mod tests {
             .unwrap();
         let mut db = db(s);
         let e = flash(&mut db).unwrap_err();
+        assert!(matches!(
+            &e,
+            Error::History { cause: Cause::Sqlite { source, .. }, .. }
+                if source.sqlite_error_code() == Some(ErrorCode::DiskFull)
+        ));
         assert_eq!(
-            e,
+            e.to_string(),
             format!(
                 "the unit history database {}: the disk (or the database's size limit) is full",
                 path.display()
@@ -583,7 +597,7 @@ mod tests {
         let mut db = Db::open(&path).unwrap();
         let e = flash(&mut db).unwrap_err();
         assert_eq!(
-            e,
+            e.to_string(),
             format!(
                 "the unit history database {}: the database file is read-only",
                 path.display()
@@ -599,7 +613,7 @@ mod tests {
         std::fs::write(&path, b"serial,time\nUNIT-1,0\n".repeat(100)).unwrap();
         let e = Db::open(&path).err().unwrap();
         assert_eq!(
-            e,
+            e.to_string(),
             format!(
                 "the unit history database {}: the file is not a calflash database",
                 path.display()
@@ -613,7 +627,17 @@ mod tests {
         let path = dir.path().join("units.sqlite");
         // Reading a database that is not there creates nothing.
         let e = Db::open_existing(&path).err().unwrap();
-        assert!(e.contains("there is none"), "{e}");
+        assert!(
+            matches!(
+                e,
+                Error::History {
+                    cause: Cause::NoFile,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("there is none"), "{e}");
         assert!(!path.exists());
         let deep = dir.path().join("a/b/units.sqlite");
         assert!(Db::open_existing(&deep).is_err());
@@ -646,13 +670,23 @@ mod tests {
             Db::open(&path).err().unwrap(),
             Db::open_existing(&path).err().unwrap(),
         ] {
-            assert!(e.contains("newer calflash (schema 7)"), "{e}");
+            assert!(
+                matches!(
+                    e,
+                    Error::History {
+                        cause: Cause::NewerSchema(7),
+                        ..
+                    }
+                ),
+                "{e:?}"
+            );
+            assert!(e.to_string().contains("newer calflash (schema 7)"), "{e}");
         }
         // An altered table is named, not answered with raw SQL.
         conn.execute_batch("PRAGMA user_version = 1; ALTER TABLE records RENAME COLUMN time TO t")
             .unwrap();
         let e = Db::open_existing(&path).err().unwrap();
-        assert!(e.contains("no column `time`"), "{e}");
+        assert!(e.to_string().contains("no column `time`"), "{e}");
         // Another program's database, and a newer one without our table, are left alone.
         for (name, sql) in [
             ("other.sqlite", "CREATE TABLE parts (id INTEGER)"),
@@ -661,7 +695,7 @@ mod tests {
             let p = dir.path().join(name);
             Connection::open(&p).unwrap().execute_batch(sql).unwrap();
             let e = Db::open(&p).err().unwrap();
-            assert!(e.contains("it has no table `records`"), "{e}");
+            assert!(e.to_string().contains("it has no table `records`"), "{e}");
             let c = Connection::open(&p).unwrap();
             let tables: i64 = c
                 .query_row(
