@@ -130,8 +130,10 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
         serde_json::to_vec_pretty(&record).map_err(|e| e.to_string())?,
     )
     .map_err(|e| e.to_string())?;
-    let mut db = Db::open(&job.db)?;
-    let fit_id = db.record_fit(&record, Some(&report), &c.blob)?;
+    let mut db = Db::open(&job.db).map_err(|e| e.to_string())?;
+    let fit_id = db
+        .record_fit(&record, Some(&report), &c.blob)
+        .map_err(|e| e.to_string())?;
     say(&format!(
         "2. calibrated unit {UNIT}: {:?}, {} table points, blob {} bytes; report {}",
         c.verdict(),
@@ -190,12 +192,14 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     .map_err(|e| e.to_string())?;
     drop(client);
     unit.power_off()?;
-    let flash_id = db.record_flash(
-        &flash.unit,
-        &signed,
-        &serde_json::to_value(&flash).map_err(|e| e.to_string())?,
-        "verified",
-    )?;
+    let flash_id = db
+        .record_flash(
+            &flash.unit,
+            &signed,
+            &serde_json::to_value(&flash).map_err(|e| e.to_string())?,
+            "verified",
+        )
+        .map_err(|e| e.to_string())?;
     say(&format!(
         "5. signed by station key {} at counter {counter} ({}) and flashed over the emulated UART: the unit verified the signature and committed it as slot sequence {}, {} bytes read back identical, {} test vectors through the device's correction within {} ulp of the host's; recorded as db:{fit_id} (fit) and db:{flash_id} (flash) in {}",
         device::key_hex(station.id()),
