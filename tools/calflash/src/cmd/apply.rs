@@ -99,9 +99,9 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
         }
     };
     let columns = if args.columns.is_empty() {
-        crate::obs::layout::Chosen::default()
+        crate::obs::header::Chosen::default()
     } else {
-        crate::obs::layout::Chosen::parse(&args.columns.join(","))
+        crate::obs::header::Chosen::parse(&args.columns.join(","))
             .map_err(|e| format!("--columns: {e}"))?
     };
     let opts = crate::obs::recording::Options {

@@ -132,7 +132,7 @@ fn samples(args: &HealthArgs, rec: &Path) -> Result<(Vec<[i32; 6]>, f64), String
         rate: args.rate,
         keep: crate::obs::layout::Keep::Both,
         units: crate::obs::units::Units::DEFAULT,
-        columns: crate::obs::layout::Chosen::default(),
+        columns: crate::obs::header::Chosen::default(),
     };
     let r = crate::obs::recording::read_with(rec, None, &opts).map_err(|e| e.to_string())?;
     let raw = r

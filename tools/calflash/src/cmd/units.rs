@@ -28,14 +28,14 @@ pub struct ColumnArgs {
     /// temp=die_c`: the roles not given are found by the recognised names (t, time_ms, ax,
     /// acc_x, gyro_z, ...); the time column's unit from its name or `t=stamp:ms`; a temperature
     /// column is carried into the record.
-    #[arg(long, value_parser = |s: &str| crate::obs::layout::Chosen::parse(s))]
-    pub columns: Option<crate::obs::layout::Chosen>,
+    #[arg(long, value_parser = |s: &str| crate::obs::header::Chosen::parse(s))]
+    pub columns: Option<crate::obs::header::Chosen>,
 }
 
 impl ColumnArgs {
     /// What the readers are told.
     #[must_use]
-    pub fn chosen(&self) -> crate::obs::layout::Chosen {
+    pub fn chosen(&self) -> crate::obs::header::Chosen {
         self.columns.clone().unwrap_or_default()
     }
 }

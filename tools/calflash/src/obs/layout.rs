@@ -10,6 +10,7 @@ use super::fields::{MAX_FIELDS, Spans, number, split_bytes};
 use super::squash;
 use std::path::Path;
 
+use super::header::{Chosen, Columns, named, positional, timestamp};
 use super::recording::RecordingError;
 use super::units::{Sensor, Unit};
 
@@ -23,7 +24,7 @@ pub enum Holds {
 }
 
 impl Holds {
-    fn counts(self) -> usize {
+    pub(super) fn counts(self) -> usize {
         match self {
             Holds::Both => 6,
             Holds::One => 3,
@@ -109,239 +110,6 @@ const NAMES: [&str; 6] = [
     "gyro y count",
     "gyro z count",
 ];
-
-/// Which fields hold what.
-#[derive(Debug, Clone, PartialEq)]
-struct Columns {
-    /// The timestamp's field and its scale to seconds.
-    t: Option<(usize, f64)>,
-    /// The fields of the counts, in order.
-    counts: Vec<usize>,
-    /// The unit each count column's name states.
-    units: Vec<Option<Unit>>,
-    /// The sensor of the first triad named (a file of one sensor names which).
-    sensor: Option<Sensor>,
-    /// A temperature column.
-    temp: Option<usize>,
-    /// The number of fields every line has (from the header, or the first sample line).
-    width: usize,
-    /// The header's line, when the columns are chosen by its names.
-    header: Option<usize>,
-}
-
-/// The scale to seconds of a timestamp column named `name`, if it is one.
-fn timestamp(name: &str) -> Option<f64> {
-    let s = squash(name);
-    let rest = ["timestamp", "time", "t"]
-        .iter()
-        .find_map(|p| s.strip_prefix(p))?;
-    match rest {
-        "" | "s" | "sec" => Some(1.0),
-        "ms" => Some(1e-3),
-        "us" => Some(1e-6),
-        "ns" => Some(1e-9),
-        _ => None,
-    }
-}
-
-/// The axis (0, 1, 2) of a column of `sensor` named by `prefixes`, if it is one, with the unit
-/// its name states: a prefix, the axis letter, and a unit or nothing (`ax`, `acc_x`, `AccelX`,
-/// `gyro_z`, `wz`, `ax_mps2`, `gyro_x[dps]`).
-fn axis(name: &str, prefixes: &[&str], sensor: Sensor) -> Option<(usize, Option<Unit>)> {
-    let s = squash(name);
-    prefixes.iter().find_map(|p| {
-        let rest = s.strip_prefix(p)?;
-        let k = ["x", "y", "z"].iter().position(|a| rest.starts_with(a))?;
-        Some((k, Unit::suffix(&rest[1..], sensor)?))
-    })
-}
-
-const ACCEL: [&str; 5] = ["accelerometer", "accel", "acc", "a", "raw_a"];
-const GYRO: [&str; 6] = ["gyroscope", "gyro", "gyr", "g", "w", "omega"];
-
-/// Columns the user chose by name (`--columns t=time_us,ax=acc_x,...,temp=die_c`): each role's
-/// header name; roles not given are found by the recognised names.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Chosen {
-    /// The timestamp's column, with its scale to seconds.
-    pub t: Option<(String, f64)>,
-    /// The accelerometer's x, y, z columns.
-    pub accel: [Option<String>; 3],
-    /// The gyro's.
-    pub gyro: [Option<String>; 3],
-    /// A temperature column, carried into the record.
-    pub temp: Option<String>,
-}
-
-impl Chosen {
-    /// True when nothing is chosen.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        *self == Self::default()
-    }
-
-    /// Reads `t=NAME,ax=NAME,ay=...,gz=NAME,temp=NAME`; the time column's unit comes from its
-    /// name (`time_us`) or a suffix (`t=stamp:ms`).
-    ///
-    /// # Errors
-    /// A role or a unit that is not known, or a role given twice.
-    pub fn parse(text: &str) -> Result<Self, String> {
-        let mut c = Self::default();
-        for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-            let Some((role, name)) = item.split_once('=') else {
-                return Err(format!(
-                    "`{item}`: expected ROLE=NAME (t, ax, ay, az, gx, gy, gz or temp)"
-                ));
-            };
-            let (role, name) = (role.trim().to_ascii_lowercase(), name.trim().to_string());
-            let slot: &mut Option<String> = match role.as_str() {
-                "ax" => &mut c.accel[0],
-                "ay" => &mut c.accel[1],
-                "az" => &mut c.accel[2],
-                "gx" => &mut c.gyro[0],
-                "gy" => &mut c.gyro[1],
-                "gz" => &mut c.gyro[2],
-                "temp" => &mut c.temp,
-                "t" => {
-                    let (column, scale) = match name.rsplit_once(':') {
-                        Some((n, u)) => (
-                            n.trim().to_string(),
-                            timestamp(&format!("t{u}")).ok_or_else(|| {
-                                format!("`{item}`: the time unit `{u}` is not s, ms, us or ns")
-                            })?,
-                        ),
-                        None => (
-                            name.clone(),
-                            timestamp(&name).ok_or_else(|| {
-                                format!(
-                                    "`{item}`: the unit of `{name}` cannot be read from its name; \
-                                     give it: t={name}:s (or ms, us, ns)"
-                                )
-                            })?,
-                        ),
-                    };
-                    if c.t.replace((column, scale)).is_some() {
-                        return Err(format!("`{item}`: t is given twice"));
-                    }
-                    continue;
-                }
-                other => {
-                    return Err(format!(
-                        "`{item}`: `{other}` is not a role; expected t, ax, ay, az, gx, gy, gz or temp"
-                    ));
-                }
-            };
-            if slot.replace(name).is_some() {
-                return Err(format!("`{item}`: {role} is given twice"));
-            }
-        }
-        Ok(c)
-    }
-}
-
-/// A count column found: its field, the unit its name states, its sensor.
-type Found = (usize, Option<Unit>, Sensor);
-
-/// The index of the header field named `name` (case aside).
-fn position(header: &[&str], name: &str) -> Option<usize> {
-    header.iter().position(|h| h.eq_ignore_ascii_case(name))
-}
-
-/// The columns a header on line `line` names, when it names all the counts `holds` needs.
-fn named(
-    header: &[&str],
-    line: usize,
-    holds: Holds,
-    chosen: &Chosen,
-) -> Result<Option<Columns>, String> {
-    let missing = |name: &str| {
-        format!(
-            "--columns names `{name}`, which is not in the header; its columns are: {}",
-            header.join(", ")
-        )
-    };
-    // A sensor's three columns: the chosen names where given (`None` when a file of one sensor
-    // has none of them: it is the other sensor's file), the recognised names otherwise.
-    let find = |prefixes: &[&str],
-                sensor: Sensor,
-                names: &[Option<String>; 3]|
-     -> Result<Option<[Found; 3]>, String> {
-        let given: Vec<&String> = names.iter().flatten().collect();
-        if holds == Holds::One
-            && !given.is_empty()
-            && given.iter().all(|n| position(header, n).is_none())
-        {
-            return Ok(None);
-        }
-        let mut out = [None; 3];
-        for (i, h) in header.iter().enumerate() {
-            if let Some((k, unit)) = axis(h, prefixes, sensor) {
-                out[k].get_or_insert((i, unit, sensor));
-            }
-        }
-        for (k, name) in names.iter().enumerate() {
-            if let Some(name) = name {
-                let i = position(header, name).ok_or_else(|| missing(name))?;
-                let unit = axis(name, prefixes, sensor).and_then(|(_, u)| u);
-                out[k] = Some((i, unit, sensor));
-            }
-        }
-        Ok(match out {
-            [Some(x), Some(y), Some(z)] => Some([x, y, z]),
-            _ => None,
-        })
-    };
-    let t = match &chosen.t {
-        Some((name, scale)) => Some((position(header, name).ok_or_else(|| missing(name))?, *scale)),
-        None => header
-            .iter()
-            .enumerate()
-            .find_map(|(i, h)| timestamp(h).map(|s| (i, s))),
-    };
-    let temp = match &chosen.temp {
-        Some(name) => Some(position(header, name).ok_or_else(|| missing(name))?),
-        None => header.iter().position(|h| squash(h).starts_with("temp")),
-    };
-    let a = find(&ACCEL, Sensor::Accel, &chosen.accel)?;
-    let g = find(&GYRO, Sensor::Gyro, &chosen.gyro)?;
-    let found: Vec<Found> = match (holds, a, g) {
-        (Holds::Both, Some(a), Some(g)) => a.into_iter().chain(g).collect(),
-        (Holds::One, Some(a), _) => a.to_vec(),
-        (Holds::One, None, Some(g)) => g.to_vec(),
-        _ => return Ok(None),
-    };
-    Ok(Some(Columns {
-        t,
-        counts: found.iter().map(|f| f.0).collect(),
-        units: found.iter().map(|f| f.1).collect(),
-        sensor: found.first().map(|f| f.2),
-        temp,
-        width: header.len(),
-        header: Some(line),
-    }))
-}
-
-/// The columns of a file without a recognised header, from its first sample line's width.
-fn positional(width: usize, holds: Holds) -> Option<Columns> {
-    let n = holds.counts();
-    let t = if width == n + 1 {
-        Some((0, 1.0))
-    } else if width == n {
-        None
-    } else {
-        return None;
-    };
-    let first = usize::from(t.is_some());
-    Some(Columns {
-        t,
-        counts: (first..first + n).collect(),
-        units: vec![None; n],
-        sensor: None,
-        temp: None,
-        width,
-        header: None,
-    })
-}
 
 /// A preamble line: two fields, a name and a number.
 fn setting(fields: &[&str]) -> Option<(String, f64)> {
@@ -743,6 +511,7 @@ fn timestamp_like(header: &str) -> bool {
 
 #[cfg(test)]
 mod tests {
+    use super::super::header::{ACCEL, GYRO, axis};
     use super::*;
     use std::path::PathBuf;
 

@@ -5,6 +5,7 @@
 
 pub mod codes;
 pub(crate) mod fields;
+pub mod header;
 pub mod layout;
 pub mod mat;
 pub mod recording;

@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 
 use spincal::model::Rails;
 
-use super::layout;
 use super::units::{self, Sensor, Unit};
+use super::{header, layout};
 
 /// A failure to read a recording.
 #[derive(Debug, thiserror::Error)]
@@ -219,7 +219,7 @@ pub struct Options {
     /// The units of the files' values, as the user states them.
     pub units: units::Units,
     /// Columns the user chose by name.
-    pub columns: layout::Chosen,
+    pub columns: header::Chosen,
 }
 
 impl Recording {
@@ -256,7 +256,7 @@ pub fn read(acc: &Path, gyro: Option<&Path>, rails: Rails) -> Result<Recording, 
             rate: None,
             keep: layout::Keep::Both,
             units: units::Units::DEFAULT,
-            columns: layout::Chosen::default(),
+            columns: header::Chosen::default(),
         },
     )
 }
@@ -610,7 +610,7 @@ fn read_file(
     path: &Path,
     holds: layout::Holds,
     keep: layout::Keep,
-    columns: &layout::Chosen,
+    columns: &header::Chosen,
 ) -> Result<layout::Rows, RecordingError> {
     if super::mat::is_mat(path) {
         if !columns.is_empty() {
@@ -783,7 +783,7 @@ mod tests {
             rate,
             keep: layout::Keep::Both,
             units: units::Units::DEFAULT,
-            columns: layout::Chosen::default(),
+            columns: header::Chosen::default(),
         };
         let six = "-12 -812 15032 -447 156 -86\n-208 -828 14796 -398 132 -63\n-1 -2 -3 -4 -5 -6\n";
         let bare = write(d.path(), "bare.txt", six);
@@ -836,7 +836,7 @@ mod tests {
                 rate: Some(100.0),
                 keep: layout::Keep::Both,
                 units: units::Units::DEFAULT,
-                columns: layout::Chosen::default(),
+                columns: header::Chosen::default(),
             },
         )
         .unwrap_err()

@@ -14,7 +14,7 @@ use super::Kind;
 use crate::columns as col;
 use crate::formula;
 use crate::obs::recording::{self, Recording};
-use crate::obs::{Table, layout, units};
+use crate::obs::{Table, header, layout, units};
 use crate::sensor::{AxisFit, Options, WorkflowError};
 
 /// Readings within this many C of the bench's temperature tie the pose to the bench.
@@ -177,7 +177,7 @@ pub fn observations(
                 Kind::Imu => layout::Keep::Both,
             },
             units: units::Units::DEFAULT,
-            columns: layout::Chosen::default(),
+            columns: header::Chosen::default(),
         },
     )
     .map_err(|e| WorkflowError::Message(e.to_string()))?;
