@@ -3,21 +3,25 @@
 
 use nalgebra::DMatrix;
 use spincal::model::{
-    BoundedVec, CalibrationData, Channel, MAX_TEMPERATURES, Quantity, Sensor, Span,
+    BoundedVec, CalibrationData, Channel, MAX_TEMPERATURES, Quantity, Sensor, SingleSet, Span,
     TemperatureModel,
 };
+
+mod decide;
+
+use decide::{asymmetry, hysteresis, select_terms};
 
 use super::invert::Own;
 use super::table::{self, Layout};
 use super::thermal;
-use super::thermal::device::{self as thermal_device, DeviceSet};
+use super::thermal::ThermalFit;
+use super::thermal::device::{self as thermal_device, DeviceSet, DeviceTemperature};
 use super::{
-    AxisFit, Calibrated, Decision, Options, PointFit, Thermal, WorkflowError, blob, covariance,
+    AxisFit, Calibrated, Finding, Options, PointFit, Thermal, WorkflowError, blob, covariance,
 };
 use crate::columns as col;
 use crate::formula::{self, Formula};
 use crate::obs::{self, Table};
-use crate::stats::{self, select};
 
 /// The derived column holding `|input - breakpoint| - |breakpoint|`.
 pub const KINK: &str = "input_kink";
@@ -63,98 +67,14 @@ fn fit_axis_weighted(
     Ok(fit)
 }
 
-/// Terms of `formula` that are not significant, dropped one at a time (never `1` or `input`,
-/// never a term another kept term contains), with the reasons.
-fn select_terms(
-    formula: &Formula,
-    table: &Table,
-    alpha: f64,
-    notes: &mut Vec<String>,
-) -> Result<Formula, WorkflowError> {
-    let d = formula.design(table);
-    let opts = stats::Options {
-        alpha,
-        ..stats::Options::default()
-    };
-    let e = select::backward(
-        &d.x,
-        &d.y,
-        &d.names,
-        d.intercept,
-        &opts,
-        alpha,
-        |names, j| {
-            let name = &names[j];
-            if name == "1" || name == col::INPUT || thermal::is_thermal(name) {
-                return false;
-            }
-            let Some(t) = formula.terms.iter().find(|t| &t.name() == name) else {
-                return false;
-            };
-            !formula
-                .terms
-                .iter()
-                .filter(|o| names.contains(&o.name()))
-                .any(|o| Formula::contains(o, t))
-        },
-    )
-    .map_err(|e| WorkflowError::Message(e.to_string()))?;
-    let mut out = formula.clone();
-    for s in &e.steps {
-        notes.push(format!(
-            "dropped {}: not significant (p = {:.3} > {alpha})",
-            s.dropped, s.p_value
-        ));
-        out = out.without(&s.dropped);
-    }
-    Ok(out)
-}
-
-/// The Chow test of separate fits of `model` below and above the breakpoint, in words (empty
-/// when a side has too few observations for its own fit).
-fn chow(
-    model: &Formula,
-    t: &Table,
-    bp: f64,
-    alpha: f64,
-    path: &std::path::Path,
-    where_: &str,
-) -> String {
-    let input = t.column(col::INPUT).unwrap_or_default();
-    let below: Vec<usize> = (0..t.len()).filter(|&i| input[i] < bp).collect();
-    let above: Vec<usize> = (0..t.len()).filter(|&i| input[i] >= bp).collect();
-    let k = model.width();
-    if below.len() <= k || above.len() <= k {
-        return String::new();
-    }
-    let fits = (
-        fit_axis(model, t, alpha, path, where_),
-        fit_axis(model, &t.select(&below), alpha, path, where_),
-        fit_axis(model, &t.select(&above), alpha, path, where_),
-    );
-    let (Ok(pooled), Ok(lo), Ok(hi)) = fits else {
-        return String::new();
-    };
-    let separate = lo.fit.rss + hi.fit.rss;
-    let dof = t.len() - 2 * k;
-    let f = (pooled.fit.rss - separate) / k as f64 / (separate / dof as f64);
-    let p = stats::dist::f_upper(f, k as f64, dof as f64);
-    format!(
-        "; Chow test of separate fits below and above: F = {f:.3} on ({k}, {dof}) dof, p = {p:.3e}; slopes {:.6e} below, {:.6e} above",
-        lo.coef(col::INPUT),
-        hi.coef(col::INPUT)
-    )
-}
-
 fn sub(table: &Table, rows: &[usize]) -> Table {
     table.select(rows)
 }
 
-/// Calibrates a single-axis sensor from the observations in `opts.file`.
-///
-/// # Errors
-/// A [`WorkflowError`] naming the file, column, term or table point.
-pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, WorkflowError> {
+/// The observations of a single-axis file: the columns of those the workflow reads that the
+/// file has, with the outputs beyond the rails excluded (and the finding that says so), and
+/// the kink column [`KINK`] about the breakpoint.
+fn observations(opts: &Options) -> Result<(Table, Option<Finding>), WorkflowError> {
     let path = &opts.file;
     let header = obs::header(path, opts.format)?;
     for need in [col::INPUT, col::OUTPUT] {
@@ -190,20 +110,31 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     }
     let mut table = obs::read_columns(path, &wanted, opts.format)?;
     let beyond = super::exclude_beyond_rails(&mut table, &[col::OUTPUT], &opts.rails, path)?;
-    let varies = |t: &Table, c: &str| t.column(c).is_some_and(|v| v.iter().any(|x| *x != v[0]));
-    let input = table.column(col::INPUT).unwrap_or_default().to_vec();
+    let input = table.column(col::INPUT).unwrap_or_default();
     let bp = opts.breakpoint;
-    table.push_column(
-        KINK,
-        input.iter().map(|x| (x - bp).abs() - bp.abs()).collect(),
-    );
+    let kink = input.iter().map(|x| (x - bp).abs() - bp.abs()).collect();
+    table.push_column(KINK, kink);
+    Ok((table, beyond))
+}
 
-    let mut notes = Vec::new();
+/// The model to fit: `--model`, checked against the file and the device, or the preset for the
+/// cross inputs that vary; whether it was the preset (whose terms are then selected).
+fn model(
+    opts: &Options,
+    table: &Table,
+    notes: &mut Vec<String>,
+) -> Result<(Formula, bool), WorkflowError> {
+    let path = &opts.file;
+    let varies = |c: &str| {
+        table
+            .column(c)
+            .is_some_and(|v| v.iter().any(|x| *x != v[0]))
+    };
     let cross: Vec<&str> = [col::INPUT_P, col::INPUT_O]
         .into_iter()
-        .filter(|c| varies(&table, c))
+        .filter(|c| varies(c))
         .collect();
-    let (mut model, chosen) = match &opts.model {
+    let (model, chosen) = match &opts.model {
         Some(m) => (formula::parse(m)?, false),
         None => {
             let text = preset(&cross);
@@ -235,11 +166,176 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             ));
         }
     }
-    let mut layout = table::layout(
-        &table,
-        has(col::TEMP).then_some(col::TEMP),
-        has(col::VOLT).then_some(col::VOLT),
+    Ok((model, chosen))
+}
+
+/// The continuous thermal model (with the supply voltage's terms when it varies) and the
+/// device's table points or series nodes that keep its interpolation close to it.
+struct Continuous {
+    /// The device's points.
+    layout: Layout,
+    /// The model at each.
+    fits: Vec<AxisFit>,
+    /// The output at zero input at the middle of the temperature span (the channel's center).
+    center: f64,
+    /// The thermal model.
+    thermal: ThermalFit,
+    /// What the device holds of it.
+    device: DeviceTemperature,
+    /// How closely the device follows the model.
+    finding: Finding,
+}
+
+/// Fits the continuous thermal model of `model` over what the temperatures `support`, on the
+/// scaled supply voltage `volts` when it varies, weighted by `weights`; the device's points
+/// over the input span `(lo, hi)`.
+fn continuous_points(
+    model: &mut Formula,
+    table: &Table,
+    (s, volts, weights): (&thermal::Support, Option<&thermal::Scale>, Option<&[f64]>),
+    opts: &Options,
+    (lo, hi): (f64, f64),
+    notes: &mut Vec<String>,
+) -> Result<Continuous, WorkflowError> {
+    let (path, bp) = (&opts.file, opts.breakpoint);
+    if volts.is_some() {
+        for t in [
+            formula::Term::var(thermal::VOLT),
+            formula::Term::var(col::INPUT).times(thermal::VOLT, 1),
+        ] {
+            if !model.terms.contains(&t) {
+                model.terms.push(t);
+            }
+        }
+    }
+    let temps = table.column(col::TEMP).unwrap_or_default();
+    let tf = thermal::choose(model, (s, temps), opts.alpha, opts.thermal_order, &|f| {
+        fit_axis_weighted(f, table, opts.alpha, (path, "all temperatures"), weights)
+    })?;
+    notes.extend(
+        tf.reasons
+            .iter()
+            .map(|r| format!("temperature order of {r}")),
     );
+    let (c0, _) = tf.coefficients_at(s.scale.center());
+    let center = own_of(&tf.base.term_names(), &c0, bp).bias;
+    // The span as the device holds it (f32), which its series is evaluated over.
+    let held = thermal::Scale {
+        lo: f64::from(s.scale.lo as f32),
+        hi: f64::from(s.scale.hi as f32),
+    };
+    // The device's voltage points: the two ends of the supply's span.
+    let (vs, ys) = match &volts {
+        Some(v) => (vec![v.lo, v.hi], vec![-1.0, 1.0]),
+        None => (Vec::new(), vec![0.0]),
+    };
+    let dt = thermal_device::choose(&tf, &held, center, (lo, hi), bp, &ys)
+        .map_err(|e| WorkflowError::msg(path, e))?;
+    let mut fits = Vec::new();
+    let mut points = Vec::new();
+    for t in &dt.temps {
+        let f = tf.at(*t);
+        for v in vs
+            .iter()
+            .map(|v| Some(*v))
+            .chain(vs.is_empty().then_some(None))
+        {
+            fits.push(f.clone());
+            points.push(table::Point {
+                temp: Some(*t),
+                volt: v,
+                rows: Vec::new(),
+            });
+        }
+    }
+    let layout = Layout {
+        temps: dt.temps.clone(),
+        volts: vs,
+        points,
+    };
+    Ok(Continuous {
+        finding: thermal_device::finding(&dt, &held),
+        layout,
+        fits,
+        center,
+        thermal: tf,
+        device: dt,
+    })
+}
+
+/// What the device holds at the table points, in their order.
+struct DeviceSets {
+    /// The linearised sets.
+    sets: Vec<SingleSet>,
+    /// Their covariance factors.
+    covariances: Vec<[f32; 3]>,
+    /// The point fits, as the report shows them.
+    points: Vec<PointFit>,
+}
+
+/// What the device holds at each of the `layout`'s points (the model `fits` there, on the
+/// scaled supply voltage `volts`, linearised about `center` over the input span): its sets,
+/// their covariance factors, and the point fits as the report shows them.
+fn device_sets(
+    layout: &Layout,
+    fits: Vec<AxisFit>,
+    volts: Option<&thermal::Scale>,
+    center: f64,
+    (lo, hi): (f64, f64),
+    opts: &Options,
+) -> Result<DeviceSets, WorkflowError> {
+    let bp = opts.breakpoint;
+    let mut sets = Vec::new();
+    let mut covs = Vec::new();
+    let mut points = Vec::new();
+    for (p, f) in layout.points.iter().zip(fits) {
+        // The scaled supply voltage of the point, for a model with voltage terms.
+        let y = match (volts, p.volt) {
+            (Some(s), Some(v)) => s.x(v),
+            _ => 0.0,
+        };
+        let o = own_at(&f.fit.names, &f.fit.coefficients, bp, y);
+        let d = DeviceSet::of(&o, center, lo, hi);
+        let [vb, cbs, vs] = bias_slope_cov(&f.fit.names, &f.fit.covariance, y);
+        let c = DMatrix::from_row_slice(2, 2, &[vb, cbs, cbs, vs]);
+        let factor = covariance::single(&c, o.slope, d.offset, d.scale).map_err(|e| {
+            WorkflowError::msg(
+                &opts.file,
+                format!("{} at {}: {e}", f.output, table::describe(p)),
+            )
+        })?;
+        covs.push([factor[0] as f32, factor[1] as f32, factor[2] as f32]);
+        sets.push(d.set());
+        points.push(PointFit {
+            temp: p.temp,
+            volt: p.volt,
+            noise: vec![f.fit.sigma2.sqrt() / o.slope.abs()],
+            inversion_error: vec![d.error],
+            axes: vec![f],
+        });
+    }
+    Ok(DeviceSets {
+        sets,
+        covariances: covs,
+        points,
+    })
+}
+
+/// Calibrates a single-axis sensor from the observations in `opts.file`.
+///
+/// # Errors
+/// A [`WorkflowError`] naming the file, column, term or table point.
+pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, WorkflowError> {
+    let path = &opts.file;
+    let (mut table, beyond) = observations(opts)?;
+    let varies = |t: &Table, c: &str| t.column(c).is_some_and(|v| v.iter().any(|x| *x != v[0]));
+    let input = table.column(col::INPUT).unwrap_or_default().to_vec();
+    let bp = opts.breakpoint;
+
+    let mut notes = Vec::new();
+    let (mut model, chosen) = model(opts, &table, &mut notes)?;
+    let has = |c: &'static str| table.column(c).is_some().then_some(c);
+    let mut layout = table::layout(&table, has(col::TEMP), has(col::VOLT));
     let continuous = match opts.thermal {
         Thermal::Table => false,
         Thermal::Continuous => true,
@@ -365,101 +461,24 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             (layout, fits, center, None, None)
         }
         Some(s) => {
-            if volts.is_some() {
-                for t in [
-                    formula::Term::var(thermal::VOLT),
-                    formula::Term::var(col::INPUT).times(thermal::VOLT, 1),
-                ] {
-                    if !model.terms.contains(&t) {
-                        model.terms.push(t);
-                    }
-                }
-            }
-            let temps = table.column(col::TEMP).unwrap_or_default();
-            let tf = thermal::choose(&model, (s, temps), opts.alpha, opts.thermal_order, &|f| {
-                fit_axis_weighted(
-                    f,
-                    &table,
-                    opts.alpha,
-                    (path, "all temperatures"),
-                    weights.as_deref(),
-                )
-            })?;
-            notes.extend(
-                tf.reasons
-                    .iter()
-                    .map(|r| format!("temperature order of {r}")),
-            );
-            let (c0, _) = tf.coefficients_at(s.scale.center());
-            let center = own_of(&tf.base.term_names(), &c0, bp).bias;
-            // The span as the device holds it (f32), which its series is evaluated over.
-            let held = thermal::Scale {
-                lo: f64::from(s.scale.lo as f32),
-                hi: f64::from(s.scale.hi as f32),
-            };
-            // The device's voltage points: the two ends of the supply's span.
-            let (vs, ys) = match &volts {
-                Some(v) => (vec![v.lo, v.hi], vec![-1.0, 1.0]),
-                None => (Vec::new(), vec![0.0]),
-            };
-            let dt = thermal_device::choose(&tf, &held, center, (lo, hi), bp, &ys)
-                .map_err(|e| WorkflowError::msg(path, e))?;
-            findings_extra.push(thermal_device::finding(&dt, &held));
-            let mut fits = Vec::new();
-            let mut points = Vec::new();
-            for t in &dt.temps {
-                let f = tf.at(*t);
-                for v in vs
-                    .iter()
-                    .map(|v| Some(*v))
-                    .chain(vs.is_empty().then_some(None))
-                {
-                    fits.push(f.clone());
-                    points.push(table::Point {
-                        temp: Some(*t),
-                        volt: v,
-                        rows: Vec::new(),
-                    });
-                }
-            }
-            let layout = Layout {
-                temps: dt.temps.clone(),
-                volts: vs,
-                points,
-            };
-            (layout, fits, center, Some(tf), Some(dt))
+            let c = continuous_points(
+                &mut model,
+                &table,
+                (s, volts.as_ref(), weights.as_deref()),
+                opts,
+                (lo, hi),
+                &mut notes,
+            )?;
+            findings_extra.push(c.finding);
+            (c.layout, c.fits, c.center, Some(c.thermal), Some(c.device))
         }
     };
     let reference = layout.reference();
-    let mut sets = Vec::new();
-    let mut covs = Vec::new();
-    let mut points = Vec::new();
-    for (p, f) in layout.points.iter().zip(fits) {
-        // The scaled supply voltage of the point, for a model with voltage terms.
-        let y = match (&volts, p.volt) {
-            (Some(s), Some(v)) => s.x(v),
-            _ => 0.0,
-        };
-        let o = own_at(&f.fit.names, &f.fit.coefficients, bp, y);
-        let d = DeviceSet::of(&o, center, lo, hi);
-        let [vb, cbs, vs] = bias_slope_cov(&f.fit.names, &f.fit.covariance, y);
-        let c = DMatrix::from_row_slice(2, 2, &[vb, cbs, cbs, vs]);
-        let factor = covariance::single(&c, o.slope, d.offset, d.scale).map_err(|e| {
-            WorkflowError::msg(
-                &opts.file,
-                format!("{} at {}: {e}", f.output, table::describe(p)),
-            )
-        })?;
-        covs.push([factor[0] as f32, factor[1] as f32, factor[2] as f32]);
-        sets.push(d.set());
-        points.push(PointFit {
-            temp: p.temp,
-            volt: p.volt,
-            noise: vec![f.fit.sigma2.sqrt() / o.slope.abs()],
-            inversion_error: vec![d.error],
-            axes: vec![f],
-        });
-    }
+    let DeviceSets {
+        mut sets,
+        covariances: mut covs,
+        points,
+    } = device_sets(&layout, fits, volts.as_ref(), center, (lo, hi), opts)?;
     let mut env = blob::environment(&table, &layout, opts)?;
     if let Some(dt) = &device_temp {
         sets.clone_from(&dt.sets);
@@ -515,107 +534,6 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         findings,
         earth: None,
         thermal: thermal_fit.into_iter().collect(),
-    })
-}
-
-type Decide<'a> = dyn Fn(&Formula) -> Result<AxisFit, WorkflowError> + 'a;
-
-/// Asymmetry: does a kink at the breakpoint improve the model (`decide` fits a model where the
-/// decisions are taken)? The decision and the model to go on with; `None` when a side has too
-/// few inputs (an error if asymmetry was asked for).
-fn asymmetry(
-    model: &Formula,
-    input: &[f64],
-    opts: &Options,
-    decide: &Decide<'_>,
-    (ref_table, ref_where): (&Table, &str),
-) -> Result<Option<(Decision, Formula)>, WorkflowError> {
-    let path = &opts.file;
-    let bp = opts.breakpoint;
-    let with_kink = {
-        let mut m = model.clone();
-        m.terms.push(formula::Term::var(KINK));
-        m
-    };
-    let below = input.iter().filter(|x| **x < bp).count();
-    let above = input.len() - below;
-    if below < 2 || above < 2 {
-        if opts.asymmetry == Some(true) {
-            return Err(WorkflowError::msg(
-                path,
-                format!(
-                    "asymmetry about {bp} is not observable: {below} inputs below and {above} above it; each side needs at least 2"
-                ),
-            ));
-        }
-        return Ok(None);
-    }
-    let full = decide(&with_kink)?;
-    let reduced = decide(model)?;
-    let test = select::partial_f(&full.fit, &reduced.fit);
-    let k1 = full.coef(col::INPUT);
-    let ca = full.coef(KINK);
-    let kept = opts.asymmetry.unwrap_or(test.p < opts.alpha);
-    let side = |below: bool| -> Vec<(f64, f64)> {
-        reduced
-            .input
-            .iter()
-            .zip(&reduced.fit.residuals)
-            .filter(|(x, _)| (**x < bp) == below)
-            .map(|(x, e)| (*x, *e))
-            .collect()
-    };
-    let decision = Decision {
-        figure: vec![
-            (format!("below {bp}"), side(true)),
-            (format!("above {bp}"), side(false)),
-        ],
-        name: format!("asymmetry about {bp}"),
-        test,
-        detail: format!(
-            "scale factor {:.6e} above and {:.6e} below the breakpoint ({:+.3e} relative){}",
-            k1 + ca,
-            k1 - ca,
-            2.0 * ca / k1,
-            chow(model, ref_table, bp, opts.alpha, path, ref_where)
-        ),
-        kept,
-    };
-    Ok(Some((
-        decision,
-        if kept { with_kink } else { model.clone() },
-    )))
-}
-
-/// Hysteresis: an offset by sweep direction (reported; the device cannot know the direction).
-fn hysteresis(model: &Formula, decide: &Decide<'_>) -> Result<Decision, WorkflowError> {
-    let mut m = model.clone();
-    m.terms.push(formula::Term::var(col::DIR));
-    let full = decide(&m)?;
-    let reduced = decide(model)?;
-    let test = select::partial_f(&full.fit, &reduced.fit);
-    let h = full.coef(col::DIR);
-    let se = full.fit.std_errors[full.index(col::DIR).unwrap_or(0)];
-    let figure = super::hysteresis::by_direction(&reduced)
-        .map(|(up, down)| {
-            vec![
-                ("ascending".to_string(), up),
-                ("descending".to_string(), down),
-            ]
-        })
-        .unwrap_or_default();
-    Ok(Decision {
-        figure,
-        name: "hysteresis".into(),
-        test,
-        detail: format!(
-            "output {:+.4} counts ascending, {:+.4} descending (+-{:.2}); {:.3e} input units",
-            h,
-            -h,
-            se,
-            h / full.coef(col::INPUT)
-        ),
-        kept: false,
     })
 }
 
