@@ -1,0 +1,202 @@
+//! `calflash design evaluate`: what a plan estimates, and how well.
+
+use std::path::PathBuf;
+
+use crate::files::{Paths, Staged};
+use clap::Args;
+
+use crate::design::models::{self, Block};
+use crate::design::points::{self, Points, Unit};
+use crate::design::predict;
+use crate::design::space;
+use crate::report::design as show;
+
+use super::{ModelArgs, plan_files, unit};
+
+/// `calflash design evaluate`.
+#[derive(Debug, Args)]
+pub struct EvaluateArgs {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// A plan: a file (CSV with a header naming the variables) or plan items
+    /// (`tumble:24`, `rate:-10:10:11,tumble:6`, ...). Repeat to compare.
+    #[arg(long, required = true)]
+    pub plan: Vec<String>,
+    /// The prediction-variance curve over one variable, NAME=LO:HI:N (the figure in --report).
+    #[arg(long)]
+    pub curve: Option<String>,
+    /// Orientation error of the fixture, degrees (1 sigma about each axis): the standard errors
+    /// with it, for triads (needs --noise and --scale).
+    #[arg(long, value_parser = crate::cmd::values::non_negative)]
+    pub fixture_error: Option<f64>,
+    /// Output noise, counts (1 sigma), for standard errors in counts.
+    #[arg(long, value_parser = crate::cmd::values::positive)]
+    pub noise: Option<f64>,
+    /// Counts per SI unit of the input (for the fixture error).
+    #[arg(long, value_parser = crate::cmd::values::positive)]
+    pub scale: Option<f64>,
+    /// Write the figures and tables as HTML here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Write JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+pub(super) fn run(a: &EvaluateArgs) -> Result<(), String> {
+    plan_files(&a.plan, "--plan", Paths::new())
+        .output("--json", a.json.as_deref())
+        .output("--report", a.report.as_deref())
+        .check()?;
+    let (u, gyro) = unit(a.model.sensor);
+    let space = a.model.space();
+    let blocks = models::blocks(&a.model.model, gyro)?;
+    let vars = models::variables(&blocks);
+    let mut loaded = Vec::new();
+    for spec in &a.plan {
+        let pts = space.load_plan(spec, &vars)?;
+        space::check_variables(&blocks, &pts, &format!("plan {spec}"))?;
+        space.check_limits(&pts, &format!("plan {spec}"))?;
+        loaded.push((spec.clone(), pts));
+    }
+    // Without --region, every plan is judged over all the plans' points together.
+    let union = space::union(loaded.iter().map(|(_, p)| p), &vars);
+    if models::has_lever(&blocks) {
+        return evaluate_spin_rig(a, &blocks, loaded, &union);
+    }
+    let mut plans = Vec::new();
+    for (spec, pts) in loaded {
+        let crit = space.evaluate_plan(&spec, &pts, &blocks, &union)?;
+        plans.push(show::PlanResult {
+            name: spec,
+            points: pts,
+            criteria: crit,
+            fixture: None,
+        });
+    }
+    if let Some(deg) = a.fixture_error {
+        let (Some(noise), Some(scale)) = (a.noise, a.scale) else {
+            return Err(
+                "--fixture-error needs --noise (counts) and --scale (counts per SI unit)".into(),
+            );
+        };
+        if u != Unit::Triad {
+            return Err("--fixture-error applies to triads (--sensor accel or gyro)".into());
+        }
+        for p in &mut plans {
+            let se: Vec<(Vec<f64>, Vec<f64>)> = blocks
+                .iter()
+                .zip(&p.criteria)
+                .enumerate()
+                .map(|(axis, (b, c))| {
+                    let x = p.points.model_rows(&b.formula);
+                    let extra = predict::orientation_variance(
+                        &p.points,
+                        axis,
+                        scale,
+                        deg.to_radians(),
+                        gyro,
+                    );
+                    let cov = predict::covariance_with(&x, &c.unscaled_covariance, noise, &extra);
+                    let plain = (0..c.p)
+                        .map(|k| noise * c.unscaled_covariance[(k, k)].sqrt())
+                        .collect();
+                    (plain, (0..c.p).map(|k| cov[(k, k)].sqrt()).collect())
+                })
+                .collect();
+            p.fixture = Some(se);
+        }
+    }
+    let curve = a.curve.as_deref().map(points::grid).transpose()?;
+    print!(
+        "{}",
+        show::evaluate_text(&a.model.model, &blocks, &plans, a.fixture_error)
+    );
+    write_evaluation(a, &blocks, &plans, curve.as_ref())
+}
+
+/// `design evaluate`'s files, all or none.
+fn write_evaluation(
+    a: &EvaluateArgs,
+    blocks: &[Block],
+    plans: &[show::PlanResult],
+    curve: Option<&Points>,
+) -> Result<(), String> {
+    let mut staged = Staged::new();
+    if let Some(path) = &a.json {
+        let v = show::evaluate_json(blocks, plans);
+        staged.write(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+        })?;
+    }
+    if let Some(path) = &a.report {
+        let html = show::evaluate_html(&a.model.model, blocks, plans, curve)?;
+        staged.write(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
+    }
+    staged.commit()
+}
+
+/// `design evaluate` of the spin-rig model: each plan on the lever-arm components it can
+/// estimate (plans that estimate the same ones side by side), saying which it cannot and, with
+/// --noise and --scale, how well it estimates the others.
+fn evaluate_spin_rig(
+    a: &EvaluateArgs,
+    blocks: &[Block],
+    loaded: Vec<(String, Points)>,
+    union: &Points,
+) -> Result<(), String> {
+    if a.fixture_error.is_some() {
+        return Err("--fixture-error: not with the lever-arm model".into());
+    }
+    /// Plans that estimate the same lever-arm components, on the model of those.
+    struct Group {
+        estimable: [[bool; 3]; 3],
+        blocks: Vec<Block>,
+        plans: Vec<show::PlanResult>,
+    }
+    let mut groups: Vec<Group> = Vec::new();
+    for (spec, pts) in loaded {
+        let (reduced, estimable) = models::lever_blocks(blocks, &pts);
+        let criteria = a
+            .model
+            .space()
+            .evaluate_plan(&spec, &pts, &reduced, union)?;
+        let plan = show::PlanResult {
+            name: spec,
+            points: pts,
+            criteria,
+            fixture: None,
+        };
+        match groups.iter_mut().find(|g| g.estimable == estimable) {
+            Some(g) => g.plans.push(plan),
+            None => groups.push(Group {
+                estimable,
+                blocks: reduced,
+                plans: vec![plan],
+            }),
+        }
+    }
+    let per = match (a.noise, a.scale) {
+        (Some(n), Some(s)) => Some(n / s),
+        _ => None,
+    };
+    for g in &groups {
+        print!(
+            "{}",
+            show::evaluate_text(&a.model.model, &g.blocks, &g.plans, None)
+        );
+        for p in &g.plans {
+            print!("{}", show::lever_text(p, &g.blocks, &g.estimable, per));
+        }
+    }
+    if (a.json.is_some() || a.report.is_some()) && groups.len() > 1 {
+        return Err(
+            "--json, --report: these plans estimate different lever-arm components, so they have no model in common; write one per plan (or per group of plans that estimate the same)".into(),
+        );
+    }
+    if let Some(g) = groups.first() {
+        let curve = a.curve.as_deref().map(points::grid).transpose()?;
+        write_evaluation(a, &g.blocks, &g.plans, curve.as_ref())?;
+    }
+    Ok(())
+}
