@@ -28,13 +28,15 @@
 //! counter). The counter lives in the committed records, so the A/B slots keep it across cuts:
 //! a cut leaves the old record (and its counter) or the new one.
 
+mod error;
 mod keys;
 
+use error::flash_err;
+pub use error::StoreError;
 pub use keys::{KEYS_SPAN, MAX_KEYS, Provisioning, StationKeys, keys_record};
 
-use embedded_storage::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
+use embedded_storage::nor_flash::NorFlash;
 
-use crate::Error;
 use crate::blob;
 use crate::model::{Calibration, CalibrationData, Serial};
 use crate::signed::{self, MAX_SIGNED_LEN, SignError, StationKey};
@@ -52,37 +54,6 @@ const MAGIC: [u8; 4] = *b"SCSL";
 /// The lock word: the store is locked when the lock sector starts with exactly this.
 const LOCKED: [u8; 4] = *b"LOCK";
 
-/// Why the store cannot do what was asked.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum StoreError {
-    /// The flash driver failed.
-    Flash(NorFlashErrorKind),
-    /// The region does not fit the flash, or is not a whole number of erase sectors, or the
-    /// write size is above 16 bytes.
-    Layout,
-    /// No slot holds a valid calibration (a new unit, or both slots damaged).
-    NoValidSlot,
-    /// The blob is larger than a slot holds.
-    BlobTooLarge {
-        /// Blob bytes.
-        len: usize,
-        /// What a slot holds.
-        capacity: usize,
-    },
-    /// The buffer given is smaller than the blob (padded to the write size) needs.
-    BufferTooSmall,
-    /// The blob offered for an update does not decode and validate.
-    InvalidBlob(Error),
-    /// What was read back after writing differs from what was written.
-    VerifyFailed,
-    /// The unit is locked against writes.
-    Locked,
-    /// The record's signature, key, serial or counter is refused by a provisioned unit; or,
-    /// at boot, no slot holds a record it trusts and this is why the newest was refused.
-    Refused(SignError),
-}
-
 /// What a slot's record must be to count.
 #[derive(Debug, Clone, Copy)]
 pub enum Policy<'a> {
@@ -95,24 +66,6 @@ pub enum Policy<'a> {
         /// The unit's serial.
         unit: &'a Serial,
     },
-}
-
-impl core::fmt::Display for StoreError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::Flash(k) => write!(f, "flash error: {k:?}"),
-            Self::Layout => f.write_str("the store's region does not fit the flash's sectors"),
-            Self::NoValidSlot => f.write_str("no slot holds a valid calibration"),
-            Self::BlobTooLarge { len, capacity } => {
-                write!(f, "a blob of {len} bytes does not fit a slot of {capacity}")
-            }
-            Self::BufferTooSmall => f.write_str("the buffer is too small for the blob"),
-            Self::InvalidBlob(e) => write!(f, "the blob is not a valid calibration: {e}"),
-            Self::VerifyFailed => f.write_str("the slot read back differs from what was written"),
-            Self::Locked => f.write_str("the unit is locked against writes"),
-            Self::Refused(e) => write!(f, "refused: {e}"),
-        }
-    }
 }
 
 impl Provisioning {
@@ -129,42 +82,6 @@ impl Provisioning {
             },
         }
     }
-}
-
-// `NorFlashErrorKind` has no `defmt::Format`: the flash error is logged by its name.
-#[cfg(feature = "defmt")]
-impl defmt::Format for StoreError {
-    fn format(&self, f: defmt::Formatter<'_>) {
-        match self {
-            Self::Flash(k) => {
-                let kind = match k {
-                    NorFlashErrorKind::NotAligned => "not aligned",
-                    NorFlashErrorKind::OutOfBounds => "out of bounds",
-                    _ => "other",
-                };
-                defmt::write!(f, "flash error: {=str}", kind);
-            }
-            Self::Layout => defmt::write!(f, "Layout"),
-            Self::NoValidSlot => defmt::write!(f, "NoValidSlot"),
-            Self::BlobTooLarge { len, capacity } => {
-                defmt::write!(
-                    f,
-                    "BlobTooLarge {{ len: {=usize}, capacity: {=usize} }}",
-                    len,
-                    capacity
-                );
-            }
-            Self::BufferTooSmall => defmt::write!(f, "BufferTooSmall"),
-            Self::InvalidBlob(e) => defmt::write!(f, "InvalidBlob({})", e),
-            Self::VerifyFailed => defmt::write!(f, "VerifyFailed"),
-            Self::Locked => defmt::write!(f, "Locked"),
-            Self::Refused(e) => defmt::write!(f, "Refused({})", e),
-        }
-    }
-}
-
-fn flash_err<E: NorFlashError>(e: E) -> StoreError {
-    StoreError::Flash(e.kind())
 }
 
 /// A slot holding a valid calibration.
