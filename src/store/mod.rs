@@ -31,8 +31,8 @@
 mod error;
 mod keys;
 
-use error::flash_err;
 pub use error::StoreError;
+use error::flash_err;
 pub use keys::{KEYS_SPAN, MAX_KEYS, Provisioning, StationKeys, keys_record};
 
 use embedded_storage::nor_flash::NorFlash;

@@ -2,15 +2,20 @@
 //! panic or produce a non-finite value for a raw code inside the rails.
 
 use super::interval::{Bound, affine_bound, axis_bound};
-use super::rotation::LeverTerms;
 use super::series;
 use super::sets::{AxisNonlinearity, ImuSet, SingleSet, TriadSet};
 use super::{
-    BoundedVec, CalibrationData, Channel, Environment, MAX_LEVER_ARM_M, Rails, Sensor, Span,
-    TemperatureModel,
+    BoundedVec, CalibrationData, Channel, Environment, Rails, Sensor, Span, TemperatureModel,
 };
 use crate::Error;
 use crate::error::{Field, Part};
+
+mod bounds;
+mod lever;
+
+pub(crate) use bounds::rail_offsets;
+use bounds::{check_bounded, triad_output_bound};
+use lever::{validate_lever_arm, validate_lever_feedback, validate_sensing_directions};
 
 /// Largest corrected magnitude a validated calibration may produce inside its rails. Far above
 /// any physical value, and small enough that the lever-arm term (`w^2 r`, `dw/dt r`) stays
@@ -162,7 +167,7 @@ fn finite(
     }
 }
 
-fn finite_all<'a>(
+pub(super) fn finite_all<'a>(
     xs: impl IntoIterator<Item = &'a f32>,
     field: Field,
     part: Option<Part>,
@@ -484,148 +489,6 @@ fn validate_imu_set(
         *wi = wi.add(affine_bound(&g_row.map(|g| -g), 0.0, &a));
     }
     check_bounded(&w, Part::Gyro, i)
-}
-
-/// With a lever arm the device feeds the previous sample's lever term into the g-sensitivity
-/// ([`super::rotation`]); for every code inside the rails the rate must stay bounded through
-/// that feedback, at every sample rate up to [`MAX_SAMPLE_RATE_HZ`](super::MAX_SAMPLE_RATE_HZ):
-/// the smallest `W` with `W = W_s + |G| (A + E(W))` must exist below the output limit, where
-/// `W_s` and `A` bound the triads' outputs over the rails (doubled for the blends between
-/// sets), `|G|` is the g-sensitivity's largest row sum and `E(W)` bounds the lever term for
-/// rates up to `W` and rate differences up to `2 W`, all maxima over the sets.
-fn validate_lever_feedback(
-    sets: &[ImuSet],
-    lever: &[[f32; 3]; 3],
-    (accel, accel_rails): (&[Channel; 3], &Rails),
-    (gyro, gyro_rails): (&[Channel; 3], &Rails),
-) -> Result<(), Error> {
-    let rate = super::MAX_SAMPLE_RATE_HZ;
-    let big = |b: &[Bound; 3]| {
-        b.iter()
-            .map(|b| f64::from(libm::fmaxf(libm::fabsf(b.lo), libm::fabsf(b.hi))))
-            .fold(0.0, f64::max)
-    };
-    let row_sum = |rows: &[[f32; 3]]| {
-        rows.iter()
-            .map(|r| r.iter().map(|x| f64::from(libm::fabsf(*x))).sum::<f64>())
-            .fold(0.0, f64::max)
-    };
-    let (mut a, mut ws, mut g, mut pq, mut pt) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    // The set with the largest loop gain names the failure.
-    let (mut worst, mut worst_gain) = (0u8, -1.0f64);
-    for (i, set) in sets.iter().enumerate() {
-        let Some(terms) = LeverTerms::new(&set.accel.matrix, lever, rate) else {
-            return Err(Error::InvalidSensingDirection {
-                set: i as u8,
-                axis: 0,
-            });
-        };
-        a = a.max(big(&triad_output_bound(&set.accel, accel, accel_rails)));
-        ws = ws.max(big(&triad_output_bound(&set.gyro, gyro, gyro_rails)));
-        g = g.max(row_sum(&set.g_sensitivity));
-        let sums = |rows: &[[f32; 6]]| {
-            rows.iter()
-                .map(|r| r.iter().map(|x| f64::from(libm::fabsf(*x))).sum::<f64>())
-                .fold(0.0, f64::max)
-        };
-        let (q, t) = (sums(&terms.quad), row_sum(&terms.tangential));
-        let gain = row_sum(&set.g_sensitivity) * (q + t);
-        if gain > worst_gain {
-            (worst, worst_gain) = (i as u8, gain);
-        }
-        pq = pq.max(q);
-        pt = pt.max(t);
-    }
-    let (a, ws) = (2.0 * a, 2.0 * ws);
-    let limit = f64::from(OUTPUT_LIMIT);
-    let mut w = ws;
-    for _ in 0..200 {
-        let next = ws + g * (a + pq * w * w + pt * 2.0 * w);
-        if next.is_nan() || next > limit {
-            break;
-        }
-        if next - w <= 1e-9 * w {
-            return Ok(());
-        }
-        w = next;
-    }
-    Err(Error::InvalidUnboundedOutput {
-        part: Part::Gyro,
-        set: worst,
-    })
-}
-
-/// Each accelerometer axis senses mainly along itself: in the inverse of the device matrix
-/// (rows: the sensitive directions up to scale) the diagonal dominates every other element of
-/// its row, so the lever term's normalised directions exist ([`super::rotation::LeverTerms`]).
-fn validate_sensing_directions(m: &[[f32; 3]; 3], set: u8) -> Result<(), Error> {
-    let Some(inv) = super::rotation::inverse3(m) else {
-        return Err(Error::InvalidSingularMatrix {
-            part: Part::Accelerometer,
-            set,
-        });
-    };
-    for (i, row) in inv.iter().enumerate() {
-        let own = row.get(i).map_or(0.0, |x| libm::fabsf(*x));
-        let dominant = row
-            .iter()
-            .enumerate()
-            .all(|(j, x)| j == i || libm::fabsf(*x) < own);
-        if !dominant {
-            return Err(Error::InvalidSensingDirection { set, axis: i as u8 });
-        }
-    }
-    Ok(())
-}
-
-fn validate_lever_arm(arm: &[[f32; 3]; 3]) -> Result<(), Error> {
-    for (i, row) in arm.iter().enumerate() {
-        finite_all(row.iter(), Field::LeverArm, Some(Part::Accelerometer), None)?;
-        let len = libm::sqrtf(row.iter().map(|x| x * x).sum());
-        if len > MAX_LEVER_ARM_M {
-            return Err(Error::InvalidLeverArm { axis: i as u8 });
-        }
-    }
-    Ok(())
-}
-
-/// `v` at the two rails of an axis.
-pub(crate) fn rail_offsets(rails: &Rails, channel: &Channel) -> (f32, f32) {
-    (
-        rails.lo as f32 - channel.center,
-        rails.hi as f32 - channel.center,
-    )
-}
-
-/// Bound of a triad's outputs over every code inside its rails.
-pub(crate) fn triad_output_bound(
-    set: &TriadSet,
-    channels: &[Channel; 3],
-    rails: &Rails,
-) -> [Bound; 3] {
-    let mut u = [Bound::point(0.0); 3];
-    for ((b, n), c) in u.iter_mut().zip(&set.axes).zip(channels) {
-        let (lo, hi) = rail_offsets(rails, c);
-        *b = axis_bound(n, lo, hi);
-    }
-    let mut y = [Bound::point(0.0); 3];
-    for ((b, row), o) in y.iter_mut().zip(&set.matrix).zip(&set.offset) {
-        *b = affine_bound(row, *o, &u);
-    }
-    y
-}
-
-fn check_bounded(bounds: &[Bound], part: Part, set: u8) -> Result<(), Error> {
-    for b in bounds {
-        if !(b.is_finite()
-            && b.lo >= -OUTPUT_LIMIT
-            && b.hi <= OUTPUT_LIMIT
-            && b.mag <= OUTPUT_LIMIT)
-        {
-            return Err(Error::InvalidUnboundedOutput { part, set });
-        }
-    }
-    Ok(())
 }
 
 /// A scale-misalignment matrix is invertible when its determinant is not negligible against
