@@ -289,7 +289,8 @@ fn largest_row(x: &DMatrix<f64>, y: &[f64]) -> usize {
         .unwrap_or(0)
 }
 
-/// Fits `y = X b + e` by least squares.
+/// Fits `y = X b + e` by least squares: checks the data, factors `X`, solves for the
+/// coefficients, then diagnoses the fit.
 ///
 /// # Errors
 /// [`FitError`] when there are not more observations than columns, a column is (numerically)
@@ -301,137 +302,56 @@ pub fn fit(
     intercept: bool,
     opts: &Options,
 ) -> Result<Fit, FitError> {
+    check(x, y, &names)?;
+    let factored = factor(x, opts)?;
+    let solved = solve(&factored, x, y)?;
     let (n, p) = x.shape();
-    assert_eq!(y.len(), n, "one response per row");
-    assert_eq!(names.len(), p, "one name per column");
-    if n <= p {
-        return Err(FitError::TooFewObservations { n, p });
-    }
-    if let Some(row) = y.iter().position(|v| !v.is_finite()) {
-        return Err(FitError::NotFinite { row, column: None });
-    }
-    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-        // Column-major: element i is row i % n of column i / n.
-        return Err(FitError::NotFinite {
-            row: i % n,
-            column: Some(i / n),
-        });
-    }
-    // Scale the columns to unit length: the factorisation then sees the geometry, not units.
-    let norms: Vec<f64> = x.column_iter().map(|c| c.norm()).collect();
-    if let Some(j) = norms.iter().position(|&d| d == 0.0) {
-        return Err(FitError::RankDeficient {
-            column: j,
-            combination: Vec::new(),
-        });
-    }
-    let mut xs = x.clone();
-    for (j, mut c) in xs.column_iter_mut().enumerate() {
-        c /= norms[j];
-    }
-    let qr = xs.qr();
-    let r = qr.r();
-    for j in 0..p {
-        if r[(j, j)].abs() < opts.rank_tolerance {
-            return Err(rank_deficient(&r, &norms, j));
-        }
-    }
-    let q = qr.q();
-    // R^-1 (upper triangular), then A = D^-1 R^-1.
-    let r_inv = r
-        .clone()
-        .solve_upper_triangular(&DMatrix::identity(p, p))
-        .ok_or_else(|| rank_deficient(&r, &norms, p - 1))?;
-    let mut factor = r_inv;
-    for (i, mut row) in factor.row_iter_mut().enumerate() {
-        row /= norms[i];
-    }
-    // b = A Q'y.
-    let qty = q.tr_mul(&DVector::from_column_slice(y));
-    let beta = &factor * &qty;
-    let coefficients: Vec<f64> = beta.iter().copied().collect();
-    let fitted_v = x * &beta;
-    let fitted: Vec<f64> = fitted_v.iter().copied().collect();
-    let residuals: Vec<f64> = y.iter().zip(&fitted).map(|(a, b)| a - b).collect();
-    let rss: f64 = residuals.iter().map(|e| e * e).sum();
     let dof = n - p;
-    let sigma2 = rss / dof as f64;
-    let unscaled = &factor * factor.transpose();
-    let covariance = &unscaled * sigma2;
-    let std_errors: Vec<f64> = (0..p).map(|j| covariance[(j, j)].sqrt()).collect();
-    if !sigma2.is_finite()
-        || coefficients
-            .iter()
-            .chain(&std_errors)
-            .any(|v| !v.is_finite())
-    {
-        return Err(FitError::Overflow {
-            row: largest_row(x, y),
-        });
-    }
     let Inference {
         t,
         p_values,
         ci_lower,
         ci_upper,
-    } = inference(&coefficients, &std_errors, opts.alpha, dof);
-
-    let k = usize::from(intercept);
-    let tss = if intercept {
-        let mean = y.iter().sum::<f64>() / n as f64;
-        y.iter().map(|v| (v - mean) * (v - mean)).sum()
-    } else {
-        y.iter().map(|v| v * v).sum()
-    };
-    let r2 = 1.0 - rss / tss;
-    let adj_r2 = 1.0 - (n - k) as f64 / dof as f64 * (1.0 - r2);
-    let df_model = p - k;
-    let (f, f_p) = if df_model == 0 {
-        (f64::NAN, f64::NAN)
-    } else {
-        let f = (tss - rss) / df_model as f64 / sigma2;
-        (f, dist::f_upper(f, df_model as f64, dof as f64))
-    };
-    let nf = n as f64;
-    let log_likelihood = -nf / 2.0 * ((2.0 * std::f64::consts::PI).ln() + (rss / nf).ln() + 1.0);
-    let aic = -2.0 * log_likelihood + 2.0 * p as f64;
-    let bic = -2.0 * log_likelihood + nf.ln() * p as f64;
-
-    // Singular values of X are those of R D.
-    let mut rd = r.clone();
-    for (j, mut c) in rd.column_iter_mut().enumerate() {
-        c *= norms[j];
-    }
-    let sv = crate::stats::decompose::singular_values(rd).map_err(|_| FitError::Overflow {
-        row: largest_row(x, y),
-    })?;
-    let condition_number = sv.max() / sv.min();
-
-    let vif = (0..p)
-        .map(|j| {
-            let col = x.column(j);
-            let is_constant = col.iter().all(|v| *v == col[0]);
-            if intercept && is_constant {
-                None
-            } else {
-                let ss = if intercept {
-                    let mean = col.mean();
-                    col.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>()
-                } else {
-                    col.iter().map(|v| v * v).sum()
-                };
-                Some(unscaled[(j, j)] * ss)
-            }
-        })
-        .collect();
-
-    let influence = influence::compute(&q, &factor, &residuals, rss, dof, p, opts.alpha);
-    let durbin_watson = residuals
+    } = inference(&solved.coefficients, &solved.std_errors, opts.alpha, dof);
+    let goodness = goodness(y, &solved, p, intercept);
+    let condition_number = condition_number(&factored, x, y)?;
+    let vif = variance_inflation(x, &solved.unscaled, intercept);
+    let influence = influence::compute(
+        &factored.q,
+        &factored.factor,
+        &solved.residuals,
+        solved.rss,
+        dof,
+        p,
+        opts.alpha,
+    );
+    let durbin_watson = solved
+        .residuals
         .windows(2)
         .map(|w| (w[1] - w[0]).powi(2))
         .sum::<f64>()
-        / rss;
-
+        / solved.rss;
+    let Solved {
+        coefficients,
+        std_errors,
+        covariance,
+        fitted,
+        residuals,
+        rss,
+        sigma2,
+        unscaled: _,
+    } = solved;
+    let Goodness {
+        tss,
+        r2,
+        adj_r2,
+        df_model,
+        f,
+        f_p,
+        log_likelihood,
+        aic,
+        bic,
+    } = goodness;
     Ok(Fit {
         names,
         intercept,
@@ -463,8 +383,217 @@ pub fn fit(
         residuals,
         influence,
         durbin_watson,
+        factor: factored.factor,
+    })
+}
+
+/// Refuses data a fit cannot take: no more observations than columns, or a value that is not
+/// finite (named by its row and column).
+fn check(x: &DMatrix<f64>, y: &[f64], names: &[String]) -> Result<(), FitError> {
+    let (n, p) = x.shape();
+    assert_eq!(y.len(), n, "one response per row");
+    assert_eq!(names.len(), p, "one name per column");
+    if n <= p {
+        return Err(FitError::TooFewObservations { n, p });
+    }
+    if let Some(row) = y.iter().position(|v| !v.is_finite()) {
+        return Err(FitError::NotFinite { row, column: None });
+    }
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        // Column-major: element i is row i % n of column i / n.
+        return Err(FitError::NotFinite {
+            row: i % n,
+            column: Some(i / n),
+        });
+    }
+    Ok(())
+}
+
+/// `X` factored: its columns scaled to unit length, `X D^-1 = Q R`.
+struct Factored {
+    /// The column lengths `D`.
+    norms: Vec<f64>,
+    /// `Q` (n x p).
+    q: DMatrix<f64>,
+    /// `R` (p x p, upper triangular).
+    r: DMatrix<f64>,
+    /// `A = D^-1 R^-1`: the coefficients are `A Q'y`, their unscaled covariance `A A'`.
+    factor: DMatrix<f64>,
+}
+
+/// Factors `X`, refusing a column that is (numerically) a combination of those before it.
+fn factor(x: &DMatrix<f64>, opts: &Options) -> Result<Factored, FitError> {
+    let p = x.ncols();
+    // Scale the columns to unit length: the factorisation then sees the geometry, not units.
+    let norms: Vec<f64> = x.column_iter().map(|c| c.norm()).collect();
+    if let Some(j) = norms.iter().position(|&d| d == 0.0) {
+        return Err(FitError::RankDeficient {
+            column: j,
+            combination: Vec::new(),
+        });
+    }
+    let mut xs = x.clone();
+    for (j, mut c) in xs.column_iter_mut().enumerate() {
+        c /= norms[j];
+    }
+    let qr = xs.qr();
+    let r = qr.r();
+    for j in 0..p {
+        if r[(j, j)].abs() < opts.rank_tolerance {
+            return Err(rank_deficient(&r, &norms, j));
+        }
+    }
+    let q = qr.q();
+    // R^-1 (upper triangular), then A = D^-1 R^-1.
+    let r_inv = r
+        .clone()
+        .solve_upper_triangular(&DMatrix::identity(p, p))
+        .ok_or_else(|| rank_deficient(&r, &norms, p - 1))?;
+    let mut factor = r_inv;
+    for (i, mut row) in factor.row_iter_mut().enumerate() {
+        row /= norms[i];
+    }
+    Ok(Factored {
+        norms,
+        q,
+        r,
         factor,
     })
+}
+
+/// The least-squares solution and what follows from it alone.
+struct Solved {
+    coefficients: Vec<f64>,
+    std_errors: Vec<f64>,
+    covariance: DMatrix<f64>,
+    /// `(X'X)^-1 = A A'`.
+    unscaled: DMatrix<f64>,
+    fitted: Vec<f64>,
+    residuals: Vec<f64>,
+    rss: f64,
+    sigma2: f64,
+}
+
+/// Solves for the coefficients, `b = A Q'y`, and their covariance `sigma^2 A A'`.
+fn solve(f: &Factored, x: &DMatrix<f64>, y: &[f64]) -> Result<Solved, FitError> {
+    let (n, p) = x.shape();
+    let qty = f.q.tr_mul(&DVector::from_column_slice(y));
+    let beta = &f.factor * &qty;
+    let coefficients: Vec<f64> = beta.iter().copied().collect();
+    let fitted_v = x * &beta;
+    let fitted: Vec<f64> = fitted_v.iter().copied().collect();
+    let residuals: Vec<f64> = y.iter().zip(&fitted).map(|(a, b)| a - b).collect();
+    let rss: f64 = residuals.iter().map(|e| e * e).sum();
+    let sigma2 = rss / (n - p) as f64;
+    let unscaled = &f.factor * f.factor.transpose();
+    let covariance = &unscaled * sigma2;
+    let std_errors: Vec<f64> = (0..p).map(|j| covariance[(j, j)].sqrt()).collect();
+    if !sigma2.is_finite()
+        || coefficients
+            .iter()
+            .chain(&std_errors)
+            .any(|v| !v.is_finite())
+    {
+        return Err(FitError::Overflow {
+            row: largest_row(x, y),
+        });
+    }
+    Ok(Solved {
+        coefficients,
+        std_errors,
+        covariance,
+        unscaled,
+        fitted,
+        residuals,
+        rss,
+        sigma2,
+    })
+}
+
+/// How well the model explains the data, as a regression package reports it.
+struct Goodness {
+    tss: f64,
+    r2: f64,
+    adj_r2: f64,
+    df_model: usize,
+    f: f64,
+    f_p: f64,
+    log_likelihood: f64,
+    aic: f64,
+    bic: f64,
+}
+
+/// R^2 (about the mean with an intercept, about zero without), the overall F-test, the Gaussian
+/// log-likelihood and the information criteria.
+fn goodness(y: &[f64], s: &Solved, p: usize, intercept: bool) -> Goodness {
+    let n = y.len();
+    let (rss, dof) = (s.rss, n - p);
+    let k = usize::from(intercept);
+    let tss = if intercept {
+        let mean = y.iter().sum::<f64>() / n as f64;
+        y.iter().map(|v| (v - mean) * (v - mean)).sum()
+    } else {
+        y.iter().map(|v| v * v).sum()
+    };
+    let r2 = 1.0 - rss / tss;
+    let adj_r2 = 1.0 - (n - k) as f64 / dof as f64 * (1.0 - r2);
+    let df_model = p - k;
+    let (f, f_p) = if df_model == 0 {
+        (f64::NAN, f64::NAN)
+    } else {
+        let f = (tss - rss) / df_model as f64 / s.sigma2;
+        (f, dist::f_upper(f, df_model as f64, dof as f64))
+    };
+    let nf = n as f64;
+    let log_likelihood = -nf / 2.0 * ((2.0 * std::f64::consts::PI).ln() + (rss / nf).ln() + 1.0);
+    Goodness {
+        tss,
+        r2,
+        adj_r2,
+        df_model,
+        f,
+        f_p,
+        log_likelihood,
+        aic: -2.0 * log_likelihood + 2.0 * p as f64,
+        bic: -2.0 * log_likelihood + nf.ln() * p as f64,
+    }
+}
+
+/// The condition number of `X`, from the singular values of `R D` (those of `X`).
+fn condition_number(f: &Factored, x: &DMatrix<f64>, y: &[f64]) -> Result<f64, FitError> {
+    let mut rd = f.r.clone();
+    for (j, mut c) in rd.column_iter_mut().enumerate() {
+        c *= f.norms[j];
+    }
+    let sv = crate::stats::decompose::singular_values(rd).map_err(|_| FitError::Overflow {
+        row: largest_row(x, y),
+    })?;
+    Ok(sv.max() / sv.min())
+}
+
+/// The variance inflation factor of each column (`None` for the intercept's constant column).
+fn variance_inflation(
+    x: &DMatrix<f64>,
+    unscaled: &DMatrix<f64>,
+    intercept: bool,
+) -> Vec<Option<f64>> {
+    (0..x.ncols())
+        .map(|j| {
+            let col = x.column(j);
+            let is_constant = col.iter().all(|v| *v == col[0]);
+            if intercept && is_constant {
+                None
+            } else {
+                let ss = if intercept {
+                    let mean = col.mean();
+                    col.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>()
+                } else {
+                    col.iter().map(|v| v * v).sum()
+                };
+                Some(unscaled[(j, j)] * ss)
+            }
+        })
+        .collect()
 }
 
 /// Column `j` is (nearly) explained by the columns before it: find the combination.
