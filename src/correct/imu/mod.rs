@@ -3,19 +3,18 @@
 
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 mod fast;
+mod uncertainty;
 
 use super::environment::{effective_covariance_into, effective_set};
 use super::kernel::{Shape, TriadKernel, affine, range_bounds};
 use super::sample::{self, Sample};
-use super::{Corrected, Flags, factor_norm};
+use super::{Corrected, Flags};
 use core::marker::PhantomData;
 
 use crate::Error;
 use crate::model::interval::{Bound, affine_bound};
 use crate::model::rotation::{self, LeverTerms};
-use crate::model::{
-    Calibration, Channel, Environment, ImuCovariance, ImuOutputCovariance, ImuSet, Rails, Sensor,
-};
+use crate::model::{Calibration, Channel, Environment, ImuCovariance, ImuSet, Rails, Sensor};
 
 pub use crate::model::MAX_SAMPLE_RATE_HZ;
 
@@ -338,47 +337,6 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         self.suspect
     }
 
-    /// Per output, the variance that quantisation adds to one corrected sample:
-    /// `sum_j M_ij^2 / 12` (a code is uniform over its width).
-    #[must_use]
-    pub fn quantisation_variance(&self) -> [f32; 6] {
-        let row = |m: &[f32; 3]| m.iter().map(|x| x * x).sum::<f32>() / 12.0;
-        let [a0, a1, a2] = &self.accel.m;
-        let [g0, g1, g2] = &self.gyro.m;
-        [row(a0), row(a1), row(a2), row(g0), row(g1), row(g2)]
-    }
-
-    /// Per output, the variance of one corrected sample of a unit at rest whose outputs carry
-    /// noise of variance `own` per sample (white noise and quantisation,
-    /// [`quantisation_variance`](Self::quantisation_variance)): the accelerometer's with the
-    /// tangential lever term of the gyro noise's backward difference (`2 var` per rate, through
-    /// the coefficients that fold in the sample rate), the gyro's with the g-sensitivity of the
-    /// accelerometer noise.
-    #[must_use]
-    pub fn sample_variance(&self, own: &[f32; 6]) -> [f32; 6] {
-        let v = *own;
-        let [a0, a1, a2, g0, g1, g2] = v;
-        let (accel, gyro) = ([a0, a1, a2], [g0, g1, g2]);
-        let through = |row: &[f32; 3], var: &[f32; 3], k: f32| -> f32 {
-            row.iter().zip(var).map(|(c, v)| c * c * v * k).sum()
-        };
-        let mut out = v;
-        for (i, o) in out.iter_mut().enumerate() {
-            *o += match i {
-                0..3 => self
-                    .terms
-                    .tangential
-                    .get(i)
-                    .map_or(0.0, |t| through(t, &gyro, 2.0)),
-                _ => self
-                    .neg_g
-                    .get(i - 3)
-                    .map_or(0.0, |g| through(g, &accel, 1.0)),
-            };
-        }
-        out
-    }
-
     /// Forgets the previous gyro sample (after a gap in the stream): the next sample's rate
     /// derivative is unknown and flagged.
     pub fn reset(&mut self) {
@@ -450,74 +408,6 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
             values: raw.map(|x| x as f32),
             flags: self.env_flags,
         }
-    }
-
-    /// The 1-sigma calibration error of each output of a corrected sample `values`
-    /// (`[ax, ay, az, wx, wy, wz]`, as [`correct`](Self::correct) gave them) at the current
-    /// environment: bias, sensitivity and misalignment, lever arm, g-sensitivity and g-squared
-    /// terms, over the features of [`IMU_FEATURES`](crate::model::IMU_FEATURES) (the
-    /// tangential term is left out of them: it is a small part of the spin's at any rate a
-    /// round spins up at). `None` when the calibration has no covariance factors. With an
-    /// [`Overlay`], each refined bias's variance stands in for the factory bias's own.
-    #[must_use]
-    pub fn sigma(&self, values: &[f32; 6]) -> Option<[f32; 6]> {
-        let (mut norms, own) = self.factor_norms(values)?;
-        if let Some(overlay) = &self.overlay {
-            for ((n, b), v) in norms.iter_mut().zip(own).zip(overlay.variance) {
-                *n = libm::sqrtf((*n * *n - b * b).max(0.0) + v);
-            }
-        }
-        Some(norms)
-    }
-
-    /// Per output of the corrected sample `values`, the factory calibration's error variance
-    /// (whatever the overlay) and its bias's own part. `None` without covariance factors.
-    #[must_use]
-    pub fn factory_variances(&self, values: &[f32; 6]) -> Option<([f32; 6], [f32; 6])> {
-        let (norms, own) = self.factor_norms(values)?;
-        Some((norms.map(|x| x * x), own.map(|x| x * x)))
-    }
-
-    /// The factory 1-sigma of each output and of its bias alone.
-    fn factor_norms(&self, values: &[f32; 6]) -> Option<([f32; 6], [f32; 6])> {
-        let ImuCovariance {
-            accel: ca,
-            gyro: cg,
-        } = self.covariance.as_ref()?;
-        let [f0, f1, f2, w0, w1, w2] = *values;
-        let (f, w) = ([f0, f1, f2], [w0, w1, w2]);
-        let [na, ng] = &self.directions;
-        let zero = [0.0; 3];
-        let accel = |i: usize| -> [f32; 8] {
-            let (Some(n), Some(r)) = (na.get(i), self.lever.get(i)) else {
-                return [0.0; 8];
-            };
-            let at = rotation::force_at(&f, &w, &zero, r);
-            let [g0, g1, g2] = rotation::lever_gradient(n, &w, &zero);
-            let x = rotation::dot(n, &at);
-            let [a0, a1, a2] = at;
-            [1.0, a0, a1, a2, g0, g1, g2, x * x]
-        };
-        let [h0, h1, h2] = self.g_sensitivity(zero, &f).map(|x| -x);
-        let sensed_rate = [w0 + h0, w1 + h1, w2 + h2];
-        let gyro = |i: usize| -> [f32; 8] {
-            let x = ng.get(i).map_or(0.0, |n| rotation::dot(n, &sensed_rate));
-            [1.0, w0, w1, w2, f0, f1, f2, x * x]
-        };
-        let [a0, a1, a2] = ca;
-        let [g0, g1, g2] = cg;
-        let own = |l: &ImuOutputCovariance| l.as_flattened().first().map_or(0.0, |x| x.abs());
-        Some((
-            [
-                factor_norm(a0.as_flattened(), &accel(0)),
-                factor_norm(a1.as_flattened(), &accel(1)),
-                factor_norm(a2.as_flattened(), &accel(2)),
-                factor_norm(g0.as_flattened(), &gyro(0)),
-                factor_norm(g1.as_flattened(), &gyro(1)),
-                factor_norm(g2.as_flattened(), &gyro(2)),
-            ],
-            [own(a0), own(a1), own(a2), own(g0), own(g1), own(g2)],
-        ))
     }
 
     /// The sensor-domain specific force and the gyro's rate before g-sensitivity.
