@@ -10,6 +10,8 @@ use super::outputs::Outputs;
 use crate::nonlinear::selfcal::{self, GyroBias, Options, Quadratic};
 use crate::obs::recording;
 use crate::report;
+use crate::sensor::selfcal::acceptance;
+use crate::sensor::selfcal::record::{self, SelfcalRecord};
 use crate::sensor::{blob, selfcal as build};
 
 /// Calibrate an IMU without equipment: still poses by hand, gravity as the only reference.
@@ -121,7 +123,7 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
         ..Options::default()
     };
     let c = selfcal::calibrate(&rec, &opts).map_err(|e| e.to_string())?;
-    let reject = !report::selfcal::rejected(&c).is_empty();
+    let reject = !acceptance::rejected(&c).is_empty();
     let mut files = vec![args.acc.as_path()];
     files.extend(args.gyro.as_deref());
     // A rejected calibration writes no blob unless forced; a forced one says so.
@@ -150,11 +152,11 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
     if si && args.out.blob.is_some() {
         return Err(format!(
             "--blob: {}",
-            report::selfcal::NO_BLOB.trim_start_matches("no blob: ")
+            record::NO_BLOB.trim_start_matches("no blob: ")
         ));
     }
     let name = serial.as_str();
-    let record = report::selfcal::record(&c, &rec, check, name);
+    let record = SelfcalRecord::new(&c, &rec, check, name);
     let signed = check
         .map(|c| c.blob.clone())
         .filter(|_| !reject || args.out.force_blob)
@@ -174,7 +176,8 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
         );
     }
     let report_path = args.out.report.as_deref();
-    if let Some(said) = args.out.record(name, &record, |d| {
+    let fallback = serde_json::to_value(&record).unwrap_or_default();
+    if let Some(said) = args.out.record(name, &fallback, |d| {
         d.record_selfcal(name, &record, report_path, blob.unwrap_or_default())
     })? {
         println!("  {said}");

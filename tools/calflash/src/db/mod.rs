@@ -21,6 +21,7 @@ pub use schema::SCHEMA_VERSION;
 use schema::{Listed, Row};
 
 use crate::sensor::record::Record;
+use crate::sensor::selfcal::record::SelfcalRecord;
 
 /// Where a record that the database cannot take is saved: the directory of the first output
 /// file given, else the current directory.
@@ -320,12 +321,19 @@ impl Db {
     pub fn record_selfcal(
         &mut self,
         serial: &str,
-        record: &serde_json::Value,
+        record: &SelfcalRecord<'_>,
         report: Option<&Path>,
         blob: &[u8],
     ) -> Result<i64, Error> {
-        let coefficients = serde_json::json!({"accel": record["accel"], "gyro": record["gyro"]["matrix_rad_s_per_count"], "gyro_bias_counts": record["gyro"]["bias_counts"]});
-        let covariance = serde_json::json!({"accel": record["accel"]["covariance"], "gyro": record["gyro"]["covariance"]});
+        let coefficients = serde_json::json!({
+            "accel": record.accel,
+            "gyro": record.gyro.matrix_rad_s_per_count,
+            "gyro_bias_counts": record.gyro.bias_counts,
+        });
+        let covariance = serde_json::json!({
+            "accel": record.accel.covariance,
+            "gyro": record.gyro.covariance,
+        });
         self.insert(Row {
             serial: serial.into(),
             kind: "fit".into(),
@@ -337,8 +345,8 @@ impl Db {
             report: report.map(|p| p.display().to_string()),
             blob: blob.to_vec(),
             verification: None,
-            outcome: record["verdict"].as_str().unwrap_or("").to_lowercase(),
-            record: Some(record.to_string()),
+            outcome: record.verdict.word().to_lowercase(),
+            record: Some(serde_json::to_string(record).unwrap_or_default()),
             station: station(),
             lot: String::new(),
         })

@@ -1,9 +1,7 @@
-//! Reports of a calibration without equipment: the terminal summary, the JSON record
-//! (`calflash.selfcal/1`, with the convention spelled out) and the HTML report with its figures.
+//! Reports of a calibration without equipment: the terminal summary and the HTML report with
+//! its figures (the JSON record is [`crate::sensor::selfcal::record`]).
 
 use std::fmt::Write as _;
-
-use serde_json::{Value, json};
 
 use super::html::esc;
 use super::plot::{Figure, Series, svg};
@@ -11,90 +9,9 @@ use super::terminal::{num, pval};
 use crate::nonlinear::selfcal::SelfCal;
 use crate::obs::recording::Recording;
 use crate::obs::units::Sensor;
-use crate::sensor::Verdict;
 use crate::sensor::selfcal::DeviceCheck;
-
-/// The convention of the stored coefficients, for users applying them elsewhere.
-pub const CONVENTION: &str = "raw counts r per axis (or SI values, as `inputs` says: then read `count` as that unit), v = r - center (counts); accelerometer a = M (v + q * v^2) + o in m/s^2, \
-M upper triangular (m/s^2 per count), rows and columns in x, y, z order, q per axis (1/count), o in m/s^2; \
-gyro w = G v in rad/s, G full 3x3 (rad/s per count) that also rotates the gyro axes into the body frame, \
-center = the gyro bias in counts; body frame = accelerometer frame: x along the accelerometer's x axis, y in its x-y plane, z completing a right-handed frame. \
-Matrices are row-major: M[i][j] multiplies v[j] into output i.";
-
-/// The gyro fit's RMS angle error above which it explains the rotations too badly to be
-/// trusted, degrees (good hand tumbles leave a few tenths).
-pub const GYRO_REJECT_DEG: f64 = 3.0;
-
-/// The accelerometer fit's RMS of |a| - g above which it cannot be trusted, as a fraction of g
-/// (good tumbles leave a few parts in 10^4).
-pub const ACCEL_REJECT: f64 = 0.01;
-
-/// Why the calibration cannot be trusted (empty when it can): parameters a fit cannot observe,
-/// or fits that do not explain the recording. Such a calibration is judged REJECT and writes no
-/// blob unless `--force-blob`.
-#[must_use]
-pub fn rejected(c: &SelfCal) -> Vec<String> {
-    let mut why = Vec::new();
-    if c.accel.covariance.is_none() {
-        why.push("the accelerometer's parameters are not all observable from these poses: turn the unit through more directions".to_string());
-    }
-    if c.gyro.covariance.is_none() {
-        why.push("the gyro's parameters are not all observable from these rotations: rotate about all three axes".to_string());
-    }
-    if c.accel.rms() > ACCEL_REJECT * c.options.g {
-        why.push(format!(
-            "the accelerometer fit leaves |a| - g of {:.4} m/s^2 RMS ({:.2} % of g, more than {} %): poses that moved, or a --g far from the site's",
-            c.accel.rms(),
-            100.0 * c.accel.rms() / c.options.g,
-            100.0 * ACCEL_REJECT
-        ));
-    }
-    if c.gyro.rms_deg() > GYRO_REJECT_DEG {
-        why.push(format!(
-            "the gyro fit predicts the gravity direction after each rotation {:.1} degrees RMS off (more than {GYRO_REJECT_DEG}): the rotations are not what the gyro measured (a wrong --rate, a gyro file of another recording, poses that moved)",
-            c.gyro.rms_deg()
-        ));
-    }
-    why
-}
-
-/// Whether the result can be used as it is: REJECT with the reasons of [`rejected`], else
-/// REVIEW with what to look at, else ACCEPT.
-#[must_use]
-pub fn verdict(c: &SelfCal, check: Option<&DeviceCheck>) -> (Verdict, Vec<String>) {
-    let why = rejected(c);
-    if !why.is_empty() {
-        return (Verdict::Reject, why);
-    }
-    let mut notes = Vec::new();
-    if c.holdout.rms > 2.0 * c.accel.rms() {
-        notes.push(format!(
-            "poses left out are predicted {:.1} times worse than the fit: too few poses for the model, or a pose that moved",
-            c.holdout.rms / c.accel.rms()
-        ));
-    }
-    if !c.skipped.is_empty() {
-        notes.push(format!(
-            "{} rotations left out of the gyro fit",
-            c.skipped.len()
-        ));
-    }
-    let limit = 1e-3 * c.accel.sigma();
-    if let Some(check) = check
-        && check.accel > limit.max(1e-5)
-    {
-        notes.push(format!(
-            "the device's f32 correction differs from the fit by {:.2e} m/s^2",
-            check.accel
-        ));
-    }
-    let v = if notes.is_empty() {
-        Verdict::Accept
-    } else {
-        Verdict::Review
-    };
-    (v, notes)
-}
+use crate::sensor::selfcal::acceptance::verdict;
+use crate::sensor::selfcal::record::{CONVENTION, NO_BLOB, Temperature, rms_deg};
 
 fn matrix_lines(name: &str, m: &[[f64; 3]; 3], sd: Option<&[[f64; 3]; 3]>, unit: &str) -> String {
     let mut s = String::new();
@@ -148,12 +65,6 @@ fn gyro_sd(c: &SelfCal) -> Option<[[f64; 3]; 3]> {
     }))
 }
 
-fn rms_deg(a: &[f64]) -> f64 {
-    (a.iter().map(|x| x * x).sum::<f64>() / a.len().max(1) as f64)
-        .sqrt()
-        .to_degrees()
-}
-
 /// The terminal summary.
 #[must_use]
 pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial: &str) -> String {
@@ -176,7 +87,13 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
         rec.saturated_count.0,
         rec.saturated_count.1
     );
-    if let Some((name, lo, mean, hi)) = temperature(rec) {
+    if let Some(Temperature {
+        column: name,
+        min: lo,
+        mean,
+        max: hi,
+    }) = Temperature::of(rec)
+    {
         let _ = writeln!(
             s,
             "  temperature  column {name}: {lo} to {hi}, mean {mean:.2} (carried into the record)"
@@ -327,92 +244,9 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
     s
 }
 
-/// Why a calibration of physical values has no blob.
-pub const NO_BLOB: &str = "no blob: the values are physical (SI) and the device corrects converter \
-codes; give --lsb ACCEL,GYRO (the value of one code, from the part's datasheet) to calibrate the \
-codes and write one";
-
-/// A temperature column's name, least, mean and largest value.
-fn temperature(rec: &Recording) -> Option<(&str, f64, f64, f64)> {
-    let (name, v) = rec.temperature.as_ref()?;
-    if v.is_empty() {
-        return None;
-    }
-    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    Some((name, lo, v.iter().sum::<f64>() / v.len() as f64, hi))
-}
-
 /// `count` -> `counts`; a unit stays as it is.
 fn plural(per: &str) -> &str {
     if per == "count" { "counts" } else { per }
-}
-
-/// The JSON record.
-#[must_use]
-pub fn record(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial: &str) -> Value {
-    let (v, notes) = verdict(c, check);
-    let word = v.word();
-    let t0 = rec.t[0];
-    let poses: Vec<Value> = c
-        .poses
-        .iter()
-        .zip(&c.pose_means)
-        .zip(&c.accel.residuals)
-        .map(|((r, m), e)| json!({"from_s": rec.t[r.start] - t0, "to_s": rec.t[r.end - 1] - t0, "lines": [rec.line[r.start], rec.line[r.end - 1]], "accel_mean_counts": m, "residual_m_s2": e}))
-        .collect();
-    let rotations: Vec<Value> = c.rotations.iter().zip(&c.gyro.angles).zip(&c.constant_bias_angles).map(|((k, a), b)| json!({"after_pose": k, "angle_error_deg": a.to_degrees(), "constant_bias_angle_error_deg": b.to_degrees()})).collect();
-    let cov = |m: &Option<nalgebra::DMatrix<f64>>| {
-        m.as_ref().map(|m| {
-            (0..m.nrows())
-                .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect::<Vec<f64>>())
-                .collect::<Vec<_>>()
-        })
-    };
-    json!({
-        "schema": "calflash.selfcal/1",
-        "serial": serial,
-        "verdict": word,
-        "notes": notes,
-        "convention": CONVENTION,
-        "recording": {"source": rec.source, "samples": rec.len(), "rate_hz": rec.rate(), "gaps": rec.gaps, "saturated": {"accel": rec.saturated_count.0, "gyro": rec.saturated_count.1}, "temperature": temperature(rec).map(|(name, lo, mean, hi)| json!({"column": name, "min": lo, "mean": mean, "max": hi}))},
-        "options": c.options,
-        "threshold_search": c.trials,
-        "chosen_multiplier": c.trials[c.chosen].multiplier,
-        "poses": poses,
-        "accel": {
-            "center_counts": c.accel.model.center,
-            "matrix_m_s2_per_count": c.accel.model.matrix,
-            "offset_m_s2": c.accel.model.offset,
-            "quadratic_per_count": c.accel.model.quadratic,
-            "terms": c.accel.terms,
-            "parameters": c.accel.params,
-            "covariance": cov(&c.accel.covariance),
-            "rms_m_s2": c.accel.rms(),
-            "max_m_s2": c.accel.max(),
-            "sigma_m_s2": c.accel.sigma(),
-            "quadratic_test": c.quadratic_test,
-            "holdout": c.holdout,
-        },
-        "gyro": {
-            "bias_counts": c.gyro_bias,
-            "bias_spread_counts": c.gyro_bias_spread,
-            "bias_rms_counts": c.gyro_bias_rms,
-            "matrix_rad_s_per_count": c.gyro.matrix,
-            "terms": crate::nonlinear::rotation::TERMS,
-            "covariance": cov(&c.gyro.covariance),
-            "rms_deg": c.gyro.rms_deg(),
-            "max_deg": c.gyro.max_deg(),
-            "constant_bias_rms_deg": rms_deg(&c.constant_bias_angles),
-            "rotations": rotations,
-            "skipped": c.skipped,
-        },
-        "inputs": {"accel": rec.units[0].describe(Sensor::Accel), "gyro": rec.units[1].describe(Sensor::Gyro), "accel_file_unit": rec.units[0].file.name(), "gyro_file_unit": rec.units[1].file.name(), "lsb": rec.units.map(|u| u.lsb)},
-        "device": check.map_or_else(
-            || json!({"blob_bytes": Value::Null, "not_written": NO_BLOB}),
-            |check| json!({"blob_bytes": check.blob.len(), "accel_f32_vs_f64_m_s2": check.accel, "gyro_f32_vs_f64_rad_s": check.gyro, "accel_rms_m_s2": check.device_accel_rms}),
-        ),
-    })
 }
 
 /// The HTML report.

@@ -8,6 +8,9 @@
 //! axis, y in its x-y plane); gyro `w = G v` in rad/s with `G` full (it also rotates the gyro
 //! axes into the body frame) and `center` the gyro bias in counts.
 
+pub mod acceptance;
+pub mod record;
+
 use nalgebra::{DMatrix, Matrix3};
 use spincal::correct::AnyImuCorrector;
 use spincal::model::{
