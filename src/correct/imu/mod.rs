@@ -174,7 +174,6 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         let mode = Mode { shape, lever };
         let lever = lever_arm.unwrap_or([[0.0; 3]; 3]);
         let mut out = Self {
-            sample: PhantomData,
             source: Some(Source {
                 env: &data.environment,
                 sets,
@@ -185,25 +184,10 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
                 covariance: covariance.as_deref(),
             }),
             mode,
-            accel: TriadKernel::IDENTITY,
-            gyro: TriadKernel::IDENTITY,
-            limits: [0; 2],
-            neg_g: [[0.0; 3]; 3],
             lever,
             rate: sample_rate_hz,
-            terms: LeverTerms::NONE,
-            directions: [[[0.0; 3]; 3]; 2],
-            prev_rate: [0.0; 3],
-            prev_lever: [0.0; 3],
-            primed: false,
-            prev_in_range: false,
             env_flags: Flags::NONE,
-            covariance: None,
-            environment: [f32::NAN; 2],
-            overlay: None,
-            suspect: false,
-            #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
-            hot: super::m4f::Hot::None,
+            ..Self::identity()
         };
         out.set_environment(f32::NAN, f32::NAN);
         Ok(out)
