@@ -70,7 +70,7 @@ impl Bench {
             no_db: false,
             sign_key: None,
         };
-        let r = run(&args);
+        let r = run(&args).map_err(|e| e.to_string());
         (r, u.finish().into_store().into_inner())
     }
 

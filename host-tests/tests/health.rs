@@ -450,7 +450,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
     let unit = TcpUnit::serve(tcp_unit::device(flashed, &serial), Fault::None);
     let mut a = args(Some(unit.address()), None, "plain.json");
     a.recording = None;
-    let err = health(&a).unwrap_err();
+    let err = health(&a).unwrap_err().to_string();
     drop(unit.finish());
     assert!(
         err.contains("HealthUnavailable(HealthNoNoiseTerms)"),

@@ -269,7 +269,7 @@ fn calflash_flash_signs_for_the_unit_and_the_history_records_the_key() {
     };
     let flash = tcp_unit::provisioned_flash(&[public]);
     let unit = TcpUnit::serve(tcp_unit::device(flash.clone(), UNIT), Fault::None);
-    let e = run(&args(unit.address(), None)).unwrap_err();
+    let e = run(&args(unit.address(), None)).unwrap_err().to_string();
     assert!(
         e.contains("takes only calibrations signed") && e.contains("--sign-key"),
         "{e}"

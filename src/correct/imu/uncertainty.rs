@@ -56,7 +56,7 @@ impl<S: Sample> ImuCorrector<'_, S> {
     /// terms, over the features of [`IMU_FEATURES`](crate::model::IMU_FEATURES) (the
     /// tangential term is left out of them: it is a small part of the spin's at any rate a
     /// round spins up at). `None` when the calibration has no covariance factors. With an
-    /// [`Overlay`], each refined bias's variance stands in for the factory bias's own.
+    /// [`Overlay`](super::Overlay), each refined bias's variance stands in for the factory bias's own.
     #[must_use]
     pub fn sigma(&self, values: &[f32; 6]) -> Option<[f32; 6]> {
         let (mut norms, own) = self.factor_norms(values)?;

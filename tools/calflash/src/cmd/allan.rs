@@ -1,6 +1,7 @@
 //! `calflash allan`: the overlapping Allan deviation of a still recording and its IEEE Std 952
 //! noise terms, per axis, in stated units, with a log-log figure.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use super::values;
@@ -66,7 +67,7 @@ pub struct AllanArgs {
 ///
 /// # Errors
 /// Bad input or too short a recording.
-pub fn run(args: &AllanArgs) -> Result<(), String> {
+pub fn run(args: &AllanArgs) -> Result<(), Failure> {
     crate::files::Paths::new()
         .input("the recording", Some(&args.acc))
         .input("--gyro", args.gyro.as_deref())
@@ -97,8 +98,7 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
             }
             e => Err(e),
         }),
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     let t0 = rec.t[0];
     let (a, b) = (args.from.unwrap_or(0.0), args.to.unwrap_or(f64::INFINITY));
     // Timestamps increase: the samples in [a, b] are one run.
@@ -108,7 +108,7 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
             "{}: {} samples between {a} s and {b} s; the Allan deviation needs a still recording of at least 100 (many thousands for the slow terms)",
             rec.source,
             idx.len()
-        ));
+        ).into());
     }
     if let Some(g) = rec.gaps.iter().find(|g| (a..=b).contains(&(g.from - t0))) {
         return Err(format!(
@@ -117,17 +117,14 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
             g.line,
             g.missing,
             g.from - t0
-        ));
+        ).into());
     }
     let scale: [f64; 3] = match args.scale.as_slice() {
         [] => [1.0; 3],
         [s] => [*s; 3],
         [x, y, z] => [*x, *y, *z],
         other => {
-            return Err(format!(
-                "--scale: one value or three, {} given",
-                other.len()
-            ));
+            return Err(format!("--scale: one value or three, {} given", other.len()).into());
         }
     };
     if scale.iter().any(|s| !(s.is_finite() && *s != 0.0)) {
@@ -142,7 +139,8 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
             "--scale: the values are already in {} (read from {}); --scale is for counts",
             units::si(sensor),
             read.file.name()
-        ));
+        )
+        .into());
     }
     let (unit, si) = match (read.is_si(), args.scale.is_empty()) {
         (true, _) => (units::si(sensor), true),
@@ -190,7 +188,8 @@ pub fn run(args: &AllanArgs) -> Result<(), String> {
                 },
                 axes[j],
                 y[k]
-            ));
+            )
+            .into());
         }
         let t = allan::noise_terms(&c);
         println!("  {}: {}", axes[j], describe(&t, args.sensor, unit, si));

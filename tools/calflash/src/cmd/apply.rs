@@ -1,6 +1,7 @@
 //! `calflash apply`: raw counts through the firmware crate's own correction, to SI values, so
 //! a user sees exactly what the device computes.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use super::values;
@@ -85,7 +86,7 @@ struct Input {
     reference: Option<Vec<Vec<f64>>>,
 }
 
-fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
+fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, Failure> {
     let rails = spincal::model::Rails::new(i32::MIN, i32::MAX);
     let (acc, gyro) = match (channels, &args.gyro) {
         (6, Some(g)) => (args.input.as_path(), Some(g.as_path())),
@@ -95,7 +96,7 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
         _ => {
             return Err(format!(
                 "--gyro: the calibration corrects {channels} channel(s); a gyro file goes with an IMU calibration"
-            ));
+            ).into());
         }
     };
     let columns = if args.columns.is_empty() {
@@ -111,13 +112,14 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
         units: args.units.units(),
         columns,
     };
-    let rec = crate::obs::recording::read_with(acc, gyro, &opts).map_err(|e| e.to_string())?;
+    let rec = crate::obs::recording::read_with(acc, gyro, &opts)?;
     if rec.units.iter().any(|u| u.is_si()) {
         return Err(format!(
             "{}: the values are physical and the blob corrects converter codes; give --lsb \
              ACCEL,GYRO (the value of one code, as the calibration was made with)",
             rec.source
-        ));
+        )
+        .into());
     }
     Ok(Input {
         header: "line,t".into(),
@@ -155,7 +157,7 @@ fn recording_input(args: &ApplyArgs, channels: usize) -> Result<Input, String> {
 ///
 /// # Errors
 /// A bad blob or input file.
-pub fn run(args: &ApplyArgs) -> Result<(), String> {
+pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
     Paths::new()
         .input("--blob", Some(&args.blob))
         .input("the raw file", Some(&args.input))
@@ -188,7 +190,8 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
             "--columns: the calibration corrects {} channel(s), {} columns given",
             default_cols.len(),
             cols.len()
-        ));
+        )
+        .into());
     }
     let reference_cols: Vec<&str> = match &data.sensor {
         Sensor::Single { .. } => vec![col::INPUT],
@@ -211,8 +214,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
         if args.reference {
             wanted.extend(reference_cols.iter().map(|c| c.to_string()));
         }
-        let table =
-            obs::read_columns(&args.input, &wanted, args.format).map_err(|e| e.to_string())?;
+        let table = obs::read_columns(&args.input, &wanted, args.format)?;
         let named = |c: &Option<String>| {
             c.as_ref()
                 .and_then(|t| table.column(t))
@@ -259,9 +261,9 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
                 "{}: unit {}'s calibration has lever arms, whose tangential term needs the sample rate: give --rate HZ, or the timestamps with --time-column NAME",
                 args.blob.display(),
                 data.identity.serial
-            ));
+            ).into());
         }
-        Err(e) => return Err(format!("{}: {e}", args.input.display())),
+        Err(e) => return Err(format!("{}: {e}", args.input.display()).into()),
     };
     let env = &data.environment;
     let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
@@ -314,7 +316,8 @@ pub fn run(args: &ApplyArgs) -> Result<(), String> {
                 args.input.display(),
                 input.labels[i],
                 raw.len()
-            ));
+            )
+            .into());
         };
         let values = o.values[..n].to_vec();
         let flags: Flags = o.flags;

@@ -3,6 +3,7 @@
 //! calibrated exactly as one file at a time would be; a unit that fails does not stop the
 //! others.
 
+use crate::cmd::Failure;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
@@ -129,7 +130,7 @@ pub fn calibrate_all(
             Outcome {
                 serial: serial.clone(),
                 file: file.clone(),
-                result,
+                result: result.map_err(|e| e.to_string()),
             }
         })
         .collect();
@@ -141,7 +142,7 @@ pub fn calibrate_all(
 ///
 /// # Errors
 /// The option given.
-pub fn check_options(args: &CalibrateArgs) -> Result<(), String> {
+pub fn check_options(args: &CalibrateArgs) -> Result<(), Failure> {
     for (given, name) in [
         (args.serial.is_some(), "--serial"),
         (args.out.blob.is_some(), "--blob"),
@@ -152,7 +153,7 @@ pub fn check_options(args: &CalibrateArgs) -> Result<(), String> {
         if given {
             return Err(format!(
                 "{name} names one unit's; in a batch each unit's serial is its file's name (or its fixture columns'), its files go to --out-dir, and a signed blob's counter comes from its history"
-            ));
+            ).into());
         }
     }
     Ok(())
@@ -163,13 +164,13 @@ pub fn check_options(args: &CalibrateArgs) -> Result<(), String> {
 /// # Errors
 /// Options a batch cannot take, two files of one serial, or units that failed (after all
 /// the others are done: the message says how many and which).
-pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
+pub fn run(args: &CalibrateArgs) -> Result<Verdict, Failure> {
     let out_dir = args.out_dir.as_ref().ok_or(
         "a batch (several files or a directory) writes each unit's files into --out-dir: give it",
     )?;
     check_options(args)?;
     if !out_dir.is_dir() {
-        return Err(format!("--out-dir {}: not a directory", out_dir.display()));
+        return Err(format!("--out-dir {}: not a directory", out_dir.display()).into());
     }
     let files = files(&args.data)?;
     let mut units: Vec<(String, PathBuf)> = Vec::with_capacity(files.len());
@@ -180,7 +181,8 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
                 "{} and {}: two files for unit {serial}",
                 other.display(),
                 f.display()
-            ));
+            )
+            .into());
         }
         units.push((serial, f.clone()));
     }
@@ -196,7 +198,7 @@ pub fn run_units(
     args: &CalibrateArgs,
     units: &[(String, PathBuf)],
     out_dir: &Path,
-) -> Result<Verdict, String> {
+) -> Result<Verdict, Failure> {
     let outcomes = calibrate_all(args, units, out_dir);
     println!(
         "calflash calibrate  {} units on {} threads into {}",
@@ -239,7 +241,8 @@ pub fn run_units(
             failed.len(),
             outcomes.len(),
             failed.join(", ")
-        ));
+        )
+        .into());
     }
     Ok(outcomes
         .iter()

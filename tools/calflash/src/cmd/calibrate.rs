@@ -1,6 +1,7 @@
 //! `calflash calibrate`: a sensor workflow from observations to the device's blob, with the
 //! report and the record.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use super::values::{self, SensorKind};
@@ -154,7 +155,7 @@ pub struct CalibrateArgs {
 ///
 /// # Errors
 /// A message naming the file, column, term or table point.
-pub fn run(args: &CalibrateArgs) -> Result<Verdict, String> {
+pub fn run(args: &CalibrateArgs) -> Result<Verdict, Failure> {
     if args.fixture {
         super::batch::check_options(args)?;
         return super::fixture::run(args);
@@ -190,7 +191,7 @@ pub fn calibrate_one(
     serial: &str,
     out: &Outputs,
     said: &mut String,
-) -> Result<Verdict, String> {
+) -> Result<Verdict, Failure> {
     use std::fmt::Write as _;
     sensor::blob::serial(serial)?;
     out.check(
@@ -258,8 +259,7 @@ pub fn calibrate_one(
         SensorKind::Accel => triad::calibrate(&opts, triad::Kind::Accel, args.nonlinear),
         SensorKind::Gyro => triad::calibrate(&opts, triad::Kind::Gyro, args.nonlinear),
         SensorKind::Imu => triad::calibrate(&opts, triad::Kind::Imu, args.nonlinear),
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     let mut c = c;
     if let Some(terms) = noise {
         c.data.noise = Some(terms);

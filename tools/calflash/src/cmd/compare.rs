@@ -1,6 +1,7 @@
 //! `calflash compare`: which terms of a unit's calibration moved beyond their uncertainty
 //! between two calibrations.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -32,7 +33,7 @@ pub struct CompareArgs {
 ///
 /// # Errors
 /// Unreadable or incomparable records.
-pub fn run(args: &CompareArgs) -> Result<(), String> {
+pub fn run(args: &CompareArgs) -> Result<(), Failure> {
     let file = |r: &str| (!r.starts_with("db:")).then(|| std::path::PathBuf::from(r));
     let (before, after) = (file(&args.before), file(&args.after));
     crate::files::Paths::new()
@@ -65,9 +66,9 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
         return against_health(args, &ta, &sa, &h);
     }
     if health_of(&ta, &sa)?.is_some() {
-        return Err(format!(
-            "{sa}: a health report comes second, after the calibration it judged"
-        ));
+        return Err(
+            format!("{sa}: a health report comes second, after the calibration it judged").into(),
+        );
     }
     let a = Estimates::parse(&ta, &sa)?;
     let b = Estimates::parse(&tb, &sb)?;
@@ -136,7 +137,7 @@ fn against_health(
     before: &str,
     source: &str,
     health: &serde_json::Value,
-) -> Result<(), String> {
+) -> Result<(), Failure> {
     let factory: serde_json::Value =
         serde_json::from_str(before).map_err(|e| format!("{source}: not a record: {e}"))?;
     let serial = factory["serial"].as_str().unwrap_or_default();
@@ -144,19 +145,19 @@ fn against_health(
         return Err(format!(
             "{source} is of unit {serial}, the health report of unit {}: compare a unit with itself",
             health["serial"]
-        ));
+        ).into());
     }
     if let (Some(a), Some(b)) = (factory["data_hash"].as_str(), health["data_hash"].as_str())
         && a != b
     {
         return Err(format!(
             "{source}: the health report judged another calibration of unit {serial} (data {b}, this one {a}); compare it with that one"
-        ));
+        ).into());
     }
     let h = &health["health"];
     let get = |key: &str, i: usize| h[key][i].as_f64().unwrap_or(f64::NAN);
     // Chi-square with one degree of freedom at alpha / 6: the square of the normal quantile.
-    let normal = statrs::distribution::Normal::new(0.0, 1.0).map_err(|e| e.to_string())?;
+    let normal = statrs::distribution::Normal::new(0.0, 1.0)?;
     let z = statrs::distribution::ContinuousCDF::inverse_cdf(&normal, 1.0 - args.alpha / 12.0);
     let limit = z * z;
     println!(

@@ -1,5 +1,6 @@
 //! `calflash fit`: fit a formula model to a file of observations.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -94,12 +95,12 @@ fn parse_curve(text: &str) -> Result<CurveSpec, String> {
 ///
 /// # Errors
 /// A one-line message naming the file, line and column or the term.
-pub fn run(args: &FitArgs) -> Result<(), String> {
+pub fn run(args: &FitArgs) -> Result<(), Failure> {
     crate::files::Paths::new()
         .input("the data", Some(&args.file))
         .output("--json", args.json.as_deref())
         .check()?;
-    let formula = formula::parse(&args.model).map_err(|e| e.to_string())?;
+    let formula = formula::parse(&args.model)?;
     let compare = args
         .compare
         .as_deref()
@@ -124,10 +125,10 @@ pub fn run(args: &FitArgs) -> Result<(), String> {
             ..Options::default()
         },
     };
-    let reg = regression::run(&req).map_err(|e| e.to_string())?;
+    let reg = regression::run(&req)?;
     match args.json.as_deref() {
         Some(p) if p == std::path::Path::new("-") => {
-            report::json::write(&reg, std::io::stdout().lock()).map_err(|e| e.to_string())?;
+            report::json::write(&reg, std::io::stdout().lock())?;
             println!();
         }
         Some(p) => {

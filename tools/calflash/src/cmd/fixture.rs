@@ -5,6 +5,7 @@
 //! columns are split into its own observation file in `--out-dir` (`SERIAL.obs.csv`, kept
 //! beside its blob for traceability) and the units are calibrated as a batch.
 
+use crate::cmd::Failure;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -202,7 +203,7 @@ pub fn split(
 ///
 /// # Errors
 /// As [`split`] and the batch.
-pub fn run(args: &CalibrateArgs) -> Result<crate::sensor::Verdict, String> {
+pub fn run(args: &CalibrateArgs) -> Result<crate::sensor::Verdict, Failure> {
     let [data] = args.data.as_slice() else {
         return Err("--fixture: give one fixture file".into());
     };
@@ -211,7 +212,7 @@ pub fn run(args: &CalibrateArgs) -> Result<crate::sensor::Verdict, String> {
         .as_ref()
         .ok_or("--fixture writes each unit's files into --out-dir: give it")?;
     if !out_dir.is_dir() {
-        return Err(format!("--out-dir {}: not a directory", out_dir.display()));
+        return Err(format!("--out-dir {}: not a directory", out_dir.display()).into());
     }
     let units = split(data, args.sensor, &args.units, out_dir)?;
     super::batch::run_units(args, &units, out_dir)

@@ -1,5 +1,6 @@
 //! `calflash flash`: write a blob into a unit over its serial link and verify it there.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -52,7 +53,7 @@ fn timeout(s: &str) -> Result<f64, String> {
 ///
 /// # Errors
 /// A message saying what failed and what the unit holds.
-pub fn run(args: &FlashArgs) -> Result<(), String> {
+pub fn run(args: &FlashArgs) -> Result<(), Failure> {
     let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let key = crate::signing::key_path(args.sign_key.as_deref())
         .map(|p| crate::signing::load_private(&p))
@@ -61,7 +62,7 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
     let link = Link::open(&args.port, timeout)?;
     let mut client = Client::new(link, timeout);
     // Who answers: a unit that does not says so and nothing is recorded.
-    let id = client.identify().map_err(|e| e.to_string())?;
+    let id = client.identify()?;
     if id.trust == spincal::protocol::Trust::Unprovisioned {
         println!(
             "  unit {} is UNPROVISIONED: it holds no station key and takes unsigned calibrations from anyone with the cable",
@@ -170,7 +171,7 @@ pub fn run(args: &FlashArgs) -> Result<(), String> {
                     Err(said) => eprintln!("  the failed attempt is {said}"),
                 }
             }
-            Err(msg)
+            Err(msg.into())
         }
     }
 }

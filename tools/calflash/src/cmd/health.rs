@@ -2,6 +2,7 @@
 //! rest (`spincal::health`), read from the unit over its link, or run on the host over a raw
 //! recording with the unit's blob; shown, and recorded in the unit history.
 
+use crate::cmd::Failure;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -56,7 +57,7 @@ pub struct HealthArgs {
 ///
 /// # Errors
 /// A message naming the file, line or request that failed.
-pub fn run(args: &HealthArgs) -> Result<&'static str, String> {
+pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
     let db_path = (!args.no_db).then(|| crate::db::Location::or_default(args.db.as_ref()));
     Paths::new()
         .input("the recording", args.recording.as_deref())
@@ -101,7 +102,7 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, String> {
     });
     print!("{}", summary(&serial, &source, &health));
     if let Some(p) = &args.json {
-        let body = serde_json::to_vec_pretty(&record).map_err(|e| e.to_string())?;
+        let body = serde_json::to_vec_pretty(&record)?;
         crate::files::write_atomically(p, |w| std::io::Write::write_all(w, &body))?;
         println!("  record: {}", p.display());
     }
@@ -113,8 +114,7 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, String> {
             &record,
             &beside,
             &serial,
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         println!("  {said}");
     }
     Ok(health.verdict.word())
@@ -158,7 +158,7 @@ fn environment(args: &HealthArgs, cal: &spincal::model::Calibration) -> (f32, f3
 }
 
 /// The device's correction and health check over the recording, on the host.
-fn on_host(args: &HealthArgs, bytes: &[u8], rec: &Path) -> Result<Health, String> {
+fn on_host(args: &HealthArgs, bytes: &[u8], rec: &Path) -> Result<Health, Failure> {
     let name = args.blob.as_deref().unwrap_or(rec).display().to_string();
     let cal = crate::signing::calibration(bytes).map_err(|e| format!("{name}: {e}"))?;
     let (raw, rate) = samples(args, rec)?;

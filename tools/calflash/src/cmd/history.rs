@@ -1,5 +1,6 @@
 //! `calflash history`: every fit and flash of a unit.
 
+use crate::cmd::Failure;
 use clap::Args;
 
 use crate::db::Db;
@@ -22,16 +23,11 @@ pub struct HistoryArgs {
 ///
 /// # Errors
 /// An unreadable database.
-pub fn run(args: &HistoryArgs) -> Result<(), String> {
+pub fn run(args: &HistoryArgs) -> Result<(), Failure> {
     let path = crate::db::Location::or_default(args.db.as_ref());
-    let rows = Db::open_existing(&path)
-        .and_then(|mut d| d.history(&args.serial))
-        .map_err(|e| e.to_string())?;
+    let rows = Db::open_existing(&path).and_then(|mut d| d.history(&args.serial))?;
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?
-        );
+        println!("{}", serde_json::to_string_pretty(&rows)?);
         return Ok(());
     }
     println!(

@@ -1,6 +1,7 @@
 //! `calflash db`: the unit history itself: copy a station's SQLite history into the shared
 //! PostgreSQL database (or any history into another).
 
+use crate::cmd::Failure;
 use clap::{Args, Subcommand};
 
 use crate::db::{self, Db, Location};
@@ -39,24 +40,24 @@ pub struct MigrateArgs {
 ///
 /// # Errors
 /// Either history's failure, named; nothing is written then.
-pub fn run(args: &DbArgs) -> Result<(), String> {
+pub fn run(args: &DbArgs) -> Result<(), Failure> {
     match &args.command {
         DbCommand::Migrate(m) => migrate(m),
     }
 }
 
-fn migrate(args: &MigrateArgs) -> Result<(), String> {
+fn migrate(args: &MigrateArgs) -> Result<(), Failure> {
     let to = Location::or_default(args.to.as_ref());
     let from = &args.from;
     if to == *from {
         return Err(format!(
             "calflash db migrate: {from} is both the history to copy and the one to copy into"
-        ));
+        )
+        .into());
     }
     let station = args.station.clone().unwrap_or_else(db::station);
     let (records, copied) = Db::open_existing(from)
-        .and_then(|mut source| Db::open(&to)?.copy_from(&mut source, &station))
-        .map_err(|e| e.to_string())?;
+        .and_then(|mut source| Db::open(&to)?.copy_from(&mut source, &station))?;
     println!(
         "calflash db migrate  {from} -> {to}: {copied} of {records} records copied{}",
         if copied < records {

@@ -1,5 +1,6 @@
 //! `calflash image`: the calibration region as a file for any flasher, or written over SWD.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -35,7 +36,7 @@ pub struct ImageArgs {
 ///
 /// # Errors
 /// A bad blob, an unwritable file, or a probe failure.
-pub fn run(args: &ImageArgs) -> Result<(), String> {
+pub fn run(args: &ImageArgs) -> Result<(), Failure> {
     let mut paths = crate::files::Paths::new().input("--blob", args.blob.as_deref());
     for k in &args.station_key {
         paths = paths.input("--station-key", Some(k));
@@ -108,7 +109,7 @@ pub fn run(args: &ImageArgs) -> Result<(), String> {
 }
 
 #[cfg(feature = "probe")]
-fn probe(chip: &str, address: u32, image: &[u8]) -> Result<(), String> {
+fn probe(chip: &str, address: u32, image: &[u8]) -> Result<(), Failure> {
     use probe_rs::flashing::{DownloadOptions, FlashLoader};
     use probe_rs::{Session, SessionConfig};
     let mut session = Session::auto_attach(chip, SessionConfig::default())
@@ -131,6 +132,6 @@ fn probe(chip: &str, address: u32, image: &[u8]) -> Result<(), String> {
 }
 
 #[cfg(not(feature = "probe"))]
-fn probe(_chip: &str, _address: u32, _image: &[u8]) -> Result<(), String> {
+fn probe(_chip: &str, _address: u32, _image: &[u8]) -> Result<(), Failure> {
     Err("this calflash was built without the `probe` feature (cargo build -p calflash --features probe)".into())
 }

@@ -1,6 +1,7 @@
 //! `calflash keygen` and `calflash sign`: the station's key pair, and a blob signed with it for
 //! a unit that holds the station's public key (issue 17).
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -20,7 +21,7 @@ pub struct KeygenArgs {
 ///
 /// # Errors
 /// Files that exist or cannot be written.
-pub fn keygen(args: &KeygenArgs) -> Result<(), String> {
+pub fn keygen(args: &KeygenArgs) -> Result<(), Failure> {
     let private = args.prefix.with_extension("key");
     let public = args.prefix.with_extension("pub");
     let id = signing::keygen(&private, &public)?;
@@ -58,7 +59,7 @@ pub struct SignArgs {
 ///
 /// # Errors
 /// Unreadable key or blob, a key readable by others, a blob already signed.
-pub fn sign(args: &SignArgs) -> Result<(), String> {
+pub fn sign(args: &SignArgs) -> Result<(), Failure> {
     let key_path = signing::key_path(args.sign_key.as_deref()).ok_or(
         "no key: give --sign-key or set $CALFLASH_SIGN_KEY (make one with `calflash keygen`)",
     )?;

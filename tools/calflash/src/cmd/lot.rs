@@ -1,5 +1,6 @@
 //! `calflash lot`: a production lot from the unit history, judged as a lot.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
@@ -108,15 +109,15 @@ fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, String> {
 ///
 /// # Errors
 /// An unreadable history, too few units, or no shared coefficients.
-pub fn load(path: &Location, sel: &Selection<'_>, alpha: f64) -> Result<lot::Lot, String> {
-    judge(path, sel, units(path, sel)?, alpha)
+pub fn load(path: &Location, sel: &Selection<'_>, alpha: f64) -> Result<lot::Lot, Failure> {
+    Ok(judge(path, sel, units(path, sel)?, alpha)?)
 }
 
 /// Runs `calflash lot`.
 ///
 /// # Errors
 /// As [`load`], a coefficient to chart that the lot lacks, or an unwritable JSON file.
-pub fn run(args: &LotArgs) -> Result<(), String> {
+pub fn run(args: &LotArgs) -> Result<(), Failure> {
     let path = crate::db::Location::or_default(args.db.as_ref());
     crate::files::Paths::new()
         .input("--db", path.file())

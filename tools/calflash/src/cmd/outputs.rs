@@ -1,6 +1,7 @@
 //! What a calibration command writes: the blob, the HTML report, the JSON record, and the
 //! entry in the unit history. Shared by `calflash calibrate` and `calflash selfcal`.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -64,14 +65,15 @@ impl Outputs {
     ///
     /// # Errors
     /// The two options that name one file.
-    pub fn check(&self, inputs: Paths) -> Result<(), String> {
+    pub fn check(&self, inputs: Paths) -> Result<(), Failure> {
         let db = (!self.no_db).then(|| crate::db::Location::or_default(self.db.as_ref()));
         inputs
             .output("--blob", self.blob.as_deref())
             .output("--report", self.report.as_deref())
             .output("--json", self.json.as_deref())
             .created("the unit history", db.as_ref().and_then(db::Location::file))
-            .check()
+            .check()?;
+        Ok(())
     }
 
     /// Where the unit with `coefficients` stands against its lot (`--lot`), as a finding: a
@@ -140,7 +142,7 @@ impl Outputs {
     ///
     /// # Errors
     /// An unreadable key or one others may read, a history that cannot be read, or no counter.
-    pub fn sign(&self, blob: Vec<u8>, serial: &str, rejected: bool) -> Result<Signed, String> {
+    pub fn sign(&self, blob: Vec<u8>, serial: &str, rejected: bool) -> Result<Signed, Failure> {
         let Some(key_path) = crate::signing::key_path(self.sign_key.as_deref()) else {
             return Ok(Signed {
                 bytes: blob,
@@ -168,9 +170,7 @@ impl Outputs {
                 let path = crate::db::Location::or_default(self.db.as_ref());
                 let held = match path.file() {
                     Some(f) if !f.exists() => 0,
-                    _ => Db::open(&path)
-                        .and_then(|mut d| d.highest_counter(serial))
-                        .map_err(|e| e.to_string())?,
+                    _ => Db::open(&path).and_then(|mut d| d.highest_counter(serial))?,
                 };
                 held.checked_add(1)
                     .ok_or("the unit's history holds the highest counter there is")?
@@ -201,7 +201,7 @@ impl Outputs {
         blob: Option<&[u8]>,
         record: &impl serde::Serialize,
         html: impl FnOnce() -> Result<String, String>,
-    ) -> Result<(), String> {
+    ) -> Result<(), Failure> {
         let html = self.report.as_ref().map(|_| html()).transpose()?;
         let mut staged = Staged::new();
         if let (Some(p), Some(blob)) = (&self.blob, blob) {
@@ -215,7 +215,7 @@ impl Outputs {
                 serde_json::to_writer_pretty(&mut *w, record).map_err(std::io::Error::other)
             })?;
         }
-        staged.commit()
+        Ok(staged.commit()?)
     }
 
     /// Records the calibration in the unit history with `save` (unless `--no-db`) and says

@@ -1,5 +1,6 @@
 //! `calflash selfcal`: an IMU calibrated from a recording of still poses, with no equipment.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use crate::files::Paths;
@@ -83,7 +84,7 @@ fn gravity(s: &str) -> Result<f64, String> {
 ///
 /// # Errors
 /// Bad input, or a recording that cannot calibrate the unit (the message says what to do).
-pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
+pub fn run(args: &SelfcalArgs) -> Result<bool, Failure> {
     if args.out.lot.is_some() {
         return Err("--lot: lots are judged on the coefficients of `calflash calibrate` (bias and scale per axis); a calibration without equipment has others, so it joins no lot".into());
     }
@@ -106,8 +107,7 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
             units: args.units.units(),
             columns: args.columns.chosen(),
         },
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let init_rest = match (args.init_rest, rec.rest) {
         (Some(r), _) => r,
         (None, Some(r)) => r,
@@ -122,7 +122,7 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
         gyro_bias: args.gyro_bias,
         ..Options::default()
     };
-    let c = selfcal::calibrate(&rec, &opts).map_err(|e| e.to_string())?;
+    let c = selfcal::calibrate(&rec, &opts)?;
     let reject = !acceptance::rejected(&c).is_empty();
     let mut files = vec![args.acc.as_path()];
     files.extend(args.gyro.as_deref());
@@ -130,7 +130,7 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
     let identity = crate::sensor::blob::new_identity(
         serial.clone(),
         None,
-        crate::sensor::data_hash(&files).map_err(|e| e.to_string())?,
+        crate::sensor::data_hash(&files)?,
         reject,
     );
     // SI values cannot make a blob: the device corrects converter codes.
@@ -153,7 +153,8 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, String> {
         return Err(format!(
             "--blob: {}",
             record::NO_BLOB.trim_start_matches("no blob: ")
-        ));
+        )
+        .into());
     }
     let name = serial.as_str();
     let record = SelfcalRecord::new(&c, &rec, check, name);

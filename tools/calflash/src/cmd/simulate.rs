@@ -1,5 +1,6 @@
 //! `calflash simulate`: a virtual sensor through a test plan, to an observation file.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use crate::files::{Paths, Staged};
@@ -124,13 +125,13 @@ pub struct SimulateArgs {
     pub output: PathBuf,
 }
 
-fn load<T: serde::de::DeserializeOwned + Default>(p: Option<&PathBuf>) -> Result<T, String> {
+fn load<T: serde::de::DeserializeOwned + Default>(p: Option<&PathBuf>) -> Result<T, Failure> {
     match p {
         None => Ok(T::default()),
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
-            serde_json::from_str(&text)
-                .map_err(|e| format!("{}:{}:{}: {e}", p.display(), e.line(), e.column()))
+            Ok(serde_json::from_str(&text)
+                .map_err(|e| format!("{}:{}:{}: {e}", p.display(), e.line(), e.column()))?)
         }
     }
 }
@@ -190,7 +191,7 @@ fn coning(text: &str) -> Result<(f64, f64), String> {
 /// The most samples a simulated flight holds (about 2 GB of CSV).
 const MAX_FLIGHT_SAMPLES: f64 = 1e7;
 
-fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
+fn flight(args: &SimulateArgs, profile: &str) -> Result<(), Failure> {
     use crate::sim::spin;
     let sample_rate = args.sample_rate.unwrap_or(2000.0);
     if args.sensor != SensorKind::Imu {
@@ -204,7 +205,7 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
              (shorten the profile or lower --sample-rate)",
             sample_rate,
             seconds * sample_rate
-        ));
+        ).into());
     }
     let (cone_angle, cone_hz) = match &args.coning {
         Some(c) => coning(c)?,
@@ -224,7 +225,8 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
             return Err(format!(
                 "--spin-axis `{}`: three finite numbers, not all zero",
                 args.spin_axis
-            ));
+            )
+            .into());
         }
     };
     let mut truth = load::<truth::ImuTruth>(args.truth.as_ref())?;
@@ -254,7 +256,7 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), String> {
     let mut staged = Staged::new();
     staged.write(&args.output, |w| spin::write_csv(&samples, w))?;
     if let Some(p) = &args.write_truth {
-        let json = serde_json::to_string_pretty(&truth).map_err(|e| e.to_string())?;
+        let json = serde_json::to_string_pretty(&truth)?;
         staged.write(p, |w| w.write_all(json.as_bytes()))?;
     }
     staged.commit()?;
@@ -311,7 +313,7 @@ fn ramp_columns(obs: &mut sim::Observations, temps: &ramp::Temperatures) {
 }
 
 /// `--rest`: the unit at rest and handled, raw counts of its blob's correction.
-fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), String> {
+fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), Failure> {
     if args.sensor != SensorKind::Imu {
         return Err("--rest: a unit at rest is simulated as an IMU (--sensor imu)".into());
     }
@@ -352,7 +354,7 @@ fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), String> {
 ///
 /// # Errors
 /// A bad plan item or truth file.
-pub fn run(args: &SimulateArgs) -> Result<(), String> {
+pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     Paths::new()
         .input("--plan-file", args.plan_file.as_deref())
         .input("--truth", args.truth.as_deref())
@@ -375,21 +377,20 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
         // Along a ramp, each repeat runs the plan at every voltage in turn, so that the
         // voltages share the temperatures.
         None if args.ramp.is_some() => {
-            let once = plan::plan(&args.plan, &args.temps, &args.volts, 1, single)
-                .map_err(|e| e.to_string())?;
+            let once = plan::plan(&args.plan, &args.temps, &args.volts, 1, single)?;
             if once.len().saturating_mul(args.repeat) > plan::MAX_CONDITIONS {
                 return Err(format!(
                     "{} conditions with every voltage and repeat; a plan holds at most {}",
                     once.len().saturating_mul(args.repeat),
                     plan::MAX_CONDITIONS
-                ));
+                )
+                .into());
             }
             (0..args.repeat)
                 .flat_map(|_| once.iter().copied())
                 .collect()
         }
-        None => plan::plan(&args.plan, &args.temps, &args.volts, args.repeat, single)
-            .map_err(|e| e.to_string())?,
+        None => plan::plan(&args.plan, &args.temps, &args.volts, args.repeat, single)?,
     };
     let ramp = match &args.ramp {
         Some(text) => {
@@ -454,8 +455,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), String> {
             Sensor::Single { truth, .. } => serde_json::to_string_pretty(truth),
             Sensor::Accel(t) | Sensor::Gyro(t) => serde_json::to_string_pretty(t),
             Sensor::Imu(t) => serde_json::to_string_pretty(t),
-        }
-        .map_err(|e| e.to_string())?;
+        }?;
         staged.write(p, |w| w.write_all(json.as_bytes()))?;
     }
     staged.commit()?;

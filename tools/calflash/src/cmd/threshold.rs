@@ -1,5 +1,6 @@
 //! `calflash threshold`: threshold, dead band and resolution from a fine-step run.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -29,13 +30,12 @@ pub struct ThresholdArgs {
 ///
 /// # Errors
 /// A bad file or a run that cannot give the figures.
-pub fn run(args: &ThresholdArgs) -> Result<(), String> {
+pub fn run(args: &ThresholdArgs) -> Result<(), Failure> {
     let t = obs::read_columns(
         &args.data,
         &[col::INPUT.into(), col::OUTPUT.into()],
         args.format,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let r = threshold::analyse(
         t.column(col::INPUT).unwrap_or_default(),
         t.column(col::OUTPUT).unwrap_or_default(),

@@ -1,5 +1,6 @@
 //! `calflash design evaluate`: what a plan estimates, and how well.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use crate::files::{Paths, Staged};
@@ -43,7 +44,7 @@ pub struct EvaluateArgs {
     pub json: Option<PathBuf>,
 }
 
-pub(super) fn run(a: &EvaluateArgs) -> Result<(), String> {
+pub(super) fn run(a: &EvaluateArgs) -> Result<(), Failure> {
     plan_files(&a.plan, "--plan", Paths::new())
         .output("--json", a.json.as_deref())
         .output("--report", a.report.as_deref())
@@ -121,7 +122,7 @@ fn write_evaluation(
     blocks: &[Block],
     plans: &[show::PlanResult],
     curve: Option<&Points>,
-) -> Result<(), String> {
+) -> Result<(), Failure> {
     let mut staged = Staged::new();
     if let Some(path) = &a.json {
         let v = show::evaluate_json(blocks, plans);
@@ -133,7 +134,7 @@ fn write_evaluation(
         let html = show::evaluate_html(&a.model.model, blocks, plans, curve)?;
         staged.write(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
     }
-    staged.commit()
+    Ok(staged.commit()?)
 }
 
 /// `design evaluate` of the spin-rig model: each plan on the lever-arm components it can
@@ -144,7 +145,7 @@ fn evaluate_spin_rig(
     blocks: &[Block],
     loaded: Vec<(String, Points)>,
     union: &Points,
-) -> Result<(), String> {
+) -> Result<(), Failure> {
     if a.fixture_error.is_some() {
         return Err("--fixture-error: not with the lever-arm model".into());
     }

@@ -8,6 +8,7 @@ pub use evaluate::EvaluateArgs;
 pub use optimize::{MAX_PLAN, OptimizeArgs};
 pub use predict::{MAX_MONTE_CARLO, MAX_SIMULATED, PredictArgs};
 
+use crate::cmd::Failure;
 use std::path::Path;
 
 use clap::{Args, Subcommand};
@@ -82,7 +83,7 @@ impl ModelArgs {
 ///
 /// # Errors
 /// Bad input or a plan that cannot estimate the model.
-pub fn run(args: &DesignArgs) -> Result<(), String> {
+pub fn run(args: &DesignArgs) -> Result<(), Failure> {
     match &args.action {
         Action::Evaluate(a) => evaluate::run(a),
         Action::Optimize(a) => optimize::run(a),

@@ -1,5 +1,6 @@
 //! `calflash design optimize`: the plan of a given size that estimates the model best.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use crate::files::Paths;
@@ -50,7 +51,7 @@ pub struct OptimizeArgs {
     pub output: PathBuf,
 }
 
-pub(super) fn run(o: &OptimizeArgs) -> Result<(), String> {
+pub(super) fn run(o: &OptimizeArgs) -> Result<(), Failure> {
     plan_files(&o.candidates, "--candidates", Paths::new())
         .output("-o", Some(&o.output))
         .check()?;
@@ -90,7 +91,7 @@ pub(super) fn run(o: &OptimizeArgs) -> Result<(), String> {
     for (i, (name, pts)) in compare.iter().enumerate() {
         match space.evaluate_plan(name, pts, &blocks, &searched.region) {
             // The plan found is the answer: failing to evaluate it is the command's failure.
-            Err(e) if i == 0 => return Err(e),
+            Err(e) if i == 0 => return Err(e.into()),
             Ok(c) => rows.push(show::PlanResult {
                 name: name.clone(),
                 points: pts.clone(),

@@ -1,6 +1,7 @@
 //! `calflash design predict`: the precision a plan gives, predicted and confirmed by
 //! simulation.
 
+use crate::cmd::Failure;
 use std::path::PathBuf;
 
 use crate::files::Paths;
@@ -58,7 +59,7 @@ pub struct PredictArgs {
     pub json: Option<PathBuf>,
 }
 
-pub(super) fn run(a: &PredictArgs) -> Result<(), String> {
+pub(super) fn run(a: &PredictArgs) -> Result<(), Failure> {
     plan_files(a.plan.iter(), "--plan", Paths::new())
         .output("--json", a.json.as_deref())
         .check()?;
@@ -102,7 +103,8 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), String> {
             return Err(format!(
                 "--at `{spec}`: the model reads no `{k}`; it reads {}",
                 vars.join(", ")
-            ));
+            )
+            .into());
         }
         let names: Vec<String> = point.values.iter().map(|(k, _)| k.clone()).collect();
         if at.rows.is_empty() {
@@ -111,7 +113,8 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), String> {
             return Err(format!(
                 "--at `{spec}`: every operating point must name the same variables ({})",
                 at.names.join(", ")
-            ));
+            )
+            .into());
         }
         at.rows.push(point.values.iter().map(|(_, v)| *v).collect());
     }
@@ -193,7 +196,8 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), String> {
                          observations; at most {MAX_SIMULATED:e} (fewer runs: 1,000 give the \
                          standard errors to about 2 %)",
                         pts.rows.len()
-                    ));
+                    )
+                    .into());
                 }
                 let bar = indicatif::ProgressBar::new(runs as u64);
                 bar.set_style(
