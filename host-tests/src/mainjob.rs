@@ -148,10 +148,10 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     let flash_file = w("unit-flash.bin");
     let (key_file, pub_file) = (w("station.key"), w("station.pub"));
     if !key_file.exists() {
-        calflash::signing::keygen(&key_file, &pub_file)?;
+        calflash::signing::keygen(&key_file, &pub_file).map_err(|e| e.to_string())?;
     }
-    let key = calflash::signing::load_private(&key_file)?;
-    let station = calflash::signing::load_public(&pub_file)?;
+    let key = calflash::signing::load_private(&key_file).map_err(|e| e.to_string())?;
+    let station = calflash::signing::load_public(&pub_file).map_err(|e| e.to_string())?;
     let provisioned = provision(&flash_file, station)?;
     say(&format!(
         "   the unit is provisioned with station key {} ({}{})",

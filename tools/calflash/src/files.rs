@@ -9,6 +9,59 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// Why a command's files cannot be used as given, or an output cannot be written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// An output's directory does not exist (and the command does not create it).
+    #[error("{what} {}: the directory {} does not exist; create it first", .path.display(), .dir.display())]
+    NoDirectory {
+        /// The option that gave it.
+        what: String,
+        /// The output.
+        path: PathBuf,
+        /// Its directory.
+        dir: PathBuf,
+    },
+    /// An output that is a directory.
+    #[error("{what} {}: that is a directory; give a file name", .path.display())]
+    IsDirectory {
+        /// The option that gave it.
+        what: String,
+        /// The output.
+        path: PathBuf,
+    },
+    /// An output that is one of the command's inputs.
+    #[error("{what} {}: that is the file {input} reads; the command would replace its own input", .path.display())]
+    ReplacesInput {
+        /// The option that gave the output.
+        what: String,
+        /// The output.
+        path: PathBuf,
+        /// The option that gave the input.
+        input: String,
+    },
+    /// Two outputs that are one file.
+    #[error("{what} {} and {other} name one file: give each output its own path", .path.display())]
+    SameOutput {
+        /// The option that gave the output.
+        what: String,
+        /// The output.
+        path: PathBuf,
+        /// The option that gave the other.
+        other: String,
+    },
+    /// Writing or renaming an output failed.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The output.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
 /// The files of one command, named by the option that gave them.
 #[derive(Debug, Clone, Default)]
 pub struct Paths {
@@ -88,33 +141,24 @@ impl Paths {
     ///
     /// # Errors
     /// The two options that name one file.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), Error> {
         for (i, (what, out)) in self.outputs.iter().enumerate() {
+            let (what, path) = (what.clone(), out.clone());
             let dir = dir_of(out);
             if !self.creates_dir[i] && !dir.is_dir() {
-                return Err(format!(
-                    "{what} {}: the directory {} does not exist; create it first",
-                    out.display(),
-                    dir.display()
-                ));
+                let dir = dir.to_path_buf();
+                return Err(Error::NoDirectory { what, path, dir });
             }
             if out.is_dir() {
-                return Err(format!(
-                    "{what} {}: that is a directory; give a file name",
-                    out.display()
-                ));
+                return Err(Error::IsDirectory { what, path });
             }
-            if let Some((src, _)) = self.inputs.iter().find(|(_, p)| same_file(p, out)) {
-                return Err(format!(
-                    "{what} {}: that is the file {src} reads; the command would replace its own input",
-                    out.display()
-                ));
+            if let Some((input, _)) = self.inputs.iter().find(|(_, p)| same_file(p, out)) {
+                let input = input.clone();
+                return Err(Error::ReplacesInput { what, path, input });
             }
             if let Some((other, _)) = self.outputs[..i].iter().find(|(_, p)| same_file(p, out)) {
-                return Err(format!(
-                    "{what} {} and {other} name one file: give each output its own path",
-                    out.display()
-                ));
+                let other = other.clone();
+                return Err(Error::SameOutput { what, path, other });
             }
         }
         Ok(())
@@ -177,7 +221,11 @@ impl Staged {
         &mut self,
         path: &Path,
         contents: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-    ) -> Result<(), String> {
+    ) -> Result<(), Error> {
+        let io = |source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        };
         let dir = dir_of(path);
         clean_stale(dir);
         let mut builder = tempfile::Builder::new();
@@ -189,13 +237,11 @@ impl Staged {
             // An ordinary file for its reader, not the private 0600 of a temporary file.
             builder.permissions(std::fs::Permissions::from_mode(0o644));
         }
-        let mut tmp = builder
-            .tempfile_in(dir)
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut tmp = builder.tempfile_in(dir).map_err(io)?;
         {
             let mut w = std::io::BufWriter::new(tmp.as_file_mut());
-            contents(&mut w).map_err(|e| format!("{}: {e}", path.display()))?;
-            w.flush().map_err(|e| format!("{}: {e}", path.display()))?;
+            contents(&mut w).map_err(io)?;
+            w.flush().map_err(io)?;
         }
         self.files.push((tmp.into_temp_path(), path.to_path_buf()));
         Ok(())
@@ -205,10 +251,14 @@ impl Staged {
     ///
     /// # Errors
     /// A rename that fails (the ones before it are in place, the rest removed), naming it.
-    pub fn commit(self) -> Result<(), String> {
+    pub fn commit(self) -> Result<(), Error> {
         for (tmp, path) in self.files {
-            tmp.persist(&path)
-                .map_err(|e| format!("{}: {}", path.display(), e.error))?;
+            if let Err(e) = tmp.persist(&path) {
+                return Err(Error::Io {
+                    path,
+                    source: e.error,
+                });
+            }
         }
         Ok(())
     }
@@ -221,7 +271,7 @@ impl Staged {
 pub fn write_atomically(
     path: &Path,
     contents: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let mut s = Staged::new();
     s.write(path, contents)?;
     s.commit()
@@ -245,6 +295,7 @@ mod tests {
                 .output("--blob", Some(out))
                 .check()
                 .unwrap_err();
+            let e = e.to_string();
             assert!(e.contains("--blob") && e.contains("the data reads"), "{e}");
         }
         // Two outputs, one not yet existing.
@@ -255,13 +306,14 @@ mod tests {
             .check()
             .unwrap_err();
         // `sub` does not exist, so that output cannot be written at all.
-        assert!(e.contains("sub/.. does not exist"), "{e}");
+        assert!(e.to_string().contains("sub/.. does not exist"), "{e}");
         std::fs::create_dir(dir.path().join("sub")).unwrap();
         let e = Paths::new()
             .output("--blob", Some(&n))
             .output("--json", Some(&dir.path().join("sub/../new.json")))
             .check()
             .unwrap_err();
+        let e = e.to_string();
         assert!(e.contains("--json") && e.contains("--blob"), "{e}");
         assert!(
             Paths::new()

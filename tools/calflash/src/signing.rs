@@ -5,7 +5,7 @@
 //! owner only; the public one the 32-byte public key.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use ed25519_dalek::{Signer, SigningKey};
 use spincal::signed::{self, StationKey};
@@ -14,14 +14,54 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-fn unhex32(text: &str, path: &Path) -> Result<[u8; 32], String> {
+/// Why a key file cannot be written or used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum KeyError {
+    /// A key file to write that exists already.
+    #[error("{}: exists; a key is never overwritten (move it away first)", .0.display())]
+    Exists(PathBuf),
+    /// A key file that cannot be read or written.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The public key cannot be written.
+    #[error(transparent)]
+    Write(#[from] crate::files::Error),
+    /// A key file that is not 64 hex digits.
+    #[error("{}: expected 64 hex digits (a key written by `calflash keygen`)", .0.display())]
+    Malformed(PathBuf),
+    /// A private key that group or others may read.
+    #[error(
+        "{}: the private key is readable by others (mode {mode:o}); it signs every unit's \
+         calibration: `chmod 600 {}` and keep it so",
+        .path.display(),
+        .path.display()
+    )]
+    Exposed {
+        /// The file.
+        path: PathBuf,
+        /// Its permission bits.
+        mode: u32,
+    },
+}
+
+/// An I/O failure on key file `path`.
+fn io(path: &Path) -> impl Fn(std::io::Error) -> KeyError + '_ {
+    move |source| KeyError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn unhex32(text: &str, path: &Path) -> Result<[u8; 32], KeyError> {
     let t = text.trim();
-    let bad = || {
-        format!(
-            "{}: expected 64 hex digits (a key written by `calflash keygen`)",
-            path.display()
-        )
-    };
+    let bad = || KeyError::Malformed(path.to_path_buf());
     if t.len() != 64 {
         return Err(bad());
     }
@@ -37,13 +77,10 @@ fn unhex32(text: &str, path: &Path) -> Result<[u8; 32], String> {
 ///
 /// # Errors
 /// A file that exists or cannot be written, named.
-pub fn keygen(private: &Path, public: &Path) -> Result<[u8; 4], String> {
+pub fn keygen(private: &Path, public: &Path) -> Result<[u8; 4], KeyError> {
     for p in [private, public] {
         if p.exists() {
-            return Err(format!(
-                "{}: exists; a key is never overwritten (move it away first)",
-                p.display()
-            ));
+            return Err(KeyError::Exists(p.to_path_buf()));
         }
     }
     let seed: [u8; 32] = rand::random();
@@ -55,12 +92,9 @@ pub fn keygen(private: &Path, public: &Path) -> Result<[u8; 4], String> {
     opts.write(true).create_new(true);
     #[cfg(unix)]
     std::os::unix::fs::OpenOptionsExt::mode(&mut opts, 0o600);
-    let mut f = opts
-        .open(private)
-        .map_err(|e| format!("{}: {e}", private.display()))?;
-    writeln!(f, "{}", hex(&seed)).map_err(|e| format!("{}: {e}", private.display()))?;
-    f.sync_all()
-        .map_err(|e| format!("{}: {e}", private.display()))?;
+    let mut f = opts.open(private).map_err(io(private))?;
+    writeln!(f, "{}", hex(&seed)).map_err(io(private))?;
+    f.sync_all().map_err(io(private))?;
     crate::files::write_atomically(public, |w| writeln!(w, "{}", hex(&station.public)))?;
     Ok(station.id())
 }
@@ -69,25 +103,22 @@ pub fn keygen(private: &Path, public: &Path) -> Result<[u8; 4], String> {
 ///
 /// # Errors
 /// A missing or malformed file, or one readable by group or others.
-pub fn load_private(path: &Path) -> Result<SigningKey, String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn load_private(path: &Path) -> Result<SigningKey, KeyError> {
+    let meta = std::fs::metadata(path).map_err(io(path))?;
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
         let mode = meta.permissions().mode();
         if mode & 0o077 != 0 {
-            return Err(format!(
-                "{}: the private key is readable by others (mode {:o}); it signs every unit's \
-                 calibration: `chmod 600 {}` and keep it so",
-                path.display(),
-                mode & 0o777,
-                path.display()
-            ));
+            return Err(KeyError::Exposed {
+                path: path.to_path_buf(),
+                mode: mode & 0o777,
+            });
         }
     }
     #[cfg(not(unix))]
     let _ = meta;
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text = std::fs::read_to_string(path).map_err(io(path))?;
     Ok(SigningKey::from_bytes(&unhex32(&text, path)?))
 }
 
@@ -95,8 +126,8 @@ pub fn load_private(path: &Path) -> Result<SigningKey, String> {
 ///
 /// # Errors
 /// A missing or malformed file.
-pub fn load_public(path: &Path) -> Result<StationKey, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn load_public(path: &Path) -> Result<StationKey, KeyError> {
+    let text = std::fs::read_to_string(path).map_err(io(path))?;
     Ok(StationKey {
         public: unhex32(&text, path)?,
     })
@@ -164,7 +195,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let (sk, pk) = (dir.path().join("s.key"), dir.path().join("s.pub"));
         let id = keygen(&sk, &pk).unwrap();
-        assert!(keygen(&sk, &pk).unwrap_err().contains("never overwritten"));
+        assert!(matches!(keygen(&sk, &pk), Err(KeyError::Exists(p)) if p == sk));
         let key = load_private(&sk).unwrap();
         let public = load_public(&pk).unwrap();
         assert_eq!(public.id(), id);
@@ -189,12 +220,19 @@ mod tests {
             );
             std::fs::set_permissions(&sk, std::fs::Permissions::from_mode(0o644)).unwrap();
             let e = load_private(&sk).unwrap_err();
+            assert!(matches!(e, KeyError::Exposed { mode: 0o644, .. }), "{e:?}");
+            let e = e.to_string();
             assert!(
                 e.contains("readable by others") && e.contains("chmod 600"),
                 "{e}"
             );
         }
         std::fs::write(&pk, "zz\n").unwrap();
-        assert!(load_public(&pk).unwrap_err().contains("64 hex digits"));
+        assert!(
+            load_public(&pk)
+                .unwrap_err()
+                .to_string()
+                .contains("64 hex digits")
+        );
     }
 }

@@ -151,6 +151,6 @@ pub enum NotRecorded {
         /// Where it was to be saved.
         file: std::path::PathBuf,
         /// Why it could not be.
-        why: String,
+        why: crate::files::Error,
     },
 }
