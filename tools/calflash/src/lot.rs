@@ -10,6 +10,48 @@ use nalgebra::{DMatrix, DVector};
 use crate::stats::chart::{self, Chart};
 use crate::stats::robust::{self, ColumnLimits, Robust, RobustError};
 
+/// Why a lot cannot be judged, or a unit placed or charted in it.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A fit's coefficients that are not JSON.
+    #[error("{0}")]
+    NotJson(#[source] serde_json::Error),
+    /// JSON that holds no coefficients calflash wrote.
+    #[error("neither a calibration's points nor a selfcal record")]
+    NotCoefficients,
+    /// Fewer than two units.
+    #[error("a lot of {0} unit(s): at least 2 are needed to compare")]
+    TooFewUnits(usize),
+    /// No coefficient that every unit has varies across the lot.
+    #[error(
+        "no coefficient is shared by every unit and varies across the lot (are the units of one kind?)"
+    )]
+    NothingShared,
+    /// A unit without coefficients the lot is judged on.
+    #[error("the unit lacks coefficients its lot is judged on: {}", .0.join(", "))]
+    UnitLacks(Vec<String>),
+    /// A chart of a coefficient the lot is not judged on.
+    #[error("the lot has no coefficient {name}; it has {}", .has.join(", "))]
+    NoCoefficient {
+        /// The coefficient asked for.
+        name: String,
+        /// Those the lot has.
+        has: Vec<String>,
+    },
+    /// A chart of fewer than two units.
+    #[error(
+        "a chart of {name} needs two units{}",
+        .station.as_ref().map(|s| format!(" at station {s}")).unwrap_or_default()
+    )]
+    ChartTooShort {
+        /// The coefficient.
+        name: String,
+        /// The station, when the chart is of one.
+        station: Option<String>,
+    },
+}
+
 /// One unit's coefficients, by name (`OUTPUT:TERM`, with `@T` for each temperature point of a
 /// table beyond the first).
 #[derive(Debug, Clone)]
@@ -29,8 +71,8 @@ pub struct Unit {
 ///
 /// # Errors
 /// JSON that is neither.
-pub fn coefficients(json: &str) -> Result<BTreeMap<String, f64>, String> {
-    let v: serde_json::Value = serde_json::from_str(json).map_err(|e| e.to_string())?;
+pub fn coefficients(json: &str) -> Result<BTreeMap<String, f64>, Error> {
+    let v: serde_json::Value = serde_json::from_str(json).map_err(Error::NotJson)?;
     let mut out = BTreeMap::new();
     match &v {
         serde_json::Value::Array(points) => {
@@ -53,7 +95,7 @@ pub fn coefficients(json: &str) -> Result<BTreeMap<String, f64>, String> {
             }
         }
         serde_json::Value::Object(_) => flatten("", &v, &mut out),
-        _ => return Err("neither a calibration's points nor a selfcal record".into()),
+        _ => return Err(Error::NotCoefficients),
     }
     Ok(out)
 }
@@ -161,12 +203,9 @@ pub struct Lot {
 ///
 /// # Errors
 /// Fewer than two units, or no coefficient shared by all that varies.
-pub fn judge(units: Vec<Unit>, alpha: f64) -> Result<Lot, String> {
+pub fn judge(units: Vec<Unit>, alpha: f64) -> Result<Lot, Error> {
     if units.len() < 2 {
-        return Err(format!(
-            "a lot of {} unit(s): at least 2 are needed to compare",
-            units.len()
-        ));
+        return Err(Error::TooFewUnits(units.len()));
     }
     let mut shared: Vec<String> = units[0].coefficients.keys().cloned().collect();
     shared.retain(|k| units.iter().all(|u| u.coefficients.contains_key(k)));
@@ -184,10 +223,7 @@ pub fn judge(units: Vec<Unit>, alpha: f64) -> Result<Lot, String> {
         .partition(|k| robust::median_mad(&column(k)).1 > 0.0);
     left_out.extend(constant);
     if names.is_empty() {
-        return Err(
-            "no coefficient is shared by every unit and varies across the lot (are the units of one kind?)"
-                .into(),
-        );
+        return Err(Error::NothingShared);
     }
     let (n, p) = (units.len(), names.len());
     let cols: Vec<Vec<f64>> = names.iter().map(|k| column(k)).collect();
@@ -271,18 +307,15 @@ impl Lot {
     ///
     /// # Errors
     /// The unit lacks coefficients the lot is judged on.
-    pub fn place(&self, coefficients: &BTreeMap<String, f64>) -> Result<(Outlier, bool), String> {
-        let missing: Vec<&str> = self
+    pub fn place(&self, coefficients: &BTreeMap<String, f64>) -> Result<(Outlier, bool), Error> {
+        let missing: Vec<String> = self
             .names
             .iter()
             .filter(|k| !coefficients.contains_key(*k))
-            .map(String::as_str)
+            .cloned()
             .collect();
         if !missing.is_empty() {
-            return Err(format!(
-                "the unit lacks coefficients its lot is judged on: {}",
-                missing.join(", ")
-            ));
+            return Err(Error::UnitLacks(missing));
         }
         let row: Vec<f64> = self.names.iter().map(|k| coefficients[k]).collect();
         let z = self.columns.scores(&row);
@@ -334,12 +367,12 @@ impl Lot {
         name: &str,
         kind: chart::Kind,
         station: Option<&str>,
-    ) -> Result<UnitChart, String> {
+    ) -> Result<UnitChart, Error> {
         let Some(key) = self.names.iter().find(|k| *k == name) else {
-            return Err(format!(
-                "the lot has no coefficient {name}; it has {}",
-                self.names.join(", ")
-            ));
+            return Err(Error::NoCoefficient {
+                name: name.to_string(),
+                has: self.names.clone(),
+            });
         };
         let units: Vec<&Unit> = self
             .units
@@ -347,13 +380,9 @@ impl Lot {
             .filter(|u| station.is_none_or(|s| u.station == s))
             .collect();
         let values: Vec<f64> = units.iter().map(|u| u.coefficients[key]).collect();
-        let chart = chart::chart(&values, kind).ok_or_else(|| {
-            format!(
-                "a chart of {name} needs two units{}",
-                station
-                    .map(|s| format!(" at station {s}"))
-                    .unwrap_or_default()
-            )
+        let chart = chart::chart(&values, kind).ok_or_else(|| Error::ChartTooShort {
+            name: name.to_string(),
+            station: station.map(str::to_string),
         })?;
         Ok(UnitChart {
             chart,
@@ -376,5 +405,50 @@ impl std::ops::Deref for UnitChart {
     type Target = Chart;
     fn deref(&self) -> &Chart {
         &self.chart
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit(k: usize, bias: f64) -> Unit {
+        Unit {
+            serial: format!("U-{k}"),
+            time: k as i64,
+            station: "A".into(),
+            coefficients: BTreeMap::from([("bias".to_string(), bias), ("one".to_string(), 1.0)]),
+        }
+    }
+
+    /// Each refusal is its own variant, and says what the lot needs.
+    #[test]
+    fn what_a_lot_cannot_do_is_named() {
+        assert!(matches!(
+            judge(vec![unit(0, 1.0)], 0.01),
+            Err(Error::TooFewUnits(1))
+        ));
+        let flat = vec![unit(0, 1.0), unit(1, 1.0)];
+        assert!(matches!(judge(flat, 0.01), Err(Error::NothingShared)));
+        let lot = judge((0..6).map(|k| unit(k, k as f64)).collect(), 0.01).unwrap();
+        assert_eq!(lot.names, ["bias"]);
+        let e = lot.place(&BTreeMap::new()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the unit lacks coefficients its lot is judged on: bias"
+        );
+        let e = lot
+            .chart("scale", chart::Kind::Individuals, None)
+            .unwrap_err();
+        assert!(matches!(&e, Error::NoCoefficient { name, .. } if name == "scale"));
+        let e = lot
+            .chart("bias", chart::Kind::Individuals, Some("B"))
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "a chart of bias needs two units at station B"
+        );
+        assert!(matches!(coefficients("3"), Err(Error::NotCoefficients)));
+        assert!(matches!(coefficients("{"), Err(Error::NotJson(_))));
     }
 }

@@ -103,6 +103,7 @@ impl Outputs {
         let placed = lot.map_err(Clone::clone).and_then(|lot| {
             lot.place(coefficients)
                 .map(|(o, outside)| (o, outside, lot.units.len(), lot.distance_limit()))
+                .map_err(|e| e.to_string())
         });
         Some(match placed {
             Ok((o, outside, n, limit)) => {
