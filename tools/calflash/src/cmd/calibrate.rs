@@ -312,7 +312,7 @@ pub fn calibrate_one(
 }
 
 /// The noise terms `--noise` names, with the allowances; `None` without `--noise`.
-fn noise_terms(args: &CalibrateArgs) -> Result<Option<spincal::model::NoiseTerms>, String> {
+fn noise_terms(args: &CalibrateArgs) -> Result<Option<spincal::model::NoiseTerms>, Failure> {
     let (accel, gyro) = match args.noise.as_slice() {
         [] => return Ok(None),
         [a, g] => (a, g),
@@ -320,7 +320,8 @@ fn noise_terms(args: &CalibrateArgs) -> Result<Option<spincal::model::NoiseTerms
             return Err(format!(
                 "--noise: two files, the accelerometer's and the gyro's Allan JSON, {} given",
                 other.len()
-            ));
+            )
+            .into());
         }
     };
     if args.sensor != SensorKind::Imu {
@@ -335,7 +336,7 @@ fn noise_terms(args: &CalibrateArgs) -> Result<Option<spincal::model::NoiseTerms
         gravity,
         false_alarm: args.false_alarm,
     };
-    crate::noise::stated::from_allan(accel, gyro, &allow).map(Some)
+    Ok(Some(crate::noise::stated::from_allan(accel, gyro, &allow)?))
 }
 
 fn hex(b: &[u8]) -> String {

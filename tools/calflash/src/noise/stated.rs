@@ -3,9 +3,80 @@
 //! and the gyro from two `calflash allan --json` files (in SI units), and the allowances the
 //! unit is held to.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use spincal::model::{NoiseTerms, Span};
+
+/// Why the noise terms cannot be read from the Allan files, or are refused by the device.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file that cannot be read.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file that is not JSON.
+    #[error("{}: not JSON: {source}", .path.display())]
+    NotJson {
+        /// The file.
+        path: PathBuf,
+        /// Where and why.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// JSON that `calflash allan --json` did not write.
+    #[error(
+        "{}: field \"schema\": expected \"calflash.allan/1\" (the file `calflash allan --json` writes)",
+        .0.display()
+    )]
+    NotAllan(PathBuf),
+    /// Terms in another unit than the sensor's SI unit.
+    #[error(
+        "{}: field \"unit\" is {found}, expected \"{expected}\": run `calflash allan` with --scale (counts per {expected}) so that the terms are in SI units",
+        .path.display()
+    )]
+    Unit {
+        /// The file.
+        path: PathBuf,
+        /// The unit it states, as JSON.
+        found: serde_json::Value,
+        /// The SI unit.
+        expected: &'static str,
+    },
+    /// Not three axes.
+    #[error("{}: field \"axes\": expected the three axes", .0.display())]
+    Axes(PathBuf),
+    /// A term that is missing, not finite or negative.
+    #[error("{}: axes[{axis}].terms.{key}: expected a finite non-negative number", .path.display())]
+    Term {
+        /// The file.
+        path: PathBuf,
+        /// The axis.
+        axis: usize,
+        /// The term.
+        key: &'static str,
+    },
+    /// An axis without white noise.
+    #[error(
+        "{}: axes[{axis}].terms.random_walk is 0: the recording shows no white noise \
+         on axis {axis} (too short, or quantisation only); record longer",
+        .path.display()
+    )]
+    NoWhiteNoise {
+        /// The file.
+        path: PathBuf,
+        /// The axis.
+        axis: usize,
+    },
+    /// Terms or allowances the device's own check refuses.
+    #[error("--noise: {0}")]
+    Refused(#[source] spincal::Error),
+}
 
 /// What the health check's allowances are, besides the measured noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -19,44 +90,50 @@ pub struct Allowances {
 }
 
 /// One sensor's three axes: white-noise densities and rate random walks, from an Allan JSON.
-fn read_axes(path: &Path, unit: &str) -> Result<([f64; 3], [f64; 3]), String> {
-    let name = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{name}: {e}"))?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{name}: not JSON: {e}"))?;
+fn read_axes(path: &Path, unit: &'static str) -> Result<([f64; 3], [f64; 3]), Error> {
+    let file = || path.to_path_buf();
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: file(),
+        source,
+    })?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|source| Error::NotJson {
+        path: file(),
+        source,
+    })?;
     if v["schema"] != "calflash.allan/1" {
-        return Err(format!(
-            "{name}: field \"schema\": expected \"calflash.allan/1\" (the file `calflash allan --json` writes)"
-        ));
+        return Err(Error::NotAllan(file()));
     }
     if v["unit"] != unit {
-        return Err(format!(
-            "{name}: field \"unit\" is {}, expected \"{unit}\": run `calflash allan` with --scale (counts per {unit}) so that the terms are in SI units",
-            v["unit"]
-        ));
+        return Err(Error::Unit {
+            path: file(),
+            found: v["unit"].clone(),
+            expected: unit,
+        });
     }
     let axes = v["axes"]
         .as_array()
         .filter(|a| a.len() == 3)
-        .ok_or_else(|| format!("{name}: field \"axes\": expected the three axes"))?;
+        .ok_or_else(|| Error::Axes(file()))?;
     let mut white = [0.0; 3];
     let mut walk = [0.0; 3];
     for (j, a) in axes.iter().enumerate() {
-        let term = |key: &str| {
+        let term = |key: &'static str| {
             a["terms"][key]
                 .as_f64()
                 .filter(|x| x.is_finite() && *x >= 0.0)
-                .ok_or_else(|| {
-                    format!("{name}: axes[{j}].terms.{key}: expected a finite non-negative number")
+                .ok_or_else(|| Error::Term {
+                    path: file(),
+                    axis: j,
+                    key,
                 })
         };
         white[j] = term("random_walk")?;
         walk[j] = term("rate_random_walk")?;
         if white[j] <= 0.0 {
-            return Err(format!(
-                "{name}: axes[{j}].terms.random_walk is 0: the recording shows no white noise \
-                 on axis {j} (too short, or quantisation only); record longer"
-            ));
+            return Err(Error::NoWhiteNoise {
+                path: file(),
+                axis: j,
+            });
         }
     }
     Ok((white, walk))
@@ -66,7 +143,7 @@ fn read_axes(path: &Path, unit: &str) -> Result<([f64; 3], [f64; 3]), String> {
 ///
 /// # Errors
 /// A message naming the file and the field, or the allowance, that is wrong.
-pub fn from_allan(accel: &Path, gyro: &Path, allow: &Allowances) -> Result<NoiseTerms, String> {
+pub fn from_allan(accel: &Path, gyro: &Path, allow: &Allowances) -> Result<NoiseTerms, Error> {
     let (wa, ka) = read_axes(accel, "m/s^2")?;
     let (wg, kg) = read_axes(gyro, "rad/s")?;
     let six = |a: [f64; 3], g: [f64; 3]| [a[0], a[1], a[2], g[0], g[1], g[2]].map(|x| x as f32);
@@ -81,7 +158,7 @@ pub fn from_allan(accel: &Path, gyro: &Path, allow: &Allowances) -> Result<Noise
     // The device's own check, so that a bad allowance is named here and not at the flash.
     let mut probe = spincal::model::CalibrationData::example_imu();
     probe.noise = Some(terms);
-    spincal::model::Calibration::new(probe).map_err(|e| format!("--noise: {e}"))?;
+    spincal::model::Calibration::new(probe).map_err(Error::Refused)?;
     Ok(terms)
 }
 
@@ -115,16 +192,18 @@ mod tests {
         assert_eq!(t.white, [1.5e-3, 1.5e-3, 1.5e-3, 2e-4, 2e-4, 2e-4]);
         assert_eq!(t.bias_walk[5], 5e-7);
         // Swapped files: the unit is named.
-        let e = from_allan(&g, &a, &ALLOW).unwrap_err();
+        let e = from_allan(&g, &a, &ALLOW).unwrap_err().to_string();
         assert!(e.contains("a.json") || e.contains("g.json"), "{e}");
         assert!(e.contains("\"unit\""), "{e}");
         // Counts: the unit says so.
         let c = allan_file(dir.path(), "c.json", "counts", 1.0, 0.0);
-        let e = from_allan(&c, &g, &ALLOW).unwrap_err();
+        let e = from_allan(&c, &g, &ALLOW).unwrap_err().to_string();
         assert!(e.contains("--scale"), "{e}");
         // No white noise on an axis.
         let z = allan_file(dir.path(), "z.json", "rad/s", 0.0, 0.0);
         let e = from_allan(&a, &z, &ALLOW).unwrap_err();
+        assert!(matches!(e, Error::NoWhiteNoise { axis: 0, .. }), "{e:?}");
+        let e = e.to_string();
         assert!(e.contains("axes[0].terms.random_walk is 0"), "{e}");
         // A gravity span beyond the Earth's.
         let bad = Allowances {
@@ -132,6 +211,8 @@ mod tests {
             ..ALLOW
         };
         let e = from_allan(&a, &g, &bad).unwrap_err();
+        assert!(matches!(e, Error::Refused(_)), "{e:?}");
+        let e = e.to_string();
         assert!(e.contains("gravity span"), "{e}");
     }
 }
