@@ -11,6 +11,7 @@
 
 mod bench;
 mod calibrate;
+mod disk;
 mod fuzz;
 mod setup;
 mod test;

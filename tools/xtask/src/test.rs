@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use host_tests::qemu::{REQUIRE_ENV, TARGET};
 
-use crate::{cargo, root, setup};
+use crate::{cargo, disk, root, setup};
 
 struct Step {
     name: &'static str,
@@ -15,11 +15,35 @@ struct Step {
 fn step(name: &'static str, args: &[&str]) -> Step {
     let mut cmd = cargo();
     cmd.args(args);
+    // A whole run builds everything once: incremental state would only add ~1 GB to the disk.
+    // A setting of the caller's own wins.
+    if std::env::var_os("CARGO_INCREMENTAL").is_none() {
+        cmd.env("CARGO_INCREMENTAL", "0");
+    }
     Step { name, cmd }
+}
+
+/// Prints the free space under the builds; warns when it is below what a fresh run writes.
+fn report_disk(when: &str) -> Option<u64> {
+    let free = disk::free_bytes(&root())?;
+    let warning = if free < disk::NEEDED_BYTES {
+        format!(
+            " (a fresh run writes about {}: builds may fail for want of space)",
+            disk::human(disk::NEEDED_BYTES)
+        )
+    } else {
+        String::new()
+    };
+    println!(
+        "xtask: {} free on the build disk {when}{warning}",
+        disk::human(free)
+    );
+    Some(free)
 }
 
 pub fn run() -> Result<(), String> {
     let setup = setup::run(true)?;
+    report_disk("at the start");
     let mut steps = vec![
         step("rustfmt", &["fmt", "--all", "--check"]),
         {
@@ -172,6 +196,12 @@ pub fn run() -> Result<(), String> {
         );
     }
     println!("  {:<40} {fuzz_line}", "fuzz smoke");
+    if let Some(free) = report_disk("at the end")
+        && !failed.is_empty()
+        && free < (1 << 30)
+    {
+        println!("xtask: the disk is (nearly) full: a failed build may be that, not the code");
+    }
     if let Some(why) = &setup.qemu_missing {
         println!("  {:<40} SKIPPED: {why}", "QEMU tests");
     }
