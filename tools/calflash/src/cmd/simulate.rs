@@ -141,10 +141,10 @@ fn plan_file(
     path: &std::path::Path,
     kind: SensorKind,
     repeat: usize,
-) -> Result<Vec<plan::Condition>, String> {
+) -> Result<Vec<plan::Condition>, Failure> {
     use crate::columns as col;
     use crate::design::points::{self, Unit};
-    let header = crate::obs::header(path, crate::obs::Format::Auto).map_err(|e| e.to_string())?;
+    let header = crate::obs::header(path, crate::obs::Format::Auto)?;
     let known: Vec<&str> = col::F
         .iter()
         .chain(col::W.iter())
@@ -161,7 +161,8 @@ fn plan_file(
             "{}: no plan columns; expected some of {}",
             path.display(),
             known.join(", ")
-        ));
+        )
+        .into());
     }
     let pts = points::read(path, &names)?;
     let unit = match kind {

@@ -3,9 +3,12 @@
 
 pub mod coordinate;
 pub mod criteria;
+pub mod error;
 pub mod exchange;
 pub mod models;
 pub mod points;
 pub mod predict;
 pub mod search;
 pub mod space;
+
+pub use error::Error;

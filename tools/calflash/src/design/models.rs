@@ -1,6 +1,7 @@
 //! The models a plan is designed for: any formula, or a sensor preset expanded to one formula
 //! per output (the three axes of a triad share their points but not all their terms).
 
+use super::Error;
 use crate::columns as col;
 use crate::formula::{self, Formula};
 
@@ -24,9 +25,9 @@ pub struct Block {
 ///
 /// # Errors
 /// A formula that does not parse, naming where.
-pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, String> {
+pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, Error> {
     let inputs = if gyro { col::W } else { col::F };
-    let triad = |extra: &dyn Fn(usize) -> String| -> Result<Vec<Block>, String> {
+    let triad = |extra: &dyn Fn(usize) -> String| -> Result<Vec<Block>, Error> {
         (0..3)
             .map(|i| {
                 let text = format!(
@@ -39,15 +40,14 @@ pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, String> {
                 );
                 Ok(Block {
                     label: ["x", "y", "z"][i].to_string(),
-                    formula: formula::parse(&text).map_err(|e| e.to_string())?,
+                    formula: formula::parse(&text)?,
                 })
             })
             .collect()
     };
     match model.trim() {
         "single" => {
-            let f = formula::parse("output ~ 1 + input + input^2 + input^3 + input:abs(input)")
-                .map_err(|e| e.to_string())?;
+            let f = formula::parse("output ~ 1 + input + input^2 + input^3 + input:abs(input)")?;
             Ok(vec![Block {
                 label: "output".into(),
                 formula: f,
@@ -57,7 +57,11 @@ pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, String> {
         "triad-nonlinear" => triad(&|i| format!(" + {0}^2 + {0}^3 + {0}:abs({0})", inputs[i])),
         "accel-lever" => {
             if gyro {
-                return Err("--model accel-lever: the lever-arm preset is for an accelerometer triad (--sensor accel or imu)".into());
+                return Err(Error::PresetForOtherSensor {
+                    preset: "accel-lever",
+                    what: "lever-arm",
+                    sensor: "an accelerometer triad (--sensor accel or imu)",
+                });
             }
             triad(&|i| {
                 let a = ["x", "y", "z"][i];
@@ -66,7 +70,11 @@ pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, String> {
         }
         "gyro-gsens" => {
             if !gyro {
-                return Err("--model gyro-gsens: the g-sensitivity preset is for a gyro triad (--sensor gyro)".into());
+                return Err(Error::PresetForOtherSensor {
+                    preset: "gyro-gsens",
+                    what: "g-sensitivity",
+                    sensor: "a gyro triad (--sensor gyro)",
+                });
             }
             triad(&|_| format!(" + {} + {} + {}", col::F[0], col::F[1], col::F[2]))
         }
@@ -76,8 +84,10 @@ pub fn blocks(model: &str, gyro: bool) -> Result<Vec<Block>, String> {
             } else {
                 text.to_string()
             };
-            let f = formula::parse(&full)
-                .map_err(|e| format!("--model: {e} (or a preset: {PRESETS})"))?;
+            let f = formula::parse(&full).map_err(|source| Error::Model {
+                source,
+                presets: PRESETS,
+            })?;
             Ok(vec![Block {
                 label: f.response.clone(),
                 formula: f,

@@ -9,6 +9,7 @@ use std::path::Path;
 
 use nalgebra::DMatrix;
 
+use super::Error;
 use crate::columns as col;
 use crate::formula::Formula;
 use crate::obs::{self, Format};
@@ -164,9 +165,8 @@ pub fn from_items(
     volts: &[f64],
     repeat: usize,
     unit: Unit,
-) -> Result<Points, String> {
-    let conds =
-        plan::plan(items, temps, volts, repeat, unit != Unit::Triad).map_err(|e| e.to_string())?;
+) -> Result<Points, Error> {
+    let conds = plan::plan(items, temps, volts, repeat, unit != Unit::Triad)?;
     Ok(Points {
         names: condition_names(),
         rows: conds.iter().map(|c| condition_values(c, unit)).collect(),
@@ -177,9 +177,10 @@ pub fn from_items(
 ///
 /// # Errors
 /// A malformed grid.
-pub fn grid(text: &str) -> Result<Points, String> {
-    let bad = |why: &str| {
-        format!("grid `{text}`: {why}; expected NAME=LO:HI:N, for example rate=-10:10:21")
+pub fn grid(text: &str) -> Result<Points, Error> {
+    let bad = |why: &str| Error::Grid {
+        text: text.to_string(),
+        why: why.to_string(),
     };
     let (name, spec) = text.split_once('=').ok_or_else(|| bad("no `=`"))?;
     let parts: Vec<&str> = spec.split(':').collect();
@@ -226,8 +227,8 @@ pub fn grid(text: &str) -> Result<Points, String> {
 ///
 /// # Errors
 /// The reader's error, naming the file, line and column.
-pub fn read(path: &Path, names: &[String]) -> Result<Points, String> {
-    let table = obs::read_columns(path, names, Format::Auto).map_err(|e| e.to_string())?;
+pub fn read(path: &Path, names: &[String]) -> Result<Points, Error> {
+    let table = obs::read_columns(path, names, Format::Auto)?;
     let rows = (0..table.len())
         .map(|r| {
             names
@@ -303,26 +304,27 @@ pub struct OperatingPoint {
 }
 
 impl std::str::FromStr for OperatingPoint {
-    type Err = String;
+    type Err = Error;
 
-    fn from_str(spec: &str) -> Result<Self, String> {
+    fn from_str(spec: &str) -> Result<Self, Error> {
         let values = spec
             .split(',')
             .map(|kv| {
                 let (k, v) = kv
                     .split_once('=')
-                    .ok_or_else(|| format!("--at `{spec}`: expected NAME=VALUE[,NAME=VALUE...]"))?;
+                    .ok_or_else(|| Error::OperatingPoint(spec.to_string()))?;
                 let v = v
                     .trim()
                     .parse::<f64>()
                     .ok()
                     .filter(|v| v.is_finite())
-                    .ok_or_else(|| {
-                        format!("--at `{spec}`: `{}` is not a finite number", v.trim())
+                    .ok_or_else(|| Error::OperatingValue {
+                        spec: spec.to_string(),
+                        value: v.trim().to_string(),
                     })?;
                 Ok((k.trim().to_string(), v))
             })
-            .collect::<Result<_, String>>()?;
+            .collect::<Result<_, Error>>()?;
         Ok(Self {
             text: spec.to_string(),
             values,
@@ -339,11 +341,14 @@ mod tests {
         let p: OperatingPoint = "rate = 2.5, temp=-40".parse().unwrap();
         assert_eq!(p.values, [("rate".into(), 2.5), ("temp".into(), -40.0)]);
         assert_eq!(
-            "rate".parse::<OperatingPoint>().unwrap_err(),
+            "rate".parse::<OperatingPoint>().unwrap_err().to_string(),
             "--at `rate`: expected NAME=VALUE[,NAME=VALUE...]"
         );
         assert_eq!(
-            "rate=1,temp=NaN".parse::<OperatingPoint>().unwrap_err(),
+            "rate=1,temp=NaN"
+                .parse::<OperatingPoint>()
+                .unwrap_err()
+                .to_string(),
             "--at `rate=1,temp=NaN`: `NaN` is not a finite number"
         );
     }
@@ -353,7 +358,7 @@ mod tests {
         let g = grid("rate=-1:1:3").unwrap();
         assert_eq!(g.rows, [vec![-1.0], vec![0.0], vec![1.0]]);
         assert_eq!(
-            grid("rate=1:0:3").unwrap_err(),
+            grid("rate=1:0:3").unwrap_err().to_string(),
             "grid `rate=1:0:3`: N must be at least 2 (1 when LO = HI) and LO at most HI; expected NAME=LO:HI:N, for example rate=-10:10:21"
         );
         let t = grid("temp=-40:85:2").unwrap();

@@ -5,6 +5,7 @@
 
 use nalgebra::DMatrix;
 
+use super::Error;
 use super::criteria;
 use super::exchange::{self, Criterion, Found};
 use super::points::{Points, Unit};
@@ -143,7 +144,7 @@ pub fn monte_carlo(
     x: &DMatrix<f64>,
     at: &DMatrix<f64>,
     mut progress: impl FnMut(usize),
-) -> Result<MonteCarlo, String> {
+) -> Result<MonteCarlo, Error> {
     let (sensor, output, runs, seed) = (sim.sensor, sim.output, sim.runs, sim.seed);
     let conds = conditions(points, sim.unit);
     let names: Vec<String> = (0..x.ncols()).map(|k| format!("c{k}")).collect();
@@ -153,9 +154,9 @@ pub fn monte_carlo(
         let obs = sim::simulate(sensor, &conds, seed.wrapping_add(r as u64), false);
         let y = obs
             .column(output)
-            .ok_or_else(|| format!("the simulator writes no column {output}"))?;
+            .ok_or_else(|| Error::NoSimulatedColumn(output.to_string()))?;
         let fit = stats::fit(x, &y, names.clone(), false, &stats::Options::default())
-            .map_err(|e| format!("simulated run {r}: {e:?}"))?;
+            .map_err(|source| Error::SimulatedFit { run: r, source })?;
         let p: Vec<f64> = (0..at.nrows())
             .map(|i| {
                 at.row(i)
@@ -211,10 +212,10 @@ pub fn smallest_n(
     goal: &Target<'_>,
     restarts: usize,
     mut progress: impl FnMut(usize),
-) -> Result<Smallest, String> {
+) -> Result<Smallest, Error> {
     let (at, sigma, target) = (goal.at, goal.sigma, goal.error);
     let p = f.ncols();
-    let mut worst_at = |n: usize| -> Result<(f64, Found), String> {
+    let mut worst_at = |n: usize| -> Result<(f64, Found), Error> {
         progress(n);
         let found = exchange::optimize(
             f,
@@ -226,14 +227,11 @@ pub fn smallest_n(
                 seed: 1,
             },
             |_, _| {},
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         let x = DMatrix::from_fn(n, p, |i, j| f[(found.points[i], j)]);
-        let c = criteria::evaluate(&x, at, false).map_err(|d| {
-            format!(
-                "the optimal plan of {n} points cannot estimate column {}",
-                d.column
-            )
+        let c = criteria::evaluate(&x, at, false).map_err(|d| Error::OptimalNotEstimable {
+            n,
+            column: d.column,
         })?;
         let e = expected(&c.unscaled_covariance, sigma, at);
         Ok((e.at.iter().fold(0.0f64, |m, v| m.max(*v)), found))
@@ -242,10 +240,11 @@ pub fn smallest_n(
     let mut best = worst_at(hi)?;
     while best.0 > target {
         if hi >= 100_000 {
-            return Err(format!(
-                "even {hi} observations give an expected error of {:.3e} > {target:.3e}: lower the noise or the target",
-                best.0
-            ));
+            return Err(Error::TargetNotReached {
+                n: hi,
+                error: best.0,
+                target,
+            });
         }
         hi = (hi * 2).min(100_000);
         best = worst_at(hi)?;

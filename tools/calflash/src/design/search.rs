@@ -4,6 +4,7 @@
 
 use nalgebra::DMatrix;
 
+use super::Error;
 use super::coordinate;
 use super::exchange::{self, Criterion};
 use super::models::Block;
@@ -89,7 +90,7 @@ impl Search {
         space: &Space,
         blocks: &[Block],
         progress: impl FnMut(usize),
-    ) -> Result<Searched, String> {
+    ) -> Result<Searched, Error> {
         match self.method(method, blocks) {
             Method::Coordinate => self.coordinate(space, blocks, progress),
             _ => self.fedorov(space, blocks, progress),
@@ -101,7 +102,7 @@ impl Search {
         space: &Space,
         blocks: &[Block],
         mut progress: impl FnMut(usize),
-    ) -> Result<Searched, String> {
+    ) -> Result<Searched, Error> {
         let cands = space.candidates(&self.candidates, &self.grid)?;
         space::check_variables(blocks, &cands, "the candidates")?;
         space.check_limits(&cands, "the candidates")?;
@@ -113,7 +114,7 @@ impl Search {
             .iter()
             .map(|b| {
                 let r = space.region_rows(&cands, b)?;
-                Ok::<_, String>(Some(r.transpose() * &r / r.nrows() as f64))
+                Ok::<_, Error>(Some(r.transpose() * &r / r.nrows() as f64))
             })
             .collect::<Result<_, _>>()?;
         let opts = exchange::Options {
@@ -122,15 +123,13 @@ impl Search {
             seed: self.seed,
         };
         let found = exchange::optimize_blocks(&fs, self.criterion, &ws, &opts, |d, _| progress(d))
-            .map_err(|e| {
-                format!(
-                    "{e}; the model's terms: {}",
-                    blocks
-                        .iter()
-                        .map(|b| b.formula.term_names().join(", "))
-                        .collect::<Vec<_>>()
-                        .join(" | ")
-                )
+            .map_err(|source| Error::Exchange {
+                source,
+                terms: blocks
+                    .iter()
+                    .map(|b| b.formula.term_names().join(", "))
+                    .collect::<Vec<_>>()
+                    .join(" | "),
             })?;
         Ok(Searched {
             plan: cands.select(&found.points),
@@ -146,14 +145,16 @@ impl Search {
         space: &Space,
         blocks: &[Block],
         mut progress: impl FnMut(usize),
-    ) -> Result<Searched, String> {
+    ) -> Result<Searched, Error> {
         if !self.candidates.is_empty() {
-            return Err("--method coordinate: works on the levels of --grid factors; plan items are listed candidates (use --method fedorov)".into());
+            return Err(Error::Coordinate(
+                "works on the levels of --grid factors; plan items are listed candidates (use --method fedorov)",
+            ));
         }
         if blocks.len() != 1 {
-            return Err(
-                "--method coordinate: one model at a time (a formula or the single preset)".into(),
-            );
+            return Err(Error::Coordinate(
+                "one model at a time (a formula or the single preset)",
+            ));
         }
         let factor_grids: Vec<Points> = self
             .grid
@@ -161,7 +162,7 @@ impl Search {
             .map(|g| points::grid(g))
             .collect::<Result<_, _>>()?;
         if factor_grids.is_empty() {
-            return Err("--method coordinate: give the factors as --grid NAME=LO:HI:N".into());
+            return Err(Error::Coordinate("give the factors as --grid NAME=LO:HI:N"));
         }
         let factors: Vec<coordinate::Factor> = factor_grids
             .iter()
@@ -229,11 +230,9 @@ impl Search {
             coordinate::optimize(&factors, &row, self.criterion, Some(&w), &opts, |d, _| {
                 progress(d)
             })
-            .map_err(|e| {
-                format!(
-                    "{e}; the model's terms: {}",
-                    formula.term_names().join(", ")
-                )
+            .map_err(|source| Error::Exchange {
+                source,
+                terms: formula.term_names().join(", "),
             })?;
         let combinations: f64 = factors.iter().map(|f| f.levels.len() as f64).product();
         Ok(Searched {

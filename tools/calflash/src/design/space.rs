@@ -7,6 +7,7 @@ use std::str::FromStr;
 
 use nalgebra::DMatrix;
 
+use super::Error;
 use super::criteria::{self, Criteria};
 use super::models::{self, Block};
 use super::points::{self, Points, Unit};
@@ -24,10 +25,10 @@ pub struct Limit {
 }
 
 impl FromStr for Limit {
-    type Err = String;
+    type Err = Error;
 
-    fn from_str(l: &str) -> Result<Self, String> {
-        let bad = || format!("--limit `{l}`: expected NAME=LO:HI, for example rate=-800:800");
+    fn from_str(l: &str) -> Result<Self, Error> {
+        let bad = || Error::Limit(l.to_string());
         let (name, range) = l.split_once('=').ok_or_else(bad)?;
         let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
         let (lo, hi): (f64, f64) = (
@@ -67,22 +68,27 @@ impl Space {
     ///
     /// # Errors
     /// The first point beyond a limit, or a limit on a variable `pts` lacks.
-    pub fn check_limits(&self, pts: &Points, what: &str) -> Result<(), String> {
+    pub fn check_limits(&self, pts: &Points, what: &str) -> Result<(), Error> {
         for l in &self.limits {
             let (name, lo, hi) = (l.name.as_str(), l.lo, l.hi);
             if !pts.names.iter().any(|n| n == name) {
-                return Err(format!(
-                    "--limit {name}: {what} has no variable {name} (it has {})",
-                    pts.names.join(", ")
-                ));
+                return Err(Error::LimitOnNoVariable {
+                    name: name.to_string(),
+                    what: what.to_string(),
+                    has: pts.names.join(", "),
+                });
             }
             for r in 0..pts.rows.len() {
                 let v = pts.value(r, name);
                 if !(lo..=hi).contains(&v) {
-                    return Err(format!(
-                        "{what}, point {}: {name} = {v} is outside the equipment's limits {lo} to {hi}",
-                        r + 1
-                    ));
+                    return Err(Error::BeyondLimit {
+                        what: what.to_string(),
+                        point: r + 1,
+                        name: name.to_string(),
+                        value: v,
+                        lo,
+                        hi,
+                    });
                 }
             }
         }
@@ -93,21 +99,25 @@ impl Space {
     ///
     /// # Errors
     /// Neither a readable plan file nor plan items.
-    pub fn load_plan(&self, spec: &str, vars: &[String]) -> Result<Points, String> {
+    pub fn load_plan(&self, spec: &str, vars: &[String]) -> Result<Points, Error> {
         let path = Path::new(spec);
         if path.is_file() {
             return points::read(path, vars);
         }
         let items: Vec<String> = spec.split(',').map(|s| s.trim().to_string()).collect();
-        points::from_items(&items, &self.temps, &self.volts, 1, self.unit)
-            .map_err(|e| format!("--plan `{spec}`: not a file, and {e}"))
+        points::from_items(&items, &self.temps, &self.volts, 1, self.unit).map_err(|e| {
+            Error::Plan {
+                spec: spec.to_string(),
+                source: Box::new(e),
+            }
+        })
     }
 
     /// The candidates: plan `items` times the grids `grid_specs`.
     ///
     /// # Errors
     /// Malformed items or grids, too many to list, or none.
-    pub fn candidates(&self, items: &[String], grid_specs: &[String]) -> Result<Points, String> {
+    pub fn candidates(&self, items: &[String], grid_specs: &[String]) -> Result<Points, Error> {
         let from_items = if items.is_empty() {
             Points {
                 names: Vec::new(),
@@ -126,15 +136,14 @@ impl Space {
             .product::<f64>()
             * (from_items.rows.len().max(1) as f64);
         if count > MAX_LISTED {
-            return Err(format!(
-                "the candidates number {count:.3e}, too many to list (at most {MAX_LISTED:.0e}); `design optimize --method coordinate` searches the levels of --grid factors without listing them"
-            ));
+            return Err(Error::TooManyCandidates {
+                count,
+                max: MAX_LISTED,
+            });
         }
         let c = per_grid.iter().fold(from_items, |acc, g| acc.product(g));
         if c.rows.is_empty() {
-            return Err(
-                "no candidates: give --candidates plan items or --grid NAME=LO:HI:N".into(),
-            );
+            return Err(Error::NoCandidates);
         }
         Ok(c)
     }
@@ -144,7 +153,7 @@ impl Space {
     ///
     /// # Errors
     /// A region of too many points.
-    pub fn region_rows(&self, fallback: &Points, block: &Block) -> Result<DMatrix<f64>, String> {
+    pub fn region_rows(&self, fallback: &Points, block: &Block) -> Result<DMatrix<f64>, Error> {
         if self.region.is_empty() {
             Ok(fallback.model_rows(&block.formula))
         } else {
@@ -162,7 +171,7 @@ impl Space {
         pts: &Points,
         blocks: &[Block],
         region_points: &Points,
-    ) -> Result<Vec<Criteria>, String> {
+    ) -> Result<Vec<Criteria>, Error> {
         blocks
             .iter()
             .map(|b| {
@@ -173,14 +182,15 @@ impl Space {
                     let why =
                         b.formula
                             .explain_rank_deficiency(&table, dep.column, &dep.combination);
-                    format!(
-                        "plan {name} cannot estimate the model{}: {why}",
-                        if blocks.len() > 1 {
+                    Error::NotEstimable {
+                        plan: name.to_string(),
+                        axis: if blocks.len() > 1 {
                             format!(" of axis {}", b.label)
                         } else {
                             String::new()
-                        }
-                    )
+                        },
+                        why,
+                    }
                 })
             })
             .collect()
@@ -191,7 +201,7 @@ impl Space {
 ///
 /// # Errors
 /// A malformed grid, or too many points.
-pub fn grids(specs: &[String]) -> Result<Points, String> {
+pub fn grids(specs: &[String]) -> Result<Points, Error> {
     let mut p = Points {
         names: Vec::new(),
         rows: Vec::new(),
@@ -200,11 +210,11 @@ pub fn grids(specs: &[String]) -> Result<Points, String> {
         let g = points::grid(g)?;
         let n = p.rows.len().max(1).saturating_mul(g.rows.len());
         if n > crate::sim::plan::MAX_CONDITIONS {
-            return Err(format!(
-                "the grids {} make {n} points; a region or grid holds at most {}",
-                specs.join(" "),
-                crate::sim::plan::MAX_CONDITIONS
-            ));
+            return Err(Error::TooManyGridPoints {
+                specs: specs.join(" "),
+                points: n,
+                max: crate::sim::plan::MAX_CONDITIONS,
+            });
         }
         p = p.product(&g);
     }
@@ -219,17 +229,18 @@ pub const MAX_LISTED: f64 = 2e6;
 ///
 /// # Errors
 /// A variable the model reads that `pts` does not set.
-pub fn check_variables(blocks: &[Block], pts: &Points, what: &str) -> Result<(), String> {
+pub fn check_variables(blocks: &[Block], pts: &Points, what: &str) -> Result<(), Error> {
     for v in models::variables(blocks) {
         if !pts.sets(&v) {
-            return Err(format!(
-                "{what}: the model reads `{v}`, which it does not set (it sets {}); name the variable as the plan does, or add a grid {v}=LO:HI:N",
-                if pts.names.is_empty() {
+            return Err(Error::UnsetVariable {
+                what: what.to_string(),
+                sets: if pts.names.is_empty() {
                     "nothing".to_string()
                 } else {
                     pts.names.join(", ")
-                }
-            ));
+                },
+                variable: v,
+            });
         }
     }
     Ok(())
@@ -271,12 +282,12 @@ mod tests {
     #[test]
     fn a_limit_reads_name_low_and_high_or_says_what_it_expects() {
         assert_eq!(
-            "rate = -800:800".parse::<Limit>(),
-            Ok(Limit {
+            "rate = -800:800".parse::<Limit>().unwrap(),
+            Limit {
                 name: "rate".into(),
                 lo: -800.0,
                 hi: 800.0
-            })
+            }
         );
         for bad in [
             "rate",
@@ -287,8 +298,9 @@ mod tests {
             "rate=-inf:1",
         ] {
             let e = bad.parse::<Limit>().unwrap_err();
+            assert!(matches!(&e, Error::Limit(text) if text == bad));
             assert_eq!(
-                e,
+                e.to_string(),
                 format!("--limit `{bad}`: expected NAME=LO:HI, for example rate=-800:800")
             );
         }
@@ -304,18 +316,17 @@ mod tests {
             limits: vec!["rate=-800:800".parse().unwrap()],
         };
         let pts = grids(&["rate=-1000:1000:3".into()]).unwrap();
+        let beyond = space.check_limits(&pts, "the candidates").unwrap_err();
+        assert!(matches!(beyond, Error::BeyondLimit { point: 1, .. }));
         assert_eq!(
-            space.check_limits(&pts, "the candidates").unwrap_err(),
+            beyond.to_string(),
             "the candidates, point 1: rate = -1000 is outside the equipment's limits -800 to 800"
         );
         let inside = grids(&["rate=-800:800:3".into()]).unwrap();
         assert!(space.check_limits(&inside, "the plan").is_ok());
         let other = grids(&["temp=0:1:2".into()]).unwrap();
-        assert!(
-            space
-                .check_limits(&other, "the plan")
-                .unwrap_err()
-                .contains("has no variable rate")
-        );
+        let missing = space.check_limits(&other, "the plan").unwrap_err();
+        assert!(matches!(&missing, Error::LimitOnNoVariable { name, .. } if name == "rate"));
+        assert!(missing.to_string().contains("has no variable rate"));
     }
 }

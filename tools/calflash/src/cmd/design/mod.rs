@@ -92,7 +92,7 @@ pub fn run(args: &DesignArgs) -> Result<(), Failure> {
 }
 
 /// A grid option (`--region`, `--grid`), checked as it is parsed.
-fn grid_spec(s: &str) -> Result<String, String> {
+fn grid_spec(s: &str) -> Result<String, crate::design::Error> {
     points::grid(s).map(|_| s.to_string())
 }
 
