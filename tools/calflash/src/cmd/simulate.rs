@@ -279,7 +279,7 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), Failure> {
 }
 
 /// The ramp the options describe.
-fn ramp_of(args: &SimulateArgs, text: &str) -> Result<ramp::Ramp, String> {
+fn ramp_of(args: &SimulateArgs, text: &str) -> Result<ramp::Ramp, ramp::Error> {
     let (from, to) = ramp::span(text)?;
     let self_heating = args
         .self_heating

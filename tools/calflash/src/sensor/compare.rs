@@ -16,6 +16,103 @@ use super::record::{self, Record};
 use crate::nonlinear::gravity;
 use crate::stats::dist;
 
+/// Why two records cannot be read or compared.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// Not JSON.
+    #[error("{file}:{line}:{column}: not a calibration record: {source}")]
+    NotJson {
+        /// The record's name.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// The parser's error.
+        source: serde_json::Error,
+    },
+    /// JSON of the calibration schema that is not a calibration record.
+    #[error("{file}: not a calibration record: {source}")]
+    NotRecord {
+        /// The record's name.
+        file: String,
+        /// What serde found wrong.
+        source: serde_json::Error,
+    },
+    /// A schema of neither kind.
+    #[error("{file}: schema `{found}`, expected `{calibration}` or `{selfcal}`")]
+    Schema {
+        /// The record's name.
+        file: String,
+        /// Its schema.
+        found: String,
+        /// `calflash calibrate`'s.
+        calibration: &'static str,
+        /// `calflash selfcal`'s.
+        selfcal: &'static str,
+    },
+    /// No schema at all.
+    #[error("{file}: no `schema`: not a record of `calflash calibrate` or `calflash selfcal`")]
+    NoSchema {
+        /// The record's name.
+        file: String,
+    },
+    /// A selfcal record without a field the comparison needs.
+    #[error("{file}: selfcal record without `{field}`")]
+    Missing {
+        /// The record's name.
+        file: String,
+        /// The field's path, dotted.
+        field: String,
+    },
+    /// A selfcal field of the wrong type.
+    #[error("{file}: `{field}` is not {expected}")]
+    NotA {
+        /// The record's name.
+        file: String,
+        /// The field's path, dotted.
+        field: &'static str,
+        /// What it should be ("a list of numbers").
+        expected: &'static str,
+    },
+    /// A covariance whose size does not match the terms.
+    #[error("{file}: `{field}` is not {k} x {k} for the {k} terms of the {output}")]
+    CovarianceSize {
+        /// The record's name.
+        file: String,
+        /// The field's path, dotted.
+        field: &'static str,
+        /// Terms.
+        k: usize,
+        /// The output ("gyro").
+        output: &'static str,
+    },
+    /// Records of two units.
+    #[error(
+        "the records are of different units: {before} and {after} (compare calibrations of one unit)"
+    )]
+    DifferentUnits {
+        /// The first record's serial.
+        before: String,
+        /// The second's.
+        after: String,
+    },
+    /// Records of two kinds.
+    #[error(
+        "the records are of different kinds: {before} and {after} (compare two records of one kind)"
+    )]
+    DifferentKinds {
+        /// The first record's kind.
+        before: String,
+        /// The second's.
+        after: String,
+    },
+    /// Nothing in common with a covariance.
+    #[error("the records share no table point and output with a covariance to compare")]
+    NothingShared,
+}
+
 /// One output's estimated terms and their covariance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Estimate {
@@ -96,13 +193,22 @@ impl Estimates {
     ///
     /// # Errors
     /// A field missing or of the wrong type, named with `source`.
-    pub fn of_selfcal(v: &Value, source: &str) -> Result<Self, String> {
-        let field = |path: &[&str]| -> Result<&Value, String> {
+    pub fn of_selfcal(v: &Value, source: &str) -> Result<Self, Error> {
+        let file = || source.to_string();
+        let field = |path: &[&str]| -> Result<&Value, Error> {
             path.iter()
                 .try_fold(v, |at, key| at.get(key))
-                .ok_or_else(|| format!("{source}: selfcal record without `{}`", path.join(".")))
+                .ok_or_else(|| Error::Missing {
+                    file: file(),
+                    field: path.join("."),
+                })
         };
-        let numbers = |x: &Value, what: &str| -> Result<Vec<f64>, String> {
+        let not_a = |field: &'static str, expected: &'static str| Error::NotA {
+            file: file(),
+            field,
+            expected,
+        };
+        let numbers = |x: &Value, what: &'static str| -> Result<Vec<f64>, Error> {
             let flat: Vec<&Value> = match x.as_array() {
                 Some(items) if items.iter().all(Value::is_array) => items
                     .iter()
@@ -115,28 +221,31 @@ impl Estimates {
                 .map(|n| n.as_f64())
                 .collect::<Option<Vec<f64>>>()
                 .filter(|n| !n.is_empty())
-                .ok_or_else(|| format!("{source}: `{what}` is not a list of numbers"))
+                .ok_or_else(|| not_a(what, "a list of numbers"))
         };
-        let names = |x: &Value, what: &str| -> Result<Vec<String>, String> {
+        let names = |x: &Value, what: &'static str| -> Result<Vec<String>, Error> {
             x.as_array()
                 .and_then(|a| a.iter().map(|t| t.as_str().map(String::from)).collect())
-                .ok_or_else(|| format!("{source}: `{what}` is not a list of names"))
+                .ok_or_else(|| not_a(what, "a list of names"))
         };
-        let estimate = |output: &str,
+        let estimate = |output: &'static str,
                         terms: Vec<String>,
                         values: Vec<f64>,
                         cov: &Value,
-                        what: &str|
-         -> Result<Option<Estimate>, String> {
+                        what: &'static str|
+         -> Result<Option<Estimate>, Error> {
             if cov.is_null() {
                 return Ok(None);
             }
             let k = terms.len();
             let flat = numbers(cov, what)?;
             if values.len() != k || flat.len() != k * k {
-                return Err(format!(
-                    "{source}: `{what}` is not {k} x {k} for the {k} terms of the {output}"
-                ));
+                return Err(Error::CovarianceSize {
+                    file: file(),
+                    field: what,
+                    k,
+                    output,
+                });
             }
             let covariance: Vec<Vec<f64>> = flat.chunks(k).map(<[f64]>::to_vec).collect();
             let std_errors = (0..k).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
@@ -150,7 +259,7 @@ impl Estimates {
         };
         let serial = field(&["serial"])?
             .as_str()
-            .ok_or_else(|| format!("{source}: `serial` is not a string"))?
+            .ok_or_else(|| not_a("serial", "a string"))?
             .to_string();
         let accel = estimate(
             "accelerometer",
@@ -171,7 +280,7 @@ impl Estimates {
         )?;
         let center = numbers(field(&["accel", "center_counts"])?, "accel.center_counts")?;
         let accel_center = <[f64; 3]>::try_from(center.as_slice())
-            .map_err(|_| format!("{source}: `accel.center_counts` is not 3 numbers"))?;
+            .map_err(|_| not_a("accel.center_counts", "3 numbers"))?;
         Ok(Self {
             accel_center: Some(accel_center),
             serial,
@@ -229,28 +338,31 @@ impl Estimates {
     ///
     /// # Errors
     /// Not JSON, an unknown schema, or a record missing what the comparison needs.
-    pub fn parse(text: &str, source: &str) -> Result<Self, String> {
-        let v: Value = serde_json::from_str(text).map_err(|e| {
-            format!(
-                "{source}:{}:{}: not a calibration record: {e}",
-                e.line(),
-                e.column()
-            )
+    pub fn parse(text: &str, source: &str) -> Result<Self, Error> {
+        let v: Value = serde_json::from_str(text).map_err(|e| Error::NotJson {
+            file: source.to_string(),
+            line: e.line(),
+            column: e.column(),
+            source: e,
         })?;
         match v.get("schema").and_then(Value::as_str) {
             Some(record::SCHEMA) => {
-                let r: Record = serde_json::from_value(v)
-                    .map_err(|e| format!("{source}: not a calibration record: {e}"))?;
+                let r: Record = serde_json::from_value(v).map_err(|e| Error::NotRecord {
+                    file: source.to_string(),
+                    source: e,
+                })?;
                 Ok(Self::of_record(&r))
             }
             Some(SELFCAL_SCHEMA) => Self::of_selfcal(&v, source),
-            Some(other) => Err(format!(
-                "{source}: schema `{other}`, expected `{}` or `{SELFCAL_SCHEMA}`",
-                record::SCHEMA
-            )),
-            None => Err(format!(
-                "{source}: no `schema`: not a record of `calflash calibrate` or `calflash selfcal`"
-            )),
+            Some(other) => Err(Error::Schema {
+                file: source.to_string(),
+                found: other.to_string(),
+                calibration: record::SCHEMA,
+                selfcal: SELFCAL_SCHEMA,
+            }),
+            None => Err(Error::NoSchema {
+                file: source.to_string(),
+            }),
         }
     }
 }
@@ -299,18 +411,18 @@ pub fn compare(
     before: &Estimates,
     after: &Estimates,
     alpha: f64,
-) -> Result<Vec<AxisChange>, String> {
+) -> Result<Vec<AxisChange>, Error> {
     if before.serial != after.serial {
-        return Err(format!(
-            "the records are of different units: {} and {} (compare calibrations of one unit)",
-            before.serial, after.serial
-        ));
+        return Err(Error::DifferentUnits {
+            before: before.serial.clone(),
+            after: after.serial.clone(),
+        });
     }
     if before.kind != after.kind {
-        return Err(format!(
-            "the records are of different kinds: {} and {} (compare two records of one kind)",
-            before.kind, after.kind
-        ));
+        return Err(Error::DifferentKinds {
+            before: before.kind.clone(),
+            after: after.kind.clone(),
+        });
     }
     // Parameters relative to a center compare only at one center.
     let after = &match before.accel_center {
@@ -379,9 +491,7 @@ pub fn compare(
         }
     }
     if out.is_empty() {
-        return Err(
-            "the records share no table point and output with a covariance to compare".into(),
-        );
+        return Err(Error::NothingShared);
     }
     Ok(out)
 }
@@ -412,9 +522,42 @@ mod tests {
     #[test]
     fn records_of_different_kinds_are_refused() {
         let e = compare(&one("imu", 1.0), &one("imu without equipment", 1.0), 0.05).unwrap_err();
+        assert!(matches!(e, Error::DifferentKinds { .. }));
         assert_eq!(
-            e,
+            e.to_string(),
             "the records are of different kinds: imu and imu without equipment (compare two records of one kind)"
+        );
+    }
+
+    #[test]
+    fn records_that_cannot_be_read_say_where_and_what() {
+        let parse = |text: &str| Estimates::parse(text, "a.json").unwrap_err();
+        let e = parse("{\n  \"schema\": ");
+        assert!(matches!(e, Error::NotJson { line: 2, .. }), "{e:?}");
+        assert!(e.to_string().starts_with("a.json:2:"), "{e}");
+        let e = parse(r#"{"serial": "U-1"}"#);
+        assert!(matches!(e, Error::NoSchema { .. }));
+        let e = parse(r#"{"schema": "other/9"}"#);
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "a.json: schema `other/9`, expected `{}` or `{SELFCAL_SCHEMA}`",
+                record::SCHEMA
+            )
+        );
+        let e = parse(&format!(r#"{{"schema": "{SELFCAL_SCHEMA}", "serial": 7}}"#));
+        assert_eq!(e.to_string(), "a.json: `serial` is not a string");
+        let e = parse(&format!(
+            r#"{{"schema": "{SELFCAL_SCHEMA}", "serial": "U-1"}}"#
+        ));
+        assert!(matches!(&e, Error::Missing { field, .. } if field == "accel.terms"));
+        let e = parse(&format!(
+            r#"{{"schema": "{SELFCAL_SCHEMA}", "serial": "U-1",
+                "accel": {{"terms": ["b"], "parameters": [1.0], "covariance": [[1.0, 0.0]]}}}}"#
+        ));
+        assert_eq!(
+            e.to_string(),
+            "a.json: `accel.covariance` is not 1 x 1 for the 1 terms of the accelerometer"
         );
     }
 

@@ -14,7 +14,39 @@ use spincal::model::Quantity;
 use super::ramp::Ramp;
 use super::truth::SingleTruth;
 use super::{Sensor, plan};
-use crate::sensor::{Options, single};
+use crate::sensor::{Options, WorkflowError, single};
+
+/// Why one seed of the comparison could not be run.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// PX4's least-squares problem has no solution.
+    #[error("PX4's fit has no solution: {0}")]
+    Px4Fit(&'static str),
+    /// The scenario's plan cannot be read.
+    #[error(transparent)]
+    Plan(#[from] plan::PlanError),
+    /// The simulator wrote no temperature column.
+    #[error("no temp column")]
+    NoTemperature,
+    /// The simulated ramp could not be written.
+    #[error("{}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// `calflash calibrate`'s workflow failed on the ramp.
+    #[error(transparent)]
+    Calibrate(#[from] WorkflowError),
+    /// The ramp was calibrated without a continuous temperature model.
+    #[error("the ramp was not fitted with a continuous temperature model")]
+    NotContinuous,
+    /// The blob or the device's corrector refused the calibration.
+    #[error(transparent)]
+    Device(#[from] spincal::Error),
+}
 
 /// PX4's model of one axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -34,7 +66,7 @@ impl Px4 {
     ///
     /// # Errors
     /// When the least-squares problem has no solution (fewer than 5 distinct observations).
-    pub fn fit(input: &[f64], output: &[f64], temp: &[f64]) -> Result<Self, String> {
+    pub fn fit(input: &[f64], output: &[f64], temp: &[f64]) -> Result<Self, Error> {
         let lo = temp.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = temp.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let (t_ref, half) = (0.5 * (lo + hi), (0.5 * (hi - lo)).max(1e-9));
@@ -45,7 +77,7 @@ impl Px4 {
         let b = x
             .svd(true, true)
             .solve(&DVector::from_column_slice(output), 1e-12)
-            .map_err(|e| format!("PX4's fit has no solution: {e}"))?;
+            .map_err(Error::Px4Fit)?;
         Ok(Self {
             t_ref,
             half,
@@ -103,15 +135,14 @@ pub struct Told<'a> {
 ///
 /// # Errors
 /// A calibration that fails, in words.
-pub fn run(s: &Scenario, seed: u64, dir: &Path, told: Told<'_>) -> Result<Errors, String> {
+pub fn run(s: &Scenario, seed: u64, dir: &Path, told: Told<'_>) -> Result<Errors, Error> {
     let conditions = plan::plan(
         &["head:16".into()],
         &[25.0],
         &[s.truth.ref_volt],
         s.repeat,
         true,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let (conditions, temps) = super::ramp::run(&s.ramp, &conditions);
     let sensor = Sensor::Single {
         gyro: false,
@@ -122,34 +153,35 @@ pub fn run(s: &Scenario, seed: u64, dir: &Path, told: Told<'_>) -> Result<Errors
         .names
         .iter()
         .position(|n| n == crate::columns::TEMP)
-        .ok_or("no temp column")?;
+        .ok_or(Error::NoTemperature)?;
     for (row, t) in obs.rows.iter_mut().zip(&temps.reported) {
         row[ti] = *t;
     }
     let path = dir.join(format!("ramp-{seed}.csv"));
     let mut buf = Vec::new();
-    obs.write_csv(&mut buf).map_err(|e| e.to_string())?;
-    std::fs::write(&path, buf).map_err(|e| e.to_string())?;
+    obs.write_csv(&mut buf)
+        .and_then(|()| std::fs::write(&path, buf))
+        .map_err(|source| Error::Write {
+            path: path.clone(),
+            source,
+        })?;
     let mut opts = Options::new(&path, "PX4CMP");
     opts.created = Some(0);
     opts.model = told.model.map(String::from);
     if told.no_asymmetry {
         opts.asymmetry = Some(false);
     }
-    let c = single::calibrate(&opts, Quantity::Acceleration).map_err(|e| e.to_string())?;
+    let c = single::calibrate(&opts, Quantity::Acceleration)?;
     let _ = std::fs::remove_file(&path);
-    let tf = c
-        .thermal
-        .first()
-        .ok_or("the ramp was not fitted with a continuous temperature model")?;
+    let tf = c.thermal.first().ok_or(Error::NotContinuous)?;
     let col = |n: &str| obs.column(n).unwrap_or_default();
     let px4 = Px4::fit(
         &col(crate::columns::INPUT),
         &col(crate::columns::OUTPUT),
         &temps.reported,
     )?;
-    let cal = spincal::blob::decode(&c.blob).map_err(|e| e.to_string())?;
-    let mut device = AnyAxisCorrector::new(&cal).map_err(|e| e.to_string())?;
+    let cal = spincal::blob::decode(&c.blob)?;
+    let mut device = AnyAxisCorrector::new(&cal)?;
     let (lo, hi) = (tf.scale.lo, tf.scale.hi);
     let mut sums = [0.0f64; 3];
     let mut n = 0.0;

@@ -135,20 +135,33 @@ pub fn run(
     (out, temps)
 }
 
+/// A `--ramp` or `--self-heating` option that cannot be read.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// `--ramp` not of the form `FROM:TO`.
+    #[error("--ramp `{0}`: expected FROM:TO in C, e.g. -40:70")]
+    Span(String),
+    /// A ramp beyond what a chamber reaches.
+    #[error("--ramp `{0}`: a chamber ramps between -100 and 200 C")]
+    Unreachable(String),
+    /// `--self-heating` not a rise of at most 50 C and a time constant of at least 0 s.
+    #[error("--self-heating `{0}`: expected RISE:SECONDS, a rise of at most 50 C, e.g. 3:300")]
+    SelfHeating(String),
+}
+
 /// Reads `FROM:TO` (C).
 ///
 /// # Errors
 /// Not two finite temperatures a chamber reaches (-100 to 200 C).
-pub fn span(text: &str) -> Result<(f64, f64), String> {
-    let err = || format!("--ramp `{text}`: expected FROM:TO in C, e.g. -40:70");
+pub fn span(text: &str) -> Result<(f64, f64), Error> {
+    let err = || Error::Span(text.to_string());
     let (a, b) = text.split_once(':').ok_or_else(err)?;
     let a: f64 = a.trim().parse().map_err(|_| err())?;
     let b: f64 = b.trim().parse().map_err(|_| err())?;
     let reached = |t: f64| (-100.0..=200.0).contains(&t);
     if !(reached(a) && reached(b)) {
-        return Err(format!(
-            "--ramp `{text}`: a chamber ramps between -100 and 200 C"
-        ));
+        return Err(Error::Unreachable(text.to_string()));
     }
     Ok((a, b))
 }
@@ -157,12 +170,8 @@ pub fn span(text: &str) -> Result<(f64, f64), String> {
 ///
 /// # Errors
 /// Not a rise of at most 50 C and a time constant of at least 0 s.
-pub fn self_heating(text: &str) -> Result<(f64, f64), String> {
-    let err = || {
-        format!(
-            "--self-heating `{text}`: expected RISE:SECONDS, a rise of at most 50 C, e.g. 3:300"
-        )
-    };
+pub fn self_heating(text: &str) -> Result<(f64, f64), Error> {
+    let err = || Error::SelfHeating(text.to_string());
     let (a, b) = text.split_once(':').ok_or_else(err)?;
     let rise: f64 = a.trim().parse().map_err(|_| err())?;
     let tau: f64 = b.trim().parse().map_err(|_| err())?;
@@ -196,8 +205,15 @@ mod tests {
         assert!(t.sensor[50] < t.chamber[50] + 3.0);
         assert!((t.sensor[400] - (t.chamber[400] + 3.0)).abs() < 0.5);
         assert!(t.reported.iter().all(|v| v.fract() == 0.0));
-        assert!(span("-40:70").is_ok() && span("-300:70").is_err() && span("x").is_err());
+        assert!(span("-40:70").is_ok());
+        assert_eq!(span("-300:70"), Err(Error::Unreachable("-300:70".into())));
+        assert_eq!(span("x"), Err(Error::Span("x".into())));
+        assert_eq!(
+            span("x").unwrap_err().to_string(),
+            "--ramp `x`: expected FROM:TO in C, e.g. -40:70"
+        );
         assert_eq!(self_heating("3:300"), Ok((3.0, 300.0)));
-        assert!(self_heating("3").is_err() && self_heating("99:1").is_err());
+        assert_eq!(self_heating("3"), Err(Error::SelfHeating("3".into())));
+        assert!(self_heating("99:1").is_err());
     }
 }
