@@ -121,7 +121,8 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     opts.rails = job.codes;
     let c = triad::calibrate(&opts, triad::Kind::Imu, false).map_err(|e| e.to_string())?;
     let record = Record::new(&c, &data.display().to_string());
-    let html = calflash::report::html::render(&c, &data.display().to_string())?;
+    let html = calflash::report::html::render(&c, &data.display().to_string())
+        .map_err(|e| e.to_string())?;
     let (blob, report, json) = (w("unit.blob"), w("report.html"), w("calibration.json"));
     std::fs::write(&blob, &c.blob).map_err(|e| e.to_string())?;
     std::fs::write(&report, html).map_err(|e| e.to_string())?;

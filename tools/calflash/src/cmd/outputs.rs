@@ -201,7 +201,7 @@ impl Outputs {
         &self,
         blob: Option<&[u8]>,
         record: &impl serde::Serialize,
-        html: impl FnOnce() -> Result<String, String>,
+        html: impl FnOnce() -> Result<String, crate::report::Error>,
     ) -> Result<(), Failure> {
         let html = self.report.as_ref().map(|_| html()).transpose()?;
         let mut staged = Staged::new();

@@ -1,6 +1,7 @@
 //! Reports of `calflash design`: plans side by side, the optimum against the usual plans, and
 //! predicted (and simulated) precision.
 
+use super::Error;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -249,7 +250,7 @@ pub fn evaluate_html(
     blocks: &[Block],
     plans: &[PlanResult],
     curve: Option<&Points>,
-) -> Result<String, String> {
+) -> Result<String, Error> {
     let mut h = format!(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>Plans for {0}</title>\n<style>{1}</style>\n</head>\n<body>\n<h1>Plans for {0}</h1>\n<pre>{2}</pre>\n",
         esc(model),

@@ -1,5 +1,6 @@
 //! The calibration report: one HTML file with inline SVG figures, the verdict first.
 
+use super::Error;
 use std::fmt::Write as _;
 
 use super::plot::{COLORS, Figure, Series, svg};
@@ -25,7 +26,7 @@ pre{white-space:pre-wrap;overflow-wrap:anywhere}";
 ///
 /// # Errors
 /// A figure that cannot be drawn.
-pub fn render(c: &Calibrated, data_file: &str) -> Result<String, String> {
+pub fn render(c: &Calibrated, data_file: &str) -> Result<String, Error> {
     let id = &c.data.identity;
     let mut h = String::new();
     let verdict = c.verdict();

@@ -2,13 +2,14 @@
 //! with the limit, the units outside, and the control charts with their limits and the points
 //! out of control.
 
+use super::Error;
 use std::fmt::Write as _;
 
 use super::html::{STYLE, esc};
 use super::plot::{Figure, Series, svg};
 use crate::lot::{Judge, Lot, UnitChart};
 
-fn figure(title: &str, x: &str, y: &str, series: Vec<Series<'_>>) -> Result<String, String> {
+fn figure(title: &str, x: &str, y: &str, series: Vec<Series<'_>>) -> Result<String, Error> {
     svg(&Figure {
         title,
         x,
@@ -30,7 +31,7 @@ fn indexed(values: impl Iterator<Item = f64>) -> Vec<(f64, f64)> {
 ///
 /// # Errors
 /// A figure that cannot be drawn.
-pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<String, String> {
+pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<String, Error> {
     let name = name.replace('`', "");
     let mut h = String::new();
     let n = lot.units.len();

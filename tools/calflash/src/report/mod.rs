@@ -1,6 +1,7 @@
 //! Reports: they only read results.
 
 pub mod design;
+pub mod error;
 pub mod html;
 pub mod json;
 pub mod lot;
@@ -8,3 +9,5 @@ pub mod plot;
 pub mod selfcal;
 pub mod terminal;
 pub mod thermal;
+
+pub use error::Error;

@@ -1,6 +1,7 @@
 //! SVG figures for the HTML report, drawn with plotters' SVG backend (text is laid out by the
 //! browser, so no font files are needed).
 
+use super::Error;
 use plotters::prelude::*;
 
 /// A named set of points and how to draw it.
@@ -171,12 +172,12 @@ fn legend_spot(
 /// Draws a figure as an SVG document (a string).
 ///
 /// # Errors
-/// plotters' drawing error, as text.
-pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
+/// plotters' drawing error.
+pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (720, 360)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        root.fill(&WHITE)?;
         let ((x0, x1), (y0, y1)) = bounds(fig);
         let (spot, y1) = legend_spot(fig, (x0, x1), (y0, y1));
         // Error bars too short to see are said under the axis, not left to look like no
@@ -202,8 +203,7 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(80)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(x0..x1, y0..y1)?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
@@ -211,14 +211,12 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
             .x_label_formatter(&|v| super::terminal::num(*v))
             .y_label_formatter(&|v| super::terminal::num(*v))
             .light_line_style(RGBColor(235, 235, 235))
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         if !fig.bands.is_empty() {
             chart
                 .draw_series(fig.bands.iter().map(|(a, b)| {
                     Rectangle::new([(*a, y0), (*b, y1)], RGBColor(230, 240, 255).filled())
-                }))
-                .map_err(|e| e.to_string())?
+                }))?
                 .label(fig.band_label)
                 .legend(|(x, y)| {
                     Rectangle::new(
@@ -228,9 +226,7 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
                 });
         }
         if fig.zero_line {
-            chart
-                .draw_series(LineSeries::new([(x0, 0.0), (x1, 0.0)], BLACK.mix(0.4)))
-                .map_err(|e| e.to_string())?;
+            chart.draw_series(LineSeries::new([(x0, 0.0), (x1, 0.0)], BLACK.mix(0.4)))?;
         }
         for s in &fig.series {
             let color = s.color;
@@ -241,16 +237,14 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, String> {
                 .filter(|(a, b)| a.is_finite() && b.is_finite())
                 .collect();
             if let Some(errors) = s.errors {
-                chart
-                    .draw_series(pts.iter().zip(errors).map(|((x, y), e)| {
-                        ErrorBar::new_vertical(*x, y - e, *y, y + e, color.filled(), 6)
-                    }))
-                    .map_err(|e| e.to_string())?;
+                chart.draw_series(pts.iter().zip(errors).map(|((x, y), e)| {
+                    ErrorBar::new_vertical(*x, y - e, *y, y + e, color.filled(), 6)
+                }))?;
             }
             line_or_marks(&mut chart, s, &pts, 2)?;
         }
         legend(&mut chart, spot)?;
-        root.present().map_err(|e| e.to_string())?;
+        root.present()?;
     }
     Ok(out)
 }
@@ -261,9 +255,9 @@ fn line_or_marks<'a, DB, CT>(
     s: &Series<'_>,
     pts: &[(f64, f64)],
     radius: i32,
-) -> Result<(), String>
+) -> Result<(), Error>
 where
-    DB: DrawingBackend + 'a,
+    DB: DrawingBackend<ErrorType = std::io::Error> + 'a,
     CT: CoordTranslate<From = (f64, f64)>,
 {
     let color = s.color;
@@ -271,8 +265,7 @@ where
         chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
     } else {
         chart.draw_series(pts.iter().map(|p| Circle::new(*p, radius, color.filled())))
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     // A series without a name (the second edge of a band) has no legend entry.
     if !s.name.is_empty() {
         anno.label(s.name)
@@ -285,9 +278,9 @@ where
 fn legend<'a, DB, CT>(
     chart: &mut ChartContext<'a, DB, CT>,
     position: SeriesLabelPosition,
-) -> Result<(), String>
+) -> Result<(), Error>
 where
-    DB: DrawingBackend + 'a,
+    DB: DrawingBackend<ErrorType = std::io::Error> + 'a,
     CT: CoordTranslate,
 {
     chart
@@ -295,20 +288,20 @@ where
         .position(position)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.3))
-        .draw()
-        .map_err(|e| e.to_string())
+        .draw()?;
+    Ok(())
 }
 
 /// Draws series on logarithmic axes (the Allan deviation), as an SVG document. Points with a
 /// coordinate at or below zero are left out.
 ///
 /// # Errors
-/// plotters' drawing error, as text.
-pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, String> {
+/// plotters' drawing error.
+pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, Error> {
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (720, 420)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        root.fill(&WHITE)?;
         let pos: Vec<(f64, f64)> = fig
             .series
             .iter()
@@ -324,7 +317,7 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, String> {
         };
         let ((x0, x1), (y0, y1)) = (fold(|p| p.0), fold(|p| p.1));
         if !x0.is_finite() {
-            return Err(format!("{}: nothing to draw", fig.title));
+            return Err(Error::Empty(fig.title.to_string()));
         }
         let mut chart = ChartBuilder::on(&root)
             .caption(fig.title, ("sans-serif", 18))
@@ -334,8 +327,7 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, String> {
             .build_cartesian_2d(
                 (x0 / 1.5..x1 * 1.5).log_scale(),
                 (y0 / 1.5..y1 * 1.5).log_scale(),
-            )
-            .map_err(|e| e.to_string())?;
+            )?;
         chart
             .configure_mesh()
             .x_desc(fig.x)
@@ -343,8 +335,7 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, String> {
             .x_label_formatter(&|v| super::terminal::num(*v))
             .y_label_formatter(&|v| super::terminal::num(*v))
             .light_line_style(RGBColor(235, 235, 235))
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         for s in &fig.series {
             let pts: Vec<(f64, f64)> = s
                 .points
@@ -355,7 +346,7 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, String> {
             line_or_marks(&mut chart, s, &pts, 3)?;
         }
         legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
-        root.present().map_err(|e| e.to_string())?;
+        root.present()?;
     }
     Ok(out)
 }
@@ -386,6 +377,15 @@ mod tests {
         assert!(s.starts_with("<svg"));
         assert!(s.matches("<circle").count() >= 3);
         assert!(s.contains("residuals") && s.contains("calibrated range"));
+    }
+
+    #[test]
+    fn a_log_log_figure_with_no_positive_point_says_so() {
+        let pts = [(0.0, 1.0), (1.0, -0.5)];
+        let e = svg_loglog(&figure(&pts)).unwrap_err();
+        assert!(matches!(&e, Error::Empty(title) if title == "t"));
+        assert_eq!(e.to_string(), "t: nothing to draw");
+        assert!(svg_loglog(&figure(&[(1.0, 2.0), (10.0, 0.5)])).is_ok());
     }
 
     fn figure<'a>(pts: &'a [(f64, f64)]) -> Figure<'a> {

@@ -1,6 +1,7 @@
 //! Reports of a calibration without equipment: the terminal summary and the HTML report with
 //! its figures (the JSON record is [`crate::sensor::selfcal::record`]).
 
+use super::Error;
 use std::fmt::Write as _;
 
 use super::html::esc;
@@ -258,7 +259,7 @@ pub fn html(
     rec: &Recording,
     check: Option<&DeviceCheck>,
     serial: &str,
-) -> Result<String, String> {
+) -> Result<String, Error> {
     let (v, notes) = verdict(c, check);
     let word = v.word();
     let t0 = rec.t[0];

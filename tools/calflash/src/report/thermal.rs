@@ -4,6 +4,7 @@
 //! the device's series or table departs from the model (a triad's or an IMU's: each output
 //! along its own axis; the departure for models without nonlinear terms or lever arms).
 
+use super::Error;
 use std::fmt::Write as _;
 
 use spincal::correct::AnyAxisCorrector;
@@ -31,7 +32,7 @@ fn grid(tf: &ThermalFit, beyond: f64) -> Vec<f64> {
 ///
 /// # Errors
 /// A figure that cannot be drawn.
-pub fn section(c: &Calibrated) -> Result<String, String> {
+pub fn section(c: &Calibrated) -> Result<String, Error> {
     let Some(first) = c.thermal.first() else {
         return Ok(String::new());
     };
@@ -96,8 +97,8 @@ pub fn section(c: &Calibrated) -> Result<String, String> {
         })?
     );
     // The device against the model: its correction of the model's own codes.
-    let cal = spincal::blob::decode(&c.blob).map_err(|e| e.to_string())?;
-    let mut device = AnyAxisCorrector::new(&cal).map_err(|e| e.to_string())?;
+    let cal = spincal::blob::decode(&c.blob)?;
+    let mut device = AnyAxisCorrector::new(&cal)?;
     let volt =
         0.5 * (cal.data().environment.voltage_span.lo + cal.data().environment.voltage_span.hi);
     let departure: Vec<(f64, f64)> = temps
@@ -130,7 +131,7 @@ pub fn section(c: &Calibrated) -> Result<String, String> {
 
 /// Each coefficient of `tf` against the temperature with its 95 % band (the bias with the
 /// observations' partial residuals), titled with `axis`.
-fn coefficient_figures(h: &mut String, tf: &ThermalFit, axis: &str) -> Result<(), String> {
+fn coefficient_figures(h: &mut String, tf: &ThermalFit, axis: &str) -> Result<(), Error> {
     let names = tf.base.term_names();
     let temps = grid(tf, 0.0);
     for (j, name) in names.iter().enumerate() {
@@ -224,7 +225,7 @@ fn linear_at(tf: &ThermalFit, t: f64) -> Option<([f64; 4], impl Fn(f64) -> f64)>
 
 /// A triad's or an IMU's figures: each output's 1-sigma along its own axis over the
 /// temperature (at the top of its range), and the device's departure from the model.
-fn triad_figures(c: &Calibrated) -> Result<String, String> {
+fn triad_figures(c: &Calibrated) -> Result<String, Error> {
     let mut h = String::new();
     let Some(first) = c.thermal.first() else {
         return Ok(h);
@@ -265,7 +266,7 @@ fn triad_figures(c: &Calibrated) -> Result<String, String> {
             })?
         );
     }
-    let cal = spincal::blob::decode(&c.blob).map_err(|e| e.to_string())?;
+    let cal = spincal::blob::decode(&c.blob)?;
     let env = &cal.data().environment;
     let volt = 0.5 * (env.voltage_span.lo + env.voltage_span.hi);
     if matches!(cal.data().sensor, spincal::model::Sensor::Single { .. }) {
@@ -347,7 +348,7 @@ fn departure_figure(
     model: TemperatureModel,
     over: &str,
     departure: &[(f64, f64)],
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let what = match model {
         TemperatureModel::Chebyshev(n) => format!("Chebyshev series of {n} terms"),
         TemperatureModel::Table => format!("table of {} temperatures", c.temps.len()),
