@@ -297,7 +297,9 @@ fn provision(flash_file: &Path, station: StationKey) -> Result<bool, String> {
     let name = flash_file.display();
     let mut image = match std::fs::read(flash_file) {
         Ok(image) => image,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => unit_image(None, &[], region)?,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            unit_image(None, &[], region).map_err(|e| e.to_string())?
+        }
         Err(e) => return Err(format!("{name}: {e}")),
     };
     let before_keys = region.keys_offset() as usize;

@@ -36,6 +36,8 @@ pub enum StoreError {
     Refused(SignError),
 }
 
+impl core::error::Error for StoreError {}
+
 impl core::fmt::Display for StoreError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {

@@ -178,14 +178,12 @@ fn from_unit(
     args: &HealthArgs,
     port: &str,
     rec: Option<&Path>,
-) -> Result<(Health, Vec<u8>, String, String), String> {
+) -> Result<(Health, Vec<u8>, String, String), Failure> {
     let timeout = Duration::from_secs_f64(args.timeout);
     let link = Link::open(port, timeout)?;
     let mut client = Client::new(link, timeout);
-    let id = client.identify().map_err(|e| e.to_string())?;
-    let blob = client
-        .read_blob(id.blob_len as usize)
-        .map_err(|e| e.to_string())?;
+    let id = client.identify()?;
+    let blob = client.read_blob(id.blob_len as usize)?;
     let cal = crate::signing::calibration(&blob).map_err(|e| format!("the unit's blob: {e}"))?;
     if let Some(rec) = rec {
         let (raw, rate) = samples(args, rec)?;
@@ -194,7 +192,8 @@ fn from_unit(
             return Err(format!(
                 "{}: sampled at {rate} Hz; the unit's stream runs at {device_rate} Hz",
                 rec.display()
-            ));
+            )
+            .into());
         }
         let (t, v) = environment(args, &cal);
         let bar = indicatif::ProgressBar::new(raw.len() as u64);

@@ -76,7 +76,7 @@ pub fn run(args: &ImageArgs) -> Result<(), Failure> {
     let image =
         image::unit_image(bytes.as_deref(), &keys, region).map_err(|e| match &args.blob {
             Some(p) => format!("{}: {e}", p.display()),
-            None => e,
+            None => e.to_string(),
         })?;
     for k in &keys {
         println!(

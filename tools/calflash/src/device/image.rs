@@ -57,12 +57,32 @@ impl Region {
     }
 }
 
+/// Why a unit's image cannot be made.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The blob is invalid or does not fit a slot.
+    #[error(transparent)]
+    Slot(#[from] store::StoreError),
+    /// More station keys than a unit holds (or none where some are needed).
+    #[error("{given} station keys; a unit holds 1 to {max}")]
+    Keys {
+        /// Keys given.
+        given: usize,
+        /// The most a unit holds.
+        max: usize,
+    },
+    /// The Intel HEX writer's error.
+    #[error(transparent)]
+    Hex(#[from] ihex::WriterError),
+}
+
 /// The region's bytes after committing `blob` into slot 0 with sequence number 1 (a signed
 /// blob keeps its trailer).
 ///
 /// # Errors
 /// When the blob is invalid or does not fit a slot.
-pub fn region_image(blob: &[u8], region: Region) -> Result<Vec<u8>, String> {
+pub fn region_image(blob: &[u8], region: Region) -> Result<Vec<u8>, Error> {
     unit_image(Some(blob), &[], region)
 }
 
@@ -76,22 +96,18 @@ pub fn unit_image(
     blob: Option<&[u8]>,
     keys: &[StationKey],
     region: Region,
-) -> Result<Vec<u8>, String> {
+) -> Result<Vec<u8>, Error> {
     let mut out = vec![0xffu8; region.bytes() as usize];
     if let Some(blob) = blob {
         let mut scratch = CalibrationData::empty();
-        store::slot_image(blob, 1, &mut out[..region.slot_size as usize], &mut scratch)
-            .map_err(|e| e.to_string())?;
+        store::slot_image(blob, 1, &mut out[..region.slot_size as usize], &mut scratch)?;
     }
     if !keys.is_empty() {
         let at = region.keys_offset() as usize;
-        store::keys_record(keys, &mut out[at..at + region.lock_size as usize]).ok_or_else(
-            || {
-                format!(
-                    "{} station keys; a unit holds 1 to {}",
-                    keys.len(),
-                    store::MAX_KEYS
-                )
+        store::keys_record(keys, &mut out[at..at + region.lock_size as usize]).ok_or(
+            Error::Keys {
+                given: keys.len(),
+                max: store::MAX_KEYS,
             },
         )?;
     }
@@ -102,7 +118,7 @@ pub fn unit_image(
 ///
 /// # Errors
 /// The writer's.
-pub fn intel_hex(bytes: &[u8], address: u32) -> Result<String, String> {
+pub fn intel_hex(bytes: &[u8], address: u32) -> Result<String, Error> {
     let mut records = Vec::new();
     let mut upper = None;
     for (k, chunk) in bytes.chunks(16).enumerate() {
@@ -117,12 +133,24 @@ pub fn intel_hex(bytes: &[u8], address: u32) -> Result<String, String> {
         });
     }
     records.push(ihex::Record::EndOfFile);
-    ihex::create_object_file_representation(&records).map_err(|e| e.to_string())
+    Ok(ihex::create_object_file_representation(&records)?)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_image_refuses_an_invalid_blob_and_too_many_keys() {
+        let region = Region::from_memory_x();
+        let e = region_image(&[0u8; 8], region).unwrap_err();
+        assert!(matches!(e, Error::Slot(_)), "{e:?}");
+        let keys = [StationKey { public: [7; 32] }; store::MAX_KEYS + 1];
+        let e = unit_image(None, &keys, region).unwrap_err();
+        assert!(matches!(e, Error::Keys { given: 5, max: 4 }), "{e:?}");
+        assert_eq!(e.to_string(), "5 station keys; a unit holds 1 to 4");
+        assert!(unit_image(None, &keys[..4], region).is_ok());
+    }
 
     #[test]
     fn region_and_hex() {
