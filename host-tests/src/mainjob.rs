@@ -180,7 +180,8 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     ));
     // Signed for this unit, at the counter above the one it holds.
     let counter = before.counter + 1;
-    let signed = calflash::signing::sign(&c.blob, &key, counter, false)?;
+    let signed =
+        calflash::signing::sign(&c.blob, &key, counter, false).map_err(|e| e.to_string())?;
     let signed_path = w("unit-signed.blob");
     std::fs::write(&signed_path, &signed).map_err(|e| format!("{}: {e}", signed_path.display()))?;
     let flash = device::flash(

@@ -56,17 +56,28 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     spincal::model::rotation::dot(&a, &b)
 }
 
+/// A station's latitude or fixture heading out of range, naming the option.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum StationError {
+    /// Not finite, or beyond the poles.
+    #[error("--latitude {0}: degrees from -90 to 90")]
+    Latitude(f64),
+    /// Not finite, or more than a turn.
+    #[error("--heading {0}: degrees from -360 to 360")]
+    Heading(f64),
+}
+
 impl Station {
     /// A station at `latitude_deg`, its fixture's mark at `heading_deg`.
     ///
     /// # Errors
     /// Values outside `[-90, 90]` and `[-360, 360]`, or not finite, naming the option.
-    pub fn new(latitude_deg: f64, heading_deg: f64) -> Result<Self, String> {
+    pub fn new(latitude_deg: f64, heading_deg: f64) -> Result<Self, StationError> {
         if !(latitude_deg.is_finite() && (-90.0..=90.0).contains(&latitude_deg)) {
-            return Err(format!("--latitude {latitude_deg}: degrees from -90 to 90"));
+            return Err(StationError::Latitude(latitude_deg));
         }
         if !(heading_deg.is_finite() && (-360.0..=360.0).contains(&heading_deg)) {
-            return Err(format!("--heading {heading_deg}: degrees from -360 to 360"));
+            return Err(StationError::Heading(heading_deg));
         }
         Ok(Self {
             latitude_deg,
@@ -189,6 +200,14 @@ mod tests {
             s.rate_in_body([0.0; 3], [0.0; 3], [1.0, 0.0, 0.0]),
             Err(EarthError::NoUp)
         );
-        assert!(Station::new(91.0, 0.0).is_err() && Station::new(0.0, f64::NAN).is_err());
+        assert_eq!(Station::new(91.0, 0.0), Err(StationError::Latitude(91.0)));
+        assert!(matches!(
+            Station::new(0.0, f64::NAN),
+            Err(StationError::Heading(h)) if h.is_nan()
+        ));
+        assert_eq!(
+            StationError::Heading(400.0).to_string(),
+            "--heading 400: degrees from -360 to 360"
+        );
     }
 }

@@ -155,6 +155,20 @@ pub fn calibration(bytes: &[u8]) -> Result<spincal::model::Calibration, spincal:
 pub fn signer(bytes: &[u8]) -> Option<(String, u32)> {
     signed::parts(bytes).1.map(|t| (hex(&t.key_id), t.counter))
 }
+/// Why a blob cannot be signed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SealError {
+    /// It carries a trailer already.
+    #[error("the blob is signed already")]
+    SignedAlready,
+    /// It does not decode.
+    #[error("not a calibration blob: {0}")]
+    NotBlob(spincal::Error),
+    /// Blob and trailer are longer than a slot holds.
+    #[error("the signed blob does not fit its buffer")]
+    TooLong,
+}
 
 /// `blob` signed with `key` at `counter` (a downgrade made for the unit at that counter when
 /// `downgrade`).
@@ -166,12 +180,12 @@ pub fn sign(
     key: &SigningKey,
     counter: u32,
     downgrade: bool,
-) -> Result<Vec<u8>, String> {
+) -> Result<Vec<u8>, SealError> {
     spincal::blob::decode(blob).map_err(|e| {
         if signed::split(blob).is_ok() {
-            "the blob is signed already".to_string()
+            SealError::SignedAlready
         } else {
-            format!("not a calibration blob: {e}")
+            SealError::NotBlob(e)
         }
     })?;
     let station = StationKey {
@@ -181,7 +195,7 @@ pub fn sign(
     let n = signed::seal(blob, &station, counter, downgrade, &mut out, |digest| {
         key.sign(digest).to_bytes()
     })
-    .ok_or("the signed blob does not fit its buffer")?;
+    .ok_or(SealError::TooLong)?;
     out.truncate(n);
     Ok(out)
 }
@@ -206,11 +220,11 @@ mod tests {
         let bytes = sign(&buf[..n], &key, 4, false).unwrap();
         let v = signed::verify(&bytes, &[public], &data.identity.serial, 3).unwrap();
         assert_eq!((v.counter, v.key_id), (4, id));
-        assert!(
-            sign(&bytes, &key, 5, false)
-                .unwrap_err()
-                .contains("signed already")
-        );
+        assert_eq!(sign(&bytes, &key, 5, false), Err(SealError::SignedAlready));
+        assert!(matches!(
+            sign(&[1, 2, 3], &key, 5, false),
+            Err(SealError::NotBlob(_))
+        ));
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;

@@ -81,13 +81,11 @@ impl Chosen {
     ///
     /// # Errors
     /// A role or a unit that is not known, or a role given twice.
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, ColumnsError> {
         let mut c = Self::default();
         for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let Some((role, name)) = item.split_once('=') else {
-                return Err(format!(
-                    "`{item}`: expected ROLE=NAME (t, ax, ay, az, gx, gy, gz or temp)"
-                ));
+                return Err(ColumnsError::NotRoleName(item.to_string()));
             };
             let (role, name) = (role.trim().to_ascii_lowercase(), name.trim().to_string());
             let slot: &mut Option<String> = match role.as_str() {
@@ -102,37 +100,103 @@ impl Chosen {
                     let (column, scale) = match name.rsplit_once(':') {
                         Some((n, u)) => (
                             n.trim().to_string(),
-                            timestamp(&format!("t{u}")).ok_or_else(|| {
-                                format!("`{item}`: the time unit `{u}` is not s, ms, us or ns")
+                            timestamp(&format!("t{u}")).ok_or_else(|| ColumnsError::TimeUnit {
+                                item: item.to_string(),
+                                unit: u.to_string(),
                             })?,
                         ),
                         None => (
                             name.clone(),
-                            timestamp(&name).ok_or_else(|| {
-                                format!(
-                                    "`{item}`: the unit of `{name}` cannot be read from its name; \
-                                     give it: t={name}:s (or ms, us, ns)"
-                                )
+                            timestamp(&name).ok_or_else(|| ColumnsError::TimeUnitUnstated {
+                                item: item.to_string(),
+                                name: name.clone(),
                             })?,
                         ),
                     };
                     if c.t.replace((column, scale)).is_some() {
-                        return Err(format!("`{item}`: t is given twice"));
+                        return Err(ColumnsError::Twice {
+                            item: item.to_string(),
+                            role: "t".into(),
+                        });
                     }
                     continue;
                 }
                 other => {
-                    return Err(format!(
-                        "`{item}`: `{other}` is not a role; expected t, ax, ay, az, gx, gy, gz or temp"
-                    ));
+                    return Err(ColumnsError::NotRole {
+                        item: item.to_string(),
+                        role: other.to_string(),
+                    });
                 }
             };
             if slot.replace(name).is_some() {
-                return Err(format!("`{item}`: {role} is given twice"));
+                return Err(ColumnsError::Twice {
+                    item: item.to_string(),
+                    role,
+                });
             }
         }
         Ok(c)
     }
+}
+
+/// `--columns` that cannot be read, or that name a column the header lacks.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ColumnsError {
+    /// An item not of the form `ROLE=NAME`.
+    #[error("`{0}`: expected ROLE=NAME (t, ax, ay, az, gx, gy, gz or temp)")]
+    NotRoleName(String),
+    /// A time unit that is not known.
+    #[error("`{item}`: the time unit `{unit}` is not s, ms, us or ns")]
+    TimeUnit {
+        /// The item.
+        item: String,
+        /// The unit given.
+        unit: String,
+    },
+    /// A time column whose name does not state its unit.
+    #[error(
+        "`{item}`: the unit of `{name}` cannot be read from its name; give it: t={name}:s (or ms, us, ns)"
+    )]
+    TimeUnitUnstated {
+        /// The item.
+        item: String,
+        /// The column's name.
+        name: String,
+    },
+    /// A role that is not known.
+    #[error("`{item}`: `{role}` is not a role; expected t, ax, ay, az, gx, gy, gz or temp")]
+    NotRole {
+        /// The item.
+        item: String,
+        /// The role given.
+        role: String,
+    },
+    /// A role given twice.
+    #[error("`{item}`: {role} is given twice")]
+    Twice {
+        /// The second item.
+        item: String,
+        /// The role.
+        role: String,
+    },
+    /// A header that does not name the counts `--columns` chose.
+    #[error("--columns: the header on line {header_line} does not name the counts")]
+    CountsNotNamed {
+        /// The header's line.
+        header_line: usize,
+    },
+    /// `--columns` for a file without a header.
+    #[error("--columns names columns, but the file has no header line before its first sample")]
+    NoHeader,
+    /// A chosen column the header does not have.
+    #[error("--columns names `{name}`, which is not in the header; its columns are: {header}")]
+    NotInHeader {
+        /// The name chosen.
+        name: String,
+        /// The header's columns, listed.
+        header: String,
+    },
 }
 
 /// A count column found: its field, the unit its name states, its sensor.
@@ -149,19 +213,17 @@ pub(super) fn named(
     line: usize,
     holds: Holds,
     chosen: &Chosen,
-) -> Result<Option<Columns>, String> {
-    let missing = |name: &str| {
-        format!(
-            "--columns names `{name}`, which is not in the header; its columns are: {}",
-            header.join(", ")
-        )
+) -> Result<Option<Columns>, ColumnsError> {
+    let missing = |name: &str| ColumnsError::NotInHeader {
+        name: name.to_string(),
+        header: header.join(", "),
     };
     // A sensor's three columns: the chosen names where given (`None` when a file of one sensor
     // has none of them: it is the other sensor's file), the recognised names otherwise.
     let find = |prefixes: &[&str],
                 sensor: Sensor,
                 names: &[Option<String>; 3]|
-     -> Result<Option<[Found; 3]>, String> {
+     -> Result<Option<[Found; 3]>, ColumnsError> {
         let given: Vec<&String> = names.iter().flatten().collect();
         if holds == Holds::One
             && !given.is_empty()
@@ -237,4 +299,26 @@ pub(super) fn positional(width: usize, holds: Holds) -> Option<Columns> {
         width,
         header: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn columns_read_roles_and_time_units_or_say_what_is_wrong() {
+        let c = Chosen::parse("t=stamp:ms, AX=a1, ay=a2, az=a3, temp=die").unwrap();
+        assert_eq!(c.t, Some(("stamp".into(), 1e-3)));
+        assert_eq!(c.accel[0].as_deref(), Some("a1"));
+        assert_eq!(c.temp.as_deref(), Some("die"));
+        let err = |text: &str| Chosen::parse(text).unwrap_err();
+        assert_eq!(err("ax"), ColumnsError::NotRoleName("ax".into()));
+        assert!(matches!(err("t=stamp:min"), ColumnsError::TimeUnit { unit, .. } if unit == "min"));
+        assert_eq!(
+            err("t=stamp").to_string(),
+            "`t=stamp`: the unit of `stamp` cannot be read from its name; give it: t=stamp:s (or ms, us, ns)"
+        );
+        assert!(matches!(err("ax=a, ax=b"), ColumnsError::Twice { role, .. } if role == "ax"));
+        assert!(matches!(err("mx=m"), ColumnsError::NotRole { role, .. } if role == "mx"));
+    }
 }

@@ -10,7 +10,7 @@ use super::fields::{MAX_FIELDS, Spans, number, split_bytes};
 use super::squash;
 use std::path::Path;
 
-use super::header::{Chosen, Columns, named, positional, timestamp};
+use super::header::{Chosen, Columns, ColumnsError, named, positional, timestamp};
 use super::recording::RecordingError;
 use super::units::{Sensor, Unit};
 
@@ -413,8 +413,8 @@ pub fn read_chosen(
                 path: path.to_path_buf(),
                 line,
                 what: match &header {
-                    Some((hl, _)) => format!("--columns: the header on line {hl} does not name the counts"),
-                    None => "--columns names columns, but the file has no header line before its first sample".into(),
+                    Some((hl, _)) => ColumnsError::CountsNotNamed { header_line: *hl },
+                    None => ColumnsError::NoHeader,
                 },
             });
         }

@@ -37,17 +37,20 @@ pub(crate) fn too_many(path: &Path, n: usize) -> WorkflowError {
     )
 }
 
+/// A serial number the device cannot store.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "--serial `{0}`: the device stores 1 to {cap} printable ASCII characters",
+    cap = spincal::model::SERIAL_CAPACITY
+)]
+pub struct SerialError(pub String);
+
 /// A serial number the device can store.
 ///
 /// # Errors
 /// What is wrong with it.
-pub fn serial(text: &str) -> Result<Serial, String> {
-    Serial::parse(text).ok_or_else(|| {
-        format!(
-            "--serial `{text}`: the device stores 1 to {} printable ASCII characters",
-            spincal::model::SERIAL_CAPACITY
-        )
-    })
+pub fn serial(text: &str) -> Result<Serial, SerialError> {
+    Serial::parse(text).ok_or_else(|| SerialError(text.to_string()))
 }
 
 /// The unit's identity: serial, now, the data's hash, this tool's version.
@@ -55,7 +58,7 @@ pub fn serial(text: &str) -> Result<Serial, String> {
 /// # Errors
 /// A serial the device cannot store.
 pub fn identity(opts: &Options) -> Result<Identity, WorkflowError> {
-    let serial = serial(&opts.serial).map_err(WorkflowError::Message)?;
+    let serial = serial(&opts.serial)?;
     let hash = super::data_hash(&[opts.file.as_path()])?;
     Ok(new_identity(serial, opts.created, hash, false))
 }

@@ -43,6 +43,9 @@ pub enum WorkflowError {
     /// A formula does not parse.
     #[error(transparent)]
     Formula(#[from] FormulaError),
+    /// A serial the device cannot store.
+    #[error(transparent)]
+    Serial(#[from] blob::SerialError),
     /// Anything else, already in words.
     #[error("{0}")]
     Message(String),

@@ -201,30 +201,6 @@ impl Record {
         }
     }
 
-    /// Reads a record.
-    ///
-    /// # Errors
-    /// A message naming the file and what is wrong.
-    pub fn read(path: &std::path::Path) -> Result<Self, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let r: Self = serde_json::from_str(&text).map_err(|e| {
-            format!(
-                "{}:{}:{}: not a calibration record: {e}",
-                path.display(),
-                e.line(),
-                e.column()
-            )
-        })?;
-        if r.schema != SCHEMA {
-            return Err(format!(
-                "{}: schema `{}`, expected `{SCHEMA}`",
-                path.display(),
-                r.schema
-            ));
-        }
-        Ok(r)
-    }
-
     /// The blob's bytes.
     #[must_use]
     pub fn blob_bytes(&self) -> Vec<u8> {

@@ -55,12 +55,23 @@ pub struct Layout {
     pub points: Vec<Point>,
 }
 
+/// Setpoints that do not form a full grid of temperature by voltage.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "the temperature and voltage setpoints do not form a full grid: no observations at {at}; \
+     the device interpolates over a grid, so every temperature needs every voltage"
+)]
+pub struct GridError {
+    /// The setpoint without observations ("-40.0 C, 3.60 V").
+    pub at: String,
+}
+
 /// Groups the observations by the setpoints of the `temp` and `volt` columns (each axis only
 /// when the column is there and takes more than one setpoint).
 ///
 /// # Errors
 /// When the setpoints do not form a full grid (a temperature without every voltage).
-pub fn layout(table: &Table, temp: Option<&str>, volt: Option<&str>) -> Result<Layout, String> {
+pub fn layout(table: &Table, temp: Option<&str>, volt: Option<&str>) -> Result<Layout, GridError> {
     let axis = |name: Option<&str>, tol: f64| -> (Vec<f64>, Option<&[f64]>) {
         match name.and_then(|n| table.column(n)) {
             Some(c) => {
@@ -90,11 +101,7 @@ pub fn layout(table: &Table, temp: Option<&str>, volt: Option<&str>) -> Result<L
         points[t * nv + v].rows.push(i);
     }
     if let Some(p) = points.iter().find(|p| p.rows.is_empty()) {
-        return Err(format!(
-            "the temperature and voltage setpoints do not form a full grid: no observations at {}; \
-             the device interpolates over a grid, so every temperature needs every voltage",
-            describe(p)
-        ));
+        return Err(GridError { at: describe(p) });
     }
     Ok(Layout {
         temps,
@@ -174,6 +181,10 @@ mod tests {
             ..t
         };
         let e = layout(&missing, Some("temp"), Some("volt")).unwrap_err();
-        assert!(e.contains("no observations at -40.0 C, 3.60 V"), "{e}");
+        assert_eq!(e.at, "-40.0 C, 3.60 V");
+        assert!(
+            e.to_string().contains("no observations at -40.0 C, 3.60 V"),
+            "{e}"
+        );
     }
 }

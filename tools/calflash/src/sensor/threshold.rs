@@ -25,6 +25,16 @@ pub struct Threshold {
     /// Resolution, SI.
     pub resolution: Option<f64>,
 }
+/// Why a threshold run cannot be analysed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum ThresholdError {
+    /// Neither an input of 0 nor a given bias.
+    #[error("the run has no input of 0 and no --bias was given: the zero-input output is unknown")]
+    NoZero,
+    /// Inputs on one side of zero only.
+    #[error("the run needs inputs on both sides of zero")]
+    OneSided,
+}
 
 /// Analyses `(input, output)` pairs with the accepted scale factor (counts per SI unit); the
 /// zero-input output is `bias` when given, else the mean at input 0.
@@ -36,7 +46,7 @@ pub fn analyse(
     output: &[f64],
     scale: f64,
     bias: Option<f64>,
-) -> Result<Threshold, String> {
+) -> Result<Threshold, ThresholdError> {
     let mut groups: Vec<(f64, Vec<f64>)> = Vec::new();
     let mut order: Vec<usize> = (0..input.len()).collect();
     order.sort_by(|&a, &b| input[a].total_cmp(&input[b]));
@@ -48,9 +58,7 @@ pub fn analyse(
     }
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let measured_zero = groups.iter().find(|(x, _)| *x == 0.0).map(|(_, v)| mean(v));
-    let zero = bias.or(measured_zero).ok_or(
-        "the run has no input of 0 and no --bias was given: the zero-input output is unknown",
-    )?;
+    let zero = bias.or(measured_zero).ok_or(ThresholdError::NoZero)?;
     let steps: Vec<(f64, f64, f64)> = groups
         .iter()
         .filter(|(x, _)| *x != 0.0)
@@ -60,7 +68,7 @@ pub fn analyse(
         })
         .collect();
     if !steps.iter().any(|s| s.0 > 0.0) || !steps.iter().any(|s| s.0 < 0.0) {
-        return Err("the run needs inputs on both sides of zero".into());
+        return Err(ThresholdError::OneSided);
     }
     // The threshold on a side: the innermost input from which outward every ratio is >= 1/2.
     let side = |positive: bool| -> Option<f64> {
@@ -121,7 +129,14 @@ mod tests {
         assert!((t.positive.unwrap() - 0.0125).abs() < 1e-12, "{t:?}");
         assert!((t.negative.unwrap() + 0.0125).abs() < 1e-12);
         assert!((t.resolution.unwrap() - 0.0025).abs() < 1e-12);
-        assert!(analyse(&[1.0, 2.0], &[1.0, 2.0], 1.0, None).is_err());
+        assert_eq!(
+            analyse(&[1.0, 2.0], &[1.0, 2.0], 1.0, None),
+            Err(ThresholdError::NoZero)
+        );
+        assert_eq!(
+            analyse(&[0.0, 1.0, 2.0], &[0.0, 1.0, 2.0], 1.0, None),
+            Err(ThresholdError::OneSided)
+        );
         // A given bias is used even where the run has an input of 0, and the run's is kept.
         let b = analyse(&input, &output, 400.0, Some(1002.0)).unwrap();
         assert_eq!((b.zero, b.measured_zero), (1002.0, Some(1000.0)));

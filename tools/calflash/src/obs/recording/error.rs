@@ -129,7 +129,7 @@ pub enum RecordingError {
         /// The header's line (or the first sample's).
         line: usize,
         /// What is wrong.
-        what: String,
+        what: crate::obs::header::ColumnsError,
     },
     /// Units that disagree, or an LSB for codes.
     #[error("{path}:{line}: {what}")]

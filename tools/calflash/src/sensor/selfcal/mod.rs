@@ -169,6 +169,16 @@ pub struct DeviceCheck {
     /// RMS of `|a| - g` at the poses, from the mean of the device's corrected samples, m/s^2.
     pub device_accel_rms: f64,
 }
+/// Why the self-calibration's blob cannot be built or played back as the device would.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CheckError {
+    /// It does not become a blob the device reads back.
+    #[error(transparent)]
+    Blob(#[from] super::blob::BlobError),
+    /// The device's corrector refuses it.
+    #[error(transparent)]
+    Device(#[from] spincal::Error),
+}
 
 /// Validates and encodes `data`, then corrects the recording's poses and rotations through the
 /// decoded blob with the device's correction.
@@ -179,9 +189,9 @@ pub fn build_and_check(
     data: &CalibrationData,
     c: &SelfCal,
     rec: &Recording,
-) -> Result<DeviceCheck, String> {
-    let (buf, back) = super::blob::encode_checked(data).map_err(|e| e.to_string())?;
-    let mut dev = AnyImuCorrector::new(&back, rec.rate() as f32).map_err(|e| e.to_string())?;
+) -> Result<DeviceCheck, CheckError> {
+    let (buf, back) = super::blob::encode_checked(data)?;
+    let mut dev = AnyImuCorrector::new(&back, rec.rate() as f32)?;
     let env = &data.environment;
     dev.set_environment(
         0.5 * (env.temperature_span.lo + env.temperature_span.hi),
