@@ -96,10 +96,26 @@ pub fn check(table: &Table, column: &str) -> Result<Support, WorkflowError> {
     })
 }
 
+/// A temperature column that jumps back and forth as no chamber does.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "the temperatures jump back and forth by more than {by:.1} C {times} times in {readings} readings, as no chamber does ({at}, ...): is the temperature column holding another quantity?"
+)]
+struct Jumps {
+    /// The jump that counts, C.
+    by: f64,
+    /// Reversals.
+    times: usize,
+    /// Readings.
+    readings: usize,
+    /// The first reversals, with their lines.
+    at: String,
+}
+
 /// Readings in file order that jump back and forth by more than a tenth of the span, more often
 /// than a chamber's cycles could (at least 3 reversals and 5 % of the readings): the column
 /// holds something else.
-fn jumps(temps: &[f64], lines: &[u64], span: f64) -> Result<(), String> {
+fn jumps(temps: &[f64], lines: &[u64], span: f64) -> Result<(), Jumps> {
     let big = 0.1 * span;
     let mut last_sign = 0.0;
     let mut reversals = Vec::new();
@@ -118,12 +134,12 @@ fn jumps(temps: &[f64], lines: &[u64], span: f64) -> Result<(), String> {
             .take(3)
             .map(|&i| format!("line {} ({} after {})", lines[i], temps[i], temps[i - 1]))
             .collect();
-        return Err(format!(
-            "the temperatures jump back and forth by more than {big:.1} C {} times in {} readings, as no chamber does ({}, ...): is the temperature column holding another quantity?",
-            reversals.len(),
-            temps.len(),
-            at.join(", ")
-        ));
+        return Err(Jumps {
+            by: big,
+            times: reversals.len(),
+            readings: temps.len(),
+            at: at.join(", "),
+        });
     }
     Ok(())
 }

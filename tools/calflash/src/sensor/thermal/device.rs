@@ -258,6 +258,21 @@ pub(crate) fn clenshaw_rows(c: &[&[f64]], x: f64) -> Vec<f64> {
         })
         .collect()
 }
+/// Why the device's temperature form cannot be chosen.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ChooseError {
+    /// No series was tried (no breakpoints to fit one through).
+    #[error("no series")]
+    NoSeries,
+    /// A covariance factor that cannot be formed at a temperature.
+    #[error("output at {temp:.1} C: {source}")]
+    Covariance {
+        /// The temperature, C.
+        temp: f64,
+        /// Why.
+        source: covariance::CovarianceError,
+    },
+}
 
 /// The device's temperature dependence for a continuous model of one axis (inputs `lo..hi`,
 /// codes about `center`), over `scale` (the calibrated span as the device holds it, in f32),
@@ -275,7 +290,7 @@ pub fn choose(
     (lo, hi): (f64, f64),
     bp: f64,
     ys: &[f64],
-) -> Result<DeviceTemperature, String> {
+) -> Result<DeviceTemperature, ChooseError> {
     let grids: Vec<Grid> = ys
         .iter()
         .map(|y| Grid::new(tf, center, (lo, hi), bp, *y))
@@ -342,13 +357,13 @@ pub fn choose(
         }
     }
     let Some((temps, models, coefficients, series_ratio)) = series else {
-        return Err("no series".into());
+        return Err(ChooseError::NoSeries);
     };
     let factor = |t: f64, d: &DeviceSet, o: &Own, c: &[f64; 3]| {
         let m = DMatrix::from_row_slice(2, 2, &[c[0], c[1], c[1], c[2]]);
         covariance::single(&m, o.slope, d.offset, d.scale)
             .map(|f| [f[0], f[1], f[2]])
-            .map_err(|e| format!("output at {t:.1} C: {e}"))
+            .map_err(|source| ChooseError::Covariance { temp: t, source })
     };
     let n = temps.len();
     let table_wins = table_ratio.0 <= 1.0 && breaks.len() < n
