@@ -30,10 +30,14 @@
 
 mod error;
 mod keys;
+mod slot;
 
 pub use error::StoreError;
 use error::flash_err;
 pub use keys::{KEYS_SPAN, MAX_KEYS, Provisioning, StationKeys, keys_record};
+pub use slot::{SlotInfo, SlotState, slot_image};
+
+use slot::{BLOB_OFFSET, COMMIT, COMMIT_SPAN, HEADER_SPAN, blob_crc};
 
 use embedded_storage::nor_flash::NorFlash;
 
@@ -41,16 +45,6 @@ use crate::blob;
 use crate::model::{Calibration, CalibrationData, Serial};
 use crate::signed::{self, MAX_SIGNED_LEN, SignError, StationKey};
 
-/// Bytes of the commit region (the largest write size supported).
-const COMMIT_SPAN: usize = 16;
-/// Bytes of the header region.
-const HEADER_SPAN: usize = 16;
-/// Offset of the blob in a slot.
-const BLOB_OFFSET: usize = COMMIT_SPAN + HEADER_SPAN;
-/// The commit pattern: both 0 and 1 bits in every byte, so no partial program matches it.
-const COMMIT: [u8; 4] = [0x5a, 0xa5, 0xc3, 0x3c];
-/// The header magic, "SCSL".
-const MAGIC: [u8; 4] = *b"SCSL";
 /// The lock word: the store is locked when the lock sector starts with exactly this.
 const LOCKED: [u8; 4] = *b"LOCK";
 
@@ -82,39 +76,6 @@ impl Provisioning {
             },
         }
     }
-}
-
-/// A slot holding a valid calibration.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct SlotInfo {
-    /// Which slot, 0 or 1.
-    pub index: u8,
-    /// Its sequence number (higher is newer).
-    pub seq: u32,
-    /// Record bytes (the blob, and its trailer when signed).
-    pub len: u32,
-    /// The record's counter (0 when unsigned).
-    pub counter: u32,
-    /// The id of the key that signed it, when signed.
-    pub signed_by: Option<[u8; 4]>,
-}
-
-/// What a slot holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum SlotState {
-    /// Never written since its last erase (or never erased).
-    Empty,
-    /// Written but not committed, torn or damaged.
-    Invalid,
-    /// A committed, checked calibration.
-    Valid {
-        /// Sequence number.
-        seq: u32,
-        /// Blob bytes.
-        len: u32,
-    },
 }
 
 /// The calibration store over a flash region.
@@ -238,22 +199,12 @@ impl<F: NorFlash> Store<F> {
         if head.iter().all(|b| *b == 0xff) {
             return Ok(Err(SlotState::Empty));
         }
-        let word = |at: usize| -> [u8; 4] {
-            let mut w = [0u8; 4];
-            if let Some(s) = head.get(at..at + 4) {
-                w.copy_from_slice(s);
-            }
-            w
-        };
-        let magic = word(COMMIT_SPAN);
-        let seq = u32::from_le_bytes(word(COMMIT_SPAN + 4));
-        let len = u32::from_le_bytes(word(COMMIT_SPAN + 8));
         // A length no valid blob can have (beyond the slot, or beyond the largest blob) makes
         // the slot invalid; it must never turn into an error that hides the other slot.
         let longest = self.capacity().min(MAX_SIGNED_LEN);
-        if word(0) != COMMIT || magic != MAGIC || len == 0 || len as usize > longest {
+        let Some((seq, len)) = slot::sound_head(&head, longest) else {
             return Ok(Err(SlotState::Invalid));
-        }
+        };
         Ok(Ok(SlotInfo {
             index,
             seq,
@@ -495,16 +446,7 @@ impl<F: NorFlash> Store<F> {
         self.flash
             .write(start + BLOB_OFFSET as u32, data)
             .map_err(flash_err)?;
-        let mut header = [0u8; HEADER_SPAN];
-        let fields = [
-            MAGIC,
-            seq.to_le_bytes(),
-            (record.len() as u32).to_le_bytes(),
-            blob_crc(record).to_le_bytes(),
-        ];
-        for (chunk, f) in header.chunks_exact_mut(4).zip(fields) {
-            chunk.copy_from_slice(&f);
-        }
+        let header = slot::header(seq, record);
         self.flash
             .write(start + COMMIT_SPAN as u32, &header)
             .map_err(flash_err)?;
@@ -553,50 +495,4 @@ impl<F: NorFlash> Store<F> {
         let start = self.slot_start(info.index) + BLOB_OFFSET as u32;
         self.flash.read(start + offset, out).map_err(flash_err)
     }
-}
-
-/// The bytes a slot holds after a committed update of `blob` (a record: signed or not) with
-/// sequence number `seq`, for
-/// programming a unit by other means (a debug probe, a production flasher) with exactly what an
-/// update would write. `out` is the slot: it is filled with 0xFF first. Returns the bytes used.
-///
-/// # Errors
-/// [`StoreError::InvalidBlob`] when the blob does not decode and validate (it is checked with
-/// `scratch`), [`StoreError::BlobTooLarge`] when it does not fit `out`.
-pub fn slot_image(
-    blob: &[u8],
-    seq: u32,
-    out: &mut [u8],
-    scratch: &mut CalibrationData,
-) -> Result<usize, StoreError> {
-    blob::decode_in(signed::parts(blob).0, scratch).map_err(StoreError::InvalidBlob)?;
-    let capacity = out.len().saturating_sub(BLOB_OFFSET);
-    if blob.len() > capacity {
-        return Err(StoreError::BlobTooLarge {
-            len: blob.len(),
-            capacity,
-        });
-    }
-    out.fill(0xff);
-    let fields = [
-        COMMIT,
-        [0xff; 4],
-        [0xff; 4],
-        [0xff; 4],
-        MAGIC,
-        seq.to_le_bytes(),
-        (blob.len() as u32).to_le_bytes(),
-        blob_crc(blob).to_le_bytes(),
-    ];
-    for (chunk, f) in out.chunks_exact_mut(4).zip(fields) {
-        chunk.copy_from_slice(&f);
-    }
-    if let Some(dst) = out.get_mut(BLOB_OFFSET..BLOB_OFFSET + blob.len()) {
-        dst.copy_from_slice(blob);
-    }
-    Ok(BLOB_OFFSET + blob.len())
-}
-
-fn blob_crc(bytes: &[u8]) -> u32 {
-    crc::Crc::<u32>::new(&crc::CRC_32_ISCSI).checksum(bytes)
 }
