@@ -102,6 +102,34 @@ fn bounds(fig: &Figure<'_>) -> ((f64, f64), (f64, f64)) {
 /// label areas).
 const PLOT_PX: (f64, f64) = (616.0, 266.0);
 
+/// The plotting area of the 720 x 420 log-log figure.
+const LOGLOG_PX: (f64, f64) = (616.0, 326.0);
+
+/// How a figure's axes map values to distance: the legend's place is chosen in that space.
+#[derive(Debug, Clone, Copy)]
+enum Axes {
+    /// Linear on both axes.
+    Linear,
+    /// Logarithmic on both axes.
+    Log,
+}
+
+impl Axes {
+    fn to(self, v: f64) -> f64 {
+        match self {
+            Self::Linear => v,
+            Self::Log => v.ln(),
+        }
+    }
+
+    fn from(self, v: f64) -> f64 {
+        match self {
+            Self::Linear => v,
+            Self::Log => v.exp(),
+        }
+    }
+}
+
 /// The legend's size in pixels: plotters' entries are about 18 px high, their text about 6.5
 /// px a character beside a 12 px mark.
 fn legend_px(fig: &Figure<'_>) -> Option<(f64, f64)> {
@@ -126,14 +154,16 @@ fn legend_px(fig: &Figure<'_>) -> Option<(f64, f64)> {
 /// (possibly raised) top of the y range.
 fn legend_spot(
     fig: &Figure<'_>,
-    (x0, x1): (f64, f64),
-    (y0, y1): (f64, f64),
+    x: (f64, f64),
+    y: (f64, f64),
+    (axes, plot_px): (Axes, (f64, f64)),
 ) -> (SeriesLabelPosition, f64) {
     let Some((w, h)) = legend_px(fig) else {
-        return (SeriesLabelPosition::UpperRight, y1);
+        return (SeriesLabelPosition::UpperRight, y.1);
     };
+    let (x0, x1, y0, y1) = (axes.to(x.0), axes.to(x.1), axes.to(y.0), axes.to(y.1));
     // The legend's share of the plot, with its 10 px from the edges.
-    let (fw, fh) = ((w + 10.0) / PLOT_PX.0, (h + 10.0) / PLOT_PX.1);
+    let (fw, fh) = ((w + 10.0) / plot_px.0, (h + 10.0) / plot_px.1);
     let under = |left: bool, top: bool| {
         let (xa, xb) = if left {
             (x0, x0 + fw * (x1 - x0))
@@ -148,7 +178,7 @@ fn legend_spot(
         fig.series
             .iter()
             .flat_map(|s| s.points.iter())
-            .filter(|(x, y)| (xa..=xb).contains(x) && (ya..=yb).contains(y))
+            .filter(|(x, y)| (xa..=xb).contains(&axes.to(*x)) && (ya..=yb).contains(&axes.to(*y)))
             .count()
     };
     for (position, left, top) in [
@@ -158,14 +188,14 @@ fn legend_spot(
         (SeriesLabelPosition::LowerLeft, true, false),
     ] {
         if under(left, top) == 0 {
-            return (position, y1);
+            return (position, y.1);
         }
     }
     // Room above the data: the legend takes the top fh of the raised range.
     let fh = fh.min(0.6);
     (
         SeriesLabelPosition::UpperRight,
-        y1 + (y1 - y0) * fh / (1.0 - fh),
+        axes.from(y1 + (y1 - y0) * fh / (1.0 - fh)),
     )
 }
 
@@ -179,7 +209,7 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
         let root = SVGBackend::with_string(&mut out, (720, 360)).into_drawing_area();
         root.fill(&WHITE)?;
         let ((x0, x1), (y0, y1)) = bounds(fig);
-        let (spot, y1) = legend_spot(fig, (x0, x1), (y0, y1));
+        let (spot, y1) = legend_spot(fig, (x0, x1), (y0, y1), (Axes::Linear, PLOT_PX));
         // Error bars too short to see are said under the axis, not left to look like no
         // uncertainty.
         let largest = fig
@@ -319,15 +349,14 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, Error> {
         if !x0.is_finite() {
             return Err(Error::Empty(fig.title.to_string()));
         }
+        let (x0, x1, y0) = (x0 / 1.5, x1 * 1.5, y0 / 1.5);
+        let (spot, y1) = legend_spot(fig, (x0, x1), (y0, y1 * 1.5), (Axes::Log, LOGLOG_PX));
         let mut chart = ChartBuilder::on(&root)
             .caption(fig.title, ("sans-serif", 18))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(80)
-            .build_cartesian_2d(
-                (x0 / 1.5..x1 * 1.5).log_scale(),
-                (y0 / 1.5..y1 * 1.5).log_scale(),
-            )?;
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
         chart
             .configure_mesh()
             .x_desc(fig.x)
@@ -345,7 +374,7 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, Error> {
                 .collect();
             line_or_marks(&mut chart, s, &pts, 3)?;
         }
-        legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
+        legend(&mut chart, spot)?;
         root.present()?;
     }
     Ok(out)
@@ -401,16 +430,37 @@ mod tests {
     }
 
     #[test]
+    fn on_log_axes_the_legend_is_placed_by_decades() {
+        // In decades, (500, 500) is in the upper right and (1.5, 500) in the upper left; on
+        // linear axes both are far from those corners.
+        let pts = [(500.0, 500.0), (1.5, 500.0), (1.5, 1.5)];
+        let range = ((1.0, 1000.0), (1.0, 1000.0));
+        let (spot, top) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Log, LOGLOG_PX));
+        assert!(matches!(spot, SeriesLabelPosition::LowerRight));
+        assert_eq!(top, 1000.0);
+        let (spot, _) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Linear, PLOT_PX));
+        assert!(matches!(spot, SeriesLabelPosition::UpperRight));
+        // Every corner taken: the top is raised by a share of the decades, not of the values.
+        let pts = [(1.1, 1.1), (900.0, 1.1), (1.1, 900.0), (900.0, 900.0)];
+        let (spot, top) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Log, LOGLOG_PX));
+        assert!(matches!(spot, SeriesLabelPosition::UpperRight));
+        let (_, h) = legend_px(&figure(&pts)).unwrap();
+        let share = (h + 10.0) / LOGLOG_PX.1;
+        let want = (1000f64.ln() / (1.0 - share)).exp();
+        assert!((top / want - 1.0).abs() < 1e-9, "{top} {want}");
+    }
+
+    #[test]
     fn the_legend_goes_where_it_covers_no_point() {
         let range = ((0.0, 10.0), (0.0, 10.0));
         // Points in the upper right: the upper left is free.
         let pts = [(9.5, 9.5), (5.0, 5.0)];
-        let (spot, top) = legend_spot(&figure(&pts), range.0, range.1);
+        let (spot, top) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Linear, PLOT_PX));
         assert!(matches!(spot, SeriesLabelPosition::UpperLeft));
         assert_eq!(top, 10.0);
         // Points in every corner: room is made above them.
         let pts = [(0.2, 0.2), (9.8, 0.2), (0.2, 9.8), (9.8, 9.8)];
-        let (spot, top) = legend_spot(&figure(&pts), range.0, range.1);
+        let (spot, top) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Linear, PLOT_PX));
         assert!(matches!(spot, SeriesLabelPosition::UpperRight));
         let (_, h) = legend_px(&figure(&pts)).unwrap();
         let share = (h + 10.0) / PLOT_PX.1;
