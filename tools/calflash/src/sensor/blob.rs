@@ -292,7 +292,10 @@ pub fn build_and_check(
     data: &CalibrationData,
     points: &[PointFit],
 ) -> Result<(Vec<u8>, Vec<f64>), WorkflowError> {
-    let (buf, back) = encode_checked(data).map_err(|e| WorkflowError::msg(path, e.to_string()))?;
+    let (buf, back) = encode_checked(data).map_err(|source| WorkflowError::Blob {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let env = &data.environment;
     let mut worst = vec![0.0f64; points.first().map_or(0, |p| p.axes.len())];
     let mut note = |j: usize, e: f64| {
@@ -320,8 +323,7 @@ pub fn build_and_check(
     };
     match &data.sensor {
         Sensor::Single { channel, sets, .. } => {
-            let mut c =
-                AnyAxisCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
+            let mut c = AnyAxisCorrector::new(&back)?;
             for (k, p) in points.iter().enumerate() {
                 let (t, v) = at(p);
                 let set = set_at(env, sets, k, (t, v), SINGLE_ROW).ok_or_else(not_this)?;
@@ -344,8 +346,7 @@ pub fn build_and_check(
             }
         }
         Sensor::Triad { channels, sets, .. } => {
-            let mut c =
-                AnyTriadCorrector::new(&back).map_err(|e| WorkflowError::Message(e.to_string()))?;
+            let mut c = AnyTriadCorrector::new(&back)?;
             for (k, p) in points.iter().enumerate() {
                 let (t, v) = at(p);
                 let set = &set_at(env, sets, k, (t, v), (triad_row, triad_of_row))
@@ -368,8 +369,7 @@ pub fn build_and_check(
         Sensor::Imu {
             accel, gyro, sets, ..
         } => {
-            let mut c = AnyImuCorrector::new(&back, 1000.0)
-                .map_err(|e| WorkflowError::Message(e.to_string()))?;
+            let mut c = AnyImuCorrector::new(&back, 1000.0)?;
             for (k, p) in points.iter().enumerate() {
                 let (t, v) = at(p);
                 let set =

@@ -46,6 +46,47 @@ pub enum WorkflowError {
     /// A serial the device cannot store.
     #[error(transparent)]
     Serial(#[from] blob::SerialError),
+    /// A recording that cannot be read.
+    #[error(transparent)]
+    Recording(#[from] crate::obs::recording::RecordingError),
+    /// A fit inside the backward elimination of terms that fails.
+    #[error(transparent)]
+    Selection(crate::stats::FitError),
+    /// The device's corrector refuses the calibration.
+    #[error(transparent)]
+    Device(#[from] spincal::Error),
+    /// The calibration does not become a blob the device reads back.
+    #[error("{}: {source}", path.display())]
+    Blob {
+        /// The observations.
+        path: PathBuf,
+        /// Why.
+        source: blob::BlobError,
+    },
+    /// Temperature and voltage setpoints that are not a full grid.
+    #[error("{}: {source}", path.display())]
+    Grid {
+        /// The observations.
+        path: PathBuf,
+        /// Which setpoint has none.
+        source: table::GridError,
+    },
+    /// A temperature column that jumps as no chamber does.
+    #[error("{}: {source}", path.display())]
+    Temperatures {
+        /// The observations.
+        path: PathBuf,
+        /// Where it jumps.
+        source: thermal::data::Jumps,
+    },
+    /// The device's temperature form cannot be chosen.
+    #[error("{}: {source}", path.display())]
+    DeviceTemperature {
+        /// The observations.
+        path: PathBuf,
+        /// Why.
+        source: thermal::device::ChooseError,
+    },
     /// Anything else, already in words.
     #[error("{0}")]
     Message(String),

@@ -44,7 +44,7 @@ pub(super) fn select_terms(
                 .any(|o| Formula::contains(o, t))
         },
     )
-    .map_err(|e| WorkflowError::Message(e.to_string()))?;
+    .map_err(WorkflowError::Selection)?;
     let mut out = formula.clone();
     for s in &e.steps {
         notes.push(format!(

@@ -229,8 +229,12 @@ fn continuous_points(
         Some(v) => (vec![v.lo, v.hi], vec![-1.0, 1.0]),
         None => (Vec::new(), vec![0.0]),
     };
-    let dt = thermal_device::choose(&tf, &held, center, (lo, hi), bp, &ys)
-        .map_err(|e| WorkflowError::msg(path, e))?;
+    let dt = thermal_device::choose(&tf, &held, center, (lo, hi), bp, &ys).map_err(|source| {
+        WorkflowError::DeviceTemperature {
+            path: path.to_path_buf(),
+            source,
+        }
+    })?;
     let mut fits = Vec::new();
     let mut points = Vec::new();
     for t in &dt.temps {
@@ -368,7 +372,10 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     } else {
         None
     };
-    let layout = layout.map_err(|e| WorkflowError::msg(path, e))?;
+    let layout = layout.map_err(|source| WorkflowError::Grid {
+        path: path.to_path_buf(),
+        source,
+    })?;
     // While terms and tests are decided, the bias and the scale factor follow the temperature
     // at the highest order the observations can estimate.
     let caps = match &support {

@@ -75,7 +75,10 @@ pub fn check(table: &Table, column: &str) -> Result<Support, WorkflowError> {
             ),
         ));
     }
-    jumps(temps, &table.lines, hi - lo).map_err(|e| WorkflowError::msg(path, e))?;
+    jumps(temps, &table.lines, hi - lo).map_err(|source| WorkflowError::Temperatures {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mut sorted = temps.to_vec();
     sorted.sort_by(f64::total_cmp);
     let mut distinct = 0usize;
@@ -101,15 +104,15 @@ pub fn check(table: &Table, column: &str) -> Result<Support, WorkflowError> {
 #[error(
     "the temperatures jump back and forth by more than {by:.1} C {times} times in {readings} readings, as no chamber does ({at}, ...): is the temperature column holding another quantity?"
 )]
-struct Jumps {
+pub struct Jumps {
     /// The jump that counts, C.
-    by: f64,
+    pub by: f64,
     /// Reversals.
-    times: usize,
+    pub times: usize,
     /// Readings.
-    readings: usize,
+    pub readings: usize,
     /// The first reversals, with their lines.
-    at: String,
+    pub at: String,
 }
 
 /// Readings in file order that jump back and forth by more than a tenth of the span, more often
@@ -306,9 +309,17 @@ mod tests {
                 .map(|i| if i % 2 == 0 { 9.8 } else { -9.8 })
                 .collect(),
         );
-        let e = check(&mixed, "temp").unwrap_err().to_string();
+        let err = check(&mixed, "temp").unwrap_err();
         assert!(
-            e.contains("jump back and forth") && e.contains("line 4"),
+            matches!(&err, WorkflowError::Temperatures { source, .. } if source.times >= 3),
+            "{err:?}"
+        );
+        assert!(std::error::Error::source(&err).is_some());
+        let e = err.to_string();
+        assert!(
+            e.starts_with("ramp.csv: ")
+                && e.contains("jump back and forth")
+                && e.contains("line 4"),
             "{e}"
         );
         // A chamber cycling three times between soaks is not a mix-up.

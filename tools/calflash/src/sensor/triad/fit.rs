@@ -214,7 +214,7 @@ fn axis_formula(
                     .any(|o| Formula::contains(o, t))
             },
         )
-        .map_err(|e| WorkflowError::Message(e.to_string()))?;
+        .map_err(WorkflowError::Selection)?;
         for s in &e.steps {
             notes.push(format!(
                 "{}: dropped {} (p = {:.3} > {})",

@@ -266,7 +266,10 @@ fn temperature_points(
     };
     let layout = match &prepared {
         Some(_) => None,
-        None => Some(layout.map_err(|e| WorkflowError::msg(path, e))?),
+        None => Some(layout.map_err(|source| WorkflowError::Grid {
+            path: path.to_path_buf(),
+            source,
+        })?),
     };
     Ok((prepared, layout))
 }

@@ -179,8 +179,7 @@ pub fn observations(
             units: units::Units::DEFAULT,
             columns: header::Chosen::default(),
         },
-    )
-    .map_err(|e| WorkflowError::Message(e.to_string()))?;
+    )?;
     let Some((temp_name, temps)) = rec.temperature.clone() else {
         return Err(WorkflowError::msg(
             path,
