@@ -87,6 +87,14 @@ pub enum WorkflowError {
         /// Why.
         source: thermal::device::ChooseError,
     },
+    /// A still ramp that cannot be tied to the bench.
+    #[error("{}: {source}", path.display())]
+    StillRamp {
+        /// The recording or the bench observations.
+        path: PathBuf,
+        /// Why.
+        source: triad::still::StillRampError,
+    },
     /// Anything else, already in words.
     #[error("{0}")]
     Message(String),

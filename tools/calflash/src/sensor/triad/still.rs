@@ -27,6 +27,84 @@ const WINDOW_S: f64 = 1.0;
 /// turns it a little, a moved unit much more.
 const MOST_TURN_DEG: f64 = 3.0;
 
+/// Why a still ramp cannot be tied to the bench.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StillRampError {
+    /// The bench's accelerometer fit has no inverse.
+    #[error("--still-ramp: the bench's accelerometer fit is singular")]
+    SingularBench,
+    /// Too few samples near the bench's temperature.
+    #[error(
+        "--still-ramp: the recording's temperatures ({lo:.1} to {hi:.1} C) come within {near} C of the bench's {bench:.1} C at {samples} samples; at least 10 tie the still pose to the bench (record the ramp through the bench's temperature)",
+        near = NEAR
+    )]
+    NotThroughBench {
+        /// The recording's lowest temperature, C.
+        lo: f64,
+        /// Its highest.
+        hi: f64,
+        /// The bench's temperature.
+        bench: f64,
+        /// Samples near it.
+        samples: usize,
+    },
+    /// The specific force turned within a window.
+    #[error(
+        "--still-ramp: line {line}: the unit's specific force turned by {turn:.1} degrees within {window} s; the recording must be of one still pose",
+        window = WINDOW_S
+    )]
+    Turned {
+        /// The window's first line.
+        line: u32,
+        /// Degrees.
+        turn: f64,
+    },
+    /// The specific force is far from the pose held at the bench's temperature.
+    #[error(
+        "--still-ramp: line {line}: the unit's specific force is {turn:.1} degrees from the pose it held at the bench's temperature; the recording must be of one still pose"
+    )]
+    Moved {
+        /// The window's first line.
+        line: u32,
+        /// Degrees.
+        turn: f64,
+    },
+    /// Bench observations without a temperature column.
+    #[error(
+        "--still-ramp: the bench observations need their temperature (a `temp` column) to tie the ramp's biases to them"
+    )]
+    BenchWithoutTemperature,
+    /// Bench observations at several temperatures.
+    #[error(
+        "--still-ramp: the bench observations span {lo:.1} to {hi:.1} C; with a still ramp they are the run at one temperature"
+    )]
+    BenchAtSeveral {
+        /// Lowest, C.
+        lo: f64,
+        /// Highest.
+        hi: f64,
+    },
+    /// A recording without a temperature column.
+    #[error(
+        "--still-ramp: the recording has no temperature column (a column named temp...); the ramp is followed by the sensor's own temperature"
+    )]
+    RecordingWithoutTemperature,
+    /// A gyro alone, whose g-sensitivity needs the specific force.
+    #[error(
+        "--still-ramp: a lone gyro's still pose has an unknown specific force, which its g-sensitivity needs; record the accelerometer with it and calibrate the IMU"
+    )]
+    LoneGyro,
+}
+
+/// `why`, in the file `path`.
+fn still(path: &Path, why: StillRampError) -> WorkflowError {
+    WorkflowError::StillRamp {
+        path: path.to_path_buf(),
+        source: why,
+    }
+}
+
 /// The bench's sensitivity matrix and bias of `outputs` against `inputs`, each axis a
 /// straight fit.
 fn bench_fit(
@@ -68,12 +146,9 @@ fn pose(
     (s, b): (&Matrix3<f64>, &Vector3<f64>),
     path: &Path,
 ) -> Result<(Vector3<f64>, usize), WorkflowError> {
-    let inv = s.try_inverse().ok_or_else(|| {
-        WorkflowError::msg(
-            path,
-            "--still-ramp: the bench's accelerometer fit is singular",
-        )
-    })?;
+    let inv = s
+        .try_inverse()
+        .ok_or_else(|| still(path, StillRampError::SingularBench))?;
     let sensed = |k: usize| inv * (Vector3::from(rec.acc[k]) - b);
     let near: Vec<usize> = (0..rec.len())
         .filter(|k| (temps[*k] - t0).abs() <= NEAR && !rec.saturated[*k])
@@ -84,12 +159,14 @@ fn pose(
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), t| {
                 (a.min(*t), c.max(*t))
             });
-        return Err(WorkflowError::msg(
+        return Err(still(
             path,
-            format!(
-                "--still-ramp: the recording's temperatures ({lo:.1} to {hi:.1} C) come within {NEAR} C of the bench's {t0:.1} C at {} samples; at least 10 tie the still pose to the bench (record the ramp through the bench's temperature)",
-                near.len()
-            ),
+            StillRampError::NotThroughBench {
+                lo,
+                hi,
+                bench: t0,
+                samples: near.len(),
+            },
         ));
     }
     let f = near.iter().map(|k| sensed(*k)).sum::<Vector3<f64>>() / near.len() as f64;
@@ -104,12 +181,12 @@ fn pose(
         if let Some(p) = previous {
             let turn = mean.angle(&p).to_degrees();
             if turn > MOST_TURN_DEG {
-                return Err(WorkflowError::msg(
+                return Err(still(
                     path,
-                    format!(
-                        "--still-ramp: line {}: the unit's specific force turned by {turn:.1} degrees within {WINDOW_S} s; the recording must be of one still pose",
-                        rec.line[start]
-                    ),
+                    StillRampError::Turned {
+                        line: rec.line[start],
+                        turn,
+                    },
                 ));
             }
         }
@@ -119,12 +196,12 @@ fn pose(
     for (start, mean) in windows {
         let turn = mean.angle(&f).to_degrees();
         if turn > MOST_TURN_DEG {
-            return Err(WorkflowError::msg(
+            return Err(still(
                 path,
-                format!(
-                    "--still-ramp: line {}: the unit's specific force is {turn:.1} degrees from the pose it held at the bench's temperature; the recording must be of one still pose",
-                    rec.line[start]
-                ),
+                StillRampError::Moved {
+                    line: rec.line[start],
+                    turn,
+                },
             ));
         }
     }
@@ -146,10 +223,7 @@ pub fn observations(
     notes: &mut Vec<String>,
 ) -> Result<Table, WorkflowError> {
     let Some(bench_temps) = bench.column(col::TEMP) else {
-        return Err(WorkflowError::msg(
-            &opts.file,
-            "--still-ramp: the bench observations need their temperature (a `temp` column) to tie the ramp's biases to them",
-        ));
+        return Err(still(&opts.file, StillRampError::BenchWithoutTemperature));
     };
     let (lo, hi) = bench_temps
         .iter()
@@ -157,12 +231,7 @@ pub fn observations(
             (a.min(*t), c.max(*t))
         });
     if hi - lo > NEAR {
-        return Err(WorkflowError::msg(
-            &opts.file,
-            format!(
-                "--still-ramp: the bench observations span {lo:.1} to {hi:.1} C; with a still ramp they are the run at one temperature"
-            ),
-        ));
+        return Err(still(&opts.file, StillRampError::BenchAtSeveral { lo, hi }));
     }
     let t0 = 0.5 * (lo + hi);
     let rec = recording::read_with(
@@ -181,20 +250,14 @@ pub fn observations(
         },
     )?;
     let Some((temp_name, temps)) = rec.temperature.clone() else {
-        return Err(WorkflowError::msg(
-            path,
-            "--still-ramp: the recording has no temperature column (a column named temp...); the ramp is followed by the sensor's own temperature",
-        ));
+        return Err(still(path, StillRampError::RecordingWithoutTemperature));
     };
     let gyro_g = bench
         .column(col::F[0])
         .is_some_and(|c| c.iter().any(|x| *x != c[0]));
     let force = match kind {
         Kind::Gyro if gyro_g => {
-            return Err(WorkflowError::msg(
-                path,
-                "--still-ramp: a lone gyro's still pose has an unknown specific force, which its g-sensitivity needs; record the accelerometer with it and calibrate the IMU",
-            ));
+            return Err(still(path, StillRampError::LoneGyro));
         }
         Kind::Gyro => Vector3::zeros(),
         Kind::Accel | Kind::Imu => {
@@ -257,4 +320,39 @@ pub fn observations(
         columns,
         lines: rows.iter().map(|k| u64::from(rec.line[*k])).collect(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_still_ramp_error_names_the_file_and_keeps_its_cause() {
+        let e = still(
+            Path::new("ramp.csv"),
+            StillRampError::NotThroughBench {
+                lo: 30.0,
+                hi: 60.0,
+                bench: 25.0,
+                samples: 3,
+            },
+        );
+        assert_eq!(
+            e.to_string(),
+            "ramp.csv: --still-ramp: the recording's temperatures (30.0 to 60.0 C) come within 2 C of the bench's 25.0 C at 3 samples; at least 10 tie the still pose to the bench (record the ramp through the bench's temperature)"
+        );
+        let cause = std::error::Error::source(&e).unwrap().to_string();
+        assert!(
+            cause.starts_with("--still-ramp: the recording's"),
+            "{cause}"
+        );
+        let turned = StillRampError::Turned {
+            line: 12,
+            turn: 4.25,
+        };
+        assert_eq!(
+            turned.to_string(),
+            "--still-ramp: line 12: the unit's specific force turned by 4.2 degrees within 1 s; the recording must be of one still pose"
+        );
+    }
 }
