@@ -27,13 +27,48 @@ pub fn unit(q: Quantity) -> &'static str {
     }
 }
 
+/// A calibration beyond what the device holds, or a series it cannot take.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DeviceLimitError {
+    /// More table points than coefficient sets.
+    #[error("the table has {points} points; the device holds at most {max}")]
+    Points {
+        /// Table points.
+        points: usize,
+        /// Sets the device holds.
+        max: usize,
+    },
+    /// More setpoints of one kind than the device holds.
+    #[error("{count} {what} setpoints; the device holds at most {max}")]
+    Setpoints {
+        /// Setpoints.
+        count: usize,
+        /// Their column (`temp`, `volt`).
+        what: String,
+        /// The most the device holds.
+        max: usize,
+    },
+    /// A temperature series built for another kind of sensor.
+    #[error("the calibration's temperature series is not for this sensor")]
+    SeriesNotForSensor,
+}
+
+/// `why`, in the file `path`.
+fn beyond(path: &Path, why: DeviceLimitError) -> WorkflowError {
+    WorkflowError::DeviceLimit {
+        path: path.to_path_buf(),
+        source: why,
+    }
+}
+
 pub(crate) fn too_many(path: &Path, n: usize) -> WorkflowError {
-    WorkflowError::msg(
+    beyond(
         path,
-        format!(
-            "the table has {n} points; the device holds at most {}",
-            spincal::model::MAX_SETS
-        ),
+        DeviceLimitError::Points {
+            points: n,
+            max: spincal::model::MAX_SETS,
+        },
     )
 }
 
@@ -143,9 +178,13 @@ pub fn environment(
     ) -> Result<BoundedVec<f32, N>, WorkflowError> {
         let f: Vec<f32> = v.iter().map(|x| *x as f32).collect();
         BoundedVec::from_slice(&f).ok_or_else(|| {
-            WorkflowError::msg(
+            beyond(
                 &opts.file,
-                format!("{} {what} setpoints; the device holds at most {N}", v.len()),
+                DeviceLimitError::Setpoints {
+                    count: v.len(),
+                    what: what.to_string(),
+                    max: N,
+                },
             )
         })
     }
@@ -315,12 +354,7 @@ pub fn build_and_check(
                 }),
         )
     };
-    let not_this = || {
-        WorkflowError::msg(
-            path,
-            "the calibration's temperature series is not for this sensor",
-        )
-    };
+    let not_this = || beyond(path, DeviceLimitError::SeriesNotForSensor);
     match &data.sensor {
         Sensor::Single { channel, sets, .. } => {
             let mut c = AnyAxisCorrector::new(&back)?;
@@ -450,4 +484,29 @@ fn sample_code(ch: &spincal::model::Channel, fit: &super::AxisFit, k: u32, j: us
         .fract();
     let x = f64::from(ch.range.lo) + (f64::from(ch.range.hi) - f64::from(ch.range.lo)) * frac;
     (f64::from(ch.center) + fit.coef(&fit.own) * x).round() as i32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_table_beyond_the_device_names_the_file_and_the_limit() {
+        let e = too_many(Path::new("obs.csv"), 99);
+        assert!(matches!(
+            &e,
+            WorkflowError::DeviceLimit {
+                source: DeviceLimitError::Points { points: 99, .. },
+                ..
+            }
+        ));
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "obs.csv: the table has 99 points; the device holds at most {}",
+                spincal::model::MAX_SETS
+            )
+        );
+        assert_eq!(serial("U 1\u{7f}"), Err(SerialError("U 1\u{7f}".into())));
+    }
 }

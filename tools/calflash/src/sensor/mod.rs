@@ -95,6 +95,14 @@ pub enum WorkflowError {
         /// Why.
         source: triad::still::StillRampError,
     },
+    /// A calibration beyond what the device holds.
+    #[error("{}: {source}", path.display())]
+    DeviceLimit {
+        /// The observations.
+        path: PathBuf,
+        /// What.
+        source: blob::DeviceLimitError,
+    },
     /// Anything else, already in words.
     #[error("{0}")]
     Message(String),
