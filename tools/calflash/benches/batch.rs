@@ -11,8 +11,8 @@ mod pg_server;
 
 use std::path::PathBuf;
 
-use calflash::cmd::batch::calibrate_all;
 use calflash::cmd::calibrate::CalibrateArgs;
+use calflash::cmd::calibrate::batch::calibrate_all;
 use calflash::sim::{self, Sensor, plan};
 use clap::Parser;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};

@@ -2,12 +2,10 @@
 
 pub mod allan;
 pub mod apply;
-pub mod batch;
 pub mod calibrate;
 pub mod compare;
 pub mod design;
 pub mod fit;
-pub mod fixture;
 pub mod flash;
 pub mod health;
 pub mod history;

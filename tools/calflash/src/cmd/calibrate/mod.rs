@@ -1,15 +1,19 @@
 //! `calflash calibrate`: a sensor workflow from observations to the device's blob, with the
-//! report and the record.
+//! report and the record. Over a directory or a list of files it is a batch ([`batch`]); over
+//! a fixture's file of several units, one calibration per unit ([`fixture`]).
+
+pub mod batch;
+pub mod fixture;
 
 use crate::cmd::Failure;
 use std::path::PathBuf;
 
-use super::values::{self, SensorKind};
+use crate::cmd::values::{self, SensorKind};
 use crate::files::Paths;
 use clap::{Args, ValueEnum};
 use spincal::model::{Quantity, Rails, Span};
 
-use super::outputs::Outputs;
+use crate::cmd::outputs::Outputs;
 use crate::obs::Format;
 use crate::report::{self, terminal::num, terminal::pval};
 use crate::sensor::{self, Options, Verdict, record::Record, single, triad};
@@ -157,15 +161,15 @@ pub struct CalibrateArgs {
 /// A message naming the file, column, term or table point.
 pub fn run(args: &CalibrateArgs) -> Result<Verdict, Failure> {
     if args.fixture {
-        super::batch::check_options(args)?;
-        return super::fixture::run(args);
+        batch::check_options(args)?;
+        return fixture::run(args);
     }
     let single = match args.data.as_slice() {
         [one] if !one.is_dir() => Some(one),
         _ => None,
     };
     let Some(data) = single else {
-        return super::batch::run(args);
+        return batch::run(args);
     };
     if args.out_dir.is_some() {
         return Err("--out-dir is for a batch (several files or a directory); one unit's files are named by --blob, --report and --json".into());

@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use super::calibrate::{CalibrateArgs, calibrate_one};
-use super::outputs::Outputs;
+use super::{CalibrateArgs, calibrate_one};
+use crate::cmd::outputs::Outputs;
 use crate::sensor::Verdict;
 
 /// One unit's outcome.

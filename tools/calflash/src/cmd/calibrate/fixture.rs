@@ -9,8 +9,8 @@ use crate::cmd::Failure;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use super::calibrate::CalibrateArgs;
-use super::values::SensorKind;
+use super::CalibrateArgs;
+use crate::cmd::values::SensorKind;
 use crate::columns;
 
 /// Every column name a workflow reads.
