@@ -103,6 +103,9 @@ pub enum WorkflowError {
         /// What.
         source: blob::DeviceLimitError,
     },
+    /// Observations or a model the single-axis workflow cannot use.
+    #[error(transparent)]
+    Single(#[from] single::SingleError),
     /// Anything else, already in words.
     #[error("{0}")]
     Message(String),

@@ -71,6 +71,50 @@ fn sub(table: &Table, rows: &[usize]) -> Table {
     table.select(rows)
 }
 
+/// Observations or a model the single-axis workflow cannot use.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SingleError {
+    /// The file lacks the input or the output column.
+    #[error("{}: missing the column `{column}` ({what}); the file has: {header}", path.display())]
+    MissingColumn {
+        /// The observations.
+        path: std::path::PathBuf,
+        /// The column.
+        column: &'static str,
+        /// What it holds.
+        what: &'static str,
+        /// The file's columns, listed.
+        header: String,
+    },
+    /// A model of another response than the output counts.
+    #[error(
+        "--model `{model}`: the single-axis workflow's response is the `{output}` column (counts); fit models of other responses with `calflash fit`",
+        output = col::OUTPUT
+    )]
+    Response {
+        /// The model, as parsed.
+        model: String,
+    },
+    /// A model without the input term.
+    #[error(
+        "--model `{model}`: without the term `{input}` the model has no scale factor, and the device has nothing to correct with",
+        input = col::INPUT
+    )]
+    NoScaleFactor {
+        /// The model, as parsed.
+        model: String,
+    },
+    /// A term over a column the file does not have.
+    #[error("{}: the model term {term} uses a column the file does not have", path.display())]
+    TermColumn {
+        /// The observations.
+        path: std::path::PathBuf,
+        /// The term.
+        term: String,
+    },
+}
+
 /// The observations of a single-axis file: the columns of those the workflow reads that the
 /// file has, with the outputs beyond the rails excluded (and the finding that says so), and
 /// the kink column [`KINK`] about the breakpoint.
@@ -79,18 +123,17 @@ fn observations(opts: &Options) -> Result<(Table, Option<Finding>), WorkflowErro
     let header = obs::header(path, opts.format)?;
     for need in [col::INPUT, col::OUTPUT] {
         if !header.iter().any(|h| h == need) {
-            return Err(WorkflowError::msg(
-                path,
-                format!(
-                    "missing the column `{need}` ({}); the file has: {}",
-                    if need == col::INPUT {
-                        "the reference input, SI units"
-                    } else {
-                        "the sensor output, counts"
-                    },
-                    header.join(", ")
-                ),
-            ));
+            return Err(SingleError::MissingColumn {
+                path: path.clone(),
+                column: need,
+                what: if need == col::INPUT {
+                    "the reference input, SI units"
+                } else {
+                    "the sensor output, counts"
+                },
+                header: header.join(", "),
+            }
+            .into());
         }
     }
     let has = |c: &str| header.iter().any(|h| h == c);
@@ -143,16 +186,16 @@ fn model(
         }
     };
     if model.response != col::OUTPUT {
-        return Err(WorkflowError::Message(format!(
-            "--model `{model}`: the single-axis workflow's response is the `{}` column (counts); fit models of other responses with `calflash fit`",
-            col::OUTPUT
-        )));
+        return Err(SingleError::Response {
+            model: model.to_string(),
+        }
+        .into());
     }
     if !model.terms.iter().any(|t| t.name() == col::INPUT) {
-        return Err(WorkflowError::Message(format!(
-            "--model `{model}`: without the term `{}` the model has no scale factor, and the device has nothing to correct with",
-            col::INPUT
-        )));
+        return Err(SingleError::NoScaleFactor {
+            model: model.to_string(),
+        }
+        .into());
     }
     for t in &model.terms {
         let name = t.name();
@@ -160,10 +203,11 @@ fn model(
             .iter()
             .any(|v| !table.names.iter().any(|n| n == v))
         {
-            return Err(WorkflowError::msg(
-                path,
-                format!("the model term {name} uses a column the file does not have"),
-            ));
+            return Err(SingleError::TermColumn {
+                path: path.clone(),
+                term: name,
+            }
+            .into());
         }
     }
     Ok((model, chosen))
@@ -591,4 +635,40 @@ pub fn bias_slope_cov(names: &[String], cov: &DMatrix<f64>, y: f64) -> [f64; 3] 
             .sum::<f64>()
     };
     [q(&b, &b), q(&b, &sl), q(&sl, &sl)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_or_model_the_workflow_cannot_use_is_a_typed_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("nocol.csv");
+        std::fs::write(&file, "angle,output\n1,2\n2,4\n3,6\n").unwrap();
+        let e = calibrate(&Options::new(&file, "U-1"), Quantity::Acceleration).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                WorkflowError::Single(SingleError::MissingColumn {
+                    column: "input",
+                    ..
+                })
+            ),
+            "{e:?}"
+        );
+        assert!(
+            e.to_string().ends_with("the file has: angle, output"),
+            "{e}"
+        );
+        let file = dir.path().join("obs.csv");
+        std::fs::write(&file, "input,output\n-1,1\n0,2\n1,3\n2,4\n").unwrap();
+        let mut opts = Options::new(&file, "U-1");
+        opts.model = Some("output ~ 1".into());
+        let e = calibrate(&opts, Quantity::Acceleration).unwrap_err();
+        assert!(
+            matches!(&e, WorkflowError::Single(SingleError::NoScaleFactor { .. })),
+            "{e:?}"
+        );
+    }
 }
