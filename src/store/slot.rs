@@ -109,18 +109,11 @@ pub fn slot_image(
         });
     }
     out.fill(0xff);
-    let fields = [
-        COMMIT,
-        [0xff; 4],
-        [0xff; 4],
-        [0xff; 4],
-        MAGIC,
-        seq.to_le_bytes(),
-        (blob.len() as u32).to_le_bytes(),
-        blob_crc(blob).to_le_bytes(),
-    ];
-    for (chunk, f) in out.chunks_exact_mut(4).zip(fields) {
-        chunk.copy_from_slice(&f);
+    if let Some(marker) = out.get_mut(..COMMIT.len()) {
+        marker.copy_from_slice(&COMMIT);
+    }
+    if let Some(head) = out.get_mut(COMMIT_SPAN..BLOB_OFFSET) {
+        head.copy_from_slice(&header(seq, blob));
     }
     if let Some(dst) = out.get_mut(BLOB_OFFSET..BLOB_OFFSET + blob.len()) {
         dst.copy_from_slice(blob);
