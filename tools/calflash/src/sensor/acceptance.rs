@@ -119,6 +119,32 @@ pub(crate) fn findings(
     out
 }
 
+/// Outputs at or beyond the ADC rails that leave nothing to fit.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RailsError {
+    /// Codes beyond the rails that another format of the same width reads.
+    #[error("{advice} (the format given is {given})")]
+    OtherFormat {
+        /// Which format they show, and the option that reads it.
+        advice: String,
+        /// The format given.
+        given: String,
+    },
+    /// Every observation has an output at or beyond the rails.
+    #[error(
+        "every observation has an output at or beyond the ADC rails {} and {} (lines {lines}): check --codes",
+        rails.lo,
+        rails.hi
+    )]
+    Every {
+        /// The rails.
+        rails: Rails,
+        /// The first lines, listed.
+        lines: String,
+    },
+}
+
 /// Removes the observations whose outputs are at or beyond the ADC rails (saturated codes, or
 /// values no converter of these rails can give: a typing slip, a logger's sentinel) so that
 /// none is ever fitted. Returns the finding that names them (`None` when there are none).
@@ -145,14 +171,15 @@ pub(crate) fn exclude_beyond_rails(
             })
             .count()
     };
+    let fail = |source: RailsError| WorkflowError::Rails {
+        path: path.to_path_buf(),
+        source,
+    };
     if let Some(advice) = crate::obs::codes::mismatch(beyond(true), beyond(false), *rails) {
-        return Err(WorkflowError::msg(
-            path,
-            format!(
-                "{advice} (the format given is {})",
-                crate::obs::codes::name(*rails)
-            ),
-        ));
+        return Err(fail(RailsError::OtherFormat {
+            advice,
+            given: crate::obs::codes::name(*rails),
+        }));
     }
     let bad: Vec<usize> = (0..table.len())
         .filter(|&r| {
@@ -178,15 +205,10 @@ pub(crate) fn exclude_beyond_rails(
         String::new()
     };
     if bad.len() == table.len() {
-        return Err(WorkflowError::msg(
-            path,
-            format!(
-                "every observation has an output at or beyond the ADC rails {} and {} (lines {}{more}): check --codes",
-                rails.lo,
-                rails.hi,
-                lines.join(", ")
-            ),
-        ));
+        return Err(fail(RailsError::Every {
+            rails: *rails,
+            lines: format!("{}{more}", lines.join(", ")),
+        }));
     }
     let keep: Vec<usize> = (0..table.len()).filter(|r| !bad.contains(r)).collect();
     *table = table.select(&keep);

@@ -31,6 +31,7 @@ use crate::obs::{Format, ObsError};
 use crate::stats::Fit;
 use crate::stats::select::PartialF;
 
+pub use acceptance::RailsError;
 pub(crate) use acceptance::{exclude_beyond_rails, findings};
 
 /// A workflow that cannot run on these observations, in words naming the file, the column,
@@ -71,13 +72,13 @@ pub enum WorkflowError {
         /// Which setpoint has none.
         source: table::GridError,
     },
-    /// A temperature column that jumps as no chamber does.
+    /// A temperature (or supply voltage) column a model cannot follow.
     #[error("{}: {source}", path.display())]
     Temperatures {
         /// The observations.
         path: PathBuf,
-        /// Where it jumps.
-        source: thermal::data::Jumps,
+        /// What is wrong with it, and where.
+        source: thermal::data::ColumnError,
     },
     /// The device's temperature form cannot be chosen.
     #[error("{}: {source}", path.display())]
@@ -95,6 +96,53 @@ pub enum WorkflowError {
         /// Why.
         source: triad::still::StillRampError,
     },
+    /// Outputs at or beyond the ADC rails that leave nothing to fit.
+    #[error("{}: {source}", path.display())]
+    Rails {
+        /// The observations.
+        path: PathBuf,
+        /// Why.
+        source: acceptance::RailsError,
+    },
+    /// A fit that fails, explained in the model's terms: the terms that are collinear in these
+    /// observations, too few observations, values that overflow.
+    #[error("{}: {explanation}", path.display())]
+    Fit {
+        /// The observations.
+        path: PathBuf,
+        /// Where and why, in the formula's and the file's words.
+        explanation: String,
+        /// The regression engine's error.
+        source: crate::stats::FitError,
+    },
+    /// A weighted fit whose sandwich covariance is not positive definite.
+    #[error("{}: at {at}: the weighted fit's covariance is not positive definite", path.display())]
+    WeightedCovariance {
+        /// The observations.
+        path: PathBuf,
+        /// Where the fit is (the table point).
+        at: String,
+    },
+    /// A covariance the device's factor cannot be taken of.
+    #[error("{}: {outputs} at {at}: {source}", path.display())]
+    Covariance {
+        /// The observations.
+        path: PathBuf,
+        /// The outputs whose covariance it is.
+        outputs: String,
+        /// The table point.
+        at: String,
+        /// Why.
+        source: covariance::CovarianceError,
+    },
+    /// Observations or a plan the triad and IMU workflows cannot use.
+    #[error("{}: {source}", path.display())]
+    Triad {
+        /// The observations (or the still ramp's recording).
+        path: PathBuf,
+        /// Why.
+        source: triad::TriadError,
+    },
     /// A calibration beyond what the device holds.
     #[error("{}: {source}", path.display())]
     DeviceLimit {
@@ -106,14 +154,14 @@ pub enum WorkflowError {
     /// Observations or a model the single-axis workflow cannot use.
     #[error(transparent)]
     Single(#[from] single::SingleError),
-    /// Anything else, already in words.
-    #[error("{0}")]
-    Message(String),
 }
 
 impl WorkflowError {
-    pub(crate) fn msg(path: &Path, text: impl std::fmt::Display) -> Self {
-        Self::Message(format!("{}: {text}", path.display()))
+    pub(crate) fn triad(path: &Path, source: triad::TriadError) -> Self {
+        Self::Triad {
+            path: path.to_path_buf(),
+            source,
+        }
     }
 }
 
@@ -272,32 +320,33 @@ impl AxisFit {
         let (x, y) = scaled
             .as_ref()
             .map_or((&d.x, &d.y[..]), |(x, y)| (x, &y[..]));
-        let fit = stats::fit(x, y, d.names, d.intercept, &opts).map_err(|e| match e {
-            FitError::RankDeficient {
-                column,
-                combination,
-            } => {
-                let why = formula.explain_rank_deficiency(table, column, &combination);
-                let who = if name_response {
-                    format!("{} ", formula.response)
-                } else {
-                    String::new()
-                };
-                WorkflowError::msg(path, format!("{who}at {where_}: {why}"))
-            }
-            FitError::TooFewObservations { n, p } => WorkflowError::msg(
-                path,
-                format!(
+        let fit = stats::fit(x, y, d.names, d.intercept, &opts).map_err(|e| {
+            let explanation = match &e {
+                FitError::RankDeficient {
+                    column,
+                    combination,
+                } => {
+                    let why = formula.explain_rank_deficiency(table, *column, combination);
+                    let who = if name_response {
+                        format!("{} ", formula.response)
+                    } else {
+                        String::new()
+                    };
+                    format!("{who}at {where_}: {why}")
+                }
+                FitError::TooFewObservations { n, p } => format!(
                     "{where_} has {n} observations; the model {formula} ({p} terms) needs at least {}",
                     p + 1
                 ),
-            ),
-            e @ (FitError::NotFinite { .. } | FitError::Overflow { .. }) => WorkflowError::msg(
-                path,
-                formula
+                FitError::NotFinite { .. } | FitError::Overflow { .. } => formula
                     .explain_values(table, &e)
                     .unwrap_or_else(|| e.to_string()),
-            ),
+            };
+            WorkflowError::Fit {
+                path: path.to_path_buf(),
+                explanation,
+                source: e,
+            }
         })?;
         let fit = match weights {
             Some(w) => {
@@ -323,12 +372,10 @@ impl AxisFit {
                         })
                         .collect();
                 let mut f = fit.with_covariance(sigma2, &sandwich).ok_or_else(|| {
-                    WorkflowError::msg(
-                        path,
-                        format!(
-                            "at {where_}: the weighted fit's covariance is not positive definite"
-                        ),
-                    )
+                    WorkflowError::WeightedCovariance {
+                        path: path.to_path_buf(),
+                        at: where_.into(),
+                    }
                 })?;
                 // The weighted residual sum of squares stays: it is what the partial F tests
                 // between weighted fits compare.

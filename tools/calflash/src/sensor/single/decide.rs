@@ -3,7 +3,7 @@
 //! direction) is there, each by a partial F-test.
 
 use super::super::{AxisFit, Decision, Options, WorkflowError, thermal};
-use super::{KINK, fit_axis};
+use super::{KINK, SingleError, fit_axis};
 use crate::columns as col;
 use crate::formula::{self, Formula};
 use crate::obs::Table;
@@ -115,12 +115,13 @@ pub(super) fn asymmetry(
     let above = input.len() - below;
     if below < 2 || above < 2 {
         if opts.asymmetry == Some(true) {
-            return Err(WorkflowError::msg(
-                path,
-                format!(
-                    "asymmetry about {bp} is not observable: {below} inputs below and {above} above it; each side needs at least 2"
-                ),
-            ));
+            return Err(SingleError::Asymmetry {
+                path: path.clone(),
+                breakpoint: bp,
+                below,
+                above,
+            }
+            .into());
         }
         return Ok(None);
     }

@@ -72,7 +72,7 @@ fn sub(table: &Table, rows: &[usize]) -> Table {
 }
 
 /// Observations or a model the single-axis workflow cannot use.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SingleError {
     /// The file lacks the input or the output column.
@@ -104,6 +104,21 @@ pub enum SingleError {
     NoScaleFactor {
         /// The model, as parsed.
         model: String,
+    },
+    /// Asymmetry asked for about a breakpoint with too few inputs on one side.
+    #[error(
+        "{}: asymmetry about {breakpoint} is not observable: {below} inputs below and {above} above it; each side needs at least 2",
+        path.display()
+    )]
+    Asymmetry {
+        /// The observations.
+        path: std::path::PathBuf,
+        /// The breakpoint (SI).
+        breakpoint: f64,
+        /// Inputs below it.
+        below: usize,
+        /// Inputs at or above it.
+        above: usize,
     },
     /// A term over a column the file does not have.
     #[error("{}: the model term {term} uses a column the file does not have", path.display())]
@@ -346,11 +361,13 @@ fn device_sets(
         let d = DeviceSet::of(&o, center, lo, hi);
         let [vb, cbs, vs] = bias_slope_cov(&f.fit.names, &f.fit.covariance, y);
         let c = DMatrix::from_row_slice(2, 2, &[vb, cbs, cbs, vs]);
-        let factor = covariance::single(&c, o.slope, d.offset, d.scale).map_err(|e| {
-            WorkflowError::msg(
-                &opts.file,
-                format!("{} at {}: {e}", f.output, table::describe(p)),
-            )
+        let factor = covariance::single(&c, o.slope, d.offset, d.scale).map_err(|source| {
+            WorkflowError::Covariance {
+                path: opts.file.clone(),
+                outputs: f.output.clone(),
+                at: table::describe(p),
+                source,
+            }
         })?;
         covs.push([factor[0] as f32, factor[1] as f32, factor[2] as f32]);
         sets.push(d.set());
@@ -668,6 +685,98 @@ mod tests {
         let e = calibrate(&opts, Quantity::Acceleration).unwrap_err();
         assert!(
             matches!(&e, WorkflowError::Single(SingleError::NoScaleFactor { .. })),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn asymmetry_without_inputs_on_both_sides_and_collinear_terms_are_typed_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("obs.csv");
+        std::fs::write(
+            &file,
+            "input,output\n-1,1\n0,2\n1,3.1\n2,3.9\n3,5\n4,6.1\n5,6.9\n6,8\n",
+        )
+        .unwrap();
+        let mut opts = Options::new(&file, "U-1");
+        opts.asymmetry = Some(true);
+        opts.breakpoint = -0.5;
+        let e = calibrate(&opts, Quantity::Acceleration).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                WorkflowError::Single(SingleError::Asymmetry {
+                    below: 1,
+                    above: 7,
+                    ..
+                })
+            ),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("each side needs at least 2"), "{e}");
+        // Inputs that are never negative make abs(input) the input itself.
+        std::fs::write(
+            &file,
+            (0..8).fold(String::from("input,output\n"), |s, i| {
+                s + &format!("{i},{}\n", 1.1 * f64::from(i) + 0.1 * f64::from(i % 3))
+            }),
+        )
+        .unwrap();
+        let mut opts = Options::new(&file, "U-1");
+        opts.model = Some("output ~ 1 + input + abs(input)".into());
+        let e = calibrate(&opts, Quantity::Acceleration).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                WorkflowError::Fit {
+                    source: crate::stats::FitError::RankDeficient { .. },
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        assert!(std::error::Error::source(&e).is_some());
+    }
+
+    #[test]
+    fn outputs_that_leave_nothing_inside_the_rails_are_typed_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("rails.csv");
+        let rows = |out: &dyn Fn(i32) -> i32| -> String {
+            (0..8).fold(String::from("input,output\n"), |s, i| {
+                s + &format!("{i},{}\n", out(i))
+            })
+        };
+        std::fs::write(&file, rows(&|_| 65535)).unwrap();
+        let e = calibrate(&Options::new(&file, "U-1"), Quantity::Acceleration).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                WorkflowError::Rails {
+                    source: crate::sensor::RailsError::Every { .. },
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        assert!(
+            e.to_string().contains("(lines 2, 3, 4, 5, 6, 7, 8, 9)"),
+            "{e}"
+        );
+        // Signed codes read as unsigned: many below zero, none above the top.
+        let signed = (0..40).fold(String::from("input,output\n"), |s, i| {
+            s + &format!("{i},{}\n", 300 * (i - 20))
+        });
+        std::fs::write(&file, signed).unwrap();
+        let e = calibrate(&Options::new(&file, "U-1"), Quantity::Acceleration).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                WorkflowError::Rails {
+                    source: crate::sensor::RailsError::OtherFormat { .. },
+                    ..
+                }
+            ),
             "{e:?}"
         );
     }

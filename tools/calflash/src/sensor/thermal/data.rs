@@ -43,42 +43,31 @@ fn quantum(temps: &[f64]) -> Option<f64> {
 /// [`PLAUSIBLE`]); a span under [`MIN_SPAN`] (which supports no temperature term); readings that
 /// jump back and forth as no chamber does (a column mix-up).
 pub fn check(table: &Table, column: &str) -> Result<Support, WorkflowError> {
-    let path = std::path::Path::new(&table.path);
+    let fail = |source: ColumnError| WorkflowError::Temperatures {
+        path: table.path.clone(),
+        source,
+    };
     let Some(temps) = table.column(column) else {
-        return Err(WorkflowError::msg(
-            path,
-            format!(
-                "a temperature model needs the column `{column}` (the sensor's temperature, C); the file has: {}",
-                table.names.join(", ")
-            ),
-        ));
+        return Err(fail(ColumnError::Missing {
+            column: column.into(),
+            found: table.names.join(", "),
+        }));
     };
     for (i, t) in temps.iter().enumerate() {
         if !(t.is_finite() && (PLAUSIBLE.0..=PLAUSIBLE.1).contains(t)) {
-            return Err(WorkflowError::msg(
-                path,
-                format!(
-                    "line {}: {column} = {t} is not a temperature a unit is calibrated at; expected {} to {} C",
-                    table.lines[i], PLAUSIBLE.0, PLAUSIBLE.1
-                ),
-            ));
+            return Err(fail(ColumnError::NotATemperature {
+                line: table.lines[i],
+                column: column.into(),
+                value: *t,
+            }));
         }
     }
     let lo = temps.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if hi - lo < MIN_SPAN {
-        return Err(WorkflowError::msg(
-            path,
-            format!(
-                "the temperatures span {:.1} C ({lo} to {hi} C); a temperature model needs at least {MIN_SPAN} C, and this spread supports temperature terms of order: none (calibrate at one temperature without a temperature model, or widen the ramp)",
-                hi - lo
-            ),
-        ));
+        return Err(fail(ColumnError::Narrow { lo, hi }));
     }
-    jumps(temps, &table.lines, hi - lo).map_err(|source| WorkflowError::Temperatures {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    jumps(temps, &table.lines, hi - lo).map_err(|j| fail(j.into()))?;
     let mut sorted = temps.to_vec();
     sorted.sort_by(f64::total_cmp);
     let mut distinct = 0usize;
@@ -97,6 +86,58 @@ pub fn check(table: &Table, column: &str) -> Result<Support, WorkflowError> {
         // Steps matter along a ramp; a few setpoints are whole numbers by choice.
         quantum: if distinct >= 10 { quantum(temps) } else { None },
     })
+}
+
+/// A temperature or voltage column a model cannot follow.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ColumnError {
+    /// The file has no temperature column.
+    #[error(
+        "a temperature model needs the column `{column}` (the sensor's temperature, C); the file has: {found}"
+    )]
+    Missing {
+        /// The column.
+        column: String,
+        /// The file's columns, listed.
+        found: String,
+    },
+    /// A reading that is not a temperature.
+    #[error(
+        "line {line}: {column} = {value} is not a temperature a unit is calibrated at; expected {} to {} C",
+        PLAUSIBLE.0,
+        PLAUSIBLE.1
+    )]
+    NotATemperature {
+        /// The file's line.
+        line: u64,
+        /// The column.
+        column: String,
+        /// The reading.
+        value: f64,
+    },
+    /// A span too narrow for any temperature term.
+    #[error(
+        "the temperatures span {:.1} C ({lo} to {hi} C); a temperature model needs at least {MIN_SPAN} C, and this spread supports temperature terms of order: none (calibrate at one temperature without a temperature model, or widen the ramp)",
+        hi - lo
+    )]
+    Narrow {
+        /// The lowest reading, C.
+        lo: f64,
+        /// The highest, C.
+        hi: f64,
+    },
+    /// Readings that jump as no chamber does.
+    #[error(transparent)]
+    Jumps(#[from] Jumps),
+    /// A reading that is not a supply voltage.
+    #[error("line {line}: volt = {value} is not a supply voltage; expected 0 to 1000 V")]
+    NotAVoltage {
+        /// The file's line.
+        line: u64,
+        /// The reading.
+        value: f64,
+    },
 }
 
 /// A temperature column that jumps back and forth as no chamber does.
@@ -154,19 +195,18 @@ fn jumps(temps: &[f64], lines: &[u64], span: f64) -> Result<(), Jumps> {
 /// The first reading that is not, by line.
 pub fn supply(table: &Table) -> Result<(f64, f64), WorkflowError> {
     use crate::columns as col;
-    let path = std::path::Path::new(&table.path);
     let v = table.column(col::VOLT).unwrap_or_default();
     if let Some(i) = v
         .iter()
         .position(|x| !(x.is_finite() && *x > 0.0 && *x <= 1000.0))
     {
-        return Err(WorkflowError::msg(
-            path,
-            format!(
-                "line {}: volt = {} is not a supply voltage; expected 0 to 1000 V",
-                table.lines[i], v[i]
-            ),
-        ));
+        return Err(WorkflowError::Temperatures {
+            path: table.path.clone(),
+            source: ColumnError::NotAVoltage {
+                line: table.lines[i],
+                value: v[i],
+            },
+        });
     }
     let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -292,7 +332,18 @@ mod tests {
         assert_eq!(s.max_order, MAX_ORDER);
         assert_eq!(s.scale.x(-40.0), -1.0);
         let narrow = table((0..100).map(|i| 24.0 + 3.0 * f64::from(i) / 99.0).collect());
-        let e = check(&narrow, "temp").unwrap_err().to_string();
+        let err = check(&narrow, "temp").unwrap_err();
+        assert!(
+            matches!(
+                &err,
+                WorkflowError::Temperatures {
+                    source: ColumnError::Narrow { .. },
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        let e = err.to_string();
         assert!(e.contains("span 3.0 C") && e.contains("order: none"), "{e}");
         let whole = table((0..400).map(|i| (f64::from(i) / 4.0).round()).collect());
         assert_eq!(check(&whole, "temp").unwrap().quantum, Some(1.0));
@@ -302,7 +353,18 @@ mod tests {
     fn readings_that_are_not_temperatures_are_located() {
         let mut t: Vec<f64> = (0..50).map(f64::from).collect();
         t[7] = -300.0;
-        let e = check(&table(t), "temp").unwrap_err().to_string();
+        let err = check(&table(t), "temp").unwrap_err();
+        assert!(
+            matches!(
+                &err,
+                WorkflowError::Temperatures {
+                    source: ColumnError::NotATemperature { line: 9, .. },
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        let e = err.to_string();
         assert!(e.contains("line 9: temp = -300"), "{e}");
         let mixed = table(
             (0..200)
@@ -311,7 +373,7 @@ mod tests {
         );
         let err = check(&mixed, "temp").unwrap_err();
         assert!(
-            matches!(&err, WorkflowError::Temperatures { source, .. } if source.times >= 3),
+            matches!(&err, WorkflowError::Temperatures { source: ColumnError::Jumps(j), .. } if j.times >= 3),
             "{err:?}"
         );
         assert!(std::error::Error::source(&err).is_some());

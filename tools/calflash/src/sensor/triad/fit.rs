@@ -7,7 +7,7 @@ use nalgebra::Matrix3;
 use super::super::table;
 use super::super::thermal::{self as continuous};
 use super::super::{AxisFit, Options, WorkflowError, lever};
-use super::{ALL, Spec, Temperature, TriadModel, calibrated_ranges};
+use super::{ALL, Spec, Temperature, TriadError, TriadModel, calibrated_ranges};
 use crate::columns as col;
 use crate::formula::{self, Formula};
 use crate::obs::Table;
@@ -97,12 +97,13 @@ fn fit_axis(
         }
         est = next;
     }
-    Err(WorkflowError::msg(
+    Err(WorkflowError::triad(
         &opts.file,
-        format!(
-            "{} at {where_}: the fit of the sensitivity and lever arm did not settle in {MAX_STEPS} steps; the plan may not separate them (spin the unit at several rates and hold it still in several positions)",
-            spec.outputs[i]
-        ),
+        TriadError::NotSettled {
+            output: spec.outputs[i].into(),
+            at: where_.into(),
+            steps: MAX_STEPS,
+        },
     ))
 }
 
@@ -231,7 +232,7 @@ fn axis_formula(
 pub(super) fn fit_triad(
     spec: &Spec<'_>,
     table: &Table,
-    temperature: Temperature<'_>,
+    temperature: &Temperature,
     opts: &Options,
     notes: &mut Vec<String>,
 ) -> Result<TriadModel, WorkflowError> {
@@ -325,12 +326,11 @@ pub(super) fn fit_triad(
     let ranges = calibrated_ranges(spec, table, &s_of(spec, &reference), lever_arm.as_ref());
     for (j, r) in ranges.iter().enumerate() {
         if r.lo >= r.hi {
-            return Err(WorkflowError::msg(
+            return Err(WorkflowError::triad(
                 path,
-                format!(
-                    "{} is constant over the observations: the plan gives the triad no input along it",
-                    spec.inputs[j]
-                ),
+                TriadError::ConstantInput {
+                    input: spec.inputs[j].into(),
+                },
             ));
         }
     }

@@ -17,11 +17,13 @@ use spincal::model::{
 };
 
 mod assemble;
+mod error;
 mod fit;
 mod sets;
 pub mod still;
 mod thermal;
 
+pub use self::error::TriadError;
 use self::fit::fit_triad;
 use self::sets::device_sets;
 use super::table::{self, Layout};
@@ -74,13 +76,12 @@ struct Spec<'a> {
 }
 
 /// How a triad's coefficients follow the temperature.
-#[derive(Clone, Copy)]
-enum Temperature<'a> {
+enum Temperature {
     /// A fit at each point of the table.
-    Points(&'a Layout),
+    Points(Layout),
     /// One fit over every observation, each coefficient a polynomial in the temperature
     /// (`sensor::thermal`).
-    Continuous(&'a continuous::Prepared),
+    Continuous(continuous::Prepared),
 }
 
 /// Where a continuous model's fits are said to be.
@@ -115,14 +116,13 @@ fn add_earth_rate(
             get(table, col::W, r),
             get(table, col::H, r),
         );
-        let e = station.rate_in_body(f, wr, h).map_err(|why| {
-            WorkflowError::msg(
+        let e = station.rate_in_body(f, wr, h).map_err(|source| {
+            WorkflowError::triad(
                 path,
-                format!(
-                    "line {}: {why}; --latitude needs the columns {} for still positions",
-                    table.lines[r],
-                    col::H.join(" ")
-                ),
+                TriadError::EarthRate {
+                    line: table.lines[r],
+                    source,
+                },
             )
         })?;
         for k in 0..3 {
@@ -213,7 +213,7 @@ fn temperature_points(
     opts: &Options,
     has: (bool, bool),
     notes: &mut Vec<String>,
-) -> Result<(Option<continuous::Prepared>, Option<Layout>), WorkflowError> {
+) -> Result<Temperature, WorkflowError> {
     let path = &opts.file;
     let (has_temp, has_volt) = has;
     let layout = table::layout(
@@ -241,11 +241,9 @@ fn temperature_points(
         Thermal::Table => {
             if !setpoints && varies(col::TEMP) {
                 let (lo, hi) = spread();
-                return Err(WorkflowError::msg(
+                return Err(WorkflowError::triad(
                     path,
-                    format!(
-                        "--thermal table: the temperatures are spread from {lo:.1} to {hi:.1} C, as along a ramp, not held at setpoints (each reading within 1 C of its setpoint, the setpoints at least 3 C apart); give --thermal continuous for a model that follows the temperature wherever the observations fall"
-                    ),
+                    TriadError::NotSetpoints { lo, hi },
                 ));
             }
             false
@@ -253,25 +251,18 @@ fn temperature_points(
         Thermal::Continuous => true,
         Thermal::Auto => varies(col::TEMP) && !setpoints,
     };
-    let prepared = if continuous {
+    if continuous {
         if varies(col::VOLT) {
-            return Err(WorkflowError::msg(
-                path,
-                "the supply voltage varies: a triad's or an IMU's continuous temperature model does not follow the voltage (a single axis' does); hold the supply at one voltage along the ramp, or take the observations at a few exact temperature and voltage setpoints",
-            ));
+            return Err(WorkflowError::triad(path, TriadError::VoltageVaries));
         }
-        Some(continuous::prepare(table, notes)?)
-    } else {
-        None
-    };
-    let layout = match &prepared {
-        Some(_) => None,
-        None => Some(layout.map_err(|source| WorkflowError::Grid {
+        return Ok(Temperature::Continuous(continuous::prepare(table, notes)?));
+    }
+    layout
+        .map(Temperature::Points)
+        .map_err(|source| WorkflowError::Grid {
             path: path.to_path_buf(),
             source,
-        })?),
-    };
-    Ok((prepared, layout))
+        })
 }
 
 /// The observations `kind` needs from the file, with the references, temperature and voltage
@@ -297,14 +288,12 @@ fn read(opts: &Options, kind: Kind) -> Result<(Table, Option<super::Finding>), W
         .filter(|n| !header.iter().any(|h| h == n))
         .collect();
     if !missing.is_empty() {
-        return Err(WorkflowError::msg(
+        return Err(WorkflowError::triad(
             path,
-            format!(
-                "missing the column{} {} (reference f_* in m/s^2, w_* in rad/s; outputs a_*, g_* in counts); the file has: {}",
-                if missing.len() > 1 { "s" } else { "" },
-                missing.join(", "),
-                header.join(", ")
-            ),
+            TriadError::MissingColumns {
+                missing: missing.iter().map(ToString::to_string).collect(),
+                found: header.join(", "),
+            },
         ));
     }
     let has = |c: &str| header.iter().any(|h| h == c);
@@ -344,9 +333,9 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
     let mut notes = Vec::new();
     if let Some(recording) = &opts.still_ramp {
         if opts.earth.is_some() {
-            return Err(WorkflowError::msg(
+            return Err(WorkflowError::triad(
                 recording,
-                "--still-ramp with --latitude: the still pose's heading is not known, so neither is the Earth's rate it senses; leave --latitude out (the gyro biases absorb it)",
+                TriadError::StillRampWithLatitude,
             ));
         }
         let still = still::observations(recording, kind, &table, opts, &mut notes)?;
@@ -378,13 +367,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             .column(c)
             .is_some_and(|v| v.iter().any(|x| *x != v[0]))
     });
-    let (prepared, layout) =
-        temperature_points(&mut table, opts, (has_temp, has_volt), &mut notes)?;
-    let temperature = match (&prepared, &layout) {
-        (Some(p), _) => Temperature::Continuous(p),
-        (None, Some(l)) => Temperature::Points(l),
-        (None, None) => return Err(WorkflowError::Message("no temperature layout".into())),
-    };
+    let temperature = temperature_points(&mut table, opts, (has_temp, has_volt), &mut notes)?;
     let accel_spec = Spec {
         outputs: col::A,
         inputs: col::F,
@@ -394,7 +377,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         nonlinear,
     };
     let accel = (kind != Kind::Gyro)
-        .then(|| fit_triad(&accel_spec, &table, temperature, opts, &mut notes))
+        .then(|| fit_triad(&accel_spec, &table, &temperature, opts, &mut notes))
         .transpose()?;
     let gyro_g = kind != Kind::Accel && f_varies;
     if kind != Kind::Accel && !f_varies {
@@ -418,15 +401,15 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         nonlinear,
     };
     let gyro = (kind != Kind::Accel)
-        .then(|| fit_triad(&gyro_spec, &table, temperature, opts, &mut notes))
+        .then(|| fit_triad(&gyro_spec, &table, &temperature, opts, &mut notes))
         .transpose()?;
     let mut extra_findings = Vec::new();
     let mut series_terms: Option<usize> = None;
     // The points the device holds: the table's, or the temperatures its interpolation of the
     // continuous model needs.
-    let layout = match (&prepared, layout) {
-        (_, Some(l)) => l,
-        (Some(p), None) => {
+    let layout = match temperature {
+        Temperature::Points(l) => l,
+        Temperature::Continuous(p) => {
             let held = continuous::Scale {
                 lo: f64::from(p.support.scale.lo as f32),
                 hi: f64::from(p.support.scale.hi as f32),
@@ -471,7 +454,6 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
                 volts: Vec::new(),
             }
         }
-        (None, None) => return Err(WorkflowError::Message("no temperature layout".into())),
     };
     let sets_of = |spec: &Spec<'_>, model: TriadModel| {
         let points = match &model.thermal {
@@ -577,4 +559,84 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             .flatten()
             .collect(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn written(name: &str, text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join(name);
+        std::fs::write(&file, text).unwrap();
+        (dir, file)
+    }
+
+    #[test]
+    fn a_file_or_plan_the_triad_workflow_cannot_use_is_a_typed_error() {
+        let (_dir, file) = written("nogyro.csv", "f_x,f_y,f_z,a_x,a_y,a_z\n0,0,9.8,1,2,3\n");
+        let e = calibrate(&Options::new(&file, "U-1"), Kind::Gyro, false).unwrap_err();
+        match &e {
+            WorkflowError::Triad {
+                source: TriadError::MissingColumns { missing, .. },
+                ..
+            } => assert_eq!(missing, &["w_x", "w_y", "w_z", "g_x", "g_y", "g_z"]),
+            other => panic!("{other:?}"),
+        }
+        assert!(e.to_string().contains("missing the columns w_x"), "{e}");
+
+        // Six positions that never turn the unit about y's input: f_y is always zero.
+        let mut text = String::from("f_x,f_y,f_z,a_x,a_y,a_z\n");
+        for (fx, fz) in [
+            (9.8, 0.0),
+            (-9.8, 0.0),
+            (0.0, 9.8),
+            (0.0, -9.8),
+            (6.9, 6.9),
+            (-6.9, 6.9),
+        ] {
+            for k in 0..3 {
+                let n = f64::from(k) * 0.01;
+                text += &format!(
+                    "{fx},0,{fz},{},{},{}\n",
+                    32768.0 + 1000.0 * fx + n,
+                    32768.0 + n,
+                    32768.0 + 1000.0 * fz - n
+                );
+            }
+        }
+        let (_dir, file) = written("flat.csv", &text);
+        let e = calibrate(&Options::new(&file, "U-1"), Kind::Accel, false).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                WorkflowError::Fit {
+                    source: crate::stats::FitError::RankDeficient { .. },
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        assert!(
+            e.to_string()
+                .ends_with("a_x at the single table point: f_y is not observable: it is 0 for every observation"),
+            "{e}"
+        );
+
+        // A still ramp's pose has no known heading: the error names the recording.
+        let mut opts = Options::new(&file, "U-1");
+        opts.still_ramp = Some("still.csv".into());
+        opts.earth = Some(crate::earth::Station::new(45.0, 0.0).unwrap());
+        let e = calibrate(&opts, Kind::Accel, false).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                WorkflowError::Triad {
+                    path,
+                    source: TriadError::StillRampWithLatitude,
+                } if path == std::path::Path::new("still.csv")
+            ),
+            "{e:?}"
+        );
+    }
 }

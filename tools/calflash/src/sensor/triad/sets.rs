@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, Matrix3};
 use spincal::model::{AxisNonlinearity, ImuOutputCovariance, Span, TriadSet};
 
 use super::fit::{b_of, s_of};
-use super::{Spec, TriadModel, TriadResult, lever};
+use super::{Spec, TriadError, TriadModel, TriadResult, lever};
 use crate::columns as col;
 use crate::obs::Table;
 use crate::sensor::invert::{
@@ -108,12 +108,9 @@ pub(super) fn point_device(
 ) -> Result<PointDevice, WorkflowError> {
     let s = s_of(spec, f);
     let b = b_of(f);
-    let inv = s.try_inverse().ok_or_else(|| {
-        WorkflowError::msg(
-            path,
-            "the fitted sensitivity matrix is singular: the plan does not separate the axes",
-        )
-    })?;
+    let inv = s
+        .try_inverse()
+        .ok_or_else(|| WorkflowError::triad(path, TriadError::SingularSensitivity))?;
     let own: [Own; 3] = std::array::from_fn(|i| Own {
         bias: b[i],
         slope: s[(i, i)],
@@ -155,7 +152,12 @@ pub(super) fn point_device(
         &DMatrix::from_fn(3, 3, |i, j| m[(i, j)]),
         &off,
     )
-    .map_err(|e| WorkflowError::msg(path, format!("{} at {at}: {e}", spec.outputs.join(" "))))?;
+    .map_err(|source| WorkflowError::Covariance {
+        path: path.to_path_buf(),
+        outputs: spec.outputs.join(" "),
+        at: at.into(),
+        source,
+    })?;
     Ok(PointDevice {
         s,
         inv,
@@ -204,8 +206,11 @@ pub(super) fn device_sets(
             },
             &ranges.map(|r| (f64::from(r.lo), f64::from(r.hi))),
         );
-        let located = |e: covariance::CovarianceError| {
-            WorkflowError::msg(path, format!("{} at {at}: {e}", spec.outputs.join(" ")))
+        let located = |source| WorkflowError::Covariance {
+            path: path.to_path_buf(),
+            outputs: spec.outputs.join(" "),
+            at: at.clone(),
+            source,
         };
         let factors = a.factors;
         out.imu_covs.push([

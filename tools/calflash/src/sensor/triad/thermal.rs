@@ -198,11 +198,10 @@ pub(super) fn choose(
         parts
             .iter()
             .map(|(spec, model)| {
-                let Some(tfs) = &model.thermal else {
-                    return Err(WorkflowError::Message(
-                        "a triad without a continuous temperature model".into(),
-                    ));
-                };
+                let tfs = model
+                    .thermal
+                    .as_ref()
+                    .expect("a continuous temperature model's triads have thermal fits");
                 let f = [tfs[0].at(t), tfs[1].at(t), tfs[2].at(t)];
                 let at = format!("{t:.1} C");
                 point_device(spec, &f, (&model.centers, &model.ranges), None, (path, &at))
@@ -260,9 +259,7 @@ pub(super) fn choose(
     if let Some(e) = failure {
         return Err(e);
     }
-    let Some(table_worst) = table_worst else {
-        return Err(WorkflowError::Message("no table was tried".into()));
-    };
+    let table_worst = table_worst.expect("breakpoints measures the table at least once");
     let table_ratio = table_worst.ratio;
     let table = Choice {
         temps: breaks.clone(),
