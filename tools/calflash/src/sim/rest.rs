@@ -192,12 +192,30 @@ pub struct Session {
     pub seed: u64,
 }
 
+/// A calibration a unit at rest cannot be simulated from.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RestError {
+    /// The IMU corrector refuses it (not an IMU, say).
+    #[error(transparent)]
+    Corrector(#[from] spincal::Error),
+    /// No covariance factors.
+    #[error("the calibration has no covariance factors, so it states no 1-sigma")]
+    NoCovariance,
+    /// No noise terms.
+    #[error("the calibration has no noise terms (calflash calibrate --noise)")]
+    NoNoise,
+    /// Codes other than unsigned 16-bit.
+    #[error("a unit at rest is simulated for unsigned 16-bit codes")]
+    NotU16,
+}
+
 /// The stated 1-sigma of each output of `cal` at rest with z up (25 C, 3.3 V).
 ///
 /// # Errors
 /// When `cal` is not an IMU with covariance factors.
-pub fn stated_sigma(cal: &Calibration) -> Result<[f64; 6], String> {
-    let mut imu = ImuCorrector::<u16>::new(cal, 1000.0).map_err(|e| e.to_string())?;
+pub fn stated_sigma(cal: &Calibration) -> Result<[f64; 6], RestError> {
+    let mut imu = ImuCorrector::<u16>::new(cal, 1000.0)?;
     imu.set_environment(25.0, 3.3);
     let unit = Unit::new(cal, 1000.0, [0.0; 6], 9.81, 0);
     let target = unit.truth(&face(2, 1.0, 0.0), &Vector3::zeros());
@@ -205,7 +223,7 @@ pub fn stated_sigma(cal: &Calibration) -> Result<[f64; 6], String> {
     let out = imu.correct(raw.map(|r| r.round().clamp(0.0, 65_535.0) as u16));
     let (total, _) = imu
         .factory_variances(&out.values)
-        .ok_or("the calibration has no covariance factors, so it states no 1-sigma")?;
+        .ok_or(RestError::NoCovariance)?;
     Ok(total.map(|v| f64::from(v).sqrt()))
 }
 
@@ -214,12 +232,12 @@ impl Session {
     ///
     /// # Errors
     /// When `cal` is not an unsigned 16-bit IMU with covariance factors and noise terms.
-    pub fn record(&self, cal: &Calibration) -> Result<Vec<[u16; 6]>, String> {
+    pub fn record(&self, cal: &Calibration) -> Result<Vec<[u16; 6]>, RestError> {
         if cal.data().noise.is_none() {
-            return Err("the calibration has no noise terms (calflash calibrate --noise)".into());
+            return Err(RestError::NoNoise);
         }
         if spincal::correct::format_of(cal) != spincal::model::SampleFormat::U16 {
-            return Err("a unit at rest is simulated for unsigned 16-bit codes".into());
+            return Err(RestError::NotU16);
         }
         let sigma = stated_sigma(cal)?;
         let walk = cal.data().noise.map_or([0.0; 6], |n| n.bias_walk);
