@@ -7,11 +7,14 @@ use spincal::model::{
     TemperatureModel,
 };
 
+mod coefficients;
 mod decide;
+mod error;
 
+pub use coefficients::{bias_slope_cov, own_at, own_of};
 use decide::{asymmetry, hysteresis, select_terms};
+pub use error::SingleError;
 
-use super::invert::Own;
 use super::table::{self, Layout};
 use super::thermal;
 use super::thermal::ThermalFit;
@@ -69,65 +72,6 @@ fn fit_axis_weighted(
 
 fn sub(table: &Table, rows: &[usize]) -> Table {
     table.select(rows)
-}
-
-/// Observations or a model the single-axis workflow cannot use.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum SingleError {
-    /// The file lacks the input or the output column.
-    #[error("{}: missing the column `{column}` ({what}); the file has: {header}", path.display())]
-    MissingColumn {
-        /// The observations.
-        path: std::path::PathBuf,
-        /// The column.
-        column: &'static str,
-        /// What it holds.
-        what: &'static str,
-        /// The file's columns, listed.
-        header: String,
-    },
-    /// A model of another response than the output counts.
-    #[error(
-        "--model `{model}`: the single-axis workflow's response is the `{output}` column (counts); fit models of other responses with `calflash fit`",
-        output = col::OUTPUT
-    )]
-    Response {
-        /// The model, as parsed.
-        model: String,
-    },
-    /// A model without the input term.
-    #[error(
-        "--model `{model}`: without the term `{input}` the model has no scale factor, and the device has nothing to correct with",
-        input = col::INPUT
-    )]
-    NoScaleFactor {
-        /// The model, as parsed.
-        model: String,
-    },
-    /// Asymmetry asked for about a breakpoint with too few inputs on one side.
-    #[error(
-        "{}: asymmetry about {breakpoint} is not observable: {below} inputs below and {above} above it; each side needs at least 2",
-        path.display()
-    )]
-    Asymmetry {
-        /// The observations.
-        path: std::path::PathBuf,
-        /// The breakpoint (SI).
-        breakpoint: f64,
-        /// Inputs below it.
-        below: usize,
-        /// Inputs at or above it.
-        above: usize,
-    },
-    /// A term over a column the file does not have.
-    #[error("{}: the model term {term} uses a column the file does not have", path.display())]
-    TermColumn {
-        /// The observations.
-        path: std::path::PathBuf,
-        /// The term.
-        term: String,
-    },
 }
 
 /// The observations of a single-axis file: the columns of those the workflow reads that the
@@ -603,55 +547,6 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         earth: None,
         thermal: thermal_fit.into_iter().collect(),
     })
-}
-
-/// The own-axis polynomial from named coefficients (at the middle of the supply voltage's
-/// span, when the model has voltage terms).
-pub fn own_of(names: &[String], coefficients: &[f64], bp: f64) -> Own {
-    own_at(names, coefficients, bp, 0.0)
-}
-
-/// The own-axis polynomial from named coefficients at scaled supply voltage `y`
-/// ([`thermal::VOLT`]): the bias and the scale factor are linear in it.
-pub fn own_at(names: &[String], coefficients: &[f64], bp: f64, y: f64) -> Own {
-    let c = |term: &str| {
-        names
-            .iter()
-            .position(|n| n == term)
-            .map_or(0.0, |i| coefficients[i])
-    };
-    Own {
-        bias: c("1") + y * c(thermal::VOLT),
-        slope: c(col::INPUT) + y * c(&thermal::volt_term(col::INPUT)),
-        c2: c("input^2"),
-        c3: c("input^3"),
-        coq: c("input:abs(input)"),
-        ca: c(KINK),
-        bp,
-    }
-}
-
-/// The covariance `[var b, cov(b, s), var s]` of the bias and the scale factor at scaled
-/// supply voltage `y`, from the covariance `cov` of the coefficients `names`.
-#[must_use]
-pub fn bias_slope_cov(names: &[String], cov: &DMatrix<f64>, y: f64) -> [f64; 3] {
-    let idx = |n: &str| names.iter().position(|m| m == n);
-    // b = c_1 + y c_v, s = c_in + y c_in:v: rows of weights over the coefficients.
-    let row = |base: &str, volt: &str| -> Vec<(usize, f64)> {
-        idx(base)
-            .map(|i| (i, 1.0))
-            .into_iter()
-            .chain(idx(volt).map(|i| (i, y)))
-            .collect()
-    };
-    let b = row("1", thermal::VOLT);
-    let sl = row(col::INPUT, &thermal::volt_term(col::INPUT));
-    let q = |u: &[(usize, f64)], v: &[(usize, f64)]| {
-        u.iter()
-            .flat_map(|(i, a)| v.iter().map(move |(j, c)| a * c * cov[(*i, *j)]))
-            .sum::<f64>()
-    };
-    [q(&b, &b), q(&b, &sl), q(&sl, &sl)]
 }
 
 #[cfg(test)]
