@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use super::plot::{COLORS, Figure, Series, svg};
 use super::terminal::{num, pval};
-use crate::sensor::Calibrated;
+use crate::sensor::{AxisFit, Calibrated};
 
 pub(crate) fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -29,12 +29,32 @@ pre{white-space:pre-wrap;overflow-wrap:anywhere}";
 pub fn render(c: &Calibrated, data_file: &str) -> Result<String, Error> {
     let id = &c.data.identity;
     let mut h = String::new();
-    let verdict = c.verdict();
     let _ = write!(
         h,
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>Calibration {}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n",
         esc(id.serial.as_str())
     );
+    summary(&mut h, c, data_file);
+    model(&mut h, c)?;
+    for (a, axis) in c.points[c.reference].axes.iter().enumerate() {
+        axis_section(&mut h, c, a, axis)?;
+    }
+    h.push_str(&super::thermal::section(c)?);
+    let _ = writeln!(
+        h,
+        "<h2>Device</h2>\n<p>The blob holds {} coefficient set{} with covariance factors; the device's f32 correction differs from the f64 correction by at most {}.</p>",
+        c.points.len(),
+        if c.points.len() == 1 { "" } else { "s" },
+        num(c.device_error)
+    );
+    let _ = writeln!(h, "</body>\n</html>");
+    Ok(h)
+}
+
+/// The unit, its codes, the verdict and its findings, and where the data came from.
+fn summary(h: &mut String, c: &Calibrated, data_file: &str) {
+    let id = &c.data.identity;
+    let verdict = c.verdict();
     let _ = writeln!(
         h,
         "<h1>Calibration of unit {}</h1>",
@@ -74,7 +94,10 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, Error> {
         id.tool_version[2],
         c.blob.len()
     );
+}
 
+/// The notes on the model, and each test that decided a term (with the residuals without it).
+fn model(h: &mut String, c: &Calibrated) -> Result<(), Error> {
     let _ = writeln!(h, "<h2>Model</h2>\n<ul>");
     for n in &c.notes {
         let _ = writeln!(h, "<li>{}</li>", esc(n));
@@ -119,202 +142,228 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, Error> {
         }
     }
 
+    Ok(())
+}
+
+/// One output axis at the reference point: its fit, its residuals, its calibration error over
+/// the range, and its bias and scale factor against temperature.
+fn axis_section(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Result<(), Error> {
     let reference = &c.points[c.reference];
-    for (a, axis) in reference.axes.iter().enumerate() {
-        let unit = c.units[a];
-        let _ = writeln!(h, "<h2>{} at the reference point</h2>", esc(&axis.output));
-        let f = &axis.fit;
-        let _ = writeln!(
-            h,
-            "<p>{}: residual sigma {} counts ({} {unit}), R&#178; {}, inversion error {} {unit}.</p>",
-            esc(&axis.formula.to_string()),
-            num(f.sigma2.sqrt()),
-            num(reference.noise[a]),
-            num(f.r2),
-            num(reference.inversion_error[a])
-        );
-        let _ = writeln!(
-            h,
-            "<table><tr><th>term</th><th>coefficient</th><th>std error</th><th>t</th><th>p</th></tr>"
-        );
-        for j in 0..f.p {
-            let _ = writeln!(
-                h,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                esc(&f.names[j]),
-                num(f.coefficients[j]),
-                num(f.std_errors[j]),
-                num(f.t[j]),
-                pval(f.p_values[j])
-            );
-        }
-        let _ = writeln!(h, "</table>");
-        // Residuals against the input, every table point.
-        let by_point: Vec<Vec<(f64, f64)>> = c
-            .points
-            .iter()
-            .map(|p| {
-                p.axes[a]
-                    .input
-                    .iter()
-                    .copied()
-                    .zip(p.axes[a].fit.residuals.iter().copied())
-                    .collect()
-            })
-            .collect();
-        let names: Vec<String> = c
-            .points
-            .iter()
-            .map(|p| {
-                crate::sensor::table::describe(&crate::sensor::table::Point {
-                    temp: p.temp,
-                    volt: p.volt,
-                    rows: vec![],
-                })
-            })
-            .collect();
-        let series = by_point
-            .iter()
-            .zip(&names)
-            .enumerate()
-            .map(|(k, (pts, name))| Series::dots(name, pts, k))
-            .collect();
-        let range = c.ranges[a];
-        let _ = writeln!(
-            h,
-            "<div class=\"fig\">{}</div>",
-            svg(&Figure {
-                title: &format!("{}: residuals against the input", axis.output),
-                x: &format!("{} ({unit})", axis.own),
-                y: "residual (counts)",
-                series,
-                bands: vec![(f64::from(range.lo), f64::from(range.hi))],
-                band_label: "calibrated range",
-                zero_line: true,
-            })?
-        );
-        let order: Vec<Vec<(f64, f64)>> = c
-            .points
-            .iter()
-            .map(|p| {
-                p.axes[a]
-                    .lines
-                    .iter()
-                    .map(|l| *l as f64)
-                    .zip(p.axes[a].fit.residuals.iter().copied())
-                    .collect()
-            })
-            .collect();
-        let series = order
-            .iter()
-            .zip(&names)
-            .enumerate()
-            .map(|(k, (pts, name))| Series::dots(name, pts, k))
-            .collect();
-        let _ = writeln!(
-            h,
-            "<div class=\"fig\">{}</div>",
-            svg(&Figure {
-                title: &format!("{}: residuals in test order", axis.output),
-                x: "line of the data file",
-                y: "residual (counts)",
-                series,
-                bands: Vec::new(),
-                band_label: "",
-                zero_line: true,
-            })?
-        );
-        // The calibration's own error over and beyond the calibrated range.
-        let (lo, hi) = (f64::from(range.lo), f64::from(range.hi));
-        let w = hi - lo;
-        let slope = axis.coef(&axis.own).abs();
-        let curve: Vec<(f64, f64)> = (0..=200)
-            .map(|k| {
-                let x = lo - 0.5 * w + 2.0 * w * f64::from(k) / 200.0;
-                let mut row = Vec::new();
-                axis.formula.row(
-                    |v| {
-                        if v == axis.own {
-                            x
-                        } else if v == crate::sensor::single::KINK {
-                            (x - c.breakpoint).abs() - c.breakpoint.abs()
-                        } else {
-                            0.0
-                        }
-                    },
-                    &mut row,
-                );
-                (x, f.predict(&row).variance.sqrt() / slope)
-            })
-            .collect();
-        let _ = writeln!(
-            h,
-            "<div class=\"fig\">{}</div>",
-            svg(&Figure {
-                title: &format!("{}: 1-sigma calibration error over the range", axis.output),
-                x: &format!("{} ({unit})", axis.own),
-                y: &format!("1-sigma ({unit})"),
-                series: vec![Series::curve("prediction standard error", &curve, 0)],
-                bands: vec![(lo, hi)],
-                band_label: "calibrated range",
-                zero_line: true,
-            })?
-        );
-        // Coefficients against temperature.
-        if c.temps.len() > 1 {
-            let per_unit = format!("scale factor (counts per {unit})");
-            for (term, what) in [
-                ("1", "bias (counts)"),
-                (axis.own.as_str(), per_unit.as_str()),
-            ] {
-                let pts: Vec<(f64, f64)> = c
-                    .points
-                    .iter()
-                    .filter_map(|p| Some((p.temp?, p.axes[a].coef(term))))
-                    .collect();
-                let errs: Vec<f64> = c
-                    .points
-                    .iter()
-                    .filter(|p| p.temp.is_some())
-                    .map(|p| {
-                        p.axes[a]
-                            .index(term)
-                            .map_or(0.0, |i| p.axes[a].fit.std_errors[i])
-                    })
-                    .collect();
-                let _ = writeln!(
-                    h,
-                    "<div class=\"fig\">{}</div>",
-                    svg(&Figure {
-                        title: &format!(
-                            "{}: {what} against temperature (error bars 1-sigma)",
-                            axis.output
-                        ),
-                        x: "temperature (C)",
-                        y: what,
-                        series: vec![Series {
-                            name: what,
-                            points: &pts,
-                            color: COLORS[1],
-                            line: true,
-                            errors: Some(&errs),
-                        }],
-                        bands: Vec::new(),
-                        band_label: "",
-                        zero_line: false,
-                    })?
-                );
-            }
-        }
-    }
-    h.push_str(&super::thermal::section(c)?);
+    let unit = c.units[a];
+    let _ = writeln!(h, "<h2>{} at the reference point</h2>", esc(&axis.output));
+    let f = &axis.fit;
     let _ = writeln!(
         h,
-        "<h2>Device</h2>\n<p>The blob holds {} coefficient set{} with covariance factors; the device's f32 correction differs from the f64 correction by at most {}.</p>",
-        c.points.len(),
-        if c.points.len() == 1 { "" } else { "s" },
-        num(c.device_error)
+        "<p>{}: residual sigma {} counts ({} {unit}), R&#178; {}, inversion error {} {unit}.</p>",
+        esc(&axis.formula.to_string()),
+        num(f.sigma2.sqrt()),
+        num(reference.noise[a]),
+        num(f.r2),
+        num(reference.inversion_error[a])
     );
-    let _ = writeln!(h, "</body>\n</html>");
-    Ok(h)
+    let _ = writeln!(
+        h,
+        "<table><tr><th>term</th><th>coefficient</th><th>std error</th><th>t</th><th>p</th></tr>"
+    );
+    for j in 0..f.p {
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&f.names[j]),
+            num(f.coefficients[j]),
+            num(f.std_errors[j]),
+            num(f.t[j]),
+            pval(f.p_values[j])
+        );
+    }
+    let _ = writeln!(h, "</table>");
+    residual_figures(h, c, a, axis)?;
+    error_figure(h, c, a, axis)?;
+    if c.temps.len() > 1 {
+        temperature_figures(h, c, a, axis)?;
+    }
+    Ok(())
+}
+
+/// The residuals of axis `a` at every table point, against the input and in test order.
+fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Result<(), Error> {
+    let unit = c.units[a];
+    // Residuals against the input, every table point.
+    let by_point: Vec<Vec<(f64, f64)>> = c
+        .points
+        .iter()
+        .map(|p| {
+            p.axes[a]
+                .input
+                .iter()
+                .copied()
+                .zip(p.axes[a].fit.residuals.iter().copied())
+                .collect()
+        })
+        .collect();
+    let names: Vec<String> = c
+        .points
+        .iter()
+        .map(|p| {
+            crate::sensor::table::describe(&crate::sensor::table::Point {
+                temp: p.temp,
+                volt: p.volt,
+                rows: vec![],
+            })
+        })
+        .collect();
+    let series = by_point
+        .iter()
+        .zip(&names)
+        .enumerate()
+        .map(|(k, (pts, name))| Series::dots(name, pts, k))
+        .collect();
+    let range = c.ranges[a];
+    let _ = writeln!(
+        h,
+        "<div class=\"fig\">{}</div>",
+        svg(&Figure {
+            title: &format!("{}: residuals against the input", axis.output),
+            x: &format!("{} ({unit})", axis.own),
+            y: "residual (counts)",
+            series,
+            bands: vec![(f64::from(range.lo), f64::from(range.hi))],
+            band_label: "calibrated range",
+            zero_line: true,
+        })?
+    );
+    let order: Vec<Vec<(f64, f64)>> = c
+        .points
+        .iter()
+        .map(|p| {
+            p.axes[a]
+                .lines
+                .iter()
+                .map(|l| *l as f64)
+                .zip(p.axes[a].fit.residuals.iter().copied())
+                .collect()
+        })
+        .collect();
+    let series = order
+        .iter()
+        .zip(&names)
+        .enumerate()
+        .map(|(k, (pts, name))| Series::dots(name, pts, k))
+        .collect();
+    let _ = writeln!(
+        h,
+        "<div class=\"fig\">{}</div>",
+        svg(&Figure {
+            title: &format!("{}: residuals in test order", axis.output),
+            x: "line of the data file",
+            y: "residual (counts)",
+            series,
+            bands: Vec::new(),
+            band_label: "",
+            zero_line: true,
+        })?
+    );
+    Ok(())
+}
+
+/// The calibration's own 1-sigma error of axis `a` over its calibrated range and half a range
+/// beyond each end.
+fn error_figure(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Result<(), Error> {
+    let unit = c.units[a];
+    let f = &axis.fit;
+    let range = c.ranges[a];
+    // The calibration's own error over and beyond the calibrated range.
+    let (lo, hi) = (f64::from(range.lo), f64::from(range.hi));
+    let w = hi - lo;
+    let slope = axis.coef(&axis.own).abs();
+    let curve: Vec<(f64, f64)> = (0..=200)
+        .map(|k| {
+            let x = lo - 0.5 * w + 2.0 * w * f64::from(k) / 200.0;
+            let mut row = Vec::new();
+            axis.formula.row(
+                |v| {
+                    if v == axis.own {
+                        x
+                    } else if v == crate::sensor::single::KINK {
+                        (x - c.breakpoint).abs() - c.breakpoint.abs()
+                    } else {
+                        0.0
+                    }
+                },
+                &mut row,
+            );
+            (x, f.predict(&row).variance.sqrt() / slope)
+        })
+        .collect();
+    let _ = writeln!(
+        h,
+        "<div class=\"fig\">{}</div>",
+        svg(&Figure {
+            title: &format!("{}: 1-sigma calibration error over the range", axis.output),
+            x: &format!("{} ({unit})", axis.own),
+            y: &format!("1-sigma ({unit})"),
+            series: vec![Series::curve("prediction standard error", &curve, 0)],
+            bands: vec![(lo, hi)],
+            band_label: "calibrated range",
+            zero_line: true,
+        })?
+    );
+    Ok(())
+}
+
+/// The bias and the scale factor of axis `a` at each temperature, with their standard errors.
+fn temperature_figures(
+    h: &mut String,
+    c: &Calibrated,
+    a: usize,
+    axis: &AxisFit,
+) -> Result<(), Error> {
+    let unit = c.units[a];
+    // Coefficients against temperature.
+    if c.temps.len() > 1 {
+        let per_unit = format!("scale factor (counts per {unit})");
+        for (term, what) in [
+            ("1", "bias (counts)"),
+            (axis.own.as_str(), per_unit.as_str()),
+        ] {
+            let pts: Vec<(f64, f64)> = c
+                .points
+                .iter()
+                .filter_map(|p| Some((p.temp?, p.axes[a].coef(term))))
+                .collect();
+            let errs: Vec<f64> = c
+                .points
+                .iter()
+                .filter(|p| p.temp.is_some())
+                .map(|p| {
+                    p.axes[a]
+                        .index(term)
+                        .map_or(0.0, |i| p.axes[a].fit.std_errors[i])
+                })
+                .collect();
+            let _ = writeln!(
+                h,
+                "<div class=\"fig\">{}</div>",
+                svg(&Figure {
+                    title: &format!(
+                        "{}: {what} against temperature (error bars 1-sigma)",
+                        axis.output
+                    ),
+                    x: "temperature (C)",
+                    y: what,
+                    series: vec![Series {
+                        name: what,
+                        points: &pts,
+                        color: COLORS[1],
+                        line: true,
+                        errors: Some(&errs),
+                    }],
+                    bands: Vec::new(),
+                    band_label: "",
+                    zero_line: false,
+                })?
+            );
+        }
+    }
+    Ok(())
 }
