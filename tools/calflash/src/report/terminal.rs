@@ -3,6 +3,7 @@
 use std::fmt::Write as _;
 
 use crate::regression::Regression;
+use crate::stats::Fit;
 
 /// Six significant digits, fixed or exponent form as fits; `-` for an undefined value.
 #[must_use]
@@ -47,9 +48,18 @@ pub fn pval(p: f64) -> String {
 /// The summary as text.
 #[must_use]
 pub fn render(reg: &Regression) -> String {
-    let f = &reg.fit;
-    let inf = &f.influence;
     let mut s = String::new();
+    model(&mut s, reg);
+    coefficients(&mut s, &reg.fit);
+    goodness(&mut s, reg);
+    influence(&mut s, reg);
+    checks(&mut s, reg);
+    s
+}
+
+/// The file, the model and the backward elimination that led to it.
+fn model(s: &mut String, reg: &Regression) {
+    let f = &reg.fit;
     let _ = writeln!(
         s,
         "calflash fit  {}  ({} observations, {} terms, {} residual dof)",
@@ -87,6 +97,10 @@ pub fn render(reg: &Regression) -> String {
             );
         }
     }
+}
+
+/// Each term's coefficient, standard error, t, p, interval and VIF.
+fn coefficients(s: &mut String, f: &Fit) {
     let level = 100.0 * (1.0 - f.alpha);
     let width = f.names.iter().map(String::len).max().unwrap_or(4).max(4);
     let _ = writeln!(
@@ -119,6 +133,12 @@ pub fn render(reg: &Regression) -> String {
             vif
         );
     }
+}
+
+/// The fit as a whole: sigma, R^2, F, the information criteria, the condition number, the
+/// Durbin-Watson statistic and the runs test of the residuals.
+fn goodness(s: &mut String, reg: &Regression) {
+    let f = &reg.fit;
     let _ = writeln!(
         s,
         "\nresidual sigma {} (dof {})   R^2 {}   adj R^2 {}   F {} (p {})",
@@ -143,7 +163,11 @@ pub fn render(reg: &Regression) -> String {
         .map(|(o, t)| format!("{o} z = {:.2} (p {})", t.z, pval(t.p)))
         .collect();
     let _ = writeln!(s, "residual pattern (runs test): {}", runs.join("; "));
+}
 
+/// The outliers and the influential observations, by line.
+fn influence(s: &mut String, reg: &Regression) {
+    let (f, inf) = (&reg.fit, &reg.fit.influence);
     if inf.outliers.is_empty() {
         let _ = writeln!(
             s,
@@ -165,19 +189,13 @@ pub fn render(reg: &Regression) -> String {
                 )
             })
             .collect();
-        let more = inf.outliers.len().saturating_sub(10);
         let _ = writeln!(
             s,
-            "OUTLIERS ({} with |t| > {}, Bonferroni at {}): {}{}",
+            "OUTLIERS ({} with |t| > {}, Bonferroni at {}): {}",
             inf.outliers.len(),
             num(inf.thresholds.outlier),
             f.alpha,
-            list.join(", "),
-            if more > 0 {
-                format!(" and {more} more")
-            } else {
-                String::new()
-            }
+            first_ten(&list, inf.outliers.len())
         );
     }
     if !inf.influential.is_empty() {
@@ -194,21 +212,31 @@ pub fn render(reg: &Regression) -> String {
                 )
             })
             .collect();
-        let more = inf.influential.len().saturating_sub(10);
         let _ = writeln!(
             s,
-            "influential ({}; Cook > {} or |DFFITS| > {}): {}{}",
+            "influential ({}; Cook > {} or |DFFITS| > {}): {}",
             inf.influential.len(),
             num(inf.thresholds.cooks_distance),
             num(inf.thresholds.dffits),
-            list.join(", "),
-            if more > 0 {
-                format!(" and {more} more")
-            } else {
-                String::new()
-            }
+            first_ten(&list, inf.influential.len())
         );
     }
+}
+
+/// The first ten of `total` items, listed, and how many more there are.
+fn first_ten(listed: &[String], total: usize) -> String {
+    let more = total.saturating_sub(10);
+    if more > 0 {
+        format!("{} and {more} more", listed.join(", "))
+    } else {
+        listed.join(", ")
+    }
+}
+
+/// What was asked besides the fit: a reduced model, a hold-out, predictions, a curve, and the
+/// warnings.
+fn checks(s: &mut String, reg: &Regression) {
+    let f = &reg.fit;
     if let Some(c) = &reg.comparison {
         let _ = writeln!(
             s,
@@ -275,12 +303,18 @@ pub fn render(reg: &Regression) -> String {
     for w in &reg.warnings {
         let _ = writeln!(s, "warning: {w}");
     }
-    s
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_long_list_names_its_first_ten_and_counts_the_rest() {
+        let ten: Vec<String> = (1..=10).map(|i| format!("line {i}")).collect();
+        assert!(first_ten(&ten, 10).ends_with("line 10"));
+        assert!(first_ten(&ten, 13).ends_with("line 10 and 3 more"));
+    }
 
     #[test]
     fn numbers_read_well() {
