@@ -319,6 +319,119 @@ fn read(opts: &Options, kind: Kind) -> Result<(Table, Option<super::Finding>), W
     Ok((table, beyond))
 }
 
+/// Adds to `table` what the references lack: the still ramp's observations (`--still-ramp`),
+/// and the Earth's rate in every reference rate (`--latitude`), saying so in `notes`.
+fn add_references(
+    table: &mut Table,
+    opts: &Options,
+    kind: Kind,
+    notes: &mut Vec<String>,
+) -> Result<(), WorkflowError> {
+    if let Some(recording) = &opts.still_ramp {
+        if opts.earth.is_some() {
+            return Err(WorkflowError::triad(
+                recording,
+                TriadError::StillRampWithLatitude,
+            ));
+        }
+        let still = still::observations(recording, kind, table, opts, notes)?;
+        table.append(&still);
+    }
+    if let Some(station) = &opts.earth {
+        add_earth_rate(table, station, &opts.file)?;
+        notes.push(format!(
+            "the Earth's rate at latitude {} deg with the fixture's mark at heading {} deg ({:.3e} rad/s) is in every observation's reference rate",
+            station.latitude_deg,
+            station.heading_deg,
+            crate::earth::RATE
+        ));
+    }
+    Ok(())
+}
+
+/// The temperatures the device holds a continuous model at (`p` prepared it): the table or
+/// Chebyshev series `thermal::choose` finds for the triads `parts`, as a layout of points, with
+/// the series' terms (`None` for a table) and the finding that states how well it follows the
+/// model.
+fn held_layout(
+    p: &continuous::Prepared,
+    parts: &[(&Spec<'_>, &TriadModel)],
+    series: bool,
+    path: &std::path::Path,
+    notes: &mut Vec<String>,
+) -> Result<(Layout, Option<usize>, super::Finding), WorkflowError> {
+    let held = continuous::Scale {
+        lo: f64::from(p.support.scale.lo as f32),
+        hi: f64::from(p.support.scale.hi as f32),
+    };
+    let choice = thermal::choose(parts, &held, series, path)?;
+    let finding = continuous::device::finding(
+        &continuous::device::DeviceTemperature {
+            temps: choice.temps.clone(),
+            series: choice.series,
+            sets: Vec::new(),
+            covariances: Vec::new(),
+            ratio: (choice.worst.departure, choice.worst.at),
+            sigma_error: Some(choice.worst.sigma),
+            other: choice.other,
+        },
+        &held,
+    );
+    if !series {
+        notes.push("an IMU with lever arms: the device gets a table (it proves the lever term's sensing directions per set of one)".into());
+    }
+    let temps = choice.temps;
+    let layout = Layout {
+        points: temps
+            .iter()
+            .map(|t| table::Point {
+                temp: Some(*t),
+                volt: None,
+                rows: Vec::new(),
+            })
+            .collect(),
+        temps,
+        volts: Vec::new(),
+    };
+    Ok((layout, choice.series, finding))
+}
+
+/// The names, units and calibrated ranges of the outputs of `accel` and `gyro`, in that order,
+/// with notes on the g-sensitivity (at point `reference`) and the lever arms.
+fn described(
+    accel: Option<&TriadResult>,
+    gyro: Option<&TriadResult>,
+    reference: usize,
+    notes: &mut Vec<String>,
+) -> (Vec<String>, Vec<&'static str>, Vec<Span>) {
+    let mut names = Vec::new();
+    let mut units = Vec::new();
+    let mut ranges = Vec::new();
+    if let Some(a) = accel {
+        names.extend(col::A.map(String::from));
+        units.extend([blob::unit(Quantity::Acceleration); 3]);
+        ranges.extend(a.ranges);
+    }
+    if let Some(g) = gyro {
+        names.extend(col::GYRO.map(String::from));
+        units.extend([blob::unit(Quantity::AngularRate); 3]);
+        ranges.extend(g.ranges);
+        if let Some(gm) = g.g.get(reference) {
+            notes.push(format!(
+                "g-sensitivity at the reference point (rad/s per m/s^2, device form): {:?}",
+                gm.map(|r| r.map(|v| (v * 1e6).round() / 1e6))
+            ));
+        }
+    }
+    if let Some(r) = accel.and_then(|a| a.lever) {
+        notes.push(format!(
+            "lever arms (m), rows = accelerometer axes: {:?}",
+            r.map(|row| row.map(|v| (v * 1e5).round() / 1e5))
+        ));
+    }
+    (names, units, ranges)
+}
+
 /// Calibrates a triad or an IMU from the observations in `opts.file`.
 ///
 /// # Errors
@@ -331,25 +444,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         table.column(col::VOLT).is_some(),
     );
     let mut notes = Vec::new();
-    if let Some(recording) = &opts.still_ramp {
-        if opts.earth.is_some() {
-            return Err(WorkflowError::triad(
-                recording,
-                TriadError::StillRampWithLatitude,
-            ));
-        }
-        let still = still::observations(recording, kind, &table, opts, &mut notes)?;
-        table.append(&still);
-    }
-    if let Some(station) = &opts.earth {
-        add_earth_rate(&mut table, station, path)?;
-        notes.push(format!(
-            "the Earth's rate at latitude {} deg with the fixture's mark at heading {} deg ({:.3e} rad/s) is in every observation's reference rate",
-            station.latitude_deg,
-            station.heading_deg,
-            crate::earth::RATE
-        ));
-    }
+    add_references(&mut table, opts, kind, &mut notes)?;
     let spin = table.column(col::W[0]).is_some()
         && (0..table.len()).any(|r| {
             col::W
@@ -410,10 +505,6 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
     let layout = match temperature {
         Temperature::Points(l) => l,
         Temperature::Continuous(p) => {
-            let held = continuous::Scale {
-                lo: f64::from(p.support.scale.lo as f32),
-                hi: f64::from(p.support.scale.hi as f32),
-            };
             let parts: Vec<(&Spec<'_>, &TriadModel)> = accel
                 .iter()
                 .map(|m| (&accel_spec, m))
@@ -423,36 +514,10 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             let series = accel
                 .as_ref()
                 .is_none_or(|a| a.lever.is_none() || gyro.is_none());
-            let choice = thermal::choose(&parts, &held, series, path)?;
-            extra_findings.push(continuous::device::finding(
-                &continuous::device::DeviceTemperature {
-                    temps: choice.temps.clone(),
-                    series: choice.series,
-                    sets: Vec::new(),
-                    covariances: Vec::new(),
-                    ratio: (choice.worst.departure, choice.worst.at),
-                    sigma_error: Some(choice.worst.sigma),
-                    other: choice.other,
-                },
-                &held,
-            ));
-            if !series {
-                notes.push("an IMU with lever arms: the device gets a table (it proves the lever term's sensing directions per set of one)".into());
-            }
-            series_terms = choice.series;
-            let temps = choice.temps;
-            Layout {
-                points: temps
-                    .iter()
-                    .map(|t| table::Point {
-                        temp: Some(*t),
-                        volt: None,
-                        rows: Vec::new(),
-                    })
-                    .collect(),
-                temps,
-                volts: Vec::new(),
-            }
+            let (layout, terms, finding) = held_layout(&p, &parts, series, path, &mut notes)?;
+            series_terms = terms;
+            extra_findings.push(finding);
+            layout
         }
     };
     let sets_of = |spec: &Spec<'_>, model: TriadModel| {
@@ -506,31 +571,12 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
     let points = assemble::point_fits(&layout, &parts);
     let (blob, output_errors) = blob::build_and_check(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);
-    let mut names = Vec::new();
-    let mut units = Vec::new();
-    let mut ranges = Vec::new();
-    if let Some(a) = &accel {
-        names.extend(col::A.map(String::from));
-        units.extend([blob::unit(Quantity::Acceleration); 3]);
-        ranges.extend(a.ranges);
-    }
-    if let Some(g) = &gyro {
-        names.extend(col::GYRO.map(String::from));
-        units.extend([blob::unit(Quantity::AngularRate); 3]);
-        ranges.extend(g.ranges);
-        if let Some(gm) = g.g.get(layout.reference()) {
-            notes.push(format!(
-                "g-sensitivity at the reference point (rad/s per m/s^2, device form): {:?}",
-                gm.map(|r| r.map(|v| (v * 1e6).round() / 1e6))
-            ));
-        }
-    }
-    if let Some(r) = accel.as_ref().and_then(|a| a.lever) {
-        notes.push(format!(
-            "lever arms (m), rows = accelerometer axes: {:?}",
-            r.map(|row| row.map(|v| (v * 1e5).round() / 1e5))
-        ));
-    }
+    let (names, units, ranges) = described(
+        accel.as_ref(),
+        gyro.as_ref(),
+        layout.reference(),
+        &mut notes,
+    );
     let mut findings = super::findings(&points, &names, &units, opts, &output_errors);
     findings.extend(beyond);
     findings.extend(extra_findings);
