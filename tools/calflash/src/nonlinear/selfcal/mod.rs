@@ -325,77 +325,181 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
     let source = rec.source.as_str();
     let rate = rec.rate();
     let samples = |s: f64| ((s * rate).round() as usize).max(1);
-    let t0 = rec.t[0];
-    let rest_end = rec.t.partition_point(|t| *t < t0 + opts.init_rest);
-    if rest_end >= rec.len() {
-        return Err(SelfCalError::TooShort {
-            file: source.into(),
-            len: rec.t[rec.len() - 1] - t0,
-            rest: opts.init_rest,
-        });
-    }
-    // The quantisation's variance floors every variance: identical codes are not silence.
-    let floor = statics::floor(statics::quantum(&rec.acc));
-    // The rest must be still: no second of it far noisier than its quietest.
-    let second = samples(1.0);
-    let blocks: Vec<(usize, f64)> = (0..rest_end / second)
-        .map(|b| {
-            (
-                b * second,
-                statics::rest_level(&rec.acc[b * second..(b + 1) * second], floor),
-            )
-        })
-        .collect();
-    let quietest = blocks
-        .iter()
-        .map(|b| b.1)
-        .fold(f64::INFINITY, f64::min)
-        .max(1e-12);
-    if let Some(&(at, level)) = blocks.iter().find(|b| b.1 > 25.0 * quietest) {
-        return Err(SelfCalError::RestNotStill {
-            file: source.into(),
-            at: rec.t[at] - t0,
-            rest: opts.init_rest,
-            ratio: level / quietest,
-        });
-    }
-    let rest_level = statics::rest_level(&rec.acc[..rest_end], floor);
-    // Two still runs whose means agree within 8 sigma of the rest's noise, a window apart at
-    // most, are one hold.
-    let tol = statics::variances(&rec.acc[..rest_end], floor).map(|v| 8.0 * v.sqrt());
+    let rest = Rest::checked(rec, opts)?;
+    let rest_level = rest.level;
     // A turn about the vertical barely moves the accelerometer, but the gyro sees it: the
     // gyro's measure, put in the accelerometer's units by the ratio of the two rest levels and
     // divided by GYRO_MARGIN (a hand holding a pose trembles: the gyro sees that too, and it
     // is not a turn), counts where it is the larger, and marks where the unit turned.
     let window = samples(opts.window) | 1;
     let gfloor = statics::floor(statics::quantum(&rec.gyro));
-    let scale = rest_level / statics::rest_level(&rec.gyro[..rest_end], gfloor) / GYRO_MARGIN;
+    let scale = rest_level / statics::rest_level(&rec.gyro[..rest.end], gfloor) / GYRO_MARGIN;
     // A short window: a turn's edges must not bleed into a short hold.
     let gyro: Vec<f64> = statics::measure(&rec.gyro, samples(GYRO_WINDOW) | 1, gfloor)
         .into_iter()
         .map(|g| g * scale)
         .collect();
     let turned: Vec<bool> = gyro.iter().map(|g| *g > 10.0 * rest_level).collect();
-    let measure: Vec<f64> = statics::measure(&rec.acc, window, floor)
+    let measure: Vec<f64> = statics::measure(&rec.acc, window, rest.floor)
         .into_iter()
         .zip(&gyro)
         .map(|(a, g)| a.max(*g))
         .collect();
     let finder = few_poses::Finder {
         rec,
-        tol,
+        tol: rest.tol,
         turned: &turned,
     };
-    let min_len = samples(opts.min_still);
+    let (trials, best) = threshold_trials(&finder, &measure, rest_level, opts);
+    let Some((chosen, poses)) = best else {
+        return Err(few_poses::diagnose(
+            &finder, opts, &trials, &measure, rest_level, rest.floor,
+        ));
+    };
+    let pose_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
+    let (accel, quadratic_test) =
+        accel_fit(&pose_means, opts.g, opts.quadratic).map_err(fit_err(source, "accelerometer"))?;
+    let quadratic = accel.params.len() == 12;
+    let holdout = holdout(
+        &pose_means,
+        opts.g,
+        quadratic,
+        opts.folds.clamp(2, pose_means.len()),
+    )
+    .map_err(fit_err(source, "hold-out accelerometer"))?;
 
-    // The threshold: the multiple whose poses face the most distinct directions (a threshold
-    // too low for the noise misses holds, and the fit of fewer poses looks better only because
-    // it has fewer to fit; one too high merges holds across short turns); ties go to the best
-    // linear accelerometer fit.
+    // The gyro.
+    let gyro_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.gyro, r)).collect();
+    let rest_gyro = statics::mean(&rec.gyro, &(0..rest.end));
+    let gyro_bias = match opts.gyro_bias {
+        GyroBias::Poses => std::array::from_fn(|j| {
+            gyro_means.iter().map(|m| m[j]).sum::<f64>() / gyro_means.len() as f64
+        }),
+        GyroBias::Rest => rest_gyro,
+    };
+    let (gyro_bias_spread, gyro_bias_rms) = spread_and_rms(&gyro_means, gyro_bias);
+    let dirs: Vec<[f64; 3]> = pose_means
+        .iter()
+        .map(|m| unit(accel.model.apply(*m)))
+        .collect();
+    let turns = segments::turns(
+        rec,
+        opts.gyro_bias,
+        &poses,
+        &dirs,
+        &gyro_means,
+        rest_gyro,
+        gyro_bias,
+    );
+    let (gyro, constant_bias_angles) = gyro_fit(source, &turns, &accel, &pose_means)?;
+    Ok(SelfCal {
+        options: opts.clone(),
+        rate,
+        rest: 0..rest.end,
+        rest_level,
+        measure,
+        trials,
+        chosen,
+        poses,
+        pose_means,
+        accel,
+        quadratic_test,
+        holdout,
+        gyro,
+        gyro_bias,
+        gyro_bias_spread,
+        gyro_bias_rms,
+        constant_bias_angles,
+        rotations: turns.rotations,
+        skipped: turns.skipped,
+    })
+}
+
+/// The initial rest, checked: long enough and still.
+struct Rest {
+    /// The first sample after it.
+    end: usize,
+    /// The accelerometer's quantisation variance, which floors every variance.
+    floor: [f64; 3],
+    /// Its level of motion (the accelerometer's measure at rest).
+    level: f64,
+    /// Two still runs whose means agree within this (8 sigma of the rest's noise, per axis),
+    /// a window apart at most, are one hold.
+    tol: [f64; 3],
+}
+
+impl Rest {
+    /// The rest of `opts.init_rest` seconds at the start of `rec`.
+    ///
+    /// # Errors
+    /// A recording shorter than the rest, or a rest with a second far noisier than its
+    /// quietest (the unit was moved).
+    fn checked(rec: &Recording, opts: &Options) -> Result<Self, SelfCalError> {
+        let source = rec.source.as_str();
+        let t0 = rec.t[0];
+        let end = rec.t.partition_point(|t| *t < t0 + opts.init_rest);
+        if end >= rec.len() {
+            return Err(SelfCalError::TooShort {
+                file: source.into(),
+                len: rec.t[rec.len() - 1] - t0,
+                rest: opts.init_rest,
+            });
+        }
+        // The quantisation's variance floors every variance: identical codes are not silence.
+        let floor = statics::floor(statics::quantum(&rec.acc));
+        // The rest must be still: no second of it far noisier than its quietest.
+        let second = ((rec.rate()).round() as usize).max(1);
+        let blocks: Vec<(usize, f64)> = (0..end / second)
+            .map(|b| {
+                (
+                    b * second,
+                    statics::rest_level(&rec.acc[b * second..(b + 1) * second], floor),
+                )
+            })
+            .collect();
+        let quietest = blocks
+            .iter()
+            .map(|b| b.1)
+            .fold(f64::INFINITY, f64::min)
+            .max(1e-12);
+        if let Some(&(at, level)) = blocks.iter().find(|b| b.1 > 25.0 * quietest) {
+            return Err(SelfCalError::RestNotStill {
+                file: source.into(),
+                at: rec.t[at] - t0,
+                rest: opts.init_rest,
+                ratio: level / quietest,
+            });
+        }
+        Ok(Self {
+            end,
+            floor,
+            level: statics::rest_level(&rec.acc[..end], floor),
+            tol: statics::variances(&rec.acc[..end], floor).map(|v| 8.0 * v.sqrt()),
+        })
+    }
+}
+
+/// The chosen threshold's index among the trials, and the poses it found.
+type Chosen = (usize, Vec<Range<usize>>);
+
+/// Every threshold of `opts.multipliers` tried, and the one chosen with its poses: the multiple
+/// whose poses face the most distinct directions (a threshold too low for the noise misses
+/// holds, and the fit of fewer poses looks better only because it has fewer to fit; one too
+/// high merges holds across short turns); ties go to the best linear accelerometer fit. `None`
+/// when no threshold finds enough poses for a fit.
+fn threshold_trials(
+    finder: &few_poses::Finder<'_>,
+    measure: &[f64],
+    rest_level: f64,
+    opts: &Options,
+) -> (Vec<Trial>, Option<Chosen>) {
+    let rec = finder.rec;
+    let samples = |s: f64| ((s * rec.rate()).round() as usize).max(1);
+    let min_len = samples(opts.min_still);
     let mut trials = Vec::new();
     let mut found: Vec<(usize, f64, usize, Vec<Range<usize>>)> = Vec::new();
     for &m in &opts.multipliers {
-        let poses = finder.poses(&measure, m * rest_level, min_len, samples(opts.window));
+        let poses = finder.poses(measure, m * rest_level, min_len, samples(opts.window));
         let means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
         let rms_m = if poses.len() >= MIN_POSES {
             let (center, start) = gravity::center_and_start(&means, opts.g);
@@ -418,67 +522,45 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
     let best = found
         .into_iter()
         .max_by(|a, b| a.2.cmp(&b.2).then(b.1.total_cmp(&a.1)))
-        .map(|(k, r, _, poses)| (k, r, poses));
-    let Some((chosen, _, poses)) = best else {
-        return Err(few_poses::diagnose(
-            &finder, opts, &trials, &measure, rest_level, floor,
-        ));
-    };
-    let pose_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
-    let (accel, quadratic_test) =
-        accel_fit(&pose_means, opts.g, opts.quadratic).map_err(fit_err(source, "accelerometer"))?;
-    let quadratic = accel.params.len() == 12;
-    let holdout = holdout(
-        &pose_means,
-        opts.g,
-        quadratic,
-        opts.folds.clamp(2, pose_means.len()),
-    )
-    .map_err(fit_err(source, "hold-out accelerometer"))?;
+        .map(|(k, _, _, poses)| (k, poses));
+    (trials, best)
+}
 
-    // The gyro.
-    let gyro_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.gyro, r)).collect();
-    let rest_gyro = statics::mean(&rec.gyro, &(0..rest_end));
-    let gyro_bias = match opts.gyro_bias {
-        GyroBias::Poses => std::array::from_fn(|j| {
-            gyro_means.iter().map(|m| m[j]).sum::<f64>() / gyro_means.len() as f64
-        }),
-        GyroBias::Rest => rest_gyro,
-    };
-    let gyro_bias_spread = std::array::from_fn(|j| {
-        let (lo, hi) = gyro_means
+/// Per axis, the spread (largest less smallest) of the pose means `means` and their RMS
+/// about `bias`.
+fn spread_and_rms(means: &[[f64; 3]], bias: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let spread = std::array::from_fn(|j| {
+        let (lo, hi) = means
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| {
                 (lo.min(m[j]), hi.max(m[j]))
             });
         hi - lo
     });
-    let gyro_bias_rms = std::array::from_fn(|j| {
-        (gyro_means
-            .iter()
-            .map(|m| (m[j] - gyro_bias[j]).powi(2))
-            .sum::<f64>()
-            / gyro_means.len() as f64)
-            .sqrt()
+    let rms = std::array::from_fn(|j| {
+        (means.iter().map(|m| (m[j] - bias[j]).powi(2)).sum::<f64>() / means.len() as f64).sqrt()
     });
-    let dirs: Vec<[f64; 3]> = pose_means
-        .iter()
-        .map(|m| unit(accel.model.apply(*m)))
-        .collect();
+    (spread, rms)
+}
+
+/// The gyro's fit to the rotations between poses (`turns`), its covariance including the
+/// accelerometer's error in the rotations' end directions, and the angle each rotation of the
+/// constant-bias check turned through.
+///
+/// # Errors
+/// Too few usable rotations (each skipped one says why), or a fit that fails.
+fn gyro_fit(
+    source: &str,
+    turns: &segments::Turns,
+    accel: &AccelFit,
+    pose_means: &[[f64; 3]],
+) -> Result<(GyroFit, Vec<f64>), SelfCalError> {
     let segments::Turns {
         segments,
         const_segments,
         rotations,
         skipped,
-    } = segments::turns(
-        rec,
-        opts.gyro_bias,
-        &poses,
-        &dirs,
-        &gyro_means,
-        rest_gyro,
-        gyro_bias,
-    );
+    } = turns;
     if segments.len() < MIN_ROTATIONS {
         let why = if skipped.is_empty() {
             "none".into()
@@ -497,8 +579,8 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
             needed: MIN_ROTATIONS,
         });
     }
-    let start = segments::gyro_start(&segments);
-    let mut gyro = rotation::fit(&segments, start).map_err(fit_err(source, "gyro"))?;
+    let start = segments::gyro_start(segments);
+    let mut gyro = rotation::fit(segments, start).map_err(fit_err(source, "gyro"))?;
     // The rotations' ends are the accelerometer's gravity directions: its error is the gyro's.
     if let Some(cov_a) = &accel.covariance {
         let center = accel.model.center;
@@ -514,8 +596,7 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
                 })
                 .collect::<Vec<_>>()
         };
-        if let Some(c) =
-            rotation::with_direction_error(&segments, &gyro, &accel.params, cov_a, ends)
+        if let Some(c) = rotation::with_direction_error(segments, &gyro, &accel.params, cov_a, ends)
         {
             gyro.covariance = Some(c);
         }
@@ -525,27 +606,7 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         .iter()
         .map(|s| rotation::angle(&m, s))
         .collect();
-    Ok(SelfCal {
-        options: opts.clone(),
-        rate,
-        rest: 0..rest_end,
-        rest_level,
-        measure,
-        trials,
-        chosen,
-        poses,
-        pose_means,
-        accel,
-        quadratic_test,
-        holdout,
-        gyro,
-        gyro_bias,
-        gyro_bias_spread,
-        gyro_bias_rms,
-        constant_bias_angles,
-        rotations,
-        skipped,
-    })
+    Ok((gyro, constant_bias_angles))
 }
 
 /// How many of the pose means `means` (counts) face directions at least 10 degrees from each
