@@ -13,10 +13,11 @@ use std::path::{Path, PathBuf};
 use spincal::model::Rails;
 
 mod error;
+mod halves;
 mod rate;
 
 pub use error::RecordingError;
-use rate::{median_step, note_preamble, timing};
+use rate::median_step;
 
 use super::units::{self, Sensor, Unit};
 use super::{header, layout};
@@ -130,162 +131,25 @@ pub fn read_with(
     opts: &Options,
 ) -> Result<Recording, RecordingError> {
     let rails = opts.rails;
-    let (want_acc, want_gyro) = match opts.keep {
+    let want = match opts.keep {
         layout::Keep::Both => (true, true),
         layout::Keep::Accel => (true, false),
         layout::Keep::Gyro => (false, true),
     };
-    // The units each kept sensor's header names, with its file and the header's line.
-    let mut header_units: [Option<Stated>; 2] = [None, None];
-    let temperature;
-    // Where each kept count is: its file and 1-based field.
-    let mut places: Vec<(PathBuf, usize)> = Vec::with_capacity(6);
-    let (t, a, g, line, source, rest) = match gyro {
-        None => {
-            let mut r = read_file(acc, layout::Holds::Both, opts.keep, &opts.columns)?;
-            note_preamble(acc, &r.preamble);
-            let t = timing(&mut r, acc, opts.rate)?;
-            places.extend(r.fields.iter().map(|f| (acc.to_path_buf(), *f)));
-            let mut kept = std::mem::take(&mut r.triads).into_iter();
-            let a = if want_acc {
-                kept.next().unwrap_or_default()
-            } else {
-                Vec::new()
-            };
-            let g = if want_gyro {
-                kept.next().unwrap_or_default()
-            } else {
-                Vec::new()
-            };
-            let rest = r.preamble.rest.map(|s| s.value);
-            temperature = r.temp.take();
-            let mut stated = r.units.chunks(3);
-            if want_acc {
-                header_units[0] = Some((
-                    stated.next().unwrap_or_default().to_vec(),
-                    acc.to_path_buf(),
-                    r.header,
-                ));
-            }
-            if want_gyro {
-                header_units[1] = Some((
-                    stated.next().unwrap_or_default().to_vec(),
-                    acc.to_path_buf(),
-                    r.header,
-                ));
-            }
-            (t, a, g, r.line, acc.display().to_string(), rest)
-        }
-        Some(gp) => {
-            let one = |p: &Path| -> Result<(layout::Rows, Vec<f64>), RecordingError> {
-                let mut r =
-                    layout::read_chosen(p, layout::Holds::One, layout::Keep::Both, &opts.columns)?;
-                note_preamble(p, &r.preamble);
-                let t = timing(&mut r, p, opts.rate)?;
-                Ok((r, t))
-            };
-            // One file of one triad read as both halves: read once, used for what is kept.
-            let same = gp == acc;
-            let mut ra = if want_acc || same {
-                Some(one(acc)?)
-            } else {
-                None
-            };
-            let mut rg = if want_gyro && !same {
-                Some(one(gp)?)
-            } else {
-                None
-            };
-            if let (Some((ra, ta)), Some((rg, tg))) = (&ra, &rg) {
-                let mismatch = |line: usize, what: String| RecordingError::Mismatch {
-                    acc: acc.to_path_buf(),
-                    gyro: gp.to_path_buf(),
-                    line,
-                    what,
-                };
-                if ta.len() != tg.len() {
-                    let line = rg
-                        .line
-                        .get(ta.len().min(tg.len()))
-                        .or(rg.line.last())
-                        .map_or(1, |l| *l as usize);
-                    return Err(mismatch(
-                        line,
-                        format!(
-                            "{} gyro samples against {} accelerometer samples",
-                            tg.len(),
-                            ta.len()
-                        ),
-                    ));
-                }
-                let tol = 1e-6 * ta.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-                if let Some(k) = (0..ta.len()).find(|&k| (ta[k] - tg[k]).abs() > tol) {
-                    return Err(mismatch(
-                        rg.line[k] as usize,
-                        format!(
-                            "timestamp {} s where the accelerometer's is {} s",
-                            tg[k], ta[k]
-                        ),
-                    ));
-                }
-                let _ = ra;
-            }
-            let mut a = Vec::new();
-            let mut g = Vec::new();
-            let mut place = |r: &layout::Rows, p: &Path| {
-                places.extend(r.fields.iter().map(|f| (p.to_path_buf(), *f)));
-            };
-            if let Some((r, _)) = &ra {
-                let named = (r.units.clone(), acc.to_path_buf(), r.header);
-                if want_acc {
-                    header_units[0] = Some(named.clone());
-                }
-                if same && want_gyro {
-                    header_units[1] = Some(named);
-                }
-            }
-            if let Some((r, _)) = &rg {
-                header_units[1] = Some((r.units.clone(), gp.to_path_buf(), r.header));
-            }
-            temperature = [&mut ra, &mut rg]
-                .into_iter()
-                .find_map(|r| r.as_mut().and_then(|(r, _)| r.temp.take()));
-            if let Some((r, _)) = &mut ra {
-                if want_acc {
-                    place(r, acc);
-                }
-                if same && want_gyro {
-                    place(r, gp);
-                }
-                let triad = std::mem::take(&mut r.triads[0]);
-                match (want_acc, same && want_gyro) {
-                    // One file read as both halves, both wanted: the one copy it needs.
-                    (true, true) => {
-                        g = triad.clone();
-                        a = triad;
-                    }
-                    (true, false) => a = triad,
-                    (false, true) => g = triad,
-                    (false, false) => {}
-                }
-            }
-            if let Some((r, _)) = &mut rg {
-                place(r, gp);
-                g = std::mem::take(&mut r.triads[0]);
-            }
-            let source = match (&ra, &rg) {
-                (Some(_), Some(_)) => format!("{} + {}", acc.display(), gp.display()),
-                (None, Some(_)) => gp.display().to_string(),
-                _ => acc.display().to_string(),
-            };
-            let rest = [&ra, &rg]
-                .iter()
-                .find_map(|r| r.as_ref().and_then(|(r, _)| r.preamble.rest))
-                .map(|s| s.value);
-            // Lines and times from the accelerometer's file when it was read.
-            let (r, t) = ra.or(rg).expect("at least one file is read");
-            (t, a, g, r.line, source, rest)
-        }
+    let (want_acc, want_gyro) = want;
+    let halves::Halves {
+        t,
+        acc: a,
+        gyro: g,
+        line,
+        source,
+        rest,
+        stated: header_units,
+        temperature,
+        places,
+    } = match gyro {
+        None => halves::one_file(acc, opts, want)?,
+        Some(gp) => halves::two_files(acc, gp, opts, want)?,
     };
     let period = median_step(&t);
     let gaps = t
