@@ -168,84 +168,28 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
     let cal =
         crate::signing::calibration(&bytes).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let data = cal.data();
-    let (default_cols, out_names): (Vec<&str>, Vec<&str>) = match &data.sensor {
-        Sensor::Single { .. } => (vec![col::OUTPUT], vec!["value"]),
-        Sensor::Triad {
-            quantity: spincal::model::Quantity::Acceleration,
-            ..
-        } => (col::A.to_vec(), vec!["ax", "ay", "az"]),
-        Sensor::Triad { .. } => (col::GYRO.to_vec(), vec!["wx", "wy", "wz"]),
-        Sensor::Imu { .. } => (
-            col::A.iter().chain(&col::GYRO).copied().collect(),
-            vec!["ax", "ay", "az", "wx", "wy", "wz"],
-        ),
-    };
+    let channels = Channels::of(&data.sensor);
     let cols: Vec<String> = if args.columns.is_empty() {
-        default_cols.iter().map(|s| s.to_string()).collect()
+        channels.raw.iter().map(|s| s.to_string()).collect()
     } else {
         args.columns.clone()
     };
-    if cols.len() != default_cols.len() && !args.recording {
+    if cols.len() != channels.raw.len() && !args.recording {
         return Err(format!(
             "--columns: the calibration corrects {} channel(s), {} columns given",
-            default_cols.len(),
+            channels.raw.len(),
             cols.len()
         )
         .into());
     }
-    let reference_cols: Vec<&str> = match &data.sensor {
-        Sensor::Single { .. } => vec![col::INPUT],
-        Sensor::Triad {
-            quantity: spincal::model::Quantity::Acceleration,
-            ..
-        } => col::F.to_vec(),
-        Sensor::Triad { .. } => col::W.to_vec(),
-        Sensor::Imu { .. } => col::F.iter().chain(&col::W).copied().collect(),
-    };
     let input = if args.recording {
         if args.reference {
             return Err("--reference: a raw recording has no reference columns".into());
         }
-        recording_input(args, default_cols.len())?
+        recording_input(args, channels.raw.len())?
     } else {
-        let mut wanted = cols.clone();
-        wanted.extend(args.temp_column.iter().cloned());
-        wanted.extend(args.time_column.iter().cloned());
-        if args.reference {
-            wanted.extend(reference_cols.iter().map(|c| c.to_string()));
-        }
-        let table = obs::read_columns(&args.input, &wanted, args.format)?;
-        let named = |c: &Option<String>| {
-            c.as_ref()
-                .and_then(|t| table.column(t))
-                .map(<[f64]>::to_vec)
-        };
-        Input {
-            header: "line".into(),
-            labels: table.lines.iter().map(ToString::to_string).collect(),
-            raw: (0..table.len())
-                .map(|i| {
-                    cols.iter()
-                        .map(|c| table.column(c).map_or(0, |v| v[i].round() as i32))
-                        .collect()
-                })
-                .collect(),
-            temps: named(&args.temp_column),
-            times: named(&args.time_column),
-            reference: args.reference.then(|| {
-                (0..table.len())
-                    .map(|i| {
-                        reference_cols
-                            .iter()
-                            .map(|c| table.column(c).map_or(f64::NAN, |v| v[i]))
-                            .collect()
-                    })
-                    .collect()
-            }),
-        }
+        table_input(args, &cols, &channels.reference)?
     };
-    // The rate: an IMU with lever arms needs it; a stream with timestamps has its off-rate
-    // steps flagged.
     let lever = matches!(
         &data.sensor,
         Sensor::Imu {
@@ -253,18 +197,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
             ..
         }
     );
-    let timing = match Timing::new(args.rate, input.times.as_deref()) {
-        Ok(t) => Some(t),
-        Err(TimingError::Missing) if !lever => None,
-        Err(TimingError::Missing) => {
-            return Err(format!(
-                "{}: unit {}'s calibration has lever arms, whose tangential term needs the sample rate: give --rate HZ, or the timestamps with --time-column NAME",
-                args.blob.display(),
-                data.identity.serial
-            ).into());
-        }
-        Err(e) => return Err(format!("{}: {e}", args.input.display()).into()),
-    };
+    let timing = timing(args, &cal, lever, &input)?;
     let env = &data.environment;
     let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
     let volt = args.volt.unwrap_or_else(|| mid(env.voltage_span));
@@ -278,17 +211,149 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
                 e.to_string()
             }
         })?;
-    let n = corrector.outputs();
-    let set_env = |c: &mut AnyCorrector<'_>, t: f32| c.set_environment(t, volt);
-    set_env(&mut corrector, temp0);
-    let temps = input.temps.as_deref();
-    let mut last_temp = temp0;
+    corrector.set_environment(temp0, volt);
     let mut header = vec![input.header.clone()];
-    header.extend(out_names.iter().map(|s| s.to_string()));
+    header.extend(channels.out.iter().map(|s| s.to_string()));
     header.extend(["flags".to_string(), "flag_names".to_string()]);
     if args.sigma {
-        header.extend(out_names.iter().map(|s| format!("sigma_{s}")));
+        header.extend(channels.out.iter().map(|s| format!("sigma_{s}")));
     }
+    let corrected = correct_all(
+        args,
+        &mut corrector,
+        &input,
+        timing.as_ref(),
+        (temp0, volt),
+        &channels.out,
+    )?;
+    crate::files::write_atomically(&args.output, |w| {
+        writeln!(w, "{}", header.join(","))?;
+        w.write_all(corrected.rows.as_bytes())
+    })?;
+    report(args, &cal, &input, timing.as_ref(), lever, &corrected);
+    Ok(())
+}
+
+/// The raw columns a calibration's sensor corrects, the names of its outputs, and the
+/// reference columns `--reference` compares them with.
+struct Channels {
+    raw: Vec<&'static str>,
+    out: Vec<&'static str>,
+    reference: Vec<&'static str>,
+}
+
+impl Channels {
+    fn of(sensor: &Sensor) -> Self {
+        use spincal::model::Quantity::Acceleration;
+        let (raw, out, reference) = match sensor {
+            Sensor::Single { .. } => (vec![col::OUTPUT], vec!["value"], vec![col::INPUT]),
+            Sensor::Triad {
+                quantity: Acceleration,
+                ..
+            } => (col::A.to_vec(), vec!["ax", "ay", "az"], col::F.to_vec()),
+            Sensor::Triad { .. } => (col::GYRO.to_vec(), vec!["wx", "wy", "wz"], col::W.to_vec()),
+            Sensor::Imu { .. } => (
+                col::A.iter().chain(&col::GYRO).copied().collect(),
+                vec!["ax", "ay", "az", "wx", "wy", "wz"],
+                col::F.iter().chain(&col::W).copied().collect(),
+            ),
+        };
+        Self {
+            raw,
+            out,
+            reference,
+        }
+    }
+}
+
+/// The raw columns `cols` of an observations file, with the temperature, time and reference
+/// columns asked for.
+fn table_input(
+    args: &ApplyArgs,
+    cols: &[String],
+    reference_cols: &[&str],
+) -> Result<Input, Failure> {
+    let mut wanted = cols.to_vec();
+    wanted.extend(args.temp_column.iter().cloned());
+    wanted.extend(args.time_column.iter().cloned());
+    if args.reference {
+        wanted.extend(reference_cols.iter().map(|c| c.to_string()));
+    }
+    let table = obs::read_columns(&args.input, &wanted, args.format)?;
+    let named = |c: &Option<String>| {
+        c.as_ref()
+            .and_then(|t| table.column(t))
+            .map(<[f64]>::to_vec)
+    };
+    Ok(Input {
+        header: "line".into(),
+        labels: table.lines.iter().map(ToString::to_string).collect(),
+        raw: (0..table.len())
+            .map(|i| {
+                cols.iter()
+                    .map(|c| table.column(c).map_or(0, |v| v[i].round() as i32))
+                    .collect()
+            })
+            .collect(),
+        temps: named(&args.temp_column),
+        times: named(&args.time_column),
+        reference: args.reference.then(|| {
+            (0..table.len())
+                .map(|i| {
+                    reference_cols
+                        .iter()
+                        .map(|c| table.column(c).map_or(f64::NAN, |v| v[i]))
+                        .collect()
+                })
+                .collect()
+        }),
+    })
+}
+
+/// The sample rate: an IMU with lever arms (`lever`) needs it; a stream with timestamps has
+/// its off-rate steps found. `None` when neither the rate nor timestamps are given and no
+/// term needs them.
+fn timing(
+    args: &ApplyArgs,
+    cal: &spincal::model::Calibration,
+    lever: bool,
+    input: &Input,
+) -> Result<Option<Timing>, Failure> {
+    match Timing::new(args.rate, input.times.as_deref()) {
+        Ok(t) => Ok(Some(t)),
+        Err(TimingError::Missing) if !lever => Ok(None),
+        Err(TimingError::Missing) => Err(format!(
+            "{}: unit {}'s calibration has lever arms, whose tangential term needs the sample rate: give --rate HZ, or the timestamps with --time-column NAME",
+            args.blob.display(),
+            cal.data().identity.serial
+        )
+        .into()),
+        Err(e) => Err(format!("{}: {e}", args.input.display()).into()),
+    }
+}
+
+/// Every sample corrected: the output file's rows, how many were flagged, and the accuracy
+/// against the reference columns when they were given.
+struct Corrected {
+    rows: String,
+    flagged: usize,
+    accuracy: Option<Accuracy>,
+}
+
+/// Runs every sample of `input` through `corrector`, following the temperature column when
+/// there is one (`env`: the temperature it starts at, and the voltage), and resetting the rate
+/// derivative after each off-rate step.
+fn correct_all(
+    args: &ApplyArgs,
+    corrector: &mut AnyCorrector<'_>,
+    input: &Input,
+    timing: Option<&Timing>,
+    (temp0, volt): (f32, f32),
+    out_names: &[&str],
+) -> Result<Corrected, Failure> {
+    let n = corrector.outputs();
+    let temps = input.temps.as_deref();
+    let mut last_temp = temp0;
     let mut rows = String::new();
     use std::fmt::Write as _;
     let mut flagged = 0usize;
@@ -296,7 +361,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
         .iter()
         .flat_map(|t| t.off_rate.iter().copied())
         .collect();
-    let mut accuracy = input.reference.as_ref().map(|_| Accuracy::new(&out_names));
+    let mut accuracy = input.reference.as_ref().map(|_| Accuracy::new(out_names));
     for (i, raw) in input.raw.iter().enumerate() {
         if off_rate.contains(&i) {
             // The step before this sample is not the rate: its derivative is unknown.
@@ -305,7 +370,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
         if let Some(t) = temps {
             let t = t[i] as f32;
             if t != last_temp {
-                set_env(&mut corrector, t);
+                corrector.set_environment(t, volt);
                 last_temp = t;
             }
         }
@@ -343,18 +408,32 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
         }
         rows.push('\n');
     }
-    crate::files::write_atomically(&args.output, |w| {
-        writeln!(w, "{}", header.join(","))?;
-        w.write_all(rows.as_bytes())
-    })?;
+    Ok(Corrected {
+        rows,
+        flagged,
+        accuracy,
+    })
+}
+
+/// What `apply` says when it is done: the samples, the flagged ones, the rate and its off-rate
+/// steps, and the accuracy against the reference.
+fn report(
+    args: &ApplyArgs,
+    cal: &spincal::model::Calibration,
+    input: &Input,
+    timing: Option<&Timing>,
+    lever: bool,
+    corrected: &Corrected,
+) {
+    let data = cal.data();
     println!(
         "calflash apply: {} samples corrected with unit {}'s calibration ({} flagged) into {}",
         input.raw.len(),
         data.identity.serial,
-        flagged,
+        corrected.flagged,
         args.output.display()
     );
-    if let Some(t) = &timing {
+    if let Some(t) = timing {
         println!("  sample rate {}", t.source);
         if !t.off_rate.is_empty() {
             println!(
@@ -369,7 +448,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
             );
         }
     }
-    if let Some(acc) = &accuracy {
+    if let Some(acc) = &corrected.accuracy {
         println!(
             "  against the reference columns, {} unflagged samples:",
             acc.count()
@@ -385,5 +464,4 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
             );
         }
     }
-    Ok(())
 }
