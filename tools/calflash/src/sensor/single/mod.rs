@@ -20,7 +20,8 @@ use super::thermal;
 use super::thermal::ThermalFit;
 use super::thermal::device::{self as thermal_device, DeviceSet, DeviceTemperature};
 use super::{
-    AxisFit, Calibrated, Finding, Options, PointFit, Thermal, WorkflowError, blob, covariance,
+    AxisFit, Calibrated, Decision, Finding, Options, PointFit, Thermal, WorkflowError, blob,
+    covariance,
 };
 use crate::columns as col;
 use crate::formula::{self, Formula};
@@ -334,65 +335,92 @@ fn device_sets(
 ///
 /// # Errors
 /// A [`WorkflowError`] naming the file, column, term or table point.
-pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, WorkflowError> {
-    let path = &opts.file;
-    let (mut table, beyond) = observations(opts)?;
-    let varies = |t: &Table, c: &str| t.column(c).is_some_and(|v| v.iter().any(|x| *x != v[0]));
-    let input = table.column(col::INPUT).unwrap_or_default().to_vec();
-    let bp = opts.breakpoint;
+/// How the temperature enters a single axis' model: at the table's points, or one continuous
+/// model over every observation (then one point holding every row), with the temperatures'
+/// support, the ramp's weights and the supply voltage's scale.
+struct Setting {
+    layout: Layout,
+    support: Option<thermal::data::Support>,
+    weights: Option<Vec<f64>>,
+    volts: Option<thermal::Scale>,
+}
 
-    let mut notes = Vec::new();
-    let (mut model, chosen) = model(opts, &table, &mut notes)?;
-    let has = |c: &'static str| table.column(c).is_some().then_some(c);
-    let mut layout = table::layout(&table, has(col::TEMP), has(col::VOLT));
-    let continuous = match opts.thermal {
-        Thermal::Table => false,
-        Thermal::Continuous => true,
-        Thermal::Auto => {
-            varies(&table, col::TEMP)
-                && layout.as_ref().map_or(true, |l| {
-                    l.temps.len() > MAX_TEMPERATURES
-                        || l.points.iter().any(|p| p.rows.len() <= 2 * model.width())
-                        || !table::exact_setpoints(&table, col::TEMP, l)
-                })
+impl Setting {
+    /// `--thermal`'s choice for `table`, where `width` is the model's number of terms: `auto`
+    /// takes the continuous model when the temperatures vary and are not a table of
+    /// well-filled exact setpoints.
+    fn of(
+        table: &mut Table,
+        opts: &Options,
+        width: usize,
+        notes: &mut Vec<String>,
+    ) -> Result<Self, WorkflowError> {
+        let varies = |t: &Table, c: &str| t.column(c).is_some_and(|v| v.iter().any(|x| *x != v[0]));
+        let has = |c: &'static str| table.column(c).is_some().then_some(c);
+        let layout = table::layout(table, has(col::TEMP), has(col::VOLT));
+        let continuous = match opts.thermal {
+            Thermal::Table => false,
+            Thermal::Continuous => true,
+            Thermal::Auto => {
+                varies(table, col::TEMP)
+                    && layout.as_ref().map_or(true, |l| {
+                        l.temps.len() > MAX_TEMPERATURES
+                            || l.points.iter().any(|p| p.rows.len() <= 2 * width)
+                            || !table::exact_setpoints(table, col::TEMP, l)
+                    })
+            }
+        };
+        if !continuous {
+            return Ok(Self {
+                layout: layout.map_err(|source| WorkflowError::Grid {
+                    path: opts.file.clone(),
+                    source,
+                })?,
+                support: None,
+                weights: None,
+                volts: None,
+            });
         }
-    };
-    let mut weights: Option<Vec<f64>> = None;
-    let mut volts: Option<thermal::Scale> = None;
-    let support = if continuous {
-        let prepared = thermal::prepare(&mut table, &mut notes)?;
-        weights = prepared.weights;
-        volts = prepared.volts;
-        let s = prepared.support;
-        layout = Ok(Layout {
-            temps: Vec::new(),
-            volts: Vec::new(),
-            points: vec![table::Point {
-                temp: None,
-                volt: None,
-                rows: (0..table.len()).collect(),
-            }],
-        });
-        Some(s)
-    } else {
-        None
-    };
-    let layout = layout.map_err(|source| WorkflowError::Grid {
-        path: path.to_path_buf(),
-        source,
-    })?;
+        let prepared = thermal::prepare(table, notes)?;
+        Ok(Self {
+            layout: Layout {
+                temps: Vec::new(),
+                volts: Vec::new(),
+                points: vec![table::Point {
+                    temp: None,
+                    volt: None,
+                    rows: (0..table.len()).collect(),
+                }],
+            },
+            support: Some(prepared.support),
+            weights: prepared.weights,
+            volts: prepared.volts,
+        })
+    }
+}
+
+/// The model's terms decided at the reference point of `layout`: the full model checked, the
+/// terms the data support kept (when the model is the preset, `chosen`, and not every term is
+/// kept), then the asymmetry and hysteresis tests; the terms the device does not apply are
+/// said in `notes`. With a continuous model (`support`) the bias and the scale factor follow
+/// the temperature meanwhile at the highest order the observations can estimate.
+fn decide_model(
+    (mut model, chosen): (Formula, bool),
+    table: &Table,
+    layout: &Layout,
+    (support, weights): (Option<&thermal::data::Support>, Option<&[f64]>),
+    opts: &Options,
+    notes: &mut Vec<String>,
+) -> Result<(Formula, Vec<Decision>), WorkflowError> {
+    let path = &opts.file;
+    let varies = |t: &Table, c: &str| t.column(c).is_some_and(|v| v.iter().any(|x| *x != v[0]));
+    let input = table.column(col::INPUT).unwrap_or_default();
     // While terms and tests are decided, the bias and the scale factor follow the temperature
     // at the highest order the observations can estimate.
-    let caps = match &support {
+    let caps = match support {
         Some(s) => {
             let all = |f: &Formula| {
-                fit_axis_weighted(
-                    f,
-                    &table,
-                    opts.alpha,
-                    (path, "all temperatures"),
-                    weights.as_deref(),
-                )
+                fit_axis_weighted(f, table, opts.alpha, (path, "all temperatures"), weights)
             };
             let base = formula::parse(&format!("{} ~ 1 + {}", col::OUTPUT, col::INPUT))?;
             let bias = thermal::estimable(&base, 0, s.max_order, &[], &all);
@@ -403,7 +431,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         }
         None => (0, 0),
     };
-    let provisional = |m: &Formula| match &support {
+    let provisional = |m: &Formula| match support {
         Some(_) => {
             let orders: Vec<u32> = m
                 .term_names()
@@ -420,8 +448,8 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     };
     let reference = layout.reference();
     let ref_rows = &layout.points[reference].rows;
-    let ref_table = sub(&table, ref_rows);
-    let ref_where = match &support {
+    let ref_table = sub(table, ref_rows);
+    let ref_where = match support {
         Some(_) => "all temperatures".to_string(),
         None => table::describe(&layout.points[reference]),
     };
@@ -433,7 +461,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             &provisional(&model),
             &ref_table,
             opts.alpha,
-            &mut notes,
+            notes,
         )?);
         notes.push(format!(
             "model after term selection at {ref_where}: {model}"
@@ -441,11 +469,11 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
     }
 
     let mut decisions = Vec::new();
-    if let Some((d, m)) = asymmetry(&model, &input, opts, &decide, (&ref_table, &ref_where))? {
+    if let Some((d, m)) = asymmetry(&model, input, opts, &decide, (&ref_table, &ref_where))? {
         decisions.push(d);
         model = m;
     }
-    if varies(&table, col::DIR) {
+    if varies(table, col::DIR) {
         decisions.push(hysteresis(&model, &decide)?);
     }
     for t in &model.terms {
@@ -455,6 +483,32 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
             ));
         }
     }
+
+    Ok((model, decisions))
+}
+
+pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, WorkflowError> {
+    let path = &opts.file;
+    let (mut table, beyond) = observations(opts)?;
+    let input = table.column(col::INPUT).unwrap_or_default().to_vec();
+    let bp = opts.breakpoint;
+
+    let mut notes = Vec::new();
+    let (model, chosen) = model(opts, &table, &mut notes)?;
+    let Setting {
+        layout,
+        support,
+        weights,
+        volts,
+    } = Setting::of(&mut table, opts, model.width(), &mut notes)?;
+    let (mut model, decisions) = decide_model(
+        (model, chosen),
+        &table,
+        &layout,
+        (support.as_ref(), weights.as_deref()),
+        opts,
+        &mut notes,
+    )?;
 
     // The model at each table point: a fit per setpoint, or the continuous model at the
     // breakpoints that keep the device's interpolation close to it.
@@ -469,7 +523,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
                 let t = sub(&table, &p.rows);
                 fits.push(fit_axis(&model, &t, opts.alpha, path, &table::describe(p))?);
             }
-            let center = own(&fits[reference]).bias;
+            let center = own(&fits[layout.reference()]).bias;
             (layout, fits, center, None, None)
         }
         Some(s) => {
