@@ -53,6 +53,21 @@ pub struct Preamble {
     pub ignored: Vec<String>,
 }
 
+impl Preamble {
+    /// Takes the setting `key` (any case, spaces and punctuation ignored) read at `here`.
+    fn note(&mut self, key: String, here: Setting) {
+        match squash(&key).as_str() {
+            "fs" | "rate" | "samplerate" | "samplingrate" | "frequency" | "hz" => {
+                self.rate = Some(here);
+            }
+            "initializationtime" | "initialrest" | "rest" | "inittime" => {
+                self.rest = (here.value > 0.0).then_some(here);
+            }
+            _ => self.ignored.push(key),
+        }
+    }
+}
+
 /// Which triads of a file of both sensors to keep (a file of one keeps its one).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Keep {
@@ -312,7 +327,6 @@ pub fn read_chosen(
     keep: Keep,
     chosen: &Chosen,
 ) -> Result<Rows, RecordingError> {
-    use std::io::BufRead as _;
     let io = |source| RecordingError::Io {
         path: path.to_path_buf(),
         source,
@@ -338,92 +352,19 @@ pub fn read_chosen(
     };
     let mut times = Vec::new();
     let mut temps = Vec::new();
-    let mut columns: Option<Columns> = None;
-    let mut header: Option<(usize, String)> = None;
-    let bad = |line: usize, found: usize, expected: String| RecordingError::Fields {
-        path: path.to_path_buf(),
-        line,
-        found,
-        expected,
-    };
-    let not_text = |line| RecordingError::NotText {
-        path: path.to_path_buf(),
-        line,
-    };
-    let mut buf = Vec::with_capacity(256);
-    let mut line = 0usize;
-    // The separator, fixed by the first sample line (`None` until then).
-    let mut comma: Option<bool> = None;
     let mut spans: Spans = [(0, 0); MAX_FIELDS];
-    // The head: preamble and header lines, up to the first sample line.
-    let first = loop {
-        buf.clear();
-        if reader.read_until(b'\n', &mut buf).map_err(io)? == 0 {
-            break None;
-        }
-        line += 1;
-        let mut bytes = &buf[..];
-        if line == 1
-            && let Some(rest) = bytes.strip_prefix(b"\xEF\xBB\xBF")
-        {
-            super::note_bom(path);
-            bytes = rest;
-        }
-        let bytes = bytes.trim_ascii();
-        if bytes.is_empty() || bytes[0] == b'#' {
-            continue;
-        }
-        // Before the first sample: a preamble line, or the header (read as text).
-        if columns.is_none() && header.is_none() {
-            let s = std::str::from_utf8(bytes).map_err(|_| not_text(line))?;
-            let fields = split(s);
-            if fields.first().is_some_and(|f| f.parse::<f64>().is_err())
-                && fields.iter().any(|f| f.chars().any(char::is_alphabetic))
-            {
-                if let Some((key, value)) = setting(&fields) {
-                    let here = Setting { value, line };
-                    match squash(&key).as_str() {
-                        "fs" | "rate" | "samplerate" | "samplingrate" | "frequency" | "hz" => {
-                            rows.preamble.rate = Some(here);
-                        }
-                        "initializationtime" | "initialrest" | "rest" | "inittime" => {
-                            rows.preamble.rest = (value > 0.0).then_some(here);
-                        }
-                        _ => rows.preamble.ignored.push(key),
-                    }
-                    continue;
-                }
-                // The header: the columns by name when it names them.
-                columns = named(&fields, line, holds, chosen).map_err(|what| {
-                    RecordingError::Columns {
-                        path: path.to_path_buf(),
-                        line,
-                        what,
-                    }
-                })?;
-                header = Some((line, s.to_string()));
-                continue;
-            }
-        }
-        // The first sample line fixes the separator and, without a header, the columns.
-        let comma = *comma.get_or_insert_with(|| bytes.contains(&b','));
-        let count = split_bytes(bytes, comma, &mut spans);
-        if columns.is_none() && !chosen.is_empty() {
-            return Err(RecordingError::Columns {
-                path: path.to_path_buf(),
-                line,
-                what: match &header {
-                    Some((hl, _)) => ColumnsError::CountsNotNamed { header_line: *hl },
-                    None => ColumnsError::NoHeader,
-                },
-            });
-        }
-        if columns.is_none() {
-            columns =
-                Some(positional(count, holds).ok_or_else(|| bad(line, count, expected(holds)))?);
-        }
-        break Some((line, comma, bytes.to_vec()));
-    };
+    let Head {
+        columns,
+        header,
+        first,
+    } = read_head(
+        &mut reader,
+        path,
+        holds,
+        chosen,
+        &mut rows.preamble,
+        &mut spans,
+    )?;
     if let (Some((first, comma, bytes)), Some(cols)) = (first, &columns) {
         let sampler = Sampler {
             path,
@@ -500,6 +441,112 @@ pub fn read_chosen(
         }
     }
     Ok(rows)
+}
+
+/// What the lines before the first sample say: the columns (by the header's names, or by
+/// position from the first sample line), the header line, and the first sample line with its
+/// separator (`None` when the file has no sample).
+struct Head {
+    columns: Option<Columns>,
+    header: Option<(usize, String)>,
+    first: Option<(usize, bool, Vec<u8>)>,
+}
+
+/// Reads the preamble (its settings into `preamble`) and the header, up to and including the
+/// first sample line.
+fn read_head(
+    reader: &mut impl std::io::BufRead,
+    path: &Path,
+    holds: Holds,
+    chosen: &Chosen,
+    preamble: &mut Preamble,
+    spans: &mut Spans,
+) -> Result<Head, RecordingError> {
+    let io = |source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let bad = |line: usize, found: usize, expected: String| RecordingError::Fields {
+        path: path.to_path_buf(),
+        line,
+        found,
+        expected,
+    };
+    let not_text = |line| RecordingError::NotText {
+        path: path.to_path_buf(),
+        line,
+    };
+    let mut columns: Option<Columns> = None;
+    let mut header: Option<(usize, String)> = None;
+    let mut buf = Vec::with_capacity(256);
+    let mut line = 0usize;
+    // The separator, fixed by the first sample line (`None` until then).
+    let mut comma: Option<bool> = None;
+    // The head: preamble and header lines, up to the first sample line.
+    let first = loop {
+        buf.clear();
+        if reader.read_until(b'\n', &mut buf).map_err(io)? == 0 {
+            break None;
+        }
+        line += 1;
+        let mut bytes = &buf[..];
+        if line == 1
+            && let Some(rest) = bytes.strip_prefix(b"\xEF\xBB\xBF")
+        {
+            super::note_bom(path);
+            bytes = rest;
+        }
+        let bytes = bytes.trim_ascii();
+        if bytes.is_empty() || bytes[0] == b'#' {
+            continue;
+        }
+        // Before the first sample: a preamble line, or the header (read as text).
+        if columns.is_none() && header.is_none() {
+            let s = std::str::from_utf8(bytes).map_err(|_| not_text(line))?;
+            let fields = split(s);
+            if fields.first().is_some_and(|f| f.parse::<f64>().is_err())
+                && fields.iter().any(|f| f.chars().any(char::is_alphabetic))
+            {
+                if let Some((key, value)) = setting(&fields) {
+                    preamble.note(key, Setting { value, line });
+                    continue;
+                }
+                // The header: the columns by name when it names them.
+                columns = named(&fields, line, holds, chosen).map_err(|what| {
+                    RecordingError::Columns {
+                        path: path.to_path_buf(),
+                        line,
+                        what,
+                    }
+                })?;
+                header = Some((line, s.to_string()));
+                continue;
+            }
+        }
+        // The first sample line fixes the separator and, without a header, the columns.
+        let comma = *comma.get_or_insert_with(|| bytes.contains(&b','));
+        let count = split_bytes(bytes, comma, spans);
+        if columns.is_none() && !chosen.is_empty() {
+            return Err(RecordingError::Columns {
+                path: path.to_path_buf(),
+                line,
+                what: match &header {
+                    Some((hl, _)) => ColumnsError::CountsNotNamed { header_line: *hl },
+                    None => ColumnsError::NoHeader,
+                },
+            });
+        }
+        if columns.is_none() {
+            columns =
+                Some(positional(count, holds).ok_or_else(|| bad(line, count, expected(holds)))?);
+        }
+        break Some((line, comma, bytes.to_vec()));
+    };
+    Ok(Head {
+        columns,
+        header,
+        first,
+    })
 }
 
 /// True when a header names something time-like that [`timestamp`] does not read.
