@@ -76,6 +76,29 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
     for n in &notes {
         let _ = writeln!(s, "  {word} {n}");
     }
+    recording_lines(&mut s, rec);
+    accel_lines(&mut s, c, rec);
+    gyro_lines(&mut s, c, rec);
+    match check {
+        Some(check) => {
+            let _ = writeln!(
+                s,
+                "  device  blob {} bytes; its f32 correction against the f64 fit: {:.1e} m/s^2, {:.1e} rad/s; |a| - g from its corrected samples: RMS {:.3} mm/s^2",
+                check.blob.len(),
+                check.accel,
+                check.gyro,
+                check.device_accel_rms * 1e3
+            );
+        }
+        None => {
+            let _ = writeln!(s, "  device  {NO_BLOB}");
+        }
+    }
+    s
+}
+
+/// The recording: its samples, rate, gaps, saturation and temperature.
+fn recording_lines(s: &mut String, rec: &Recording) {
     let dur = rec.t[rec.len() - 1] - rec.t[0];
     let _ = writeln!(
         s,
@@ -100,6 +123,10 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
             "  temperature  column {name}: {lo} to {hi}, mean {mean:.2} (carried into the record)"
         );
     }
+}
+
+/// The poses found, the accelerometer's fit to gravity and its coefficients.
+fn accel_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
     let trials: Vec<String> = c
         .trials
         .iter()
@@ -149,7 +176,7 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
     let sd = accel_sd(c);
     let m = &c.accel.model;
     let [ua, ug] = rec.units;
-    let (pa, pg) = (ua.per(Sensor::Accel), ug.per(Sensor::Gyro));
+    let pa = ua.per(Sensor::Accel);
     let _ = writeln!(
         s,
         "  inputs  accelerometer in {}, gyro in {}",
@@ -194,6 +221,12 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
         m.center.map(|x| format!("{x}")).join(", "),
         plural(pa)
     );
+}
+
+/// The gyro's fit to the rotations between poses, its coefficients, bias and the rotations
+/// left out.
+fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
+    let pg = rec.units[1].per(Sensor::Gyro);
     let bias_word = match c.options.gyro_bias {
         crate::nonlinear::selfcal::GyroBias::Poses => "bias from the poses on either side",
         crate::nonlinear::selfcal::GyroBias::Rest => "bias from the initial rest",
@@ -227,22 +260,6 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
             k.why
         );
     }
-    match check {
-        Some(check) => {
-            let _ = writeln!(
-                s,
-                "  device  blob {} bytes; its f32 correction against the f64 fit: {:.1e} m/s^2, {:.1e} rad/s; |a| - g from its corrected samples: RMS {:.3} mm/s^2",
-                check.blob.len(),
-                check.accel,
-                check.gyro,
-                check.device_accel_rms * 1e3
-            );
-        }
-        None => {
-            let _ = writeln!(s, "  device  {NO_BLOB}");
-        }
-    }
-    s
 }
 
 /// `count` -> `counts`; a unit stays as it is.
