@@ -74,79 +74,9 @@ pub fn run(args: &AllanArgs) -> Result<(), Failure> {
         .output("--plot", args.plot.as_deref())
         .output("--json", args.json.as_deref())
         .check()?;
-    let opts = recording::Options {
-        rails: Rails::new(i32::MIN, i32::MAX),
-        rate: args.rate,
-        // Only the sensor asked for is read and kept.
-        keep: match args.sensor {
-            Which::Gyro => crate::obs::layout::Keep::Gyro,
-            Which::Accel => crate::obs::layout::Keep::Accel,
-        },
-        units: args.units.units(),
-        columns: args.columns.chosen(),
-    };
-    let rec = match &args.gyro {
-        Some(g) => recording::read_with(&args.acc, Some(g), &opts),
-        // Both sensors in one file, or the one sensor --sensor names (read as both halves).
-        None => recording::read_with(&args.acc, None, &opts).or_else(|both| match both {
-            recording::RecordingError::Fields { .. } => {
-                // Its own error when it reads as one sensor but is wrong otherwise.
-                recording::read_with(&args.acc, Some(&args.acc), &opts).map_err(|one| match one {
-                    recording::RecordingError::Fields { .. } => both,
-                    e => e,
-                })
-            }
-            e => Err(e),
-        }),
-    }?;
-    let t0 = rec.t[0];
-    let (a, b) = (args.from.unwrap_or(0.0), args.to.unwrap_or(f64::INFINITY));
-    // Timestamps increase: the samples in [a, b] are one run.
-    let idx = rec.t.partition_point(|t| t - t0 < a)..rec.t.partition_point(|t| t - t0 <= b);
-    if idx.len() < 100 {
-        return Err(format!(
-            "{}: {} samples between {a} s and {b} s; the Allan deviation needs a still recording of at least 100 (many thousands for the slow terms)",
-            rec.source,
-            idx.len()
-        ).into());
-    }
-    if let Some(g) = rec.gaps.iter().find(|g| (a..=b).contains(&(g.from - t0))) {
-        return Err(format!(
-            "{}:{}: {} samples dropped at {:.3} s; the Allan deviation needs an unbroken record (use --from/--to to take a part without gaps)",
-            rec.source,
-            g.line,
-            g.missing,
-            g.from - t0
-        ).into());
-    }
-    let scale: [f64; 3] = match args.scale.as_slice() {
-        [] => [1.0; 3],
-        [s] => [*s; 3],
-        [x, y, z] => [*x, *y, *z],
-        other => {
-            return Err(format!("--scale: one value or three, {} given", other.len()).into());
-        }
-    };
-    if scale.iter().any(|s| !(s.is_finite() && *s != 0.0)) {
-        return Err("--scale: counts per unit must be finite and non-zero".into());
-    }
-    let (sensor, read) = match args.sensor {
-        Which::Gyro => (Sensor::Gyro, rec.units[1]),
-        Which::Accel => (Sensor::Accel, rec.units[0]),
-    };
-    if read.is_si() && !args.scale.is_empty() {
-        return Err(format!(
-            "--scale: the values are already in {} (read from {}); --scale is for counts",
-            units::si(sensor),
-            read.file.name()
-        )
-        .into());
-    }
-    let (unit, si) = match (read.is_si(), args.scale.is_empty()) {
-        (true, _) => (units::si(sensor), true),
-        (false, true) => ("counts", false),
-        (false, false) => (units::si(sensor), true),
-    };
+    let rec = read(args)?;
+    let idx = window(args, &rec)?;
+    let (scale, unit, si) = scale(args, &rec)?;
     let axes = ["x", "y", "z"];
     let mut curves: Vec<Vec<Point>> = Vec::new();
     let mut terms: Vec<NoiseTerms> = Vec::new();
@@ -197,53 +127,118 @@ pub fn run(args: &AllanArgs) -> Result<(), Failure> {
         terms.push(t);
     }
     if let Some(p) = &args.plot {
-        let pts: Vec<Vec<(f64, f64)>> = curves
-            .iter()
-            .map(|c| c.iter().map(|p| (p.tau, p.adev)).collect())
-            .collect();
-        let fits: Vec<Vec<(f64, f64)>> = curves
-            .iter()
-            .zip(&terms)
-            .map(|(c, t)| c.iter().map(|p| (p.tau, t.adev(p.tau))).collect())
-            .collect();
-        let fit_names: Vec<String> = axes.iter().map(|a| format!("{a}: noise terms")).collect();
-        let mut series = Vec::new();
-        for j in 0..3 {
-            series.push(report::plot::Series {
-                name: axes[j],
-                points: &pts[j],
-                color: report::plot::COLORS[j],
-                line: false,
-                errors: None,
-            });
-            series.push(report::plot::Series {
-                name: &fit_names[j],
-                points: &fits[j],
-                color: report::plot::COLORS[j],
-                line: true,
-                errors: None,
-            });
-        }
-        let y = format!("Allan deviation [{unit}]");
-        let fig = report::plot::Figure {
-            title: "Overlapping Allan deviation",
-            x: "tau [s]",
-            y: &y,
-            series,
-            bands: Vec::new(),
-            band_label: "",
-            zero_line: false,
-        };
-        let svg = report::plot::svg_loglog(&fig)?;
+        let svg = report::allan::figure(&curves, &terms, unit)?;
         crate::files::write_atomically(p, |w| w.write_all(svg.as_bytes()))?;
     }
     if let Some(p) = &args.json {
-        let v = serde_json::json!({"schema": "calflash.allan/1", "source": rec.source, "unit": unit, "axes": axes.iter().zip(&curves).zip(&terms).map(|((a, c), t)| serde_json::json!({"axis": a, "curve": c, "terms": t})).collect::<Vec<_>>()});
+        let record = allan::Record {
+            schema: allan::SCHEMA,
+            source: &rec.source,
+            unit,
+            axes: (0..3)
+                .map(|j| allan::AxisRecord {
+                    axis: axes[j],
+                    curve: &curves[j],
+                    terms: &terms[j],
+                })
+                .collect(),
+        };
         crate::files::write_atomically(p, |w| {
-            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
+            serde_json::to_writer_pretty(&mut *w, &record).map_err(std::io::Error::other)
         })?;
     }
     Ok(())
+}
+
+/// The recording: only the sensor `--sensor` names is read and kept.
+fn read(args: &AllanArgs) -> Result<recording::Recording, Failure> {
+    let opts = recording::Options {
+        rails: Rails::new(i32::MIN, i32::MAX),
+        rate: args.rate,
+        // Only the sensor asked for is read and kept.
+        keep: match args.sensor {
+            Which::Gyro => crate::obs::layout::Keep::Gyro,
+            Which::Accel => crate::obs::layout::Keep::Accel,
+        },
+        units: args.units.units(),
+        columns: args.columns.chosen(),
+    };
+    let rec = match &args.gyro {
+        Some(g) => recording::read_with(&args.acc, Some(g), &opts),
+        // Both sensors in one file, or the one sensor --sensor names (read as both halves).
+        None => recording::read_with(&args.acc, None, &opts).or_else(|both| match both {
+            recording::RecordingError::Fields { .. } => {
+                // Its own error when it reads as one sensor but is wrong otherwise.
+                recording::read_with(&args.acc, Some(&args.acc), &opts).map_err(|one| match one {
+                    recording::RecordingError::Fields { .. } => both,
+                    e => e,
+                })
+            }
+            e => Err(e),
+        }),
+    }?;
+    Ok(rec)
+}
+
+/// The samples between `--from` and `--to`: at least 100, with no gap.
+fn window(args: &AllanArgs, rec: &recording::Recording) -> Result<std::ops::Range<usize>, Failure> {
+    let t0 = rec.t[0];
+    let (a, b) = (args.from.unwrap_or(0.0), args.to.unwrap_or(f64::INFINITY));
+    // Timestamps increase: the samples in [a, b] are one run.
+    let idx = rec.t.partition_point(|t| t - t0 < a)..rec.t.partition_point(|t| t - t0 <= b);
+    if idx.len() < 100 {
+        return Err(format!(
+            "{}: {} samples between {a} s and {b} s; the Allan deviation needs a still recording of at least 100 (many thousands for the slow terms)",
+            rec.source,
+            idx.len()
+        ).into());
+    }
+    if let Some(g) = rec.gaps.iter().find(|g| (a..=b).contains(&(g.from - t0))) {
+        return Err(format!(
+            "{}:{}: {} samples dropped at {:.3} s; the Allan deviation needs an unbroken record (use --from/--to to take a part without gaps)",
+            rec.source,
+            g.line,
+            g.missing,
+            g.from - t0
+        ).into());
+    }
+    Ok(idx)
+}
+
+/// Counts per unit per axis (`--scale`), the unit of the values, and whether it is SI.
+fn scale(
+    args: &AllanArgs,
+    rec: &recording::Recording,
+) -> Result<([f64; 3], &'static str, bool), Failure> {
+    let scale: [f64; 3] = match args.scale.as_slice() {
+        [] => [1.0; 3],
+        [s] => [*s; 3],
+        [x, y, z] => [*x, *y, *z],
+        other => {
+            return Err(format!("--scale: one value or three, {} given", other.len()).into());
+        }
+    };
+    if scale.iter().any(|s| !(s.is_finite() && *s != 0.0)) {
+        return Err("--scale: counts per unit must be finite and non-zero".into());
+    }
+    let (sensor, read) = match args.sensor {
+        Which::Gyro => (Sensor::Gyro, rec.units[1]),
+        Which::Accel => (Sensor::Accel, rec.units[0]),
+    };
+    if read.is_si() && !args.scale.is_empty() {
+        return Err(format!(
+            "--scale: the values are already in {} (read from {}); --scale is for counts",
+            units::si(sensor),
+            read.file.name()
+        )
+        .into());
+    }
+    let (unit, si) = match (read.is_si(), args.scale.is_empty()) {
+        (true, _) => (units::si(sensor), true),
+        (false, true) => ("counts", false),
+        (false, false) => (units::si(sensor), true),
+    };
+    Ok((scale, unit, si))
 }
 
 fn describe(t: &NoiseTerms, which: Which, unit: &str, si: bool) -> String {

@@ -208,6 +208,33 @@ pub fn noise_terms(curve: &[Point]) -> NoiseTerms {
     }
 }
 
+/// What `calflash allan --json` writes (schema `calflash.allan/1`; `noise::stated` reads it).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Record<'a> {
+    /// `calflash.allan/1`.
+    pub schema: &'static str,
+    /// The recording.
+    pub source: &'a str,
+    /// The unit of the values (`counts`, or an SI unit).
+    pub unit: &'a str,
+    /// Per axis, x, y, z.
+    pub axes: Vec<AxisRecord<'a>>,
+}
+
+/// One axis of a [`Record`].
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct AxisRecord<'a> {
+    /// `x`, `y` or `z`.
+    pub axis: &'static str,
+    /// The Allan deviation.
+    pub curve: &'a [Point],
+    /// Its noise terms.
+    pub terms: &'a NoiseTerms,
+}
+
+/// The schema of [`Record`].
+pub const SCHEMA: &str = "calflash.allan/1";
+
 #[cfg(test)]
 mod tests {
     use rand::SeedableRng;

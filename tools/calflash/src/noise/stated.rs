@@ -166,14 +166,30 @@ pub fn from_allan(accel: &Path, gyro: &Path, allow: &Allowances) -> Result<Noise
 mod tests {
     use super::*;
 
+    /// An Allan file as `calflash allan --json` writes it (its `Record`).
     fn allan_file(dir: &Path, name: &str, unit: &str, n: f64, k: f64) -> std::path::PathBuf {
-        let axis = serde_json::json!({"axis": "x", "curve": [], "terms": {
-            "quantization": 0.0, "random_walk": n, "bias_instability": 0.0,
-            "rate_random_walk": k, "rate_ramp": 0.0}});
-        let v = serde_json::json!({"schema": "calflash.allan/1", "source": "r.csv", "unit": unit,
-            "axes": [axis.clone(), axis.clone(), axis]});
+        use crate::noise::allan::{AxisRecord, NoiseTerms as Terms, Record, SCHEMA};
+        let terms = Terms {
+            quantization: 0.0,
+            random_walk: n,
+            bias_instability: 0.0,
+            rate_random_walk: k,
+            rate_ramp: 0.0,
+        };
+        let record = Record {
+            schema: SCHEMA,
+            source: "r.csv",
+            unit,
+            axes: ["x", "y", "z"]
+                .map(|axis| AxisRecord {
+                    axis,
+                    curve: &[],
+                    terms: &terms,
+                })
+                .to_vec(),
+        };
         let p = dir.join(name);
-        std::fs::write(&p, v.to_string()).unwrap();
+        std::fs::write(&p, serde_json::to_string(&record).unwrap()).unwrap();
         p
     }
 

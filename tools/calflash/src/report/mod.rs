@@ -1,5 +1,6 @@
 //! Reports: they only read results.
 
+pub mod allan;
 pub mod design;
 pub mod error;
 pub mod html;
