@@ -408,6 +408,101 @@ impl std::ops::Deref for UnitChart {
     }
 }
 
+/// What `calflash lot --json` writes (schema `calflash.lot/1`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Record<'a> {
+    /// `calflash.lot/1`.
+    pub schema: &'static str,
+    /// The serial prefix the lot was selected by (empty: every unit).
+    pub prefix: &'a str,
+    /// The production lot, when selected by one.
+    pub lot: Option<&'a str>,
+    /// How many units.
+    pub units: usize,
+    /// The coefficients judged.
+    pub coefficients: &'a [String],
+    /// The coefficients left out (not in every unit, or the same in all).
+    pub left_out: &'a [String],
+    /// `robust covariance`, or `coefficients: ` and why there is no scatter.
+    pub judged_by: String,
+    /// The family-wise level.
+    pub alpha: f64,
+    /// The distance beyond which a unit is outside.
+    pub distance_limit: f64,
+    /// Each coefficient's distribution.
+    pub spread: &'a [Spread],
+    /// Each unit's distance, in calibration order.
+    pub distances: Vec<UnitDistance<'a>>,
+    /// The units outside, furthest first.
+    pub outliers: &'a [Outlier],
+    /// The control charts, by coefficient (and station).
+    pub charts: Vec<NamedChart<'a>>,
+}
+
+/// A unit's distance from its lot, in a [`Record`].
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct UnitDistance<'a> {
+    /// Serial.
+    pub serial: &'a str,
+    /// When it was calibrated (Unix seconds).
+    pub time: i64,
+    /// As in [`Outlier::distance`].
+    pub distance: f64,
+}
+
+/// A control chart and what it charts, in a [`Record`].
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct NamedChart<'a> {
+    /// The coefficient (and station).
+    pub coefficient: &'a str,
+    /// The chart.
+    pub chart: &'a UnitChart,
+}
+
+impl<'a> Record<'a> {
+    /// The record of `lot`, selected by `prefix` and `name`, with its `charts`.
+    #[must_use]
+    pub fn new(
+        lot: &'a Lot,
+        (prefix, name): (&'a str, Option<&'a str>),
+        charts: &'a [(String, UnitChart)],
+    ) -> Self {
+        Self {
+            schema: "calflash.lot/1",
+            prefix,
+            lot: name,
+            units: lot.units.len(),
+            coefficients: &lot.names,
+            left_out: &lot.left_out,
+            judged_by: match &lot.judge {
+                Judge::Scatter { .. } => "robust covariance".to_string(),
+                Judge::Columns { why } => format!("coefficients: {why}"),
+            },
+            alpha: lot.alpha,
+            distance_limit: lot.distance_limit(),
+            spread: &lot.spread,
+            distances: lot
+                .units
+                .iter()
+                .zip(&lot.distances)
+                .map(|(u, d)| UnitDistance {
+                    serial: &u.serial,
+                    time: u.time,
+                    distance: *d,
+                })
+                .collect(),
+            outliers: &lot.outliers,
+            charts: charts
+                .iter()
+                .map(|(n, c)| NamedChart {
+                    coefficient: n,
+                    chart: c,
+                })
+                .collect(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -231,24 +231,7 @@ pub fn run(args: &LotArgs) -> Result<(), Failure> {
         println!("  report: {}", p.display());
     }
     if let Some(p) = &args.json {
-        let v = serde_json::json!({
-            "schema": "calflash.lot/1",
-            "prefix": args.prefix,
-            "lot": args.lot,
-            "units": lot.units.len(),
-            "coefficients": lot.names,
-            "left_out": lot.left_out,
-            "judged_by": match &lot.judge {
-                Judge::Scatter { .. } => "robust covariance".to_string(),
-                Judge::Columns { why } => format!("coefficients: {why}"),
-            },
-            "alpha": lot.alpha,
-            "distance_limit": lot.distance_limit(),
-            "spread": lot.spread,
-            "distances": lot.units.iter().zip(&lot.distances).map(|(u, d)| serde_json::json!({"serial": u.serial, "time": u.time, "distance": d})).collect::<Vec<_>>(),
-            "outliers": lot.outliers,
-            "charts": charts.iter().map(|(n, c)| serde_json::json!({"coefficient": n, "chart": c})).collect::<Vec<_>>(),
-        });
+        let v = crate::lot::Record::new(&lot, (&args.prefix, args.lot.as_deref()), &charts);
         crate::files::write_atomically(p, |w| {
             serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
         })?;
