@@ -8,7 +8,7 @@ use std::path::Path;
 use serde_json::{Value, json};
 
 use super::html::esc;
-use super::plot::{Figure, Series, svg};
+use super::plot::{Figure, Series, figure};
 use super::terminal::num;
 use crate::design::criteria::{self, Criteria};
 use crate::design::exchange::Criterion;
@@ -319,7 +319,7 @@ pub fn evaluate_html(
                 band_label: "range of the plans' points",
                 zero_line: true,
             };
-            let _ = writeln!(h, "<div class=\"fig\">{}</div>", svg(&fig)?);
+            figure(&mut h, &fig)?;
         }
     }
     h.push_str("</body>\n</html>\n");

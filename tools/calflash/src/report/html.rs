@@ -3,7 +3,7 @@
 use super::Error;
 use std::fmt::Write as _;
 
-use super::plot::{COLORS, Figure, Series, svg};
+use super::plot::{COLORS, Figure, Series, figure};
 use super::terminal::{num, pval};
 use crate::sensor::{AxisFit, Calibrated};
 
@@ -126,19 +126,12 @@ fn model(h: &mut String, c: &Calibrated) -> Result<(), Error> {
                 .enumerate()
                 .map(|(k, (name, pts))| Series::dots(name, pts, k))
                 .collect();
-            let _ = writeln!(
+            residual_figure(
                 h,
-                "<div class=\"fig\">{}</div>",
-                svg(&Figure {
-                    title: &format!("{}: residuals without the term", d.name),
-                    x: "input",
-                    y: "residual (counts)",
-                    series,
-                    bands: Vec::new(),
-                    band_label: "",
-                    zero_line: true,
-                })?
-            );
+                (&format!("{}: residuals without the term", d.name), "input"),
+                series,
+                None,
+            )?;
         }
     }
 
@@ -219,19 +212,15 @@ fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) ->
         .map(|(k, (pts, name))| Series::dots(name, pts, k))
         .collect();
     let range = c.ranges[a];
-    let _ = writeln!(
+    residual_figure(
         h,
-        "<div class=\"fig\">{}</div>",
-        svg(&Figure {
-            title: &format!("{}: residuals against the input", axis.output),
-            x: &format!("{} ({unit})", axis.own),
-            y: "residual (counts)",
-            series,
-            bands: vec![(f64::from(range.lo), f64::from(range.hi))],
-            band_label: "calibrated range",
-            zero_line: true,
-        })?
-    );
+        (
+            &format!("{}: residuals against the input", axis.output),
+            &format!("{} ({unit})", axis.own),
+        ),
+        series,
+        Some((f64::from(range.lo), f64::from(range.hi))),
+    )?;
     let order: Vec<Vec<(f64, f64)>> = c
         .points
         .iter()
@@ -250,20 +239,42 @@ fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) ->
         .enumerate()
         .map(|(k, (pts, name))| Series::dots(name, pts, k))
         .collect();
-    let _ = writeln!(
+    residual_figure(
         h,
-        "<div class=\"fig\">{}</div>",
-        svg(&Figure {
-            title: &format!("{}: residuals in test order", axis.output),
-            x: "line of the data file",
+        (
+            &format!("{}: residuals in test order", axis.output),
+            "line of the data file",
+        ),
+        series,
+        None,
+    )?;
+    Ok(())
+}
+
+/// A figure of residuals (counts) about zero, titled and with its x axis as `(title, x)`, and
+/// the calibrated range when `range` is given.
+fn residual_figure(
+    h: &mut String,
+    (title, x): (&str, &str),
+    series: Vec<Series<'_>>,
+    range: Option<(f64, f64)>,
+) -> Result<(), Error> {
+    figure(
+        h,
+        &Figure {
+            title,
+            x,
             y: "residual (counts)",
             series,
-            bands: Vec::new(),
-            band_label: "",
+            bands: range.into_iter().collect(),
+            band_label: if range.is_some() {
+                "calibrated range"
+            } else {
+                ""
+            },
             zero_line: true,
-        })?
-    );
-    Ok(())
+        },
+    )
 }
 
 /// The calibration's own 1-sigma error of axis `a` over its calibrated range and half a range
@@ -295,10 +306,9 @@ fn error_figure(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
             (x, f.predict(&row).variance.sqrt() / slope)
         })
         .collect();
-    let _ = writeln!(
+    figure(
         h,
-        "<div class=\"fig\">{}</div>",
-        svg(&Figure {
+        &Figure {
             title: &format!("{}: 1-sigma calibration error over the range", axis.output),
             x: &format!("{} ({unit})", axis.own),
             y: &format!("1-sigma ({unit})"),
@@ -306,8 +316,8 @@ fn error_figure(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
             bands: vec![(lo, hi)],
             band_label: "calibrated range",
             zero_line: true,
-        })?
-    );
+        },
+    )?;
     Ok(())
 }
 
@@ -341,10 +351,9 @@ fn temperature_figures(
                         .map_or(0.0, |i| p.axes[a].fit.std_errors[i])
                 })
                 .collect();
-            let _ = writeln!(
+            figure(
                 h,
-                "<div class=\"fig\">{}</div>",
-                svg(&Figure {
+                &Figure {
                     title: &format!(
                         "{}: {what} against temperature (error bars 1-sigma)",
                         axis.output
@@ -361,8 +370,8 @@ fn temperature_figures(
                     bands: Vec::new(),
                     band_label: "",
                     zero_line: false,
-                })?
-            );
+                },
+            )?;
         }
     }
     Ok(())

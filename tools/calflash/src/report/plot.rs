@@ -199,6 +199,17 @@ fn legend_spot(
     )
 }
 
+/// Appends `fig` to an HTML page `h`, as an inline SVG in a `fig` block.
+///
+/// # Errors
+/// As [`svg`].
+pub fn figure(h: &mut String, fig: &Figure<'_>) -> Result<(), Error> {
+    h.push_str("<div class=\"fig\">");
+    h.push_str(&svg(fig)?);
+    h.push_str("</div>\n");
+    Ok(())
+}
+
 /// Draws a figure as an SVG document (a string).
 ///
 /// # Errors

@@ -5,7 +5,7 @@ use super::Error;
 use std::fmt::Write as _;
 
 use super::html::esc;
-use super::plot::{Figure, Series, svg};
+use super::plot::{Figure, Series, figure, svg};
 use super::terminal::{num, pval};
 use crate::nonlinear::selfcal::SelfCal;
 use crate::obs::recording::Recording;
@@ -346,7 +346,7 @@ pub fn html(
         band_label: "still pose",
         zero_line: false,
     };
-    let _ = writeln!(h, "<div class=\"fig\">{}</div>", svg(&fig)?);
+    figure(&mut h, &fig)?;
     let trials: Vec<(f64, f64)> = c
         .trials
         .iter()
@@ -361,7 +361,7 @@ pub fn html(
         band_label: "",
         zero_line: false,
     };
-    let _ = writeln!(h, "<div class=\"fig\">{}</div>", svg(&fig)?);
+    figure(&mut h, &fig)?;
     let res: Vec<(f64, f64)> = c
         .accel
         .residuals

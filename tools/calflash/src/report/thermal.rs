@@ -11,7 +11,7 @@ use spincal::correct::AnyAxisCorrector;
 use spincal::model::TemperatureModel;
 
 use super::html::esc;
-use super::plot::{Figure, Series, svg};
+use super::plot::{Figure, Series, figure};
 use super::terminal::num;
 use crate::sensor::Calibrated;
 use crate::sensor::single::{bias_slope_cov, own_of};
@@ -80,10 +80,9 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
         .map(|t| (*t, sigma_at(*t, range_in.1)))
         .collect();
     let top = format!("input {}", num(range_in.1));
-    let _ = writeln!(
-        h,
-        "<div class=\"fig\">{}</div>",
-        svg(&Figure {
+    figure(
+        &mut h,
+        &Figure {
             title: "1-sigma calibration error of the corrected input over the temperature",
             x: "temperature (C)",
             y: &format!("1-sigma ({unit})"),
@@ -94,8 +93,8 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
             bands: range.clone(),
             band_label: "calibrated range",
             zero_line: true,
-        })?
-    );
+        },
+    )?;
     // The device against the model: its correction of the model's own codes.
     let cal = spincal::blob::decode(&c.blob)?;
     let mut device = AnyAxisCorrector::new(&cal)?;
@@ -170,10 +169,9 @@ fn coefficient_figures(h: &mut String, tf: &ThermalFit, axis: &str) -> Result<()
         if !observed.is_empty() {
             series.push(Series::dots("observations", &observed, 2));
         }
-        let _ = writeln!(
+        figure(
             h,
-            "<div class=\"fig\">{}</div>",
-            svg(&Figure {
+            &Figure {
                 title: &title,
                 x: "temperature (C)",
                 y: &what,
@@ -181,8 +179,8 @@ fn coefficient_figures(h: &mut String, tf: &ThermalFit, axis: &str) -> Result<()
                 bands: Vec::new(),
                 band_label: "",
                 zero_line: false,
-            })?
-        );
+            },
+        )?;
     }
     Ok(())
 }
@@ -248,10 +246,9 @@ fn triad_figures(c: &Calibrated) -> Result<String, Error> {
         })
         .collect();
     if sigma.len() == c.thermal.len() {
-        let _ = writeln!(
-            h,
-            "<div class=\"fig\">{}</div>",
-            svg(&Figure {
+        figure(
+            &mut h,
+            &Figure {
                 title: "1-sigma calibration error of each corrected output along its own axis, at the top of its range",
                 x: "temperature (C)",
                 y: "1-sigma (output units)",
@@ -263,8 +260,8 @@ fn triad_figures(c: &Calibrated) -> Result<String, Error> {
                 bands: vec![(first.scale.lo, first.scale.hi)],
                 band_label: "calibrated range",
                 zero_line: true,
-            })?
-        );
+            },
+        )?;
     }
     let cal = spincal::blob::decode(&c.blob)?;
     let env = &cal.data().environment;
@@ -353,10 +350,9 @@ fn departure_figure(
         TemperatureModel::Chebyshev(n) => format!("Chebyshev series of {n} terms"),
         TemperatureModel::Table => format!("table of {} temperatures", c.temps.len()),
     };
-    let _ = writeln!(
+    figure(
         h,
-        "<div class=\"fig\">{}</div>",
-        svg(&Figure {
+        &Figure {
             title: &format!(
                 "the device's {what} against the model: worst departure over {over}, in the model's 1-sigma"
             ),
@@ -366,7 +362,7 @@ fn departure_figure(
             bands: Vec::new(),
             band_label: "",
             zero_line: true,
-        })?
-    );
+        },
+    )?;
     Ok(())
 }
