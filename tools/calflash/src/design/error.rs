@@ -120,6 +120,27 @@ pub enum Error {
         /// The value as given.
         value: String,
     },
+    /// An operating point over a variable the model does not read.
+    #[error("--at `{spec}`: the model reads no `{name}`; it reads {reads}")]
+    OperatingVariable {
+        /// The option's text.
+        spec: String,
+        /// The variable.
+        name: String,
+        /// The variables the model reads, listed.
+        reads: String,
+    },
+    /// Operating points that name different variables.
+    #[error("--at `{spec}`: every operating point must name the same variables ({first})")]
+    OperatingVariables {
+        /// The option's text.
+        spec: String,
+        /// The first point's variables, listed.
+        first: String,
+    },
+    /// No operating point.
+    #[error("--at: give at least one operating point, NAME=VALUE[,NAME=VALUE...]")]
+    NoOperatingPoint,
     /// A preset's own formula that does not parse (a defect of the presets).
     #[error(transparent)]
     Preset(#[from] FormulaError),

@@ -303,6 +303,46 @@ pub struct OperatingPoint {
     pub values: Vec<(String, f64)>,
 }
 
+impl Points {
+    /// The operating points `at` as a set of points, each over variables the model reads
+    /// (`vars`), all over the same ones.
+    ///
+    /// # Errors
+    /// No point, a variable the model does not read, or points over different variables.
+    pub fn operating(at: &[OperatingPoint], vars: &[String]) -> Result<Self, Error> {
+        let mut points = Self {
+            names: Vec::new(),
+            rows: Vec::new(),
+        };
+        for point in at {
+            let spec = &point.text;
+            if let Some((k, _)) = point.values.iter().find(|(k, _)| !vars.contains(k)) {
+                return Err(Error::OperatingVariable {
+                    spec: spec.clone(),
+                    name: k.clone(),
+                    reads: vars.join(", "),
+                });
+            }
+            let names: Vec<String> = point.values.iter().map(|(k, _)| k.clone()).collect();
+            if points.rows.is_empty() {
+                points.names = names;
+            } else if points.names != names {
+                return Err(Error::OperatingVariables {
+                    spec: spec.clone(),
+                    first: points.names.join(", "),
+                });
+            }
+            points
+                .rows
+                .push(point.values.iter().map(|(_, v)| *v).collect());
+        }
+        if points.rows.is_empty() {
+            return Err(Error::NoOperatingPoint);
+        }
+        Ok(points)
+    }
+}
+
 impl std::str::FromStr for OperatingPoint {
     type Err = Error;
 
@@ -335,6 +375,35 @@ impl std::str::FromStr for OperatingPoint {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn operating_points_are_over_the_models_variables_and_the_same_ones() {
+        let vars = ["input".to_string(), "temp".to_string()];
+        let at = |specs: &[&str]| -> Vec<OperatingPoint> {
+            specs.iter().map(|s| s.parse().unwrap()).collect()
+        };
+        let p = Points::operating(&at(&["input=5,temp=20", "input=-9,temp=20"]), &vars).unwrap();
+        assert_eq!(p.names, ["input", "temp"]);
+        assert_eq!(p.rows, [[5.0, 20.0], [-9.0, 20.0]]);
+        let e = Points::operating(&at(&["volt=5"]), &vars).unwrap_err();
+        assert!(
+            matches!(&e, Error::OperatingVariable { name, .. } if name == "volt"),
+            "{e:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            "--at `volt=5`: the model reads no `volt`; it reads input, temp"
+        );
+        let e = Points::operating(&at(&["input=5", "temp=3"]), &vars).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "--at `temp=3`: every operating point must name the same variables (input)"
+        );
+        assert!(matches!(
+            Points::operating(&[], &vars),
+            Err(Error::NoOperatingPoint)
+        ));
+    }
 
     #[test]
     fn an_operating_point_reads_names_and_finite_values() {

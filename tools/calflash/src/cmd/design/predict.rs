@@ -67,21 +67,7 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), Failure> {
     let space = a.model.space();
     let blocks = models::blocks(&a.model.model, gyro)?;
     let vars = models::variables(&blocks);
-    let sensor = match a.model.sensor {
-        SensorKind::SingleAccel => sim::Sensor::Single {
-            gyro: false,
-            truth: truth::SingleTruth::default(),
-        },
-        SensorKind::SingleGyro => sim::Sensor::Single {
-            gyro: true,
-            truth: truth::SingleTruth::default(),
-        },
-        SensorKind::Accel => sim::Sensor::Accel(truth::TriadTruth::default()),
-        SensorKind::Gyro => sim::Sensor::Gyro(truth::TriadTruth::default()),
-        SensorKind::Imu => {
-            return Err("--sensor imu: predict one triad at a time (accel or gyro)".into());
-        }
-    };
+    let sensor = simulated(a.model.sensor)?;
     // Per block: the given noise, or the simulator's unit's (per axis for a triad).
     let noises: Vec<f64> = (0..blocks.len())
         .map(|k| {
@@ -93,75 +79,9 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), Failure> {
         })
         .collect();
     let noise = noises[0];
-    let mut at = Points {
-        names: Vec::new(),
-        rows: Vec::new(),
-    };
-    for point in &a.at {
-        let spec = &point.text;
-        if let Some((k, _)) = point.values.iter().find(|(k, _)| !vars.contains(k)) {
-            return Err(format!(
-                "--at `{spec}`: the model reads no `{k}`; it reads {}",
-                vars.join(", ")
-            )
-            .into());
-        }
-        let names: Vec<String> = point.values.iter().map(|(k, _)| k.clone()).collect();
-        if at.rows.is_empty() {
-            at.names = names;
-        } else if at.names != names {
-            return Err(format!(
-                "--at `{spec}`: every operating point must name the same variables ({})",
-                at.names.join(", ")
-            )
-            .into());
-        }
-        at.rows.push(point.values.iter().map(|(_, v)| *v).collect());
-    }
-    if at.rows.is_empty() {
-        return Err("--at: give at least one operating point, NAME=VALUE[,NAME=VALUE...]".into());
-    }
+    let at = Points::operating(&a.at, &vars)?;
     if let Some(target) = a.target {
-        if blocks.len() != 1 {
-            return Err("--target: one model at a time (a formula or the single preset)".into());
-        }
-        let cands = space.candidates(&a.candidates, &a.grid)?;
-        space::check_variables(&blocks, &cands, "the candidates")?;
-        let f = cands.model_rows(&blocks[0].formula);
-        let region = space.region_rows(&cands, &blocks[0])?;
-        let w = region.transpose() * &region / region.nrows() as f64;
-        let at_rows = at.model_rows(&blocks[0].formula);
-        let goal = predict::Target {
-            at: &at_rows,
-            sigma: noise,
-            error: target,
-        };
-        let s = predict::smallest_n(&f, a.criterion, Some(&w), &goal, 5, |n| {
-            eprint!("\r  trying {n} observations   ")
-        })?;
-        eprint!("\r{:40}\r", "");
-        println!(
-            "calflash design predict  model {}: the fewest observations for an expected error of at most {target} counts at the {} operating point(s), noise {noise} counts: {} on the {:?}-optimal plan (largest expected error {:.4})",
-            a.model.model,
-            at.rows.len(),
-            s.n,
-            a.criterion,
-            s.worst
-        );
-        for (row, count) in points::tally(&cands.select(&s.found.points)) {
-            println!(
-                "    {count:>4} x  {}",
-                cands
-                    .names
-                    .iter()
-                    .zip(&row)
-                    .filter(|(n, _)| vars.contains(n))
-                    .map(|(n, v)| format!("{n} = {v}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-        return Ok(());
+        return fewest(a, (&space, &blocks, &vars), &at, (noise, target));
     }
     let spec = a
         .plan
@@ -180,38 +100,14 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), Failure> {
         let at_rows = at.model_rows(&b.formula);
         let e = predict::expected(&c.unscaled_covariance, noises[k], &at_rows);
         let mc = match a.monte_carlo {
-            Some(runs) => {
-                let x = pts.model_rows(&b.formula);
-                let sim = predict::Simulation {
-                    sensor: &sensor,
-                    unit: u,
-                    output: outputs[k.min(outputs.len() - 1)],
-                    runs,
-                    seed: 7,
-                };
-                let work = runs.saturating_mul(pts.rows.len());
-                if work > MAX_SIMULATED {
-                    return Err(format!(
-                        "--monte-carlo {runs}: {runs} runs of {} observations is {work} simulated \
-                         observations; at most {MAX_SIMULATED:e} (fewer runs: 1,000 give the \
-                         standard errors to about 2 %)",
-                        pts.rows.len()
-                    )
-                    .into());
-                }
-                let bar = indicatif::ProgressBar::new(runs as u64);
-                bar.set_style(
-                    indicatif::ProgressStyle::with_template(
-                        "  simulating {bar:30} {pos}/{len} calibrations, {eta} left",
-                    )
-                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-                );
-                let mc = predict::monte_carlo(&pts, &sim, &x, &at_rows, |r| {
-                    bar.set_position(r as u64);
-                });
-                bar.finish_and_clear();
-                Some(mc?)
-            }
+            Some(runs) => Some(confirm(
+                &sensor,
+                (u, outputs[k.min(outputs.len() - 1)]),
+                runs,
+                &pts,
+                &b.formula,
+                &at_rows,
+            )?),
             None => None,
         };
         results.push((b.clone(), e, mc));
@@ -225,4 +121,115 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), Failure> {
         })?;
     }
     Ok(())
+}
+
+/// The simulator's unit of the sensor kind (`predict` takes one triad at a time).
+fn simulated(kind: SensorKind) -> Result<sim::Sensor, Failure> {
+    Ok(match kind {
+        SensorKind::SingleAccel => sim::Sensor::Single {
+            gyro: false,
+            truth: truth::SingleTruth::default(),
+        },
+        SensorKind::SingleGyro => sim::Sensor::Single {
+            gyro: true,
+            truth: truth::SingleTruth::default(),
+        },
+        SensorKind::Accel => sim::Sensor::Accel(truth::TriadTruth::default()),
+        SensorKind::Gyro => sim::Sensor::Gyro(truth::TriadTruth::default()),
+        SensorKind::Imu => {
+            return Err("--sensor imu: predict one triad at a time (accel or gyro)".into());
+        }
+    })
+}
+
+/// `--target`: the fewest observations on the optimal plan over the candidates whose expected
+/// error at the operating points `at` is at most `target` for output noise `noise`.
+fn fewest(
+    a: &PredictArgs,
+    (space, blocks, vars): (&space::Space, &[models::Block], &[String]),
+    at: &Points,
+    (noise, target): (f64, f64),
+) -> Result<(), Failure> {
+    if blocks.len() != 1 {
+        return Err("--target: one model at a time (a formula or the single preset)".into());
+    }
+    let cands = space.candidates(&a.candidates, &a.grid)?;
+    space::check_variables(blocks, &cands, "the candidates")?;
+    let f = cands.model_rows(&blocks[0].formula);
+    let region = space.region_rows(&cands, &blocks[0])?;
+    let w = region.transpose() * &region / region.nrows() as f64;
+    let at_rows = at.model_rows(&blocks[0].formula);
+    let goal = predict::Target {
+        at: &at_rows,
+        sigma: noise,
+        error: target,
+    };
+    let s = predict::smallest_n(&f, a.criterion, Some(&w), &goal, 5, |n| {
+        eprint!("\r  trying {n} observations   ")
+    })?;
+    eprint!("\r{:40}\r", "");
+    println!(
+        "calflash design predict  model {}: the fewest observations for an expected error of at most {target} counts at the {} operating point(s), noise {noise} counts: {} on the {:?}-optimal plan (largest expected error {:.4})",
+        a.model.model,
+        at.rows.len(),
+        s.n,
+        a.criterion,
+        s.worst
+    );
+    for (row, count) in points::tally(&cands.select(&s.found.points)) {
+        println!(
+            "    {count:>4} x  {}",
+            cands
+                .names
+                .iter()
+                .zip(&row)
+                .filter(|(n, _)| vars.contains(n))
+                .map(|(n, v)| format!("{n} = {v}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// The expected error confirmed by `runs` simulated calibrations of `sensor` (unit `u`,
+/// `output` the column fitted) on the plan `pts`, at the model rows `at_rows`.
+fn confirm(
+    sensor: &sim::Sensor,
+    (u, output): (Unit, &str),
+    runs: usize,
+    pts: &Points,
+    formula: &crate::formula::Formula,
+    at_rows: &nalgebra::DMatrix<f64>,
+) -> Result<predict::MonteCarlo, Failure> {
+    let x = pts.model_rows(formula);
+    let sim = predict::Simulation {
+        sensor,
+        unit: u,
+        output,
+        runs,
+        seed: 7,
+    };
+    let work = runs.saturating_mul(pts.rows.len());
+    if work > MAX_SIMULATED {
+        return Err(format!(
+            "--monte-carlo {runs}: {runs} runs of {} observations is {work} simulated \
+             observations; at most {MAX_SIMULATED:e} (fewer runs: 1,000 give the \
+             standard errors to about 2 %)",
+            pts.rows.len()
+        )
+        .into());
+    }
+    let bar = indicatif::ProgressBar::new(runs as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "  simulating {bar:30} {pos}/{len} calibrations, {eta} left",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mc = predict::monte_carlo(pts, &sim, &x, at_rows, |r| {
+        bar.set_position(r as u64);
+    });
+    bar.finish_and_clear();
+    Ok(mc?)
 }
