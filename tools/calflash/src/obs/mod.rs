@@ -5,11 +5,11 @@
 
 pub mod codes;
 pub(crate) mod fields;
-pub mod header;
-pub mod layout;
-pub mod mat;
 pub mod recording;
 pub mod timing;
+
+// The parts of reading a recording file, at the paths they have always had.
+pub use recording::{header, layout, mat};
 pub mod units;
 
 use std::fs::File;

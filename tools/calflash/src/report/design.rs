@@ -7,7 +7,7 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
-use super::html::esc;
+use super::page::esc;
 use super::plot::{Figure, Series, figure};
 use super::terminal::num;
 use crate::design::criteria::{self, Criteria};
@@ -254,7 +254,7 @@ pub fn evaluate_html(
     let mut h = format!(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>Plans for {0}</title>\n<style>{1}</style>\n</head>\n<body>\n<h1>Plans for {0}</h1>\n<pre>{2}</pre>\n",
         esc(model),
-        super::html::STYLE,
+        super::page::STYLE,
         esc(&table(blocks, plans))
     );
     if let Some(c) = curve {

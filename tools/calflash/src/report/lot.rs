@@ -5,7 +5,7 @@
 use super::Error;
 use std::fmt::Write as _;
 
-use super::html::{STYLE, esc};
+use super::page::{STYLE, esc};
 use super::plot::{Figure, Series, svg};
 use crate::lot::{Judge, Lot, UnitChart};
 

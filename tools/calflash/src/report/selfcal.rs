@@ -4,7 +4,7 @@
 use super::Error;
 use std::fmt::Write as _;
 
-use super::html::esc;
+use super::page::esc;
 use super::plot::{Figure, Series, figure, svg};
 use super::terminal::{num, pval};
 use crate::nonlinear::selfcal::SelfCal;
@@ -285,7 +285,7 @@ pub fn html(
         h,
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>Calibration {0}</title>\n<style>{1}</style>\n</head>\n<body>\n<h1>Calibration of unit {0} without external equipment</h1>\n<p class=\"verdict {2}\">{3}</p>\n",
         esc(serial),
-        super::html::STYLE,
+        super::page::STYLE,
         word.to_lowercase(),
         word
     );

@@ -10,11 +10,11 @@ use std::fmt::Write as _;
 use spincal::correct::AnyAxisCorrector;
 use spincal::model::TemperatureModel;
 
-use super::html::esc;
+use super::page::esc;
 use super::plot::{Figure, Series, figure};
 use super::terminal::num;
 use crate::sensor::Calibrated;
-use crate::sensor::single::{bias_slope_cov, own_of};
+use crate::sensor::single::coefficients::{bias_slope_cov, own_of};
 use crate::sensor::thermal::ThermalFit;
 
 /// Temperatures each curve is drawn at.

@@ -187,7 +187,8 @@ pub fn run(s: &Scenario, seed: u64, dir: &Path, told: Told<'_>) -> Result<Errors
     let mut n = 0.0;
     for k in 0..37 {
         let t = lo + (hi - lo) * (f64::from(k) + 0.5) / 37.0;
-        let own = single::own_of(&tf.base.term_names(), &tf.coefficients_at(t).0, 0.0);
+        let own =
+            single::coefficients::own_of(&tf.base.term_names(), &tf.coefficients_at(t).0, 0.0);
         device.set_environment(t as f32, s.truth.ref_volt as f32);
         for i in 0..=20 {
             let x = plan::G * (f64::from(i) / 10.0 - 1.0);

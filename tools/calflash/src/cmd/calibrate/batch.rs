@@ -253,7 +253,7 @@ pub fn run_units(
 
 /// The batch's report: one table, a row and a link per unit to its own page.
 fn index_html(outcomes: &[Outcome]) -> String {
-    use crate::report::html::esc;
+    use crate::report::page::esc;
     let mut rows = String::new();
     for o in outcomes {
         let (verdict, page) = match &o.result {

@@ -14,13 +14,15 @@ use spincal::model::Rails;
 
 mod error;
 mod halves;
+pub mod header;
+pub mod layout;
+pub mod mat;
 mod rate;
 
 pub use error::RecordingError;
 use rate::median_step;
 
 use super::units::{self, Sensor, Unit};
-use super::{header, layout};
 
 /// A step in time longer than 1.5 sampling periods: samples were dropped.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -243,7 +245,7 @@ fn read_file(
     keep: layout::Keep,
     columns: &header::Chosen,
 ) -> Result<layout::Rows, RecordingError> {
-    if super::mat::is_mat(path) {
+    if mat::is_mat(path) {
         if !columns.is_empty() {
             return Err(RecordingError::Mat {
                 path: path.to_path_buf(),
@@ -252,7 +254,7 @@ fn read_file(
                     .into(),
             });
         }
-        return super::mat::read(path, holds, keep);
+        return mat::read(path, holds, keep);
     }
     layout::read_chosen(path, holds, keep, columns)
 }

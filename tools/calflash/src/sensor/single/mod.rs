@@ -7,11 +7,11 @@ use spincal::model::{
     TemperatureModel,
 };
 
-mod coefficients;
+pub mod coefficients;
 mod decide;
 mod error;
 
-pub use coefficients::{bias_slope_cov, own_at, own_of};
+use coefficients::{bias_slope_cov, own_at, own_of};
 use decide::{asymmetry, hysteresis, select_terms};
 pub use error::SingleError;
 

@@ -11,7 +11,7 @@ use spincal::model::{AxisNonlinearity, MAX_SETS, MAX_TEMPERATURES, SingleSet};
 use super::{Scale, ThermalFit};
 use crate::sensor::covariance;
 use crate::sensor::invert::{Own, linearization, linearize};
-use crate::sensor::single::{bias_slope_cov, own_at};
+use crate::sensor::single::coefficients::{bias_slope_cov, own_at};
 use crate::sensor::{Finding, Verdict};
 
 /// What the device applies for one forward model, in f64: the linearisation `n`, then

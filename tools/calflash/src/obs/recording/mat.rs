@@ -7,9 +7,9 @@ use std::path::Path;
 
 use matfile::{Array, MatFile, NumericData};
 
+use super::RecordingError;
 use super::layout::{Holds, Keep, Preamble, Rows};
-use super::recording::RecordingError;
-use super::squash;
+use crate::obs::squash;
 
 /// True when `path` names a `.mat` file.
 #[must_use]

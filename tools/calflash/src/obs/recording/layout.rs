@@ -6,31 +6,14 @@
 //! positional: an optional timestamp, then the counts. Timestamps are seconds, or ms, us or ns
 //! when the header's name says so.
 
-use super::fields::{MAX_FIELDS, Spans, number, split_bytes};
-use super::squash;
+use crate::obs::fields::{MAX_FIELDS, Spans, number, split_bytes};
+use crate::obs::squash;
 use std::path::Path;
 
+use super::RecordingError;
+pub use super::header::Holds;
 use super::header::{Chosen, Columns, ColumnsError, named, positional, timestamp};
-use super::recording::RecordingError;
-use super::units::{Sensor, Unit};
-
-/// What a file holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Holds {
-    /// Accelerometer and gyro: six counts a line.
-    Both,
-    /// One triad: three counts a line.
-    One,
-}
-
-impl Holds {
-    pub(super) fn counts(self) -> usize {
-        match self {
-            Holds::Both => 6,
-            Holds::One => 3,
-        }
-    }
-}
+use crate::obs::units::{Sensor, Unit};
 
 /// A setting a preamble line gave, with its line.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -158,7 +141,7 @@ fn not_a_number(
             line,
             field: k + 1,
             what,
-            text: super::shorten(text),
+            text: crate::obs::shorten(text),
         },
         Err(_) => RecordingError::NotText {
             path: path.to_path_buf(),
@@ -219,7 +202,7 @@ impl Sampler<'_> {
     fn block(&self, block: &[u8], before: u64) -> Part {
         let mut part = self.part(block.len() / 24);
         let mut spans: Spans = [(0, 0); MAX_FIELDS];
-        for (line, bytes) in super::fields::lines(block, before) {
+        for (line, bytes) in crate::obs::fields::lines(block, before) {
             let bytes = bytes.trim_ascii();
             if bytes.is_empty() || bytes[0] == b'#' {
                 continue;
@@ -398,7 +381,7 @@ pub fn read_chosen(
             head.error = Some(e);
         }
         merge(head)?;
-        super::fields::parse_blocks(
+        crate::obs::fields::parse_blocks(
             &mut reader,
             first as u64,
             |block, before| Ok(sampler.block(block, before)),
@@ -493,7 +476,7 @@ fn read_head(
         if line == 1
             && let Some(rest) = bytes.strip_prefix(b"\xEF\xBB\xBF")
         {
-            super::note_bom(path);
+            crate::obs::note_bom(path);
             bytes = rest;
         }
         let bytes = bytes.trim_ascii();

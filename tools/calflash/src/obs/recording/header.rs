@@ -2,9 +2,26 @@
 //! header's names (`t`, `time_us`, `ax`, `acc_x`, `gyro_z`, `wx`, ...; the units their names
 //! state), or by position when there is no header it recognises.
 
-use super::layout::Holds;
-use super::squash;
-use super::units::{Sensor, Unit};
+use crate::obs::squash;
+use crate::obs::units::{Sensor, Unit};
+
+/// What a file holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Holds {
+    /// Accelerometer and gyro: six counts a line.
+    Both,
+    /// One triad: three counts a line.
+    One,
+}
+
+impl Holds {
+    pub(super) fn counts(self) -> usize {
+        match self {
+            Holds::Both => 6,
+            Holds::One => 3,
+        }
+    }
+}
 
 /// Which fields hold what.
 #[derive(Debug, Clone, PartialEq)]
