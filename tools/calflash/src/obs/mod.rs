@@ -189,6 +189,13 @@ impl Table {
             .map(|i| self.columns[i].as_slice())
     }
 
+    /// True when the table has the column `name` and it takes more than one value.
+    #[must_use]
+    pub fn varies(&self, name: &str) -> bool {
+        self.column(name)
+            .is_some_and(|v| v.iter().any(|x| *x != v[0]))
+    }
+
     /// The observations at the given indices, in that order.
     #[must_use]
     pub fn select(&self, rows: &[usize]) -> Self {

@@ -37,52 +37,34 @@ pub(super) fn one_file(
     want: (bool, bool),
 ) -> Result<Halves, RecordingError> {
     let (want_acc, want_gyro) = want;
-    // The units each kept sensor's header names, with its file and the header's line.
-    let mut header_units: [Option<Stated>; 2] = [None, None];
-    // Where each kept count is: its file and 1-based field.
-    let mut places: Vec<(PathBuf, usize)> = Vec::with_capacity(6);
     let mut r = read_file(acc, layout::Holds::Both, opts.keep, &opts.columns)?;
     note_preamble(acc, &r.preamble);
     let t = timing(&mut r, acc, opts.rate)?;
-    places.extend(r.fields.iter().map(|f| (acc.to_path_buf(), *f)));
+    // The kept triads, and the units their header names, in the file's order.
     let mut kept = std::mem::take(&mut r.triads).into_iter();
-    let a = if want_acc {
-        kept.next().unwrap_or_default()
-    } else {
-        Vec::new()
+    let mut named = r.units.chunks(3);
+    let mut take = |wanted: bool| {
+        wanted.then(|| {
+            let stated = (
+                named.next().unwrap_or_default().to_vec(),
+                acc.to_path_buf(),
+                r.header,
+            );
+            (kept.next().unwrap_or_default(), stated)
+        })
     };
-    let g = if want_gyro {
-        kept.next().unwrap_or_default()
-    } else {
-        Vec::new()
-    };
-    let rest = r.preamble.rest.map(|s| s.value);
-    let temperature = r.temp.take();
-    let mut stated = r.units.chunks(3);
-    if want_acc {
-        header_units[0] = Some((
-            stated.next().unwrap_or_default().to_vec(),
-            acc.to_path_buf(),
-            r.header,
-        ));
-    }
-    if want_gyro {
-        header_units[1] = Some((
-            stated.next().unwrap_or_default().to_vec(),
-            acc.to_path_buf(),
-            r.header,
-        ));
-    }
+    let (a, sa) = take(want_acc).unzip();
+    let (g, sg) = take(want_gyro).unzip();
     Ok(Halves {
         t,
-        acc: a,
-        gyro: g,
-        line: r.line,
+        acc: a.unwrap_or_default(),
+        gyro: g.unwrap_or_default(),
         source: acc.display().to_string(),
-        rest,
-        stated: header_units,
-        temperature,
-        places,
+        rest: r.preamble.rest.map(|s| s.value),
+        stated: [sa, sg],
+        temperature: r.temp.take(),
+        places: r.fields.iter().map(|f| (acc.to_path_buf(), *f)).collect(),
+        line: r.line,
     })
 }
 

@@ -128,14 +128,9 @@ fn model(
     notes: &mut Vec<String>,
 ) -> Result<(Formula, bool), WorkflowError> {
     let path = &opts.file;
-    let varies = |c: &str| {
-        table
-            .column(c)
-            .is_some_and(|v| v.iter().any(|x| *x != v[0]))
-    };
     let cross: Vec<&str> = [col::INPUT_P, col::INPUT_O]
         .into_iter()
-        .filter(|c| varies(c))
+        .filter(|c| table.varies(c))
         .collect();
     let (model, chosen) = match &opts.model {
         Some(m) => (formula::parse(m)?, false),
@@ -355,14 +350,13 @@ impl Setting {
         width: usize,
         notes: &mut Vec<String>,
     ) -> Result<Self, WorkflowError> {
-        let varies = |t: &Table, c: &str| t.column(c).is_some_and(|v| v.iter().any(|x| *x != v[0]));
         let has = |c: &'static str| table.column(c).is_some().then_some(c);
         let layout = table::layout(table, has(col::TEMP), has(col::VOLT));
         let continuous = match opts.thermal {
             Thermal::Table => false,
             Thermal::Continuous => true,
             Thermal::Auto => {
-                varies(table, col::TEMP)
+                table.varies(col::TEMP)
                     && layout.as_ref().map_or(true, |l| {
                         l.temps.len() > MAX_TEMPERATURES
                             || l.points.iter().any(|p| p.rows.len() <= 2 * width)
@@ -413,7 +407,6 @@ fn decide_model(
     notes: &mut Vec<String>,
 ) -> Result<(Formula, Vec<Decision>), WorkflowError> {
     let path = &opts.file;
-    let varies = |t: &Table, c: &str| t.column(c).is_some_and(|v| v.iter().any(|x| *x != v[0]));
     let input = table.column(col::INPUT).unwrap_or_default();
     // While terms and tests are decided, the bias and the scale factor follow the temperature
     // at the highest order the observations can estimate.
@@ -473,7 +466,7 @@ fn decide_model(
         decisions.push(d);
         model = m;
     }
-    if varies(table, col::DIR) {
+    if table.varies(col::DIR) {
         decisions.push(hysteresis(&model, &decide)?);
     }
     for t in &model.terms {

@@ -221,11 +221,6 @@ fn temperature_points(
         has_temp.then_some(col::TEMP),
         has_volt.then_some(col::VOLT),
     );
-    let varies = |c: &str| {
-        table
-            .column(c)
-            .is_some_and(|v| v.iter().any(|x| *x != v[0]))
-    };
     let spread = || {
         let temps = table.column(col::TEMP).unwrap_or_default();
         temps
@@ -239,7 +234,7 @@ fn temperature_points(
     });
     let continuous = match opts.thermal {
         Thermal::Table => {
-            if !setpoints && varies(col::TEMP) {
+            if !setpoints && table.varies(col::TEMP) {
                 let (lo, hi) = spread();
                 return Err(WorkflowError::triad(
                     path,
@@ -249,10 +244,10 @@ fn temperature_points(
             false
         }
         Thermal::Continuous => true,
-        Thermal::Auto => varies(col::TEMP) && !setpoints,
+        Thermal::Auto => table.varies(col::TEMP) && !setpoints,
     };
     if continuous {
-        if varies(col::VOLT) {
+        if table.varies(col::VOLT) {
             return Err(WorkflowError::triad(path, TriadError::VoltageVaries));
         }
         return Ok(Temperature::Continuous(continuous::prepare(table, notes)?));
@@ -457,11 +452,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             "the plan does not spin the unit: no lever arms (size effect) are estimated".into(),
         );
     }
-    let f_varies = col::F.iter().all(|c| {
-        table
-            .column(c)
-            .is_some_and(|v| v.iter().any(|x| *x != v[0]))
-    });
+    let f_varies = col::F.iter().all(|c| table.varies(c));
     let temperature = temperature_points(&mut table, opts, (has_temp, has_volt), &mut notes)?;
     let accel_spec = Spec {
         outputs: col::A,
