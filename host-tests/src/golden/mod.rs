@@ -20,7 +20,7 @@ mod format;
 pub use format::{ParseError, parse, render};
 
 use spincal::correct::AnyCorrector;
-use spincal::model::{Calibration, CalibrationData, Rails, SampleFormat, Sensor};
+use spincal::model::{Calibration, CalibrationData, Rails, SampleFormat, Sensor, Span};
 
 /// The sensor kind of a case.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -141,6 +141,16 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
             cases.push((names[k], in_format(data(), format), Kind::Imu(1000.0)));
         }
     }
+    // Triads with windows of different sizes (the examples' are both 2^15 codes), so that a
+    // 16-bit kernel testing a gyro code against the accelerometer's window shows.
+    cases.push((
+        "imu_narrow_gyro_i16",
+        in_format(
+            narrow_gyro(CalibrationData::example_imu_polynomial()),
+            SampleFormat::I16,
+        ),
+        Kind::Imu(1000.0),
+    ));
     // A single axis whose sets are a temperature series.
     cases.push((
         "single_series",
@@ -243,6 +253,16 @@ fn without_lever(mut data: CalibrationData) -> CalibrationData {
     data
 }
 
+/// `data` (an IMU) with its gyros' calibrated range an eighth as wide, and so a smaller window.
+fn narrow_gyro(mut data: CalibrationData) -> CalibrationData {
+    if let Sensor::Imu { gyro, .. } = &mut data.sensor {
+        for c in gyro.iter_mut() {
+            c.range = Span::new(c.range.lo / 8.0, c.range.hi / 8.0);
+        }
+    }
+    data
+}
+
 /// Encodes a calibration as a blob.
 ///
 /// # Panics
@@ -282,6 +302,11 @@ fn axis_inputs(rails: Rails, center: f32, rng: &mut Lcg, n: usize) -> Vec<i32> {
     let mut v: Vec<i32> = (0..n)
         .map(|_| rng.range((c - 6_000).max(lo + 1), (c + 6_000).min(hi - 1)))
         .collect();
+    // Codes at powers of two from the center, where the corrector's safe windows end (each is
+    // `2^k` codes centred on the rounded center): a window test that lets through more than
+    // its window passes some of these, which are outside the calibrated range, unflagged.
+    let probes = (9..=14).flat_map(|j| [c + (1 << j), c - (1 << j) - 1]);
+    let probes: Vec<i32> = probes.map(|x| x.clamp(lo, hi) as i32).collect();
     let extremes = [
         rails.lo,
         rails.hi,
@@ -295,6 +320,7 @@ fn axis_inputs(rails: Rails, center: f32, rng: &mut Lcg, n: usize) -> Vec<i32> {
         rng.range(lo + 1, hi - 1),
     ];
     v.extend_from_slice(&extremes);
+    v.extend(probes);
     v
 }
 

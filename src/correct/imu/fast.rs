@@ -4,18 +4,31 @@
 //! it, take the Rust slow path. The kernel is the one for the corrector's sample type.
 
 use super::super::Corrected;
-use super::super::kernel::Shape;
+use super::super::kernel::{Shape, TriadKernel};
 use super::super::m4f::{self, Full, FullBlock, Hot, LinearBlock};
 use super::super::sample::{self, Sample};
 use super::{ImuCorrector, split};
+use crate::model::SampleFormat;
 
 impl<S: Sample> ImuCorrector<'_, S> {
     /// Builds the kernel's block for the current effective coefficients (none for a shape
     /// without a kernel).
     pub(super) fn refresh_m4f(&mut self) {
         let flags = self.env_flags.bits();
+        // A 16-bit kernel's masks cannot close a window: with a window that never opens in
+        // this environment the compiled path runs (it flags every sample through the slow
+        // path, as the kernel would hand each one to it).
+        if S::FORMAT != SampleFormat::I32 && self.limits.contains(&0) {
+            self.hot = Hot::None;
+            return;
+        }
         self.hot = match (self.mode.shape, self.mode.lever) {
-            (Shape::Linear, _) => Hot::Linear(LinearBlock::new(&self.accel, &self.gyro, flags)),
+            (Shape::Linear, _) => Hot::Linear(LinearBlock::new(
+                &self.open_accel(),
+                &self.gyro,
+                flags,
+                S::FORMAT,
+            )),
             (shape @ (Shape::Polynomial | Shape::Asymmetric), lever) => Hot::Full(
                 self.full_block(),
                 Full::new::<S>(shape == Shape::Asymmetric, lever),
@@ -28,13 +41,25 @@ impl<S: Sample> ImuCorrector<'_, S> {
     #[inline(always)]
     fn full_block(&self) -> FullBlock {
         FullBlock::new(
-            &self.accel,
+            &self.open_accel(),
             &self.gyro,
             self.env_flags.bits(),
             &self.neg_g,
             &self.terms,
             (self.prev_rate, self.prev_lever),
+            S::FORMAT,
         )
+    }
+
+    /// The accelerometer's kernel with its window open (the limit computed for the environment,
+    /// which the lever arm's state closes and opens per sample): the block's 16-bit masks are
+    /// made from it once.
+    fn open_accel(&self) -> TriadKernel {
+        let [limit, _] = self.limits;
+        TriadKernel {
+            limit,
+            ..self.accel
+        }
     }
 
     /// Runs the kernel until the first sample outside a window; `None` when the shape has no
@@ -123,9 +148,11 @@ fn with_lever_state<S: Sample>(
     raw: &[[S; 6]],
     out: &mut [Corrected<6>],
 ) -> usize {
+    if !block.header.set_accel_limit(accel_limit, S::FORMAT) {
+        return 0;
+    }
     block.prev_rate = *prev_rate;
     block.prev_lever = *prev_lever;
-    block.header.accel_limit = accel_limit;
     let done = m4f::full(kind, block, raw, out);
     *prev_rate = block.prev_rate;
     *prev_lever = block.prev_lever;

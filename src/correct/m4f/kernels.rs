@@ -7,9 +7,6 @@ use super::{FullBlock, Header, LinearBlock};
 
 // The offsets the assembly below uses, pinned.
 const _: () = {
-    assert!(offset_of!(Header, accel_limit) == 12);
-    assert!(offset_of!(Header, gyro_neg_base) == 16);
-    assert!(offset_of!(Header, gyro_limit) == 28);
     assert!(offset_of!(Header, flags) == 32);
     assert!(size_of::<Header>() == 36);
     assert!(offset_of!(LinearBlock, offset) == 36);
@@ -32,11 +29,12 @@ const _: () = {
 
 // Every kernel: r0 = block, r1 = raw samples, r2 = outputs, r3 = count. They return in r0 the
 // number of samples corrected before the first one outside a window (the count when none is).
-// The window test is the Rust one: `(w0 | w1 | w2) < limit` (unsigned) for both triads, with
-// `w_j = raw_j - base_j` (wrapping). Registers: r4-r9 the six codes, then the offsets w; r10,
-// r11, r12, lr a triad's negated bases and limit; r3 the samples left, whose starting value is
-// saved on the stack. s16-s31 are callee-saved and pushed. Each kernel exists for the three
-// sample formats (`_i16`, `_u16`, and `i32` unsuffixed), which differ only in spincal_codes.
+// The window test decides as the Rust one does, `w_j < limit` for every axis with
+// `w_j = raw_j - base_j` (the limits are powers of two). Registers: r4-r12 and lr the codes,
+// their offsets w and the header's words; r3 the samples left, whose starting value is saved
+// on the stack. s16-s31 are callee-saved and pushed. Each kernel exists for `[i32; 6]` samples
+// (unsuffixed) and for 16-bit ones (`_16`, both `i16` and `u16`: only the offsets' arithmetic
+// modulo 2^16 is used), which differ only in spincal_codes.
 core::arch::global_asm!(
     ".syntax unified",
     ".thumb",
@@ -48,25 +46,12 @@ core::arch::global_asm!(
     "vpush {{s16-s31}}",
     ".endm",
     // The next sample: load its six codes, leave for 3f when either triad is outside its
-    // window, else convert the offsets w to f32 in s0-s5. `fmt`: 0 `[i32; 6]` (one `ldm`,
-    // `w = raw + (-base)` by `add`), 1 `[i16; 6]` and 2 `[u16; 6]` (three `ldr`, which need
-    // no word alignment, then `sxtah`/`uxtah` widen each halfword and add the negated base in
-    // one instruction). Little-endian: code 2k is the low half of word k.
-    ".macro spincal_widen fmt, rd, rn, rm, hi",
-    ".if \\fmt == 1",
-    ".if \\hi",
-    "sxtah \\rd, \\rn, \\rm, ror #16",
-    ".else",
-    "sxtah \\rd, \\rn, \\rm",
-    ".endif",
-    ".else",
-    ".if \\hi",
-    "uxtah \\rd, \\rn, \\rm, ror #16",
-    ".else",
-    "uxtah \\rd, \\rn, \\rm",
-    ".endif",
-    ".endif",
-    ".endm",
+    // window, else convert the offsets w to f32 in s0-s5. `fmt` 0, `[i32; 6]`: one `ldm`,
+    // `w = raw + (-base)` by `add`, the OR of each triad's offsets against its limit. `fmt` 1,
+    // `[i16; 6]` and `[u16; 6]`: three `ldr` (which need no word alignment) of two codes each
+    // (little-endian: code 2k is the low half of word k), `uadd16` adds the negated bases to
+    // both halves at once, the masked offsets must all be zero (see `Header`), and
+    // `vcvt.f32.u16` converts the low half of a register, so only the high halves need a shift.
     ".macro spincal_codes fmt",
     ".if \\fmt == 0",
     "ldm r1!, {{r4-r9}}",
@@ -74,30 +59,15 @@ core::arch::global_asm!(
     "add r4, r4, r10",
     "add r5, r5, r11",
     "add r6, r6, r12",
-    ".else",
-    "ldr r8, [r1, #4]",
-    "ldr r9, [r1, #8]",
-    "ldr r7, [r1], #12",
-    "ldm r0, {{r10-r12, lr}}",
-    "spincal_widen \\fmt, r4, r10, r7, 0",
-    "spincal_widen \\fmt, r5, r11, r7, 1",
-    "spincal_widen \\fmt, r6, r12, r8, 0",
-    ".endif",
     "orr r10, r4, r5",
     "orr r10, r10, r6",
     "cmp r10, lr",
     "bhs 3f",
     "ldrd r10, r11, [r0, #16]",
     "ldrd r12, lr, [r0, #24]",
-    ".if \\fmt == 0",
     "add r7, r7, r10",
     "add r8, r8, r11",
     "add r9, r9, r12",
-    ".else",
-    "spincal_widen \\fmt, r7, r10, r8, 1",
-    "spincal_widen \\fmt, r8, r11, r9, 0",
-    "spincal_widen \\fmt, r9, r12, r9, 1",
-    ".endif",
     "orr r10, r7, r8",
     "orr r10, r10, r9",
     "cmp r10, lr",
@@ -111,13 +81,39 @@ core::arch::global_asm!(
     "vcvt.f32.s32 s3, s3",
     "vcvt.f32.s32 s4, s4",
     "vcvt.f32.s32 s5, s5",
+    ".else",
+    "ldr r8, [r1, #4]",
+    "ldr r9, [r1, #8]",
+    "ldr r7, [r1], #12",
+    "ldm r0, {{r4-r6, r10-r12}}",
+    "uadd16 r7, r7, r4",
+    "uadd16 r8, r8, r5",
+    "uadd16 r9, r9, r6",
+    "and r4, r7, r10",
+    "and r5, r8, r11",
+    "orr r4, r4, r5",
+    "and r5, r9, r12",
+    "orrs r4, r4, r5",
+    "bne 3f",
+    "lsr r4, r7, #16",
+    "lsr r5, r8, #16",
+    "lsr r6, r9, #16",
+    "vmov s0, s1, r7, r4",
+    "vmov s2, s3, r8, r5",
+    "vmov s4, s5, r9, r6",
+    "vcvt.f32.u16 s0, s0, #0",
+    "vcvt.f32.u16 s1, s1, #0",
+    "vcvt.f32.u16 s2, s2, #0",
+    "vcvt.f32.u16 s3, s3, #0",
+    "vcvt.f32.u16 s4, s4, #0",
+    "vcvt.f32.u16 s5, s5, #0",
+    ".endif",
     ".endm",
-    // Store the outputs s6-s11 and the flags, loop to 1b while samples are left; 3: return
-    // the number corrected.
+    // Store the outputs s6-s11 and the flags word in s12 (the flag byte and the three bytes of
+    // padding after it: one `vstm` writes the whole `Corrected<6>`), loop to 1b while samples
+    // are left; 3: return the number corrected.
     ".macro spincal_store_and_return",
-    "vstm r2!, {{s6-s11}}",
-    "ldr r4, [r0, #32]",
-    "strb r4, [r2], #4",
+    "vstm r2!, {{s6-s12}}",
     "subs r3, r3, #1",
     "bne 1b",
     "3:",
@@ -127,11 +123,13 @@ core::arch::global_asm!(
     "bx lr",
     ".endm",
     //
-    // Linear: y = off_lin + M w per triad. The matrices stay in s14-s31 for the whole batch.
+    // Linear: y = off_lin + M w per triad. The matrices stay in s14-s31 and the flags in s12
+    // for the whole batch.
     ".macro spincal_linear fmt",
     "spincal_entry",
     "add r4, r0, #60",
     "vldm r4, {{s14-s31}}",
+    "vldr s12, [r0, #32]",
     "cmp r3, #0",
     "beq 3f",
     "1:",
@@ -318,6 +316,7 @@ core::arch::global_asm!(
     "vsub.f32 s7, s7, s13",
     "vsub.f32 s8, s8, s14",
     "vstmdb r5!, {{s9-s14}}",
+    "vldr s12, [r0, #32]",
     ".else",
     // -g -> s12-s20.
     "vldm r4, {{s12-s20}}",
@@ -330,6 +329,7 @@ core::arch::global_asm!(
     "vmla.f32 s11, s18, s6",
     "vmla.f32 s11, s19, s7",
     "vmla.f32 s11, s20, s8",
+    "vldr s12, [r0, #32]",
     ".endif",
     "spincal_store_and_return",
     ".endm",
@@ -355,14 +355,9 @@ core::arch::global_asm!(
     "spincal_define spincal_imu_full_asym_m4f, 0, 0, 1, 1",
     "spincal_define spincal_imu_poly_m4f, 0, 0, 0, 0",
     "spincal_define spincal_imu_poly_asym_m4f, 0, 0, 1, 0",
-    "spincal_define spincal_imu_linear_i16_m4f, 1, 1, 0, 0",
-    "spincal_define spincal_imu_full_i16_m4f, 1, 0, 0, 1",
-    "spincal_define spincal_imu_full_asym_i16_m4f, 1, 0, 1, 1",
-    "spincal_define spincal_imu_poly_i16_m4f, 1, 0, 0, 0",
-    "spincal_define spincal_imu_poly_asym_i16_m4f, 1, 0, 1, 0",
-    "spincal_define spincal_imu_linear_u16_m4f, 2, 1, 0, 0",
-    "spincal_define spincal_imu_full_u16_m4f, 2, 0, 0, 1",
-    "spincal_define spincal_imu_full_asym_u16_m4f, 2, 0, 1, 1",
-    "spincal_define spincal_imu_poly_u16_m4f, 2, 0, 0, 0",
-    "spincal_define spincal_imu_poly_asym_u16_m4f, 2, 0, 1, 0",
+    "spincal_define spincal_imu_linear_16_m4f, 1, 1, 0, 0",
+    "spincal_define spincal_imu_full_16_m4f, 1, 0, 0, 1",
+    "spincal_define spincal_imu_full_asym_16_m4f, 1, 0, 1, 1",
+    "spincal_define spincal_imu_poly_16_m4f, 1, 0, 0, 0",
+    "spincal_define spincal_imu_poly_asym_16_m4f, 1, 0, 1, 0",
 );

@@ -69,42 +69,87 @@ impl Full {
             (I32, true, true) => spincal_imu_full_asym_m4f,
             (I32, false, false) => spincal_imu_poly_m4f,
             (I32, true, false) => spincal_imu_poly_asym_m4f,
-            (I16, false, true) => spincal_imu_full_i16_m4f,
-            (I16, true, true) => spincal_imu_full_asym_i16_m4f,
-            (I16, false, false) => spincal_imu_poly_i16_m4f,
-            (I16, true, false) => spincal_imu_poly_asym_i16_m4f,
-            (U16, false, true) => spincal_imu_full_u16_m4f,
-            (U16, true, true) => spincal_imu_full_asym_u16_m4f,
-            (U16, false, false) => spincal_imu_poly_u16_m4f,
-            (U16, true, false) => spincal_imu_poly_asym_u16_m4f,
+            (I16 | U16, false, true) => spincal_imu_full_16_m4f,
+            (I16 | U16, true, true) => spincal_imu_full_asym_16_m4f,
+            (I16 | U16, false, false) => spincal_imu_poly_16_m4f,
+            (I16 | U16, true, false) => spincal_imu_poly_asym_16_m4f,
         })
     }
 }
 
-/// Negated window bases and limits of both triads and the environment flags (36 bytes). The
-/// bases are negated so that the 16-bit kernels add them while they widen each code
-/// (`sxtah`/`uxtah`), at no cost over the `i32` kernels' subtraction.
+/// The window test's words and the environment flags (36 bytes), in the layout of the
+/// kernel's sample format.
+///
+/// - `i32` kernels: the accelerometer's three negated window bases and its limit, then the
+///   gyro's (the kernel adds the negated bases and compares the OR of each triad's offsets
+///   with its limit).
+/// - 16-bit kernels (`i16` and `u16`): the negated bases in halfword pairs as the codes lie in
+///   a sample (codes 0-1, 2-3, 4-5), then each pair's masks `!(limit - 1)` (the bits an offset
+///   inside its window cannot have). `uadd16` forms two offsets modulo 2^16 in one
+///   instruction; as validation keeps the rails (and so the windows, strictly inside them)
+///   within the container's range, an offset modulo 2^16 is below the limit exactly when the
+///   code is inside its window. Two words of padding follow.
+///
+/// A closed window has no mask: the caller does not run a 16-bit kernel while the lever arm's
+/// state closes the accelerometer's window ([`Header::set_accel_limit`]), nor build one for an
+/// environment whose windows are not both open (`ImuCorrector::refresh_m4f`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Header {
-    accel_neg_base: [i32; 3],
-    /// Accelerometer window limit (0 until the lever arm is primed).
-    pub accel_limit: u32,
-    gyro_neg_base: [i32; 3],
-    gyro_limit: u32,
+    window: [u32; 8],
     flags: u32,
 }
 
 impl Header {
-    fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8) -> Self {
+    fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8, format: SampleFormat) -> Self {
+        let neg = |b: i32| b.wrapping_neg() as u32;
+        let window = match format {
+            SampleFormat::I32 => {
+                let [a0, a1, a2] = accel.base.map(neg);
+                let [g0, g1, g2] = gyro.base.map(neg);
+                [a0, a1, a2, accel.limit, g0, g1, g2, gyro.limit]
+            }
+            SampleFormat::I16 | SampleFormat::U16 => {
+                let [b0, b1, b2, b3, b4, b5] = join(accel.base, gyro.base).map(neg);
+                let pair = |lo: u32, hi: u32| (lo & 0xFFFF) | (hi << 16);
+                let (ma, mg) = (mask(accel.limit), mask(gyro.limit));
+                [
+                    pair(b0, b1),
+                    pair(b2, b3),
+                    pair(b4, b5),
+                    pair(ma, ma),
+                    pair(ma, mg),
+                    pair(mg, mg),
+                    0,
+                    0,
+                ]
+            }
+        };
         Self {
-            accel_neg_base: accel.base.map(i32::wrapping_neg),
-            accel_limit: accel.limit,
-            gyro_neg_base: gyro.base.map(i32::wrapping_neg),
-            gyro_limit: gyro.limit,
+            window,
             flags: u32::from(flags),
         }
     }
+
+    /// Closes the accelerometer's window (`limit` 0) or opens it again (`limit` the one the
+    /// block was built with) for the next run of a kernel of `format`. False when the kernel
+    /// must not run: a 16-bit kernel's masks cannot close a window, so the caller takes the
+    /// slow path instead (which is what the kernel would do with every sample).
+    pub fn set_accel_limit(&mut self, limit: u32, format: SampleFormat) -> bool {
+        match format {
+            SampleFormat::I32 => {
+                self.window[3] = limit;
+                true
+            }
+            SampleFormat::I16 | SampleFormat::U16 => limit != 0,
+        }
+    }
+}
+
+/// The bits of a 16-bit offset that must be clear for it to lie below `limit`, a power of two
+/// up to 2^16 (a closed window, 0, has no mask; see [`Header`]).
+fn mask(limit: u32) -> u32 {
+    !limit.wrapping_sub(1) & 0xFFFF
 }
 
 /// Coefficients of the linear kernel: offsets (the six accumulators' start values), then the
@@ -118,9 +163,9 @@ pub(crate) struct LinearBlock {
 }
 
 impl LinearBlock {
-    pub fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8) -> Self {
+    pub fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8, format: SampleFormat) -> Self {
         Self {
-            header: Header::new(accel, gyro, flags),
+            header: Header::new(accel, gyro, flags, format),
             offset: join(accel.off_lin, gyro.off_lin),
             matrix: matrices(accel, gyro),
         }
@@ -161,6 +206,7 @@ impl FullBlock {
         neg_g: &[[f32; 3]; 3],
         terms: &LeverTerms<f32>,
         (prev_rate, prev_lever): ([f32; 3], [f32; 3]),
+        format: SampleFormat,
     ) -> Self {
         let pick = |f: fn([f32; 5]) -> f32| join(accel.nl.map(f), gyro.nl.map(f));
         let mut lever = [0.0; 27];
@@ -173,7 +219,7 @@ impl FullBlock {
             *dst = *src;
         }
         Self {
-            header: Header::new(accel, gyro, flags),
+            header: Header::new(accel, gyro, flags, format),
             q: pick(|[q, ..]| q),
             delta: join(accel.delta, gyro.delta),
             k: pick(|[_, k, ..]| k),
@@ -196,7 +242,7 @@ impl FullBlock {
     }
 }
 
-fn join(a: [f32; 3], b: [f32; 3]) -> [f32; 6] {
+fn join<T: Copy>(a: [T; 3], b: [T; 3]) -> [T; 6] {
     let [a0, a1, a2] = a;
     let [b0, b1, b2] = b;
     [a0, a1, a2, b0, b1, b2]
@@ -244,61 +290,31 @@ unsafe extern "C" {
         o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
-    fn spincal_imu_linear_i16_m4f(
+    fn spincal_imu_linear_16_m4f(
         b: *const LinearBlock,
         r: *const u8,
         o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
-    fn spincal_imu_full_i16_m4f(
+    fn spincal_imu_full_16_m4f(
         b: *mut FullBlock,
         r: *const u8,
         o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
-    fn spincal_imu_full_asym_i16_m4f(
+    fn spincal_imu_full_asym_16_m4f(
         b: *mut FullBlock,
         r: *const u8,
         o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
-    fn spincal_imu_poly_i16_m4f(
+    fn spincal_imu_poly_16_m4f(
         b: *mut FullBlock,
         r: *const u8,
         o: *mut Corrected<6>,
         n: usize,
     ) -> usize;
-    fn spincal_imu_poly_asym_i16_m4f(
-        b: *mut FullBlock,
-        r: *const u8,
-        o: *mut Corrected<6>,
-        n: usize,
-    ) -> usize;
-    fn spincal_imu_linear_u16_m4f(
-        b: *const LinearBlock,
-        r: *const u8,
-        o: *mut Corrected<6>,
-        n: usize,
-    ) -> usize;
-    fn spincal_imu_full_u16_m4f(
-        b: *mut FullBlock,
-        r: *const u8,
-        o: *mut Corrected<6>,
-        n: usize,
-    ) -> usize;
-    fn spincal_imu_full_asym_u16_m4f(
-        b: *mut FullBlock,
-        r: *const u8,
-        o: *mut Corrected<6>,
-        n: usize,
-    ) -> usize;
-    fn spincal_imu_poly_u16_m4f(
-        b: *mut FullBlock,
-        r: *const u8,
-        o: *mut Corrected<6>,
-        n: usize,
-    ) -> usize;
-    fn spincal_imu_poly_asym_u16_m4f(
+    fn spincal_imu_poly_asym_16_m4f(
         b: *mut FullBlock,
         r: *const u8,
         o: *mut Corrected<6>,
@@ -316,12 +332,11 @@ pub(crate) fn linear<S: Sample>(
     let n = raw.len().min(out.len());
     let kernel = match S::FORMAT {
         SampleFormat::I32 => spincal_imu_linear_m4f,
-        SampleFormat::I16 => spincal_imu_linear_i16_m4f,
-        SampleFormat::U16 => spincal_imu_linear_u16_m4f,
+        SampleFormat::I16 | SampleFormat::U16 => spincal_imu_linear_16_m4f,
     };
     // SAFETY: the kernel for `S`'s format reads `n` samples `[S; 6]` from `raw` (the 16-bit
     // ones by word loads that need no alignment) and writes `n` outputs (28 bytes each: the
-    // values and the flag byte) to `out`, reads only `block`, saves every callee-saved
+    // values, the flag byte and the padding after it) to `out`, reads only `block`, saves every callee-saved
     // register it uses and returns at most `n`. The layouts are pinned by the assertions above.
     unsafe { kernel(block, raw.as_ptr().cast(), out.as_mut_ptr(), n) }
 }
