@@ -7,7 +7,6 @@ use super::{FullBlock, Header, LinearBlock};
 
 // The offsets the assembly below uses, pinned.
 const _: () = {
-    assert!(offset_of!(Header, flags) == 32);
     assert!(size_of::<Header>() == 36);
     assert!(offset_of!(LinearBlock, offset) == 36);
     assert!(offset_of!(LinearBlock, matrix) == 60);
@@ -40,22 +39,27 @@ core::arch::global_asm!(
     ".thumb",
     ".fpu fpv4-sp-d16",
     //
-    // Shared by both kernels. Entry: save r3 (the count) and the callee-saved registers.
+    // Shared by both kernels. Entry: save r3 (the count) and the callee-saved registers, point
+    // r0 at the header's word 4 (see `Header`): the offsets from r0 below are 16 less than
+    // the blocks' own, which the assertions above give.
     ".macro spincal_entry",
     "push {{r3-r11, lr}}",
     "vpush {{s16-s31}}",
+    "add r0, r0, #16",
     ".endm",
     // The next sample: load its six codes, leave for 3f when either triad is outside its
     // window, else convert the offsets w to f32 in s0-s5. `fmt` 0, `[i32; 6]`: one `ldm`,
     // `w = raw + (-base)` by `add`, the OR of each triad's offsets against its limit. `fmt` 1,
     // `[i16; 6]` and `[u16; 6]`: three `ldr` (which need no word alignment) of two codes each
     // (little-endian: code 2k is the low half of word k), `uadd16` adds the negated bases to
-    // both halves at once, the masked offsets must all be zero (see `Header`), and
-    // `vcvt.f32.u16` converts the low half of a register, so only the high halves need a shift.
+    // both halves at once; the OR of word 0 with word 1 shifted up holds the accelerometer's
+    // offsets (w0 | w1 | w2 in the high half), of word 2 with word 1 shifted down the gyro's,
+    // and each masked by its triad's mask must be zero (see `Header`); `vcvt.f32.u16`
+    // converts the low half of a register, so only the high halves need a shift.
     ".macro spincal_codes fmt",
     ".if \\fmt == 0",
     "ldm r1!, {{r4-r9}}",
-    "ldm r0, {{r10-r12, lr}}",
+    "ldmdb r0, {{r10-r12, lr}}",
     "add r4, r4, r10",
     "add r5, r5, r11",
     "add r6, r6, r12",
@@ -63,8 +67,7 @@ core::arch::global_asm!(
     "orr r10, r10, r6",
     "cmp r10, lr",
     "bhs 3f",
-    "ldrd r10, r11, [r0, #16]",
-    "ldrd r12, lr, [r0, #24]",
+    "ldm r0, {{r10-r12, lr}}",
     "add r7, r7, r10",
     "add r8, r8, r11",
     "add r9, r9, r12",
@@ -85,14 +88,14 @@ core::arch::global_asm!(
     "ldr r8, [r1, #4]",
     "ldr r9, [r1, #8]",
     "ldr r7, [r1], #12",
-    "ldm r0, {{r4-r6, r10-r12}}",
+    "ldm r0, {{r4-r6, r10, r11}}",
     "uadd16 r7, r7, r4",
     "uadd16 r8, r8, r5",
     "uadd16 r9, r9, r6",
-    "and r4, r7, r10",
-    "and r5, r8, r11",
-    "orr r4, r4, r5",
-    "and r5, r9, r12",
+    "orr r4, r7, r8, lsl #16",
+    "orr r5, r9, r8, lsr #16",
+    "and r4, r4, r10",
+    "and r5, r5, r11",
     "orrs r4, r4, r5",
     "bne 3f",
     "lsr r4, r7, #16",
@@ -107,6 +110,14 @@ core::arch::global_asm!(
     "vcvt.f32.u16 s3, s3, #0",
     "vcvt.f32.u16 s4, s4, #0",
     "vcvt.f32.u16 s5, s5, #0",
+    ".endif",
+    ".endm",
+    // The flags word into s12: word 8 of the `i32` header, word 3 of the 16-bit one.
+    ".macro spincal_flags fmt",
+    ".if \\fmt == 0",
+    "vldr s12, [r0, #16]",
+    ".else",
+    "vldr s12, [r0, #-4]",
     ".endif",
     ".endm",
     // Store the outputs s6-s11 and the flags word in s12 (the flag byte and the three bytes of
@@ -127,14 +138,14 @@ core::arch::global_asm!(
     // for the whole batch.
     ".macro spincal_linear fmt",
     "spincal_entry",
-    "add r4, r0, #60",
+    "add r4, r0, #44",
     "vldm r4, {{s14-s31}}",
-    "vldr s12, [r0, #32]",
+    "spincal_flags \\fmt",
     "cmp r3, #0",
     "beq 3f",
     "1:",
     "spincal_codes \\fmt",
-    "add r4, r0, #36",
+    "add r4, r0, #20",
     "vldm r4, {{s6-s11}}",
     "vmla.f32 s6, s14, s0",
     "vmla.f32 s6, s15, s1",
@@ -168,7 +179,7 @@ core::arch::global_asm!(
     "1:",
     "spincal_codes \\fmt",
     // q -> s6-s11 (the accumulators t), delta -> s12-s17, k -> s18-s23, o -> s24-s29.
-    "add r4, r0, #36",
+    "add r4, r0, #20",
     "vldm r4!, {{s6-s29}}",
     "vsub.f32 s0, s0, s12",
     "vsub.f32 s1, s1, s13",
@@ -202,7 +213,7 @@ core::arch::global_asm!(
     "vmla.f32 s11, s29, s30",
     ".if \\asym",
     // Asymmetry: s -> s12-s17, b -> s18-s23 (the block's end), then |v - b| in s18-s23.
-    "add r5, r0, #396",
+    "add r5, r0, #380",
     "vldm r5, {{s12-s23}}",
     "vsub.f32 s18, s0, s18",
     "vsub.f32 s19, s1, s19",
@@ -316,7 +327,7 @@ core::arch::global_asm!(
     "vsub.f32 s7, s7, s13",
     "vsub.f32 s8, s8, s14",
     "vstmdb r5!, {{s9-s14}}",
-    "vldr s12, [r0, #32]",
+    "spincal_flags \\fmt",
     ".else",
     // -g -> s12-s20.
     "vldm r4, {{s12-s20}}",
@@ -329,7 +340,7 @@ core::arch::global_asm!(
     "vmla.f32 s11, s18, s6",
     "vmla.f32 s11, s19, s7",
     "vmla.f32 s11, s20, s8",
-    "vldr s12, [r0, #32]",
+    "spincal_flags \\fmt",
     ".endif",
     "spincal_store_and_return",
     ".endm",

@@ -77,18 +77,20 @@ impl Full {
     }
 }
 
-/// The window test's words and the environment flags (36 bytes), in the layout of the
-/// kernel's sample format.
+/// The window test's words and the environment flags: nine words in the layout of the
+/// kernel's sample format. A kernel points r0 at word 4 so that one `ldm` or `ldmdb` reaches
+/// each group.
 ///
-/// - `i32` kernels: the accelerometer's three negated window bases and its limit, then the
-///   gyro's (the kernel adds the negated bases and compares the OR of each triad's offsets
-///   with its limit).
-/// - 16-bit kernels (`i16` and `u16`): the negated bases in halfword pairs as the codes lie in
-///   a sample (codes 0-1, 2-3, 4-5), then each pair's masks `!(limit - 1)` (the bits an offset
-///   inside its window cannot have). `uadd16` forms two offsets modulo 2^16 in one
-///   instruction; as validation keeps the rails (and so the windows, strictly inside them)
-///   within the container's range, an offset modulo 2^16 is below the limit exactly when the
-///   code is inside its window. Two words of padding follow.
+/// - `i32` kernels: the accelerometer's three negated window bases and its limit (words 0-3,
+///   `ldmdb`), the gyro's (words 4-7, `ldm`), the flags (word 8). The kernel adds the negated
+///   bases and compares the OR of each triad's offsets with its limit.
+/// - 16-bit kernels (`i16` and `u16`): the flags (word 3), then the negated bases in halfword
+///   pairs as the codes lie in a sample (codes 0-1, 2-3, 4-5) and the masks `!(limit - 1)` of
+///   each triad in both halves (the bits an offset inside its window cannot have; words 4-8,
+///   one `ldm`). `uadd16` forms two offsets modulo 2^16 in one instruction; as validation keeps
+///   the rails (and so the windows, strictly inside them) within the container's range, an
+///   offset modulo 2^16 is below the limit exactly when the code is inside its window. Words
+///   0-2 are not used.
 ///
 /// A closed window has no mask: the caller does not run a 16-bit kernel while the lever arm's
 /// state closes the accelerometer's window ([`Header::set_accel_limit`]), nor build one for an
@@ -96,39 +98,28 @@ impl Full {
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Header {
-    window: [u32; 8],
-    flags: u32,
+    words: [u32; 9],
 }
 
 impl Header {
     fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8, format: SampleFormat) -> Self {
         let neg = |b: i32| b.wrapping_neg() as u32;
-        let window = match format {
+        let flags = u32::from(flags);
+        let words = match format {
             SampleFormat::I32 => {
                 let [a0, a1, a2] = accel.base.map(neg);
                 let [g0, g1, g2] = gyro.base.map(neg);
-                [a0, a1, a2, accel.limit, g0, g1, g2, gyro.limit]
+                [a0, a1, a2, accel.limit, g0, g1, g2, gyro.limit, flags]
             }
             SampleFormat::I16 | SampleFormat::U16 => {
                 let [b0, b1, b2, b3, b4, b5] = join(accel.base, gyro.base).map(neg);
                 let pair = |lo: u32, hi: u32| (lo & 0xFFFF) | (hi << 16);
                 let (ma, mg) = (mask(accel.limit), mask(gyro.limit));
-                [
-                    pair(b0, b1),
-                    pair(b2, b3),
-                    pair(b4, b5),
-                    pair(ma, ma),
-                    pair(ma, mg),
-                    pair(mg, mg),
-                    0,
-                    0,
-                ]
+                let [p0, p1, p2] = [pair(b0, b1), pair(b2, b3), pair(b4, b5)];
+                [0, 0, 0, flags, p0, p1, p2, pair(ma, ma), pair(mg, mg)]
             }
         };
-        Self {
-            window,
-            flags: u32::from(flags),
-        }
+        Self { words }
     }
 
     /// Closes the accelerometer's window (`limit` 0) or opens it again (`limit` the one the
@@ -138,7 +129,7 @@ impl Header {
     pub fn set_accel_limit(&mut self, limit: u32, format: SampleFormat) -> bool {
         match format {
             SampleFormat::I32 => {
-                self.window[3] = limit;
+                self.words[3] = limit;
                 true
             }
             SampleFormat::I16 | SampleFormat::U16 => limit != 0,
