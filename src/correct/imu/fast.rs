@@ -1,4 +1,4 @@
-//! How [`ImuCorrector`] uses the Cortex-M4F kernels ([`m4f`](super::super::m4f)): the
+//! How [`ImuCorrector`] uses the Cortex-M4F kernels ([`m4f`]): the
 //! coefficient block is built with the environment, `correct` runs the kernel on one sample and
 //! `correct_batch` on the whole batch; a sample outside a window, and any outside samples after
 //! it, take the Rust slow path. The kernel is the one for the corrector's sample type.

@@ -76,7 +76,7 @@ struct Source<'a> {
 }
 
 /// Corrects a 6-axis IMU sample `[ax, ay, az, gx, gy, gz]` (see the [module docs](super) and
-/// the model under rotation in [`rotation`](crate::model::rotation)).
+/// the model under rotation in [`rotation`]).
 ///
 /// The gyro's g-sensitivity acts on the specific force at the reference point; the
 /// accelerometer outputs are moved to the reference point by removing what each axis sensed of
