@@ -146,7 +146,18 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
     cases.push((
         "imu_narrow_gyro_i16",
         in_format(
-            narrow_gyro(CalibrationData::example_imu_polynomial()),
+            narrow_gyro(CalibrationData::example_imu_polynomial(), 8.0),
+            SampleFormat::I16,
+        ),
+        Kind::Imu(1000.0),
+    ));
+    // A gyro range so narrow that no window is safe (limit 0), which a 16-bit kernel cannot
+    // express: the device runs the compiled path and flags every sample through the slow one.
+    // Without the lever arm, whose state would keep the kernel from running anyway.
+    cases.push((
+        "imu_closed_gyro_i16",
+        in_format(
+            without_lever(narrow_gyro(CalibrationData::example_imu_polynomial(), 1e4)),
             SampleFormat::I16,
         ),
         Kind::Imu(1000.0),
@@ -253,11 +264,12 @@ fn without_lever(mut data: CalibrationData) -> CalibrationData {
     data
 }
 
-/// `data` (an IMU) with its gyros' calibrated range an eighth as wide, and so a smaller window.
-fn narrow_gyro(mut data: CalibrationData) -> CalibrationData {
+/// `data` (an IMU) with its gyros' calibrated range `by` times narrower, and so a smaller
+/// window.
+fn narrow_gyro(mut data: CalibrationData, by: f32) -> CalibrationData {
     if let Sensor::Imu { gyro, .. } = &mut data.sensor {
         for c in gyro.iter_mut() {
-            c.range = Span::new(c.range.lo / 8.0, c.range.hi / 8.0);
+            c.range = Span::new(c.range.lo / by, c.range.hi / by);
         }
     }
     data
