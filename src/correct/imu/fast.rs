@@ -14,6 +14,7 @@ impl<S: Sample> ImuCorrector<'_, S> {
     /// Builds the kernel's block for the current effective coefficients (none for a shape
     /// without a kernel).
     pub(super) fn refresh_m4f(&mut self) {
+        self.state_to_corrector();
         let flags = self.env_flags.bits();
         // A 16-bit kernel's masks cannot close a window: with a window that never opens in
         // this environment the compiled path runs (it flags every sample through the slow
@@ -63,21 +64,45 @@ impl<S: Sample> ImuCorrector<'_, S> {
     }
 
     /// Runs the kernel until the first sample outside a window; `None` when the shape has no
-    /// kernel. The lever-arm state (previous rate and lever term, whether the accelerometer
-    /// window is open) lives in the corrector and is handed to the kernel's block and back.
+    /// kernel. While a full kernel exists, the lever-arm state (the previous rate and lever
+    /// term) lives in its block, which the kernel reads and writes; the slow path works on the
+    /// corrector's copy ([`state_to_corrector`](Self::state_to_corrector) and back).
     #[inline(always)]
     fn kernel(&mut self, raw: &[[S; 6]], out: &mut [Corrected<6>]) -> Option<usize> {
         match &mut self.hot {
             Hot::None => None,
             Hot::Linear(block) => Some(m4f::linear(block, raw, out)),
             Hot::Full(block, kind) => {
-                let state = (&mut self.prev_rate, &mut self.prev_lever, self.accel.limit);
-                Some(with_lever_state(block, state, *kind, raw, out))
+                if !block.header.set_accel_limit(self.accel.limit, S::FORMAT) {
+                    return Some(0);
+                }
+                Some(m4f::full(*kind, block, raw, out))
             }
         }
     }
 
-    /// The slow path of the shapes that have a kernel.
+    /// The lever-arm state from the kernel's block into the corrector, before the slow path
+    /// or a new block.
+    #[inline(never)]
+    fn state_to_corrector(&mut self) {
+        if let Hot::Full(block, _) = &self.hot {
+            self.prev_rate = block.prev_rate;
+            self.prev_lever = block.prev_lever;
+        }
+    }
+
+    /// The lever-arm state from the corrector back into the kernel's block, after the slow
+    /// path.
+    #[inline(never)]
+    fn state_to_block(&mut self) {
+        if let Hot::Full(block, _) = &mut self.hot {
+            block.prev_rate = self.prev_rate;
+            block.prev_lever = self.prev_lever;
+        }
+    }
+
+    /// The slow path of the shapes that have a kernel, on the corrector's copy of the
+    /// lever-arm state (see [`kernel`](Self::kernel)).
     fn slow_m4f(&mut self, raw: [i32; 6], out: &mut Corrected<6>) {
         match (self.mode.shape, self.mode.lever) {
             (Shape::Asymmetric, true) => self.slow::<true, true, true>(raw, out),
@@ -95,7 +120,9 @@ impl<S: Sample> ImuCorrector<'_, S> {
             None => false,
             Some(1) => true,
             Some(_) => {
+                self.state_to_corrector();
                 self.slow_m4f(sample::codes(raw), out);
+                self.state_to_block();
                 true
             }
         }
@@ -112,6 +139,10 @@ impl<S: Sample> ImuCorrector<'_, S> {
         loop {
             let done = self.kernel(raw, out).unwrap_or(0);
             (raw, out) = after(raw, out, done);
+            if raw.is_empty() {
+                return true;
+            }
+            self.state_to_corrector();
             let mut slow = 0;
             for (r, o) in raw.iter().zip(out.iter_mut()) {
                 if self.inside(r) {
@@ -120,6 +151,7 @@ impl<S: Sample> ImuCorrector<'_, S> {
                 self.slow_m4f(sample::codes(*r), o);
                 slow += 1;
             }
+            self.state_to_block();
             if slow == 0 {
                 return true;
             }
@@ -135,28 +167,6 @@ impl<S: Sample> ImuCorrector<'_, S> {
         let (_, acc_g) = self.gyro.offsets(rg);
         (acc_a < self.accel.limit) & (acc_g < self.gyro.limit)
     }
-}
-
-/// A full kernel with the corrector's lever-arm state: the previous rate and lever term
-/// (handed in and back) and the accelerometer window's limit (0 until the lever state is
-/// primed and inside its bound).
-#[inline(always)]
-fn with_lever_state<S: Sample>(
-    block: &mut FullBlock,
-    (prev_rate, prev_lever, accel_limit): (&mut [f32; 3], &mut [f32; 3], u32),
-    kind: Full,
-    raw: &[[S; 6]],
-    out: &mut [Corrected<6>],
-) -> usize {
-    if !block.header.set_accel_limit(accel_limit, S::FORMAT) {
-        return 0;
-    }
-    block.prev_rate = *prev_rate;
-    block.prev_lever = *prev_lever;
-    let done = m4f::full(kind, block, raw, out);
-    *prev_rate = block.prev_rate;
-    *prev_lever = block.prev_lever;
-    done
 }
 
 /// Both slices without their first `k` items.
