@@ -4,8 +4,8 @@
 //! it, take the Rust slow path. The kernel is the one for the corrector's sample type.
 
 use super::super::Corrected;
-use super::super::kernel::{Shape, TriadKernel};
-use super::super::m4f::{self, Full, FullBlock, Hot, LinearBlock};
+use super::super::kernel::Shape;
+use super::super::m4f::{self, Full, FullBlock, Header, Hot, LinearBlock};
 use super::super::sample::{self, Sample};
 use super::{ImuCorrector, split};
 use crate::model::SampleFormat;
@@ -15,7 +15,6 @@ impl<S: Sample> ImuCorrector<'_, S> {
     /// without a kernel).
     pub(super) fn refresh_m4f(&mut self) {
         self.state_to_corrector();
-        let flags = self.env_flags.bits();
         // A 16-bit kernel's masks cannot close a window: with a window that never opens in
         // this environment the compiled path runs (it flags every sample through the slow
         // path, as the kernel would hand each one to it).
@@ -23,44 +22,31 @@ impl<S: Sample> ImuCorrector<'_, S> {
             self.hot = Hot::None;
             return;
         }
+        let header = self.header();
         self.hot = match (self.mode.shape, self.mode.lever) {
-            (Shape::Linear, _) => Hot::Linear(LinearBlock::new(
-                &self.open_accel(),
-                &self.gyro,
-                flags,
-                S::FORMAT,
-            )),
+            (Shape::Linear, _) => Hot::Linear(LinearBlock::new(header, &self.accel, &self.gyro)),
             (shape @ (Shape::Polynomial | Shape::Asymmetric), lever) => Hot::Full(
-                self.full_block(),
+                FullBlock::new(
+                    header,
+                    &self.accel,
+                    &self.gyro,
+                    &self.neg_g,
+                    &self.terms,
+                    (self.prev_rate, self.prev_lever),
+                ),
                 Full::new::<S>(shape == Shape::Asymmetric, lever),
             ),
             _ => Hot::None,
         };
     }
 
-    /// The full kernels' block for the current coefficients.
-    #[inline(always)]
-    fn full_block(&self) -> FullBlock {
-        FullBlock::new(
-            &self.open_accel(),
-            &self.gyro,
-            self.env_flags.bits(),
-            &self.neg_g,
-            &self.terms,
-            (self.prev_rate, self.prev_lever),
-            S::FORMAT,
-        )
-    }
-
-    /// The accelerometer's kernel with its window open (the limit computed for the environment,
-    /// which the lever arm's state closes and opens per sample): the block's 16-bit masks are
-    /// made from it once.
-    fn open_accel(&self) -> TriadKernel {
-        let [limit, _] = self.limits;
-        TriadKernel {
-            limit,
-            ..self.accel
-        }
+    /// The kernels' window words and flags, with the accelerometer's window open at the limit
+    /// computed for the environment (the lever arm's state closes and opens it per call): the
+    /// 16-bit masks are made from it once.
+    fn header(&self) -> Header {
+        let [accel_limit, _] = self.limits;
+        let flags = self.env_flags.bits();
+        Header::new((&self.accel, accel_limit), &self.gyro, flags, S::FORMAT)
     }
 
     /// Runs the kernel until the first sample outside a window; `None` when the shape has no

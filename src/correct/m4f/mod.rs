@@ -102,19 +102,27 @@ pub(crate) struct Header {
 }
 
 impl Header {
-    fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8, format: SampleFormat) -> Self {
+    /// The header for kernels of `format`: the windows of `accel` (with its window open at
+    /// `accel_limit`, the limit computed for the environment, which the lever arm's state closes
+    /// and opens per call) and `gyro`, and the environment's `flags`.
+    pub fn new(
+        (accel, accel_limit): (&TriadKernel, u32),
+        gyro: &TriadKernel,
+        flags: u8,
+        format: SampleFormat,
+    ) -> Self {
         let neg = |b: i32| b.wrapping_neg() as u32;
         let flags = u32::from(flags);
         let words = match format {
             SampleFormat::I32 => {
                 let [a0, a1, a2] = accel.base.map(neg);
                 let [g0, g1, g2] = gyro.base.map(neg);
-                [a0, a1, a2, accel.limit, g0, g1, g2, gyro.limit, flags]
+                [a0, a1, a2, accel_limit, g0, g1, g2, gyro.limit, flags]
             }
             SampleFormat::I16 | SampleFormat::U16 => {
                 let [b0, b1, b2, b3, b4, b5] = join(accel.base, gyro.base).map(neg);
                 let pair = |lo: u32, hi: u32| (lo & 0xFFFF) | (hi << 16);
-                let (ma, mg) = (mask(accel.limit), mask(gyro.limit));
+                let (ma, mg) = (mask(accel_limit), mask(gyro.limit));
                 let [p0, p1, p2] = [pair(b0, b1), pair(b2, b3), pair(b4, b5)];
                 [0, 0, 0, flags, p0, p1, p2, pair(ma, ma), pair(mg, mg)]
             }
@@ -154,9 +162,9 @@ pub(crate) struct LinearBlock {
 }
 
 impl LinearBlock {
-    pub fn new(accel: &TriadKernel, gyro: &TriadKernel, flags: u8, format: SampleFormat) -> Self {
+    pub fn new(header: Header, accel: &TriadKernel, gyro: &TriadKernel) -> Self {
         Self {
-            header: Header::new(accel, gyro, flags, format),
+            header,
             offset: join(accel.off_lin, gyro.off_lin),
             matrix: matrices(accel, gyro),
         }
@@ -191,13 +199,12 @@ pub(crate) struct FullBlock {
 
 impl FullBlock {
     pub fn new(
+        header: Header,
         accel: &TriadKernel,
         gyro: &TriadKernel,
-        flags: u8,
         neg_g: &[[f32; 3]; 3],
         terms: &LeverTerms<f32>,
         (prev_rate, prev_lever): ([f32; 3], [f32; 3]),
-        format: SampleFormat,
     ) -> Self {
         let pick = |f: fn([f32; 5]) -> f32| join(accel.nl.map(f), gyro.nl.map(f));
         let mut lever = [0.0; 27];
@@ -210,7 +217,7 @@ impl FullBlock {
             *dst = *src;
         }
         Self {
-            header: Header::new(accel, gyro, flags, format),
+            header,
             q: pick(|[q, ..]| q),
             delta: join(accel.delta, gyro.delta),
             k: pick(|[_, k, ..]| k),
