@@ -542,14 +542,8 @@ fn timestamp_like(header: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use super::super::header::{ACCEL, GYRO, axis};
+    use super::super::tests::write;
     use super::*;
-    use std::path::PathBuf;
-
-    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-        let p = dir.join(name);
-        std::fs::write(&p, text).unwrap();
-        p
-    }
 
     #[test]
     fn names_units_and_preambles() {
