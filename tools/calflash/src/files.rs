@@ -3,8 +3,18 @@
 //! it exists, by device and inode, so `./a`, `dir/../a` and a hard link are all caught); the
 //! outputs are staged beside their destinations and renamed into place together once every one
 //! is written, so a failed command leaves none; and a staging file that a killed run left behind
-//! (`.calflash-<pid>-*.tmp`, its process gone) is removed the next time a command writes into
-//! that directory.
+//! (`.calflash-<pid>-*.tmp`, its process gone) is removed the first time a command writes into
+//! that directory (once per directory and process, so a batch of thousands of units reads its
+//! folder once, not once per file).
+//!
+//! An output that exists and is not a regular file (a device such as `/dev/null`, `/dev/stdout`,
+//! a FIFO, a socket) is never renamed over: a rename would replace the device with a file (run
+//! as root, `--json /dev/null` would break every other program on the machine). Its bytes are
+//! held until the commit and written into it in place. An output that is a symbolic link to a
+//! file is staged beside the link's target and replaces the target, so the link stays.
+//!
+//! A file a unit's serial names ([`unit_file`]) is made only of a serial that is a safe file
+//! name: no separator, no `..`, nothing hidden, so a serial cannot write outside its folder.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -50,6 +60,37 @@ pub enum Error {
         path: PathBuf,
         /// The option that gave the other.
         other: String,
+    },
+    /// A unit's serial that cannot name a file.
+    #[error(
+        "unit `{serial}`: a serial that names a file must be a plain file name: letters, digits, \
+         `-`, `_`, `+` and `.`, not starting with `.` (it would write {})",
+        .path.display()
+    )]
+    UnsafeSerial {
+        /// The serial.
+        serial: String,
+        /// The file it would have named.
+        path: PathBuf,
+    },
+    /// An input longer than any file of its kind can be.
+    #[error("{}: longer than {max} bytes: not {what}", .path.display())]
+    TooLong {
+        /// The input.
+        path: PathBuf,
+        /// The most its kind holds.
+        max: u64,
+        /// What it should be.
+        what: &'static str,
+    },
+    /// Reading an input failed.
+    #[error("{}: {source}", .path.display())]
+    Read {
+        /// The input.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
     },
     /// Writing or renaming an output failed.
     #[error("{}: {source}", .path.display())]
@@ -152,6 +193,10 @@ impl Paths {
             if out.is_dir() {
                 return Err(Error::IsDirectory { what, path });
             }
+            if is_special(out) {
+                // Written in place, never replaced: /dev/null twice is no conflict.
+                continue;
+            }
             if let Some((input, _)) = self.inputs.iter().find(|(_, p)| same_file(p, out)) {
                 let input = input.clone();
                 return Err(Error::ReplacesInput { what, path, input });
@@ -172,11 +217,87 @@ fn dir_of(path: &Path) -> &Path {
         .unwrap_or(Path::new("."))
 }
 
+/// The whole of input `path`, which is `what` and holds at most `max` bytes: at most `max + 1`
+/// bytes are read, so `/dev/zero` or a wrong file of gigabytes is refused, not read.
+///
+/// # Errors
+/// [`Error::Read`], or [`Error::TooLong`].
+pub fn read_bounded(path: &Path, max: u64, what: &'static str) -> Result<Vec<u8>, Error> {
+    use std::io::Read as _;
+    let read = |source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    };
+    let f = std::fs::File::open(path).map_err(read)?;
+    let mut bytes = Vec::new();
+    f.take(max + 1).read_to_end(&mut bytes).map_err(read)?;
+    if bytes.len() as u64 > max {
+        return Err(Error::TooLong {
+            path: path.to_path_buf(),
+            max,
+            what,
+        });
+    }
+    Ok(bytes)
+}
+
+/// A calibration blob file, signed or not: at most [`spincal::signed::MAX_SIGNED_LEN`] bytes.
+///
+/// # Errors
+/// As [`read_bounded`].
+pub fn read_blob(path: &Path) -> Result<Vec<u8>, Error> {
+    read_bounded(
+        path,
+        spincal::signed::MAX_SIGNED_LEN as u64,
+        "a calibration blob (signed or not)",
+    )
+}
+
+/// True when `path` exists and is neither a regular file nor a directory (following links):
+/// a device, a FIFO, a socket.
+#[must_use]
+pub fn is_special(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
+/// The file `SERIAL.ext` in `dir` for unit `serial`, refused when the serial is not a plain
+/// file name (a separator, `..`, a leading `.`, a character outside letters, digits and
+/// `-_+.`): a serial never writes outside its folder nor hides its file.
+///
+/// # Errors
+/// [`Error::UnsafeSerial`].
+pub fn unit_file(dir: &Path, serial: &str, ext: &str) -> Result<PathBuf, Error> {
+    let path = dir.join(format!("{serial}.{ext}"));
+    let plain = !serial.is_empty()
+        && !serial.starts_with('.')
+        && serial
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '+' | '.'));
+    if plain {
+        Ok(path)
+    } else {
+        Err(Error::UnsafeSerial {
+            serial: serial.to_string(),
+            path,
+        })
+    }
+}
+
 /// Removes the staging files of runs that were killed: `.calflash-<pid>-*.tmp` whose process
-/// no longer exists (Linux: `/proc/<pid>`; elsewhere nothing is removed).
+/// no longer exists (Linux: `/proc/<pid>`; elsewhere nothing is removed). Each directory is
+/// read once per process.
 fn clean_stale(dir: &Path) {
+    static CLEANED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
     if !Path::new("/proc/self").exists() {
         return;
+    }
+    let key = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+    {
+        let mut cleaned = CLEANED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        if cleaned.contains(&key) {
+            return;
+        }
+        cleaned.push(key);
     }
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
@@ -204,6 +325,8 @@ fn clean_stale(dir: &Path) {
 #[derive(Debug, Default)]
 pub struct Staged {
     files: Vec<(tempfile::TempPath, PathBuf)>,
+    /// Outputs that are special files: their bytes, written in place at the commit.
+    special: Vec<(Vec<u8>, PathBuf)>,
 }
 
 impl Staged {
@@ -226,7 +349,18 @@ impl Staged {
             path: path.to_path_buf(),
             source,
         };
-        let dir = dir_of(path);
+        if is_special(path) {
+            let mut bytes = Vec::new();
+            contents(&mut bytes).map_err(io)?;
+            self.special.push((bytes, path.to_path_buf()));
+            return Ok(());
+        }
+        // A link to a file: replace the file it points to, keep the link.
+        let target = match std::fs::symlink_metadata(path) {
+            Ok(m) if m.file_type().is_symlink() => path.canonicalize().map_err(io)?,
+            _ => path.to_path_buf(),
+        };
+        let dir = dir_of(&target);
         clean_stale(dir);
         let mut builder = tempfile::Builder::new();
         let prefix = format!(".calflash-{}-", std::process::id());
@@ -243,14 +377,14 @@ impl Staged {
             contents(&mut w).map_err(io)?;
             w.flush().map_err(io)?;
         }
-        self.files.push((tmp.into_temp_path(), path.to_path_buf()));
+        self.files.push((tmp.into_temp_path(), target));
         Ok(())
     }
 
-    /// Renames every staged file into place.
+    /// Renames every staged file into place, then writes the special files in place.
     ///
     /// # Errors
-    /// A rename that fails (the ones before it are in place, the rest removed), naming it.
+    /// A rename or write that fails (the ones before it are done, the rest removed), naming it.
     pub fn commit(self) -> Result<(), Error> {
         for (tmp, path) in self.files {
             if let Err(e) = tmp.persist(&path) {
@@ -259,6 +393,18 @@ impl Staged {
                     source: e.error,
                 });
             }
+        }
+        for (bytes, path) in self.special {
+            let io = |source| Error::Io {
+                path: path.clone(),
+                source,
+            };
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(&path)
+                .map_err(io)?;
+            f.write_all(&bytes).map_err(io)?;
+            f.flush().map_err(io)?;
         }
         Ok(())
     }
@@ -334,12 +480,91 @@ mod tests {
         assert!(e.is_err());
         drop(s);
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-        // A killed run's staging file (a process that cannot exist) is removed.
+        // A killed run's staging file (a process that cannot exist) is removed by the first
+        // write of this process into its directory.
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.csv");
         let stale = dir.path().join(".calflash-4294967-abc.tmp");
         std::fs::write(&stale, "half").unwrap();
         write_atomically(&out, |w| w.write_all(b"done")).unwrap();
         assert!(!stale.exists());
         assert_eq!(std::fs::read_to_string(&out).unwrap(), "done");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // The directory is read once per process: a later write does not read it again.
+        std::fs::write(&stale, "half").unwrap();
+        write_atomically(&out, |w| w.write_all(b"again")).unwrap();
+        assert!(stale.exists(), "the folder was read a second time");
+    }
+
+    #[test]
+    fn a_special_file_is_written_in_place_never_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("pipe");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if !made.is_ok_and(|s| s.success()) {
+            eprintln!("skipped: mkfifo is not available here");
+            return;
+        }
+        // A link to the FIFO, as /dev/stdout is a link to the process's pipe.
+        let link = dir.path().join("stdout");
+        std::os::unix::fs::symlink(&fifo, &link).unwrap();
+        for out in [&fifo, &link] {
+            let reader = {
+                let fifo = fifo.clone();
+                std::thread::spawn(move || std::fs::read(fifo).unwrap())
+            };
+            write_atomically(out, |w| w.write_all(b"through the pipe")).unwrap();
+            assert_eq!(reader.join().unwrap(), b"through the pipe");
+            let m = std::fs::metadata(&fifo).unwrap();
+            assert!(!m.is_file(), "the FIFO was replaced by a file");
+            assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        }
+        // Two outputs into one special file are no conflict; into one regular file they are.
+        assert!(is_special(Path::new("/dev/null")));
+        assert!(
+            Paths::new()
+                .output("-o", Some(Path::new("/dev/null")))
+                .output("--json", Some(Path::new("/dev/null")))
+                .check()
+                .is_ok()
+        );
+    }
+
+    #[test]
+    fn a_link_to_a_file_keeps_the_link_and_replaces_its_target() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("real.json");
+        std::fs::write(&target, "old").unwrap();
+        let link = dir.path().join("link.json");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        write_atomically(&link, |w| w.write_all(b"new")).unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
+    }
+
+    #[test]
+    fn reads_are_bounded() {
+        let e = read_blob(Path::new("/dev/zero")).unwrap_err();
+        assert!(matches!(e, Error::TooLong { max, .. } if max == spincal::signed::MAX_SIGNED_LEN as u64));
+        assert!(e.to_string().contains("not a calibration blob"), "{e}");
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("b");
+        std::fs::write(&p, [7u8; 10]).unwrap();
+        assert_eq!(read_bounded(&p, 10, "ten").unwrap().len(), 10);
+        assert!(read_bounded(&p, 9, "nine").is_err());
+    }
+
+    #[test]
+    fn a_serial_names_a_file_only_when_it_is_a_plain_name() {
+        let dir = Path::new("out");
+        assert_eq!(
+            unit_file(dir, "IMU-0007_b+2.1", "blob").unwrap(),
+            Path::new("out/IMU-0007_b+2.1.blob")
+        );
+        for bad in ["../x", "/tmp/x", "a/b", "..", ".hidden", "", "a b", "a\\b", "a:b"] {
+            let e = unit_file(dir, bad, "blob").unwrap_err();
+            assert!(matches!(&e, Error::UnsafeSerial { serial, .. } if serial == bad), "{bad}");
+            assert!(e.to_string().contains("plain file name"), "{e}");
+        }
     }
 }

@@ -4,6 +4,7 @@
 //! The library holds all the logic; `main.rs` is a thin CLI over it.
 #![forbid(unsafe_code)]
 
+pub mod approval;
 pub mod cmd;
 pub mod columns;
 pub mod db;

@@ -341,6 +341,29 @@ fn another_programs_table_is_left_alone_and_reading_creates_nothing() {
             assert!(e.contains("not calflash's"), "{l}: {e}");
         }
     }
+    // Another program's database with tables of its own, none called `records` (issue 30):
+    // calflash creates nothing there and records nothing.
+    for l in h.each("customers") {
+        let sql = "CREATE TABLE customers (id INTEGER); INSERT INTO customers VALUES (1)";
+        match &l {
+            Location::File(p) => rusqlite::Connection::open(p)
+                .unwrap()
+                .execute_batch(sql)
+                .unwrap(),
+            Location::Server(_) => h.server.as_ref().unwrap().execute("customers", sql),
+        }
+        let e = Db::open(&l).err().unwrap().to_string();
+        assert!(
+            e.contains("another program's database") || e.contains("is not empty"),
+            "{l}: {e}"
+        );
+        if let Location::Server(_) = &l {
+            h.server.as_ref().unwrap().execute(
+                "customers",
+                "DO $$ BEGIN IF to_regclass('records') IS NOT NULL OR to_regclass('calflash_schema') IS NOT NULL THEN RAISE 'taken over'; END IF; END $$",
+            );
+        }
+    }
 }
 
 #[test]

@@ -164,7 +164,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
         .input("--gyro", args.gyro.as_deref())
         .output("-o", Some(&args.output))
         .check()?;
-    let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let bytes = crate::files::read_blob(&args.blob)?;
     let cal =
         crate::signing::calibration(&bytes).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let data = cal.data();

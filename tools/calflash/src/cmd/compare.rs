@@ -20,7 +20,7 @@ pub struct CompareArgs {
     /// The unit history for `db:ID` records: a SQLite file, or a PostgreSQL database shared by stations
     /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
     #[arg(long, value_name = "FILE|URL")]
-    pub db: Option<crate::db::Location>,
+    pub db: Option<crate::db::Given>,
     /// Significance level.
     #[arg(long, default_value_t = 0.05, value_parser = super::values::level)]
     pub alpha: f64,
@@ -36,10 +36,11 @@ pub struct CompareArgs {
 pub fn run(args: &CompareArgs) -> Result<(), Failure> {
     let file = |r: &str| (!r.starts_with("db:")).then(|| std::path::PathBuf::from(r));
     let (before, after) = (file(&args.before), file(&args.after));
+    let db = args.db.as_ref().map(crate::db::Given::location).transpose()?;
     crate::files::Paths::new()
         .input("the earlier record", before.as_deref())
         .input("the later record", after.as_deref())
-        .input("--db", args.db.as_ref().and_then(crate::db::Location::file))
+        .input("--db", db.as_ref().and_then(crate::db::Location::file))
         .output("--json", args.json.as_deref())
         .check()?;
     let text = |r: &str| -> Result<(String, String), String> {
@@ -48,7 +49,7 @@ pub fn run(args: &CompareArgs) -> Result<(), Failure> {
                 let id: i64 = id
                     .parse()
                     .map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
-                let path = crate::db::Location::or_default(args.db.as_ref());
+                let path = crate::db::Location::or_default(args.db.as_ref()).map_err(|e| e.to_string())?;
                 let text = crate::db::Db::open_existing(&path)
                     .and_then(|mut d| d.record(id))
                     .map_err(|e| e.to_string())?;

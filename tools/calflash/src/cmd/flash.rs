@@ -33,7 +33,7 @@ pub struct FlashArgs {
     /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
     /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
     #[arg(long, value_name = "FILE|URL")]
-    pub db: Option<crate::db::Location>,
+    pub db: Option<crate::db::Given>,
     /// Do not record the flash.
     #[arg(long)]
     pub no_db: bool,
@@ -54,7 +54,16 @@ fn timeout(s: &str) -> Result<f64, String> {
 /// # Errors
 /// A message saying what failed and what the unit holds.
 pub fn run(args: &FlashArgs) -> Result<(), Failure> {
-    let bytes = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let bytes = crate::files::read_blob(&args.blob)?;
+    // The rule every path into a unit applies, before a key is read or the unit asked.
+    let cal = crate::signing::calibration(&bytes)
+        .map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let warning = crate::approval::admit(
+        &cal.data().identity,
+        &args.blob,
+        crate::approval::Act::Flash,
+        args.force_rejected,
+    );
     let key = crate::signing::key_path(args.sign_key.as_deref())
         .map(|p| crate::signing::load_private(&p))
         .transpose()?;
@@ -69,8 +78,12 @@ pub fn run(args: &FlashArgs) -> Result<(), Failure> {
             id.unit
         );
     }
+    // A refused blob is not signed; the unit's flash refuses it below and records the refusal.
+    if let Ok(Some(w)) = &warning {
+        eprintln!("calflash: {w}");
+    }
     let bytes = match key {
-        Some(key) if spincal::signed::parts(&bytes).1.is_none() => {
+        Some(key) if warning.is_ok() && spincal::signed::parts(&bytes).1.is_none() => {
             let counter = id
                 .counter
                 .checked_add(1)
@@ -99,7 +112,7 @@ pub fn run(args: &FlashArgs) -> Result<(), Failure> {
         bar.set_position(done as u64)
     });
     bar.finish_and_clear();
-    let db_path = crate::db::Location::or_default(args.db.as_ref());
+    let db_path = crate::db::Location::or_default(args.db.as_ref())?;
     let beside = args.blob.parent().map_or_else(
         || std::path::PathBuf::from("."),
         std::path::Path::to_path_buf,

@@ -47,7 +47,7 @@ pub struct HealthArgs {
     /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
     /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
     #[arg(long, value_name = "FILE|URL")]
-    pub db: Option<crate::db::Location>,
+    pub db: Option<crate::db::Given>,
     /// Do not record the health.
     #[arg(long)]
     pub no_db: bool,
@@ -58,7 +58,9 @@ pub struct HealthArgs {
 /// # Errors
 /// A message naming the file, line or request that failed.
 pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
-    let db_path = (!args.no_db).then(|| crate::db::Location::or_default(args.db.as_ref()));
+    let db_path = (!args.no_db)
+        .then(|| crate::db::Location::or_default(args.db.as_ref()))
+        .transpose()?;
     Paths::new()
         .input("the recording", args.recording.as_deref())
         .input("--blob", args.blob.as_deref())
@@ -71,7 +73,7 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
     let (health, blob, serial, source) = match (&args.port, &args.blob, &args.recording) {
         (Some(port), _, rec) => from_unit(args, port, rec.as_deref())?,
         (None, Some(b), Some(rec)) => {
-            let bytes = std::fs::read(b).map_err(|e| format!("{}: {e}", b.display()))?;
+            let bytes = crate::files::read_blob(b)?;
             let h = on_host(args, &bytes, rec)?;
             let serial = serial_of(&bytes, b)?;
             (h, bytes, serial, rec.display().to_string())

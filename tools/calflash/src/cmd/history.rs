@@ -13,7 +13,7 @@ pub struct HistoryArgs {
     /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
     /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
     #[arg(long, value_name = "FILE|URL")]
-    pub db: Option<crate::db::Location>,
+    pub db: Option<crate::db::Given>,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -24,7 +24,7 @@ pub struct HistoryArgs {
 /// # Errors
 /// An unreadable database.
 pub fn run(args: &HistoryArgs) -> Result<(), Failure> {
-    let path = crate::db::Location::or_default(args.db.as_ref());
+    let path = crate::db::Location::or_default(args.db.as_ref())?;
     let rows = Db::open_existing(&path).and_then(|mut d| d.history(&args.serial))?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);

@@ -26,10 +26,10 @@ pub enum DbCommand {
 pub struct MigrateArgs {
     /// The history to copy from (read, never changed): a SQLite file or a PostgreSQL URL.
     #[arg(value_name = "FROM")]
-    pub from: Location,
+    pub from: db::Given,
     /// The history to copy into (default: $CALFLASH_DB): a PostgreSQL URL or a SQLite file.
     #[arg(long, value_name = "FILE|URL")]
-    pub to: Option<Location>,
+    pub to: Option<db::Given>,
     /// The station of the records that name none (recorded before histories kept stations;
     /// default: $CALFLASH_STATION, else this machine's host name).
     #[arg(long)]
@@ -47,8 +47,8 @@ pub fn run(args: &DbArgs) -> Result<(), Failure> {
 }
 
 fn migrate(args: &MigrateArgs) -> Result<(), Failure> {
-    let to = Location::or_default(args.to.as_ref());
-    let from = &args.from;
+    let to = Location::or_default(args.to.as_ref())?;
+    let from = &args.from.location()?;
     if to == *from {
         return Err(format!(
             "calflash db migrate: {from} is both the history to copy and the one to copy into"

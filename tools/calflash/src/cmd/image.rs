@@ -30,6 +30,10 @@ pub struct ImageArgs {
     /// it (for example STM32F407VGTx).
     #[arg(long, value_name = "CHIP")]
     pub probe: Option<String>,
+    /// Put a blob whose fit was judged REJECT (made with `calibrate --force-blob`) into the
+    /// image: a person insists; the blob keeps its mark.
+    #[arg(long)]
+    pub force_rejected: bool,
 }
 
 /// Runs `calflash image`.
@@ -51,16 +55,23 @@ pub fn run(args: &ImageArgs) -> Result<(), Failure> {
     if args.hex.is_none() && args.bin.is_none() && args.probe.is_none() {
         return Err("give --hex, --bin or --probe".into());
     }
-    let keys = args
-        .station_key
-        .iter()
-        .map(|p| crate::signing::load_public(p))
-        .collect::<Result<Vec<_>, _>>()?;
+    let keys = crate::signing::load_publics(&args.station_key)?;
     let bytes = args
         .blob
-        .as_ref()
-        .map(|p| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display())))
+        .as_deref()
+        .map(crate::files::read_blob)
         .transpose()?;
+    let mut warning = None;
+    if let (Some(bytes), Some(path)) = (&bytes, &args.blob) {
+        let cal =
+            crate::signing::calibration(bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        warning = crate::approval::admit(
+            &cal.data().identity,
+            path,
+            crate::approval::Act::Image,
+            args.force_rejected,
+        )?;
+    }
     if let (Some(bytes), Some(path), false) = (&bytes, &args.blob, keys.is_empty()) {
         // A provisioned unit boots only a blob signed for it by one of its keys.
         let cal =
@@ -78,6 +89,9 @@ pub fn run(args: &ImageArgs) -> Result<(), Failure> {
             Some(p) => format!("{}: {e}", p.display()),
             None => e.to_string(),
         })?;
+    if let Some(w) = warning {
+        eprintln!("calflash: {w}");
+    }
     for k in &keys {
         println!(
             "calflash image: keys sector provisioned with station key {}",

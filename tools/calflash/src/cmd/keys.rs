@@ -22,8 +22,7 @@ pub struct KeygenArgs {
 /// # Errors
 /// Files that exist or cannot be written.
 pub fn keygen(args: &KeygenArgs) -> Result<(), Failure> {
-    let private = args.prefix.with_extension("key");
-    let public = args.prefix.with_extension("pub");
+    let (private, public) = signing::pair_paths(&args.prefix)?;
     let id = signing::keygen(&private, &public)?;
     println!(
         "calflash keygen  key {}: private {} (mode 600: keep it on the station), public {}",
@@ -43,8 +42,8 @@ pub struct SignArgs {
     /// The station's private key (default: $CALFLASH_SIGN_KEY).
     #[arg(long)]
     pub sign_key: Option<PathBuf>,
-    /// The counter: above the one the unit holds (its present one for a --downgrade).
-    #[arg(long)]
+    /// The counter: above the one the unit holds (its present one for a --downgrade), from 1.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub counter: u32,
     /// A downgrade: an earlier calibration put back on purpose, made for the unit at its
     /// present counter.
@@ -53,6 +52,10 @@ pub struct SignArgs {
     /// The signed blob to write.
     #[arg(long, short)]
     pub output: PathBuf,
+    /// Sign a blob whose fit was judged REJECT (made with `calibrate --force-blob`): a person
+    /// insists; the blob keeps its mark.
+    #[arg(long)]
+    pub force_rejected: bool,
 }
 
 /// Runs `calflash sign`.
@@ -69,10 +72,27 @@ pub fn sign(args: &SignArgs) -> Result<(), Failure> {
         .output("-o", Some(&args.output))
         .check()?;
     let key = signing::load_private(&key_path)?;
-    let blob = std::fs::read(&args.blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let blob = crate::files::read_blob(&args.blob)?;
+    let cal =
+        signing::calibration(&blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let warning = crate::approval::admit(
+        &cal.data().identity,
+        &args.blob,
+        crate::approval::Act::Sign,
+        args.force_rejected,
+    )?;
+    if args.counter == u32::MAX && !args.downgrade {
+        eprintln!(
+            "calflash: WARNING: counter {} is the highest there is: a unit that takes it accepts only downgrades signed at it from then on",
+            u32::MAX
+        );
+    }
     let signed = signing::sign(&blob, &key, args.counter, args.downgrade)
         .map_err(|e| format!("{}: {e}", args.blob.display()))?;
     crate::files::write_atomically(&args.output, |w| w.write_all(&signed))?;
+    if let Some(w) = warning {
+        eprintln!("calflash: {w}");
+    }
     println!(
         "calflash sign  {} -> {}: counter {}{}, {} bytes ({} over the blob)",
         args.blob.display(),

@@ -49,7 +49,7 @@ pub struct LotArgs {
     /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
     /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
     #[arg(long, value_name = "FILE|URL")]
-    pub db: Option<crate::db::Location>,
+    pub db: Option<crate::db::Given>,
 }
 
 /// A chart kind on the command line.
@@ -118,7 +118,7 @@ pub fn load(path: &Location, sel: &Selection<'_>, alpha: f64) -> Result<lot::Lot
 /// # Errors
 /// As [`load`], a coefficient to chart that the lot lacks, or an unwritable JSON file.
 pub fn run(args: &LotArgs) -> Result<(), Failure> {
-    let path = crate::db::Location::or_default(args.db.as_ref());
+    let path = crate::db::Location::or_default(args.db.as_ref())?;
     crate::files::Paths::new()
         .input("--db", path.file())
         .output("--json", args.json.as_deref())

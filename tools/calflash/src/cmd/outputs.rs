@@ -24,7 +24,7 @@ pub struct Outputs {
     /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
     /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
     #[arg(long, value_name = "FILE|URL")]
-    pub db: Option<crate::db::Location>,
+    pub db: Option<crate::db::Given>,
     /// Do not record the calibration.
     #[arg(long)]
     pub no_db: bool,
@@ -33,9 +33,15 @@ pub struct Outputs {
     #[arg(long)]
     pub force_blob: bool,
     /// Sign the blob with the station's private key (default: $CALFLASH_SIGN_KEY), for a
-    /// unit provisioned with its public key. A calibration judged REJECT is never signed.
+    /// unit provisioned with its public key. Only a calibration judged ACCEPT is signed: one
+    /// judged REVIEW only with --sign-review, one judged REJECT never.
     #[arg(long)]
     pub sign_key: Option<PathBuf>,
+    /// Sign a calibration judged REVIEW too: a person has reviewed it (or the station's policy
+    /// says so). Without it, a REVIEW blob is written unsigned, to be signed with `calflash
+    /// sign` after the review.
+    #[arg(long)]
+    pub sign_review: bool,
     /// The signed blob's counter: above the one the unit holds (default: one above the
     /// highest counter of the unit's blobs in the history).
     #[arg(long)]
@@ -66,7 +72,9 @@ impl Outputs {
     /// # Errors
     /// The two options that name one file.
     pub fn check(&self, inputs: Paths) -> Result<(), Failure> {
-        let db = (!self.no_db).then(|| crate::db::Location::or_default(self.db.as_ref()));
+        let db = (!self.no_db)
+            .then(|| crate::db::Location::or_default(self.db.as_ref()))
+            .transpose()?;
         inputs
             .output("--blob", self.blob.as_deref())
             .output("--report", self.report.as_deref())
@@ -91,12 +99,15 @@ impl Outputs {
         let lot = match &self.lot_before {
             Some(before) => before.as_ref().as_ref(),
             None => {
-                let path = crate::db::Location::or_default(self.db.as_ref());
                 let sel = crate::db::Selection {
                     lot: Some(name),
                     ..crate::db::Selection::all()
                 };
-                read = crate::cmd::lot::load_without(&path, &sel, |s| s == serial, alpha);
+                read = crate::db::Location::or_default(self.db.as_ref())
+                    .map_err(|e| e.to_string())
+                    .and_then(|path| {
+                        crate::cmd::lot::load_without(&path, &sel, |s| s == serial, alpha)
+                    });
                 read.as_ref()
             }
         };
@@ -137,26 +148,38 @@ impl Outputs {
         })
     }
 
-    /// Signs `blob` (the calibration of unit `serial`) when a key is given, unless the
-    /// calibration is `rejected`: the counter is `--counter`, else one above the highest in
-    /// the unit's history.
+    /// Signs `blob` (the calibration of unit `serial`, judged `verdict`) when a key is given
+    /// (`--sign-key` or `$CALFLASH_SIGN_KEY`, the same policy for both): ACCEPT is signed,
+    /// REVIEW only with `--sign-review`, REJECT never. The counter is `--counter`, else one
+    /// above the highest in the unit's history.
     ///
     /// # Errors
     /// An unreadable key or one others may read, a history that cannot be read, or no counter.
-    pub fn sign(&self, blob: Vec<u8>, serial: &str, rejected: bool) -> Result<Signed, Failure> {
+    pub fn sign(
+        &self,
+        blob: Vec<u8>,
+        serial: &str,
+        verdict: crate::sensor::Verdict,
+    ) -> Result<Signed, Failure> {
+        use crate::sensor::Verdict;
         let Some(key_path) = crate::signing::key_path(self.sign_key.as_deref()) else {
             return Ok(Signed {
                 bytes: blob,
                 note: None,
             });
         };
-        if rejected {
+        let refused = match verdict {
+            Verdict::Reject => Some("a calibration judged REJECT is never signed".to_string()),
+            Verdict::Review if !self.sign_review => Some(
+                "a calibration judged REVIEW is signed only after a review: `calflash sign` it then, or calibrate with --sign-review"
+                    .to_string(),
+            ),
+            _ => None,
+        };
+        if let Some(why) = refused {
             return Ok(Signed {
                 bytes: blob,
-                note: Some(format!(
-                    "  not signed: a calibration judged REJECT is never signed with {}",
-                    key_path.display()
-                )),
+                note: Some(format!("  not signed with {}: {why}", key_path.display())),
             });
         }
         let key = crate::signing::load_private(&key_path)?;
@@ -168,7 +191,7 @@ impl Outputs {
                 );
             }
             None => {
-                let path = crate::db::Location::or_default(self.db.as_ref());
+                let path = crate::db::Location::or_default(self.db.as_ref())?;
                 let held = match path.file() {
                     Some(f) if !f.exists() => 0,
                     _ => Db::open(&path).and_then(|mut d| d.highest_counter(serial))?,
@@ -181,9 +204,14 @@ impl Outputs {
         let id = crate::signing::signer(&bytes)
             .map(|(id, _)| id)
             .unwrap_or_default();
+        let reviewed = if verdict == Verdict::Review {
+            " (REVIEW, signed on --sign-review)"
+        } else {
+            ""
+        };
         Ok(Signed {
             note: Some(format!(
-                "  signed by station key {id} ({}), counter {counter}",
+                "  signed by station key {id} ({}), counter {counter}{reviewed}",
                 key_path.display()
             )),
             bytes,
@@ -234,7 +262,7 @@ impl Outputs {
         if self.no_db {
             return Ok(None);
         }
-        let path = crate::db::Location::or_default(self.db.as_ref());
+        let path = crate::db::Location::or_default(self.db.as_ref()).map_err(|e| e.to_string())?;
         let beside = db::beside(&[
             self.blob.as_deref(),
             self.json.as_deref(),

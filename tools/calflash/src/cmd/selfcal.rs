@@ -161,7 +161,7 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, Failure> {
     let signed = check
         .map(|c| c.blob.clone())
         .filter(|_| !reject || args.out.force_blob)
-        .map(|b| args.out.sign(b, name, reject))
+        .map(|b| args.out.sign(b, name, acceptance::verdict(&c, check).0))
         .transpose()?;
     let blob = signed.as_ref().map(|s| s.bytes.as_slice());
     args.out.write(blob, &record, || {

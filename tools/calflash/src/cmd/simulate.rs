@@ -318,7 +318,7 @@ fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), Failure> {
     if args.sensor != SensorKind::Imu {
         return Err("--rest: a unit at rest is simulated as an IMU (--sensor imu)".into());
     }
-    let bytes = std::fs::read(blob).map_err(|e| format!("{}: {e}", blob.display()))?;
+    let bytes = crate::files::read_blob(blob)?;
     let cal =
         crate::signing::calibration(&bytes).map_err(|e| format!("{}: {e}", blob.display()))?;
     let rate = args.sample_rate.unwrap_or(1000.0);

@@ -91,6 +91,14 @@ pub enum Cause {
          nothing was read or written"
     )]
     ForeignTable,
+    /// A PostgreSQL database without calflash's tables that holds tables of its own: another
+    /// program's database, which calflash never takes over.
+    #[error(
+        "it holds {0} table(s) or other object(s) of its own and no calflash history: it is \
+         another program's database; calflash creates its tables only in an empty database \
+         (createdb a new one for the history); nothing was written"
+    )]
+    ForeignDatabase(i64),
     /// A SQLite file without calflash's table that is not empty: another program's.
     #[error(
         "it has no table `records` but {} (schema {version}, {objects} other object(s)): it is \

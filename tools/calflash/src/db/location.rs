@@ -1,7 +1,7 @@
 //! Where the unit history is: a SQLite file on the station (the default) or a PostgreSQL
 //! database that several stations share (`postgres://` or `postgresql://` URLs).
 
-use std::ffi::OsString;
+use std::ffi::{OsStr, OsString};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -14,18 +14,111 @@ pub enum Location {
     Server(String),
 }
 
-impl From<OsString> for Location {
-    fn from(s: OsString) -> Self {
-        match s.to_str() {
-            Some(t) if is_server_url(t) => Self::Server(t.to_string()),
-            _ => Self::File(PathBuf::from(s)),
+/// A `--db` or `$CALFLASH_DB` that names no history calflash can keep records in. The text
+/// given is never repeated whole in the message: a mistyped URL may hold a password.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LocationError {
+    /// An empty location.
+    #[error(
+        "the unit history's location is empty (--db \"\" or an empty $CALFLASH_DB): give a \
+         SQLite file or a postgres:// URL, or --no-db to record nothing"
+    )]
+    Empty,
+    /// A database in memory, deleted when calflash exits.
+    #[error(
+        "`{0}` is a database in memory, deleted when calflash exits: nothing would be kept; \
+         give a SQLite file or a postgres:// URL, or --no-db to record nothing"
+    )]
+    Memory(String),
+    /// Blanks around the location.
+    #[error(
+        "the unit history's location begins or ends with a blank: give it without (a file \
+         name with such blanks is refused, as a mistyped URL would become one)"
+    )]
+    Blank,
+    /// A URL of a scheme calflash does not speak, or a URL mistyped.
+    #[error(
+        "`{scheme}:...` (the rest not shown: it may hold a password) is not a history calflash \
+         can use: give a SQLite file (./{scheme}... for a file of that name) or a PostgreSQL \
+         URL, postgres://USER:PASSWORD@HOST/DB (postgresql:// too)"
+    )]
+    Scheme {
+        /// The text before the first `:`.
+        scheme: String,
+    },
+}
+
+impl Location {
+    /// Reads `--db` or `$CALFLASH_DB`: a `postgres://` or `postgresql://` URL (the scheme in
+    /// any case) is a server; a path a SQLite file. Refused: an empty location, `:memory:` and
+    /// SQLite's `file:` URIs, blanks around it, and any other `scheme:/...` or `scheme://`
+    /// (`postgress://`, `postgres:/`, `mysql://`): a mistyped URL must not become a local file
+    /// whose directories carry the password.
+    ///
+    /// # Errors
+    /// [`LocationError`].
+    pub fn parse(text: &OsStr) -> Result<Self, LocationError> {
+        let Some(t) = text.to_str() else {
+            // Not UTF-8: a path, never a URL.
+            return Ok(Self::File(PathBuf::from(text)));
+        };
+        if t.is_empty() {
+            return Err(LocationError::Empty);
         }
+        if t.trim() != t {
+            return Err(LocationError::Blank);
+        }
+        if t == ":memory:" || t.starts_with("file:") && t.contains("memory") {
+            return Err(LocationError::Memory(t.to_string()));
+        }
+        if let Some((scheme, rest)) = t.split_once(':') {
+            let lower = scheme.to_ascii_lowercase();
+            let schemelike = scheme.len() >= 2
+                && scheme.starts_with(|c: char| c.is_ascii_alphabetic())
+                && scheme
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.'));
+            if schemelike && rest.starts_with("//") && matches!(lower.as_str(), "postgres" | "postgresql") {
+                return Ok(Self::Server(format!("{lower}{}", &t[scheme.len()..])));
+            }
+            if schemelike && (rest.starts_with('/') || lower == "file" || t.contains('@')) {
+                return Err(LocationError::Scheme {
+                    scheme: scheme.to_string(),
+                });
+            }
+        }
+        Ok(Self::File(PathBuf::from(t)))
     }
 }
 
-impl From<&str> for Location {
-    fn from(s: &str) -> Self {
-        Self::from(OsString::from(s))
+/// A history's location as `--db` gives it, read by [`Given::location`] (or
+/// [`Location::or_default`]) and not by the option parser, whose error would repeat the text
+/// given, password and all.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Given(OsString);
+
+impl From<OsString> for Given {
+    fn from(s: OsString) -> Self {
+        Self(s)
+    }
+}
+
+impl Given {
+    /// The location.
+    ///
+    /// # Errors
+    /// As [`Location::parse`].
+    pub fn location(&self) -> Result<Location, LocationError> {
+        Location::parse(&self.0)
+    }
+}
+
+impl std::str::FromStr for Location {
+    type Err = LocationError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::parse(OsStr::new(s))
     }
 }
 
@@ -59,22 +152,26 @@ impl fmt::Display for Location {
 impl Location {
     /// The default: `$CALFLASH_DB`, else `$XDG_DATA_HOME/calflash/units.sqlite`, else
     /// `~/.local/share/calflash/units.sqlite`.
-    #[must_use]
-    pub fn default_location() -> Self {
+    ///
+    /// # Errors
+    /// A `$CALFLASH_DB` that names no usable history ([`Location::parse`]).
+    pub fn default_location() -> Result<Self, LocationError> {
         if let Some(p) = std::env::var_os("CALFLASH_DB") {
-            return Self::from(p);
+            return Self::parse(&p);
         }
         let data = std::env::var_os("XDG_DATA_HOME")
             .map(PathBuf::from)
             .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
             .unwrap_or_else(|| PathBuf::from("."));
-        Self::File(data.join("calflash").join("units.sqlite"))
+        Ok(Self::File(data.join("calflash").join("units.sqlite")))
     }
 
     /// `given`, else the default.
-    #[must_use]
-    pub fn or_default(given: Option<&Self>) -> Self {
-        given.cloned().unwrap_or_else(Self::default_location)
+    ///
+    /// # Errors
+    /// As [`Location::parse`] and [`Location::default_location`].
+    pub fn or_default(given: Option<&Given>) -> Result<Self, LocationError> {
+        given.map_or_else(Self::default_location, Given::location)
     }
 
     /// The file, for a SQLite history.
@@ -85,10 +182,6 @@ impl Location {
             Self::Server(_) => None,
         }
     }
-}
-
-fn is_server_url(s: &str) -> bool {
-    s.starts_with("postgres://") || s.starts_with("postgresql://")
 }
 
 /// `url` without its password (the `:password` of the user part and any `password=`
@@ -132,22 +225,53 @@ pub fn redact(url: &str) -> String {
 mod tests {
     use super::*;
 
+    fn from(s: &str) -> Location {
+        s.parse().unwrap()
+    }
+
+    #[test]
+    fn a_mistyped_url_or_a_memory_database_is_refused_and_no_password_shown() {
+        for bad in [
+            "Postgress://u:s3cret@h/db",
+            "postgress://u:s3cret@h/db",
+            "postgres:/u:s3cret@h/db",
+            "mysql://u:s3cret@h/db",
+            "sqlite://u:s3cret@h/db",
+            "file:units.sqlite?mode=memory",
+            " postgres://u:s3cret@h/db",
+            "postgres://u:s3cret@h/db ",
+            "postgres:u:s3cret@h/db",
+            "",
+            ":memory:",
+        ] {
+            let e = bad.parse::<Location>().unwrap_err();
+            let m = e.to_string();
+            assert!(!m.contains("s3cret"), "{bad}: {m}");
+            assert!(!m.is_empty());
+        }
+        assert_eq!(
+            from("Postgres://u@h/db"),
+            Location::Server("postgres://u@h/db".into())
+        );
+        assert_eq!(from("C:/units.sqlite"), Location::File("C:/units.sqlite".into()));
+    }
+
     #[test]
     fn a_url_is_a_server_and_anything_else_a_file() {
         assert_eq!(
-            Location::from("postgres://u@h/db"),
+            from("postgres://u@h/db"),
             Location::Server("postgres://u@h/db".into())
         );
         assert_eq!(
-            Location::from("postgresql://h/db"),
+            from("postgresql://h/db"),
             Location::Server("postgresql://h/db".into())
         );
         assert_eq!(
-            Location::from("units.sqlite"),
+            from("units.sqlite"),
             Location::File("units.sqlite".into())
         );
         assert_eq!(
-            Location::from("./postgres:/x"),
+            from("./postgres:/x"),
             Location::File("./postgres:/x".into())
         );
     }
@@ -172,7 +296,7 @@ mod tests {
             ("postgres://h:5433/d", "postgres://h:5433/d"),
         ] {
             assert_eq!(redact(url), shown, "{url}");
-            assert_eq!(Location::from(url).to_string(), shown);
+            assert_eq!(from(url).to_string(), shown);
         }
     }
 }

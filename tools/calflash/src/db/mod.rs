@@ -16,7 +16,7 @@ mod sqlite;
 use std::path::{Path, PathBuf};
 
 pub use error::{Cause, Error, NotRecorded};
-pub use location::{Location, redact};
+pub use location::{Given, Location, LocationError, redact};
 pub use schema::SCHEMA_VERSION;
 use schema::{Listed, Row};
 

@@ -5,7 +5,8 @@
 //! `calflash_schema` (PostgreSQL has no `user_version`). A record is one `INSERT`, whole or
 //! absent; stations writing at once each get their own id from the table's sequence. The
 //! first station to open an empty database creates the tables, under an advisory lock so that
-//! two stations starting together do not both try. Connections are made without TLS (the
+//! two stations starting together do not both try; a database that holds tables of another
+//! program is never taken over. Connections are made without TLS (the
 //! plant's network or a local socket), with a 10 s timeout unless the URL sets one; a URL
 //! without a password takes `$PGPASSWORD`'s (`~/.pgpass` is not read).
 
@@ -187,6 +188,22 @@ fn tables(c: &mut impl postgres::GenericClient) -> Result<(bool, bool), Cause> {
     Ok((row.get(0), row.get(1)))
 }
 
+/// How many tables, views, sequences and other relations of its own the database holds,
+/// outside the system's schemas.
+fn own_objects(c: &mut impl postgres::GenericClient) -> Result<i64, Cause> {
+    let row = c
+        .query_one(
+            "SELECT count(*) FROM pg_class r JOIN pg_namespace n ON n.oid = r.relnamespace
+             WHERE r.relkind IN ('r', 'p', 'v', 'm', 'f', 'S')
+               AND n.nspname NOT IN ('pg_catalog', 'information_schema')
+               AND n.nspname NOT LIKE 'pg\\_toast%'
+               AND n.nspname NOT LIKE 'pg\\_temp\\_%'",
+            &[],
+        )
+        .map_err(why)?;
+    Ok(row.get(0))
+}
+
 /// Checks the version and columns of an existing history; migrates version 3 when `write`.
 /// The version and the later columns the table (now) has.
 fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<(i64, Later), Cause> {
@@ -241,6 +258,10 @@ impl Postgres {
             .map_err(why)?;
         match tables(&mut tx)? {
             (false, false) => {
+                let theirs = own_objects(&mut tx)?;
+                if theirs > 0 {
+                    return Err(Cause::ForeignDatabase(theirs));
+                }
                 tx.batch_execute(SCHEMA).map_err(why)?;
                 tx.execute(
                     "INSERT INTO calflash_schema (version) VALUES ($1)",

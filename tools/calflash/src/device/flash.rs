@@ -320,7 +320,9 @@ pub fn flash<L: Read + Write>(
             }
         }
     }
-    if cal.data().identity.fit_rejected && !opts.rejected_fit {
+    let path = std::path::Path::new("the blob");
+    let act = crate::approval::Act::Flash;
+    if crate::approval::admit(&cal.data().identity, path, act, opts.rejected_fit).is_err() {
         return Err(FlashError::RejectedFit);
     }
     let kind = protocol::UnitSensor::of(cal.data());

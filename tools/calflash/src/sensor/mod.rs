@@ -533,11 +533,13 @@ pub fn data_hash(paths: &[&Path]) -> Result<[u8; 16], ObsError> {
     use sha2::Digest as _;
     let mut h = sha2::Sha256::new();
     for path in paths {
-        let bytes = std::fs::read(path).map_err(|source| ObsError::Io {
+        // Streamed: the hash of a file of any size in constant memory.
+        let io = |source| ObsError::Io {
             path: path.to_path_buf(),
             source,
-        })?;
-        h.update(&bytes);
+        };
+        let mut f = std::fs::File::open(path).map_err(io)?;
+        std::io::copy(&mut f, &mut h).map_err(io)?;
     }
     let mut out = [0u8; 16];
     out.copy_from_slice(&h.finalize()[..16]);

@@ -71,14 +71,73 @@ fn serial_of(file: &Path) -> Result<String, String> {
     Ok(stem.to_string())
 }
 
+/// The files a batch writes for one unit into `--out-dir`.
+#[derive(Debug, Clone)]
+pub struct UnitFiles {
+    /// `SERIAL.blob`.
+    pub blob: PathBuf,
+    /// `SERIAL.json`.
+    pub json: PathBuf,
+    /// `SERIAL.html`, with `--reports`.
+    pub report: Option<PathBuf>,
+    /// `SERIAL.txt`: what `calibrate` prints for one unit.
+    pub summary: PathBuf,
+}
+
+/// Every unit's files in `out_dir`, checked before any work: a serial that is not a plain file
+/// name is refused, and no unit's file may be an input of the batch (an observation file, a
+/// fixture) or another unit's file, nor `index.html`.
+///
+/// # Errors
+/// The unit and the file.
+pub fn unit_files(
+    args: &CalibrateArgs,
+    units: &[(String, PathBuf)],
+    out_dir: &Path,
+) -> Result<Vec<UnitFiles>, Failure> {
+    let file = |serial: &str, ext: &str| crate::files::unit_file(out_dir, serial, ext);
+    let mut paths = crate::files::Paths::new();
+    for d in &args.data {
+        paths = paths.input("the data", Some(d.as_path()));
+    }
+    for (serial, f) in units {
+        paths = paths.input(&format!("unit {serial}'s observations"), Some(f.as_path()));
+    }
+    let mut all = Vec::with_capacity(units.len());
+    for (serial, _) in units {
+        let files = UnitFiles {
+            blob: file(serial, "blob")?,
+            json: file(serial, "json")?,
+            report: args.reports.then(|| file(serial, "html")).transpose()?,
+            summary: file(serial, "txt")?,
+        };
+        let named = |what: &str| format!("--out-dir (unit {serial}'s {what})");
+        paths = paths
+            .output(&named("blob"), Some(&files.blob))
+            .output(&named("record"), Some(&files.json))
+            .output(&named("report"), files.report.as_deref())
+            .output(&named("summary"), Some(&files.summary));
+        all.push(files);
+    }
+    let index = out_dir.join("index.html");
+    paths
+        .output("--out-dir (the batch's index.html)", args.reports.then_some(index.as_path()))
+        .check()?;
+    Ok(all)
+}
+
 /// Calibrates `units` (serial, file) with the options of `args` on rayon's threads, each
 /// unit's files and summary (`SERIAL.txt`) into `out_dir`, with a progress bar; the outcomes
 /// in the order of `units`.
+///
+/// # Errors
+/// A unit's files that cannot be written ([`unit_files`]), before any unit is calibrated.
 pub fn calibrate_all(
     args: &CalibrateArgs,
     units: &[(String, PathBuf)],
     out_dir: &Path,
-) -> Vec<Outcome> {
+) -> Result<Vec<Outcome>, Failure> {
+    let files = unit_files(args, units, out_dir)?;
     let bar = indicatif::ProgressBar::new(units.len() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -95,25 +154,27 @@ pub fn calibrate_all(
             lot: Some(name),
             ..crate::db::Selection::all()
         };
-        let path = crate::db::Location::or_default(args.out.db.as_ref());
-        std::sync::Arc::new(crate::cmd::lot::load_without(
-            &path,
-            &sel,
-            |s| serials.contains(s),
-            0.001,
-        ))
+        std::sync::Arc::new(
+            crate::db::Location::or_default(args.out.db.as_ref())
+                .map_err(|e| e.to_string())
+                .and_then(|path| {
+                    crate::cmd::lot::load_without(&path, &sel, |s| serials.contains(s), 0.001)
+                }),
+        )
     });
     let outcomes: Vec<Outcome> = units
         .par_iter()
-        .map(|(serial, file)| {
+        .zip(&files)
+        .map(|((serial, file), files)| {
             let out = Outputs {
-                blob: Some(out_dir.join(format!("{serial}.blob"))),
-                report: args.reports.then(|| out_dir.join(format!("{serial}.html"))),
-                json: Some(out_dir.join(format!("{serial}.json"))),
+                blob: Some(files.blob.clone()),
+                report: files.report.clone(),
+                json: Some(files.json.clone()),
                 db: args.out.db.clone(),
                 no_db: args.out.no_db,
                 force_blob: args.out.force_blob,
                 sign_key: args.out.sign_key.clone(),
+                sign_review: args.out.sign_review,
                 counter: None,
                 lot: args.out.lot.clone(),
                 lot_before: lot_before.clone(),
@@ -125,7 +186,7 @@ pub fn calibrate_all(
                 Ok(_) => said,
                 Err(e) => format!("{said}calflash: {e}\n"),
             };
-            let _ = std::fs::write(out_dir.join(format!("{serial}.txt")), text);
+            let _ = crate::files::write_atomically(&files.summary, |w| w.write_all(text.as_bytes()));
             bar.inc(1);
             Outcome {
                 serial: serial.clone(),
@@ -135,7 +196,7 @@ pub fn calibrate_all(
         })
         .collect();
     bar.finish_and_clear();
-    outcomes
+    Ok(outcomes)
 }
 
 /// Refuses the options that name one unit's files or serial in a batch.
@@ -199,7 +260,7 @@ pub fn run_units(
     units: &[(String, PathBuf)],
     out_dir: &Path,
 ) -> Result<Verdict, Failure> {
-    let outcomes = calibrate_all(args, units, out_dir);
+    let outcomes = calibrate_all(args, units, out_dir)?;
     println!(
         "calflash calibrate  {} units on {} threads into {}",
         outcomes.len(),

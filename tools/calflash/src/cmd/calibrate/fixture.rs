@@ -81,17 +81,28 @@ fn split_header(header: &csv::StringRecord) -> Split {
     (units, shared)
 }
 
-/// `--units u1=SERIAL,...`: prefix to serial.
+/// `--units u1=SERIAL,...`: prefix to serial; a prefix given twice, or two prefixes given one
+/// serial, are refused (one unit would be dropped, or two written into one file).
 fn unit_map(text: &[String]) -> Result<BTreeMap<String, String>, String> {
-    text.iter()
-        .map(|pair| {
-            let (prefix, serial) = pair.split_once('=').ok_or_else(|| {
-                format!("--units {pair}: expected PREFIX=SERIAL, e.g. u3=IMU-0007")
-            })?;
-            crate::sensor::blob::serial(serial).map_err(|e| format!("--units {pair}: {e}"))?;
-            Ok((prefix.to_string(), serial.to_string()))
-        })
-        .collect()
+    let mut map = BTreeMap::new();
+    for pair in text {
+        let (prefix, serial) = pair
+            .split_once('=')
+            .ok_or_else(|| format!("--units {pair}: expected PREFIX=SERIAL, e.g. u3=IMU-0007"))?;
+        crate::sensor::blob::serial(serial).map_err(|e| format!("--units {pair}: {e}"))?;
+        if let Some(before) = map.get(prefix) {
+            return Err(format!(
+                "--units {pair}: unit {prefix} is named twice ({prefix}={before} and {pair}); name each unit once"
+            ));
+        }
+        if let Some((other, _)) = map.iter().find(|(_, s)| *s == serial) {
+            return Err(format!(
+                "--units {pair}: serial {serial} is given to {other} and {prefix}; each unit needs its own serial"
+            ));
+        }
+        map.insert(prefix.to_string(), serial.to_string());
+    }
+    Ok(map)
 }
 
 /// Splits the fixture file `data` into one observation file per unit in `out_dir`; the units
@@ -157,46 +168,67 @@ pub fn split(
             (serial, cols.into_iter().collect())
         })
         .collect();
+    let unnamed: Vec<&str> = plan
+        .iter()
+        .filter(|(serial, _)| !map.values().any(|s| s == serial))
+        .map(|(s, _)| s.as_str())
+        .collect();
+    if !unnamed.is_empty() {
+        eprintln!(
+            "calflash: {name}: unit(s) {} recorded under their column prefix as serial (name them with --units PREFIX=SERIAL)",
+            unnamed.join(", ")
+        );
+    }
+    let mut paths = crate::files::Paths::new().input("the fixture", Some(data));
+    let mut files = Vec::with_capacity(plan.len());
     for (serial, _) in &plan {
         crate::sensor::blob::serial(serial).map_err(|e| {
             format!("{name}: unit {serial}: {e} (name it with --units PREFIX=SERIAL)")
         })?;
+        if plan.iter().filter(|(s, _)| s == serial).count() > 1 {
+            return Err(format!(
+                "{name}: two units are named {serial} (a column prefix and a --units serial); each unit needs its own serial"
+            ));
+        }
+        let path = crate::files::unit_file(out_dir, serial, "obs.csv").map_err(|e| e.to_string())?;
+        paths = paths.output(&format!("--out-dir (unit {serial}'s observations)"), Some(&path));
+        files.push(path);
     }
-    let mut writers = plan
-        .iter()
-        .map(|(serial, cols)| {
-            let path = out_dir.join(format!("{serial}.obs.csv"));
-            let mut w =
-                csv::Writer::from_path(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-            w.write_record(cols.iter().map(|(k, _)| k.as_str()))
-                .map_err(|e| format!("{}: {e}", path.display()))?;
-            Ok((path, w))
+    paths.check().map_err(|e| e.to_string())?;
+    let rows = reader
+        .records()
+        .enumerate()
+        .map(|(line, row)| {
+            let row = row.map_err(|e| format!("{name}: {e}"))?;
+            if let Some((k, _)) = plan
+                .iter()
+                .flat_map(|(_, cols)| cols)
+                .find(|(_, i)| row.get(*i).is_none())
+            {
+                return Err(format!(
+                    "{name}:{}: no value for column {k} (the row is short)",
+                    line + 2
+                ));
+            }
+            Ok(row)
         })
         .collect::<Result<Vec<_>, String>>()?;
-    for (line, row) in reader.records().enumerate() {
-        let row = row.map_err(|e| format!("{name}: {e}"))?;
-        for ((_, cols), (path, w)) in plan.iter().zip(&mut writers) {
-            let fields = cols
-                .iter()
-                .map(|(k, i)| {
-                    row.get(*i).ok_or_else(|| {
-                        format!(
-                            "{name}:{}: no value for column {k} (the row is short)",
-                            line + 2
-                        )
-                    })
-                })
-                .collect::<Result<Vec<_>, String>>()?;
-            w.write_record(fields)
-                .map_err(|e| format!("{}: {e}", path.display()))?;
-        }
+    // Every unit's file staged, then all renamed into place: a failure leaves none.
+    let mut staged = crate::files::Staged::new();
+    for ((_, cols), path) in plan.iter().zip(&files) {
+        staged
+            .write(path, |w| {
+                let mut w = csv::Writer::from_writer(w);
+                w.write_record(cols.iter().map(|(k, _)| k.as_str()))?;
+                for row in &rows {
+                    w.write_record(cols.iter().map(|(_, i)| row.get(*i).unwrap_or_default()))?;
+                }
+                w.flush()
+            })
+            .map_err(|e| e.to_string())?;
     }
-    let mut out = Vec::with_capacity(plan.len());
-    for ((serial, _), (path, mut w)) in plan.into_iter().zip(writers) {
-        w.flush().map_err(|e| format!("{}: {e}", path.display()))?;
-        out.push((serial, path));
-    }
-    Ok(out)
+    staged.commit().map_err(|e| e.to_string())?;
+    Ok(plan.into_iter().map(|(s, _)| s).zip(files).collect())
 }
 
 /// Runs `calflash calibrate FIXTURE --fixture --out-dir OUT`: splits, then the batch.

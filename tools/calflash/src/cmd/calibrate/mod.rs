@@ -290,7 +290,7 @@ pub fn calibrate_one(
     let serial = c.data.identity.serial.as_str();
     let (blob, signed_note) = match blob {
         Some(b) => {
-            let s = out.sign(b, serial, c.verdict() == Verdict::Reject)?;
+            let s = out.sign(b, serial, c.verdict())?;
             (Some(s.bytes), s.note)
         }
         None => (None, None),

@@ -1,0 +1,387 @@
+//! The newer commands (batches and fixtures, keys and signing, images, the shared history,
+//! health, lots, flights on the spin rig) tried as a careless and a hostile user would
+//! (issue 30; the list is kept in `RELIABILITY.md`). Every command runs under the watchdog.
+
+#[path = "common/watchdog.rs"]
+mod watchdog;
+
+use std::path::{Path, PathBuf};
+
+use watchdog::{Ran, calflash, cli};
+
+fn examples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data")
+}
+
+/// Every file in `dir`, hidden ones included.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// Asserts the run failed with `code`, said `says` and did not panic.
+fn refused(r: &Ran, code: i32, says: &str, what: &str) {
+    r.expect(code, says, what);
+}
+
+/// A simulated single-axis accelerometer's observations in `dir/file`.
+fn simulate(dir: &Path, file: &str, seed: u64) {
+    let r = cli(
+        dir,
+        &format!(
+            "simulate --sensor single-accel --plan head:36 --temps=-40,25,85 --seed {seed} -o {file}"
+        ),
+    );
+    assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
+}
+
+/// `dir` with a rejected blob `r.blob` (forced out of a REJECT), an accepted one `ok.blob`
+/// of the same unit, and a station key pair `st.key`/`st.pub`.
+fn station(dir: &Path) {
+    std::fs::copy(examples().join("single_accel.csv"), dir.join("s.csv")).unwrap();
+    let base = "calibrate s.csv --sensor single-accel --serial RT-1 --no-db";
+    let r = cli(
+        dir,
+        &format!("{base} --max-noise 1e-6 --force-blob --blob r.blob"),
+    );
+    assert_eq!(r.code(), Some(3), "{}{}", r.out, r.err);
+    let r = cli(dir, &format!("{base} --blob ok.blob"));
+    assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
+    let r = cli(dir, "keygen st");
+    assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
+}
+
+// ---- Calibrations nobody approved reach a unit ----
+
+#[test]
+fn a_rejected_blob_goes_into_no_image_and_is_signed_by_no_key_unless_insisted_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    station(d);
+    let before = listing(d);
+    for line in [
+        "image --blob r.blob --bin x.bin",
+        "image --blob r.blob --hex x.hex",
+        "image --blob r.blob --bin x.bin --hex x.hex --station-key st.pub",
+        "sign --blob r.blob --sign-key st.key --counter 1 -o x.signed",
+    ] {
+        let r = cli(d, line);
+        refused(&r, 1, "judged REJECT", line);
+        assert!(r.err.contains("--force-rejected"), "{line}: {}", r.err);
+        assert_eq!(listing(d), before, "{line}: nothing written");
+    }
+    // The accepted blob of the same unit goes through; the rejected one only when insisted on,
+    // with a warning, and the mark travels with it.
+    let r = cli(d, "image --blob ok.bin --bin x.bin");
+    assert_ne!(r.code(), Some(0), "no such file");
+    let r = cli(d, "image --blob ok.blob --bin ok.region");
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    let r = cli(
+        d,
+        "sign --blob r.blob --sign-key st.key --counter 1 -o r.signed --force-rejected",
+    );
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    assert!(r.err.contains("WARNING") && r.err.contains("REJECT"), "{}", r.err);
+    let signed = std::fs::read(d.join("r.signed")).unwrap();
+    let cal = calflash::signing::calibration(&signed).unwrap();
+    assert!(cal.data().identity.fit_rejected, "the signed record keeps the mark");
+    // A forced, signed, rejected blob still needs --force-rejected to go into an image.
+    let r = cli(d, "image --blob r.signed --station-key st.pub --bin y.bin");
+    refused(&r, 1, "judged REJECT", "the signed rejected blob");
+    let r = cli(
+        d,
+        "image --blob r.signed --station-key st.pub --bin y.bin --force-rejected",
+    );
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+}
+
+#[test]
+fn a_review_calibration_is_signed_only_when_the_station_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::copy(examples().join("single_accel.csv"), d.join("s.csv")).unwrap();
+    let r = cli(d, "keygen st");
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    // One output on the converter's rail: the observation is left out, the unit is a REVIEW.
+    let text = std::fs::read_to_string(d.join("s.csv")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let mut fields: Vec<&str> = lines[5].split(',').collect();
+    fields[6] = "65535";
+    lines[5] = fields.join(",");
+    std::fs::write(d.join("rail.csv"), lines.join("\n") + "\n").unwrap();
+    let run = |extra: &str| {
+        let args: Vec<String> = format!(
+            "calibrate rail.csv --sensor single-accel --serial RT-1 --no-db --counter 1 --blob b.blob {extra}"
+        )
+        .split_whitespace()
+        .map(String::from)
+        .collect();
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_calflash"))
+            .current_dir(d)
+            .env("CALFLASH_SIGN_KEY", d.join("st.key"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&out.stdout).into_owned();
+        let signed = spincal::signed::parts(&std::fs::read(d.join("b.blob")).unwrap())
+            .1
+            .is_some();
+        (said, signed)
+    };
+    let (said, signed) = run("");
+    assert!(said.contains("REVIEW"), "{said}");
+    assert!(!signed, "a REVIEW is not signed by the key in the environment: {said}");
+    assert!(said.contains("signed only after a review"), "{said}");
+    let (said, signed) = run("--sign-review");
+    assert!(signed, "{said}");
+    assert!(said.contains("signed on --sign-review"), "{said}");
+}
+
+#[test]
+fn the_two_key_files_are_not_interchangeable_and_weak_keys_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    station(d);
+    let secret = std::fs::read_to_string(d.join("st.key")).unwrap();
+    let secret_hex = secret.lines().nth(1).unwrap().trim().to_string();
+    // The private key as the public one: refused, nothing written, the secret never echoed.
+    let r = cli(d, "image --station-key st.key --bin x.bin --hex x.hex");
+    refused(&r, 1, "PRIVATE key", "private key as --station-key");
+    assert!(!d.join("x.bin").exists() && !d.join("x.hex").exists());
+    assert!(!r.err.contains(&secret_hex) && !r.out.contains(&secret_hex));
+    // The public key to sign with, readable by all: named as the public key, no chmod advice;
+    // after a chmod 600 it still does not sign.
+    for mode in [0o644, 0o600] {
+        use std::os::unix::fs::PermissionsExt as _;
+        std::fs::set_permissions(d.join("st.pub"), std::fs::Permissions::from_mode(mode)).unwrap();
+        let r = cli(
+            d,
+            "sign --blob ok.blob --sign-key st.pub --counter 1 -o x.signed",
+        );
+        refused(&r, 1, "public key", "public key as --sign-key");
+        assert!(!r.err.contains("chmod"), "{}", r.err);
+        assert!(!d.join("x.signed").exists());
+    }
+    // The same key twice.
+    let r = cli(
+        d,
+        "image --station-key st.pub --station-key ./st.pub --bin x.bin",
+    );
+    refused(&r, 1, "the same station key twice", "one key twice");
+    // A small-order point (the identity) and a non-point.
+    let header = calflash::signing::PUBLIC_HEADER;
+    let identity = format!("01{}", "00".repeat(31));
+    for (name, hex, says) in [
+        ("weak.pub", identity.as_str(), "small order"),
+        ("bad.pub", &format!("02{}", "00".repeat(31))[..], "not a point"),
+    ] {
+        std::fs::write(d.join(name), format!("{header}\n{hex}\n")).unwrap();
+        let r = cli(d, &format!("image --station-key {name} --bin x.bin"));
+        refused(&r, 1, says, name);
+        assert!(!d.join("x.bin").exists());
+    }
+}
+
+#[test]
+fn keygen_appends_its_extensions_and_a_failed_pair_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let r = cli(d, "keygen station.v1");
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    assert_eq!(listing(d), ["station.v1.key", "station.v1.pub"]);
+    let r = cli(d, "keygen other.key");
+    refused(&r, 1, "without extension", "a prefix with .key");
+    // The public half cannot be written (its directory is missing): no private half is left,
+    // so a rerun into a good place starts clean.
+    let private = d.join("lone.key");
+    let e = calflash::signing::keygen(&private, &d.join("missing/lone.pub")).unwrap_err();
+    assert!(e.to_string().contains("missing"), "{e}");
+    assert!(!private.exists(), "the private half was left behind");
+    calflash::signing::keygen(&private, &d.join("lone.pub")).unwrap();
+}
+
+// ---- Inputs overwritten, records lost ----
+
+#[test]
+fn a_batch_never_writes_over_its_own_observations() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("in")).unwrap();
+    simulate(d, "in/A-1.txt", 1);
+    simulate(d, "in/A-2.txt", 2);
+    let before = std::fs::read(d.join("in/A-1.txt")).unwrap();
+    let r = cli(d, "calibrate in --sensor single-accel --out-dir in --no-db");
+    refused(&r, 1, "A-1's summary", "--out-dir the input directory");
+    assert!(r.err.contains("the file"), "{}", r.err);
+    assert_eq!(std::fs::read(d.join("in/A-1.txt")).unwrap(), before);
+    assert_eq!(listing(&d.join("in")), ["A-1.txt", "A-2.txt"]);
+}
+
+/// A fixture of two units (`u1_output`, `u2_output`) beside the shared columns.
+fn fixture(d: &Path, prefixes: [&str; 2]) {
+    simulate(d, "s1.csv", 1);
+    simulate(d, "s2.csv", 2);
+    let rows = |f: &str| -> Vec<Vec<String>> {
+        std::fs::read_to_string(d.join(f))
+            .unwrap()
+            .lines()
+            .map(|l| l.split(',').map(String::from).collect())
+            .collect()
+    };
+    let (a, b) = (rows("s1.csv"), rows("s2.csv"));
+    let last = a[0].len() - 1;
+    let text: Vec<String> = a
+        .iter()
+        .zip(&b)
+        .enumerate()
+        .map(|(i, (ra, rb))| {
+            let mut r = ra[..last].to_vec();
+            if i == 0 {
+                r.push(format!("{}_output", prefixes[0]));
+                r.push(format!("{}_output", prefixes[1]));
+            } else {
+                r.push(ra[last].clone());
+                r.push(rb[last].clone());
+            }
+            r.join(",")
+        })
+        .collect();
+    std::fs::write(d.join("fixture.csv"), text.join("\n") + "\n").unwrap();
+}
+
+#[test]
+fn a_serial_never_names_a_file_outside_the_folder_nor_two_units_one_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("out")).unwrap();
+    fixture(d, ["u1", "u2"]);
+    let base = "calibrate fixture.csv --fixture --sensor single-accel --out-dir out --no-db";
+    for (units, says) in [
+        ("u1=../x", "plain file name"),
+        ("u1=/tmp/x", "plain file name"),
+        ("u1=.hidden", "plain file name"),
+        ("u1=A,u2=A", "each unit needs its own serial"),
+        ("u1=A,u1=B", "named twice"),
+        ("u1=u2", "two units are named u2"),
+    ] {
+        let r = cli(d, &format!("{base} --units {units}"));
+        refused(&r, 1, says, units);
+        assert!(listing(&d.join("out")).is_empty(), "{units}: nothing written");
+        assert!(!d.join("x.obs.csv").exists() && !Path::new("/tmp/x.obs.csv").exists());
+    }
+    // Units without --units are said to be recorded under their prefixes.
+    let r = cli(d, base);
+    assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
+    assert!(
+        r.err.contains("u1, u2 recorded under their column prefix"),
+        "{}",
+        r.err
+    );
+    // A prefix that is a path.
+    let e = tempfile::tempdir().unwrap();
+    std::fs::create_dir(e.path().join("out")).unwrap();
+    fixture(e.path(), ["..", "u2"]);
+    let r = cli(e.path(), base);
+    assert_ne!(r.code(), Some(0), "{}{}", r.out, r.err);
+    assert!(listing(&e.path().join("out")).is_empty());
+    assert!(!e.path().join("..obs.csv").exists());
+}
+
+#[test]
+fn a_special_file_as_an_output_is_written_into_never_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fifo = d.join("pipe");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("skipped: mkfifo is not available here");
+        return;
+    }
+    // A link to the FIFO has the shape of /dev/stdout.
+    std::os::unix::fs::symlink(&fifo, d.join("stdout")).unwrap();
+    for out in ["pipe", "stdout"] {
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read_to_string(fifo).unwrap())
+        };
+        let r = cli(
+            d,
+            &format!("simulate --sensor single-accel --plan head:4 --seed 1 -o {out}"),
+        );
+        assert_eq!(r.code(), Some(0), "{out}: {}", r.err);
+        let text = reader.join().unwrap();
+        assert!(text.starts_with("input"), "{out}: {text}");
+        let m = std::fs::metadata(&fifo).unwrap();
+        assert!(!m.is_file(), "{out}: the FIFO became a file");
+        assert!(
+            std::fs::symlink_metadata(d.join("stdout"))
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+    }
+}
+
+#[test]
+fn a_history_that_keeps_nothing_or_a_mistyped_url_is_refused_and_no_password_shown() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::copy(examples().join("single_accel.csv"), d.join("s.csv")).unwrap();
+    let base = ["calibrate", "s.csv", "--sensor", "single-accel", "--serial", "RT-1"];
+    for db in [
+        "",
+        ":memory:",
+        "Postgress://u:s3cret@h/db",
+        "postgress://u:s3cret@h/db",
+        "postgres:/u:s3cret@h/db",
+        " postgres://u:s3cret@h/db",
+        "mysql://u:s3cret@h/db",
+    ] {
+        let mut args = base.to_vec();
+        args.extend(["--db", db]);
+        let r = calflash(d, &args);
+        assert_eq!(r.code(), Some(1), "--db {db:?}: {}{}", r.out, r.err);
+        assert!(!r.out.contains("recorded"), "--db {db:?}: {}", r.out);
+        assert!(!r.err.contains("s3cret") && !r.out.contains("s3cret"), "{}", r.err);
+        assert_eq!(listing(d), ["s.csv"], "--db {db:?}: nothing created");
+        // The same from the environment.
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_calflash"))
+            .current_dir(d)
+            .env("CALFLASH_DB", db)
+            .args(base)
+            .output()
+            .unwrap();
+        let (o, e) = (
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr),
+        );
+        assert_eq!(out.status.code(), Some(1), "CALFLASH_DB={db:?}: {o}{e}");
+        assert!(!o.contains("recorded as") && !e.contains("s3cret"), "{o}{e}");
+        assert_eq!(listing(d), ["s.csv"], "CALFLASH_DB={db:?}: nothing created");
+    }
+}
+
+// ---- Crashes and the machine's memory ----
+
+#[test]
+fn a_blob_is_read_only_as_far_as_a_blob_can_be_long() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    station(d);
+    for line in [
+        "sign --blob /dev/zero --sign-key st.key --counter 1 -o x.signed",
+        "image --blob /dev/zero --bin x.bin",
+        "apply s.csv --blob /dev/zero -o x.csv",
+        "health s.csv --blob /dev/zero",
+        "flash --blob /dev/zero --port tcp://127.0.0.1:9",
+    ] {
+        let r = cli(d, line);
+        refused(&r, 1, "/dev/zero: longer than", line);
+        assert!(r.err.contains("not a calibration blob"), "{line}: {}", r.err);
+    }
+}
