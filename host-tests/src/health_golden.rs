@@ -101,11 +101,15 @@ pub fn compute(name: &str, shift_sigmas: [f64; 6]) -> Case {
     let mut ignore = |_: &mut ImuCorrector<'_, u16>, _: &Corrected<6>| {};
     let (a, b) = (face(2, 1.0, 0.3), face(0, -1.0, 0.5));
     if name == "health_drifted" {
-        unit.rest(&a, 2.0, &mut ignore);
-        unit.turn(&a, &b, &mut ignore);
-        unit.rest(&b, 2.0, &mut ignore);
+        unit.rest(&a, 2.0, &mut ignore)
+            .expect("the golden unit is within its converter's range");
+        unit.turn(&a, &b, &mut ignore)
+            .expect("the golden unit is within its converter's range");
+        unit.rest(&b, 2.0, &mut ignore)
+            .expect("the golden unit is within its converter's range");
     } else {
-        unit.rest(&a, 1.5, &mut ignore);
+        unit.rest(&a, 1.5, &mut ignore)
+            .expect("the golden unit is within its converter's range");
     }
     let raw = unit.recording.take().unwrap_or_default();
     Case {

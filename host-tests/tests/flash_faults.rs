@@ -66,7 +66,7 @@ impl Bench {
             force_rejected: false,
             timeout: 0.3,
             vectors: 4,
-            db: Some(calflash::db::Location::File(self.path("units.sqlite"))),
+            db: Some(self.path("units.sqlite").into()),
             no_db: false,
             sign_key: None,
         };
@@ -309,7 +309,7 @@ fn a_blob_whose_fit_was_rejected_is_refused_unless_forced() {
         force_rejected: true,
         timeout: 0.3,
         vectors: 4,
-        db: Some(calflash::db::Location::File(b.path("units.sqlite"))),
+        db: Some(b.path("units.sqlite").into()),
         no_db: false,
         sign_key: None,
     };

@@ -48,9 +48,9 @@ fn run(unit: &mut Unit<'_>, cal: &Calibration, poses: &[Rotation3<f64>], seconds
     };
     for (k, pose) in poses.iter().enumerate() {
         if k > 0 {
-            unit.turn(&poses[k - 1], pose, &mut each);
+            unit.turn(&poses[k - 1], pose, &mut each).unwrap();
         }
-        unit.rest(pose, seconds, &mut each);
+        unit.rest(pose, seconds, &mut each).unwrap();
     }
     Run {
         health: monitor.health(),
@@ -209,7 +209,7 @@ fn a_drifted_unit_is_corrected_by_the_overlay_and_keeps_its_calibration() {
                     out: &spincal::correct::Corrected<6>| {
         monitor.observe_rest(imu, out);
     };
-    unit.rest(&pose, 10.0, &mut each);
+    unit.rest(&pose, 10.0, &mut each).unwrap();
     let h = monitor.health();
     assert_eq!(h.verdict, Verdict::Drifted, "{h:?}");
     let overlay = *unit.imu.overlay().expect("the overlay is applied");
@@ -228,7 +228,8 @@ fn a_drifted_unit_is_corrected_by_the_overlay_and_keeps_its_calibration() {
             *s += f64::from(v);
         }
         sigmas = imu.sigma(&out.values).expect("covariance");
-    });
+    })
+    .unwrap();
     let mean = sum.map(|s| s / f64::from(n));
     assert!(
         mean[3].abs() < 3e-4,
@@ -266,7 +267,8 @@ fn nan_and_saturated_samples_at_rest_are_ignored_and_counted() {
             _ => {}
         }
         monitor.observe_rest(imu, &out);
-    });
+    })
+    .unwrap();
     let h = monitor.health();
     assert_eq!(h.ignored_samples, 2 * 5000 / 50);
     assert_eq!(h.verdict, Verdict::Ok, "{h:?}");
@@ -283,7 +285,8 @@ fn a_unit_that_never_rests_has_no_verdict() {
     for pair in poses.windows(2) {
         unit.turn(&pair[0], &pair[1], &mut |imu, out| {
             monitor.observe_rest(imu, out);
-        });
+        })
+        .unwrap();
     }
     let h = monitor.health();
     assert_eq!(h.verdict, Verdict::NotYet);
@@ -374,7 +377,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
         force_rejected: false,
         timeout: 2.0,
         vectors: 1,
-        db: Some(calflash::db::Location::File(path("units.sqlite"))),
+        db: Some(path("units.sqlite").into()),
         no_db: false,
         sign_key: None,
     })
@@ -389,7 +392,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
         temp: Some(25.0),
         volt: Some(3.3),
         json: Some(path(json)),
-        db: Some(calflash::db::Location::File(path("units.sqlite"))),
+        db: Some(path("units.sqlite").into()),
         no_db: false,
     };
     let on_host = health(&args(None, Some("imu.blob"), "host.json")).unwrap();

@@ -263,7 +263,7 @@ fn calflash_flash_signs_for_the_unit_and_the_history_records_the_key() {
         force_rejected: false,
         timeout: 2.0,
         vectors: 1,
-        db: Some(calflash::db::Location::File(p("units.sqlite"))),
+        db: Some(p("units.sqlite").into()),
         no_db: false,
         sign_key,
     };

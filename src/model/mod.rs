@@ -43,7 +43,7 @@ mod sets;
 pub(crate) mod validate;
 
 pub use bounded::{BoundedVec, Serial};
-pub use noise::{IMU_OUTPUTS, NoiseTerms};
+pub use noise::{IMU_OUTPUTS, MAX_AGEING_S, NoiseTerms};
 pub(crate) use sets::Blend;
 pub use sets::{
     AxisNonlinearity, IMU_FEATURES, ImuCovariance, ImuOutputCovariance, ImuSet, SingleCovariance,

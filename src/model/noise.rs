@@ -10,6 +10,11 @@ use crate::error::Field;
 /// The outputs of an IMU in the order of a corrected sample: `[ax, ay, az, wx, wy, wz]`.
 pub const IMU_OUTPUTS: usize = 6;
 
+/// The longest ageing allowance a calibration may state: 100 years of 365.25 days, in seconds.
+/// Beyond it the allowance means nothing, and its variance (`K^2 t`) would leave the range in
+/// which the health check's f32 arithmetic stays finite.
+pub const MAX_AGEING_S: f32 = 3.155_76e9;
+
 /// The noise terms of an IMU's six outputs (from `calflash allan`, or stated) and what the
 /// unit at rest is held to. Optional in a calibration: without it the unit corrects as ever
 /// and cannot judge its own calibration.
@@ -25,7 +30,7 @@ pub struct NoiseTerms {
     pub bias_walk: [f32; IMU_OUTPUTS],
     /// The time, seconds, over which ageing may move the biases by their random walk: the
     /// allowance beyond which a drifted unit is SUSPECT rather than DRIFTED (its shelf life, or
-    /// the interval between bench checks).
+    /// the interval between bench checks). At most [`MAX_AGEING_S`].
     pub ageing_s: f32,
     /// The magnitude of gravity wherever the unit may rest, m/s^2 (taken as uniform over it).
     pub gravity: Span,
@@ -74,7 +79,7 @@ impl NoiseTerms {
                 return Err(bad(Field::BiasWalk, Some(i)));
             }
         }
-        if !(self.ageing_s.is_finite() && self.ageing_s >= 0.0) {
+        if !(self.ageing_s.is_finite() && (0.0..=MAX_AGEING_S).contains(&self.ageing_s)) {
             return Err(bad(Field::Ageing, None));
         }
         let Span { lo, hi } = self.gravity;
@@ -85,5 +90,31 @@ impl NoiseTerms {
             return Err(bad(Field::FalseAlarm, None));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_ageing_beyond_a_century_or_not_finite_is_refused() {
+        let mut n = crate::model::CalibrationData::example_imu()
+            .noise
+            .expect("the example IMU states noise terms");
+        assert_eq!(n.validate(), Ok(()));
+        n.ageing_s = MAX_AGEING_S;
+        assert_eq!(n.validate(), Ok(()));
+        for bad in [MAX_AGEING_S * 1.01, 8.64e34, -1.0] {
+            n.ageing_s = bad;
+            assert_eq!(
+                n.validate(),
+                Err(Error::InvalidNoiseTerm {
+                    field: Field::Ageing,
+                    index: None
+                }),
+                "{bad}"
+            );
+        }
     }
 }

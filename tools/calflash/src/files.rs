@@ -241,6 +241,67 @@ pub fn read_bounded(path: &Path, max: u64, what: &'static str) -> Result<Vec<u8>
     Ok(bytes)
 }
 
+/// The most a JSON input of calflash's own (a record, a truth, an Allan file) holds.
+pub const MAX_JSON: u64 = 64 << 20;
+
+/// A JSON input as text, at most [`MAX_JSON`] bytes.
+///
+/// # Errors
+/// As [`read_bounded`], or text that is not UTF-8 (as an I/O error of kind `InvalidData`).
+pub fn read_json_text(path: &Path, what: &'static str) -> Result<String, Error> {
+    let bytes = read_bounded(path, MAX_JSON, what)?;
+    String::from_utf8(bytes).map_err(|e| Error::Read {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e),
+    })
+}
+
+/// A reader that refuses a line longer than `max` bytes: the read fails naming the line, so a
+/// reader that gathers a line before looking at it (the `csv` crate) never holds more.
+#[derive(Debug)]
+pub struct LineBound<R> {
+    inner: R,
+    max: usize,
+    run: usize,
+    line: u64,
+}
+
+impl<R> LineBound<R> {
+    /// `inner`, with lines of at most `max` bytes.
+    pub fn new(inner: R, max: usize) -> Self {
+        Self {
+            inner,
+            max,
+            run: 0,
+            line: 1,
+        }
+    }
+}
+
+impl<R: std::io::Read> std::io::Read for LineBound<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        for &b in &buf[..n] {
+            if b == b'\n' {
+                self.run = 0;
+                self.line += 1;
+            } else {
+                self.run += 1;
+                if self.run > self.max {
+                    return Err(std::io::Error::new(
+                        std::io::ErrorKind::InvalidData,
+                        format!(
+                            "line {} is longer than {} bytes (a binary file?)",
+                            self.line, self.max
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(n)
+    }
+}
+
 /// A calibration blob file, signed or not: at most [`spincal::signed::MAX_SIGNED_LEN`] bytes.
 ///
 /// # Errors
@@ -293,7 +354,9 @@ fn clean_stale(dir: &Path) {
     }
     let key = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
     {
-        let mut cleaned = CLEANED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let mut cleaned = CLEANED
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         if cleaned.contains(&key) {
             return;
         }
@@ -517,7 +580,12 @@ mod tests {
             assert_eq!(reader.join().unwrap(), b"through the pipe");
             let m = std::fs::metadata(&fifo).unwrap();
             assert!(!m.is_file(), "the FIFO was replaced by a file");
-            assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+            assert!(
+                std::fs::symlink_metadata(&link)
+                    .unwrap()
+                    .file_type()
+                    .is_symlink()
+            );
         }
         // Two outputs into one special file are no conflict; into one regular file they are.
         assert!(is_special(Path::new("/dev/null")));
@@ -538,14 +606,21 @@ mod tests {
         let link = dir.path().join("link.json");
         std::os::unix::fs::symlink(&target, &link).unwrap();
         write_atomically(&link, |w| w.write_all(b"new")).unwrap();
-        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
         assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
     }
 
     #[test]
     fn reads_are_bounded() {
         let e = read_blob(Path::new("/dev/zero")).unwrap_err();
-        assert!(matches!(e, Error::TooLong { max, .. } if max == spincal::signed::MAX_SIGNED_LEN as u64));
+        assert!(
+            matches!(e, Error::TooLong { max, .. } if max == spincal::signed::MAX_SIGNED_LEN as u64)
+        );
         assert!(e.to_string().contains("not a calibration blob"), "{e}");
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("b");
@@ -555,15 +630,38 @@ mod tests {
     }
 
     #[test]
+    fn a_line_too_long_is_refused_naming_it() {
+        use std::io::Read as _;
+        let mut ok = String::new();
+        LineBound::new(&b"ab\ncd\n"[..], 2)
+            .read_to_string(&mut ok)
+            .unwrap();
+        assert_eq!(ok, "ab\ncd\n");
+        let mut s = String::new();
+        let e = LineBound::new(&b"ab\ncde\n"[..], 2)
+            .read_to_string(&mut s)
+            .unwrap_err();
+        assert!(
+            e.to_string().contains("line 2 is longer than 2 bytes"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn a_serial_names_a_file_only_when_it_is_a_plain_name() {
         let dir = Path::new("out");
         assert_eq!(
             unit_file(dir, "IMU-0007_b+2.1", "blob").unwrap(),
             Path::new("out/IMU-0007_b+2.1.blob")
         );
-        for bad in ["../x", "/tmp/x", "a/b", "..", ".hidden", "", "a b", "a\\b", "a:b"] {
+        for bad in [
+            "../x", "/tmp/x", "a/b", "..", ".hidden", "", "a b", "a\\b", "a:b",
+        ] {
             let e = unit_file(dir, bad, "blob").unwrap_err();
-            assert!(matches!(&e, Error::UnsafeSerial { serial, .. } if serial == bad), "{bad}");
+            assert!(
+                matches!(&e, Error::UnsafeSerial { serial, .. } if serial == bad),
+                "{bad}"
+            );
             assert!(e.to_string().contains("plain file name"), "{e}");
         }
     }

@@ -253,7 +253,10 @@ pub fn load_private(path: &Path) -> Result<SigningKey, KeyError> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
-        let mode = std::fs::metadata(path).map_err(io(path))?.permissions().mode();
+        let mode = std::fs::metadata(path)
+            .map_err(io(path))?
+            .permissions()
+            .mode();
         if mode & 0o077 != 0 {
             return Err(KeyError::Exposed {
                 path: path.to_path_buf(),
@@ -411,14 +414,32 @@ mod tests {
             );
             // A public key readable by all is the public key, never 'chmod 600' and sign.
             let e = load_private(&pk).unwrap_err();
-            assert!(matches!(e, KeyError::WrongHalf { held: Half::Public, .. }), "{e:?}");
+            assert!(
+                matches!(
+                    e,
+                    KeyError::WrongHalf {
+                        held: Half::Public,
+                        ..
+                    }
+                ),
+                "{e:?}"
+            );
             assert!(!e.to_string().contains("chmod"), "{e}");
             std::fs::set_permissions(&pk, std::fs::Permissions::from_mode(0o600)).unwrap();
             assert!(load_private(&pk).is_err(), "a public key never signs");
             std::fs::set_permissions(&sk, std::fs::Permissions::from_mode(0o600)).unwrap();
             // The private key is never taken as the public one.
             let e = load_public(&sk).unwrap_err();
-            assert!(matches!(e, KeyError::WrongHalf { held: Half::Private, .. }), "{e:?}");
+            assert!(
+                matches!(
+                    e,
+                    KeyError::WrongHalf {
+                        held: Half::Private,
+                        ..
+                    }
+                ),
+                "{e:?}"
+            );
         }
         assert!(matches!(
             load_publics(&[pk.clone(), pk.clone()]),

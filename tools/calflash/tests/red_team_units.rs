@@ -85,10 +85,17 @@ fn a_rejected_blob_goes_into_no_image_and_is_signed_by_no_key_unless_insisted_on
         "sign --blob r.blob --sign-key st.key --counter 1 -o r.signed --force-rejected",
     );
     assert_eq!(r.code(), Some(0), "{}", r.err);
-    assert!(r.err.contains("WARNING") && r.err.contains("REJECT"), "{}", r.err);
+    assert!(
+        r.err.contains("WARNING") && r.err.contains("REJECT"),
+        "{}",
+        r.err
+    );
     let signed = std::fs::read(d.join("r.signed")).unwrap();
     let cal = calflash::signing::calibration(&signed).unwrap();
-    assert!(cal.data().identity.fit_rejected, "the signed record keeps the mark");
+    assert!(
+        cal.data().identity.fit_rejected,
+        "the signed record keeps the mark"
+    );
     // A forced, signed, rejected blob still needs --force-rejected to go into an image.
     let r = cli(d, "image --blob r.signed --station-key st.pub --bin y.bin");
     refused(&r, 1, "judged REJECT", "the signed rejected blob");
@@ -135,7 +142,10 @@ fn a_review_calibration_is_signed_only_when_the_station_says_so() {
     };
     let (said, signed) = run("");
     assert!(said.contains("REVIEW"), "{said}");
-    assert!(!signed, "a REVIEW is not signed by the key in the environment: {said}");
+    assert!(
+        !signed,
+        "a REVIEW is not signed by the key in the environment: {said}"
+    );
     assert!(said.contains("signed only after a review"), "{said}");
     let (said, signed) = run("--sign-review");
     assert!(signed, "{said}");
@@ -178,7 +188,11 @@ fn the_two_key_files_are_not_interchangeable_and_weak_keys_are_refused() {
     let identity = format!("01{}", "00".repeat(31));
     for (name, hex, says) in [
         ("weak.pub", identity.as_str(), "small order"),
-        ("bad.pub", &format!("02{}", "00".repeat(31))[..], "not a point"),
+        (
+            "bad.pub",
+            &format!("02{}", "00".repeat(31))[..],
+            "not a point",
+        ),
     ] {
         std::fs::write(d.join(name), format!("{header}\n{hex}\n")).unwrap();
         let r = cli(d, &format!("image --station-key {name} --bin x.bin"));
@@ -271,7 +285,10 @@ fn a_serial_never_names_a_file_outside_the_folder_nor_two_units_one_file() {
     ] {
         let r = cli(d, &format!("{base} --units {units}"));
         refused(&r, 1, says, units);
-        assert!(listing(&d.join("out")).is_empty(), "{units}: nothing written");
+        assert!(
+            listing(&d.join("out")).is_empty(),
+            "{units}: nothing written"
+        );
         assert!(!d.join("x.obs.csv").exists() && !Path::new("/tmp/x.obs.csv").exists());
     }
     // Units without --units are said to be recorded under their prefixes.
@@ -332,7 +349,14 @@ fn a_history_that_keeps_nothing_or_a_mistyped_url_is_refused_and_no_password_sho
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::copy(examples().join("single_accel.csv"), d.join("s.csv")).unwrap();
-    let base = ["calibrate", "s.csv", "--sensor", "single-accel", "--serial", "RT-1"];
+    let base = [
+        "calibrate",
+        "s.csv",
+        "--sensor",
+        "single-accel",
+        "--serial",
+        "RT-1",
+    ];
     for db in [
         "",
         ":memory:",
@@ -347,7 +371,11 @@ fn a_history_that_keeps_nothing_or_a_mistyped_url_is_refused_and_no_password_sho
         let r = calflash(d, &args);
         assert_eq!(r.code(), Some(1), "--db {db:?}: {}{}", r.out, r.err);
         assert!(!r.out.contains("recorded"), "--db {db:?}: {}", r.out);
-        assert!(!r.err.contains("s3cret") && !r.out.contains("s3cret"), "{}", r.err);
+        assert!(
+            !r.err.contains("s3cret") && !r.out.contains("s3cret"),
+            "{}",
+            r.err
+        );
         assert_eq!(listing(d), ["s.csv"], "--db {db:?}: nothing created");
         // The same from the environment.
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_calflash"))
@@ -361,7 +389,10 @@ fn a_history_that_keeps_nothing_or_a_mistyped_url_is_refused_and_no_password_sho
             String::from_utf8_lossy(&out.stderr),
         );
         assert_eq!(out.status.code(), Some(1), "CALFLASH_DB={db:?}: {o}{e}");
-        assert!(!o.contains("recorded as") && !e.contains("s3cret"), "{o}{e}");
+        assert!(
+            !o.contains("recorded as") && !e.contains("s3cret"),
+            "{o}{e}"
+        );
         assert_eq!(listing(d), ["s.csv"], "CALFLASH_DB={db:?}: nothing created");
     }
 }
@@ -382,6 +413,99 @@ fn a_blob_is_read_only_as_far_as_a_blob_can_be_long() {
     ] {
         let r = cli(d, line);
         refused(&r, 1, "/dev/zero: longer than", line);
-        assert!(r.err.contains("not a calibration blob"), "{line}: {}", r.err);
+        assert!(
+            r.err.contains("not a calibration blob"),
+            "{line}: {}",
+            r.err
+        );
+    }
+}
+
+#[test]
+fn a_line_is_read_only_as_far_as_a_line_can_be_long() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("out")).unwrap();
+    for (line, says) in [
+        ("allan /dev/zero", "/dev/zero:1: longer than"),
+        (
+            "selfcal /dev/zero --serial X --g 9.81",
+            "/dev/zero:1: longer than",
+        ),
+        (
+            "calibrate /dev/zero --sensor single-accel --serial X --no-db",
+            "/dev/zero:1: longer than",
+        ),
+        (
+            "fit /dev/zero --model output~input",
+            "/dev/zero:1: longer than",
+        ),
+        (
+            "calibrate /dev/zero --fixture --sensor single-accel --out-dir out --no-db",
+            "line 1 is longer than",
+        ),
+        ("compare /dev/zero /dev/zero", "/dev/zero: longer than"),
+    ] {
+        let r = cli(d, line);
+        refused(&r, 1, says, line);
+    }
+}
+
+/// An Allan file of three axes with white noise `n` and rate random walk `k`.
+fn allan(dir: &Path, name: &str, unit: &str, n: f64, k: f64) {
+    let axis = serde_json::json!({"axis": "x", "curve": [], "terms": {
+        "quantization": 0.0, "random_walk": n, "bias_instability": 0.0,
+        "rate_random_walk": k, "rate_ramp": 0.0}});
+    let v = serde_json::json!({"schema": "calflash.allan/1", "source": "still.csv",
+        "unit": unit, "axes": [axis.clone(), axis.clone(), axis]});
+    std::fs::write(dir.join(name), v.to_string()).unwrap();
+}
+
+/// The example IMU calibrated with noise terms into `dir/u.blob`, with `extra` options.
+fn noisy_imu(dir: &Path, extra: &str) -> Ran {
+    allan(dir, "accel.json", "m/s^2", 1.5e-3, 1.6e-5);
+    allan(dir, "gyro.json", "rad/s", 2.0e-4, 8.0e-7);
+    let bench = examples().join("imu_bench.csv");
+    cli(
+        dir,
+        &format!(
+            "calibrate {} --sensor imu --serial IMU-H-1 --blob u.blob --no-db --noise accel.json,gyro.json {extra}",
+            bench.display()
+        ),
+    )
+}
+
+// ---- Wrong results at exit 0 ----
+
+#[test]
+fn an_ageing_beyond_a_century_is_refused_and_a_shift_beyond_the_codes_is_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for ageing in ["1e30d", "36526d", "1e12"] {
+        let r = noisy_imu(d, &format!("--ageing {ageing}"));
+        refused(&r, 2, "at most 100 years", ageing);
+        assert!(!d.join("u.blob").exists());
+    }
+    let r = noisy_imu(d, "--ageing 365d");
+    assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
+    for (line, says) in [
+        (
+            "simulate --sensor imu --rest u.blob --shift 1e9,0,0,0,0,0 --poses 1 --hold 0.2 -o r.csv",
+            "output ax would have to read",
+        ),
+        (
+            "simulate --sensor imu --rest u.blob --shift 0,0,0,0,0,1e12 --poses 2 --hold 0.2 -o r.csv",
+            "output wz would have to read",
+        ),
+        (
+            "simulate --sensor imu --rest u.blob --aged 1e30d --poses 1 --hold 0.2 -o r.csv",
+            "at most 100 years",
+        ),
+    ] {
+        let r = cli(d, line);
+        assert_ne!(r.code(), Some(0), "{line}");
+        assert!(r.err.contains(says), "{line}: {}", r.err);
+        assert!(!r.err.contains("panicked"), "{line}: {}", r.err);
+        assert!(!d.join("r.csv").exists());
     }
 }

@@ -36,7 +36,11 @@ pub struct CompareArgs {
 pub fn run(args: &CompareArgs) -> Result<(), Failure> {
     let file = |r: &str| (!r.starts_with("db:")).then(|| std::path::PathBuf::from(r));
     let (before, after) = (file(&args.before), file(&args.after));
-    let db = args.db.as_ref().map(crate::db::Given::location).transpose()?;
+    let db = args
+        .db
+        .as_ref()
+        .map(crate::db::Given::location)
+        .transpose()?;
     crate::files::Paths::new()
         .input("the earlier record", before.as_deref())
         .input("the later record", after.as_deref())
@@ -49,14 +53,16 @@ pub fn run(args: &CompareArgs) -> Result<(), Failure> {
                 let id: i64 = id
                     .parse()
                     .map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
-                let path = crate::db::Location::or_default(args.db.as_ref()).map_err(|e| e.to_string())?;
+                let path =
+                    crate::db::Location::or_default(args.db.as_ref()).map_err(|e| e.to_string())?;
                 let text = crate::db::Db::open_existing(&path)
                     .and_then(|mut d| d.record(id))
                     .map_err(|e| e.to_string())?;
                 Ok((text, format!("{path} record {id}")))
             }
             None => Ok((
-                std::fs::read_to_string(r).map_err(|e| format!("{r}: {e}"))?,
+                crate::files::read_json_text(std::path::Path::new(r), "a calibration record")
+                    .map_err(|e| e.to_string())?,
                 r.to_string(),
             )),
         }

@@ -56,8 +56,8 @@ fn timeout(s: &str) -> Result<f64, String> {
 pub fn run(args: &FlashArgs) -> Result<(), Failure> {
     let bytes = crate::files::read_blob(&args.blob)?;
     // The rule every path into a unit applies, before a key is read or the unit asked.
-    let cal = crate::signing::calibration(&bytes)
-        .map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let cal =
+        crate::signing::calibration(&bytes).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let warning = crate::approval::admit(
         &cal.data().identity,
         &args.blob,

@@ -73,8 +73,7 @@ pub fn sign(args: &SignArgs) -> Result<(), Failure> {
         .check()?;
     let key = signing::load_private(&key_path)?;
     let blob = crate::files::read_blob(&args.blob)?;
-    let cal =
-        signing::calibration(&blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
+    let cal = signing::calibration(&blob).map_err(|e| format!("{}: {e}", args.blob.display()))?;
     let warning = crate::approval::admit(
         &cal.data().identity,
         &args.blob,

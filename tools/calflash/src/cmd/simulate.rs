@@ -32,7 +32,7 @@ pub struct SimulateArgs {
     pub shift: Vec<f64>,
     /// With --rest: the unit has aged this long since its calibration (s, or with h or d):
     /// each bias has also wandered by a draw of its stored random walk over that time.
-    #[arg(long, default_value = "0", requires = "rest", value_parser = super::values::duration)]
+    #[arg(long, default_value = "0", requires = "rest", value_parser = super::values::duration_at_most_a_century)]
     pub aged: f64,
     /// With --rest: the number of rest poses.
     #[arg(long, default_value_t = 3, requires = "rest", value_parser = |s: &str| super::values::count_in(s, 1, 24))]
@@ -129,7 +129,7 @@ fn load<T: serde::de::DeserializeOwned + Default>(p: Option<&PathBuf>) -> Result
     match p {
         None => Ok(T::default()),
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            let text = crate::files::read_json_text(p, "a calflash JSON file")?;
             Ok(serde_json::from_str(&text)
                 .map_err(|e| format!("{}:{}:{}: {e}", p.display(), e.line(), e.column()))?)
         }

@@ -119,6 +119,23 @@ pub fn duration(s: &str) -> Result<f64, String> {
     }
 }
 
+/// The longest duration an option takes: 100 years ([`spincal::model::MAX_AGEING_S`]).
+pub const LONGEST_DURATION_S: f64 = 3.155_76e9;
+
+/// A duration of at most 100 years: an ageing allowance, an age.
+///
+/// # Errors
+/// As [`duration`], or longer than 100 years.
+pub fn duration_at_most_a_century(s: &str) -> Result<f64, String> {
+    let v = duration(s)?;
+    if v > LONGEST_DURATION_S {
+        return Err(format!(
+            "`{s}`: at most 100 years (36525d) is expected; a longer allowance means nothing"
+        ));
+    }
+    Ok(v)
+}
+
 /// A count from `lo` to `hi`.
 ///
 /// # Errors

@@ -79,7 +79,10 @@ impl Location {
                 && scheme
                     .chars()
                     .all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.'));
-            if schemelike && rest.starts_with("//") && matches!(lower.as_str(), "postgres" | "postgresql") {
+            if schemelike
+                && rest.starts_with("//")
+                && matches!(lower.as_str(), "postgres" | "postgresql")
+            {
                 return Ok(Self::Server(format!("{lower}{}", &t[scheme.len()..])));
             }
             if schemelike && (rest.starts_with('/') || lower == "file" || t.contains('@')) {
@@ -101,6 +104,12 @@ pub struct Given(OsString);
 impl From<OsString> for Given {
     fn from(s: OsString) -> Self {
         Self(s)
+    }
+}
+
+impl From<PathBuf> for Given {
+    fn from(p: PathBuf) -> Self {
+        Self(p.into_os_string())
     }
 }
 
@@ -253,7 +262,10 @@ mod tests {
             from("Postgres://u@h/db"),
             Location::Server("postgres://u@h/db".into())
         );
-        assert_eq!(from("C:/units.sqlite"), Location::File("C:/units.sqlite".into()));
+        assert_eq!(
+            from("C:/units.sqlite"),
+            Location::File("C:/units.sqlite".into())
+        );
     }
 
     #[test]
@@ -266,10 +278,7 @@ mod tests {
             from("postgresql://h/db"),
             Location::Server("postgresql://h/db".into())
         );
-        assert_eq!(
-            from("units.sqlite"),
-            Location::File("units.sqlite".into())
-        );
+        assert_eq!(from("units.sqlite"), Location::File("units.sqlite".into()));
         assert_eq!(
             from("./postgres:/x"),
             Location::File("./postgres:/x".into())

@@ -11,15 +11,9 @@ use spincal::model::{NoiseTerms, Span};
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// A file that cannot be read.
-    #[error("{}: {source}", .path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: std::io::Error,
-    },
+    /// A file that cannot be read, or is too long to be an Allan file.
+    #[error(transparent)]
+    Read(Box<crate::files::Error>),
     /// A file that is not JSON.
     #[error("{}: not JSON: {source}", .path.display())]
     NotJson {
@@ -92,10 +86,8 @@ pub struct Allowances {
 /// One sensor's three axes: white-noise densities and rate random walks, from an Allan JSON.
 fn read_axes(path: &Path, unit: &'static str) -> Result<([f64; 3], [f64; 3]), Error> {
     let file = || path.to_path_buf();
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: file(),
-        source,
-    })?;
+    let text = crate::files::read_json_text(path, "an Allan file (calflash allan --json)")
+        .map_err(|e| Error::Read(Box::new(e)))?;
     let v: serde_json::Value = serde_json::from_str(&text).map_err(|source| Error::NotJson {
         path: file(),
         source,

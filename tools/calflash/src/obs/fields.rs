@@ -110,6 +110,31 @@ fn general(field: &[u8]) -> Option<f64> {
         .filter(|x| x.is_finite())
 }
 
+/// The longest line of a file's head (preamble, comments, header) that is read: a head line
+/// longer than this (a binary file, `/dev/zero`) is refused, named by its number, rather than
+/// read on into memory.
+pub(crate) const LONGEST_HEAD_LINE: usize = 1 << 20;
+
+/// Reads one line of a file's head into `buf` (appended, its ending kept): the bytes read, 0 at
+/// the end of the file. Reads at most [`LONGEST_HEAD_LINE`] + 1 bytes; see [`too_long`].
+///
+/// # Errors
+/// The reader's.
+pub(crate) fn read_head_line(
+    reader: &mut impl std::io::BufRead,
+    buf: &mut Vec<u8>,
+) -> std::io::Result<usize> {
+    use std::io::BufRead as _;
+    reader
+        .take(LONGEST_HEAD_LINE as u64 + 1)
+        .read_until(b'\n', buf)
+}
+
+/// True when the head line in `buf` was cut at [`LONGEST_HEAD_LINE`].
+pub(crate) fn too_long(buf: &[u8]) -> bool {
+    buf.len() > LONGEST_HEAD_LINE && !buf.ends_with(b"\n")
+}
+
 /// Bytes read per block: large enough that a block's parse outweighs handing it to a thread.
 const BLOCK: usize = 1 << 20;
 

@@ -46,6 +46,19 @@ pub enum ObsError {
         /// 1-based line.
         line: u64,
     },
+    /// A line of the head (comments, header) too long to be one.
+    #[error(
+        "{path}:{line}: longer than {max} bytes without a line end (a binary file?); expected a \
+         header row naming the columns"
+    )]
+    LineTooLong {
+        /// File.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The longest line read.
+        max: usize,
+    },
     /// No header row.
     #[error(
         "{path}: the file is empty; expected a header row naming the columns, then observations"
@@ -456,10 +469,17 @@ pub fn header(path: &Path, format: Format) -> Result<Vec<String>, ObsError> {
     let mut buf = Vec::new();
     loop {
         buf.clear();
-        if reader.read_until(b'\n', &mut buf).map_err(io(path))? == 0 {
+        if fields::read_head_line(&mut reader, &mut buf).map_err(io(path))? == 0 {
             return Err(ObsError::Empty { path: path.into() });
         }
         line += 1;
+        if fields::too_long(&buf) {
+            return Err(ObsError::LineTooLong {
+                path: path.into(),
+                line,
+                max: fields::LONGEST_HEAD_LINE,
+            });
+        }
         let text = std::str::from_utf8(&buf)
             .ok()
             .filter(|_| !buf.contains(&0))
@@ -508,10 +528,17 @@ fn read_text(
     let mut line = 0u64;
     let header = loop {
         buf.clear();
-        if reader.read_until(b'\n', &mut buf).map_err(io(path))? == 0 {
+        if fields::read_head_line(&mut reader, &mut buf).map_err(io(path))? == 0 {
             return Err(ObsError::Empty { path: path.into() });
         }
         line += 1;
+        if fields::too_long(&buf) {
+            return Err(ObsError::LineTooLong {
+                path: path.into(),
+                line,
+                max: fields::LONGEST_HEAD_LINE,
+            });
+        }
         let text = std::str::from_utf8(&buf)
             .ok()
             .filter(|_| !buf.contains(&0))

@@ -96,9 +96,24 @@ impl<'a> Unit<'a> {
     }
 
     /// The codes whose correction is `target`, and the inverse Jacobian there.
-    pub(crate) fn invert(&self, target: &Vector6<f64>) -> ([f64; 6], Matrix6<f64>) {
+    ///
+    /// # Errors
+    /// [`RestError::Unreachable`] when no codes within the converter's range correct to
+    /// `target` (a bias shifted or aged beyond what the codes express): the output furthest
+    /// from it is named.
+    pub(crate) fn invert(
+        &self,
+        target: &Vector6<f64>,
+    ) -> Result<([f64; 6], Matrix6<f64>), RestError> {
         let mut raw = [32_768.0; 6];
         let mut jinv = Matrix6::identity();
+        let unreachable = |y: &Vector6<f64>| {
+            let (i, _) = (target - y).abs().argmax();
+            RestError::Unreachable {
+                output: OUTPUTS[i],
+                value: target[i],
+            }
+        };
         for _ in 0..3 {
             raw = raw.map(f64::round);
             let y0 = self.probe(&raw);
@@ -110,13 +125,19 @@ impl<'a> Unit<'a> {
                 let d = (self.probe(&up) - self.probe(&down)) / 128.0;
                 j.set_column(c, &d);
             }
-            jinv = j.try_inverse().expect("an invertible correction");
+            jinv = j.try_inverse().ok_or_else(|| unreachable(&y0))?;
             let step = jinv * (target - y0);
             for (r, s) in raw.iter_mut().zip(step.iter()) {
                 *r += s;
             }
         }
-        (raw, jinv)
+        // Within a few codes of the target, and inside the rails.
+        let y = self.probe(&raw);
+        let off = jinv * (target - y);
+        if raw.iter().any(|r| !(1.0..=65_534.0).contains(r)) || off.amax() > 4.0 {
+            return Err(unreachable(&y));
+        }
+        Ok((raw, jinv))
     }
 
     /// One sample with the true outputs `truth` (codes `raw` there, inverse Jacobian `jinv`).
@@ -137,12 +158,13 @@ impl<'a> Unit<'a> {
         pose: &Rotation3<f64>,
         seconds: f64,
         each: &mut dyn FnMut(&mut ImuCorrector<'a, u16>, &Corrected<6>),
-    ) {
-        let (raw, jinv) = self.invert(&self.truth(pose, &Vector3::zeros()));
+    ) -> Result<(), RestError> {
+        let (raw, jinv) = self.invert(&self.truth(pose, &Vector3::zeros()))?;
         for _ in 0..(seconds * self.rate).round() as usize {
             let out = self.sample(&raw, &jinv);
             each(&mut self.imu, &out);
         }
+        Ok(())
     }
 
     /// One second turning from `from` to `to` about a fixed axis at a constant rate.
@@ -151,7 +173,7 @@ impl<'a> Unit<'a> {
         from: &Rotation3<f64>,
         to: &Rotation3<f64>,
         each: &mut dyn FnMut(&mut ImuCorrector<'a, u16>, &Corrected<6>),
-    ) {
+    ) -> Result<(), RestError> {
         let delta = from.inverse() * to;
         let (axis, angle) = delta.axis_angle().unwrap_or((Vector3::x_axis(), 0.0));
         let n = self.rate.round() as usize;
@@ -160,12 +182,13 @@ impl<'a> Unit<'a> {
         for k in (0..n).step_by(16) {
             let t = (k as f64 + 8.0) / n as f64;
             let pose = from * Rotation3::from_axis_angle(&axis, angle * t);
-            let (raw, jinv) = self.invert(&self.truth(&pose, &w_body));
+            let (raw, jinv) = self.invert(&self.truth(&pose, &w_body))?;
             for _ in 0..16.min(n - k) {
                 let out = self.sample(&raw, &jinv);
                 each(&mut self.imu, &out);
             }
         }
+        Ok(())
     }
 
     /// Draws `sigma * N(0, 1)`.
@@ -193,7 +216,7 @@ pub struct Session {
 }
 
 /// A calibration a unit at rest cannot be simulated from.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum RestError {
     /// The IMU corrector refuses it (not an IMU, say).
@@ -208,7 +231,22 @@ pub enum RestError {
     /// Codes other than unsigned 16-bit.
     #[error("a unit at rest is simulated for unsigned 16-bit codes")]
     NotU16,
+    /// A true output the unit's converter cannot express.
+    #[error(
+        "the unit's output {output} would have to read {value:.4e} (SI), which its converter's \
+         codes cannot express: the bias shift (--shift) or the ageing (--aged) is too large for \
+         this unit"
+    )]
+    Unreachable {
+        /// The output: ax .. wz.
+        output: &'static str,
+        /// The value it would read.
+        value: f64,
+    },
 }
+
+/// The six outputs' names.
+const OUTPUTS: [&str; 6] = ["ax", "ay", "az", "wx", "wy", "wz"];
 
 /// The stated 1-sigma of each output of `cal` at rest with z up (25 C, 3.3 V).
 ///
@@ -219,7 +257,7 @@ pub fn stated_sigma(cal: &Calibration) -> Result<[f64; 6], RestError> {
     imu.set_environment(25.0, 3.3);
     let unit = Unit::new(cal, 1000.0, [0.0; 6], 9.81, 0);
     let target = unit.truth(&face(2, 1.0, 0.0), &Vector3::zeros());
-    let (raw, _) = unit.invert(&target);
+    let (raw, _) = unit.invert(&target)?;
     let out = imu.correct(raw.map(|r| r.round().clamp(0.0, 65_535.0) as u16));
     let (total, _) = imu
         .factory_variances(&out.values)
@@ -267,9 +305,9 @@ impl Session {
         let mut ignore = |_: &mut ImuCorrector<'_, u16>, _: &Corrected<6>| {};
         for (k, pose) in poses.iter().enumerate() {
             if k > 0 {
-                unit.turn(&poses[k - 1], pose, &mut ignore);
+                unit.turn(&poses[k - 1], pose, &mut ignore)?;
             }
-            unit.rest(pose, self.hold, &mut ignore);
+            unit.rest(pose, self.hold, &mut ignore)?;
         }
         Ok(unit.recording.take().unwrap_or_default())
     }

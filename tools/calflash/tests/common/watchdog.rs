@@ -79,4 +79,3 @@ pub fn calflash_with(dir: &Path, args: &[&str], stdout: Stdio) -> Ran {
         err: err.join().unwrap(),
     }
 }
-

@@ -121,7 +121,10 @@ pub fn unit_files(
     }
     let index = out_dir.join("index.html");
     paths
-        .output("--out-dir (the batch's index.html)", args.reports.then_some(index.as_path()))
+        .output(
+            "--out-dir (the batch's index.html)",
+            args.reports.then_some(index.as_path()),
+        )
         .check()?;
     Ok(all)
 }
@@ -186,7 +189,8 @@ pub fn calibrate_all(
                 Ok(_) => said,
                 Err(e) => format!("{said}calflash: {e}\n"),
             };
-            let _ = crate::files::write_atomically(&files.summary, |w| w.write_all(text.as_bytes()));
+            let _ =
+                crate::files::write_atomically(&files.summary, |w| w.write_all(text.as_bytes()));
             bar.inc(1);
             Outcome {
                 serial: serial.clone(),

@@ -118,11 +118,14 @@ pub fn split(
     out_dir: &Path,
 ) -> Result<Vec<(String, PathBuf)>, String> {
     let name = data.display();
+    let file = std::fs::File::open(data).map_err(|e| format!("{name}: {e}"))?;
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
-        .from_path(data)
-        .map_err(|e| format!("{name}: {e}"))?;
+        .from_reader(crate::files::LineBound::new(
+            std::io::BufReader::new(file),
+            crate::obs::fields::LONGEST_HEAD_LINE,
+        ));
     let header = reader
         .headers()
         .map_err(|e| format!("{name}: {e}"))?
@@ -190,8 +193,12 @@ pub fn split(
                 "{name}: two units are named {serial} (a column prefix and a --units serial); each unit needs its own serial"
             ));
         }
-        let path = crate::files::unit_file(out_dir, serial, "obs.csv").map_err(|e| e.to_string())?;
-        paths = paths.output(&format!("--out-dir (unit {serial}'s observations)"), Some(&path));
+        let path =
+            crate::files::unit_file(out_dir, serial, "obs.csv").map_err(|e| e.to_string())?;
+        paths = paths.output(
+            &format!("--out-dir (unit {serial}'s observations)"),
+            Some(&path),
+        );
         files.push(path);
     }
     paths.check().map_err(|e| e.to_string())?;

@@ -138,7 +138,7 @@ pub struct CalibrateArgs {
     /// With --noise: the time over which ageing may move the biases by their random walk
     /// before the unit calls a drift SUSPECT (its shelf life, or the interval between bench
     /// checks), in s, or with the suffix h or d.
-    #[arg(long, default_value = "365d", requires = "noise", value_parser = values::duration)]
+    #[arg(long, default_value = "365d", requires = "noise", value_parser = values::duration_at_most_a_century)]
     pub ageing: f64,
     /// With --noise: the magnitude of gravity wherever the unit may rest, m/s^2 (a narrower
     /// span lets one pose test the accelerometer along gravity more sharply).

@@ -23,6 +23,19 @@ pub enum RecordingError {
         /// Line.
         line: usize,
     },
+    /// A line of the head (preamble, header) too long to be one.
+    #[error(
+        "{path}:{line}: longer than {max} bytes without a line end (a binary file?); expected \
+         a timestamp and three counts per line"
+    )]
+    LineTooLong {
+        /// File.
+        path: PathBuf,
+        /// Line.
+        line: usize,
+        /// The longest line read.
+        max: usize,
+    },
     /// A line with the wrong number of fields.
     #[error("{path}:{line}: {found} fields; expected {expected}")]
     Fields {

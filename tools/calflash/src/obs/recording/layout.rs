@@ -468,10 +468,17 @@ fn read_head(
     // The head: preamble and header lines, up to the first sample line.
     let first = loop {
         buf.clear();
-        if reader.read_until(b'\n', &mut buf).map_err(io)? == 0 {
+        if crate::obs::fields::read_head_line(reader, &mut buf).map_err(io)? == 0 {
             break None;
         }
         line += 1;
+        if crate::obs::fields::too_long(&buf) {
+            return Err(RecordingError::LineTooLong {
+                path: path.to_path_buf(),
+                line,
+                max: crate::obs::fields::LONGEST_HEAD_LINE,
+            });
+        }
         let mut bytes = &buf[..];
         if line == 1
             && let Some(rest) = bytes.strip_prefix(b"\xEF\xBB\xBF")
