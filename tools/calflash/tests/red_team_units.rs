@@ -2,6 +2,8 @@
 //! health, lots, flights on the spin rig) tried as a careless and a hostile user would
 //! (issue 30; the list is kept in `RELIABILITY.md`). Every command runs under the watchdog.
 
+#[path = "common/lot_history.rs"]
+mod lot_history;
 #[path = "common/watchdog.rs"]
 mod watchdog;
 
@@ -507,5 +509,38 @@ fn an_ageing_beyond_a_century_is_refused_and_a_shift_beyond_the_codes_is_said() 
         assert!(r.err.contains(says), "{line}: {}", r.err);
         assert!(!r.err.contains("panicked"), "{line}: {}", r.err);
         assert!(!d.join("r.csv").exists());
+    }
+}
+
+#[test]
+fn a_lot_judged_at_a_tiny_alpha_still_names_a_unit_far_outside() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    lot_history::write(
+        &d.join("units.sqlite"),
+        "LOT-",
+        60,
+        1_750_000_000,
+        3,
+        |i, b, _| {
+            if i == 7 {
+                b[0] += 40_000.0;
+            }
+        },
+    );
+    for alpha in ["0.001", "1e-15", "1e-100", "1e-300"] {
+        let r = cli(d, &format!("lot LOT- --db units.sqlite --alpha {alpha}"));
+        assert_eq!(r.code(), Some(0), "{alpha}: {}{}", r.out, r.err);
+        assert!(
+            !r.out.contains("NaN") && !r.out.contains("inf"),
+            "{alpha}: {}",
+            r.out
+        );
+        assert!(r.out.contains("LOT-000007"), "{alpha}: {}", r.out);
+        assert!(
+            r.out.contains("1 of 60 units outside"),
+            "{alpha}: {}",
+            r.out
+        );
     }
 }

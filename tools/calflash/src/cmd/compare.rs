@@ -163,10 +163,8 @@ fn against_health(
     }
     let h = &health["health"];
     let get = |key: &str, i: usize| h[key][i].as_f64().unwrap_or(f64::NAN);
-    // Chi-square with one degree of freedom at alpha / 6: the square of the normal quantile.
-    let normal = statrs::distribution::Normal::new(0.0, 1.0)?;
-    let z = statrs::distribution::ContinuousCDF::inverse_cdf(&normal, 1.0 - args.alpha / 12.0);
-    let limit = z * z;
+    // Chi-square with one degree of freedom at alpha / 6 (Bonferroni over the six outputs).
+    let limit = crate::stats::dist::chi2_upper_quantile(args.alpha / 6.0, 1.0);
     println!(
         "calflash compare  unit {serial}  {} -> {} (health at rest: {}, {:.1} s)",
         args.before,

@@ -108,7 +108,7 @@ impl Robust {
     /// probability `1 - alpha` (chi-square with `p` degrees of freedom).
     #[must_use]
     pub fn limit(&self, alpha: f64) -> f64 {
-        chi2_quantile(self.centre.len(), 1.0 - alpha)
+        super::dist::chi2_upper_quantile(alpha, self.centre.len() as f64)
     }
 }
 
