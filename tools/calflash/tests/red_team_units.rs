@@ -544,3 +544,113 @@ fn a_lot_judged_at_a_tiny_alpha_still_names_a_unit_far_outside() {
         );
     }
 }
+
+/// A lever-arm calibration `r.blob` of the spinning round's truth and a spin-rig flight
+/// `f.csv` of it at 1000 Hz (`t` in seconds).
+fn spin_flight(d: &Path, spin: &str) -> Ran {
+    let truth = examples().join("spinning_round.truth.json");
+    let truth = truth.display();
+    let r = cli(
+        d,
+        &format!(
+            "simulate --sensor imu --truth {truth} --plan tumble:24 --plan rate:-1900:1900:5 --plan diagonal:-1900:1900:5 --plan centrifuge:1:1500:4 -o rig.csv"
+        ),
+    );
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    let r = cli(
+        d,
+        "calibrate rig.csv --sensor imu --serial R-1 --blob r.blob --no-db",
+    );
+    assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
+    cli(
+        d,
+        &format!("simulate --sensor imu --truth {truth} --spin {spin} --sample-rate 1000 -o f.csv"),
+    )
+}
+
+#[test]
+fn a_time_column_in_milliseconds_is_read_as_milliseconds_and_rates_no_sensor_has_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let r = spin_flight(d, "150:0.05");
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    // The same flight with its time in milliseconds, in a column that says so.
+    let text = std::fs::read_to_string(d.join("f.csv")).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().replacen("t,", "t_ms,", 1);
+    assert!(header.starts_with("t_ms,"), "{header}");
+    let mut out = vec![header.clone()];
+    for l in lines {
+        let (t, rest) = l.split_once(',').unwrap();
+        out.push(format!("{},{rest}", t.parse::<f64>().unwrap() * 1000.0));
+    }
+    std::fs::write(d.join("f_ms.csv"), out.join("\n") + "\n").unwrap();
+    std::fs::write(
+        d.join("f_stamp.csv"),
+        out.join("\n").replacen("t_ms,", "stamp,", 1) + "\n",
+    )
+    .unwrap();
+    let apply = |file: &str, time: &str, o: &str| {
+        cli(
+            d,
+            &format!("apply --blob r.blob {file} --time-column {time} --reference -o {o}"),
+        )
+    };
+    let s = apply("f.csv", "t", "s.csv");
+    assert_eq!(s.code(), Some(0), "{}", s.err);
+    for (file, time) in [
+        ("f_ms.csv", "t_ms"),
+        ("f_stamp.csv", "stamp:ms"),
+        ("f.csv", "t:s"),
+    ] {
+        let r = apply(file, time, "ms.csv");
+        assert_eq!(r.code(), Some(0), "{time}: {}", r.err);
+        assert!(
+            r.out.contains("1000.000000 Hz from the timestamps"),
+            "{time}: {}",
+            r.out
+        );
+        let [a, b] = ["s.csv", "ms.csv"].map(|f| std::fs::read_to_string(d.join(f)).unwrap());
+        assert_eq!(a, b, "{time}: the same correction as with seconds");
+    }
+    // A time column whose name states no unit, and an unknown unit, are refused.
+    let r = apply("f_stamp.csv", "stamp", "x.csv");
+    refused(&r, 2, "cannot be read from its name", "stamp");
+    let r = apply("f_stamp.csv", "stamp:min", "x.csv");
+    refused(&r, 2, "min", "stamp:min");
+    // Rates no sensor has.
+    for rate in ["1e-9", "0", "1e6", "nan"] {
+        let r = cli(
+            d,
+            &format!("apply --blob r.blob f.csv --rate {rate} -o x.csv"),
+        );
+        refused(&r, 2, "a sample rate from 0.1 Hz", rate);
+    }
+    assert!(!d.join("x.csv").exists());
+}
+
+#[test]
+fn a_spin_that_jumps_in_one_sample_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let truth = examples().join("spinning_round.truth.json");
+    for profile in ["300:0.5,150-300:0.5", "50:0.1,150:0.1"] {
+        let r = cli(
+            d,
+            &format!(
+                "simulate --sensor imu --truth {} --spin {profile} --sample-rate 1000 -o f.csv",
+                truth.display()
+            ),
+        );
+        refused(&r, 1, "cannot jump in one sample", profile);
+        assert!(!d.join("f.csv").exists());
+    }
+    let r = cli(
+        d,
+        &format!(
+            "simulate --sensor imu --truth {} --spin 150-300:0.05,300:0.05 --sample-rate 1000 -o f.csv",
+            truth.display()
+        ),
+    );
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+}

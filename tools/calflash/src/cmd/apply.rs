@@ -49,15 +49,17 @@ pub struct ApplyArgs {
     /// Sample rate, Hz. An IMU calibration with lever arms needs it (its tangential term
     /// takes the rate derivative by backward difference) or the timestamps: `--time-column`,
     /// or a recording's.
-    #[arg(long, value_parser = values::positive)]
+    #[arg(long, value_parser = values::sample_rate)]
     pub rate: Option<f64>,
     /// The units of the values (counts unless stated).
     #[command(flatten)]
     pub units: super::units::UnitArgs,
-    /// A column with each sample's time in seconds: the rate, when `--rate` is not given, and
-    /// a sample after a step that is not the rate is flagged (its rate derivative is unknown).
-    #[arg(long, conflicts_with = "recording")]
-    pub time_column: Option<String>,
+    /// A column with each sample's time: the rate, when `--rate` is not given, and a sample
+    /// after a step that is not the rate is flagged (its rate derivative is unknown). Its unit
+    /// from its name (`t`, `time`: seconds; `t_ms`, `time_us`, `timestamp_ns`) or given as
+    /// `NAME:ms` (s, ms, us, ns).
+    #[arg(long, conflicts_with = "recording", value_parser = time_column)]
+    pub time_column: Option<(String, f64)>,
     /// Hold the corrected values against the reference columns of the input (`f_*`, `w_*`, or
     /// `input` for a single axis): mean and RMS error of the unflagged samples against the
     /// stated 1-sigma, per output.
@@ -275,7 +277,7 @@ fn table_input(
 ) -> Result<Input, Failure> {
     let mut wanted = cols.to_vec();
     wanted.extend(args.temp_column.iter().cloned());
-    wanted.extend(args.time_column.iter().cloned());
+    wanted.extend(args.time_column.iter().map(|(name, _)| name.clone()));
     if args.reference {
         wanted.extend(reference_cols.iter().map(|c| c.to_string()));
     }
@@ -296,7 +298,11 @@ fn table_input(
             })
             .collect(),
         temps: named(&args.temp_column),
-        times: named(&args.time_column),
+        times: args.time_column.as_ref().and_then(|(name, scale)| {
+            table
+                .column(name)
+                .map(|v| v.iter().map(|t| t * scale).collect())
+        }),
         reference: args.reference.then(|| {
             (0..table.len())
                 .map(|i| {
@@ -308,6 +314,12 @@ fn table_input(
                 .collect()
         }),
     })
+}
+
+/// `--time-column NAME[:UNIT]`: the column and its scale to seconds.
+fn time_column(s: &str) -> Result<(String, f64), String> {
+    crate::obs::header::time_column(s, s)
+        .map_err(|e| format!("{e}").replace(&format!("t={s}:"), &format!("{s}:")))
 }
 
 /// The sample rate: an IMU with lever arms (`lever`) needs it; a stream with timestamps has

@@ -42,7 +42,8 @@ pub struct SimulateArgs {
     pub hold: f64,
     /// A spin-rig flight of an IMU instead of a plan: the unit rolls about its x axis, held
     /// horizontal (gravity transverse), through comma-separated segments `HZ:SECONDS` (steady)
-    /// and `FROM-TO:SECONDS` (spin-up or spin-down), e.g. `50:1,150:1,300:1,150-300:0.5`. The
+    /// and `FROM-TO:SECONDS` (spin-up or spin-down), each starting where the one before ends,
+    /// e.g. `50:1,50-150:0.2,150:1,150-300:0.5,300:1`. The
     /// file has a row per sample: `t`, the true `f_*`, `w_*`, `dw_*` and the raw `a_*`, `g_*`
     /// counts (noisy, rounded), for `calflash apply --time-column t --reference`.
     #[arg(long, conflicts_with_all = ["plan", "plan_file"])]

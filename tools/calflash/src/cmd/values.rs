@@ -136,6 +136,18 @@ pub fn duration_at_most_a_century(s: &str) -> Result<f64, String> {
     Ok(v)
 }
 
+/// A sample rate the device corrects at: from 0.1 Hz to the firmware's
+/// [`spincal::model::MAX_SAMPLE_RATE_HZ`] (100 kHz). No inertial sensor samples outside it.
+///
+/// # Errors
+/// Not a number in that range.
+pub fn sample_rate(s: &str) -> Result<f64, String> {
+    let max = f64::from(spincal::model::MAX_SAMPLE_RATE_HZ);
+    in_range(s, 0.1, max).map_err(|_| {
+        format!("`{s}`: a sample rate from 0.1 Hz to {max} Hz is expected (Hz, e.g. 2000)")
+    })
+}
+
 /// A count from `lo` to `hi`.
 ///
 /// # Errors

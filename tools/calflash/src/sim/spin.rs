@@ -77,7 +77,10 @@ pub struct ProfileError {
 }
 
 /// Reads a profile: comma-separated `HZ:SECONDS` (steady) and `FROM-TO:SECONDS` (ramp), e.g.
-/// `50:1,150:1,300:1,150-300:0.5`.
+/// `50:1,50-150:0.2,150:1,150-300:0.5,300:1`. Each segment starts at the spin the one before it
+/// ends at: a spin that jumps in one sample has an angular acceleration no rig and no airframe
+/// makes (and that the truth would not hold), so a profile whose segments do not join is
+/// refused, naming the two and the ramp that joins them.
 ///
 /// # Errors
 /// A [`ProfileError`] naming the piece and what was expected.
@@ -93,6 +96,7 @@ pub fn profile(text: &str) -> Result<Vec<Segment>, ProfileError> {
         }
     };
     let mut out = Vec::new();
+    let mut previous_end: Option<f64> = None;
     for piece in text.split(',') {
         let Some((rate, secs)) = piece.split_once(':') else {
             return Err(err(format!(
@@ -127,6 +131,19 @@ pub fn profile(text: &str) -> Result<Vec<Segment>, ProfileError> {
                 "`{piece}`: a spin rig turns at most {MAX_SPIN_HZ} Hz"
             )));
         }
+        let (starts, ends) = match seg {
+            Segment::Steady { hz, .. } => (hz, hz),
+            Segment::Ramp { from_hz, to_hz, .. } => (from_hz, to_hz),
+        };
+        if let Some(before) = previous_end
+            && (starts - before).abs() > 1e-9 * before.abs().max(1.0)
+        {
+            return Err(err(format!(
+                "`{piece}` starts at {starts} Hz but the spin before it ends at {before} Hz: a \
+                 spin cannot jump in one sample; join them with a ramp, e.g. `{before}-{starts}:0.1`"
+            )));
+        }
+        previous_end = Some(ends);
         out.push(seg);
     }
     Ok(out)
@@ -294,10 +311,10 @@ mod tests {
     #[test]
     fn profiles_read_steady_spins_and_ramps() {
         assert_eq!(
-            profile("50:1,150-300:0.5,-20:2").unwrap(),
+            profile("150:1,150-300:0.5,300-20:2,20:1").unwrap(),
             vec![
                 Segment::Steady {
-                    hz: 50.0,
+                    hz: 150.0,
                     seconds: 1.0
                 },
                 Segment::Ramp {
@@ -305,12 +322,25 @@ mod tests {
                     to_hz: 300.0,
                     seconds: 0.5
                 },
-                Segment::Steady {
-                    hz: -20.0,
+                Segment::Ramp {
+                    from_hz: 300.0,
+                    to_hz: 20.0,
                     seconds: 2.0
+                },
+                Segment::Steady {
+                    hz: 20.0,
+                    seconds: 1.0
                 },
             ]
         );
+        // Segments that do not join: the spin would jump in one sample.
+        for jump in ["300:0.5,150-300:0.5", "50:1,150:1", "150-300:0.5,-20:2"] {
+            let e = profile(jump).unwrap_err().to_string();
+            assert!(
+                e.contains("cannot jump") && e.contains("join them with a ramp"),
+                "{e}"
+            );
+        }
         assert!(
             profile("50")
                 .unwrap_err()

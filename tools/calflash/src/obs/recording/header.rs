@@ -57,6 +57,31 @@ pub(super) fn timestamp(name: &str) -> Option<f64> {
     }
 }
 
+/// A time column given as `NAME:UNIT` (s, ms, us, ns) or `NAME` whose name states its unit
+/// (`t`, `time`, `t_ms`, `time_us`, `timestamp_ns`): the column's name and its scale to
+/// seconds. `item` is what the user wrote, for the message.
+///
+/// # Errors
+/// An unknown unit, or a name that states none.
+pub fn time_column(spec: &str, item: &str) -> Result<(String, f64), ColumnsError> {
+    match spec.rsplit_once(':') {
+        Some((n, u)) => Ok((
+            n.trim().to_string(),
+            timestamp(&format!("t{u}")).ok_or_else(|| ColumnsError::TimeUnit {
+                item: item.to_string(),
+                unit: u.to_string(),
+            })?,
+        )),
+        None => Ok((
+            spec.to_string(),
+            timestamp(spec).ok_or_else(|| ColumnsError::TimeUnitUnstated {
+                item: item.to_string(),
+                name: spec.to_string(),
+            })?,
+        )),
+    }
+}
+
 /// The axis (0, 1, 2) of a column of `sensor` named by `prefixes`, if it is one, with the unit
 /// its name states: a prefix, the axis letter, and a unit or nothing (`ax`, `acc_x`, `AccelX`,
 /// `gyro_z`, `wz`, `ax_mps2`, `gyro_x[dps]`).
@@ -114,22 +139,7 @@ impl Chosen {
                 "gz" => &mut c.gyro[2],
                 "temp" => &mut c.temp,
                 "t" => {
-                    let (column, scale) = match name.rsplit_once(':') {
-                        Some((n, u)) => (
-                            n.trim().to_string(),
-                            timestamp(&format!("t{u}")).ok_or_else(|| ColumnsError::TimeUnit {
-                                item: item.to_string(),
-                                unit: u.to_string(),
-                            })?,
-                        ),
-                        None => (
-                            name.clone(),
-                            timestamp(&name).ok_or_else(|| ColumnsError::TimeUnitUnstated {
-                                item: item.to_string(),
-                                name: name.clone(),
-                            })?,
-                        ),
-                    };
+                    let (column, scale) = time_column(&name, item)?;
                     if c.t.replace((column, scale)).is_some() {
                         return Err(ColumnsError::Twice {
                             item: item.to_string(),
