@@ -654,3 +654,60 @@ fn a_spin_that_jumps_in_one_sample_is_refused() {
     );
     assert_eq!(r.code(), Some(0), "{}", r.err);
 }
+
+#[test]
+fn a_preset_term_the_plan_cannot_estimate_is_dropped_with_its_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // +-1, +-0.5 and 0 g at every temperature of a ramp: symmetric levels, on which
+    // input:abs(input) is a combination of input and input^3.
+    let g = 9.80665;
+    let mut text = String::from("input,temp,output\n");
+    let mut k = 0u32;
+    for temp in [-40.0, 25.0, 85.0] {
+        for level in [-1.0, -0.5, 0.0, 0.5, 1.0] {
+            for _ in 0..4 {
+                k += 1;
+                let noise = f64::from(k * 7919 % 13) / 13.0 - 0.5;
+                let x = level * g;
+                let out =
+                    32_768.0 + 3.0 * temp + 170.0 * x * (1.0 + 1e-4 * temp) + 0.05 * x * x + noise;
+                text.push_str(&format!("{x},{temp},{out}\n"));
+            }
+        }
+    }
+    std::fs::write(d.join("sym.csv"), text).unwrap();
+    let r = cli(
+        d,
+        "calibrate sym.csv --sensor single-accel --serial S-1 --no-db --blob s.blob",
+    );
+    assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
+    assert!(
+        r.out.contains("dropped input:abs(input) from the preset")
+            && r.out.contains("not observable"),
+        "{}",
+        r.out
+    );
+    assert!(d.join("s.blob").exists());
+    // A term the user asked for by formula is not dropped: the fit says why it cannot be had.
+    let r = calflash(
+        d,
+        &[
+            "calibrate",
+            "sym.csv",
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "S-1",
+            "--no-db",
+            "--model",
+            "output ~ 1 + input + input^3 + input:abs(input)",
+        ],
+    );
+    refused(
+        &r,
+        1,
+        "input:abs(input) is not observable",
+        "the user's formula",
+    );
+}

@@ -343,7 +343,8 @@ fn plans_and_data_that_cannot_support_the_workflow_are_refused() {
         ],
         "head.csv: a_x at the single table point: f_y is not observable: it is 0 for every observation",
     );
-    // Two input levels cannot give a quadratic.
+    // Two input levels cannot give a quadratic the user asks for; the preset's higher terms
+    // are dropped with the reason and the bias and scale factor fitted (issue 30).
     std::fs::write(
         d.join("two.csv"),
         "input,output\n-9.8,28900\n9.8,36900\n-9.8,28901\n9.8,36899\n-9.8,28899\n9.8,36901\n",
@@ -358,8 +359,26 @@ fn plans_and_data_that_cannot_support_the_workflow_are_refused() {
             "single-accel",
             "--serial",
             "X",
+            "--model",
+            "output ~ 1 + input + input^2",
         ],
-        "input^2 is not observable: input takes only 2 distinct values; the model's 5 terms in input (the intercept included) need at least 5",
+        "input^2 is not observable: input takes only 2 distinct values; it needs at least 3",
+    );
+    let out = ok(
+        d,
+        &[
+            "calibrate",
+            "two.csv",
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "X",
+            "--no-db",
+        ],
+    );
+    assert!(
+        out.contains("dropped input^2 from the preset: input^2 is not observable: input takes only 2 distinct values"),
+        "{out}"
     );
     // Missing reference columns.
     std::fs::write(d.join("nocol.csv"), "angle,output\n0,1\n1,2\n").unwrap();

@@ -125,8 +125,14 @@ pub(super) fn asymmetry(
         }
         return Ok(None);
     }
-    let full = decide(&with_kink)?;
     let reduced = decide(model)?;
+    // A kink the plan cannot estimate (one level on a side: the kink is then a constant, or a
+    // combination of the model's terms) is not tested, unless it was asked for.
+    let full = match decide(&with_kink) {
+        Ok(f) => f,
+        Err(WorkflowError::Fit { .. }) if opts.asymmetry != Some(true) => return Ok(None),
+        Err(e) => return Err(e),
+    };
     let test = select::partial_f(&full.fit, &reduced.fit);
     let k1 = full.coef(col::INPUT);
     let ca = full.coef(KINK);

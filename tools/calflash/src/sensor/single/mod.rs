@@ -165,7 +165,57 @@ fn model(
             .into());
         }
     }
+    let model = if chosen {
+        observable(model, table, notes)
+    } else {
+        model
+    };
     Ok((model, chosen))
+}
+
+/// The preset without the terms the plan cannot estimate (each a combination of the terms
+/// before it over these observations, or at one of the temperatures: symmetric levels make
+/// `input:abs(input)` one of `input` and `input^3`), each dropped with the reason, as
+/// insignificant terms are. The preset is the tool's own choice; a term the user asked for by
+/// formula is never dropped (the fit then says why it cannot be estimated). `1` and `input`
+/// are never dropped.
+fn observable(mut model: Formula, table: &Table, notes: &mut Vec<String>) -> Formula {
+    use crate::stats::{self, FitError};
+    // The whole table, then each temperature's observations (a table point's own fit).
+    let mut parts = vec![(table.clone(), String::new())];
+    if let Some(temps) = table.column(col::TEMP) {
+        let mut levels: Vec<f64> = temps.to_vec();
+        levels.sort_by(f64::total_cmp);
+        levels.dedup();
+        if levels.len() > 1 {
+            for t in levels {
+                let rows: Vec<usize> = (0..temps.len()).filter(|&i| temps[i] == t).collect();
+                parts.push((table.select(&rows), format!(" at {t} C")));
+            }
+        }
+    }
+    'terms: loop {
+        for (part, at) in &parts {
+            let d = model.design(part);
+            let opts = stats::Options::default();
+            let Err(FitError::RankDeficient {
+                column,
+                combination,
+            }) = stats::fit(&d.x, &d.y, d.names.clone(), d.intercept, &opts)
+            else {
+                continue;
+            };
+            let name = d.names[column].clone();
+            if name == "1" || name == col::INPUT {
+                return model;
+            }
+            let why = model.explain_rank_deficiency(part, column, &combination);
+            notes.push(format!("dropped {name} from the preset{at}: {why}"));
+            model = model.without(&name);
+            continue 'terms;
+        }
+        return model;
+    }
 }
 
 /// The continuous thermal model (with the supply voltage's terms when it varies) and the
