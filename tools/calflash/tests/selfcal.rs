@@ -702,3 +702,23 @@ fn selfcal_refuses_a_lot() {
     );
     assert!(!dir.path().join("u.blob").exists());
 }
+
+/// A one-sample glitch inside the initial rest (issue 30) is named and left out, not taken for
+/// motion: the calibration is the clean recording's.
+#[test]
+fn a_glitch_in_the_rest_is_named_not_taken_for_motion() {
+    let clean = Tumble::default().record();
+    let c0 = selfcal::calibrate(&clean, &opts()).unwrap();
+    assert!(c0.rest_glitches.is_empty());
+    for (k, axis, value) in [(500, 0, 5.0e4), (1200, 2, -3.0e4), (2000, 1, 1.0e9)] {
+        let mut rec = clean.clone();
+        rec.acc[k][axis] = value;
+        let c = selfcal::calibrate(&rec, &opts())
+            .unwrap_or_else(|e| panic!("glitch at sample {k}: {e}"));
+        let t = rec.t[k] - rec.t[0];
+        assert_eq!(c.rest_glitches, vec![t], "sample {k}");
+        for (a, b) in c.accel.params.iter().zip(&c0.accel.params) {
+            assert!((a - b).abs() <= 1e-6 * b.abs().max(1.0), "sample {k}: {a} against {b}");
+        }
+    }
+}

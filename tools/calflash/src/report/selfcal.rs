@@ -77,6 +77,15 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
         let _ = writeln!(s, "  {word} {n}");
     }
     recording_lines(&mut s, rec);
+    if !c.rest_glitches.is_empty() {
+        let at: Vec<String> = c.rest_glitches.iter().map(|t| format!("{t:.3} s")).collect();
+        let _ = writeln!(
+            s,
+            "  rest         {} glitch sample(s) in the initial rest left out of it (at {}): a misread, not motion",
+            at.len(),
+            at.join(", ")
+        );
+    }
     accel_lines(&mut s, c, rec);
     gyro_lines(&mut s, c, rec);
     match check {

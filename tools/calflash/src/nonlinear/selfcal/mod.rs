@@ -235,6 +235,8 @@ pub struct SelfCal {
     pub rotations: Vec<usize>,
     /// Rotations left out.
     pub skipped: Vec<Skipped>,
+    /// Times (s from the start) of one-sample glitches in the initial rest, left out of it.
+    pub rest_glitches: Vec<f64>,
 }
 
 fn rms(x: &[f64]) -> f64 {
@@ -326,6 +328,22 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
     let rate = rec.rate();
     let samples = |s: f64| ((s * rate).round() as usize).max(1);
     let rest = Rest::checked(rec, opts)?;
+    // The rest's glitches take the rest's median: they move no pose's mean, no measure.
+    let cleaned;
+    let rec = if rest.glitches.is_empty() {
+        rec
+    } else {
+        let mut r = rec.clone();
+        let median: [f64; 3] = std::array::from_fn(|j| {
+            let x: Vec<f64> = rec.acc[..rest.end].iter().map(|a| a[j]).collect();
+            crate::stats::robust::median_mad(&x).0
+        });
+        for &i in &rest.glitches {
+            r.acc[i] = median;
+        }
+        cleaned = r;
+        &cleaned
+    };
     let rest_level = rest.level;
     // A turn about the vertical barely moves the accelerometer, but the gyro sees it: the
     // gyro's measure, put in the accelerometer's units by the ratio of the two rest levels and
@@ -412,6 +430,7 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         constant_bias_angles,
         rotations: turns.rotations,
         skipped: turns.skipped,
+        rest_glitches: rest.glitches.iter().map(|&i| rec.t[i] - rec.t[0]).collect(),
     })
 }
 
@@ -426,6 +445,8 @@ struct Rest {
     /// Two still runs whose means agree within this (8 sigma of the rest's noise, per axis),
     /// a window apart at most, are one hold.
     tol: [f64; 3],
+    /// One-sample glitches inside it, left out of its level (sample indices).
+    glitches: Vec<usize>,
 }
 
 impl Rest {
@@ -447,14 +468,23 @@ impl Rest {
         }
         // The quantisation's variance floors every variance: identical codes are not silence.
         let floor = statics::floor(statics::quantum(&rec.acc));
+        // One-sample glitches (a converter's or a link's misread): samples far outside the
+        // rest's robust spread, too few and too short to be motion. They are left out of the
+        // rest and named; real motion moves many samples, and is refused below.
+        let glitches = glitches(&rec.acc[..end], floor);
+        let kept: Vec<[f64; 3]> = (0..end)
+            .filter(|i| glitches.binary_search(i).is_err())
+            .map(|i| rec.acc[i])
+            .collect();
         // The rest must be still: no second of it far noisier than its quietest.
         let second = ((rec.rate()).round() as usize).max(1);
         let blocks: Vec<(usize, f64)> = (0..end / second)
             .map(|b| {
-                (
-                    b * second,
-                    statics::rest_level(&rec.acc[b * second..(b + 1) * second], floor),
-                )
+                let block: Vec<[f64; 3]> = (b * second..(b + 1) * second)
+                    .filter(|i| glitches.binary_search(i).is_err())
+                    .map(|i| rec.acc[i])
+                    .collect();
+                (b * second, statics::rest_level(&block, floor))
             })
             .collect();
         let quietest = blocks
@@ -473,9 +503,39 @@ impl Rest {
         Ok(Self {
             end,
             floor,
-            level: statics::rest_level(&rec.acc[..end], floor),
-            tol: statics::variances(&rec.acc[..end], floor).map(|v| 8.0 * v.sqrt()),
+            level: statics::rest_level(&kept, floor),
+            tol: statics::variances(&kept, floor).map(|v| 8.0 * v.sqrt()),
+            glitches,
         })
+    }
+}
+
+/// The samples of a rest `acc` (in order) that are glitches: on some axis more than 30
+/// robust standard deviations (the scaled MAD, floored by a quantisation step) from the rest's median,
+/// in runs of at most 3 samples, and at most one in 1,000 of the rest (at least 3). Anything
+/// more is motion, and none are returned.
+fn glitches(acc: &[[f64; 3]], floor: [f64; 3]) -> Vec<usize> {
+    let n = acc.len();
+    let mut far = vec![false; n];
+    for j in 0..3 {
+        let x: Vec<f64> = acc.iter().map(|a| a[j]).collect();
+        let (median, mad) = crate::stats::robust::median_mad(&x);
+        let sigma = mad.max((12.0 * floor[j]).sqrt());
+        for (f, a) in far.iter_mut().zip(acc) {
+            *f |= (a[j] - median).abs() > 30.0 * sigma;
+        }
+    }
+    let found: Vec<usize> = (0..n).filter(|&i| far[i]).collect();
+    let longest_run = found
+        .chunk_by(|a, b| b - a == 1)
+        .map(<[usize]>::len)
+        .max()
+        .unwrap_or(0);
+    let allowed = (n / 1000).max(3);
+    if found.len() <= allowed && longest_run <= 3 {
+        found
+    } else {
+        Vec::new()
     }
 }
 
