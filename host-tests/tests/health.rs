@@ -192,6 +192,56 @@ fn six_sigma_shifts_are_suspect_within_ten_seconds() {
     assert!(slowest <= 10.0);
 }
 
+/// The example IMU as a 1 g bench (tumble and rate table) calibrates it: the accelerometers'
+/// calibrated range ends at 1 g, so a unit at rest with an axis vertical reads that axis at or
+/// just beyond the range on about half its samples.
+fn one_g_bench() -> Calibration {
+    let mut data = CalibrationData::example_imu();
+    if let spincal::model::Sensor::Imu { accel, .. } = &mut data.sensor {
+        for c in accel.iter_mut() {
+            c.range = spincal::model::Span::new(-9.806_65, 9.806_65);
+        }
+    }
+    Calibration::new(data).expect("valid")
+}
+
+/// A rest reading beyond the calibrated range is censored by the range, not an outlier
+/// (issue 30): after a 1 g bench, units resting with an axis vertical are judged OK as often
+/// as the stated false-alarm rate allows, and the same unit shocked upward or downward by
+/// 6 sigma is SUSPECT, not left unjudged or pulled down.
+#[test]
+fn a_reading_beyond_a_one_g_bench_is_judged_not_dropped() {
+    let cal = one_g_bench();
+    let sigma = stated_sigma(&cal);
+    let units = 40u64;
+    let mut not_ok = Vec::new();
+    for k in 0..units {
+        let axis = (k % 3) as usize;
+        let sign = if (k / 3) % 2 == 0 { 1.0 } else { -1.0 };
+        let pose = face(axis, sign, 0.3 * k as f64);
+        let gravity = 9.80 + 0.02 * (k as f64 + 0.5) / units as f64;
+        let mut unit = Unit::new(&cal, RATE, [0.0; 6], gravity, 90_000 + k);
+        let r = run(&mut unit, &cal, &[pose], 10.0);
+        if r.health.verdict != Verdict::Ok {
+            not_ok.push((k, r.health.verdict, r.health.ignored_samples));
+        }
+        for shock in [6.0, -6.0] {
+            let mut shift = [0.0; 6];
+            shift[axis] = shock * sign * sigma[axis];
+            let mut unit = Unit::new(&cal, RATE, shift, gravity, 95_000 + k);
+            let r = run(&mut unit, &cal, &[pose], 10.0);
+            assert_eq!(
+                r.health.verdict,
+                Verdict::Suspect,
+                "unit {k}, axis {axis} shocked {shock:+} sigma along gravity: {:?}",
+                r.health
+            );
+        }
+    }
+    eprintln!("1 g bench, {units} units at rest with an axis vertical: not OK {not_ok:?}");
+    assert!(not_ok.len() <= 2, "{not_ok:?}");
+}
+
 /// A shift within what ageing explains: DRIFTED, the refined biases applied as an overlay
 /// (the corrected rate at rest comes back to zero) and the 1-sigma from the refined variance;
 /// the calibration itself is untouched.

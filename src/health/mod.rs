@@ -77,10 +77,13 @@ pub const FIRST_CHECKPOINT: u32 = 8;
 /// Earth's rate, rad/s: at rest the gyros read it, in a direction the unit does not know.
 const EARTH_RATE: f32 = 7.292_115e-5;
 
-/// Flags that keep a sample out of the stillness detector.
-const UNUSABLE: Flags = Flags::from_bits_truncate(
-    Flags::SATURATED.bits() | Flags::OUT_OF_RANGE.bits() | Flags::NO_CALIBRATION.bits(),
-);
+/// Flags that keep a sample out of the stillness detector: a converter at its rail (the true
+/// value is unknown) or no calibration. A value beyond the calibrated range is kept: it is the
+/// model's extrapolation, and at rest after a 1 g bench half of a vertical axis' readings lie
+/// just beyond the range; leaving them out would censor the rest's mean (pulling the refined
+/// bias down) or, for a unit shocked upward, leave it unjudged.
+const UNUSABLE: Flags =
+    Flags::from_bits_truncate(Flags::SATURATED.bits() | Flags::NO_CALIBRATION.bits());
 
 /// What the unit concludes about its calibration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -139,7 +142,7 @@ pub struct Health {
     pub rest_windows: u32,
     /// Windows taken as moving.
     pub moving_windows: u32,
-    /// Samples left out (NaN, saturated, out of range, no calibration).
+    /// Samples left out (NaN, saturated, no calibration).
     pub ignored_samples: u32,
 }
 

@@ -718,7 +718,10 @@ fn a_glitch_in_the_rest_is_named_not_taken_for_motion() {
         let t = rec.t[k] - rec.t[0];
         assert_eq!(c.rest_glitches, vec![t], "sample {k}");
         for (a, b) in c.accel.params.iter().zip(&c0.accel.params) {
-            assert!((a - b).abs() <= 1e-6 * b.abs().max(1.0), "sample {k}: {a} against {b}");
+            assert!(
+                (a - b).abs() <= 1e-6 * b.abs().max(1.0),
+                "sample {k}: {a} against {b}"
+            );
         }
     }
 }

@@ -78,7 +78,11 @@ pub fn summary(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>, serial
     }
     recording_lines(&mut s, rec);
     if !c.rest_glitches.is_empty() {
-        let at: Vec<String> = c.rest_glitches.iter().map(|t| format!("{t:.3} s")).collect();
+        let at: Vec<String> = c
+            .rest_glitches
+            .iter()
+            .map(|t| format!("{t:.3} s"))
+            .collect();
         let _ = writeln!(
             s,
             "  rest         {} glitch sample(s) in the initial rest left out of it (at {}): a misread, not motion",
