@@ -122,7 +122,10 @@ fn false_alarms_at_the_stated_rate() {
 }
 
 /// A bias shift of 1 sigma on every output: OK or DRIFTED, and the refined biases' 95 %
-/// intervals cover the truth 95 % +- 3.5 % of the time over 200 handled units.
+/// intervals cover the truth at least 95 % - 3.5 % of the time over 200 handled units. (These
+/// units carry a bias and no other error, which is not what the prior describes, so the
+/// intervals, which allow for the scale and misalignment errors a unit may carry, cover more;
+/// the calibrated coverage is `a_units_own_calibration_error_is_carried_from_pose_to_pose`.)
 #[test]
 fn one_sigma_shifts_are_refined_within_their_stated_covariance() {
     let cal = calibration(1e-3);
@@ -159,7 +162,7 @@ fn one_sigma_shifts_are_refined_within_their_stated_covariance() {
          [not-yet, ok, drifted, suspect] {verdicts:?}; 95 % intervals cover {coverage:.4} \
          (per output {per_output:?} of {units})"
     );
-    assert!((coverage - 0.95).abs() <= 0.035, "{coverage}");
+    assert!(coverage >= 0.95 - 0.035, "{coverage}");
 }
 
 /// A shift of 6 sigma on any one output is SUSPECT within 10 s of rest at 1 kHz (the
@@ -240,6 +243,97 @@ fn a_reading_beyond_a_one_g_bench_is_judged_not_dropped() {
     }
     eprintln!("1 g bench, {units} units at rest with an axis vertical: not OK {not_ok:?}");
     assert!(not_ok.len() <= 2, "{not_ok:?}");
+}
+
+/// The example IMU with an accelerometer covariance dominated by the sensitivity rows (scale
+/// and misalignment, 2e-3 per axis) over the bias (2e-3 m/s^2): the error of a unit then
+/// depends strongly on its pose.
+fn scale_dominated() -> Calibration {
+    let mut data = calibration(1e-3).into_data();
+    if let spincal::model::Sensor::Imu {
+        covariance: Some(sets),
+        ..
+    } = &mut data.sensor
+    {
+        for set in sets.as_mut_slice() {
+            for l in &mut set.accel {
+                let packed = l.as_flattened_mut();
+                packed.fill(0.0);
+                let diagonal = |i: usize| i * (i + 1) / 2 + i;
+                packed[diagonal(0)] = 2e-3;
+                for i in 1..4 {
+                    packed[diagonal(i)] = 2e-3;
+                }
+                packed[diagonal(7)] = 1e-5;
+            }
+        }
+    }
+    Calibration::new(data).expect("valid")
+}
+
+/// Units that carry their own calibration error (bias, scale, misalignment and g-squared
+/// errors drawn from the stated covariance, so that the error depends on the pose): after
+/// one, two and three poses the refined accelerometer biases' 95 % intervals cover the error at
+/// the last pose 95 % +- 3.5 % of the time over 300 units (issue 30: before, 0.95, 0.90 and
+/// 0.75, as a pose change added the pose-dependent part as fresh noise).
+#[test]
+fn a_units_own_calibration_error_is_carried_from_pose_to_pose() {
+    let cal = scale_dominated();
+    let noise = cal.data().noise.expect("noise");
+    let ageing: Vec<f64> = noise
+        .bias_walk
+        .iter()
+        .map(|k| f64::from(*k) * f64::from(noise.ageing_s).sqrt())
+        .collect();
+    let units = 300u64;
+    let mut coverage = Vec::new();
+    for poses in 1..=3usize {
+        let (mut covered, mut total) = (0u32, 0u32);
+        let mut along = (0u32, 0u32);
+        for k in 0..units {
+            let gravity = 9.80 + 0.02 * ((k * 37 % units) as f64 + 0.5) / units as f64;
+            // The health reports the aged prior's refinement: the unit has aged by a draw of
+            // the allowance too.
+            let mut seed = Unit::new(&cal, RATE, [0.0; 6], gravity, 80_000 + k);
+            let aged: [f64; 6] = std::array::from_fn(|i| seed.normal(ageing[i]));
+            let mut unit = Unit::new(&cal, RATE, aged, gravity, 40_000 + k);
+            let theta = unit.draw_accel_error(&cal);
+            let mut unit = unit.with_accel_error(theta);
+            let handled = handling(k);
+            let r = run(&mut unit, &cal, &handled[..poses], 4.0);
+            let h = &r.health;
+            let last = handled[poses - 1];
+            let f = last.inverse() * nalgebra::Vector3::new(0.0, 0.0, gravity);
+            let own = unit.accel_error(&[f[0], f[1], f[2]]);
+            let truth: [f64; 3] = std::array::from_fn(|i| own[i] + aged[i]);
+            let up = (0..3)
+                .max_by(|&a, &b| f[a].abs().total_cmp(&f[b].abs()))
+                .unwrap();
+            for (i, t) in truth.iter().enumerate() {
+                let inside = (f64::from(h.bias[i]) - t).abs() <= 1.96 * f64::from(h.bias_sigma[i]);
+                covered += u32::from(inside);
+                total += 1;
+                if i == up {
+                    along.0 += u32::from(inside);
+                    along.1 += 1;
+                }
+            }
+        }
+        let c = f64::from(covered) / f64::from(total);
+        let a = f64::from(along.0) / f64::from(along.1);
+        coverage.push((poses, c, a));
+    }
+    eprintln!(
+        "units with their own calibration error, {units} per row, 4 s a pose: (poses, coverage \
+         of the accelerometer biases, along gravity) {coverage:?}"
+    );
+    for (poses, c, a) in coverage {
+        assert!((c - 0.95).abs() <= 0.035, "{poses} pose(s): {c}");
+        assert!(
+            (a - 0.95).abs() <= 0.05,
+            "{poses} pose(s) along gravity: {a}"
+        );
+    }
 }
 
 /// A shift within what ageing explains: DRIFTED, the refined biases applied as an overlay

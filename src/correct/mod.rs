@@ -43,7 +43,7 @@ mod widened;
 
 pub use any::AnyCorrector;
 pub use flags::Flags;
-pub use imu::{ImuCorrector, MAX_SAMPLE_RATE_HZ, Overlay};
+pub use imu::{ImuCorrector, MAX_SAMPLE_RATE_HZ, Overlay, REST_FEATURES};
 pub use sample::Sample;
 pub use single::AxisCorrector;
 pub use triad::TriadCorrector;

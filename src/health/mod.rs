@@ -11,9 +11,11 @@
 //! Each rest window updates a Kalman filter over the biases (`health/filter.rs`); two of them run side
 //! by side, one whose prior is the stored calibration's (each output's stated 1-sigma at the
 //! rest pose, Earth's rate included for the gyros), one whose prior adds what ageing may
-//! explain (the bias random walk over the stored ageing time). The process noise is the bias
-//! random walk over each window; a change of pose adds the part of the stated error that
-//! depends on the pose (all but the bias's own). The verdict comes from each filter's per-axis
+//! explain (the bias random walk over the stored ageing time). The accelerometer's state is
+//! its parameters' error (bias, sensitivity row, g-squared term: what the calibration's
+//! covariance factors state), so that its error at each pose, and what one pose teaches about
+//! the next, follow from one prior. The process noise is the bias random walk over each window;
+//! a change of pose adds the part of the gyros' stated error that depends on it. The verdict comes from each filter's per-axis
 //! statistic `x^2 / (spread - P)`, chi-square with one degree of freedom when its prior holds,
 //! tested on the axes the data observe with Bonferroni's correction, at checkpoints after
 //! 1, 2, 4, 8, ... rest windows of one rest period, the `j`-th spending `alpha / 2^(j+1)` of
@@ -367,32 +369,39 @@ impl RestMonitor {
         let Some((total, own)) = imu.factory_variances(mean) else {
             return;
         };
-        let mut pose_part = [0.0; OUTPUTS];
-        for (i, (p, (t, b))) in pose_part.iter_mut().zip(total.iter().zip(own)).enumerate() {
-            *p = (t - b).max(0.0) + if i >= 3 { earth } else { 0.0 };
-        }
+        let Some(accel_prior) = imu.accel_rest_covariance() else {
+            return;
+        };
+        let phi = imu.accel_rest_features(&force);
+        // The gyros' stated error that depends on the pose (g-sensitivity, scale times Earth's
+        // rate), and Earth's rate itself: fresh at each new pose. The accelerometer's carries
+        // over through its parameters' correlations in the filter.
+        let [.., t3, t4, t5] = total;
+        let [.., o3, o4, o5] = own;
+        let gyro_pose_part = [t3 - o3, t4 - o4, t5 - o5].map(|v| v.max(0.0) + earth);
         match (&mut self.filters, self.pose) {
             (None, _) => {
                 // The stated error at rest; the gyros' with Earth's rate.
-                let mut prior = total;
-                for p in prior.iter_mut().skip(3) {
-                    *p += earth;
-                }
+                let gyro = [t3, t4, t5].map(|v| v + earth);
                 let Span { lo, hi } = self.gravity;
                 let gravity_var = (hi - lo) * (hi - lo) / 12.0;
-                let mut aged_prior = prior;
-                for (p, a) in aged_prior.iter_mut().zip(&self.ageing) {
-                    *p += a;
-                }
+                let [ga0, ga1, ga2, gg0, gg1, gg2] = self.ageing;
+                let aged_gyro = [gyro[0] + gg0, gyro[1] + gg1, gyro[2] + gg2];
                 self.filters = Some([
-                    Filter::new(&prior, gravity_var),
-                    Filter::new(&aged_prior, gravity_var),
+                    Filter::new(&accel_prior, &[0.0; 3], &gyro, gravity_var, &phi),
+                    Filter::new(
+                        &accel_prior,
+                        &[ga0, ga1, ga2],
+                        &aged_gyro,
+                        gravity_var,
+                        &phi,
+                    ),
                 ]);
             }
             (Some(filters), Some(pose)) => {
                 if change(&force, &pose, r) > self.steady_limit {
                     for f in filters.iter_mut() {
-                        f.add_noise(&pose_part);
+                        f.add_gyro_noise(&gyro_pose_part);
                     }
                 }
             }
@@ -404,7 +413,7 @@ impl RestMonitor {
         if let Some(filters) = &mut self.filters {
             for f in filters.iter_mut() {
                 f.update_gyro(&[w0, w1, w2], &[rw0, rw1, rw2]);
-                f.update_accel(&force, &[ra0, ra1, ra2], g0);
+                f.update_accel(&force, &[ra0, ra1, ra2], g0, &phi);
             }
         }
         self.rest_windows = self.rest_windows.saturating_add(1);

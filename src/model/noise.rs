@@ -94,6 +94,10 @@ impl NoiseTerms {
 }
 
 #[cfg(test)]
+#[expect(
+    clippy::expect_used,
+    reason = "the example's noise terms are a fixture"
+)]
 mod tests {
     use super::*;
 

@@ -17,6 +17,7 @@ use crate::model::rotation::{self, LeverTerms};
 use crate::model::{Calibration, Channel, Environment, ImuCovariance, ImuSet, Rails, Sensor};
 
 pub use crate::model::MAX_SAMPLE_RATE_HZ;
+pub use uncertainty::REST_FEATURES;
 
 /// Fixed-point iterations of the first sample (and the first after a reset), which has no
 /// previous lever term to feed the g-sensitivity: each shrinks the error by `|G de/dw|`, about

@@ -8,6 +8,11 @@ use super::ImuCorrector;
 use crate::model::rotation;
 use crate::model::{ImuCovariance, ImuOutputCovariance};
 
+/// The accelerometer features of [`IMU_FEATURES`](crate::model::IMU_FEATURES) that do not
+/// vanish at rest: the bias, the sensitivity row and the g-squared term (the lever arm's
+/// gradient is zero without a spin).
+pub const REST_FEATURES: [usize; 5] = [0, 1, 2, 3, 7];
+
 impl<S: Sample> ImuCorrector<'_, S> {
     /// Per output, the variance that quantisation adds to one corrected sample:
     /// `sum_j M_ij^2 / 12` (a code is uniform over its width).
@@ -66,6 +71,51 @@ impl<S: Sample> ImuCorrector<'_, S> {
             }
         }
         Some(norms)
+    }
+
+    /// The accelerometer error's features at rest (no spin) under the specific force `f`, per
+    /// axis `i`: `[1, f_0, f_1, f_2, x_i^2]` with `x_i = n_i . f`, the features of
+    /// [`IMU_FEATURES`](crate::model::IMU_FEATURES) that do not vanish at rest
+    /// ([`REST_FEATURES`] picks them). The axis' error is their dot product with its
+    /// parameters' error.
+    #[must_use]
+    pub fn accel_rest_features(&self, f: &[f32; 3]) -> [[f32; 5]; 3] {
+        let [na, _] = &self.directions;
+        core::array::from_fn(|i| {
+            let x = na.get(i).map_or(0.0, |n| rotation::dot(n, f));
+            [1.0, f[0], f[1], f[2], x * x]
+        })
+    }
+
+    /// Per accelerometer axis, the covariance of its parameters' error over the features of
+    /// [`accel_rest_features`](Self::accel_rest_features) (from the factor `L`: `L L'`
+    /// restricted to [`REST_FEATURES`]), packed upper triangle row by row (`00 01 .. 04 11 ..
+    /// 44`). `None` without covariance factors.
+    #[must_use]
+    pub fn accel_rest_covariance(&self) -> Option<[[f32; 15]; 3]> {
+        let ImuCovariance { accel, .. } = self.covariance.as_ref()?;
+        Some(core::array::from_fn(|axis| {
+            let packed = accel.get(axis).map_or(&[][..], |a| a.as_flattened());
+            let l = |i: usize, j: usize| {
+                if j <= i {
+                    packed.get(i * (i + 1) / 2 + j).copied().unwrap_or(0.0)
+                } else {
+                    0.0
+                }
+            };
+            let mut out = [0.0f32; 15];
+            let mut k = 0;
+            for (a, &fa) in REST_FEATURES.iter().enumerate() {
+                for &fb in REST_FEATURES.iter().skip(a) {
+                    let c: f32 = (0..=fa.min(fb)).map(|m| l(fa, m) * l(fb, m)).sum();
+                    if let Some(o) = out.get_mut(k) {
+                        *o = c;
+                    }
+                    k += 1;
+                }
+            }
+            out
+        }))
     }
 
     /// Per output of the corrected sample `values`, the factory calibration's error variance

@@ -97,7 +97,9 @@ fn bench(c: &mut Criterion) {
                 );
                 g.bench_function(name, |b| {
                     b.iter(|| {
-                        let outcomes = pool.install(|| calibrate_all(&args, &units, out.path()));
+                        let outcomes = pool
+                            .install(|| calibrate_all(&args, &units, out.path()))
+                            .expect("the units' files can be written");
                         assert!(outcomes.iter().all(|o| o.result.is_ok()), "{outcomes:?}");
                     });
                 });

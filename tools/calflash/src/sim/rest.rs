@@ -27,6 +27,10 @@ pub struct Unit<'a> {
     rate: f64,
     /// Bias errors against the stored calibration, `[ax .. wz]`.
     pub bias: [f64; 6],
+    /// Per accelerometer axis, its parameters' error over the features at rest
+    /// ([`ImuCorrector::accel_rest_features`]): the pose-dependent part of a unit's own
+    /// calibration error (zero unless [`Unit::with_accel_error`]).
+    pub accel_error: [[f64; 5]; 3],
     /// The magnitude of gravity where it rests.
     pub gravity: f64,
     white: [f64; 6],
@@ -66,6 +70,7 @@ impl<'a> Unit<'a> {
             imu,
             rate,
             bias,
+            accel_error: [[0.0; 5]; 3],
             gravity,
             white: noise.white.map(|d| f64::from(d) * rate.sqrt()),
             rng: ChaCha8Rng::seed_from_u64(seed),
@@ -75,14 +80,63 @@ impl<'a> Unit<'a> {
         }
     }
 
+    /// This unit carrying the accelerometer calibration error `theta` (per axis, over the
+    /// features at rest): its error then depends on the pose, as a real unit's does.
+    #[must_use]
+    pub fn with_accel_error(mut self, theta: [[f64; 5]; 3]) -> Self {
+        self.accel_error = theta;
+        self
+    }
+
+    /// Draws an accelerometer calibration error from the stated covariance of `cal`
+    /// ([`ImuCorrector::accel_rest_covariance`] at 25 C, 3.3 V): what a unit whose
+    /// calibration is as good as it states carries.
+    ///
+    /// # Panics
+    /// When `cal` is not an IMU with covariance factors.
+    pub fn draw_accel_error(&mut self, cal: &Calibration) -> [[f64; 5]; 3] {
+        let mut imu = ImuCorrector::<u16>::new(cal, 1000.0).expect("an IMU calibration");
+        imu.set_environment(25.0, 3.3);
+        let blocks = imu.accel_rest_covariance().expect("covariance factors");
+        std::array::from_fn(|axis| {
+            let c = nalgebra::Matrix5::from_fn(|i, j| {
+                let (a, b) = (i.min(j), i.max(j));
+                let k = a * 5 - a * (a.saturating_sub(1)) / 2 + (b - a);
+                f64::from(blocks[axis][k])
+            });
+            // A covariance that is only semi-definite (an unobserved feature) draws nothing
+            // along its null space.
+            let eig = c.symmetric_eigen();
+            let z = nalgebra::Vector5::from_fn(|i, _| {
+                eig.eigenvalues[i].max(0.0).sqrt() * self.normal.sample(&mut self.rng)
+            });
+            let theta = eig.eigenvectors * z;
+            std::array::from_fn(|i| theta[i])
+        })
+    }
+
     /// The true outputs (before noise) with attitude `pose` (body to level) turning at
     /// `w_body`.
     pub(crate) fn truth(&self, pose: &Rotation3<f64>, w_body: &Vector3<f64>) -> Vector6<f64> {
         let f = pose.inverse() * Vector3::new(0.0, 0.0, self.gravity);
         let w = pose.inverse() * self.earth + w_body;
+        let error = self.accel_error(&[f[0], f[1], f[2]]);
         Vector6::from_fn(|i, _| {
-            let v = if i < 3 { f[i] } else { w[i - 3] };
+            let v = if i < 3 { f[i] + error[i] } else { w[i - 3] };
             v + self.bias[i]
+        })
+    }
+
+    /// The accelerometer's pose-dependent error under the specific force `f`.
+    #[must_use]
+    pub fn accel_error(&self, f: &[f64; 3]) -> [f64; 3] {
+        let features = self.factory.accel_rest_features(&f.map(|x| x as f32));
+        std::array::from_fn(|i| {
+            features[i]
+                .iter()
+                .zip(&self.accel_error[i])
+                .map(|(x, t)| f64::from(*x) * t)
+                .sum()
         })
     }
 
