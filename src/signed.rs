@@ -117,6 +117,13 @@ impl core::fmt::Display for SignError {
                  signing",
             ),
             Self::WrongSerial => f.write_str("the calibration was signed for another unit"),
+            // Above the held counter, only a downgrade is refused: it was made for another one.
+            Self::Replay { counter, held } if counter > held => write!(
+                f,
+                "a downgrade signed at counter {counter}, but the unit holds counter {held}: a \
+                 downgrade is made for the counter the unit holds; sign it again with --downgrade \
+                 --counter {held}"
+            ),
             Self::Replay { counter, held } => write!(
                 f,
                 "counter {counter} is not above the {held} the unit holds (an older calibration, \

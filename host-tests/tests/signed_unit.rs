@@ -174,6 +174,21 @@ fn unknown_keys_replays_other_units_and_unsigned_blobs_are_refused() {
             held: 3
         }
     );
+    // One signed above the unit's counter says so, not that 4 is "not above" 3 (issue 30).
+    let wrong = refused(write(&mut d, &sign(&blob_for(UNIT, 0.0), &key, 4, true)));
+    assert_eq!(
+        wrong,
+        SignError::Replay {
+            counter: 4,
+            held: 3
+        }
+    );
+    let said = wrong.to_string();
+    assert!(
+        said.starts_with("a downgrade signed at counter 4, but the unit holds counter 3")
+            && said.contains("--downgrade --counter 3"),
+        "{said}"
+    );
     let down = sign(&blob_for(UNIT, 0.0), &key, 3, true);
     assert_eq!(
         write(&mut d, &down),

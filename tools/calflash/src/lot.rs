@@ -25,9 +25,10 @@ pub enum Error {
     TooFewUnits(usize),
     /// No coefficient that every unit has varies across the lot.
     #[error(
-        "no coefficient is shared by every unit and varies across the lot (are the units of one kind?)"
+        "no coefficient is shared by every unit and varies across the lot{}",
+        if .0.is_empty() { String::new() } else { format!("; the units are of more than one kind: {}", .0) }
     )]
-    NothingShared,
+    NothingShared(String),
     /// A unit without coefficients the lot is judged on.
     #[error("the unit lacks coefficients its lot is judged on: {}", .0.join(", "))]
     UnitLacks(Vec<String>),
@@ -223,7 +224,7 @@ pub fn judge(units: Vec<Unit>, alpha: f64) -> Result<Lot, Error> {
         .partition(|k| robust::median_mad(&column(k)).1 > 0.0);
     left_out.extend(constant);
     if names.is_empty() {
-        return Err(Error::NothingShared);
+        return Err(Error::NothingShared(kinds(&units).unwrap_or_default()));
     }
     let (n, p) = (units.len(), names.len());
     let cols: Vec<Vec<f64>> = names.iter().map(|k| column(k)).collect();
@@ -288,6 +289,48 @@ pub fn judge(units: Vec<Unit>, alpha: f64) -> Result<Lot, Error> {
         outliers,
         alpha,
     })
+}
+
+/// When the units hold different sets of coefficients (units of another kind, or calibrated
+/// with other models), each set's units, largest group first: how many, up to five serials,
+/// and up to four of the coefficients; `None` when all hold the same set.
+#[must_use]
+pub fn kinds(units: &[Unit]) -> Option<String> {
+    let mut groups: Vec<(Vec<&String>, Vec<&str>)> = Vec::new();
+    for u in units {
+        let keys: Vec<&String> = u.coefficients.keys().collect();
+        match groups.iter_mut().find(|(k, _)| *k == keys) {
+            Some((_, serials)) => serials.push(&u.serial),
+            None => groups.push((keys, vec![&u.serial])),
+        }
+    }
+    if groups.len() < 2 {
+        return None;
+    }
+    groups.sort_by_key(|g| std::cmp::Reverse(g.1.len()));
+    let described: Vec<String> = groups
+        .iter()
+        .map(|(keys, serials)| {
+            let more = |n: usize, all: usize| {
+                if all > n {
+                    format!(", ... ({all} in all)")
+                } else {
+                    String::new()
+                }
+            };
+            let named: Vec<&str> = serials.iter().take(5).copied().collect();
+            let coefs: Vec<&str> = keys.iter().take(4).map(|k| k.as_str()).collect();
+            format!(
+                "{} unit(s) {}{} with {}{}",
+                serials.len(),
+                named.join(", "),
+                more(5, serials.len()),
+                coefs.join(", "),
+                more(4, keys.len())
+            )
+        })
+        .collect();
+    Some(described.join("; "))
 }
 
 /// The coefficients with |z| beyond 3, largest first, at most five; when none is, the two
@@ -524,7 +567,20 @@ mod tests {
             Err(Error::TooFewUnits(1))
         ));
         let flat = vec![unit(0, 1.0), unit(1, 1.0)];
-        assert!(matches!(judge(flat, 0.01), Err(Error::NothingShared)));
+        assert!(matches!(judge(flat, 0.01), Err(Error::NothingShared(k)) if k.is_empty()));
+        // Units of another kind are named.
+        let mut mixed: Vec<Unit> = (0..3).map(|k| unit(k, 1.0)).collect();
+        mixed.push(Unit {
+            serial: "SINGLE-9".into(),
+            time: 9,
+            station: String::new(),
+            coefficients: BTreeMap::from([("output:1".to_string(), 3.0)]),
+        });
+        let e = judge(mixed, 0.01).unwrap_err().to_string();
+        assert!(
+            e.contains("more than one kind") && e.contains("1 unit(s) SINGLE-9 with output:1"),
+            "{e}"
+        );
         let lot = judge((0..6).map(|k| unit(k, k as f64)).collect(), 0.01).unwrap();
         assert_eq!(lot.names, ["bias"]);
         let e = lot.place(&BTreeMap::new()).unwrap_err();

@@ -711,3 +711,121 @@ fn a_preset_term_the_plan_cannot_estimate_is_dropped_with_its_reason() {
         "the user's formula",
     );
 }
+
+// ---- Messages that mislead ----
+
+#[test]
+fn the_history_credits_a_key_only_with_a_signature_that_was_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let r = cli(d, "keygen st");
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    let key = calflash::signing::load_private(&d.join("st.key")).unwrap();
+    let cal =
+        spincal::model::Calibration::new(spincal::model::CalibrationData::example_imu()).unwrap();
+    let serial = cal.data().identity.serial.as_str().to_string();
+    let mut buf = vec![0u8; spincal::blob::MAX_BLOB_LEN];
+    let n = spincal::blob::encode(&cal, &mut buf).unwrap();
+    let signed = calflash::signing::sign(&buf[..n], &key, 3, false).unwrap();
+    let (id, _) = calflash::signing::signer(&signed).unwrap();
+    let mut db = calflash::db::Db::open(d.join("u.sqlite").as_path()).unwrap();
+    // Refused by the unit (another key's id on it, say): it only claims the key.
+    let refused = serde_json::json!({"error": "the unit refused it: unknown key"});
+    db.record_flash(&serial, &signed, &refused, "failed")
+        .unwrap();
+    // Committed and verified by a provisioned unit.
+    let verified = serde_json::json!({"trust": "provisioned", "signed_by": id});
+    db.record_flash(&serial, &signed, &verified, "verified")
+        .unwrap();
+    // Committed by an unprovisioned unit, which checks no signature.
+    let open = serde_json::json!({"trust": "unprovisioned", "signed_by": id});
+    db.record_flash(&serial, &signed, &open, "verified")
+        .unwrap();
+    drop(db);
+    let r = cli(d, &format!("history {serial} --db u.sqlite"));
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    let lines: Vec<&str> = r.out.lines().filter(|l| l.contains(" flash ")).collect();
+    assert_eq!(lines.len(), 3, "{}", r.out);
+    assert!(
+        lines[0].contains(&format!("claims key {id} #3 (unverified)")),
+        "{}",
+        lines[0]
+    );
+    assert!(
+        lines[1].contains(&format!("signed by key {id} #3")),
+        "{}",
+        lines[1]
+    );
+    assert!(lines[2].contains("claims key"), "{}", lines[2]);
+}
+
+#[test]
+fn a_link_that_answers_garbage_is_named_with_its_port_not_called_silent() {
+    use std::io::{Read as _, Write as _};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    station(d);
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    std::thread::spawn(move || {
+        if let Ok((mut s, _)) = listener.accept() {
+            let mut buf = [0u8; 256];
+            let _ = s.read(&mut buf);
+            // A console's banner: text, never a frame's zero byte.
+            let _ = s.write_all(&b"U-Boot 2024.01 login: "[..]);
+            std::thread::sleep(std::time::Duration::from_secs(3));
+        }
+    });
+    let r = cli(
+        d,
+        &format!("flash --blob ok.blob --port tcp://127.0.0.1:{port} --timeout 0.5 --no-db"),
+    );
+    refused(&r, 1, "no frame of the calflash protocol", "garbage");
+    assert!(
+        r.err.contains(&format!("tcp://127.0.0.1:{port}")),
+        "{}",
+        r.err
+    );
+    assert!(!r.err.contains("did not answer"), "{}", r.err);
+}
+
+#[test]
+fn messages_name_the_option_or_the_file_at_fault() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // --gravity under its own name; a noise term too large for the device names its file.
+    let r = noisy_imu(d, "--gravity 9.5:9.82");
+    refused(&r, 1, "--gravity 9.5:9.82", "gravity");
+    assert!(!r.err.contains("--noise"), "{}", r.err);
+    allan(d, "huge.json", "m/s^2", 1e300, 1.6e-5);
+    let bench = examples().join("imu_bench.csv");
+    let r = cli(
+        d,
+        &format!(
+            "calibrate {} --sensor imu --serial X --no-db --noise huge.json,gyro.json",
+            bench.display()
+        ),
+    );
+    refused(&r, 1, "huge.json: axes[0].terms.random_walk", "1e300");
+    let r = noisy_imu(d, "--false-alarm 1e-300");
+    refused(&r, 2, "from 1e-12 to 0.5", "--false-alarm 1e-300");
+    // A one-sample recording is said to be one, not blamed on the blob.
+    let r = noisy_imu(d, "");
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    std::fs::write(d.join("one.csv"), "t,ax,ay,az,gx,gy,gz\n0,1,2,3,4,5,6\n").unwrap();
+    let r = cli(d, "health one.csv --blob u.blob --no-db");
+    refused(&r, 1, "one.csv: one sample", "one sample");
+    assert!(!r.err.contains("u.blob"), "{}", r.err);
+    let r = cli(d, "allan one.csv");
+    refused(&r, 1, "one sample", "allan");
+    assert!(!r.err.contains("inf s"), "{}", r.err);
+    // Days that do not exist, and a reversed range.
+    let r = cli(d, "lot X --since 2026-02-30 --db u.sqlite");
+    refused(&r, 2, "no such day", "2026-02-30");
+    let r = cli(
+        d,
+        "lot X --since 2026-03-01 --until 2026-02-01 --db u.sqlite",
+    );
+    refused(&r, 1, "--since is after --until", "reversed");
+    assert!(!d.join("u.sqlite").exists());
+}

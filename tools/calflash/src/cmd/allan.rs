@@ -187,8 +187,16 @@ fn window(args: &AllanArgs, rec: &recording::Recording) -> Result<std::ops::Rang
     // Timestamps increase: the samples in [a, b] are one run.
     let idx = rec.t.partition_point(|t| t - t0 < a)..rec.t.partition_point(|t| t - t0 <= b);
     if idx.len() < 100 {
+        let span = match (args.from, args.to) {
+            (None, None) => String::new(),
+            (from, to) => format!(
+                " between {} s and {}",
+                from.unwrap_or(0.0),
+                to.map_or_else(|| "its end".to_string(), |t| format!("{t} s"))
+            ),
+        };
         return Err(format!(
-            "{}: {} samples between {a} s and {b} s; the Allan deviation needs a still recording of at least 100 (many thousands for the slow terms)",
+            "{}: {} samples{span}; the Allan deviation needs a still recording of at least 100 (many thousands for the slow terms)",
             rec.source,
             idx.len()
         ).into());

@@ -71,7 +71,9 @@ pub fn run(args: &FlashArgs) -> Result<(), Failure> {
     let link = Link::open(&args.port, timeout)?;
     let mut client = Client::new(link, timeout);
     // Who answers: a unit that does not says so and nothing is recorded.
-    let id = client.identify()?;
+    let id = client
+        .identify()
+        .map_err(|e| format!("{}: {e}", args.port))?;
     if id.trust == spincal::protocol::Trust::Unprovisioned {
         println!(
             "  unit {} is UNPROVISIONED: it holds no station key and takes unsigned calibrations from anyone with the cable",

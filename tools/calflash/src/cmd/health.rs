@@ -184,7 +184,7 @@ fn from_unit(
     let timeout = Duration::from_secs_f64(args.timeout);
     let link = Link::open(port, timeout)?;
     let mut client = Client::new(link, timeout);
-    let id = client.identify()?;
+    let id = client.identify().map_err(|e| format!("{port}: {e}"))?;
     let blob = client.read_blob(id.blob_len as usize)?;
     let cal = crate::signing::calibration(&blob).map_err(|e| format!("the unit's blob: {e}"))?;
     if let Some(rec) = rec {

@@ -52,7 +52,11 @@ pub fn run(args: &HistoryArgs) -> Result<(), Failure> {
             },
             r.signed_by
                 .as_ref()
-                .map(|s| format!("  signed by key {s}"))
+                .map(|s| if r.signature_checked {
+                    format!("  signed by key {s}")
+                } else {
+                    format!("  claims key {s} (unverified)")
+                })
                 .unwrap_or_default(),
             r.model
                 .as_ref()

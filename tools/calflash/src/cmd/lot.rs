@@ -118,6 +118,14 @@ pub fn load(path: &Location, sel: &Selection<'_>, alpha: f64) -> Result<lot::Lot
 /// # Errors
 /// As [`load`], a coefficient to chart that the lot lacks, or an unwritable JSON file.
 pub fn run(args: &LotArgs) -> Result<(), Failure> {
+    if let (Some(since), Some(until)) = (args.since, args.until)
+        && since > until
+    {
+        return Err(
+            "--since is after --until: the range holds no day; give the earlier date to --since"
+                .into(),
+        );
+    }
     let path = crate::db::Location::or_default(args.db.as_ref())?;
     crate::files::Paths::new()
         .input("--db", path.file())
@@ -166,6 +174,9 @@ pub fn run(args: &LotArgs) -> Result<(), Failure> {
             lot.left_out.len(),
             lot.left_out.join(", ")
         );
+    }
+    if let Some(kinds) = crate::lot::kinds(&lot.units) {
+        println!("  units of more than one kind, judged on what they share: {kinds}");
     }
     println!(
         "  {:<28} {:>14} {:>12} {:>14} {:>14}",

@@ -276,6 +276,18 @@ pub fn date(s: &str) -> Result<i64, String> {
         }
     };
     let (y, m, d) = (next(1970, 9999)?, next(1, 12)?, next(1, 31)?);
+    let leap = y % 4 == 0 && (y % 100 != 0 || y % 400 == 0);
+    let days = match m {
+        2 if leap => 29,
+        2 => 28,
+        4 | 6 | 9 | 11 => 30,
+        _ => 31,
+    };
+    if d > days {
+        return Err(format!(
+            "`{s}`: there is no such day ({y}-{m:02} has {days} days); expected a date YYYY-MM-DD"
+        ));
+    }
     // Days from civil (Howard Hinnant's algorithm).
     let y = if m <= 2 { y - 1 } else { y };
     let era = y.div_euclid(400);
@@ -294,6 +306,12 @@ mod tests {
     fn dates() {
         assert_eq!(date("2026-11-24"), Ok(1_795_478_400));
         assert_eq!(date("2000-02-29"), Ok(951_782_400));
+        for no_such_day in ["2026-02-30", "2026-02-29", "2100-02-29", "2026-04-31"] {
+            assert!(
+                date(no_such_day).unwrap_err().contains("no such day"),
+                "{no_such_day}"
+            );
+        }
         assert_eq!(date("1970-01-01"), Ok(0));
         for bad in ["2026-13-01", "26-11-24", "2026/11/24", "x"] {
             assert!(date(bad).unwrap_err().contains("YYYY-MM-DD"), "{bad}");

@@ -103,6 +103,10 @@ pub struct Entry {
     pub blob_len: usize,
     /// The station key that signed the blob and its counter (`KEYID #COUNTER`), when signed.
     pub signed_by: Option<String>,
+    /// Whether that signature was checked: a fit's blob is signed here with the key named; a
+    /// flash's is checked by a provisioned unit that committed it. A refused or failed flash,
+    /// or one to an unprovisioned unit, only claims the key.
+    pub signature_checked: bool,
     /// The production lot the unit was calibrated in (empty: none given).
     pub lot: String,
 }
@@ -434,6 +438,13 @@ impl Db {
             .map(|l| Entry {
                 signed_by: crate::signing::signer(&l.blob)
                     .map(|(key, counter)| format!("{key} #{counter}")),
+                signature_checked: l.kind == "fit"
+                    || (l.kind == "flash"
+                        && l.outcome == "verified"
+                        && l.verification
+                            .as_deref()
+                            .and_then(|v| serde_json::from_str::<serde_json::Value>(v).ok())
+                            .is_some_and(|v| v["trust"] == "provisioned")),
                 id: l.id,
                 kind: l.kind,
                 time: l.time,

@@ -393,8 +393,8 @@ impl Backend for Postgres {
 
     fn history(&mut self, serial: &str) -> Result<Vec<Listed>, Cause> {
         let sql = format!(
-            "SELECT id, kind, time, data_hash, model, outcome, report, blob, {} FROM records
-             WHERE serial = $1 ORDER BY time, id",
+            "SELECT id, kind, time, data_hash, model, outcome, report, blob, {}, verification
+             FROM records WHERE serial = $1 ORDER BY time, id",
             Later::column(self.later.lot, "lot")
         );
         let rows = self.client().query(&sql, &[&serial]).map_err(why)?;
@@ -410,6 +410,7 @@ impl Backend for Postgres {
                 report: r.get(6),
                 blob: r.get(7),
                 lot: r.get(8),
+                verification: r.get(9),
             })
             .collect())
     }

@@ -135,4 +135,6 @@ pub(super) struct Listed {
     pub(super) report: Option<String>,
     pub(super) blob: Vec<u8>,
     pub(super) lot: String,
+    /// A flash's verification (JSON), with the unit's trust.
+    pub(super) verification: Option<String>,
 }

@@ -283,8 +283,8 @@ impl Backend for Sqlite {
         let mut st = self
             .conn
             .prepare(&format!(
-                "SELECT id, kind, time, data_hash, model, outcome, report, blob, {} FROM records
-                 WHERE serial = ?1 ORDER BY time, id",
+                "SELECT id, kind, time, data_hash, model, outcome, report, blob, {}, verification
+                 FROM records WHERE serial = ?1 ORDER BY time, id",
                 Later::column(self.later.lot, "lot")
             ))
             .map_err(|e| why(&self.path, e))?;
@@ -300,6 +300,7 @@ impl Backend for Sqlite {
                     report: r.get(6)?,
                     blob: r.get(7)?,
                     lot: r.get(8)?,
+                    verification: r.get(9)?,
                 })
             })
             .map_err(|e| why(&self.path, e))?;

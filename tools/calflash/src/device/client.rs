@@ -16,6 +16,20 @@ pub enum DeviceError {
         /// The limit.
         secs: f64,
     },
+    /// Bytes came within the time limit, but no frame of the protocol: something else answers
+    /// (another device, a console, a wrong baud rate).
+    #[error(
+        "the link answered {what} with {bytes} bytes that are no frame of the calflash protocol \
+         within {secs:.1} s: is a calflash unit on it, at the right baud rate?"
+    )]
+    NotAFrame {
+        /// The request.
+        what: String,
+        /// The bytes received.
+        bytes: usize,
+        /// The limit.
+        secs: f64,
+    },
     /// The link failed.
     #[error("the link failed during {what}: {source}")]
     Io {
@@ -128,10 +142,20 @@ impl<L: Read + Write> Client<L> {
                 return Ok(reply.response);
             }
             if start.elapsed() > self.timeout {
-                return Err(DeviceError::Timeout {
-                    what,
-                    secs: self.timeout.as_secs_f64(),
-                });
+                let secs = self.timeout.as_secs_f64();
+                if !self.pending.is_empty() {
+                    let bytes = self.pending.len();
+                    self.pending.clear();
+                    return Err(DeviceError::NotAFrame { what, bytes, secs });
+                }
+                return Err(DeviceError::Timeout { what, secs });
+            }
+            // A stream that never ends a frame is not read on without bound.
+            if self.pending.len() > 4 * MAX_FRAME {
+                let bytes = self.pending.len();
+                self.pending.clear();
+                let secs = start.elapsed().as_secs_f64();
+                return Err(DeviceError::NotAFrame { what, bytes, secs });
             }
             match self.link.read(&mut byte) {
                 Ok(0) => {

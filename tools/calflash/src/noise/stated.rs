@@ -45,8 +45,12 @@ pub enum Error {
     /// Not three axes.
     #[error("{}: field \"axes\": expected the three axes", .0.display())]
     Axes(PathBuf),
-    /// A term that is missing, not finite or negative.
-    #[error("{}: axes[{axis}].terms.{key}: expected a finite non-negative number", .path.display())]
+    /// A term that is missing, not finite, negative, or beyond what the device stores.
+    #[error(
+        "{}: axes[{axis}].terms.{key}: expected a non-negative number the device can store \
+         (at most 1e30; an Allan file of SI units states noise far below that)",
+        .path.display()
+    )]
     Term {
         /// The file.
         path: PathBuf,
@@ -66,6 +70,17 @@ pub enum Error {
         path: PathBuf,
         /// The axis.
         axis: usize,
+    },
+    /// A gravity span the health check cannot hold a unit to.
+    #[error(
+        "--gravity {lo}:{hi}: expected LO:HI with LO <= HI, both within 9.7 to 9.9 m/s^2 (the \
+         magnitude of gravity anywhere on the Earth's surface)"
+    )]
+    Gravity {
+        /// The span's low end.
+        lo: f64,
+        /// Its high end.
+        hi: f64,
     },
     /// Terms or allowances the device's own check refuses.
     #[error("--noise: {0}")]
@@ -112,7 +127,7 @@ fn read_axes(path: &Path, unit: &'static str) -> Result<([f64; 3], [f64; 3]), Er
         let term = |key: &'static str| {
             a["terms"][key]
                 .as_f64()
-                .filter(|x| x.is_finite() && *x >= 0.0)
+                .filter(|x| x.is_finite() && (0.0..=1e30).contains(x))
                 .ok_or_else(|| Error::Term {
                     path: file(),
                     axis: j,
@@ -140,6 +155,9 @@ pub fn from_allan(accel: &Path, gyro: &Path, allow: &Allowances) -> Result<Noise
     let (wg, kg) = read_axes(gyro, "rad/s")?;
     let six = |a: [f64; 3], g: [f64; 3]| [a[0], a[1], a[2], g[0], g[1], g[2]].map(|x| x as f32);
     let (lo, hi) = allow.gravity;
+    if !(lo <= hi && lo >= 9.7 && hi <= 9.9) {
+        return Err(Error::Gravity { lo, hi });
+    }
     let terms = NoiseTerms {
         white: six(wa, wg),
         bias_walk: six(ka, kg),
@@ -221,6 +239,6 @@ mod tests {
         let e = from_allan(&a, &g, &bad).unwrap_err();
         assert!(matches!(e, Error::Refused(_)), "{e:?}");
         let e = e.to_string();
-        assert!(e.contains("gravity span"), "{e}");
+        assert!(e.contains("--gravity 9.5:9.82"), "{e}");
     }
 }

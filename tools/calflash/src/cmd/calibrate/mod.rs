@@ -150,9 +150,17 @@ pub struct CalibrateArgs {
     )]
     pub gravity: String,
     /// With --noise: the probability that the unit calls a calibration that holds SUSPECT
-    /// (or one aged within the allowance) in one period at rest.
-    #[arg(long, default_value_t = 1e-3, requires = "noise", value_parser = values::level)]
+    /// (or one aged within the allowance) in one period at rest: from 1e-12 to 0.5.
+    #[arg(long, default_value_t = 1e-3, requires = "noise", value_parser = false_alarm)]
     pub false_alarm: f64,
+}
+
+/// `--false-alarm`: a probability from 1e-12 to 0.5 (the device holds it in f32 and tests a
+/// rest period's checkpoints at fractions of it).
+fn false_alarm(s: &str) -> Result<f64, String> {
+    values::in_range(s, 1e-12, 0.5).map_err(|_| {
+        format!("`{s}`: a false-alarm rate from 1e-12 to 0.5 per rest period is expected")
+    })
 }
 
 /// Runs `calflash calibrate`; returns the verdict (the process exits 3 on reject).

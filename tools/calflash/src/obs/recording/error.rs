@@ -160,4 +160,13 @@ pub enum RecordingError {
         /// File.
         path: PathBuf,
     },
+    /// One sample: no step in time, so no sample rate.
+    #[error(
+        "{path}: one sample; a recording needs at least two (and many more for any use) to have \
+         a sample rate"
+    )]
+    OneSample {
+        /// File.
+        path: PathBuf,
+    },
 }

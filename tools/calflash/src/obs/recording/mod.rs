@@ -153,6 +153,11 @@ pub fn read_with(
         None => halves::one_file(acc, opts, want)?,
         Some(gp) => halves::two_files(acc, gp, opts, want)?,
     };
+    if t.len() == 1 {
+        return Err(RecordingError::OneSample {
+            path: acc.to_path_buf(),
+        });
+    }
     let period = median_step(&t);
     let gaps = t
         .windows(2)
