@@ -419,7 +419,7 @@ fn a_server_that_is_down_or_refuses_the_login_loses_no_record_and_hides_the_pass
         let shown = calflash::db::redact(url);
         assert!(
             err.contains(&format!(
-                "the calibration is written but NOT recorded: the unit history database {shown}: {why}"
+                "the calibration's files are written but it is NOT recorded: the unit history database {shown}: {why}"
             )),
             "{url}: {err}"
         );

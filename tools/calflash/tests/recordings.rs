@@ -598,6 +598,30 @@ fn matlab_files_are_read_as_recordings() {
             );
         }
     }
+    // Two matrices that could each be the recording: refused, not one picked without a word
+    // (issue 30).
+    let mut both = Vec::with_capacity(14 * n);
+    both.extend(rec.t.iter().copied());
+    for j in 0..3 {
+        both.extend(rec.acc.iter().map(|v| v[j]));
+    }
+    for j in 0..3 {
+        both.extend(rec.gyro.iter().map(|v| v[j]));
+    }
+    let second = both.clone();
+    std::fs::write(
+        p.join("two.mat"),
+        mat_file(&[("run1", n, 7, both), ("run2", n, 7, second)]),
+    )
+    .unwrap();
+    let (code, _, err) = calflash(p, &["selfcal", "two.mat", "--g", "9.81", "--serial", "M1"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("2 matrices could be the recording (run1 [")
+            && err.contains("run2 [")
+            && err.contains("keep one per file"),
+        "{err}"
+    );
     std::fs::write(
         p.join("other.mat"),
         mat_file(&[("pressure", 4, 2, vec![1.0; 8])]),

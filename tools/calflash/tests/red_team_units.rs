@@ -819,6 +819,47 @@ fn messages_name_the_option_or_the_file_at_fault() {
     let r = cli(d, "allan one.csv");
     refused(&r, 1, "one sample", "allan");
     assert!(!r.err.contains("inf s"), "{}", r.err);
+    // Nanosecond timestamps under a name that says seconds: refused with the way out.
+    let mut text = String::from("t,ax,ay,az,gx,gy,gz\n");
+    for k in 0..200u64 {
+        text.push_str(&format!(
+            "{},100,200,16384,1,2,3\n",
+            1_700_000_000_000_000_000 + k * 1_000_000
+        ));
+    }
+    std::fs::write(d.join("ns.csv"), text).unwrap();
+    let r = cli(d, "allan ns.csv");
+    refused(&r, 1, "a rate no inertial sensor samples at", "ns as s");
+    assert!(r.err.contains("t=NAME:ms"), "{}", r.err);
+    // Options that would be ignored are said to be.
+    let r = cli(
+        d,
+        "design evaluate --model single --plan head:12 --curve temp=-40:85:20",
+    );
+    refused(
+        &r,
+        1,
+        "--curve temp=-40:85:20: the model reads no `temp`",
+        "curve",
+    );
+    std::fs::copy(examples().join("single_accel.csv"), d.join("s.csv")).unwrap();
+    let r = cli(
+        d,
+        "calibrate s.csv --sensor single-accel --serial X --no-db --thermal-order 2",
+    );
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    assert!(r.out.contains("--thermal-order 2 is not used"), "{}", r.out);
+    // A history that cannot be written, and no file asked for: not "written but".
+    let r = cli(
+        d,
+        "calibrate s.csv --sensor single-accel --serial X --db /proc/h.sqlite",
+    );
+    assert_ne!(r.code(), Some(0), "{}", r.out);
+    assert!(
+        r.err.contains("the calibration is NOT recorded") && !r.err.contains("written"),
+        "{}",
+        r.err
+    );
     // Days that do not exist, and a reversed range.
     let r = cli(d, "lot X --since 2026-02-30 --db u.sqlite");
     refused(&r, 2, "no such day", "2026-02-30");

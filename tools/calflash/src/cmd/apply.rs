@@ -332,6 +332,14 @@ fn timing(
     input: &Input,
 ) -> Result<Option<Timing>, Failure> {
     match Timing::new(args.rate, input.times.as_deref()) {
+        Ok(t) if !(0.1..=f64::from(spincal::model::MAX_SAMPLE_RATE_HZ)).contains(&t.rate) => {
+            Err(format!(
+                "{}: the time column gives {:.3e} Hz, a rate no inertial sensor samples at: is it in another unit? Give it as --time-column NAME:ms (s, ms, us, ns)",
+                args.input.display(),
+                t.rate
+            )
+            .into())
+        }
         Ok(t) => Ok(Some(t)),
         Err(TimingError::Missing) if !lever => Ok(None),
         Err(TimingError::Missing) => Err(format!(

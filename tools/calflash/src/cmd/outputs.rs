@@ -268,8 +268,13 @@ impl Outputs {
             self.json.as_deref(),
             self.report.as_deref(),
         ]);
-        let said = db::record_or_save(&path, save, record, &beside, serial)
-            .map_err(|e| format!("the calibration is written but {e}"))?;
+        let said = db::record_or_save(&path, save, record, &beside, serial).map_err(|e| {
+            if self.blob.is_some() || self.json.is_some() || self.report.is_some() {
+                format!("the calibration's files are written but it is {e}")
+            } else {
+                format!("the calibration is {e}")
+            }
+        })?;
         Ok(Some(said))
     }
 }

@@ -109,6 +109,16 @@ pub(super) fn run(a: &EvaluateArgs) -> Result<(), Failure> {
         }
     }
     let curve = a.curve.as_deref().map(points::grid).transpose()?;
+    if let Some(c) = &curve
+        && let Some(name) = c.names.iter().find(|n| !vars.contains(n))
+    {
+        return Err(format!(
+            "--curve {}: the model reads no `{name}`; it reads {}",
+            a.curve.as_deref().unwrap_or_default(),
+            vars.join(", ")
+        )
+        .into());
+    }
     print!(
         "{}",
         show::evaluate_text(&a.model.model, &blocks, &plans, a.fixture_error)

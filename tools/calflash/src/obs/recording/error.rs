@@ -160,6 +160,20 @@ pub enum RecordingError {
         /// File.
         path: PathBuf,
     },
+    /// Timestamps whose step no inertial sensor samples at: read in the wrong unit.
+    #[error(
+        "{path}: the timestamps step by {period:e} s ({rate:.3e} Hz), a rate no inertial sensor \
+         samples at: are they in another unit? Name the column with it (t_ms, t_us, t_ns) or \
+         give it: --columns t=NAME:ms (s, ms, us, ns)"
+    )]
+    ImplausibleRate {
+        /// File.
+        path: PathBuf,
+        /// The median step as read, s.
+        period: f64,
+        /// Its rate, Hz.
+        rate: f64,
+    },
     /// One sample: no step in time, so no sample rate.
     #[error(
         "{path}: one sample; a recording needs at least two (and many more for any use) to have \

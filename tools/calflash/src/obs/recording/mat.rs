@@ -91,8 +91,26 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
             .collect::<Vec<_>>()
             .join(", ")
     };
-    // One matrix of the timestamp and the counts, or of the counts.
-    let whole = mat.arrays().iter().find_map(|a| {
+    // One matrix of the timestamp and the counts, or of the counts; two that could be are
+    // not chosen between silently.
+    let fits = |a: &&matfile::Array| rows_of(a, n + 1).is_some() || rows_of(a, n).is_some();
+    let candidates: Vec<&matfile::Array> = mat.arrays().iter().filter(fits).collect();
+    if candidates.len() > 1 {
+        return Err(RecordingError::Mat {
+            path: path.to_path_buf(),
+            what: format!(
+                "{} matrices could be the recording ({}): keep one per file, so that none is \
+                 picked without a word",
+                candidates.len(),
+                candidates
+                    .iter()
+                    .map(|a| format!("{} {:?}", a.name(), a.size()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        });
+    }
+    let whole = candidates.first().and_then(|a| {
         rows_of(a, n + 1)
             .map(|r| (Some(1.0), r))
             .or_else(|| rows_of(a, n).map(|r| (None, r)))

@@ -159,6 +159,14 @@ pub fn read_with(
         });
     }
     let period = median_step(&t);
+    // From 0.1 Hz to 10 MHz: anything else is a time read in the wrong unit.
+    if !(1e-7..=10.0).contains(&period) {
+        return Err(RecordingError::ImplausibleRate {
+            path: acc.to_path_buf(),
+            period,
+            rate: 1.0 / period,
+        });
+    }
     let gaps = t
         .windows(2)
         .enumerate()

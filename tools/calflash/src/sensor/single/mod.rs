@@ -414,6 +414,11 @@ impl Setting {
                     })
             }
         };
+        notes.extend(thermal::unused_order(
+            opts.thermal_order,
+            continuous,
+            table.varies(col::TEMP),
+        ));
         if !continuous {
             return Ok(Self {
                 layout: layout.map_err(|source| WorkflowError::Grid {

@@ -33,6 +33,27 @@ use crate::stats::select;
 /// `input:volt_leg1`), so the device's blend between the two ends is exact.
 pub const VOLT: &str = "volt_leg1";
 
+/// What `--thermal-order` did not do, when it was given and is not used: the observations hold
+/// one temperature, or the temperatures are a table of setpoints fitted point by point.
+#[must_use]
+pub fn unused_order(
+    order: Option<u32>,
+    continuous: bool,
+    temperature_varies: bool,
+) -> Option<String> {
+    let order = order?;
+    if !temperature_varies {
+        return Some(format!(
+            "--thermal-order {order} is not used: the observations hold one temperature"
+        ));
+    }
+    (!continuous).then(|| {
+        format!(
+            "--thermal-order {order} is not used: the temperatures are a table of setpoints, each fitted on its own (--thermal continuous fits one model over them)"
+        )
+    })
+}
+
 /// `term:volt_leg1`.
 #[must_use]
 pub fn volt_term(term: &str) -> String {

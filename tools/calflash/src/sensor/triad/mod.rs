@@ -246,6 +246,11 @@ fn temperature_points(
         Thermal::Continuous => true,
         Thermal::Auto => table.varies(col::TEMP) && !setpoints,
     };
+    notes.extend(super::thermal::unused_order(
+        opts.thermal_order,
+        continuous,
+        table.varies(col::TEMP),
+    ));
     if continuous {
         if table.varies(col::VOLT) {
             return Err(WorkflowError::triad(path, TriadError::VoltageVaries));
