@@ -55,15 +55,18 @@ fn timeout(s: &str) -> Result<f64, String> {
 /// A message saying what failed and what the unit holds.
 pub fn run(args: &FlashArgs) -> Result<(), Failure> {
     let bytes = crate::files::read_blob(&args.blob)?;
-    // The rule every path into a unit applies, before a key is read or the unit asked.
-    let cal =
-        crate::signing::calibration(&bytes).map_err(|e| format!("{}: {e}", args.blob.display()))?;
-    let warning = crate::approval::admit(
-        &cal.data().identity,
-        &args.blob,
-        crate::approval::Act::Flash,
-        args.force_rejected,
-    );
+    // The rule every path into a unit applies, before a key is read. A refused blob (or one
+    // that is none) goes on to the unit's flash, which refuses it and records the refusal
+    // under the unit that answered.
+    let warning = match crate::signing::calibration(&bytes) {
+        Ok(cal) => crate::approval::admit(
+            &cal.data().identity,
+            &args.blob,
+            crate::approval::Act::Flash,
+            args.force_rejected,
+        ),
+        Err(_) => Ok(None),
+    };
     let key = crate::signing::key_path(args.sign_key.as_deref())
         .map(|p| crate::signing::load_private(&p))
         .transpose()?;
