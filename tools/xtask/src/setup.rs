@@ -42,22 +42,54 @@ fn debian_package(package: &str, present: fn() -> bool) -> Option<String> {
         ));
     }
     println!("xtask: apt-get install -y {package}");
-    let install = || {
-        Command::new("apt-get")
-            .args(["install", "-y", "--no-install-recommends", package])
+    // apt-get waits up to five minutes for another apt or dpkg to let go of its lock; what it
+    // said last is kept, so that a failure is reported as apt-get's, not guessed at.
+    let run = |args: &[&str]| -> Result<(), String> {
+        let out = Command::new("apt-get")
+            .args(["-o", "DPkg::Lock::Timeout=300"])
+            .args(args)
             .env("DEBIAN_FRONTEND", "noninteractive")
             .stdout(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success())
+            .stderr(Stdio::piped())
+            .output()
+            .map_err(|e| format!("apt-get did not run: {e}"))?;
+        if out.status.success() {
+            return Ok(());
+        }
+        let said = String::from_utf8_lossy(&out.stderr);
+        Err(said
+            .lines()
+            .map(str::trim)
+            .rfind(|l| !l.is_empty())
+            .unwrap_or("no message")
+            .to_string())
     };
-    let installed = install() || (quiet(Command::new("apt-get").arg("update")) && install());
-    if installed && present() {
-        None
-    } else {
-        Some(format!(
-            "`apt-get install -y {package}` failed (no network to the Debian mirror?)"
-        ))
+    let install = || run(&["install", "-y", "--no-install-recommends", package]);
+    let result = install().or_else(|first| {
+        // A stale package list: update it once and try again.
+        run(&["update"]).map_err(|e| format!("{first}; `apt-get update`: {e}"))?;
+        install()
+    });
+    match result {
+        Ok(()) if present() => None,
+        Ok(()) => Some(format!(
+            "`apt-get install -y {package}` succeeded but {package} is still not found"
+        )),
+        Err(said) => Some(apt_failure(package, &said)),
     }
+}
+
+/// Why `apt-get install` of `package` failed, from what apt-get `said` last: its own words,
+/// and what they mean when they say it (a lock another process holds, no network).
+fn apt_failure(package: &str, said: &str) -> String {
+    let meaning = if said.contains("lock") {
+        " (another apt-get or dpkg holds the package lock: wait for it, then run again)"
+    } else if said.contains("Temporary failure resolving") || said.contains("Could not resolve") {
+        " (no network to the Debian mirror)"
+    } else {
+        ""
+    };
+    format!("`apt-get install -y {package}` failed: apt-get said: {said}{meaning}")
 }
 
 /// Whether Debian's Chromium is installed, for the reports' test in a real browser.
@@ -130,4 +162,28 @@ pub fn run(components: bool) -> Result<Setup, String> {
         postgres_missing,
         chromium_missing,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::apt_failure;
+
+    #[test]
+    fn an_apt_failure_is_told_in_apt_gets_words() {
+        let lock = "E: Could not get lock /var/lib/dpkg/lock-frontend. It is held by process 4242 (apt-get)";
+        let e = apt_failure("qemu-system-arm", lock);
+        assert!(
+            e.contains("held by process 4242") && e.contains("holds the package lock"),
+            "{e}"
+        );
+        assert!(!e.contains("network"), "{e}");
+        let net = "W: Failed to fetch http://deb.debian.org/...  Temporary failure resolving 'deb.debian.org'";
+        assert!(apt_failure("qemu-system-arm", net).contains("no network"));
+        let other = "E: Unable to locate package qemu-system-arm";
+        let e = apt_failure("qemu-system-arm", other);
+        assert!(
+            e.ends_with("Unable to locate package qemu-system-arm"),
+            "{e}"
+        );
+    }
 }
