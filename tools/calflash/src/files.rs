@@ -444,19 +444,12 @@ impl Staged {
         Ok(())
     }
 
-    /// Renames every staged file into place, then writes the special files in place.
+    /// Writes the special files in place, then renames every staged file into place (a
+    /// special file that cannot take its bytes, `/dev/full`, leaves no regular output).
     ///
     /// # Errors
-    /// A rename or write that fails (the ones before it are done, the rest removed), naming it.
+    /// A write or rename that fails (the ones before it are done, the rest removed), naming it.
     pub fn commit(self) -> Result<(), Error> {
-        for (tmp, path) in self.files {
-            if let Err(e) = tmp.persist(&path) {
-                return Err(Error::Io {
-                    path,
-                    source: e.error,
-                });
-            }
-        }
         for (bytes, path) in self.special {
             let io = |source| Error::Io {
                 path: path.clone(),
@@ -468,6 +461,14 @@ impl Staged {
                 .map_err(io)?;
             f.write_all(&bytes).map_err(io)?;
             f.flush().map_err(io)?;
+        }
+        for (tmp, path) in self.files {
+            if let Err(e) = tmp.persist(&path) {
+                return Err(Error::Io {
+                    path,
+                    source: e.error,
+                });
+            }
         }
         Ok(())
     }

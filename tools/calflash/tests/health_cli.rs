@@ -155,7 +155,7 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
             "--gravity",
             "9.0:9.8",
         ],
-        "gravity span",
+        "--gravity 9:9.8: expected LO:HI",
     );
     refused(&["health", "rest.csv"], "give --port");
     // A blob without noise terms: the check says it cannot run, and why.

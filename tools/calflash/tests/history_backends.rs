@@ -116,7 +116,8 @@ fn what_is_recorded_reads_back_alike_from_both_backends() {
                 "IMU-H-1",
                 &db,
                 "u.blob",
-                &["--sign-key", "station.key", "--lot", "L-H"],
+                // The lot is new, so the unit is a REVIEW: signed on the station's word.
+                &["--sign-key", "station.key", "--sign-review", "--lot", "L-H"],
             );
             assert_eq!(code, 0, "{l}: {out}{err}");
             assert!(out.contains(&format!("counter {counter}")), "{l}: {out}");

@@ -23,6 +23,10 @@ pub struct KeygenArgs {
 /// Files that exist or cannot be written.
 pub fn keygen(args: &KeygenArgs) -> Result<(), Failure> {
     let (private, public) = signing::pair_paths(&args.prefix)?;
+    Paths::new()
+        .output("the private key", Some(&private))
+        .output("the public key", Some(&public))
+        .check()?;
     let id = signing::keygen(&private, &public)?;
     println!(
         "calflash keygen  key {}: private {} (mode 600: keep it on the station), public {}",

@@ -237,7 +237,7 @@ mod tests {
             ..ALLOW
         };
         let e = from_allan(&a, &g, &bad).unwrap_err();
-        assert!(matches!(e, Error::Refused(_)), "{e:?}");
+        assert!(matches!(e, Error::Gravity { .. }), "{e:?}");
         let e = e.to_string();
         assert!(e.contains("--gravity 9.5:9.82"), "{e}");
     }

@@ -46,7 +46,10 @@ pub fn normal_two_sided(z: f64) -> f64 {
 /// by Newton steps on the tail so that it is accurate to a few ulp.
 #[must_use]
 pub fn t_upper_quantile(upper: f64, dof: f64) -> f64 {
-    let dist = StudentsT::new(0.0, 1.0, dof).expect("dof > 0");
+    // Without a degree of freedom there is no distribution: nothing lies beyond its quantile.
+    let Ok(dist) = StudentsT::new(0.0, 1.0, dof) else {
+        return f64::INFINITY;
+    };
     if upper < 1e-12 {
         return by_bisection(upper, |t| 0.5 * t_two_sided(t, dof));
     }
