@@ -6,7 +6,6 @@
 //! each folder once per process. Run with `cargo bench -p calflash --bench outputs`.
 
 use std::hint::black_box;
-use std::io::Write as _;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 
