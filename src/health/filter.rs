@@ -60,10 +60,11 @@ pub(super) struct Filter {
     xa: [f32; NA],
     /// Their covariance, packed upper triangle.
     pa: [f32; PACKED],
-    /// Each axis' parameter block's prior covariance, packed (for the spread).
-    prior: [[f32; BLOCK]; 3],
-    /// The process noise added to each axis' bias so far (for the spread).
+    /// The variance added to each axis' bias beyond its block's prior (ageing) and the process
+    /// noise added so far (for the spread).
     walked: [f32; 3],
+    /// Each accelerometer axis' prior-predictive variance at the present pose.
+    accel_spread: [f32; 3],
     /// The features of the present pose.
     phi: [[f32; FEATURES]; 3],
     /// Gyro biases.
@@ -112,8 +113,8 @@ impl Filter {
         Self {
             xa: [0.0; NA],
             pa,
-            prior,
-            walked: [0.0; 3],
+            walked: *extra,
+            accel_spread: spread_at(accel, extra, phi),
             phi: *phi,
             xg: [0.0; 3],
             pg: *gyro,
@@ -136,6 +137,9 @@ impl Filter {
             }
             if let Some(w) = self.walked.get_mut(axis) {
                 *w += v;
+            }
+            if let Some(s) = self.accel_spread.get_mut(axis) {
+                *s += v;
             }
         }
         self.add_gyro_noise(&[g0, g1, g2]);
@@ -173,15 +177,18 @@ impl Filter {
     }
 
     /// A window's mean specific force `mean` at rest (features `phi` there), with the variance
-    /// `r` of each component of the mean, against the assumed magnitude of gravity `g0`.
+    /// `r` of each component of the mean, against the assumed magnitude of gravity `g0`;
+    /// `prior` is the parameter blocks' prior covariance (as at [`Filter::new`]), for the
+    /// spread at this pose.
     pub fn update_accel(
         &mut self,
         mean: &[f32; 3],
         r: &[f32; 3],
         g0: f32,
-        phi: &[[f32; FEATURES]; 3],
+        (phi, prior): (&[[f32; FEATURES]; 3], &[[f32; BLOCK]; 3]),
     ) {
         self.phi = *phi;
+        self.accel_spread = spread_at(prior, &self.walked, phi);
         let [e0, e1, e2] = self.accel_error();
         let [m0, m1, m2] = *mean;
         let a = [m0 - e0, m1 - e1, m2 - e2];
@@ -283,20 +290,9 @@ impl Filter {
     /// Each bias's prior-predictive variance at the present pose: the prior and every process
     /// noise added.
     pub fn spread(&self) -> [f32; OUTPUTS] {
-        let accel = |axis: usize| -> f32 {
-            let (Some(block), Some(phi)) = (self.prior.get(axis), self.phi.get(axis)) else {
-                return 0.0;
-            };
-            let mut sum = 0.0;
-            for (i, fi) in phi.iter().enumerate() {
-                for (j, fj) in phi.iter().enumerate() {
-                    sum += fi * block.get(packed(FEATURES, i, j)).copied().unwrap_or(0.0) * fj;
-                }
-            }
-            sum + self.walked.get(axis).copied().unwrap_or(0.0)
-        };
+        let [a0, a1, a2] = self.accel_spread;
         let [g0, g1, g2] = self.gyro_spread;
-        [accel(0), accel(1), accel(2), g0, g1, g2]
+        [a0, a1, a2, g0, g1, g2]
     }
 
     /// The gravity error's estimate and variance.
@@ -318,6 +314,23 @@ impl Filter {
         }
         (worst, used)
     }
+}
+
+/// Each axis' prior-predictive variance under the features `phi`: `phi' C phi` of its block's
+/// prior `C`, plus what was added to its bias (`walked`).
+fn spread_at(prior: &[[f32; BLOCK]; 3], walked: &[f32; 3], phi: &[[f32; FEATURES]; 3]) -> [f32; 3] {
+    core::array::from_fn(|axis| {
+        let (Some(block), Some(phi)) = (prior.get(axis), phi.get(axis)) else {
+            return 0.0;
+        };
+        let mut sum = 0.0;
+        for (i, fi) in phi.iter().enumerate() {
+            for (j, fj) in phi.iter().enumerate() {
+                sum += fi * block.get(packed(FEATURES, i, j)).copied().unwrap_or(0.0) * fj;
+            }
+        }
+        sum + walked.get(axis).copied().unwrap_or(0.0)
+    })
 }
 
 #[cfg(test)]
@@ -352,7 +365,7 @@ mod tests {
         // z up, a bias of 0.02 on z and 0.02 on x.
         let m = [0.02, 0.0, 9.8 + 0.02];
         for _ in 0..100 {
-            f.update_accel(&m, &[1e-6; 3], 9.8, &phi(m));
+            f.update_accel(&m, &[1e-6; 3], 9.8, (&phi(m), &bias_only(1e-4)));
         }
         let [bx, by, bz, ..] = f.bias();
         assert!((bz - 0.02).abs() < 1e-3, "{bz}");
@@ -363,7 +376,7 @@ mod tests {
         // Turned on its side, x is observed too.
         let m = [9.8 + 0.02, 0.0, 0.02];
         for _ in 0..100 {
-            f.update_accel(&m, &[1e-6; 3], 9.8, &phi(m));
+            f.update_accel(&m, &[1e-6; 3], 9.8, (&phi(m), &bias_only(1e-4)));
         }
         let [bx, _, bz, ..] = f.bias();
         assert!(
@@ -387,7 +400,7 @@ mod tests {
         );
         let m = [0.0, 0.0, 9.8 + 0.0196];
         for _ in 0..200 {
-            f.update_accel(&m, &[1e-7; 3], 9.8, &phi(m));
+            f.update_accel(&m, &[1e-7; 3], 9.8, (&phi(m), &[block; 3]));
         }
         assert!((f.bias()[2] - 0.0196).abs() < 1e-3, "{:?}", f.bias());
         // On its side, z across gravity: its error there is its bias, about 0, not 0.0196.

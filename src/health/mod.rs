@@ -413,7 +413,7 @@ impl RestMonitor {
         if let Some(filters) = &mut self.filters {
             for f in filters.iter_mut() {
                 f.update_gyro(&[w0, w1, w2], &[rw0, rw1, rw2]);
-                f.update_accel(&force, &[ra0, ra1, ra2], g0, &phi);
+                f.update_accel(&force, &[ra0, ra1, ra2], g0, (&phi, &accel_prior));
             }
         }
         self.rest_windows = self.rest_windows.saturating_add(1);
