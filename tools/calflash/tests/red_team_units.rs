@@ -179,6 +179,23 @@ fn the_two_key_files_are_not_interchangeable_and_weak_keys_are_refused() {
         assert!(!r.err.contains("chmod"), "{}", r.err);
         assert!(!d.join("x.signed").exists());
     }
+    // Counter 0 (below any a unit holds) is refused; the largest there is is said to be.
+    let r = cli(
+        d,
+        "sign --blob ok.blob --sign-key st.key --counter 0 -o x.signed",
+    );
+    refused(&r, 2, "--counter", "counter 0");
+    let r = cli(
+        d,
+        "sign --blob ok.blob --sign-key st.key --counter 4294967295 -o x.signed",
+    );
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    assert!(
+        r.err.contains("the highest there is") && r.err.contains("only downgrades"),
+        "{}",
+        r.err
+    );
+    std::fs::remove_file(d.join("x.signed")).unwrap();
     // The same key twice.
     let r = cli(
         d,
