@@ -19,6 +19,16 @@ fn calibration(false_alarm: f32) -> Calibration {
     Calibration::new(data).expect("valid")
 }
 
+/// Each bias's 1-sigma wander over the whole ageing allowance (`K sqrt(t)`).
+fn ageing_sigma(cal: &Calibration) -> Vec<f64> {
+    let noise = cal.data().noise.expect("noise");
+    noise
+        .bias_walk
+        .iter()
+        .map(|k| f64::from(*k) * f64::from(noise.ageing_s).sqrt())
+        .collect()
+}
+
 /// The stated 1-sigma of each bias at rest (25 C): what "n sigma" means below.
 fn stated_sigma(cal: &Calibration) -> [f64; 6] {
     calflash::sim::rest::stated_sigma(cal).expect("covariance")
@@ -84,12 +94,7 @@ fn false_alarms_at_the_stated_rate() {
     let alpha = 0.05;
     let cal = calibration(alpha as f32);
     let sigma = stated_sigma(&cal);
-    let noise = cal.data().noise.expect("noise");
-    let ageing: Vec<f64> = noise
-        .bias_walk
-        .iter()
-        .map(|k| f64::from(*k) * f64::from(noise.ageing_s).sqrt())
-        .collect();
+    let ageing = ageing_sigma(&cal);
     let units = 400u64;
     let (mut not_ok, mut suspect) = (0u32, 0u32);
     for k in 0..units {
@@ -279,12 +284,7 @@ fn scale_dominated() -> Calibration {
 #[test]
 fn a_units_own_calibration_error_is_carried_from_pose_to_pose() {
     let cal = scale_dominated();
-    let noise = cal.data().noise.expect("noise");
-    let ageing: Vec<f64> = noise
-        .bias_walk
-        .iter()
-        .map(|k| f64::from(*k) * f64::from(noise.ageing_s).sqrt())
-        .collect();
+    let ageing = ageing_sigma(&cal);
     let units = 300u64;
     let mut coverage = Vec::new();
     for poses in 1..=3usize {

@@ -7,16 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::calflash;
-
-fn allan(dir: &Path, name: &str, unit: &str, n: f64, k: f64) {
-    let axis = serde_json::json!({"axis": "x", "curve": [], "terms": {
-        "quantization": 0.0, "random_walk": n, "bias_instability": 0.0,
-        "rate_random_walk": k, "rate_ramp": 0.0}});
-    let v = serde_json::json!({"schema": "calflash.allan/1", "source": "still.csv",
-        "unit": unit, "axes": [axis.clone(), axis.clone(), axis]});
-    std::fs::write(dir.join(name), v.to_string()).unwrap();
-}
+use common::{allan, calflash};
 
 /// `calflash health RECORDING --blob u.blob` at the environment the simulator used, and `extra`.
 fn health(dir: &Path, recording: &str, extra: &[&str]) -> (i32, String, String) {

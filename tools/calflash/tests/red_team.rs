@@ -7,7 +7,7 @@ use std::process::Stdio;
 
 #[path = "common/watchdog.rs"]
 mod watchdog;
-use watchdog::{Ran, calflash, calflash_with, cli};
+use watchdog::{Ran, calflash, calflash_with, cli, listing};
 
 fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data")
@@ -31,16 +31,6 @@ fn bench(names: &[&str]) -> tempfile::TempDir {
         std::fs::copy(examples().join(n), dir.path().join(n)).unwrap();
     }
     dir
-}
-
-/// Every file in `dir`, hidden ones included.
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 /// `calflash calibrate` of a single-axis file as unit RT-1, unrecorded, with `extra`.

@@ -2,6 +2,7 @@
 //! health, lots, flights on the spin rig) tried as a careless and a hostile user would
 //! (issue 30; the list is kept in `RELIABILITY.md`). Every command runs under the watchdog.
 
+mod common;
 #[path = "common/lot_history.rs"]
 mod lot_history;
 #[path = "common/watchdog.rs"]
@@ -9,20 +10,11 @@ mod watchdog;
 
 use std::path::{Path, PathBuf};
 
-use watchdog::{Ran, calflash, cli};
+use common::allan;
+use watchdog::{Ran, calflash, cli, listing};
 
 fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data")
-}
-
-/// Every file in `dir`, hidden ones included.
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 /// Asserts the run failed with `code`, said `says` and did not panic.
@@ -468,16 +460,6 @@ fn a_line_is_read_only_as_far_as_a_line_can_be_long() {
         let r = cli(d, line);
         refused(&r, 1, says, line);
     }
-}
-
-/// An Allan file of three axes with white noise `n` and rate random walk `k`.
-fn allan(dir: &Path, name: &str, unit: &str, n: f64, k: f64) {
-    let axis = serde_json::json!({"axis": "x", "curve": [], "terms": {
-        "quantization": 0.0, "random_walk": n, "bias_instability": 0.0,
-        "rate_random_walk": k, "rate_ramp": 0.0}});
-    let v = serde_json::json!({"schema": "calflash.allan/1", "source": "still.csv",
-        "unit": unit, "axes": [axis.clone(), axis.clone(), axis]});
-    std::fs::write(dir.join(name), v.to_string()).unwrap();
 }
 
 /// The example IMU calibrated with noise terms into `dir/u.blob`, with `extra` options.

@@ -4,6 +4,7 @@ use std::path::Path;
 use std::process::Command;
 
 /// Runs `calflash` with `args` in `dir`; returns its exit code, stdout and stderr.
+#[allow(dead_code)] // the red-team tests run it under their watchdog instead
 pub fn calflash(dir: &Path, args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
         .current_dir(dir)
@@ -106,4 +107,16 @@ pub mod stated {
             within(1.0)
         );
     }
+}
+
+/// Writes an Allan file as `calflash allan --json` does, three axes of white noise `n` and rate
+/// random walk `k` in `unit`, to `dir/name`.
+#[allow(dead_code)] // used by the health and red-team tests only
+pub fn allan(dir: &Path, name: &str, unit: &str, n: f64, k: f64) {
+    let axis = serde_json::json!({"axis": "x", "curve": [], "terms": {
+        "quantization": 0.0, "random_walk": n, "bias_instability": 0.0,
+        "rate_random_walk": k, "rate_ramp": 0.0}});
+    let v = serde_json::json!({"schema": "calflash.allan/1", "source": "still.csv",
+        "unit": unit, "axes": [axis.clone(), axis.clone(), axis]});
+    std::fs::write(dir.join(name), v.to_string()).unwrap();
 }

@@ -79,3 +79,13 @@ pub fn calflash_with(dir: &Path, args: &[&str], stdout: Stdio) -> Ran {
         err: err.join().unwrap(),
     }
 }
+
+/// Every file in `dir`, hidden ones included, sorted.
+pub fn listing(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
