@@ -209,19 +209,10 @@ impl Filter {
         if let Some(o) = h.get_mut(DG) {
             *o = -1.0;
         }
-        // P h, walking the packed upper triangle once: each stored (i, j) serves rows i and j.
         let mut ph = [0.0f32; NA];
-        let mut cells = self.pa.iter();
-        for (i, &hi) in h.iter().enumerate() {
-            for ((j, &hj), &p) in h.iter().enumerate().skip(i).zip(&mut cells) {
-                if let Some(o) = ph.get_mut(i) {
-                    *o += p * hj;
-                }
-                if j != i
-                    && let Some(o) = ph.get_mut(j)
-                {
-                    *o += p * hi;
-                }
+        for (i, o) in ph.iter_mut().enumerate() {
+            for (j, hj) in h.iter().enumerate() {
+                *o += self.p(i, j) * hj;
             }
         }
         let noise: f32 = u.iter().zip(r).map(|(u, r)| u * u * r).sum();
@@ -234,16 +225,17 @@ impl Filter {
         for (x, p) in self.xa.iter_mut().zip(&ph) {
             *x += p / s * innovation;
         }
-        // P - (P h)(P h)' / s, the same walk.
-        let mut cells = self.pa.iter_mut();
-        for (i, a) in ph.iter().enumerate() {
-            let a = a / s;
-            for ((j, b), p) in ph.iter().enumerate().skip(i).zip(&mut cells) {
-                *p -= a * b;
-                // Rounding must not make a variance negative.
-                if j == i {
-                    *p = p.max(0.0);
+        for i in 0..NA {
+            for j in i..NA {
+                if let (Some(p), Some(a), Some(b)) =
+                    (self.pa.get_mut(packed(NA, i, j)), ph.get(i), ph.get(j))
+                {
+                    *p -= a * b / s;
                 }
+            }
+            // Rounding must not make a variance negative.
+            if let Some(p) = self.pa.get_mut(packed(NA, i, i)) {
+                *p = p.max(0.0);
             }
         }
     }
