@@ -114,7 +114,11 @@ impl Filter {
             xa: [0.0; NA],
             pa,
             walked: *extra,
-            accel_spread: spread_at(accel, extra, phi),
+            accel_spread: {
+                let [s0, s1, s2] = stated_at(accel, phi);
+                let [e0, e1, e2] = *extra;
+                [s0 + e0, s1 + e1, s2 + e2]
+            },
             phi: *phi,
             xg: [0.0; 3],
             pg: *gyro,
@@ -178,17 +182,19 @@ impl Filter {
 
     /// A window's mean specific force `mean` at rest (features `phi` there), with the variance
     /// `r` of each component of the mean, against the assumed magnitude of gravity `g0`;
-    /// `prior` is the parameter blocks' prior covariance (as at [`Filter::new`]), for the
-    /// spread at this pose.
+    /// `stated` is each axis' stated error variance at this pose (`phi' C phi` of the blocks'
+    /// prior [`Filter::new`] had: [`stated_at`]), for the spread.
     pub fn update_accel(
         &mut self,
         mean: &[f32; 3],
         r: &[f32; 3],
         g0: f32,
-        (phi, prior): (&[[f32; FEATURES]; 3], &[[f32; BLOCK]; 3]),
+        (phi, stated): (&[[f32; FEATURES]; 3], &[f32; 3]),
     ) {
         self.phi = *phi;
-        self.accel_spread = spread_at(prior, &self.walked, phi);
+        let [s0, s1, s2] = *stated;
+        let [w0, w1, w2] = self.walked;
+        self.accel_spread = [s0 + w0, s1 + w1, s2 + w2];
         let [e0, e1, e2] = self.accel_error();
         let [m0, m1, m2] = *mean;
         let a = [m0 - e0, m1 - e1, m2 - e2];
@@ -209,11 +215,21 @@ impl Filter {
         if let Some(o) = h.get_mut(DG) {
             *o = -1.0;
         }
+        // P h row by row, one accumulator a row: the row's part left of the diagonal is its
+        // column in the packed upper triangle (stride shrinking by one), the rest contiguous.
         let mut ph = [0.0f32; NA];
         for (i, o) in ph.iter_mut().enumerate() {
-            for (j, hj) in h.iter().enumerate() {
-                *o += self.p(i, j) * hj;
+            let mut acc = 0.0;
+            let mut at = i;
+            for (j, hj) in h.iter().enumerate().take(i) {
+                acc += self.pa.get(at).copied().unwrap_or(0.0) * hj;
+                at += NA - j - 1;
             }
+            let row = self.pa.get(at..at + NA - i).unwrap_or(&[]);
+            for (p, hj) in row.iter().zip(h.iter().skip(i)) {
+                acc += p * hj;
+            }
+            *o = acc;
         }
         let noise: f32 = u.iter().zip(r).map(|(u, r)| u * u * r).sum();
         let s = h.iter().zip(&ph).map(|(h, p)| h * p).sum::<f32>() + noise;
@@ -225,18 +241,20 @@ impl Filter {
         for (x, p) in self.xa.iter_mut().zip(&ph) {
             *x += p / s * innovation;
         }
-        for i in 0..NA {
-            for j in i..NA {
-                if let (Some(p), Some(a), Some(b)) =
-                    (self.pa.get_mut(packed(NA, i, j)), ph.get(i), ph.get(j))
-                {
+        // P - (P h)(P h)' / s, row by row over the packed upper triangle.
+        let mut start = 0;
+        for (i, a) in ph.iter().enumerate() {
+            let len = NA - i;
+            if let Some(row) = self.pa.get_mut(start..start + len) {
+                for (p, b) in row.iter_mut().zip(ph.iter().skip(i)) {
                     *p -= a * b / s;
                 }
+                // Rounding must not make a variance negative.
+                if let Some(d) = row.first_mut() {
+                    *d = d.max(0.0);
+                }
             }
-            // Rounding must not make a variance negative.
-            if let Some(p) = self.pa.get_mut(packed(NA, i, i)) {
-                *p = p.max(0.0);
-            }
+            start += len;
         }
     }
 
@@ -316,9 +334,9 @@ impl Filter {
     }
 }
 
-/// Each axis' prior-predictive variance under the features `phi`: `phi' C phi` of its block's
-/// prior `C`, plus what was added to its bias (`walked`).
-fn spread_at(prior: &[[f32; BLOCK]; 3], walked: &[f32; 3], phi: &[[f32; FEATURES]; 3]) -> [f32; 3] {
+/// Each axis' stated error variance under the features `phi`: `phi' C phi` of its block's
+/// prior `C`.
+pub(super) fn stated_at(prior: &[[f32; BLOCK]; 3], phi: &[[f32; FEATURES]; 3]) -> [f32; 3] {
     core::array::from_fn(|axis| {
         let (Some(block), Some(phi)) = (prior.get(axis), phi.get(axis)) else {
             return 0.0;
@@ -329,7 +347,7 @@ fn spread_at(prior: &[[f32; BLOCK]; 3], walked: &[f32; 3], phi: &[[f32; FEATURES
                 sum += fi * block.get(packed(FEATURES, i, j)).copied().unwrap_or(0.0) * fj;
             }
         }
-        sum + walked.get(axis).copied().unwrap_or(0.0)
+        sum
     })
 }
 
@@ -365,7 +383,12 @@ mod tests {
         // z up, a bias of 0.02 on z and 0.02 on x.
         let m = [0.02, 0.0, 9.8 + 0.02];
         for _ in 0..100 {
-            f.update_accel(&m, &[1e-6; 3], 9.8, (&phi(m), &bias_only(1e-4)));
+            f.update_accel(
+                &m,
+                &[1e-6; 3],
+                9.8,
+                (&phi(m), &stated_at(&bias_only(1e-4), &phi(m))),
+            );
         }
         let [bx, by, bz, ..] = f.bias();
         assert!((bz - 0.02).abs() < 1e-3, "{bz}");
@@ -376,7 +399,12 @@ mod tests {
         // Turned on its side, x is observed too.
         let m = [9.8 + 0.02, 0.0, 0.02];
         for _ in 0..100 {
-            f.update_accel(&m, &[1e-6; 3], 9.8, (&phi(m), &bias_only(1e-4)));
+            f.update_accel(
+                &m,
+                &[1e-6; 3],
+                9.8,
+                (&phi(m), &stated_at(&bias_only(1e-4), &phi(m))),
+            );
         }
         let [bx, _, bz, ..] = f.bias();
         assert!(
@@ -400,7 +428,12 @@ mod tests {
         );
         let m = [0.0, 0.0, 9.8 + 0.0196];
         for _ in 0..200 {
-            f.update_accel(&m, &[1e-7; 3], 9.8, (&phi(m), &[block; 3]));
+            f.update_accel(
+                &m,
+                &[1e-7; 3],
+                9.8,
+                (&phi(m), &stated_at(&[block; 3], &phi(m))),
+            );
         }
         assert!((f.bias()[2] - 0.0196).abs() < 1e-3, "{:?}", f.bias());
         // On its side, z across gravity: its error there is its bias, about 0, not 0.0196.

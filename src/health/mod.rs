@@ -174,6 +174,8 @@ pub struct RestMonitor {
     pose: Option<[f32; 3]>,
     /// Under the factory prior and under the aged prior; `None` before the first rest.
     filters: Option<[Filter; 2]>,
+    /// The accelerometer parameters' prior at the environment it was computed at.
+    prior: Option<([f32; 2], [[f32; filter::BLOCK]; 3])>,
     /// The overlay given to the corrector.
     applied: [f32; OUTPUTS],
     verdict: Verdict,
@@ -223,6 +225,7 @@ impl RestMonitor {
             previous: None,
             pose: None,
             filters: None,
+            prior: None,
             applied: [0.0; OUTPUTS],
             verdict: Verdict::NotYet,
             period: 0,
@@ -297,6 +300,7 @@ impl RestMonitor {
         self.previous = None;
         self.pose = None;
         self.filters = None;
+        self.prior = None;
         self.applied = [0.0; OUTPUTS];
         self.verdict = Verdict::NotYet;
         self.end_period();
@@ -369,8 +373,17 @@ impl RestMonitor {
         let Some((total, own)) = imu.factory_variances(mean) else {
             return;
         };
-        let Some(accel_prior) = imu.accel_rest_covariance() else {
-            return;
+        // The accelerometer's prior at this environment, computed again only when it changes.
+        let env = imu.environment();
+        let accel_prior = match self.prior {
+            Some((at, prior)) if at == env => prior,
+            _ => {
+                let Some(prior) = imu.accel_rest_covariance() else {
+                    return;
+                };
+                self.prior = Some((env, prior));
+                prior
+            }
         };
         let phi = imu.accel_rest_features(&force);
         // The gyros' stated error that depends on the pose (g-sensitivity, scale times Earth's
@@ -408,12 +421,13 @@ impl RestMonitor {
             (Some(_), None) => {}
         }
         self.pose = Some(force);
+        let stated = filter::stated_at(&accel_prior, &phi);
         let g0 = 0.5 * (self.gravity.lo + self.gravity.hi);
         let [ra0, ra1, ra2, rw0, rw1, rw2] = *r;
         if let Some(filters) = &mut self.filters {
             for f in filters.iter_mut() {
                 f.update_gyro(&[w0, w1, w2], &[rw0, rw1, rw2]);
-                f.update_accel(&force, &[ra0, ra1, ra2], g0, (&phi, &accel_prior));
+                f.update_accel(&force, &[ra0, ra1, ra2], g0, (&phi, &stated));
             }
         }
         self.rest_windows = self.rest_windows.saturating_add(1);

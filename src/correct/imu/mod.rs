@@ -331,6 +331,12 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         }
     }
 
+    /// The temperature and supply voltage last set ([`set_environment`](Self::set_environment)).
+    #[must_use]
+    pub const fn environment(&self) -> [f32; 2] {
+        self.environment
+    }
+
     /// The flags that the current environment puts on every sample.
     #[must_use]
     pub const fn environment_flags(&self) -> Flags {
