@@ -170,3 +170,61 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
         "no noise terms",
     );
 }
+
+/// A simulated unit at rest writes the temperature it rested at, and `health` corrects it
+/// there: an unshifted unit of a calibration over -40 to 85 C is OK without `--temp` (issue 35:
+/// it read DRIFTED at the span's middle). A recording without a temperature says which it
+/// assumed and how far the calibration moves over the span.
+#[test]
+fn the_temperature_at_rest_is_the_recordings_or_said_to_be_assumed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/imu_bench.csv");
+    allan(d, "accel.json", "m/s^2", 1.5e-3, 1.6e-5);
+    allan(d, "gyro.json", "rad/s", 2.0e-4, 8.0e-7);
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            &bench.display().to_string(),
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-T-1",
+            "--blob",
+            "u.blob",
+            "--no-db",
+            "--noise",
+            "accel.json,gyro.json",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "simulate", "--sensor", "imu", "--rest", "u.blob", "--poses", "2", "--hold", "4",
+            "--seed", "5", "-o", "rest.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, err) = calflash(d, &["health", "rest.csv", "--blob", "u.blob", "--no-db"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("(rest.csv): OK"), "{out}");
+    assert!(
+        out.contains("temperature  25.00 C, the mean of the recording's column temp"),
+        "{out}"
+    );
+    // The same samples without their temperature.
+    let text = std::fs::read_to_string(d.join("rest.csv")).unwrap();
+    let bare: Vec<String> = text
+        .lines()
+        .map(|l| l.rsplit_once(',').unwrap().0.to_string())
+        .collect();
+    std::fs::write(d.join("bare.csv"), bare.join("\n") + "\n").unwrap();
+    let (_, out, err) = calflash(d, &["health", "bare.csv", "--blob", "u.blob", "--no-db"]);
+    assert!(
+        out.contains("temperature  assumed 22.5 C, the middle of the calibrated span -40 to 85 C")
+            && out.contains("the calibration moves by up to"),
+        "{out}{err}"
+    );
+}

@@ -35,7 +35,8 @@ pub struct HealthArgs {
     /// The sample rate, Hz, of a recording without timestamps.
     #[arg(long, value_parser = values::sample_rate)]
     pub rate: Option<f64>,
-    /// Temperature, C (default: the middle of the calibrated span).
+    /// Temperature, C (default: the mean of the recording's temperature column, else the
+    /// middle of the calibrated span, said with how far the calibration moves over the span).
     #[arg(long, value_parser = values::finite_f32)]
     pub temp: Option<f32>,
     /// Supply voltage, V (default: the middle of the calibrated span).
@@ -70,13 +71,13 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
             db_path.as_ref().and_then(db::Location::file),
         )
         .check()?;
-    let (health, blob, serial, source) = match (&args.port, &args.blob, &args.recording) {
+    let (health, blob, serial, source, said) = match (&args.port, &args.blob, &args.recording) {
         (Some(port), _, rec) => from_unit(args, port, rec.as_deref())?,
         (None, Some(b), Some(rec)) => {
             let bytes = crate::files::read_blob(b)?;
-            let h = on_host(args, &bytes, rec)?;
+            let (h, said) = on_host(args, &bytes, rec)?;
             let serial = serial_of(&bytes, b)?;
-            (h, bytes, serial, rec.display().to_string())
+            (h, bytes, serial, rec.display().to_string(), Some(said))
         }
         _ => {
             return Err(
@@ -103,6 +104,9 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
         "health": json(&health),
     });
     print!("{}", summary(&serial, &source, &health));
+    if let Some(said) = said {
+        println!("{said}");
+    }
     if let Some(p) = &args.json {
         let body = serde_json::to_vec_pretty(&record)?;
         crate::files::write_atomically(p, |w| std::io::Write::write_all(w, &body))?;
@@ -127,8 +131,15 @@ fn serial_of(bytes: &[u8], path: &Path) -> Result<String, String> {
     Ok(cal.data().identity.serial.as_str().to_string())
 }
 
-/// The recording's raw samples and the rate.
-fn samples(args: &HealthArgs, rec: &Path) -> Result<(Vec<[i32; 6]>, f64), String> {
+/// A health judged: the health, the unit's blob, its serial, where the samples came from, and
+/// how the temperature was found (when a recording was given).
+type Judged = (Health, Vec<u8>, String, String, Option<String>);
+
+/// A recording's raw samples, its rate and its temperature column's mean (name, C), if any.
+type Samples = (Vec<[i32; 6]>, f64, Option<(String, f32)>);
+
+/// The recording's raw samples, the rate, and its temperature column's mean.
+fn samples(args: &HealthArgs, rec: &Path) -> Result<Samples, String> {
     let opts = crate::obs::recording::Options {
         rails: spincal::model::Rails::new(i32::MIN, i32::MAX),
         rate: args.rate,
@@ -146,49 +157,117 @@ fn samples(args: &HealthArgs, rec: &Path) -> Result<(Vec<[i32; 6]>, f64), String
             [c(a[0]), c(a[1]), c(a[2]), c(g[0]), c(g[1]), c(g[2])]
         })
         .collect();
-    Ok((raw, r.rate()))
+    let temp = r.temperature.as_ref().and_then(|(name, t)| {
+        let finite: Vec<f64> = t.iter().copied().filter(|x| x.is_finite()).collect();
+        (!finite.is_empty()).then(|| {
+            (
+                name.clone(),
+                (finite.iter().sum::<f64>() / finite.len() as f64) as f32,
+            )
+        })
+    });
+    Ok((raw, r.rate(), temp))
 }
 
-/// The environment: stated, or the middle of the calibrated spans.
-fn environment(args: &HealthArgs, cal: &spincal::model::Calibration) -> (f32, f32) {
+/// The environment the recording is corrected at, and how its temperature was found: `--temp`,
+/// else the recording's temperature column (its mean), else the middle of the calibrated span,
+/// said with how far the calibration moves between there and the span's ends (a unit at
+/// another temperature reads as drifted by that much). The voltage: `--volt`, else the middle
+/// of its span.
+fn environment(
+    args: &HealthArgs,
+    cal: &spincal::model::Calibration,
+    column: Option<&(String, f32)>,
+    raw: Option<&[i32; 6]>,
+) -> (f32, f32, String) {
     let env = &cal.data().environment;
     let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
+    let v = args.volt.unwrap_or(mid(env.voltage_span));
+    if let Some(t) = args.temp {
+        return (t, v, format!("  temperature  {t} C (--temp)"));
+    }
+    if let Some((name, t)) = column {
+        return (
+            *t,
+            v,
+            format!("  temperature  {t:.2} C, the mean of the recording's column {name}"),
+        );
+    }
+    let span = env.temperature_span;
+    let t = mid(span);
+    let moved = raw
+        .filter(|_| span.hi > span.lo)
+        .and_then(|r| moved_across(cal, *r, (span, t), v));
+    let how = moved.map_or(String::new(), |(sigma, output)| {
+        format!(
+            "; between it and the span's ends the calibration moves by up to {sigma:.1} of its stated 1-sigma ({output}), which a unit at another temperature reads as drift"
+        )
+    });
     (
-        args.temp.unwrap_or(mid(env.temperature_span)),
-        args.volt.unwrap_or(mid(env.voltage_span)),
+        t,
+        v,
+        format!(
+            "  temperature  assumed {t} C, the middle of the calibrated span {} to {} C: the recording states none (give --temp, or a temperature column){how}",
+            span.lo, span.hi
+        ),
     )
 }
 
-/// The device's correction and health check over the recording, on the host.
-fn on_host(args: &HealthArgs, bytes: &[u8], rec: &Path) -> Result<Health, Failure> {
+/// The largest change of the corrected sample `raw` between the temperature `mid` and the ends
+/// of `span`, in the stated 1-sigma at `mid`, and the output it is on.
+fn moved_across(
+    cal: &spincal::model::Calibration,
+    raw: [i32; 6],
+    (span, mid): (spincal::model::Span, f32),
+    volt: f32,
+) -> Option<(f32, &'static str)> {
+    const OUTPUTS: [&str; 6] = ["ax", "ay", "az", "wx", "wy", "wz"];
+    let mut imu = AnyImuCorrector::new(cal, 1000.0).ok()?;
+    let mut at = |t: f32| {
+        imu.set_environment(t, volt);
+        imu.reset();
+        imu.correct(raw).values
+    };
+    let (centre, lo, hi) = (at(mid), at(span.lo), at(span.hi));
+    imu.set_environment(mid, volt);
+    let sigma = imu.sigma(&centre)?;
+    (0..6)
+        .map(|i| {
+            let d = (lo[i] - centre[i]).abs().max((hi[i] - centre[i]).abs());
+            (d / sigma[i].max(f32::MIN_POSITIVE), OUTPUTS[i])
+        })
+        .filter(|(x, _)| x.is_finite())
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+/// The device's correction and health check over the recording, on the host; and how its
+/// temperature was found.
+fn on_host(args: &HealthArgs, bytes: &[u8], rec: &Path) -> Result<(Health, String), Failure> {
     let name = args.blob.as_deref().unwrap_or(rec).display().to_string();
     let cal = crate::signing::calibration(bytes).map_err(|e| format!("{name}: {e}"))?;
-    let (raw, rate) = samples(args, rec)?;
+    let (raw, rate, column) = samples(args, rec)?;
     let mut imu = AnyImuCorrector::new(&cal, rate as f32).map_err(|e| format!("{name}: {e}"))?;
     let mut monitor = RestMonitor::new(&cal, rate as f32).map_err(|e| format!("{name}: {e}"))?;
-    let (t, v) = environment(args, &cal);
+    let (t, v, said) = environment(args, &cal, column.as_ref(), raw.first());
     imu.set_environment(t, v);
     for r in &raw {
         let out = imu.correct(*r);
         imu.observe_rest(&mut monitor, &out);
     }
-    Ok(monitor.health())
+    Ok((monitor.health(), said))
 }
 
 /// The unit's own health, after giving it the recording (if any).
-fn from_unit(
-    args: &HealthArgs,
-    port: &str,
-    rec: Option<&Path>,
-) -> Result<(Health, Vec<u8>, String, String), Failure> {
+fn from_unit(args: &HealthArgs, port: &str, rec: Option<&Path>) -> Result<Judged, Failure> {
     let timeout = Duration::from_secs_f64(args.timeout);
     let link = Link::open(port, timeout)?;
     let mut client = Client::new(link, timeout);
     let id = client.identify().map_err(|e| format!("{port}: {e}"))?;
     let blob = client.read_blob(id.blob_len as usize)?;
     let cal = crate::signing::calibration(&blob).map_err(|e| format!("the unit's blob: {e}"))?;
+    let mut said = None;
     if let Some(rec) = rec {
-        let (raw, rate) = samples(args, rec)?;
+        let (raw, rate, column) = samples(args, rec)?;
         let device_rate = f64::from(spincal::protocol::vector_rate_hz());
         if (rate - device_rate).abs() > 1e-6 * device_rate {
             return Err(format!(
@@ -197,7 +276,8 @@ fn from_unit(
             )
             .into());
         }
-        let (t, v) = environment(args, &cal);
+        let (t, v, env_said) = environment(args, &cal, column.as_ref(), raw.first());
+        said = Some(env_said);
         let bar = indicatif::ProgressBar::new(raw.len() as u64);
         for chunk in raw.chunks(spincal::protocol::MAX_VECTORS) {
             client
@@ -212,7 +292,7 @@ fn from_unit(
         Some(r) => format!("unit on {port}, given {}", r.display()),
         None => format!("unit on {port}"),
     };
-    Ok((health, blob, id.unit.as_str().to_string(), source))
+    Ok((health, blob, id.unit.as_str().to_string(), source, said))
 }
 
 fn json(h: &Health) -> serde_json::Value {

@@ -62,7 +62,7 @@ impl<'a> Unit<'a> {
     #[must_use]
     pub fn new(cal: &'a Calibration, rate: f64, bias: [f64; 6], gravity: f64, seed: u64) -> Self {
         let mut imu = ImuCorrector::new(cal, rate as f32).expect("an IMU calibration");
-        imu.set_environment(25.0, 3.3);
+        imu.set_environment(TEMPERATURE as f32, 3.3);
         let noise = cal.data().noise.expect("noise terms");
         let latitude = 45f64.to_radians();
         Self {
@@ -96,7 +96,7 @@ impl<'a> Unit<'a> {
     /// When `cal` is not an IMU with covariance factors.
     pub fn draw_accel_error(&mut self, cal: &Calibration) -> [[f64; 5]; 3] {
         let mut imu = ImuCorrector::<u16>::new(cal, 1000.0).expect("an IMU calibration");
-        imu.set_environment(25.0, 3.3);
+        imu.set_environment(TEMPERATURE as f32, 3.3);
         let blocks = imu.accel_rest_covariance().expect("covariance factors");
         std::array::from_fn(|axis| {
             let c = nalgebra::Matrix5::from_fn(|i, j| {
@@ -308,7 +308,7 @@ const OUTPUTS: [&str; 6] = ["ax", "ay", "az", "wx", "wy", "wz"];
 /// When `cal` is not an IMU with covariance factors.
 pub fn stated_sigma(cal: &Calibration) -> Result<[f64; 6], RestError> {
     let mut imu = ImuCorrector::<u16>::new(cal, 1000.0)?;
-    imu.set_environment(25.0, 3.3);
+    imu.set_environment(TEMPERATURE as f32, 3.3);
     let unit = Unit::new(cal, 1000.0, [0.0; 6], 9.81, 0);
     let target = unit.truth(&face(2, 1.0, 0.0), &Vector3::zeros());
     let (raw, _) = unit.invert(&target)?;
@@ -367,15 +367,23 @@ impl Session {
     }
 }
 
-/// Writes raw samples as a recording: a header `t,ax,ay,az,gx,gy,gz`, then the time (s) and
-/// the six counts per line.
+/// The temperature, C, a simulated unit rests at (and its supply voltage is 3.3 V).
+pub const TEMPERATURE: f64 = 25.0;
+
+/// Writes raw samples as a recording: a header `t,ax,ay,az,gx,gy,gz,temp`, then the time (s),
+/// the six counts and the temperature the unit rested at ([`TEMPERATURE`]) per line, so that
+/// `calflash health` corrects it where it was recorded.
 ///
 /// # Errors
 /// The writer's.
 pub fn write_csv(raw: &[[u16; 6]], rate: f64, w: &mut dyn std::io::Write) -> std::io::Result<()> {
-    writeln!(w, "t,ax,ay,az,gx,gy,gz")?;
+    writeln!(w, "t,ax,ay,az,gx,gy,gz,temp")?;
     for (k, [a, b, c, d, e, f]) in raw.iter().enumerate() {
-        writeln!(w, "{:.6},{a},{b},{c},{d},{e},{f}", k as f64 / rate)?;
+        writeln!(
+            w,
+            "{:.6},{a},{b},{c},{d},{e},{f},{TEMPERATURE}",
+            k as f64 / rate
+        )?;
     }
     Ok(())
 }
