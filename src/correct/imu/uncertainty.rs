@@ -13,6 +13,9 @@ use crate::model::{ImuCovariance, ImuOutputCovariance};
 /// gradient is zero without a spin).
 pub const REST_FEATURES: [usize; 5] = [0, 1, 2, 3, 7];
 
+/// Elements of a packed upper triangle over [`REST_FEATURES`].
+const REST_BLOCK: usize = REST_FEATURES.len() * (REST_FEATURES.len() + 1) / 2;
+
 impl<S: Sample> ImuCorrector<'_, S> {
     /// Per output, the variance that quantisation adds to one corrected sample:
     /// `sum_j M_ij^2 / 12` (a code is uniform over its width).
@@ -79,7 +82,7 @@ impl<S: Sample> ImuCorrector<'_, S> {
     /// ([`REST_FEATURES`] picks them). The axis' error is their dot product with its
     /// parameters' error.
     #[must_use]
-    pub fn accel_rest_features(&self, f: &[f32; 3]) -> [[f32; 5]; 3] {
+    pub fn accel_rest_features(&self, f: &[f32; 3]) -> [[f32; REST_FEATURES.len()]; 3] {
         let [na, _] = &self.directions;
         core::array::from_fn(|i| {
             let x = na.get(i).map_or(0.0, |n| rotation::dot(n, f));
@@ -92,7 +95,7 @@ impl<S: Sample> ImuCorrector<'_, S> {
     /// restricted to [`REST_FEATURES`]), packed upper triangle row by row (`00 01 .. 04 11 ..
     /// 44`). `None` without covariance factors.
     #[must_use]
-    pub fn accel_rest_covariance(&self) -> Option<[[f32; 15]; 3]> {
+    pub fn accel_rest_covariance(&self) -> Option<[[f32; REST_BLOCK]; 3]> {
         let ImuCovariance { accel, .. } = self.covariance.as_ref()?;
         Some(core::array::from_fn(|axis| {
             let packed = accel.get(axis).map_or(&[][..], |a| a.as_flattened());
@@ -103,7 +106,7 @@ impl<S: Sample> ImuCorrector<'_, S> {
                     0.0
                 }
             };
-            let mut out = [0.0f32; 15];
+            let mut out = [0.0f32; REST_BLOCK];
             let mut k = 0;
             for (a, &fa) in REST_FEATURES.iter().enumerate() {
                 for &fb in REST_FEATURES.iter().skip(a) {

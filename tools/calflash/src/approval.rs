@@ -49,6 +49,13 @@ pub enum Refused {
     },
 }
 
+/// The rule itself: true when a blob of `identity` may not go on (its fit was judged REJECT and
+/// nobody insisted with `force_rejected`).
+#[must_use]
+pub const fn refused(identity: &Identity, force_rejected: bool) -> bool {
+    identity.fit_rejected && !force_rejected
+}
+
 /// Applies the rule to the blob at `path` whose identity is `identity`: `Ok(None)` for an
 /// approved blob, `Ok(Some(warning))` for a rejected one a person insists on
 /// (`force_rejected`), the warning to print.
@@ -61,14 +68,14 @@ pub fn admit(
     act: Act,
     force_rejected: bool,
 ) -> Result<Option<String>, Refused> {
-    if !identity.fit_rejected {
-        return Ok(None);
-    }
-    if !force_rejected {
+    if refused(identity, force_rejected) {
         return Err(Refused::RejectedFit {
             path: path.to_path_buf(),
             act,
         });
+    }
+    if !identity.fit_rejected {
+        return Ok(None);
     }
     Ok(Some(format!(
         "WARNING: {}: the blob's fit was judged REJECT; {} on --force-rejected (its identity keeps the mark fit_rejected)",

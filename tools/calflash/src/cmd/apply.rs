@@ -318,8 +318,7 @@ fn table_input(
 
 /// `--time-column NAME[:UNIT]`: the column and its scale to seconds.
 fn time_column(s: &str) -> Result<(String, f64), String> {
-    crate::obs::header::time_column(s, s)
-        .map_err(|e| format!("{e}").replace(&format!("t={s}:"), &format!("{s}:")))
+    crate::obs::header::time_column(s, s, "").map_err(|e| e.to_string())
 }
 
 /// The sample rate: an IMU with lever arms (`lever`) needs it; a stream with timestamps has
@@ -332,7 +331,7 @@ fn timing(
     input: &Input,
 ) -> Result<Option<Timing>, Failure> {
     match Timing::new(args.rate, input.times.as_deref()) {
-        Ok(t) if !(0.1..=f64::from(spincal::model::MAX_SAMPLE_RATE_HZ)).contains(&t.rate) => {
+        Ok(t) if !values::SAMPLE_RATES.contains(&t.rate) => {
             Err(format!(
                 "{}: the time column gives {:.3e} Hz, a rate no inertial sensor samples at: is it in another unit? Give it as --time-column NAME:ms (s, ms, us, ns)",
                 args.input.display(),

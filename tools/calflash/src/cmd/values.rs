@@ -119,16 +119,13 @@ pub fn duration(s: &str) -> Result<f64, String> {
     }
 }
 
-/// The longest duration an option takes: 100 years ([`spincal::model::MAX_AGEING_S`]).
-pub const LONGEST_DURATION_S: f64 = 3.155_76e9;
-
 /// A duration of at most 100 years: an ageing allowance, an age.
 ///
 /// # Errors
 /// As [`duration`], or longer than 100 years.
 pub fn duration_at_most_a_century(s: &str) -> Result<f64, String> {
     let v = duration(s)?;
-    if v > LONGEST_DURATION_S {
+    if v > f64::from(spincal::model::MAX_AGEING_S) {
         return Err(format!(
             "`{s}`: at most 100 years (36525d) is expected; a longer allowance means nothing"
         ));
@@ -142,11 +139,15 @@ pub fn duration_at_most_a_century(s: &str) -> Result<f64, String> {
 /// # Errors
 /// Not a number in that range.
 pub fn sample_rate(s: &str) -> Result<f64, String> {
-    let max = f64::from(spincal::model::MAX_SAMPLE_RATE_HZ);
-    in_range(s, 0.1, max).map_err(|_| {
-        format!("`{s}`: a sample rate from 0.1 Hz to {max} Hz is expected (Hz, e.g. 2000)")
+    let (lo, hi) = (*SAMPLE_RATES.start(), *SAMPLE_RATES.end());
+    in_range(s, lo, hi).map_err(|_| {
+        format!("`{s}`: a sample rate from {lo} Hz to {hi} Hz is expected (Hz, e.g. 2000)")
     })
 }
+
+/// The sample rates the device corrects at, Hz ([`sample_rate`]).
+pub const SAMPLE_RATES: std::ops::RangeInclusive<f64> =
+    0.1..=spincal::model::MAX_SAMPLE_RATE_HZ as f64;
 
 /// A count from `lo` to `hi`.
 ///

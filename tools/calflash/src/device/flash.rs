@@ -320,9 +320,7 @@ pub fn flash<L: Read + Write>(
             }
         }
     }
-    let path = std::path::Path::new("the blob");
-    let act = crate::approval::Act::Flash;
-    if crate::approval::admit(&cal.data().identity, path, act, opts.rejected_fit).is_err() {
+    if crate::approval::refused(&cal.data().identity, opts.rejected_fit) {
         return Err(FlashError::RejectedFit);
     }
     let kind = protocol::UnitSensor::of(cal.data());

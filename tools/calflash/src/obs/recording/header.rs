@@ -59,11 +59,16 @@ pub(super) fn timestamp(name: &str) -> Option<f64> {
 
 /// A time column given as `NAME:UNIT` (s, ms, us, ns) or `NAME` whose name states its unit
 /// (`t`, `time`, `t_ms`, `time_us`, `timestamp_ns`): the column's name and its scale to
-/// seconds. `item` is what the user wrote, for the message.
+/// seconds. `item` is what the user wrote and `role` what comes before the name where it is
+/// written (`t=` in `--columns`), for the message.
 ///
 /// # Errors
 /// An unknown unit, or a name that states none.
-pub fn time_column(spec: &str, item: &str) -> Result<(String, f64), ColumnsError> {
+pub fn time_column(
+    spec: &str,
+    item: &str,
+    role: &'static str,
+) -> Result<(String, f64), ColumnsError> {
     match spec.rsplit_once(':') {
         Some((n, u)) => Ok((
             n.trim().to_string(),
@@ -77,6 +82,7 @@ pub fn time_column(spec: &str, item: &str) -> Result<(String, f64), ColumnsError
             timestamp(spec).ok_or_else(|| ColumnsError::TimeUnitUnstated {
                 item: item.to_string(),
                 name: spec.to_string(),
+                role,
             })?,
         )),
     }
@@ -139,7 +145,7 @@ impl Chosen {
                 "gz" => &mut c.gyro[2],
                 "temp" => &mut c.temp,
                 "t" => {
-                    let (column, scale) = time_column(&name, item)?;
+                    let (column, scale) = time_column(&name, item, "t=")?;
                     if c.t.replace((column, scale)).is_some() {
                         return Err(ColumnsError::Twice {
                             item: item.to_string(),
@@ -183,13 +189,15 @@ pub enum ColumnsError {
     },
     /// A time column whose name does not state its unit.
     #[error(
-        "`{item}`: the unit of `{name}` cannot be read from its name; give it: t={name}:s (or ms, us, ns)"
+        "`{item}`: the unit of `{name}` cannot be read from its name; give it: {role}{name}:s (or ms, us, ns)"
     )]
     TimeUnitUnstated {
         /// The item.
         item: String,
         /// The column's name.
         name: String,
+        /// What comes before the name where it is given (`t=` in `--columns`).
+        role: &'static str,
     },
     /// A role that is not known.
     #[error("`{item}`: `{role}` is not a role; expected t, ax, ay, az, gx, gy, gz or temp")]
