@@ -14,6 +14,7 @@ pub mod earth;
 pub mod files;
 pub mod formula;
 pub mod lot;
+pub mod mission;
 pub mod noise;
 pub mod nonlinear;
 pub mod obs;

@@ -26,6 +26,9 @@ enum Command {
     Allan(cmd::allan::AllanArgs),
     /// Evaluate and optimise test plans before running them; predict their precision.
     Design(cmd::design::DesignArgs),
+    /// A mission profile read, checked and summarised: ranges, time at each level, setback,
+    /// spin, vibration.
+    Mission(cmd::mission::MissionArgs),
     /// Simulate a sensor through a test plan, writing an observation file.
     Simulate(cmd::simulate::SimulateArgs),
     /// Run raw counts through the device's correction.
@@ -89,6 +92,7 @@ fn main() -> ExitCode {
         Command::Allan(args) => cmd::allan::run(args),
         Command::Design(args) => cmd::design::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
+        Command::Mission(args) => cmd::mission::run(args),
         Command::Apply(args) => cmd::apply::run(args),
         Command::Compare(args) => cmd::compare::run(args),
         Command::Threshold(args) => cmd::threshold::run(args),

@@ -13,6 +13,7 @@ pub mod history_db;
 pub mod image;
 pub mod keys;
 pub mod lot;
+pub mod mission;
 pub mod outputs;
 pub mod selfcal;
 pub mod simulate;

@@ -42,6 +42,21 @@ pub enum Error {
         /// Its high end.
         hi: f64,
     },
+    /// A model variable the mission profile does not give.
+    #[error("--mission: {0}")]
+    MissionVariable(#[from] crate::mission::weight::Missing),
+    /// A mission the equipment cannot reach at all.
+    #[error(
+        "--mission: no moment of the flight {profile} is within what {what} reach: {beyond}. A plan over this equipment can promise nothing for this flight but extrapolation (use equipment that reaches it, or --limit to say what it reaches)"
+    )]
+    MissionBeyondReach {
+        /// The profile.
+        profile: String,
+        /// What sets the reach ("the candidates").
+        what: String,
+        /// The share of time beyond on each variable.
+        beyond: String,
+    },
     /// `--plan` is neither a file nor plan items.
     #[error("--plan `{spec}`: not a file, and {source}")]
     Plan {

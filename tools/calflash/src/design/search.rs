@@ -113,6 +113,9 @@ impl Search {
         let ws: Vec<Option<DMatrix<f64>>> = blocks
             .iter()
             .map(|b| {
+                if let Some((w, _, _)) = space.mission_weight(b, &cands, "the candidates")? {
+                    return Ok(Some(w.inside));
+                }
                 let r = space.region_rows(&cands, b)?;
                 Ok::<_, Error>(Some(r.transpose() * &r / r.nrows() as f64))
             })
@@ -219,8 +222,13 @@ impl Search {
         } else {
             space::grids(&space.region)?
         };
-        let r = region.model_rows(&formula);
-        let w = r.transpose() * &r / r.nrows() as f64;
+        let w = match space.mission_weight(&blocks[0], &limits_probe, "the factors")? {
+            Some((w, _, _)) => w.inside,
+            None => {
+                let r = region.model_rows(&formula);
+                r.transpose() * &r / r.nrows() as f64
+            }
+        };
         let opts = exchange::Options {
             n: self.n,
             restarts: self.restarts,
@@ -333,6 +341,7 @@ mod tests {
             volts: vec![5.0],
             region: Vec::new(),
             limits: Vec::new(),
+            mission: None,
         };
         let found = search(&[], &["rate=-10:10:21"])
             .run(Method::Auto, &space, &blocks, |_| {})

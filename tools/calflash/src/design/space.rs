@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
+use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
@@ -11,6 +12,8 @@ use super::Error;
 use super::criteria::{self, Criteria};
 use super::models::{self, Block};
 use super::points::{self, Points, Unit};
+use crate::mission::Profile;
+use crate::mission::weight::{self, Lookup, Reach, Weight};
 
 /// An equipment limit `NAME=LO:HI` (`rate=-800:800`): plans and candidates beyond it are
 /// refused.
@@ -61,6 +64,9 @@ pub struct Space {
     pub region: Vec<String>,
     /// The equipment's limits.
     pub limits: Vec<Limit>,
+    /// The flight the plans are for (`--mission`): its moments weigh the I criterion in place of
+    /// the region's.
+    pub mission: Option<Arc<Profile>>,
 }
 
 impl Space {
@@ -161,6 +167,34 @@ impl Space {
         }
     }
 
+    /// The mission's weight on `block`, the equipment reaching the range of `reach` on each
+    /// variable (narrowed by the limits); `None` without a mission.
+    ///
+    /// # Errors
+    /// A variable the profile lacks, or a flight wholly beyond the reach.
+    pub fn mission_weight(
+        &self,
+        block: &Block,
+        reach: &Points,
+        what: &str,
+    ) -> Result<Option<(Weight, Lookup, Reach)>, Error> {
+        let Some(p) = &self.mission else {
+            return Ok(None);
+        };
+        let lookup = Lookup::new(p, &block.formula, self.unit)?;
+        let vars: Vec<String> = block.formula.columns().into_iter().skip(1).collect();
+        let reach = Reach::of(reach, &vars, &self.limits);
+        let w = weight::weight(p, &block.formula, &lookup, &reach);
+        if w.share_inside == 0.0 {
+            return Err(Error::MissionBeyondReach {
+                profile: p.source.display().to_string(),
+                what: what.to_string(),
+                beyond: describe_beyond(&w, &reach),
+            });
+        }
+        Ok(Some((w, lookup, reach)))
+    }
+
     /// Evaluates `pts` for every block; a plan that cannot estimate a block names the term.
     ///
     /// # Errors
@@ -194,6 +228,29 @@ impl Space {
                 })
             })
             .collect()
+    }
+}
+
+/// The share of a flight beyond the reach on each variable, in words.
+#[must_use]
+pub fn describe_beyond(w: &Weight, reach: &Reach) -> String {
+    let parts: Vec<String> = w
+        .beyond
+        .iter()
+        .zip(&reach.bounds)
+        .filter(|((_, lo, hi), _)| lo + hi > 0.0)
+        .map(|((v, lo, hi), (_, a, b))| {
+            format!(
+                "{v} {:.1} % of the time below {a} and {:.1} % above {b}",
+                100.0 * lo,
+                100.0 * hi
+            )
+        })
+        .collect();
+    if parts.is_empty() {
+        "nothing beyond".to_string()
+    } else {
+        parts.join("; ")
     }
 }
 
@@ -314,6 +371,7 @@ mod tests {
             volts: vec![5.0],
             region: Vec::new(),
             limits: vec!["rate=-800:800".parse().unwrap()],
+            mission: None,
         };
         let pts = grids(&["rate=-1000:1000:3".into()]).unwrap();
         let beyond = space.check_limits(&pts, "the candidates").unwrap_err();

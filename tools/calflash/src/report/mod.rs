@@ -6,6 +6,7 @@ pub mod error;
 pub mod html;
 pub mod json;
 pub mod lot;
+pub mod mission;
 pub(crate) mod page;
 pub mod plot;
 pub mod selfcal;

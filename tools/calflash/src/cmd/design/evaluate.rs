@@ -46,11 +46,12 @@ pub struct EvaluateArgs {
 
 pub(super) fn run(a: &EvaluateArgs) -> Result<(), Failure> {
     plan_files(&a.plan, "--plan", Paths::new())
+        .input("--mission", a.model.mission.as_deref())
         .output("--json", a.json.as_deref())
         .output("--report", a.report.as_deref())
         .check()?;
     let (u, gyro) = unit(a.model.sensor);
-    let space = a.model.space();
+    let space = a.model.space()?;
     let blocks = models::blocks(&a.model.model, gyro)?;
     let vars = models::variables(&blocks);
     let mut loaded = Vec::new();
@@ -63,7 +64,7 @@ pub(super) fn run(a: &EvaluateArgs) -> Result<(), Failure> {
     // Without --region, every plan is judged over all the plans' points together.
     let union = space::union(loaded.iter().map(|(_, p)| p), &vars);
     if models::has_lever(&blocks) {
-        return evaluate_spin_rig(a, &blocks, loaded, &union);
+        return evaluate_spin_rig(a, &space, &blocks, loaded, &union);
     }
     let mut plans = Vec::new();
     for (spec, pts) in loaded {
@@ -123,6 +124,10 @@ pub(super) fn run(a: &EvaluateArgs) -> Result<(), Failure> {
         "{}",
         show::evaluate_text(&a.model.model, &blocks, &plans, a.fixture_error)
     );
+    // Over the mission, the equipment reaching what the plans together span.
+    if let Some(m) = super::over_mission(&space, &blocks, &plans, &union, "the plans together")? {
+        print!("{}", crate::report::mission::plans_text(&m));
+    }
     write_evaluation(a, &blocks, &plans, curve.as_ref())
 }
 
@@ -152,6 +157,7 @@ fn write_evaluation(
 /// --noise and --scale, how well it estimates the others.
 fn evaluate_spin_rig(
     a: &EvaluateArgs,
+    space: &space::Space,
     blocks: &[Block],
     loaded: Vec<(String, Points)>,
     union: &Points,
@@ -168,10 +174,7 @@ fn evaluate_spin_rig(
     let mut groups: Vec<Group> = Vec::new();
     for (spec, pts) in loaded {
         let (reduced, estimable) = models::lever_blocks(blocks, &pts);
-        let criteria = a
-            .model
-            .space()
-            .evaluate_plan(&spec, &pts, &reduced, union)?;
+        let criteria = space.evaluate_plan(&spec, &pts, &reduced, union)?;
         let plan = show::PlanResult {
             name: spec,
             points: pts,

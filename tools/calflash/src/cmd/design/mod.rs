@@ -9,7 +9,8 @@ pub use optimize::{MAX_PLAN, OptimizeArgs};
 pub use predict::{MAX_MONTE_CARLO, MAX_SIMULATED, PredictArgs};
 
 use crate::cmd::Failure;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use clap::{Args, Subcommand};
 
@@ -63,19 +64,36 @@ pub struct ModelArgs {
     /// refused.
     #[arg(long, value_name = "NAME=LO:HI")]
     pub limit: Vec<Limit>,
+    /// A mission profile (`calflash mission` reads it): the plans are judged, and optimised
+    /// with the I criterion, by their prediction variance averaged over the flight's moments
+    /// the equipment reaches; the rest is reported as extrapolation.
+    #[arg(long)]
+    pub mission: Option<PathBuf>,
+    #[command(flatten)]
+    pub mission_columns: crate::cmd::mission::MissionColumns,
 }
 
 impl ModelArgs {
-    /// Where the plans live, apart from the model.
-    #[must_use]
-    pub fn space(&self) -> Space {
-        Space {
+    /// Where the plans live, apart from the model, with the mission read.
+    ///
+    /// # Errors
+    /// A mission profile that cannot be read.
+    pub fn space(&self) -> Result<Space, crate::mission::MissionError> {
+        let mission = match &self.mission {
+            Some(path) => Some(Arc::new(crate::mission::read(
+                path,
+                &self.mission_columns.mission_columns,
+            )?)),
+            None => None,
+        };
+        Ok(Space {
             unit: unit(self.sensor).0,
             temps: self.temps.clone(),
             volts: self.volts.clone(),
             region: self.region.clone(),
             limits: self.limit.clone(),
-        }
+            mission,
+        })
     }
 }
 
@@ -118,4 +136,65 @@ fn plan_files<'a>(
         }
     }
     paths
+}
+
+/// The plans over the space's mission, the equipment reaching what `reach` spans (`what` says
+/// what that is); `None` without a mission.
+///
+/// # Errors
+/// A variable the profile lacks, or a flight wholly beyond the reach.
+fn over_mission(
+    space: &Space,
+    blocks: &[crate::design::models::Block],
+    plans: &[crate::report::design::PlanResult],
+    reach: &crate::design::points::Points,
+    what: &str,
+) -> Result<Option<crate::report::mission::OverMission>, crate::design::Error> {
+    use crate::mission::weight;
+    use crate::report::mission::{OverMission, PlanOverMission};
+    let Some(profile) = &space.mission else {
+        return Ok(None);
+    };
+    let mut m = OverMission {
+        profile: profile.source.display().to_string(),
+        reach: what.to_string(),
+        blocks: Vec::new(),
+        assumed: Vec::new(),
+        plans: plans
+            .iter()
+            .map(|p| PlanOverMission {
+                plan: p.name.clone(),
+                n: p.points.rows.len(),
+                mean_inside: Vec::new(),
+                worst_inside: Vec::new(),
+                mean_beyond: Vec::new(),
+                worst_beyond: Vec::new(),
+            })
+            .collect(),
+    };
+    for (b, block) in blocks.iter().enumerate() {
+        let Some((w, lookup, r)) = space.mission_weight(block, reach, what)? else {
+            return Ok(None);
+        };
+        for v in lookup.assumed(profile) {
+            if !m.assumed.contains(&v) {
+                m.assumed.push(v);
+            }
+        }
+        m.blocks.push((
+            block.label.clone(),
+            w.share_inside,
+            crate::design::space::describe_beyond(&w, &r),
+        ));
+        for (pm, p) in m.plans.iter_mut().zip(plans) {
+            let c = &p.criteria[b].unscaled_covariance;
+            let (worst_in, worst_out) =
+                weight::worst_variance(profile, &block.formula, &lookup, &r, c, 1);
+            pm.mean_inside.push(weight::mean_variance(c, 1, &w.inside));
+            pm.worst_inside.push(worst_in);
+            pm.mean_beyond.push(weight::mean_variance(c, 1, &w.outside));
+            pm.worst_beyond.push(worst_out);
+        }
+    }
+    Ok(Some(m))
 }

@@ -24,9 +24,9 @@ pub struct OptimizeArgs {
     /// Observations in the plan.
     #[arg(long, value_parser = |s: &str| crate::cmd::values::count_in(s, 1, MAX_PLAN))]
     pub n: usize,
-    /// The criterion.
-    #[arg(long, value_enum, default_value = "d")]
-    pub criterion: Criterion,
+    /// The criterion: D by default, I (averaged over the flight) with --mission.
+    #[arg(long, value_enum)]
+    pub criterion: Option<Criterion>,
     /// Candidate points the equipment reaches: plan items (head:N, tumble:6|12|18|24|26,
     /// sphere:N, rate:LO:HI:N, centrifuge:LO:HI:N), repeatable.
     #[arg(long)]
@@ -53,15 +53,21 @@ pub struct OptimizeArgs {
 
 pub(super) fn run(o: &OptimizeArgs) -> Result<(), Failure> {
     plan_files(&o.candidates, "--candidates", Paths::new())
+        .input("--mission", o.model.mission.as_deref())
         .output("-o", Some(&o.output))
         .check()?;
     let (u, gyro) = unit(o.model.sensor);
-    let space = o.model.space();
+    let space = o.model.space()?;
     let blocks = models::blocks(&o.model.model, gyro)?;
     let vars = models::variables(&blocks);
+    let criterion = o.criterion.unwrap_or(if space.mission.is_some() {
+        Criterion::I
+    } else {
+        Criterion::D
+    });
     let search = Search {
         n: o.n,
-        criterion: o.criterion,
+        criterion,
         candidates: o.candidates.clone(),
         grid: o.grid.clone(),
         restarts: o.restarts,
@@ -127,7 +133,7 @@ pub(super) fn run(o: &OptimizeArgs) -> Result<(), Failure> {
         std::io::Write::write_all(w, points::to_csv(&searched.plan, &keep).as_bytes())
     })?;
     let head = show::Search {
-        criterion: o.criterion,
+        criterion,
         n: o.n,
         over: &searched.over,
         hits: searched.hits,
@@ -138,5 +144,10 @@ pub(super) fn run(o: &OptimizeArgs) -> Result<(), Failure> {
         "{}",
         show::optimize_text(&head, &searched.plan, &blocks, &rows)
     );
+    // Over the mission, the equipment reaching what the candidates span.
+    let reach = searched.listed.as_ref().unwrap_or(&searched.plan);
+    if let Some(m) = super::over_mission(&space, &blocks, &rows, reach, "the candidates")? {
+        print!("{}", crate::report::mission::plans_text(&m));
+    }
     Ok(())
 }

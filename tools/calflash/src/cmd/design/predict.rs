@@ -61,10 +61,11 @@ pub struct PredictArgs {
 
 pub(super) fn run(a: &PredictArgs) -> Result<(), Failure> {
     plan_files(a.plan.iter(), "--plan", Paths::new())
+        .input("--mission", a.model.mission.as_deref())
         .output("--json", a.json.as_deref())
         .check()?;
     let (u, gyro) = unit(a.model.sensor);
-    let space = a.model.space();
+    let space = a.model.space()?;
     let blocks = models::blocks(&a.model.model, gyro)?;
     let vars = models::variables(&blocks);
     let sensor = simulated(a.model.sensor)?;
@@ -79,8 +80,19 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), Failure> {
         })
         .collect();
     let noise = noises[0];
-    let at = Points::operating(&a.at, &vars)?;
+    // Over a mission, the flight gives the operating points; --at adds its own.
+    let at = if a.at.is_empty() && space.mission.is_some() {
+        Points {
+            names: vars.clone(),
+            rows: Vec::new(),
+        }
+    } else {
+        Points::operating(&a.at, &vars)?
+    };
     if let Some(target) = a.target {
+        if space.mission.is_some() {
+            return Err("--mission with --target: not supported; give --plan (the fewest observations are judged at the --at points)".into());
+        }
         return fewest(a, (&space, &blocks, &vars), &at, (noise, target));
     }
     let spec = a
@@ -99,7 +111,7 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), Failure> {
     for (k, (b, c)) in blocks.iter().zip(&crit).enumerate() {
         let at_rows = at.model_rows(&b.formula);
         let e = predict::expected(&c.unscaled_covariance, noises[k], &at_rows);
-        let mc = match a.monte_carlo {
+        let mc = match a.monte_carlo.filter(|_| !at.rows.is_empty()) {
             Some(runs) => Some(confirm(
                 &sensor,
                 (u, outputs[k.min(outputs.len() - 1)]),
@@ -112,8 +124,18 @@ pub(super) fn run(a: &PredictArgs) -> Result<(), Failure> {
         };
         results.push((b.clone(), e, mc));
     }
-    let text = show::predict_text(spec, noise, &at, &results);
-    print!("{text}");
+    if !at.rows.is_empty() {
+        print!("{}", show::predict_text(spec, noise, &at, &results));
+    }
+    if space.mission.is_some() {
+        over_mission(
+            a,
+            (&space, &blocks),
+            &pts,
+            (&crit, &noises),
+            (&sensor, u, &outputs),
+        )?;
+    }
     if let Some(path) = &a.json {
         let v = show::predict_json(spec, noise, &at, &results);
         crate::files::write_atomically(path, |w| {
@@ -232,4 +254,89 @@ fn confirm(
     });
     bar.finish_and_clear();
     Ok(mc?)
+}
+
+/// Samples of the flight a Monte Carlo check predicts at.
+const MISSION_STATES: usize = 2_000;
+
+/// The plan's expected error over the mission per block (RMS over the flight's moments the
+/// plan reaches, and the worst), confirmed with --monte-carlo by the spread of the simulated
+/// calibrations' predictions at 2,000 of those moments.
+fn over_mission(
+    a: &PredictArgs,
+    (space, blocks): (&space::Space, &[models::Block]),
+    pts: &Points,
+    (crit, noises): (&[crate::design::criteria::Criteria], &[f64]),
+    (sensor, u, outputs): (&sim::Sensor, Unit, &[&str]),
+) -> Result<(), Failure> {
+    use crate::mission::weight;
+    let Some(profile) = &space.mission else {
+        return Ok(());
+    };
+    println!(
+        "\nOver the mission {} (the plan's reach: the range of its points on each variable):",
+        profile.source.display()
+    );
+    for (k, (b, c)) in blocks.iter().zip(crit).enumerate() {
+        let Some((w, lookup, reach)) = space.mission_weight(b, pts, "the plan's points")? else {
+            continue;
+        };
+        let cov = &c.unscaled_covariance;
+        let rms = noises[k] * weight::mean_variance(cov, 1, &w.inside).sqrt();
+        let (worst, worst_beyond) =
+            weight::worst_variance(profile, &b.formula, &lookup, &reach, cov, 1);
+        let label = if blocks.len() > 1 {
+            format!("axis {}: ", b.label)
+        } else {
+            String::new()
+        };
+        println!(
+            "  {label}{:.1} % of the flight within reach: expected error rms {rms:.4} counts, worst {:.4}",
+            100.0 * w.share_inside,
+            noises[k] * worst.sqrt()
+        );
+        if w.share_inside < 1.0 {
+            println!(
+                "    beyond ({}): rms {:.4} counts, worst {:.4}, extrapolated",
+                space::describe_beyond(&w, &reach),
+                noises[k] * weight::mean_variance(cov, 1, &w.outside).sqrt(),
+                noises[k] * worst_beyond.sqrt()
+            );
+        }
+        if let Some(runs) = a.monte_carlo {
+            let (at_rows, dwell) =
+                weight::inside_rows(profile, &b.formula, &lookup, &reach, MISSION_STATES);
+            let mc = confirm(
+                sensor,
+                (u, outputs[k.min(outputs.len() - 1)]),
+                runs,
+                pts,
+                &b.formula,
+                &at_rows,
+            )?;
+            let total: f64 = dwell.iter().sum();
+            let mc_rms = (mc
+                .at
+                .iter()
+                .zip(&dwell)
+                .map(|(s, d)| s * s * d)
+                .sum::<f64>()
+                / total)
+                .sqrt();
+            let predicted = (0..at_rows.nrows())
+                .map(|i| {
+                    let x = at_rows.row(i).transpose();
+                    (x.transpose() * cov * &x)[(0, 0)] * dwell[i]
+                })
+                .sum::<f64>()
+                / total;
+            let predicted = noises[k] * predicted.sqrt();
+            println!(
+                "    Monte Carlo ({runs} calibrations, at {} moments): rms {mc_rms:.4} counts against {predicted:.4} predicted at the same moments ({:+.1} %)",
+                at_rows.nrows(),
+                100.0 * (mc_rms / predicted - 1.0)
+            );
+        }
+    }
+    Ok(())
 }

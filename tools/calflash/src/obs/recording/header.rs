@@ -43,7 +43,7 @@ pub(super) struct Columns {
 }
 
 /// The scale to seconds of a timestamp column named `name`, if it is one.
-pub(super) fn timestamp(name: &str) -> Option<f64> {
+pub(crate) fn timestamp(name: &str) -> Option<f64> {
     let s = squash(name);
     let rest = ["timestamp", "time", "t"]
         .iter()
@@ -91,7 +91,7 @@ pub fn time_column(
 /// The axis (0, 1, 2) of a column of `sensor` named by `prefixes`, if it is one, with the unit
 /// its name states: a prefix, the axis letter, and a unit or nothing (`ax`, `acc_x`, `AccelX`,
 /// `gyro_z`, `wz`, `ax_mps2`, `gyro_x[dps]`).
-pub(super) fn axis(name: &str, prefixes: &[&str], sensor: Sensor) -> Option<(usize, Option<Unit>)> {
+pub(crate) fn axis(name: &str, prefixes: &[&str], sensor: Sensor) -> Option<(usize, Option<Unit>)> {
     let s = squash(name);
     prefixes.iter().find_map(|p| {
         let rest = s.strip_prefix(p)?;
@@ -100,8 +100,8 @@ pub(super) fn axis(name: &str, prefixes: &[&str], sensor: Sensor) -> Option<(usi
     })
 }
 
-pub(super) const ACCEL: [&str; 5] = ["accelerometer", "accel", "acc", "a", "raw_a"];
-pub(super) const GYRO: [&str; 6] = ["gyroscope", "gyro", "gyr", "g", "w", "omega"];
+pub(crate) const ACCEL: [&str; 5] = ["accelerometer", "accel", "acc", "a", "raw_a"];
+pub(crate) const GYRO: [&str; 6] = ["gyroscope", "gyro", "gyr", "g", "w", "omega"];
 
 /// Columns the user chose by name (`--columns t=time_us,ax=acc_x,...,temp=die_c`): each role's
 /// header name; roles not given are found by the recognised names.
