@@ -224,6 +224,20 @@ pub fn recognise(name: &str) -> Option<Column> {
     if let Some(scale) = header::timestamp(name) {
         return column(Role::T, Some((scale, time_unit(scale))));
     }
+    // The observation files' own names are SI by definition (`crate::columns`).
+    if let Some(q) = crate::mission::Quantity::all()
+        .into_iter()
+        .find(|q| q.name() == name)
+    {
+        let role = match q {
+            crate::mission::Quantity::F(k) => Role::F(k),
+            crate::mission::Quantity::W(k) => Role::W(k),
+            crate::mission::Quantity::Dw(k) => Role::Dw(k),
+            crate::mission::Quantity::Temp => Role::Temp,
+            crate::mission::Quantity::Volt => Role::Volt,
+        };
+        return column(role, Some((1.0, role.si())));
+    }
     let s = squash(name);
     for (prefix, role) in [("temp", Role::Temp), ("volt", Role::Volt)] {
         if let Some(rest) = s.strip_prefix(prefix) {
@@ -269,16 +283,18 @@ mod tests {
         let r = |n: &str| recognise(n).map(|c| (c.role, c.unit.map(|u| u.0)));
         assert_eq!(r("ts"), Some((Role::T, Some(1.0))));
         assert_eq!(r("time_ms"), Some((Role::T, Some(1e-3))));
-        assert_eq!(r("f_x"), Some((Role::F(0), None)));
+        assert_eq!(r("f_x"), Some((Role::F(0), Some(1.0))));
         assert_eq!(r("Ay"), Some((Role::F(1), None)));
         assert_eq!(r("acc_z_g"), Some((Role::F(2), Some(9.806_65))));
         assert_eq!(r("Gx"), Some((Role::W(0), None)));
         let (role, unit) = r("gyro_y_dps").unwrap();
         assert_eq!(role, Role::W(1));
         assert!((unit.unwrap() - 1f64.to_radians()).abs() < 1e-15);
-        assert_eq!(r("dw_z"), Some((Role::Dw(2), None)));
-        assert_eq!(r("temp"), Some((Role::Temp, None)));
-        assert_eq!(r("volt"), Some((Role::Volt, None)));
+        assert_eq!(r("dw_z"), Some((Role::Dw(2), Some(1.0))));
+        assert_eq!(r("temp"), Some((Role::Temp, Some(1.0))));
+        assert_eq!(r("volt"), Some((Role::Volt, Some(1.0))));
+        assert_eq!(r("ax"), Some((Role::F(0), None)));
+        assert_eq!(r("dwx_degs2"), Some((Role::Dw(0), Some(1f64.to_radians()))));
         assert_eq!(r("id"), None);
         assert_eq!(r("ax_counts"), None, "codes are not a mission");
     }

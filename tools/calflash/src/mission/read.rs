@@ -143,7 +143,13 @@ fn assign(
                 })?;
         found.push((c.clone(), k));
     }
-    for (k, name) in header.iter().enumerate() {
+    // The observation files' own names first (`f_x`, `w_x`, `dw_x`): beside them, `a_x` and
+    // `g_x` are a unit's raw codes, not the profile.
+    let canonical = |name: &str| crate::mission::Quantity::all().iter().any(|q| q.name() == name);
+    let mut order: Vec<usize> = (0..header.len()).collect();
+    order.sort_by_key(|k| !canonical(&header[*k]));
+    for k in order {
+        let name = &header[k];
         if found.iter().any(|(_, j)| *j == k) {
             continue;
         }
@@ -151,6 +157,11 @@ fn assign(
             continue;
         };
         if chosen.iter().any(|x| x.role == c.role) {
+            continue;
+        }
+        if let Some((first, _)) = found.iter().find(|(f, _)| f.role == c.role)
+            && canonical(&first.name)
+        {
             continue;
         }
         if let Some((first, _)) = found.iter().find(|(f, _)| f.role == c.role) {
@@ -223,9 +234,8 @@ fn units(found: &[(Column, usize)]) -> (Vec<String>, Vec<f64>) {
                 Role::F(_) => "specific force",
                 Role::W(_) => "rate",
                 Role::Dw(_) => "angular acceleration",
-                Role::Temp => "temperature",
-                Role::Volt => "supply voltage",
-                Role::T => "time",
+                // One unit each: nothing to assume.
+                Role::Temp | Role::Volt | Role::T => return 1.0,
             };
             let note = format!(
                 "{what}: no unit stated, read as {} (SI); state one as --mission-columns {}={}:UNIT",

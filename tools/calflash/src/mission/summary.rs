@@ -12,6 +12,8 @@ use super::{Profile, Quantity};
 
 /// Standard gravity, m/s^2.
 const G: f64 = 9.806_65;
+/// The mean square below which a segment is never a transient, g^2 (1 mg rms).
+const TRANSIENT_FLOOR: f64 = 1e-6;
 /// Bins of a histogram.
 pub const BINS: usize = 12;
 
@@ -68,6 +70,10 @@ pub struct Vibration {
     pub peak_hz: f64,
     /// `(low Hz, high Hz, mean square g^2)` in octave bands from the cut-off to Nyquist.
     pub bands: Vec<(f64, f64, f64)>,
+    /// Welch segments analysed.
+    pub segments: usize,
+    /// The start times of the segments left out as transients, s.
+    pub transients: Vec<f64>,
 }
 
 /// A profile's summary.
@@ -134,7 +140,7 @@ pub fn summarise(p: &Profile, vibration_above: f64) -> Summary {
         ),
         Some(f) => (
             (0..3)
-                .map(|k| vibration(f, k, step, vibration_above))
+                .map(|k| vibration(&p.t, f, k, step, vibration_above))
                 .collect(),
             None,
         ),
@@ -207,9 +213,12 @@ fn spin(t: &[f64], w: &[[f64; 3]], dwell: &[f64]) -> Spin {
 }
 
 /// The vibration of axis `k`: the specific force less its centred moving average over one
-/// period of the cut-off, its mean square, and its spectrum by Welch's method (Hann windows of
-/// 256 samples or fewer, half overlapped).
-fn vibration(f: &[[f64; 3]], k: usize, step: f64, above: f64) -> Vibration {
+/// period of the cut-off, in Welch segments (Hann windows whose bins are at most half the
+/// cut-off, half overlapped). Segments whose mean square is over ten times the median segment's are
+/// transients (a setback, a motor's ignition and burnout, the muzzle exit): they are counted
+/// and left out of the mean square and the spectrum, which describe the flight's steady
+/// vibration.
+fn vibration(t: &[f64], f: &[[f64; 3]], k: usize, step: f64, above: f64) -> Vibration {
     let x: Vec<f64> = f.iter().map(|v| v[k] / G).collect();
     let half = ((0.5 / above / step).round() as usize).max(1);
     let mut prefix = vec![0.0; x.len() + 1];
@@ -222,9 +231,29 @@ fn vibration(f: &[[f64; 3]], k: usize, step: f64, above: f64) -> Vibration {
             x[i] - (prefix[b] - prefix[a]) / (b - a) as f64
         })
         .collect();
-    let mean_square_g2 = v.iter().map(|e| e * e).sum::<f64>() / v.len() as f64;
-    let seg = 256.min(v.len().next_power_of_two() / 2).max(8);
-    let psd = welch(&v, seg, step);
+    // Segments long enough to resolve the cut-off (bins of at most half of it).
+    let wanted = ((2.0 / (above * step)).ceil() as usize).next_power_of_two();
+    let seg = wanted.min(v.len().next_power_of_two() / 2).max(8);
+    let segments = welch_segments(&v, seg, step);
+    let mut squares: Vec<f64> = segments.iter().map(|s| s.0).collect();
+    squares.sort_by(f64::total_cmp);
+    let median = squares.get(squares.len() / 2).copied().unwrap_or(0.0);
+    // A segment of under 1 mg rms is never a transient.
+    let steady = |ms: f64| ms <= (10.0 * median).max(TRANSIENT_FLOOR);
+    let kept: Vec<&(f64, Vec<f64>, usize)> = segments.iter().filter(|s| steady(s.0)).collect();
+    let transients: Vec<f64> = segments
+        .iter()
+        .filter(|s| !steady(s.0))
+        .map(|s| t[s.2])
+        .collect();
+    let count = kept.len().max(1) as f64;
+    let mean_square_g2 = kept.iter().map(|s| s.0).sum::<f64>() / count;
+    let mut psd = vec![0.0; seg / 2 + 1];
+    for s in &kept {
+        for (p, q) in psd.iter_mut().zip(&s.1) {
+            *p += q / count;
+        }
+    }
     let df = 1.0 / (seg as f64 * step);
     let peak = psd
         .iter()
@@ -246,7 +275,7 @@ fn vibration(f: &[[f64; 3]], k: usize, step: f64, above: f64) -> Vibration {
                 fj >= lo && fj < hi
             })
             .map(|(_, p)| p * df)
-            .sum();
+            .fold(0.0, |a, b| a + b);
         bands.push((lo, hi, ms));
         lo = hi;
     }
@@ -256,37 +285,40 @@ fn vibration(f: &[[f64; 3]], k: usize, step: f64, above: f64) -> Vibration {
         rectification_ug_per_ug_g2: mean_square_g2,
         peak_hz: peak,
         bands,
+        segments: segments.len(),
+        transients,
     }
 }
 
-/// One-sided power spectral density of `x` (sampled every `step` s), per Hz, at `j / (seg
-/// step)` Hz for `j` in `0..=seg/2`.
-fn welch(x: &[f64], seg: usize, step: f64) -> Vec<f64> {
+/// Welch's segments of `x` (sampled every `step` s), `seg` samples long, half overlapped:
+/// each segment's mean square, its one-sided power spectral density per Hz (Hann window) at
+/// `j / (seg step)` Hz for `j` in `0..=seg/2`, and its first sample.
+fn welch_segments(x: &[f64], seg: usize, step: f64) -> Vec<(f64, Vec<f64>, usize)> {
     let window: Vec<f64> = (0..seg)
         .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / seg as f64).cos())
         .collect();
     let power: f64 = window.iter().map(|w| w * w).sum();
     let fft = FftPlanner::new().plan_fft_forward(seg);
-    let mut psd = vec![0.0; seg / 2 + 1];
-    let mut count = 0usize;
+    let mut out = Vec::new();
     let mut buf = vec![Complex::new(0.0, 0.0); seg];
     let mut start = 0;
     while start + seg <= x.len() {
+        let part = &x[start..start + seg];
         for (i, b) in buf.iter_mut().enumerate() {
-            *b = Complex::new(x[start + i] * window[i], 0.0);
+            *b = Complex::new(part[i] * window[i], 0.0);
         }
         fft.process(&mut buf);
-        for (j, p) in psd.iter_mut().enumerate() {
-            *p += buf[j].norm_sqr();
-        }
-        count += 1;
+        let scale = step / power;
+        let psd = (0..=seg / 2)
+            .map(|j| {
+                buf[j].norm_sqr() * scale * if j == 0 || j == seg / 2 { 1.0 } else { 2.0 }
+            })
+            .collect();
+        let ms = part.iter().map(|v| v * v).sum::<f64>() / seg as f64;
+        out.push((ms, psd, start));
         start += seg / 2;
     }
-    let scale = step / (power * count.max(1) as f64);
-    for (j, p) in psd.iter_mut().enumerate() {
-        *p *= scale * if j == 0 || j == seg / 2 { 1.0 } else { 2.0 };
-    }
-    psd
+    out
 }
 
 #[cfg(test)]
@@ -332,6 +364,7 @@ mod tests {
             .unwrap();
         assert!((band.2 - 0.125).abs() < 0.015, "{:?}", x.bands);
         assert!(s.vibration[2].mean_square_g2 < 1e-20);
+        assert!(x.transients.is_empty());
         assert_eq!(s.spin.as_ref().unwrap().axis, 1);
         let peak = s.peak.unwrap();
         assert!(peak.value.abs() > G);
@@ -348,5 +381,40 @@ mod tests {
         assert!((fx.time_share[0] - 0.05).abs() < 1e-12);
         assert!((fx.time_share[BINS - 1] - 0.95).abs() < 1e-12);
         assert!(s.no_vibration.is_some());
+    }
+}
+
+#[cfg(test)]
+mod transients {
+    use super::*;
+
+    #[test]
+    fn a_shock_is_counted_apart_from_the_steady_vibration() {
+        // 0.1 g at 200 Hz for 4 s at 2 kHz, with a 50 g, 5 ms shock at 2 s.
+        let rate = 2_000.0;
+        let t: Vec<f64> = (0..8_000).map(|i| f64::from(i) / rate).collect();
+        let f: Vec<[f64; 3]> = t
+            .iter()
+            .map(|t| {
+                let shock = if (2.0..2.005).contains(t) { 50.0 * G } else { 0.0 };
+                [0.1 * G * (std::f64::consts::TAU * 200.0 * t).sin() + shock, 0.0, G]
+            })
+            .collect();
+        let n = t.len();
+        let p = Profile {
+            source: "shock".into(),
+            t,
+            line: (1..=n as u64).collect(),
+            f: Some(f),
+            w: None,
+            dw: None,
+            temp: None,
+            volt: None,
+            notes: Vec::new(),
+        };
+        let v = &summarise(&p, 20.0).vibration[0];
+        assert!((v.mean_square_g2 - 0.005).abs() < 0.0005, "{v:?}");
+        assert!(!v.transients.is_empty() && v.transients.len() < 6, "{v:?}");
+        assert!(v.transients.iter().all(|t| (1.8..2.1).contains(t)), "{v:?}");
     }
 }

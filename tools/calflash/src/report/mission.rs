@@ -83,7 +83,7 @@ pub fn text(p: &Profile, s: &Summary, k2: Option<[f64; 3]>) -> String {
         None => {
             let _ = writeln!(
                 o,
-                "\n  Vibration above {} Hz (specific force less its moving average):",
+                "\n  Vibration above {} Hz (specific force less its moving average; in a rolling unit the transverse\n  rigid-body forces turn at the spin rate and count here too):",
                 s.vibration_above
             );
             for v in &s.vibration {
@@ -111,6 +111,14 @@ pub fn text(p: &Profile, s: &Summary, k2: Option<[f64; 3]>) -> String {
                     v.peak_hz,
                     bands.join(", ")
                 );
+                if let (Some(first), Some(last)) = (v.transients.first(), v.transients.last()) {
+                    let _ = writeln!(
+                        o,
+                        "       {} of {} segments left out as transients (over ten times the median's mean square), from t = {first:.3} s to {last:.3} s",
+                        v.transients.len(),
+                        v.segments
+                    );
+                }
             }
         }
     }

@@ -1,6 +1,7 @@
 //! `calflash simulate`: a virtual sensor with known true coefficients and noise, driven
 //! through a test plan, writing an observation file the workflows read.
 
+pub mod flight;
 pub mod plan;
 pub mod px4;
 pub mod ramp;

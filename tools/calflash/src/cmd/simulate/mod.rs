@@ -3,6 +3,8 @@
 use crate::cmd::Failure;
 use std::path::PathBuf;
 
+mod flight;
+
 use crate::files::{Paths, Staged};
 use clap::Args;
 
@@ -18,7 +20,7 @@ pub struct SimulateArgs {
     /// Plan items (repeatable): head:N, tumble:6|12|18|24|26, sphere:N, rate:LO:HI:N (rad/s),
     /// diagonal:LO:HI:N (rad/s, about the 45-degree diagonals), centrifuge:LO:HI:N (g),
     /// sweep:LO:HI:N, fine:LO:HI:N.
-    #[arg(long, required_unless_present_any = ["plan_file", "spin", "rest"])]
+    #[arg(long, required_unless_present_any = ["plan_file", "spin", "rest", "flight"])]
     pub plan: Vec<String>,
     /// An IMU at rest and being handled, as the raw counts of this blob's device correction
     /// (for `calflash health` and `allan`): rests of `--hold` seconds in `--poses` poses, one
@@ -48,6 +50,20 @@ pub struct SimulateArgs {
     /// counts (noisy, rounded), for `calflash apply --time-column t --reference`.
     #[arg(long, conflicts_with_all = ["plan", "plan_file"])]
     pub spin: Option<String>,
+    /// A flight of an IMU (a mission profile with the unit's raw codes): `shell` or `rocket`,
+    /// then `:KEY=VALUE,...` for what differs from the default flight. A shell: setback (g,
+    /// 15000), velocity (m/s, 800), spin (rev/s, 300), elevation (degrees, 45), tip-off (rad/s,
+    /// 5), seconds (60), conditioned (C, 21), altitude (m, 0). A rocket: thrust (N, 1800), burn
+    /// (s, 6), elevation (84), rail (m, 12), cant (0.077), seconds (300), conditioned (25),
+    /// altitude. The file has a row per sample: `t`, the true `f_*`, `w_*`, `dw_*`, `temp`,
+    /// `volt` (the profile `calflash mission` and `--mission` read) and the raw `a_*`, `g_*`.
+    #[arg(long, conflicts_with_all = ["plan", "plan_file", "spin", "rest"])]
+    pub flight: Option<String>,
+    /// With --flight: write the flight's truth here (CSV: t, position x y z in m downrange,
+    /// left and up from the launch point, velocity vx vy vz, attitude qw qx qy qz body to
+    /// Earth).
+    #[arg(long, requires = "flight")]
+    pub flight_truth: Option<PathBuf>,
     /// Samples per second of a spin-rig flight (2000 unless stated) or of a unit at rest (1000).
     #[arg(long, value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
     pub sample_rate: Option<f64>,
@@ -189,11 +205,22 @@ fn coning(text: &str) -> Result<(f64, f64), String> {
     Ok((a.to_radians(), f))
 }
 
-/// A spin-rig flight of an IMU, written as CSV.
+/// The IMU a flight runs through: `--truth`, or the default unit centred on `--codes`.
+fn imu_truth(args: &SimulateArgs) -> Result<truth::ImuTruth, Failure> {
+    let mut truth = load::<truth::ImuTruth>(args.truth.as_ref())?;
+    if args.truth.is_none()
+        && let Sensor::Imu(t) = Sensor::Imu(Box::new(truth.clone())).with_codes(args.codes)
+    {
+        truth = *t;
+    }
+    Ok(truth)
+}
+
 /// The most samples a simulated flight holds (about 2 GB of CSV).
 const MAX_FLIGHT_SAMPLES: f64 = 1e7;
 
-fn flight(args: &SimulateArgs, profile: &str) -> Result<(), Failure> {
+/// A spin-rig flight of an IMU, written as CSV.
+fn spin_rig(args: &SimulateArgs, profile: &str) -> Result<(), Failure> {
     use crate::sim::spin;
     let sample_rate = args.sample_rate.unwrap_or(2000.0);
     if args.sensor != SensorKind::Imu {
@@ -231,12 +258,7 @@ fn flight(args: &SimulateArgs, profile: &str) -> Result<(), Failure> {
             .into());
         }
     };
-    let mut truth = load::<truth::ImuTruth>(args.truth.as_ref())?;
-    if args.truth.is_none()
-        && let Sensor::Imu(t) = Sensor::Imu(Box::new(truth.clone())).with_codes(args.codes)
-    {
-        truth = *t;
-    }
+    let truth = imu_truth(args)?;
     let run = spin::SpinRun {
         segments,
         axis,
@@ -363,12 +385,16 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         .input("--rest", args.rest.as_deref())
         .output("-o", Some(&args.output))
         .output("--write-truth", args.write_truth.as_deref())
+        .output("--flight-truth", args.flight_truth.as_deref())
         .check()?;
+    if let Some(spec) = &args.flight {
+        return flight::run(args, spec);
+    }
     if let Some(blob) = &args.rest {
         return rest(args, blob);
     }
     if let Some(profile) = &args.spin {
-        return flight(args, profile);
+        return spin_rig(args, profile);
     }
     let single = matches!(
         args.sensor,
