@@ -289,6 +289,23 @@ fn start(f: &DMatrix<f64>, n: usize, rng: &mut rand_chacha::ChaCha8Rng) -> Optio
     Some(state.design)
 }
 
+/// The columns of all blocks side by side, each distinct column once; `None` for one block.
+fn distinct_columns(fs: &[DMatrix<f64>]) -> Option<DMatrix<f64>> {
+    if fs.len() < 2 {
+        return None;
+    }
+    let mut kept: Vec<DVector<f64>> = Vec::new();
+    for f in fs {
+        for c in f.column_iter() {
+            let c = c.into_owned();
+            if !kept.iter().any(|k| (k - &c).amax() <= 1e-12 * c.amax()) {
+                kept.push(c);
+            }
+        }
+    }
+    Some(DMatrix::from_columns(&kept))
+}
+
 /// Finds an exact `criterion`-optimal design of `opts.n` points from the candidate model rows
 /// `f` (`N x p`). `w` is the region's moment matrix for I (ignored otherwise). `progress(done,
 /// total)` is called after each restart.
@@ -326,6 +343,34 @@ pub fn optimize_blocks(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Found, ExchangeError> {
     let nc = fs[0].nrows();
+    // Each column scaled to its largest candidate value: a model in SI over a wide range (a
+    // cubic in rates to 2,000 rad/s spans 1 to 8e9) is otherwise too ill-conditioned for the
+    // rank-one updates. With `X = X' S`, `(X'X)^-1 = S^-1 C' S^-1` and `tr(C W) = tr(C' W')`
+    // with `W' = S^-1 W S^-1`: every criterion's optimum is unchanged, and D's value is scaled
+    // back at the end.
+    let scales: Vec<Vec<f64>> = fs
+        .iter()
+        .map(|f| {
+            f.column_iter()
+                .map(|c| {
+                    let m = c.amax();
+                    if m > 0.0 && m.is_finite() { m } else { 1.0 }
+                })
+                .collect()
+        })
+        .collect();
+    let scaled: Vec<DMatrix<f64>> = fs
+        .iter()
+        .zip(&scales)
+        .map(|(f, sc)| {
+            let mut f = f.clone();
+            for (mut c, s) in f.column_iter_mut().zip(sc) {
+                c /= *s;
+            }
+            f
+        })
+        .collect();
+    let fs = &scaled[..];
     for f in fs {
         let p = f.ncols();
         if opts.n < p {
@@ -351,10 +396,27 @@ pub fn optimize_blocks(
                     .unwrap_or_else(|| DMatrix::identity(f.ncols(), f.ncols())),
             ),
         })
+        .zip(&scales)
+        .map(|(w, sc)| {
+            w.map(|w| DMatrix::from_fn(w.nrows(), w.ncols(), |i, j| w[(i, j)] / (sc[i] * sc[j])))
+        })
         .collect();
-    // The start is built on the widest model (it estimates the others' columns too when the
-    // blocks share their inputs); the exchange then works on all.
+    // det(X'X)^(1/p) of the unscaled rows, from the scaled ones'.
+    let unscale_d: f64 = scales
+        .iter()
+        .map(|sc| (sc.iter().map(|s| 2.0 * s.ln()).sum::<f64>() / sc.len() as f64).exp())
+        .product();
+    // The start is built on the blocks' columns together (each distinct column once), so that
+    // it estimates every block (a triad's axes each have their own nonlinear terms); when
+    // those are too many for the plan or dependent, on the widest block. The exchange then
+    // works on all.
     let widest = (0..fs.len()).max_by_key(|b| fs[*b].ncols()).unwrap_or(0);
+    let together = distinct_columns(fs).filter(|u| {
+        u.ncols() <= opts.n
+            && crate::stats::decompose::singular_values(u.clone())
+                .is_ok_and(|sv| sv.iter().filter(|s| **s > 1e-10 * sv.max()).count() == u.ncols())
+    });
+    let start_rows = together.as_ref().unwrap_or(&fs[widest]);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed);
     let mut best: Option<Found> = None;
     let restarts = opts.restarts.max(1);
@@ -364,7 +426,7 @@ pub fn optimize_blocks(
     };
     for r in 0..restarts {
         progress(r, restarts);
-        let Some(design) = start(&fs[widest], opts.n, &mut rng) else {
+        let Some(design) = start(start_rows, opts.n, &mut rng) else {
             continue;
         };
         let states: Option<Vec<State<'_>>> = fs
@@ -419,7 +481,11 @@ pub fn optimize_blocks(
                 break;
             }
         }
-        let mut value = if criterion == Criterion::D { 1.0 } else { 0.0 };
+        let mut value = if criterion == Criterion::D {
+            unscale_d
+        } else {
+            0.0
+        };
         for st in &mut states {
             st.refresh();
             let v = st.value(criterion);

@@ -352,3 +352,104 @@ mod tests {
         assert!(found.listed.is_some());
     }
 }
+
+#[cfg(test)]
+mod mission_optima {
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::design::models;
+    use crate::mission::Profile;
+
+    /// A gyro's mission at the rates `w_x` (one sample each, equally spaced in time).
+    fn mission(rates: &[f64]) -> Arc<Profile> {
+        let n = rates.len();
+        Arc::new(Profile {
+            source: "mission".into(),
+            t: (0..n).map(|i| i as f64).collect(),
+            line: (1..=n as u64).collect(),
+            f: None,
+            w: Some(rates.iter().map(|r| [*r, 0.0, 0.0]).collect()),
+            dw: Some(vec![[0.0; 3]; n]),
+            temp: None,
+            volt: None,
+            notes: Vec::new(),
+        })
+    }
+
+    fn space(profile: Arc<Profile>) -> Space {
+        Space {
+            unit: Unit::SingleGyro,
+            temps: vec![25.0],
+            volts: vec![5.0],
+            region: Vec::new(),
+            limits: Vec::new(),
+            mission: Some(profile),
+        }
+    }
+
+    fn plan_over(model: &str, profile: Arc<Profile>, n: usize) -> (Vec<f64>, f64) {
+        let blocks = models::blocks(model, true).unwrap();
+        let s = Search {
+            n,
+            criterion: Criterion::I,
+            candidates: Vec::new(),
+            grid: vec!["input=-1:1:21".into()],
+            restarts: 20,
+            seed: 3,
+        };
+        let space = space(profile);
+        let found = s.run(Method::Fedorov, &space, &blocks, |_| {}).unwrap();
+        let mut rates: Vec<f64> = (0..n).map(|r| found.plan.value(r, "input")).collect();
+        rates.sort_by(f64::total_cmp);
+        let c = space
+            .evaluate_plan("found", &found.plan, &blocks, &found.plan)
+            .unwrap();
+        let (w, _, _) = space
+            .mission_weight(&blocks[0], found.listed.as_ref().unwrap(), "the candidates")
+            .unwrap()
+            .unwrap();
+        let value = crate::mission::weight::mean_variance(&c[0].unscaled_covariance, n, &w.inside);
+        (rates, value)
+    }
+
+    #[test]
+    fn a_line_for_a_flight_at_one_rate_leans_three_to_one_towards_it() {
+        // B = [[1, m], [m, m^2]] with m = 1/2: the I-optimal weights at -1 and +1 are 1/4 and
+        // 3/4 (a = w+ - w- solves m a^2 - (1 + m^2) a + m = 0), and n tr(C B) = 1 exactly.
+        let (rates, value) = plan_over("~ 1 + input", mission(&[0.5; 10]), 40);
+        assert_eq!(
+            rates.iter().filter(|r| **r == -1.0).count(),
+            10,
+            "{rates:?}"
+        );
+        assert_eq!(rates.iter().filter(|r| **r == 1.0).count(), 30, "{rates:?}");
+        assert!((value - 1.0).abs() < 1e-9, "{value}");
+    }
+
+    #[test]
+    fn a_quadratic_for_a_uniform_flight_is_the_textbook_i_optimum() {
+        // Rates spread evenly over [-1, 1]: the I-optimal weights are 1/4, 1/2, 1/4 at -1, 0, 1.
+        let rates: Vec<f64> = (0..=2000).map(|k| -1.0 + f64::from(k) / 1000.0).collect();
+        let (plan, value) = plan_over("~ 1 + input + input^2", mission(&rates), 40);
+        let count = |x: f64| plan.iter().filter(|r| (**r - x).abs() < 1e-12).count();
+        assert_eq!(
+            (count(-1.0), count(0.0), count(1.0)),
+            (10, 20, 10),
+            "{plan:?}"
+        );
+        // The continuous optimum's value: tr(M^-1 B) with M = [[1,0,1/2],[0,1/2,0],[1/2,0,1/2]].
+        let m =
+            nalgebra::DMatrix::from_row_slice(3, 3, &[1.0, 0.0, 0.5, 0.0, 0.5, 0.0, 0.5, 0.0, 0.5]);
+        let f = nalgebra::DMatrix::from_fn(rates.len(), 3, |i, j| rates[i].powi(j as i32));
+        // Trapezoid weights: the end samples stand for half a step.
+        let mut b = f.transpose() * &f;
+        for i in [0, rates.len() - 1] {
+            let r = f.row(i).transpose();
+            b -= 0.5 * &r * r.transpose();
+        }
+        b /= (rates.len() - 1) as f64;
+        let want = (m.try_inverse().unwrap() * b).trace();
+        assert!((value / want - 1.0).abs() < 1e-9, "{value} against {want}");
+    }
+}

@@ -240,10 +240,13 @@ pub fn describe_beyond(w: &Weight, reach: &Reach) -> String {
         .zip(&reach.bounds)
         .filter(|((_, lo, hi), _)| lo + hi > 0.0)
         .map(|((v, lo, hi), (_, a, b))| {
+            use crate::report::terminal::num;
             format!(
-                "{v} {:.1} % of the time below {a} and {:.1} % above {b}",
-                100.0 * lo,
-                100.0 * hi
+                "{v} {} % of the time below {} and {} % above {}",
+                percent(*lo),
+                num(*a),
+                percent(*hi),
+                num(*b)
             )
         })
         .collect();
@@ -251,6 +254,24 @@ pub fn describe_beyond(w: &Weight, reach: &Reach) -> String {
         "nothing beyond".to_string()
     } else {
         parts.join("; ")
+    }
+}
+
+/// A share as a percentage a reader can tell from 0 and 100: one decimal between 1 and 99 %,
+/// three significant digits nearer the ends.
+#[must_use]
+pub fn percent(share: f64) -> String {
+    let p = 100.0 * share;
+    if p == 0.0 || p == 100.0 {
+        format!("{p:.0}")
+    } else if (1.0..=99.0).contains(&p) {
+        format!("{p:.1}")
+    } else if p < 1.0 {
+        format!("{p:.2e}")
+    } else {
+        format!("{:.3}", 100.0 - (100.0 - p).max(0.001))
+            .trim_end_matches('0')
+            .to_string()
     }
 }
 

@@ -18,8 +18,9 @@ pub const MAX_SPECIFIC_FORCE: f64 = 1.0e6;
 /// The largest rate, rad/s (5,000 rev/s: beyond a rifle bullet's spin).
 pub const MAX_RATE: f64 = 2.0 * std::f64::consts::PI * 5_000.0;
 /// The largest angular acceleration an airframe makes, rad/s^2 (a shell's spin rises to
-/// 2,000 rad/s over a few milliseconds in the bore: a few 1e5).
-pub const MAX_ANGULAR_ACCELERATION: f64 = 1.0e7;
+/// 2,000 rad/s over a few milliseconds in the bore: a few 1e5; at 100 Hz a jump of 10,000
+/// rad/s from one sample to the next).
+pub const MAX_ANGULAR_ACCELERATION: f64 = 1.0e6;
 /// The largest rate of change of specific force, m/s^3 (a 30,000 g setback rising in 0.1 ms
 /// is 3e9).
 pub const MAX_JERK: f64 = 1.0e10;

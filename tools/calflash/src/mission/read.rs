@@ -145,7 +145,11 @@ fn assign(
     }
     // The observation files' own names first (`f_x`, `w_x`, `dw_x`): beside them, `a_x` and
     // `g_x` are a unit's raw codes, not the profile.
-    let canonical = |name: &str| crate::mission::Quantity::all().iter().any(|q| q.name() == name);
+    let canonical = |name: &str| {
+        crate::mission::Quantity::all()
+            .iter()
+            .any(|q| q.name() == name)
+    };
     let mut order: Vec<usize> = (0..header.len()).collect();
     order.sort_by_key(|k| !canonical(&header[*k]));
     for k in order {

@@ -310,9 +310,7 @@ fn welch_segments(x: &[f64], seg: usize, step: f64) -> Vec<(f64, Vec<f64>, usize
         fft.process(&mut buf);
         let scale = step / power;
         let psd = (0..=seg / 2)
-            .map(|j| {
-                buf[j].norm_sqr() * scale * if j == 0 || j == seg / 2 { 1.0 } else { 2.0 }
-            })
+            .map(|j| buf[j].norm_sqr() * scale * if j == 0 || j == seg / 2 { 1.0 } else { 2.0 })
             .collect();
         let ms = part.iter().map(|v| v * v).sum::<f64>() / seg as f64;
         out.push((ms, psd, start));
@@ -396,8 +394,16 @@ mod transients {
         let f: Vec<[f64; 3]> = t
             .iter()
             .map(|t| {
-                let shock = if (2.0..2.005).contains(t) { 50.0 * G } else { 0.0 };
-                [0.1 * G * (std::f64::consts::TAU * 200.0 * t).sin() + shock, 0.0, G]
+                let shock = if (2.0..2.005).contains(t) {
+                    50.0 * G
+                } else {
+                    0.0
+                };
+                [
+                    0.1 * G * (std::f64::consts::TAU * 200.0 * t).sin() + shock,
+                    0.0,
+                    G,
+                ]
             })
             .collect();
         let n = t.len();

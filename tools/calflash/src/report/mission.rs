@@ -187,13 +187,13 @@ pub fn plans_text(m: &OverMission) -> String {
     for (b, (label, inside, beyond)) in m.blocks.iter().enumerate() {
         let _ = writeln!(
             o,
-            "  {}{:.1} % of the flight within what {} reach; beyond: {beyond}",
+            "  {}{} % of the flight within what {} reach; beyond: {beyond}",
             if m.blocks.len() > 1 {
                 format!("axis {label}: ")
             } else {
                 String::new()
             },
-            100.0 * inside,
+            crate::design::space::percent(*inside),
             m.reach
         );
         let _ = writeln!(
@@ -205,7 +205,7 @@ pub fn plans_text(m: &OverMission) -> String {
         for p in &m.plans {
             let beyond = |v: f64| {
                 if *inside < 1.0 {
-                    format!("{:.4}", v.sqrt())
+                    crate::report::terminal::num(v.sqrt())
                 } else {
                     "-".to_string()
                 }

@@ -291,16 +291,18 @@ fn over_mission(
             String::new()
         };
         println!(
-            "  {label}{:.1} % of the flight within reach: expected error rms {rms:.4} counts, worst {:.4}",
-            100.0 * w.share_inside,
+            "  {label}{} % of the flight within reach: expected error rms {rms:.4} counts, worst {:.4}",
+            space::percent(w.share_inside),
             noises[k] * worst.sqrt()
         );
         if w.share_inside < 1.0 {
             println!(
-                "    beyond ({}): rms {:.4} counts, worst {:.4}, extrapolated",
+                "    beyond ({}): rms {} counts, worst {}, extrapolated",
                 space::describe_beyond(&w, &reach),
-                noises[k] * weight::mean_variance(cov, 1, &w.outside).sqrt(),
-                noises[k] * worst_beyond.sqrt()
+                crate::report::terminal::num(
+                    noises[k] * weight::mean_variance(cov, 1, &w.outside).sqrt()
+                ),
+                crate::report::terminal::num(noises[k] * worst_beyond.sqrt())
             );
         }
         if let Some(runs) = a.monte_carlo {

@@ -87,7 +87,11 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
     let range = flown.samples.last().map_or(0.0, |s| s.r[0]);
     println!(
         "calflash simulate: a {} flight, {} samples at {rate} Hz, written to {}",
-        if matches!(launch, Launch::Shell(_)) { "shell" } else { "rocket" },
+        if matches!(launch, Launch::Shell(_)) {
+            "shell"
+        } else {
+            "rocket"
+        },
         flown.samples.len(),
         args.output.display()
     );

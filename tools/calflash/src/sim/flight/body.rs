@@ -75,7 +75,10 @@ impl Airframe {
     /// The thrust at time `t`, N.
     #[must_use]
     pub fn thrust_at(&self, t: f64) -> f64 {
-        if self.thrust.is_empty() || t < self.thrust[0].0 || t > self.thrust[self.thrust.len() - 1].0 {
+        if self.thrust.is_empty()
+            || t < self.thrust[0].0
+            || t > self.thrust[self.thrust.len() - 1].0
+        {
             return 0.0;
         }
         interpolate(&self.thrust, t)

@@ -102,13 +102,29 @@ fn the_epicyclic_rates_and_the_stability_factor_are_the_linear_theorys() {
     let (fast, slow) = yaw_rates(&shell, 4.0, 2e-4);
     let air = atmosphere::standard(0.0);
     let spin = std::f64::consts::TAU * shell.muzzle_spin;
-    let theory = theory::epicyclic(&shell.airframe, shell.muzzle_velocity, spin, air.density, 0.0)
-        .unwrap();
-    assert!((fast / theory.fast - 1.0).abs() < 0.005, "fast {fast} against {theory:?}");
-    assert!((slow / theory.slow - 1.0).abs() < 0.01, "slow {slow} against {theory:?}");
+    let theory = theory::epicyclic(
+        &shell.airframe,
+        shell.muzzle_velocity,
+        spin,
+        air.density,
+        0.0,
+    )
+    .unwrap();
+    assert!(
+        (fast / theory.fast - 1.0).abs() < 0.005,
+        "fast {fast} against {theory:?}"
+    );
+    assert!(
+        (slow / theory.slow - 1.0).abs() < 0.01,
+        "slow {slow} against {theory:?}"
+    );
     // The rates give the stability factor: Sg = (f + s)^2 / (4 f s).
     let sg = (fast + slow).powi(2) / (4.0 * fast * slow);
-    assert!((sg / theory.sg - 1.0).abs() < 0.01, "Sg {sg} against {}", theory.sg);
+    assert!(
+        (sg / theory.sg - 1.0).abs() < 0.01,
+        "Sg {sg} against {}",
+        theory.sg
+    );
     assert!(theory.sg > 1.0 && theory.fast_damping < 0.0 && theory.slow_damping < 0.0);
 }
 
@@ -131,11 +147,15 @@ fn the_spin_decays_exponentially_at_the_spin_damping_rate() {
     let (first, last) = (flight.samples[muzzle], *flight.samples.last().unwrap());
     let af = &shell.airframe;
     let rho = atmosphere::standard(0.0).density;
-    let rate = 0.5 * rho * shell.muzzle_velocity * af.area() * af.diameter.powi(2)
-        * af.spin_damping
-        / af.ix;
+    let rate =
+        0.5 * rho * shell.muzzle_velocity * af.area() * af.diameter.powi(2) * af.spin_damping
+            / af.ix;
     let want = first.w[0] * (rate * (last.t - first.t)).exp();
-    assert!((last.w[0] / want - 1.0).abs() < 1e-6, "{} against {want}", last.w[0]);
+    assert!(
+        (last.w[0] / want - 1.0).abs() < 1e-6,
+        "{} against {want}",
+        last.w[0]
+    );
     assert!(last.w[0] < first.w[0]);
 }
 
@@ -168,10 +188,19 @@ fn a_rockets_fins_roll_it_at_their_steady_rate() {
     let burnout = rocket.airframe.burnout();
     let af = &rocket.airframe;
     let mut checked = 0;
-    for s in flight.samples.iter().filter(|s| s.t > burnout + 1.0 && s.t < burnout + 6.0) {
+    for s in flight
+        .samples
+        .iter()
+        .filter(|s| s.t > burnout + 1.0 && s.t < burnout + 6.0)
+    {
         let speed = Vector3::from(s.v).norm();
         let steady = -af.roll_drive * speed / (af.spin_damping * af.diameter);
-        assert!((s.w[0] / steady - 1.0).abs() < 0.05, "{} against {steady} at {}", s.w[0], s.t);
+        assert!(
+            (s.w[0] / steady - 1.0).abs() < 0.05,
+            "{} against {steady} at {}",
+            s.w[0],
+            s.t
+        );
         checked += 1;
     }
     assert!(checked > 1000);

@@ -80,13 +80,7 @@ pub struct FreeFlight {
 }
 
 /// Flies `af` freely from `from`, appending one sample per step to `out` and the events.
-pub fn fly(
-    af: &Airframe,
-    world: &World,
-    thermal: &Thermal,
-    from: &FreeFlight,
-    out: &mut Flight,
-) {
+pub fn fly(af: &Airframe, world: &World, thermal: &Thermal, from: &FreeFlight, out: &mut Flight) {
     let mut s = from.start;
     let mut t = from.t0;
     let mut temp = from.temp;

@@ -106,13 +106,25 @@ impl Rocket {
                 q,
                 w: Vector3::zeros(),
             };
-            out.samples.push(sample(t, &s, held(&q, a), Vector3::zeros(), self.conditioned));
+            out.samples.push(sample(
+                t,
+                &s,
+                held(&q, a),
+                Vector3::zeros(),
+                self.conditioned,
+            ));
             for j in 0..RAIL_SUBSTEPS {
                 // Runge-Kutta on (x, v).
                 let tj = t + j as f64 * h;
                 let (k1x, k1v) = (v, along(tj, x, v));
-                let (k2x, k2v) = (v + 0.5 * h * k1v, along(tj + 0.5 * h, x + 0.5 * h * k1x, v + 0.5 * h * k1v));
-                let (k3x, k3v) = (v + 0.5 * h * k2v, along(tj + 0.5 * h, x + 0.5 * h * k2x, v + 0.5 * h * k2v));
+                let (k2x, k2v) = (
+                    v + 0.5 * h * k1v,
+                    along(tj + 0.5 * h, x + 0.5 * h * k1x, v + 0.5 * h * k1v),
+                );
+                let (k3x, k3v) = (
+                    v + 0.5 * h * k2v,
+                    along(tj + 0.5 * h, x + 0.5 * h * k2x, v + 0.5 * h * k2v),
+                );
                 let (k4x, k4v) = (v + h * k3v, along(tj + h, x + h * k3x, v + h * k3v));
                 x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
                 v = (v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)).max(0.0);

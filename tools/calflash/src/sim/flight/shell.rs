@@ -88,7 +88,8 @@ impl Default for Shell {
 fn pulse(u: f64) -> (f64, f64, f64) {
     const PEAK: f64 = 16.0 / 729.0;
     let v = u * u * (1.0 - u).powi(4);
-    let i1 = u.powi(3) / 3.0 - u.powi(4) + 1.2 * u.powi(5) - 2.0 * u.powi(6) / 3.0 + u.powi(7) / 7.0;
+    let i1 =
+        u.powi(3) / 3.0 - u.powi(4) + 1.2 * u.powi(5) - 2.0 * u.powi(6) / 3.0 + u.powi(7) / 7.0;
     let i2 = u.powi(4) / 12.0 - u.powi(5) / 5.0 + u.powi(6) / 5.0 - 2.0 * u.powi(7) / 21.0
         + u.powi(8) / 56.0;
     (v / PEAK, i1 / PEAK, i2 / PEAK)
@@ -163,11 +164,7 @@ impl Shell {
             r: q * Vector3::x() * barrel,
             v: q * Vector3::x() * self.muzzle_velocity,
             q,
-            w: Vector3::new(
-                std::f64::consts::TAU * self.muzzle_spin,
-                self.tip_off,
-                0.0,
-            ),
+            w: Vector3::new(std::f64::consts::TAU * self.muzzle_spin, self.tip_off, 0.0),
         };
         let world = World {
             gravity: self.gravity,
@@ -175,7 +172,8 @@ impl Shell {
         };
         // From the muzzle to the next sampling instant.
         let t0 = k as f64 * dt;
-        let (start, _) = super::body::step(&self.airframe, &world, &start, bore_time, t0 - bore_time);
+        let (start, _) =
+            super::body::step(&self.airframe, &world, &start, bore_time, t0 - bore_time);
         let from = FreeFlight {
             start,
             t0,

@@ -1,8 +1,8 @@
 //! `--flight KIND[:KEY=VALUE,...]`: which flight, and what differs from its defaults.
 
+use super::Flight;
 use super::rocket::Rocket;
 use super::shell::Shell;
-use super::Flight;
 
 /// A flight to simulate.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,7 +58,9 @@ impl Launch {
                 .ok()
                 .filter(|v: &f64| v.is_finite())
                 .ok_or_else(|| bad(format!("`{item}`: `{}` is not a number", value.trim())))?;
-            launch.set(key.trim(), value).map_err(|why| bad(format!("`{item}`: {why}")))?;
+            launch
+                .set(key.trim(), value)
+                .map_err(|why| bad(format!("`{item}`: {why}")))?;
         }
         Ok(launch)
     }
@@ -74,7 +76,9 @@ impl Launch {
         match self {
             Self::Shell(s) => match key {
                 "setback" => s.setback_g = within(100.0, 100_000.0, "the setback (g)")?,
-                "velocity" => s.muzzle_velocity = within(50.0, 2_000.0, "the muzzle velocity (m/s)")?,
+                "velocity" => {
+                    s.muzzle_velocity = within(50.0, 2_000.0, "the muzzle velocity (m/s)")?
+                }
                 "spin" => s.muzzle_spin = within(1.0, 1_000.0, "the muzzle spin (rev/s)")?,
                 "elevation" => s.elevation = within(0.0, 89.0, "the elevation (degrees)")?,
                 "tip-off" => s.tip_off = within(0.0, 50.0, "the tip-off rate (rad/s)")?,
@@ -101,7 +105,9 @@ impl Launch {
                 "conditioned" => r.conditioned = within(-60.0, 80.0, "the conditioning (C)")?,
                 "altitude" => r.altitude = within(-400.0, 5_000.0, "the altitude (m)")?,
                 other => {
-                    return Err(format!("a rocket has no `{other}`; its keys: {ROCKET_KEYS}"));
+                    return Err(format!(
+                        "a rocket has no `{other}`; its keys: {ROCKET_KEYS}"
+                    ));
                 }
             },
         }
@@ -155,7 +161,10 @@ mod tests {
         let Launch::Shell(s) = Launch::parse("shell:setback=20000, spin=250").unwrap() else {
             panic!()
         };
-        assert_eq!((s.setback_g, s.muzzle_spin, s.muzzle_velocity), (20_000.0, 250.0, 800.0));
+        assert_eq!(
+            (s.setback_g, s.muzzle_spin, s.muzzle_velocity),
+            (20_000.0, 250.0, 800.0)
+        );
         let Launch::Rocket(r) = Launch::parse("rocket:thrust=2500,burn=4").unwrap() else {
             panic!()
         };

@@ -1,0 +1,383 @@
+//! Missions end to end: a profile read and checked (each bad input named by line and column),
+//! simulated flights read back as missions, the real Hedy rocket flight (skipped with a notice
+//! when `../shared` is absent), and plans designed and judged for a mission.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::calflash;
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A still profile at 100 Hz with one line replaced.
+fn profile(dir: &Path, bad: Option<(usize, &str)>) -> PathBuf {
+    let mut text = String::from("t,ax,ay,az,gx,gy,gz\n");
+    for i in 0..50u32 {
+        let line = match bad {
+            Some((k, l)) if k == i as usize => l.to_string(),
+            _ => format!("{},0,0,9.81,0,0,0.1", f64::from(i) * 0.01),
+        };
+        text.push_str(&line);
+        text.push('\n');
+    }
+    write(dir, "p.csv", &text)
+}
+
+#[test]
+fn a_profile_that_is_not_a_flight_is_named_by_line_and_column() {
+    let d = tempfile::tempdir().unwrap();
+    for (bad, says) in [
+        (
+            (10, "0.05,0,0,9.81,0,0,0.1"),
+            "line 12: time 0.05 s is not after the previous sample's 0.09 s",
+        ),
+        (
+            (7, "0.07,0,NaN,9.81,0,0,0.1"),
+            "line 9, column `ay`: `NaN` is not a finite number",
+        ),
+        (
+            (7, "0.07,0,0,9.81,0,0"),
+            "line 9: 6 fields where the header has 7",
+        ),
+        (
+            (20, "0.2,0,0,9.81,0,0,20000"),
+            "line 22, column `gz`: from 0.1 to 20000 rad/s in 0.01",
+        ),
+        (
+            (20, "0.2,0,0,9.81e7,0,0,0.1"),
+            "line 22, column `az`: 98100000 m/s^2 is beyond what a flight can make",
+        ),
+    ] {
+        let p = profile(d.path(), Some(bad));
+        let (code, _, err) = calflash(d.path(), &["mission", p.to_str().unwrap()]);
+        assert_ne!(code, 0, "{bad:?}");
+        assert!(err.contains(says), "{bad:?}: {err}");
+        assert!(err.contains("p.csv"), "{err}");
+    }
+    // A value beyond reason in an unstated unit says which unit was assumed and how to state one.
+    let p = profile(d.path(), Some((20, "0.2,0,0,9.81e7,0,0,0.1")));
+    let (_, _, err) = calflash(d.path(), &["mission", p.to_str().unwrap()]);
+    assert!(
+        err.contains("m/s^2 was assumed: state it as --mission-columns fz=az:UNIT"),
+        "{err}"
+    );
+    // Part of a triad, and a missing time column.
+    let part = write(d.path(), "part.csv", "t,ax,ay\n0,1,2\n0.1,1,2\n");
+    let (_, _, err) = calflash(d.path(), &["mission", part.to_str().unwrap()]);
+    assert!(
+        err.contains("the specific force has fx, fy but not fz"),
+        "{err}"
+    );
+    let untimed = write(d.path(), "untimed.csv", "ax,ay,az\n0,1,2\n0,1,2\n");
+    let (_, _, err) = calflash(d.path(), &["mission", untimed.to_str().unwrap()]);
+    assert!(err.contains("no time column"), "{err}");
+    // A good one: the units assumed are said, the spin axis found.
+    let p = profile(d.path(), None);
+    let (code, out, err) = calflash(d.path(), &["mission", p.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("specific force: no unit stated, read as m/s^2 (SI)"),
+        "{out}"
+    );
+    assert!(
+        out.contains("rate: no unit stated, read as rad/s (SI)"),
+        "{out}"
+    );
+    assert!(out.contains("Spin about z"), "{out}");
+    // Chosen columns with units: deg/s read as such.
+    let (code, out, _) = calflash(
+        d.path(),
+        &[
+            "mission",
+            p.to_str().unwrap(),
+            "--mission-columns",
+            "wz=gz:deg/s",
+        ],
+    );
+    assert_eq!(code, 0);
+    assert!(out.contains("w_z          0.0017"), "{out}");
+}
+
+#[test]
+fn a_simulated_shell_reads_back_as_its_mission() {
+    let d = tempfile::tempdir().unwrap();
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--flight",
+            "shell:seconds=1,setback=12000,spin=250",
+            "-o",
+            "shell.csv",
+            "--flight-truth",
+            "truth.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("muzzle 0.0"), "{out}");
+    let (code, out, err) = calflash(d.path(), &["mission", "shell.csv", "--json", "m.json"]);
+    assert_eq!(code, 0, "{err}");
+    // The stated setback (to the pulse's sampling at 10 kHz).
+    assert!(out.contains("(12000.4 g) along +x"), "{out}");
+    assert!(out.contains("Spin about x: peak 250.0 rev/s"), "{out}");
+    // The observation files' names are SI: nothing assumed.
+    assert!(!out.contains("no unit stated"), "{out}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("m.json")).unwrap()).unwrap();
+    assert_eq!(json["samples"], 10_201);
+    let truth = std::fs::read_to_string(d.path().join("truth.csv")).unwrap();
+    assert!(truth.starts_with("t,x,y,z,vx,vy,vz,qw,qx,qy,qz\n"));
+    // A flight is of an IMU, and its spec is checked.
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "simulate", "--sensor", "accel", "--flight", "shell", "-o", "x.csv",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(err.contains("--sensor imu"), "{err}");
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--flight",
+            "shell:calibre=3",
+            "-o",
+            "x.csv",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(err.contains("a shell has no `calibre`"), "{err}");
+}
+
+fn hedy() -> Option<PathBuf> {
+    let p =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/hedy-rocket/imu.csv");
+    if p.is_file() {
+        Some(p)
+    } else {
+        println!(
+            "hedy mission: SKIPPED, {} is absent (it lives beside the checkout in CI)",
+            p.display()
+        );
+        None
+    }
+}
+
+const HEDY_COLUMNS: &str =
+    "fx=Ax:m/s^2,fy=Ay:m/s^2,fz=Az:m/s^2,wx=Gx:deg/s,wy=Gy:deg/s,wz=Gz:deg/s";
+
+#[test]
+fn the_hedy_flight_is_a_mission() {
+    let Some(imu) = hedy() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let imu = imu.to_str().unwrap();
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "mission",
+            imu,
+            "--mission-columns",
+            HEDY_COLUMNS,
+            "--k2",
+            "100",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    // The README's figures: the roll about y to 1,757 deg/s; 100 Hz resolves vibration to 50 Hz.
+    assert!(
+        out.contains("Spin about y: peak 4.9 rev/s (1757 deg/s)"),
+        "{out}"
+    );
+    assert!(out.contains("24564 samples"), "{out}");
+    assert!(out.contains("K2 100 ug/g^2 rectifies"), "{out}");
+    assert!(
+        out.contains("dw: no angular acceleration columns; differentiated"),
+        "{out}"
+    );
+    // A design for it: the mission-optimal plan beats the uniform one on every axis.
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "design",
+            "optimize",
+            "--sensor",
+            "gyro",
+            "--model",
+            "triad-nonlinear",
+            "--candidates",
+            "rate:-40:40:21",
+            "--n",
+            "40",
+            "--mission",
+            imu,
+            "--mission-columns",
+            HEDY_COLUMNS,
+            "-o",
+            "plan.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("Over the mission"), "{out}");
+    let ratios = variance_ratios(&out);
+    assert_eq!(ratios.len(), 3, "{out}");
+    // The roll gyro (y) gains most: its rates are the flight's widest.
+    assert!(ratios.iter().all(|r| *r > 1.0), "{ratios:?}\n{out}");
+    assert!(ratios[1] > 2.0, "{ratios:?}\n{out}");
+}
+
+/// The `variance/1st` of the uniform plan, per axis, from `design optimize`'s mission table.
+fn variance_ratios(out: &str) -> Vec<f64> {
+    out.lines()
+        .filter(|l| l.trim_start().starts_with("uniform") && l.contains("40 points"))
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            // ... n rms worst ratio beyond worst
+            f.get(f.len() - 3)?.parse().ok()
+        })
+        .collect()
+}
+
+#[test]
+fn a_mission_the_equipment_cannot_reach_is_said_and_the_rest_is_extrapolation() {
+    let d = tempfile::tempdir().unwrap();
+    // A flight spinning at 100 to 200 rad/s about x; a rate table reaching 50 rad/s.
+    let mut text = String::from("t,w_x,w_y,w_z,f_x,f_y,f_z\n");
+    for i in 0..200 {
+        let t = f64::from(i) * 0.01;
+        text.push_str(&format!("{t},{},0,0,0,0,9.8\n", 100.0 + 50.0 * t));
+    }
+    let p = write(d.path(), "spin.csv", &text);
+    let args = |cands: &'static str| {
+        vec![
+            "design".to_string(),
+            "optimize".into(),
+            "--sensor".into(),
+            "gyro".into(),
+            "--model".into(),
+            "triad".into(),
+            "--candidates".into(),
+            cands.into(),
+            "--n".into(),
+            "24".into(),
+            "--mission".into(),
+            p.to_str().unwrap().into(),
+            "-o".into(),
+            "plan.csv".into(),
+        ]
+    };
+    let run = |a: Vec<String>| {
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        calflash(d.path(), &a)
+    };
+    let (code, _, err) = run(args("rate:-50:50:11"));
+    assert_ne!(code, 0);
+    assert!(err.contains("no moment of the flight"), "{err}");
+    assert!(
+        err.contains("w_x 0 % of the time below -50 and 100 % above 50"),
+        "{err}"
+    );
+    // Reaching 150 rad/s: half the flight inside, the rest extrapolated and priced apart.
+    let (code, out, err) = run(args("rate:-150:150:31"));
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("% of the flight within what the candidates reach"),
+        "{out}"
+    );
+    assert!(
+        out.contains("w_x 0 % of the time below -150 and 49.5 % above 150"),
+        "{out}"
+    );
+    // A profile without the rates the gyro model reads.
+    let still = write(
+        d.path(),
+        "still.csv",
+        "t,f_x,f_y,f_z\n0,0,0,9.8\n0.1,0,0,9.8\n",
+    );
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "design",
+            "optimize",
+            "--sensor",
+            "gyro",
+            "--model",
+            "triad",
+            "--candidates",
+            "rate:-50:50:11",
+            "--n",
+            "24",
+            "--mission",
+            still.to_str().unwrap(),
+            "-o",
+            "p.csv",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("the model reads `w_x`, which the mission profile"),
+        "{err}"
+    );
+}
+
+#[test]
+fn the_predicted_mission_error_is_what_simulated_calibrations_give() {
+    let d = tempfile::tempdir().unwrap();
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--flight",
+            "rocket:seconds=30",
+            "-o",
+            "rocket.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "design",
+            "predict",
+            "--sensor",
+            "gyro",
+            "--model",
+            "triad",
+            "--plan",
+            "rate:-40:40:9",
+            "--mission",
+            "rocket.csv",
+            "--monte-carlo",
+            "400",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let deviations: Vec<f64> = out
+        .lines()
+        .filter(|l| l.contains("Monte Carlo"))
+        .filter_map(|l| {
+            let pct = l
+                .rsplit('(')
+                .next()?
+                .trim_end_matches(" %)")
+                .trim_end_matches(')');
+            pct.trim_end_matches(" %").parse().ok()
+        })
+        .collect();
+    assert_eq!(deviations.len(), 3, "{out}");
+    assert!(
+        deviations.iter().all(|p: &f64| p.abs() < 10.0),
+        "{deviations:?}\n{out}"
+    );
+}
