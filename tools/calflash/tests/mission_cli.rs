@@ -381,3 +381,83 @@ fn the_predicted_mission_error_is_what_simulated_calibrations_give() {
         "{deviations:?}\n{out}"
     );
 }
+
+#[test]
+fn a_calibration_is_judged_over_its_mission() {
+    let d = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| calflash(d.path(), args);
+    let (code, _, err) = run(&[
+        "simulate",
+        "--sensor",
+        "accel",
+        "--plan",
+        "tumble:24",
+        "--plan",
+        "centrifuge:1:6:4",
+        "--repeat",
+        "2",
+        "-o",
+        "acc.csv",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // A rocket pulling up to 6.4 g: within what the centrifuge reached but for the boost's peak.
+    let (code, _, err) = run(&[
+        "simulate",
+        "--sensor",
+        "imu",
+        "--flight",
+        "rocket:seconds=20",
+        "-o",
+        "rocket.csv",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let calibrate = |extra: &[&str]| {
+        let mut a = vec![
+            "calibrate",
+            "acc.csv",
+            "--sensor",
+            "accel",
+            "--serial",
+            "M1",
+            "--db",
+            "h.sqlite",
+            "--mission",
+            "rocket.csv",
+        ];
+        a.extend_from_slice(extra);
+        run(&a)
+    };
+    // A loose requirement: the predicted error is met, and the left-out nonlinear terms, at
+    // their bench bound, stay under it.
+    let (code, out, err) = calibrate(&["--requirement", "a=0.5", "--report", "r.html"]);
+    assert!(code == 0 || code == 2, "{err}");
+    assert!(
+        out.contains("mission rocket.csv: predicted 1-sigma error over the flight"),
+        "{out}"
+    );
+    assert!(out.contains("a_x: rms "), "{out}");
+    assert!(out.contains("left-out term f_x"), "{out}");
+    assert!(!out.contains("exceeds the requirement"), "{out}");
+    let html = std::fs::read_to_string(d.path().join("r.html")).unwrap();
+    assert!(html.contains("<h2>Over the mission</h2>"));
+    assert!(html.contains("Predicted error along the flight"));
+    // A requirement tighter than the bench can give: REVIEW, naming the output.
+    let (_, out, _) = calibrate(&["--requirement", "a=1e-5"]);
+    assert!(out.contains("unit M1: REVIEW"), "{out}");
+    assert!(
+        out.contains("a_x: predicted 1-sigma error over the flight"),
+        "{out}"
+    );
+    assert!(out.contains("exceeds the requirement 0.00001"), "{out}");
+    // Without a requirement, a left-out term that may cost over three times the predicted
+    // error is named.
+    let (_, out, _) = calibrate(&[]);
+    assert!(
+        out.contains(", left out of the model, may cost up to"),
+        "{out}"
+    );
+    // A requirement that cannot be read.
+    let (code, _, err) = calibrate(&["--requirement", "a=-1"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("expected a=SI,g=SI"), "{err}");
+}

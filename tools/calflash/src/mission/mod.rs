@@ -5,6 +5,7 @@
 //! for designing and judging a calibration for that flight (DESIGN §10).
 
 pub mod columns;
+pub mod judge;
 mod read;
 pub mod summary;
 pub mod weight;

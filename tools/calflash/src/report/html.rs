@@ -26,6 +26,9 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, Error> {
         axis_section(&mut h, c, a, axis)?;
     }
     h.push_str(&super::thermal::section(c)?);
+    if let Some(m) = &c.mission {
+        h.push_str(&super::mission::judged_html(m)?);
+    }
     let _ = writeln!(
         h,
         "<h2>Device</h2>\n<p>The blob holds {} coefficient set{} with covariance factors; the device's f32 correction differs from the f64 correction by at most {}.</p>",

@@ -235,3 +235,153 @@ fn clip(text: &str, width: usize) -> String {
         format!("{head}...")
     }
 }
+
+/// A calibration judged over a mission, as the terminal shows it.
+#[must_use]
+pub fn judged_text(m: &crate::mission::judge::Judged) -> String {
+    use crate::report::terminal::num;
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "  mission {}: predicted 1-sigma error over the flight within the calibrated range",
+        m.profile
+    );
+    if !m.assumed.is_empty() {
+        let _ = writeln!(
+            o,
+            "    the profile does not give {}: the bench's value is assumed",
+            m.assumed.join(", ")
+        );
+    }
+    for x in &m.outputs {
+        let _ = writeln!(
+            o,
+            "    {}: rms {} {u}, worst {} {u}{}; {} % of the flight within range{}",
+            x.output,
+            num(x.rms),
+            num(x.worst),
+            x.requirement
+                .map(|r| format!(" (requirement {r})"))
+                .unwrap_or_default(),
+            crate::design::space::percent(x.share_inside),
+            if x.share_inside < 1.0 {
+                format!("; beyond: {}", x.beyond)
+            } else {
+                String::new()
+            },
+            u = x.unit,
+        );
+    }
+    for t in m.terms.iter().take(5) {
+        let unit = m
+            .outputs
+            .iter()
+            .find(|x| x.output == t.output)
+            .map_or("", |x| x.unit);
+        let _ = writeln!(
+            o,
+            "    left-out term {} of {}: bench bound {}, up to {} {unit} over the flight",
+            t.term,
+            t.output,
+            num(t.bound),
+            num(t.worst)
+        );
+    }
+    o
+}
+
+/// The report's section on the mission: the predicted 1-sigma error along the flight per
+/// output (within the calibrated range; the times beyond it shaded), and the left-out terms.
+///
+/// # Errors
+/// A figure that cannot be drawn.
+pub fn judged_html(m: &crate::mission::judge::Judged) -> Result<String, crate::report::Error> {
+    use crate::report::page::esc;
+    use crate::report::plot::{Figure, Series, figure};
+    use crate::report::terminal::num;
+    let mut h = String::new();
+    let _ = writeln!(
+        h,
+        "<h2>Over the mission</h2>\n<p>The flight {}: each output's predicted 1-sigma error from the fit's covariance at every moment of the flight; where the flight goes beyond the calibrated range (shaded) the calibration extrapolates.</p>",
+        esc(&m.profile)
+    );
+    let series: Vec<(String, Vec<(f64, f64)>)> = m
+        .outputs
+        .iter()
+        .map(|x| {
+            (
+                x.output.clone(),
+                x.timeline
+                    .iter()
+                    .filter(|p| p.2)
+                    .map(|p| (p.0, p.1))
+                    .collect(),
+            )
+        })
+        .collect();
+    let mut bands = Vec::new();
+    if let Some(first) = m.outputs.first() {
+        let mut start: Option<f64> = None;
+        for w in first.timeline.windows(2) {
+            match (start, w[0].2) {
+                (None, false) => start = Some(w[0].0),
+                (Some(s), true) => {
+                    bands.push((s, w[0].0));
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        if let (Some(s), Some(last)) = (start, first.timeline.last()) {
+            bands.push((s, last.0));
+        }
+    }
+    let unit = m.outputs.first().map_or("", |x| x.unit);
+    let y = format!("predicted 1-sigma error, {unit}");
+    figure(
+        &mut h,
+        &Figure {
+            title: "Predicted error along the flight",
+            x: "time, s",
+            y: &y,
+            series: series
+                .iter()
+                .enumerate()
+                .map(|(k, (name, pts))| Series::curve(name, pts, k))
+                .collect(),
+            bands,
+            band_label: "beyond the calibrated range",
+            zero_line: false,
+        },
+    )?;
+    h.push_str("<table>\n<tr><th>output</th><th>rms</th><th>worst</th><th>within range</th><th>requirement</th></tr>\n");
+    for x in &m.outputs {
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{} {u}</td><td>{} {u}</td><td>{} %</td><td>{}</td></tr>",
+            esc(&x.output),
+            num(x.rms),
+            num(x.worst),
+            crate::design::space::percent(x.share_inside),
+            x.requirement.map_or("-".to_string(), num),
+            u = esc(x.unit)
+        );
+    }
+    h.push_str("</table>\n");
+    if !m.terms.is_empty() {
+        h.push_str("<p>Terms the model leaves out, at their bench bound (the upper confidence bound of the coefficient with the term added), over the flight:</p>\n<table>\n<tr><th>output</th><th>term</th><th>estimate</th><th>bound</th><th>up to, over the flight</th></tr>\n");
+        for t in &m.terms {
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                esc(&t.output),
+                esc(&t.term),
+                num(t.estimate),
+                num(t.bound),
+                num(t.worst)
+            );
+        }
+        h.push_str("</table>\n");
+    }
+    Ok(h)
+}

@@ -510,6 +510,10 @@ pub struct Calibrated {
     /// The continuous temperature model the device's table or series was made from, one per
     /// output axis (in `points`' axis order); empty without one.
     pub thermal: Vec<thermal::ThermalFit>,
+    /// The observations as fitted (with the references the workflow added), every point.
+    pub table: crate::obs::Table,
+    /// The calibration judged over a mission (`calibrate --mission`).
+    pub mission: Option<crate::mission::judge::Judged>,
 }
 
 impl Calibrated {

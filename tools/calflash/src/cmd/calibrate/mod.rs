@@ -153,6 +153,28 @@ pub struct CalibrateArgs {
     /// (or one aged within the allowance) in one period at rest: from 1e-12 to 0.5.
     #[arg(long, default_value_t = 1e-3, requires = "noise", value_parser = false_alarm)]
     pub false_alarm: f64,
+    /// A mission profile (`calflash mission` reads it): the calibration is judged over the
+    /// flight: each output's predicted 1-sigma error along it, where it leaves the calibrated
+    /// range, and the terms the bench dropped priced at their bench bound over it.
+    #[arg(long)]
+    pub mission: Option<PathBuf>,
+    #[command(flatten)]
+    pub mission_columns: crate::cmd::mission::MissionColumns,
+    /// With --mission: the largest acceptable predicted error over the flight, SI per output
+    /// family or output: `a=0.05,g=0.002` (m/s^2, rad/s) or `a_x=0.05,...`; above it, REVIEW.
+    #[arg(long, requires = "mission", value_parser = requirement)]
+    pub requirement: Option<Requirements>,
+}
+
+/// `--requirement`: `(output or family, SI)` pairs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Requirements(pub Vec<(String, f64)>);
+
+/// `--requirement`, read as it is parsed.
+fn requirement(s: &str) -> Result<Requirements, String> {
+    crate::mission::judge::requirements(s)
+        .map(Requirements)
+        .map_err(|e| e.to_string())
 }
 
 /// `--false-alarm`: a probability from 1e-12 to 0.5 (the device holds it in f32 and tests a
@@ -211,7 +233,8 @@ pub fn calibrate_one(
             .input("the data", Some(data))
             .input("--still-ramp", args.still_ramp.as_deref())
             .input("--noise", args.noise.first().map(PathBuf::as_path))
-            .input("--noise", args.noise.get(1).map(PathBuf::as_path)),
+            .input("--noise", args.noise.get(1).map(PathBuf::as_path))
+            .input("--mission", args.mission.as_deref()),
     )?;
     let noise = noise_terms(args)?;
     let mut opts = Options::new(data, serial);
@@ -278,6 +301,18 @@ pub fn calibrate_one(
         c.blob = sensor::blob::encode_checked(&c.data)
             .map_err(|e| format!("--noise: {e}"))?
             .0;
+    }
+    if let Some(path) = &args.mission {
+        let profile = crate::mission::read(path, &args.mission_columns.mission_columns)?;
+        let judged = crate::mission::judge::judge(
+            &c,
+            &profile,
+            args.sensor == SensorKind::SingleGyro,
+            args.requirement.as_ref().map_or(&[][..], |r| &r.0[..]),
+            args.alpha,
+        )?;
+        c.findings.extend(judged.findings.iter().cloned());
+        c.mission = Some(judged);
     }
     let data_name = data.display().to_string();
     // Against its lot: judged on the coefficients the history keeps.
@@ -418,6 +453,9 @@ fn summary(
             num(r.noise[a]),
             c.units[a]
         );
+    }
+    if let Some(m) = &c.mission {
+        s.push_str(&crate::report::mission::judged_text(m));
     }
     let _ = match c.data.environment.temperature_model {
         spincal::model::TemperatureModel::Chebyshev(n) => writeln!(

@@ -648,6 +648,8 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         findings,
         earth: None,
         thermal: thermal_fit.into_iter().collect(),
+        table,
+        mission: None,
     })
 }
 

@@ -600,6 +600,8 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             .filter_map(|t| t.thermal.clone())
             .flatten()
             .collect(),
+        table,
+        mission: None,
     })
 }
 

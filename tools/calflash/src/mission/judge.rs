@@ -1,0 +1,369 @@
+//! A calibration judged for a mission (`calibrate --mission`): each output's predicted 1-sigma
+//! error along the flight from the fit's covariance, where the flight leaves the calibrated
+//! range, and the terms the model leaves out (dropped on the bench, or not in its preset) that
+//! would cost most over the flight. For each such
+//! term (the nonlinear preset's own-axis terms, and a gyro's g-sensitivity), the kept model
+//! with the term added is fitted at the reference point; the term's bench bound is
+//! `|b| + t(1 - alpha/2, dof) se(b)`, and its worst contribution over the flight's moments the
+//! bench reached is that bound times the largest `|term(x_t)|`, in the output's SI unit.
+//!
+//! Verdicts: an output whose predicted RMS error over the flight exceeds its requirement, a
+//! dropped term whose worst contribution exceeds the requirement (or, without one, three
+//! times the output's predicted RMS error), or a flight more than 1 % of whose time is beyond
+//! the calibrated range, each make the calibration REVIEW, naming what.
+
+use nalgebra::DMatrix;
+
+use super::Profile;
+use super::weight::{self, Lookup, Reach};
+use crate::design::models;
+use crate::design::points::{Points, Unit};
+use crate::formula::Formula;
+use crate::sensor::{AxisFit, Calibrated, Finding, Verdict};
+
+/// Samples of the flight the timeline shows.
+const TIMELINE: usize = 600;
+/// The share of the flight beyond the calibrated range a calibration may leave without review.
+pub const BEYOND_ALLOWED: f64 = 0.01;
+
+/// One output over the mission.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Output {
+    /// The output column.
+    pub output: String,
+    /// Its input's SI unit.
+    pub unit: &'static str,
+    /// Predicted RMS 1-sigma error over the flight's moments within the calibrated range, SI.
+    pub rms: f64,
+    /// The largest there.
+    pub worst: f64,
+    /// Share of the flight's time within the calibrated range.
+    pub share_inside: f64,
+    /// What is beyond, in words.
+    pub beyond: String,
+    /// Predicted 1-sigma error against time, `(s, SI, within the calibrated range)`.
+    pub timeline: Vec<(f64, f64, bool)>,
+    /// The requirement, SI, when given.
+    pub requirement: Option<f64>,
+}
+
+/// A term the bench dropped, priced over the flight.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TermCost {
+    /// The output.
+    pub output: String,
+    /// The term.
+    pub term: String,
+    /// Its estimate with the kept model, counts per unit of the term.
+    pub estimate: f64,
+    /// Its bench bound (upper confidence bound of `|b|`).
+    pub bound: f64,
+    /// Its worst contribution over the flight within the calibrated range, SI.
+    pub worst: f64,
+}
+
+/// The calibration over a mission.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Judged {
+    /// The profile.
+    pub profile: String,
+    /// Per output.
+    pub outputs: Vec<Output>,
+    /// The dropped terms, costliest first.
+    pub terms: Vec<TermCost>,
+    /// Variables the profile does not give (the bench's value assumed).
+    pub assumed: Vec<String>,
+    /// The findings it adds.
+    pub findings: Vec<Finding>,
+}
+
+/// Why a calibration cannot be judged over a mission.
+#[derive(Debug, thiserror::Error)]
+pub enum JudgeError {
+    /// The profile lacks a variable the model reads.
+    #[error("--mission: {0}")]
+    Missing(#[from] weight::Missing),
+    /// A requirement for no output.
+    #[error(
+        "--requirement `{0}`: expected a=SI,g=SI (accelerometer in m/s^2, gyro in rad/s) or OUTPUT=SI, a positive number each"
+    )]
+    Requirement(String),
+}
+
+/// Reads `--requirement`: `a=0.05,g=0.002` (SI) or per output (`a_x=0.05`).
+///
+/// # Errors
+/// An item that is not `NAME=positive number`.
+pub fn requirements(text: &str) -> Result<Vec<(String, f64)>, JudgeError> {
+    text.split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|item| {
+            let (k, v) = item
+                .split_once('=')
+                .ok_or_else(|| JudgeError::Requirement(item.to_string()))?;
+            let v: f64 = v
+                .trim()
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite() && *v > 0.0)
+                .ok_or_else(|| JudgeError::Requirement(item.to_string()))?;
+            Ok((k.trim().to_string(), v))
+        })
+        .collect()
+}
+
+/// What kind of input an axis reads: the unit kind for the profile, whether it is a gyro, and
+/// its triad index.
+fn kind(axis: &AxisFit) -> (Unit, bool, usize) {
+    let own = axis.own.as_str();
+    let k = own.chars().last().map_or(0, |c| match c {
+        'y' => 1,
+        'z' => 2,
+        _ => 0,
+    });
+    if own.starts_with("w_") {
+        (Unit::Triad, true, k)
+    } else if own.starts_with("f_") {
+        (Unit::Triad, false, k)
+    } else if axis.output.contains('g') && !axis.output.contains("output") {
+        (Unit::SingleGyro, true, 0)
+    } else {
+        (Unit::SingleAccel, false, 0)
+    }
+}
+
+/// The terms the bench could have kept for an axis: the nonlinear preset's, and a gyro's
+/// g-sensitivity.
+fn candidates(unit: Unit, gyro: bool, k: usize) -> Vec<String> {
+    let preset = match unit {
+        Unit::Triad => "triad-nonlinear",
+        _ => "single",
+    };
+    let mut names: Vec<String> = models::blocks(preset, gyro)
+        .map(|b| b[k.min(b.len() - 1)].formula.term_names())
+        .unwrap_or_default();
+    if gyro && unit == Unit::Triad {
+        names.extend(crate::columns::F.iter().map(|s| (*s).to_string()));
+    }
+    names
+}
+
+/// Judges `c` (whose unit kind is `single_gyro` for a single axis) over `profile`.
+///
+/// # Errors
+/// A profile without a variable the model reads, or a requirement that cannot be read.
+pub fn judge(
+    c: &Calibrated,
+    profile: &Profile,
+    single_gyro: bool,
+    requirement: &[(String, f64)],
+    alpha: f64,
+) -> Result<Judged, JudgeError> {
+    let point = &c.points[c.reference];
+    let mut out = Judged {
+        profile: profile.source.display().to_string(),
+        outputs: Vec::new(),
+        terms: Vec::new(),
+        assumed: Vec::new(),
+        findings: Vec::new(),
+    };
+    for (a, axis) in point.axes.iter().enumerate() {
+        let (mut unit, gyro, k) = kind(axis);
+        if unit != Unit::Triad {
+            unit = if single_gyro {
+                Unit::SingleGyro
+            } else {
+                Unit::SingleAccel
+            };
+        }
+        let lookup = Lookup::new(profile, &axis.formula, unit)?;
+        for v in lookup.assumed(profile) {
+            if !out.assumed.contains(&v) {
+                out.assumed.push(v);
+            }
+        }
+        let rows = reference_rows(&c.table, axis);
+        let bench = c.table.select(&rows);
+        let vars: Vec<String> = axis.formula.columns().into_iter().skip(1).collect();
+        let reach = Reach::of(&points(&bench, &vars), &vars, &[]);
+        let scale = axis
+            .fit
+            .names
+            .iter()
+            .position(|n| *n == axis.own)
+            .map_or(1.0, |j| axis.fit.coefficients[j].abs());
+        let cov = &axis.fit.covariance;
+        let w = weight::weight(profile, &axis.formula, &lookup, &reach);
+        let rms = weight::mean_variance(cov, 1, &w.inside).max(0.0).sqrt() / scale;
+        let (worst_in, _) = weight::worst_variance(profile, &axis.formula, &lookup, &reach, cov, 1);
+        let timeline = timeline(profile, (&axis.formula, &lookup, &reach), cov, scale);
+        let name = axis.output.clone();
+        let required = requirement
+            .iter()
+            .find(|(key, _)| *key == name)
+            .or_else(|| {
+                let family = if gyro { "g" } else { "a" };
+                requirement.iter().find(|(key, _)| key == family)
+            })
+            .map(|r| r.1);
+        let beyond = crate::design::space::describe_beyond(&w, &reach);
+        if 1.0 - w.share_inside > BEYOND_ALLOWED {
+            out.findings.push(Finding {
+                verdict: Verdict::Review,
+                text: format!(
+                    "{name}: {} % of the flight is beyond the calibrated range ({beyond}); the calibration extrapolates there",
+                    crate::design::space::percent(1.0 - w.share_inside)
+                ),
+            });
+        }
+        if let Some(req) = required
+            && rms > req
+        {
+            out.findings.push(Finding {
+                verdict: Verdict::Review,
+                text: format!(
+                    "{name}: predicted 1-sigma error over the flight {} {} rms exceeds the requirement {req}",
+                    crate::report::terminal::num(rms),
+                    c.units[a]
+                ),
+            });
+        }
+        // The terms the bench dropped, priced over the flight's moments it reached.
+        for term in candidates(unit, gyro, k) {
+            if axis.formula.term_names().contains(&term) || !vars_in_table(&term, &c.table) {
+                continue;
+            }
+            let Ok(with) = crate::formula::parse(&format!("{} + {term}", axis.formula)) else {
+                continue;
+            };
+            let Ok(fit) = AxisFit::fit(
+                &with,
+                &bench,
+                &axis.own,
+                alpha,
+                (&c.table.path, "mission"),
+                false,
+            ) else {
+                continue;
+            };
+            let j = fit.fit.names.len() - 1;
+            let (b, se) = (fit.fit.coefficients[j], fit.fit.std_errors[j]);
+            let t = crate::stats::dist::t_upper_quantile(alpha / 2.0, fit.fit.dof as f64);
+            let bound = b.abs() + t * se;
+            let Ok(only) = crate::formula::parse(&format!("{} ~ 0 + {term}", with.response)) else {
+                continue;
+            };
+            let Ok(term_lookup) = Lookup::new(profile, &only, unit) else {
+                continue;
+            };
+            let largest = (0..profile.len())
+                .filter(|i| lookup.inside(profile, *i, &reach))
+                .map(|i| {
+                    let mut row = Vec::with_capacity(1);
+                    only.row(|v| term_lookup.value(profile, i, v), &mut row);
+                    row.first().copied().unwrap_or(0.0).abs()
+                })
+                .fold(0.0, f64::max);
+            out.terms.push(TermCost {
+                output: name.clone(),
+                term,
+                estimate: b,
+                bound,
+                worst: bound * largest / scale,
+            });
+        }
+        let limit = required.unwrap_or(3.0 * rms);
+        for cost in out
+            .terms
+            .iter()
+            .filter(|t| t.output == name && t.worst > limit)
+        {
+            out.findings.push(Finding {
+                verdict: Verdict::Review,
+                text: format!(
+                    "{name}: the term {}, left out of the model, may cost up to {} {} over the flight (its bench bound {} times its largest value in flight), more than {}",
+                    cost.term,
+                    crate::report::terminal::num(cost.worst),
+                    c.units[a],
+                    crate::report::terminal::num(cost.bound),
+                    match required {
+                        Some(r) => format!("the requirement {r}"),
+                        None => "three times the predicted error; keep it (--nonlinear, or the model) or calibrate where the flight goes".to_string(),
+                    }
+                ),
+            });
+        }
+        out.outputs.push(Output {
+            output: name,
+            unit: c.units[a],
+            rms,
+            worst: worst_in.max(0.0).sqrt() / scale,
+            share_inside: w.share_inside,
+            beyond,
+            timeline,
+            requirement: required,
+        });
+    }
+    out.terms.sort_by(|a, b| b.worst.total_cmp(&a.worst));
+    Ok(out)
+}
+
+/// The rows of the reference point's fit of `axis` in `table` (by file line).
+fn reference_rows(table: &crate::obs::Table, axis: &AxisFit) -> Vec<usize> {
+    let lines: std::collections::HashSet<u64> = axis.lines.iter().copied().collect();
+    (0..table.len())
+        .filter(|i| lines.contains(&table.lines[*i]))
+        .collect()
+}
+
+/// True when every variable of `term` is a column of `table`.
+fn vars_in_table(term: &str, table: &crate::obs::Table) -> bool {
+    crate::formula::parse(&format!("y ~ {term}")).is_ok_and(|f| {
+        f.columns()
+            .iter()
+            .skip(1)
+            .all(|v| table.column(v).is_some())
+    })
+}
+
+/// The table's `vars` as points.
+fn points(table: &crate::obs::Table, vars: &[String]) -> Points {
+    let cols: Vec<Option<&[f64]>> = vars.iter().map(|v| table.column(v)).collect();
+    Points {
+        names: vars.to_vec(),
+        rows: (0..table.len())
+            .map(|i| {
+                cols.iter()
+                    .zip(vars)
+                    .map(|(c, v)| {
+                        c.map_or_else(|| crate::design::points::default_value(v), |c| c[i])
+                    })
+                    .collect()
+            })
+            .collect(),
+    }
+}
+
+/// The predicted 1-sigma error at [`TIMELINE`] moments spread over the flight, SI.
+fn timeline(
+    p: &Profile,
+    (formula, lookup, reach): (&Formula, &Lookup, &Reach),
+    cov: &DMatrix<f64>,
+    scale: f64,
+) -> Vec<(f64, f64, bool)> {
+    let every = p.len().div_ceil(TIMELINE).max(1);
+    let mut row = Vec::new();
+    (0..p.len())
+        .step_by(every)
+        .map(|i| {
+            formula.row(|v| lookup.value(p, i, v), &mut row);
+            let x = nalgebra::DVector::from_column_slice(&row);
+            (
+                p.t[i],
+                (x.transpose() * cov * &x)[(0, 0)].max(0.0).sqrt() / scale,
+                lookup.inside(p, i, reach),
+            )
+        })
+        .collect()
+}
