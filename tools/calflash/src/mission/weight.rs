@@ -38,6 +38,10 @@ pub struct Missing {
     pub has: String,
 }
 
+/// How far beyond the bench's range, as a share of its span, a flight's moment still counts as
+/// reached.
+pub const REACH_MARGIN: f64 = 0.01;
+
 /// The range of each variable the equipment reaches.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Reach {
@@ -46,7 +50,9 @@ pub struct Reach {
 }
 
 impl Reach {
-    /// The range of each of `vars` over `pts`, narrowed by `limits`.
+    /// The range of each of `vars` over `pts`, widened by [`REACH_MARGIN`] of its span (a
+    /// recorded flight's own instrument reads 1 g at rest as 9.9 m/s^2 where the bench's
+    /// reference is 9.807), then narrowed by `limits`.
     #[must_use]
     pub fn of(pts: &Points, vars: &[String], limits: &[crate::design::space::Limit]) -> Self {
         let bounds = vars
@@ -58,6 +64,9 @@ impl Reach {
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
                         (a.min(x), b.max(x))
                     });
+                let margin = REACH_MARGIN * (hi - lo);
+                lo -= margin;
+                hi += margin;
                 for l in limits.iter().filter(|l| l.name == *v) {
                     lo = lo.max(l.lo);
                     hi = hi.min(l.hi);
