@@ -22,7 +22,8 @@ fn truth() -> String {
         .to_string()
 }
 
-/// The `| name | mean | rms | sigma |` rows of `apply --reference`.
+/// The `| name | mean | rms | sigma | ...` rows of `apply --reference` (the robust figures
+/// after them).
 fn figures(out: &str) -> Vec<(String, f64, f64, f64)> {
     out.lines()
         .filter_map(|l| {
@@ -32,7 +33,7 @@ fn figures(out: &str) -> Vec<(String, f64, f64, f64)> {
                 .split('|')
                 .map(str::trim)
                 .collect();
-            let [name, mean, rms, sigma] = cells[..] else {
+            let [name, mean, rms, sigma, ..] = cells[..] else {
                 return None;
             };
             Some((
@@ -122,9 +123,16 @@ fn a_spin_rig_calibration_flies_at_300_hz_within_three_sigma() {
             "--reference",
             "-o",
             "si.csv",
+            "--report",
+            "flight.html",
         ],
     );
     assert!(out.contains("(1 flagged)"), "{out}");
+    // Robust figures beside the RMS, and the error along the flight drawn per unit.
+    assert!(out.contains("| median error | robust spread |"), "{out}");
+    let html = std::fs::read_to_string(d.join("flight.html")).unwrap();
+    assert_eq!(html.matches("Error along the recording").count(), 2);
+    assert!(html.contains("error, m/s^2") && html.contains("error, rad/s"));
     assert!(out.contains("2000.000000 Hz from the timestamps"), "{out}");
     let rows = figures(&out);
     assert_eq!(rows.len(), 6, "{out}");

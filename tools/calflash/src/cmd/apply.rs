@@ -68,6 +68,10 @@ pub struct ApplyArgs {
     /// Also write the 1-sigma calibration error of each value.
     #[arg(long)]
     pub sigma: bool,
+    /// With --reference: write an HTML page of each output's error along the recording
+    /// (against its time, or the sample number without one) with the robust figures.
+    #[arg(long, requires = "reference")]
+    pub report: Option<PathBuf>,
     /// Field separator of the input.
     #[arg(long, value_enum, default_value = "auto")]
     pub format: Format,
@@ -165,6 +169,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
         .input("the raw file", Some(&args.input))
         .input("--gyro", args.gyro.as_deref())
         .output("-o", Some(&args.output))
+        .output("--report", args.report.as_deref())
         .check()?;
     let bytes = crate::files::read_blob(&args.blob)?;
     let cal =
@@ -228,10 +233,41 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
         (temp0, volt),
         &channels.out,
     )?;
-    crate::files::write_atomically(&args.output, |w| {
+    let mut staged = crate::files::Staged::new();
+    staged.write(&args.output, |w| {
         writeln!(w, "{}", header.join(","))?;
         w.write_all(corrected.rows.as_bytes())
     })?;
+    if let (Some(path), Some(acc)) = (&args.report, &corrected.accuracy) {
+        let units: Vec<&'static str> = channels
+            .reference
+            .iter()
+            .map(|r| match (r.chars().next(), &data.sensor) {
+                (Some('f'), _) => "m/s^2",
+                (Some('w'), _) => "rad/s",
+                (
+                    _,
+                    Sensor::Single {
+                        quantity: spincal::model::Quantity::Acceleration,
+                        ..
+                    },
+                ) => "m/s^2",
+                _ => "rad/s",
+            })
+            .collect();
+        let (x, label): (Vec<f64>, &str) = match &input.times {
+            Some(t) => (t.clone(), "time, s"),
+            None => ((0..input.raw.len()).map(|i| i as f64).collect(), "sample"),
+        };
+        let title = format!(
+            "{} corrected with unit {}'s calibration",
+            args.input.display(),
+            data.identity.serial
+        );
+        let html = crate::report::accuracy::html(&title, acc, (&x, label), &units)?;
+        staged.write(path, |w| w.write_all(html.as_bytes()))?;
+    }
+    staged.commit()?;
     report(args, &cal, &input, timing.as_ref(), lever, &corrected);
     Ok(())
 }
@@ -410,7 +446,7 @@ fn correct_all(
         if let (Some(acc), Some(reference)) = (&mut accuracy, &input.reference)
             && flags.is_clean()
         {
-            acc.add(&values, &reference[i], sigma.as_deref());
+            acc.add(i, &values, &reference[i], sigma.as_deref());
         }
         let _ = write!(rows, "{}", input.labels[i]);
         for v in &values {
@@ -472,15 +508,26 @@ fn report(
             "  against the reference columns, {} unflagged samples:",
             acc.count()
         );
-        println!("  | output | mean error | RMS error | stated 1-sigma |");
+        println!(
+            "  | output | mean error | RMS error | stated 1-sigma | median error | robust spread | 99 % of abs. error below | worst (sample) | far out |"
+        );
         for r in acc.rows() {
             println!(
-                "  | {} | {:.4e} | {:.4e} | {} |",
+                "  | {} | {:.4e} | {:.4e} | {} | {:.4e} | {:.4e} | {:.4e} | {:.4e} ({}) | {} |",
                 r.name,
                 r.mean,
                 r.rms,
-                r.sigma.map_or("(none)".to_string(), |s| format!("{s:.4e}"))
+                r.sigma.map_or("(none)".to_string(), |s| format!("{s:.4e}")),
+                r.median,
+                r.spread,
+                r.p99,
+                r.worst.0,
+                input.labels.get(r.worst.1).map_or("", String::as_str),
+                r.far_out
             );
         }
+        println!(
+            "  (the stated 1-sigma is the calibration's error; the spread adds each sample's noise; far out: beyond five robust spreads from the median)"
+        );
     }
 }

@@ -1,5 +1,6 @@
 //! Reports: they only read results.
 
+pub mod accuracy;
 pub mod allan;
 pub mod design;
 pub mod error;

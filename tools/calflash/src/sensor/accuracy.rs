@@ -1,8 +1,13 @@
 //! A corrected stream held against its reference (a spin rig's or a rate table's known
-//! inputs): per output, the mean and RMS error of the samples the device did not flag, and the
-//! mean 1-sigma it stated for them.
+//! inputs, a simulated flight's truth): per output, the mean and RMS error of the samples the
+//! device did not flag and the mean 1-sigma it stated for them, with robust figures beside
+//! them (the median error, the robust spread `1.4826 MAD`, the 99th percentile of the absolute
+//! error, the worst sample and the samples far out: more than five robust spreads from the
+//! median, which a Gaussian error makes once in two million), and every error kept for a
+//! figure. The stated 1-sigma is the calibration's error alone; the spread includes each
+//! sample's noise.
 
-/// Running sums per output.
+/// Running sums per output, and each sample's error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Accuracy {
     names: Vec<String>,
@@ -11,6 +16,8 @@ pub struct Accuracy {
     square: Vec<f64>,
     sigma: Vec<f64>,
     stated: usize,
+    /// Per output: `(sample index, error)`.
+    errors: Vec<Vec<(usize, f64)>>,
 }
 
 /// One output's figures.
@@ -24,6 +31,16 @@ pub struct Row {
     pub rms: f64,
     /// Mean stated 1-sigma, when every sample stated one.
     pub sigma: Option<f64>,
+    /// Median error.
+    pub median: f64,
+    /// 99th percentile of the absolute error.
+    pub p99: f64,
+    /// The largest absolute error and its sample's index.
+    pub worst: (f64, usize),
+    /// The robust spread of the errors, `1.4826` times their median absolute deviation.
+    pub spread: f64,
+    /// Samples more than five robust spreads from the median error.
+    pub far_out: usize,
 }
 
 impl Accuracy {
@@ -38,11 +55,13 @@ impl Accuracy {
             square: vec![0.0; k],
             sigma: vec![0.0; k],
             stated: 0,
+            errors: vec![Vec::new(); k],
         }
     }
 
-    /// Adds one clean sample: its corrected `values`, the `reference` and the stated `sigma`.
-    pub fn add(&mut self, values: &[f32], reference: &[f64], sigma: Option<&[f32]>) {
+    /// Adds clean sample `index`: its corrected `values`, the `reference` and the stated
+    /// `sigma`.
+    pub fn add(&mut self, index: usize, values: &[f32], reference: &[f64], sigma: Option<&[f32]>) {
         for (k, (v, r)) in values.iter().zip(reference).enumerate() {
             let e = f64::from(*v) - r;
             self.sum[k] += e;
@@ -50,6 +69,7 @@ impl Accuracy {
             if let Some(s) = sigma.and_then(|s| s.get(k)) {
                 self.sigma[k] += f64::from(*s);
             }
+            self.errors[k].push((index, e));
         }
         self.n += 1;
         self.stated += usize::from(sigma.is_some());
@@ -71,13 +91,59 @@ impl Accuracy {
         self.names
             .iter()
             .enumerate()
-            .map(|(k, name)| Row {
-                name: name.clone(),
-                mean: self.sum[k] / n,
-                rms: (self.square[k] / n).sqrt(),
-                sigma: (self.stated == self.n).then(|| self.sigma[k] / n),
+            .map(|(k, name)| {
+                let errors = &self.errors[k];
+                let mut signed: Vec<f64> = errors.iter().map(|e| e.1).collect();
+                signed.sort_by(f64::total_cmp);
+                let median = quantile(&signed, 0.5);
+                let mut absolute: Vec<f64> = signed.iter().map(|e| e.abs()).collect();
+                absolute.sort_by(f64::total_cmp);
+                let mut deviation: Vec<f64> = signed.iter().map(|e| (e - median).abs()).collect();
+                deviation.sort_by(f64::total_cmp);
+                let spread = 1.4826 * quantile(&deviation, 0.5);
+                let worst = errors
+                    .iter()
+                    .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+                    .map_or((0.0, 0), |e| (e.1.abs(), e.0));
+                Row {
+                    name: name.clone(),
+                    mean: self.sum[k] / n,
+                    rms: (self.square[k] / n).sqrt(),
+                    sigma: (self.stated == self.n).then(|| self.sigma[k] / n),
+                    median,
+                    p99: quantile(&absolute, 0.99),
+                    worst,
+                    spread,
+                    far_out: deviation.iter().filter(|d| **d > 5.0 * spread).count(),
+                }
             })
             .collect()
+    }
+
+    /// Output `k`'s errors: `(sample index, error)`.
+    #[must_use]
+    pub fn errors(&self, k: usize) -> &[(usize, f64)] {
+        self.errors.get(k).map_or(&[], Vec::as_slice)
+    }
+
+    /// The outputs' names.
+    #[must_use]
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+}
+
+/// The `q` quantile of sorted values (linear between order statistics).
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    match sorted.len() {
+        0 => 0.0,
+        1 => sorted[0],
+        n => {
+            let at = q * (n - 1) as f64;
+            let (i, frac) = (at.floor() as usize, at.fract());
+            let next = sorted[(i + 1).min(n - 1)];
+            sorted[i] + frac * (next - sorted[i])
+        }
     }
 }
 
@@ -88,14 +154,35 @@ mod tests {
     #[test]
     fn means_rms_and_stated_sigma() {
         let mut a = Accuracy::new(&["x", "y"]);
-        a.add(&[1.0, 2.0], &[0.0, 2.0], Some(&[0.5, 0.1]));
-        a.add(&[-1.0, 2.5], &[0.0, 2.0], Some(&[0.7, 0.3]));
+        a.add(0, &[1.0, 2.0], &[0.0, 2.0], Some(&[0.5, 0.1]));
+        a.add(1, &[-1.0, 2.5], &[0.0, 2.0], Some(&[0.7, 0.3]));
         let r = a.rows();
         assert_eq!((r[0].mean, r[0].rms), (0.0, 1.0));
         assert!((r[1].mean - 0.25).abs() < 1e-12 && (r[1].rms - 0.125f64.sqrt()).abs() < 1e-12);
         assert!((r[0].sigma.unwrap() - 0.6).abs() < 1e-7);
-        a.add(&[0.0, 2.0], &[0.0, 2.0], None);
+        assert_eq!(r[1].worst, (0.5, 1));
+        a.add(2, &[0.0, 2.0], &[0.0, 2.0], None);
         assert_eq!(a.rows()[0].sigma, None);
         assert_eq!(a.count(), 3);
+        assert_eq!(a.errors(0), &[(0, 1.0), (1, -1.0), (2, 0.0)]);
+    }
+
+    #[test]
+    fn robust_figures_ignore_a_few_wild_samples() {
+        let mut a = Accuracy::new(&["x"]);
+        for i in 0..1000 {
+            let e = if i % 250 == 0 {
+                100.0
+            } else {
+                0.001 * f64::from(i % 7)
+            };
+            a.add(i as usize, &[e as f32], &[0.0], None);
+        }
+        let r = &a.rows()[0];
+        assert!(r.rms > 6.0, "the RMS sees the four wild samples");
+        assert!(r.median < 0.01 && r.p99 < 0.01, "{r:?}");
+        assert_eq!(r.worst.0, 100.0);
+        assert_eq!(r.far_out, 4, "{r:?}");
+        assert!(r.spread > 0.0 && r.spread < 0.01, "{r:?}");
     }
 }
