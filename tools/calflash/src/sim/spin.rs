@@ -14,7 +14,6 @@
 use nalgebra::{Rotation3, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 
 use super::plan::G;
 use super::truth::ImuTruth;
@@ -268,13 +267,6 @@ pub fn write_csv(samples: &[Sample], mut w: impl std::io::Write) -> std::io::Res
 #[must_use]
 pub fn run(truth: &ImuTruth, run: &SpinRun) -> Vec<Sample> {
     let mut rng = ChaCha8Rng::seed_from_u64(run.seed);
-    let noise = |rng: &mut ChaCha8Rng, sigma: f64| {
-        if sigma > 0.0 {
-            Normal::new(0.0, sigma).map_or(0.0, |n| n.sample(rng))
-        } else {
-            0.0
-        }
-    };
     let tau = 2.0 * std::f64::consts::PI;
     let mut out = Vec::new();
     let (mut start, mut turns) = (0.0, 0.0);
@@ -289,12 +281,7 @@ pub fn run(truth: &ImuTruth, run: &SpinRun) -> Vec<Sample> {
             }
             let (hz, dhz, gained) = seg.at(t - start);
             let mut s = kinematics(run, t, tau * hz, tau * dhz, tau * (turns + gained));
-            let a = truth.accel.accel_output(s.f, s.w, s.dw, run.temp, run.volt);
-            let g = truth.gyro.gyro_output(s.w, s.f, run.temp, run.volt);
-            for i in 0..3 {
-                s.raw[i] = (a[i] + noise(&mut rng, truth.accel.noise[i])).round();
-                s.raw[i + 3] = (g[i] + noise(&mut rng, truth.gyro.noise[i])).round();
-            }
+            s.raw = truth.codes((s.f, s.w, s.dw), (run.temp, run.volt), &mut rng);
             out.push(s);
             k += 1;
         }

@@ -311,6 +311,35 @@ pub struct ImuTruth {
 }
 
 impl ImuTruth {
+    /// The six raw codes (accelerometer x y z, gyro x y z) the unit puts out feeling specific
+    /// force `f`, rate `w` and angular acceleration `dw` at `temp` C and `volt` V: each with a
+    /// draw of its noise from `rng`, rounded (not yet held at a converter's rails).
+    pub fn codes(
+        &self,
+        (f, w, dw): ([f64; 3], [f64; 3], [f64; 3]),
+        (temp, volt): (f64, f64),
+        rng: &mut impl rand::Rng,
+    ) -> [f64; 6] {
+        use rand_distr::{Distribution, Normal};
+        let a = self.accel.accel_output(f, w, dw, temp, volt);
+        let g = self.gyro.gyro_output(w, f, temp, volt);
+        let mut draw = |sigma: f64| {
+            if sigma > 0.0 {
+                Normal::new(0.0, sigma).map_or(0.0, |n| n.sample(rng))
+            } else {
+                0.0
+            }
+        };
+        // Drawn axis by axis, the accelerometer's then the gyro's (the order the spin rig's
+        // flights were always drawn in, so that a seed gives the same flight).
+        let mut out = [0.0; 6];
+        for i in 0..3 {
+            out[i] = (a[i] + draw(self.accel.noise[i])).round();
+            out[i + 3] = (g[i] + draw(self.gyro.noise[i])).round();
+        }
+        out
+    }
+
     /// An IMU for a round that spins to 300 Hz: a high-g accelerometer (about +-2000 g on a
     /// 16-bit converter, 1.67 counts per m/s^2) with lever arms of 0.5 to 3 mm, a few mrad of
     /// misalignment and g-squared terms, and a gyro reading +-2000 rad/s (16.4 counts per

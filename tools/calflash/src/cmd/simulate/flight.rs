@@ -3,7 +3,6 @@
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 
 use super::{MAX_FLIGHT_SAMPLES, SimulateArgs, imu_truth};
 use crate::cmd::Failure;
@@ -36,34 +35,14 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
     let volt = args.volts.first().copied().unwrap_or(5.0);
     let flown = launch.fly(1.0 / rate);
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-    let mut noise = |sigma: f64| {
-        if sigma > 0.0 {
-            Normal::new(0.0, sigma).map_or(0.0, |n| n.sample(&mut rng))
-        } else {
-            0.0
-        }
-    };
-    let rails = args.codes;
-    let mut saturated = 0usize;
     let raw: Vec<[f64; 6]> = flown
         .samples
         .iter()
-        .map(|s| {
-            let a = truth.accel.accel_output(s.f, s.w, s.dw, s.temp, volt);
-            let g = truth.gyro.gyro_output(s.w, s.f, s.temp, volt);
-            std::array::from_fn(|i| {
-                let (v, sigma) = if i < 3 {
-                    (a[i], truth.accel.noise[i])
-                } else {
-                    (g[i - 3], truth.gyro.noise[i - 3])
-                };
-                let code = (v + noise(sigma)).round();
-                let held = code.clamp(f64::from(rails.lo), f64::from(rails.hi));
-                saturated += usize::from(held != code);
-                held
-            })
-        })
+        .map(|s| truth.codes((s.f, s.w, s.dw), (s.temp, volt), &mut rng))
         .collect();
+    let mut raw = raw;
+    let rails = args.codes;
+    let saturated = super::hold_at_rails(raw.iter_mut().flatten(), rails);
     let mut staged = Staged::new();
     staged.write(&args.output, |w| {
         flight::write_csv(&flown.samples, volt, Some(&raw), std::io::BufWriter::new(w))
@@ -99,13 +78,9 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
         "  {}; apogee {apogee:.0} m, {range:.0} m downrange at the end",
         events.join(", ")
     );
-    if saturated > 0 {
-        println!(
-            "  {saturated} code(s) saturated at the {} converter's rails {} and {} (the unit's range, not the flight's)",
-            crate::obs::codes::name(rails),
-            rails.lo,
-            rails.hi
-        );
-    }
+    print!(
+        "{}",
+        super::saturation_note(saturated, rails, " (the unit's range, not the flight's)")
+    );
     Ok(())
 }

@@ -205,6 +205,33 @@ fn coning(text: &str) -> Result<(f64, f64), String> {
     Ok((a.to_radians(), f))
 }
 
+/// Holds `codes` at the converter's `rails`; how many were beyond them.
+fn hold_at_rails<'a>(
+    codes: impl Iterator<Item = &'a mut f64>,
+    rails: spincal::model::Rails,
+) -> usize {
+    let mut saturated = 0;
+    for code in codes {
+        let v = code.clamp(f64::from(rails.lo), f64::from(rails.hi));
+        saturated += usize::from(v != *code);
+        *code = v;
+    }
+    saturated
+}
+
+/// The line that says how many codes a flight saturated (nothing when none), `why` after it.
+fn saturation_note(saturated: usize, rails: spincal::model::Rails, why: &str) -> String {
+    if saturated == 0 {
+        return String::new();
+    }
+    format!(
+        "  {saturated} code(s) saturated at the {} converter's rails {} and {}{why}\n",
+        crate::obs::codes::name(rails),
+        rails.lo,
+        rails.hi
+    )
+}
+
 /// The IMU a flight runs through: `--truth`, or the default unit centred on `--codes`.
 fn imu_truth(args: &SimulateArgs) -> Result<truth::ImuTruth, Failure> {
     let mut truth = load::<truth::ImuTruth>(args.truth.as_ref())?;
@@ -271,12 +298,7 @@ fn spin_rig(args: &SimulateArgs, profile: &str) -> Result<(), Failure> {
     };
     let mut samples = spin::run(&truth, &run);
     let rails = args.codes;
-    let mut saturated = 0;
-    for code in samples.iter_mut().flat_map(|s| s.raw.iter_mut()) {
-        let v = code.clamp(f64::from(rails.lo), f64::from(rails.hi));
-        saturated += usize::from(v != *code);
-        *code = v;
-    }
+    let saturated = hold_at_rails(samples.iter_mut().flat_map(|s| s.raw.iter_mut()), rails);
     let mut staged = Staged::new();
     staged.write(&args.output, |w| spin::write_csv(&samples, w))?;
     if let Some(p) = &args.write_truth {
@@ -290,14 +312,7 @@ fn spin_rig(args: &SimulateArgs, profile: &str) -> Result<(), Failure> {
         sample_rate,
         args.output.display()
     );
-    if saturated > 0 {
-        println!(
-            "  {saturated} code(s) saturated at the {} converter's rails {} and {}",
-            crate::obs::codes::name(rails),
-            rails.lo,
-            rails.hi
-        );
-    }
+    print!("{}", saturation_note(saturated, rails, ""));
     Ok(())
 }
 

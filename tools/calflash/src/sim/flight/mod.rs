@@ -38,7 +38,7 @@ pub struct Sample {
 }
 
 /// A flight: its samples and its events.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Flight {
     /// The samples, at a fixed step.
     pub samples: Vec<Sample>,
@@ -57,6 +57,15 @@ pub struct Thermal {
 }
 
 impl Thermal {
+    /// A unit conditioned at `conditioned` C with a 300 s time constant (a unit in its round).
+    #[must_use]
+    pub fn conditioned_at(conditioned: f64) -> Self {
+        Self {
+            conditioned,
+            tau: 300.0,
+        }
+    }
+
     /// The next temperature after `dt` s in air at `air_c` C.
     #[must_use]
     pub fn step(&self, temp: f64, air_c: f64, dt: f64) -> f64 {

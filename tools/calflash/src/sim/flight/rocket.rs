@@ -76,14 +76,8 @@ impl Rocket {
             gravity: self.gravity,
             altitude: self.altitude,
         };
-        let thermal = Thermal {
-            conditioned: self.conditioned,
-            tau: 300.0,
-        };
-        let mut out = Flight {
-            samples: Vec::new(),
-            events: Vec::new(),
-        };
+        let thermal = Thermal::conditioned_at(self.conditioned);
+        let mut out = Flight::default();
         // On the rail: along its axis only, held against gravity across it.
         let along = |t: f64, x: f64, v: f64| {
             let s = State {

@@ -115,14 +115,8 @@ impl Shell {
         let peak = self.setback_g * G0;
         let (bore_time, barrel) = self.bore();
         let spin_per_speed = std::f64::consts::TAU * self.muzzle_spin / self.muzzle_velocity;
-        let thermal = Thermal {
-            conditioned: self.conditioned,
-            tau: 300.0,
-        };
-        let mut out = Flight {
-            samples: Vec::new(),
-            events: Vec::new(),
-        };
+        let thermal = Thermal::conditioned_at(self.conditioned);
+        let mut out = Flight::default();
         let mut k: i64 = -((LOADED / dt).round() as i64);
         // Loaded and in the bore: along the barrel, the spin following the speed.
         loop {
