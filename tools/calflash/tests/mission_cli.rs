@@ -73,6 +73,15 @@ fn a_profile_that_is_not_a_flight_is_named_by_line_and_column() {
         err.contains("the specific force has fx, fy but not fz"),
         "{err}"
     );
+    let empty = write(d.path(), "empty.csv", "");
+    let (_, _, err) = calflash(d.path(), &["mission", empty.to_str().unwrap()]);
+    assert!(
+        err.contains("empty.csv: empty; a mission profile is CSV with a header"),
+        "{err}"
+    );
+    let binary = write(d.path(), "binary.csv", &"\u{1}".repeat(2 << 20));
+    let (_, _, err) = calflash(d.path(), &["mission", binary.to_str().unwrap()]);
+    assert!(err.contains("line 1 is longer than 1048576 bytes"), "{err}");
     let untimed = write(d.path(), "untimed.csv", "ax,ay,az\n0,1,2\n0,1,2\n");
     let (_, _, err) = calflash(d.path(), &["mission", untimed.to_str().unwrap()]);
     assert!(err.contains("no time column"), "{err}");

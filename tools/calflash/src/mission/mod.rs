@@ -210,6 +210,14 @@ pub enum MissionError {
         /// The second.
         second: String,
     },
+    /// No header at all.
+    #[error(
+        "{path}: empty; a mission profile is CSV with a header naming its columns (t, f_x, f_y, f_z, w_x, ...)"
+    )]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
     /// No time column.
     #[error(
         "{path}: no time column (t, ts, time, time_ms, ...); name it with --mission-columns t=NAME:s"

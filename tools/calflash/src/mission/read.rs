@@ -48,6 +48,11 @@ pub fn read(path: &Path, chosen: &str) -> Result<Profile, MissionError> {
         .iter()
         .map(str::to_string)
         .collect();
+    if header.iter().all(String::is_empty) {
+        return Err(MissionError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
     let found = assign(path, &header, &chosen)?;
     let (mut notes, scales) = units(&found);
     let width = header.len();
