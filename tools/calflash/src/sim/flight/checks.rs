@@ -211,3 +211,83 @@ fn a_rockets_fins_roll_it_at_their_steady_rate() {
     assert!((2_000.0..8_000.0).contains(&apogee), "{apogee}");
     assert!(flight.events.iter().any(|e| e.0 == "rail exit"));
 }
+
+/// The decay rate of the arm turning at `rate` rad/s in the complex yaw `xi` (sampled every
+/// `dt` s): demodulated by that rate, averaged over `window` s to remove the other arm, the
+/// slope of the log amplitude.
+fn arm_decay(xi: &[Complex<f64>], dt: f64, rate: f64, window: f64) -> f64 {
+    let w = (window / dt) as usize;
+    let demod: Vec<Complex<f64>> = xi
+        .iter()
+        .enumerate()
+        .map(|(i, x)| x * Complex::from_polar(1.0, -rate * i as f64 * dt))
+        .collect();
+    let points: Vec<(f64, f64)> = (0..demod.len() - w)
+        .step_by(w / 4)
+        .map(|i| {
+            let mean: Complex<f64> = demod[i..i + w].iter().sum::<Complex<f64>>() / w as f64;
+            ((i + w / 2) as f64 * dt, mean.norm().ln())
+        })
+        .collect();
+    let n = points.len() as f64;
+    let (mx, my) = (
+        points.iter().map(|p| p.0).sum::<f64>() / n,
+        points.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>()
+        / points.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>()
+}
+
+#[test]
+fn the_epicyclic_arms_decay_at_the_linear_theorys_rates() {
+    let mut shell = Shell {
+        elevation: 0.0,
+        gravity: false,
+        seconds: 4.5,
+        ..Shell::default()
+    };
+    shell.airframe.drag = vec![(0.0, 0.0)];
+    shell.airframe.spin_damping = 0.0;
+    let dt = 2e-4;
+    let flight = shell.fire(dt);
+    let start = flight
+        .samples
+        .iter()
+        .position(|s| s.t >= shell.bore().0)
+        .unwrap();
+    let v = Vector3::from(flight.samples[start].v).normalize();
+    let ea = v.cross(&Vector3::y()).normalize();
+    let eb = v.cross(&ea);
+    let xi: Vec<Complex<f64>> = flight.samples[start..start + (4.0 / dt) as usize]
+        .iter()
+        .map(|s| {
+            let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                s.q[0], s.q[1], s.q[2], s.q[3],
+            ));
+            let x = q * Vector3::x();
+            Complex::new(x.dot(&ea), x.dot(&eb))
+        })
+        .collect();
+    let air = atmosphere::standard(0.0);
+    let spin = std::f64::consts::TAU * shell.muzzle_spin;
+    let theory = theory::epicyclic(
+        &shell.airframe,
+        shell.muzzle_velocity,
+        spin,
+        air.density,
+        0.0,
+    )
+    .unwrap();
+    let beat = std::f64::consts::TAU / (theory.fast - theory.slow);
+    let fast = arm_decay(&xi, dt, theory.fast, 4.0 * beat);
+    let slow = arm_decay(&xi, dt, theory.slow, 4.0 * beat);
+    // Measured -1.886 and -0.260 1/s against -1.922 and -0.269: linear theory to 2-3 %.
+    assert!(
+        (fast / theory.fast_damping - 1.0).abs() < 0.05,
+        "fast {fast} against {theory:?}"
+    );
+    assert!(
+        (slow / theory.slow_damping - 1.0).abs() < 0.05,
+        "slow {slow} against {theory:?}"
+    );
+}
