@@ -94,7 +94,11 @@ fn main() -> ExitCode {
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Mission(args) => cmd::mission::run(args),
         Command::Apply(args) => cmd::apply::run(args),
-        Command::Compare(args) => cmd::compare::run(args),
+        Command::Compare(args) => match cmd::compare::run(args) {
+            // A unit that changed beyond its uncertainty: the rejected unit's exit code.
+            Ok(true) => return ExitCode::from(3),
+            other => other.map(|_| ()),
+        },
         Command::Threshold(args) => cmd::threshold::run(args),
         Command::Flash(args) => cmd::flash::run(args),
         Command::Image(args) => cmd::image::run(args),

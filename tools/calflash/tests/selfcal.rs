@@ -311,11 +311,17 @@ fn compare_reads_selfcal_records() {
     assert_eq!(code, 0, "{said}{err}");
     assert!(said.contains("accelerometer: chi-square"), "{said}");
     assert!(said.contains("gyro: chi-square"), "{said}");
-    assert!(!said.contains("CHANGED"), "{said}");
+    assert!(!said.lines().any(|l| l.ends_with(": CHANGED")), "{said}");
+    assert!(said.contains("verdict: UNCHANGED"), "{said}");
 
     // From the history: records 1 and 3 (every selfcal run above was recorded).
     let (code, said, err) = calflash(d, &["compare", "db:1", "db:3", "--db", "db.sqlite"]);
-    assert_eq!(code, 0, "{said}{err}");
+    // A unit that changed exits 3, as a rejected one does, after one verdict line.
+    assert_eq!(code, 3, "{said}{err}");
+    assert!(
+        said.contains("verdict: CHANGED: 1 output(s) changed (gyro)"),
+        "{said}"
+    );
     let line = |out: &str, output: &str| {
         out.lines()
             .find(|l| l.trim_start().starts_with(&format!("{output}:")))

@@ -193,9 +193,12 @@ fn compare_finds_what_moved() {
             ],
         );
     }
-    let out = ok(d, &["compare", "before.json", "after.json"]);
+    // Two calibrations of one unshocked unit: held at 5 % over all their tests together.
+    let (code, out, err) = calflash(d, &["compare", "before.json", "after.json"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("verdict: UNCHANGED"), "{out}");
     assert!(
-        out.contains("no term moved beyond its uncertainty") || !out.contains("MOVED"),
+        !out.contains("MOVED") && !out.contains("CHANGED\n"),
         "{out}"
     );
     // After a shock: the z bias moved by 30 counts.
@@ -231,7 +234,7 @@ fn compare_finds_what_moved() {
             "shocked.json",
         ],
     );
-    let out = ok(
+    let (code, out, err) = calflash(
         d,
         &[
             "compare",
@@ -240,6 +243,11 @@ fn compare_finds_what_moved() {
             "--json",
             "cmp.json",
         ],
+    );
+    assert_eq!(code, 3, "{out}{err}");
+    assert!(
+        out.contains("verdict: CHANGED: 1 output(s) changed (g_z)"),
+        "{out}"
     );
     assert!(
         out.contains("g_z: chi-square") && out.contains("CHANGED"),

@@ -640,18 +640,18 @@ fn two_ramp_calibrations_of_a_unit_compare_at_common_temperatures() {
     cal("first", "cubic.json", "2");
     cal("again", "cubic.json", "5");
     cal("shocked", "shocked.json", "6");
-    let compared = |a: &str, b: &str| {
+    let compared = |a: &str, b: &str, changed: bool| {
         let (code, out, err) = calflash(d, &["compare", a, b]);
-        assert_eq!(code, 0, "{out}{err}");
+        assert_eq!(code, if changed { 3 } else { 0 }, "{out}{err}");
         out
     };
     // The same unit again: the models agree at every 5 C of the range.
-    let same = compared("first.json", "again.json");
+    let same = compared("first.json", "again.json", false);
     let points = same.matches("output at ").count();
     assert_eq!(points, 23, "{same}");
     assert!(!same.contains("<1e-300"), "{same}");
     // A bias shifted by 10 counts (25 times its standard error) moves everywhere.
-    let moved = compared("first.json", "shocked.json");
+    let moved = compared("first.json", "shocked.json", true);
     assert_eq!(moved.matches(": CHANGED").count(), 23, "{moved}");
 }
 

@@ -9,7 +9,8 @@ use clap::Args;
 use crate::report::{terminal::num, terminal::pval};
 use crate::sensor::compare::{self, Estimates};
 
-/// Compare two calibration records of one unit (Wald tests per term, chi-square per output).
+/// Compare two calibration records of one unit (Wald tests per term, chi-square per output,
+/// each family held at --alpha by Holm's procedure). Exits 3 when the unit CHANGED.
 #[derive(Debug, Args)]
 pub struct CompareArgs {
     /// The earlier record: a file from `calflash calibrate --json` or `calflash selfcal --json`,
@@ -29,11 +30,12 @@ pub struct CompareArgs {
     pub json: Option<PathBuf>,
 }
 
-/// Runs `calflash compare`.
+/// Runs `calflash compare`; true when the unit changed beyond its uncertainty (the process
+/// exits 3).
 ///
 /// # Errors
 /// Unreadable or incomparable records.
-pub fn run(args: &CompareArgs) -> Result<(), Failure> {
+pub fn run(args: &CompareArgs) -> Result<bool, Failure> {
     let file = |r: &str| (!r.starts_with("db:")).then(|| std::path::PathBuf::from(r));
     let (before, after) = (file(&args.before), file(&args.after));
     let db = args
@@ -70,7 +72,7 @@ pub fn run(args: &CompareArgs) -> Result<(), Failure> {
     let (ta, sa) = text(&args.before)?;
     let (tb, sb) = text(&args.after)?;
     if let Some(h) = health_of(&tb, &sb)? {
-        return against_health(args, &ta, &sa, &h);
+        return against_health(args, &ta, &sa, &h).map(|()| false);
     }
     if health_of(&ta, &sa)?.is_some() {
         return Err(
@@ -84,7 +86,7 @@ pub fn run(args: &CompareArgs) -> Result<(), Failure> {
         "calflash compare  unit {}  {} -> {}",
         a.serial, args.before, args.after
     );
-    let mut moved_any = false;
+    let terms: usize = changes.iter().map(|c| c.terms.len()).sum();
     for c in &changes {
         let at = match (c.temp, c.volt) {
             (Some(t), Some(v)) => format!(" at {t:.1} C, {v:.2} V"),
@@ -92,15 +94,13 @@ pub fn run(args: &CompareArgs) -> Result<(), Failure> {
             (None, Some(v)) => format!(" at {v:.2} V"),
             (None, None) => String::new(),
         };
-        let moved: Vec<&compare::TermChange> = c.terms.iter().filter(|t| t.moved).collect();
-        moved_any |= !moved.is_empty() || c.p < args.alpha;
         println!(
             "  {}{at}: chi-square {} on {} dof, p = {}: {}",
             c.output,
             num(c.chi2),
             c.df,
             pval(c.p),
-            if c.p < args.alpha {
+            if c.changed {
                 "CHANGED"
             } else {
                 "no change beyond the uncertainty"
@@ -118,15 +118,43 @@ pub fn run(args: &CompareArgs) -> Result<(), Failure> {
             );
         }
     }
-    if !moved_any {
-        println!("  no term moved beyond its uncertainty at {}", args.alpha);
+    let changed: Vec<String> = changes
+        .iter()
+        .filter(|c| c.changed)
+        .map(|c| match c.temp {
+            Some(t) => format!("{} at {t:.1} C", c.output),
+            None => c.output.clone(),
+        })
+        .collect();
+    let moved = changes
+        .iter()
+        .flat_map(|c| &c.terms)
+        .filter(|t| t.moved)
+        .count();
+    let family = format!(
+        "at {} over {} output test(s) and {terms} term test(s), Holm",
+        args.alpha,
+        changes.len()
+    );
+    if changed.is_empty() && moved == 0 {
+        println!("verdict: UNCHANGED: no output and no term moved beyond its uncertainty {family}");
+    } else {
+        println!(
+            "verdict: CHANGED: {} output(s) changed{}, {moved} term(s) moved, {family}",
+            changed.len(),
+            if changed.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", changed.join(", "))
+            }
+        );
     }
     if let Some(p) = &args.json {
         crate::files::write_atomically(p, |w| {
             serde_json::to_writer_pretty(&mut *w, &changes).map_err(std::io::Error::other)
         })?;
     }
-    Ok(())
+    Ok(!changed.is_empty() || moved > 0)
 }
 
 /// The health record in `text`, if it is one (`calflash.health/1`).

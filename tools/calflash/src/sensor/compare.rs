@@ -380,7 +380,8 @@ pub struct TermChange {
     pub z: f64,
     /// Two-sided p-value.
     pub p: f64,
-    /// Moved beyond its uncertainty at the level.
+    /// Moved beyond its uncertainty: rejected by Holm's procedure over every term of the
+    /// comparison at the level.
     pub moved: bool,
 }
 
@@ -401,6 +402,9 @@ pub struct AxisChange {
     pub df: usize,
     /// Its p-value.
     pub p: f64,
+    /// Changed beyond the uncertainty: rejected by Holm's procedure over every output and
+    /// table point of the comparison at the level.
+    pub changed: bool,
 }
 
 /// Compares two records of the same unit at significance level `alpha`.
@@ -465,7 +469,7 @@ pub fn compare(
                         after: aa.values[j],
                         z,
                         p,
-                        moved: p < alpha,
+                        moved: false,
                     }
                 })
                 .collect();
@@ -487,11 +491,25 @@ pub fn compare(
                 chi2,
                 df: k,
                 p,
+                changed: false,
             });
         }
     }
     if out.is_empty() {
         return Err(Error::NothingShared);
+    }
+    // One family each: the outputs' joint tests, and every term's test.
+    let changed = crate::stats::multiple::holm(&out.iter().map(|c| c.p).collect::<Vec<_>>(), alpha);
+    for (c, ch) in out.iter_mut().zip(changed) {
+        c.changed = ch;
+    }
+    let ps: Vec<f64> = out
+        .iter()
+        .flat_map(|c| c.terms.iter().map(|t| t.p))
+        .collect();
+    let mut moved = crate::stats::multiple::holm(&ps, alpha).into_iter();
+    for t in out.iter_mut().flat_map(|c| c.terms.iter_mut()) {
+        t.moved = moved.next().unwrap_or(false);
     }
     Ok(out)
 }

@@ -6,6 +6,7 @@ pub mod chart;
 pub mod decompose;
 pub mod dist;
 pub mod influence;
+pub mod multiple;
 pub mod ols;
 pub mod pattern;
 pub mod robust;
