@@ -408,3 +408,38 @@ fn two_stations(d: &std::path::Path, db: &str, count: impl Fn(&str) -> i64) {
         assert_eq!(stray, 0);
     }
 }
+
+#[test]
+fn out_dir_is_made_when_missing_and_refused_when_a_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir_all(d.join("in")).unwrap();
+    for (i, s) in ["ACC-0001", "ACC-0002"].iter().enumerate() {
+        simulate(d, &format!("in/{s}.csv"), i as u64 + 1);
+    }
+    let batch = |out: &str| {
+        calflash(
+            d,
+            &[
+                "calibrate",
+                "in",
+                "--sensor",
+                "single-accel",
+                "--out-dir",
+                out,
+                "--db",
+                "units.sqlite",
+            ],
+        )
+    };
+    // Missing, two levels deep: made, as mkdir -p would.
+    let (code, out, err) = batch("made/here");
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(d.join("made/here/ACC-0002.blob").is_file());
+    // A file in its place is refused, and left alone.
+    std::fs::write(d.join("taken"), "mine").unwrap();
+    let (code, _, err) = batch("taken");
+    assert_ne!(code, 0);
+    assert!(err.contains("--out-dir taken: not a directory"), "{err}");
+    assert_eq!(std::fs::read_to_string(d.join("taken")).unwrap(), "mine");
+}

@@ -123,6 +123,16 @@ fn a_small_lot_is_judged_coefficient_by_coefficient_and_says_how_many_it_needs()
     );
     assert_ne!(code, 0);
     assert!(err.contains("a lot of 0 unit(s)"), "{err}");
+    // A lot nobody recorded is named as such.
+    let (code, _, err) = calflash(
+        dir.path(),
+        &["lot", "--lot", "L-NONE", "--db", "units.sqlite"],
+    );
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("no such lot: no unit in") && err.contains("was calibrated in lot `L-NONE`"),
+        "{err}"
+    );
     let (code, _, err) = calflash(
         dir.path(),
         &["lot", "SMALL-", "--db", "units.sqlite", "--chart", "nope"],

@@ -166,6 +166,20 @@ fn a_simulated_shell_reads_back_as_its_mission() {
     );
     assert_ne!(code, 0);
     assert!(err.contains("a shell has no `calibre`"), "{err}");
+    // A sensor's name in capitals is the same sensor.
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "IMU",
+            "--flight",
+            "shell:seconds=0.05",
+            "-o",
+            "caps.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
 }
 
 fn hedy() -> Option<PathBuf> {

@@ -40,7 +40,7 @@ pub struct AllanArgs {
     #[command(flatten)]
     pub columns: super::units::ColumnArgs,
     /// Which sensor.
-    #[arg(long, value_enum, default_value = "gyro")]
+    #[arg(long, value_enum, ignore_case = true, default_value = "gyro")]
     pub sensor: Which,
     /// Counts per SI unit (per rad/s or per m/s^2), one for all axes or three; without it the
     /// deviation is in counts.

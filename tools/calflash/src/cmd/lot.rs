@@ -110,7 +110,21 @@ fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, String> {
 /// # Errors
 /// An unreadable history, too few units, or no shared coefficients.
 pub fn load(path: &Location, sel: &Selection<'_>, alpha: f64) -> Result<lot::Lot, Failure> {
-    Ok(judge(path, sel, units(path, sel)?, alpha)?)
+    let units = units(path, sel)?;
+    if units.is_empty()
+        && let Some(name) = sel.lot
+    {
+        return Err(format!(
+            "no such lot: no unit in {path} was calibrated in lot `{name}`{} (`calflash calibrate --lot {name}` records one; `calflash history` lists the units)",
+            if sel.prefix.is_empty() && sel.station.is_none() {
+                String::new()
+            } else {
+                format!(" within {sel}")
+            }
+        )
+        .into());
+    }
+    Ok(judge(path, sel, units, alpha)?)
 }
 
 /// Runs `calflash lot`.

@@ -224,6 +224,18 @@ pub fn check_options(args: &CalibrateArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `--out-dir`, made (with its parents) when it does not exist yet, as `mkdir -p` would.
+///
+/// # Errors
+/// A path that exists and is not a directory, or one that cannot be made.
+pub(super) fn ready_out_dir(dir: &Path) -> Result<(), Failure> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(format!("--out-dir {}: not a directory", dir.display()).into());
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| format!("--out-dir {}: cannot make it: {e}", dir.display()).into())
+}
+
 /// Runs a batch; the worst verdict.
 ///
 /// # Errors
@@ -234,9 +246,7 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, Failure> {
         "a batch (several files or a directory) writes each unit's files into --out-dir: give it",
     )?;
     check_options(args)?;
-    if !out_dir.is_dir() {
-        return Err(format!("--out-dir {}: not a directory", out_dir.display()).into());
-    }
+    ready_out_dir(out_dir)?;
     let files = files(&args.data)?;
     let mut units: Vec<(String, PathBuf)> = Vec::with_capacity(files.len());
     for f in &files {

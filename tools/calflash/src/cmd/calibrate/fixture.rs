@@ -250,9 +250,7 @@ pub fn run(args: &CalibrateArgs) -> Result<crate::sensor::Verdict, Failure> {
         .out_dir
         .as_ref()
         .ok_or("--fixture writes each unit's files into --out-dir: give it")?;
-    if !out_dir.is_dir() {
-        return Err(format!("--out-dir {}: not a directory", out_dir.display()).into());
-    }
+    super::batch::ready_out_dir(out_dir)?;
     let units = split(data, args.sensor, &args.units, out_dir)?;
     super::batch::run_units(args, &units, out_dir)
 }

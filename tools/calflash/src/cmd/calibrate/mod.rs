@@ -52,7 +52,7 @@ pub struct CalibrateArgs {
     #[arg(required = true, num_args = 1..)]
     pub data: Vec<PathBuf>,
     /// What the observations are of.
-    #[arg(long, value_enum)]
+    #[arg(long, value_enum, ignore_case = true)]
     pub sensor: SensorKind,
     /// The unit's serial number (1 to 16 printable ASCII characters); a batch takes each
     /// unit's from its file name.

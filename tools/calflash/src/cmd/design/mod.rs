@@ -48,7 +48,7 @@ pub struct ModelArgs {
     pub model: String,
     /// The unit the plan items drive (which input a single axis reads; triad inputs are the
     /// specific force, or the rate for a gyro).
-    #[arg(long, value_enum, default_value = "single-accel")]
+    #[arg(long, value_enum, ignore_case = true, default_value = "single-accel")]
     pub sensor: SensorKind,
     /// The operating region for the G and I criteria (repeatable grids NAME=LO:HI:N, combined);
     /// default: the candidates or the plan's own points.

@@ -15,7 +15,7 @@ use crate::sim::{self, Sensor, plan, ramp, truth};
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
     /// What to simulate.
-    #[arg(long, value_enum)]
+    #[arg(long, value_enum, ignore_case = true)]
     pub sensor: SensorKind,
     /// Plan items (repeatable): head:N, tumble:6|12|18|24|26, sphere:N, rate:LO:HI:N (rad/s),
     /// diagonal:LO:HI:N (rad/s, about the 45-degree diagonals), centrifuge:LO:HI:N (g),
