@@ -245,9 +245,7 @@ fn compare_finds_what_moved() {
         ],
     );
     assert_eq!(code, 3, "{out}{err}");
-    // The shock moved the z bias by 30 counts. (With this seed x's bias also reads as moved,
-    // z = -3.1, though its truth did not: compare's false alarms on simulated gyros run above
-    // their level, a limit the closing note names.)
+    // The shock moved the z bias by 30 counts.
     let verdict = out.lines().find(|l| l.starts_with("verdict: ")).unwrap();
     assert!(
         verdict.starts_with("verdict: CHANGED: ") && verdict.contains("g_z"),

@@ -126,6 +126,9 @@ pub struct Estimate {
     pub std_errors: Vec<f64>,
     /// Covariance, rows in the order of `terms`.
     pub covariance: Vec<Vec<f64>>,
+    /// The residual degrees of freedom its noise was estimated with (`None`: known, or not
+    /// recorded: the tests take the normal and chi-square references).
+    pub dof: Option<f64>,
 }
 
 /// The estimates of one table point.
@@ -179,6 +182,7 @@ impl Estimates {
                             values: a.coefficients.clone(),
                             std_errors: a.std_errors.clone(),
                             covariance: a.covariance.clone(),
+                            dof: (a.dof > 0).then_some(a.dof as f64),
                         })
                         .collect(),
                 })
@@ -255,6 +259,7 @@ impl Estimates {
                 values,
                 std_errors,
                 covariance,
+                dof: None,
             }))
         };
         let serial = field(&["serial"])?
@@ -461,8 +466,17 @@ pub fn compare(
                 .iter()
                 .map(|&(i, j)| {
                     let d = aa.values[j] - ab.values[i];
-                    let z = d / (ab.std_errors[i].powi(2) + aa.std_errors[j].powi(2)).sqrt();
-                    let p = dist::normal_two_sided(z);
+                    let (v1, v2) = (ab.std_errors[i].powi(2), aa.std_errors[j].powi(2));
+                    let z = d / (v1 + v2).sqrt();
+                    // Each variance estimated from its fit's residuals: Welch's t with
+                    // Satterthwaite's degrees of freedom, not the normal.
+                    let p = match (ab.dof, aa.dof) {
+                        (Some(n1), Some(n2)) => {
+                            let nu = (v1 + v2).powi(2) / (v1 * v1 / n1 + v2 * v2 / n2);
+                            dist::t_two_sided(z, nu)
+                        }
+                        _ => dist::normal_two_sided(z),
+                    };
                     TermChange {
                         term: ab.terms[i].clone(),
                         before: ab.values[i],
@@ -482,7 +496,12 @@ pub fn compare(
                 ab.covariance[i1][i2] + aa.covariance[j1][j2]
             });
             let chi2 = c.cholesky().map_or(f64::NAN, |ch| d.dot(&ch.solve(&d)));
-            let p = ChiSquared::new(k as f64).map_or(f64::NAN, |dist| dist.sf(chi2));
+            // With estimated noise, chi2 / k is F(k, nu) (nu the smaller fit's residual
+            // degrees of freedom, which errs towards calling no change).
+            let p = match (ab.dof, aa.dof) {
+                (Some(n1), Some(n2)) => dist::f_upper(chi2 / k as f64, k as f64, n1.min(n2)),
+                _ => ChiSquared::new(k as f64).map_or(f64::NAN, |dist| dist.sf(chi2)),
+            };
             out.push(AxisChange {
                 output: ab.output.clone(),
                 temp: pb.temp,
@@ -531,6 +550,7 @@ mod tests {
                     values: vec![value, 1.0],
                     std_errors: vec![0.01, 0.01],
                     covariance: vec![vec![1e-4, 0.0], vec![0.0, 1e-4]],
+                    dof: None,
                 }],
             }],
             accel_center: None,
