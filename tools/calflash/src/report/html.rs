@@ -75,7 +75,13 @@ fn summary(h: &mut String, c: &Calibrated, data_file: &str) {
         "<p>Data {} (SHA-256 {}&#8230;), {} observations at {} table point{}; calflash {}.{}.{}; blob {} bytes.</p>",
         esc(data_file),
         hash,
-        c.points.iter().map(|p| p.axes[0].fit.n).sum::<usize>(),
+        // Each observation once: a continuous temperature model fits every observation at
+        // each of the device's breakpoints.
+        c.points
+            .iter()
+            .flat_map(|p| p.axes[0].lines.iter())
+            .collect::<std::collections::HashSet<_>>()
+            .len(),
         c.points.len(),
         if c.points.len() == 1 { "" } else { "s" },
         id.tool_version[0],
