@@ -19,8 +19,9 @@
 //! | `sweep:LO:HI:N` | ascending then descending input along x (hysteresis), with the direction |
 //! | `fine:LO:HI:N` | N small steps of the x input near zero (threshold, dead band, resolution) |
 //!
-//! Single-axis plans use only the first direction of each item (`+x` up for `rate`, `+x`
-//! radial for `centrifuge`); triads use them all.
+//! Single-axis plans use only the first direction of each item (`+x` up for `rate`), but a
+//! centrifuge's two (`+x` and `-x` radial: the input axis outward and inward); triads use them
+//! all.
 
 use serde::{Deserialize, Serialize};
 
@@ -258,7 +259,14 @@ pub fn item(text: &str, single: bool) -> Result<Vec<Condition>, PlanError> {
         "centrifuge" => {
             let (lo, hi, n) = range()?;
             let mut out = Vec::new();
-            for radial in dirs(axes()) {
+            // A single axis is mounted twice, its input axis outward and inward (+x and -x
+            // radial): the negative inputs a one-armed centrifuge gives.
+            let radials = if single {
+                axes().into_iter().take(2).collect()
+            } else {
+                axes()
+            };
+            for radial in radials {
                 let k = radial.iter().position(|c| *c != 0.0).unwrap_or(0);
                 let mut vertical = [0.0; 3];
                 vertical[(k + 1) % 3] = 1.0;
@@ -394,6 +402,11 @@ mod tests {
         assert!((d[0].w[0] - 100.0 / 2f64.sqrt()).abs() < 1e-12 && d[0].w[2] == 0.0);
         assert!((d[0].f[1] - G / 2f64.sqrt()).abs() < 1e-12);
         assert_eq!(item("rate:-5:5:11", true).unwrap().len(), 11);
+        // A single axis on the centrifuge: outward and inward, +-1 to +-10 g.
+        let one = item("centrifuge:1:10:4", true).unwrap();
+        assert_eq!(one.len(), 8);
+        let inputs: Vec<f64> = one.iter().map(|c| (c.f[0] / G).round()).collect();
+        assert_eq!(inputs, [1.0, 4.0, 7.0, 10.0, -1.0, -4.0, -7.0, -10.0]);
         let c = item("centrifuge:1:10:4", false).unwrap();
         let last = c[3];
         // 10 g radial along +x, gravity on y, spin about y with w^2 R = 10 g.
