@@ -262,3 +262,26 @@ fn bad_options_are_refused() {
         "{stderr}"
     );
 }
+
+#[test]
+fn help_lists_every_preset_and_plan_item() {
+    let d = tempfile::tempdir().unwrap();
+    let (code, out, _) = calflash(d.path(), &["design", "optimize", "--help"]);
+    assert_eq!(code, 0);
+    for word in [
+        "accel-lever",
+        "gyro-gsens",
+        "triad-nonlinear",
+        "diagonal:LO:HI:N",
+        "--mission",
+    ] {
+        assert!(
+            out.contains(word),
+            "design optimize --help lacks {word}:\n{out}"
+        );
+    }
+    let (_, out, _) = calflash(d.path(), &["simulate", "--help"]);
+    for word in ["diagonal:LO:HI:N", "--flight", "--flight-truth"] {
+        assert!(out.contains(word), "simulate --help lacks {word}:\n{out}");
+    }
+}

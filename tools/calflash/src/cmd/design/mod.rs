@@ -43,7 +43,7 @@ pub enum Action {
 #[derive(Debug, Args)]
 pub struct ModelArgs {
     /// The model: a formula (`~ 1 + rate + rate^2` or `volts ~ ...`) or a preset: single,
-    /// triad, triad-nonlinear, gyro-gsens.
+    /// triad, triad-nonlinear, gyro-gsens, accel-lever (the spin rig's lever arms).
     #[arg(long)]
     pub model: String,
     /// The unit the plan items drive (which input a single axis reads; triad inputs are the

@@ -28,7 +28,7 @@ pub struct OptimizeArgs {
     #[arg(long, value_enum)]
     pub criterion: Option<Criterion>,
     /// Candidate points the equipment reaches: plan items (head:N, tumble:6|12|18|24|26,
-    /// sphere:N, rate:LO:HI:N, centrifuge:LO:HI:N), repeatable.
+    /// sphere:N, rate:LO:HI:N, diagonal:LO:HI:N, centrifuge:LO:HI:N), repeatable.
     #[arg(long)]
     pub candidates: Vec<String>,
     /// Candidate grids NAME=LO:HI:N (repeatable; combined with each other and with the items).
