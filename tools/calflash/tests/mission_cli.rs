@@ -321,6 +321,31 @@ fn a_mission_the_equipment_cannot_reach_is_said_and_the_rest_is_extrapolation() 
         out.contains("w_x 0 % of the time below -153 and 46.5 % above 153"),
         "{out}"
     );
+    // evaluate judges plans over the flight too, and its JSON keeps the table.
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "design",
+            "evaluate",
+            "--sensor",
+            "gyro",
+            "--model",
+            "triad",
+            "--plan",
+            "rate:-150:150:7",
+            "--plan",
+            "rate:-150:150:31",
+            "--mission",
+            p.to_str().unwrap(),
+            "--json",
+            "e.json",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("Over the mission"), "{out}");
+    let e: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("e.json")).unwrap()).unwrap();
+    assert_eq!(e["mission"]["plans"].as_array().unwrap().len(), 2);
     // A profile without the rates the gyro model reads.
     let still = write(
         d.path(),
@@ -453,7 +478,14 @@ fn a_calibration_is_judged_over_its_mission() {
     };
     // A loose requirement: the predicted error is met, and the left-out nonlinear terms, at
     // their bench bound, stay under it.
-    let (code, out, err) = calibrate(&["--requirement", "a=0.5", "--report", "r.html"]);
+    let (code, out, err) = calibrate(&[
+        "--requirement",
+        "a=0.5",
+        "--report",
+        "r.html",
+        "--json",
+        "r.json",
+    ]);
     assert!(code == 0 || code == 2, "{err}");
     assert!(
         out.contains("mission rocket.csv: predicted 1-sigma error over the flight"),
@@ -462,6 +494,12 @@ fn a_calibration_is_judged_over_its_mission() {
     assert!(out.contains("a_x: rms "), "{out}");
     assert!(out.contains("left-out term f_x"), "{out}");
     assert!(!out.contains("exceeds the requirement"), "{out}");
+    // The record keeps the judgement: per output the predicted error and the left-out terms.
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("r.json")).unwrap()).unwrap();
+    assert_eq!(record["mission"]["outputs"].as_array().unwrap().len(), 3);
+    assert!(record["mission"]["outputs"][0]["rms"].as_f64().unwrap() > 0.0);
+    assert!(!record["mission"]["terms"].as_array().unwrap().is_empty());
     let html = std::fs::read_to_string(d.path().join("r.html")).unwrap();
     assert!(html.contains("<h2>Over the mission</h2>"));
     assert!(html.contains("Predicted error along the flight"));

@@ -92,6 +92,10 @@ pub struct Record {
     /// The production lot the unit was calibrated in (`calibrate --lot`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lot: Option<String>,
+    /// The calibration judged over a mission (`calibrate --mission`): per output the predicted
+    /// error along the flight, the share beyond the calibrated range, the left-out terms.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mission: Option<serde_json::Value>,
 }
 
 /// The points a record holds: the table's; for a continuous temperature model, the model at
@@ -198,6 +202,10 @@ impl Record {
             blob: hex(&c.blob),
             earth: c.earth,
             lot: None,
+            mission: c
+                .mission
+                .as_ref()
+                .and_then(|m| serde_json::to_value(m).ok()),
         }
     }
 

@@ -125,10 +125,11 @@ pub(super) fn run(a: &EvaluateArgs) -> Result<(), Failure> {
         show::evaluate_text(&a.model.model, &blocks, &plans, a.fixture_error)
     );
     // Over the mission, the equipment reaching what the plans together span.
-    if let Some(m) = super::over_mission(&space, &blocks, &plans, &union, "the plans together")? {
-        print!("{}", crate::report::mission::plans_text(&m));
+    let mission = super::over_mission(&space, &blocks, &plans, &union, "the plans together")?;
+    if let Some(m) = &mission {
+        print!("{}", crate::report::mission::plans_text(m));
     }
-    write_evaluation(a, &blocks, &plans, curve.as_ref())
+    write_evaluation(a, &blocks, &plans, curve.as_ref(), mission.as_ref())
 }
 
 /// `design evaluate`'s files, all or none.
@@ -137,10 +138,14 @@ fn write_evaluation(
     blocks: &[Block],
     plans: &[show::PlanResult],
     curve: Option<&Points>,
+    mission: Option<&crate::report::mission::OverMission>,
 ) -> Result<(), Failure> {
     let mut staged = Staged::new();
     if let Some(path) = &a.json {
-        let v = show::evaluate_json(blocks, plans);
+        let mut v = show::evaluate_json(blocks, plans);
+        if let (Some(m), Some(o)) = (mission, v.as_object_mut()) {
+            o.insert("mission".into(), serde_json::to_value(m)?);
+        }
         staged.write(path, |w| {
             serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
         })?;
@@ -164,6 +169,11 @@ fn evaluate_spin_rig(
 ) -> Result<(), Failure> {
     if a.fixture_error.is_some() {
         return Err("--fixture-error: not with the lever-arm model".into());
+    }
+    if a.model.mission.is_some() {
+        return Err(
+            "--mission: not with the lever-arm model (its plans differ in what they estimate); evaluate them with --model triad".into(),
+        );
     }
     /// Plans that estimate the same lever-arm components, on the model of those.
     struct Group {
@@ -210,7 +220,7 @@ fn evaluate_spin_rig(
     }
     if let Some(g) = groups.first() {
         let curve = a.curve.as_deref().map(points::grid).transpose()?;
-        write_evaluation(a, &g.blocks, &g.plans, curve.as_ref())?;
+        write_evaluation(a, &g.blocks, &g.plans, curve.as_ref(), None)?;
     }
     Ok(())
 }
