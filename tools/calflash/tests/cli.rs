@@ -285,3 +285,40 @@ fn help_lists_every_preset_and_plan_item() {
         assert!(out.contains(word), "simulate --help lacks {word}:\n{out}");
     }
 }
+
+#[test]
+fn a_simulated_still_recording_gives_allan_its_noise_back() {
+    let d = tempfile::tempdir().unwrap();
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--still",
+            "3600",
+            "--bias-walk",
+            "0.05,0.02",
+            "-o",
+            "still.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("360000 samples at 100 Hz"), "{out}");
+    let (code, _, err) = calflash(
+        d.path(),
+        &["allan", "still.csv", "--sensor", "gyro", "--json", "g.json"],
+    );
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("g.json")).unwrap()).unwrap();
+    for axis in json["axes"].as_array().unwrap() {
+        let terms = &axis["terms"];
+        // 2 counts of white noise a sample at 100 Hz: 0.2 counts/sqrt(Hz).
+        let n = terms["random_walk"].as_f64().unwrap();
+        assert!((n / 0.2 - 1.0).abs() < 0.05, "{axis}");
+        // The stated walk of 0.02 counts/sqrt(s), read from one hour.
+        let k = terms["rate_random_walk"].as_f64().unwrap();
+        assert!((0.01..0.03).contains(&k), "{axis}");
+    }
+}

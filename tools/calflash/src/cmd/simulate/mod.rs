@@ -20,7 +20,7 @@ pub struct SimulateArgs {
     /// Plan items (repeatable): head:N, tumble:6|12|18|24|26, sphere:N, rate:LO:HI:N (rad/s),
     /// diagonal:LO:HI:N (rad/s, about the 45-degree diagonals), centrifuge:LO:HI:N (g),
     /// sweep:LO:HI:N, fine:LO:HI:N.
-    #[arg(long, required_unless_present_any = ["plan_file", "spin", "rest", "flight"])]
+    #[arg(long, required_unless_present_any = ["plan_file", "spin", "rest", "flight", "still"])]
     pub plan: Vec<String>,
     /// An IMU at rest and being handled, as the raw counts of this blob's device correction
     /// (for `calflash health` and `allan`): rests of `--hold` seconds in `--poses` poses, one
@@ -59,6 +59,13 @@ pub struct SimulateArgs {
     /// `volt` (the profile `calflash mission` and `--mission` read) and the raw `a_*`, `g_*`.
     #[arg(long, conflicts_with_all = ["plan", "plan_file", "spin", "rest"])]
     pub flight: Option<String>,
+    /// An IMU lying still (z up) this many seconds, for `calflash allan`: a row per sample,
+    /// `t`, the six codes and `temp`, with the truth's white noise and `--bias-walk`.
+    #[arg(long, conflicts_with_all = ["plan", "plan_file", "spin", "rest", "flight"], value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
+    pub still: Option<f64>,
+    /// With --still: each bias's random walk, counts per root second, `ACCEL,GYRO`.
+    #[arg(long, requires = "still", value_delimiter = ',', value_parser = super::values::non_negative)]
+    pub bias_walk: Vec<f64>,
     /// With --flight: write the flight's truth here (CSV: t, position x y z in m downrange,
     /// left and up from the launch point, velocity vx vy vz, attitude qw qx qy qz body to
     /// Earth).
@@ -389,6 +396,53 @@ fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `--still`: an IMU at rest for an Allan deviation.
+fn still(args: &SimulateArgs, seconds: f64) -> Result<(), Failure> {
+    if args.sensor != SensorKind::Imu {
+        return Err("--still: a still recording is of an IMU (--sensor imu)".into());
+    }
+    let rate = args.sample_rate.unwrap_or(100.0);
+    if seconds * rate > MAX_FLIGHT_SAMPLES {
+        return Err(format!(
+            "--still: {seconds} s at {rate} Hz is {:.3e} samples; at most {MAX_FLIGHT_SAMPLES:e}",
+            seconds * rate
+        )
+        .into());
+    }
+    let walk = match args.bias_walk.as_slice() {
+        [] => [0.0; 2],
+        [a, g] => [*a, *g],
+        _ => return Err("--bias-walk: two values, ACCEL,GYRO (counts per root second)".into()),
+    };
+    let s = sim::still::Still {
+        seconds,
+        rate,
+        walk,
+        temp: args.temps.first().copied().unwrap_or(25.0),
+        volt: args.volts.first().copied().unwrap_or(5.0),
+        seed: args.seed,
+    };
+    let truth = imu_truth(args)?;
+    let mut codes = sim::still::record(&truth, &s);
+    let saturated = hold_at_rails(codes.iter_mut().flatten(), args.codes);
+    let mut staged = Staged::new();
+    staged.write(&args.output, |w| {
+        sim::still::write_csv(&codes, &s, std::io::BufWriter::new(w))
+    })?;
+    if let Some(p) = &args.write_truth {
+        let json = serde_json::to_string_pretty(&truth)?;
+        staged.write(p, |w| w.write_all(json.as_bytes()))?;
+    }
+    staged.commit()?;
+    println!(
+        "calflash simulate: an IMU still for {seconds} s, {} samples at {rate} Hz (bias walk {walk:?} counts/sqrt(s)), written to {}",
+        codes.len(),
+        args.output.display()
+    );
+    print!("{}", saturation_note(saturated, args.codes, ""));
+    Ok(())
+}
+
 /// Runs `calflash simulate`.
 ///
 /// # Errors
@@ -404,6 +458,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         .check()?;
     if let Some(spec) = &args.flight {
         return flight::run(args, spec);
+    }
+    if let Some(seconds) = args.still {
+        return still(args, seconds);
     }
     if let Some(blob) = &args.rest {
         return rest(args, blob);
