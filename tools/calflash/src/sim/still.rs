@@ -107,13 +107,8 @@ mod tests {
             let m = mean(i);
             (codes.iter().map(|c| (c[i] - m).powi(2)).sum::<f64>() / 1999.0).sqrt()
         };
-        for i in 0..3 {
-            assert!(
-                (mean(i) - want[i]).abs() < 0.2,
-                "{i}: {} against {}",
-                mean(i),
-                want[i]
-            );
+        for (i, w) in want.iter().enumerate() {
+            assert!((mean(i) - w).abs() < 0.2, "{i}: {} against {w}", mean(i));
             // The white noise, with rounding's 1/12 count^2.
             let expect = (truth.accel.noise[i].powi(2) + 1.0 / 12.0).sqrt();
             assert!(
