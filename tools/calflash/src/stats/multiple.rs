@@ -30,10 +30,10 @@ mod tests {
             holm(&[0.01, 0.04, 0.012, 0.03], 0.05),
             [true, false, true, false]
         );
-        // 0.0125 is not below 0.0125: nothing after it either.
+        // 0.03 is not below 0.025: 0.04, below its own 0.05, is kept with it.
         assert_eq!(
-            holm(&[0.0125, 0.001, 0.002, 0.003], 0.05),
-            [false, true, true, true]
+            holm(&[0.013, 0.001, 0.04, 0.03], 0.05),
+            [true, true, false, false]
         );
         assert_eq!(holm(&[0.2, f64::NAN], 0.05), [false, false]);
         assert!(holm(&[], 0.05).is_empty());
