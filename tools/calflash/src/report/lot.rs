@@ -126,7 +126,7 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
     for (name, c) in charts {
         let _ = write!(
             h,
-            "<h2>{:?} chart of {}</h2><p>Centre {:.6e}, sigma {:.3e} (mean moving range / 1.128); {} point(s) out of control.</p><div class=\"fig\">",
+            "<h2>{:?} chart of {}</h2><p>Centre {:.6e}, sigma {:.3e} (the baseline's median and median moving range / 0.954, robust to units far out); {} point(s) out of control.</p><div class=\"fig\">",
             c.kind,
             esc(name),
             c.centre,

@@ -2,7 +2,10 @@
 //! sigma) and EWMA, with the points out of control marked. The centre line and sigma come from
 //! a baseline, the first quarter of the points (at least 20, or all when fewer): the process as
 //! it was, against which the later points are watched (a drift in the later points does not
-//! move the limits that should catch it).
+//! move the limits that should catch it). Both are robust, so that a unit far out does not
+//! widen the limits that should name it: the centre is the baseline's median, sigma its median
+//! moving range over 0.954 (the median of `|X1 - X2|` for two normal values is
+//! `0.6745 sqrt(2)` of their sigma).
 
 /// Which chart.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -18,18 +21,18 @@ pub enum Kind {
 pub const EWMA_LAMBDA: f64 = 0.2;
 /// Limits at this many sigma of the plotted statistic.
 pub const SIGMAS: f64 = 3.0;
-/// The mean moving range of two normal values is this times their sigma (d2 for n = 2, which
-/// is 2 / sqrt(pi)).
-const D2: f64 = std::f64::consts::FRAC_2_SQRT_PI;
+/// The median moving range of two normal values is this times their sigma: the normal's
+/// quartile 0.674490 times sqrt(2).
+const MEDIAN_MR: f64 = 0.674_489_750_196_081_7 * std::f64::consts::SQRT_2;
 
 /// A chart: the plotted statistic per value, its limits, and the points beyond them.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Chart {
     /// Which chart.
     pub kind: Kind,
-    /// The centre line (the mean of the baseline).
+    /// The centre line (the median of the baseline).
     pub centre: f64,
-    /// The process sigma (the baseline's mean moving range / 1.128).
+    /// The process sigma (the baseline's median moving range / 0.954).
     pub sigma: f64,
     /// Points in the baseline (the first ones).
     pub baseline: usize,
@@ -49,10 +52,9 @@ pub fn chart(values: &[f64], kind: Kind) -> Option<Chart> {
     }
     let baseline = (values.len() / 4).max(20).min(values.len());
     let base = &values[..baseline];
-    let n = baseline as f64;
-    let centre = base.iter().sum::<f64>() / n;
-    let mr = base.windows(2).map(|w| (w[1] - w[0]).abs()).sum::<f64>() / (n - 1.0);
-    let sigma = mr / D2;
+    let centre = median(base.to_vec());
+    let ranges: Vec<f64> = base.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    let sigma = median(ranges) / MEDIAN_MR;
     let (plotted, limits): (Vec<f64>, Vec<(f64, f64)>) = match kind {
         Kind::Individuals => values
             .iter()
@@ -89,6 +91,20 @@ pub fn chart(values: &[f64], kind: Kind) -> Option<Chart> {
         limits,
         out_of_control,
     })
+}
+
+/// The median of `v` (the mean of the middle two for an even count).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
 }
 
 #[cfg(test)]
@@ -130,5 +146,20 @@ mod tests {
         let ind = chart(&wild, Kind::Individuals).unwrap();
         assert_eq!(ind.out_of_control, vec![77]);
         assert!(chart(&[1.0], Kind::Ewma).is_none());
+    }
+
+    #[test]
+    fn units_far_out_do_not_widen_the_limits_that_name_them() {
+        // Eleven units alternating +-1, two at +10 and -10: the mean moving range (4.7) would
+        // put the limits at +-12 and both in control; the median's (2) puts them at +-6.3.
+        let mut v: Vec<f64> = (0..13)
+            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        v[4] = 10.0;
+        v[9] = -10.0;
+        let c = chart(&v, Kind::Individuals).unwrap();
+        assert!((c.sigma - 2.0 / MEDIAN_MR).abs() < 1e-12, "{c:?}");
+        assert_eq!(c.centre, 1.0);
+        assert_eq!(c.out_of_control, [4, 9]);
     }
 }
