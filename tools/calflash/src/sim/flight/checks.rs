@@ -49,9 +49,10 @@ fn without_aerodynamics_the_flight_is_the_exact_parabola() {
     assert!(flight.events.iter().any(|e| e.0 == "apogee"));
 }
 
-/// The complex yaw's spectrum (the axis' components across the initial velocity) and its two
-/// largest peaks, rad/s, by zero-padded FFT with parabolic interpolation.
-fn yaw_rates(shell: &Shell, seconds: f64, dt: f64) -> (f64, f64) {
+/// The complex yaw over `seconds` from the muzzle, sampled every `dt` s: the axis' components
+/// across the muzzle velocity, `(e_a, e_b, v)` right-handed so that a turn in the spin's sense
+/// is a positive frequency.
+fn complex_yaw(shell: &Shell, seconds: f64, dt: f64) -> Vec<Complex<f64>> {
     let flight = shell.fire(dt);
     let start = flight
         .samples
@@ -61,16 +62,56 @@ fn yaw_rates(shell: &Shell, seconds: f64, dt: f64) -> (f64, f64) {
     let v = Vector3::from(flight.samples[start].v).normalize();
     let ea = v.cross(&Vector3::y()).normalize();
     let eb = v.cross(&ea);
-    let n = (seconds / dt) as usize;
+    flight.samples[start..start + (seconds / dt) as usize]
+        .iter()
+        .map(|s| {
+            let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                s.q[0], s.q[1], s.q[2], s.q[3],
+            ));
+            let x = q * Vector3::x();
+            Complex::new(x.dot(&ea), x.dot(&eb))
+        })
+        .collect()
+}
+
+/// The shell flying level with neither gravity, drag nor spin damping: its speed, spin and air
+/// stay those at the muzzle, where linear theory is evaluated.
+fn level_shell() -> Shell {
+    let mut shell = Shell {
+        elevation: 0.0,
+        gravity: false,
+        seconds: 4.5,
+        ..Shell::default()
+    };
+    shell.airframe.drag = vec![(0.0, 0.0)];
+    shell.airframe.spin_damping = 0.0;
+    shell
+}
+
+/// Linear theory for [`level_shell`] at its muzzle state.
+fn level_theory(shell: &Shell) -> theory::Epicyclic {
+    let air = atmosphere::standard(0.0);
+    let spin = std::f64::consts::TAU * shell.muzzle_spin;
+    theory::epicyclic(
+        &shell.airframe,
+        shell.muzzle_velocity,
+        spin,
+        air.density,
+        0.0,
+    )
+    .unwrap()
+}
+
+/// The complex yaw's spectrum and its two largest peaks, rad/s, by zero-padded FFT with
+/// parabolic interpolation.
+fn yaw_rates(shell: &Shell, seconds: f64, dt: f64) -> (f64, f64) {
+    let xi = complex_yaw(shell, seconds, dt);
+    let n = xi.len();
     let size = (4 * n).next_power_of_two();
     let mut buf = vec![Complex::new(0.0, 0.0); size];
-    for (i, s) in flight.samples[start..start + n].iter().enumerate() {
-        let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-            s.q[0], s.q[1], s.q[2], s.q[3],
-        ));
-        let x = q * Vector3::x();
+    for (i, x) in xi.iter().enumerate() {
         let hann = 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos();
-        buf[i] = Complex::new(x.dot(&ea), x.dot(&eb)) * hann;
+        buf[i] = x * hann;
     }
     FftPlanner::new().plan_fft_forward(size).process(&mut buf);
     let power: Vec<f64> = buf[..size / 2].iter().map(|c| c.norm_sqr()).collect();
@@ -90,26 +131,9 @@ fn yaw_rates(shell: &Shell, seconds: f64, dt: f64) -> (f64, f64) {
 
 #[test]
 fn the_epicyclic_rates_and_the_stability_factor_are_the_linear_theorys() {
-    // Level, without gravity, drag or spin damping: speed, spin and air stay as at the muzzle.
-    let mut shell = Shell {
-        elevation: 0.0,
-        gravity: false,
-        seconds: 4.5,
-        ..Shell::default()
-    };
-    shell.airframe.drag = vec![(0.0, 0.0)];
-    shell.airframe.spin_damping = 0.0;
+    let shell = level_shell();
     let (fast, slow) = yaw_rates(&shell, 4.0, 2e-4);
-    let air = atmosphere::standard(0.0);
-    let spin = std::f64::consts::TAU * shell.muzzle_spin;
-    let theory = theory::epicyclic(
-        &shell.airframe,
-        shell.muzzle_velocity,
-        spin,
-        air.density,
-        0.0,
-    )
-    .unwrap();
+    let theory = level_theory(&shell);
     assert!(
         (fast / theory.fast - 1.0).abs() < 0.005,
         "fast {fast} against {theory:?}"
@@ -240,44 +264,10 @@ fn arm_decay(xi: &[Complex<f64>], dt: f64, rate: f64, window: f64) -> f64 {
 
 #[test]
 fn the_epicyclic_arms_decay_at_the_linear_theorys_rates() {
-    let mut shell = Shell {
-        elevation: 0.0,
-        gravity: false,
-        seconds: 4.5,
-        ..Shell::default()
-    };
-    shell.airframe.drag = vec![(0.0, 0.0)];
-    shell.airframe.spin_damping = 0.0;
+    let shell = level_shell();
     let dt = 2e-4;
-    let flight = shell.fire(dt);
-    let start = flight
-        .samples
-        .iter()
-        .position(|s| s.t >= shell.bore().0)
-        .unwrap();
-    let v = Vector3::from(flight.samples[start].v).normalize();
-    let ea = v.cross(&Vector3::y()).normalize();
-    let eb = v.cross(&ea);
-    let xi: Vec<Complex<f64>> = flight.samples[start..start + (4.0 / dt) as usize]
-        .iter()
-        .map(|s| {
-            let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-                s.q[0], s.q[1], s.q[2], s.q[3],
-            ));
-            let x = q * Vector3::x();
-            Complex::new(x.dot(&ea), x.dot(&eb))
-        })
-        .collect();
-    let air = atmosphere::standard(0.0);
-    let spin = std::f64::consts::TAU * shell.muzzle_spin;
-    let theory = theory::epicyclic(
-        &shell.airframe,
-        shell.muzzle_velocity,
-        spin,
-        air.density,
-        0.0,
-    )
-    .unwrap();
+    let xi = complex_yaw(&shell, 4.0, dt);
+    let theory = level_theory(&shell);
     let beat = std::f64::consts::TAU / (theory.fast - theory.slow);
     let fast = arm_decay(&xi, dt, theory.fast, 4.0 * beat);
     let slow = arm_decay(&xi, dt, theory.slow, 4.0 * beat);
