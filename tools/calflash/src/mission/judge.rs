@@ -230,6 +230,10 @@ pub fn judge(
             });
         }
         // The terms the bench dropped, priced over the flight's moments it reached.
+        let reached: Vec<usize> = (0..profile.len())
+            .filter(|i| lookup.inside(profile, *i, &reach))
+            .collect();
+        let mut row = Vec::with_capacity(1);
         for term in candidates(unit, gyro, k) {
             if axis.formula.term_names().contains(&term) || !vars_in_table(&term, &c.table) {
                 continue;
@@ -257,10 +261,9 @@ pub fn judge(
             let Ok(term_lookup) = Lookup::new(profile, &only, unit) else {
                 continue;
             };
-            let largest = (0..profile.len())
-                .filter(|i| lookup.inside(profile, *i, &reach))
-                .map(|i| {
-                    let mut row = Vec::with_capacity(1);
+            let largest = reached
+                .iter()
+                .map(|&i| {
                     only.row(|v| term_lookup.value(profile, i, v), &mut row);
                     row.first().copied().unwrap_or(0.0).abs()
                 })
