@@ -84,6 +84,7 @@ pub mod correct;
 pub mod driver;
 pub mod health;
 pub mod model;
+pub mod nav;
 pub mod protocol;
 pub mod signed;
 pub mod store;

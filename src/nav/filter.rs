@@ -1,0 +1,453 @@
+//! The error-state Kalman filter: the navigation's errors (position, velocity, attitude) and
+//! the corrected samples' residual sensor errors (per axis the accelerometer's and the gyro's
+//! bias and scale factor) and the barometer's bias, 22 states, propagated with the
+//! navigation and corrected by scalar measurements (GNSS position and velocity, barometric
+//! height), fed back into the navigation after each group of updates.
+//!
+//! Errors are true minus estimated; the attitude error `psi` is the small rotation, in the
+//! level frame, from the estimated attitude to the true one (`C = (I + [psi x]) C_hat`). A
+//! corrected sample holds `f_meas = (1 + s_a) f + b_a` per axis (the gyro alike), which the
+//! filter compensates with its estimates before navigating.
+//!
+//! The covariance is not propagated per sample: a round sampled at 2 kHz and spinning at
+//! 300 rev/s turns its transverse errors through a revolution in seven samples. The filter
+//! integrates, per sample, the matrices the error model needs (`int C`, `int C diag(f)`,
+//! `int C diag(w)`, `int f_n`) and steps the covariance with them over the interval
+//! (`Phi = I + F dt + (F dt)^2 / 2` with `F` the interval's mean), so what the spin averages
+//! out is averaged exactly and the cost is a few 22 x 22 products per interval.
+
+use nalgebra::{Matrix3, RealField, SMatrix, SVector, UnitQuaternion, Vector3};
+
+use super::earth::Earth;
+use super::strapdown::{Navigation, Step};
+
+/// The number of error states.
+pub const STATES: usize = 22;
+
+/// Where each error state block starts.
+pub mod index {
+    /// Position error, m (east, north, up).
+    pub const POSITION: usize = 0;
+    /// Velocity error, m/s.
+    pub const VELOCITY: usize = 3;
+    /// Attitude error, rad (level frame).
+    pub const ATTITUDE: usize = 6;
+    /// Accelerometer biases, m/s^2 (body axes).
+    pub const ACCEL_BIAS: usize = 9;
+    /// Gyro biases, rad/s.
+    pub const GYRO_BIAS: usize = 12;
+    /// Accelerometer scale factors (relative).
+    pub const ACCEL_SCALE: usize = 15;
+    /// Gyro scale factors (relative).
+    pub const GYRO_SCALE: usize = 18;
+    /// The barometer's height bias, m.
+    pub const BARO: usize = 21;
+}
+
+/// A square matrix over the error states.
+pub type StateMatrix<T> = SMatrix<T, STATES, STATES>;
+/// A vector over the error states.
+pub type StateVector<T> = SVector<T, STATES>;
+
+/// The residual errors of the corrected samples and the barometer, as estimated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorErrors<T: RealField + Copy> {
+    /// Accelerometer biases, m/s^2.
+    pub accel_bias: Vector3<T>,
+    /// Gyro biases, rad/s.
+    pub gyro_bias: Vector3<T>,
+    /// Accelerometer scale factors (relative: 0.001 reads 0.1 % high).
+    pub accel_scale: Vector3<T>,
+    /// Gyro scale factors.
+    pub gyro_scale: Vector3<T>,
+    /// The barometer's height bias, m.
+    pub baro_bias: T,
+}
+
+impl<T: RealField + Copy> Default for SensorErrors<T> {
+    fn default() -> Self {
+        Self {
+            accel_bias: Vector3::zeros(),
+            gyro_bias: Vector3::zeros(),
+            accel_scale: Vector3::zeros(),
+            gyro_scale: Vector3::zeros(),
+            baro_bias: T::zero(),
+        }
+    }
+}
+
+impl<T: RealField + Copy> SensorErrors<T> {
+    /// A corrected sample with these errors taken out: `(f - b) / (1 + s)` per axis.
+    #[must_use]
+    pub fn compensate(&self, f: &Vector3<T>, w: &Vector3<T>) -> (Vector3<T>, Vector3<T>) {
+        let one = Vector3::repeat(T::one());
+        (
+            (f - self.accel_bias).component_div(&(one + self.accel_scale)),
+            (w - self.gyro_bias).component_div(&(one + self.gyro_scale)),
+        )
+    }
+}
+
+/// The navigation and the sensor errors together: what the filter estimates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate<T: RealField + Copy> {
+    /// The navigation.
+    pub nav: Navigation<T>,
+    /// The sensor errors.
+    pub sensors: SensorErrors<T>,
+}
+
+fn block<T: RealField + Copy>(x: &StateVector<T>, at: usize) -> Vector3<T> {
+    x.fixed_rows::<3>(at).into_owned()
+}
+
+impl<T: RealField + Copy> Estimate<T> {
+    /// This estimate corrected by the error `dx`.
+    #[must_use]
+    pub fn plus(&self, dx: &StateVector<T>) -> Self {
+        use index::*;
+        let mut out = *self;
+        out.nav.p += block(dx, POSITION);
+        out.nav.v += block(dx, VELOCITY);
+        out.nav
+            .turn(&UnitQuaternion::from_scaled_axis(block(dx, ATTITUDE)));
+        out.sensors.accel_bias += block(dx, ACCEL_BIAS);
+        out.sensors.gyro_bias += block(dx, GYRO_BIAS);
+        out.sensors.accel_scale += block(dx, ACCEL_SCALE);
+        out.sensors.gyro_scale += block(dx, GYRO_SCALE);
+        out.sensors.baro_bias += dx.get(BARO).copied().unwrap_or_else(T::zero);
+        out
+    }
+
+    /// The error that takes `other` to this estimate (`self = other.plus(dx)`).
+    #[must_use]
+    pub fn minus(&self, other: &Self) -> StateVector<T> {
+        use index::*;
+        let mut dx = StateVector::zeros();
+        let (a, b) = (&self.sensors, &other.sensors);
+        let parts = [
+            (POSITION, self.nav.p - other.nav.p),
+            (VELOCITY, self.nav.v - other.nav.v),
+            (
+                ATTITUDE,
+                (self.nav.attitude() * other.nav.attitude().inverse()).scaled_axis(),
+            ),
+            (ACCEL_BIAS, a.accel_bias - b.accel_bias),
+            (GYRO_BIAS, a.gyro_bias - b.gyro_bias),
+            (ACCEL_SCALE, a.accel_scale - b.accel_scale),
+            (GYRO_SCALE, a.gyro_scale - b.gyro_scale),
+        ];
+        for (at, v) in parts {
+            dx.fixed_rows_mut::<3>(at).copy_from(&v);
+        }
+        if let Some(x) = dx.get_mut(BARO) {
+            *x = a.baro_bias - b.baro_bias;
+        }
+        dx
+    }
+}
+
+/// The noise that drives the errors between measurements.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavNoise<T> {
+    /// The accelerometers' white-noise density, m/s^2/sqrt(Hz) (velocity random walk).
+    pub accel_white: T,
+    /// The gyros' white-noise density, rad/s/sqrt(Hz) (angle random walk).
+    pub gyro_white: T,
+    /// The accelerometer biases' random walk, m/s^2/sqrt(s).
+    pub accel_walk: T,
+    /// The gyro biases' random walk, rad/s/sqrt(s).
+    pub gyro_walk: T,
+    /// The scale factors' random walk, 1/sqrt(s).
+    pub scale_walk: T,
+    /// The barometer bias's random walk, m/sqrt(s) (the weather and the air's temperature
+    /// against the standard atmosphere's).
+    pub baro_walk: T,
+}
+
+/// The prior of the errors: the covariance at the start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prior<T: RealField + Copy> {
+    /// The covariance over the error states.
+    pub covariance: StateMatrix<T>,
+}
+
+/// One scalar measurement's innovation and its variance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Innovation<T> {
+    /// Measured minus predicted.
+    pub value: T,
+    /// Its predicted variance (`h' P h + r`).
+    pub variance: T,
+}
+
+/// What the error model integrates between covariance steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Integrals<T: RealField + Copy> {
+    c: Matrix3<T>,
+    cf: Matrix3<T>,
+    cw: Matrix3<T>,
+    f: Vector3<T>,
+    dt: T,
+    /// Standard deviations of what flagged samples may have hidden, summed over them:
+    /// velocity (m/s) and angle (rad).
+    lost: (T, T),
+}
+
+impl<T: RealField + Copy> Integrals<T> {
+    fn zero() -> Self {
+        Self {
+            c: Matrix3::zeros(),
+            cf: Matrix3::zeros(),
+            cw: Matrix3::zeros(),
+            f: Vector3::zeros(),
+            dt: T::zero(),
+            lost: (T::zero(), T::zero()),
+        }
+    }
+}
+
+/// A sample the corrector could not vouch for: the specific force and rate that may hide
+/// behind it (1-sigma, m/s^2 and rad/s), over which the filter widens its covariance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Doubt<T> {
+    /// Specific force, m/s^2.
+    pub force: T,
+    /// Rate, rad/s.
+    pub rate: T,
+}
+
+/// The filter.
+#[derive(Debug, Clone)]
+pub struct ErrorFilter<T: RealField + Copy> {
+    /// The estimate (navigation and sensor errors) after the last feedback.
+    pub estimate: Estimate<T>,
+    /// The error covariance.
+    pub covariance: StateMatrix<T>,
+    /// The launch point.
+    pub earth: Earth<T>,
+    /// The process noise.
+    pub noise: NavNoise<T>,
+    dx: StateVector<T>,
+    acc: Integrals<T>,
+    /// The last sample, compensated: rate and specific force.
+    last: Option<(Vector3<T>, Vector3<T>)>,
+}
+
+fn skew<T: RealField + Copy>(v: &Vector3<T>) -> Matrix3<T> {
+    v.cross_matrix()
+}
+
+impl<T: RealField + Copy> ErrorFilter<T> {
+    /// A filter from an estimate, its prior covariance, the launch point and the noise.
+    #[must_use]
+    pub fn new(
+        estimate: Estimate<T>,
+        prior: &Prior<T>,
+        earth: Earth<T>,
+        noise: NavNoise<T>,
+    ) -> Self {
+        Self {
+            estimate,
+            covariance: prior.covariance,
+            earth,
+            noise,
+            dx: StateVector::zeros(),
+            acc: Integrals::zero(),
+            last: None,
+        }
+    }
+
+    /// Time integrated since the last covariance step, s.
+    #[must_use]
+    pub fn pending(&self) -> T {
+        self.acc.dt
+    }
+
+    /// Navigates one corrected sample `dt` s after the previous one. A sample with a
+    /// [`Doubt`] is not navigated as read: the last trusted one stands in for it and the
+    /// covariance widens by what it may hide.
+    pub fn sample(&mut self, f: &Vector3<T>, w: &Vector3<T>, dt: T, doubt: Option<Doubt<T>>) {
+        let (fc, wc) = match (doubt, self.last) {
+            (Some(_), Some((w0, f0))) => (f0, w0),
+            _ => self.estimate.sensors.compensate(f, w),
+        };
+        let Some((w0, f0)) = self.last.replace((wc, fc)) else {
+            return;
+        };
+        if dt <= T::zero() {
+            return;
+        }
+        let half: T = nalgebra::convert(0.5);
+        let c0 = self
+            .estimate
+            .nav
+            .attitude()
+            .to_rotation_matrix()
+            .into_inner();
+        let forces = self.estimate.nav.propagate(
+            &self.earth,
+            &Step {
+                w: [w0, wc],
+                f: [f0, fc],
+                dt,
+            },
+        );
+        let c1 = self
+            .estimate
+            .nav
+            .attitude()
+            .to_rotation_matrix()
+            .into_inner();
+        let a = &mut self.acc;
+        let h = half * dt;
+        a.c += (c0 + c1) * h;
+        a.cf += (c0 * Matrix3::from_diagonal(&f0) + c1 * Matrix3::from_diagonal(&fc)) * h;
+        a.cw += (c0 * Matrix3::from_diagonal(&w0) + c1 * Matrix3::from_diagonal(&wc)) * h;
+        let [n0, n1] = forces;
+        a.f += (n0 + n1) * h;
+        a.dt += dt;
+        if let Some(d) = doubt {
+            a.lost.0 += d.force * dt;
+            a.lost.1 += d.rate * dt;
+        }
+    }
+
+    /// Steps the covariance over the samples navigated since the last step; returns the
+    /// transition matrix (the smoother's).
+    pub fn covariance_step(&mut self) -> StateMatrix<T> {
+        use index::*;
+        let a = self.acc;
+        self.acc = Integrals::zero();
+        let mut phi = StateMatrix::identity();
+        if a.dt <= T::zero() {
+            return phi;
+        }
+        let inv = T::one() / a.dt;
+        let omega = self.earth.rate();
+        let grad = self.earth.gravity_gradient(self.estimate.nav.p.z);
+        let mut f = StateMatrix::zeros();
+        let mut put = |r: usize, c: usize, m: Matrix3<T>| {
+            f.fixed_view_mut::<3, 3>(r, c).copy_from(&m);
+        };
+        put(POSITION, VELOCITY, Matrix3::identity());
+        put(VELOCITY, POSITION, Matrix3::from_diagonal(&grad));
+        put(
+            VELOCITY,
+            VELOCITY,
+            skew(&omega) * nalgebra::convert::<f64, T>(-2.0),
+        );
+        put(VELOCITY, ATTITUDE, -skew(&(a.f * inv)));
+        put(VELOCITY, ACCEL_BIAS, -a.c * inv);
+        put(VELOCITY, ACCEL_SCALE, -a.cf * inv);
+        put(ATTITUDE, ATTITUDE, -skew(&omega));
+        put(ATTITUDE, GYRO_BIAS, -a.c * inv);
+        put(ATTITUDE, GYRO_SCALE, -a.cw * inv);
+        let fd = f * a.dt;
+        phi += fd + fd * fd * nalgebra::convert::<f64, T>(0.5);
+        let n = &self.noise;
+        let mut q = StateVector::<T>::zeros();
+        let mut fill = |at: usize, len: usize, v: T| {
+            for i in at..at + len {
+                if let Some(x) = q.get_mut(i) {
+                    *x = v;
+                }
+            }
+        };
+        fill(
+            VELOCITY,
+            3,
+            n.accel_white * n.accel_white * a.dt + a.lost.0 * a.lost.0,
+        );
+        fill(
+            ATTITUDE,
+            3,
+            n.gyro_white * n.gyro_white * a.dt + a.lost.1 * a.lost.1,
+        );
+        fill(ACCEL_BIAS, 3, n.accel_walk * n.accel_walk * a.dt);
+        fill(GYRO_BIAS, 3, n.gyro_walk * n.gyro_walk * a.dt);
+        fill(ACCEL_SCALE, 6, n.scale_walk * n.scale_walk * a.dt);
+        fill(BARO, 1, n.baro_walk * n.baro_walk * a.dt);
+        let p = phi * self.covariance * phi.transpose() + StateMatrix::from_diagonal(&q);
+        self.covariance = (p + p.transpose()) * nalgebra::convert::<f64, T>(0.5);
+        self.dx = phi * self.dx;
+        phi
+    }
+
+    /// One scalar measurement: `h` its sensitivity to the errors, `innovation` the measured
+    /// minus the value predicted from the estimate (before [`feedback`](Self::feedback)),
+    /// `variance` the measurement's own. `None` when its predicted variance is not positive
+    /// (nothing changes).
+    pub fn update(
+        &mut self,
+        h: &StateVector<T>,
+        innovation: T,
+        variance: T,
+    ) -> Option<Innovation<T>> {
+        let nu = innovation - h.dot(&self.dx);
+        let u = self.covariance * h;
+        let s = h.dot(&u) + variance;
+        if s <= T::zero() || !s.is_finite() || !nu.is_finite() {
+            return None;
+        }
+        let k = u / s;
+        self.dx += k * nu;
+        // Joseph's form, expanded for one measurement: P - k u' - u k' + s k k'.
+        let p = self.covariance - k * u.transpose() - u * k.transpose() + k * k.transpose() * s;
+        self.covariance = (p + p.transpose()) * nalgebra::convert::<f64, T>(0.5);
+        Some(Innovation {
+            value: nu,
+            variance: s,
+        })
+    }
+
+    /// Feeds the estimated errors back into the navigation and the sensor errors.
+    pub fn feedback(&mut self) {
+        self.estimate = self.estimate.plus(&self.dx);
+        self.dx = StateVector::zeros();
+    }
+
+    /// The estimate's velocity sensitivity row for the level-frame axis `axis` (0 east, 1
+    /// north, 2 up), with the innovation `measured - v` for a measured velocity.
+    #[must_use]
+    pub fn velocity_row(axis: usize) -> StateVector<T> {
+        let mut h = StateVector::zeros();
+        if let Some(x) = h.get_mut(index::VELOCITY + axis) {
+            *x = T::one();
+        }
+        h
+    }
+
+    /// The sensitivity row of an antenna at `lever` (body axes, m, from the unit) along the
+    /// level-frame axis `axis`, and the antenna's estimated position on that axis.
+    #[must_use]
+    pub fn antenna_row(&self, lever: &Vector3<T>, axis: usize) -> (StateVector<T>, T) {
+        let arm = self.estimate.nav.attitude() * lever;
+        let at = self.estimate.nav.p + arm;
+        let mut h = StateVector::zeros();
+        if let Some(x) = h.get_mut(index::POSITION + axis) {
+            *x = T::one();
+        }
+        // p_true + C_true l = p + dp + C l + psi x (C l): -[(C l) x] psi.
+        let m = -skew(&arm);
+        for j in 0..3 {
+            if let (Some(x), Some(v)) = (h.get_mut(index::ATTITUDE + j), m.get((axis, j))) {
+                *x = *v;
+            }
+        }
+        (h, at.get(axis).copied().unwrap_or_else(T::zero))
+    }
+
+    /// The barometer's sensitivity row and its predicted reading (height of the unit plus the
+    /// barometer's bias, m above the origin).
+    #[must_use]
+    pub fn baro_row(&self) -> (StateVector<T>, T) {
+        let mut h = StateVector::zeros();
+        for i in [index::POSITION + 2, index::BARO] {
+            if let Some(x) = h.get_mut(i) {
+                *x = T::one();
+            }
+        }
+        (h, self.estimate.nav.p.z + self.estimate.sensors.baro_bias)
+    }
+}
