@@ -108,7 +108,7 @@ mod tests {
         let grad = (e.normal_gravity(0.0) - e.normal_gravity(1000.0)) / 1000.0;
         assert!((grad - 3.086e-6).abs() < 0.01e-6, "{grad}");
         let f32_earth = Earth::<f32> {
-            latitude: 0.785_398,
+            latitude: core::f32::consts::FRAC_PI_4,
             height: 0.0,
         };
         assert!((f32_earth.normal_gravity(0.0) - e.normal_gravity(0.0) as f32).abs() < 1e-5);
