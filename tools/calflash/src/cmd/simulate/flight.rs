@@ -8,6 +8,7 @@ use super::{MAX_FLIGHT_SAMPLES, SimulateArgs, imu_truth};
 use crate::cmd::Failure;
 use crate::cmd::values::SensorKind;
 use crate::files::Staged;
+use crate::sim::flight::receivers::{LaunchShift, Receiver, write_baro, write_gnss};
 use crate::sim::flight::{self, spec::Launch};
 
 /// Runs `--flight SPEC`.
@@ -15,7 +16,18 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
     if args.sensor != SensorKind::Imu {
         return Err("--flight: a flight carries an IMU (--sensor imu)".into());
     }
-    let launch = Launch::parse(spec)?;
+    let mut launch = Launch::parse(spec)?;
+    let receivers = args.gnss.is_some() || args.baro.is_some();
+    let defaulted = receivers && launch.site_mut().is_none();
+    if defaulted {
+        *launch.site_mut() = Some(flight::spec::DEFAULT_SITE);
+    }
+    let shift = args
+        .launch_shift
+        .as_deref()
+        .map(LaunchShift::parse)
+        .transpose()?
+        .unwrap_or_default();
     let rate = args.sample_rate.unwrap_or_else(|| launch.default_rate());
     if launch.seconds() * rate > MAX_FLIGHT_SAMPLES {
         return Err(format!(
@@ -35,10 +47,21 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
     let volt = args.volts.first().copied().unwrap_or(5.0);
     let flown = launch.fly(1.0 / rate);
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
+    let site = *launch.site_mut();
+    let earth_rate = site.map_or_else(nalgebra::Vector3::zeros, |s| s.rate());
     let raw: Vec<[f64; 6]> = flown
         .samples
         .iter()
-        .map(|s| truth.codes((s.f, s.w, s.dw), (s.temp, volt), &mut rng))
+        .map(|s| {
+            // The gyros sense the Earth's rate too; after launch, the unit's shifted errors.
+            let [qw, qx, qy, qz] = s.q;
+            let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                qw, qx, qy, qz,
+            ));
+            let w: [f64; 3] = (nalgebra::Vector3::from(s.w) + q.inverse() * earth_rate).into();
+            let (f, w) = if s.t > 0.0 { shift.apply(s.f, w) } else { (s.f, w) };
+            truth.codes((f, w, s.dw), (s.temp, volt), &mut rng)
+        })
         .collect();
     let mut raw = raw;
     let rails = args.codes;
@@ -50,6 +73,34 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
     if let Some(p) = &args.flight_truth {
         staged.write(p, |w| {
             flight::write_truth(&flown.samples, std::io::BufWriter::new(w))
+        })?;
+    }
+    let mut receiver_rng = ChaCha8Rng::seed_from_u64(args.seed.wrapping_add(1));
+    if let (Some(p), Some(site)) = (&args.gnss, &site) {
+        let rx = Receiver {
+            rate: args.gnss_rate,
+            noise: (
+                args.gnss_noise.first().copied().unwrap_or(2.0),
+                args.gnss_noise.get(1).copied().unwrap_or(4.0),
+            ),
+            latency: args.gnss_latency,
+            outage: args.gnss_outage,
+            ..Receiver::default()
+        };
+        staged.write(p, |w| {
+            write_gnss(&flown.samples, site, &rx, &mut receiver_rng, std::io::BufWriter::new(w))
+        })?;
+    }
+    if let (Some(p), Some(site)) = (&args.baro, &site) {
+        staged.write(p, |w| {
+            write_baro(
+                &flown.samples,
+                site.height,
+                100.0,
+                args.baro_noise,
+                &mut receiver_rng,
+                std::io::BufWriter::new(w),
+            )
         })?;
     }
     if let Some(p) = &args.write_truth {
@@ -78,6 +129,12 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
         "  {}; apogee {apogee:.0} m, {range:.0} m downrange at the end",
         events.join(", ")
     );
+    if let (true, Some(site)) = (defaulted, site) {
+        println!(
+            "  launched at {} N, {} E, fired at azimuth {} (the receivers need a place: lat=, lon=, azimuth= in --flight)",
+            site.latitude, site.longitude, site.azimuth
+        );
+    }
     print!(
         "{}",
         super::saturation_note(saturated, rails, " (the unit's range, not the flight's)")

@@ -66,6 +66,35 @@ pub struct SimulateArgs {
     /// With --still: each bias's random walk, counts per root second, `ACCEL,GYRO`.
     #[arg(long, requires = "still", value_delimiter = ',', value_parser = super::values::non_negative)]
     pub bias_walk: Vec<f64>,
+    /// With --flight: write what a GNSS receiver riding along reports here (CSV: t, latitude,
+    /// longitude, height, v_east, v_north, v_up, satellites), for `calflash flight --gnss`. The
+    /// flight is then launched on the turning Earth (lat=, lon=, azimuth= in --flight; 45 N,
+    /// 0 E, fired north unless given).
+    #[arg(long, requires = "flight")]
+    pub gnss: Option<PathBuf>,
+    /// The GNSS fixes' 1-sigma noise, m: `HORIZONTAL,VERTICAL`.
+    #[arg(long, default_values_t = [2.0, 4.0], value_delimiter = ',', requires = "gnss", value_parser = |s: &str| super::values::in_range(s, 0.01, 1000.0))]
+    pub gnss_noise: Vec<f64>,
+    /// Fixes per second.
+    #[arg(long, default_value_t = 10.0, requires = "gnss", value_parser = |s: &str| super::values::in_range(s, 0.1, 100.0))]
+    pub gnss_rate: f64,
+    /// How late each fix is stamped, s.
+    #[arg(long, default_value_t = 0.0, requires = "gnss", value_parser = |s: &str| super::values::in_range(s, 0.0, 5.0))]
+    pub gnss_latency: f64,
+    /// No fix for this long after launch, s.
+    #[arg(long, default_value_t = 1.0, requires = "gnss", value_parser = |s: &str| super::values::in_range(s, 0.0, 1.0e4))]
+    pub gnss_outage: f64,
+    /// With --flight: write a barometer's readings here (CSV: t, T in C, P in Pa, 100 Hz).
+    #[arg(long, requires = "flight")]
+    pub baro: Option<PathBuf>,
+    /// The barometer's 1-sigma noise, Pa.
+    #[arg(long, default_value_t = 2.0, requires = "baro", value_parser = |s: &str| super::values::in_range(s, 0.0, 1000.0))]
+    pub baro_noise: f64,
+    /// With --flight: the unit's errors shift at launch by these, `KEY=VALUE,...`: ax ay az
+    /// (accelerometer biases, m/s^2), wx wy wz (gyro biases, rad/s), sax say saz swx swy swz
+    /// (scale factors, relative).
+    #[arg(long, requires = "flight")]
+    pub launch_shift: Option<String>,
     /// With --flight: write the flight's truth here (CSV: t, position x y z in m downrange,
     /// left and up from the launch point, velocity vx vy vz, attitude qw qx qy qz body to
     /// Earth).

@@ -12,6 +12,7 @@
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use super::atmosphere::{self, G0};
+use super::site::Site;
 
 /// An airframe and its aerodynamic coefficients (per radian, reference area `pi d^2 / 4`,
 /// reference length `d`).
@@ -150,16 +151,32 @@ pub struct World {
     pub gravity: bool,
     /// Height of the launch point above sea level, m.
     pub altitude: f64,
+    /// Where on the Earth (its gravity and rotation), or a flat, still Earth.
+    pub site: Option<Site>,
+}
+
+impl World {
+    /// Gravity at `r`, m/s^2, flight frame.
+    #[must_use]
+    pub fn gravity_at(&self, r: &Vector3<f64>) -> Vector3<f64> {
+        match (self.gravity, &self.site) {
+            (false, _) => Vector3::zeros(),
+            (true, Some(site)) => site.gravity(r),
+            (true, None) => Vector3::new(0.0, 0.0, -G0),
+        }
+    }
+
+    /// The Earth's rate in the flight frame (zero over a still Earth), rad/s.
+    #[must_use]
+    pub fn earth_rate(&self) -> Vector3<f64> {
+        self.site.map_or_else(Vector3::zeros, |s| s.rate())
+    }
 }
 
 /// What the body feels in state `s` at time `t`.
 #[must_use]
 pub fn felt(af: &Airframe, world: &World, s: &State, t: f64) -> Felt {
-    let g = if world.gravity {
-        Vector3::new(0.0, 0.0, -G0)
-    } else {
-        Vector3::zeros()
-    };
+    let g = world.gravity_at(&s.r) - world.earth_rate().cross(&s.v) * 2.0;
     let x = s.q * Vector3::x();
     let speed = s.v.norm();
     let mass = af.mass_at(t);

@@ -6,14 +6,15 @@
 
 pub mod atmosphere;
 pub mod body;
+pub mod receivers;
 pub mod rocket;
 pub mod shell;
+pub mod site;
 pub mod spec;
 pub mod theory;
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use atmosphere::G0;
 use body::{Airframe, State, World};
 
 /// One sample of a flight: what the unit feels and where the body is.
@@ -151,10 +152,10 @@ pub fn pointing(elevation: f64, roll: f64) -> UnitQuaternion<f64> {
 }
 
 /// The specific force, in body axes, of a body accelerating at `a` m/s^2 along its axis while
-/// something (a barrel, a rail, the ground) holds it against gravity.
+/// something (a barrel, a rail, the ground) holds it against gravity `g` (flight frame).
 #[must_use]
-pub fn held(q: &UnitQuaternion<f64>, a: f64) -> Vector3<f64> {
-    Vector3::x() * a + q.inverse() * Vector3::new(0.0, 0.0, G0)
+pub fn held(q: &UnitQuaternion<f64>, a: f64, g: &Vector3<f64>) -> Vector3<f64> {
+    Vector3::x() * a - q.inverse() * g
 }
 
 /// Writes a flight as CSV: `t`, the true `f_*`, `w_*`, `dw_*`, `temp`, `volt` (the mission

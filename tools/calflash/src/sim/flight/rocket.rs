@@ -26,6 +26,10 @@ pub struct Rocket {
     pub altitude: f64,
     /// Gravity on.
     pub gravity: bool,
+    /// Where on the Earth it is launched (a flat, still Earth without).
+    pub site: Option<super::site::Site>,
+    /// Time on the rail before ignition, s (a still stretch at the start).
+    pub waiting: f64,
 }
 
 impl Default for Rocket {
@@ -59,6 +63,8 @@ impl Default for Rocket {
             conditioned: 25.0,
             altitude: 0.0,
             gravity: true,
+            site: None,
+            waiting: 0.0,
         }
     }
 }
@@ -75,6 +81,7 @@ impl Rocket {
         let world = World {
             gravity: self.gravity,
             altitude: self.altitude,
+            site: self.site,
         };
         let thermal = Thermal::conditioned_at(self.conditioned);
         let mut out = Flight::default();
@@ -89,9 +96,9 @@ impl Rocket {
             let a = body::felt(&self.airframe, &world, &s, t).a.dot(&axis);
             if v <= 0.0 && a <= 0.0 { 0.0 } else { a }
         };
-        let (mut t, mut x, mut v) = (0.0f64, 0.0f64, 0.0f64);
+        let mut k: i64 = -((self.waiting / dt).round() as i64);
+        let (mut t, mut x, mut v) = (k as f64 * dt, 0.0f64, 0.0f64);
         let h = dt / RAIL_SUBSTEPS as f64;
-        let mut k: u64 = 0;
         while x < self.rail && t < self.seconds {
             let a = along(t, x, v);
             let s = State {
@@ -103,7 +110,7 @@ impl Rocket {
             out.samples.push(sample(
                 t,
                 &s,
-                held(&q, a),
+                held(&q, a, &world.gravity_at(&s.r)),
                 Vector3::zeros(),
                 self.conditioned,
             ));

@@ -33,6 +33,10 @@ pub struct Shell {
     pub altitude: f64,
     /// Gravity on.
     pub gravity: bool,
+    /// Where on the Earth it is fired (a flat, still Earth without).
+    pub site: Option<super::site::Site>,
+    /// Time loaded in the gun before firing, s (a still stretch at the start).
+    pub loaded: f64,
 }
 
 /// The M107's zero-yaw drag against Mach (McCoy, table 11.2, rounded).
@@ -79,6 +83,8 @@ impl Default for Shell {
             conditioned: 21.0,
             altitude: 0.0,
             gravity: true,
+            site: None,
+            loaded: LOADED,
         }
     }
 }
@@ -95,8 +101,8 @@ fn pulse(u: f64) -> (f64, f64, f64) {
     (v / PEAK, i1 / PEAK, i2 / PEAK)
 }
 
-/// Time the shell rests in the loaded gun before firing, s (a still stretch at the start).
-const LOADED: f64 = 0.02;
+/// Time the shell rests in the loaded gun before firing unless told, s.
+pub const LOADED: f64 = 0.02;
 
 impl Shell {
     /// The time in the bore, s, and the barrel's length, m.
@@ -117,7 +123,12 @@ impl Shell {
         let spin_per_speed = std::f64::consts::TAU * self.muzzle_spin / self.muzzle_velocity;
         let thermal = Thermal::conditioned_at(self.conditioned);
         let mut out = Flight::default();
-        let mut k: i64 = -((LOADED / dt).round() as i64);
+        let world = World {
+            gravity: self.gravity,
+            altitude: self.altitude,
+            site: self.site,
+        };
+        let mut k: i64 = -((self.loaded / dt).round() as i64);
         // Loaded and in the bore: along the barrel, the spin following the speed.
         loop {
             let t = k as f64 * dt;
@@ -146,7 +157,7 @@ impl Shell {
             out.samples.push(sample(
                 t,
                 &s,
-                held(&q, a),
+                held(&q, a, &world.gravity_at(&s.r)),
                 Vector3::new(spin_per_speed * a, 0.0, 0.0),
                 self.conditioned,
             ));
@@ -159,10 +170,6 @@ impl Shell {
             v: q * Vector3::x() * self.muzzle_velocity,
             q,
             w: Vector3::new(std::f64::consts::TAU * self.muzzle_spin, self.tip_off, 0.0),
-        };
-        let world = World {
-            gravity: self.gravity,
-            altitude: self.altitude,
         };
         // From the muzzle to the next sampling instant.
         let t0 = k as f64 * dt;

@@ -3,6 +3,16 @@
 use super::Flight;
 use super::rocket::Rocket;
 use super::shell::Shell;
+use super::site::Site;
+
+/// Where a flight is launched when a key names only part of it (or a receiver needs one):
+/// 45 N, 0 E, sea level, fired north.
+pub const DEFAULT_SITE: Site = Site {
+    latitude: 45.0,
+    longitude: 0.0,
+    height: 0.0,
+    azimuth: 0.0,
+};
 
 /// A flight to simulate.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,9 +34,9 @@ pub struct SpecError {
 }
 
 /// The keys of a shell and what they set.
-pub const SHELL_KEYS: &str = "setback (g, 15000), velocity (muzzle, m/s, 800), spin (muzzle, rev/s, 300), elevation (degrees, 45), tip-off (rad/s, 5), seconds (60), conditioned (C, 21), altitude (m, 0)";
+pub const SHELL_KEYS: &str = "setback (g, 15000), velocity (muzzle, m/s, 800), spin (muzzle, rev/s, 300), elevation (degrees, 45), tip-off (rad/s, 5), seconds (60), conditioned (C, 21), altitude (m, 0), rest (s loaded before firing, 0.02); and where: lat, lon (degrees), azimuth (of fire, degrees from north)";
 /// The keys of a rocket.
-pub const ROCKET_KEYS: &str = "thrust (N, 1800), burn (s, 6), elevation (degrees, 84), rail (m, 12), cant (the fins' roll drive C_l_delta delta, 0.077), seconds (300), conditioned (C, 25), altitude (m, 0)";
+pub const ROCKET_KEYS: &str = "thrust (N, 1800), burn (s, 6), elevation (degrees, 84), rail (m, 12), cant (the fins' roll drive C_l_delta delta, 0.077), seconds (300), conditioned (C, 25), altitude (m, 0), rest (s on the rail before ignition, 0); and where: lat, lon (degrees), azimuth (of fire, degrees from north)";
 
 impl Launch {
     /// Reads `shell` or `rocket`, then `:KEY=VALUE` pairs separated by commas.
@@ -73,6 +83,28 @@ impl Launch {
                 Err(format!("{what} must be from {lo} to {hi}"))
             }
         };
+        let place = match key {
+            "lat" => Some(within(-89.0, 89.0, "the latitude (degrees)")?),
+            "lon" => Some(within(-180.0, 180.0, "the longitude (degrees)")?),
+            "azimuth" => Some(within(-360.0, 360.0, "the azimuth (degrees)")?),
+            _ => None,
+        };
+        if let Some(v) = place {
+            let altitude = match self {
+                Self::Shell(s) => s.altitude,
+                Self::Rocket(r) => r.altitude,
+            };
+            let site = self.site_mut().get_or_insert(Site {
+                height: altitude,
+                ..DEFAULT_SITE
+            });
+            match key {
+                "lat" => site.latitude = v,
+                "lon" => site.longitude = v,
+                _ => site.azimuth = v,
+            }
+            return Ok(());
+        }
         match self {
             Self::Shell(s) => match key {
                 "setback" => s.setback_g = within(100.0, 100_000.0, "the setback (g)")?,
@@ -85,6 +117,7 @@ impl Launch {
                 "seconds" => s.seconds = within(0.01, 1_000.0, "the duration (s)")?,
                 "conditioned" => s.conditioned = within(-60.0, 80.0, "the conditioning (C)")?,
                 "altitude" => s.altitude = within(-400.0, 5_000.0, "the altitude (m)")?,
+                "rest" => s.loaded = within(0.0, 600.0, "the rest (s)")?,
                 other => return Err(format!("a shell has no `{other}`; its keys: {SHELL_KEYS}")),
             },
             Self::Rocket(r) => match key {
@@ -104,6 +137,7 @@ impl Launch {
                 "seconds" => r.seconds = within(0.01, 3_600.0, "the duration (s)")?,
                 "conditioned" => r.conditioned = within(-60.0, 80.0, "the conditioning (C)")?,
                 "altitude" => r.altitude = within(-400.0, 5_000.0, "the altitude (m)")?,
+                "rest" => r.waiting = within(0.0, 600.0, "the rest (s)")?,
                 other => {
                     return Err(format!(
                         "a rocket has no `{other}`; its keys: {ROCKET_KEYS}"
@@ -112,6 +146,23 @@ impl Launch {
             },
         }
         Ok(())
+    }
+
+    /// Where it is launched: `None` over a flat, still Earth.
+    pub fn site_mut(&mut self) -> &mut Option<Site> {
+        match self {
+            Self::Shell(s) => &mut s.site,
+            Self::Rocket(r) => &mut r.site,
+        }
+    }
+
+    /// The time at rest before launch, s.
+    #[must_use]
+    pub fn rest(&self) -> f64 {
+        match self {
+            Self::Shell(s) => s.loaded,
+            Self::Rocket(r) => r.waiting,
+        }
     }
 
     /// The flight's longest duration, s.
