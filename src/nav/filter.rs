@@ -374,6 +374,16 @@ impl<T: RealField + Copy> ErrorFilter<T> {
         phi
     }
 
+    /// What a scalar measurement's innovation would be, without taking it (to gate it):
+    /// `innovation` less what the pending errors already explain, and its variance.
+    #[must_use]
+    pub fn innovation(&self, h: &StateVector<T>, innovation: T, variance: T) -> Innovation<T> {
+        Innovation {
+            value: innovation - h.dot(&self.dx),
+            variance: h.dot(&(self.covariance * h)) + variance,
+        }
+    }
+
     /// One scalar measurement: `h` its sensitivity to the errors, `innovation` the measured
     /// minus the value predicted from the estimate (before [`feedback`](Self::feedback)),
     /// `variance` the measurement's own. `None` when its predicted variance is not positive

@@ -11,5 +11,5 @@ pub mod filter;
 pub mod strapdown;
 
 pub use earth::Earth;
-pub use filter::{ErrorFilter, NavNoise, Prior, STATES, SensorErrors};
+pub use filter::{ErrorFilter, NavNoise, Prior, STATES, SensorErrors, StateMatrix, StateVector};
 pub use strapdown::{Navigation, Step};

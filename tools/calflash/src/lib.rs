@@ -15,6 +15,7 @@ pub mod files;
 pub mod formula;
 pub mod lot;
 pub mod mission;
+pub mod nav;
 pub mod noise;
 pub mod nonlinear;
 pub mod obs;

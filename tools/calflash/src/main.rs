@@ -29,6 +29,9 @@ enum Command {
     /// A mission profile read, checked and summarised: ranges, time at each level, setback,
     /// spin, vibration.
     Mission(cmd::mission::MissionArgs),
+    /// Check a calibration in flight: the IMU navigated with its correction against GNSS and
+    /// a barometer, each sensor error's shift since the calibration (HELD, SHIFTED, CANNOT TELL).
+    Flight(cmd::flight::FlightArgs),
     /// Simulate a sensor through a test plan, writing an observation file.
     Simulate(cmd::simulate::SimulateArgs),
     /// Run raw counts through the device's correction.
@@ -93,6 +96,7 @@ fn main() -> ExitCode {
         Command::Design(args) => cmd::design::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Mission(args) => cmd::mission::run(args),
+        Command::Flight(args) => cmd::flight::run(args),
         Command::Apply(args) => cmd::apply::run(args),
         Command::Compare(args) => match cmd::compare::run(args) {
             // A unit that changed beyond its uncertainty: the rejected unit's exit code.

@@ -7,6 +7,7 @@ pub mod compare;
 pub mod design;
 pub mod fit;
 pub mod flash;
+pub mod flight;
 pub mod health;
 pub mod history;
 pub mod history_db;

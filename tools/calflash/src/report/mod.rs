@@ -4,6 +4,7 @@ pub mod accuracy;
 pub mod allan;
 pub mod design;
 pub mod error;
+pub mod flight;
 pub mod html;
 pub mod json;
 pub mod lot;

@@ -59,7 +59,11 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
                 qw, qx, qy, qz,
             ));
             let w: [f64; 3] = (nalgebra::Vector3::from(s.w) + q.inverse() * earth_rate).into();
-            let (f, w) = if s.t > 0.0 { shift.apply(s.f, w) } else { (s.f, w) };
+            let (f, w) = if s.t > 0.0 {
+                shift.apply(s.f, w)
+            } else {
+                (s.f, w)
+            };
             truth.codes((f, w, s.dw), (s.temp, volt), &mut rng)
         })
         .collect();
@@ -88,7 +92,13 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
             ..Receiver::default()
         };
         staged.write(p, |w| {
-            write_gnss(&flown.samples, site, &rx, &mut receiver_rng, std::io::BufWriter::new(w))
+            write_gnss(
+                &flown.samples,
+                site,
+                &rx,
+                &mut receiver_rng,
+                std::io::BufWriter::new(w),
+            )
         })?;
     }
     if let (Some(p), Some(site)) = (&args.baro, &site) {

@@ -56,7 +56,11 @@ pub fn write_gnss(
     let Some(first) = samples.first() else {
         return Ok(());
     };
-    let (h, v, dv) = (noise(rx.noise.0)?, noise(rx.noise.1)?, noise(rx.velocity_noise)?);
+    let (h, v, dv) = (
+        noise(rx.noise.0)?,
+        noise(rx.noise.1)?,
+        noise(rx.velocity_noise)?,
+    );
     let to_level = site.to_level();
     let mut next = (first.t * rx.rate).ceil() / rx.rate;
     for s in samples {
@@ -167,7 +171,11 @@ impl LaunchShift {
                 Some("w") => (&mut out.gyro_bias, 100.0),
                 Some("sa") => (&mut out.accel_scale, 0.1),
                 Some("sw") => (&mut out.gyro_scale, 0.1),
-                _ => return Err(format!("--launch-shift: no key `{key}`; the keys: {SHIFT_KEYS}")),
+                _ => {
+                    return Err(format!(
+                        "--launch-shift: no key `{key}`; the keys: {SHIFT_KEYS}"
+                    ));
+                }
             };
             if v.abs() > limit || axis > 2 {
                 return Err(format!(
@@ -198,7 +206,7 @@ mod tests {
         let s = LaunchShift::parse("ax=0.05, swx=0.003").unwrap();
         assert_eq!((s.accel_bias[0], s.gyro_scale[0]), (0.05, 0.003));
         let (f, w) = s.apply([1.0, 2.0, 3.0], [100.0, 0.0, 0.0]);
-        assert_eq!((f[0], w[0]), (1.05, 100.3));
+        assert!((f[0] - 1.05).abs() < 1e-12 && (w[0] - 100.3).abs() < 1e-9);
         for (text, says) in [
             ("bx=1", "no key"),
             ("ax", "expected KEY=VALUE"),

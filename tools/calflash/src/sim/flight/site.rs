@@ -93,7 +93,9 @@ mod tests {
             site.height,
             map_3d::Ellipsoid::WGS84,
         );
-        assert!((e - 5_000.0).abs() < 1e-6 && (n - 200.0).abs() < 1e-6 && (u - 3_000.0).abs() < 1e-6);
+        assert!(
+            (e - 5_000.0).abs() < 1e-6 && (n - 200.0).abs() < 1e-6 && (u - 3_000.0).abs() < 1e-6
+        );
         assert!((site.rate().norm() - spincal::nav::earth::RATE).abs() < 1e-18);
     }
 }

@@ -1,0 +1,148 @@
+//! `calflash flight`: did the calibration survive the launch? A flight's IMU recording
+//! navigated with the unit's own correction and checked against GNSS and a barometer.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::cmd::Failure;
+use crate::files::{Paths, Staged};
+use crate::nav::check::{self, PriorSource, StatedPrior, Walks};
+use crate::nav::input;
+use crate::nav::run::Options;
+
+/// Check a calibration in flight against GNSS and a barometer.
+#[derive(Debug, Args)]
+pub struct FlightArgs {
+    /// The IMU recording: raw codes (`t`, `a_x..g_z`, optionally `temp`) with `--blob`, or
+    /// physical values (a mission profile's columns, `--imu-columns`) without.
+    pub recording: PathBuf,
+    /// The unit's calibration blob: the codes go through its correction, and its covariance
+    /// factors are the prior of the sensor errors.
+    #[arg(long)]
+    pub blob: Option<PathBuf>,
+    /// Columns of a physical recording (without --blob), as `--mission-columns` takes them:
+    /// `t=ts,fx=Ax:m/s^2,...,wx=Gx:deg/s,...`.
+    #[arg(long, default_value = "", conflicts_with = "blob")]
+    pub imu_columns: String,
+    /// GNSS fixes: `t` (the IMU's clock), `latitude`, `longitude` (degrees), optionally
+    /// `height`, `v_east v_north v_up`, `satellites`.
+    #[arg(long)]
+    pub gnss: PathBuf,
+    /// Barometer: `t`, `P` (Pa).
+    #[arg(long)]
+    pub baro: Option<PathBuf>,
+    /// The GNSS antenna from the IMU, body axes, m: `X,Y,Z`.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, num_args = 3, value_parser = super::values::finite)]
+    pub lever: Vec<f64>,
+    /// 1-sigma of a fix, m: `HORIZONTAL,VERTICAL`.
+    #[arg(long, value_delimiter = ',', default_values_t = [2.5, 5.0], value_parser = |s: &str| super::values::in_range(s, 0.01, 1000.0))]
+    pub gnss_noise: Vec<f64>,
+    /// How late each fix is stamped, s.
+    #[arg(long, default_value_t = 0.0, value_parser = |s: &str| super::values::in_range(s, 0.0, 5.0))]
+    pub gnss_latency: f64,
+    /// 1-sigma of a barometric height, m.
+    #[arg(long, default_value_t = 1.5, value_parser = |s: &str| super::values::in_range(s, 0.01, 1000.0))]
+    pub baro_noise: f64,
+    /// The barometer's bias random walk, m/sqrt(s) (the air against the standard atmosphere).
+    #[arg(long, default_value_t = 0.5, value_parser = |s: &str| super::values::in_range(s, 0.0, 100.0))]
+    pub baro_walk: f64,
+    /// Without covariance in the calibration: the prior, 1-sigma, `ACCEL_BIAS,GYRO_BIAS,
+    /// ACCEL_SCALE,GYRO_SCALE` (m/s^2, rad/s, relative, relative).
+    #[arg(long, value_delimiter = ',', num_args = 4, value_parser = |s: &str| super::values::in_range(s, 1e-9, 100.0))]
+    pub prior: Vec<f64>,
+    /// The bias random walks, `ACCEL,GYRO` (m/s^2/sqrt(s), rad/s/sqrt(s)).
+    #[arg(long, value_delimiter = ',', num_args = 2, value_parser = |s: &str| super::values::in_range(s, 0.0, 10.0))]
+    pub walk: Vec<f64>,
+    /// The false-alarm rate of SHIFTED over all terms together.
+    #[arg(long, default_value_t = 0.01, value_parser = |s: &str| super::values::in_range(s, 1e-12, 0.5))]
+    pub alpha: f64,
+    /// Write the result as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Runs `calflash flight`.
+///
+/// # Errors
+/// Unreadable inputs, a flight that cannot be checked.
+pub fn run(args: &FlightArgs) -> Result<(), Failure> {
+    Paths::new()
+        .input("the recording", Some(&args.recording))
+        .input("--blob", args.blob.as_deref())
+        .input("--gnss", Some(&args.gnss))
+        .input("--baro", args.baro.as_deref())
+        .output("--json", args.json.as_deref())
+        .check()?;
+    let stated = match args.prior.as_slice() {
+        [ab, gb, asf, gsf] => StatedPrior {
+            accel_bias: *ab,
+            gyro_bias: *gb,
+            accel_scale: *asf,
+            gyro_scale: *gsf,
+        },
+        _ => StatedPrior::default(),
+    };
+    let (imu, prior, serial) = match &args.blob {
+        Some(path) => {
+            let bytes = crate::files::read_blob(path)?;
+            let cal = crate::signing::calibration(&bytes)
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            let imu = input::corrected(&args.recording, &cal)?;
+            let serial = cal.data().identity.serial.to_string();
+            match check::calibration_prior(&cal) {
+                Some(p) => (imu, (p, PriorSource::Calibration), serial),
+                None => (
+                    imu,
+                    (check::stated_prior(&stated), PriorSource::Stated(stated)),
+                    serial,
+                ),
+            }
+        }
+        None => {
+            let profile = crate::mission::read(&args.recording, &args.imu_columns)?;
+            (
+                input::physical(&profile),
+                (check::stated_prior(&stated), PriorSource::Stated(stated)),
+                "(no calibration)".to_string(),
+            )
+        }
+    };
+    let (fixes, counts) = input::gnss(&args.gnss)?;
+    let baro = args
+        .baro
+        .as_deref()
+        .map(input::baro)
+        .transpose()?
+        .unwrap_or_default();
+    let opts = Options {
+        lever: match args.lever.as_slice() {
+            [x, y, z] => [*x, *y, *z],
+            _ => [0.0; 3],
+        },
+        gnss_noise: (
+            args.gnss_noise.first().copied().unwrap_or(2.5),
+            args.gnss_noise.get(1).copied().unwrap_or(5.0),
+        ),
+        gnss_latency: args.gnss_latency,
+        baro_noise: args.baro_noise,
+        ..Options::default()
+    };
+    let walks = Walks {
+        accel: args.walk.first().copied().unwrap_or(Walks::default().accel),
+        gyro: args.walk.get(1).copied().unwrap_or(Walks::default().gyro),
+        baro: args.baro_walk,
+        ..Walks::default()
+    };
+    let checked = check::check(&imu, (&fixes, &baro), prior, &walks, &opts, args.alpha)
+        .map_err(|e| format!("{}: {e}", args.recording.display()))?;
+    let text = crate::report::flight::text(&serial, &checked, &counts);
+    if let Some(path) = &args.json {
+        let json = crate::report::flight::json(&serial, &checked, &counts);
+        let mut staged = Staged::new();
+        staged.write(path, |w| w.write_all(json.as_bytes()))?;
+        staged.commit()?;
+    }
+    print!("{text}");
+    Ok(())
+}

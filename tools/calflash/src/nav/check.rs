@@ -1,0 +1,368 @@
+//! The whole in-flight check: the prior from the calibration, the noise from the rest before
+//! launch, the heading, the pass with the calibration's prior and its verdict, a second pass
+//! with each shifted term's prior opened (so its shift is estimated by the flight alone), and
+//! the smoothed trajectory against GNSS and the barometer.
+
+use nalgebra::Vector3;
+use spincal::model::{Calibration, Sensor};
+use spincal::nav::filter::index;
+use spincal::nav::{NavNoise, StateMatrix};
+
+use super::input::{Fix, ImuSeries, Pressure};
+use super::run::{self, Options, Pass, Start};
+use super::smooth::smooth;
+use super::verdict::{self, Verdict};
+
+/// A stated prior (1-sigma) for a unit whose calibration carries no covariance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StatedPrior {
+    /// Accelerometer bias, m/s^2.
+    pub accel_bias: f64,
+    /// Gyro bias, rad/s.
+    pub gyro_bias: f64,
+    /// Accelerometer scale factor.
+    pub accel_scale: f64,
+    /// Gyro scale factor.
+    pub gyro_scale: f64,
+}
+
+impl Default for StatedPrior {
+    /// A consumer MEMS unit's datasheet: 20 mg, 0.5 deg/s, 1 %, 1 %.
+    fn default() -> Self {
+        Self {
+            accel_bias: 0.2,
+            gyro_bias: 0.5f64.to_radians(),
+            accel_scale: 0.01,
+            gyro_scale: 0.01,
+        }
+    }
+}
+
+/// The random walks the filter allows the errors between measurements.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Walks {
+    /// Accelerometer bias, m/s^2/sqrt(s).
+    pub accel: f64,
+    /// Gyro bias, rad/s/sqrt(s).
+    pub gyro: f64,
+    /// Scale factors, 1/sqrt(s).
+    pub scale: f64,
+    /// Barometer bias, m/sqrt(s).
+    pub baro: f64,
+}
+
+impl Default for Walks {
+    fn default() -> Self {
+        Self {
+            accel: 1e-3,
+            gyro: 1e-4,
+            scale: 1e-7,
+            baro: 0.5,
+        }
+    }
+}
+
+/// Where the prior came from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PriorSource {
+    /// The calibration's covariance factors.
+    Calibration,
+    /// Stated, because the calibration carries none (or there is no calibration).
+    Stated(StatedPrior),
+}
+
+/// The sensor errors' prior from a calibration's covariance factors (its first table point):
+/// per axis the bias, the scale factor (the sensitivity's diagonal) and their covariance.
+#[must_use]
+pub fn calibration_prior(cal: &Calibration) -> Option<StateMatrix<f64>> {
+    let Sensor::Imu {
+        covariance: Some(cov),
+        ..
+    } = &cal.data().sensor
+    else {
+        return None;
+    };
+    let c = cov.first()?;
+    let mut p = StateMatrix::zeros();
+    let block = |packed: &[f32], i: usize, j: usize| -> f64 {
+        let l = |a: usize, b: usize| {
+            packed
+                .get(a * (a + 1) / 2 + b)
+                .map_or(0.0, |x| f64::from(*x))
+        };
+        (0..=i.min(j)).map(|m| l(i, m) * l(j, m)).sum()
+    };
+    for axis in 0..3 {
+        for (out, bias, scale) in [
+            (&c.accel[axis], index::ACCEL_BIAS, index::ACCEL_SCALE),
+            (&c.gyro[axis], index::GYRO_BIAS, index::GYRO_SCALE),
+        ] {
+            let packed = out.as_flattened();
+            let (b, s) = (bias + axis, scale + axis);
+            p[(b, b)] = block(packed, 0, 0);
+            p[(s, s)] = block(packed, 1 + axis, 1 + axis);
+            p[(b, s)] = block(packed, 0, 1 + axis);
+            p[(s, b)] = p[(b, s)];
+        }
+    }
+    Some(p)
+}
+
+/// A stated prior as a covariance.
+#[must_use]
+pub fn stated_prior(s: &StatedPrior) -> StateMatrix<f64> {
+    let mut p = StateMatrix::zeros();
+    for i in 0..3 {
+        p[(index::ACCEL_BIAS + i, index::ACCEL_BIAS + i)] = s.accel_bias.powi(2);
+        p[(index::GYRO_BIAS + i, index::GYRO_BIAS + i)] = s.gyro_bias.powi(2);
+        p[(index::ACCEL_SCALE + i, index::ACCEL_SCALE + i)] = s.accel_scale.powi(2);
+        p[(index::GYRO_SCALE + i, index::GYRO_SCALE + i)] = s.gyro_scale.powi(2);
+    }
+    p
+}
+
+/// The white-noise densities seen at rest: per sensor the largest axis' standard deviation
+/// over the rest, times the square root of the sample interval.
+#[must_use]
+pub fn rest_noise(imu: &ImuSeries, rest_end: usize) -> (f64, f64) {
+    let n = rest_end.max(2);
+    let dt = (imu.t.get(n - 1).copied().unwrap_or(1.0) - imu.t.first().copied().unwrap_or(0.0))
+        / (n - 1) as f64;
+    let sd = |get: &dyn Fn(usize) -> f64| {
+        let mean = (0..n).map(get).sum::<f64>() / n as f64;
+        ((0..n).map(|i| (get(i) - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
+    };
+    let worst = |v: &[[f64; 3]]| {
+        (0..3)
+            .map(|a| sd(&|i| v.get(i).map_or(0.0, |x| x[a])))
+            .fold(0.0, f64::max)
+    };
+    (worst(&imu.f) * dt.sqrt(), worst(&imu.w) * dt.sqrt())
+}
+
+/// Everything `calflash flight` reports.
+#[derive(Debug, Clone)]
+pub struct Checked {
+    /// The verdict on the calibration (from the pass with its prior).
+    pub verdict: Verdict,
+    /// The shifted terms' estimates from the pass with their prior opened: name, estimate,
+    /// 1-sigma.
+    pub shifts: Vec<(&'static str, f64, f64)>,
+    /// The pass whose smoothed trajectory is reported.
+    pub pass: Pass,
+    /// Smoothed horizontal track against GNSS, RMS m, and the fixes compared.
+    pub track_rms: Option<(f64, usize)>,
+    /// Smoothed height against the barometer, RMS m.
+    pub height_rms: Option<(f64, usize)>,
+    /// Heading at rest and its 1-sigma, degrees.
+    pub heading_deg: (f64, f64),
+    /// The noise densities used: accelerometer, gyro.
+    pub noise: (f64, f64),
+    /// Where the prior came from.
+    pub prior: PriorSource,
+    /// The rest before launch, s.
+    pub rest_seconds: f64,
+}
+
+/// What stops a check before it starts.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CheckError {
+    /// No launch in the recording.
+    #[error(
+        "no launch: the specific force never exceeds {0:.1} m/s^2 (or there is less than 0.2 s at rest before it to level the unit on)"
+    )]
+    NoLaunch(f64),
+    /// The clocks do not overlap.
+    #[error("the GNSS file's fixes ({gnss}) do not overlap the IMU's recording ({imu})")]
+    Clocks {
+        /// The GNSS span.
+        gnss: String,
+        /// The IMU's span.
+        imu: String,
+    },
+    /// No heading.
+    #[error(
+        "the flight never takes the unit {0:.0} m from the pad by GNSS: its heading cannot be found, so nothing can be told"
+    )]
+    NoHeading(f64),
+    /// Too few samples.
+    #[error("{0}")]
+    TooShort(String),
+}
+
+/// Runs the check.
+///
+/// # Errors
+/// [`CheckError`].
+pub fn check(
+    imu: &ImuSeries,
+    (fixes, baro): (&[Fix], &[Pressure]),
+    (prior, source): (StateMatrix<f64>, PriorSource),
+    walks: &Walks,
+    opts: &Options,
+    alpha: f64,
+) -> Result<Checked, CheckError> {
+    if imu.t.len() < 100 {
+        return Err(CheckError::TooShort(format!(
+            "{} IMU samples: a flight needs at least 100",
+            imu.t.len()
+        )));
+    }
+    let span = |a: f64, b: f64| format!("{a} to {b} s");
+    let (t0, t1) = (imu.t[0], imu.t[imu.t.len() - 1]);
+    let (Some(g0), Some(g1)) = (fixes.first(), fixes.last()) else {
+        return Err(CheckError::TooShort(
+            "the GNSS file holds no usable fix".into(),
+        ));
+    };
+    if g1.t < t0 || g0.t > t1 {
+        return Err(CheckError::Clocks {
+            gnss: span(g0.t, g1.t),
+            imu: span(t0, t1),
+        });
+    }
+    let (rest_end, launch_at) =
+        run::launch(imu, opts.launch_force).ok_or(CheckError::NoLaunch(opts.launch_force))?;
+    let t_launch = imu.t[launch_at];
+    let pad: Vec<&Fix> = fixes.iter().filter(|f| f.t < t_launch).collect();
+    let origin = {
+        let base: Vec<&Fix> = if pad.is_empty() { vec![g0] } else { pad };
+        let n = base.len() as f64;
+        let lat = base.iter().map(|f| f.lat_lon.0).sum::<f64>() / n;
+        let lon = base.iter().map(|f| f.lat_lon.1).sum::<f64>() / n;
+        let h = base.iter().filter_map(|f| f.height).sum::<f64>() / n;
+        (
+            lat,
+            lon,
+            if base.iter().all(|f| f.height.is_some()) {
+                h
+            } else {
+                0.0
+            },
+        )
+    };
+    let min_distance = (30.0 * opts.gnss_noise.0).max(100.0);
+    let heading = run::heading(
+        imu,
+        fixes,
+        origin,
+        (rest_end, launch_at),
+        opts.gnss_noise.0,
+        min_distance,
+    )
+    .ok_or(CheckError::NoHeading(min_distance))?;
+    let (aw, gw) = rest_noise(imu, rest_end);
+    let noise = NavNoise {
+        accel_white: aw.max(1e-4),
+        gyro_white: gw.max(1e-6),
+        accel_walk: walks.accel,
+        gyro_walk: walks.gyro,
+        scale_walk: walks.scale,
+        baro_walk: walks.baro,
+    };
+    let mut prior = prior;
+    prior[(index::BARO, index::BARO)] = 1.0;
+    let start = Start {
+        origin,
+        prior,
+        noise,
+        heading,
+    };
+    let first = run::forward(imu, fixes, baro, &start, opts, (rest_end, launch_at));
+    let last = first
+        .epochs
+        .last()
+        .map_or_else(|| (at_pad(), first.p0), |e| e.filtered);
+    let verdict = verdict::judge(&first.p0, (&last.0.sensors, &last.1), &first.said, alpha);
+    let mut shifts = Vec::new();
+    let mut pass = first;
+    if verdict.word == "SHIFTED" {
+        let mut open = prior;
+        for (i, t) in verdict.terms.iter().enumerate() {
+            if t.shifted {
+                let k = index::ACCEL_BIAS + i;
+                open[(k, k)] *= 1e4;
+            }
+        }
+        let second = run::forward(
+            imu,
+            fixes,
+            baro,
+            &Start {
+                prior: open,
+                ..start
+            },
+            opts,
+            (rest_end, launch_at),
+        );
+        if let Some(e) = second.epochs.last() {
+            let v = verdict::judge(
+                &second.p0,
+                (&e.filtered.0.sensors, &e.filtered.1),
+                &second.said,
+                alpha,
+            );
+            for (t, t2) in verdict.terms.iter().zip(&v.terms) {
+                if t.shifted {
+                    shifts.push((t.name, t2.estimate, t2.sigma));
+                }
+            }
+        }
+        pass = second;
+    }
+    let smoothed = smooth(&pass.epochs);
+    let times: Vec<f64> = pass.epochs.iter().map(|e| e.t).collect();
+    let at = |t: f64| -> Option<Vector3<f64>> {
+        let k = times.partition_point(|x| *x < t);
+        let (a, b) = (smoothed.get(k.checked_sub(1)?)?, smoothed.get(k)?);
+        let (ta, tb) = (times[k - 1], times[k]);
+        let u = if tb > ta { (t - ta) / (tb - ta) } else { 0.0 };
+        Some(a.0.nav.p * (1.0 - u) + b.0.nav.p * u)
+    };
+    let track: Vec<f64> = fixes
+        .iter()
+        .filter(|f| f.t >= t_launch)
+        .filter_map(|f| {
+            let p = at(f.t - opts.gnss_latency)?;
+            let z = run::level_position(f, origin);
+            Some((p.x - z[0]).powi(2) + (p.y - z[1]).powi(2))
+        })
+        .collect();
+    let baro_ref = baro
+        .iter()
+        .filter(|b| b.t < t_launch - 0.1)
+        .map(|b| run::pressure_height(b.pa))
+        .collect::<Vec<_>>();
+    let baro_ref = if baro_ref.is_empty() {
+        baro.first().map_or(0.0, |b| run::pressure_height(b.pa))
+    } else {
+        baro_ref.iter().sum::<f64>() / baro_ref.len() as f64
+    };
+    let heights: Vec<f64> = baro
+        .iter()
+        .filter(|b| b.t >= t_launch)
+        .filter_map(|b| Some((at(b.t)?.z - (run::pressure_height(b.pa) - baro_ref)).powi(2)))
+        .collect();
+    let rms = |v: &[f64]| {
+        (!v.is_empty()).then(|| ((v.iter().sum::<f64>() / v.len() as f64).sqrt(), v.len()))
+    };
+    Ok(Checked {
+        verdict,
+        shifts,
+        track_rms: rms(&track),
+        height_rms: rms(&heights),
+        heading_deg: (heading.0.to_degrees(), heading.1.to_degrees()),
+        noise: (aw, gw),
+        prior: source,
+        rest_seconds: imu.t[rest_end] - t0,
+        pass,
+    })
+}
+
+/// An estimate at the pad, for a pass that recorded no epoch.
+fn at_pad() -> spincal::nav::filter::Estimate<f64> {
+    spincal::nav::filter::Estimate {
+        nav: spincal::nav::Navigation::at_rest(nalgebra::UnitQuaternion::identity(), Vector3::x()),
+        sensors: spincal::nav::SensorErrors::default(),
+    }
+}

@@ -1,0 +1,477 @@
+//! What `calflash flight` reads: the IMU's samples (raw codes through the unit's own
+//! correction, or physical values), the GNSS fixes and the barometer, each checked and named
+//! by file, line and column when it cannot be read.
+
+use std::path::Path;
+
+use spincal::correct::{AnyCorrector, Flags};
+use spincal::model::Calibration;
+
+use crate::mission::Profile;
+
+/// The IMU's samples, corrected: time (s), specific force (m/s^2) and rate (rad/s) in body
+/// axes, and whether the corrector flagged the sample.
+#[derive(Debug, Clone, Default)]
+pub struct ImuSeries {
+    /// Times, s.
+    pub t: Vec<f64>,
+    /// Specific force, m/s^2.
+    pub f: Vec<[f64; 3]>,
+    /// Rate, rad/s.
+    pub w: Vec<[f64; 3]>,
+    /// Flagged by the corrector as a value it cannot vouch for: saturated, beyond the
+    /// calibrated range, uncorrected. (A temperature or voltage beyond the calibrated span is
+    /// corrected at its edge: the calibration's own uncertainty, not a lost sample.)
+    pub flagged: Vec<bool>,
+}
+
+/// A GNSS fix in the file's terms.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fix {
+    /// Time, s (the IMU's clock).
+    pub t: f64,
+    /// Latitude and longitude, degrees.
+    pub lat_lon: (f64, f64),
+    /// Height above the ellipsoid, m, when logged.
+    pub height: Option<f64>,
+    /// Velocity east, north, up, m/s, when logged.
+    pub velocity: Option<[f64; 3]>,
+}
+
+/// What the GNSS file held beside its usable fixes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FixCounts {
+    /// Rows read.
+    pub rows: usize,
+    /// Rows without a fix (a "no fix" marker, fewer than four satellites).
+    pub no_fix: usize,
+    /// Rows repeating the previous fix's position and time, or its position exactly (a
+    /// receiver holding its last fix).
+    pub repeated: usize,
+}
+
+/// A barometer reading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pressure {
+    /// Time, s.
+    pub t: f64,
+    /// Static pressure, Pa.
+    pub pa: f64,
+}
+
+/// A file that cannot be read as what it should be.
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    /// The file could not be opened or read.
+    #[error("{file}: {source}")]
+    Io {
+        /// The file.
+        file: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A CSV it cannot parse.
+    #[error("{file}: {source}")]
+    Csv {
+        /// The file.
+        file: String,
+        /// Why.
+        source: csv::Error,
+    },
+    /// A column it needs is missing.
+    #[error("{file}: no column `{column}` in the header ({expected})")]
+    NoColumn {
+        /// The file.
+        file: String,
+        /// The column.
+        column: String,
+        /// What the file should hold.
+        expected: &'static str,
+    },
+    /// A field that is not what it should be.
+    #[error("{file} line {line}, column `{column}`: `{text}` {why}")]
+    Field {
+        /// The file.
+        file: String,
+        /// Its line, from 1.
+        line: u64,
+        /// The column.
+        column: String,
+        /// What was there.
+        text: String,
+        /// What was expected.
+        why: &'static str,
+    },
+    /// Time running backwards.
+    #[error("{file} line {line}: time {t} s is before the line above's {before} s")]
+    Backwards {
+        /// The file.
+        file: String,
+        /// Its line.
+        line: u64,
+        /// Its time.
+        t: f64,
+        /// The time before.
+        before: f64,
+    },
+    /// The corrector refused the calibration.
+    #[error("{0}")]
+    Corrector(String),
+}
+
+/// The longest line read, bytes.
+const MAX_LINE: usize = 1 << 20;
+
+/// A header-led CSV with named columns: its reader and the index of each column asked for.
+struct Table {
+    file: String,
+    reader: csv::Reader<crate::files::LineBound<std::fs::File>>,
+    header: Vec<String>,
+}
+
+impl Table {
+    fn open(path: &Path) -> Result<Self, InputError> {
+        let file = path.display().to_string();
+        let inner = std::fs::File::open(path).map_err(|source| InputError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        let mut reader = csv::ReaderBuilder::new()
+            .trim(csv::Trim::All)
+            .flexible(false)
+            .from_reader(crate::files::LineBound::new(inner, MAX_LINE));
+        let header = reader
+            .headers()
+            .map_err(|source| InputError::Csv {
+                file: file.clone(),
+                source,
+            })?
+            .iter()
+            .map(str::to_string)
+            .collect();
+        Ok(Self {
+            file,
+            reader,
+            header,
+        })
+    }
+
+    /// The first of `names` in the header, exactly as written, else in any case (so `T`, a
+    /// temperature, is not taken for `t`).
+    fn column(&self, names: &[&str]) -> Option<usize> {
+        names
+            .iter()
+            .find_map(|n| self.header.iter().position(|h| h == n))
+            .or_else(|| {
+                names.iter().find_map(|n| {
+                    (n.len() > 1)
+                        .then(|| self.header.iter().position(|h| h.eq_ignore_ascii_case(n)))
+                        .flatten()
+                })
+            })
+    }
+
+    fn need(&self, names: &[&str], expected: &'static str) -> Result<usize, InputError> {
+        self.column(names).ok_or_else(|| InputError::NoColumn {
+            file: self.file.clone(),
+            column: names.first().copied().unwrap_or_default().to_string(),
+            expected,
+        })
+    }
+
+    /// Each row's line and the numbers in `columns` (`None` for an empty field).
+    fn rows(
+        &mut self,
+        columns: &[usize],
+        mut each: impl FnMut(u64, &[Option<f64>]) -> Result<(), InputError>,
+    ) -> Result<(), InputError> {
+        let mut record = csv::StringRecord::new();
+        let mut values = vec![None; columns.len()];
+        loop {
+            let more = self
+                .reader
+                .read_record(&mut record)
+                .map_err(|source| InputError::Csv {
+                    file: self.file.clone(),
+                    source,
+                })?;
+            if !more {
+                return Ok(());
+            }
+            let line = record.position().map_or(0, csv::Position::line);
+            for (v, &c) in values.iter_mut().zip(columns) {
+                let text = record.get(c).unwrap_or_default();
+                *v = if text.is_empty() {
+                    None
+                } else {
+                    Some(
+                        text.parse::<f64>()
+                            .ok()
+                            .filter(|x| x.is_finite())
+                            .ok_or_else(|| InputError::Field {
+                                file: self.file.clone(),
+                                line,
+                                column: self.header.get(c).cloned().unwrap_or_default(),
+                                text: text.chars().take(40).collect(),
+                                why: "is not a finite number",
+                            })?,
+                    )
+                };
+            }
+            each(line, &values)?;
+        }
+    }
+}
+
+/// Raw codes (`t`, `a_x a_y a_z g_x g_y g_z`, optionally `temp`) through the unit's own
+/// correction, each sample at its temperature.
+///
+/// # Errors
+/// An unreadable file, a missing column, a field that is not a number, time running back.
+pub fn corrected(path: &Path, cal: &Calibration) -> Result<ImuSeries, InputError> {
+    use crate::columns as col;
+    let mut table = Table::open(path)?;
+    let codes = "t and the raw codes a_x a_y a_z g_x g_y g_z (as simulate --flight writes them)";
+    let mut cols = vec![table.need(&["t", "time", "ts"], codes)?];
+    for name in col::A.iter().chain(&col::GYRO) {
+        cols.push(table.need(&[name], codes)?);
+    }
+    let temp = table.column(&["temp"]);
+    cols.extend(temp);
+    let mut raw: Vec<(u64, Vec<f64>)> = Vec::new();
+    let file = table.file.clone();
+    table.rows(&cols, |line, v| {
+        let mut row = Vec::with_capacity(v.len());
+        for (x, &c) in v.iter().zip(&cols) {
+            row.push(x.ok_or_else(|| InputError::Field {
+                file: file.clone(),
+                line,
+                column: c.to_string(),
+                text: String::new(),
+                why: "is empty; expected a number",
+            })?);
+        }
+        raw.push((line, row));
+        Ok(())
+    })?;
+    let rate = median_rate(raw.iter().map(|(_, r)| r[0]));
+    let mut corrector = AnyCorrector::new(cal, rate as f32)
+        .map_err(|e| InputError::Corrector(format!("{file}: {e}")))?;
+    let env = &cal.data().environment;
+    let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
+    let volt = mid(env.voltage_span);
+    let mut series = ImuSeries::default();
+    let mut last_t = f64::NEG_INFINITY;
+    let mut last_temp = f32::NAN;
+    for (line, row) in &raw {
+        let t = row[0];
+        if t < last_t {
+            return Err(InputError::Backwards {
+                file,
+                line: *line,
+                t,
+                before: last_t,
+            });
+        }
+        let temp = row.get(7).map_or(mid(env.temperature_span), |x| *x as f32);
+        // A new environment restarts the rate derivative: follow the temperature in steps.
+        if last_temp.is_nan() || (temp - last_temp).abs() >= TEMPERATURE_STEP {
+            corrector.set_environment(temp, volt);
+            last_temp = temp;
+        }
+        let c: Vec<i32> = row[1..7].iter().map(|x| x.round() as i32).collect();
+        let Some(o) = corrector.correct(&c) else {
+            return Err(InputError::Corrector(format!(
+                "{file}: the calibration does not correct an IMU's six codes"
+            )));
+        };
+        let v = o.values.map(f64::from);
+        series.t.push(t);
+        series.f.push([v[0], v[1], v[2]]);
+        series.w.push([v[3], v[4], v[5]]);
+        let f = o.flags;
+        series.flagged.push(
+            [Flags::SATURATED, Flags::OUT_OF_RANGE, Flags::NO_CALIBRATION]
+                .into_iter()
+                .any(|x| f.contains(x)),
+        );
+        last_t = t;
+    }
+    Ok(series)
+}
+
+/// The temperature change, C, after which a recording's samples are corrected at the new
+/// temperature (each change restarts the corrector's rate derivative, flagging a sample).
+const TEMPERATURE_STEP: f32 = 0.1;
+
+/// The median sampling rate of increasing times, Hz (1000 when it cannot tell).
+pub fn median_rate(t: impl Iterator<Item = f64>) -> f64 {
+    let t: Vec<f64> = t.collect();
+    let mut d: Vec<f64> = t
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .collect();
+    if d.is_empty() {
+        return 1000.0;
+    }
+    let mid = d.len() / 2;
+    let (_, m, _) = d.select_nth_unstable_by(mid, f64::total_cmp);
+    1.0 / *m
+}
+
+/// Physical values from a mission-profile reader (as `selfcal` and `mission` take them):
+/// nothing flagged, as the log has no flags.
+#[must_use]
+pub fn physical(p: &Profile) -> ImuSeries {
+    let n = p.len();
+    ImuSeries {
+        t: p.t.clone(),
+        f: p.f.clone().unwrap_or_else(|| vec![[0.0; 3]; n]),
+        w: p.w.clone().unwrap_or_else(|| vec![[0.0; 3]; n]),
+        flagged: vec![false; n],
+    }
+}
+
+/// The satellites value some receivers log while they have no fix.
+pub const NO_FIX_MARKER: f64 = 193.0;
+
+/// Reads GNSS fixes: `t` (or `ts`), `latitude`, `longitude` (degrees), optionally `height`
+/// (m), `v_east v_north v_up` (m/s) and `satellites` (a row with fewer than four, or the
+/// "no fix" marker 193, is counted and left out, as is a row that repeats the last fix's
+/// position: a receiver holding it).
+///
+/// # Errors
+/// As [`corrected`]; a latitude or longitude out of range.
+pub fn gnss(path: &Path) -> Result<(Vec<Fix>, FixCounts), InputError> {
+    let mut table = Table::open(path)?;
+    let what =
+        "t, latitude, longitude in degrees; height, v_east, v_north, v_up, satellites optional";
+    let mut cols = vec![
+        table.need(&["t", "ts", "time"], what)?,
+        table.need(&["latitude", "lat"], what)?,
+        table.need(&["longitude", "lon"], what)?,
+    ];
+    let optional = [
+        table.column(&["height", "alt", "altitude"]),
+        table.column(&["v_east"]),
+        table.column(&["v_north"]),
+        table.column(&["v_up"]),
+        table.column(&["satellites", "sats"]),
+    ];
+    cols.extend(optional.iter().map(|c| c.unwrap_or(usize::MAX)));
+    let file = table.file.clone();
+    let header = table.header.clone();
+    let mut fixes: Vec<Fix> = Vec::new();
+    let mut counts = FixCounts::default();
+    let used: Vec<usize> = cols.iter().copied().filter(|c| *c != usize::MAX).collect();
+    table.rows(&used, |line, v| {
+        counts.rows += 1;
+        let mut it = v.iter();
+        let mut get = |present: bool| {
+            if present {
+                it.next().copied().flatten()
+            } else {
+                None
+            }
+        };
+        let (t, lat, lon) = (get(true), get(true), get(true));
+        let [h, ve, vn, vu, sats] = optional.map(|c| get(c.is_some()));
+        let field = |col: usize, text: String, why: &'static str| InputError::Field {
+            file: file.clone(),
+            line,
+            column: header.get(col).cloned().unwrap_or_default(),
+            text,
+            why,
+        };
+        let (Some(t), Some(lat), Some(lon)) = (t, lat, lon) else {
+            counts.no_fix += 1;
+            return Ok(());
+        };
+        if !(-90.0..=90.0).contains(&lat) {
+            return Err(field(
+                cols[1],
+                lat.to_string(),
+                "is not a latitude (degrees, -90 to 90)",
+            ));
+        }
+        if !(-180.0..=360.0).contains(&lon) {
+            return Err(field(
+                cols[2],
+                lon.to_string(),
+                "is not a longitude (degrees)",
+            ));
+        }
+        if sats.is_some_and(|s| s < 4.0 || s == NO_FIX_MARKER) {
+            counts.no_fix += 1;
+            return Ok(());
+        }
+        if let Some(last) = fixes.last() {
+            if t < last.t {
+                return Err(InputError::Backwards {
+                    file: file.clone(),
+                    line,
+                    t,
+                    before: last.t,
+                });
+            }
+            if last.lat_lon == (lat, lon) && last.height == h {
+                counts.repeated += 1;
+                return Ok(());
+            }
+        }
+        let velocity = match (ve, vn, vu) {
+            (Some(e), Some(n), Some(u)) => Some([e, n, u]),
+            _ => None,
+        };
+        fixes.push(Fix {
+            t,
+            lat_lon: (lat, lon),
+            height: h,
+            velocity,
+        });
+        Ok(())
+    })?;
+    Ok((fixes, counts))
+}
+
+/// Reads a barometer: `t` (or `ts`) and `P` (Pa).
+///
+/// # Errors
+/// As [`corrected`]; a pressure outside 1 to 120,000 Pa.
+pub fn baro(path: &Path) -> Result<Vec<Pressure>, InputError> {
+    let mut table = Table::open(path)?;
+    let what = "t and P (static pressure, Pa)";
+    let cols = [
+        table.need(&["t", "ts", "time"], what)?,
+        table.need(&["P", "pressure", "pressure_pa"], what)?,
+    ];
+    let file = table.file.clone();
+    let header = table.header.clone();
+    let mut out: Vec<Pressure> = Vec::new();
+    table.rows(&cols, |line, v| {
+        let (Some(t), Some(pa)) = (v[0], v[1]) else {
+            return Ok(());
+        };
+        if !(1.0..=120_000.0).contains(&pa) {
+            return Err(InputError::Field {
+                file: file.clone(),
+                line,
+                column: header.get(cols[1]).cloned().unwrap_or_default(),
+                text: pa.to_string(),
+                why: "is not a static pressure in Pa (1 to 120,000)",
+            });
+        }
+        if out.last().is_some_and(|p| t < p.t) {
+            return Err(InputError::Backwards {
+                file: file.clone(),
+                line,
+                t,
+                before: out.last().map_or(t, |p| p.t),
+            });
+        }
+        out.push(Pressure { t, pa });
+        Ok(())
+    })?;
+    Ok(out)
+}

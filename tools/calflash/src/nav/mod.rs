@@ -1,0 +1,10 @@
+//! In flight, on the host: what only the host does around the firmware crate's navigator and
+//! filter ([`spincal::nav`]): reading the flight's files, the forward pass with its launch,
+//! levelling and heading, the Rauch-Tung-Striebel smoother, and the verdict on the
+//! calibration with the filter's own consistency.
+
+pub mod check;
+pub mod input;
+pub mod run;
+pub mod smooth;
+pub mod verdict;

@@ -1,0 +1,497 @@
+//! One pass of the filter over a flight: the launch found, the unit levelled at rest (zero
+//! velocity and position updates on the pad), the heading found from the GNSS track, then the
+//! strapdown navigation with its error-state filter, GNSS and barometer updates, and a record
+//! of every epoch for the smoother.
+
+use nalgebra::{UnitQuaternion, Vector3};
+use spincal::nav::filter::{Doubt, Estimate, StateMatrix, index};
+use spincal::nav::{Earth, ErrorFilter, NavNoise, Navigation, Prior, SensorErrors, StateVector};
+
+use super::input::{Fix, ImuSeries, Pressure};
+use crate::sim::flight::atmosphere;
+
+/// How the filter is set up beyond its inputs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// The GNSS antenna from the IMU, body axes, m.
+    pub lever: [f64; 3],
+    /// 1-sigma of a GNSS fix, m: horizontal (each axis) and vertical.
+    pub gnss_noise: (f64, f64),
+    /// 1-sigma of a GNSS velocity, m/s.
+    pub gnss_velocity_noise: f64,
+    /// How late each fix is stamped, s.
+    pub gnss_latency: f64,
+    /// 1-sigma of a barometric height, m.
+    pub baro_noise: f64,
+    /// Barometer updates per second at most.
+    pub baro_rate: f64,
+    /// Longest covariance step, s.
+    pub max_step: f64,
+    /// Specific force that marks the launch, m/s^2.
+    pub launch_force: f64,
+    /// Innovations beyond this many sigma are refused (and counted).
+    pub gate: f64,
+    /// What a flagged sample may hide, 1-sigma: specific force (m/s^2) and rate (rad/s).
+    pub doubt: (f64, f64),
+    /// The barometer is not used from this Mach number up (the shock wave on its port).
+    pub baro_mach: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            lever: [0.0; 3],
+            gnss_noise: (2.5, 5.0),
+            gnss_velocity_noise: 0.2,
+            gnss_latency: 0.0,
+            baro_noise: 1.5,
+            baro_rate: 10.0,
+            max_step: 0.01,
+            launch_force: 2.0 * atmosphere::G0,
+            gate: 5.0,
+            doubt: (1.0e5, 100.0),
+            baro_mach: 0.8,
+        }
+    }
+}
+
+/// The filter's start: the launch point and the errors' prior and noise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Start {
+    /// Latitude, longitude (degrees) and height (m) of the level frame's origin.
+    pub origin: (f64, f64, f64),
+    /// The prior of the sensor errors (the rest of the matrix is the filter's to set).
+    pub prior: StateMatrix<f64>,
+    /// The process noise.
+    pub noise: NavNoise<f64>,
+    /// Heading of the unit at rest, and its 1-sigma, rad (from the GNSS track).
+    pub heading: (f64, f64),
+}
+
+/// What one measurement said.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Said {
+    /// Time, s.
+    pub t: f64,
+    /// Which measurement.
+    pub kind: Kind,
+    /// Innovation (measured minus predicted).
+    pub value: f64,
+    /// Its predicted 1-sigma.
+    pub sigma: f64,
+    /// Taken (false: beyond the gate).
+    pub taken: bool,
+}
+
+/// The kinds of measurement.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// On the pad: zero velocity and position.
+    Pad,
+    /// GNSS position along east, north, up.
+    Position(usize),
+    /// GNSS velocity.
+    Velocity(usize),
+    /// Barometric height.
+    Baro,
+}
+
+/// One epoch of the forward pass: the prediction into it and the estimate after its updates.
+#[derive(Debug, Clone)]
+pub struct Epoch {
+    /// Time, s.
+    pub t: f64,
+    /// The transition from the previous epoch.
+    pub phi: StateMatrix<f64>,
+    /// Predicted estimate and covariance.
+    pub predicted: (Estimate<f64>, StateMatrix<f64>),
+    /// After this epoch's updates.
+    pub filtered: (Estimate<f64>, StateMatrix<f64>),
+}
+
+/// A pass over the flight.
+#[derive(Debug, Clone)]
+pub struct Pass {
+    /// Every epoch.
+    pub epochs: Vec<Epoch>,
+    /// Every innovation.
+    pub said: Vec<Said>,
+    /// Seconds of flagged samples navigated on doubt.
+    pub flagged_seconds: f64,
+    /// Seconds the barometer was left out near and beyond Mach 1.
+    pub baro_skipped_seconds: f64,
+    /// The launch, s.
+    pub launch: f64,
+    /// The prior the pass started from.
+    pub p0: StateMatrix<f64>,
+}
+
+/// The launch: the first sample whose specific force exceeds `force`, and the rest before it
+/// (at least 0.2 s, up to 0.1 s before the launch).
+#[must_use]
+pub fn launch(imu: &ImuSeries, force: f64) -> Option<(usize, usize)> {
+    let at = imu
+        .f
+        .iter()
+        .position(|f| Vector3::from(*f).norm() > force)?;
+    let t_launch = imu.t.get(at).copied()?;
+    let rest_end = imu.t.iter().position(|t| *t > t_launch - 0.1).unwrap_or(0);
+    let t0 = imu.t.first().copied()?;
+    (imu.t.get(rest_end).is_some_and(|t| t - t0 >= 0.2) && rest_end >= 10).then_some((rest_end, at))
+}
+
+/// The attitude of a unit at rest from its mean specific force, with heading `heading` (rad,
+/// a turn about the vertical) and its body axis of greatest rate as the spin axis.
+#[must_use]
+pub fn levelled(imu: &ImuSeries, rest_end: usize, heading: f64) -> UnitQuaternion<f64> {
+    let n = rest_end.max(1) as f64;
+    let mean: Vector3<f64> = imu
+        .f
+        .iter()
+        .take(rest_end)
+        .map(|f| Vector3::from(*f))
+        .sum::<Vector3<f64>>()
+        / n;
+    let up = UnitQuaternion::rotation_between(&mean, &Vector3::z()).unwrap_or_else(|| {
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+    });
+    UnitQuaternion::from_axis_angle(&Vector3::z_axis(), heading) * up
+}
+
+/// The body axis about which the flight turns most (root mean square rate after `from`).
+#[must_use]
+pub fn spin_axis(imu: &ImuSeries, from: usize) -> Vector3<f64> {
+    let mut sum = [0.0; 3];
+    for w in imu.w.iter().skip(from) {
+        for (s, x) in sum.iter_mut().zip(w) {
+            *s += x * x;
+        }
+    }
+    let k = (0..3)
+        .max_by(|a, b| sum[*a].total_cmp(&sum[*b]))
+        .unwrap_or(0);
+    let mut axis = Vector3::zeros();
+    axis[k] = 1.0;
+    axis
+}
+
+/// Pressure altitude of the standard atmosphere's troposphere, m.
+#[must_use]
+pub fn pressure_height(pa: f64) -> f64 {
+    const T0: f64 = 288.15;
+    const L: f64 = 0.0065;
+    const P0: f64 = 101_325.0;
+    const R: f64 = 287.052_87;
+    T0 / L * (1.0 - (pa / P0).powf(R * L / atmosphere::G0))
+}
+
+/// A fix's position in the level frame of `origin`.
+#[must_use]
+pub fn level_position(fix: &Fix, origin: (f64, f64, f64)) -> [f64; 3] {
+    let (e, n, u) = map_3d::geodetic2enu(
+        fix.lat_lon.0.to_radians(),
+        fix.lat_lon.1.to_radians(),
+        fix.height.unwrap_or(origin.2),
+        origin.0.to_radians(),
+        origin.1.to_radians(),
+        origin.2,
+        map_3d::Ellipsoid::WGS84,
+    );
+    [e, n, u]
+}
+
+/// The whole prior: the sensor errors' from `start`, the rest from the levelling and the pad.
+fn prior(start: &Start, pad_sigma: (f64, f64)) -> StateMatrix<f64> {
+    let mut p = start.prior;
+    let g = atmosphere::G0;
+    let tilt2 = (0..3)
+        .map(|i| p[(index::ACCEL_BIAS + i, index::ACCEL_BIAS + i)])
+        .fold(0.0, f64::max)
+        / (g * g)
+        + 1e-6;
+    let set = |p: &mut StateMatrix<f64>, i: usize, v: f64| p[(i, i)] = v;
+    for i in 0..3 {
+        let h = if i == 2 { pad_sigma.1 } else { pad_sigma.0 };
+        set(&mut p, index::POSITION + i, h * h);
+        set(&mut p, index::VELOCITY + i, 1e-4);
+        set(
+            &mut p,
+            index::ATTITUDE + i,
+            if i == 2 {
+                start.heading.1.powi(2)
+            } else {
+                tilt2
+            },
+        );
+    }
+    p
+}
+
+/// Runs the filter over the flight.
+#[must_use]
+pub fn forward(
+    imu: &ImuSeries,
+    fixes: &[Fix],
+    baro: &[Pressure],
+    start: &Start,
+    opts: &Options,
+    (rest_end, launch_at): (usize, usize),
+) -> Pass {
+    let earth = Earth {
+        latitude: start.origin.0.to_radians(),
+        height: start.origin.2,
+    };
+    let q0 = levelled(imu, rest_end, start.heading.0);
+    let nav = Navigation::at_rest(q0, spin_axis(imu, launch_at));
+    let estimate = Estimate {
+        nav,
+        sensors: SensorErrors::default(),
+    };
+    let pad_fix = fixes
+        .iter()
+        .any(|f| imu.t.get(launch_at).is_some_and(|t| f.t < *t));
+    let pad_sigma = if pad_fix {
+        (opts.gnss_noise.0, 1.0)
+    } else {
+        (10.0, 1.0)
+    };
+    let p0 = prior(start, pad_sigma);
+    let mut filter = ErrorFilter::new(estimate, &Prior { covariance: p0 }, earth, start.noise);
+    let t_launch = imu.t.get(launch_at).copied().unwrap_or(0.0);
+    let baro_ref = {
+        let pad: Vec<f64> = baro
+            .iter()
+            .filter(|b| b.t < t_launch - 0.1)
+            .map(|b| b.pa)
+            .collect();
+        let p = if pad.is_empty() {
+            baro.first().map_or(101_325.0, |b| b.pa)
+        } else {
+            pad.iter().sum::<f64>() / pad.len() as f64
+        };
+        pressure_height(p)
+    };
+    let mut pass = Pass {
+        epochs: Vec::new(),
+        said: Vec::new(),
+        flagged_seconds: 0.0,
+        baro_skipped_seconds: 0.0,
+        launch: t_launch,
+        p0,
+    };
+    let lever = Vector3::from(opts.lever);
+    let (mut next_fix, mut next_baro) = (0usize, 0usize);
+    let mut last_baro = f64::NEG_INFINITY;
+    let mut last_epoch = imu.t.first().copied().unwrap_or(0.0);
+    let (doubt_f, doubt_w) = opts.doubt;
+    for i in 0..imu.t.len() {
+        let t = imu.t[i];
+        let dt = if i == 0 { 0.0 } else { t - imu.t[i - 1] };
+        let flagged = imu.flagged[i];
+        if flagged {
+            pass.flagged_seconds += dt;
+        }
+        filter.sample(
+            &Vector3::from(imu.f[i]),
+            &Vector3::from(imu.w[i]),
+            dt,
+            flagged.then_some(Doubt {
+                force: doubt_f,
+                rate: doubt_w,
+            }),
+        );
+        let fix_due = fixes
+            .get(next_fix)
+            .is_some_and(|f| f.t - opts.gnss_latency <= t);
+        let baro_due = baro.get(next_baro).is_some_and(|b| b.t <= t);
+        let on_pad = i < rest_end && t - last_epoch >= 0.05;
+        if !(fix_due || baro_due || on_pad || filter.pending() >= opts.max_step) || i == 0 {
+            continue;
+        }
+        last_epoch = t;
+        let phi = filter.covariance_step();
+        let predicted = (filter.estimate, filter.covariance);
+        if on_pad {
+            for axis in 0..3 {
+                let h = ErrorFilter::velocity_row(axis);
+                let v = filter.estimate.nav.v[axis];
+                take(
+                    &mut filter,
+                    &mut pass.said,
+                    (t, Kind::Pad),
+                    &h,
+                    -v,
+                    1e-4,
+                    opts.gate,
+                );
+                let (h, at) = filter.antenna_row(&Vector3::zeros(), axis);
+                take(
+                    &mut filter,
+                    &mut pass.said,
+                    (t, Kind::Pad),
+                    &h,
+                    -at,
+                    1e-4,
+                    opts.gate,
+                );
+            }
+        }
+        while let Some(fix) = fixes.get(next_fix).filter(|f| f.t - opts.gnss_latency <= t) {
+            next_fix += 1;
+            let z = level_position(fix, start.origin);
+            // The fix describes an instant up to a sample before this one.
+            let back = t - (fix.t - opts.gnss_latency);
+            let v = filter.estimate.nav.v;
+            let axes = if fix.height.is_some() { 3 } else { 2 };
+            for (axis, zi) in z.iter().enumerate().take(axes) {
+                let (h, at) = filter.antenna_row(&lever, axis);
+                let r = if axis == 2 {
+                    opts.gnss_noise.1
+                } else {
+                    opts.gnss_noise.0
+                };
+                let nu = zi - (at - v[axis] * back);
+                take(
+                    &mut filter,
+                    &mut pass.said,
+                    (t, Kind::Position(axis)),
+                    &h,
+                    nu,
+                    r * r,
+                    opts.gate,
+                );
+            }
+            if let Some(vel) = fix.velocity {
+                for (axis, vi) in vel.iter().enumerate() {
+                    let h = ErrorFilter::velocity_row(axis);
+                    let nu = vi - filter.estimate.nav.v[axis];
+                    let r = opts.gnss_velocity_noise;
+                    take(
+                        &mut filter,
+                        &mut pass.said,
+                        (t, Kind::Velocity(axis)),
+                        &h,
+                        nu,
+                        r * r,
+                        opts.gate,
+                    );
+                }
+            }
+        }
+        while let Some(b) = baro.get(next_baro).filter(|b| b.t <= t) {
+            next_baro += 1;
+            if b.t - last_baro < 1.0 / opts.baro_rate {
+                continue;
+            }
+            let height = start.origin.2 + filter.estimate.nav.p.z;
+            let sound = atmosphere::standard(height).sound;
+            if filter.estimate.nav.v.norm() >= opts.baro_mach * sound {
+                pass.baro_skipped_seconds += (b.t - last_baro).min(1.0 / opts.baro_rate);
+                last_baro = b.t;
+                continue;
+            }
+            last_baro = b.t;
+            let z = pressure_height(b.pa) - baro_ref;
+            let (h, at) = filter.baro_row();
+            let r = opts.baro_noise;
+            take(
+                &mut filter,
+                &mut pass.said,
+                (t, Kind::Baro),
+                &h,
+                z - at,
+                r * r,
+                opts.gate,
+            );
+        }
+        filter.feedback();
+        pass.epochs.push(Epoch {
+            t,
+            phi,
+            predicted,
+            filtered: (filter.estimate, filter.covariance),
+        });
+    }
+    pass
+}
+
+/// Gates and takes one scalar measurement, recording what it said.
+fn take(
+    filter: &mut ErrorFilter<f64>,
+    said: &mut Vec<Said>,
+    (t, kind): (f64, Kind),
+    h: &StateVector<f64>,
+    innovation: f64,
+    variance: f64,
+    gate: f64,
+) {
+    let peek = filter.innovation(h, innovation, variance);
+    let sigma = peek.variance.max(0.0).sqrt();
+    let taken =
+        peek.value.abs() <= gate * sigma && filter.update(h, innovation, variance).is_some();
+    said.push(Said {
+        t,
+        kind,
+        value: peek.value,
+        sigma,
+        taken,
+    });
+}
+
+/// The heading of the unit at rest: the strapdown navigated from the levelled attitude at
+/// heading zero without aiding, its horizontal track against the GNSS track at the first fix
+/// at least `min_distance` m from the origin. Returns the heading and its 1-sigma, rad, or
+/// `None` when the flight never gets that far.
+#[must_use]
+pub fn heading(
+    imu: &ImuSeries,
+    fixes: &[Fix],
+    origin: (f64, f64, f64),
+    (rest_end, launch_at): (usize, usize),
+    noise_h: f64,
+    min_distance: f64,
+) -> Option<(f64, f64)> {
+    let t_launch = *imu.t.get(launch_at)?;
+    let pad: Vec<[f64; 3]> = fixes
+        .iter()
+        .filter(|f| f.t < t_launch)
+        .map(|f| level_position(f, origin))
+        .collect();
+    let start = if pad.is_empty() {
+        [0.0; 3]
+    } else {
+        let n = pad.len() as f64;
+        [
+            pad.iter().map(|p| p[0]).sum::<f64>() / n,
+            pad.iter().map(|p| p[1]).sum::<f64>() / n,
+            0.0,
+        ]
+    };
+    let target = fixes.iter().find(|f| {
+        let p = level_position(f, origin);
+        f.t > t_launch && (p[0] - start[0]).hypot(p[1] - start[1]) >= min_distance
+    })?;
+    let earth = Earth {
+        latitude: origin.0.to_radians(),
+        height: origin.2,
+    };
+    let mut nav = Navigation::at_rest(levelled(imu, rest_end, 0.0), spin_axis(imu, launch_at));
+    let mut k = 1;
+    while k < imu.t.len() && imu.t[k] <= target.t {
+        let step = spincal::nav::Step {
+            w: [Vector3::from(imu.w[k - 1]), Vector3::from(imu.w[k])],
+            f: [Vector3::from(imu.f[k - 1]), Vector3::from(imu.f[k])],
+            dt: imu.t[k] - imu.t[k - 1],
+        };
+        nav.propagate(&earth, &step);
+        k += 1;
+    }
+    let p = level_position(target, origin);
+    let (ge, gn) = (p[0] - start[0], p[1] - start[1]);
+    let (ie, inn) = (nav.p.x, nav.p.y);
+    let d = ge.hypot(gn);
+    let yaw = gn.atan2(ge) - inn.atan2(ie);
+    let mismatch = (d - ie.hypot(inn)).abs();
+    let sigma = ((3.0 * noise_h + mismatch) / d).max(2f64.to_radians());
+    Some((yaw.sin().atan2(yaw.cos()), sigma))
+}

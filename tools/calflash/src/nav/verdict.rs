@@ -1,0 +1,238 @@
+//! Did the calibration survive the launch? Each sensor error's in-flight estimate against the
+//! calibration (its prior), only when the filter's own innovations say it fits the data.
+//!
+//! Under "held", the in-flight estimate `x` of a term whose prior is `N(0, s0^2)` has variance
+//! `s0^2 - s^2` (what the flight learnt); `z = x / sqrt(s0^2 - s^2)` is its Wald statistic,
+//! and the terms are tested together (Holm over the per-term p-values) and overall
+//! (`x' (P0 - P)^-1 x`, chi-square). A term whose variance the flight reduced by less than a
+//! third is not observed: the flight cannot tell.
+
+use serde::Serialize;
+use spincal::nav::StateMatrix;
+use spincal::nav::filter::{SensorErrors, index};
+
+use super::run::{Kind, Said};
+
+/// The terms, in the filter's order from [`index::ACCEL_BIAS`].
+pub const TERMS: [&str; 12] = [
+    "accel bias x",
+    "accel bias y",
+    "accel bias z",
+    "gyro bias x",
+    "gyro bias y",
+    "gyro bias z",
+    "accel scale x",
+    "accel scale y",
+    "accel scale z",
+    "gyro scale x",
+    "gyro scale y",
+    "gyro scale z",
+];
+
+/// The least share of its prior variance a flight must remove for a term to count as seen.
+pub const OBSERVED: f64 = 1.0 / 3.0;
+
+/// One term's in-flight figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct Term {
+    /// Its name.
+    pub name: &'static str,
+    /// Units.
+    pub unit: &'static str,
+    /// The calibration's 1-sigma (the prior).
+    pub prior_sigma: f64,
+    /// The in-flight estimate of its shift from the calibration.
+    pub estimate: f64,
+    /// Its 1-sigma after the flight.
+    pub sigma: f64,
+    /// The share of the prior variance the flight removed.
+    pub learnt: f64,
+    /// The Wald statistic and its two-sided p-value, when observed.
+    pub z: Option<f64>,
+    /// p-value.
+    pub p: Option<f64>,
+    /// Shifted (Holm at the stated level).
+    pub shifted: bool,
+}
+
+/// The filter's fit to the data.
+#[derive(Debug, Clone, Serialize)]
+pub struct Consistency {
+    /// Innovations of GNSS and barometer taken or refused.
+    pub innovations: usize,
+    /// Of them, inside their 95 % bounds (|nu| <= 1.96 sigma).
+    pub inside_95: usize,
+    /// Refused beyond the gate.
+    pub refused: usize,
+    /// Mean of nu^2 / sigma^2 over them (1 when the filter's covariance is right).
+    pub mean_nis: f64,
+    /// The filter fits the data: at least 90 % inside and a mean NIS under 2.
+    pub fits: bool,
+}
+
+/// The verdict.
+#[derive(Debug, Clone, Serialize)]
+pub struct Verdict {
+    /// HELD, SHIFTED, CANNOT TELL or FILTER DOES NOT FIT.
+    pub word: &'static str,
+    /// Why, in a sentence.
+    pub why: String,
+    /// The terms.
+    pub terms: Vec<Term>,
+    /// The overall chi-square over the observed terms, its degrees of freedom and p-value.
+    pub overall: Option<(f64, usize, f64)>,
+    /// The consistency.
+    pub consistency: Consistency,
+}
+
+/// The consistency of the aiding innovations (GNSS and barometer; the pad's are left out).
+#[must_use]
+pub fn consistency(said: &[Said]) -> Consistency {
+    let aiding: Vec<&Said> = said
+        .iter()
+        .filter(|s| s.kind != Kind::Pad && s.sigma > 0.0)
+        .collect();
+    let n = aiding.len();
+    let inside = aiding
+        .iter()
+        .filter(|s| s.value.abs() <= 1.96 * s.sigma)
+        .count();
+    let refused = aiding.iter().filter(|s| !s.taken).count();
+    let mean_nis = if n == 0 {
+        f64::NAN
+    } else {
+        aiding
+            .iter()
+            .map(|s| (s.value / s.sigma).powi(2))
+            .sum::<f64>()
+            / n as f64
+    };
+    Consistency {
+        innovations: n,
+        inside_95: inside,
+        refused,
+        mean_nis,
+        fits: n > 0 && inside as f64 >= 0.9 * n as f64 && mean_nis < 2.0,
+    }
+}
+
+fn values(s: &SensorErrors<f64>) -> [f64; 12] {
+    let mut out = [0.0; 12];
+    for i in 0..3 {
+        out[i] = s.accel_bias[i];
+        out[3 + i] = s.gyro_bias[i];
+        out[6 + i] = s.accel_scale[i];
+        out[9 + i] = s.gyro_scale[i];
+    }
+    out
+}
+
+/// The verdict from the prior `p0`, the final estimate and covariance, and the innovations, at
+/// the false-alarm rate `alpha` (over all terms together).
+#[must_use]
+pub fn judge(
+    p0: &StateMatrix<f64>,
+    (estimate, p): (&SensorErrors<f64>, &StateMatrix<f64>),
+    said: &[Said],
+    alpha: f64,
+) -> Verdict {
+    let x = values(estimate);
+    let at = |m: &StateMatrix<f64>, i: usize, j: usize| {
+        m[(index::ACCEL_BIAS + i, index::ACCEL_BIAS + j)]
+    };
+    let mut terms: Vec<Term> = (0..12)
+        .map(|i| {
+            let (s0, s) = (at(p0, i, i), at(p, i, i).max(0.0));
+            let learnt = if s0 > 0.0 { 1.0 - s / s0 } else { 0.0 };
+            let seen = learnt >= OBSERVED;
+            let z = seen.then(|| x[i] / (s0 - s).sqrt());
+            Term {
+                name: TERMS[i],
+                unit: match i {
+                    0..3 => "m/s^2",
+                    3..6 => "rad/s",
+                    _ => "",
+                },
+                prior_sigma: s0.sqrt(),
+                estimate: x[i],
+                sigma: s.sqrt(),
+                learnt,
+                z,
+                p: z.map(crate::stats::dist::normal_two_sided),
+                shifted: false,
+            }
+        })
+        .collect();
+    let observed: Vec<usize> = (0..12).filter(|i| terms[*i].z.is_some()).collect();
+    let ps: Vec<f64> = observed
+        .iter()
+        .map(|i| terms[*i].p.unwrap_or(1.0))
+        .collect();
+    for (k, rejected) in crate::stats::multiple::holm(&ps, alpha)
+        .into_iter()
+        .enumerate()
+    {
+        terms[observed[k]].shifted = rejected;
+    }
+    let overall = (!observed.is_empty()).then(|| {
+        let m = observed.len();
+        let d = nalgebra::DMatrix::from_fn(m, m, |a, b| {
+            at(p0, observed[a], observed[b]) - at(p, observed[a], observed[b])
+        });
+        let v = nalgebra::DVector::from_fn(m, |a, _| x[observed[a]]);
+        let chi2 = d
+            .clone()
+            .svd(true, true)
+            .solve(&v, 1e-12 * d.norm())
+            .map_or(f64::NAN, |s| v.dot(&s));
+        let p = statrs::distribution::ChiSquared::new(m as f64).map_or(f64::NAN, |c| {
+            statrs::distribution::ContinuousCDF::sf(&c, chi2)
+        });
+        (chi2, m, p)
+    });
+    let consistency = consistency(said);
+    let shifted: Vec<&str> = terms.iter().filter(|t| t.shifted).map(|t| t.name).collect();
+    let unseen: Vec<&str> = terms
+        .iter()
+        .filter(|t| t.z.is_none())
+        .map(|t| t.name)
+        .collect();
+    let (word, why) = if !consistency.fits {
+        (
+            "FILTER DOES NOT FIT",
+            format!(
+                "{} of {} innovations inside their 95 % bounds, mean NIS {:.2}: the filter's model does not fit this flight, so its estimates are not reported as findings",
+                consistency.inside_95, consistency.innovations, consistency.mean_nis
+            ),
+        )
+    } else if !shifted.is_empty() {
+        (
+            "SHIFTED",
+            format!("shifted in flight: {}", shifted.join(", ")),
+        )
+    } else if observed.is_empty() {
+        (
+            "CANNOT TELL",
+            "the flight taught the filter less than a third of the calibration's own variance of every term".to_string(),
+        )
+    } else {
+        (
+            "HELD",
+            if unseen.is_empty() {
+                "every term within its calibration uncertainty".to_string()
+            } else {
+                format!(
+                    "the observed terms within their calibration uncertainty; not observed: {}",
+                    unseen.join(", ")
+                )
+            },
+        )
+    };
+    Verdict {
+        word,
+        why,
+        terms,
+        overall,
+        consistency,
+    }
+}

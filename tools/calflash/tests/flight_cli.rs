@@ -1,0 +1,182 @@
+//! In flight: a simulated shell's IMU navigated with its unit's calibration against GNSS and
+//! a barometer; the filter fits the data, and a launch shift of one bias is found and
+//! estimated. Bad inputs are named.
+
+mod common;
+
+use std::path::Path;
+
+use common::calflash;
+
+const TRUTH: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../examples/data/spinning_round.truth.json"
+);
+
+fn ok(dir: &Path, args: &[&str]) -> String {
+    let (code, out, err) = calflash(dir, args);
+    assert_eq!(code, 0, "{args:?}: {out}{err}");
+    out
+}
+
+/// The spinning round calibrated on its rig: `round.blob`.
+fn calibrated(dir: &Path) {
+    ok(
+        dir,
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            TRUTH,
+            "--plan",
+            "tumble:24",
+            "--plan",
+            "rate:-1900:1900:9",
+            "--plan",
+            "diagonal:-1900:1900:9",
+            "--plan",
+            "centrifuge:1:1500:6",
+            "-o",
+            "rig.csv",
+        ],
+    );
+    ok(
+        dir,
+        &[
+            "calibrate",
+            "rig.csv",
+            "--sensor",
+            "imu",
+            "--nonlinear",
+            "--serial",
+            "ROUND-1",
+            "--blob",
+            "round.blob",
+            "--db",
+            "units.sqlite",
+        ],
+    );
+}
+
+fn fly(dir: &Path, shift: Option<&str>) -> serde_json::Value {
+    let mut args = vec![
+        "simulate",
+        "--sensor",
+        "imu",
+        "--truth",
+        TRUTH,
+        "--flight",
+        "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=20",
+        "--sample-rate",
+        "2000",
+        "-o",
+        "s.csv",
+        "--gnss",
+        "g.csv",
+        "--baro",
+        "b.csv",
+        "--seed",
+        "7",
+    ];
+    if let Some(s) = shift {
+        args.extend(["--launch-shift", s]);
+    }
+    ok(dir, &args);
+    let out = ok(
+        dir,
+        &[
+            "flight",
+            "s.csv",
+            "--blob",
+            "round.blob",
+            "--gnss",
+            "g.csv",
+            "--baro",
+            "b.csv",
+            "--json",
+            "f.json",
+        ],
+    );
+    assert!(out.contains("the filter's fit"), "{out}");
+    serde_json::from_str(&std::fs::read_to_string(dir.join("f.json")).unwrap()).unwrap()
+}
+
+fn term<'a>(v: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    v["terms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["name"] == name)
+        .unwrap()
+}
+
+#[test]
+fn a_shell_flight_fits_and_a_launch_shift_of_one_bias_is_found() {
+    let d = tempfile::tempdir().unwrap();
+    calibrated(d.path());
+    let held = fly(d.path(), None);
+    let c = &held["consistency"];
+    let inside = c["inside_95"].as_f64().unwrap() / c["innovations"].as_f64().unwrap();
+    assert!(c["fits"].as_bool().unwrap() && inside > 0.95, "{c}");
+    assert!(held["track_rms_m"].as_f64().unwrap() < 10.0, "{held}");
+    assert!(
+        !term(&held, "accel bias x")["shifted"].as_bool().unwrap(),
+        "{held}"
+    );
+    // 0.4 m/s^2 is four of the calibration's sigmas of that bias.
+    let shifted = fly(d.path(), Some("ax=0.4"));
+    assert_eq!(shifted["verdict"], "SHIFTED", "{shifted}");
+    assert!(term(&shifted, "accel bias x")["shifted"].as_bool().unwrap());
+    let found = shifted["shifts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["term"] == "accel bias x")
+        .unwrap();
+    // The flight finds the shift plus the calibration's own error (1-sigma about 0.1).
+    let x = found["estimate"].as_f64().unwrap();
+    assert!((x - 0.4).abs() < 0.3, "{found}");
+}
+
+#[test]
+fn gnss_that_does_not_overlap_the_imu_and_a_flight_without_a_launch_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    let mut imu = String::from("t,f_x,f_y,f_z,w_x,w_y,w_z\n");
+    for i in 0..500 {
+        imu.push_str(&format!("{},0,0,9.8,0,0,0\n", f64::from(i) * 0.01));
+    }
+    std::fs::write(d.path().join("imu.csv"), imu).unwrap();
+    std::fs::write(
+        d.path().join("late.csv"),
+        "t,latitude,longitude\n100,39.4,-8.3\n101,39.4,-8.3001\n",
+    )
+    .unwrap();
+    let (code, _, err) = calflash(d.path(), &["flight", "imu.csv", "--gnss", "late.csv"]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("do not overlap")
+            && err.contains("100 to 101 s")
+            && err.contains("0 to 4.99 s"),
+        "{err}"
+    );
+    std::fs::write(
+        d.path().join("g.csv"),
+        "t,latitude,longitude,satellites\n1,39.4,-8.3,193\n2,39.4,-8.3,9\n3,39.4,-8.3001,9\n",
+    )
+    .unwrap();
+    let (code, _, err) = calflash(d.path(), &["flight", "imu.csv", "--gnss", "g.csv"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("no launch"), "{err}");
+    std::fs::write(
+        d.path().join("bad.csv"),
+        "t,latitude,longitude\n1,95,-8.3\n",
+    )
+    .unwrap();
+    let (code, _, err) = calflash(d.path(), &["flight", "imu.csv", "--gnss", "bad.csv"]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("bad.csv line 2") && err.contains("latitude"),
+        "{err}"
+    );
+}
