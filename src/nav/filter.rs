@@ -208,7 +208,10 @@ impl<T: RealField + Copy> Integrals<T> {
 }
 
 /// A sample the corrector could not vouch for: the specific force and rate that may hide
-/// behind it (1-sigma, m/s^2 and rad/s), over which the filter widens its covariance.
+/// behind it (1-sigma, m/s^2 and rad/s; zero for a sensor whose reading is good), over which
+/// the filter widens its covariance. Only the doubted sensor's reading is replaced by its
+/// last trusted one: a round's gyros keep counting its spin while setback saturates its
+/// accelerometers.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Doubt<T> {
     /// Specific force, m/s^2.
@@ -268,10 +271,15 @@ impl<T: RealField + Copy> ErrorFilter<T> {
     /// [`Doubt`] is not navigated as read: the last trusted one stands in for it and the
     /// covariance widens by what it may hide.
     pub fn sample(&mut self, f: &Vector3<T>, w: &Vector3<T>, dt: T, doubt: Option<Doubt<T>>) {
-        let (fc, wc) = match (doubt, self.last) {
-            (Some(_), Some((w0, f0))) => (f0, w0),
-            _ => self.estimate.sensors.compensate(f, w),
-        };
+        let (mut fc, mut wc) = self.estimate.sensors.compensate(f, w);
+        if let (Some(d), Some((w0, f0))) = (doubt, self.last) {
+            if d.force > T::zero() {
+                fc = f0;
+            }
+            if d.rate > T::zero() {
+                wc = w0;
+            }
+        }
         let Some((w0, f0)) = self.last.replace((wc, fc)) else {
             return;
         };

@@ -33,7 +33,7 @@ pub struct FlightArgs {
     #[arg(long)]
     pub baro: Option<PathBuf>,
     /// The GNSS antenna from the IMU, body axes, m: `X,Y,Z`.
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, num_args = 3, value_parser = super::values::finite)]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = super::values::finite)]
     pub lever: Vec<f64>,
     /// 1-sigma of a fix, m: `HORIZONTAL,VERTICAL`.
     #[arg(long, value_delimiter = ',', default_values_t = [2.5, 5.0], value_parser = |s: &str| super::values::in_range(s, 0.01, 1000.0))]
@@ -49,10 +49,10 @@ pub struct FlightArgs {
     pub baro_walk: f64,
     /// Without covariance in the calibration: the prior, 1-sigma, `ACCEL_BIAS,GYRO_BIAS,
     /// ACCEL_SCALE,GYRO_SCALE` (m/s^2, rad/s, relative, relative).
-    #[arg(long, value_delimiter = ',', num_args = 4, value_parser = |s: &str| super::values::in_range(s, 1e-9, 100.0))]
+    #[arg(long, value_delimiter = ',', value_parser = |s: &str| super::values::in_range(s, 1e-9, 100.0))]
     pub prior: Vec<f64>,
     /// The bias random walks, `ACCEL,GYRO` (m/s^2/sqrt(s), rad/s/sqrt(s)).
-    #[arg(long, value_delimiter = ',', num_args = 2, value_parser = |s: &str| super::values::in_range(s, 0.0, 10.0))]
+    #[arg(long, value_delimiter = ',', value_parser = |s: &str| super::values::in_range(s, 0.0, 10.0))]
     pub walk: Vec<f64>,
     /// The false-alarm rate of SHIFTED over all terms together.
     #[arg(long, default_value_t = 0.01, value_parser = |s: &str| super::values::in_range(s, 1e-12, 0.5))]
@@ -74,6 +74,15 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         .input("--baro", args.baro.as_deref())
         .output("--json", args.json.as_deref())
         .check()?;
+    for (name, v, n) in [
+        ("--lever", &args.lever, 3),
+        ("--prior", &args.prior, 4),
+        ("--walk", &args.walk, 2),
+    ] {
+        if !v.is_empty() && v.len() != n {
+            return Err(format!("{name}: {n} comma-separated values, {} given", v.len()).into());
+        }
+    }
     let stated = match args.prior.as_slice() {
         [ab, gb, asf, gsf] => StatedPrior {
             accel_bias: *ab,

@@ -6,12 +6,95 @@
 use nalgebra::Vector3;
 use spincal::model::{Calibration, Sensor};
 use spincal::nav::filter::index;
-use spincal::nav::{NavNoise, StateMatrix};
+use spincal::nav::{NavNoise, SensorErrors, StateMatrix};
 
 use super::input::{Fix, ImuSeries, Pressure};
 use super::run::{self, Options, Pass, Start};
 use super::smooth::smooth;
-use super::verdict::{self, Verdict};
+use super::verdict::{self, Opened, Verdict};
+
+/// The scale-factor shift a spinning round's check must follow (0.3 %).
+const SPIN_SHIFT_TO_FOLLOW: f64 = 3e-3;
+/// The roll-angle drift per second, rad/s, beyond which the filter cannot follow a shift from
+/// the calibration's prior.
+const SPIN_LINEAR_LIMIT: f64 = 0.5;
+/// The opened scale factor's prior, 1-sigma (1 %).
+const OPEN_SCALE: f64 = 0.01;
+
+/// The spin axis' gyro scale factor the flight's first seconds fit best: one short pass per
+/// hypothesis from -1 % to +1 % in steps the filter can follow from (a roll drift under half a
+/// radian before the first fixes), the least misfit chosen. A round spinning at 1,900 rad/s
+/// whose roll scale factor moved 0.3 % at launch has turned 5.7 rad wrong a second later; a
+/// linearised filter cannot find its way back from that, a search over hypotheses can.
+fn roll_scale_search(
+    imu: &ImuSeries,
+    (fixes, baro): (&[Fix], &[Pressure]),
+    start: &Start,
+    opts: &Options,
+    (rest_end, launch_at): (usize, usize),
+    k: usize,
+) -> f64 {
+    use rayon::prelude::*;
+    let t_launch = imu.t[launch_at];
+    let until = t_launch + SEARCH_WINDOW;
+    let end = imu.t.partition_point(|t| *t <= until);
+    let head = ImuSeries {
+        t: imu.t[..end].to_vec(),
+        f: imu.f[..end].to_vec(),
+        w: imu.w[..end].to_vec(),
+        flagged: imu.flagged[..end].to_vec(),
+    };
+    let n = (OPEN_SCALE / SEARCH_STEP).round() as i64;
+    let at = index::GYRO_SCALE + k;
+    let mut coarse: Vec<(f64, f64)> = (-n..=n)
+        .into_par_iter()
+        .map(|j| {
+            let s = j as f64 * SEARCH_STEP;
+            let mut trial = *start;
+            trial.sensors.gyro_scale[k] = s;
+            trial.prior[(at, at)] = SEARCH_STEP * SEARCH_STEP;
+            let pass = run::forward(&head, fixes, baro, &trial, opts, (rest_end, launch_at));
+            (run::misfit(&pass, until, opts.gate), s)
+        })
+        .collect();
+    coarse.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // The first seconds are noisy evidence: the best few go on through the whole flight.
+    let end_t = imu.t.last().copied().unwrap_or(until);
+    coarse
+        .into_iter()
+        .take(SEARCH_FINALISTS)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|(_, s)| {
+            let mut trial = *start;
+            trial.sensors.gyro_scale[k] = s;
+            trial.prior[(at, at)] = SEARCH_STEP * SEARCH_STEP;
+            let pass = run::forward(imu, fixes, baro, &trial, opts, (rest_end, launch_at));
+            (run::misfit(&pass, end_t, opts.gate), s)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map_or(0.0, |b| b.1)
+}
+
+/// How many of the search's best hypotheses over the first seconds are flown through the whole
+/// flight.
+const SEARCH_FINALISTS: usize = 5;
+
+/// The seconds after launch the roll scale-factor search looks at.
+const SEARCH_WINDOW: f64 = 5.0;
+/// The search's step (the roll drift it leaves, at 1,900 rad/s over the first fixes, is
+/// under half a radian).
+const SEARCH_STEP: f64 = 2e-4;
+
+/// The root mean square rate about body axis `k` from sample `from` on, rad/s.
+fn rms_rate(imu: &ImuSeries, from: usize, k: usize) -> f64 {
+    let v: Vec<f64> = imu.w.iter().skip(from).map(|w| w[k] * w[k]).collect();
+    if v.is_empty() {
+        0.0
+    } else {
+        (v.iter().sum::<f64>() / v.len() as f64).sqrt()
+    }
+}
 
 /// A stated prior (1-sigma) for a unit whose calibration carries no covariance.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -262,24 +345,52 @@ pub fn check(
     };
     let mut prior = prior;
     prior[(index::BARO, index::BARO)] = 1.0;
-    let start = Start {
+    // A round that spins fast turns a roll scale-factor shift into a roll angle error that
+    // grows faster than the filter can linearise from the calibration's prior (0.3 % at
+    // 1,900 rad/s is 5.7 rad/s): the spin axis' gyro scale factor starts open, and the flight's
+    // own estimate of it is held against the calibration.
+    let axis = run::spin_axis(imu, launch_at);
+    let k = (0..3).find(|i| axis[*i] > 0.5).unwrap_or(0);
+    let spin = rms_rate(imu, launch_at, k);
+    let mut opened = Opened::default();
+    if spin * SPIN_SHIFT_TO_FOLLOW > SPIN_LINEAR_LIMIT {
+        let at = index::GYRO_SCALE + k;
+        opened.0[9 + k] = Some(prior[(at, at)]);
+        for j in 0..prior.nrows() {
+            prior[(at, j)] = 0.0;
+            prior[(j, at)] = 0.0;
+        }
+        prior[(at, at)] = OPEN_SCALE * OPEN_SCALE;
+    }
+    let mut start = Start {
         origin,
         prior,
         noise,
         heading,
+        sensors: SensorErrors::default(),
     };
+    if opened.0[9 + k].is_some() {
+        start.sensors.gyro_scale[k] =
+            roll_scale_search(imu, (fixes, baro), &start, opts, (rest_end, launch_at), k);
+    }
     let first = run::forward(imu, fixes, baro, &start, opts, (rest_end, launch_at));
     let last = first
         .epochs
         .last()
         .map_or_else(|| (at_pad(), first.p0), |e| e.filtered);
-    let verdict = verdict::judge(&first.p0, (&last.0.sensors, &last.1), &first.said, alpha);
+    let verdict = verdict::judge(
+        &first.p0,
+        &opened,
+        (&last.0.sensors, &last.1),
+        &first.said,
+        alpha,
+    );
     let mut shifts = Vec::new();
     let mut pass = first;
     if verdict.word == "SHIFTED" {
         let mut open = prior;
         for (i, t) in verdict.terms.iter().enumerate() {
-            if t.shifted {
+            if t.shifted && opened.0[i].is_none() {
                 let k = index::ACCEL_BIAS + i;
                 open[(k, k)] *= 1e4;
             }
@@ -298,6 +409,7 @@ pub fn check(
         if let Some(e) = second.epochs.last() {
             let v = verdict::judge(
                 &second.p0,
+                &opened,
                 (&e.filtered.0.sensors, &e.filtered.1),
                 &second.said,
                 alpha,

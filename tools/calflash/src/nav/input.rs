@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use spincal::correct::{AnyCorrector, Flags};
-use spincal::model::Calibration;
+use spincal::model::{Calibration, Rails};
 
 use crate::mission::Profile;
 
@@ -19,10 +19,11 @@ pub struct ImuSeries {
     pub f: Vec<[f64; 3]>,
     /// Rate, rad/s.
     pub w: Vec<[f64; 3]>,
-    /// Flagged by the corrector as a value it cannot vouch for: saturated, beyond the
-    /// calibrated range, uncorrected. (A temperature or voltage beyond the calibrated span is
-    /// corrected at its edge: the calibration's own uncertainty, not a lost sample.)
-    pub flagged: Vec<bool>,
+    /// Per sample, whether the accelerometers' and the gyros' readings cannot be vouched for:
+    /// a code at its rails (that sensor only), or the corrector's flags beyond the calibrated
+    /// range or uncorrected (both). A temperature or voltage beyond the calibrated span is
+    /// corrected at its edge: the calibration's own uncertainty, not a lost sample.
+    pub flagged: Vec<[bool; 2]>,
 }
 
 /// A GNSS fix in the file's terms.
@@ -260,6 +261,18 @@ pub fn corrected(path: &Path, cal: &Calibration) -> Result<ImuSeries, InputError
     let env = &cal.data().environment;
     let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
     let volt = mid(env.voltage_span);
+    let rails = match &cal.data().sensor {
+        spincal::model::Sensor::Imu {
+            accel_rails,
+            gyro_rails,
+            ..
+        } => (*accel_rails, *gyro_rails),
+        _ => {
+            return Err(InputError::Corrector(format!(
+                "{file}: the calibration is not an IMU's"
+            )));
+        }
+    };
     let mut series = ImuSeries::default();
     let mut last_t = f64::NEG_INFINITY;
     let mut last_temp = f32::NAN;
@@ -290,11 +303,12 @@ pub fn corrected(path: &Path, cal: &Calibration) -> Result<ImuSeries, InputError
         series.f.push([v[0], v[1], v[2]]);
         series.w.push([v[3], v[4], v[5]]);
         let f = o.flags;
-        series.flagged.push(
-            [Flags::SATURATED, Flags::OUT_OF_RANGE, Flags::NO_CALIBRATION]
-                .into_iter()
-                .any(|x| f.contains(x)),
-        );
+        let both = f.contains(Flags::OUT_OF_RANGE) || f.contains(Flags::NO_CALIBRATION);
+        let at_rails = |codes: &[i32], r: Rails| codes.iter().any(|c| *c <= r.lo || *c >= r.hi);
+        series.flagged.push([
+            both || at_rails(&c[..3], rails.0),
+            both || at_rails(&c[3..], rails.1),
+        ]);
         last_t = t;
     }
     Ok(series)
@@ -329,7 +343,7 @@ pub fn physical(p: &Profile) -> ImuSeries {
         t: p.t.clone(),
         f: p.f.clone().unwrap_or_else(|| vec![[0.0; 3]; n]),
         w: p.w.clone().unwrap_or_else(|| vec![[0.0; 3]; n]),
-        flagged: vec![false; n],
+        flagged: vec![[false; 2]; n],
     }
 }
 

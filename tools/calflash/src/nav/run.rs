@@ -66,6 +66,8 @@ pub struct Start {
     pub noise: NavNoise<f64>,
     /// Heading of the unit at rest, and its 1-sigma, rad (from the GNSS track).
     pub heading: (f64, f64),
+    /// The sensor errors the pass starts from (zero: the calibration holds).
+    pub sensors: SensorErrors<f64>,
 }
 
 /// What one measurement said.
@@ -245,7 +247,7 @@ pub fn forward(
     let nav = Navigation::at_rest(q0, spin_axis(imu, launch_at));
     let estimate = Estimate {
         nav,
-        sensors: SensorErrors::default(),
+        sensors: start.sensors,
     };
     let pad_fix = fixes
         .iter()
@@ -287,17 +289,17 @@ pub fn forward(
     for i in 0..imu.t.len() {
         let t = imu.t[i];
         let dt = if i == 0 { 0.0 } else { t - imu.t[i - 1] };
-        let flagged = imu.flagged[i];
-        if flagged {
+        let [accel, gyro] = imu.flagged[i];
+        if accel || gyro {
             pass.flagged_seconds += dt;
         }
         filter.sample(
             &Vector3::from(imu.f[i]),
             &Vector3::from(imu.w[i]),
             dt,
-            flagged.then_some(Doubt {
-                force: doubt_f,
-                rate: doubt_w,
+            (accel || gyro).then_some(Doubt {
+                force: if accel { doubt_f } else { 0.0 },
+                rate: if gyro { doubt_w } else { 0.0 },
             }),
         );
         let fix_due = fixes
@@ -413,6 +415,17 @@ pub fn forward(
         });
     }
     pass
+}
+
+/// The negative log-likelihood of a pass's aiding innovations up to `until` s: the sum of
+/// `nu^2 / s + ln s`, each refused innovation counted at the gate.
+#[must_use]
+pub fn misfit(pass: &Pass, until: f64, gate: f64) -> f64 {
+    pass.said
+        .iter()
+        .filter(|s| s.kind != Kind::Pad && s.t <= until && s.sigma > 0.0)
+        .map(|s| (s.value / s.sigma).powi(2).min(gate * gate) + 2.0 * s.sigma.ln())
+        .sum()
 }
 
 /// Gates and takes one scalar measurement, recording what it said.

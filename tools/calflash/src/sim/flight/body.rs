@@ -236,10 +236,26 @@ fn unpack(y: &[f64; 13]) -> State {
     }
 }
 
-/// One Runge-Kutta step of `dt` from `s` at `t`: the new state, and what the body felt at the
-/// start of the step.
+/// The largest turn, rad, one Runge-Kutta step may take: RK4 on the quaternion loses about
+/// `(theta/2)^5 / 60` rad per step, so a round at 300 rev/s sampled at 2 kHz (0.94 rad per
+/// sample) would drift 1e-4 of its roll against its own rate; at 0.2 rad it is 1e-7.
+pub const MAX_TURN: f64 = 0.2;
+
+/// One step of `dt` from `s` at `t` (in Runge-Kutta steps of at most [`MAX_TURN`]): the new
+/// state, and what the body felt at the start of the step.
 #[must_use]
 pub fn step(af: &Airframe, world: &World, s: &State, t: f64, dt: f64) -> (State, Felt) {
+    let n = ((s.w.norm() * dt.abs() / MAX_TURN).ceil() as usize).clamp(1, 10_000);
+    let h = dt / n as f64;
+    let (mut state, felt) = rk4(af, world, s, t, h);
+    for k in 1..n {
+        state = rk4(af, world, &state, t + k as f64 * h, h).0;
+    }
+    (state, felt)
+}
+
+/// One Runge-Kutta step of `dt` from `s` at `t`.
+fn rk4(af: &Airframe, world: &World, s: &State, t: f64, dt: f64) -> (State, Felt) {
     let y0 = pack(s);
     let add = |y: &[f64; 13], k: &[f64; 13], h: f64| -> [f64; 13] {
         std::array::from_fn(|i| y[i] + h * k[i])
