@@ -146,8 +146,9 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
     let checked = check::check(&imu, (&fixes, &baro), prior, &walks, &opts, args.alpha)
         .map_err(|e| format!("{}: {e}", args.recording.display()))?;
     let text = crate::report::flight::text(&serial, &checked, &counts);
+    let record = crate::report::flight::json(&serial, &checked, &counts);
     if let Some(path) = &args.json {
-        let json = crate::report::flight::json(&serial, &checked, &counts);
+        let json = serde_json::to_string_pretty(&record)?;
         let mut staged = Staged::new();
         staged.write(path, |w| w.write_all(json.as_bytes()))?;
         staged.commit()?;

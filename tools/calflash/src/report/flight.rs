@@ -102,8 +102,9 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
 
 /// The JSON record.
 #[must_use]
-pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> String {
-    let v = serde_json::json!({
+pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value {
+    serde_json::json!({
+        "schema": "calflash.flight/1",
         "kind": "flight",
         "serial": serial,
         "verdict": c.verdict.word,
@@ -119,6 +120,5 @@ pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> String {
         "gnss_no_fix": counts.no_fix,
         "gnss_repeated": counts.repeated,
         "flagged_seconds": c.pass.flagged_seconds,
-    });
-    serde_json::to_string_pretty(&v).unwrap_or_default()
+    })
 }
