@@ -96,7 +96,15 @@ fn fly(dir: &Path, shift: Option<&str>) -> serde_json::Value {
             "b.csv",
             "--json",
             "f.json",
+            "--innovations",
+            "nu.csv",
         ],
+    );
+    let nu = std::fs::read_to_string(dir.join("nu.csv")).unwrap();
+    assert!(
+        nu.starts_with("t,measurement,innovation,sigma,taken\n") && nu.contains(",position_east,"),
+        "{}",
+        &nu[..200.min(nu.len())]
     );
     assert!(out.contains("the filter's fit"), "{out}");
     serde_json::from_str(&std::fs::read_to_string(dir.join("f.json")).unwrap()).unwrap()

@@ -60,6 +60,10 @@ pub struct FlightArgs {
     /// Write the result as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Write every innovation here (CSV: t, measurement, innovation, its predicted 1-sigma,
+    /// taken), to plot against its bounds.
+    #[arg(long)]
+    pub innovations: Option<PathBuf>,
 }
 
 /// Runs `calflash flight`.
@@ -73,6 +77,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         .input("--gnss", Some(&args.gnss))
         .input("--baro", args.baro.as_deref())
         .output("--json", args.json.as_deref())
+        .output("--innovations", args.innovations.as_deref())
         .check()?;
     for (name, v, n) in [
         ("--lever", &args.lever, 3),
@@ -147,12 +152,16 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         .map_err(|e| format!("{}: {e}", args.recording.display()))?;
     let text = crate::report::flight::text(&serial, &checked, &counts);
     let record = crate::report::flight::json(&serial, &checked, &counts);
+    let mut staged = Staged::new();
     if let Some(path) = &args.json {
         let json = serde_json::to_string_pretty(&record)?;
-        let mut staged = Staged::new();
         staged.write(path, |w| w.write_all(json.as_bytes()))?;
-        staged.commit()?;
     }
+    if let Some(path) = &args.innovations {
+        let csv = crate::report::flight::innovations_csv(&checked.pass.said);
+        staged.write(path, |w| w.write_all(csv.as_bytes()))?;
+    }
+    staged.commit()?;
     print!("{text}");
     Ok(())
 }

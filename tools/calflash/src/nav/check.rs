@@ -379,7 +379,7 @@ pub fn check(
         .last()
         .map_or_else(|| (at_pad(), first.p0), |e| e.filtered);
     let verdict = verdict::judge(
-        &first.p0,
+        (&first.p0, &first.at_launch),
         &opened,
         (&last.0.sensors, &last.1),
         &first.said,
@@ -408,7 +408,7 @@ pub fn check(
         );
         if let Some(e) = second.epochs.last() {
             let v = verdict::judge(
-                &second.p0,
+                (&second.p0, &second.at_launch),
                 &opened,
                 (&e.filtered.0.sensors, &e.filtered.1),
                 &second.said,

@@ -126,6 +126,8 @@ pub struct Pass {
     pub launch: f64,
     /// The prior the pass started from.
     pub p0: StateMatrix<f64>,
+    /// The covariance at the last epoch before launch: what the pad taught.
+    pub at_launch: StateMatrix<f64>,
 }
 
 /// The launch: the first sample whose specific force exceeds `force`, and the rest before it
@@ -280,6 +282,7 @@ pub fn forward(
         baro_skipped_seconds: 0.0,
         launch: t_launch,
         p0,
+        at_launch: p0,
     };
     let lever = Vector3::from(opts.lever);
     let (mut next_fix, mut next_baro) = (0usize, 0usize);
@@ -407,6 +410,9 @@ pub fn forward(
             );
         }
         filter.feedback();
+        if t < t_launch {
+            pass.at_launch = filter.covariance;
+        }
         pass.epochs.push(Epoch {
             t,
             phi,

@@ -61,7 +61,7 @@ pub struct Term {
     pub estimate: f64,
     /// Its 1-sigma after the flight.
     pub sigma: f64,
-    /// The share of the prior variance the flight removed.
+    /// The share of its variance at launch the flight removed.
     pub learnt: f64,
     /// The Wald statistic and its two-sided p-value, when observed.
     pub z: Option<f64>,
@@ -147,7 +147,7 @@ fn values(s: &SensorErrors<f64>) -> [f64; 12] {
 /// the false-alarm rate `alpha` (over all terms together).
 #[must_use]
 pub fn judge(
-    p0: &StateMatrix<f64>,
+    (p0, at_launch): (&StateMatrix<f64>, &StateMatrix<f64>),
     opened: &Opened,
     (estimate, p): (&SensorErrors<f64>, &StateMatrix<f64>),
     said: &[Said],
@@ -168,7 +168,14 @@ pub fn judge(
         .map(|i| {
             let s = at(p, i, i).max(0.0);
             let s0 = opened.0[i].unwrap_or(at(p0, i, i));
-            let learnt = if s0 > 0.0 { 1.0 - s / s0 } else { 0.0 };
+            // What the flight taught, after what the pad did: a transverse bias of a spinning
+            // round is levelled into the attitude at rest and turns with the spin in flight.
+            let before = if opened.0[i].is_some() {
+                s0
+            } else {
+                at(at_launch, i, i)
+            };
+            let learnt = if before > 0.0 { 1.0 - s / before } else { 0.0 };
             let seen = match opened.0[i] {
                 None => learnt >= OBSERVED,
                 Some(c) => s <= (9.0 * c).max(OPEN_RESOLVED * OPEN_RESOLVED),

@@ -122,3 +122,27 @@ pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value 
         "flagged_seconds": c.pass.flagged_seconds,
     })
 }
+
+/// Every innovation as CSV: `t, measurement, innovation, sigma, taken`.
+#[must_use]
+pub fn innovations_csv(said: &[crate::nav::run::Said]) -> String {
+    use crate::nav::run::Kind;
+    let mut s = String::from("t,measurement,innovation,sigma,taken\n");
+    for x in said {
+        let what = match x.kind {
+            Kind::Pad => "pad".to_string(),
+            Kind::Position(a) => format!("position_{}", ["east", "north", "up"][a.min(2)]),
+            Kind::Velocity(a) => format!("velocity_{}", ["east", "north", "up"][a.min(2)]),
+            Kind::Baro => "baro".to_string(),
+        };
+        let _ = writeln!(
+            s,
+            "{},{what},{},{},{}",
+            x.t,
+            x.value,
+            x.sigma,
+            u8::from(x.taken)
+        );
+    }
+    s
+}
