@@ -76,6 +76,11 @@ fn roll_scale_search(
         .map_or(0.0, |b| b.1)
 }
 
+/// At most this many passes again from the opened scale factor a pass found.
+const REFLY: usize = 2;
+/// A pass is flown again when it moved the opened scale factor by more than this.
+const REFLY_CHANGE: f64 = 2e-5;
+
 /// How many of the search's best hypotheses over the first seconds are flown through the whole
 /// flight.
 const SEARCH_FINALISTS: usize = 5;
@@ -373,7 +378,27 @@ pub fn check(
         start.sensors.gyro_scale[k] =
             roll_scale_search(imu, (fixes, baro), &start, opts, (rest_end, launch_at), k);
     }
-    let first = run::forward(imu, fixes, baro, &start, opts, (rest_end, launch_at));
+    let mut first = run::forward(imu, fixes, baro, &start, opts, (rest_end, launch_at));
+    // The search's grid leaves the opened scale factor up to half a step off, which the pass
+    // pulls most of the way in; flown again from where it ended, the linearisation holds
+    // from launch on.
+    // Kept only when it fits the whole flight better.
+    let end_t = imu.t.last().copied().unwrap_or(0.0);
+    for _ in 0..REFLY {
+        let Some(end) = first.epochs.last() else { break };
+        let found = end.filtered.0.sensors.gyro_scale[k];
+        if opened.0[9 + k].is_none() || (found - start.sensors.gyro_scale[k]).abs() < REFLY_CHANGE {
+            break;
+        }
+        let mut again = start;
+        again.sensors.gyro_scale[k] = found;
+        let pass = run::forward(imu, fixes, baro, &again, opts, (rest_end, launch_at));
+        if run::misfit(&pass, end_t, opts.gate) >= run::misfit(&first, end_t, opts.gate) {
+            break;
+        }
+        start = again;
+        first = pass;
+    }
     let last = first
         .epochs
         .last()
