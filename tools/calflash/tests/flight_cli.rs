@@ -215,3 +215,63 @@ fn gnss_that_does_not_overlap_the_imu_and_a_flight_without_a_launch_are_named() 
         "{err}"
     );
 }
+
+#[test]
+fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
+    let d = tempfile::tempdir().unwrap();
+    calibrated(d.path());
+    ok(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            TRUTH,
+            "--flight",
+            "rocket:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=60",
+            "--sample-rate",
+            "1000",
+            "-o",
+            "r.csv",
+            "--gnss",
+            "g.csv",
+            "--baro",
+            "b.csv",
+            "--launch-shift",
+            "ax=0.4",
+            "--seed",
+            "3",
+        ],
+    );
+    ok(
+        d.path(),
+        &[
+            "flight",
+            "r.csv",
+            "--blob",
+            "round.blob",
+            "--gnss",
+            "g.csv",
+            "--baro",
+            "b.csv",
+            "--json",
+            "f.json",
+        ],
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("f.json")).unwrap()).unwrap();
+    let c = &v["consistency"];
+    assert!(c["fits"].as_bool().unwrap(), "{c}");
+    assert_eq!(v["verdict"], "SHIFTED", "{v}");
+    assert!(
+        term(&v, "accel bias x")["shifted"].as_bool().unwrap(),
+        "{v}"
+    );
+    // A rocket that rolls a few turns a second does not show its roll gyro's scale factor.
+    assert!(term(&v, "gyro scale x")["z"].is_null(), "{v}");
+    assert!(
+        v["track_rms_m"].as_f64().unwrap() < 10.0 && v["height_rms_m"].as_f64().unwrap() < 10.0,
+        "{v}"
+    );
+}

@@ -385,7 +385,9 @@ pub fn check(
     // Kept only when it fits the whole flight better.
     let end_t = imu.t.last().copied().unwrap_or(0.0);
     for _ in 0..REFLY {
-        let Some(end) = first.epochs.last() else { break };
+        let Some(end) = first.epochs.last() else {
+            break;
+        };
         let found = end.filtered.0.sensors.gyro_scale[k];
         if opened.0[9 + k].is_none() || (found - start.sensors.gyro_scale[k]).abs() < REFLY_CHANGE {
             break;
