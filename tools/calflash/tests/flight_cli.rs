@@ -175,7 +175,8 @@ fn a_roll_gyro_scale_factor_shifted_at_launch_is_found_at_a_round_s_spin() {
 }
 
 #[test]
-fn gnss_that_does_not_overlap_the_imu_and_a_flight_without_a_launch_are_named() {
+fn gnss_that_does_not_overlap_the_imu_a_flight_without_a_launch_and_a_rate_too_slow_for_the_spin_are_named()
+ {
     let d = tempfile::tempdir().unwrap();
     let mut imu = String::from("t,f_x,f_y,f_z,w_x,w_y,w_z\n");
     for i in 0..500 {
