@@ -50,7 +50,7 @@ fn roll_scale_search(
         .into_par_iter()
         .map(|j| {
             let s = j as f64 * SEARCH_STEP;
-            let mut trial = *start;
+            let mut trial = open_biases(start);
             trial.sensors.gyro_scale[k] = s;
             trial.prior[(at, at)] = SEARCH_STEP * SEARCH_STEP;
             let pass = run::forward(&head, fixes, baro, &trial, opts, (rest_end, launch_at));
@@ -66,7 +66,7 @@ fn roll_scale_search(
         .collect::<Vec<_>>()
         .into_par_iter()
         .map(|(_, s)| {
-            let mut trial = *start;
+            let mut trial = open_biases(start);
             trial.sensors.gyro_scale[k] = s;
             trial.prior[(at, at)] = SEARCH_STEP * SEARCH_STEP;
             let pass = run::forward(imu, fixes, baro, &trial, opts, (rest_end, launch_at));
@@ -81,10 +81,28 @@ fn roll_scale_search(
 /// within a step is no longer carried by the trapezoid.
 pub const MAX_TURN_PER_SAMPLE: f64 = 1.2;
 
+/// A shifted term's prior variance is widened by this for the pass that estimates its shift
+/// (ten times its 1-sigma: wide enough for the flight alone to say where it went, narrow
+/// enough to stay linear).
+const SHIFT_OPENED: f64 = 100.0;
+
 /// At most this many passes again from the opened scale factor a pass found.
 const REFLY: usize = 2;
 /// A pass is flown again when it moved the opened scale factor by more than this.
 const REFLY_CHANGE: f64 = 2e-5;
+
+/// The start of a search pass: the biases' priors widened by [`SHIFT_OPENED`], so that a
+/// launch shift of a bias is not taken for a roll scale factor.
+fn open_biases(start: &Start) -> Start {
+    let mut out = *start;
+    for i in index::ACCEL_BIAS..index::ACCEL_SCALE {
+        for j in 0..out.prior.ncols() {
+            out.prior[(i, j)] *= SHIFT_OPENED.sqrt();
+            out.prior[(j, i)] *= SHIFT_OPENED.sqrt();
+        }
+    }
+    out
+}
 
 /// How many of the search's best hypotheses over the first seconds are flown through the whole
 /// flight.
@@ -452,7 +470,7 @@ pub fn check(
         for (i, t) in verdict.terms.iter().enumerate() {
             if t.shifted && opened.0[i].is_none() {
                 let k = index::ACCEL_BIAS + i;
-                open[(k, k)] *= 1e4;
+                open[(k, k)] *= SHIFT_OPENED;
             }
         }
         let second = run::forward(
