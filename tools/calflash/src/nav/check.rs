@@ -50,7 +50,7 @@ fn roll_scale_search(
         .into_par_iter()
         .map(|j| {
             let s = j as f64 * SEARCH_STEP;
-            let mut trial = open_biases(start);
+            let mut trial = *start;
             trial.sensors.gyro_scale[k] = s;
             trial.prior[(at, at)] = SEARCH_STEP * SEARCH_STEP;
             let pass = run::forward(&head, fixes, baro, &trial, opts, (rest_end, launch_at));
@@ -66,7 +66,7 @@ fn roll_scale_search(
         .collect::<Vec<_>>()
         .into_par_iter()
         .map(|(_, s)| {
-            let mut trial = open_biases(start);
+            let mut trial = *start;
             trial.sensors.gyro_scale[k] = s;
             trial.prior[(at, at)] = SEARCH_STEP * SEARCH_STEP;
             let pass = run::forward(imu, fixes, baro, &trial, opts, (rest_end, launch_at));
@@ -90,19 +90,6 @@ const SHIFT_OPENED: f64 = 100.0;
 const REFLY: usize = 2;
 /// A pass is flown again when it moved the opened scale factor by more than this.
 const REFLY_CHANGE: f64 = 2e-5;
-
-/// The start of a search pass: the biases' priors widened by [`SHIFT_OPENED`], so that a
-/// launch shift of a bias is not taken for a roll scale factor.
-fn open_biases(start: &Start) -> Start {
-    let mut out = *start;
-    for i in index::ACCEL_BIAS..index::ACCEL_SCALE {
-        for j in 0..out.prior.ncols() {
-            out.prior[(i, j)] *= SHIFT_OPENED.sqrt();
-            out.prior[(j, i)] *= SHIFT_OPENED.sqrt();
-        }
-    }
-    out
-}
 
 /// How many of the search's best hypotheses over the first seconds are flown through the whole
 /// flight.
