@@ -98,7 +98,15 @@ fn fly(dir: &Path, shift: Option<&str>) -> serde_json::Value {
             "f.json",
             "--innovations",
             "nu.csv",
+            "--report",
+            "f.html",
         ],
+    );
+    let page = std::fs::read_to_string(dir.join("f.html")).unwrap();
+    assert!(
+        page.contains("<h1>Unit ROUND-1 in flight: ") && page.matches("<svg").count() == 7,
+        "{}",
+        &page[..300]
     );
     let nu = std::fs::read_to_string(dir.join("nu.csv")).unwrap();
     assert!(

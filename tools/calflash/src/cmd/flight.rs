@@ -60,6 +60,10 @@ pub struct FlightArgs {
     /// Write the result as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Write an HTML report here: the verdict, the innovations against their bounds, the
+    /// trajectory against GNSS and the barometer, each sensor error along the flight.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     /// Write every innovation here (CSV: t, measurement, innovation, its predicted 1-sigma,
     /// taken), to plot against its bounds.
     #[arg(long)]
@@ -78,6 +82,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         .input("--baro", args.baro.as_deref())
         .output("--json", args.json.as_deref())
         .output("--innovations", args.innovations.as_deref())
+        .output("--report", args.report.as_deref())
         .check()?;
     for (name, v, n) in [
         ("--lever", &args.lever, 3),
@@ -160,6 +165,10 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
     if let Some(path) = &args.innovations {
         let csv = crate::report::flight::innovations_csv(&checked.pass.said);
         staged.write(path, |w| w.write_all(csv.as_bytes()))?;
+    }
+    if let Some(path) = &args.report {
+        let page = crate::report::flight::html(&serial, &checked, &counts)?;
+        staged.write(path, |w| w.write_all(page.as_bytes()))?;
     }
     staged.commit()?;
     print!("{text}");

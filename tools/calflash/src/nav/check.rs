@@ -10,7 +10,7 @@ use spincal::nav::{NavNoise, SensorErrors, StateMatrix};
 
 use super::input::{Fix, ImuSeries, Pressure};
 use super::run::{self, Options, Pass, Start};
-use super::smooth::smooth;
+use super::track::{self, Track};
 use super::verdict::{self, Opened, Verdict};
 
 /// The scale-factor shift a spinning round's check must follow (0.3 %).
@@ -248,10 +248,8 @@ pub struct Checked {
     pub shifts: Vec<(&'static str, f64, f64)>,
     /// The pass whose smoothed trajectory is reported.
     pub pass: Pass,
-    /// Smoothed horizontal track against GNSS, RMS m, and the fixes compared.
-    pub track_rms: Option<(f64, usize)>,
-    /// Smoothed height against the barometer, RMS m.
-    pub height_rms: Option<(f64, usize)>,
+    /// The smoothed flight against GNSS and the barometer.
+    pub track: Track,
     /// Heading at rest and its 1-sigma, degrees.
     pub heading_deg: (f64, f64),
     /// The noise densities used: accelerometer, gyro.
@@ -487,47 +485,19 @@ pub fn check(
         }
         pass = second;
     }
-    let smoothed = smooth(&pass.epochs);
-    let times: Vec<f64> = pass.epochs.iter().map(|e| e.t).collect();
-    let at = |t: f64| -> Option<Vector3<f64>> {
-        let k = times.partition_point(|x| *x < t);
-        let (a, b) = (smoothed.get(k.checked_sub(1)?)?, smoothed.get(k)?);
-        let (ta, tb) = (times[k - 1], times[k]);
-        let u = if tb > ta { (t - ta) / (tb - ta) } else { 0.0 };
-        Some(a.0.nav.p * (1.0 - u) + b.0.nav.p * u)
-    };
-    let track: Vec<f64> = fixes
-        .iter()
-        .filter(|f| f.t >= t_launch)
-        .filter_map(|f| {
-            let p = at(f.t - opts.gnss_latency)?;
-            let z = run::level_position(f, origin);
-            Some((p.x - z[0]).powi(2) + (p.y - z[1]).powi(2))
-        })
-        .collect();
-    let baro_ref = baro
-        .iter()
-        .filter(|b| b.t < t_launch - 0.1)
-        .map(|b| run::pressure_height(b.pa))
-        .collect::<Vec<_>>();
-    let baro_ref = if baro_ref.is_empty() {
-        baro.first().map_or(0.0, |b| run::pressure_height(b.pa))
-    } else {
-        baro_ref.iter().sum::<f64>() / baro_ref.len() as f64
-    };
-    let heights: Vec<f64> = baro
-        .iter()
-        .filter(|b| b.t >= t_launch)
-        .filter_map(|b| Some((at(b.t)?.z - (run::pressure_height(b.pa) - baro_ref)).powi(2)))
-        .collect();
-    let rms = |v: &[f64]| {
-        (!v.is_empty()).then(|| ((v.iter().sum::<f64>() / v.len() as f64).sqrt(), v.len()))
-    };
+    let track = track::track(
+        &pass,
+        (fixes, baro),
+        &track::Setting {
+            origin,
+            launch: t_launch,
+            latency: opts.gnss_latency,
+        },
+    );
     Ok(Checked {
         verdict,
         shifts,
-        track_rms: rms(&track),
-        height_rms: rms(&heights),
+        track,
         heading_deg: (heading.0.to_degrees(), heading.1.to_degrees()),
         noise: (aw, gw),
         prior: source,

@@ -7,4 +7,5 @@ pub mod check;
 pub mod input;
 pub mod run;
 pub mod smooth;
+pub mod track;
 pub mod verdict;

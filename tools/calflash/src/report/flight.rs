@@ -85,13 +85,13 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
             );
         }
     }
-    if let Some((rms, n)) = c.track_rms {
+    if let Some((rms, n)) = c.track.track_rms {
         let _ = writeln!(
             s,
             "  smoothed horizontal track against {n} GNSS fixes: RMS {rms:.2} m"
         );
     }
-    if let Some((rms, n)) = c.height_rms {
+    if let Some((rms, n)) = c.track.height_rms {
         let _ = writeln!(
             s,
             "  smoothed height against {n} barometer readings: RMS {rms:.2} m"
@@ -113,8 +113,8 @@ pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value 
         "terms": c.verdict.terms,
         "overall": c.verdict.overall,
         "shifts": c.shifts.iter().map(|(n, x, s)| serde_json::json!({"term": n, "estimate": x, "sigma": s})).collect::<Vec<_>>(),
-        "track_rms_m": c.track_rms.map(|x| x.0),
-        "height_rms_m": c.height_rms.map(|x| x.0),
+        "track_rms_m": c.track.track_rms.map(|x| x.0),
+        "height_rms_m": c.track.height_rms.map(|x| x.0),
         "heading_deg": [c.heading_deg.0, c.heading_deg.1],
         "gnss_rows": counts.rows,
         "gnss_no_fix": counts.no_fix,
@@ -145,4 +145,153 @@ pub fn innovations_csv(said: &[crate::nav::run::Said]) -> String {
         );
     }
     s
+}
+
+/// Whether an innovation is of one kind of measurement.
+type IsKind = fn(&crate::nav::run::Kind) -> bool;
+
+/// The HTML page: the verdict, then the innovations against their 95 % bounds, the trajectory
+/// against GNSS and the barometer, and each sensor error along the flight with its 1-sigma.
+///
+/// # Errors
+/// A figure that cannot be drawn.
+pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, super::Error> {
+    use super::page::{STYLE, esc};
+    use super::plot::{Figure, Series, figure};
+    use crate::nav::run::Kind;
+    let title = format!("Unit {serial} in flight: {}", c.verdict.word);
+    let mut h = String::new();
+    let _ = writeln!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>{0}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{0}</h1>\n<pre>{1}</pre>",
+        esc(&title),
+        esc(&text(serial, c, counts))
+    );
+    // Innovations over their predicted sigma, with the 95 % bounds.
+    let said = &c.pass.said;
+    let span = said.first().map(|s| s.t).unwrap_or(0.0)..=said.last().map(|s| s.t).unwrap_or(1.0);
+    let bounds = [
+        vec![(*span.start(), 1.96), (*span.end(), 1.96)],
+        vec![(*span.start(), -1.96), (*span.end(), -1.96)],
+    ];
+    let kinds: [(&str, IsKind); 3] = [
+        ("GNSS position", |k| matches!(k, Kind::Position(_))),
+        ("GNSS velocity", |k| matches!(k, Kind::Velocity(_))),
+        ("barometer", |k| matches!(k, Kind::Baro)),
+    ];
+    let normalised: Vec<Vec<(f64, f64)>> = kinds
+        .iter()
+        .map(|(_, is)| {
+            said.iter()
+                .filter(|s| is(&s.kind) && s.sigma > 0.0)
+                .map(|s| (s.t, (s.value / s.sigma).clamp(-10.0, 10.0)))
+                .collect()
+        })
+        .collect();
+    let mut series: Vec<Series<'_>> = kinds
+        .iter()
+        .zip(&normalised)
+        .enumerate()
+        .filter(|(_, (_, v))| !v.is_empty())
+        .map(|(k, ((name, _), v))| Series::dots(name, v, k))
+        .collect();
+    series.push(Series::curve("95 % bounds", &bounds[0], 3));
+    series.push(Series::curve("", &bounds[1], 3));
+    figure(
+        &mut h,
+        &Figure {
+            title: "Innovations over their predicted 1-sigma (clipped at 10)",
+            x: "time, s",
+            y: "innovation / sigma",
+            series,
+            bands: Vec::new(),
+            band_label: "",
+            zero_line: true,
+        },
+    )?;
+    let tr = &c.track;
+    let height: Vec<(f64, f64)> =
+        tr.t.iter()
+            .zip(&tr.position)
+            .map(|(t, p)| (*t, p[2]))
+            .collect();
+    let gnss_height: Vec<(f64, f64)> = tr.gnss.iter().map(|(t, p)| (*t, p[2])).collect();
+    let mut series = vec![Series::curve("smoothed", &height, 0)];
+    if !tr.baro.is_empty() {
+        series.push(Series::dots("barometer", &tr.baro, 1));
+    }
+    if !gnss_height.is_empty() {
+        series.push(Series::dots("GNSS", &gnss_height, 2));
+    }
+    figure(
+        &mut h,
+        &Figure {
+            title: "Height above the pad",
+            x: "time, s",
+            y: "height, m",
+            series,
+            bands: Vec::new(),
+            band_label: "",
+            zero_line: false,
+        },
+    )?;
+    let path: Vec<(f64, f64)> = tr.position.iter().map(|p| (p[0], p[1])).collect();
+    let fixes: Vec<(f64, f64)> = tr.gnss.iter().map(|(_, p)| (p[0], p[1])).collect();
+    figure(
+        &mut h,
+        &Figure {
+            title: "Horizontal track",
+            x: "east, m",
+            y: "north, m",
+            series: vec![
+                Series::curve("smoothed", &path, 0),
+                Series::dots("GNSS", &fixes, 2),
+            ],
+            bands: Vec::new(),
+            band_label: "",
+            zero_line: false,
+        },
+    )?;
+    // Each sensor error along the flight with its 1-sigma, a figure per kind of term.
+    let every = tr.t.len().div_ceil(60).max(1);
+    for (group, unit, first) in [
+        ("Accelerometer biases", "m/s^2", 0),
+        ("Gyro biases", "rad/s", 3),
+        ("Accelerometer scale factors", "relative", 6),
+        ("Gyro scale factors", "relative", 9),
+    ] {
+        let values: Vec<Vec<(f64, f64)>> = (first..first + 3)
+            .map(|i| {
+                tr.t.iter()
+                    .zip(&tr.terms)
+                    .step_by(every)
+                    .map(|(t, (v, _))| (*t, v[i]))
+                    .collect()
+            })
+            .collect();
+        let sigmas: Vec<Vec<f64>> = (first..first + 3)
+            .map(|i| tr.terms.iter().step_by(every).map(|(_, s)| s[i]).collect())
+            .collect();
+        let mut series: Vec<Series<'_>> = Vec::new();
+        for (k, (v, s)) in values.iter().zip(&sigmas).enumerate() {
+            let mut one = Series::curve(crate::nav::verdict::TERMS[first + k], v, k);
+            one.errors = Some(s);
+            series.push(one);
+        }
+        let y = format!("smoothed estimate, {unit}");
+        figure(
+            &mut h,
+            &Figure {
+                title: group,
+                x: "time, s",
+                y: &y,
+                series,
+                bands: Vec::new(),
+                band_label: "",
+                zero_line: true,
+            },
+        )?;
+    }
+    h.push_str("<p>Each sensor error is the smoothed estimate of its shift from the calibration, with its 1-sigma; the innovations are GNSS and barometer readings against the filter's prediction, over the spread the filter expected.</p>\n</body>\n</html>\n");
+    Ok(h)
 }

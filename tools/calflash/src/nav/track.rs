@@ -1,0 +1,122 @@
+//! The smoothed flight against its references: the trajectory beside the GNSS fixes and the
+//! barometer's heights, and each sensor error along the flight with its band, thinned for the
+//! report's figures.
+
+use nalgebra::Vector3;
+use spincal::nav::filter::index;
+
+use super::input::{Fix, Pressure};
+use super::run::{self, Pass};
+use super::smooth::smooth;
+
+/// The most epochs a figure's series keeps.
+const SHOWN: usize = 2_000;
+
+/// The smoothed flight.
+#[derive(Debug, Clone, Default)]
+pub struct Track {
+    /// Epoch times, s (thinned).
+    pub t: Vec<f64>,
+    /// Smoothed position (east, north, up), m.
+    pub position: Vec<[f64; 3]>,
+    /// Each sensor error (in [`super::verdict::TERMS`]' order) and its 1-sigma.
+    pub terms: Vec<([f64; 12], [f64; 12])>,
+    /// GNSS fixes after launch in the level frame: time and position.
+    pub gnss: Vec<(f64, [f64; 3])>,
+    /// Barometric heights above the pad after launch: time and height, m.
+    pub baro: Vec<(f64, f64)>,
+    /// Smoothed horizontal track against GNSS, RMS m, and the fixes compared.
+    pub track_rms: Option<(f64, usize)>,
+    /// Smoothed height against the barometer, RMS m, and the readings compared.
+    pub height_rms: Option<(f64, usize)>,
+}
+
+/// Where the flight was.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Setting {
+    /// The level frame's origin (latitude, longitude degrees, height m).
+    pub origin: (f64, f64, f64),
+    /// The launch, s.
+    pub launch: f64,
+    /// The GNSS latency, s.
+    pub latency: f64,
+}
+
+/// Smooths `pass` and holds it against the fixes and the barometer.
+#[must_use]
+pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) -> Track {
+    let smoothed = smooth(&pass.epochs);
+    let times: Vec<f64> = pass.epochs.iter().map(|e| e.t).collect();
+    let position = |t: f64| -> Option<Vector3<f64>> {
+        let k = times.partition_point(|x| *x < t);
+        let (a, b) = (smoothed.get(k.checked_sub(1)?)?, smoothed.get(k)?);
+        let (ta, tb) = (times[k - 1], times[k]);
+        let u = if tb > ta { (t - ta) / (tb - ta) } else { 0.0 };
+        Some(a.0.nav.p * (1.0 - u) + b.0.nav.p * u)
+    };
+    let gnss: Vec<(f64, [f64; 3])> = fixes
+        .iter()
+        .filter(|f| f.t >= at.launch)
+        .map(|f| (f.t - at.latency, run::level_position(f, at.origin)))
+        .collect();
+    let track: Vec<f64> = gnss
+        .iter()
+        .filter_map(|(t, z)| {
+            let p = position(*t)?;
+            Some((p.x - z[0]).powi(2) + (p.y - z[1]).powi(2))
+        })
+        .collect();
+    let pad: Vec<f64> = baro
+        .iter()
+        .filter(|b| b.t < at.launch - 0.1)
+        .map(|b| run::pressure_height(b.pa))
+        .collect();
+    let reference = if pad.is_empty() {
+        baro.first().map_or(0.0, |b| run::pressure_height(b.pa))
+    } else {
+        pad.iter().sum::<f64>() / pad.len() as f64
+    };
+    let heights: Vec<(f64, f64)> = baro
+        .iter()
+        .filter(|b| b.t >= at.launch)
+        .map(|b| (b.t, run::pressure_height(b.pa) - reference))
+        .collect();
+    let height_errors: Vec<f64> = heights
+        .iter()
+        .filter_map(|(t, h)| Some((position(*t)?.z - h).powi(2)))
+        .collect();
+    let rms = |v: &[f64]| {
+        (!v.is_empty()).then(|| ((v.iter().sum::<f64>() / v.len() as f64).sqrt(), v.len()))
+    };
+    let every = smoothed.len().div_ceil(SHOWN).max(1);
+    let mut out = Track {
+        track_rms: rms(&track),
+        height_rms: rms(&height_errors),
+        gnss,
+        baro: heights
+            .iter()
+            .step_by(heights.len().div_ceil(SHOWN).max(1))
+            .copied()
+            .collect(),
+        ..Track::default()
+    };
+    for (k, (x, p)) in smoothed.iter().enumerate().step_by(every) {
+        out.t.push(times[k]);
+        out.position.push(x.nav.p.into());
+        let s = &x.sensors;
+        let mut v = [0.0; 12];
+        let mut sd = [0.0; 12];
+        for i in 0..3 {
+            v[i] = s.accel_bias[i];
+            v[3 + i] = s.gyro_bias[i];
+            v[6 + i] = s.accel_scale[i];
+            v[9 + i] = s.gyro_scale[i];
+        }
+        for (i, d) in sd.iter_mut().enumerate() {
+            let j = index::ACCEL_BIAS + i;
+            *d = p[(j, j)].max(0.0).sqrt();
+        }
+        out.terms.push((v, sd));
+    }
+    out
+}
