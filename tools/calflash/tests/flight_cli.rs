@@ -100,6 +100,8 @@ fn fly(dir: &Path, shift: Option<&str>) -> serde_json::Value {
             "nu.csv",
             "--report",
             "f.html",
+            "--db",
+            "units.sqlite",
         ],
     );
     let page = std::fs::read_to_string(dir.join("f.html")).unwrap();
@@ -266,6 +268,7 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
             "b.csv",
             "--json",
             "f.json",
+            "--no-db",
         ],
     );
     let v: serde_json::Value =

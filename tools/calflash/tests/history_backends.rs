@@ -601,3 +601,59 @@ fn a_history_of_schema_3_reads_without_lots_and_gains_them_when_written() {
         assert_eq!(new.history("U-1").unwrap().len(), 1, "{l}: kept");
     }
 }
+
+#[test]
+fn a_history_of_schema_4_takes_in_flight_checks_once_written() {
+    let h = Histories::new("a_history_of_schema_4_takes_in_flight_checks_once_written");
+    for l in h.each("flights") {
+        Db::open(&l)
+            .unwrap()
+            .record_flash("U-1", &[1; 8], &serde_json::json!({}), "verified")
+            .unwrap();
+        // Schema 4 as it was: its check knows no flights.
+        let four = "'fit', 'flash', 'health'";
+        match &l {
+            Location::File(p) => {
+                let c = rusqlite::Connection::open(p).unwrap();
+                let sql: String = c
+                    .query_row(
+                        "SELECT sql FROM sqlite_master WHERE name = 'records'",
+                        [],
+                        |r| r.get(0),
+                    )
+                    .unwrap();
+                c.execute_batch(&format!(
+                    "ALTER TABLE records RENAME TO r4; DROP INDEX records_serial; DROP INDEX records_lot;
+                     {}; INSERT INTO records SELECT * FROM r4; DROP TABLE r4; PRAGMA user_version = 4",
+                    sql.replace("'fit', 'flash', 'health', 'flight'", four)
+                ))
+                .unwrap();
+            }
+            Location::Server(_) => h.server.as_ref().unwrap().execute(
+                "flights",
+                &format!(
+                    "ALTER TABLE records DROP CONSTRAINT records_kind_check;
+                     ALTER TABLE records ADD CONSTRAINT records_kind_check CHECK (kind IN ({four}));
+                     UPDATE calflash_schema SET version = 4"
+                ),
+            ),
+        }
+        let mut db = Db::open(&l).unwrap();
+        let record = serde_json::json!({"verdict": "HELD", "terms": [{"name": "accel bias x", "estimate": 0.01, "sigma": 0.02}]});
+        db.record_flight("U-1", &[1; 8], &record).unwrap();
+        let kinds: Vec<(String, String)> = db
+            .history("U-1")
+            .unwrap()
+            .into_iter()
+            .map(|e| (e.kind, e.outcome))
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                ("flash".to_string(), "verified".to_string()),
+                ("flight".to_string(), "held".to_string())
+            ],
+            "{l}"
+        );
+    }
+}

@@ -60,6 +60,14 @@ pub struct FlightArgs {
     /// Write the result as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// The unit history the check is recorded in (kind `flight`, with --blob): a SQLite file,
+    /// or postgres://USER:PASSWORD@HOST/DB; default $CALFLASH_DB, else the user's data
+    /// directory.
+    #[arg(long, value_name = "FILE|URL")]
+    pub db: Option<crate::db::Given>,
+    /// Do not record the check.
+    #[arg(long)]
+    pub no_db: bool,
     /// Write an HTML report here: the verdict, the innovations against their bounds, the
     /// trajectory against GNSS and the barometer, each sensor error along the flight.
     #[arg(long)]
@@ -75,6 +83,9 @@ pub struct FlightArgs {
 /// # Errors
 /// Unreadable inputs, a flight that cannot be checked.
 pub fn run(args: &FlightArgs) -> Result<(), Failure> {
+    let db_path = (!args.no_db && args.blob.is_some())
+        .then(|| crate::db::Location::or_default(args.db.as_ref()))
+        .transpose()?;
     Paths::new()
         .input("the recording", Some(&args.recording))
         .input("--blob", args.blob.as_deref())
@@ -83,6 +94,10 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         .output("--json", args.json.as_deref())
         .output("--innovations", args.innovations.as_deref())
         .output("--report", args.report.as_deref())
+        .created(
+            "the unit history",
+            db_path.as_ref().and_then(crate::db::Location::file),
+        )
         .check()?;
     for (name, v, n) in [
         ("--lever", &args.lever, 3),
@@ -102,9 +117,11 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         },
         _ => StatedPrior::default(),
     };
+    let mut blob_bytes = Vec::new();
     let (imu, prior, serial) = match &args.blob {
         Some(path) => {
             let bytes = crate::files::read_blob(path)?;
+            blob_bytes.clone_from(&bytes);
             let cal = crate::signing::calibration(&bytes)
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             let imu = input::corrected(&args.recording, &cal)?;
@@ -172,5 +189,16 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
     }
     staged.commit()?;
     print!("{text}");
+    if let Some(path) = db_path {
+        let beside = crate::db::beside(&[args.json.as_deref(), Some(args.recording.as_path())]);
+        let said = crate::db::record_or_save(
+            &path,
+            |d| d.record_flight(&serial, &blob_bytes, &record),
+            &record,
+            &beside,
+            &serial,
+        )?;
+        println!("  {said}");
+    }
     Ok(())
 }

@@ -389,6 +389,47 @@ impl Db {
         })
     }
 
+    /// Records an in-flight check (`calflash flight`): the verdict as the outcome, each sensor
+    /// error's in-flight estimate as the coefficients and their 1-sigma as the covariance, the
+    /// whole result as the record, and the blob of the calibration it checked.
+    ///
+    /// # Errors
+    /// A message naming the history and why; nothing is written then.
+    pub fn record_flight(
+        &mut self,
+        serial: &str,
+        blob: &[u8],
+        record: &serde_json::Value,
+    ) -> Result<i64, Error> {
+        let terms = record["terms"].as_array().cloned().unwrap_or_default();
+        let pick = |key: &str| -> serde_json::Value {
+            terms
+                .iter()
+                .map(|t| (t["name"].as_str().unwrap_or("").to_string(), t[key].clone()))
+                .collect::<serde_json::Map<_, _>>()
+                .into()
+        };
+        self.insert(Row {
+            serial: serial.into(),
+            kind: "flight".into(),
+            time: now(),
+            data_hash: blob_hash(blob).unwrap_or_default(),
+            model: Some(
+                "in flight: biases and scale factors against GNSS and a barometer (spincal::nav)"
+                    .into(),
+            ),
+            coefficients: Some(pick("estimate").to_string()),
+            covariance: Some(pick("sigma").to_string()),
+            report: None,
+            blob: blob.to_vec(),
+            verification: None,
+            outcome: record["verdict"].as_str().unwrap_or("").to_lowercase(),
+            record: Some(record.to_string()),
+            station: station(),
+            lot: String::new(),
+        })
+    }
+
     /// Records a flash (done or failed): the unit, the blob, the verification.
     ///
     /// # Errors

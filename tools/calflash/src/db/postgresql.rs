@@ -83,7 +83,7 @@ const SCHEMA: &str = "CREATE TABLE calflash_schema (version INTEGER NOT NULL);
 CREATE TABLE records (
     id BIGSERIAL PRIMARY KEY,
     serial TEXT NOT NULL,
-    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health')),
+    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health', 'flight')),
     time BIGINT NOT NULL,
     data_hash TEXT NOT NULL,
     model TEXT,
@@ -105,6 +105,13 @@ CREATE INDEX records_lot ON records (lot);
 const MIGRATE_FROM_3: &str = "ALTER TABLE records ADD COLUMN lot TEXT NOT NULL DEFAULT '';
 CREATE INDEX records_lot ON records (lot);
 UPDATE calflash_schema SET version = 4;
+";
+
+/// Lets a version 4 history take in-flight checks (kind `flight`).
+const MIGRATE_FROM_4: &str = "ALTER TABLE records DROP CONSTRAINT IF EXISTS records_kind_check;
+ALTER TABLE records ADD CONSTRAINT records_kind_check
+    CHECK (kind IN ('fit', 'flash', 'health', 'flight'));
+UPDATE calflash_schema SET version = 5;
 ";
 
 /// The advisory lock under which a station creates the tables ("calf").
@@ -204,7 +211,8 @@ fn own_objects(c: &mut impl postgres::GenericClient) -> Result<i64, Cause> {
     Ok(row.get(0))
 }
 
-/// Checks the version and columns of an existing history; migrates version 3 when `write`.
+/// Checks the version and columns of an existing history; migrates versions 3 and 4 when
+/// `write`.
 /// The version and the later columns the table (now) has.
 fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<(i64, Later), Cause> {
     let version: Option<i32> = c
@@ -225,7 +233,10 @@ fn check_schema(c: &mut impl postgres::GenericClient, write: bool) -> Result<(i6
         .collect();
     let later = super::schema::check_columns(&have)?;
     if version < SCHEMA_VERSION && write {
-        c.batch_execute(MIGRATE_FROM_3).map_err(why)?;
+        if version < 4 {
+            c.batch_execute(MIGRATE_FROM_3).map_err(why)?;
+        }
+        c.batch_execute(MIGRATE_FROM_4).map_err(why)?;
         return Ok((SCHEMA_VERSION, Later::ALL));
     }
     Ok((version, later))

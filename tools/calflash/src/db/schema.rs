@@ -6,12 +6,12 @@ use super::{Cause, Selection};
 /// The schema version this calflash reads and writes. On SQLite (`PRAGMA user_version`)
 /// version 0 is a database of the releases before versioning, version 1 one whose records are
 /// fits and flashes only, version 2 one without the recording station, version 3 one without
-/// the production lot; all are migrated (in one transaction) when written to: versions 0 and 1
-/// by rebuilding the table so that it also takes the unit's health reports, versions 2 and 3
-/// by adding the columns they lack (empty for the records before them). On PostgreSQL (table
-/// `calflash_schema`) version 3 lacks the lot and gains it when written to. Read-only, an
-/// older history reads with no stations or lots.
-pub const SCHEMA_VERSION: i64 = 4;
+/// the production lot, version 4 one without in-flight checks; all are migrated (in one
+/// transaction) when written to, by rebuilding the table so that it takes every kind of
+/// record and has every column (empty for the records before them). On PostgreSQL (table
+/// `calflash_schema`) version 3 lacks the lot and version 4 the flights, both gained when
+/// written to. Read-only, an older history reads with no stations or lots.
+pub const SCHEMA_VERSION: i64 = 5;
 
 /// The columns of `records` the code reads and writes.
 const COLUMNS: [&str; 13] = [

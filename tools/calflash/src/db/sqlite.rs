@@ -44,7 +44,7 @@ macro_rules! records_table {
         "CREATE TABLE IF NOT EXISTS records (
     id INTEGER PRIMARY KEY,
     serial TEXT NOT NULL,
-    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health')),
+    kind TEXT NOT NULL CHECK (kind IN ('fit', 'flash', 'health', 'flight')),
     time INTEGER NOT NULL,
     data_hash TEXT NOT NULL,
     model TEXT,
@@ -66,33 +66,32 @@ CREATE INDEX IF NOT EXISTS records_lot ON records (lot);
 
 pub(super) const SCHEMA: &str = records_table!();
 
-/// Rebuilds a version 0 or 1 table under the present schema (run inside the write lock).
-const MIGRATE_FROM_1: &str = concat!(
-    "ALTER TABLE records RENAME TO records_v1;
+/// Rebuilds an older table under the present schema (run inside the write lock): SQLite
+/// cannot change a column's check, and each version took more kinds of record (health in
+/// version 2, flights in 5). The columns the old table has are copied; the station and the lot
+/// it lacks are left empty.
+fn rebuild(later: Later) -> String {
+    let mut columns = String::from(
+        "id, serial, kind, time, data_hash, model, coefficients, covariance, report, blob, \
+         verification, outcome, record",
+    );
+    if later.station {
+        columns.push_str(", station");
+    }
+    if later.lot {
+        columns.push_str(", lot");
+    }
+    format!(
+        "ALTER TABLE records RENAME TO records_old;
 DROP INDEX IF EXISTS records_serial;
+DROP INDEX IF EXISTS records_lot;
+{}INSERT INTO records ({columns}) SELECT {columns} FROM records_old;
+DROP TABLE records_old;
+PRAGMA user_version = {SCHEMA_VERSION};
 ",
-    records_table!(),
-    "INSERT INTO records (id, serial, kind, time, data_hash, model, coefficients, covariance,
-    report, blob, verification, outcome, record)
-    SELECT id, serial, kind, time, data_hash, model, coefficients, covariance, report, blob,
-    verification, outcome, record FROM records_v1;
-DROP TABLE records_v1;
-PRAGMA user_version = 4;
-"
-);
-
-/// Adds the recording station and the lot to a version 2 table (run inside the write lock).
-const MIGRATE_FROM_2: &str = "ALTER TABLE records ADD COLUMN station TEXT NOT NULL DEFAULT '';
-ALTER TABLE records ADD COLUMN lot TEXT NOT NULL DEFAULT '';
-CREATE INDEX IF NOT EXISTS records_lot ON records (lot);
-PRAGMA user_version = 4;
-";
-
-/// Adds the lot to a version 3 table (run inside the write lock).
-const MIGRATE_FROM_3: &str = "ALTER TABLE records ADD COLUMN lot TEXT NOT NULL DEFAULT '';
-CREATE INDEX IF NOT EXISTS records_lot ON records (lot);
-PRAGMA user_version = 4;
-";
+        records_table!()
+    )
+}
 
 /// Checks the schema of an existing database: its version and which later columns the table
 /// has.
@@ -129,14 +128,13 @@ fn has_records(conn: &Connection, path: &Path) -> Result<bool, Cause> {
 /// what it sees cannot change before it acts.
 fn make_writable(conn: &Connection, path: &Path) -> Result<(), Cause> {
     if has_records(conn, path)? {
-        let (version, _) = check_schema(conn, path)?;
-        let migrate = match version {
-            SCHEMA_VERSION => return Ok(()),
-            ..=1 => MIGRATE_FROM_1,
-            2 => MIGRATE_FROM_2,
-            _ => MIGRATE_FROM_3,
-        };
-        return conn.execute_batch(migrate).map_err(|e| why(path, e));
+        let (version, later) = check_schema(conn, path)?;
+        if version == SCHEMA_VERSION {
+            return Ok(());
+        }
+        return conn
+            .execute_batch(&rebuild(later))
+            .map_err(|e| why(path, e));
     }
     // No calflash table: a new file, or a database that is not ours to write into.
     let version: i64 = conn
@@ -437,7 +435,7 @@ mod tests {
         let path = dir.path().join("units.sqlite");
         {
             let c = Connection::open(&path).unwrap();
-            let old = SCHEMA.replace("'fit', 'flash', 'health'", "'fit', 'flash'");
+            let old = SCHEMA.replace("'fit', 'flash', 'health', 'flight'", "'fit', 'flash'");
             c.execute_batch(&format!("{old} PRAGMA user_version = 1;"))
                 .unwrap();
             c.execute(
