@@ -287,3 +287,47 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
         "{v}"
     );
 }
+
+/// The real Hedy rocket flight: its physical IMU log, its GNSS (a receiver that holds stale
+/// fixes) and its barometer, with the options the README documents.
+#[test]
+fn the_hedy_flight_fits_its_gnss_and_barometer() {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/hedy-rocket");
+    if !dir.join("imu.csv").is_file() {
+        println!(
+            "hedy flight: SKIPPED, {} is absent (it lives beside the checkout in CI)",
+            dir.display()
+        );
+        return;
+    }
+    let d = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.join(f).display().to_string();
+    let out = ok(
+        d.path(),
+        &[
+            "flight",
+            &p("imu.csv"),
+            "--imu-columns",
+            "t=ts,fx=Ax:m/s^2,fy=Ay:m/s^2,fz=Az:m/s^2,wx=Gx:deg/s,wy=Gy:deg/s,wz=Gz:deg/s",
+            "--gnss",
+            &p("gnssInfo.csv"),
+            "--baro",
+            &p("baro.csv"),
+            "--baro-noise",
+            "4",
+            "--json",
+            "h.json",
+        ],
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("h.json")).unwrap()).unwrap();
+    let c = &v["consistency"];
+    let inside = c["inside_95"].as_f64().unwrap() / c["innovations"].as_f64().unwrap();
+    assert!(c["fits"].as_bool().unwrap() && inside >= 0.95, "{out}");
+    // The receiver's "no fix" rows and the minute it held one fix are counted and left out.
+    assert!(
+        v["gnss_no_fix"].as_u64().unwrap() > 50 && v["gnss_repeated"].as_u64().unwrap() > 100,
+        "{v}"
+    );
+}

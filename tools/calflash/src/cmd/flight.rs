@@ -44,6 +44,10 @@ pub struct FlightArgs {
     /// 1-sigma of a barometric height, m.
     #[arg(long, default_value_t = 1.5, value_parser = |s: &str| super::values::in_range(s, 0.01, 1000.0))]
     pub baro_noise: f64,
+    /// The barometer port's pressure coefficient, 1-sigma: its height error grows as
+    /// `CP v^2 / 2g` with the speed (0 for a barometer that reads the true static pressure).
+    #[arg(long, default_value_t = 0.03, value_parser = |s: &str| super::values::in_range(s, 0.0, 2.0))]
+    pub baro_cp: f64,
     /// The barometer's bias random walk, m/sqrt(s) (the air against the standard atmosphere).
     #[arg(long, default_value_t = 0.5, value_parser = |s: &str| super::values::in_range(s, 0.0, 100.0))]
     pub baro_walk: f64,
@@ -162,6 +166,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         ),
         gnss_latency: args.gnss_latency,
         baro_noise: args.baro_noise,
+        baro_cp: args.baro_cp,
         ..Options::default()
     };
     let walks = Walks {

@@ -35,6 +35,10 @@ pub struct Options {
     pub doubt: (f64, f64),
     /// The barometer is not used from this Mach number up (the shock wave on its port).
     pub baro_mach: f64,
+    /// The static port's pressure coefficient, 1-sigma: a port on a moving body reads the
+    /// static pressure off by `Cp q`, a height error of `Cp v^2 / 2g` (15 m at 100 m/s for
+    /// 0.03) added to the barometer's own.
+    pub baro_cp: f64,
 }
 
 impl Default for Options {
@@ -51,6 +55,7 @@ impl Default for Options {
             gate: 5.0,
             doubt: (1.0e5, 100.0),
             baro_mach: 0.8,
+            baro_cp: 0.03,
         }
     }
 }
@@ -398,14 +403,16 @@ pub fn forward(
             last_baro = b.t;
             let z = pressure_height(b.pa) - baro_ref;
             let (h, at) = filter.baro_row();
-            let r = opts.baro_noise;
+            let v2 = filter.estimate.nav.v.norm_squared();
+            let port = opts.baro_cp * v2 / (2.0 * atmosphere::G0);
+            let r2 = opts.baro_noise * opts.baro_noise + port * port;
             take(
                 &mut filter,
                 &mut pass.said,
                 (t, Kind::Baro),
                 &h,
                 z - at,
-                r * r,
+                r2,
                 opts.gate,
             );
         }

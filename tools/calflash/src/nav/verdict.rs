@@ -80,9 +80,10 @@ pub struct Consistency {
     pub inside_95: usize,
     /// Refused beyond the gate.
     pub refused: usize,
-    /// Mean of nu^2 / sigma^2 over them (1 when the filter's covariance is right).
+    /// Mean of nu^2 / sigma^2 over those taken (1 when the filter's covariance is right).
     pub mean_nis: f64,
-    /// The filter fits the data: at least 90 % inside and a mean NIS under 2.
+    /// The filter fits the data: at least 90 % inside, a mean NIS under 2 over those taken,
+    /// at most [`REFUSED_AT_MOST`] refused.
     pub fits: bool,
 }
 
@@ -101,7 +102,12 @@ pub struct Verdict {
     pub consistency: Consistency,
 }
 
-/// The consistency of the aiding innovations (GNSS and barometer; the pad's are left out).
+/// The share of innovations a filter that fits may refuse beyond its gate (outliers: a
+/// receiver at high dynamics, a barometer in a gust).
+pub const REFUSED_AT_MOST: f64 = 0.05;
+
+/// The consistency of the aiding innovations (GNSS and barometer; the pad's are left out):
+/// the share inside their 95 % bounds, the mean NIS of those taken, and those refused.
 #[must_use]
 pub fn consistency(said: &[Said]) -> Consistency {
     let aiding: Vec<&Said> = said
@@ -113,22 +119,26 @@ pub fn consistency(said: &[Said]) -> Consistency {
         .iter()
         .filter(|s| s.value.abs() <= 1.96 * s.sigma)
         .count();
-    let refused = aiding.iter().filter(|s| !s.taken).count();
-    let mean_nis = if n == 0 {
+    let taken: Vec<&&Said> = aiding.iter().filter(|s| s.taken).collect();
+    let refused = n - taken.len();
+    let mean_nis = if taken.is_empty() {
         f64::NAN
     } else {
-        aiding
+        taken
             .iter()
             .map(|s| (s.value / s.sigma).powi(2))
             .sum::<f64>()
-            / n as f64
+            / taken.len() as f64
     };
     Consistency {
         innovations: n,
         inside_95: inside,
         refused,
         mean_nis,
-        fits: n > 0 && inside as f64 >= 0.9 * n as f64 && mean_nis < 2.0,
+        fits: n > 0
+            && inside as f64 >= 0.9 * n as f64
+            && mean_nis < 2.0
+            && refused as f64 <= REFUSED_AT_MOST * n as f64,
     }
 }
 

@@ -15,7 +15,7 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
     let k = &v.consistency;
     let _ = writeln!(
         s,
-        "  the filter's fit: {} of {} GNSS and barometer innovations inside their 95 % bounds ({:.1} %), mean NIS {:.2} (1 when its covariance is right), {} refused beyond 5 sigma",
+        "  the filter's fit: {} of {} GNSS and barometer innovations inside their 95 % bounds ({:.1} %), mean NIS {:.2} over those taken (1 when its covariance is right), {} refused beyond 5 sigma",
         k.inside_95,
         k.innovations,
         100.0 * k.inside_95 as f64 / k.innovations.max(1) as f64,
