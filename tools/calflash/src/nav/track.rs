@@ -103,15 +103,8 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
     for (k, (x, p)) in smoothed.iter().enumerate().step_by(every) {
         out.t.push(times[k]);
         out.position.push(x.nav.p.into());
-        let s = &x.sensors;
-        let mut v = [0.0; 12];
+        let v = super::verdict::values(&x.sensors);
         let mut sd = [0.0; 12];
-        for i in 0..3 {
-            v[i] = s.accel_bias[i];
-            v[3 + i] = s.gyro_bias[i];
-            v[6 + i] = s.accel_scale[i];
-            v[9 + i] = s.gyro_scale[i];
-        }
         for (i, d) in sd.iter_mut().enumerate() {
             let j = index::ACCEL_BIAS + i;
             *d = p[(j, j)].max(0.0).sqrt();

@@ -142,7 +142,9 @@ pub fn consistency(said: &[Said]) -> Consistency {
     }
 }
 
-fn values(s: &SensorErrors<f64>) -> [f64; 12] {
+/// The sensor errors in [`TERMS`]' order.
+#[must_use]
+pub fn values(s: &SensorErrors<f64>) -> [f64; 12] {
     let mut out = [0.0; 12];
     for i in 0..3 {
         out[i] = s.accel_bias[i];
