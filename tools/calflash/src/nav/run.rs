@@ -194,6 +194,23 @@ pub fn pressure_height(pa: f64) -> f64 {
     T0 / L * (1.0 - (pa / P0).powf(R * L / atmosphere::G0))
 }
 
+/// The pressure height of the pad: of the mean pressure read more than 0.1 s before the
+/// launch `t_launch`, or of the first reading when none was.
+#[must_use]
+pub fn pad_height(baro: &[Pressure], t_launch: f64) -> f64 {
+    let pad: Vec<f64> = baro
+        .iter()
+        .filter(|b| b.t < t_launch - 0.1)
+        .map(|b| b.pa)
+        .collect();
+    let p = if pad.is_empty() {
+        baro.first().map_or(101_325.0, |b| b.pa)
+    } else {
+        pad.iter().sum::<f64>() / pad.len() as f64
+    };
+    pressure_height(p)
+}
+
 /// A fix's position in the level frame of `origin`.
 #[must_use]
 pub fn level_position(fix: &Fix, origin: (f64, f64, f64)) -> [f64; 3] {
@@ -267,19 +284,7 @@ pub fn forward(
     let p0 = prior(start, pad_sigma);
     let mut filter = ErrorFilter::new(estimate, &Prior { covariance: p0 }, earth, start.noise);
     let t_launch = imu.t.get(launch_at).copied().unwrap_or(0.0);
-    let baro_ref = {
-        let pad: Vec<f64> = baro
-            .iter()
-            .filter(|b| b.t < t_launch - 0.1)
-            .map(|b| b.pa)
-            .collect();
-        let p = if pad.is_empty() {
-            baro.first().map_or(101_325.0, |b| b.pa)
-        } else {
-            pad.iter().sum::<f64>() / pad.len() as f64
-        };
-        pressure_height(p)
-    };
+    let baro_ref = pad_height(baro, t_launch);
     let mut pass = Pass {
         epochs: Vec::new(),
         said: Vec::new(),

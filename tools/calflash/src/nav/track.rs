@@ -66,16 +66,7 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
             Some((p.x - z[0]).powi(2) + (p.y - z[1]).powi(2))
         })
         .collect();
-    let pad: Vec<f64> = baro
-        .iter()
-        .filter(|b| b.t < at.launch - 0.1)
-        .map(|b| run::pressure_height(b.pa))
-        .collect();
-    let reference = if pad.is_empty() {
-        baro.first().map_or(0.0, |b| run::pressure_height(b.pa))
-    } else {
-        pad.iter().sum::<f64>() / pad.len() as f64
-    };
+    let reference = run::pad_height(baro, at.launch);
     let heights: Vec<(f64, f64)> = baro
         .iter()
         .filter(|b| b.t >= at.launch)
