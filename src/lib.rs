@@ -82,6 +82,7 @@
 pub mod blob;
 pub mod correct;
 pub mod driver;
+pub mod flight;
 pub mod health;
 pub mod model;
 pub mod nav;

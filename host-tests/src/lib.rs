@@ -3,6 +3,7 @@
 #![forbid(unsafe_code)]
 
 pub mod fields;
+pub mod flight_golden;
 pub mod golden;
 pub mod health_golden;
 pub mod mainjob;

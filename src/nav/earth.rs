@@ -5,6 +5,8 @@
 
 use nalgebra::{RealField, Vector3};
 
+use super::real::Real;
+
 /// The Earth's rotation rate, rad/s (WGS 84).
 pub const RATE: f64 = 7.292_115e-5;
 /// The semi-major axis, m (WGS 84).
@@ -20,53 +22,83 @@ pub const SOMIGLIANA_K: f64 = 1.931_852_652_41e-3;
 /// `m = w^2 a^2 b / GM` (WGS 84).
 pub const GRAVITY_M: f64 = 3.449_786_003_08e-3;
 
-/// The launch point: where the local level frame's origin is.
+/// The launch point: where the local level frame's origin is, with what the navigation asks
+/// of it at every sample worked out once (the Earth's rate, the radii, the surface gravity).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Earth<T> {
-    /// Geodetic latitude, rad.
-    pub latitude: T,
-    /// Height of the origin above the ellipsoid, m.
-    pub height: T,
+pub struct Earth<T: RealField + Copy> {
+    latitude: T,
+    height: T,
+    rate: Vector3<T>,
+    radii: (T, T),
+    sin2: T,
+    surface_gravity: T,
 }
 
 fn c<T: RealField + Copy>(x: f64) -> T {
     nalgebra::convert(x)
 }
 
-impl<T: RealField + Copy> Earth<T> {
+impl<T: Real> Earth<T> {
+    /// The origin at geodetic latitude `latitude` (rad) and `height` m above the ellipsoid.
+    #[must_use]
+    pub fn new(latitude: T, height: T) -> Self {
+        let (s, cos) = latitude.sin_cos_libm();
+        let w: T = c(RATE);
+        let sin2 = s * s;
+        let e2: T = c(ECCENTRICITY2);
+        let w2 = T::one() - e2 * sin2;
+        let a: T = c(SEMI_MAJOR);
+        let n = a / w2.sqrt();
+        let m = a * (T::one() - e2) / (w2 * w2.sqrt());
+        let surface_gravity =
+            c::<T>(GRAVITY_EQUATOR) * (T::one() + c::<T>(SOMIGLIANA_K) * sin2) / w2.sqrt();
+        Self {
+            latitude,
+            height,
+            rate: Vector3::new(T::zero(), w * cos, w * s),
+            radii: (m + height, n + height),
+            sin2,
+            surface_gravity,
+        }
+    }
+
+    /// Geodetic latitude of the origin, rad.
+    #[must_use]
+    pub fn latitude(&self) -> T {
+        self.latitude
+    }
+
+    /// Height of the origin above the ellipsoid, m.
+    #[must_use]
+    pub fn height(&self) -> T {
+        self.height
+    }
+
     /// The Earth's rate in the local level frame (east, north, up), rad/s.
     #[must_use]
     pub fn rate(&self) -> Vector3<T> {
-        let w: T = c(RATE);
-        Vector3::new(T::zero(), w * self.latitude.cos(), w * self.latitude.sin())
+        self.rate
     }
 
     /// The radii of curvature at the origin, m: along the meridian (north) and across it
     /// (east, the prime vertical).
     #[must_use]
     pub fn radii(&self) -> (T, T) {
-        let s = self.latitude.sin();
-        let w2 = T::one() - c::<T>(ECCENTRICITY2) * s * s;
-        let a: T = c(SEMI_MAJOR);
-        let n = a / w2.sqrt();
-        let m = a * (T::one() - c::<T>(ECCENTRICITY2)) / (w2 * w2.sqrt());
-        (m + self.height, n + self.height)
+        self.radii
     }
 
     /// The magnitude of normal gravity at height `h` m above the ellipsoid over the origin:
     /// Somigliana's formula and its second-order fall-off with height.
     #[must_use]
     pub fn normal_gravity(&self, h: T) -> T {
-        let s2 = self.latitude.sin() * self.latitude.sin();
-        let e2: T = c(ECCENTRICITY2);
-        let g0 = c::<T>(GRAVITY_EQUATOR) * (T::one() + c::<T>(SOMIGLIANA_K) * s2)
-            / (T::one() - e2 * s2).sqrt();
+        let s2 = self.sin2;
         let a: T = c(SEMI_MAJOR);
         let f: T = c(FLATTENING);
         let m: T = c(GRAVITY_M);
         let two: T = c(2.0);
         let three: T = c(3.0);
-        g0 * (T::one() - two / a * (T::one() + f + m - two * f * s2) * h + three * h * h / (a * a))
+        self.surface_gravity
+            * (T::one() - two / a * (T::one() + f + m - two * f * s2) * h + three * h * h / (a * a))
     }
 
     /// Gravity at `p` (m, east-north-up from the origin), m/s^2: down along the normal, tilted
@@ -74,7 +106,7 @@ impl<T: RealField + Copy> Earth<T> {
     #[must_use]
     pub fn gravity(&self, p: &Vector3<T>) -> Vector3<T> {
         let g = self.normal_gravity(self.height + p.z);
-        let (rn, re) = self.radii();
+        let (rn, re) = self.radii;
         Vector3::new(-g * p.x / re, -g * p.y / rn, -g)
     }
 
@@ -84,7 +116,7 @@ impl<T: RealField + Copy> Earth<T> {
     #[must_use]
     pub fn gravity_gradient(&self, h: T) -> Vector3<T> {
         let g = self.normal_gravity(self.height + h);
-        let (rn, re) = self.radii();
+        let (rn, re) = self.radii;
         let r = (rn * re).sqrt();
         Vector3::new(-g / re, -g / rn, c::<T>(2.0) * g / r)
     }
@@ -97,29 +129,20 @@ mod tests {
     #[test]
     fn normal_gravity_matches_the_wgs84_tables() {
         // WGS 84 (NIMA TR8350.2): 9.7803253359 at the equator, 9.8321849378 at the poles.
-        let at = |lat: f64| Earth {
-            latitude: lat.to_radians(),
-            height: 0.0,
-        };
+        let at = |lat: f64| Earth::new(lat.to_radians(), 0.0);
         assert!((at(0.0).normal_gravity(0.0) - 9.780_325_335_9).abs() < 1e-9);
         assert!((at(90.0).normal_gravity(0.0) - 9.832_184_937_8).abs() < 1e-9);
         // The free-air gradient, about 3.086e-6 s^-2.
         let e = at(45.0);
         let grad = (e.normal_gravity(0.0) - e.normal_gravity(1000.0)) / 1000.0;
         assert!((grad - 3.086e-6).abs() < 0.01e-6, "{grad}");
-        let f32_earth = Earth::<f32> {
-            latitude: core::f32::consts::FRAC_PI_4,
-            height: 0.0,
-        };
+        let f32_earth = Earth::<f32>::new(core::f32::consts::FRAC_PI_4, 0.0);
         assert!((f32_earth.normal_gravity(0.0) - e.normal_gravity(0.0) as f32).abs() < 1e-5);
     }
 
     #[test]
     fn gravity_tilts_toward_the_centre_and_the_rate_lies_in_the_meridian() {
-        let e = Earth {
-            latitude: 0.7_f64,
-            height: 100.0,
-        };
+        let e = Earth::new(0.7_f64, 100.0);
         let g = e.gravity(&Vector3::new(10_000.0, 0.0, 0.0));
         assert!(g.x < 0.0 && (g.x / g.z - 10_000.0 / e.radii().1).abs() < 1e-12);
         let w = e.rate();

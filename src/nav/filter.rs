@@ -16,9 +16,10 @@
 //! (`Phi = I + F dt + (F dt)^2 / 2` with `F` the interval's mean), so what the spin averages
 //! out is averaged exactly and the cost is a few 22 x 22 products per interval.
 
-use nalgebra::{Matrix3, RealField, SMatrix, SVector, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, RealField, SMatrix, SVector, Vector3};
 
 use super::earth::Earth;
+use super::real::{Real, rotation};
 use super::strapdown::{Navigation, Step};
 
 /// The number of error states.
@@ -101,7 +102,7 @@ fn block<T: RealField + Copy>(x: &StateVector<T>, at: usize) -> Vector3<T> {
     x.fixed_rows::<3>(at).into_owned()
 }
 
-impl<T: RealField + Copy> Estimate<T> {
+impl<T: Real> Estimate<T> {
     /// This estimate corrected by the error `dx`.
     #[must_use]
     pub fn plus(&self, dx: &StateVector<T>) -> Self {
@@ -109,8 +110,7 @@ impl<T: RealField + Copy> Estimate<T> {
         let mut out = *self;
         out.nav.p += block(dx, POSITION);
         out.nav.v += block(dx, VELOCITY);
-        out.nav
-            .turn(&UnitQuaternion::from_scaled_axis(block(dx, ATTITUDE)));
+        out.nav.turn(&rotation(&block(dx, ATTITUDE)));
         out.sensors.accel_bias += block(dx, ACCEL_BIAS);
         out.sensors.gyro_bias += block(dx, GYRO_BIAS);
         out.sensors.accel_scale += block(dx, ACCEL_SCALE);
@@ -241,7 +241,7 @@ fn skew<T: RealField + Copy>(v: &Vector3<T>) -> Matrix3<T> {
     v.cross_matrix()
 }
 
-impl<T: RealField + Copy> ErrorFilter<T> {
+impl<T: Real> ErrorFilter<T> {
     /// A filter from an estimate, its prior covariance, the launch point and the noise.
     #[must_use]
     pub fn new(

@@ -8,8 +8,10 @@
 
 pub mod earth;
 pub mod filter;
+pub mod real;
 pub mod strapdown;
 
 pub use earth::Earth;
 pub use filter::{ErrorFilter, NavNoise, Prior, STATES, SensorErrors, StateMatrix, StateVector};
+pub use real::Real;
 pub use strapdown::{Navigation, Step};

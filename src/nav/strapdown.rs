@@ -15,6 +15,7 @@
 use nalgebra::{RealField, UnitQuaternion, Vector3};
 
 use super::earth::Earth;
+use super::real::{Real, rotation};
 
 /// Where the navigator is: attitude (body to level frame), velocity and position (east,
 /// north, up; m/s and m from the origin).
@@ -56,7 +57,7 @@ pub fn rotation_vector<T: RealField + Copy>(w0: &Vector3<T>, w1: &Vector3<T>, dt
     (w0 + w1) * (half * dt) + w0.cross(w1) * (twelfth * dt * dt)
 }
 
-impl<T: RealField + Copy> Navigation<T> {
+impl<T: Real> Navigation<T> {
     /// At rest at the origin with attitude `q`, spinning (if at all) about the body axis
     /// `axis` (normalised here; a zero axis means the body x axis).
     #[must_use]
@@ -80,7 +81,7 @@ impl<T: RealField + Copy> Navigation<T> {
     }
 
     fn spin(&self) -> UnitQuaternion<T> {
-        UnitQuaternion::from_scaled_axis(self.axis * self.roll)
+        rotation(&(self.axis * self.roll))
     }
 
     /// Turns the attitude by `r` in the level frame (`q <- r q`).
@@ -91,7 +92,7 @@ impl<T: RealField + Copy> Navigation<T> {
     /// The rate `w` without its part about the spin axis, seen in the de-spun frame at `roll`.
     fn despun_rate(&self, w: &Vector3<T>, roll: T) -> Vector3<T> {
         let across = w - self.axis * self.axis.dot(w);
-        UnitQuaternion::from_scaled_axis(self.axis * roll) * across
+        rotation(&(self.axis * roll)) * across
     }
 
     /// Advances by one step over `earth`; returns the specific force of the step's two ends in
@@ -106,9 +107,11 @@ impl<T: RealField + Copy> Navigation<T> {
         let roll1 = self.roll + (self.axis.dot(&w0) + self.axis.dot(&w1)) * (half * dt);
         let d0 = self.despun_rate(&w0, self.roll);
         let d1 = self.despun_rate(&w1, roll1);
-        let body = UnitQuaternion::from_scaled_axis(rotation_vector(&d0, &d1, dt));
-        let level = UnitQuaternion::from_scaled_axis(omega * (-dt));
-        self.despun = level * self.despun * body;
+        let body = rotation(&rotation_vector(&d0, &d1, dt));
+        let level = rotation(&(omega * (-dt)));
+        // Renormalised every step: in f32 the rounding of a product of unit quaternions
+        // would otherwise walk the norm away over a flight's 10^5 steps.
+        self.despun = UnitQuaternion::new_normalize((level * self.despun * body).into_inner());
         let pi = T::pi();
         self.roll = if roll1 > pi || roll1 < -pi {
             roll1 - T::two_pi() * (roll1 / T::two_pi()).round()
@@ -134,10 +137,7 @@ mod tests {
     use super::*;
 
     fn earth() -> Earth<f64> {
-        Earth {
-            latitude: 0.6,
-            height: 0.0,
-        }
+        Earth::new(0.6, 0.0)
     }
 
     #[test]
@@ -184,10 +184,7 @@ mod tests {
                     * (Vector3::x() * (spin - cone))
         };
         let dt = 1.0 / 2000.0;
-        let e = Earth {
-            latitude: 0.0,
-            height: 0.0,
-        };
+        let e = Earth::new(0.0, 0.0);
         // The closed form turns against the level frame: the gyros also feel the Earth's rate.
         let mut with = Navigation::at_rest(truth(0.0), Vector3::x());
         let mut plain = truth(0.0);

@@ -263,10 +263,7 @@ pub fn forward(
     opts: &Options,
     (rest_end, launch_at): (usize, usize),
 ) -> Pass {
-    let earth = Earth {
-        latitude: start.origin.0.to_radians(),
-        height: start.origin.2,
-    };
+    let earth = Earth::new(start.origin.0.to_radians(), start.origin.2);
     let q0 = levelled(imu, rest_end, start.heading.0);
     let nav = Navigation::at_rest(q0, spin_axis(imu, launch_at));
     let estimate = Estimate {
@@ -502,10 +499,7 @@ pub fn heading(
         let p = level_position(f, origin);
         f.t > t_launch && (p[0] - start[0]).hypot(p[1] - start[1]) >= min_distance
     })?;
-    let earth = Earth {
-        latitude: origin.0.to_radians(),
-        height: origin.2,
-    };
+    let earth = Earth::new(origin.0.to_radians(), origin.2);
     let mut nav = Navigation::at_rest(levelled(imu, rest_end, 0.0), spin_axis(imu, launch_at));
     let mut k = 1;
     while k < imu.t.len() && imu.t[k] <= target.t {

@@ -26,10 +26,7 @@ impl Site {
     /// The Earth of the navigator at this site.
     #[must_use]
     pub fn earth(&self) -> Earth<f64> {
-        Earth {
-            latitude: self.latitude.to_radians(),
-            height: self.height,
-        }
+        Earth::new(self.latitude.to_radians(), self.height)
     }
 
     /// The rotation from the flight's frame to the level frame (east, north, up).

@@ -1,0 +1,284 @@
+//! The golden flight: a simulated shell's corrected samples, GNSS fixes and pressures, as the
+//! device's flight filter receives them, and the filter's state at checkpoints.
+//!
+//! The flight comes from `calflash`'s simulator (a 155 mm-like shell spinning at 300 rev/s
+//! from a site at 39.4 N, 1 s on the pad, 4 s of flight) with white noise on the sensors, a
+//! launch shift of the x accelerometer's bias (0.3 m/s^2) and a heading known to 1 degree. The
+//! same events go through `FlightFilter<f32>` on the host and on the Cortex-M4F
+//! (`firmware/src/bin/flight.rs`, the bytes made by `firmware/build.rs`), which must agree bit
+//! for bit, and through `FlightFilter<f64>` (`tests/flight_device.rs`).
+//!
+//! Encoding, little-endian, one record after another: a sample `0, t_us: u32, f: [f32; 3],
+//! w: [f32; 3], doubt: u8` (bit 0 the accelerometer, bit 1 the gyro); a fix `1, t_us: u32,
+//! latitude, longitude, height: f64, velocity: [f32; 3], satellites: u8`; a pressure `2,
+//! t_us: u32, pa: f32`. Checkpoints are [`CHECKPOINT_VALUES`] `u32` bit patterns each.
+
+use calflash::sim::flight::atmosphere;
+use calflash::sim::flight::spec::Launch;
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use spincal::flight::{FlightConfig, FlightFilter, Geodetic, GnssFix};
+use spincal::nav::{NavNoise, Real, SensorErrors};
+
+/// One input of the flight filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Event {
+    /// A corrected sample: time (us), specific force, rate, which sensors are in doubt.
+    Sample(u64, [f32; 3], [f32; 3], [bool; 2]),
+    /// A GNSS fix.
+    Fix(GnssFix),
+    /// A static pressure: time (us), Pa.
+    Pressure(u64, f32),
+}
+
+/// The samples between two checkpoints.
+pub const CHECKPOINT_EVERY: usize = 200;
+
+/// Values per checkpoint: position, velocity, attitude (w x y z), the 13 sensor errors, the
+/// 22 variances.
+pub const CHECKPOINT_VALUES: usize = 3 + 3 + 4 + 13 + 22;
+
+/// The sample rate, Hz.
+pub const RATE: f64 = 2000.0;
+
+/// White-noise densities of the simulated sensors (and of the filter's process noise):
+/// m/s^2/sqrt(Hz) and rad/s/sqrt(Hz).
+const NOISE: (f64, f64) = (0.01, 2e-4);
+
+/// The launch point.
+pub const ORIGIN: Geodetic = Geodetic {
+    latitude: 39.4,
+    longitude: -8.3,
+    height: 0.0,
+};
+
+/// The launch shift the flight carries: the x accelerometer's bias, m/s^2.
+pub const SHIFT_AX: f64 = 0.3;
+
+/// The flight's events and the true heading of the unit at rest (rad, as
+/// [`FlightConfig::heading`] counts it).
+///
+/// # Panics
+/// If the simulator refuses the flight (it does not).
+#[must_use]
+pub fn flight() -> (Vec<Event>, f64) {
+    let spec = "shell:lat=39.4,lon=-8.3,azimuth=60,rest=1,seconds=4";
+    let mut launch = Launch::parse(spec).expect("the golden flight's spec");
+    let site = launch.site_mut().expect("the golden flight names its site");
+    let flown = launch.fly(1.0 / RATE);
+    let to_level = site.to_level();
+    let earth_rate = site.rate();
+    let mut rng = ChaCha8Rng::seed_from_u64(33);
+    let (na, ng) = (
+        Normal::new(0.0, NOISE.0 * RATE.sqrt()).expect("sigma"),
+        Normal::new(0.0, NOISE.1 * RATE.sqrt()).expect("sigma"),
+    );
+    let (gh, gv, gvel, pa) = (
+        Normal::new(0.0, 2.0).expect("sigma"),
+        Normal::new(0.0, 4.0).expect("sigma"),
+        Normal::new(0.0, 0.1).expect("sigma"),
+        Normal::new(0.0, 2.0).expect("sigma"),
+    );
+    let t0 = flown.samples.first().map_or(0.0, |s| s.t);
+    let mut events = Vec::new();
+    let mut heading = 0.0;
+    for (k, s) in flown.samples.iter().enumerate() {
+        let t_us = ((s.t - t0) * 1e6).round() as u64;
+        let q = body_to_flight(s.q);
+        let mut f = Vector3::from(s.f);
+        let w = Vector3::from(s.w) + q.inverse() * earth_rate;
+        if s.t > 0.0 {
+            f.x += SHIFT_AX;
+        }
+        let noisy = |v: Vector3<f64>, n: &Normal<f64>, rng: &mut ChaCha8Rng| {
+            [0, 1, 2].map(|i| (v[i] + n.sample(rng)) as f32)
+        };
+        let f32s = noisy(f, &na, &mut rng);
+        let w32s = noisy(w, &ng, &mut rng);
+        events.push(Event::Sample(t_us, f32s, w32s, [false; 2]));
+        if k == 0 {
+            heading = true_heading(&(to_level * q.to_rotation_matrix().into_inner()), &f);
+        }
+        if k.is_multiple_of(RATE as usize / 10) && (s.t < 0.0 || s.t >= 1.0) {
+            let level = to_level * Vector3::from(s.r);
+            let noisy = level
+                + Vector3::new(
+                    gh.sample(&mut rng),
+                    gh.sample(&mut rng),
+                    gv.sample(&mut rng),
+                );
+            let (latitude, longitude, height) = site.geodetic(&(to_level.transpose() * noisy));
+            let v = to_level * Vector3::from(s.v);
+            events.push(Event::Fix(GnssFix {
+                t_us,
+                position: Geodetic {
+                    latitude,
+                    longitude,
+                    height,
+                },
+                velocity: Some([0, 1, 2].map(|i| (v[i] + gvel.sample(&mut rng)) as f32)),
+                satellites: 12,
+            }));
+        }
+        if k.is_multiple_of(RATE as usize / 100) {
+            let p = atmosphere::standard(site.height + s.r[2]).pressure + pa.sample(&mut rng);
+            events.push(Event::Pressure(t_us, p as f32));
+        }
+    }
+    (events, heading)
+}
+
+fn body_to_flight(q: [f64; 4]) -> UnitQuaternion<f64> {
+    let [w, x, y, z] = q;
+    UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
+}
+
+/// The heading the filter should level to: the turn about the vertical between the attitude
+/// levelled from gravity alone and the true one.
+fn true_heading(body_to_level: &Matrix3<f64>, f: &Vector3<f64>) -> f64 {
+    let up = spincal::nav::real::rotation_between(f, &Vector3::z());
+    let truth = UnitQuaternion::from_matrix(body_to_level);
+    let turn = truth * up.inverse();
+    let x = turn * Vector3::x();
+    x.y.atan2(x.x)
+}
+
+/// The filter's set-up for the golden flight: heading off by 1 degree with a 2-degree sigma,
+/// the noise it was simulated with, priors that cover the shift.
+#[must_use]
+pub fn config<T: Real>(heading: f64) -> FlightConfig<T> {
+    let c = |x: f64| -> T { nalgebra::convert(x) };
+    let noise = NavNoise {
+        accel_white: c(NOISE.0),
+        gyro_white: c(NOISE.1),
+        accel_walk: c(1e-4),
+        gyro_walk: c(1e-6),
+        scale_walk: c(1e-7),
+        baro_walk: c(0.1),
+    };
+    let prior = SensorErrors {
+        accel_bias: Vector3::repeat(c(0.2)),
+        gyro_bias: Vector3::repeat(c(2e-3)),
+        accel_scale: Vector3::repeat(c(2e-3)),
+        gyro_scale: Vector3::repeat(c(1e-5)),
+        baro_bias: c(5.0),
+    };
+    let mut config: FlightConfig<T> = FlightConfig::new(
+        (c(heading + 1f64.to_radians()), c(2f64.to_radians())),
+        noise,
+        prior,
+    );
+    config.origin = Some(ORIGIN);
+    config.launch_shift.accel_bias = Vector3::repeat(c(0.3));
+    config
+}
+
+/// Runs `events` through `filter`, calling `checkpoint` every [`CHECKPOINT_EVERY`] samples and
+/// after the last.
+pub fn run<T: Real>(
+    filter: &mut FlightFilter<T>,
+    events: &[Event],
+    mut checkpoint: impl FnMut(&FlightFilter<T>),
+) {
+    let c = |x: f32| -> T { nalgebra::convert(f64::from(x)) };
+    let mut samples = 0usize;
+    for e in events {
+        match e {
+            Event::Sample(t, f, w, doubt) => {
+                let f = Vector3::new(c(f[0]), c(f[1]), c(f[2]));
+                let w = Vector3::new(c(w[0]), c(w[1]), c(w[2]));
+                filter.sample(*t, &f, &w, *doubt);
+                samples += 1;
+                if samples.is_multiple_of(CHECKPOINT_EVERY) {
+                    checkpoint(filter);
+                }
+            }
+            Event::Fix(fix) => filter.gnss(fix),
+            Event::Pressure(t, p) => filter.pressure(*t, c(*p)),
+        }
+    }
+    checkpoint(filter);
+}
+
+/// A checkpoint's values: position, velocity, attitude, sensor errors, variances.
+#[must_use]
+pub fn values<T: Real>(filter: &FlightFilter<T>) -> [T; CHECKPOINT_VALUES] {
+    let e = filter.estimate();
+    let s = &e.sensors;
+    let q = e.nav.attitude();
+    let mut out = [T::zero(); CHECKPOINT_VALUES];
+    let quaternion = [q.w, q.i, q.j, q.k];
+    let variances = filter.covariance().diagonal();
+    let head = e
+        .nav
+        .p
+        .iter()
+        .chain(e.nav.v.iter())
+        .chain(quaternion.iter())
+        .chain(s.accel_bias.iter())
+        .chain(s.gyro_bias.iter())
+        .chain(s.accel_scale.iter())
+        .chain(s.gyro_scale.iter())
+        .chain(core::iter::once(&s.baro_bias))
+        .chain(variances.iter());
+    for (o, v) in out.iter_mut().zip(head) {
+        *o = *v;
+    }
+    out
+}
+
+/// The events as bytes (the module's encoding).
+#[must_use]
+pub fn encode(events: &[Event]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let t32 = |t: u64| u32::try_from(t).expect("a golden flight lasts less than an hour");
+    for e in events {
+        match e {
+            Event::Sample(t, f, w, doubt) => {
+                out.push(0);
+                out.extend(t32(*t).to_le_bytes());
+                for x in f.iter().chain(w.iter()) {
+                    out.extend(x.to_le_bytes());
+                }
+                out.push(u8::from(doubt[0]) | (u8::from(doubt[1]) << 1));
+            }
+            Event::Fix(fix) => {
+                out.push(1);
+                out.extend(t32(fix.t_us).to_le_bytes());
+                for x in [
+                    fix.position.latitude,
+                    fix.position.longitude,
+                    fix.position.height,
+                ] {
+                    out.extend(x.to_le_bytes());
+                }
+                for x in fix.velocity.unwrap_or([f32::NAN; 3]) {
+                    out.extend(x.to_le_bytes());
+                }
+                out.push(fix.satellites);
+            }
+            Event::Pressure(t, p) => {
+                out.push(2);
+                out.extend(t32(*t).to_le_bytes());
+                out.extend(p.to_le_bytes());
+            }
+        }
+    }
+    out
+}
+
+/// The `f32` filter's checkpoints on the golden flight, as bit patterns, little-endian.
+#[must_use]
+pub fn expected() -> (Vec<u8>, Vec<u8>) {
+    let (events, heading) = flight();
+    let mut filter = FlightFilter::<f32>::new(config(heading));
+    let mut bits = Vec::new();
+    run(&mut filter, &events, |f| {
+        for v in values(f) {
+            bits.extend(v.to_bits().to_le_bytes());
+        }
+    });
+    (encode(&events), bits)
+}

@@ -1,0 +1,236 @@
+//! The device's flight filter (`spincal::flight`) on the golden flight: the `f32` filter the
+//! round runs against the same code in `f64`, every state at every sample; what the flight
+//! teaches (the launch shift found, the innovations consistent); and bad input refused,
+//! counted, never applied.
+
+use host_tests::flight_golden::{self, Event, SHIFT_AX};
+use nalgebra::Vector3;
+use spincal::flight::{Aiding, FlightFilter, Geodetic, GnssFix, Phase};
+use spincal::nav::filter::index;
+use spincal::nav::{Real, STATES};
+
+/// The `f32` filter's largest departure from the `f64` one allowed, in the `f64` one's sigma,
+/// at every epoch (a covariance step and its updates: between two, the covariance is the last
+/// epoch's while the navigation moves on).
+const AGREE: f64 = 0.1;
+
+fn feed<T: Real>(filter: &mut FlightFilter<T>, e: &Event) {
+    let c = |x: f32| -> T { nalgebra::convert(f64::from(x)) };
+    match e {
+        Event::Sample(t, f, w, doubt) => filter.sample(
+            *t,
+            &Vector3::new(c(f[0]), c(f[1]), c(f[2])),
+            &Vector3::new(c(w[0]), c(w[1]), c(w[2])),
+            *doubt,
+        ),
+        Event::Fix(fix) => filter.gnss(fix),
+        Event::Pressure(t, p) => filter.pressure(*t, c(*p)),
+    }
+}
+
+/// The state of `a` against `b` in `b`'s sigma: the largest ratio and the state it is in.
+fn departure(a: &FlightFilter<f32>, b: &FlightFilter<f64>) -> (f64, usize) {
+    let (ea, eb) = (a.estimate(), b.estimate());
+    let mut d = [0.0f64; STATES];
+    for i in 0..3 {
+        d[index::POSITION + i] = f64::from(ea.nav.p[i]) - eb.nav.p[i];
+        d[index::VELOCITY + i] = f64::from(ea.nav.v[i]) - eb.nav.v[i];
+        d[index::ACCEL_BIAS + i] = f64::from(ea.sensors.accel_bias[i]) - eb.sensors.accel_bias[i];
+        d[index::GYRO_BIAS + i] = f64::from(ea.sensors.gyro_bias[i]) - eb.sensors.gyro_bias[i];
+        d[index::ACCEL_SCALE + i] =
+            f64::from(ea.sensors.accel_scale[i]) - eb.sensors.accel_scale[i];
+        d[index::GYRO_SCALE + i] = f64::from(ea.sensors.gyro_scale[i]) - eb.sensors.gyro_scale[i];
+    }
+    d[index::BARO] = f64::from(ea.sensors.baro_bias) - eb.sensors.baro_bias;
+    let qa = ea.nav.attitude().cast::<f64>();
+    let turn = (qa * eb.nav.attitude().inverse()).scaled_axis();
+    for i in 0..3 {
+        d[index::ATTITUDE + i] = turn[i];
+    }
+    let p = b.covariance();
+    (0..STATES)
+        .map(|i| (d[i].abs() / p[(i, i)].sqrt(), i))
+        .fold((0.0, 0), |m, x| if x.0 > m.0 { x } else { m })
+}
+
+#[test]
+fn the_f32_filter_follows_the_f64_one_within_a_tenth_of_its_sigma_at_every_epoch() {
+    let (events, heading) = flight_golden::flight();
+    let mut single = FlightFilter::<f32>::new(flight_golden::config(heading));
+    let mut double = FlightFilter::<f64>::new(flight_golden::config(heading));
+    let (mut worst, mut at, mut samples) = (0.0f64, (0usize, 0usize), 0usize);
+    for e in &events {
+        let epochs = double.stats().epochs;
+        feed(&mut single, e);
+        feed(&mut double, e);
+        if double.stats().epochs > epochs {
+            samples += 1;
+            let (d, i) = departure(&single, &double);
+            if d > worst {
+                (worst, at) = (d, (samples, i));
+            }
+        }
+    }
+    println!(
+        "f32 against f64 over {samples} epochs: largest departure {worst:.4} sigma (state {} at epoch {})",
+        at.1, at.0
+    );
+    assert!(samples > 400, "{samples}");
+    assert_eq!(single.stats().epochs, double.stats().epochs);
+    assert!(
+        worst <= AGREE,
+        "state {} at sample {}: {worst} sigma",
+        at.1,
+        at.0
+    );
+    assert_eq!(single.stats().resets, 0);
+    assert_eq!(single.stats().taken, double.stats().taken);
+}
+
+#[test]
+fn the_flight_finds_the_launch_shift_and_its_innovations_are_consistent() {
+    let (events, heading) = flight_golden::flight();
+    let mut filter = FlightFilter::<f64>::new(flight_golden::config(heading));
+    for e in &events {
+        feed(&mut filter, e);
+    }
+    let s = filter.stats();
+    println!("{s:?}");
+    assert_eq!(filter.phase(), Phase::Flight);
+    let ax = filter.estimate().sensors.accel_bias.x;
+    let sigma = filter.covariance()[(index::ACCEL_BIAS, index::ACCEL_BIAS)].sqrt();
+    println!("ax {ax:.4} +- {sigma:.4} (shift {SHIFT_AX})");
+    assert!(
+        (ax - SHIFT_AX).abs() < 3.0 * sigma && sigma < 0.1,
+        "{ax} +- {sigma}"
+    );
+    // A shell is supersonic from the muzzle on: the barometer is left out all flight.
+    assert!(
+        s.baro_transonic > 300 && s.taken[Aiding::Baro as usize] == 0,
+        "{s:?}"
+    );
+    for kind in [Aiding::Position, Aiding::Velocity] {
+        let nis = s.mean_nis(kind).unwrap();
+        assert!((0.2..2.0).contains(&nis), "{kind:?}: mean NIS {nis}");
+        let k = kind as usize;
+        assert!(s.refused[k] * 20 <= s.taken[k], "{kind:?}: {s:?}");
+    }
+    let overlay = filter.overlay().unwrap();
+    assert!((f64::from(overlay.bias[0]) - ax).abs() < 1e-6);
+    assert_eq!(
+        s.resets + s.gnss_invalid + s.gnss_stale + s.time_faults,
+        0,
+        "{s:?}"
+    );
+}
+
+#[test]
+fn bad_input_is_refused_counted_and_never_reaches_the_estimate() {
+    let (events, heading) = flight_golden::flight();
+    let mut filter = FlightFilter::<f32>::new(flight_golden::config(heading));
+    let half = events.len() * 3 / 4;
+    for e in &events[..half] {
+        feed(&mut filter, e);
+    }
+    assert_eq!(filter.phase(), Phase::Flight);
+    let now = events[..half]
+        .iter()
+        .rev()
+        .find_map(|e| match e {
+            Event::Sample(t, ..) => Some(*t),
+            _ => None,
+        })
+        .unwrap();
+    let good = events[..half]
+        .iter()
+        .rev()
+        .find_map(|e| match e {
+            Event::Fix(f) => Some(*f),
+            _ => None,
+        })
+        .unwrap();
+    let before = *filter.stats();
+    let fix = |t_us: u64, position: Geodetic, satellites: u8| GnssFix {
+        t_us,
+        position,
+        velocity: good.velocity,
+        satellites,
+    };
+    let nan = Geodetic {
+        latitude: f64::NAN,
+        ..good.position
+    };
+    filter.gnss(&fix(now, nan, 12));
+    filter.gnss(&GnssFix {
+        velocity: Some([f32::NAN, 0.0, 0.0]),
+        ..fix(now, good.position, 12)
+    });
+    filter.gnss(&fix(now + 5_000_000, good.position, 12));
+    filter.gnss(&fix(now - 3_000_000, good.position, 12));
+    filter.gnss(&fix(now, good.position, 2));
+    filter.gnss(&fix(now, good.position, 12));
+    // A kilometre off: gated, never applied.
+    let far = Geodetic {
+        latitude: good.position.latitude + 0.01,
+        ..good.position
+    };
+    filter.gnss(&fix(now, far, 12));
+    filter.pressure(now, f32::NAN);
+    filter.pressure(now, 5e6);
+    filter.sample(now, &Vector3::zeros(), &Vector3::zeros(), [false; 2]);
+    filter.sample(
+        now + 500,
+        &Vector3::repeat(f32::NAN),
+        &Vector3::zeros(),
+        [false; 2],
+    );
+    for e in &events[half..] {
+        if let Event::Sample(t, ..) = e
+            && *t <= now + 500
+        {
+            continue;
+        }
+        feed(&mut filter, e);
+    }
+    let s = filter.stats();
+    println!("{s:?}");
+    assert_eq!(s.gnss_invalid - before.gnss_invalid, 2, "{s:?}");
+    assert_eq!(s.gnss_future - before.gnss_future, 1, "{s:?}");
+    assert_eq!(s.gnss_stale - before.gnss_stale, 1, "{s:?}");
+    assert_eq!(
+        s.gnss_few_satellites - before.gnss_few_satellites,
+        1,
+        "{s:?}"
+    );
+    assert_eq!(s.gnss_repeated - before.gnss_repeated, 1, "{s:?}");
+    assert!(s.refused[Aiding::Position as usize] >= 2, "{s:?}");
+    assert_eq!(s.baro_invalid - before.baro_invalid, 2, "{s:?}");
+    assert_eq!(s.time_faults - before.time_faults, 1, "{s:?}");
+    assert!(s.doubted > before.doubted, "{s:?}");
+    let e = filter.estimate();
+    assert!(e.nav.p.iter().chain(e.nav.v.iter()).all(|x| x.is_finite()));
+    assert!(filter.overlay().is_some());
+    // The flight still ends where it should: the launch shift found.
+    let ax = e.sensors.accel_bias.x;
+    assert!((f64::from(ax) - SHIFT_AX).abs() < 0.15, "{ax}");
+}
+
+#[test]
+fn a_covariance_that_overflows_goes_back_to_the_prior_and_is_counted() {
+    let (events, heading) = flight_golden::flight();
+    let mut config = flight_golden::config::<f32>(heading);
+    config.noise.scale_walk = 1e25;
+    let mut filter = FlightFilter::<f32>::new(config);
+    for e in &events {
+        feed(&mut filter, e);
+    }
+    let s = filter.stats();
+    assert!(s.resets > 0, "{s:?}");
+    let p = filter.covariance();
+    assert!(p.iter().all(|x| x.is_finite()));
+    assert!(
+        filter
+            .overlay()
+            .is_none_or(|o| o.bias.iter().all(|x| x.is_finite()))
+    );
+}

@@ -1,0 +1,481 @@
+//! The flight filter's run: levelling at rest, zero-velocity updates on the pad, the launch,
+//! then the strapdown navigation at the IMU's rate, the covariance stepped at most every
+//! [`FlightConfig::covariance_interval_us`], and the GNSS and barometer updates as they come.
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use super::air;
+use super::config::FlightConfig;
+use super::origin::{Geodetic, Origin};
+use super::stats::{Aiding, FlightStats, MAX_FIX_AGE_US, MAX_SAMPLE_GAP_US};
+use crate::nav::filter::{Doubt, Estimate, index};
+use crate::nav::{Earth, ErrorFilter, Navigation, Prior, Real, SensorErrors, StateMatrix};
+
+/// One GNSS fix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GnssFix {
+    /// The instant it describes on the IMU's clock (the samples' `t_us`), us, before the
+    /// receiver's latency.
+    pub t_us: u64,
+    /// The antenna's position.
+    pub position: Geodetic,
+    /// The antenna's velocity (east, north, up, m/s), when the receiver gives one.
+    pub velocity: Option<[f32; 3]>,
+    /// Satellites in the solution.
+    pub satellites: u8,
+}
+
+/// Where the flight filter is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// Averaging the rest to level the unit (or waiting for the origin).
+    Levelling,
+    /// Levelled, on the pad: navigating with zero-velocity updates.
+    Pad,
+    /// Launched: navigating with GNSS and barometer updates.
+    Flight,
+}
+
+/// The in-flight GNSS- and barometer-aided filter over the corrected samples (see the
+/// [module docs](super)).
+#[derive(Debug, Clone)]
+pub struct FlightFilter<T: Real> {
+    config: FlightConfig<T>,
+    origin: Option<Origin>,
+    phase: Phase,
+    filter: ErrorFilter<T>,
+    prior: StateMatrix<T>,
+    rest: (Vector3<T>, u32, u64),
+    now_us: Option<u64>,
+    last_epoch_us: u64,
+    launch_us: Option<u64>,
+    fix: Option<GnssFix>,
+    last_fix: Option<Geodetic>,
+    pressure: Option<(u64, T)>,
+    pad_pressure: (T, u32),
+    baro_reference: Option<T>,
+    last_baro_us: Option<u64>,
+    stats: FlightStats,
+}
+
+fn c<T: Real>(x: f64) -> T {
+    nalgebra::convert(x)
+}
+
+fn micros<T: Real>(us: u64) -> T {
+    // Exact for differences below 2^24 us in f32: a flight's steps and ages.
+    c::<T>(us as f64) * c(1e-6)
+}
+
+impl<T: Real> FlightFilter<T> {
+    /// A filter set up by `config`, levelling from its first sample.
+    #[must_use]
+    pub fn new(config: FlightConfig<T>) -> Self {
+        let prior = Self::prior(&config);
+        let origin = config
+            .origin
+            .filter(Geodetic::is_plausible)
+            .map(Origin::new);
+        Self {
+            filter: ErrorFilter::new(
+                Estimate {
+                    nav: Navigation::at_rest(UnitQuaternion::identity(), config.spin_axis),
+                    sensors: SensorErrors::default(),
+                },
+                &Prior { covariance: prior },
+                Earth::new(T::zero(), T::zero()),
+                config.noise,
+            ),
+            config,
+            origin,
+            phase: Phase::Levelling,
+            prior,
+            rest: (Vector3::zeros(), 0, 0),
+            now_us: None,
+            last_epoch_us: 0,
+            launch_us: None,
+            fix: None,
+            last_fix: None,
+            pressure: None,
+            pad_pressure: (T::zero(), 0),
+            baro_reference: None,
+            last_baro_us: None,
+            stats: FlightStats::default(),
+        }
+    }
+
+    /// The prior covariance: the sensor errors' from the set-up, position as the GNSS knows
+    /// the pad, velocity at rest, the tilt as the accelerometer biases leave it, the heading's.
+    fn prior(config: &FlightConfig<T>) -> StateMatrix<T> {
+        let mut d = Self::sensor_variances(&config.sensor_sigma);
+        let s = &config.sensor_sigma;
+        let mut put = |at: usize, v: &Vector3<T>| {
+            for (i, x) in v.iter().enumerate() {
+                if let Some(slot) = d.get_mut(at + i) {
+                    *slot = *x * *x;
+                }
+            }
+        };
+        let g: T = c(air::G0);
+        let tilt = s.accel_bias.amax() / g;
+        let h = config.gnss_sigma.0;
+        put(index::POSITION, &Vector3::new(h, h, T::one()));
+        put(index::VELOCITY, &Vector3::repeat(c(1e-2)));
+        let tilt = (tilt * tilt + c(1e-6)).sqrt();
+        put(index::ATTITUDE, &Vector3::new(tilt, tilt, config.heading.1));
+        StateMatrix::from_diagonal(&nalgebra::SVector::from(d))
+    }
+
+    /// The variances of sensor errors of 1-sigma `s`, in their places among the states.
+    fn sensor_variances(s: &SensorErrors<T>) -> [T; crate::nav::STATES] {
+        let mut d = [T::zero(); crate::nav::STATES];
+        let mut put = |at: usize, v: &Vector3<T>| {
+            for (i, x) in v.iter().enumerate() {
+                if let Some(slot) = d.get_mut(at + i) {
+                    *slot = *x * *x;
+                }
+            }
+        };
+        put(index::ACCEL_BIAS, &s.accel_bias);
+        put(index::GYRO_BIAS, &s.gyro_bias);
+        put(index::ACCEL_SCALE, &s.accel_scale);
+        put(index::GYRO_SCALE, &s.gyro_scale);
+        if let Some(slot) = d.get_mut(index::BARO) {
+            *slot = s.baro_bias * s.baro_bias;
+        }
+        d
+    }
+
+    /// Where the filter is.
+    #[must_use]
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// The counts since the start.
+    #[must_use]
+    pub fn stats(&self) -> &FlightStats {
+        &self.stats
+    }
+
+    /// The navigation and sensor-error estimate (meaningful from [`Phase::Pad`] on).
+    #[must_use]
+    pub fn estimate(&self) -> &Estimate<T> {
+        &self.filter.estimate
+    }
+
+    /// The error covariance.
+    #[must_use]
+    pub fn covariance(&self) -> &StateMatrix<T> {
+        &self.filter.covariance
+    }
+
+    /// The launch point, once known.
+    #[must_use]
+    pub fn origin(&self) -> Option<Geodetic> {
+        self.origin.map(|o| o.geodetic())
+    }
+
+    /// The instant of the launch on the samples' clock, us, once detected.
+    #[must_use]
+    pub fn launch_us(&self) -> Option<u64> {
+        self.launch_us
+    }
+
+    /// One corrected sample at `t_us` on the IMU's clock: specific force (m/s^2) and rate
+    /// (rad/s), body axes, and whether the corrector's flags (or the codes at their rails)
+    /// leave the accelerometer's and the gyro's readings in doubt.
+    pub fn sample(&mut self, t_us: u64, f: &Vector3<T>, w: &Vector3<T>, doubted: [bool; 2]) {
+        let dt_us = match self.now_us {
+            Some(prev) if t_us <= prev => {
+                self.stats.time_faults += 1;
+                return;
+            }
+            Some(prev) => t_us - prev,
+            None => 0,
+        };
+        self.now_us = Some(t_us);
+        let gap = dt_us > MAX_SAMPLE_GAP_US;
+        let finite = f.iter().chain(w.iter()).all(|x| x.is_finite());
+        let doubted = [doubted[0] || gap || !finite, doubted[1] || gap || !finite];
+        if gap {
+            self.stats.time_faults += 1;
+        }
+        if self.phase == Phase::Levelling {
+            self.level(t_us, f, doubted);
+            return;
+        }
+        if doubted[0] || doubted[1] {
+            self.stats.doubted += 1;
+        }
+        let (df, dw) = self.config.doubt;
+        let (f, w) = if finite {
+            (*f, *w)
+        } else {
+            (Vector3::zeros(), Vector3::zeros())
+        };
+        self.filter.sample(
+            &f,
+            &w,
+            micros(dt_us),
+            (doubted[0] || doubted[1]).then_some(Doubt {
+                force: if doubted[0] { df } else { T::zero() },
+                rate: if doubted[1] { dw } else { T::zero() },
+            }),
+        );
+        if self.phase == Phase::Pad && f.norm() > self.config.launch_force {
+            self.phase = Phase::Flight;
+            self.launch_us = Some(t_us);
+            let shift = Self::sensor_variances(&self.config.launch_shift);
+            for (i, v) in shift.iter().enumerate() {
+                if let Some(p) = self.filter.covariance.get_mut((i, i)) {
+                    *p += *v;
+                }
+            }
+            self.baro_reference = Some(air::pressure_height(if self.pad_pressure.1 > 0 {
+                self.pad_pressure.0 / c(f64::from(self.pad_pressure.1))
+            } else {
+                self.pressure.map_or(c(101_325.0), |p| p.1)
+            }));
+            self.pressure = None;
+        }
+        let fix_due = self
+            .fix
+            .is_some_and(|x| x.t_us + u64::from(self.config.gnss_latency_us) <= t_us);
+        let baro_due = self.phase == Phase::Flight && self.pressure.is_some_and(|p| p.0 <= t_us);
+        let since = t_us.saturating_sub(self.last_epoch_us);
+        let pad_due = self.phase == Phase::Pad && since >= u64::from(self.config.pad_interval_us);
+        let step_due = since >= u64::from(self.config.covariance_interval_us);
+        if fix_due || baro_due || pad_due || step_due {
+            self.epoch(t_us, fix_due, baro_due);
+        }
+    }
+
+    /// Averages the rest; levels the unit once it has rested long enough and the origin is
+    /// known. A doubted sample restarts the average.
+    fn level(&mut self, t_us: u64, f: &Vector3<T>, doubted: [bool; 2]) {
+        if doubted[0] || doubted[1] {
+            self.rest = (Vector3::zeros(), 0, t_us);
+            return;
+        }
+        if self.rest.1 == 0 {
+            self.rest.2 = t_us;
+        }
+        self.rest.0 += f;
+        self.rest.1 += 1;
+        let Some(origin) = self.origin else {
+            return;
+        };
+        if t_us - self.rest.2 < u64::from(self.config.level_us) {
+            return;
+        }
+        let mean = self.rest.0 / c::<T>(f64::from(self.rest.1));
+        let up = UnitQuaternion::rotation_between(&mean, &Vector3::z())
+            .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::x_axis(), T::pi()));
+        let q = crate::nav::real::rotation(&(Vector3::z() * self.config.heading.0)) * up;
+        let at = origin.geodetic();
+        self.filter = ErrorFilter::new(
+            Estimate {
+                nav: Navigation::at_rest(q, self.config.spin_axis),
+                sensors: SensorErrors::default(),
+            },
+            &Prior {
+                covariance: self.prior,
+            },
+            Earth::new(c::<T>(at.latitude.to_radians()), c(at.height)),
+            self.config.noise,
+        );
+        self.phase = Phase::Pad;
+        self.last_epoch_us = t_us;
+    }
+
+    /// A GNSS fix, held until the samples reach the instant it describes.
+    pub fn gnss(&mut self, fix: &GnssFix) {
+        let velocity_ok = fix
+            .velocity
+            .is_none_or(|v| v.iter().all(|x| x.is_finite() && x.abs() < 1e4));
+        if !fix.position.is_plausible() || !velocity_ok {
+            self.stats.gnss_invalid += 1;
+            return;
+        }
+        if fix.satellites < self.config.min_satellites {
+            self.stats.gnss_few_satellites += 1;
+            return;
+        }
+        let now = self.now_us.unwrap_or(fix.t_us);
+        if fix.t_us + MAX_FIX_AGE_US < now.max(self.last_epoch_us) {
+            self.stats.gnss_stale += 1;
+            return;
+        }
+        if fix.t_us > now + MAX_FIX_AGE_US {
+            self.stats.gnss_future += 1;
+            return;
+        }
+        if self.last_fix == Some(fix.position) {
+            self.stats.gnss_repeated += 1;
+            return;
+        }
+        self.last_fix = Some(fix.position);
+        if self.origin.is_none() {
+            self.origin = Some(Origin::new(fix.position));
+        }
+        if self.phase == Phase::Levelling {
+            return;
+        }
+        if self.fix.replace(*fix).is_some() {
+            self.stats.gnss_dropped += 1;
+        }
+    }
+
+    /// A static pressure (Pa) read at `t_us`: averaged on the pad as the height's reference,
+    /// an update in flight (at most one per [`FlightConfig::baro_interval_us`]).
+    pub fn pressure(&mut self, t_us: u64, pa: T) {
+        if !pa.is_finite() || pa < c(1_000.0) || pa > c(120_000.0) {
+            self.stats.baro_invalid += 1;
+            return;
+        }
+        if self.phase != Phase::Flight {
+            self.pad_pressure.0 += pa;
+            self.pad_pressure.1 += 1;
+            self.pressure = Some((t_us, pa));
+            return;
+        }
+        let interval = u64::from(self.config.baro_interval_us);
+        if self.last_baro_us.is_some_and(|t| t_us < t + interval) {
+            return;
+        }
+        self.pressure = Some((t_us, pa));
+    }
+
+    /// A covariance step and the updates due at `t_us`, then the feedback.
+    fn epoch(&mut self, t_us: u64, fix_due: bool, baro_due: bool) {
+        self.last_epoch_us = t_us;
+        self.stats.epochs += 1;
+        self.filter.covariance_step();
+        if self.phase == Phase::Pad {
+            for axis in 0..3 {
+                let h = ErrorFilter::velocity_row(axis);
+                let v = self
+                    .filter
+                    .estimate
+                    .nav
+                    .v
+                    .get(axis)
+                    .copied()
+                    .unwrap_or_else(T::zero);
+                self.take(Aiding::Pad, &h, -v, c(1e-4));
+                let (h, at) = self.filter.antenna_row(&Vector3::zeros(), axis);
+                self.take(Aiding::Pad, &h, -at, c(1e-4));
+            }
+        }
+        if fix_due {
+            if let (Some(fix), Some(origin)) = (self.fix.take(), self.origin) {
+                self.gnss_update(&fix, &origin, t_us);
+            }
+        }
+        if baro_due {
+            if let (Some((t, pa)), Some(reference)) = (self.pressure.take(), self.baro_reference) {
+                self.baro_update(t, pa, reference);
+            }
+        }
+        self.filter.feedback();
+        self.check();
+    }
+
+    fn gnss_update(&mut self, fix: &GnssFix, origin: &Origin, t_us: u64) {
+        let z = origin.local(&fix.position);
+        // The fix describes an instant before this one: move the prediction back to it.
+        let back: T = micros(t_us.saturating_sub(fix.t_us));
+        let (h_sigma, v_sigma) = self.config.gnss_sigma;
+        let lever = self.config.lever;
+        for (axis, zi) in z.iter().enumerate() {
+            let (h, at) = self.filter.antenna_row(&lever, axis);
+            let v = self
+                .filter
+                .estimate
+                .nav
+                .v
+                .get(axis)
+                .copied()
+                .unwrap_or_else(T::zero);
+            let r = if axis == 2 { v_sigma } else { h_sigma };
+            self.take(Aiding::Position, &h, c::<T>(*zi) - (at - v * back), r * r);
+        }
+        if let Some(vel) = fix.velocity {
+            let r = self.config.gnss_velocity_sigma;
+            for (axis, vi) in vel.iter().enumerate() {
+                let h = ErrorFilter::velocity_row(axis);
+                let v = self
+                    .filter
+                    .estimate
+                    .nav
+                    .v
+                    .get(axis)
+                    .copied()
+                    .unwrap_or_else(T::zero);
+                self.take(Aiding::Velocity, &h, c::<T>(f64::from(*vi)) - v, r * r);
+            }
+        }
+    }
+
+    fn baro_update(&mut self, t_us: u64, pa: T, reference: T) {
+        let nav = &self.filter.estimate.nav;
+        let height = c::<T>(self.origin.map_or(0.0, |o| o.geodetic().height)) + nav.p.z;
+        let v2 = nav.v.norm_squared();
+        let sound = air::speed_of_sound(height);
+        if v2 >= (self.config.baro_mach * sound).powi(2) {
+            self.stats.baro_transonic += 1;
+            return;
+        }
+        self.last_baro_us = Some(t_us);
+        let z = air::pressure_height(pa) - reference;
+        let (h, at) = self.filter.baro_row();
+        let port = self.config.baro_cp * v2 / c(2.0 * air::G0);
+        let r2 = self.config.baro_sigma * self.config.baro_sigma + port * port;
+        self.take(Aiding::Baro, &h, z - at, r2);
+    }
+
+    /// Gates and takes one scalar measurement.
+    fn take(&mut self, kind: Aiding, h: &crate::nav::StateVector<T>, nu: T, r2: T) {
+        let peek = self.filter.innovation(h, nu, r2);
+        let k = kind as usize;
+        let inside = peek.value * peek.value <= self.config.gate * self.config.gate * peek.variance;
+        let taken = inside && self.filter.update(h, nu, r2).is_some();
+        let (count, nis) = if taken {
+            (
+                self.stats.taken.get_mut(k),
+                (peek.value * peek.value / peek.variance).to_f64(),
+            )
+        } else {
+            (self.stats.refused.get_mut(k), 0.0)
+        };
+        if let Some(n) = count {
+            *n += 1;
+        }
+        if let Some(s) = self.stats.nis.get_mut(k) {
+            *s += nis as f32;
+        }
+    }
+
+    /// A covariance that is no longer one (a NaN, an infinity, a variance not positive) goes
+    /// back to the prior, counted; an estimate that is no longer finite levels again.
+    fn check(&mut self) {
+        let p = &self.filter.covariance;
+        let broken =
+            p.iter().any(|x| !x.is_finite()) || p.diagonal().iter().any(|d| *d <= T::zero());
+        if broken {
+            self.stats.resets += 1;
+            self.filter.covariance = self.prior;
+        }
+        let e = &self.filter.estimate;
+        let lost = e.nav.p.iter().chain(e.nav.v.iter()).any(|x| !x.is_finite())
+            || !e.nav.attitude().coords.iter().all(|x| x.is_finite());
+        if lost {
+            self.stats.resets += 1;
+            self.phase = Phase::Levelling;
+            self.rest = (Vector3::zeros(), 0, 0);
+        }
+    }
+}
