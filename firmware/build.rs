@@ -68,6 +68,10 @@ fn main() {
     .unwrap();
     health_cases(&dir, &mut src);
     std::fs::write(out.join("golden_cases.rs"), src).expect("write golden_cases.rs");
+    let (events, expected, config) = host_tests::flight_golden::device_files();
+    std::fs::write(out.join("flight.events"), events).expect("write flight.events");
+    std::fs::write(out.join("flight.expected"), expected).expect("write flight.expected");
+    std::fs::write(out.join("flight_config.rs"), config).expect("write flight_config.rs");
 }
 
 /// The health check's golden cases: raw samples, and the checks after some of them.

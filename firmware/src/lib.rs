@@ -4,6 +4,7 @@
 #![no_std]
 
 pub mod device;
+pub mod flight_golden;
 pub mod simulated_mpu6050;
 
 use spincal::correct::AnyCorrector;

@@ -269,16 +269,103 @@ pub fn encode(events: &[Event]) -> Vec<u8> {
     out
 }
 
-/// The `f32` filter's checkpoints on the golden flight, as bit patterns, little-endian.
+/// Rust source of a function `flight_config()` that builds `config` bit for bit
+/// (the firmware's `build.rs` writes it for the device's run of the golden flight).
 #[must_use]
-pub fn expected() -> (Vec<u8>, Vec<u8>) {
+pub fn config_source(c: &FlightConfig<f32>) -> String {
+    let f = |x: f32| format!("f32::from_bits({:#010x})", x.to_bits());
+    let d = |x: f64| format!("f64::from_bits({:#018x})", x.to_bits());
+    let v = |x: &Vector3<f32>| format!("Vector3::new({}, {}, {})", f(x.x), f(x.y), f(x.z));
+    let errors = |s: &SensorErrors<f32>| {
+        format!(
+            "SensorErrors {{ accel_bias: {}, gyro_bias: {}, accel_scale: {}, gyro_scale: {}, baro_bias: {} }}",
+            v(&s.accel_bias),
+            v(&s.gyro_bias),
+            v(&s.accel_scale),
+            v(&s.gyro_scale),
+            f(s.baro_bias)
+        )
+    };
+    let n = &c.noise;
+    let origin = c.origin.map_or("None".to_string(), |o| {
+        format!(
+            "Some(Geodetic {{ latitude: {}, longitude: {}, height: {} }})",
+            d(o.latitude),
+            d(o.longitude),
+            d(o.height)
+        )
+    });
+    format!(
+        "/// The golden flight's set-up, bit for bit the host's.
+pub fn flight_config() -> FlightConfig<f32> {{
+    FlightConfig {{
+        origin: {origin},
+        heading: ({}, {}),
+        spin_axis: {},
+        lever: {},
+        gnss_sigma: ({}, {}),
+        gnss_velocity_sigma: {},
+        gnss_latency_us: {},
+        min_satellites: {},
+        baro_sigma: {},
+        baro_cp: {},
+        baro_mach: {},
+        baro_interval_us: {},
+        gate: {},
+        covariance_interval_us: {},
+        pad_interval_us: {},
+        level_us: {},
+        launch_force: {},
+        doubt: ({}, {}),
+        noise: NavNoise {{ accel_white: {}, gyro_white: {}, accel_walk: {}, gyro_walk: {}, scale_walk: {}, baro_walk: {} }},
+        sensor_sigma: {},
+        launch_shift: {},
+    }}
+}}
+",
+        f(c.heading.0),
+        f(c.heading.1),
+        v(&c.spin_axis),
+        v(&c.lever),
+        f(c.gnss_sigma.0),
+        f(c.gnss_sigma.1),
+        f(c.gnss_velocity_sigma),
+        c.gnss_latency_us,
+        c.min_satellites,
+        f(c.baro_sigma),
+        f(c.baro_cp),
+        f(c.baro_mach),
+        c.baro_interval_us,
+        f(c.gate),
+        c.covariance_interval_us,
+        c.pad_interval_us,
+        c.level_us,
+        f(c.launch_force),
+        f(c.doubt.0),
+        f(c.doubt.1),
+        f(n.accel_white),
+        f(n.gyro_white),
+        f(n.accel_walk),
+        f(n.gyro_walk),
+        f(n.scale_walk),
+        f(n.baro_walk),
+        errors(&c.sensor_sigma),
+        errors(&c.launch_shift),
+    )
+}
+
+/// What the firmware's `build.rs` writes for the device's golden flight: the events, the
+/// expected checkpoints and the set-up's source.
+#[must_use]
+pub fn device_files() -> (Vec<u8>, Vec<u8>, String) {
     let (events, heading) = flight();
-    let mut filter = FlightFilter::<f32>::new(config(heading));
+    let config = config::<f32>(heading);
+    let mut filter = FlightFilter::<f32>::new(config);
     let mut bits = Vec::new();
     run(&mut filter, &events, |f| {
         for v in values(f) {
             bits.extend(v.to_bits().to_le_bytes());
         }
     });
-    (encode(&events), bits)
+    (encode(&events), bits, config_source(&config))
 }

@@ -1,4 +1,4 @@
-//! The golden vectors on the Cortex-M4F: builds the test firmware for thumbv7em-none-eabihf,
+//! The golden vectors and the golden flight on the Cortex-M4F: builds the test firmware for thumbv7em-none-eabihf,
 //! runs it under qemu-system-arm (mps2-an386) and fails on any mismatch with the host's
 //! expected outputs. Skips with a notice when QEMU or the target is missing, unless
 //! `SPINCAL_REQUIRE_QEMU=1` (as in CI).
@@ -59,4 +59,30 @@ fn golden_vectors_match_on_cortex_m4f() {
         summary.contains(&format!(" {expected} samples checked")),
         "{summary}"
     );
+}
+
+#[test]
+fn the_golden_flight_is_bit_exact_on_cortex_m4f() {
+    if !qemu::available_or_skip("the_golden_flight_is_bit_exact_on_cortex_m4f") {
+        return;
+    }
+    let bin = qemu::build_firmware().unwrap_or_else(|e| panic!("{e}"));
+    let run = qemu::run(&bin.join("flight"), &[], Duration::from_secs(120)).expect("qemu starts");
+    println!("{}", run.stdout);
+    assert_eq!(run.code, Some(0), "{}\n{}", run.stdout, run.stderr);
+    let (events, _) = host_tests::flight_golden::flight();
+    let samples = events
+        .iter()
+        .filter(|e| matches!(e, host_tests::flight_golden::Event::Sample(..)))
+        .count();
+    let summary = run
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("flight:"))
+        .expect("summary line");
+    let want = format!(
+        "flight: {samples} samples, 480 epochs, {} checkpoints, 0 values differ",
+        samples / host_tests::flight_golden::CHECKPOINT_EVERY + 1
+    );
+    assert!(summary.starts_with(&want), "{summary}\nexpected {want}");
 }
