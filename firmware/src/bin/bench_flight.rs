@@ -1,0 +1,158 @@
+//! Instruction counts of the flight filter on the Cortex-M4F (QEMU `-icount shift=10`, as
+//! `bench.rs`): the golden flight's events through `FlightFilter<f32>`, each call timed, the
+//! samples that only navigate apart from those that also step the covariance and take the
+//! updates; and the filter's parts on their own (the navigation of one sample, one covariance
+//! step, one GNSS position update of three scalars). Prints `bench` and `size`/`stack` lines as
+//! `bench.rs` does.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box;
+
+use cortex_m_rt::entry;
+use cortex_m_semihosting::hprintln;
+use nalgebra::Vector3;
+use spincal::flight::{FlightFilter, Phase};
+use spincal::nav::ErrorFilter;
+use spincal_firmware::flight_golden::{Event, events, flight_config};
+use spincal_firmware::{stack, timer};
+
+fn report(name: &str, ticks: u64, ops: u64) {
+    let total = (ticks * 40 + 512) / 1024;
+    let tenths = (total * 10 + ops / 2) / ops.max(1);
+    hprintln!(
+        "bench {} {}.{} {} {}",
+        name,
+        tenths / 10,
+        tenths % 10,
+        ops,
+        total
+    );
+}
+
+/// Ticks of `f`, less the cost of reading the timer twice.
+#[inline(always)]
+fn timed<R>(f: impl FnOnce() -> R) -> (R, u64) {
+    let t0 = timer::now();
+    let r = f();
+    let t1 = timer::now();
+    (r, u64::from(t0.wrapping_sub(t1)))
+}
+
+#[entry]
+fn main() -> ! {
+    timer::start();
+    let (_, overhead) = timed(|| black_box(0));
+    let mut filter = FlightFilter::new(flight_config());
+    // Per kind of call: ticks and count.
+    let mut navigate = (0u64, 0u64);
+    let mut epoch = (0u64, 0u64);
+    let mut fixes = (0u64, 0u64);
+    let mut pressures = (0u64, 0u64);
+    let mut all = 0u64;
+    let mut last_t = 0u64;
+    let mut first_flight_t = None;
+    let mut epoch_stack = 0usize;
+    for e in events() {
+        match e {
+            Event::Sample(t, f, w, doubt) => {
+                let (f, w) = (Vector3::from(f), Vector3::from(w));
+                let before = filter.stats().epochs;
+                let flying = filter.phase() == Phase::Flight;
+                let (_, ticks) = timed(|| filter.sample(t, &f, &w, doubt));
+                let ticks = ticks.saturating_sub(overhead);
+                all += ticks;
+                last_t = t;
+                if flying {
+                    first_flight_t.get_or_insert(t);
+                    let slot = if filter.stats().epochs > before {
+                        &mut epoch
+                    } else {
+                        &mut navigate
+                    };
+                    slot.0 += ticks;
+                    slot.1 += 1;
+                }
+            }
+            Event::Fix(fix) => {
+                let (_, ticks) = timed(|| filter.gnss(&fix));
+                fixes.0 += ticks.saturating_sub(overhead);
+                fixes.1 += 1;
+                all += ticks.saturating_sub(overhead);
+            }
+            Event::Pressure(t, p) => {
+                let (_, ticks) = timed(|| filter.pressure(t, p));
+                pressures.0 += ticks.saturating_sub(overhead);
+                pressures.1 += 1;
+                all += ticks.saturating_sub(overhead);
+            }
+        }
+    }
+    report("flight_sample_navigate", navigate.0, navigate.1);
+    report("flight_sample_with_epoch", epoch.0, epoch.1);
+    report("flight_gnss_receive", fixes.0, fixes.1);
+    report("flight_pressure_receive", pressures.0, pressures.1);
+    // The whole golden flight (pad and flight), per second of it.
+    report("flight_golden_per_second", all * 1_000_000 / last_t.max(1), 1);
+    let _ = first_flight_t;
+
+    // The parts: an error filter in flight, from the golden flight's state at its end.
+    let estimate = *filter.estimate();
+    let covariance = *filter.covariance();
+    let config = flight_config();
+    let mut parts = ErrorFilter::new(
+        estimate,
+        &spincal::nav::Prior { covariance },
+        spincal::nav::Earth::new(0.687_f32, 0.0),
+        config.noise,
+    );
+    let f = Vector3::new(-8.0f32, 0.3, -0.2);
+    let w = Vector3::new(1800.0f32, 2.0, -1.5);
+    parts.sample(&f, &w, 0.0005, None);
+    let n = 200u64;
+    let (_, ticks) = timed(|| {
+        for _ in 0..n {
+            parts.sample(black_box(&f), black_box(&w), black_box(0.0005), None);
+        }
+    });
+    report("nav_sample", ticks, n);
+    let (_, ticks) = timed(|| black_box(parts.covariance_step()));
+    report("covariance_step", ticks.saturating_sub(overhead), 1);
+    let lever = Vector3::zeros();
+    let (_, ticks) = timed(|| {
+        for axis in 0..3 {
+            let (h, at) = parts.antenna_row(&lever, axis);
+            black_box(parts.update(&h, black_box(at + 1.0), 6.25));
+        }
+    });
+    report("gnss_position_update_3", ticks.saturating_sub(overhead), 1);
+    let (_, ticks) = timed(|| {
+        for axis in 0..3 {
+            let h = ErrorFilter::<f32>::velocity_row(axis);
+            black_box(parts.update(&h, black_box(0.1), 0.04));
+        }
+    });
+    report("gnss_velocity_update_3", ticks.saturating_sub(overhead), 1);
+    let (_, ticks) = timed(|| parts.feedback());
+    report("feedback", ticks.saturating_sub(overhead), 1);
+
+    // Stack of a sample that steps the covariance and takes a fix.
+    let mut again = FlightFilter::new(flight_config());
+    for e in events() {
+        match e {
+            Event::Sample(t, f, w, doubt) => {
+                let (f, w) = (Vector3::from(f), Vector3::from(w));
+                let (_, used) = stack::high_water(|| again.sample(t, &f, &w, doubt));
+                epoch_stack = epoch_stack.max(used);
+            }
+            Event::Fix(fix) => again.gnss(&fix),
+            Event::Pressure(t, p) => again.pressure(t, p),
+        }
+    }
+    hprintln!("stack flight_sample {}", epoch_stack);
+    hprintln!(
+        "size flight_filter {}",
+        core::mem::size_of::<FlightFilter<f32>>()
+    );
+    spincal_firmware::exit(true);
+}
