@@ -30,8 +30,9 @@ pub struct Earth<T: RealField + Copy> {
     height: T,
     rate: Vector3<T>,
     radii: (T, T),
-    sin2: T,
     surface_gravity: T,
+    /// The fall-off with height `h`: `g(h) = g(0) (1 - k1 h + k2 h^2)`.
+    falloff: (T, T),
 }
 
 fn c<T: RealField + Copy>(x: f64) -> T {
@@ -52,13 +53,19 @@ impl<T: Real> Earth<T> {
         let m = a * (T::one() - e2) / (w2 * w2.sqrt());
         let surface_gravity =
             c::<T>(GRAVITY_EQUATOR) * (T::one() + c::<T>(SOMIGLIANA_K) * sin2) / w2.sqrt();
+        let f: T = c(FLATTENING);
+        let gm: T = c(GRAVITY_M);
+        let two: T = c(2.0);
         Self {
             latitude,
             height,
             rate: Vector3::new(T::zero(), w * cos, w * s),
             radii: (m + height, n + height),
-            sin2,
             surface_gravity,
+            falloff: (
+                two / a * (T::one() + f + gm - two * f * sin2),
+                c::<T>(3.0) / (a * a),
+            ),
         }
     }
 
@@ -91,14 +98,8 @@ impl<T: Real> Earth<T> {
     /// Somigliana's formula and its second-order fall-off with height.
     #[must_use]
     pub fn normal_gravity(&self, h: T) -> T {
-        let s2 = self.sin2;
-        let a: T = c(SEMI_MAJOR);
-        let f: T = c(FLATTENING);
-        let m: T = c(GRAVITY_M);
-        let two: T = c(2.0);
-        let three: T = c(3.0);
-        self.surface_gravity
-            * (T::one() - two / a * (T::one() + f + m - two * f * s2) * h + three * h * h / (a * a))
+        let (k1, k2) = self.falloff;
+        self.surface_gravity * (T::one() - k1 * h + k2 * h * h)
     }
 
     /// Gravity at `p` (m, east-north-up from the origin), m/s^2: down along the normal, tilted

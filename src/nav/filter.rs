@@ -47,6 +47,31 @@ pub mod index {
 
 /// A square matrix over the error states.
 pub type StateMatrix<T> = SMatrix<T, STATES, STATES>;
+
+/// The navigation's error states (position, velocity, attitude): the rows of the error model
+/// that are not zero.
+pub const NAV: usize = 9;
+
+/// The navigation's rows of a matrix over the error states.
+pub type NavRows<T> = SMatrix<T, NAV, STATES>;
+
+/// The transition of the errors over one covariance step: the identity but for its first
+/// [`NAV`] rows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transition<T: RealField + Copy> {
+    /// The first [`NAV`] rows.
+    pub top: NavRows<T>,
+}
+
+impl<T: RealField + Copy> Transition<T> {
+    /// The whole matrix.
+    #[must_use]
+    pub fn matrix(&self) -> StateMatrix<T> {
+        let mut phi = StateMatrix::identity();
+        phi.fixed_rows_mut::<NAV>(0).copy_from(&self.top);
+        phi
+    }
+}
 /// A vector over the error states.
 pub type StateVector<T> = SVector<T, STATES>;
 
@@ -237,6 +262,15 @@ pub struct ErrorFilter<T: RealField + Copy> {
     last: Option<(Vector3<T>, Vector3<T>)>,
 }
 
+/// `m diag(v)`: each column of `m` times its entry of `v`.
+fn scale_columns<T: RealField + Copy>(m: &Matrix3<T>, v: &Vector3<T>) -> Matrix3<T> {
+    let mut out = *m;
+    for (mut column, x) in out.column_iter_mut().zip(v.iter()) {
+        column *= *x;
+    }
+    out
+}
+
 fn skew<T: RealField + Copy>(v: &Vector3<T>) -> Matrix3<T> {
     v.cross_matrix()
 }
@@ -310,8 +344,8 @@ impl<T: Real> ErrorFilter<T> {
         let a = &mut self.acc;
         let h = half * dt;
         a.c += (c0 + c1) * h;
-        a.cf += (c0 * Matrix3::from_diagonal(&f0) + c1 * Matrix3::from_diagonal(&fc)) * h;
-        a.cw += (c0 * Matrix3::from_diagonal(&w0) + c1 * Matrix3::from_diagonal(&wc)) * h;
+        a.cf += (scale_columns(&c0, &f0) + scale_columns(&c1, &fc)) * h;
+        a.cw += (scale_columns(&c0, &w0) + scale_columns(&c1, &wc)) * h;
         let [n0, n1] = forces;
         a.f += (n0 + n1) * h;
         a.dt += dt;
@@ -322,19 +356,29 @@ impl<T: Real> ErrorFilter<T> {
     }
 
     /// Steps the covariance over the samples navigated since the last step; returns the
-    /// transition matrix (the smoother's).
-    pub fn covariance_step(&mut self) -> StateMatrix<T> {
+    /// transition (the smoother's).
+    ///
+    /// Only the navigation's nine rows of the error model are not zero (the sensor errors
+    /// are random walks), so `Phi` differs from the identity in its first nine rows and
+    /// `Phi P Phi'` changes only the first nine rows and columns of `P`: two 9 x 22 x 22
+    /// products instead of two 22 x 22 x 22.
+    pub fn covariance_step(&mut self) -> Transition<T> {
         use index::*;
         let a = self.acc;
         self.acc = Integrals::zero();
-        let mut phi = StateMatrix::identity();
+        let mut top = NavRows::<T>::zeros();
+        for i in 0..NAV {
+            if let Some(x) = top.get_mut((i, i)) {
+                *x = T::one();
+            }
+        }
         if a.dt <= T::zero() {
-            return phi;
+            return Transition { top };
         }
         let inv = T::one() / a.dt;
         let omega = self.earth.rate();
         let grad = self.earth.gravity_gradient(self.estimate.nav.p.z);
-        let mut f = StateMatrix::zeros();
+        let mut f = NavRows::<T>::zeros();
         let mut put = |r: usize, c: usize, m: Matrix3<T>| {
             f.fixed_view_mut::<3, 3>(r, c).copy_from(&m);
         };
@@ -351,8 +395,14 @@ impl<T: Real> ErrorFilter<T> {
         put(ATTITUDE, ATTITUDE, -skew(&omega));
         put(ATTITUDE, GYRO_BIAS, -a.c * inv);
         put(ATTITUDE, GYRO_SCALE, -a.cw * inv);
+        // Phi = I + F dt + (F dt)^2 / 2, of which only the top rows are not the identity's.
         let fd = f * a.dt;
-        phi += fd + fd * fd * nalgebra::convert::<f64, T>(0.5);
+        let square = fd.fixed_columns::<NAV>(0) * fd;
+        top += fd + square * nalgebra::convert::<f64, T>(0.5);
+        let rows = top * self.covariance;
+        self.covariance.fixed_rows_mut::<NAV>(0).copy_from(&rows);
+        let columns = self.covariance * top.transpose();
+        self.covariance.fixed_columns_mut::<NAV>(0).copy_from(&columns);
         let n = &self.noise;
         let mut q = StateVector::<T>::zeros();
         let mut fill = |at: usize, len: usize, v: T| {
@@ -376,10 +426,32 @@ impl<T: Real> ErrorFilter<T> {
         fill(GYRO_BIAS, 3, n.gyro_walk * n.gyro_walk * a.dt);
         fill(ACCEL_SCALE, 6, n.scale_walk * n.scale_walk * a.dt);
         fill(BARO, 1, n.baro_walk * n.baro_walk * a.dt);
-        let p = phi * self.covariance * phi.transpose() + StateMatrix::from_diagonal(&q);
-        self.covariance = (p + p.transpose()) * nalgebra::convert::<f64, T>(0.5);
-        self.dx = phi * self.dx;
-        phi
+        // The two products round the corner blocks differently: hold P symmetric.
+        let half: T = nalgebra::convert(0.5);
+        for i in 0..NAV {
+            for j in i + 1..STATES {
+                if let (Some(x), Some(y)) = (
+                    self.covariance.get((i, j)).copied(),
+                    self.covariance.get((j, i)).copied(),
+                ) {
+                    let m = (x + y) * half;
+                    if let Some(v) = self.covariance.get_mut((i, j)) {
+                        *v = m;
+                    }
+                    if let Some(v) = self.covariance.get_mut((j, i)) {
+                        *v = m;
+                    }
+                }
+            }
+        }
+        for (i, qi) in q.iter().enumerate() {
+            if let Some(v) = self.covariance.get_mut((i, i)) {
+                *v += *qi;
+            }
+        }
+        let moved = top * self.dx;
+        self.dx.fixed_rows_mut::<NAV>(0).copy_from(&moved);
+        Transition { top }
     }
 
     /// What a scalar measurement's innovation would be, without taking it (to gate it):
@@ -403,16 +475,33 @@ impl<T: Real> ErrorFilter<T> {
         variance: T,
     ) -> Option<Innovation<T>> {
         let nu = innovation - h.dot(&self.dx);
-        let u = self.covariance * h;
+        // P h over the sensitivity's few non-zero entries.
+        let mut u = StateVector::<T>::zeros();
+        for (j, hj) in h.iter().enumerate() {
+            if *hj != T::zero() {
+                u.axpy(*hj, &self.covariance.column(j), T::one());
+            }
+        }
         let s = h.dot(&u) + variance;
         if s <= T::zero() || !s.is_finite() || !nu.is_finite() {
             return None;
         }
         let k = u / s;
         self.dx += k * nu;
-        // Joseph's form, expanded for one measurement: P - k u' - u k' + s k k'.
-        let p = self.covariance - k * u.transpose() - u * k.transpose() + k * k.transpose() * s;
-        self.covariance = (p + p.transpose()) * nalgebra::convert::<f64, T>(0.5);
+        // Joseph's form, expanded for one measurement: P - k u' - u k' + s k k' (symmetric
+        // as computed: each entry's terms are the mirror entry's, in the same order).
+        let (ks, us) = (k.as_slice(), u.as_slice());
+        for ((column, kj), uj) in self
+            .covariance
+            .as_mut_slice()
+            .chunks_exact_mut(STATES)
+            .zip(ks)
+            .zip(us)
+        {
+            for ((x, ki), ui) in column.iter_mut().zip(ks).zip(us) {
+                *x = *x - (*ki * *uj + *ui * *kj) + s * (*ki * *kj);
+            }
+        }
         Some(Innovation {
             value: nu,
             variance: s,

@@ -30,6 +30,8 @@ use super::real::{Real, rotation};
 pub struct Navigation<T: RealField + Copy> {
     despun: UnitQuaternion<T>,
     roll: T,
+    /// The rotation by `roll` about `axis`, kept with it.
+    spin: UnitQuaternion<T>,
     axis: Vector3<T>,
     /// Velocity, m/s.
     pub v: Vector3<T>,
@@ -68,6 +70,7 @@ impl<T: Real> Navigation<T> {
         Self {
             despun: q,
             roll: T::zero(),
+            spin: UnitQuaternion::identity(),
             axis,
             v: Vector3::zeros(),
             p: Vector3::zeros(),
@@ -77,11 +80,7 @@ impl<T: Real> Navigation<T> {
     /// The attitude, body to level frame.
     #[must_use]
     pub fn attitude(&self) -> UnitQuaternion<T> {
-        self.despun * self.spin()
-    }
-
-    fn spin(&self) -> UnitQuaternion<T> {
-        rotation(&(self.axis * self.roll))
+        self.despun * self.spin
     }
 
     /// Turns the attitude by `r` in the level frame (`q <- r q`).
@@ -89,10 +88,11 @@ impl<T: Real> Navigation<T> {
         self.despun = r * self.despun;
     }
 
-    /// The rate `w` without its part about the spin axis, seen in the de-spun frame at `roll`.
-    fn despun_rate(&self, w: &Vector3<T>, roll: T) -> Vector3<T> {
+    /// The rate `w` without its part about the spin axis, seen in the de-spun frame at the
+    /// roll whose rotation is `spin`.
+    fn despun_rate(&self, w: &Vector3<T>, spin: &UnitQuaternion<T>) -> Vector3<T> {
         let across = w - self.axis * self.axis.dot(w);
-        rotation(&(self.axis * roll)) * across
+        spin * across
     }
 
     /// Advances by one step over `earth`; returns the specific force of the step's two ends in
@@ -105,19 +105,22 @@ impl<T: Real> Navigation<T> {
         let before = self.attitude();
         let [w0, w1] = step.w;
         let roll1 = self.roll + (self.axis.dot(&w0) + self.axis.dot(&w1)) * (half * dt);
-        let d0 = self.despun_rate(&w0, self.roll);
-        let d1 = self.despun_rate(&w1, roll1);
+        let pi = T::pi();
+        let roll1 = if roll1 > pi || roll1 < -pi {
+            roll1 - T::two_pi() * (roll1 / T::two_pi()).round()
+        } else {
+            roll1
+        };
+        let spin1 = rotation(&(self.axis * roll1));
+        let d0 = self.despun_rate(&w0, &self.spin);
+        let d1 = self.despun_rate(&w1, &spin1);
         let body = rotation(&rotation_vector(&d0, &d1, dt));
         let level = rotation(&(omega * (-dt)));
         // Renormalised every step: in f32 the rounding of a product of unit quaternions
         // would otherwise walk the norm away over a flight's 10^5 steps.
         self.despun = UnitQuaternion::new_normalize((level * self.despun * body).into_inner());
-        let pi = T::pi();
-        self.roll = if roll1 > pi || roll1 < -pi {
-            roll1 - T::two_pi() * (roll1 / T::two_pi()).round()
-        } else {
-            roll1
-        };
+        self.roll = roll1;
+        self.spin = spin1;
         let after = self.attitude();
         let [f0, f1] = step.f;
         let forces = [before * f0, after * f1];

@@ -321,7 +321,7 @@ pub fn forward(
             continue;
         }
         last_epoch = t;
-        let phi = filter.covariance_step();
+        let phi = filter.covariance_step().matrix();
         let predicted = (filter.estimate, filter.covariance);
         if on_pad {
             for axis in 0..3 {
