@@ -234,3 +234,59 @@ fn a_covariance_that_overflows_goes_back_to_the_prior_and_is_counted() {
             .is_none_or(|o| o.bias.iter().all(|x| x.is_finite()))
     );
 }
+
+#[test]
+fn the_unit_publishes_its_flight_filter_and_calflash_flight_port_reads_it() {
+    use clap::{Args, Command, FromArgMatches};
+    use host_tests::tcp_unit::{self, Fault, TcpUnit};
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("unit.json");
+    let read = |address: &str| {
+        let cmd = calflash::cmd::flight::FlightArgs::augment_args(Command::new("flight"));
+        let m = cmd
+            .try_get_matches_from([
+                "flight",
+                "--port",
+                address,
+                "--json",
+                json.to_str().unwrap(),
+            ])
+            .unwrap();
+        calflash::cmd::flight::run(
+            &calflash::cmd::flight::FlightArgs::from_arg_matches(&m).unwrap(),
+        )
+    };
+    // Before the flight loop has published anything: said, not invented.
+    let unit = TcpUnit::serve(
+        tcp_unit::device(tcp_unit::blank_flash(), "ROUND-7"),
+        Fault::None,
+    );
+    let err = read(&unit.address()).unwrap_err().to_string();
+    assert!(
+        err.contains("has published no flight filter state"),
+        "{err}"
+    );
+    let mut device = unit.finish();
+    // The flight loop runs the golden flight and publishes its snapshot.
+    let (events, heading) = flight_golden::flight();
+    let mut filter = FlightFilter::<f32>::new(flight_golden::config(heading));
+    for e in &events {
+        feed(&mut filter, e);
+    }
+    device.publish_flight(filter.report());
+    let unit = TcpUnit::serve(device, Fault::None);
+    read(&unit.address()).unwrap();
+    drop(unit.finish());
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(v["unit"], "ROUND-7");
+    assert_eq!(v["phase"], "in flight");
+    let ax = v["sensors"]["accel_bias"][0].as_f64().unwrap();
+    assert_eq!(ax as f32, filter.estimate().sensors.accel_bias.x);
+    assert!((ax - SHIFT_AX).abs() < 0.15, "{v}");
+    assert_eq!(v["taken"][1], filter.stats().taken[1]);
+    let sigma = v["sigma"][index::ACCEL_BIAS].as_f64().unwrap();
+    assert_eq!(
+        sigma as f32,
+        filter.covariance()[(index::ACCEL_BIAS, index::ACCEL_BIAS)].sqrt()
+    );
+}

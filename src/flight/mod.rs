@@ -51,11 +51,13 @@ mod air;
 mod config;
 mod origin;
 mod overlay;
+mod report;
 mod run;
 mod stats;
 
 pub use air::{pressure_height, speed_of_sound};
 pub use config::FlightConfig;
 pub use origin::{Geodetic, Origin};
+pub use report::FlightReport;
 pub use run::{FlightFilter, GnssFix, Phase};
 pub use stats::{Aiding, FlightStats, MAX_FIX_AGE_US, MAX_SAMPLE_GAP_US};

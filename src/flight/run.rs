@@ -3,6 +3,7 @@
 //! [`FlightConfig::covariance_interval_us`], and the GNSS and barometer updates as they come.
 
 use nalgebra::{UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
 
 use super::air;
 use super::config::FlightConfig;
@@ -27,7 +28,7 @@ pub struct GnssFix {
 }
 
 /// Where the flight filter is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Phase {
     /// Averaging the rest to level the unit (or waiting for the origin).

@@ -1,6 +1,8 @@
 //! What the flight filter counts: the measurements it took and refused, the inputs it could
 //! not use and why, and the resets of its covariance.
 
+use serde::{Deserialize, Serialize};
+
 /// The kinds of measurement, as indices into [`FlightStats`]'s arrays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -16,7 +18,7 @@ pub enum Aiding {
 }
 
 /// The flight filter's counts since it started.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FlightStats {
     /// Scalar measurements taken, per [`Aiding`].

@@ -402,7 +402,9 @@ impl<T: Real> ErrorFilter<T> {
         let rows = top * self.covariance;
         self.covariance.fixed_rows_mut::<NAV>(0).copy_from(&rows);
         let columns = self.covariance * top.transpose();
-        self.covariance.fixed_columns_mut::<NAV>(0).copy_from(&columns);
+        self.covariance
+            .fixed_columns_mut::<NAV>(0)
+            .copy_from(&columns);
         let n = &self.noise;
         let mut q = StateVector::<T>::zeros();
         let mut fill = |at: usize, len: usize, v: T| {

@@ -43,6 +43,8 @@ pub struct Device<F> {
     /// The health check of the running stream (in RAM only: a power cut or a new calibration
     /// starts it afresh, and it never touches the store).
     health: Health,
+    /// The flight filter's last snapshot, as the firmware's flight loop published it.
+    flight: Option<crate::flight::FlightReport>,
 }
 
 /// The running IMU stream's health check and what it gave the corrector: the corrector
@@ -77,6 +79,7 @@ impl<F: NorFlash> Device<F> {
             buf: [0; SLOT_BUFFER],
             frame: [0; MAX_FRAME],
             health: Health::default(),
+            flight: None,
         };
         d.reload();
         d
@@ -177,7 +180,14 @@ impl<F: NorFlash> Device<F> {
                 raw,
             } => self.observe_rest(temperature, voltage, &raw),
             Request::ReadHealth => self.read_health(),
+            Request::ReadFlight => Response::Flight(self.flight),
         }
+    }
+
+    /// Publishes the flight filter's snapshot for [`Request::ReadFlight`] (the firmware's
+    /// flight loop calls this as often as it likes; the last one is answered).
+    pub fn publish_flight(&mut self, report: crate::flight::FlightReport) {
+        self.flight = Some(report);
     }
 
     fn observe_rest(&mut self, temperature: f32, voltage: f32, raw: &[[i32; 6]]) -> Response {

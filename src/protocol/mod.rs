@@ -125,8 +125,9 @@ pub const MAX_FRAME: usize = 640;
 /// The protocol's version (in [`Identity`]); 2 added the unit's [`UnitSensor`], 3 the health
 /// check at rest ([`Request::ObserveRest`], [`Request::ReadHealth`]), 4 signed calibrations
 /// (every answer a [`Reply`] saying whether the unit checks signatures; [`Status::Refused`];
-/// the station keys, counter and signer in [`Identity`]).
-pub const PROTOCOL_VERSION: u8 = 4;
+/// the station keys, counter and signer in [`Identity`]), 5 the flight filter's state
+/// ([`Request::ReadFlight`]).
+pub const PROTOCOL_VERSION: u8 = 5;
 
 /// What the host asks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -184,6 +185,8 @@ pub enum Request {
     /// The unit's health: its verdict on its calibration, the refined terms and their
     /// covariance, and its time at rest ([`crate::health`]).
     ReadHealth,
+    /// The flight filter's last snapshot ([`crate::flight`]): estimate, 1-sigma, counts.
+    ReadFlight,
 }
 
 /// Why the device refused a request.
@@ -327,6 +330,9 @@ pub enum Response {
     Health(crate::health::Health),
     /// A refusal; nothing changed.
     Error(Status),
+    /// To [`Request::ReadFlight`]: the snapshot the firmware's flight loop last published
+    /// ([`Device::publish_flight`]), `None` when it has published none since power-on.
+    Flight(Option<crate::flight::FlightReport>),
 }
 
 /// A frame that cannot be made or read.

@@ -93,7 +93,11 @@ fn main() -> ! {
     report("flight_gnss_receive", fixes.0, fixes.1);
     report("flight_pressure_receive", pressures.0, pressures.1);
     // The whole golden flight (pad and flight), per second of it.
-    report("flight_golden_per_second", all * 1_000_000 / last_t.max(1), 1);
+    report(
+        "flight_golden_per_second",
+        all * 1_000_000 / last_t.max(1),
+        1,
+    );
     let _ = first_flight_t;
 
     // The parts: an error filter in flight, from the golden flight's state at its end.

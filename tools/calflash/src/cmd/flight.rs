@@ -16,7 +16,8 @@ use crate::nav::run::Options;
 pub struct FlightArgs {
     /// The IMU recording: raw codes (`t`, `a_x..g_z`, optionally `temp`) with `--blob`, or
     /// physical values (a mission profile's columns, `--imu-columns`) without.
-    pub recording: PathBuf,
+    #[arg(required_unless_present = "port")]
+    pub recording: Option<PathBuf>,
     /// The unit's calibration blob: the codes go through its correction, and its covariance
     /// factors are the prior of the sensor errors.
     #[arg(long)]
@@ -27,8 +28,8 @@ pub struct FlightArgs {
     pub imu_columns: String,
     /// GNSS fixes: `t` (the IMU's clock), `latitude`, `longitude` (degrees), optionally
     /// `height`, `v_east v_north v_up`, `satellites`.
-    #[arg(long)]
-    pub gnss: PathBuf,
+    #[arg(long, required_unless_present = "port")]
+    pub gnss: Option<PathBuf>,
     /// Barometer: `t`, `P` (Pa).
     #[arg(long)]
     pub baro: Option<PathBuf>,
@@ -80,6 +81,13 @@ pub struct FlightArgs {
     /// taken), to plot against its bounds.
     #[arg(long)]
     pub innovations: Option<PathBuf>,
+    /// Read the flight filter running in the unit on this serial port (or tcp://HOST:PORT)
+    /// instead: its estimate, 1-sigma and counts as its flight loop last published them.
+    #[arg(long, conflicts_with_all = ["recording", "blob", "gnss", "baro", "report", "innovations"])]
+    pub port: Option<String>,
+    /// Seconds to wait for each answer from the unit.
+    #[arg(long, default_value_t = 2.0, value_parser = |s: &str| super::values::in_range(s, 0.01, 600.0))]
+    pub timeout: f64,
 }
 
 /// Runs `calflash flight`.
@@ -87,13 +95,19 @@ pub struct FlightArgs {
 /// # Errors
 /// Unreadable inputs, a flight that cannot be checked.
 pub fn run(args: &FlightArgs) -> Result<(), Failure> {
+    if let Some(port) = &args.port {
+        return super::flight_unit::run(args, port);
+    }
+    let (Some(recording), Some(gnss)) = (&args.recording, &args.gnss) else {
+        return Err("calflash flight: give a recording and --gnss, or --port to read the unit's own flight filter".into());
+    };
     let db_path = (!args.no_db && args.blob.is_some())
         .then(|| crate::db::Location::or_default(args.db.as_ref()))
         .transpose()?;
     Paths::new()
-        .input("the recording", Some(&args.recording))
+        .input("the recording", Some(recording))
         .input("--blob", args.blob.as_deref())
-        .input("--gnss", Some(&args.gnss))
+        .input("--gnss", Some(gnss))
         .input("--baro", args.baro.as_deref())
         .output("--json", args.json.as_deref())
         .output("--innovations", args.innovations.as_deref())
@@ -128,7 +142,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
             blob_bytes.clone_from(&bytes);
             let cal = crate::signing::calibration(&bytes)
                 .map_err(|e| format!("{}: {e}", path.display()))?;
-            let imu = input::corrected(&args.recording, &cal)?;
+            let imu = input::corrected(recording, &cal)?;
             let serial = cal.data().identity.serial.to_string();
             match check::calibration_prior(&cal) {
                 Some(p) => (imu, (p, PriorSource::Calibration), serial),
@@ -140,7 +154,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
             }
         }
         None => {
-            let profile = crate::mission::read(&args.recording, &args.imu_columns)?;
+            let profile = crate::mission::read(recording, &args.imu_columns)?;
             (
                 input::physical(&profile),
                 (check::stated_prior(&stated), PriorSource::Stated(stated)),
@@ -148,7 +162,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
             )
         }
     };
-    let (fixes, counts) = input::gnss(&args.gnss)?;
+    let (fixes, counts) = input::gnss(gnss)?;
     let baro = args
         .baro
         .as_deref()
@@ -176,7 +190,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         ..Walks::default()
     };
     let checked = check::check(&imu, (&fixes, &baro), prior, &walks, &opts, args.alpha)
-        .map_err(|e| format!("{}: {e}", args.recording.display()))?;
+        .map_err(|e| format!("{}: {e}", recording.display()))?;
     let text = crate::report::flight::text(&serial, &checked, &counts);
     let record = crate::report::flight::json(&serial, &checked, &counts);
     let mut staged = Staged::new();
@@ -195,7 +209,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
     staged.commit()?;
     print!("{text}");
     if let Some(path) = db_path {
-        let beside = crate::db::beside(&[args.json.as_deref(), Some(args.recording.as_path())]);
+        let beside = crate::db::beside(&[args.json.as_deref(), Some(recording.as_path())]);
         let said = crate::db::record_or_save(
             &path,
             |d| d.record_flight(&serial, &blob_bytes, &record),

@@ -8,6 +8,7 @@ pub mod design;
 pub mod fit;
 pub mod flash;
 pub mod flight;
+pub mod flight_unit;
 pub mod health;
 pub mod history;
 pub mod history_db;

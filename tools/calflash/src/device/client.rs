@@ -83,6 +83,7 @@ fn name(r: &Request) -> String {
         Request::Lock => "Lock".into(),
         Request::ObserveRest { .. } => "samples for the health check".into(),
         Request::ReadHealth => "the health read".into(),
+        Request::ReadFlight => "the flight filter's read".into(),
     }
 }
 
@@ -228,6 +229,21 @@ impl<L: Read + Write> Client<L> {
             Response::Health(h) => Ok(h),
             other => Err(DeviceError::Unexpected {
                 what: "the health read".into(),
+                got: format!("{other:?}"),
+            }),
+        }
+    }
+
+    /// The unit's flight filter, as its flight loop last published it (`None`: nothing since
+    /// power-on).
+    ///
+    /// # Errors
+    /// As `ask`.
+    pub fn flight(&mut self) -> Result<Option<spincal::flight::FlightReport>, DeviceError> {
+        match self.ask(&Request::ReadFlight)? {
+            Response::Flight(r) => Ok(r),
+            other => Err(DeviceError::Unexpected {
+                what: "the flight filter's read".into(),
                 got: format!("{other:?}"),
             }),
         }

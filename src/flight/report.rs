@@ -1,0 +1,71 @@
+//! What the flight filter tells the world: a snapshot of its estimate, its 1-sigma and its
+//! counts, in `f32`, for the update protocol ([`crate::protocol::Request::ReadFlight`]).
+
+use serde::{Deserialize, Serialize};
+
+use super::run::{FlightFilter, Phase};
+use super::stats::FlightStats;
+use crate::nav::{Real, STATES};
+
+/// A snapshot of the flight filter.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FlightReport {
+    /// Where the filter is.
+    pub phase: Phase,
+    /// The launch on the samples' clock, us, once detected.
+    pub launch_us: Option<u64>,
+    /// Position from the origin (east, north, up), m.
+    pub position: [f32; 3],
+    /// Velocity, m/s.
+    pub velocity: [f32; 3],
+    /// Attitude, body to level frame, `w, x, y, z`.
+    pub attitude: [f32; 4],
+    /// The sensor errors: accelerometer biases (m/s^2), gyro biases (rad/s), accelerometer
+    /// and gyro scale factors, the barometer's bias (m).
+    pub sensors: [f32; 13],
+    /// 1-sigma of every error state (position, velocity, attitude, then the sensor errors in
+    /// the order of `sensors`).
+    pub sigma: [f32; STATES],
+    /// The counts.
+    pub stats: FlightStats,
+}
+
+fn f<T: Real>(x: T) -> f32 {
+    x.to_f64() as f32
+}
+
+impl<T: Real> FlightFilter<T> {
+    /// The snapshot of the filter now.
+    #[must_use]
+    pub fn report(&self) -> FlightReport {
+        let e = self.estimate();
+        let s = &e.sensors;
+        let q = e.nav.attitude();
+        let mut sensors = [0.0; 13];
+        let errors = s
+            .accel_bias
+            .iter()
+            .chain(s.gyro_bias.iter())
+            .chain(s.accel_scale.iter())
+            .chain(s.gyro_scale.iter())
+            .chain(core::iter::once(&s.baro_bias));
+        for (o, x) in sensors.iter_mut().zip(errors) {
+            *o = f(*x);
+        }
+        let mut sigma = [0.0; STATES];
+        for (o, v) in sigma.iter_mut().zip(self.covariance().diagonal().iter()) {
+            *o = f(v.max(T::zero()).sqrt());
+        }
+        FlightReport {
+            phase: self.phase(),
+            launch_us: self.launch_us(),
+            position: [f(e.nav.p.x), f(e.nav.p.y), f(e.nav.p.z)],
+            velocity: [f(e.nav.v.x), f(e.nav.v.y), f(e.nav.v.z)],
+            attitude: [f(q.w), f(q.i), f(q.j), f(q.k)],
+            sensors,
+            sigma,
+            stats: *self.stats(),
+        }
+    }
+}
