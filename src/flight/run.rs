@@ -10,7 +10,9 @@ use super::config::FlightConfig;
 use super::origin::{Geodetic, Origin};
 use super::stats::{Aiding, FlightStats, MAX_FIX_AGE_US, MAX_SAMPLE_GAP_US};
 use crate::nav::filter::{Doubt, Estimate, index};
-use crate::nav::{Earth, ErrorFilter, Navigation, Prior, Real, SensorErrors, StateMatrix};
+use crate::nav::{
+    Earth, ErrorFilter, Navigation, Prior, Real, SensorErrors, StateMatrix, StateVector,
+};
 
 /// One GNSS fix.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,7 +49,8 @@ pub struct FlightFilter<T: Real> {
     origin: Option<Origin>,
     phase: Phase,
     filter: ErrorFilter<T>,
-    prior: StateMatrix<T>,
+    /// The prior's variances (it is diagonal: 88 bytes in f32, not 1,936).
+    prior: StateVector<T>,
     rest: (Vector3<T>, u32, u64),
     now_us: Option<u64>,
     last_epoch_us: u64,
@@ -85,7 +88,9 @@ impl<T: Real> FlightFilter<T> {
                     nav: Navigation::at_rest(UnitQuaternion::identity(), config.spin_axis),
                     sensors: SensorErrors::default(),
                 },
-                &Prior { covariance: prior },
+                &Prior {
+                    covariance: StateMatrix::from_diagonal(&prior),
+                },
                 Earth::new(T::zero(), T::zero()),
                 config.noise,
             ),
@@ -109,7 +114,7 @@ impl<T: Real> FlightFilter<T> {
 
     /// The prior covariance: the sensor errors' from the set-up, position as the GNSS knows
     /// the pad, velocity at rest, the tilt as the accelerometer biases leave it, the heading's.
-    fn prior(config: &FlightConfig<T>) -> StateMatrix<T> {
+    fn prior(config: &FlightConfig<T>) -> StateVector<T> {
         let mut d = Self::sensor_variances(&config.sensor_sigma);
         let s = &config.sensor_sigma;
         let mut put = |at: usize, v: &Vector3<T>| {
@@ -126,7 +131,7 @@ impl<T: Real> FlightFilter<T> {
         put(index::VELOCITY, &Vector3::repeat(c(1e-2)));
         let tilt = (tilt * tilt + c(1e-6)).sqrt();
         put(index::ATTITUDE, &Vector3::new(tilt, tilt, config.heading.1));
-        StateMatrix::from_diagonal(&nalgebra::SVector::from(d))
+        StateVector::from(d)
     }
 
     /// The variances of sensor errors of 1-sigma `s`, in their places among the states.
@@ -283,7 +288,7 @@ impl<T: Real> FlightFilter<T> {
                 sensors: SensorErrors::default(),
             },
             &Prior {
-                covariance: self.prior,
+                covariance: StateMatrix::from_diagonal(&self.prior),
             },
             Earth::new(c::<T>(at.latitude.to_radians()), c(at.height)),
             self.config.noise,
@@ -468,7 +473,7 @@ impl<T: Real> FlightFilter<T> {
             p.iter().any(|x| !x.is_finite()) || p.diagonal().iter().any(|d| *d <= T::zero());
         if broken {
             self.stats.resets += 1;
-            self.filter.covariance = self.prior;
+            self.filter.covariance = StateMatrix::from_diagonal(&self.prior);
         }
         let e = &self.filter.estimate;
         let lost = e.nav.p.iter().chain(e.nav.v.iter()).any(|x| !x.is_finite())
