@@ -35,6 +35,8 @@
 //! - [`store`]: two power-fail-safe slots over an `embedded-storage` NOR flash.
 //! - [`health`]: the unit judges its calibration at rest (stillness, a Kalman filter over the
 //!   biases with the calibration's covariance as its prior, OK / DRIFTED / SUSPECT).
+//! - [`nav`] and [`flight`]: in flight, the strapdown navigation and the GNSS- and
+//!   barometer-aided error-state filter over the corrected samples (`f32` on the round).
 //! - [`driver`]: real parts over `embedded-hal` 1.0 (the MPU-6050), raw samples for the
 //!   correctors.
 //!
