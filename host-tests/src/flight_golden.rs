@@ -64,7 +64,16 @@ pub const SHIFT_AX: f64 = 0.3;
 /// If the simulator refuses the flight (it does not).
 #[must_use]
 pub fn flight() -> (Vec<Event>, f64) {
-    let spec = "shell:lat=39.4,lon=-8.3,azimuth=60,rest=1,seconds=4";
+    flight_of("shell:lat=39.4,lon=-8.3,azimuth=60,rest=1,seconds=4")
+}
+
+/// The events of the flight `spec` (a `calflash simulate --flight` spec with its site named),
+/// simulated as [`flight`]'s, and the unit's true heading at rest.
+///
+/// # Panics
+/// If the simulator refuses the spec.
+#[must_use]
+pub fn flight_of(spec: &str) -> (Vec<Event>, f64) {
     let mut launch = Launch::parse(spec).expect("the golden flight's spec");
     let site = launch.site_mut().expect("the golden flight names its site");
     let flown = launch.fly(1.0 / RATE);

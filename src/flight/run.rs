@@ -11,7 +11,7 @@ use super::origin::{Geodetic, Origin};
 use super::stats::{Aiding, FlightStats, MAX_FIX_AGE_US, MAX_SAMPLE_GAP_US};
 use crate::nav::filter::{Doubt, Estimate, index};
 use crate::nav::{
-    Earth, ErrorFilter, Navigation, Prior, Real, SensorErrors, StateMatrix, StateVector,
+    Earth, ErrorFilter, Interval, Navigation, Prior, Real, SensorErrors, StateMatrix, StateVector,
 };
 
 /// One GNSS fix.
@@ -225,7 +225,7 @@ impl<T: Real> FlightFilter<T> {
         self.filter.sample(
             &f,
             &w,
-            micros(dt_us),
+            Interval::micros(c::<T>(dt_us as f64)),
             (doubted[0] || doubted[1]).then_some(Doubt {
                 force: if doubted[0] { df } else { T::zero() },
                 rate: if doubted[1] { dw } else { T::zero() },

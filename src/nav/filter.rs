@@ -20,7 +20,7 @@ use nalgebra::{Matrix3, RealField, SMatrix, SVector, Vector3};
 
 use super::earth::Earth;
 use super::real::{Real, rotation};
-use super::strapdown::{Navigation, Step};
+use super::strapdown::{Interval, Navigation, Step};
 
 /// The number of error states.
 pub const STATES: usize = 22;
@@ -304,7 +304,14 @@ impl<T: Real> ErrorFilter<T> {
     /// Navigates one corrected sample `dt` s after the previous one. A sample with a
     /// [`Doubt`] is not navigated as read: the last trusted one stands in for it and the
     /// covariance widens by what it may hide.
-    pub fn sample(&mut self, f: &Vector3<T>, w: &Vector3<T>, dt: T, doubt: Option<Doubt<T>>) {
+    pub fn sample(
+        &mut self,
+        f: &Vector3<T>,
+        w: &Vector3<T>,
+        step: Interval<T>,
+        doubt: Option<Doubt<T>>,
+    ) {
+        let dt = step.seconds_of();
         let (mut fc, mut wc) = self.estimate.sensors.compensate(f, w);
         if let (Some(d), Some((w0, f0))) = (doubt, self.last) {
             if d.force > T::zero() {
@@ -332,7 +339,7 @@ impl<T: Real> ErrorFilter<T> {
             &Step {
                 w: [w0, wc],
                 f: [f0, fc],
-                dt,
+                dt: step,
             },
         );
         let c1 = self

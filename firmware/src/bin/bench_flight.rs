@@ -112,11 +112,12 @@ fn main() -> ! {
     );
     let f = Vector3::new(-8.0f32, 0.3, -0.2);
     let w = Vector3::new(1800.0f32, 2.0, -1.5);
-    parts.sample(&f, &w, 0.0005, None);
+    let step = spincal::nav::Interval::micros(500.0f32);
+    parts.sample(&f, &w, step, None);
     let n = 200u64;
     let (_, ticks) = timed(|| {
         for _ in 0..n {
-            parts.sample(black_box(&f), black_box(&w), black_box(0.0005), None);
+            parts.sample(black_box(&f), black_box(&w), black_box(step), None);
         }
     });
     report("nav_sample", ticks, n);

@@ -306,7 +306,7 @@ pub fn forward(
         filter.sample(
             &Vector3::from(imu.f[i]),
             &Vector3::from(imu.w[i]),
-            dt,
+            spincal::nav::Interval::seconds(dt),
             (accel || gyro).then_some(Doubt {
                 force: if accel { doubt_f } else { 0.0 },
                 rate: if gyro { doubt_w } else { 0.0 },
@@ -506,7 +506,7 @@ pub fn heading(
         let step = spincal::nav::Step {
             w: [Vector3::from(imu.w[k - 1]), Vector3::from(imu.w[k])],
             f: [Vector3::from(imu.f[k - 1]), Vector3::from(imu.f[k])],
-            dt: imu.t[k] - imu.t[k - 1],
+            dt: spincal::nav::Interval::seconds(imu.t[k] - imu.t[k - 1]),
         };
         nav.propagate(&earth, &step);
         k += 1;
