@@ -299,3 +299,42 @@ fn the_unit_publishes_its_flight_filter_and_calflash_flight_port_reads_it() {
         filter.covariance()[(index::ACCEL_BIAS, index::ACCEL_BIAS)].sqrt()
     );
 }
+
+#[test]
+fn the_flight_filters_biases_reach_the_corrector_as_an_overlay_and_never_the_store() {
+    use spincal::correct::ImuCorrector;
+    use spincal::model::{Calibration, CalibrationData};
+    let (events, heading) = flight_golden::flight();
+    let mut filter = FlightFilter::<f32>::new(flight_golden::config(heading));
+    assert!(
+        filter.overlay().is_none(),
+        "no overlay before the filter has levelled"
+    );
+    for e in &events {
+        feed(&mut filter, e);
+    }
+    let overlay = filter.overlay().unwrap();
+    let data = CalibrationData::example_imu();
+    let stored = data.clone();
+    let cal = Calibration::new(data).unwrap();
+    let mut imu = ImuCorrector::<u16>::new(&cal, 2000.0).unwrap();
+    imu.set_environment(25.0, 3.3);
+    let raw = [33_000u16, 33_300, 36_400, 32_800, 32_400, 32_500];
+    // The second of two equal samples: the lever arm's rate derivative known.
+    let _ = imu.correct(raw);
+    let plain = imu.correct(raw);
+    imu.set_overlay(Some(overlay));
+    let _ = imu.correct(raw);
+    let refined = imu.correct(raw);
+    // The accelerometer's outputs move by the refined biases, the calibration does not.
+    for axis in 0..3 {
+        let moved = plain.values[axis] - refined.values[axis];
+        assert!(
+            (moved - overlay.bias[axis]).abs() < 1e-4 * (1.0 + overlay.bias[axis].abs()),
+            "axis {axis}: moved {moved}, overlay {}",
+            overlay.bias[axis]
+        );
+    }
+    assert!((overlay.bias[0] - SHIFT_AX as f32).abs() < 0.15);
+    assert_eq!(*cal.data(), stored);
+}
