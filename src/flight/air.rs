@@ -28,7 +28,7 @@ pub fn pressure_height<T: Real>(pa: T) -> T {
 #[must_use]
 pub fn speed_of_sound<T: Real>(height: T) -> T {
     let t = (c::<T>(T0) - c::<T>(LAPSE) * height).max(c(TROPOPAUSE_T));
-    (c::<T>(GAMMA * R_AIR) * t).sqrt()
+    (c::<T>(GAMMA * R_AIR) * t).sqrt_libm()
 }
 
 #[cfg(test)]

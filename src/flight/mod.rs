@@ -49,6 +49,7 @@
 
 mod air;
 mod config;
+mod doubt;
 mod origin;
 mod overlay;
 mod report;
@@ -57,7 +58,8 @@ mod stats;
 
 pub use air::{pressure_height, speed_of_sound};
 pub use config::FlightConfig;
+pub use doubt::doubted;
 pub use origin::{Geodetic, Origin};
 pub use report::FlightReport;
-pub use run::{FlightFilter, GnssFix, Phase};
+pub use run::{FlightFilter, GnssFix, LOST_VELOCITY, Phase};
 pub use stats::{Aiding, FlightStats, MAX_FIX_AGE_US, MAX_SAMPLE_GAP_US};

@@ -68,6 +68,10 @@ fn c<T: Real>(x: f64) -> T {
     nalgebra::convert(x)
 }
 
+/// A velocity 1-sigma (m/s) beyond which the navigation has lost track: the next fix with a
+/// velocity puts it back ([`FlightStats::navigation_resets`]).
+pub const LOST_VELOCITY: f64 = 30.0;
+
 fn micros<T: Real>(us: u64) -> T {
     // Exact for differences below 2^24 us in f32: a flight's steps and ages.
     c::<T>(us as f64) * c(1e-6)
@@ -231,7 +235,9 @@ impl<T: Real> FlightFilter<T> {
                 rate: if doubted[1] { dw } else { T::zero() },
             }),
         );
-        if self.phase == Phase::Pad && f.norm() > self.config.launch_force {
+        if self.phase == Phase::Pad
+            && f.norm_squared() > self.config.launch_force * self.config.launch_force
+        {
             self.phase = Phase::Flight;
             self.launch_us = Some(t_us);
             let shift = Self::sensor_variances(&self.config.launch_shift);
@@ -278,8 +284,7 @@ impl<T: Real> FlightFilter<T> {
             return;
         }
         let mean = self.rest.0 / c::<T>(f64::from(self.rest.1));
-        let up = UnitQuaternion::rotation_between(&mean, &Vector3::z())
-            .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::x_axis(), T::pi()));
+        let up = crate::nav::real::rotation_between(&mean, &Vector3::z());
         let q = crate::nav::real::rotation(&(Vector3::z() * self.config.heading.0)) * up;
         let at = origin.geodetic();
         self.filter = ErrorFilter::new(
@@ -396,6 +401,25 @@ impl<T: Real> FlightFilter<T> {
         let back: T = micros(t_us.saturating_sub(fix.t_us));
         let (h_sigma, v_sigma) = self.config.gnss_sigma;
         let lever = self.config.lever;
+        let lost = c::<T>(LOST_VELOCITY * LOST_VELOCITY);
+        let p = &self.filter.covariance;
+        let velocity_lost = (index::VELOCITY..index::VELOCITY + 3)
+            .any(|i| p.get((i, i)).is_some_and(|var| *var > lost));
+        if let (true, Some(vel)) = (velocity_lost, fix.velocity) {
+            let v = Vector3::new(
+                c(f64::from(vel[0])),
+                c(f64::from(vel[1])),
+                c(f64::from(vel[2])),
+            );
+            let arm = self.filter.estimate.nav.attitude() * lever;
+            let at = Vector3::new(c::<T>(z[0]), c(z[1]), c(z[2])) + v * back - arm;
+            let r = self.config.gnss_velocity_sigma;
+            let (h2, v2, r2) = (h_sigma * h_sigma, v_sigma * v_sigma, r * r);
+            self.filter
+                .reset_position_velocity(&at, &v, [h2, h2, v2, r2, r2, r2]);
+            self.stats.navigation_resets += 1;
+            return;
+        }
         for (axis, zi) in z.iter().enumerate() {
             let (h, at) = self.filter.antenna_row(&lever, axis);
             let v = self

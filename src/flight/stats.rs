@@ -50,6 +50,9 @@ pub struct FlightStats {
     pub time_faults: u32,
     /// Covariance steps (each followed by the updates due and the feedback).
     pub epochs: u32,
+    /// Fixes that put the navigation back after it lost track (its velocity's 1-sigma over
+    /// [`LOST_VELOCITY`](super::run::LOST_VELOCITY) m/s, as after a saturated setback).
+    pub navigation_resets: u32,
     /// Covariance resets to the prior (a NaN, an infinity or a variance not positive).
     pub resets: u32,
 }

@@ -49,10 +49,10 @@ impl<T: Real> Earth<T> {
         let e2: T = c(ECCENTRICITY2);
         let w2 = T::one() - e2 * sin2;
         let a: T = c(SEMI_MAJOR);
-        let n = a / w2.sqrt();
-        let m = a * (T::one() - e2) / (w2 * w2.sqrt());
+        let n = a / w2.sqrt_libm();
+        let m = a * (T::one() - e2) / (w2 * w2.sqrt_libm());
         let surface_gravity =
-            c::<T>(GRAVITY_EQUATOR) * (T::one() + c::<T>(SOMIGLIANA_K) * sin2) / w2.sqrt();
+            c::<T>(GRAVITY_EQUATOR) * (T::one() + c::<T>(SOMIGLIANA_K) * sin2) / w2.sqrt_libm();
         let f: T = c(FLATTENING);
         let gm: T = c(GRAVITY_M);
         let two: T = c(2.0);
@@ -118,7 +118,7 @@ impl<T: Real> Earth<T> {
     pub fn gravity_gradient(&self, h: T) -> Vector3<T> {
         let g = self.normal_gravity(self.height + h);
         let (rn, re) = self.radii;
-        let r = (rn * re).sqrt();
+        let r = (rn * re).sqrt_libm();
         Vector3::new(-g / re, -g / rn, c::<T>(2.0) * g / r)
     }
 }

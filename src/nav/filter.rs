@@ -262,6 +262,24 @@ pub struct ErrorFilter<T: RealField + Copy> {
     last: Option<(Vector3<T>, Vector3<T>)>,
 }
 
+/// `p <- (p + p') / 2`.
+fn symmetrise<T: RealField + Copy>(p: &mut StateMatrix<T>) {
+    let half: T = nalgebra::convert(0.5);
+    for j in 1..STATES {
+        for i in 0..j {
+            if let (Some(x), Some(y)) = (p.get((i, j)).copied(), p.get((j, i)).copied()) {
+                let m = (x + y) * half;
+                if let Some(v) = p.get_mut((i, j)) {
+                    *v = m;
+                }
+                if let Some(v) = p.get_mut((j, i)) {
+                    *v = m;
+                }
+            }
+        }
+    }
+}
+
 /// `m diag(v)`: each column of `m` times its entry of `v`.
 fn scale_columns<T: RealField + Copy>(m: &Matrix3<T>, v: &Vector3<T>) -> Matrix3<T> {
     let mut out = *m;
@@ -497,24 +515,68 @@ impl<T: Real> ErrorFilter<T> {
         }
         let k = u / s;
         self.dx += k * nu;
-        // Joseph's form, expanded for one measurement: P - k u' - u k' + s k k' (symmetric
-        // as computed: each entry's terms are the mirror entry's, in the same order).
+        // Joseph's form, (I - k h') P (I - k h')' + r k k', as two rank-one steps: A = P - k u'
+        // (u = P h), then A - (A h) k' + r k k' with A h taken from the rounded A, so that the
+        // second step corrects the first's rounding. Expanded into one step it would lose a
+        // variance that falls by six orders of magnitude (a fix after the setback's doubt) to
+        // the rounding of f32.
         let (ks, us) = (k.as_slice(), u.as_slice());
-        for ((column, kj), uj) in self
+        for (column, uj) in self
+            .covariance
+            .as_mut_slice()
+            .chunks_exact_mut(STATES)
+            .zip(us)
+        {
+            for (x, ki) in column.iter_mut().zip(ks) {
+                *x -= *ki * *uj;
+            }
+        }
+        let mut ah = StateVector::<T>::zeros();
+        for (j, hj) in h.iter().enumerate() {
+            if *hj != T::zero() {
+                ah.axpy(*hj, &self.covariance.column(j), T::one());
+            }
+        }
+        let ahs = ah.as_slice();
+        for ((column, kj), _) in self
             .covariance
             .as_mut_slice()
             .chunks_exact_mut(STATES)
             .zip(ks)
             .zip(us)
         {
-            for ((x, ki), ui) in column.iter_mut().zip(ks).zip(us) {
-                *x = *x - (*ki * *uj + *ui * *kj) + s * (*ki * *kj);
+            for ((x, ki), ai) in column.iter_mut().zip(ks).zip(ahs) {
+                *x = *x - *ai * *kj + variance * (*ki * *kj);
             }
         }
+        symmetrise(&mut self.covariance);
         Some(Innovation {
             value: nu,
             variance: s,
         })
+    }
+
+    /// Puts the navigation at position `p` and velocity `v` with the variances `variances`
+    /// (position then velocity, each axis), independent of every other error: for a first
+    /// fix after the navigation lost track (a saturated setback), where the update would ask
+    /// the covariance to fall by more orders of magnitude than `f32` holds.
+    pub fn reset_position_velocity(&mut self, p: &Vector3<T>, v: &Vector3<T>, variances: [T; 6]) {
+        self.estimate.nav.p = *p;
+        self.estimate.nav.v = *v;
+        for (i, var) in variances.iter().enumerate() {
+            if let Some(x) = self.dx.get_mut(i) {
+                *x = T::zero();
+            }
+            for j in 0..STATES {
+                let value = if i == j { *var } else { T::zero() };
+                if let Some(x) = self.covariance.get_mut((i, j)) {
+                    *x = value;
+                }
+                if let Some(x) = self.covariance.get_mut((j, i)) {
+                    *x = value;
+                }
+            }
+        }
     }
 
     /// Feeds the estimated errors back into the navigation and the sensor errors.

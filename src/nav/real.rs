@@ -12,6 +12,8 @@ pub trait Real: RealField + Copy {
     fn sin_cos_libm(self) -> (Self, Self);
     /// `self^e`, from `libm`.
     fn powf_libm(self, e: Self) -> Self;
+    /// The square root, from `libm` (nalgebra's own takes the platform's with `std`).
+    fn sqrt_libm(self) -> Self;
     /// `atan2(self, x)`, from `libm`.
     fn atan2_libm(self, x: Self) -> Self;
     /// This value as an `f64`.
@@ -53,6 +55,9 @@ impl Real for f32 {
     fn atan2_libm(self, x: Self) -> Self {
         libm::atan2f(self, x)
     }
+    fn sqrt_libm(self) -> Self {
+        libm::sqrtf(self)
+    }
     fn to_f64(self) -> f64 {
         f64::from(self)
     }
@@ -68,6 +73,9 @@ impl Real for f64 {
     fn atan2_libm(self, x: Self) -> Self {
         libm::atan2(self, x)
     }
+    fn sqrt_libm(self) -> Self {
+        libm::sqrt(self)
+    }
     fn to_f64(self) -> f64 {
         self
     }
@@ -76,7 +84,7 @@ impl Real for f64 {
 /// The rotation by the rotation vector `v` (axis times angle, rad).
 #[must_use]
 pub fn rotation<T: Real>(v: &Vector3<T>) -> UnitQuaternion<T> {
-    let angle = v.norm();
+    let angle = v.norm_squared().sqrt_libm();
     if angle <= T::zero() || !angle.is_finite() {
         return UnitQuaternion::identity();
     }
@@ -85,22 +93,36 @@ pub fn rotation<T: Real>(v: &Vector3<T>) -> UnitQuaternion<T> {
     UnitQuaternion::new_unchecked(Quaternion::from_parts(c, v * (s / angle)))
 }
 
+/// `q` scaled to unit length.
+#[must_use]
+pub fn normalised<T: Real>(q: Quaternion<T>) -> UnitQuaternion<T> {
+    let n = q.coords.norm_squared().sqrt_libm();
+    UnitQuaternion::new_unchecked(q / n)
+}
+
 /// The smallest rotation that takes the direction of `from` to that of `to` (a half turn
 /// about an axis across `from` when they are opposite; none when either is zero).
 #[must_use]
 pub fn rotation_between<T: Real>(from: &Vector3<T>, to: &Vector3<T>) -> UnitQuaternion<T> {
-    let (a, b) = (from.norm(), to.norm());
+    let (a, b) = (
+        from.norm_squared().sqrt_libm(),
+        to.norm_squared().sqrt_libm(),
+    );
     if a <= T::zero() || b <= T::zero() {
         return UnitQuaternion::identity();
     }
+    // The half-angle form, without trigonometry: q ~ (|a||b| + a.b, a x b), the first term
+    // as |a x b|^2 / (|a||b| - a.b) when the two nearly oppose (no cancellation).
     let axis = from.cross(to);
-    let sin = axis.norm();
-    let angle = sin.atan2_libm(from.dot(to));
-    if sin > T::zero() {
-        return rotation(&(axis * (angle / sin)));
-    }
-    if angle <= T::zero() {
-        return UnitQuaternion::identity();
+    let dot = from.dot(to);
+    let w = if dot >= T::zero() {
+        a * b + dot
+    } else {
+        axis.norm_squared() / (a * b - dot)
+    };
+    let scale = a * b;
+    if w * w + axis.norm_squared() > scale * scale * nalgebra::convert::<f64, T>(1e-12) {
+        return normalised(Quaternion::from_parts(w, axis));
     }
     // Opposite: any axis across `from`.
     let across = if from.x.abs() < from.y.abs().max(from.z.abs()) {
@@ -109,7 +131,7 @@ pub fn rotation_between<T: Real>(from: &Vector3<T>, to: &Vector3<T>) -> UnitQuat
         Vector3::y()
     };
     let axis = from.cross(&across);
-    rotation(&(axis * (T::pi() / axis.norm())))
+    rotation(&(axis * (T::pi() / axis.norm_squared().sqrt_libm())))
 }
 
 #[cfg(test)]

@@ -12,9 +12,10 @@ use core::hint::black_box;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use nalgebra::Vector3;
+use spincal::correct::AnyImuCorrector;
 use spincal::flight::{FlightFilter, Phase};
 use spincal::nav::ErrorFilter;
-use spincal_firmware::flight_golden::{Event, events, flight_config};
+use spincal_firmware::flight_golden::{BLOB, Input, RATE, flight_config, inputs, rails};
 use spincal_firmware::{stack, timer};
 
 fn report(name: &str, ticks: u64, ops: u64) {
@@ -39,9 +40,23 @@ fn timed<R>(f: impl FnOnce() -> R) -> (R, u64) {
     (r, u64::from(t0.wrapping_sub(t1)))
 }
 
+fn fail(what: &str) -> ! {
+    hprintln!("FAIL {}", what);
+    spincal_firmware::exit(false);
+}
+
 #[entry]
 fn main() -> ! {
     timer::start();
+    let Ok(cal) = spincal::blob::decode(BLOB) else {
+        fail("imu_spin.blob")
+    };
+    let Some(rails) = rails(&cal) else {
+        fail("not an IMU")
+    };
+    let Ok(mut imu) = AnyImuCorrector::new(&cal, RATE) else {
+        fail("corrector")
+    };
     let (_, overhead) = timed(|| black_box(0));
     let mut filter = FlightFilter::new(flight_config());
     // Per kind of call: ticks and count.
@@ -53,10 +68,9 @@ fn main() -> ! {
     let mut last_t = 0u64;
     let mut first_flight_t = None;
     let mut epoch_stack = 0usize;
-    for e in events() {
+    for e in inputs(&mut imu, rails) {
         match e {
-            Event::Sample(t, f, w, doubt) => {
-                let (f, w) = (Vector3::from(f), Vector3::from(w));
+            Input::Sample(t, f, w, doubt) => {
                 let before = filter.stats().epochs;
                 let flying = filter.phase() == Phase::Flight;
                 let (_, ticks) = timed(|| filter.sample(t, &f, &w, doubt));
@@ -74,13 +88,13 @@ fn main() -> ! {
                     slot.1 += 1;
                 }
             }
-            Event::Fix(fix) => {
+            Input::Fix(fix) => {
                 let (_, ticks) = timed(|| filter.gnss(&fix));
                 fixes.0 += ticks.saturating_sub(overhead);
                 fixes.1 += 1;
                 all += ticks.saturating_sub(overhead);
             }
-            Event::Pressure(t, p) => {
+            Input::Pressure(t, p) => {
                 let (_, ticks) = timed(|| filter.pressure(t, p));
                 pressures.0 += ticks.saturating_sub(overhead);
                 pressures.1 += 1;
@@ -143,15 +157,17 @@ fn main() -> ! {
 
     // Stack of a sample that steps the covariance and takes a fix.
     let mut again = FlightFilter::new(flight_config());
-    for e in events() {
+    let Ok(mut imu) = AnyImuCorrector::new(&cal, RATE) else {
+        fail("corrector")
+    };
+    for e in inputs(&mut imu, rails) {
         match e {
-            Event::Sample(t, f, w, doubt) => {
-                let (f, w) = (Vector3::from(f), Vector3::from(w));
+            Input::Sample(t, f, w, doubt) => {
                 let (_, used) = stack::high_water(|| again.sample(t, &f, &w, doubt));
                 epoch_stack = epoch_stack.max(used);
             }
-            Event::Fix(fix) => again.gnss(&fix),
-            Event::Pressure(t, p) => again.pressure(t, p),
+            Input::Fix(fix) => again.gnss(&fix),
+            Input::Pressure(t, p) => again.pressure(t, p),
         }
     }
     hprintln!("stack flight_sample {}", epoch_stack);

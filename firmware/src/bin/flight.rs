@@ -1,14 +1,17 @@
-//! The golden flight on the Cortex-M4F: the simulated shell's corrected samples, GNSS fixes
-//! and pressures through `spincal::flight::FlightFilter<f32>`, the state at every checkpoint
-//! compared bit for bit with the same code's on the host. Exits 0 when all match.
+//! The golden flight on the Cortex-M4F: the simulated shell's raw codes through the round's
+//! correction, then with the GNSS fixes and pressures through
+//! `spincal::flight::FlightFilter<f32>`, the state at every checkpoint compared bit for bit
+//! with the same code's on the host. Exits 0 when all match.
 #![no_std]
 #![no_main]
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
-use nalgebra::Vector3;
+use spincal::correct::AnyImuCorrector;
 use spincal::flight::FlightFilter;
-use spincal_firmware::flight_golden::{EVERY, EXPECTED, Event, VALUES, events, flight_config};
+use spincal_firmware::flight_golden::{
+    BLOB, EVERY, EXPECTED, Input, RATE, VALUES, flight_config, inputs, rails,
+};
 
 /// A checkpoint's values: position, velocity, attitude, sensor errors, variances.
 fn values(filter: &FlightFilter<f32>) -> [f32; VALUES] {
@@ -38,6 +41,14 @@ fn values(filter: &FlightFilter<f32>) -> [f32; VALUES] {
 
 #[entry]
 fn main() -> ! {
+    let Ok(cal) = spincal::blob::decode(BLOB) else {
+        hprintln!("FAIL: imu_spin.blob does not decode");
+        spincal_firmware::exit(false);
+    };
+    let (Some(rails), Ok(mut imu)) = (rails(&cal), AnyImuCorrector::new(&cal, RATE)) else {
+        hprintln!("FAIL: imu_spin.blob is not an IMU's");
+        spincal_firmware::exit(false);
+    };
     let mut filter = FlightFilter::new(flight_config());
     let mut expected = EXPECTED
         .chunks_exact(4)
@@ -61,17 +72,17 @@ fn main() -> ! {
             }
         }
     };
-    for e in events() {
+    for e in inputs(&mut imu, rails) {
         match e {
-            Event::Sample(t, f, w, doubt) => {
-                filter.sample(t, &Vector3::from(f), &Vector3::from(w), doubt);
+            Input::Sample(t, f, w, doubt) => {
+                filter.sample(t, &f, &w, doubt);
                 samples += 1;
                 if samples % EVERY == 0 {
                     check(&filter, &mut checkpoints);
                 }
             }
-            Event::Fix(fix) => filter.gnss(&fix),
-            Event::Pressure(t, p) => filter.pressure(t, p),
+            Input::Fix(fix) => filter.gnss(&fix),
+            Input::Pressure(t, p) => filter.pressure(t, p),
         }
     }
     check(&filter, &mut checkpoints);

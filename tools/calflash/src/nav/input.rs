@@ -4,8 +4,8 @@
 
 use std::path::Path;
 
-use spincal::correct::{AnyCorrector, Flags};
-use spincal::model::{Calibration, Rails};
+use spincal::correct::AnyCorrector;
+use spincal::model::Calibration;
 
 use crate::mission::Profile;
 
@@ -302,13 +302,10 @@ pub fn corrected(path: &Path, cal: &Calibration) -> Result<ImuSeries, InputError
         series.t.push(t);
         series.f.push([v[0], v[1], v[2]]);
         series.w.push([v[3], v[4], v[5]]);
-        let f = o.flags;
-        let both = f.contains(Flags::OUT_OF_RANGE) || f.contains(Flags::NO_CALIBRATION);
-        let at_rails = |codes: &[i32], r: Rails| codes.iter().any(|c| *c <= r.lo || *c >= r.hi);
-        series.flagged.push([
-            both || at_rails(&c[..3], rails.0),
-            both || at_rails(&c[3..], rails.1),
-        ]);
+        let codes: [i32; 6] = [c[0], c[1], c[2], c[3], c[4], c[5]];
+        series
+            .flagged
+            .push(spincal::flight::doubted(&codes, o.flags, rails.0, rails.1));
         last_t = t;
     }
     Ok(series)
