@@ -293,6 +293,7 @@ fn the_unit_publishes_its_flight_filter_and_calflash_flight_port_reads_it() {
     assert_eq!(ax as f32, filter.estimate().sensors.accel_bias.x);
     assert!((ax - SHIFT_AX).abs() < 0.15, "{v}");
     assert_eq!(v["taken"][1], filter.stats().taken[1]);
+    assert_eq!(v["navigation_resets"], 1);
     let sigma = v["sigma"][index::ACCEL_BIAS].as_f64().unwrap();
     assert_eq!(
         sigma as f32,

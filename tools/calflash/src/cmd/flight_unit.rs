@@ -116,8 +116,14 @@ pub fn text(serial: &str, port: &str, r: &FlightReport) -> String {
     );
     let _ = writeln!(
         out,
-        "  pressures left out: {} invalid, {} near Mach 1; {} samples navigated on doubt, {} time faults, {} covariance resets, {} epochs",
-        st.baro_invalid, st.baro_transonic, st.doubted, st.time_faults, st.resets, st.epochs
+        "  pressures left out: {} invalid, {} near Mach 1; {} samples navigated on doubt, {} time faults, {} navigation put back by a fix, {} covariance resets, {} epochs",
+        st.baro_invalid,
+        st.baro_transonic,
+        st.doubted,
+        st.time_faults,
+        st.navigation_resets,
+        st.resets,
+        st.epochs
     );
     out
 }
@@ -157,6 +163,7 @@ pub fn json(serial: &str, r: &FlightReport) -> serde_json::Value {
         },
         "doubted_samples": st.doubted,
         "time_faults": st.time_faults,
+        "navigation_resets": st.navigation_resets,
         "covariance_resets": st.resets,
         "epochs": st.epochs,
     })
