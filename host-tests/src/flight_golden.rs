@@ -72,12 +72,8 @@ pub fn calibration() -> Calibration {
     spincal::blob::decode(&bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
-/// The events through the unit's corrector: what the flight filter receives.
-///
-/// # Panics
-/// If the calibration is not an IMU's.
-#[must_use]
-pub fn inputs(cal: &Calibration, events: &[Event]) -> Vec<Input> {
+/// The converters' rails of the golden flight's IMU calibration.
+fn rails(cal: &Calibration) -> (spincal::model::Rails, spincal::model::Rails) {
     let Sensor::Imu {
         accel_rails,
         gyro_rails,
@@ -86,6 +82,16 @@ pub fn inputs(cal: &Calibration, events: &[Event]) -> Vec<Input> {
     else {
         panic!("the golden flight's calibration is an IMU's");
     };
+    (accel_rails, gyro_rails)
+}
+
+/// The events through the unit's corrector: what the flight filter receives.
+///
+/// # Panics
+/// If the calibration is not an IMU's.
+#[must_use]
+pub fn inputs(cal: &Calibration, events: &[Event]) -> Vec<Input> {
+    let (accel_rails, gyro_rails) = rails(cal);
     let mut imu = AnyImuCorrector::new(cal, RATE as f32).expect("an IMU corrector");
     events
         .iter()
@@ -154,14 +160,7 @@ pub fn flight_of(spec: &str) -> Flight {
     let mut rng = ChaCha8Rng::seed_from_u64(33);
     let truth = calflash::sim::truth::ImuTruth::spinning_round();
     let cal = calibration();
-    let Sensor::Imu {
-        accel_rails,
-        gyro_rails,
-        ..
-    } = cal.data().sensor
-    else {
-        panic!("the golden flight's calibration is an IMU's");
-    };
+    let (accel_rails, gyro_rails) = rails(&cal);
     const VOLT: f32 = 5.0;
     let (gh, gv, gvel, pa) = (
         Normal::new(0.0, 2.0).expect("sigma"),

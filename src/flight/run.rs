@@ -367,16 +367,7 @@ impl<T: Real> FlightFilter<T> {
         self.filter.covariance_step();
         if self.phase == Phase::Pad {
             for axis in 0..3 {
-                let h = ErrorFilter::velocity_row(axis);
-                let v = self
-                    .filter
-                    .estimate
-                    .nav
-                    .v
-                    .get(axis)
-                    .copied()
-                    .unwrap_or_else(T::zero);
-                self.take(Aiding::Pad, &h, -v, c(1e-4));
+                self.take_velocity(Aiding::Pad, axis, T::zero(), c(1e-4));
                 let (h, at) = self.filter.antenna_row(&Vector3::zeros(), axis);
                 self.take(Aiding::Pad, &h, -at, c(1e-4));
             }
@@ -422,30 +413,14 @@ impl<T: Real> FlightFilter<T> {
         }
         for (axis, zi) in z.iter().enumerate() {
             let (h, at) = self.filter.antenna_row(&lever, axis);
-            let v = self
-                .filter
-                .estimate
-                .nav
-                .v
-                .get(axis)
-                .copied()
-                .unwrap_or_else(T::zero);
+            let v = self.velocity(axis);
             let r = if axis == 2 { v_sigma } else { h_sigma };
             self.take(Aiding::Position, &h, c::<T>(*zi) - (at - v * back), r * r);
         }
         if let Some(vel) = fix.velocity {
             let r = self.config.gnss_velocity_sigma;
             for (axis, vi) in vel.iter().enumerate() {
-                let h = ErrorFilter::velocity_row(axis);
-                let v = self
-                    .filter
-                    .estimate
-                    .nav
-                    .v
-                    .get(axis)
-                    .copied()
-                    .unwrap_or_else(T::zero);
-                self.take(Aiding::Velocity, &h, c::<T>(f64::from(*vi)) - v, r * r);
+                self.take_velocity(Aiding::Velocity, axis, c(f64::from(*vi)), r * r);
             }
         }
     }
@@ -465,6 +440,24 @@ impl<T: Real> FlightFilter<T> {
         let port = self.config.baro_cp * v2 / c(2.0 * air::G0);
         let r2 = self.config.baro_sigma * self.config.baro_sigma + port * port;
         self.take(Aiding::Baro, &h, z - at, r2);
+    }
+
+    /// The navigation's velocity along the level-frame axis `axis`, m/s.
+    fn velocity(&self, axis: usize) -> T {
+        self.filter
+            .estimate
+            .nav
+            .v
+            .get(axis)
+            .copied()
+            .unwrap_or_else(T::zero)
+    }
+
+    /// Gates and takes a measured velocity along `axis` of variance `r2`.
+    fn take_velocity(&mut self, kind: Aiding, axis: usize, measured: T, r2: T) {
+        let h = ErrorFilter::velocity_row(axis);
+        let nu = measured - self.velocity(axis);
+        self.take(kind, &h, nu, r2);
     }
 
     /// Gates and takes one scalar measurement.
