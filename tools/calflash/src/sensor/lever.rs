@@ -32,6 +32,10 @@ pub fn column(i: usize, k: usize) -> String {
 /// The column of what an axis senses, SI units: the argument of its nonlinear terms.
 pub const SENSED: &str = "sensed";
 
+/// The asymmetry term of what an axis senses, `|sensed|` (a two-stage calibration carries a
+/// sensor's asymmetric scale factor about zero into the unit: `sensor::stages`).
+pub const SENSED_KINK: &str = "sensed_kink";
+
 /// `A' s` for `A = C(w) + [dw]x`: the gradient of `s . (w x (w x r) + dw x r)` in `r`
 /// ([`spincal::model::rotation::lever_gradient`]).
 #[must_use]

@@ -17,6 +17,7 @@ pub mod lever;
 pub mod record;
 pub mod selfcal;
 pub mod single;
+pub mod stages;
 pub mod table;
 pub mod thermal;
 pub mod threshold;
@@ -154,6 +155,17 @@ pub enum WorkflowError {
     /// Observations or a model the single-axis workflow cannot use.
     #[error(transparent)]
     Single(#[from] single::SingleError),
+    /// A stage-one record stage two cannot take.
+    #[error(transparent)]
+    StageOne(#[from] stages::StageOneError),
+    /// Stage-two observations that do not meet the stage-one records.
+    #[error("{}: {source}", path.display())]
+    StageTwo {
+        /// The observations.
+        path: PathBuf,
+        /// Why.
+        source: stages::StageTwoError,
+    },
 }
 
 impl WorkflowError {
@@ -514,6 +526,8 @@ pub struct Calibrated {
     pub table: crate::obs::Table,
     /// The calibration judged over a mission (`calibrate --mission`).
     pub mission: Option<crate::mission::judge::Judged>,
+    /// A two-stage calibration's check between the stages (`sensor::stages`).
+    pub stages: Option<stages::Check>,
 }
 
 impl Calibrated {

@@ -96,6 +96,10 @@ pub struct Record {
     /// error along the flight, the share beyond the calibrated range, the left-out terms.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mission: Option<serde_json::Value>,
+    /// A two-stage calibration (`calibrate --stage-one`): per sensor, its stage-one record and
+    /// whether its bias and scale factor held in assembly.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stages: Option<serde_json::Value>,
 }
 
 /// The points a record holds: the table's; for a continuous temperature model, the model at
@@ -206,6 +210,10 @@ impl Record {
                 .mission
                 .as_ref()
                 .and_then(|m| serde_json::to_value(m).ok()),
+            stages: c
+                .stages
+                .as_ref()
+                .and_then(|s| serde_json::to_value(s).ok()),
         }
     }
 

@@ -8,6 +8,7 @@ pub mod ramp;
 pub mod recording;
 pub mod rest;
 pub mod spin;
+pub mod stages;
 pub mod still;
 pub mod truth;
 

@@ -242,6 +242,38 @@ impl Fit {
     }
 }
 
+impl Fit {
+    /// Other coefficients on this fit's observations: `names` with `coefficients` and their
+    /// `covariance` composed elsewhere (a two-stage calibration: stage one's terms carried in,
+    /// stage two's fitted), the residual variance `sigma2` in their units. The residuals and
+    /// the goodness of fit stay this fit's; DFBETAS are not carried (zero); the variance
+    /// inflation factors are unknown. `None` when the covariance is not positive definite.
+    #[must_use]
+    pub fn recomposed(
+        &self,
+        names: Vec<String>,
+        coefficients: Vec<f64>,
+        covariance: &DMatrix<f64>,
+        sigma2: f64,
+    ) -> Option<Fit> {
+        let p = names.len();
+        if coefficients.len() != p || covariance.nrows() != p || covariance.ncols() != p {
+            return None;
+        }
+        let mut influence = self.influence.clone();
+        influence.dfbetas = DMatrix::zeros(self.n, p);
+        let base = Fit {
+            names,
+            p,
+            coefficients,
+            vif: vec![None; p],
+            influence,
+            ..self.clone()
+        };
+        base.with_covariance(sigma2, &(covariance / sigma2))
+    }
+}
+
 /// The t statistics, two-sided p-values and `1 - alpha` intervals of coefficients with their
 /// standard errors, on `dof` degrees of freedom.
 struct Inference {

@@ -164,6 +164,14 @@ pub struct CalibrateArgs {
     /// family or output: `a=0.05,g=0.002` (m/s^2, rad/s) or `a_x=0.05,...`; above it, REVIEW.
     #[arg(long, requires = "mission", value_parser = requirement)]
     pub requirement: Option<Requirements>,
+    /// IMUs, stage two of two: the six sensors' own single-axis calibrations (`calibrate
+    /// --sensor single-accel|single-gyro --json`), in the order a_x,a_y,a_z,g_x,g_y,g_z. The
+    /// assembled unit's observations then estimate what assembly adds (sensing directions,
+    /// bias and scale changes, lever arms, g-sensitivity) with each sensor's own terms and
+    /// temperature behaviour carried in, both stages' covariance in the stated 1-sigma; a
+    /// sensor whose bias or scale factor moved in assembly is a REVIEW.
+    #[arg(long, value_name = "AX.json,...,GZ.json", value_delimiter = ',', num_args = 1..)]
+    pub stage_one: Vec<PathBuf>,
 }
 
 /// `--requirement`: `(output or family, SI)` pairs.
@@ -228,14 +236,16 @@ pub fn calibrate_one(
 ) -> Result<Verdict, Failure> {
     use std::fmt::Write as _;
     sensor::blob::serial(serial)?;
-    out.check(
-        Paths::new()
-            .input("the data", Some(data))
-            .input("--still-ramp", args.still_ramp.as_deref())
-            .input("--noise", args.noise.first().map(PathBuf::as_path))
-            .input("--noise", args.noise.get(1).map(PathBuf::as_path))
-            .input("--mission", args.mission.as_deref()),
-    )?;
+    let mut paths = Paths::new()
+        .input("the data", Some(data))
+        .input("--still-ramp", args.still_ramp.as_deref())
+        .input("--noise", args.noise.first().map(PathBuf::as_path))
+        .input("--noise", args.noise.get(1).map(PathBuf::as_path))
+        .input("--mission", args.mission.as_deref());
+    for p in &args.stage_one {
+        paths = paths.input("--stage-one", Some(p));
+    }
+    out.check(paths)?;
     let noise = noise_terms(args)?;
     let mut opts = Options::new(data, serial);
     opts.format = args.format;
@@ -288,7 +298,20 @@ pub fn calibrate_one(
     {
         return Err("--model applies to single-axis sensors; triads use their presets".into());
     }
+    let two_stage = !args.stage_one.is_empty();
+    if two_stage {
+        if args.sensor != SensorKind::Imu {
+            return Err("--stage-one: stage two calibrates an assembled IMU (--sensor imu); stage one is each sensor's own calibration".into());
+        }
+        if args.still_ramp.is_some() || args.nonlinear {
+            return Err("--stage-one carries each sensor's nonlinear terms and temperature behaviour from stage one: --still-ramp and --nonlinear do not apply".into());
+        }
+    }
     let c = match args.sensor {
+        SensorKind::Imu if two_stage => {
+            let sensors = sensor::stages::one::read_all(&args.stage_one)?;
+            triad::stage_two::calibrate(&opts, &sensors).map(|(c, _)| c)
+        }
         SensorKind::SingleAccel => single::calibrate(&opts, Quantity::Acceleration),
         SensorKind::SingleGyro => single::calibrate(&opts, Quantity::AngularRate),
         SensorKind::Accel => triad::calibrate(&opts, triad::Kind::Accel, args.nonlinear),

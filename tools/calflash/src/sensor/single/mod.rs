@@ -650,6 +650,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         thermal: thermal_fit.into_iter().collect(),
         table,
         mission: None,
+        stages: None,
     })
 }
 

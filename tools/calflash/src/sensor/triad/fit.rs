@@ -43,7 +43,7 @@ fn fit_one(
 /// its coefficients, else regression steps from [`lever::Estimate::start`] until the estimates
 /// the regressors are made from stop moving (`sensor::lever`).
 #[allow(clippy::too_many_arguments)]
-fn fit_axis(
+pub(super) fn fit_axis(
     spec: &Spec<'_>,
     formula: &Formula,
     t: &Table,

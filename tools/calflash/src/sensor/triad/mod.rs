@@ -20,6 +20,7 @@ mod assemble;
 mod error;
 mod fit;
 mod sets;
+pub mod stage_two;
 pub mod still;
 mod thermal;
 
@@ -550,7 +551,35 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         .map(|m| sets_of(&gyro_spec, m).map(as_series))
         .transpose()?;
 
-    let mut env = blob::environment(&table, &layout, opts)?;
+    finish(
+        opts,
+        table,
+        &layout,
+        (accel, gyro),
+        (series_terms, None),
+        notes,
+        beyond.into_iter().chain(extra_findings).collect(),
+    )
+}
+
+/// The calibration from the device's sets of the triads `parts` (accelerometer, gyro) at the
+/// points of `layout` (a series of `series_terms` when given; over the temperature span
+/// `span` when given, else the data's): the blob, checked, and the findings, `findings_in`
+/// among them.
+fn finish(
+    opts: &Options,
+    table: Table,
+    layout: &Layout,
+    (accel, gyro): (Option<TriadResult>, Option<TriadResult>),
+    (series_terms, span): (Option<usize>, Option<Span>),
+    mut notes: Vec<String>,
+    findings_in: Vec<super::Finding>,
+) -> Result<Calibrated, WorkflowError> {
+    let path = &opts.file;
+    let mut env = blob::environment(&table, layout, opts)?;
+    if let Some(span) = span {
+        env.temperature_span = span;
+    }
     if let Some(n) = series_terms {
         env.temperatures = BoundedVec::new();
         env.temperature_model = TemperatureModel::Chebyshev(n as u8);
@@ -564,7 +593,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         noise: None,
     };
     let parts: Vec<&TriadResult> = accel.iter().chain(gyro.iter()).collect();
-    let points = assemble::point_fits(&layout, &parts);
+    let points = assemble::point_fits(layout, &parts);
     let (blob, output_errors) = blob::build_and_check(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);
     let (names, units, ranges) = described(
@@ -574,8 +603,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
         &mut notes,
     );
     let mut findings = super::findings(&points, &names, &units, opts, &output_errors);
-    findings.extend(beyond);
-    findings.extend(extra_findings);
+    findings.extend(findings_in);
     if let (Some(g), None) = (&gyro, &opts.earth) {
         findings.push(earth_neglected(&g.fits[layout.reference()]));
     }
@@ -602,6 +630,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
             .collect(),
         table,
         mission: None,
+        stages: None,
     })
 }
 
