@@ -3,7 +3,11 @@
 //! calibration's error over the operating range against one stage's of about the same
 //! observations, the honesty of its stated 1-sigma, and the check between the stages.
 
+mod common;
+
 use std::path::{Path, PathBuf};
+
+use common::calflash;
 
 use calflash::sensor::record::Record;
 use calflash::sensor::stages::{Check, one};
@@ -320,5 +324,284 @@ fn two_stages_beat_one_and_state_their_error_honestly() {
         (0.915..=0.985).contains(&coverage(&two)),
         "{}",
         coverage(&two)
+    );
+}
+
+/// The six stage-one records of a simulated unit in `d` (`s1/OUTPUT.json`), made by the CLI;
+/// the names, comma-separated.
+fn stage_one_cli(d: &Path, seed: &str, shift: Option<&str>) -> String {
+    let mut args = vec![
+        "simulate",
+        "--sensor",
+        "imu",
+        "--stages",
+        "s1",
+        "--plan",
+        "tumble:26",
+        "--plan",
+        "rate:-8:8:4",
+        "--plan",
+        "diagonal:-8:8:2",
+        "--temps=-20,5,25,45,70",
+        "--seed",
+        seed,
+        "--write-truth",
+        "truth.json",
+        "-o",
+        "unit.csv",
+    ];
+    if let Some(s) = shift {
+        args.extend(["--assembly-shift", s]);
+    }
+    let (code, out, err) = calflash(d, &args);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("stage one, g_z: 280 observations"), "{out}");
+    one::OUTPUTS
+        .iter()
+        .enumerate()
+        .map(|(k, o)| {
+            let (csv, json, serial) = (
+                format!("s1/{o}.csv"),
+                format!("s1/{o}.json"),
+                format!("S-{seed}-{k}"),
+            );
+            let sensor = if k < 3 { "single-accel" } else { "single-gyro" };
+            let (code, out, err) = calflash(
+                d,
+                &[
+                    "calibrate",
+                    &csv,
+                    "--sensor",
+                    sensor,
+                    "--serial",
+                    &serial,
+                    "--keep-all-terms",
+                    "--asymmetry",
+                    "keep",
+                    "--thermal",
+                    "table",
+                    "--json",
+                    &json,
+                    "--no-db",
+                ],
+            );
+            assert_eq!(code, 0, "{out}{err}");
+            json
+        })
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+fn stage_two_cli(d: &Path, records: &str, data: &str) -> (i32, String, String) {
+    calflash(
+        d,
+        &[
+            "calibrate",
+            data,
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-7",
+            "--keep-all-terms",
+            "--stage-one",
+            records,
+            "--blob",
+            "unit.blob",
+            "--json",
+            "unit.json",
+            "--report",
+            "unit.html",
+            "--no-db",
+        ],
+    )
+}
+
+#[test]
+fn calflash_calibrates_in_two_stages_end_to_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let records = stage_one_cli(d, "5", None);
+    let (code, out, err) = stage_two_cli(d, &records, "unit.csv");
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("stage one holds for the six sensors"), "{out}");
+    assert!(out.contains("between the stages: g_z S-5-5"), "{out}");
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("unit.json")).unwrap()).unwrap();
+    assert_eq!(record["stages"]["sensors"].as_array().unwrap().len(), 6);
+    assert_eq!(
+        record["points"].as_array().unwrap().len(),
+        5,
+        "stage one's temperatures"
+    );
+    let cal = spincal::blob::decode(&std::fs::read(d.join("unit.blob")).unwrap()).unwrap();
+    let env = &cal.data().environment;
+    assert_eq!(env.temperatures.len(), 5);
+    assert_eq!(
+        (env.temperature_span.lo, env.temperature_span.hi),
+        (-20.0, 70.0)
+    );
+    let html = std::fs::read_to_string(d.join("unit.html")).unwrap();
+    assert!(
+        html.contains("between the stages"),
+        "the report says what each stage did"
+    );
+
+    // Assembly stressed a_y: its scale factor moved by 0.2 %.
+    let shifted = tempfile::tempdir().unwrap();
+    let s = shifted.path();
+    let records = stage_one_cli(s, "5", Some("a_y=2e-3"));
+    let (code, out, err) = stage_two_cli(s, &records, "unit.csv");
+    assert_eq!(code, 0, "REVIEW is not a rejection: {out}{err}");
+    assert!(
+        out.contains("REVIEW a_y (sensor S-5-1): the scale factor moved in assembly by +2"),
+        "{out}"
+    );
+}
+
+#[test]
+fn stage_one_records_that_do_not_fit_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let records = stage_one_cli(d, "6", None);
+    let list: Vec<&str> = records.split(',').collect();
+    let fails = |records: &str, data: &str, want: &str| {
+        let (code, out, err) = stage_two_cli(d, records, data);
+        assert_eq!(code, 1, "{out}{err}");
+        assert!(err.contains(want), "want `{want}` in: {err}");
+        assert!(!d.join("unit.blob").exists(), "nothing written");
+    };
+    // A missing axis.
+    fails(
+        &list[..5].join(","),
+        "unit.csv",
+        "six records are expected, one per sensor in the order a_x,a_y,a_z,g_x,g_y,g_z; 5 given: g_z missing",
+    );
+    // A gyro's record for an accelerometer's output.
+    let mut swapped = list.clone();
+    swapped.swap(0, 3);
+    fails(
+        &swapped.join(","),
+        "unit.csv",
+        "s1/g_x.json (a_x): the record is of a gyro (in rad/s); a_x is an accelerometer (in m/s^2)",
+    );
+    // The same sensor twice.
+    let mut twice = list.clone();
+    twice[1] = list[0];
+    fails(&twice.join(","), "unit.csv", "are the same sensor S-6-0");
+    // A rejected stage one.
+    let text = std::fs::read_to_string(d.join(list[2])).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["verdict"] = "reject".into();
+    std::fs::write(d.join("rejected.json"), v.to_string()).unwrap();
+    let mut rejected = list.clone();
+    rejected[2] = "rejected.json";
+    fails(
+        &rejected.join(","),
+        "unit.csv",
+        "rejected.json (a_z): stage one of sensor S-6-2 was judged REJECT",
+    );
+    // A triad's record.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "unit.csv",
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-1",
+            "--json",
+            "imu1.json",
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let mut triad = list.clone();
+    triad[4] = "imu1.json";
+    fails(
+        &triad.join(","),
+        "unit.csv",
+        "imu1.json (g_y): a `imu` record; stage one is a single sensor's",
+    );
+    // The unit's data outside stage one's temperatures, or without a temperature.
+    let csv = std::fs::read_to_string(d.join("unit.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    let t = header.split(',').position(|c| c == "temp").unwrap();
+    let hot: Vec<String> = std::iter::once(header.to_string())
+        .chain(lines.map(|l| {
+            let mut f: Vec<&str> = l.split(',').collect();
+            f[t] = "85";
+            f.join(",")
+        }))
+        .collect();
+    std::fs::write(d.join("hot.csv"), hot.join("\n") + "\n").unwrap();
+    fails(
+        &records,
+        "hot.csv",
+        "hot.csv: line 2: temp 85 C is outside the span stage one calibrated a_x over (-20 to 70 C",
+    );
+    let cold: Vec<String> = csv
+        .lines()
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            f.iter()
+                .enumerate()
+                .filter(|(i, _)| *i != t)
+                .map(|(_, v)| *v)
+                .collect::<Vec<_>>()
+                .join(",")
+        })
+        .collect();
+    std::fs::write(d.join("notemp.csv"), cold.join("\n") + "\n").unwrap();
+    fails(
+        &records,
+        "notemp.csv",
+        "the stage-one records hold temperature points (-20 C, 5 C, 25 C, 45 C, 70 C) but the data have no `temp` column",
+    );
+    // A unit's plan that turns the gyros faster than their stage one did.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--stages",
+            "s1b",
+            "--plan",
+            "tumble:26",
+            "--plan",
+            "rate:-12:12:4",
+            "--seed",
+            "6",
+            "-o",
+            "fast.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    fails(
+        &records,
+        "fast.csv",
+        "g_x: the unit's plan drives the axis over -12.0000 to 12.0000 rad/s; stage one (s1/g_x.json) calibrated -8.0000 to 8.0000 rad/s",
+    );
+    // Not a single-axis unit: --stage-one with another sensor.
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "s1/a_x.csv",
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "X",
+            "--stage-one",
+            &records,
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("--stage-one: stage two calibrates an assembled IMU"),
+        "{err}"
     );
 }

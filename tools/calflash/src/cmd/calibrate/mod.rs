@@ -170,7 +170,7 @@ pub struct CalibrateArgs {
     /// bias and scale changes, lever arms, g-sensitivity) with each sensor's own terms and
     /// temperature behaviour carried in, both stages' covariance in the stated 1-sigma; a
     /// sensor whose bias or scale factor moved in assembly is a REVIEW.
-    #[arg(long, value_name = "AX.json,...,GZ.json", value_delimiter = ',', num_args = 1..)]
+    #[arg(long, value_name = "AX.json,...,GZ.json", value_delimiter = ',')]
     pub stage_one: Vec<PathBuf>,
 }
 

@@ -4,6 +4,7 @@ use crate::cmd::Failure;
 use std::path::PathBuf;
 
 mod flight;
+mod stages;
 
 use crate::files::{Paths, Staged};
 use clap::Args;
@@ -173,6 +174,27 @@ pub struct SimulateArgs {
     /// Write the truth used here (JSON).
     #[arg(long)]
     pub write_truth: Option<PathBuf>,
+    /// Two stages from one truth (`--sensor imu`): each of the six sensors through
+    /// `--stage-one-plan` at `--temps` on its own fixture, written as DIR/a_x.csv ...
+    /// DIR/g_z.csv (single-axis observations for `calibrate --sensor single-accel|single-gyro`),
+    /// and the unit they are assembled into through `--plan` at `--assembly-temp` (`-o`, for
+    /// `calibrate --sensor imu --stage-one`). `--truth` reads an assembled unit's truth (the
+    /// six sensors, their directions, lever arms, g-sensitivity, and what assembly changed);
+    /// by default one is drawn from `--seed`.
+    #[arg(long, value_name = "DIR", requires = "plan", conflicts_with_all = ["plan_file", "ramp", "spin", "rest", "flight", "still"])]
+    pub stages: Option<PathBuf>,
+    /// With --stages: the stage-one plan items, every sensor through all of them (default:
+    /// the accelerometers on a dividing head, head:56; the gyros on a rate table,
+    /// rate:-8:8:41 and rate:0:0:15).
+    #[arg(long, requires = "stages")]
+    pub stage_one_plan: Vec<String>,
+    /// With --stages: the chamber's temperature for the assembled unit's plan, C.
+    #[arg(long, default_value_t = 25.0, requires = "stages", value_parser = super::values::finite)]
+    pub assembly_temp: f64,
+    /// With --stages: what assembly changes in a sensor's scale factor, `OUTPUT=RELATIVE`
+    /// (comma-separated, e.g. `a_y=7.5e-4`).
+    #[arg(long, value_delimiter = ',', requires = "stages")]
+    pub assembly_shift: Vec<String>,
     /// The observation file to write (CSV).
     #[arg(long, short)]
     pub output: PathBuf,
@@ -487,6 +509,12 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         .check()?;
     if let Some(spec) = &args.flight {
         return flight::run(args, spec);
+    }
+    if let Some(dir) = &args.stages {
+        if args.sensor != SensorKind::Imu {
+            return Err("--stages: two stages make an assembled IMU (--sensor imu)".into());
+        }
+        return stages::run(args, dir);
     }
     if let Some(seconds) = args.still {
         return still(args, seconds);
