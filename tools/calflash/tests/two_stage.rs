@@ -605,3 +605,80 @@ fn stage_one_records_that_do_not_fit_are_named() {
         "{err}"
     );
 }
+
+/// `design evaluate --stage-one`: a two-stage plan against one stage's before any test, with
+/// the collinearity each fit suffers.
+#[test]
+fn design_compares_two_stages_with_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let unit = "tumble:26,rate:-8:8:4,diagonal:-8:8:2";
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "design",
+            "evaluate",
+            "--model",
+            "triad-nonlinear",
+            "--sensor",
+            "accel",
+            "--temps=-20,5,25,45,70",
+            "--stage-one",
+            "head:56",
+            "--plan",
+            unit,
+            "--plan",
+            unit,
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("stage one: head:56 (56 observations per sensor at each of 5 temperature(s))"),
+        "{out}"
+    );
+    assert!(
+        out.contains("axis f_z: two stages: mean prediction variance"),
+        "{out}"
+    );
+    // One stage on this plan suffers the asymmetry term's collinearity; stage two none.
+    let vif = |line: &str| -> f64 {
+        let at = line.find("largest VIF ").unwrap() + "largest VIF ".len();
+        line[at..].split(',').next().unwrap().parse().unwrap()
+    };
+    let one = out
+        .lines()
+        .find(|l| l.contains("one stage tumble:26"))
+        .unwrap();
+    let two = out
+        .lines()
+        .find(|l| l.contains("misalignment fit"))
+        .unwrap();
+    assert!(vif(one) > 1000.0 && vif(two) < 1.5, "{out}");
+    assert!(
+        one.contains("RMS error of two stages against one at equal totals: "),
+        "{one}"
+    );
+    // A one-stage plan that cannot estimate the nonlinear terms is named.
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "design",
+            "evaluate",
+            "--model",
+            "triad-nonlinear",
+            "--sensor",
+            "accel",
+            "--stage-one",
+            "head:56",
+            "--plan",
+            unit,
+            "--plan",
+            "tumble:6",
+        ],
+    );
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("one stage tumble:6, axis f_x: f_x^3 is not observable"),
+        "{err}"
+    );
+}

@@ -340,7 +340,7 @@ pub fn union<'a>(plans: impl Iterator<Item = &'a Points>, vars: &[String]) -> Po
 }
 
 /// The points as a table of the formula's columns, for explaining a rank deficiency.
-fn to_table(pts: &Points, f: &crate::formula::Formula) -> crate::obs::Table {
+pub(crate) fn to_table(pts: &Points, f: &crate::formula::Formula) -> crate::obs::Table {
     let names = f.columns();
     crate::obs::Table {
         path: PathBuf::from("plan"),

@@ -42,9 +42,17 @@ pub struct EvaluateArgs {
     /// Write JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Two stages against one (triads): each sensor alone through these plan items first
+    /// (its own polynomial with asymmetry), then the assembled unit through the first --plan
+    /// (misalignment, bias and scale held); compared with one stage on each further --plan.
+    #[arg(long, value_delimiter = ',')]
+    pub stage_one: Vec<String>,
 }
 
 pub(super) fn run(a: &EvaluateArgs) -> Result<(), Failure> {
+    if !a.stage_one.is_empty() {
+        return super::stages::run(a, &a.stage_one);
+    }
     plan_files(&a.plan, "--plan", Paths::new())
         .input("--mission", a.model.mission.as_deref())
         .output("--json", a.json.as_deref())

@@ -3,6 +3,7 @@
 mod evaluate;
 mod optimize;
 mod predict;
+mod stages;
 
 pub use evaluate::EvaluateArgs;
 pub use optimize::{MAX_PLAN, OptimizeArgs};

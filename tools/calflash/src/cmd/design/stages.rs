@@ -1,0 +1,198 @@
+//! `calflash design evaluate --stage-one ITEMS`: a two-stage plan against one stage's.
+//!
+//! Stage one puts each sensor alone through ITEMS and fits its own polynomial (bias, scale
+//! factor, g-squared, cubic, odd-quadratic and asymmetry: `output ~ 1 + input + input^2 +
+//! input^3 + input:abs(input) + abs(input)`); stage two puts the assembled unit through the
+//! first `--plan` and, with the bias and scale factor held from stage one, fits each axis'
+//! misalignment (`~ 0 + the two cross inputs`). One stage fits every term of each axis at once
+//! on each further `--plan` (the `triad-nonlinear` preset with the asymmetry term). Per axis:
+//! the prediction variance over the operating region (in output-noise units, one reading per
+//! observation) of each, the collinearity of each fit (largest VIF, condition number), and the
+//! ratio of the RMS prediction errors at equal total observations. With several `--temps`,
+//! stage one and one stage run at each, stage two once: the plans are evaluated at one
+//! temperature and the totals count them so. Stage one's error reaching stage two's
+//! misalignment through the readings is left out (a second-order effect), and so is a model's
+//! bias: a one-stage model without the asymmetry term (the triad workflow's) is biased by it,
+//! which only the Monte Carlo of `tests/two_stage.rs` shows.
+
+use crate::cmd::Failure;
+use crate::design::criteria::{self, Criteria};
+use crate::design::points::{self, Points, Unit};
+use crate::design::space;
+use crate::formula::{self, Formula};
+
+use super::EvaluateArgs;
+
+/// Stage one's model of a sensor, over its own input.
+const STAGE_ONE: &str = "output ~ 1 + input + input^2 + input^3 + input:abs(input) + abs(input)";
+
+fn largest_vif(c: &Criteria) -> f64 {
+    c.vif.iter().flatten().copied().fold(0.0, f64::max)
+}
+
+fn quad(phi: &[f64], c: &nalgebra::DMatrix<f64>) -> f64 {
+    (0..phi.len())
+        .flat_map(|a| (0..phi.len()).map(move |b| (a, b)))
+        .map(|(a, b)| phi[a] * c[(a, b)] * phi[b])
+        .sum()
+}
+
+fn evaluated(x: &nalgebra::DMatrix<f64>, what: &str) -> Result<Criteria, Failure> {
+    criteria::evaluate(x, x, true).map_err(|d| {
+        format!(
+            "{what}: the model is not estimable on this plan (column {} depends on the others)",
+            d.column + 1
+        )
+        .into()
+    })
+}
+
+/// Runs the comparison.
+///
+/// # Errors
+/// A plan that cannot be read or does not estimate its model; a sensor that is not a triad.
+pub(super) fn run(a: &EvaluateArgs, stage_one: &[String]) -> Result<(), Failure> {
+    let gyro = match a.model.sensor {
+        crate::cmd::values::SensorKind::Accel | crate::cmd::values::SensorKind::Imu => false,
+        crate::cmd::values::SensorKind::Gyro => true,
+        _ => {
+            return Err("--stage-one: two stages are compared for a triad (--sensor accel or gyro), whose axes are calibrated alone first".into());
+        }
+    };
+    let [unit_plan, one_stage @ ..] = a.plan.as_slice() else {
+        return Err("--stage-one: give the assembled unit's plan as the first --plan".into());
+    };
+    if one_stage.is_empty() {
+        return Err("--stage-one: give one-stage plans to compare as further --plan".into());
+    }
+    if a.json.is_some() || a.report.is_some() || a.curve.is_some() || a.model.mission.is_some() {
+        return Err("--stage-one: the comparison is printed; --json, --report, --curve and --mission are for one-stage plans".into());
+    }
+    let space = a.model.space()?;
+    // Stage one runs at every temperature, stage two once: each plan is evaluated at one
+    // temperature, the totals count stage one and one stage `t` times.
+    let t = a.model.temps.len();
+    let (temps, volts) = (&a.model.temps[..1], &a.model.volts);
+    let single = if gyro {
+        Unit::SingleGyro
+    } else {
+        Unit::SingleAccel
+    };
+    let one = points::from_items(stage_one, temps, volts, 1, single)?;
+    let load = |spec: &str| -> Result<Points, Failure> {
+        let items: Vec<String> = spec.split(',').map(|s| s.trim().to_string()).collect();
+        Ok(points::from_items(&items, temps, volts, 1, Unit::Triad)?)
+    };
+    let unit = load(unit_plan)?;
+    let others: Vec<(String, Points)> = one_stage
+        .iter()
+        .map(|s| load(s).map(|p| (s.clone(), p)))
+        .collect::<Result<_, _>>()?;
+    let inputs = if gyro {
+        ["w_x", "w_y", "w_z"]
+    } else {
+        ["f_x", "f_y", "f_z"]
+    };
+    let vars: Vec<String> = crate::columns::F
+        .iter()
+        .chain(&crate::columns::W)
+        .map(|s| s.to_string())
+        .collect();
+    let region = if space.region.is_empty() {
+        space::union(
+            std::iter::once(&unit).chain(others.iter().map(|(_, p)| p)),
+            &vars,
+        )
+    } else {
+        space::grids(&space.region)?
+    };
+    let f1 = formula::parse(STAGE_ONE)?;
+    let c1 = evaluated(&one.model_rows(&f1), "stage one")?;
+    let (n1, n2) = (one.rows.len(), unit.rows.len());
+    println!(
+        "calflash design evaluate: two stages against one, {} triad, over {} points of the operating region (variances in output-noise units, one reading per observation)",
+        if gyro { "a gyro" } else { "an accelerometer" },
+        region.rows.len()
+    );
+    println!(
+        "  stage one: {} ({n1} observations per sensor at each of {t} temperature(s)), model {STAGE_ONE}: largest VIF {:.1}, condition number {:.3e}",
+        stage_one.join(","),
+        largest_vif(&c1),
+        c1.condition_number
+    );
+    println!("  stage two: {unit_plan} ({n2} observations, once)");
+    for i in 0..3 {
+        let cross: Vec<&str> = (0..3).filter(|j| *j != i).map(|j| inputs[j]).collect();
+        let f2 = formula::parse(&format!("y ~ 0 + {} + {}", cross[0], cross[1]))?;
+        let c2 = evaluated(
+            &unit.model_rows(&f2),
+            &format!("stage two, axis {}", inputs[i]),
+        )?;
+        let own = region
+            .names
+            .iter()
+            .position(|n| n == inputs[i])
+            .unwrap_or(0);
+        let single_row = |x: f64| -> Vec<f64> {
+            let p = Points {
+                names: vec!["input".into()],
+                rows: vec![vec![x]],
+            };
+            p.model_rows(&f1).row(0).iter().copied().collect()
+        };
+        let two: f64 = (0..region.rows.len())
+            .map(|r| {
+                let x = region.rows[r][own];
+                let v1 = quad(&single_row(x), &c1.unscaled_covariance);
+                let phi2: Vec<f64> = cross.iter().map(|c| region.value(r, c)).collect();
+                v1 + quad(&phi2, &c2.unscaled_covariance)
+            })
+            .sum::<f64>()
+            / region.rows.len() as f64;
+        let n_two = t * n1 + n2;
+        println!(
+            "  axis {}: two stages: mean prediction variance {two:.4e} ({n_two} observations per sensor); stage two's misalignment fit: largest VIF {:.1}, condition number {:.3e}",
+            inputs[i],
+            largest_vif(&c2),
+            c2.condition_number
+        );
+        for (name, pts) in &others {
+            let sensed = inputs[i];
+            let fo = onestage_formula(i, inputs, sensed)?;
+            let x = pts.model_rows(&fo);
+            let reg = region.model_rows(&fo);
+            let c = criteria::evaluate(&x, &reg, true).map_err(|d| {
+                format!(
+                    "one stage {name}, axis {}: {}",
+                    inputs[i],
+                    fo.explain_rank_deficiency(
+                        &space::to_table(pts, &fo),
+                        d.column,
+                        &d.combination
+                    )
+                )
+            })?;
+            let n = pts.rows.len();
+            // The I criterion is n times the mean prediction variance; at equal totals one
+            // stage has n_two / t observations at each temperature.
+            let ratio = (two * n_two as f64 / (c.i * t as f64)).sqrt();
+            println!(
+                "    one stage {name} ({n} observations at each temperature): mean prediction variance {:.4e}, largest VIF {:.1}, condition number {:.3e}; RMS error of two stages against one at equal totals: {ratio:.3}",
+                c.i / n as f64,
+                largest_vif(&c),
+                c.condition_number
+            );
+        }
+    }
+    Ok(())
+}
+
+/// One stage's model of axis `i`: bias, the three inputs, and the own-axis g-squared, cubic,
+/// odd-quadratic and asymmetry terms (on the own input: misalignment is small).
+fn onestage_formula(i: usize, inputs: [&str; 3], own: &str) -> Result<Formula, Failure> {
+    Ok(formula::parse(&format!(
+        "y ~ 1 + {} + {} + {} + {own}^2 + {own}^3 + {own}:abs({own}) + abs({own})",
+        inputs[0], inputs[1], inputs[2]
+    ))
+    .map_err(|e| format!("axis {i}: {e}"))?)
+}
