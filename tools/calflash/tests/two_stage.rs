@@ -309,13 +309,20 @@ fn two_stages_beat_one_and_state_their_error_honestly() {
         coverage(&two),
         coverage(&one)
     );
-    for f in 0..2 {
+    for (name, f) in [("accelerometers", 0), ("gyros", 1)] {
+        let share = |s: &[Score]| {
+            s.iter().map(|x| x.inside_f[f]).sum::<usize>() as f64
+                / s.iter().map(|x| x.n[f]).sum::<usize>() as f64
+        };
         println!(
-            "family {f} coverage two {:.4} one {:.4}",
-            two.iter().map(|x| x.inside_f[f]).sum::<usize>() as f64
-                / two.iter().map(|x| x.n[f]).sum::<usize>() as f64,
-            one.iter().map(|x| x.inside_f[f]).sum::<usize>() as f64
-                / one.iter().map(|x| x.n[f]).sum::<usize>() as f64
+            "{name}: the device's 95% intervals cover the truth: two stages {:.4}, one stage {:.4}",
+            share(&two),
+            share(&one)
+        );
+        assert!(
+            (0.915..=0.985).contains(&share(&two)),
+            "{name}: {}",
+            share(&two)
         );
     }
     assert!(rms(&two, 0) < rms(&one, 0));
