@@ -65,27 +65,18 @@ impl AssembledTruth {
                     k1: k1 * (1.0 + normal(&mut rng, 5e-3)),
                     k2: normal(&mut rng, if gyro { 2e-4 } else { 1.5e-4 }),
                     k3: normal(&mut rng, if gyro { 5e-6 } else { 2e-6 }),
-                    koq: 0.0,
+                    // On its own fixture a sensor has no cross-axis terms: in the unit, its
+                    // mounted direction takes their place.
                     kp: 0.0,
                     ko: 0.0,
-                    kip: 0.0,
                     asym: normal(&mut rng, 5e-4),
-                    breakpoint: 0.0,
-                    hysteresis: 0.0,
-                    dead_band: 0.0,
                     k0_temp: normal(&mut rng, 0.5),
                     k1_temp: normal(&mut rng, 80e-6),
                     k0_temp2: normal(&mut rng, 4e-3),
-                    k0_temp3: 0.0,
                     k1_temp2: normal(&mut rng, 4e-7),
-                    k0_tanh: 0.0,
-                    k1_tanh: 0.0,
-                    tanh_center: 10.0,
-                    tanh_width: 15.0,
-                    k0_volt: 0.0,
-                    k1_volt: 0.0,
                     ref_volt: 3.3,
                     noise,
+                    ..SingleTruth::default()
                 }
             })
             .collect();
