@@ -389,7 +389,8 @@ fn stage_one_cli(d: &Path, seed: &str, shift: Option<&str>) -> String {
                     "table",
                     "--json",
                     &json,
-                    "--no-db",
+                    "--db",
+                    "history.sqlite",
                 ],
             );
             assert_eq!(code, 0, "{out}{err}");
@@ -452,6 +453,61 @@ fn calflash_calibrates_in_two_stages_end_to_end() {
         html.contains("between the stages"),
         "the report says what each stage did"
     );
+    // The same from the unit history, by the sensors' serials.
+    let by_serial: Vec<String> = (0..6).map(|k| format!("history:S-5-{k}")).collect();
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "unit.csv",
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-7",
+            "--keep-all-terms",
+            "--stage-one",
+            &by_serial.join(","),
+            "--json",
+            "from_history.json",
+            "--db",
+            "history.sqlite",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let again: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("from_history.json")).unwrap())
+            .unwrap();
+    let sensors = |v: &serde_json::Value| v["stages"]["sensors"].as_array().unwrap().clone();
+    for (a, b) in sensors(&again).iter().zip(&sensors(&record)) {
+        assert_eq!(a["bias_change"], b["bias_change"]);
+        assert_eq!(a["scale_change"], b["scale_change"]);
+        assert!(
+            a["record"]
+                .as_str()
+                .unwrap()
+                .contains("history.sqlite record"),
+            "{a}"
+        );
+    }
+    let mut unknown = by_serial.clone();
+    unknown[5] = "history:NOPE".into();
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "unit.csv",
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-7",
+            "--stage-one",
+            &unknown.join(","),
+            "--db",
+            "history.sqlite",
+        ],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("has no calibration of sensor NOPE"), "{err}");
 
     // Assembly stressed a_y: its scale factor moved by 0.2 %.
     let shifted = tempfile::tempdir().unwrap();

@@ -169,7 +169,8 @@ pub struct CalibrateArgs {
     /// assembled unit's observations then estimate what assembly adds (sensing directions,
     /// bias and scale changes, lever arms, g-sensitivity) with each sensor's own terms and
     /// temperature behaviour carried in, both stages' covariance in the stated 1-sigma; a
-    /// sensor whose bias or scale factor moved in assembly is a REVIEW.
+    /// sensor whose bias or scale factor moved in assembly is a REVIEW. `history:SERIAL` takes
+    /// that sensor's newest calibration from the unit history (`--db`, or the default).
     #[arg(long, value_name = "AX.json,...,GZ.json", value_delimiter = ',')]
     pub stage_one: Vec<PathBuf>,
 }
@@ -242,7 +243,7 @@ pub fn calibrate_one(
         .input("--noise", args.noise.first().map(PathBuf::as_path))
         .input("--noise", args.noise.get(1).map(PathBuf::as_path))
         .input("--mission", args.mission.as_deref());
-    for p in &args.stage_one {
+    for p in args.stage_one.iter().filter(|p| from_history(p).is_none()) {
         paths = paths.input("--stage-one", Some(p));
     }
     out.check(paths)?;
@@ -309,7 +310,7 @@ pub fn calibrate_one(
     }
     let c = match args.sensor {
         SensorKind::Imu if two_stage => {
-            let sensors = sensor::stages::one::read_all(&args.stage_one)?;
+            let sensors = stage_one(&args.stage_one, out)?;
             triad::stage_two::calibrate(&opts, &sensors).map(|(c, _)| c)
         }
         SensorKind::SingleAccel => single::calibrate(&opts, Quantity::Acceleration),
@@ -379,6 +380,55 @@ pub fn calibrate_one(
         let _ = writeln!(said, "  {line}");
     }
     Ok(c.verdict())
+}
+
+/// `history:SERIAL` in `--stage-one`: the serial.
+fn from_history(p: &std::path::Path) -> Option<&str> {
+    p.to_str().and_then(|s| s.strip_prefix("history:"))
+}
+
+/// The six stage-one records `--stage-one` names: files, or `history:SERIAL` for the sensor's
+/// newest calibration in the unit history `out` names (or the default one).
+fn stage_one(items: &[PathBuf], out: &Outputs) -> Result<Vec<sensor::stages::Sensor1>, Failure> {
+    use sensor::stages::{StageOneError, one};
+    let history = std::cell::RefCell::new(None::<(crate::db::Location, crate::db::Db)>);
+    let read = |p: &std::path::Path, k: usize| -> Result<one::Sensor1, StageOneError> {
+        let Some(serial) = from_history(p) else {
+            return one::read(p, k);
+        };
+        let fail = |why: String| StageOneError::Unreadable {
+            path: p.to_path_buf(),
+            why,
+        };
+        let mut h = history.borrow_mut();
+        if h.is_none() {
+            let at = crate::db::Location::or_default(out.db.as_ref())
+                .map_err(|e| fail(e.to_string()))?;
+            let db = crate::db::Db::open_existing(&at).map_err(|e| fail(e.to_string()))?;
+            *h = Some((at, db));
+        }
+        let Some((at, db)) = h.as_mut() else {
+            return Err(fail("no unit history".into()));
+        };
+        let newest = db
+            .history(serial)
+            .map_err(|e| fail(e.to_string()))?
+            .into_iter()
+            .filter(|e| e.kind == "fit")
+            .next_back()
+            .ok_or_else(|| {
+                fail(format!(
+                    "the unit history {at} has no calibration of sensor {serial}"
+                ))
+            })?;
+        let text = db.record(newest.id).map_err(|e| fail(e.to_string()))?;
+        one::from_text(
+            &text,
+            &std::path::PathBuf::from(format!("{at} record {} ({serial})", newest.id)),
+            k,
+        )
+    };
+    Ok(one::read_all_with(items, read)?)
 }
 
 /// The noise terms `--noise` names, with the allowances; `None` without `--noise`.

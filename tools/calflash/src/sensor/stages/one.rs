@@ -166,10 +166,19 @@ fn quantity_words(q: Quantity) -> (&'static str, &'static str) {
 /// # Errors
 /// [`StageOneError`], naming the file.
 pub fn read(path: &Path, k: usize) -> Result<Sensor1, StageOneError> {
-    let output = OUTPUTS[k];
     let text = crate::files::read_json_text(path, "a stage-one record")
         .map_err(|e| unreadable(path, e))?;
-    let rec: Record = serde_json::from_str(&text)
+    from_text(&text, path, k)
+}
+
+/// The record `text` of output `k`, read from `path` (a file, or the unit history's words for
+/// where it is).
+///
+/// # Errors
+/// [`StageOneError`], naming `path`.
+pub fn from_text(text: &str, path: &Path, k: usize) -> Result<Sensor1, StageOneError> {
+    let output = OUTPUTS[k];
+    let rec: Record = serde_json::from_str(text)
         .map_err(|e| unreadable(path, format!("not a calibration record ({e})")))?;
     if rec.schema != record::SCHEMA {
         return Err(unreadable(
@@ -296,6 +305,17 @@ pub fn read(path: &Path, k: usize) -> Result<Sensor1, StageOneError> {
 /// [`StageOneError`]: a count other than six, a record that does not fit its output, the same
 /// sensor twice.
 pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Sensor1>, StageOneError> {
+    read_all_with(paths, |p, k| read(p, k))
+}
+
+/// [`read_all`] with each record read by `read_one` (from a file or from the unit history).
+///
+/// # Errors
+/// As [`read_all`], and `read_one`'s.
+pub fn read_all_with(
+    paths: &[PathBuf],
+    read_one: impl Fn(&Path, usize) -> Result<Sensor1, StageOneError>,
+) -> Result<Vec<Sensor1>, StageOneError> {
     if paths.len() != 6 {
         let missing = if paths.len() < 6 {
             OUTPUTS[paths.len()..].join(", ")
@@ -310,7 +330,7 @@ pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Sensor1>, StageOneError> {
     let sensors: Vec<Sensor1> = paths
         .iter()
         .enumerate()
-        .map(|(k, p)| read(p, k))
+        .map(|(k, p)| read_one(p, k))
         .collect::<Result<_, _>>()?;
     for (k, s) in sensors.iter().enumerate() {
         if let Some((j, o)) = sensors[..k]
