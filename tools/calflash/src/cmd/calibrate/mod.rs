@@ -414,8 +414,7 @@ fn stage_one(items: &[PathBuf], out: &Outputs) -> Result<Vec<sensor::stages::Sen
             .history(serial)
             .map_err(|e| fail(e.to_string()))?
             .into_iter()
-            .filter(|e| e.kind == "fit")
-            .next_back()
+            .rfind(|e| e.kind == "fit")
             .ok_or_else(|| {
                 fail(format!(
                     "the unit history {at} has no calibration of sensor {serial}"

@@ -305,7 +305,7 @@ pub fn from_text(text: &str, path: &Path, k: usize) -> Result<Sensor1, StageOneE
 /// [`StageOneError`]: a count other than six, a record that does not fit its output, the same
 /// sensor twice.
 pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Sensor1>, StageOneError> {
-    read_all_with(paths, |p, k| read(p, k))
+    read_all_with(paths, read)
 }
 
 /// [`read_all`] with each record read by `read_one` (from a file or from the unit history).
