@@ -17,6 +17,23 @@ pub(crate) fn findings(
     device_error: &[f64],
 ) -> Vec<Finding> {
     let mut out = Vec::new();
+    // The outlier test is the unit's, not each fit's: a fit's Bonferroni p-value is held at
+    // `alpha` over all the unit's fits (its axes at each table point; one continuous model's
+    // points are one fit), so that a clean unit of six axes is not called REVIEW six times as
+    // often as one of a single axis.
+    let fits = axis_names.len()
+        * if points.len() > 1
+            && points.windows(2).all(|w| {
+                w[0].axes
+                    .iter()
+                    .zip(&w[1].axes)
+                    .all(|(a, b)| a.lines == b.lines)
+            })
+        {
+            1
+        } else {
+            points.len()
+        };
     for (a, name) in axis_names.iter().enumerate() {
         // Points of one continuous model share its outliers: each is named once.
         let mut named: Vec<Vec<u64>> = Vec::new();
@@ -72,6 +89,7 @@ pub(crate) fn findings(
                 .influence
                 .outliers
                 .iter()
+                .filter(|(_, p_value)| p_value * fits as f64 <= opts.alpha)
                 .map(|(i, _)| p.axes[a].lines[*i])
                 .collect();
             if !at.is_empty() && !named.contains(&at) {
