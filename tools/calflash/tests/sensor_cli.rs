@@ -72,8 +72,8 @@ fn simulate_calibrate_report_apply() {
             "a.json",
         ],
     );
-    // A perfect unit is accepted, or (one time in twenty per table point, Bonferroni at 0.05)
-    // sent to review for a chance outlier; never rejected.
+    // A perfect unit is accepted, or (one time in twenty, Bonferroni at 0.05 over the unit's
+    // fits) sent to review for a chance outlier; never rejected.
     assert!(
         out.starts_with("calflash calibrate  obs.csv  unit A-1: ACCEPT")
             || out.starts_with("calflash calibrate  obs.csv  unit A-1: REVIEW"),
