@@ -2,14 +2,15 @@
 //! read through each sensor's stage-one polynomial, the linear triad fits of what assembly
 //! adds, and the device's sets at stage one's temperatures with both stages' covariance.
 
-use nalgebra::DMatrix;
 use spincal::model::Span;
 
+mod compose;
+
+use self::compose::{Output, composed, derivative_of_fit, hold};
 use super::fit::{fit_axis, fit_triad};
 use super::sets::device_sets;
 use super::{Kind, Spec, Temperature, TriadModel, add_references, finish, read};
 use crate::columns as col;
-use crate::formula;
 use crate::sensor::stages::StageTwoError;
 use crate::sensor::stages::check::{self, Check, Moved};
 use crate::sensor::stages::one::{self, OUTPUTS, Sensor1};
@@ -18,52 +19,9 @@ use crate::sensor::{AxisFit, Calibrated, Options, WorkflowError, lever};
 
 /// Temperatures closer than this are one point of the blob's table, C.
 const SAME_TEMPERATURE: f64 = 0.01;
-/// A derivative's step, in standard errors of the coefficient it moves.
-const STEP: f64 = 0.1;
 /// How far beyond stage one's calibrated range stage two may drive an axis, as a share of that
 /// range (the lever arms' centripetal terms, a tumble's `g` against a dividing head's).
 const RANGE_MARGIN: f64 = 0.05;
-
-/// The stage-one names of the nonlinear terms in the device's form (index into
-/// [`one::TERMS`]).
-fn nonlinear_name(j: usize) -> String {
-    let s = lever::SENSED;
-    match j {
-        2 => format!("{s}^2"),
-        3 => format!("{s}^3"),
-        4 => format!("{s}:abs({s})"),
-        _ => lever::SENSED_KINK.to_string(),
-    }
-}
-
-/// The device's forward coefficients (counts) of one output from stage one's coefficients `c`
-/// at a temperature and stage two's fit `th` (SI, terms `names`): `out = h(beta + m . F)`
-/// expanded, `own` the output's own input, `nl` the nonlinear terms carried. `beta` inside the
-/// odd-quadratic and asymmetry terms is left out (`2 coq beta |x|` and `ca beta` counts: a
-/// bias change of 0.01 m/s^2 moves them by 1e-5 of the term).
-fn compose(c: &[f64; 6], names: &[String], th: &[f64], own: &str, nl: &[usize]) -> Vec<f64> {
-    let get = |n: &str| names.iter().position(|x| x == n).map_or(0.0, |i| th[i]);
-    let beta = get("1");
-    let [c0, c1, c2, c3, coq, ca] = *c;
-    let slope = c1 + beta * (2.0 * c2 + 3.0 * c3 * beta);
-    let mii = get(own);
-    let mut v: Vec<f64> = names
-        .iter()
-        .zip(th)
-        .map(|(n, t)| match n.as_str() {
-            "1" => c0 + beta * (c1 + beta * (c2 + beta * c3)),
-            n if n.starts_with("lever_") => *t,
-            _ => slope * t,
-        })
-        .collect();
-    v.extend(nl.iter().map(|j| match j {
-        2 => (c2 + 3.0 * c3 * beta) * mii * mii,
-        3 => c3 * mii.powi(3),
-        4 => coq * mii * mii.abs(),
-        _ => ca * mii.abs(),
-    }));
-    v
-}
 
 /// The temperatures the blob holds: every record's points inside the span all six share.
 fn grid(sensors: &[Sensor1]) -> Result<(Vec<f64>, Span), StageTwoError> {
@@ -120,19 +78,84 @@ fn linearised(
         .collect()
 }
 
-/// One output's stage two: its fit (SI), and per stage-one coefficient with a variance the
-/// step and stage two's coefficients refitted with it moved up and down.
-struct Output {
-    fit: AxisFit,
-    steps: Vec<Step>,
+/// The temperature of every observation of `table` (`None` without a `temp` column, when the
+/// records hold no temperature points), each inside every record's span.
+fn row_temperatures(
+    table: &crate::obs::Table,
+    sensors: &[Sensor1],
+    temps: &[f64],
+) -> Result<Vec<Option<f64>>, StageTwoError> {
+    let row_temps: Vec<Option<f64>> = match table.column(col::TEMP) {
+        Some(c) => c.iter().map(|t| Some(*t)).collect(),
+        None if temps.is_empty() => vec![None; table.len()],
+        None => {
+            return Err(StageTwoError::NoTemperature {
+                temps: temps
+                    .iter()
+                    .map(|t| format!("{t} C"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+        }
+    };
+    // A chamber's setpoint may read half a degree off the record's.
+    let tol = 0.5;
+    for (s, output) in sensors.iter().zip(OUTPUTS) {
+        if let Some((line, t)) = table.lines.iter().zip(&row_temps).find_map(|(l, t)| {
+            t.filter(|t| *t < f64::from(s.temps.lo) - tol || *t > f64::from(s.temps.hi) + tol)
+                .map(|t| (*l, t))
+        }) {
+            return Err(StageTwoError::TemperatureSpan {
+                line,
+                temp: t,
+                output,
+                lo: s.temps.lo,
+                hi: s.temps.hi,
+                record: s.file.clone(),
+            });
+        }
+    }
+    Ok(row_temps)
 }
 
-struct Step {
-    /// Flat index into the sensor's coefficients (point-major).
-    at: usize,
-    h: f64,
-    plus: Vec<f64>,
-    minus: Vec<f64>,
+/// Each axis' calibrated range in the unit (`ranges`, a_x to g_z) inside what its sensor's
+/// stage one calibrated, give or take [`RANGE_MARGIN`].
+fn within_stage_one(sensors: &[Sensor1], ranges: &[Span]) -> Result<(), StageTwoError> {
+    for (k, (s, r)) in sensors.iter().zip(ranges).enumerate() {
+        let margin = RANGE_MARGIN * f64::from(s.range.hi - s.range.lo);
+        if f64::from(r.lo) < f64::from(s.range.lo) - margin
+            || f64::from(r.hi) > f64::from(s.range.hi) + margin
+        {
+            return Err(StageTwoError::Range {
+                output: OUTPUTS[k],
+                lo: f64::from(r.lo),
+                hi: f64::from(r.hi),
+                rlo: s.range.lo,
+                rhi: s.range.hi,
+                unit: crate::sensor::blob::unit(s.quantity),
+                record: s.file.clone(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The blob's layout: a point at each of stage one's temperatures (one point without any).
+fn device_layout(temps: &[f64]) -> Layout {
+    let point = |temp| table::Point {
+        temp,
+        volt: None,
+        rows: Vec::new(),
+    };
+    Layout {
+        points: if temps.is_empty() {
+            vec![point(None)]
+        } else {
+            temps.iter().map(|t| point(Some(*t))).collect()
+        },
+        temps: temps.to_vec(),
+        volts: Vec::new(),
+    }
 }
 
 /// Calibrates the assembled IMU in `opts.file` on the six stage-one `sensors` (in the order
@@ -156,35 +179,7 @@ pub fn calibrate(
     let mut notes = Vec::new();
     add_references(&mut table, opts, Kind::Imu, &mut notes)?;
     let (temps, span) = grid(sensors).map_err(located)?;
-    let row_temps: Vec<Option<f64>> = match table.column(col::TEMP) {
-        Some(c) => c.iter().map(|t| Some(*t)).collect(),
-        None if temps.is_empty() => vec![None; table.len()],
-        None => {
-            return Err(located(StageTwoError::NoTemperature {
-                temps: temps
-                    .iter()
-                    .map(|t| format!("{t} C"))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            }));
-        }
-    };
-    for (s, output) in sensors.iter().zip(OUTPUTS) {
-        let tol = 0.5;
-        if let Some((line, t)) = table.lines.iter().zip(&row_temps).find_map(|(l, t)| {
-            t.filter(|t| *t < f64::from(s.temps.lo) - tol || *t > f64::from(s.temps.hi) + tol)
-                .map(|t| (*l, t))
-        }) {
-            return Err(located(StageTwoError::TemperatureSpan {
-                line,
-                temp: t,
-                output,
-                lo: s.temps.lo,
-                hi: s.temps.hi,
-                record: s.file.clone(),
-            }));
-        }
-    }
+    let row_temps = row_temperatures(&table, sensors, &temps).map_err(located)?;
     let raw_table = table.clone();
     let raw: Vec<Vec<f64>> = OUTPUTS
         .iter()
@@ -230,27 +225,8 @@ pub fn calibrate(
     };
     let accel = fit_triad(&accel_spec, &table, &temperature, opts, &mut notes)?;
     let gyro = fit_triad(&gyro_spec, &table, &temperature, opts, &mut notes)?;
-    for (k, s) in sensors.iter().enumerate() {
-        let r = if k < 3 {
-            accel.ranges[k]
-        } else {
-            gyro.ranges[k - 3]
-        };
-        let margin = RANGE_MARGIN * f64::from(s.range.hi - s.range.lo);
-        if f64::from(r.lo) < f64::from(s.range.lo) - margin
-            || f64::from(r.hi) > f64::from(s.range.hi) + margin
-        {
-            return Err(located(StageTwoError::Range {
-                output: OUTPUTS[k],
-                lo: f64::from(r.lo),
-                hi: f64::from(r.hi),
-                rlo: s.range.lo,
-                rhi: s.range.hi,
-                unit: crate::sensor::blob::unit(s.quantity),
-                record: s.file.clone(),
-            }));
-        }
-    }
+    let ranges: Vec<Span> = accel.ranges.iter().chain(&gyro.ranges).copied().collect();
+    within_stage_one(sensors, &ranges).map_err(located)?;
     // Each output's fit, refitted with each stage-one coefficient moved.
     let mut outputs: Vec<Output> = Vec::new();
     for (k, sensor) in sensors.iter().enumerate() {
@@ -260,7 +236,7 @@ pub fn calibrate(
             (&gyro_spec, &gyro, k - 3)
         };
         let fit = model.fits[0][i].clone();
-        let names = fit.fit.names.clone();
+        let (names, formula) = (fit.fit.names.clone(), fit.formula.clone());
         let lever_use: [bool; 3] =
             std::array::from_fn(|a| names.iter().any(|n| *n == lever::column(i, a)));
         let used: Vec<bool> = (0..sensor.points.len())
@@ -275,7 +251,7 @@ pub fn calibrate(
             t.set_column(OUTPUTS[k], reading(k, Some(delta))?);
             let f = fit_axis(
                 spec,
-                &fit.formula,
+                &formula,
                 &t,
                 i,
                 spec.lever.then_some(&lever_use),
@@ -284,28 +260,7 @@ pub fn calibrate(
             )?;
             Ok(names.iter().map(|n| f.coef(n)).collect())
         };
-        let mut steps = Vec::new();
-        for (p, point) in sensor.points.iter().enumerate() {
-            for j in 0..6 {
-                let var = point.cov[j][j];
-                if var <= 0.0 {
-                    continue;
-                }
-                let h = STEP * var.sqrt();
-                let (plus, minus) = if used[p] {
-                    (refit((p, j, h))?, refit((p, j, -h))?)
-                } else {
-                    (fit.fit.coefficients.clone(), fit.fit.coefficients.clone())
-                };
-                steps.push(Step {
-                    at: 6 * p + j,
-                    h,
-                    plus,
-                    minus,
-                });
-            }
-        }
-        outputs.push(Output { fit, steps });
+        outputs.push(Output::refitted(fit, sensor, &used, refit)?);
     }
     // The check: beta and the sensing row under "stage one holds", both stages' covariance.
     let mut moved = Vec::new();
@@ -359,26 +314,7 @@ pub fn calibrate(
         }
     }
     // The device's sets at stage one's temperatures.
-    let final_layout = Layout {
-        points: if temps.is_empty() {
-            vec![table::Point {
-                temp: None,
-                volt: None,
-                rows: Vec::new(),
-            }]
-        } else {
-            temps
-                .iter()
-                .map(|t| table::Point {
-                    temp: Some(*t),
-                    volt: None,
-                    rows: Vec::new(),
-                })
-                .collect()
-        },
-        temps: temps.clone(),
-        volts: Vec::new(),
-    };
+    let final_layout = device_layout(&temps);
     let reference = final_layout.reference();
     let mut per_point: Vec<Vec<AxisFit>> = vec![Vec::new(); final_layout.points.len()];
     for (k, (o, sensor)) in outputs.iter().zip(sensors).enumerate() {
@@ -428,147 +364,4 @@ pub fn calibrate(
     )?;
     c.stages = Some(check.clone());
     Ok((c, check))
-}
-
-/// Stage two's fit of `o` with the coefficients `fixed` held at their values: the least-squares
-/// estimate under those constraints, `theta - K (A theta - b)` with `K = C A' (A C A')^-1`
-/// (`C` the fit's covariance), and its covariance `C - K A C`; the refits of the derivatives
-/// constrained the same way.
-fn hold(o: &mut Output, fixed: &[(&str, f64)]) {
-    if fixed.is_empty() {
-        return;
-    }
-    let names = &o.fit.fit.names;
-    let idx: Vec<usize> = fixed
-        .iter()
-        .filter_map(|(n, _)| names.iter().position(|m| m == n))
-        .collect();
-    let b: Vec<f64> = fixed
-        .iter()
-        .filter(|(n, _)| names.iter().any(|m| m == n))
-        .map(|(_, v)| *v)
-        .collect();
-    let c = &o.fit.fit.covariance;
-    let p = c.nrows();
-    let a = DMatrix::from_fn(idx.len(), p, |r, q| f64::from(u8::from(idx[r] == q)));
-    let aca = &a * c * a.transpose();
-    let Some(inv) = aca.try_inverse() else {
-        return;
-    };
-    let k = c * a.transpose() * inv;
-    let project = |theta: &[f64]| -> Vec<f64> {
-        let miss: Vec<f64> = idx.iter().zip(&b).map(|(i, v)| theta[*i] - v).collect();
-        (0..p)
-            .map(|r| theta[r] - (0..idx.len()).map(|q| k[(r, q)] * miss[q]).sum::<f64>())
-            .collect()
-    };
-    o.fit.fit.coefficients = project(&o.fit.fit.coefficients);
-    let held = c - &k * &a * c;
-    o.fit.fit.covariance = (&held + held.transpose()) * 0.5;
-    for s in &mut o.steps {
-        s.plus = project(&s.plus);
-        s.minus = project(&s.minus);
-    }
-}
-
-/// `d theta2 / d theta1`: how stage two's coefficients follow each stage-one coefficient of
-/// the sensor (`n1` of them, point-major), by central differences.
-fn derivative_of_fit(o: &Output, n1: usize) -> DMatrix<f64> {
-    let n2 = o.fit.fit.coefficients.len();
-    let mut d = DMatrix::zeros(n2, n1);
-    for s in &o.steps {
-        for r in 0..n2 {
-            d[(r, s.at)] = (s.plus[r] - s.minus[r]) / (2.0 * s.h);
-        }
-    }
-    d
-}
-
-/// Output `k`'s device-form fit at temperature `t`: stage two's fit composed with stage one's
-/// polynomial there, with the covariance of both stages.
-fn composed(
-    o: &Output,
-    sensor: &Sensor1,
-    k: usize,
-    t: Option<f64>,
-    path: &std::path::Path,
-) -> Result<AxisFit, WorkflowError> {
-    let i = k % 3;
-    let inputs = if k < 3 { col::F } else { col::W };
-    let own = inputs[i];
-    let names2 = &o.fit.fit.names;
-    let th2 = &o.fit.fit.coefficients;
-    let nl: Vec<usize> = (2..6)
-        .filter(|j| sensor.points.iter().any(|p| p.cov[*j][*j] > 0.0))
-        .collect();
-    let c = sensor.at(t, None);
-    let value = compose(&c, names2, th2, own, &nl);
-    let nf = value.len();
-    // Stage one: the total derivative through the refit and the composition.
-    let sigma1 = sensor.covariance();
-    let mut j1 = DMatrix::zeros(nf, sigma1.nrows());
-    for s in &o.steps {
-        let (p, j) = (s.at / 6, s.at % 6);
-        let up = compose(&sensor.at(t, Some((p, j, s.h))), names2, &s.plus, own, &nl);
-        let down = compose(
-            &sensor.at(t, Some((p, j, -s.h))),
-            names2,
-            &s.minus,
-            own,
-            &nl,
-        );
-        for r in 0..nf {
-            j1[(r, s.at)] = (up[r] - down[r]) / (2.0 * s.h);
-        }
-    }
-    // Stage two's own scatter through the composition.
-    let sigma2 = &o.fit.fit.covariance;
-    let mut j2 = DMatrix::zeros(nf, th2.len());
-    for q in 0..th2.len() {
-        let h = STEP * sigma2[(q, q)].max(0.0).sqrt();
-        if h == 0.0 {
-            continue;
-        }
-        let moved = |sign: f64| {
-            let mut th = th2.clone();
-            th[q] += sign * h;
-            compose(&c, names2, &th, own, &nl)
-        };
-        let (up, down) = (moved(1.0), moved(-1.0));
-        for r in 0..nf {
-            j2[(r, q)] = (up[r] - down[r]) / (2.0 * h);
-        }
-    }
-    let cov = &j1 * &sigma1 * j1.transpose() + &j2 * sigma2 * j2.transpose();
-    let mut names: Vec<String> = names2.clone();
-    names.extend(nl.iter().map(|j| nonlinear_name(*j)));
-    let at = match t {
-        Some(t) => format!("{t} C"),
-        None => "the single table point".into(),
-    };
-    let formula = formula::parse(&format!("{} ~ {}", OUTPUTS[k], names.join(" + ")))?;
-    let slope = c[1];
-    let fit = o
-        .fit
-        .fit
-        .recomposed(names, value, &cov, o.fit.fit.sigma2 * slope * slope)
-        .ok_or_else(|| WorkflowError::WeightedCovariance {
-            path: path.to_path_buf(),
-            at: format!("{} at {at} (both stages' covariance)", OUTPUTS[k]),
-        })?;
-    let own_poly = one::own(&c);
-    let mut fit = fit;
-    fit.residuals = o.fit.fit.residuals.iter().map(|r| r * slope).collect();
-    fit.fitted = o
-        .fit
-        .fit
-        .fitted
-        .iter()
-        .map(|x| own_poly.output(*x))
-        .collect();
-    Ok(AxisFit {
-        formula,
-        fit,
-        ..o.fit.clone()
-    })
 }
