@@ -370,3 +370,44 @@ fn clean_units_are_rarely_called_review_for_outliers() {
     );
     assert!(rate <= band, "{rate}");
 }
+
+/// A triad calibrated from an IMU's file says which outputs it leaves uncalibrated.
+#[test]
+fn a_triad_from_an_imu_file_names_the_outputs_it_leaves() {
+    let conds = plan::plan(
+        &["tumble:24".into(), "rate:-10:10:5".into()],
+        &[25.0],
+        &[3.3],
+        1,
+        false,
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let obs = sim::simulate(&Sensor::Imu(Box::default()), &conds, 3, false);
+    let file = write(dir.path(), &obs);
+    let opts = Options::new(&file, "U-1");
+    let says = |kind, want: &str| {
+        let c = triad::calibrate(&opts, kind, false).unwrap();
+        assert!(c.notes.iter().any(|n| n.contains(want)), "{:?}", c.notes);
+    };
+    says(
+        triad::Kind::Accel,
+        "the file also has the gyro's outputs g_x g_y g_z: not calibrated here (--sensor imu calibrates both)",
+    );
+    says(
+        triad::Kind::Gyro,
+        "the file also has the accelerometer's outputs a_x a_y a_z",
+    );
+    let c = triad::calibrate(&opts, triad::Kind::Imu, false).unwrap();
+    assert!(!c.notes.iter().any(|n| n.contains("the file also has")));
+    // A triad's own file has nothing to say.
+    let accel = sim::simulate(
+        &Sensor::Accel(TriadTruth::accelerometer()),
+        &conds,
+        3,
+        false,
+    );
+    let file = write(dir.path(), &accel);
+    let c = triad::calibrate(&Options::new(&file, "U-2"), triad::Kind::Accel, false).unwrap();
+    assert!(!c.notes.iter().any(|n| n.contains("the file also has")));
+}

@@ -267,8 +267,12 @@ fn temperature_points(
 }
 
 /// The observations `kind` needs from the file, with the references, temperature and voltage
-/// it has; the outputs at or beyond the rails taken out, and said.
-fn read(opts: &Options, kind: Kind) -> Result<(Table, Option<super::Finding>), WorkflowError> {
+/// it has; the outputs at or beyond the rails taken out, and said; and a note when the file
+/// also has the other triad's outputs, which `kind` leaves uncalibrated.
+fn read(
+    opts: &Options,
+    kind: Kind,
+) -> Result<(Table, Option<super::Finding>, Option<String>), WorkflowError> {
     let path = &opts.file;
     let header = obs::header(path, opts.format)?;
     let mut need: Vec<&str> = Vec::new();
@@ -317,7 +321,20 @@ fn read(opts: &Options, kind: Kind) -> Result<(Table, Option<super::Finding>), W
         .filter(|c| col::A.contains(c) || col::GYRO.contains(c))
         .collect();
     let beyond = super::exclude_beyond_rails(&mut table, &outputs, &opts.rails, path)?;
-    Ok((table, beyond))
+    let other = match kind {
+        Kind::Accel => Some(("gyro", col::GYRO)),
+        Kind::Gyro => Some(("accelerometer", col::A)),
+        Kind::Imu => None,
+    };
+    let ignored = other
+        .filter(|(_, names)| names.iter().all(|n| has(n)))
+        .map(|(what, names)| {
+            format!(
+                "the file also has the {what}'s outputs {}: not calibrated here (--sensor imu calibrates both)",
+                names.join(" ")
+            )
+        });
+    Ok((table, beyond, ignored))
 }
 
 /// Adds to `table` what the references lack: the still ramp's observations (`--still-ramp`),
@@ -439,12 +456,12 @@ fn described(
 /// A [`WorkflowError`] naming the file, column, term or table point.
 pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrated, WorkflowError> {
     let path = &opts.file;
-    let (mut table, beyond) = read(opts, kind)?;
+    let (mut table, beyond, ignored) = read(opts, kind)?;
     let (has_temp, has_volt) = (
         table.column(col::TEMP).is_some(),
         table.column(col::VOLT).is_some(),
     );
-    let mut notes = Vec::new();
+    let mut notes: Vec<String> = ignored.into_iter().collect();
     add_references(&mut table, opts, kind, &mut notes)?;
     let spin = table.column(col::W[0]).is_some()
         && (0..table.len()).any(|r| {

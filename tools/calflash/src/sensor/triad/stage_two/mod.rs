@@ -172,7 +172,7 @@ pub fn calibrate(
         path: path.clone(),
         source,
     };
-    let (mut table, beyond) = read(opts, Kind::Imu)?;
+    let (mut table, beyond, _) = read(opts, Kind::Imu)?;
     if table.varies(col::VOLT) {
         return Err(WorkflowError::triad(path, super::TriadError::VoltageVaries));
     }
