@@ -344,14 +344,7 @@ fn lone_accelerometer_triad_with_own_axis_nonlinearity() {
 #[test]
 fn clean_units_are_rarely_called_review_for_outliers() {
     use rayon::prelude::*;
-    let conds = plan::plan(
-        &["tumble:24".into(), "rate:-10:10:5".into()],
-        &[25.0],
-        &[3.3],
-        1,
-        false,
-    )
-    .unwrap();
+    let conds = imu_bench_plan();
     let units = 200;
     let flagged = (0..units)
         .into_par_iter()
@@ -374,14 +367,7 @@ fn clean_units_are_rarely_called_review_for_outliers() {
 /// A triad calibrated from an IMU's file says which outputs it leaves uncalibrated.
 #[test]
 fn a_triad_from_an_imu_file_names_the_outputs_it_leaves() {
-    let conds = plan::plan(
-        &["tumble:24".into(), "rate:-10:10:5".into()],
-        &[25.0],
-        &[3.3],
-        1,
-        false,
-    )
-    .unwrap();
+    let conds = imu_bench_plan();
     let dir = tempfile::tempdir().unwrap();
     let obs = sim::simulate(&Sensor::Imu(Box::default()), &conds, 3, false);
     let file = write(dir.path(), &obs);
@@ -410,4 +396,16 @@ fn a_triad_from_an_imu_file_names_the_outputs_it_leaves() {
     let file = write(dir.path(), &accel);
     let c = triad::calibrate(&Options::new(&file, "U-2"), triad::Kind::Accel, false).unwrap();
     assert!(!c.notes.iter().any(|n| n.contains("the file also has")));
+}
+
+/// An IMU's bench plan at one temperature: a 24-position tumble and rate steps about the axes.
+fn imu_bench_plan() -> Vec<plan::Condition> {
+    plan::plan(
+        &["tumble:24".into(), "rate:-10:10:5".into()],
+        &[25.0],
+        &[3.3],
+        1,
+        false,
+    )
+    .unwrap()
 }

@@ -128,24 +128,22 @@ pub(super) fn run(a: &EvaluateArgs, stage_one: &[String]) -> Result<(), Failure>
             &unit.model_rows(&f2),
             &format!("stage two, axis {}", inputs[i]),
         )?;
-        let own = region
-            .names
-            .iter()
-            .position(|n| n == inputs[i])
-            .unwrap_or(0);
-        let single_row = |x: f64| -> Vec<f64> {
-            let p = Points {
-                names: vec!["input".into()],
-                rows: vec![vec![x]],
-            };
-            p.model_rows(&f1).row(0).iter().copied().collect()
+        // Each region point through both stages' models: stage one's at the axis' own input,
+        // stage two's at the cross inputs.
+        let along = Points {
+            names: vec!["input".into()],
+            rows: (0..region.rows.len())
+                .map(|r| vec![region.value(r, inputs[i])])
+                .collect(),
+        };
+        let (x1, x2) = (along.model_rows(&f1), region.model_rows(&f2));
+        let row = |x: &nalgebra::DMatrix<f64>, r: usize| -> Vec<f64> {
+            x.row(r).iter().copied().collect()
         };
         let two: f64 = (0..region.rows.len())
             .map(|r| {
-                let x = region.rows[r][own];
-                let v1 = quad(&single_row(x), &c1.unscaled_covariance);
-                let phi2: Vec<f64> = cross.iter().map(|c| region.value(r, c)).collect();
-                v1 + quad(&phi2, &c2.unscaled_covariance)
+                quad(&row(&x1, r), &c1.unscaled_covariance)
+                    + quad(&row(&x2, r), &c2.unscaled_covariance)
             })
             .sum::<f64>()
             / region.rows.len() as f64;

@@ -5,10 +5,10 @@
 //! scatter, and stage one's own error through the stage-two fit), Holm over the twelve tests.
 
 use serde::Serialize;
-use statrs::distribution::{ContinuousCDF, Normal};
 
 use super::one::OUTPUTS;
 use crate::sensor::{Finding, Verdict};
+use crate::stats::dist::normal_two_sided;
 
 /// One sensor's check.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -57,10 +57,6 @@ pub struct Moved {
     pub cov: [[f64; 4]; 4],
 }
 
-fn two_sided(z: f64) -> f64 {
-    Normal::new(0.0, 1.0).map_or(f64::NAN, |n| 2.0 * n.sf(z.abs()))
-}
-
 /// Tests the six sensors (`moved[k]` of output `k`, with its serial and record) at
 /// family-wise level `alpha`.
 #[must_use]
@@ -78,8 +74,8 @@ pub fn check(moved: &[Moved], who: &[(String, String)], alpha: f64) -> Check {
             .sum();
         let (bias_se, scale_se) = (m.cov[0][0].max(0.0).sqrt(), var_s.max(0.0).sqrt());
         let scale_change = norm - 1.0;
-        p.push(two_sided(m.beta / bias_se));
-        p.push(two_sided(scale_change / scale_se));
+        p.push(normal_two_sided(m.beta / bias_se));
+        p.push(normal_two_sided(scale_change / scale_se));
         rows.push(SensorCheck {
             output: OUTPUTS[k].into(),
             serial: who[k].0.clone(),

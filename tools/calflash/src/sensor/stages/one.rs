@@ -155,10 +155,11 @@ fn calibration(bytes: &[u8]) -> Option<spincal::model::Calibration> {
 }
 
 fn quantity_words(q: Quantity) -> (&'static str, &'static str) {
-    match q {
-        Quantity::Acceleration => ("an accelerometer", "m/s^2"),
-        Quantity::AngularRate => ("a gyro", "rad/s"),
-    }
+    let what = match q {
+        Quantity::Acceleration => "an accelerometer",
+        Quantity::AngularRate => "a gyro",
+    };
+    (what, crate::sensor::blob::unit(q))
 }
 
 /// Reads the record of output `k` ([`OUTPUTS`]).

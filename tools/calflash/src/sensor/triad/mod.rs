@@ -76,6 +76,43 @@ struct Spec<'a> {
     nonlinear: bool,
 }
 
+impl Spec<'static> {
+    /// The accelerometer triad's: lever arms when the plan spins the unit.
+    fn accel(lever: bool, nonlinear: bool) -> Self {
+        Self {
+            outputs: col::A,
+            inputs: col::F,
+            gyro: false,
+            g_sens: false,
+            lever,
+            nonlinear,
+        }
+    }
+
+    /// The gyro triad's: g-sensitivity when the specific force varies in all three axes.
+    fn gyro(g_sens: bool, nonlinear: bool) -> Self {
+        Self {
+            outputs: col::GYRO,
+            inputs: col::W,
+            gyro: true,
+            g_sens,
+            lever: false,
+            nonlinear,
+        }
+    }
+}
+
+/// Whether the plan turns the unit (some reference rate not zero): the accelerometers' lever
+/// arms are estimable only then.
+fn spins(table: &Table) -> bool {
+    col::W
+        .iter()
+        .any(|w| table.column(w).is_some_and(|c| c.iter().any(|v| *v != 0.0)))
+}
+
+/// The note of a plan that does not spin the unit.
+const NO_SPIN: &str = "the plan does not spin the unit: no lever arms (size effect) are estimated";
+
 /// How a triad's coefficients follow the temperature.
 enum Temperature {
     /// A fit at each point of the table.
@@ -463,28 +500,13 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
     );
     let mut notes: Vec<String> = ignored.into_iter().collect();
     add_references(&mut table, opts, kind, &mut notes)?;
-    let spin = table.column(col::W[0]).is_some()
-        && (0..table.len()).any(|r| {
-            col::W
-                .iter()
-                .any(|w| table.column(w).is_some_and(|c| c[r] != 0.0))
-        });
-    let accel_lever = spin && kind != Kind::Gyro;
+    let accel_lever = spins(&table) && kind != Kind::Gyro;
     if !accel_lever && kind != Kind::Gyro {
-        notes.push(
-            "the plan does not spin the unit: no lever arms (size effect) are estimated".into(),
-        );
+        notes.push(NO_SPIN.into());
     }
     let f_varies = col::F.iter().all(|c| table.varies(c));
     let temperature = temperature_points(&mut table, opts, (has_temp, has_volt), &mut notes)?;
-    let accel_spec = Spec {
-        outputs: col::A,
-        inputs: col::F,
-        gyro: false,
-        g_sens: false,
-        lever: accel_lever,
-        nonlinear,
-    };
+    let accel_spec = Spec::accel(accel_lever, nonlinear);
     let accel = (kind != Kind::Gyro)
         .then(|| fit_triad(&accel_spec, &table, &temperature, opts, &mut notes))
         .transpose()?;
@@ -501,14 +523,7 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
                 .into(),
         );
     }
-    let gyro_spec = Spec {
-        outputs: col::GYRO,
-        inputs: col::W,
-        gyro: true,
-        g_sens: gyro_g,
-        lever: false,
-        nonlinear,
-    };
+    let gyro_spec = Spec::gyro(gyro_g, nonlinear);
     let gyro = (kind != Kind::Accel)
         .then(|| fit_triad(&gyro_spec, &table, &temperature, opts, &mut notes))
         .transpose()?;

@@ -112,15 +112,10 @@ pub(super) fn hold(o: &mut Output, fixed: &[(&str, f64)]) {
         return;
     }
     let names = &o.fit.fit.names;
-    let idx: Vec<usize> = fixed
+    let (idx, b): (Vec<usize>, Vec<f64>) = fixed
         .iter()
-        .filter_map(|(n, _)| names.iter().position(|m| m == n))
-        .collect();
-    let b: Vec<f64> = fixed
-        .iter()
-        .filter(|(n, _)| names.iter().any(|m| m == n))
-        .map(|(_, v)| *v)
-        .collect();
+        .filter_map(|(n, v)| names.iter().position(|m| m == n).map(|i| (i, *v)))
+        .unzip();
     let c = &o.fit.fit.covariance;
     let p = c.nrows();
     let a = DMatrix::from_fn(idx.len(), p, |r, q| f64::from(u8::from(idx[r] == q)));

@@ -9,7 +9,7 @@ mod compose;
 use self::compose::{Output, composed, derivative_of_fit, hold};
 use super::fit::{fit_axis, fit_triad};
 use super::sets::device_sets;
-use super::{Kind, Spec, Temperature, TriadModel, add_references, finish, read};
+use super::{Kind, NO_SPIN, Spec, Temperature, TriadModel, add_references, finish, read, spins};
 use crate::columns as col;
 use crate::sensor::stages::StageTwoError;
 use crate::sensor::stages::check::{self, Check, Moved};
@@ -193,13 +193,9 @@ pub fn calibrate(
         table.set_column(output, reading(k, None)?);
     }
     notes.push("two stages: each output read through its sensor's stage-one polynomial (bias, scale factor and nonlinear terms at the observation's temperature); stage two fits the sensing directions, bias and scale changes, lever arms and g-sensitivity".into());
-    let spin = col::W
-        .iter()
-        .any(|w| table.column(w).is_some_and(|c| c.iter().any(|v| *v != 0.0)));
+    let spin = spins(&table);
     if !spin {
-        notes.push(
-            "the plan does not spin the unit: no lever arms (size effect) are estimated".into(),
-        );
+        notes.push(NO_SPIN.into());
     }
     let f_varies = col::F.iter().all(|c| table.varies(c));
     let layout = table::layout(&table, None, None).map_err(|source| WorkflowError::Grid {
@@ -207,22 +203,8 @@ pub fn calibrate(
         source,
     })?;
     let temperature = Temperature::Points(layout);
-    let accel_spec = Spec {
-        outputs: col::A,
-        inputs: col::F,
-        gyro: false,
-        g_sens: false,
-        lever: spin,
-        nonlinear: false,
-    };
-    let gyro_spec = Spec {
-        outputs: col::GYRO,
-        inputs: col::W,
-        gyro: true,
-        g_sens: f_varies,
-        lever: false,
-        nonlinear: false,
-    };
+    let accel_spec = Spec::accel(spin, false);
+    let gyro_spec = Spec::gyro(f_varies, false);
     let accel = fit_triad(&accel_spec, &table, &temperature, opts, &mut notes)?;
     let gyro = fit_triad(&gyro_spec, &table, &temperature, opts, &mut notes)?;
     let ranges: Vec<Span> = accel.ranges.iter().chain(&gyro.ranges).copied().collect();
