@@ -30,7 +30,11 @@ fn main() {
         let kind = match case.kind {
             Kind::Single => "Kind::Single".to_string(),
             Kind::Triad => "Kind::Triad".to_string(),
-            Kind::Imu(rate) => format!("Kind::Imu(f32::from_bits({:#010x}))", rate.to_bits()),
+            Kind::Imu(rate, max_acc) => format!(
+                "Kind::Imu(f32::from_bits({:#010x}), f32::from_bits({:#010x}))",
+                rate.to_bits(),
+                max_acc.to_bits()
+            ),
         };
         let upper = name.to_uppercase();
         writeln!(src, "static {upper}_STEPS: &[Step] = &[").unwrap();

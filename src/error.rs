@@ -230,6 +230,8 @@ pub enum Error {
     /// A sample rate that is not finite and positive, or above
     /// [`MAX_SAMPLE_RATE_HZ`](crate::model::MAX_SAMPLE_RATE_HZ).
     CorrectorBadSampleRate,
+    /// A largest angular acceleration that is not finite and positive (rad/s^2).
+    CorrectorBadAngularAcceleration,
     /// With a lever arm, an accelerometer axis must sense mainly along itself: the diagonal of
     /// the inverse of its scale-misalignment matrix must dominate its row.
     InvalidSensingDirection {
@@ -434,6 +436,9 @@ impl fmt::Display for Error {
                 f,
                 "the sample rate must be finite, positive and at most {} Hz",
                 crate::model::MAX_SAMPLE_RATE_HZ
+            ),
+            Error::CorrectorBadAngularAcceleration => f.write_str(
+                "the largest angular acceleration must be finite and positive (rad/s^2)",
             ),
             Error::InvalidSensingDirection { set, axis } => write!(
                 f,

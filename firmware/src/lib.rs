@@ -17,8 +17,8 @@ pub enum Kind {
     Single,
     /// Triad.
     Triad,
-    /// IMU at a sample rate (Hz).
-    Imu(f32),
+    /// IMU at a sample rate (Hz), with the largest angular acceleration (rad/s^2).
+    Imu(f32, f32),
 }
 
 /// One step of a golden case.
@@ -84,16 +84,17 @@ pub struct Runner<'a>(AnyCorrector<'a>);
 impl<'a> Runner<'a> {
     /// The corrector for `kind`, or `None` if the calibration is of another kind.
     pub fn new(cal: &'a Calibration, kind: Kind) -> Option<Self> {
-        let rate = match kind {
-            Kind::Imu(rate) => rate,
-            Kind::Single | Kind::Triad => 1000.0,
+        let (rate, max_acc) = match kind {
+            Kind::Imu(rate, max_acc) => (rate, max_acc),
+            Kind::Single | Kind::Triad => (1000.0, 1.0),
         };
-        let c = AnyCorrector::new(cal, rate).ok()?;
+        let mut c = AnyCorrector::new(cal, rate).ok()?;
+        c.set_max_angular_acceleration(max_acc).ok()?;
         let same = matches!(
             (&c, kind),
             (AnyCorrector::Axis(_), Kind::Single)
                 | (AnyCorrector::Triad(_), Kind::Triad)
-                | (AnyCorrector::Imu(_), Kind::Imu(_))
+                | (AnyCorrector::Imu(_), Kind::Imu(..))
         );
         same.then_some(Self(c))
     }

@@ -75,12 +75,19 @@ pub fn fly_about(truth: &ImuTruth, profile: &str, axis: [f64; 3], seed: u64) -> 
 }
 
 /// The golden case's flight: a steady 300 Hz roll for 80 samples, then a spin-down to 290 Hz
-/// over 70 (1,800 rad/s^2), continuous throughout.
+/// over 70 (1,800 rad/s^2), continuous, then 10 samples at 290 Hz of which one
+/// ([`GOLDEN_GLITCH`]) has its roll gyro's code 8,000 lower (about 490 rad/s): a rate step
+/// no airframe makes, into the glitch and out of it, which the device flags.
 #[must_use]
 pub fn golden_flight() -> Vec<spin::Sample> {
-    fly(
+    let mut flight = fly(
         &ImuTruth::spinning_round(),
-        "300:0.04,300-290:0.035",
+        "300:0.04,300-290:0.035,290:0.005",
         0x5eed,
-    )
+    );
+    flight[GOLDEN_GLITCH].raw[3] -= 8_000.0;
+    flight
 }
+
+/// The sample of [`golden_flight`] whose roll rate glitches.
+pub const GOLDEN_GLITCH: usize = 155;

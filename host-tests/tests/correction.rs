@@ -22,7 +22,7 @@ fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
     v.push((
         "imu_linear",
         CalibrationData::example_imu_linear(),
-        Kind::Imu(1000.0),
+        Kind::imu(1000.0),
     ));
     v
 }
@@ -63,7 +63,7 @@ fn check_against_reference(
     let mut runner = Runner::new(&cal, kind);
     runner.set_environment(env.0, env.1);
     let rate = match kind {
-        Kind::Imu(r) => f64::from(r),
+        Kind::Imu(r, _) => f64::from(r),
         _ => 0.0,
     };
     let mut prev = None;
@@ -379,6 +379,41 @@ fn lever_arm_first_sample_is_flagged_and_reset_flags_again() {
     let mut c = AnyImuCorrector::new(&lin, 1000.0).unwrap();
     c.set_environment(25.0, 3.3);
     assert!(c.correct(raw).flags.is_clean());
+}
+
+#[test]
+fn a_rate_step_beyond_the_airframe_is_flagged_only_with_a_lever_arm() {
+    let cal = Calibration::new(CalibrationData::example_imu()).unwrap();
+    let mut c = AnyImuCorrector::new(&cal, 1000.0).unwrap();
+    c.set_environment(25.0, 3.3);
+    let still = [33_109, 33_329, 36_427, 34_000, 32_430, 32_517];
+    let mut turned = still;
+    turned[3] += 3_000;
+    assert_eq!(c.correct(still).flags, Flags::RATE_DERIVATIVE_UNKNOWN);
+    // The default (5e5 rad/s^2, 500 rad/s between samples at 1 kHz) is far beyond a step
+    // inside this gyro's +-35 rad/s.
+    assert!(c.correct(turned).flags.is_clean());
+    assert!(c.correct(still).flags.is_clean());
+    // An airframe that turns at most 1,000 rad/s^2: 1 rad/s between samples.
+    c.set_max_angular_acceleration(1_000.0).unwrap();
+    assert_eq!(c.correct(turned).flags, Flags::RATE_STEP);
+    assert!(c.correct(turned).flags.is_clean(), "no step: the same rate");
+    assert_eq!(c.correct(still).flags, Flags::RATE_STEP, "and back");
+    // Refused values leave the setting as it was.
+    for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        assert_eq!(
+            c.set_max_angular_acceleration(bad),
+            Err(spincal::Error::CorrectorBadAngularAcceleration)
+        );
+    }
+    assert_eq!(c.correct(turned).flags, Flags::RATE_STEP);
+    // Without a lever arm no rate difference enters the correction: nothing to flag.
+    let lin = Calibration::new(CalibrationData::example_imu_linear()).unwrap();
+    let mut c = AnyImuCorrector::new(&lin, 1000.0).unwrap();
+    c.set_environment(25.0, 3.3);
+    c.set_max_angular_acceleration(1_000.0).unwrap();
+    assert!(c.correct(still).flags.is_clean());
+    assert!(c.correct(turned).flags.is_clean());
 }
 
 #[test]

@@ -40,7 +40,7 @@ fn golden_vectors_match_on_cortex_m4f() {
                     .filter(|l| l.starts_with("raw "))
                     .count();
             match kind {
-                host_tests::golden::Kind::Imu(_) => 2 * samples,
+                host_tests::golden::Kind::Imu(..) => 2 * samples,
                 _ => samples,
             }
         })

@@ -53,6 +53,19 @@ impl<'a> AnyCorrector<'a> {
         }
     }
 
+    /// An IMU's largest angular acceleration
+    /// ([`ImuCorrector::set_max_angular_acceleration`](super::ImuCorrector::set_max_angular_acceleration));
+    /// nothing for the others.
+    ///
+    /// # Errors
+    /// As that.
+    pub fn set_max_angular_acceleration(&mut self, rad_per_s2: f32) -> Result<(), Error> {
+        match self {
+            Self::Imu(c) => c.set_max_angular_acceleration(rad_per_s2),
+            Self::Axis(_) | Self::Triad(_) => Ok(()),
+        }
+    }
+
     /// Forgets the previous sample (an IMU's rate derivative); nothing for the others.
     pub fn reset(&mut self) {
         if let Self::Imu(c) = self {

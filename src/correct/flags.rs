@@ -32,8 +32,13 @@ impl Flags {
     /// explains (shock damage or a fault: [`crate::health`]); every sample carries it until
     /// the unit is checked on the bench.
     pub const CALIBRATION_SUSPECT: Self = Self(1 << 6);
+    /// With a lever arm: the corrected rate changed between two samples by more than the
+    /// largest angular acceleration an airframe makes
+    /// ([`ImuCorrector::set_max_angular_acceleration`](crate::correct::ImuCorrector::set_max_angular_acceleration)):
+    /// a glitch or a gap in the stream, whose tangential lever term (`dw/dt x r`) is then wrong.
+    pub const RATE_STEP: Self = Self(1 << 7);
 
-    const NAMES: [(Self, &'static str); 7] = [
+    const NAMES: [(Self, &'static str); 8] = [
         (Self::SATURATED, "saturated"),
         (Self::OUT_OF_RANGE, "out-of-range"),
         (Self::TEMPERATURE_CLAMPED, "temperature-clamped"),
@@ -41,6 +46,7 @@ impl Flags {
         (Self::NO_CALIBRATION, "no-calibration"),
         (Self::RATE_DERIVATIVE_UNKNOWN, "rate-derivative-unknown"),
         (Self::CALIBRATION_SUSPECT, "calibration-suspect"),
+        (Self::RATE_STEP, "rate-step"),
     ];
 
     /// True when no flag is set.
@@ -61,10 +67,10 @@ impl Flags {
         self.0
     }
 
-    /// Flags from bits; unknown bits are dropped.
+    /// Flags from bits (every bit of a `u8` is a flag).
     #[must_use]
     pub const fn from_bits_truncate(bits: u8) -> Self {
-        Self(bits & 0x7f)
+        Self(bits)
     }
 
     /// `self` with `other` added when `cond` holds (branch-free).

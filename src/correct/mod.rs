@@ -43,7 +43,9 @@ mod widened;
 
 pub use any::AnyCorrector;
 pub use flags::Flags;
-pub use imu::{ImuCorrector, MAX_SAMPLE_RATE_HZ, Overlay, REST_FEATURES};
+pub use imu::{
+    DEFAULT_MAX_ANGULAR_ACCELERATION, ImuCorrector, MAX_SAMPLE_RATE_HZ, Overlay, REST_FEATURES,
+};
 pub use sample::Sample;
 pub use single::AxisCorrector;
 pub use triad::TriadCorrector;

@@ -112,6 +112,14 @@ impl<'a> AnyImuCorrector<'a> {
         each!(self, |c| c.reset());
     }
 
+    /// See [`ImuCorrector::set_max_angular_acceleration`].
+    ///
+    /// # Errors
+    /// As that.
+    pub fn set_max_angular_acceleration(&mut self, rad_per_s2: f32) -> Result<(), crate::Error> {
+        each!(self, |c| c.set_max_angular_acceleration(rad_per_s2))
+    }
+
     /// See [`ImuCorrector::environment_flags`].
     #[must_use]
     pub fn environment_flags(&self) -> Flags {

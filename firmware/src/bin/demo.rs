@@ -63,7 +63,7 @@ fn main() -> ! {
     };
 
     hprintln!("   t [s]  temp   ax      ay      az   [m/s^2]   gx      gy      gz  [rad/s]  flags");
-    let mut counts = [0u32; 6];
+    let mut counts = [0u32; 8];
     let mut clean = 0u32;
     let n = 6_000u32;
     for k in 0..n {
@@ -134,6 +134,8 @@ fn main() -> ! {
         (Flags::VOLTAGE_CLAMPED, "voltage clamped"),
         (Flags::NO_CALIBRATION, "no calibration"),
         (Flags::RATE_DERIVATIVE_UNKNOWN, "rate derivative unknown"),
+        (Flags::CALIBRATION_SUSPECT, "calibration suspect"),
+        (Flags::RATE_STEP, "rate step"),
     ] {
         let i = bit.bits().trailing_zeros() as usize;
         hprintln!("  {:<24} {}", name, counts.get(i).copied().unwrap_or(0));

@@ -69,8 +69,8 @@ fn main() -> ! {
                 }
             }
         }
-        if let Kind::Imu(rate) = case.kind {
-            let (n, bad) = check_batch(case, &cal, rate);
+        if let Kind::Imu(rate, max_acc) = case.kind {
+            let (n, bad) = check_batch(case, &cal, (rate, max_acc));
             checked += n;
             failures += bad;
         }
@@ -168,7 +168,7 @@ impl<'c, S: Sample> Batch<'c, S> {
 /// Runs an IMU case again through `correct_batch` (the hand-scheduled Cortex-M4F kernels of
 /// the calibration's sample format) and compares every output bit and flag with the vectors;
 /// returns the samples checked and the mismatches.
-fn check_batch(case: &Case, cal: &Calibration, rate: f32) -> (u32, u32) {
+fn check_batch(case: &Case, cal: &Calibration, rate: (f32, f32)) -> (u32, u32) {
     match format_of(cal) {
         SampleFormat::U16 => check_batch_as::<u16>(case, cal, rate),
         SampleFormat::I16 => check_batch_as::<i16>(case, cal, rate),
@@ -176,11 +176,22 @@ fn check_batch(case: &Case, cal: &Calibration, rate: f32) -> (u32, u32) {
     }
 }
 
-fn check_batch_as<S: Sample>(case: &Case, cal: &Calibration, rate: f32) -> (u32, u32) {
+fn check_batch_as<S: Sample>(
+    case: &Case,
+    cal: &Calibration,
+    (rate, max_acc): (f32, f32),
+) -> (u32, u32) {
     let Ok(mut imu) = ImuCorrector::<S>::new(cal, rate) else {
         hprintln!("FAIL {}: no IMU corrector for the batch pass", case.name);
         return (0, 1);
     };
+    if imu.set_max_angular_acceleration(max_acc).is_err() {
+        hprintln!(
+            "FAIL {}: the largest angular acceleration is refused",
+            case.name
+        );
+        return (0, 1);
+    }
     let zero = S::clamped(0);
     let mut batch = Batch {
         name: case.name,

@@ -15,7 +15,12 @@ pub fn render(case: &Case) -> String {
     match case.kind {
         Kind::Single => writeln!(s, "kind single").unwrap(),
         Kind::Triad => writeln!(s, "kind triad").unwrap(),
-        Kind::Imu(rate) => writeln!(s, "kind imu {rate}").unwrap(),
+        Kind::Imu(rate, max_acc)
+            if max_acc == spincal::correct::DEFAULT_MAX_ANGULAR_ACCELERATION =>
+        {
+            writeln!(s, "kind imu {rate}").unwrap();
+        }
+        Kind::Imu(rate, max_acc) => writeln!(s, "kind imu {rate} {max_acc}").unwrap(),
     }
     for step in &case.steps {
         match step {
@@ -100,14 +105,24 @@ pub fn parse(text: &str) -> Result<Case, ParseError> {
                 )
             }
             Some("kind") => {
-                kind = Some(match (words.next(), words.next()) {
-                    (Some("single"), None) => Kind::Single,
-                    (Some("triad"), None) => Kind::Triad,
-                    (Some("imu"), Some(rate)) => Kind::Imu(
+                kind = Some(match (words.next(), words.next(), words.next()) {
+                    (Some("single"), None, None) => Kind::Single,
+                    (Some("triad"), None, None) => Kind::Triad,
+                    (Some("imu"), Some(rate), max_acc) => Kind::Imu(
                         rate.parse()
                             .map_err(|_| err("imu needs a sample rate in Hz"))?,
+                        match max_acc {
+                            None => spincal::correct::DEFAULT_MAX_ANGULAR_ACCELERATION,
+                            Some(a) => a.parse().map_err(|_| {
+                                err("imu's largest angular acceleration is a number (rad/s^2)")
+                            })?,
+                        },
                     ),
-                    _ => return Err(err("kind is single, triad or imu <rate>")),
+                    _ => {
+                        return Err(err(
+                            "kind is single, triad or imu <rate> [<largest angular acceleration>]",
+                        ));
+                    }
                 });
             }
             Some("env") => {

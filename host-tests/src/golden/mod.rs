@@ -29,8 +29,17 @@ pub enum Kind {
     Single,
     /// Triad.
     Triad,
-    /// IMU at a sample rate (Hz).
-    Imu(f32),
+    /// IMU at a sample rate (Hz), with the largest angular acceleration (rad/s^2) before a
+    /// rate step is flagged.
+    Imu(f32, f32),
+}
+
+impl Kind {
+    /// An IMU at `rate` Hz with the device's default largest angular acceleration.
+    #[must_use]
+    pub const fn imu(rate: f32) -> Self {
+        Self::Imu(rate, spincal::correct::DEFAULT_MAX_ANGULAR_ACCELERATION)
+    }
 }
 
 /// One step of a case.
@@ -75,31 +84,31 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
     let mut cases = vec![
         ("single", CalibrationData::example_single(), Kind::Single),
         ("triad", CalibrationData::example_triad(), Kind::Triad),
-        ("imu", CalibrationData::example_imu(), Kind::Imu(1000.0)),
+        ("imu", CalibrationData::example_imu(), Kind::imu(1000.0)),
         (
             "imu_linear",
             CalibrationData::example_imu_linear(),
-            Kind::Imu(1000.0),
+            Kind::imu(1000.0),
         ),
         (
             "imu_polynomial",
             CalibrationData::example_imu_polynomial(),
-            Kind::Imu(1000.0),
+            Kind::imu(1000.0),
         ),
         (
             "imu_no_lever",
             without_lever(CalibrationData::example_imu()),
-            Kind::Imu(1000.0),
+            Kind::imu(1000.0),
         ),
         (
             "imu_polynomial_no_lever",
             without_lever(CalibrationData::example_imu_polynomial()),
-            Kind::Imu(1000.0),
+            Kind::imu(1000.0),
         ),
         (
             SPIN_CASE,
             spin_case(),
-            Kind::Imu(crate::spin_rig::SAMPLE_RATE as f32),
+            Kind::imu(crate::spin_rig::SAMPLE_RATE as f32),
         ),
         // The single axis and the triad in one other format each; every kernel again below.
         (
@@ -138,7 +147,7 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
         .enumerate()
     {
         for (data, names) in &kernels {
-            cases.push((names[k], in_format(data(), format), Kind::Imu(1000.0)));
+            cases.push((names[k], in_format(data(), format), Kind::imu(1000.0)));
         }
     }
     // Triads with windows of different sizes (the examples' are both 2^15 codes), so that a
@@ -149,7 +158,7 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
             narrow_gyro(CalibrationData::example_imu_polynomial(), 8.0),
             SampleFormat::I16,
         ),
-        Kind::Imu(1000.0),
+        Kind::imu(1000.0),
     ));
     // A gyro range so narrow that no window is safe (limit 0), which a 16-bit kernel cannot
     // express: the device runs the compiled path and flags every sample through the slow one.
@@ -160,8 +169,21 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
             without_lever(narrow_gyro(CalibrationData::example_imu_polynomial(), 1e4)),
             SampleFormat::I16,
         ),
-        Kind::Imu(1000.0),
+        Kind::imu(1000.0),
     ));
+    // The lever kernels' rate-step flag: the full IMU at 1 kHz whose airframe turns at most
+    // 20,000 rad/s^2 (20 rad/s between samples), so that steps between the samples, all inside
+    // the calibrated range (and the kernels' windows), are flagged or not, in both formats.
+    for (name, format) in [
+        ("imu_rate_step", SampleFormat::U16),
+        ("imu_rate_step_i32", SampleFormat::I32),
+    ] {
+        cases.push((
+            name,
+            in_format(CalibrationData::example_imu(), format),
+            Kind::Imu(1000.0, 20_000.0),
+        ));
+    }
     // A single axis whose sets are a temperature series.
     cases.push((
         "single_series",
@@ -172,7 +194,7 @@ pub fn examples() -> Vec<(&'static str, CalibrationData, Kind)> {
     cases.push((
         "imu_series",
         CalibrationData::example_imu_series(),
-        Kind::Imu(1000.0),
+        Kind::imu(1000.0),
     ));
     cases
 }
@@ -456,17 +478,19 @@ impl<'a> Runner<'a> {
     /// When the calibration does not fit the kind.
     #[must_use]
     pub fn new(cal: &'a Calibration, kind: Kind) -> Self {
-        let rate = match kind {
-            Kind::Imu(rate) => rate,
-            Kind::Single | Kind::Triad => 1000.0,
+        let (rate, max_acc) = match kind {
+            Kind::Imu(rate, max_acc) => (rate, max_acc),
+            Kind::Single | Kind::Triad => (1000.0, 1.0),
         };
-        let c = AnyCorrector::new(cal, rate).expect("a corrector for the case");
+        let mut c = AnyCorrector::new(cal, rate).expect("a corrector for the case");
+        c.set_max_angular_acceleration(max_acc)
+            .expect("a positive largest angular acceleration");
         assert!(
             matches!(
                 (&c, kind),
                 (AnyCorrector::Axis(_), Kind::Single)
                     | (AnyCorrector::Triad(_), Kind::Triad)
-                    | (AnyCorrector::Imu(_), Kind::Imu(_))
+                    | (AnyCorrector::Imu(_), Kind::Imu(..))
             ),
             "the calibration is not of the case's kind"
         );

@@ -33,6 +33,7 @@ impl<S: Sample> ImuCorrector<'_, S> {
                     &self.neg_g,
                     &self.terms,
                     (self.prev_rate, self.prev_lever),
+                    self.max_step_sq,
                 ),
                 Full::new::<S>(shape == Shape::Asymmetric, lever),
             ),

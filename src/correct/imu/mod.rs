@@ -24,6 +24,13 @@ pub use uncertainty::REST_FEATURES;
 /// `2e-3` for a high-g unit at 300 Hz of spin.
 const PRIMING_ITERATIONS: usize = 3;
 
+/// The largest angular acceleration (rad/s^2) a sample's rate may imply before it is flagged
+/// [`Flags::RATE_STEP`], unless [`ImuCorrector::set_max_angular_acceleration`] says otherwise:
+/// above a 155 mm shell's spin-up in the bore (about 3e5 at peak pressure, when its
+/// accelerometers are saturated anyway) and far above a rocket's or a spin rig's. At 1 kHz it
+/// is a step of 80 Hz of spin between two samples.
+pub const DEFAULT_MAX_ANGULAR_ACCELERATION: f32 = 5.0e5;
+
 /// The per-sample arithmetic: the axis [`Shape`] (with g-sensitivity whenever it is not
 /// `Linear`) and whether the lever arm is applied.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -116,6 +123,9 @@ pub struct ImuCorrector<'a, S: Sample> {
     lever: [[f32; 3]; 3],
     /// The sample rate, Hz.
     rate: f32,
+    /// The square of the largest rate change between two samples (rad/s) before a sample is
+    /// flagged [`Flags::RATE_STEP`].
+    max_step_sq: f32,
     /// The lever term's coefficients at the environment, the sample rate folded into the
     /// tangential ones.
     terms: LeverTerms<f32>,
@@ -187,6 +197,7 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
             mode,
             lever,
             rate: sample_rate_hz,
+            max_step_sq: step_sq(DEFAULT_MAX_ANGULAR_ACCELERATION, sample_rate_hz),
             env_flags: Flags::NONE,
             ..Self::identity()
         };
@@ -211,6 +222,7 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
             neg_g: [[0.0; 3]; 3],
             lever: [[0.0; 3]; 3],
             rate: 1.0,
+            max_step_sq: f32::INFINITY,
             terms: LeverTerms::NONE,
             directions: [[[0.0; 3]; 3]; 2],
             prev_rate: [0.0; 3],
@@ -322,6 +334,27 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         self.suspect
     }
 
+    /// Sets the largest angular acceleration (rad/s^2) the airframe makes: with a lever arm, a
+    /// sample whose corrected rate changed by more than that over one sample period is flagged
+    /// [`Flags::RATE_STEP`] (its tangential lever term, from the rate's difference, cannot be
+    /// trusted). [`DEFAULT_MAX_ANGULAR_ACCELERATION`] until set. Without a lever arm no rate
+    /// difference enters the correction and nothing is flagged.
+    ///
+    /// # Errors
+    /// [`Error::CorrectorBadAngularAcceleration`] when `rad_per_s2` is not finite and
+    /// positive; the corrector is then unchanged.
+    pub fn set_max_angular_acceleration(&mut self, rad_per_s2: f32) -> Result<(), Error> {
+        if !(rad_per_s2.is_finite() && rad_per_s2 > 0.0) {
+            return Err(Error::CorrectorBadAngularAcceleration);
+        }
+        if self.source.is_some() {
+            self.max_step_sq = step_sq(rad_per_s2, self.rate);
+            let [t, v] = self.environment;
+            self.set_environment(t, v);
+        }
+        Ok(())
+    }
+
     /// Forgets the previous gyro sample (after a gap in the stream): the next sample's rate
     /// derivative is unknown and flagged.
     pub fn reset(&mut self) {
@@ -424,7 +457,9 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
 
     /// The reference-point force and the rate for sensor-domain force `a` and gyro output
     /// `ws`, with the lever term `prev` fed to the g-sensitivity and `prev_rate` for the rate
-    /// difference; returns them with the new lever term.
+    /// difference; returns them with the new lever term and whether the rate stepped beyond
+    /// the largest angular acceleration (the Cortex-M4F kernel forms the same sum in the same
+    /// order).
     #[inline(always)]
     fn lever_step(
         &self,
@@ -432,16 +467,19 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         ws: [f32; 3],
         prev: [f32; 3],
         prev_rate: [f32; 3],
-    ) -> ([f32; 3], [f32; 3], [f32; 3]) {
+    ) -> ([f32; 3], [f32; 3], [f32; 3], bool) {
         let [a0, a1, a2] = a;
         let [e0, e1, e2] = prev;
         let x = [a0 - e0, a1 - e1, a2 - e2];
         let w = self.g_sensitivity(ws, &x);
         let [w0, w1, w2] = w;
         let [p0, p1, p2] = prev_rate;
-        let e = self.terms.eval(&w, &[w0 - p0, w1 - p1, w2 - p2]);
+        let d = [w0 - p0, w1 - p1, w2 - p2];
+        let e = self.terms.eval(&w, &d);
+        let [d0, d1, d2] = d;
+        let stepped = d0 * d0 + d1 * d1 + d2 * d2 > self.max_step_sq;
         let [e0, e1, e2] = e;
-        ([a0 - e0, a1 - e1, a2 - e2], w, e)
+        ([a0 - e0, a1 - e1, a2 - e2], w, e, stepped)
     }
 
     #[inline(always)]
@@ -455,18 +493,18 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         let (wg, acc_g) = self.gyro.offsets(rg);
         if (acc_a < self.accel.limit) & (acc_g < self.gyro.limit) {
             let (a, ws) = self.triads::<NONLINEAR, ASYM>(wa, wg);
-            let (f, w) = if LEVER {
-                let (f, w, e) = self.lever_step(a, ws, self.prev_lever, self.prev_rate);
+            let (f, w, stepped) = if LEVER {
+                let (f, w, e, stepped) = self.lever_step(a, ws, self.prev_lever, self.prev_rate);
                 self.prev_rate = w;
                 self.prev_lever = e;
-                (f, w)
+                (f, w, stepped)
             } else if NONLINEAR {
-                (a, self.g_sensitivity(ws, &a))
+                (a, self.g_sensitivity(ws, &a), false)
             } else {
-                (a, ws)
+                (a, ws, false)
             };
             out.values = join(f, w);
-            out.flags = self.env_flags;
+            out.flags = self.env_flags.with_if(Flags::RATE_STEP, stepped);
         } else {
             self.slow::<NONLINEAR, ASYM, LEVER>(raw, out);
         }
@@ -504,9 +542,10 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
                 self.primed = true;
                 flags |= Flags::RATE_DERIVATIVE_UNKNOWN;
             }
-            let (f, w, e) = self.lever_step(a, ws, self.prev_lever, self.prev_rate);
+            let (f, w, e, stepped) = self.lever_step(a, ws, self.prev_lever, self.prev_rate);
             self.prev_rate = w;
             self.prev_lever = e;
+            flags = flags.with_if(Flags::RATE_STEP, stepped);
             (f, w)
         } else if NONLINEAR {
             (a, self.g_sensitivity(ws, &a))
@@ -529,6 +568,13 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         out.values = join(f, w);
         out.flags = flags;
     }
+}
+
+/// The square of the largest rate change between two samples at `rate_hz` for an angular
+/// acceleration `rad_per_s2`.
+fn step_sq(rad_per_s2: f32, rate_hz: f32) -> f32 {
+    let step = rad_per_s2 / rate_hz;
+    step * step
 }
 
 /// A bound on the lever term `e` for rates inside the gyro's calibrated ranges and rate

@@ -20,7 +20,8 @@ const _: () = {
     assert!(offset_of!(FullBlock, prev_rate) == 264);
     assert!(offset_of!(FullBlock, prev_lever) == 276);
     assert!(offset_of!(FullBlock, lever) == 288);
-    assert!(offset_of!(FullBlock, asym) == 396);
+    assert!(offset_of!(FullBlock, max_step_sq) == 396);
+    assert!(offset_of!(FullBlock, asym) == 400);
     assert!(offset_of!(Corrected<6>, values) == 0);
     assert!(offset_of!(Corrected<6>, flags) == 24);
     assert!(size_of::<Corrected<6>>() == 28);
@@ -120,6 +121,18 @@ core::arch::global_asm!(
     "vldr s12, [r0, #-4]",
     ".endif",
     ".endm",
+    // The flags word into s12 as `spincal_flags`, with RATE_STEP (bit 7) added when the
+    // condition flags say greater (the rate step's comparison, through r6).
+    ".macro spincal_flags_or_rate_step fmt",
+    ".if \\fmt == 0",
+    "ldr r6, [r0, #16]",
+    ".else",
+    "ldr r6, [r0, #-4]",
+    ".endif",
+    "it gt",
+    "orrgt r6, r6, #128",
+    "vmov s12, r6",
+    ".endm",
     // Store the outputs s6-s11 and the flags word in s12 (the flag byte and the three bytes of
     // padding after it: one `vstm` writes the whole `Corrected<6>`), loop to 1b while samples
     // are left; 3: return the number corrected.
@@ -213,7 +226,7 @@ core::arch::global_asm!(
     "vmla.f32 s11, s29, s30",
     ".if \\asym",
     // Asymmetry: s -> s12-s17, b -> s18-s23 (the block's end), then |v - b| in s18-s23.
-    "add r5, r0, #380",
+    "add r5, r0, #384",
     "vldm r5, {{s12-s23}}",
     "vsub.f32 s18, s0, s18",
     "vsub.f32 s19, s1, s19",
@@ -292,7 +305,8 @@ core::arch::global_asm!(
     "vmul.f32 s4, s9, s11",
     "vmul.f32 s5, s10, s11",
     // Lever term e_j = quad_j . m + tan_j . d -> s12-s14: output 0 and five terms of
-    // output 1 from the first load (s18-s31), the rest from the second (s18-s30).
+    // output 1 from the first load (s18-s31), the rest from the second (s18-s30), which also
+    // brings max_step_sq (s31) for the rate step.
     "vldm r4!, {{s18-s31}}",
     "vmul.f32 s12, s18, s0",
     "vmla.f32 s12, s19, s1",
@@ -308,7 +322,7 @@ core::arch::global_asm!(
     "vmla.f32 s13, s29, s2",
     "vmla.f32 s13, s30, s3",
     "vmla.f32 s13, s31, s4",
-    "vldm r4!, {{s18-s30}}",
+    "vldm r4!, {{s18-s31}}",
     "vmla.f32 s13, s18, s5",
     "vmla.f32 s13, s19, s15",
     "vmla.f32 s13, s20, s16",
@@ -327,7 +341,14 @@ core::arch::global_asm!(
     "vsub.f32 s7, s7, s13",
     "vsub.f32 s8, s8, s14",
     "vstmdb r5!, {{s9-s14}}",
-    "spincal_flags \\fmt",
+    // The rate step: |d|^2 (d0 d0 + d1 d1, then + d2 d2, as the Rust path) against
+    // max_step_sq; the flags word gains RATE_STEP (bit 7) when above (not when unordered).
+    "vmul.f32 s15, s15, s15",
+    "vmla.f32 s15, s16, s16",
+    "vmla.f32 s15, s17, s17",
+    "vcmp.f32 s15, s31",
+    "vmrs APSR_nzcv, fpscr",
+    "spincal_flags_or_rate_step \\fmt",
     ".else",
     // -g -> s12-s20.
     "vldm r4, {{s12-s20}}",

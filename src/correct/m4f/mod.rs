@@ -193,6 +193,9 @@ pub(crate) struct FullBlock {
     /// The lever term's coefficients, per output the six quadratic then the three tangential
     /// ones ([`LeverTerms`]).
     lever: [f32; 27],
+    /// The square of the largest rate change between two samples before a sample is flagged
+    /// a rate step (the lever kernels only; loaded with the lever term's last coefficients).
+    max_step_sq: f32,
     /// Per axis the asymmetry `s`, then its breakpoint `b` (the asymmetric kernel only).
     asym: [f32; 12],
 }
@@ -205,6 +208,7 @@ impl FullBlock {
         neg_g: &[[f32; 3]; 3],
         terms: &LeverTerms<f32>,
         (prev_rate, prev_lever): ([f32; 3], [f32; 3]),
+        max_step_sq: f32,
     ) -> Self {
         let pick = |f: fn([f32; 5]) -> f32| join(accel.nl.map(f), gyro.nl.map(f));
         let mut lever = [0.0; 27];
@@ -228,6 +232,7 @@ impl FullBlock {
             prev_rate,
             prev_lever,
             lever,
+            max_step_sq,
             asym: {
                 let mut sb = [0.0; 12];
                 let (s, b) = (pick(|[.., s, _]| s), pick(|[.., b]| b));

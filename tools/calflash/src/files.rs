@@ -229,9 +229,17 @@ pub fn read_bounded(path: &Path, max: u64, what: &'static str) -> Result<Vec<u8>
         source,
     };
     let f = std::fs::File::open(path).map_err(read)?;
+    // A regular file says its length: refused before a byte is read.
+    let stated = f
+        .metadata()
+        .ok()
+        .filter(std::fs::Metadata::is_file)
+        .map_or(0, |m| m.len());
     let mut bytes = Vec::new();
-    f.take(max + 1).read_to_end(&mut bytes).map_err(read)?;
-    if bytes.len() as u64 > max {
+    if stated <= max {
+        f.take(max + 1).read_to_end(&mut bytes).map_err(read)?;
+    }
+    if stated > max || bytes.len() as u64 > max {
         return Err(Error::TooLong {
             path: path.to_path_buf(),
             max,

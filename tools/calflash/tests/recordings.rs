@@ -637,4 +637,18 @@ fn matlab_files_are_read_as_recordings() {
             && err.contains("the file holds: pressure [4, 2]"),
         "{err}"
     );
+    // A file beyond what is read whole is refused by its stated length, before it is read
+    // (issue 30: the `matfile` crate parses the whole file).
+    let huge = std::fs::File::create(p.join("huge.mat")).unwrap();
+    huge.set_len(calflash::obs::recording::mat::MAX_MAT + 1)
+        .unwrap();
+    drop(huge);
+    let (code, _, err) = calflash(p, &["selfcal", "huge.mat", "--g", "9.81", "--serial", "M1"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("huge.mat")
+            && err.contains("longer than 1073741824 bytes")
+            && err.contains("save it as text"),
+        "{err}"
+    );
 }

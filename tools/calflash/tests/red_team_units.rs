@@ -869,3 +869,68 @@ fn messages_name_the_option_or_the_file_at_fault() {
     refused(&r, 1, "--since is after --until", "reversed");
     assert!(!d.join("u.sqlite").exists());
 }
+
+#[test]
+fn a_rate_step_no_airframe_makes_is_flagged_by_the_device_correction() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Two steady flights, 300 and 150 Hz of roll, spliced: at sample 50 the rate jumps by
+    // 942 rad/s in one millisecond (9.4e5 rad/s^2), while each row's truth has none.
+    let r = spin_flight(d, "300:0.1");
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    std::fs::rename(d.join("f.csv"), d.join("a.csv")).unwrap();
+    let r = cli(
+        d,
+        &format!(
+            "simulate --sensor imu --truth {} --spin 150:0.1 --sample-rate 1000 -o b.csv",
+            examples().join("spinning_round.truth.json").display()
+        ),
+    );
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    let [a, b] = ["a.csv", "b.csv"].map(|f| std::fs::read_to_string(d.join(f)).unwrap());
+    let (a, b): (Vec<&str>, Vec<&str>) = (a.lines().collect(), b.lines().collect());
+    assert_eq!(a[0], b[0], "the same columns");
+    let spliced: Vec<&str> = a[..=50].iter().chain(&b[51..]).copied().collect();
+    std::fs::write(d.join("f.csv"), spliced.join("\n") + "\n").unwrap();
+    let apply = |extra: &str| {
+        let r = cli(
+            d,
+            &format!("apply --blob r.blob f.csv --time-column t --reference -o o.csv {extra}"),
+        );
+        assert_eq!(r.code(), Some(0), "{extra}: {}{}", r.out, r.err);
+        let text = std::fs::read_to_string(d.join("o.csv")).unwrap();
+        let stepped: Vec<usize> = text
+            .lines()
+            .skip(1)
+            .enumerate()
+            .filter(|(_, l)| l.contains("rate-step"))
+            .map(|(i, _)| i)
+            .collect();
+        (r.out, stepped)
+    };
+    // The device's default: the step's sample, and only it, is flagged, and the reference
+    // figures (of unflagged samples) stay at the calibration's level.
+    let (out, stepped) = apply("");
+    assert_eq!(stepped, vec![50], "{out}");
+    // An airframe said to turn faster: nothing flagged, and the step's tangential term
+    // (hundreds of m/s^2 on one sample) reaches the figures.
+    let (out_wide, stepped) = apply("--max-angular-acceleration 1e7");
+    assert!(stepped.is_empty(), "{out_wide}");
+    // The worst absolute error of `az` (m/s^2) in the reference table.
+    let worst_az = |out: &str| -> f64 {
+        let row = out.lines().find(|l| l.starts_with("  | az |")).expect(out);
+        let cell = row.split('|').nth(8).expect(row).trim();
+        cell.split_whitespace().next().unwrap().parse().expect(row)
+    };
+    assert!(worst_az(&out) < 30.0, "{out}");
+    assert!(worst_az(&out_wide) > 500.0, "{out_wide}");
+    for bad in ["0", "-5", "nan", "1e40"] {
+        let r = cli(
+            d,
+            &format!(
+                "apply --blob r.blob f.csv --time-column t --max-angular-acceleration {bad} -o x.csv"
+            ),
+        );
+        refused(&r, 2, "max-angular-acceleration", bad);
+    }
+}

@@ -51,6 +51,11 @@ pub struct ApplyArgs {
     /// or a recording's.
     #[arg(long, value_parser = values::sample_rate)]
     pub rate: Option<f64>,
+    /// The largest angular acceleration the airframe makes, rad/s^2: with a lever arm, a
+    /// sample whose rate changed by more over one sample period is flagged `rate-step` (a
+    /// glitch or a gap; its tangential lever term is wrong). The device's default unless given.
+    #[arg(long, value_parser = values::positive_f32, default_value_t = spincal::correct::DEFAULT_MAX_ANGULAR_ACCELERATION)]
+    pub max_angular_acceleration: f32,
     /// The units of the values (counts unless stated).
     #[command(flatten)]
     pub units: super::units::UnitArgs,
@@ -218,6 +223,9 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
                 e.to_string()
             }
         })?;
+    corrector
+        .set_max_angular_acceleration(args.max_angular_acceleration)
+        .map_err(|e| format!("--max-angular-acceleration: {e}"))?;
     corrector.set_environment(temp0, volt);
     let mut header = vec![input.header.clone()];
     header.extend(channels.out.iter().map(|s| s.to_string()));

@@ -47,6 +47,20 @@ pub fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A finite number above zero that single precision holds (and not as zero).
+///
+/// # Errors
+/// As [`positive`], or beyond single precision or below its smallest normal number.
+pub fn positive_f32(s: &str) -> Result<f32, String> {
+    let v = positive(s)?;
+    let f = v as f32;
+    if f.is_normal() {
+        Ok(f)
+    } else {
+        Err(format!("{v} is beyond single precision"))
+    }
+}
+
 /// A finite number, zero or above.
 ///
 /// # Errors

@@ -11,6 +11,11 @@ use super::RecordingError;
 use super::layout::{Holds, Keep, Preamble, Rows};
 use crate::obs::squash;
 
+/// The most a `.mat` recording holds (1 GiB: an hour of six axes at 10 kHz in doubles is
+/// 2 GB as text and 1.2 GB here, so longer recordings are split or kept as text). The file is
+/// parsed whole; the arrays a compressed file expands to are not bounded beyond this.
+pub const MAX_MAT: u64 = 1 << 30;
+
 /// True when `path` names a `.mat` file.
 #[must_use]
 pub fn is_mat(path: &Path) -> bool {
@@ -75,8 +80,19 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
         path: path.to_path_buf(),
         source,
     };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let mat = MatFile::parse(std::io::BufReader::new(file)).map_err(|e| RecordingError::Mat {
+    let bytes = crate::files::read_bounded(path, MAX_MAT, "a MATLAB recording").map_err(|e| {
+        match e {
+            crate::files::Error::Read { source, .. } => io(source),
+            other => RecordingError::Mat {
+                path: path.to_path_buf(),
+                what: format!(
+                    "{} (a MATLAB file is read whole; split the recording or save it as text, which is read a line at a time)",
+                    other.to_string().trim_start_matches(&format!("{}: ", path.display()))
+                ),
+            },
+        }
+    })?;
+    let mat = MatFile::parse(bytes.as_slice()).map_err(|e| RecordingError::Mat {
         path: path.to_path_buf(),
         what: format!("not a MATLAB level-5 file that can be read ({e})"),
     })?;
