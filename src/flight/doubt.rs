@@ -1,5 +1,7 @@
 //! Which of a corrected IMU sample's sensors the flight filter should doubt: both when the
-//! corrector says the sample is outside the calibration (or there is none), one when its own
+//! corrector says the sample is outside the calibration (or there is none) or that its rate
+//! stepped beyond what the airframe can turn (a glitch or a gap, which neither the rate nor the
+//! lever-arm correction of the specific force survives), one when its own
 //! codes sit at their converter's rails (a round's accelerometers saturate at setback while
 //! its gyros keep counting the spin).
 
@@ -10,8 +12,33 @@ use crate::model::Rails;
 /// correction carried `flags`, the converters' rails being `accel` and `gyro`.
 #[must_use]
 pub fn doubted(raw: &[i32; 6], flags: Flags, accel: Rails, gyro: Rails) -> [bool; 2] {
-    let both = flags.contains(Flags::OUT_OF_RANGE) || flags.contains(Flags::NO_CALIBRATION);
+    let both = flags.contains(Flags::OUT_OF_RANGE)
+        || flags.contains(Flags::NO_CALIBRATION)
+        || flags.contains(Flags::RATE_STEP);
     let at = |codes: &[i32], r: Rails| codes.iter().any(|c| *c <= r.lo || *c >= r.hi);
     let (a, g) = raw.split_at(3);
     [both || at(a, accel), both || at(g, gyro)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_rate_step_puts_both_sensors_in_doubt_and_a_rail_only_its_own() {
+        let rails = Rails::unsigned(16);
+        let mid = [32_768; 6];
+        assert_eq!(doubted(&mid, Flags::NONE, rails, rails), [false, false]);
+        assert_eq!(doubted(&mid, Flags::RATE_STEP, rails, rails), [true, true]);
+        assert_eq!(
+            doubted(&mid, Flags::TEMPERATURE_CLAMPED, rails, rails),
+            [false, false]
+        );
+        let mut railed = mid;
+        railed[0] = 65_535;
+        assert_eq!(
+            doubted(&railed, Flags::SATURATED, rails, rails),
+            [true, false]
+        );
+    }
 }

@@ -26,9 +26,9 @@ const PRIMING_ITERATIONS: usize = 3;
 
 /// The largest angular acceleration (rad/s^2) a sample's rate may imply before it is flagged
 /// [`Flags::RATE_STEP`], unless [`ImuCorrector::set_max_angular_acceleration`] says otherwise:
-/// above a 155 mm shell's spin-up in the bore (about 3e5 at peak pressure, when its
-/// accelerometers are saturated anyway) and far above a rocket's or a spin rig's. At 1 kHz it
-/// is a step of 80 Hz of spin between two samples.
+/// above a shell's spin-up in the bore (3.5e5 at peak pressure in `calflash simulate --flight
+/// shell`: 15,000 g of setback, 300 rev/s at the muzzle) and far above a rocket's or a spin
+/// rig's. At 1 kHz it is a step of 80 Hz of spin between two samples.
 pub const DEFAULT_MAX_ANGULAR_ACCELERATION: f32 = 5.0e5;
 
 /// The per-sample arithmetic: the axis [`Shape`] (with g-sensitivity whenever it is not

@@ -72,6 +72,12 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
             "{out}"
         );
         assert!(out.contains("recorded as db:"), "{out}");
+        if exit == 0 {
+            let (_, out, err) = health(d, "rest.csv", &["--no-db", "--json", "ok.json"]);
+            let (code, said, _) = calflash(d, &["compare", "fit.json", "ok.json"]);
+            assert_eq!(code, 0, "{out}{err}{said}");
+            assert!(said.contains("verdict: UNCHANGED: no bias moved"), "{said}");
+        }
     }
     // Ten years of the stored random walk: far beyond the hour the calibration allows.
     let (code, out, err) = calflash(
@@ -88,10 +94,16 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
     let (code, out, err) = health(d, "rest.csv", &["--no-db", "--json", "health.json"]);
     assert_eq!(code, 3, "{out}{err}");
     let (code, out, err) = calflash(d, &["compare", "fit.json", "health.json"]);
-    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(code, 3, "one verdict and its exit code: {out}{err}");
     let moved: Vec<&str> = out.lines().filter(|l| l.ends_with("MOVED")).collect();
     assert_eq!(moved.len(), 1, "{out}");
     assert!(moved[0].trim_start().starts_with("wz:"), "{out}");
+    assert!(
+        out.contains(
+            "verdict: CHANGED: 1 bias(es) moved beyond the calibration's stated 1-sigma (wz)"
+        ),
+        "{out}"
+    );
     let (code, _, err) = calflash(d, &["compare", "health.json", "fit.json"]);
     assert_ne!(code, 0);
     assert!(err.contains("comes second"), "{err}");

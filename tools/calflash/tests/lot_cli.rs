@@ -306,6 +306,41 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
     let (code, out, _) = calflash(d, &["lot", "--lot", "L-0419", "--db", "units.sqlite"]);
     assert_eq!(code, 0);
     assert!(out.contains(": 16 units"), "{out}");
+    // The first batch of a new lot: every unit REVIEW, and the table and the index say why
+    // on the unit's row (there was no lot to compare with), not only each unit's summary.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "batch",
+            "--sensor",
+            "single-accel",
+            "--out-dir",
+            "out-new",
+            "--reports",
+            "--db",
+            "units.sqlite",
+            "--lot",
+            "L-NEW",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    for i in 20..23 {
+        let row = out
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("ACC-7-{i:03} ")))
+            .unwrap_or_else(|| panic!("no row for unit {i}: {out}"));
+        assert!(
+            row.contains("REVIEW") && row.contains("not compared with its lot"),
+            "{row}"
+        );
+    }
+    let index = std::fs::read_to_string(d.join("out-new/index.html")).unwrap();
+    assert_eq!(
+        index.matches("<li>not compared with its lot").count(),
+        3,
+        "{index}"
+    );
 }
 
 /// Two stations record one lot: the charts are drawn over the lot and per station, where a

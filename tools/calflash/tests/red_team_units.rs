@@ -912,6 +912,10 @@ fn a_rate_step_no_airframe_makes_is_flagged_by_the_device_correction() {
     // figures (of unflagged samples) stay at the calibration's level.
     let (out, stepped) = apply("");
     assert_eq!(stepped, vec![50], "{out}");
+    assert!(
+        out.contains("1 sample(s) flagged rate-step: the rate changed faster than 5e5 rad/s^2"),
+        "{out}"
+    );
     // An airframe said to turn faster: nothing flagged, and the step's tangential term
     // (hundreds of m/s^2 on one sample) reaches the figures.
     let (out_wide, stepped) = apply("--max-angular-acceleration 1e7");
@@ -933,4 +937,29 @@ fn a_rate_step_no_airframe_makes_is_flagged_by_the_device_correction() {
         );
         refused(&r, 2, "max-angular-acceleration", bad);
     }
+    // Given for a calibration without a lever arm: said to be unused.
+    let r = cli(
+        d,
+        &format!(
+            "simulate --sensor imu --truth {} --plan tumble:24 --plan rate:-6:6:5 -o bench.csv",
+            examples().join("imu_bench.truth.json").display()
+        ),
+    );
+    assert_eq!(r.code(), Some(0), "{}", r.err);
+    let r = cli(
+        d,
+        "calibrate bench.csv --sensor imu --serial B-1 --blob b.blob --no-db",
+    );
+    assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
+    let r = cli(
+        d,
+        "apply --blob b.blob bench.csv --rate 100 --max-angular-acceleration 10 -o x.csv",
+    );
+    assert_eq!(r.code(), Some(0), "{}{}", r.out, r.err);
+    assert!(
+        r.out
+            .contains("--max-angular-acceleration is not used: this calibration has no lever arm"),
+        "{}",
+        r.out
+    );
 }

@@ -53,9 +53,9 @@ pub struct ApplyArgs {
     pub rate: Option<f64>,
     /// The largest angular acceleration the airframe makes, rad/s^2: with a lever arm, a
     /// sample whose rate changed by more over one sample period is flagged `rate-step` (a
-    /// glitch or a gap; its tangential lever term is wrong). The device's default unless given.
-    #[arg(long, value_parser = values::positive_f32, default_value_t = spincal::correct::DEFAULT_MAX_ANGULAR_ACCELERATION)]
-    pub max_angular_acceleration: f32,
+    /// glitch or a gap; its tangential lever term is wrong). Default: the device's, 5e5.
+    #[arg(long, value_parser = values::positive_f32)]
+    pub max_angular_acceleration: Option<f32>,
     /// The units of the values (counts unless stated).
     #[command(flatten)]
     pub units: super::units::UnitArgs,
@@ -223,9 +223,11 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
                 e.to_string()
             }
         })?;
-    corrector
-        .set_max_angular_acceleration(args.max_angular_acceleration)
-        .map_err(|e| format!("--max-angular-acceleration: {e}"))?;
+    if let Some(a) = args.max_angular_acceleration {
+        corrector
+            .set_max_angular_acceleration(a)
+            .map_err(|e| format!("--max-angular-acceleration: {e}"))?;
+    }
     corrector.set_environment(temp0, volt);
     let mut header = vec![input.header.clone()];
     header.extend(channels.out.iter().map(|s| s.to_string()));
@@ -400,6 +402,8 @@ fn timing(
 struct Corrected {
     rows: String,
     flagged: usize,
+    /// Samples flagged `rate-step`.
+    rate_steps: usize,
     accuracy: Option<Accuracy>,
 }
 
@@ -420,6 +424,7 @@ fn correct_all(
     let mut rows = String::new();
     use std::fmt::Write as _;
     let mut flagged = 0usize;
+    let mut rate_steps = 0usize;
     let off_rate: std::collections::HashSet<usize> = timing
         .iter()
         .flat_map(|t| t.off_rate.iter().copied())
@@ -451,6 +456,7 @@ fn correct_all(
         let flags: Flags = o.flags;
         let sigma = corrector.sigma(codes, &o.values).map(|s| s[..n].to_vec());
         flagged += usize::from(!flags.is_clean());
+        rate_steps += usize::from(flags.contains(Flags::RATE_STEP));
         if let (Some(acc), Some(reference)) = (&mut accuracy, &input.reference)
             && flags.is_clean()
         {
@@ -474,6 +480,7 @@ fn correct_all(
     Ok(Corrected {
         rows,
         flagged,
+        rate_steps,
         accuracy,
     })
 }
@@ -510,6 +517,19 @@ fn report(
                 }
             );
         }
+    }
+    let largest = args
+        .max_angular_acceleration
+        .unwrap_or(spincal::correct::DEFAULT_MAX_ANGULAR_ACCELERATION);
+    if corrected.rate_steps > 0 {
+        println!(
+            "  {} sample(s) flagged rate-step: the rate changed faster than {largest:e} rad/s^2, more than the airframe turns (--max-angular-acceleration); a glitch or a gap, their lever-arm correction not trusted",
+            corrected.rate_steps
+        );
+    } else if args.max_angular_acceleration.is_some() && !lever {
+        println!(
+            "  --max-angular-acceleration is not used: this calibration has no lever arm, so no rate difference enters its correction and no rate step is flagged"
+        );
     }
     if let Some(acc) = &corrected.accuracy {
         println!(

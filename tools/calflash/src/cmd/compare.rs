@@ -72,7 +72,7 @@ pub fn run(args: &CompareArgs) -> Result<bool, Failure> {
     let (ta, sa) = text(&args.before)?;
     let (tb, sb) = text(&args.after)?;
     if let Some(h) = health_of(&tb, &sb)? {
-        return against_health(args, &ta, &sa, &h).map(|()| false);
+        return against_health(args, &ta, &sa, &h);
     }
     if health_of(&ta, &sa)?.is_some() {
         return Err(
@@ -166,13 +166,14 @@ fn health_of(text: &str, source: &str) -> Result<Option<serde_json::Value>, Stri
 
 /// A health report held against the calibration it judged: per bias, how far the unit at
 /// rest found it from the calibration, in the calibration's stated 1-sigma, and whether that
-/// is beyond it (chi-square with one degree of freedom at `--alpha`, Bonferroni over the six).
+/// is beyond it (chi-square with one degree of freedom at `--alpha`, Bonferroni over the six);
+/// true when one moved.
 fn against_health(
     args: &CompareArgs,
     before: &str,
     source: &str,
     health: &serde_json::Value,
-) -> Result<(), Failure> {
+) -> Result<bool, Failure> {
     let factory: serde_json::Value =
         serde_json::from_str(before).map_err(|e| format!("{source}: not a record: {e}"))?;
     let serial = factory["serial"].as_str().unwrap_or_default();
@@ -221,11 +222,29 @@ fn against_health(
             "stated_sigma": stated, "chi2": chi2, "moved": moved}),
         );
     }
+    let moved: Vec<&str> = rows
+        .iter()
+        .filter(|r| r["moved"] == true)
+        .filter_map(|r| r["output"].as_str())
+        .collect();
+    let family = format!("at {} over 6 outputs, Bonferroni", args.alpha);
+    if moved.is_empty() {
+        println!(
+            "verdict: UNCHANGED: no bias moved beyond the calibration's stated 1-sigma {family}"
+        );
+    } else {
+        println!(
+            "verdict: CHANGED: {} bias(es) moved beyond the calibration's stated 1-sigma ({}), {family}",
+            moved.len(),
+            moved.join(", ")
+        );
+    }
     if let Some(p) = &args.json {
-        let v = serde_json::json!({"serial": serial, "health": h, "outputs": rows});
+        let v = serde_json::json!({"serial": serial, "health": h, "outputs": rows,
+            "changed": !moved.is_empty()});
         crate::files::write_atomically(p, |w| {
             serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)
         })?;
     }
-    Ok(())
+    Ok(!moved.is_empty())
 }

@@ -19,8 +19,8 @@ pub struct Outcome {
     pub serial: String,
     /// Its observation file.
     pub file: PathBuf,
-    /// Its verdict, or why it failed.
-    pub result: Result<Verdict, String>,
+    /// Its verdict and the findings that gave it, or why it failed.
+    pub result: Result<super::Judged, String>,
 }
 
 /// The observation files of `inputs`: files as given, and each directory's `.csv` and `.txt`
@@ -281,21 +281,22 @@ pub fn run_units(
         rayon::current_num_threads(),
         out_dir.display()
     );
-    println!("  {:<18} {:<8} file", "unit", "verdict");
+    println!("  {:<18} {:<8} {:<24} why", "unit", "verdict", "file");
     let mut failed = Vec::new();
     let mut counts = [0usize; 3];
     for o in &outcomes {
-        let word = match &o.result {
-            Ok(v) => {
-                counts[*v as usize] += 1;
-                v.word().to_string()
+        let (word, why) = match &o.result {
+            Ok(j) => {
+                counts[j.verdict as usize] += 1;
+                (j.verdict.word().to_string(), reason_line(&j.reasons))
             }
             Err(e) => {
                 failed.push(o.serial.as_str());
-                format!("FAILED: {e}")
+                ("FAILED".to_string(), e.clone())
             }
         };
-        println!("  {:<18} {:<8} {}", o.serial, word, o.file.display());
+        let file = o.file.display().to_string();
+        println!("  {:<18} {:<8} {file:<24} {why}", o.serial, word);
     }
     println!(
         "  {} ACCEPT, {} REVIEW, {} REJECT, {} failed; each unit's summary in {}/SERIAL.txt",
@@ -321,9 +322,25 @@ pub fn run_units(
     }
     Ok(outcomes
         .iter()
-        .filter_map(|o| o.result.as_ref().ok().copied())
+        .filter_map(|o| o.result.as_ref().ok().map(|j| j.verdict))
         .max()
         .unwrap_or(Verdict::Accept))
+}
+
+/// The first reason of a unit's verdict on one line, and how many more its summary holds.
+fn reason_line(reasons: &[String]) -> String {
+    const WIDTH: usize = 100;
+    let Some(first) = reasons.first() else {
+        return String::new();
+    };
+    let mut line: String = first.chars().take(WIDTH).collect();
+    if first.chars().count() > WIDTH {
+        line.push_str("...");
+    }
+    if reasons.len() > 1 {
+        line.push_str(&format!(" (+{} more)", reasons.len() - 1));
+    }
+    line
 }
 
 /// The batch's report: one table, a row and a link per unit to its own page.
@@ -331,20 +348,33 @@ fn index_html(outcomes: &[Outcome]) -> String {
     use crate::report::page::esc;
     let mut rows = String::new();
     for o in outcomes {
-        let (verdict, page) = match &o.result {
-            Ok(v) => (
-                v.word().to_string(),
+        let (verdict, page, why) = match &o.result {
+            Ok(j) => (
+                j.verdict.word().to_string(),
                 format!("<a href=\"{0}.html\">{0}</a>", esc(&o.serial)),
+                j.reasons
+                    .iter()
+                    .map(|r| format!("<li>{}</li>", esc(r)))
+                    .collect::<String>(),
             ),
-            Err(e) => (format!("FAILED: {}", esc(e)), esc(&o.serial)),
+            Err(e) => (
+                "FAILED".to_string(),
+                esc(&o.serial),
+                format!("<li>{}</li>", esc(e)),
+            ),
+        };
+        let why = if why.is_empty() {
+            String::new()
+        } else {
+            format!("<ul>{why}</ul>")
         };
         rows.push_str(&format!(
-            "<tr><td>{page}</td><td>{verdict}</td><td>{}</td></tr>\n",
+            "<tr><td>{page}</td><td>{verdict}</td><td>{why}</td><td>{}</td></tr>\n",
             esc(&o.file.display().to_string())
         ));
     }
     format!(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>calflash batch</title></head><body>\n<h1>{} units</h1>\n<table>\n<tr><th>unit</th><th>verdict</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>calflash batch</title><style>body{{font-family:sans-serif;max-width:1200px;margin:1em auto}}td,th{{text-align:left;vertical-align:top;padding:2px 8px}}ul{{margin:0;padding-left:1.2em}}</style></head><body>\n<h1>{} units</h1>\n<table>\n<tr><th>unit</th><th>verdict</th><th>why (the findings that gave the verdict)</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
         outcomes.len()
     )
 }

@@ -218,13 +218,22 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, Failure> {
         .as_deref()
         .ok_or("--serial: the unit's serial number is required (a batch of files takes each from its file name)")?;
     let mut said = String::new();
-    let verdict = calibrate_one(args, data, serial, &args.out, &mut said);
+    let judged = calibrate_one(args, data, serial, &args.out, &mut said);
     print!("{said}");
-    verdict
+    judged.map(|j| j.verdict)
+}
+
+/// A unit's verdict and the findings that gave it (none for ACCEPT).
+#[derive(Debug, Clone)]
+pub struct Judged {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The texts of the findings at that verdict.
+    pub reasons: Vec<String>,
 }
 
 /// Calibrates the unit `serial` from `data` with the options of `args`, writing what `out`
-/// names; what a person reads goes into `said`.
+/// names; what a person reads goes into `said`; the verdict and its reasons.
 ///
 /// # Errors
 /// A message naming the file, column, term or table point.
@@ -234,7 +243,7 @@ pub fn calibrate_one(
     serial: &str,
     out: &Outputs,
     said: &mut String,
-) -> Result<Verdict, Failure> {
+) -> Result<Judged, Failure> {
     use std::fmt::Write as _;
     sensor::blob::serial(serial)?;
     let mut paths = Paths::new()
@@ -379,7 +388,14 @@ pub fn calibrate_one(
     })? {
         let _ = writeln!(said, "  {line}");
     }
-    Ok(c.verdict())
+    let verdict = c.verdict();
+    let reasons = c
+        .findings
+        .iter()
+        .filter(|f| verdict != Verdict::Accept && f.verdict == verdict)
+        .map(|f| f.text.clone())
+        .collect();
+    Ok(Judged { verdict, reasons })
 }
 
 /// `history:SERIAL` in `--stage-one`: the serial.
