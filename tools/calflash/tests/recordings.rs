@@ -651,4 +651,9 @@ fn matlab_files_are_read_as_recordings() {
             && err.contains("save it as text"),
         "{err}"
     );
+    // A device named `.mat` is not read to the bound first.
+    std::os::unix::fs::symlink("/dev/zero", p.join("zero.mat")).unwrap();
+    let (code, _, err) = calflash(p, &["selfcal", "zero.mat", "--g", "9.81", "--serial", "M1"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("zero.mat: not a regular file"), "{err}");
 }

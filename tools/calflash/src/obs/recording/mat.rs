@@ -80,6 +80,12 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
         path: path.to_path_buf(),
         source,
     };
+    if !std::fs::metadata(path).map_err(io)?.is_file() {
+        return Err(RecordingError::Mat {
+            path: path.to_path_buf(),
+            what: "not a regular file: a MATLAB file is read whole, so it is taken from a file (a stream or a device is read as text, a line at a time)".into(),
+        });
+    }
     let bytes = crate::files::read_bounded(path, MAX_MAT, "a MATLAB recording").map_err(|e| {
         match e {
             crate::files::Error::Read { source, .. } => io(source),
