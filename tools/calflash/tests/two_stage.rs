@@ -642,6 +642,30 @@ fn stage_one_records_that_do_not_fit_are_named() {
         ],
     );
     assert_eq!(code, 0, "{out}{err}");
+    // The unit's file named as one of stage one's: refused before anything is written.
+    let before = std::fs::read(d.join("s1b/a_y.csv")).unwrap();
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--stages",
+            "s1b",
+            "--plan",
+            "tumble:26",
+            "--seed",
+            "7",
+            "-o",
+            "s1b/a_y.csv",
+        ],
+    );
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("s1b/a_y.csv") && err.contains("--stages (its a_y.csv)"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(d.join("s1b/a_y.csv")).unwrap(), before);
     fails(
         &records,
         "fast.csv",

@@ -52,6 +52,24 @@ fn shifts(items: &[String]) -> Result<[f64; 6], Failure> {
 /// # Errors
 /// A plan, a truth or a shift that cannot be read; a file that cannot be written.
 pub fn run(args: &SimulateArgs, dir: &Path) -> Result<(), Failure> {
+    // Stage one's six files are outputs too: none may be -o, --write-truth or --truth.
+    let files: Vec<(String, std::path::PathBuf)> = OUTPUTS
+        .iter()
+        .map(|o| {
+            (
+                format!("--stages (its {o}.csv)"),
+                dir.join(format!("{o}.csv")),
+            )
+        })
+        .collect();
+    let mut paths = crate::files::Paths::new().input("--truth", args.truth.as_deref());
+    for (what, path) in &files {
+        paths = paths.created(what, Some(path));
+    }
+    paths
+        .created("-o", Some(&args.output))
+        .created("--write-truth", args.write_truth.as_deref())
+        .check()?;
     let mut truth = match &args.truth {
         Some(p) => {
             let text = crate::files::read_json_text(p, "an assembled unit's truth")?;
