@@ -92,38 +92,29 @@ impl TcpUnit {
         let listener = TcpListener::bind("127.0.0.1:0").expect("a local port");
         let port = listener.local_addr().expect("bound").port();
         let thread = std::thread::spawn(move || {
-            let Ok((mut s, _)) = listener.accept() else {
-                return device;
-            };
-            let mut pending = Vec::new();
-            let mut buf = [0u8; 1024];
-            let mut n = 0usize;
-            loop {
-                let k = match s.read(&mut buf) {
-                    Ok(0) | Err(_) => return device,
-                    Ok(k) => k,
-                };
-                pending.extend_from_slice(&buf[..k]);
-                while let Some(end) = pending.iter().position(|b| *b == 0) {
-                    let frame: Vec<u8> = pending.drain(..=end).collect();
-                    n += 1;
-                    match fault {
-                        Fault::SilentFrom(m) if n >= m => continue,
-                        Fault::CloseAt(m) if n >= m => return device,
-                        _ => {}
-                    }
-                    let mut out = [0u8; MAX_FRAME];
-                    let len = device.handle_frame(&frame[..frame.len() - 1], &mut out);
-                    if fault == Fault::GarbleAnswer(n) && len > 2 {
-                        out[len / 2] ^= 0x20;
-                    }
-                    if s.write_all(&out[..len]).is_err() {
-                        return device;
-                    }
-                }
+            if let Ok((s, _)) = listener.accept() {
+                session(&mut device, s, fault);
             }
+            device
         });
         Self { port, thread }
+    }
+
+    /// Serves `device` to one connection after another, for as long as the process runs (a
+    /// unit left on the bench's port); its address.
+    ///
+    /// # Panics
+    /// When no local port can be bound.
+    #[must_use]
+    pub fn serve_forever(mut device: Box<Device<Flash>>) -> String {
+        let listener = TcpListener::bind("127.0.0.1:0").expect("a local port");
+        let port = listener.local_addr().expect("bound").port();
+        std::thread::spawn(move || {
+            for s in listener.incoming().flatten() {
+                session(&mut device, s, Fault::None);
+            }
+        });
+        format!("tcp://127.0.0.1:{port}")
     }
 
     /// `tcp://127.0.0.1:PORT`.
@@ -139,5 +130,37 @@ impl TcpUnit {
     #[must_use]
     pub fn finish(self) -> Box<Device<Flash>> {
         self.thread.join().expect("the bench unit's thread")
+    }
+}
+
+/// Answers the frames of one connection `s` with `device`, with `fault`, until the client
+/// hangs up (or the fault closes the link).
+fn session(device: &mut Device<Flash>, mut s: std::net::TcpStream, fault: Fault) {
+    let mut pending = Vec::new();
+    let mut buf = [0u8; 1024];
+    let mut n = 0usize;
+    loop {
+        let k = match s.read(&mut buf) {
+            Ok(0) | Err(_) => return,
+            Ok(k) => k,
+        };
+        pending.extend_from_slice(&buf[..k]);
+        while let Some(end) = pending.iter().position(|b| *b == 0) {
+            let frame: Vec<u8> = pending.drain(..=end).collect();
+            n += 1;
+            match fault {
+                Fault::SilentFrom(m) if n >= m => continue,
+                Fault::CloseAt(m) if n >= m => return,
+                _ => {}
+            }
+            let mut out = [0u8; MAX_FRAME];
+            let len = device.handle_frame(&frame[..frame.len() - 1], &mut out);
+            if fault == Fault::GarbleAnswer(n) && len > 2 {
+                out[len / 2] ^= 0x20;
+            }
+            if s.write_all(&out[..len]).is_err() {
+                return;
+            }
+        }
     }
 }

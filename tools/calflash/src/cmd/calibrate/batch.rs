@@ -299,12 +299,12 @@ pub fn run_units(
         println!("  {:<18} {:<8} {file:<24} {why}", o.serial, word);
     }
     println!(
-        "  {} ACCEPT, {} REVIEW, {} REJECT, {} failed; each unit's summary in {}/SERIAL.txt",
+        "  {} ACCEPT, {} REVIEW, {} REJECT, {} failed; each unit's summary in {}",
         counts[0],
         counts[1],
         counts[2],
         failed.len(),
-        out_dir.display()
+        out_dir.join("SERIAL.txt").display()
     );
     if args.reports {
         let index = out_dir.join("index.html");

@@ -21,7 +21,7 @@ pub struct SimulateArgs {
     /// Plan items (repeatable): head:N, tumble:6|12|18|24|26, sphere:N, rate:LO:HI:N (rad/s),
     /// diagonal:LO:HI:N (rad/s, about the 45-degree diagonals), centrifuge:LO:HI:N (g),
     /// sweep:LO:HI:N, fine:LO:HI:N.
-    #[arg(long, required_unless_present_any = ["plan_file", "spin", "rest", "flight", "still"])]
+    #[arg(long, required_unless_present_any = ["plan_file", "spin", "rest", "flight", "still", "tumble"])]
     pub plan: Vec<String>,
     /// An IMU at rest and being handled, as the raw counts of this blob's device correction
     /// (for `calflash health` and `allan`): rests of `--hold` seconds in `--poses` poses, one
@@ -64,6 +64,16 @@ pub struct SimulateArgs {
     /// `t`, the six codes and `temp`, with the truth's white noise and `--bias-walk`.
     #[arg(long, conflicts_with_all = ["plan", "plan_file", "spin", "rest", "flight"], value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
     pub still: Option<f64>,
+    /// An IMU turned by hand through this many still poses after a 30 s rest, for `calflash
+    /// selfcal` (`--init-rest 30`, `--g 9.81`): a line per sample at 100 Hz (or
+    /// `--sample-rate`), the time and the six codes, space-separated.
+    #[arg(long, conflicts_with_all = ["plan", "plan_file", "spin", "rest", "flight", "still"], value_parser = |s: &str| super::values::count_in(s, 1, 1000))]
+    pub tumble: Option<usize>,
+    /// This many units on one fixture through the plan, in one file as `calibrate --fixture`
+    /// reads it: the plan's columns once, then each unit's outputs prefixed `u1_`, `u2_`, ...
+    /// (the same truth, each unit with its own noise: seeds `--seed`, `--seed`+1, ...).
+    #[arg(long, conflicts_with_all = ["spin", "rest", "flight", "still", "tumble", "stages"], value_parser = |s: &str| super::values::count_in(s, 2, 64))]
+    pub fixture: Option<usize>,
     /// With --still: each bias's random walk, counts per root second, `ACCEL,GYRO`.
     #[arg(long, requires = "still", value_delimiter = ',', value_parser = super::values::non_negative)]
     pub bias_walk: Vec<f64>,
@@ -448,6 +458,83 @@ fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), Failure> {
 }
 
 /// `--still`: an IMU at rest for an Allan deviation.
+/// Units on one fixture: `first`'s columns with its outputs prefixed `u1_`, then each of
+/// `others`' outputs prefixed `u2_`, `u3_`, ... (the conditions are the same).
+fn on_one_fixture(first: sim::Observations, others: &[sim::Observations]) -> sim::Observations {
+    use crate::columns;
+    let is_output =
+        |n: &str| n == columns::OUTPUT || columns::A.contains(&n) || columns::GYRO.contains(&n);
+    let outputs: Vec<usize> = (0..first.names.len())
+        .filter(|i| is_output(&first.names[*i]))
+        .collect();
+    let mut names: Vec<String> = first
+        .names
+        .iter()
+        .map(|n| {
+            if is_output(n) {
+                format!("u1_{n}")
+            } else {
+                n.clone()
+            }
+        })
+        .collect();
+    for k in 0..others.len() {
+        names.extend(
+            outputs
+                .iter()
+                .map(|i| format!("u{}_{}", k + 2, first.names[*i])),
+        );
+    }
+    let rows = first
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(r, row)| {
+            let mut row = row.clone();
+            for o in others {
+                row.extend(outputs.iter().map(|i| o.rows[r][*i]));
+            }
+            row
+        })
+        .collect();
+    sim::Observations { names, rows }
+}
+
+/// `--tumble POSES`: the recording of a unit turned by hand (the library's `Tumble`: its
+/// accelerometer and gyro, gravity 9.81 m/s^2, a 30 s rest, each pose held 4 s).
+fn tumble(args: &SimulateArgs, poses: usize) -> Result<(), Failure> {
+    use std::fmt::Write as _;
+    if args.sensor != SensorKind::Imu {
+        return Err("--tumble: a hand-turned recording is of an IMU (--sensor imu)".into());
+    }
+    let session = sim::recording::Tumble {
+        poses,
+        rate: args.sample_rate.unwrap_or(100.0),
+        seed: args.seed,
+        ..sim::recording::Tumble::default()
+    };
+    let rec = session.record();
+    let mut text = String::with_capacity(rec.t.len() * 48);
+    for ((t, a), g) in rec.t.iter().zip(&rec.acc).zip(&rec.gyro) {
+        let _ = writeln!(
+            text,
+            "{t:.3} {} {} {} {} {} {}",
+            a[0], a[1], a[2], g[0], g[1], g[2]
+        );
+    }
+    let mut staged = Staged::new();
+    staged.write(&args.output, |w| w.write_all(text.as_bytes()))?;
+    staged.commit()?;
+    println!(
+        "calflash simulate: an IMU turned by hand through {poses} poses after a {} s rest, {} samples at {} Hz, written to {}",
+        session.rest,
+        rec.t.len(),
+        session.rate,
+        args.output.display()
+    );
+    Ok(())
+}
+
 fn still(args: &SimulateArgs, seconds: f64) -> Result<(), Failure> {
     if args.sensor != SensorKind::Imu {
         return Err("--still: a still recording is of an IMU (--sensor imu)".into());
@@ -518,6 +605,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     }
     if let Some(seconds) = args.still {
         return still(args, seconds);
+    }
+    if let Some(poses) = args.tumble {
+        return tumble(args, poses);
     }
     if let Some(blob) = &args.rest {
         return rest(args, blob);
@@ -601,6 +691,22 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         station.as_ref(),
     )
     .map_err(|e| format!("--latitude: {e}"))?;
+    if let Some(units) = args.fixture {
+        let mut others = Vec::with_capacity(units - 1);
+        for k in 1..units {
+            others.push(
+                sim::simulate_at(
+                    &sensor,
+                    &conditions,
+                    args.seed.wrapping_add(k as u64),
+                    args.quantize,
+                    station.as_ref(),
+                )
+                .map_err(|e| format!("--latitude: {e}"))?,
+            );
+        }
+        obs = on_one_fixture(obs, &others);
+    }
     if let Some(r) = &ramp {
         ramp_columns(&mut obs, r);
     }
