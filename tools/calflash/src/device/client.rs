@@ -68,6 +68,17 @@ pub enum DeviceError {
 fn describe(status: &Status) -> String {
     match status {
         Status::Refused(why) => why.to_string(),
+        Status::HealthUnavailable(e) => {
+            format!("its calibration gives the health check nothing to run on: {e}")
+        }
+        Status::InvalidBlob(e) => format!("the blob is not a valid calibration: {e}"),
+        Status::NoCalibration => "it holds no valid calibration".into(),
+        Status::Locked => "it is locked against writes".into(),
+        Status::TooLarge => "the blob is longer than a slot holds".into(),
+        Status::CrcMismatch => "the blob it received differs from the one sent (CRC)".into(),
+        Status::StoreFailed => {
+            "its store failed to commit; the previous calibration stays current".into()
+        }
         other => format!("{other:?}"),
     }
 }
