@@ -305,11 +305,34 @@ fn a_simulated_still_recording_gives_allan_its_noise_back() {
     );
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("360000 samples at 100 Hz"), "{out}");
-    let (code, _, err) = calflash(
+    let (code, said, err) = calflash(
         d.path(),
         &["allan", "still.csv", "--sensor", "gyro", "--json", "g.json"],
     );
     assert_eq!(code, 0, "{err}");
+    // The random walk and the walk are resolved; a term the record does not resolve is said
+    // to be so, never printed as a 0.
+    assert!(said.contains("random walk 0.2"), "{said}");
+    assert!(!said.contains(" 0 counts"), "{said}");
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--still",
+            "60",
+            "-o",
+            "short.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let (code, said, err) = calflash(d.path(), &["allan", "short.csv", "--sensor", "gyro"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        said.contains("rate random walk not resolved in this record"),
+        "{said}"
+    );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.path().join("g.json")).unwrap()).unwrap();
     for axis in json["axes"].as_array().unwrap() {

@@ -252,35 +252,80 @@ fn scale(
 fn describe(t: &NoiseTerms, which: Which, unit: &str, si: bool) -> String {
     use crate::report::terminal::num;
     let deg = 180.0 / std::f64::consts::PI;
-    match (which, si) {
-        (Which::Gyro, true) => format!(
-            "ARW {} rad/s/sqrt(Hz) = {} deg/sqrt(h); bias instability {} rad/s = {} deg/h; RRW {} rad/s/sqrt(s) = {} deg/h/sqrt(h); quantization {} rad; rate ramp {} rad/s^2",
-            num(t.random_walk),
-            num(t.random_walk * deg * 60.0),
-            num(t.bias_instability),
-            num(t.bias_instability * deg * 3600.0),
-            num(t.rate_random_walk),
-            num(t.rate_random_walk * deg * 3600.0 * 60.0),
-            num(t.quantization),
-            num(t.rate_ramp)
+    // A term the fit set to zero was not resolved by this record (too short, or hidden under
+    // the others): said so, not printed as 0.
+    let show = |v: f64, units: &[(f64, &str)]| -> String {
+        if v > 0.0 {
+            units
+                .iter()
+                .map(|(k, u)| format!("{} {u}", num(v * k)))
+                .collect::<Vec<_>>()
+                .join(" = ")
+        } else {
+            "not resolved in this record".to_string()
+        }
+    };
+    let (rw, bi, rrw, q, ramp) = match (which, si) {
+        (Which::Gyro, true) => (
+            format!(
+                "ARW {}",
+                show(
+                    t.random_walk,
+                    &[(1.0, "rad/s/sqrt(Hz)"), (deg * 60.0, "deg/sqrt(h)")]
+                )
+            ),
+            show(
+                t.bias_instability,
+                &[(1.0, "rad/s"), (deg * 3600.0, "deg/h")],
+            ),
+            format!(
+                "RRW {}",
+                show(
+                    t.rate_random_walk,
+                    &[
+                        (1.0, "rad/s/sqrt(s)"),
+                        (deg * 3600.0 * 60.0, "deg/h/sqrt(h)")
+                    ]
+                )
+            ),
+            show(t.quantization, &[(1.0, "rad")]),
+            format!("rate ramp {}", show(t.rate_ramp, &[(1.0, "rad/s^2")])),
         ),
-        (Which::Accel, true) => format!(
-            "VRW {} m/s^2/sqrt(Hz) = {} m/s/sqrt(h); bias instability {} m/s^2 = {} mg; acceleration random walk {} m/s^2/sqrt(s); quantization {} m/s; ramp {} m/s^3",
-            num(t.random_walk),
-            num(t.random_walk * 60.0),
-            num(t.bias_instability),
-            num(t.bias_instability / 9.80665e-3),
-            num(t.rate_random_walk),
-            num(t.quantization),
-            num(t.rate_ramp)
+        (Which::Accel, true) => (
+            format!(
+                "VRW {}",
+                show(
+                    t.random_walk,
+                    &[(1.0, "m/s^2/sqrt(Hz)"), (60.0, "m/s/sqrt(h)")]
+                )
+            ),
+            show(
+                t.bias_instability,
+                &[(1.0, "m/s^2"), (1.0 / 9.80665e-3, "mg")],
+            ),
+            format!(
+                "acceleration random walk {}",
+                show(t.rate_random_walk, &[(1.0, "m/s^2/sqrt(s)")])
+            ),
+            show(t.quantization, &[(1.0, "m/s")]),
+            format!("ramp {}", show(t.rate_ramp, &[(1.0, "m/s^3")])),
         ),
-        _ => format!(
-            "random walk {} {unit}/sqrt(Hz); bias instability {} {unit}; rate random walk {} {unit}/sqrt(s); quantization {} {unit} s; ramp {} {unit}/s",
-            num(t.random_walk),
-            num(t.bias_instability),
-            num(t.rate_random_walk),
-            num(t.quantization),
-            num(t.rate_ramp)
-        ),
-    }
+        _ => {
+            let per = |suffix: &str| format!("{unit}{suffix}");
+            (
+                format!(
+                    "random walk {}",
+                    show(t.random_walk, &[(1.0, &per("/sqrt(Hz)"))])
+                ),
+                show(t.bias_instability, &[(1.0, unit)]),
+                format!(
+                    "rate random walk {}",
+                    show(t.rate_random_walk, &[(1.0, &per("/sqrt(s)"))])
+                ),
+                show(t.quantization, &[(1.0, &per(" s"))]),
+                format!("ramp {}", show(t.rate_ramp, &[(1.0, &per("/s"))])),
+            )
+        }
+    };
+    format!("{rw}; bias instability {bi}; {rrw}; quantization {q}; {ramp}")
 }
