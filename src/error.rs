@@ -461,7 +461,7 @@ impl fmt::Display for Error {
             }
             Error::HealthNoNoiseTerms => f.write_str(
                 "the health check cannot run: the calibration has no noise terms \
-                 (calflash calibrate --noise); the unit still corrects",
+                 (calflash calibrate --noise-terms); the unit still corrects",
             ),
             Error::HealthNoCovariance => f.write_str(
                 "the health check cannot run: the calibration has no covariance factors, so \

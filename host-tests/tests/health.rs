@@ -601,7 +601,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
     drop(unit.finish());
     assert!(
         err.contains("its calibration gives the health check nothing to run on")
-            && err.contains("no noise terms (calflash calibrate --noise)")
+            && err.contains("no noise terms (calflash calibrate --noise-terms)")
             && !err.contains("HealthUnavailable"),
         "{err}"
     );

@@ -345,3 +345,101 @@ fn a_simulated_still_recording_gives_allan_its_noise_back() {
         assert!((0.01..0.03).contains(&k), "{axis}");
     }
 }
+
+/// One word, one meaning (issue 35): every command's `--help` is read; `--units` is physical
+/// units wherever it appears, the sample rate is `--sample-rate` everywhere, `--noise` is an
+/// observation's noise (design) and a blob's noise terms are `--noise-terms`; the old
+/// spellings are still taken, unlisted.
+#[test]
+fn each_option_word_means_one_thing_in_every_command() {
+    let d = tempfile::tempdir().unwrap();
+    let (_, top, _) = calflash(d.path(), &["--help"]);
+    let commands: Vec<&str> = top
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(commands.len() > 15, "{top}");
+    let mut helps: Vec<(String, String)> = Vec::new();
+    for c in &commands {
+        let (_, h, _) = calflash(d.path(), &[c, "--help"]);
+        helps.push(((*c).to_string(), h.clone()));
+        // Subcommands of a command (design, db) too.
+        for sub in h
+            .lines()
+            .skip_while(|l| !l.starts_with("Commands:"))
+            .skip(1)
+            .take_while(|l| l.starts_with("  "))
+            .filter_map(|l| l.split_whitespace().next())
+            .filter(|s| *s != "help")
+        {
+            let (_, h, _) = calflash(d.path(), &[c, sub, "--help"]);
+            helps.push((format!("{c} {sub}"), h));
+        }
+    }
+    // The option's own line and its description, up to the next option.
+    let option = |help: &str, name: &str| -> Option<String> {
+        let mut lines = help.lines().skip_while(|l| {
+            !l.trim_start()
+                .split([' ', ','])
+                .any(|w| w == name || w.starts_with(&format!("{name}=")))
+        });
+        let first = lines.next()?;
+        let rest: Vec<&str> = lines
+            .take_while(|l| !l.trim_start().starts_with('-'))
+            .collect();
+        Some(format!("{first} {}", rest.join(" ")))
+    };
+    for (c, h) in &helps {
+        assert!(option(h, "--rate").is_none(), "calflash {c}: --rate");
+        if let Some(u) = option(h, "--units") {
+            assert!(
+                u.contains("m/s^2") || u.contains("physical"),
+                "calflash {c}: {u}"
+            );
+        }
+        if let Some(n) = option(h, "--noise") {
+            assert!(c.starts_with("design"), "calflash {c}: {n}");
+        }
+    }
+    for c in ["apply", "health", "selfcal", "allan", "simulate"] {
+        let h = &helps.iter().find(|(n, _)| n == c).unwrap().1;
+        assert!(option(h, "--sample-rate").is_some(), "calflash {c}: {h}");
+    }
+    let cal = &helps.iter().find(|(n, _)| n == "calibrate").unwrap().1;
+    assert!(option(cal, "--serials").is_some() && option(cal, "--noise-terms").is_some());
+    // The old spellings still parse (an error of another kind, not an unknown option).
+    for args in [
+        &[
+            "apply", "--blob", "x.blob", "in.csv", "--rate", "100", "-o", "o.csv",
+        ][..],
+        &[
+            "calibrate",
+            "x.csv",
+            "--sensor",
+            "imu",
+            "--fixture",
+            "--units",
+            "u1=A",
+            "--out-dir",
+            "o",
+        ],
+        &[
+            "calibrate",
+            "x.csv",
+            "--sensor",
+            "imu",
+            "--serial",
+            "S",
+            "--noise",
+            "a.json,g.json",
+        ],
+    ] {
+        let (code, _, err) = calflash(d.path(), args);
+        assert_ne!(code, 0);
+        assert!(!err.contains("unexpected argument"), "{args:?}: {err}");
+    }
+}

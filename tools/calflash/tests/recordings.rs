@@ -72,7 +72,7 @@ fn the_mpu6050_calibration_file_is_read_and_answered() {
     let (code, _, err) = calflash(out.path(), &signed);
     assert_eq!(code, 1);
     assert!(
-        err.contains(":1: the preamble states 100 Hz and --rate 200 Hz"),
+        err.contains(":1: the preamble states 100 Hz and --sample-rate 200 Hz"),
         "{err}"
     );
 }

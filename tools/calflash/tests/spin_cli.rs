@@ -221,7 +221,7 @@ fn a_lever_arm_calibration_needs_the_rate_and_flags_off_rate_steps() {
     assert_eq!(code, 1, "{out}{err}");
     assert!(
         err.contains("has lever arms")
-            && err.contains("--rate HZ")
+            && err.contains("--sample-rate HZ")
             && err.contains("--time-column"),
         "{err}"
     );

@@ -26,12 +26,12 @@ pub enum Which {
 #[derive(Debug, Args)]
 pub struct AllanArgs {
     /// The recording (as `calflash selfcal` reads it), or a file of the one sensor `--sensor`
-    /// names (a timestamp, or none with `--rate`, and three counts a line).
+    /// names (a timestamp, or none with `--sample-rate`, and three counts a line).
     pub acc: PathBuf,
     /// The gyro file, when separate.
     pub gyro: Option<PathBuf>,
     /// The sample rate, Hz, of a recording without timestamps (checked against them otherwise).
-    #[arg(long, value_parser = |s: &str| values::in_range(s, 1.0e-3, 1.0e6))]
+    #[arg(long = "sample-rate", alias = "rate", value_parser = |s: &str| values::in_range(s, 1.0e-3, 1.0e6))]
     pub rate: Option<f64>,
     /// The units of the values (counts unless stated).
     #[command(flatten)]

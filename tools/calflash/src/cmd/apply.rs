@@ -49,7 +49,7 @@ pub struct ApplyArgs {
     /// Sample rate, Hz. An IMU calibration with lever arms needs it (its tangential term
     /// takes the rate derivative by backward difference) or the timestamps: `--time-column`,
     /// or a recording's.
-    #[arg(long, value_parser = values::sample_rate)]
+    #[arg(long = "sample-rate", alias = "rate", value_parser = values::sample_rate)]
     pub rate: Option<f64>,
     /// The largest angular acceleration the airframe makes, rad/s^2: with a lever arm, a
     /// sample whose rate changed by more over one sample period is flagged `rate-step` (a
@@ -59,7 +59,7 @@ pub struct ApplyArgs {
     /// The units of the values (counts unless stated).
     #[command(flatten)]
     pub units: super::units::UnitArgs,
-    /// A column with each sample's time: the rate, when `--rate` is not given, and a sample
+    /// A column with each sample's time: the rate, when `--sample-rate` is not given, and a sample
     /// after a step that is not the rate is flagged (its rate derivative is unknown). Its unit
     /// from its name (`t`, `time`: seconds; `t_ms`, `time_us`, `timestamp_ns`) or given as
     /// `NAME:ms` (s, ms, us, ns).
@@ -218,7 +218,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
     let mut corrector = AnyCorrector::new(&cal, timing.as_ref().map_or(1000.0, |t| t.rate as f32))
         .map_err(|e| {
             if imu {
-                format!("--rate: {e}")
+                format!("--sample-rate: {e}")
             } else {
                 e.to_string()
             }
@@ -388,7 +388,7 @@ fn timing(
         Ok(t) => Ok(Some(t)),
         Err(TimingError::Missing) if !lever => Ok(None),
         Err(TimingError::Missing) => Err(format!(
-            "{}: unit {}'s calibration has lever arms, whose tangential term needs the sample rate: give --rate HZ, or the timestamps with --time-column NAME",
+            "{}: unit {}'s calibration has lever arms, whose tangential term needs the sample rate: give --sample-rate HZ, or the timestamps with --time-column NAME",
             args.blob.display(),
             cal.data().identity.serial
         )

@@ -33,7 +33,7 @@ pub struct HealthArgs {
     #[arg(long, default_value_t = 3.0, value_parser = |s: &str| values::in_range(s, 0.1, 3600.0))]
     pub timeout: f64,
     /// The sample rate, Hz, of a recording without timestamps.
-    #[arg(long, value_parser = values::sample_rate)]
+    #[arg(long = "sample-rate", alias = "rate", value_parser = values::sample_rate)]
     pub rate: Option<f64>,
     /// Temperature, C (default: the mean of the recording's temperature column, else the
     /// middle of the calibrated span, said with how far the calibration moves over the span).

@@ -34,7 +34,7 @@ pub struct SelfcalArgs {
     #[arg(long, value_parser = super::values::positive)]
     pub init_rest: Option<f64>,
     /// The sample rate, Hz, of a recording without timestamps (checked against them otherwise).
-    #[arg(long, value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
+    #[arg(long = "sample-rate", alias = "rate", value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
     pub rate: Option<f64>,
     /// The units of the values (counts unless stated).
     #[command(flatten)]

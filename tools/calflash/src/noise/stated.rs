@@ -83,7 +83,7 @@ pub enum Error {
         hi: f64,
     },
     /// Terms or allowances the device's own check refuses.
-    #[error("--noise: {0}")]
+    #[error("--noise-terms: {0}")]
     Refused(#[source] spincal::Error),
 }
 

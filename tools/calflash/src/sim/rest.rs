@@ -280,7 +280,7 @@ pub enum RestError {
     #[error("the calibration has no covariance factors, so it states no 1-sigma")]
     NoCovariance,
     /// No noise terms.
-    #[error("the calibration has no noise terms (calflash calibrate --noise)")]
+    #[error("the calibration has no noise terms (calflash calibrate --noise-terms)")]
     NoNoise,
     /// Codes other than unsigned 16-bit.
     #[error("a unit at rest is simulated for unsigned 16-bit codes")]

@@ -81,23 +81,23 @@ fn split_header(header: &csv::StringRecord) -> Split {
     (units, shared)
 }
 
-/// `--units u1=SERIAL,...`: prefix to serial; a prefix given twice, or two prefixes given one
+/// `--serials u1=SERIAL,...`: prefix to serial; a prefix given twice, or two prefixes given one
 /// serial, are refused (one unit would be dropped, or two written into one file).
 fn unit_map(text: &[String]) -> Result<BTreeMap<String, String>, String> {
     let mut map = BTreeMap::new();
     for pair in text {
         let (prefix, serial) = pair
             .split_once('=')
-            .ok_or_else(|| format!("--units {pair}: expected PREFIX=SERIAL, e.g. u3=IMU-0007"))?;
-        crate::sensor::blob::serial(serial).map_err(|e| format!("--units {pair}: {e}"))?;
+            .ok_or_else(|| format!("--serials {pair}: expected PREFIX=SERIAL, e.g. u3=IMU-0007"))?;
+        crate::sensor::blob::serial(serial).map_err(|e| format!("--serials {pair}: {e}"))?;
         if let Some(before) = map.get(prefix) {
             return Err(format!(
-                "--units {pair}: unit {prefix} is named twice ({prefix}={before} and {pair}); name each unit once"
+                "--serials {pair}: unit {prefix} is named twice ({prefix}={before} and {pair}); name each unit once"
             ));
         }
         if let Some((other, _)) = map.iter().find(|(_, s)| *s == serial) {
             return Err(format!(
-                "--units {pair}: serial {serial} is given to {other} and {prefix}; each unit needs its own serial"
+                "--serials {pair}: serial {serial} is given to {other} and {prefix}; each unit needs its own serial"
             ));
         }
         map.insert(prefix.to_string(), serial.to_string());
@@ -110,7 +110,7 @@ fn unit_map(text: &[String]) -> Result<BTreeMap<String, String>, String> {
 ///
 /// # Errors
 /// A file that cannot be read, a unit whose columns are incomplete (named: the unit and the
-/// column), a `--units` prefix the file does not have, or a file with no unit columns.
+/// column), a `--serials` prefix the file does not have, or a file with no unit columns.
 pub fn split(
     data: &Path,
     sensor: SensorKind,
@@ -139,7 +139,7 @@ pub fn split(
     let map = unit_map(units_arg)?;
     if let Some(p) = map.keys().find(|p| !units.contains_key(*p)) {
         return Err(format!(
-            "--units: {name} has no unit {p}; its units are {}",
+            "--serials: {name} has no unit {p}; its units are {}",
             units.keys().cloned().collect::<Vec<_>>().join(", ")
         ));
     }
@@ -178,7 +178,7 @@ pub fn split(
         .collect();
     if !unnamed.is_empty() {
         eprintln!(
-            "calflash: {name}: unit(s) {} recorded under their column prefix as serial (name them with --units PREFIX=SERIAL)",
+            "calflash: {name}: unit(s) {} recorded under their column prefix as serial (name them with --serials PREFIX=SERIAL)",
             unnamed.join(", ")
         );
     }
@@ -186,11 +186,11 @@ pub fn split(
     let mut files = Vec::with_capacity(plan.len());
     for (serial, _) in &plan {
         crate::sensor::blob::serial(serial).map_err(|e| {
-            format!("{name}: unit {serial}: {e} (name it with --units PREFIX=SERIAL)")
+            format!("{name}: unit {serial}: {e} (name it with --serials PREFIX=SERIAL)")
         })?;
         if plan.iter().filter(|(s, _)| s == serial).count() > 1 {
             return Err(format!(
-                "{name}: two units are named {serial} (a column prefix and a --units serial); each unit needs its own serial"
+                "{name}: two units are named {serial} (a column prefix and a --serials serial); each unit needs its own serial"
             ));
         }
         let path =
@@ -251,6 +251,6 @@ pub fn run(args: &CalibrateArgs) -> Result<crate::sensor::Verdict, Failure> {
         .as_ref()
         .ok_or("--fixture writes each unit's files into --out-dir: give it")?;
     super::batch::ready_out_dir(out_dir)?;
-    let units = split(data, args.sensor, &args.units, out_dir)?;
+    let units = split(data, args.sensor, &args.serials, out_dir)?;
     super::batch::run_units(args, &units, out_dir)
 }

@@ -73,8 +73,9 @@ pub struct CalibrateArgs {
     #[arg(long)]
     pub fixture: bool,
     /// A fixture's units' serials by prefix (`u1=IMU-0001,u2=IMU-0002`; default: the prefix).
-    #[arg(long, value_delimiter = ',', requires = "fixture")]
-    pub units: Vec<String>,
+    /// (`--units`, its name before 2026-11-27, is still taken.)
+    #[arg(long, alias = "units", value_delimiter = ',', requires = "fixture")]
+    pub serials: Vec<String>,
     /// A single-axis model instead of the IEEE 1293 preset (e.g. "output ~ 1 + input + input^2").
     #[arg(long)]
     pub model: Option<String>,
@@ -133,25 +134,31 @@ pub struct CalibrateArgs {
     pub heading: Option<f64>,
     /// IMUs: the accelerometer's and the gyro's noise (two `calflash allan --json` files, in
     /// SI units) go into the blob, so that the unit can judge its calibration at rest.
-    #[arg(long, value_name = "ACCEL.json,GYRO.json", value_delimiter = ',')]
-    pub noise: Vec<PathBuf>,
-    /// With --noise: the time over which ageing may move the biases by their random walk
+    /// (`--noise`, its name before 2026-11-27, is still taken.)
+    #[arg(
+        long,
+        alias = "noise",
+        value_name = "ACCEL.json,GYRO.json",
+        value_delimiter = ','
+    )]
+    pub noise_terms: Vec<PathBuf>,
+    /// With --noise-terms: the time over which ageing may move the biases by their random walk
     /// before the unit calls a drift SUSPECT (its shelf life, or the interval between bench
     /// checks), in s, or with the suffix h or d.
-    #[arg(long, default_value = "365d", requires = "noise", value_parser = values::duration_at_most_a_century)]
+    #[arg(long, default_value = "365d", requires = "noise_terms", value_parser = values::duration_at_most_a_century)]
     pub ageing: f64,
-    /// With --noise: the magnitude of gravity wherever the unit may rest, m/s^2 (a narrower
+    /// With --noise-terms: the magnitude of gravity wherever the unit may rest, m/s^2 (a narrower
     /// span lets one pose test the accelerometer along gravity more sharply).
     #[arg(
         long,
         value_name = "LO:HI",
         default_value = "9.78:9.84",
-        requires = "noise"
+        requires = "noise_terms"
     )]
     pub gravity: String,
-    /// With --noise: the probability that the unit calls a calibration that holds SUSPECT
+    /// With --noise-terms: the probability that the unit calls a calibration that holds SUSPECT
     /// (or one aged within the allowance) in one period at rest: from 1e-12 to 0.5.
-    #[arg(long, default_value_t = 1e-3, requires = "noise", value_parser = false_alarm)]
+    #[arg(long, default_value_t = 1e-3, requires = "noise_terms", value_parser = false_alarm)]
     pub false_alarm: f64,
     /// A mission profile (`calflash mission` reads it): the calibration is judged over the
     /// flight: each output's predicted 1-sigma error along it, where it leaves the calibrated
@@ -249,8 +256,14 @@ pub fn calibrate_one(
     let mut paths = Paths::new()
         .input("the data", Some(data))
         .input("--still-ramp", args.still_ramp.as_deref())
-        .input("--noise", args.noise.first().map(PathBuf::as_path))
-        .input("--noise", args.noise.get(1).map(PathBuf::as_path))
+        .input(
+            "--noise-terms",
+            args.noise_terms.first().map(PathBuf::as_path),
+        )
+        .input(
+            "--noise-terms",
+            args.noise_terms.get(1).map(PathBuf::as_path),
+        )
         .input("--mission", args.mission.as_deref());
     for p in args.stage_one.iter().filter(|p| from_history(p).is_none()) {
         paths = paths.input("--stage-one", Some(p));
@@ -332,7 +345,7 @@ pub fn calibrate_one(
     if let Some(terms) = noise {
         c.data.noise = Some(terms);
         c.blob = sensor::blob::encode_checked(&c.data)
-            .map_err(|e| format!("--noise: {e}"))?
+            .map_err(|e| format!("--noise-terms: {e}"))?
             .0;
     }
     if let Some(path) = &args.mission {
@@ -446,14 +459,14 @@ fn stage_one(items: &[PathBuf], out: &Outputs) -> Result<Vec<sensor::stages::Sen
     Ok(one::read_all_with(items, read)?)
 }
 
-/// The noise terms `--noise` names, with the allowances; `None` without `--noise`.
+/// The noise terms `--noise-terms` names, with the allowances; `None` without it.
 fn noise_terms(args: &CalibrateArgs) -> Result<Option<spincal::model::NoiseTerms>, Failure> {
-    let (accel, gyro) = match args.noise.as_slice() {
+    let (accel, gyro) = match args.noise_terms.as_slice() {
         [] => return Ok(None),
         [a, g] => (a, g),
         other => {
             return Err(format!(
-                "--noise: two files, the accelerometer's and the gyro's Allan JSON, {} given",
+                "--noise-terms: two files, the accelerometer's and the gyro's Allan JSON, {} given",
                 other.len()
             )
             .into());
@@ -461,7 +474,7 @@ fn noise_terms(args: &CalibrateArgs) -> Result<Option<spincal::model::NoiseTerms
     };
     if args.sensor != SensorKind::Imu {
         return Err(
-            "--noise: the health check at rest is an IMU's (it needs the gyros and the accelerometers)"
+            "--noise-terms: the health check at rest is an IMU's (it needs the gyros and the accelerometers)"
                 .into(),
         );
     }

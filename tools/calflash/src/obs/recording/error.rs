@@ -110,7 +110,7 @@ pub enum RecordingError {
     },
     /// No timestamps and no rate.
     #[error(
-        "{path}: no timestamp column and no sample rate: give --rate HZ (or a preamble line `Fs,HZ`)"
+        "{path}: no timestamp column and no sample rate: give --sample-rate HZ (or a preamble line `Fs,HZ`)"
     )]
     NoRate {
         /// File.

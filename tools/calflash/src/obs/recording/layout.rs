@@ -283,10 +283,10 @@ impl Sampler<'_> {
 fn expected(holds: Holds) -> String {
     match holds {
         Holds::Both => "7 (timestamp, accelerometer x, y, z, gyro x, y, z counts) or 6 without \
-                        the timestamp (then give --rate), or give the gyro file too"
+                        the timestamp (then give --sample-rate), or give the gyro file too"
             .into(),
         Holds::One => "4 (timestamp, x, y, z counts), or 3 without the timestamp (then give \
-                       --rate)"
+                       --sample-rate)"
             .into(),
     }
 }

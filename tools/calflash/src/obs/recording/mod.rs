@@ -438,7 +438,7 @@ mod tests {
         assert_eq!(
             read_with(&bare, None, &opts(None)).unwrap_err().to_string(),
             format!(
-                "{}: no timestamp column and no sample rate: give --rate HZ (or a preamble line `Fs,HZ`)",
+                "{}: no timestamp column and no sample rate: give --sample-rate HZ (or a preamble line `Fs,HZ`)",
                 bare.display()
             )
         );
@@ -457,7 +457,7 @@ mod tests {
                 .unwrap_err()
                 .to_string(),
             format!(
-                "{}:1: the preamble states 100 Hz and --rate 200 Hz; drop --rate or fix the file",
+                "{}:1: the preamble states 100 Hz and --sample-rate 200 Hz; drop --sample-rate or fix the file",
                 pre.display()
             )
         );
@@ -472,7 +472,7 @@ mod tests {
                 .unwrap_err()
                 .to_string()
                 .ends_with(
-                    ":1: the timestamps step by 0.01 s (100.0000 Hz) where --rate states 50 Hz"
+                    ":1: the timestamps step by 0.01 s (100.0000 Hz) where --sample-rate states 50 Hz"
                 )
         );
         // Signed codes read as unsigned are named, with the option that reads them.
@@ -540,7 +540,7 @@ mod tests {
         assert_eq!(
             msg(&ok, None),
             format!(
-                "{}:1: 4 fields; expected 7 (timestamp, accelerometer x, y, z, gyro x, y, z counts) or 6 without the timestamp (then give --rate), or give the gyro file too",
+                "{}:1: 4 fields; expected 7 (timestamp, accelerometer x, y, z, gyro x, y, z counts) or 6 without the timestamp (then give --sample-rate), or give the gyro file too",
                 ok.display()
             )
         );

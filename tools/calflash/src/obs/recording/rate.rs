@@ -1,4 +1,4 @@
-//! The timestamps of a recording: its own, checked against a stated rate (`--rate`, a logger's
+//! The timestamps of a recording: its own, checked against a stated rate (`--sample-rate`, a logger's
 //! preamble), or made from that rate.
 
 use std::path::Path;
@@ -26,13 +26,13 @@ pub(super) fn timing(
         return Err(conflict(
             p.line,
             format!(
-                "the preamble states {} Hz and --rate {r} Hz; drop --rate or fix the file",
+                "the preamble states {} Hz and --sample-rate {r} Hz; drop --sample-rate or fix the file",
                 p.value
             ),
         ));
     }
     let stated = rate
-        .map(|r| (r, "--rate".to_string()))
+        .map(|r| (r, "--sample-rate".to_string()))
         .or_else(|| pre.map(|p| (p.value, format!("the preamble (line {})", p.line))));
     if let Some((r, _)) = stated
         && !(r.is_finite() && r > 0.0)

@@ -35,7 +35,7 @@ pub fn rejected(c: &SelfCal) -> Vec<String> {
     }
     if c.gyro.rms_deg() > GYRO_REJECT_DEG {
         why.push(format!(
-            "the gyro fit predicts the gravity direction after each rotation {:.1} degrees RMS off (more than {GYRO_REJECT_DEG}): the rotations are not what the gyro measured (a wrong --rate, a gyro file of another recording, poses that moved)",
+            "the gyro fit predicts the gravity direction after each rotation {:.1} degrees RMS off (more than {GYRO_REJECT_DEG}): the rotations are not what the gyro measured (a wrong --sample-rate, a gyro file of another recording, poses that moved)",
             c.gyro.rms_deg()
         ));
     }
