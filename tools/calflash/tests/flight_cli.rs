@@ -161,6 +161,67 @@ fn a_shell_flight_fits_and_a_launch_shift_of_one_bias_is_found() {
     );
 }
 
+/// The README's whole shell flight (62 s): its setback leaves the navigation lost, and the
+/// first fix after it puts the navigation back, as the device's filter does; without that, the
+/// filter drifted after apogee, refused every fix that would have brought it back and did not
+/// fit (75 % inside, 452 refused).
+#[test]
+fn a_whole_shell_flight_is_put_back_on_its_fixes_after_the_setback_and_fits() {
+    let d = tempfile::tempdir().unwrap();
+    calibrated(d.path());
+    ok(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            TRUTH,
+            "--flight",
+            "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2",
+            "--sample-rate",
+            "2000",
+            "-o",
+            "s.csv",
+            "--gnss",
+            "g.csv",
+            "--baro",
+            "b.csv",
+        ],
+    );
+    let out = ok(
+        d.path(),
+        &[
+            "flight",
+            "s.csv",
+            "--blob",
+            "round.blob",
+            "--gnss",
+            "g.csv",
+            "--baro",
+            "b.csv",
+            "--json",
+            "f.json",
+            "--no-db",
+        ],
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("f.json")).unwrap()).unwrap();
+    let c = &v["consistency"];
+    let inside = c["inside_95"].as_f64().unwrap() / c["innovations"].as_f64().unwrap();
+    assert!(
+        c["fits"].as_bool().unwrap() && inside > 0.95 && c["refused"] == 0,
+        "{out}"
+    );
+    assert_eq!(v["verdict"], "HELD", "{out}");
+    let resets = v["navigation_resets"].as_array().unwrap();
+    assert!(
+        !resets.is_empty() && resets[0].as_f64().unwrap() < 2.0,
+        "{out}"
+    );
+    assert!(out.contains("the navigation put back on GNSS"), "{out}");
+}
+
 #[test]
 fn a_roll_gyro_scale_factor_shifted_at_launch_is_found_at_a_round_s_spin() {
     // 0.3 % at 1,500 to 1,900 rad/s: the roll angle runs away at 5 rad/s, beyond what the

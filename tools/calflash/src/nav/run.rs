@@ -133,6 +133,11 @@ pub struct Pass {
     pub p0: StateMatrix<f64>,
     /// The covariance at the last epoch before launch: what the pad taught.
     pub at_launch: StateMatrix<f64>,
+    /// When a fix put the navigation back on GNSS after it lost track (its velocity's 1-sigma
+    /// over [`spincal::flight::LOST_VELOCITY`], as after a saturated setback), s: as the
+    /// device's filter does, where an update would ask the covariance to fall by orders of
+    /// magnitude at once.
+    pub resets: Vec<f64>,
 }
 
 /// The launch: the first sample whose specific force exceeds `force`, and the rest before it
@@ -290,6 +295,7 @@ pub fn forward(
         launch: t_launch,
         p0,
         at_launch: p0,
+        resets: Vec::new(),
     };
     let lever = Vector3::from(opts.lever);
     let (mut next_fix, mut next_baro) = (0usize, 0usize);
@@ -353,6 +359,23 @@ pub fn forward(
             let z = level_position(fix, start.origin);
             // The fix describes an instant up to a sample before this one.
             let back = t - (fix.t - opts.gnss_latency);
+            if let Some(vel) = fix.velocity
+                && fix.height.is_some()
+                && velocity_lost(&filter)
+            {
+                let (h, v) = (opts.gnss_noise.0, opts.gnss_noise.1);
+                let r = opts.gnss_velocity_noise;
+                let vel = Vector3::from(vel);
+                let arm = filter.estimate.nav.attitude() * lever;
+                let at = Vector3::from(z) + vel * back - arm;
+                filter.reset_position_velocity(
+                    &at,
+                    &vel,
+                    [h * h, h * h, v * v, r * r, r * r, r * r],
+                );
+                pass.resets.push(t);
+                continue;
+            }
             let v = filter.estimate.nav.v;
             let axes = if fix.height.is_some() { 3 } else { 2 };
             for (axis, zi) in z.iter().enumerate().take(axes) {
@@ -441,6 +464,14 @@ pub fn misfit(pass: &Pass, until: f64, gate: f64) -> f64 {
         .filter(|s| s.kind != Kind::Pad && s.t <= until && s.sigma > 0.0)
         .map(|s| (s.value / s.sigma).powi(2).min(gate * gate) + 2.0 * s.sigma.ln())
         .sum()
+}
+
+/// Whether the navigation has lost track: a velocity 1-sigma over
+/// [`spincal::flight::LOST_VELOCITY`] (the device's test).
+fn velocity_lost(filter: &ErrorFilter<f64>) -> bool {
+    let lost = spincal::flight::LOST_VELOCITY * spincal::flight::LOST_VELOCITY;
+    (spincal::nav::filter::index::VELOCITY..spincal::nav::filter::index::VELOCITY + 3)
+        .any(|i| filter.covariance[(i, i)] > lost)
 }
 
 /// Gates and takes one scalar measurement, recording what it said.

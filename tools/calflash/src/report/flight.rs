@@ -32,6 +32,16 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
         "  {:.2} s at rest before launch; noise densities from it: accelerometer {:.3e} m/s^2/sqrt(Hz), gyro {:.3e} rad/s/sqrt(Hz); {:.3} s of flagged samples navigated on doubt; barometer left out {:.1} s near and beyond Mach 1",
         c.rest_seconds, c.noise.0, c.noise.1, c.pass.flagged_seconds, c.pass.baro_skipped_seconds
     );
+    if !c.pass.resets.is_empty() {
+        let at: Vec<String> = c.pass.resets.iter().map(|t| format!("{t:.1}")).collect();
+        let _ = writeln!(
+            s,
+            "  the navigation put back on GNSS {} time(s), at {} s: the first fix after it lost track (its velocity's 1-sigma over {} m/s, as a saturated setback leaves it)",
+            c.pass.resets.len(),
+            at.join(", "),
+            spincal::flight::LOST_VELOCITY
+        );
+    }
     match &c.prior {
         PriorSource::Calibration => {
             let _ = writeln!(s, "  prior: the calibration's own covariance");
@@ -120,6 +130,7 @@ pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value 
         "gnss_no_fix": counts.no_fix,
         "gnss_repeated": counts.repeated,
         "flagged_seconds": c.pass.flagged_seconds,
+        "navigation_resets": c.pass.resets,
     })
 }
 
