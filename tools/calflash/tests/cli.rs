@@ -4,6 +4,7 @@
 mod common;
 
 use common::calflash;
+use std::path::Path;
 
 const GOOD: &str =
     "rate,temp,volts\n-100,20,1.5\n-50,25,2.0\n0,30,2.5\n50,20,3.0\n100,25,3.51\n150,30,4.0\n";
@@ -442,4 +443,68 @@ fn each_option_word_means_one_thing_in_every_command() {
         assert_ne!(code, 0);
         assert!(!err.contains("unexpected argument"), "{args:?}: {err}");
     }
+}
+
+/// The summary in a datasheet's units (issue 35): bias in mg or deg/h per temperature from
+/// the converter's mid-scale, scale factor's 1-sigma in ppm, misalignment in mrad, each the
+/// fit's numbers converted; and it says which temperature the printed fit is for.
+#[test]
+fn calibrate_says_its_fit_in_engineering_units() {
+    let d = tempfile::tempdir().unwrap();
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/imu_bench.csv");
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "calibrate",
+            bench.to_str().unwrap(),
+            "--sensor",
+            "imu",
+            "--serial",
+            "E-1",
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("  fit at 25.0 C (the record"), "{out}");
+    let fit = out
+        .lines()
+        .find(|l| l.starts_with("  a_x: 1 "))
+        .expect(&out);
+    let value = |line: &str, name: &str| -> f64 {
+        let at = line.find(&format!("{name} ")).unwrap() + name.len() + 1;
+        line[at..]
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let (b0, s, sy) = (value(fit, "1"), value(fit, "f_x"), value(fit, "f_y"));
+    let eng = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("a_x: bias (mg)"))
+        .expect(&out);
+    let bias_25: f64 = eng
+        .split(", ")
+        .find(|p| p.ends_with("at 25.0 C"))
+        .and_then(|p| {
+            p.split_whitespace()
+                .find(|w| w.starts_with('+') || w.starts_with('-'))
+        })
+        .unwrap()
+        .parse()
+        .unwrap();
+    let expected = (b0 - 32_768.0) / s / 9.806_65e-3;
+    assert!(
+        (bias_25 - expected).abs() < 0.01,
+        "{bias_25} vs {expected}: {eng}"
+    );
+    let mrad = value(eng, "f_y");
+    assert!((mrad - sy / s * 1e3).abs() < 0.01, "{eng}");
+    assert!(eng.contains(" ppm)") && eng.contains("mrad"), "{eng}");
+    let gyro = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("g_x: bias (deg/h)"))
+        .expect(&out);
+    assert!(gyro.contains("counts per rad/s"), "{gyro}");
 }

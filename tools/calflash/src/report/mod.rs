@@ -3,6 +3,7 @@
 pub mod accuracy;
 pub mod allan;
 pub mod design;
+pub mod engineering;
 pub mod error;
 pub mod flight;
 pub mod html;

@@ -537,6 +537,11 @@ fn summary(
         );
     }
     let r = &c.points[c.reference];
+    let _ = writeln!(
+        s,
+        "  fit{} (the record and the report hold every point):",
+        r.temp.map_or(String::new(), |t| format!(" at {t:.1} C"))
+    );
     for (a, axis) in r.axes.iter().enumerate() {
         let coefs: Vec<String> = axis
             .fit
@@ -554,6 +559,13 @@ fn summary(
             num(r.noise[a]),
             c.units[a]
         );
+    }
+    let _ = writeln!(
+        s,
+        "  in engineering units (bias: the reading at zero input from the converter's mid-scale; 1-sigma in brackets):"
+    );
+    for line in crate::report::engineering::lines(c) {
+        let _ = writeln!(s, "    {line}");
     }
     if let Some(m) = &c.mission {
         s.push_str(&crate::report::mission::judged_text(m));
