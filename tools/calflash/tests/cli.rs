@@ -507,4 +507,30 @@ fn calibrate_says_its_fit_in_engineering_units() {
         .find(|l| l.trim_start().starts_with("g_x: bias (deg/h)"))
         .expect(&out);
     assert!(gyro.contains("counts per rad/s"), "{gyro}");
+    // --quiet: the verdict, what is not ACCEPT, the engineering units and the files.
+    let (code, quiet, err) = calflash(
+        d.path(),
+        &[
+            "calibrate",
+            bench.to_str().unwrap(),
+            "--sensor",
+            "imu",
+            "--serial",
+            "E-1",
+            "--no-db",
+            "--quiet",
+        ],
+    );
+    assert_eq!(code, 0, "{quiet}{err}");
+    assert!(
+        out.lines().count() > 25 && quiet.lines().count() < 12,
+        "{quiet}"
+    );
+    assert!(
+        quiet.contains("unit E-1: ACCEPT")
+            && quiet.contains("a_x: bias (mg)")
+            && !quiet.contains("note ")
+            && !quiet.contains("ACCEPT a_x"),
+        "{quiet}"
+    );
 }

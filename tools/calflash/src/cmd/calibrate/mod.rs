@@ -68,6 +68,11 @@ pub struct CalibrateArgs {
     /// index.html with a row and a link per unit.
     #[arg(long, requires = "out_dir")]
     pub reports: bool,
+    /// Say only what a person must read: the verdict and the findings that are not ACCEPT,
+    /// the calibration in engineering units, and the files written (the notes, the model
+    /// tests and the coefficients stay in the record and the report).
+    #[arg(long, short)]
+    pub quiet: bool,
     /// The file is a fixture's: several units' columns (`PREFIX_COLUMN`, e.g. `u3_a_x`) beside
     /// the shared ones; each unit is calibrated as in a batch.
     #[arg(long)]
@@ -390,7 +395,7 @@ pub fn calibrate_one(
     out.write(blob.as_deref(), &record, || {
         report::html::render(&c, &data_name)
     })?;
-    said.push_str(&summary(&c, data, out, blob.is_some()));
+    said.push_str(&summary(&c, data, out, blob.is_some(), args.quiet));
     if let Some(note) = signed_note {
         let _ = writeln!(said, "{note}");
     }
@@ -508,6 +513,7 @@ fn summary(
     data: &std::path::Path,
     out: &Outputs,
     blob_written: bool,
+    quiet: bool,
 ) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
@@ -519,13 +525,24 @@ fn summary(
         c.data.identity.serial,
         word(c.verdict())
     );
-    for f in &c.findings {
+    for f in c
+        .findings
+        .iter()
+        .filter(|f| !quiet || f.verdict != Verdict::Accept)
+    {
         let _ = writeln!(s, "  {:<6} {}", word(f.verdict), f.text);
     }
-    for n in &c.notes {
+    if quiet {
+        let hidden = c.findings.len() + c.notes.len() + c.decisions.len();
+        let _ = writeln!(
+            s,
+            "  ({hidden} findings, notes and model tests in the record and the report; without --quiet they are printed)"
+        );
+    }
+    for n in c.notes.iter().filter(|_| !quiet) {
         let _ = writeln!(s, "  note   {n}");
     }
-    for d in &c.decisions {
+    for d in c.decisions.iter().filter(|_| !quiet) {
         let _ = writeln!(
             s,
             "  test   {}: F = {}, p = {}: {}; {}",
@@ -537,12 +554,14 @@ fn summary(
         );
     }
     let r = &c.points[c.reference];
-    let _ = writeln!(
-        s,
-        "  fit{} (the record and the report hold every point):",
-        r.temp.map_or(String::new(), |t| format!(" at {t:.1} C"))
-    );
-    for (a, axis) in r.axes.iter().enumerate() {
+    if !quiet {
+        let _ = writeln!(
+            s,
+            "  fit{} (the record and the report hold every point):",
+            r.temp.map_or(String::new(), |t| format!(" at {t:.1} C"))
+        );
+    }
+    for (a, axis) in r.axes.iter().enumerate().filter(|_| !quiet) {
         let coefs: Vec<String> = axis
             .fit
             .names
