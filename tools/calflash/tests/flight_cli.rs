@@ -53,10 +53,18 @@ fn calibrated(dir: &Path) {
             "ROUND-1",
             "--blob",
             "round.blob",
+            "--json",
+            "round.json",
             "--db",
             "units.sqlite",
         ],
     );
+}
+
+/// `compare CALIBRATION.json FLIGHT.json`: the flight's report held against the calibration it
+/// judged, one verdict and its exit code.
+fn compared(dir: &Path, flight: &str) -> (i32, String, String) {
+    calflash(dir, &["compare", "round.json", flight])
 }
 
 fn fly(dir: &Path, shift: Option<&str>) -> serde_json::Value {
@@ -146,6 +154,18 @@ fn a_shell_flight_fits_and_a_launch_shift_of_one_bias_is_found() {
     let shifted = fly(d.path(), Some("ax=0.4"));
     assert_eq!(shifted["verdict"], "SHIFTED", "{shifted}");
     assert!(term(&shifted, "accel bias x")["shifted"].as_bool().unwrap());
+    let (code, out, err) = compared(d.path(), "f.json");
+    assert_eq!(code, 3, "{out}{err}");
+    assert!(
+        out.contains("verdict: CHANGED: 1 shifted in flight (accel bias x)")
+            && out.contains("accel bias x: ")
+            && out.contains("SHIFTED"),
+        "{out}"
+    );
+    // A flight record is compared after the calibration it judged, not before it.
+    let (code, _, err) = calflash(d.path(), &["compare", "f.json", "round.json"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("a flight report comes second"), "{err}");
     let found = shifted["shifts"]
         .as_array()
         .unwrap()
@@ -214,6 +234,9 @@ fn a_whole_shell_flight_is_put_back_on_its_fixes_after_the_setback_and_fits() {
         "{out}"
     );
     assert_eq!(v["verdict"], "HELD", "{out}");
+    let (code, said, err) = compared(d.path(), "f.json");
+    assert_eq!(code, 0, "{said}{err}");
+    assert!(said.contains("verdict: UNCHANGED"), "{said}");
     let resets = v["navigation_resets"].as_array().unwrap();
     assert!(
         !resets.is_empty() && resets[0].as_f64().unwrap() < 2.0,

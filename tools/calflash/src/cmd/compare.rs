@@ -71,13 +71,22 @@ pub fn run(args: &CompareArgs) -> Result<bool, Failure> {
     };
     let (ta, sa) = text(&args.before)?;
     let (tb, sb) = text(&args.after)?;
-    if let Some(h) = health_of(&tb, &sb)? {
+    if let Some(h) = schema_of(&tb, &sb, "calflash.health/1")? {
         return against_health(args, &ta, &sa, &h);
     }
-    if health_of(&ta, &sa)?.is_some() {
-        return Err(
-            format!("{sa}: a health report comes second, after the calibration it judged").into(),
-        );
+    if let Some(f) = schema_of(&tb, &sb, "calflash.flight/1")? {
+        return against_flight(args, &ta, &sa, &f);
+    }
+    for (kind, schema) in [
+        ("health", "calflash.health/1"),
+        ("flight", "calflash.flight/1"),
+    ] {
+        if schema_of(&ta, &sa, schema)?.is_some() {
+            return Err(format!(
+                "{sa}: a {kind} report comes second, after the calibration it judged"
+            )
+            .into());
+        }
     }
     let a = Estimates::parse(&ta, &sa)?;
     let b = Estimates::parse(&tb, &sb)?;
@@ -157,11 +166,96 @@ pub fn run(args: &CompareArgs) -> Result<bool, Failure> {
     Ok(!changed.is_empty() || moved > 0)
 }
 
-/// The health record in `text`, if it is one (`calflash.health/1`).
-fn health_of(text: &str, source: &str) -> Result<Option<serde_json::Value>, String> {
+/// The record in `text` if its schema is `schema` (a health or a flight report).
+fn schema_of(text: &str, source: &str, schema: &str) -> Result<Option<serde_json::Value>, String> {
     let v: serde_json::Value = serde_json::from_str(text)
         .map_err(|e| format!("{source}:{}:{}: not a record: {e}", e.line(), e.column()))?;
-    Ok((v["schema"] == "calflash.health/1").then_some(v))
+    Ok((v["schema"] == schema).then_some(v))
+}
+
+/// The calibration record `before` (from `source`) and a report that judged a calibration
+/// (`after`): the same unit, and the same calibration when the report names it.
+fn same_calibration(
+    before: &str,
+    source: &str,
+    after: &serde_json::Value,
+    kind: &str,
+) -> Result<String, Failure> {
+    let factory: serde_json::Value =
+        serde_json::from_str(before).map_err(|e| format!("{source}: not a record: {e}"))?;
+    let serial = factory["serial"].as_str().unwrap_or_default().to_string();
+    if serial != after["serial"].as_str().unwrap_or_default() {
+        return Err(format!(
+            "{source} is of unit {serial}, the {kind} report of unit {}: compare a unit with itself",
+            after["serial"]
+        )
+        .into());
+    }
+    if let (Some(a), Some(b)) = (factory["data_hash"].as_str(), after["data_hash"].as_str())
+        && a != b
+    {
+        return Err(format!(
+            "{source}: the {kind} report judged another calibration of unit {serial} (data {b}, this one {a}); compare it with that one"
+        ).into());
+    }
+    Ok(serial)
+}
+
+/// A flight report held against the calibration it judged: each sensor error's in-flight
+/// estimate against the calibration's stated 1-sigma (the flight's own Wald tests, Holm over
+/// the terms the flight observed), one verdict; true when a term shifted.
+fn against_flight(
+    args: &CompareArgs,
+    before: &str,
+    source: &str,
+    flight: &serde_json::Value,
+) -> Result<bool, Failure> {
+    let serial = same_calibration(before, source, flight, "flight")?;
+    let verdict = flight["verdict"].as_str().unwrap_or("?");
+    println!(
+        "calflash compare  unit {serial}  {} -> {} (in flight: {verdict})",
+        args.before, args.after
+    );
+    let mut shifted = Vec::new();
+    for t in flight["terms"].as_array().map_or(&[][..], Vec::as_slice) {
+        let name = t["name"].as_str().unwrap_or("?");
+        let unit = t["unit"].as_str().unwrap_or("");
+        let f = |k: &str| t[k].as_f64().unwrap_or(f64::NAN);
+        let seen = match (t["z"].as_f64(), t["p"].as_f64()) {
+            (Some(z), Some(p)) => format!("z = {z:+.2}, p = {}", pval(p)),
+            _ => "not observed in this flight".to_string(),
+        };
+        let moved = t["shifted"].as_bool().unwrap_or(false);
+        if moved {
+            shifted.push(name.to_string());
+        }
+        println!(
+            "  {name}: {} +- {} {unit} in flight; calibration 1-sigma {}: {seen}{}",
+            num(f("estimate")),
+            num(f("sigma")),
+            num(f("prior_sigma")),
+            if moved { "  SHIFTED" } else { "" }
+        );
+    }
+    let fits = flight["consistency"]["fits"].as_bool().unwrap_or(false);
+    if !fits {
+        println!(
+            "verdict: CANNOT TELL: the flight's filter did not fit its data ({verdict}); no term is judged"
+        );
+        return Ok(false);
+    }
+    if shifted.is_empty() {
+        println!(
+            "verdict: UNCHANGED: no sensor error shifted in flight beyond the calibration's 1-sigma"
+        );
+    } else {
+        println!(
+            "verdict: CHANGED: {} shifted in flight ({})",
+            shifted.len(),
+            shifted.join(", ")
+        );
+    }
+    Ok(!shifted.is_empty())
 }
 
 /// A health report held against the calibration it judged: per bias, how far the unit at
@@ -174,22 +268,7 @@ fn against_health(
     source: &str,
     health: &serde_json::Value,
 ) -> Result<bool, Failure> {
-    let factory: serde_json::Value =
-        serde_json::from_str(before).map_err(|e| format!("{source}: not a record: {e}"))?;
-    let serial = factory["serial"].as_str().unwrap_or_default();
-    if serial != health["serial"].as_str().unwrap_or_default() {
-        return Err(format!(
-            "{source} is of unit {serial}, the health report of unit {}: compare a unit with itself",
-            health["serial"]
-        ).into());
-    }
-    if let (Some(a), Some(b)) = (factory["data_hash"].as_str(), health["data_hash"].as_str())
-        && a != b
-    {
-        return Err(format!(
-            "{source}: the health report judged another calibration of unit {serial} (data {b}, this one {a}); compare it with that one"
-        ).into());
-    }
+    let serial = same_calibration(before, source, health, "health")?;
     let h = &health["health"];
     let get = |key: &str, i: usize| h[key][i].as_f64().unwrap_or(f64::NAN);
     // Chi-square with one degree of freedom at alpha / 6 (Bonferroni over the six outputs).

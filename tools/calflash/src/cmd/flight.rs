@@ -136,6 +136,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         _ => StatedPrior::default(),
     };
     let mut blob_bytes = Vec::new();
+    let mut data_hash = None;
     let (imu, prior, serial) = match &args.blob {
         Some(path) => {
             let bytes = crate::files::read_blob(path)?;
@@ -144,6 +145,14 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             let imu = input::corrected(recording, &cal)?;
             let serial = cal.data().identity.serial.to_string();
+            data_hash = Some(
+                cal.data()
+                    .identity
+                    .data_hash
+                    .iter()
+                    .map(|b| format!("{b:02x}"))
+                    .collect::<String>(),
+            );
             match check::calibration_prior(&cal) {
                 Some(p) => (imu, (p, PriorSource::Calibration), serial),
                 None => (
@@ -192,7 +201,9 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
     let checked = check::check(&imu, (&fixes, &baro), prior, &walks, &opts, args.alpha)
         .map_err(|e| format!("{}: {e}", recording.display()))?;
     let text = crate::report::flight::text(&serial, &checked, &counts);
-    let record = crate::report::flight::json(&serial, &checked, &counts);
+    let mut record = crate::report::flight::json(&serial, &checked, &counts);
+    // Which calibration it judged, as the health record says it (for `compare`).
+    record["data_hash"] = serde_json::json!(data_hash);
     let mut staged = Staged::new();
     if let Some(path) = &args.json {
         let json = serde_json::to_string_pretty(&record)?;
