@@ -165,6 +165,11 @@ fn insert_params(row: &Row) -> [&dyn rusqlite::ToSql; 14] {
     super::schema::row_values!(row)
 }
 
+/// How long a station waits for another's write to the same file: a busy batch on every core
+/// of two stations at once holds the lock in turn for far less, but a loaded machine can make
+/// a turn take seconds.
+const BUSY_WAIT: std::time::Duration = std::time::Duration::from_secs(60);
+
 impl Sqlite {
     /// Opens (creating when needed) the database at `path`.
     pub(super) fn open(path: &Path) -> Result<Self, Cause> {
@@ -172,8 +177,7 @@ impl Sqlite {
             std::fs::create_dir_all(dir).map_err(Cause::Directory)?;
         }
         let conn = Connection::open(path).map_err(|e| why(path, e))?;
-        conn.busy_timeout(std::time::Duration::from_secs(5))
-            .map_err(|e| why(path, e))?;
+        conn.busy_timeout(BUSY_WAIT).map_err(|e| why(path, e))?;
         // A history of the present schema is written into as it is. Anything else (a new
         // file, an older schema, a stranger's database) is decided again under the write lock:
         // another station may be creating or migrating the same file at this instant, and a
@@ -207,8 +211,7 @@ impl Sqlite {
         }
         let conn = Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY)
             .map_err(|e| why(path, e))?;
-        conn.busy_timeout(std::time::Duration::from_secs(5))
-            .map_err(|e| why(path, e))?;
+        conn.busy_timeout(BUSY_WAIT).map_err(|e| why(path, e))?;
         let (_, later) = check_schema(&conn, path)?;
         Ok(Self {
             conn,
@@ -224,7 +227,10 @@ impl Sqlite {
 
 impl Backend for Sqlite {
     fn insert(&mut self, row: &Row) -> Result<i64, Cause> {
-        let tx = self.conn.transaction().map_err(|e| why(&self.path, e))?;
+        let tx = self
+            .conn
+            .transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)
+            .map_err(|e| why(&self.path, e))?;
         tx.execute(&insert_sql(), insert_params(row).as_slice())
             .map_err(|e| why(&self.path, e))?;
         let id = tx.last_insert_rowid();
@@ -234,7 +240,12 @@ impl Backend for Sqlite {
 
     fn copy(&mut self, rows: &[Row]) -> Result<usize, Cause> {
         let path = self.path.clone();
-        let tx = self.conn.transaction().map_err(|e| why(&path, e))?;
+        // Immediate: it reads before it writes, and a deferred transaction that another
+        // station's write overtakes fails at once instead of waiting.
+        let tx = self
+            .conn
+            .transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)
+            .map_err(|e| why(&path, e))?;
         let mut copied = 0;
         // Only what the history did not hold before the copy: a second copy adds nothing.
         let before: i64 = tx
