@@ -16,8 +16,8 @@
 //! `README_SHOW=1` prints each command's exit code and first line of output.
 //!
 //! A command's comment states what it must do: `exits N` its exit code (0 otherwise), and a
-//! verdict word in capitals (ACCEPT, REVIEW, REJECT, OK, DRIFTED, SUSPECT, UNCHANGED, CHANGED)
-//! that its output must hold.
+//! verdict word in capitals (ACCEPT, REVIEW, REJECT, OK, DRIFTED, SUSPECT, UNCHANGED, CHANGED,
+//! HELD, SHIFTED, MOVED) that its output must hold.
 #![allow(dead_code)] // the modules below are shared with other test crates
 
 #[path = "../../../host-tests/src/nor.rs"]
@@ -31,7 +31,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The verdict words a comment can promise.
-const VERDICTS: [&str; 8] = [
+const VERDICTS: [&str; 11] = [
     "ACCEPT",
     "REVIEW",
     "REJECT",
@@ -40,6 +40,9 @@ const VERDICTS: [&str; 8] = [
     "SUSPECT",
     "UNCHANGED",
     "CHANGED",
+    "HELD",
+    "SHIFTED",
+    "MOVED",
 ];
 
 /// Far above what any README command needs in a debug build.
