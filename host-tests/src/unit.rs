@@ -155,10 +155,18 @@ impl QemuUnit {
     }
 }
 
+/// Connects to QEMU's listening `port`, retrying while it starts. A connection whose local
+/// address is its peer's is refused and retried: connecting again and again to a local port
+/// nobody listens on yet can pick that same port as its own ephemeral one, and TCP then
+/// connects the socket to itself (the link "closes" on the first request).
 fn connect_tcp(port: u16) -> Result<TcpStream, String> {
     let start = Instant::now();
     loop {
         match TcpStream::connect(("127.0.0.1", port)) {
+            Ok(s) if s.local_addr().ok() == s.peer_addr().ok() => {
+                drop(s);
+                std::thread::sleep(Duration::from_millis(50));
+            }
             Ok(s) => return Ok(s),
             Err(_) if start.elapsed() < Duration::from_secs(20) => {
                 std::thread::sleep(Duration::from_millis(50))
