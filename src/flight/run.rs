@@ -392,10 +392,7 @@ impl<T: Real> FlightFilter<T> {
         let back: T = micros(t_us.saturating_sub(fix.t_us));
         let (h_sigma, v_sigma) = self.config.gnss_sigma;
         let lever = self.config.lever;
-        let lost = c::<T>(LOST_VELOCITY * LOST_VELOCITY);
-        let p = &self.filter.covariance;
-        let velocity_lost = (index::VELOCITY..index::VELOCITY + 3)
-            .any(|i| p.get((i, i)).is_some_and(|var| *var > lost));
+        let velocity_lost = self.filter.velocity_lost(c::<T>(LOST_VELOCITY));
         if let (true, Some(vel)) = (velocity_lost, fix.velocity) {
             let v = Vector3::new(
                 c(f64::from(vel[0])),

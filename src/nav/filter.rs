@@ -556,6 +556,15 @@ impl<T: Real> ErrorFilter<T> {
         })
     }
 
+    /// Whether the navigation has lost track: a velocity 1-sigma above `sigma` (m/s) on any
+    /// axis, as a saturated setback leaves it (then a fix puts it back,
+    /// [`reset_position_velocity`](Self::reset_position_velocity)).
+    pub fn velocity_lost(&self, sigma: T) -> bool {
+        let lost = sigma * sigma;
+        (index::VELOCITY..index::VELOCITY + 3)
+            .any(|i| self.covariance.get((i, i)).is_some_and(|var| *var > lost))
+    }
+
     /// Puts the navigation at position `p` and velocity `v` with the variances `variances`
     /// (position then velocity, each axis), independent of every other error: for a first
     /// fix after the navigation lost track (a saturated setback), where the update would ask

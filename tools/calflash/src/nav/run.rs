@@ -361,7 +361,7 @@ pub fn forward(
             let back = t - (fix.t - opts.gnss_latency);
             if let Some(vel) = fix.velocity
                 && fix.height.is_some()
-                && velocity_lost(&filter)
+                && filter.velocity_lost(spincal::flight::LOST_VELOCITY)
             {
                 let (h, v) = (opts.gnss_noise.0, opts.gnss_noise.1);
                 let r = opts.gnss_velocity_noise;
@@ -464,14 +464,6 @@ pub fn misfit(pass: &Pass, until: f64, gate: f64) -> f64 {
         .filter(|s| s.kind != Kind::Pad && s.t <= until && s.sigma > 0.0)
         .map(|s| (s.value / s.sigma).powi(2).min(gate * gate) + 2.0 * s.sigma.ln())
         .sum()
-}
-
-/// Whether the navigation has lost track: a velocity 1-sigma over
-/// [`spincal::flight::LOST_VELOCITY`] (the device's test).
-fn velocity_lost(filter: &ErrorFilter<f64>) -> bool {
-    let lost = spincal::flight::LOST_VELOCITY * spincal::flight::LOST_VELOCITY;
-    (spincal::nav::filter::index::VELOCITY..spincal::nav::filter::index::VELOCITY + 3)
-        .any(|i| filter.covariance[(i, i)] > lost)
 }
 
 /// Gates and takes one scalar measurement, recording what it said.
