@@ -523,3 +523,59 @@ fn a_calibration_is_judged_over_its_mission() {
     assert_ne!(code, 0);
     assert!(err.contains("expected a=SI,g=SI"), "{err}");
 }
+
+/// An IMU calibrated on a rate table (its accelerometers' lever arms fitted) judged over a
+/// spinning shell: the terms its model leaves out are priced on the rows as its own fit read
+/// them (lever-arm regressors included). This panicked before ("the reader read every model
+/// column"): the lever-arm columns are made by the fit, not read from the file.
+#[test]
+fn an_imu_with_lever_arms_is_judged_over_a_spinning_flight() {
+    let d = tempfile::tempdir().unwrap();
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data");
+    let truth = examples.join("spinning_round.truth.json");
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            truth.to_str().unwrap(),
+            "--flight",
+            "shell:seconds=2",
+            "-o",
+            "shell.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let bench = examples.join("imu_bench.csv");
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "calibrate",
+            bench.to_str().unwrap(),
+            "--sensor",
+            "imu",
+            "--serial",
+            "M-LEVER",
+            "--mission",
+            "shell.csv",
+            "--json",
+            "m.json",
+            "--no-db",
+        ],
+    );
+    assert!(code == 0 || code == 3, "{out}{err}");
+    assert!(out.contains("lever-arm components are estimated"), "{out}");
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("m.json")).unwrap()).unwrap();
+    assert_eq!(record["mission"]["outputs"].as_array().unwrap().len(), 6);
+    // a_z has lever-arm terms; a term its model left out is priced over the flight.
+    let priced: Vec<&str> = record["mission"]["terms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|t| t["output"].as_str())
+        .collect();
+    assert!(priced.contains(&"a_z"), "{priced:?}");
+}

@@ -32,7 +32,7 @@ impl Formula {
         let col = |name: &str| {
             table
                 .column(name)
-                .expect("the reader read every model column")
+                .unwrap_or_else(|| panic!("the reader read every model column: {name}"))
         };
         let mut x = DMatrix::zeros(n, self.width());
         let first = usize::from(self.intercept);

@@ -16,10 +16,11 @@ use nalgebra::DMatrix;
 
 use super::Profile;
 use super::weight::{self, Lookup, Reach};
+use crate::columns as col;
 use crate::design::models;
 use crate::design::points::{Points, Unit};
 use crate::formula::Formula;
-use crate::sensor::{AxisFit, Calibrated, Finding, Verdict};
+use crate::sensor::{AxisFit, Calibrated, Finding, Verdict, lever};
 
 /// Samples of the flight the timeline shows.
 const TIMELINE: usize = 600;
@@ -184,7 +185,7 @@ pub fn judge(
             }
         }
         let rows = reference_rows(&c.table, axis);
-        let bench = c.table.select(&rows);
+        let bench = as_fitted(&c.table.select(&rows), axis, k, gyro);
         let vars: Vec<String> = axis.formula.columns().into_iter().skip(1).collect();
         let reach = Reach::of(&points(&bench, &vars), &vars, &[]);
         let scale = axis
@@ -241,6 +242,9 @@ pub fn judge(
             let Ok(with) = crate::formula::parse(&format!("{} + {term}", axis.formula)) else {
                 continue;
             };
+            if with.columns().iter().any(|v| bench.column(v).is_none()) {
+                continue;
+            }
             let Ok(fit) = AxisFit::fit(
                 &with,
                 &bench,
@@ -318,6 +322,41 @@ fn reference_rows(table: &crate::obs::Table, axis: &AxisFit) -> Vec<usize> {
     (0..table.len())
         .filter(|i| lines.contains(&table.lines[*i]))
         .collect()
+}
+
+/// The bench rows as the axis' own fit read them: under rotation an accelerometer's lever-arm
+/// regressors, its force at the lever arm and its pseudo-response, and what an axis senses (for
+/// its nonlinear terms), rebuilt by [`lever::axis_table`] at the fitted estimate. A term added
+/// to that table is then tested as the fit's last Gauss-Newton step would test it.
+fn as_fitted(table: &crate::obs::Table, axis: &AxisFit, i: usize, gyro: bool) -> crate::obs::Table {
+    let cols = axis.formula.columns();
+    if cols.iter().all(|v| table.column(v).is_some()) {
+        return table.clone();
+    }
+    let coef = |name: &str| {
+        axis.fit
+            .names
+            .iter()
+            .position(|n| n == name)
+            .map_or(0.0, |j| axis.fit.coefficients[j])
+    };
+    let own = if gyro { col::W } else { col::F };
+    let est = lever::Estimate {
+        s: std::array::from_fn(|k| coef(own[k])),
+        r: std::array::from_fn(|k| coef(&lever::column(i, k))),
+        g: if gyro {
+            std::array::from_fn(|k| coef(col::F[k]))
+        } else {
+            [0.0; 3]
+        },
+    };
+    if est.s[i] == 0.0 {
+        return table.clone();
+    }
+    let which: [bool; 3] = std::array::from_fn(|k| cols.contains(&lever::column(i, k)));
+    let lever = (!gyro && which.contains(&true)).then_some(&which);
+    let nonlinear = cols.iter().any(|v| v == lever::SENSED);
+    lever::axis_table(table, gyro, i, &axis.output, &est, lever, nonlinear)
 }
 
 /// True when every variable of `term` is a column of `table`.
