@@ -336,7 +336,7 @@ fn a_simulated_still_recording_gives_allan_its_noise_back() {
     );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.path().join("g.json")).unwrap()).unwrap();
-    for axis in json["axes"].as_array().unwrap() {
+    for axis in json["sensors"][0]["axes"].as_array().unwrap() {
         let terms = &axis["terms"];
         // 2 counts of white noise a sample at 100 Hz: 0.2 counts/sqrt(Hz).
         let n = terms["random_walk"].as_f64().unwrap();
@@ -532,5 +532,158 @@ fn calibrate_says_its_fit_in_engineering_units() {
             && !quiet.contains("note ")
             && !quiet.contains("ACCEPT a_x"),
         "{quiet}"
+    );
+}
+
+/// `allan` of a recording of both sensors analyses both (as of two files), writes one JSON of
+/// both that `calibrate --noise-terms` takes twice, an HTML report with each axis' slope lines
+/// and read-off points, and Kalibr's `imu.yaml` with the largest axis of each sensor.
+#[test]
+fn allan_analyses_both_sensors_and_writes_a_report_and_kalibrs_file() {
+    let d = tempfile::tempdir().unwrap();
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--still",
+            "900",
+            "--bias-walk",
+            "0.05,0.02",
+            "-o",
+            "still.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let (code, said, err) = calflash(
+        d.path(),
+        &[
+            "allan",
+            "still.csv",
+            "--scale",
+            "412,4770",
+            "--json",
+            "both.json",
+            "--report",
+            "allan.html",
+            "--kalibr",
+            "imu.yaml",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        said.contains("accelerometer in m/s^2 and gyro in rad/s"),
+        "{said}"
+    );
+    assert!(
+        said.contains("  accelerometer x: VRW ") && said.contains("  gyro z: ARW "),
+        "{said}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("both.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["schema"], "calflash.allan/2");
+    let sensors = json["sensors"].as_array().unwrap();
+    assert_eq!(sensors.len(), 2);
+    assert_eq!(
+        (&sensors[0]["sensor"], &sensors[0]["unit"]),
+        (&"accel".into(), &"m/s^2".into())
+    );
+    assert_eq!(
+        (&sensors[1]["sensor"], &sensors[1]["unit"]),
+        (&"gyro".into(), &"rad/s".into())
+    );
+    // Kalibr's file: the largest axis' white noise of each sensor, as the JSON has it.
+    let yaml = std::fs::read_to_string(d.path().join("imu.yaml")).unwrap();
+    let value = |key: &str| -> f64 {
+        yaml.lines()
+            .find_map(|l| l.strip_prefix(&format!("{key}: ")))
+            .and_then(|v| v.split_whitespace().next())
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("{key} in {yaml}"))
+    };
+    let largest = |s: usize, key: &str| {
+        sensors[s]["axes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a["terms"][key].as_f64().unwrap())
+            .fold(0.0, f64::max)
+    };
+    for (key, s) in [
+        ("accelerometer_noise_density", 0),
+        ("gyroscope_noise_density", 1),
+    ] {
+        assert!(
+            (value(key) / largest(s, "random_walk") - 1.0).abs() < 1e-6,
+            "{yaml}"
+        );
+    }
+    assert!(value("accelerometer_random_walk") > 0.0 && value("gyroscope_random_walk") > 0.0);
+    assert_eq!(value("update_rate"), 100.0);
+    // The report: the terms of both sensors, six figures, each with its slope lines.
+    let html = std::fs::read_to_string(d.path().join("allan.html")).unwrap();
+    assert_eq!(html.matches("<svg").count(), 6, "six axes");
+    assert_eq!(html.matches("slope -1/2: N = ").count(), 6);
+    assert!(html.contains("where N, B and K are read") && html.contains("Kalibr imu.yaml"));
+    // One file of both serves `calibrate --noise-terms` for both sensors.
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/imu_bench.csv");
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "calibrate",
+            bench.to_str().unwrap(),
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-A-1",
+            "--noise-terms",
+            "both.json,both.json",
+            "--blob",
+            "u.blob",
+            "--no-db",
+        ],
+    );
+    assert!(code == 0 || code == 3, "{out}{err}");
+    assert!(d.path().join("u.blob").is_file());
+    // Kalibr needs both sensors in SI: refused before anything is written.
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "allan",
+            "still.csv",
+            "--sensor",
+            "gyro",
+            "--scale",
+            "4770",
+            "--kalibr",
+            "k.yaml",
+            "--json",
+            "k.json",
+        ],
+    );
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("--kalibr: Kalibr's imu.yaml takes both sensors in SI units; this run analyses the gyro in rad/s"),
+        "{err}"
+    );
+    assert!(!d.path().join("k.yaml").exists() && !d.path().join("k.json").exists());
+    let (code, _, err) = calflash(d.path(), &["allan", "still.csv", "--scale", "1,2,3"]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("--scale: both sensors are analysed: two values"),
+        "{err}"
+    );
+    // Two files: both analysed (the accelerometer's file was once ignored).
+    common::write_recording(
+        &calflash::sim::recording::Tumble::default().record(),
+        d.path(),
+    );
+    let (code, said, err) = calflash(d.path(), &["allan", "acc.txt", "gyro.txt"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        said.contains("accelerometer x: ") && said.contains("gyro x: "),
+        "{said}"
     );
 }

@@ -91,8 +91,37 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
     let (code, out, err) = health(d, "aged.csv", &["--no-db"]);
     assert_eq!(code, 3, "{out}{err}");
     // The last report (gyro z 6 sigma off) held against the calibration it judged.
-    let (code, out, err) = health(d, "rest.csv", &["--no-db", "--json", "health.json"]);
+    let (code, out, err) = health(
+        d,
+        "rest.csv",
+        &[
+            "--no-db",
+            "--json",
+            "health.json",
+            "--report",
+            "health.html",
+        ],
+    );
     assert_eq!(code, 3, "{out}{err}");
+    // The report: the verdict and what it means, and gyro z's bias in its stated sigmas.
+    let page = std::fs::read_to_string(d.join("health.html")).unwrap();
+    assert!(
+        page.contains("<p class=\"verdict reject\">SUSPECT</p>") && page.contains("recalibrate"),
+        "{page}"
+    );
+    let wz = page
+        .split("<tr><td>wz</td>")
+        .nth(1)
+        .and_then(|r| r.split("</tr>").next())
+        .unwrap();
+    let ratio: f64 = wz
+        .rsplit("<td>")
+        .next()
+        .and_then(|c| c.strip_suffix("</td>"))
+        .and_then(|c| c.parse().ok())
+        .unwrap_or_else(|| panic!("{wz}"));
+    assert!(ratio < -3.0, "gyro z 6 sigma off: {wz}");
+    assert_eq!(page.matches("<svg").count(), 1);
     let (code, out, err) = calflash(d, &["compare", "fit.json", "health.json"]);
     assert_eq!(code, 3, "one verdict and its exit code: {out}{err}");
     let moved: Vec<&str> = out.lines().filter(|l| l.ends_with("MOVED")).collect();

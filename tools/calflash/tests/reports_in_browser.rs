@@ -37,12 +37,50 @@ window.addEventListener('load', () => {
       bad.push(name(e) + what + (e.scrollWidth - e.clientWidth) + ' px of its content');
     }
   }
+  // A figure's words: each inside its figure, none over another.
+  document.querySelectorAll('svg').forEach((svg, k) => {
+    const box = svg.getBoundingClientRect();
+    const words = [...svg.querySelectorAll('text')]
+      .filter((t) => (t.textContent || '').trim() !== '')
+      .map((t) => [t, t.getBoundingClientRect()]);
+    const fig = 'figure ' + (k + 1) + ' "' + ((words[0] && words[0][0].textContent) || '').trim().slice(0, 30) + '"';
+    for (const [t, r] of words) {
+      if (r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1 || r.bottom > box.bottom + 1) {
+        bad.push(fig + ': text "' + t.textContent.trim() + '" is cut by the figure\'s edge');
+      }
+    }
+    for (let i = 0; i < words.length; i++) {
+      for (let j = i + 1; j < words.length; j++) {
+        const [a, ra] = words[i];
+        const [b, rb] = words[j];
+        const w = Math.min(ra.right, rb.right) - Math.max(ra.left, rb.left);
+        const h = Math.min(ra.bottom, rb.bottom) - Math.max(ra.top, rb.top);
+        if (w > 1 && h > 2) {
+          bad.push(fig + ': "' + a.textContent.trim() + '" overlaps "' + b.textContent.trim() + '"');
+        }
+      }
+    }
+  });
   const out = document.createElement('pre');
   out.id = 'calflash-layout';
-  out.textContent = 'window ' + width + ' px\n' + bad.join('\n');
+  out.textContent = 'window ' + width + ' px, page ' + document.documentElement.scrollHeight + ' px\n' + bad.join('\n');
   document.body.appendChild(out);
 });
 </script>"#;
+
+/// How the browser is started: headless, alone (no network of its own), without scroll bars.
+const BROWSER: [&str; 10] = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--hide-scrollbars",
+    "--virtual-time-budget=5000",
+];
 
 /// Debian's Chromium, or `None` with a notice (an error when `SPINCAL_REQUIRE_CHROMIUM=1`).
 fn chromium(test: &str) -> Option<PathBuf> {
@@ -72,20 +110,8 @@ fn layout_faults(browser: &Path, report: &Path) -> Vec<String> {
     .unwrap();
     let profile = tempfile::tempdir().unwrap();
     let out = Command::new(browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--hide-scrollbars",
-            "--window-size=1280,1000",
-            "--virtual-time-budget=5000",
-            "--dump-dom",
-        ])
+        .args(BROWSER)
+        .args(["--window-size=1280,1000", "--dump-dom"])
         .arg(format!("--user-data-dir={}", profile.path().display()))
         .arg(format!("file://{}", checked.display()))
         .output()
@@ -103,8 +129,46 @@ fn layout_faults(browser: &Path, report: &Path) -> Vec<String> {
             )
         });
     let mut lines = found.lines();
-    assert_eq!(lines.next(), Some("window 1280 px"), "{found}");
+    let first = lines.next().unwrap_or_default();
+    let height = first
+        .strip_prefix("window 1280 px, page ")
+        .and_then(|h| h.strip_suffix(" px"))
+        .and_then(|h| h.parse().ok())
+        .unwrap_or_else(|| panic!("{}: the check said {found}", report.display()));
+    if let Some(dir) = std::env::var_os("REPORT_SCREENSHOTS") {
+        screenshot(browser, report, height, Path::new(&dir));
+    }
     lines.map(str::to_string).collect()
+}
+
+/// With `REPORT_SCREENSHOTS=DIR`: the whole page as the browser draws it at 1280 px, as
+/// `DIR/<report>.png` (for a person to look at; the test judges the layout, not the picture).
+fn screenshot(browser: &Path, report: &Path, height: u32, dir: &Path) {
+    std::fs::create_dir_all(dir).unwrap();
+    // `out/index.html` as `out_index`; a report in the test's own directory by its name.
+    let file = report.file_name().unwrap().to_string_lossy();
+    let name = match report.parent().and_then(Path::file_name) {
+        Some(p) if !p.to_string_lossy().starts_with(".tmp") => {
+            format!("{}_{file}", p.to_string_lossy())
+        }
+        _ => file.to_string(),
+    };
+    let png = std::path::absolute(dir.join(name).with_extension("png")).unwrap();
+    let profile = tempfile::tempdir().unwrap();
+    let out = Command::new(browser)
+        .args(BROWSER)
+        .arg(format!("--window-size=1280,{}", height.clamp(200, 16_000)))
+        .arg(format!("--screenshot={}", png.display()))
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .arg(format!("file://{}", report.display()))
+        .output()
+        .unwrap();
+    assert!(
+        png.is_file(),
+        "{}: no screenshot: {}",
+        report.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// Writes every kind of report into `d`; their paths.
@@ -193,6 +257,80 @@ fn reports(d: &Path) -> Vec<PathBuf> {
         "ROUND-1",
         "--report",
         "round.html",
+        "--blob",
+        "round.blob",
+        "--no-db",
+    ]);
+    // Its correction held against a simulated flight's truth, and the flight checked against
+    // GNSS and the barometer.
+    run(&[
+        "simulate",
+        "--sensor",
+        "imu",
+        "--truth",
+        &round,
+        "--flight",
+        "shell:seconds=2",
+        "-o",
+        "shell2.csv",
+    ]);
+    run(&[
+        "apply",
+        "--blob",
+        "round.blob",
+        "shell2.csv",
+        "--time-column",
+        "t",
+        "--reference",
+        "-o",
+        "shell2_si.csv",
+        "--report",
+        "accuracy.html",
+    ]);
+    run(&[
+        "simulate",
+        "--sensor",
+        "imu",
+        "--truth",
+        &round,
+        "--flight",
+        "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=12",
+        "--sample-rate",
+        "2000",
+        "-o",
+        "s.csv",
+        "--gnss",
+        "g.csv",
+        "--baro",
+        "b.csv",
+        "--launch-shift",
+        "ax=0.4",
+    ]);
+    run(&[
+        "flight",
+        "s.csv",
+        "--blob",
+        "round.blob",
+        "--gnss",
+        "g.csv",
+        "--baro",
+        "b.csv",
+        "--report",
+        "flight.html",
+        "--no-db",
+    ]);
+    // A calibration judged over the mission: an IMU's accelerometers and gyros.
+    run(&[
+        "calibrate",
+        &imu,
+        "--sensor",
+        "imu",
+        "--serial",
+        "IMU-M-1",
+        "--mission",
+        "shell2.csv",
+        "--report",
+        "mission.html",
         "--no-db",
     ]);
     // Without equipment: a simulated hand tumble.
@@ -207,6 +345,78 @@ fn reports(d: &Path) -> Vec<PathBuf> {
         "SIM-R-1",
         "--report",
         "selfcal.html",
+        "--no-db",
+    ]);
+    // Noise from a still recording, and the unit's health at rest against it.
+    run(&[
+        "simulate",
+        "--sensor",
+        "imu",
+        "--still",
+        "600",
+        "--bias-walk",
+        "0.05,0.02",
+        "-o",
+        "still.csv",
+    ]);
+    run(&[
+        "allan",
+        "still.csv",
+        "--scale",
+        "412,900",
+        "--json",
+        "noise.json",
+        "--report",
+        "allan.html",
+        "--kalibr",
+        "imu.yaml",
+    ]);
+    run(&[
+        "simulate",
+        "--sensor",
+        "imu",
+        "--plan",
+        "tumble:24",
+        "--plan",
+        "rate:-6:6:7",
+        "-o",
+        "bench.csv",
+    ]);
+    run(&[
+        "calibrate",
+        "bench.csv",
+        "--sensor",
+        "imu",
+        "--serial",
+        "IMU-H-1",
+        "--blob",
+        "h.blob",
+        "--noise-terms",
+        "noise.json,noise.json",
+        "--ageing",
+        "30d",
+        "--gravity",
+        "9.80:9.82",
+        "--no-db",
+    ]);
+    run(&[
+        "simulate",
+        "--sensor",
+        "imu",
+        "--rest",
+        "h.blob",
+        "--shift",
+        "0,0,0,12,0,0",
+        "-o",
+        "shock.csv",
+    ]);
+    run(&[
+        "health",
+        "shock.csv",
+        "--blob",
+        "h.blob",
+        "--report",
+        "health.html",
         "--no-db",
     ]);
     // A design, a lot, and a batch's index.
@@ -270,7 +480,12 @@ fn reports(d: &Path) -> Vec<PathBuf> {
         "single.html",
         "thermal.html",
         "round.html",
+        "accuracy.html",
+        "flight.html",
+        "mission.html",
         "selfcal.html",
+        "allan.html",
+        "health.html",
         "design.html",
         "lot.html",
         "out/index.html",
@@ -311,7 +526,9 @@ fn the_check_finds_a_page_too_wide_and_a_clipped_box() {
         &page,
         "<!doctype html><html><body><table style=\"width:1600px\"><tr><td>wide</td></tr></table>\
          <div style=\"width:200px;overflow:hidden;white-space:nowrap\">a line far longer than two \
-         hundred pixels can hold, clipped at its edge</div></body></html>",
+         hundred pixels can hold, clipped at its edge</div>\
+         <svg width=\"200\" height=\"60\"><text x=\"100\" y=\"20\" text-anchor=\"middle\">a title far too long for its figure</text>\
+         <text x=\"10\" y=\"50\">0.001</text><text x=\"30\" y=\"50\">8.00000e-4</text></svg></body></html>",
     )
     .unwrap();
     let faults = layout_faults(&browser, &page);
@@ -321,4 +538,16 @@ fn the_check_finds_a_page_too_wide_and_a_clipped_box() {
     );
     assert!(faults.iter().any(|f| f.contains("reaches")), "{faults:?}");
     assert!(faults.iter().any(|f| f.contains("clips")), "{faults:?}");
+    assert!(
+        faults
+            .iter()
+            .any(|f| f.contains("\"a title far too long for its figure\" is cut")),
+        "{faults:?}"
+    );
+    assert!(
+        faults
+            .iter()
+            .any(|f| f.contains("\"0.001\" overlaps \"8.00000e-4\"")),
+        "{faults:?}"
+    );
 }

@@ -45,6 +45,10 @@ pub struct HealthArgs {
     /// Write the health as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Write the HTML report here: the verdict, what the check rested on, and each output's
+    /// refined bias against the calibration's stated 1-sigma.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     /// The unit history: a SQLite file, or a PostgreSQL database shared by stations
     /// (postgres://USER:PASSWORD@HOST/DB); default $CALFLASH_DB, else the user's data directory.
     #[arg(long, value_name = "FILE|URL")]
@@ -66,6 +70,7 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
         .input("the recording", args.recording.as_deref())
         .input("--blob", args.blob.as_deref())
         .output("--json", args.json.as_deref())
+        .output("--report", args.report.as_deref())
         .created(
             "the unit history",
             db_path.as_ref().and_then(db::Location::file),
@@ -104,8 +109,13 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
         "health": json(&health),
     });
     print!("{}", summary(&serial, &source, &health));
-    if let Some(said) = said {
+    if let Some(said) = &said {
         println!("{said}");
+    }
+    if let Some(p) = &args.report {
+        let page = crate::report::health::html(&serial, &source, &health, said.as_deref())?;
+        crate::files::write_atomically(p, |w| std::io::Write::write_all(w, page.as_bytes()))?;
+        println!("  report: {}", p.display());
     }
     if let Some(p) = &args.json {
         let body = serde_json::to_vec_pretty(&record)?;

@@ -208,20 +208,30 @@ pub fn noise_terms(curve: &[Point]) -> NoiseTerms {
     }
 }
 
-/// What `calflash allan --json` writes (schema `calflash.allan/1`; `noise::stated` reads it).
+/// What `calflash allan --json` writes (schema `calflash.allan/2`; `noise::stated` reads it,
+/// and the one-sensor files of `calflash.allan/1` before it).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Record<'a> {
-    /// `calflash.allan/1`.
+    /// `calflash.allan/2`.
     pub schema: &'static str,
     /// The recording.
     pub source: &'a str,
+    /// Each sensor analysed: the accelerometer, the gyro, or both.
+    pub sensors: Vec<SensorRecord<'a>>,
+}
+
+/// One sensor of a [`Record`].
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SensorRecord<'a> {
+    /// `accel` or `gyro`.
+    pub sensor: &'static str,
     /// The unit of the values (`counts`, or an SI unit).
     pub unit: &'a str,
     /// Per axis, x, y, z.
     pub axes: Vec<AxisRecord<'a>>,
 }
 
-/// One axis of a [`Record`].
+/// One axis of a [`SensorRecord`].
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct AxisRecord<'a> {
     /// `x`, `y` or `z`.
@@ -233,7 +243,20 @@ pub struct AxisRecord<'a> {
 }
 
 /// The schema of [`Record`].
-pub const SCHEMA: &str = "calflash.allan/1";
+pub const SCHEMA: &str = "calflash.allan/2";
+
+/// The schema of the one-sensor files written before (`sensor`'s fields at the top level).
+pub const SCHEMA_ONE_SENSOR: &str = "calflash.allan/1";
+
+/// The tau at which the fitted curve is lowest (where the bias instability is read), over the
+/// curve's span.
+#[must_use]
+pub fn flattest(terms: &NoiseTerms, curve: &[Point]) -> Option<f64> {
+    let (lo, hi) = (curve.first()?.tau, curve.last()?.tau);
+    (0..=200)
+        .map(|k| lo * (hi / lo).powf(f64::from(k) / 200.0))
+        .min_by(|a, b| terms.adev(*a).total_cmp(&terms.adev(*b)))
+}
 
 #[cfg(test)]
 mod tests {

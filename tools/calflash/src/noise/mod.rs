@@ -2,4 +2,5 @@
 //! noise terms a blob carries for the unit's health check.
 
 pub mod allan;
+pub mod kalibr;
 pub mod stated;

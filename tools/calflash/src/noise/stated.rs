@@ -25,10 +25,24 @@ pub enum Error {
     },
     /// JSON that `calflash allan --json` did not write.
     #[error(
-        "{}: field \"schema\": expected \"calflash.allan/1\" (the file `calflash allan --json` writes)",
+        "{}: field \"schema\": expected \"calflash.allan/2\" or \"calflash.allan/1\" (the file `calflash allan --json` writes)",
         .0.display()
     )]
     NotAllan(PathBuf),
+    /// An Allan file without the sensor asked for.
+    #[error(
+        "{}: field \"sensors\": no {sensor} (it has {}): give the file `calflash allan` wrote for the {sensor} (a recording of both sensors gives one file for both)",
+        .path.display(),
+        if .found.is_empty() { "none".to_string() } else { .found.join(", ") }
+    )]
+    NoSensor {
+        /// The file.
+        path: PathBuf,
+        /// `accel` or `gyro`.
+        sensor: &'static str,
+        /// The sensors it has.
+        found: Vec<String>,
+    },
     /// Terms in another unit than the sensor's SI unit.
     #[error(
         "{}: field \"unit\" is {found}, expected \"{expected}\": run `calflash allan` with --scale (counts per {expected}) so that the terms are in SI units",
@@ -107,9 +121,25 @@ fn read_axes(path: &Path, unit: &'static str) -> Result<([f64; 3], [f64; 3]), Er
         path: file(),
         source,
     })?;
-    if v["schema"] != "calflash.allan/1" {
-        return Err(Error::NotAllan(file()));
-    }
+    let sensor = if unit == "rad/s" { "gyro" } else { "accel" };
+    let v = match v["schema"].as_str() {
+        Some(crate::noise::allan::SCHEMA_ONE_SENSOR) => v,
+        Some(crate::noise::allan::SCHEMA) => {
+            let sensors = v["sensors"].as_array().cloned().unwrap_or_default();
+            let Some(entry) = sensors.iter().find(|e| e["sensor"] == sensor) else {
+                return Err(Error::NoSensor {
+                    path: file(),
+                    sensor,
+                    found: sensors
+                        .iter()
+                        .filter_map(|e| e["sensor"].as_str().map(str::to_string))
+                        .collect(),
+                });
+            };
+            entry.clone()
+        }
+        _ => return Err(Error::NotAllan(file())),
+    };
     if v["unit"] != unit {
         return Err(Error::Unit {
             path: file(),
@@ -176,9 +206,9 @@ pub fn from_allan(accel: &Path, gyro: &Path, allow: &Allowances) -> Result<Noise
 mod tests {
     use super::*;
 
-    /// An Allan file as `calflash allan --json` writes it (its `Record`).
+    /// An Allan file as `calflash allan --json` writes it (its `Record`), of one sensor.
     fn allan_file(dir: &Path, name: &str, unit: &str, n: f64, k: f64) -> std::path::PathBuf {
-        use crate::noise::allan::{AxisRecord, NoiseTerms as Terms, Record, SCHEMA};
+        use crate::noise::allan::{AxisRecord, NoiseTerms as Terms, Record, SCHEMA, SensorRecord};
         let terms = Terms {
             quantization: 0.0,
             random_walk: n,
@@ -189,14 +219,17 @@ mod tests {
         let record = Record {
             schema: SCHEMA,
             source: "r.csv",
-            unit,
-            axes: ["x", "y", "z"]
-                .map(|axis| AxisRecord {
-                    axis,
-                    curve: &[],
-                    terms: &terms,
-                })
-                .to_vec(),
+            sensors: vec![SensorRecord {
+                sensor: if unit == "m/s^2" { "accel" } else { "gyro" },
+                unit,
+                axes: ["x", "y", "z"]
+                    .map(|axis| AxisRecord {
+                        axis,
+                        curve: &[],
+                        terms: &terms,
+                    })
+                    .to_vec(),
+            }],
         };
         let p = dir.join(name);
         std::fs::write(&p, serde_json::to_string(&record).unwrap()).unwrap();
@@ -217,10 +250,32 @@ mod tests {
         let t = from_allan(&a, &g, &ALLOW).unwrap();
         assert_eq!(t.white, [1.5e-3, 1.5e-3, 1.5e-3, 2e-4, 2e-4, 2e-4]);
         assert_eq!(t.bias_walk[5], 5e-7);
-        // Swapped files: the unit is named.
+        // Swapped files: the sensor is named.
         let e = from_allan(&g, &a, &ALLOW).unwrap_err().to_string();
-        assert!(e.contains("a.json") || e.contains("g.json"), "{e}");
-        assert!(e.contains("\"unit\""), "{e}");
+        assert!(
+            e.contains("g.json: field \"sensors\": no accel (it has gyro)"),
+            "{e}"
+        );
+        // One file of both sensors serves for both.
+        let both = dir.path().join("both.json");
+        let mut v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&a).unwrap()).unwrap();
+        let gv: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&g).unwrap()).unwrap();
+        v["sensors"]
+            .as_array_mut()
+            .unwrap()
+            .push(gv["sensors"][0].clone());
+        std::fs::write(&both, v.to_string()).unwrap();
+        assert_eq!(from_allan(&both, &both, &ALLOW).unwrap(), t);
+        // A one-sensor file of before (calflash.allan/1) is still read, its unit checked.
+        let old = dir.path().join("old.json");
+        let mut one = gv["sensors"][0].clone();
+        one["schema"] = "calflash.allan/1".into();
+        std::fs::write(&old, one.to_string()).unwrap();
+        assert_eq!(from_allan(&a, &old, &ALLOW).unwrap(), t);
+        let e = from_allan(&old, &g, &ALLOW).unwrap_err().to_string();
+        assert!(e.contains("old.json") && e.contains("\"unit\""), "{e}");
         // Counts: the unit says so.
         let c = allan_file(dir.path(), "c.json", "counts", 1.0, 0.0);
         let e = from_allan(&c, &g, &ALLOW).unwrap_err().to_string();

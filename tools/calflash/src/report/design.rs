@@ -293,10 +293,14 @@ pub fn evaluate_html(
                 .iter()
                 .flat_map(|pl| (0..pl.points.rows.len()).map(|r| pl.points.value(r, &var)))
                 .fold(f64::NEG_INFINITY, f64::max);
+            let point_names: Vec<String> = plans
+                .iter()
+                .map(|pl| format!("{}: its points", pl.name))
+                .collect();
             let mut series = Vec::new();
             for (k, pl) in plans.iter().enumerate() {
                 series.push(Series::curve(&pl.name, &series_pts[k], k));
-                series.push(Series::dots("its points", &marks[k], k));
+                series.push(Series::dots(&point_names[k], &marks[k], k));
             }
             let title = format!(
                 "Prediction variance / sigma^2 over {var}{}",
@@ -323,7 +327,7 @@ pub fn evaluate_html(
         }
     }
     h.push_str("</body>\n</html>\n");
-    Ok(h)
+    Ok(super::page::with_contents(&h))
 }
 
 /// What a search did, for the summary.

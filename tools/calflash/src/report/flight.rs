@@ -304,5 +304,5 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, sup
         )?;
     }
     h.push_str("<p>Each sensor error is the smoothed estimate of its shift from the calibration, with its 1-sigma; the innovations are GNSS and barometer readings against the filter's prediction, over the spread the filter expected.</p>\n</body>\n</html>\n");
-    Ok(h)
+    Ok(super::page::with_contents(&h))
 }

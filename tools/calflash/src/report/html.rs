@@ -25,6 +25,7 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, Error> {
     for (a, axis) in c.points[c.reference].axes.iter().enumerate() {
         axis_section(&mut h, c, a, axis)?;
     }
+    h.push_str(&super::spin::section(c)?);
     h.push_str(&super::thermal::section(c)?);
     if let Some(m) = &c.mission {
         h.push_str(&super::mission::judged_html(m)?);
@@ -37,7 +38,7 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, Error> {
         num(c.device_error)
     );
     let _ = writeln!(h, "</body>\n</html>");
-    Ok(h)
+    Ok(super::page::with_contents(&h))
 }
 
 /// The unit, its codes, the verdict and its findings, and where the data came from.
@@ -189,15 +190,20 @@ fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) ->
                 .collect()
         })
         .collect();
+    // A legend names the table points; with only one, it says what the marks are.
     let names: Vec<String> = c
         .points
         .iter()
         .map(|p| {
-            crate::sensor::table::describe(&crate::sensor::table::Point {
-                temp: p.temp,
-                volt: p.volt,
-                rows: vec![],
-            })
+            if c.points.len() == 1 {
+                "observations".to_string()
+            } else {
+                crate::sensor::table::describe(&crate::sensor::table::Point {
+                    temp: p.temp,
+                    volt: p.volt,
+                    rows: vec![],
+                })
+            }
         })
         .collect();
     let series = by_point

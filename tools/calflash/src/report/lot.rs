@@ -126,14 +126,29 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
     for (name, c) in charts {
         let _ = write!(
             h,
-            "<h2>{:?} chart of {}</h2><p>Centre {:.6e}, sigma {:.3e} (the baseline's median and median moving range / 0.954, robust to units far out); {} point(s) out of control.</p><div class=\"fig\">",
+            "<h2>{:?} chart of {}</h2><p>Centre {:.6e}, sigma {:.3e} (the baseline's median and median moving range / 0.954, robust to units far out); {} point(s) out of control{}.</p><div class=\"fig\">",
             c.kind,
             esc(name),
             c.centre,
             c.sigma,
-            c.out_of_control.len()
+            c.out_of_control.len(),
+            if c.out_of_control.is_empty() {
+                String::new()
+            } else {
+                let units: Vec<String> = c
+                    .out_of_control
+                    .iter()
+                    .filter_map(|&i| c.serials.get(i))
+                    .map(|s| esc(s))
+                    .collect();
+                format!(": {}", units.join(", "))
+            }
         );
         let plotted = indexed(c.plotted.iter().copied());
+        let statistic = match c.kind {
+            crate::stats::chart::Kind::Individuals => "each unit's value",
+            crate::stats::chart::Kind::Ewma => "EWMA of the units' values",
+        };
         let lo = indexed(c.limits.iter().map(|l| l.0));
         let hi = indexed(c.limits.iter().map(|l| l.1));
         let out: Vec<(f64, f64)> = c.out_of_control.iter().map(|&i| plotted[i]).collect();
@@ -142,7 +157,8 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
             "unit (calibration order)",
             name,
             vec![
-                Series::curve("plotted", &plotted, 0),
+                Series::curve(statistic, &plotted, 0),
+                Series::dots("", &plotted, 0),
                 Series::curve("lower limit", &lo, 1),
                 Series::curve("upper limit", &hi, 1),
                 Series::dots("out of control", &out, 3),
@@ -151,5 +167,5 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
         h.push_str("</div>");
     }
     h.push_str("</body></html>\n");
-    Ok(h)
+    Ok(super::page::with_contents(&h))
 }

@@ -305,55 +305,48 @@ pub fn judged_html(m: &crate::mission::judge::Judged) -> Result<String, crate::r
         "<h2>Over the mission</h2>\n<p>The flight {}: each output's predicted 1-sigma error from the fit's covariance at every moment of the flight; where the flight goes beyond the calibrated range (shaded) the calibration extrapolates.</p>",
         esc(&m.profile)
     );
-    let series: Vec<(String, Vec<(f64, f64)>)> = m
-        .outputs
-        .iter()
-        .map(|x| {
-            (
-                x.output.clone(),
-                x.timeline
-                    .iter()
-                    .filter(|p| p.2)
-                    .map(|p| (p.0, p.1))
-                    .collect(),
-            )
-        })
-        .collect();
-    let mut bands = Vec::new();
-    if let Some(first) = m.outputs.first() {
-        let mut start: Option<f64> = None;
-        for w in first.timeline.windows(2) {
-            match (start, w[0].2) {
-                (None, false) => start = Some(w[0].0),
-                (Some(s), true) => {
-                    bands.push((s, w[0].0));
-                    start = None;
-                }
-                _ => {}
-            }
-        }
-        if let (Some(s), Some(last)) = (start, first.timeline.last()) {
-            bands.push((s, last.0));
+    // One figure per unit (an IMU's accelerometers and gyros apart), each shaded where its
+    // first output goes beyond the calibrated range.
+    let mut families: Vec<&str> = Vec::new();
+    for x in &m.outputs {
+        if !families.contains(&x.unit) {
+            families.push(x.unit);
         }
     }
-    let unit = m.outputs.first().map_or("", |x| x.unit);
-    let y = format!("predicted 1-sigma error, {unit}");
-    figure(
-        &mut h,
-        &Figure {
-            title: "Predicted error along the flight",
-            x: "time, s",
-            y: &y,
-            series: series
-                .iter()
-                .enumerate()
-                .map(|(k, (name, pts))| Series::curve(name, pts, k))
-                .collect(),
-            bands,
-            band_label: "beyond the calibrated range",
-            zero_line: false,
-        },
-    )?;
+    for unit in families {
+        let outputs: Vec<&crate::mission::judge::Output> =
+            m.outputs.iter().filter(|x| x.unit == unit).collect();
+        let series: Vec<(String, Vec<(f64, f64)>)> = outputs
+            .iter()
+            .map(|x| {
+                (
+                    x.output.clone(),
+                    x.timeline
+                        .iter()
+                        .filter(|p| p.2)
+                        .map(|p| (p.0, p.1))
+                        .collect(),
+                )
+            })
+            .collect();
+        let y = format!("predicted 1-sigma error, {unit}");
+        figure(
+            &mut h,
+            &Figure {
+                title: "Predicted error along the flight",
+                x: "time, s",
+                y: &y,
+                series: series
+                    .iter()
+                    .enumerate()
+                    .map(|(k, (name, pts))| Series::curve(name, pts, k))
+                    .collect(),
+                bands: outputs.first().map_or_else(Vec::new, |x| beyond(x)),
+                band_label: "beyond the calibrated range",
+                zero_line: false,
+            },
+        )?;
+    }
     h.push_str("<table>\n<tr><th>output</th><th>rms</th><th>worst</th><th>within range</th><th>requirement</th></tr>\n");
     for x in &m.outputs {
         let _ = writeln!(
@@ -384,4 +377,24 @@ pub fn judged_html(m: &crate::mission::judge::Judged) -> Result<String, crate::r
         h.push_str("</table>\n");
     }
     Ok(h)
+}
+
+/// The stretches of the flight where `x` is beyond its calibrated range: (start, end) times.
+fn beyond(x: &crate::mission::judge::Output) -> Vec<(f64, f64)> {
+    let mut bands = Vec::new();
+    let mut start: Option<f64> = None;
+    for w in x.timeline.windows(2) {
+        match (start, w[0].2) {
+            (None, false) => start = Some(w[0].0),
+            (Some(s), true) => {
+                bands.push((s, w[0].0));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if let (Some(s), Some(last)) = (start, x.timeline.last()) {
+        bands.push((s, last.0));
+    }
+    bands
 }

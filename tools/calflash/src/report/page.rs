@@ -15,4 +15,55 @@ h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #cc
 .accept{background:#d9f2d9}.review{background:#fff3cd}.reject{background:#f8d7da}\
 table{border-collapse:collapse;margin:.5em 0}td,th{padding:2px 10px;text-align:right;border-bottom:1px solid #eee}\
 th{background:#f4f4f4}td:first-child,th:first-child{text-align:left}.fig{margin:1em 0}\
-pre{white-space:pre-wrap;overflow-wrap:anywhere}";
+.fig svg{display:block;max-width:100%;height:auto}\
+pre{white-space:pre-wrap;overflow-wrap:anywhere}\
+.contents{background:#f7f7f7;padding:.5em 1em;border-radius:6px}.contents ol{columns:2;margin:.3em 0}";
+
+/// `html` with a contents list before its first section when it has at least four: each
+/// `<h2>` gets an anchor before it and a line in the list, so a long report (a ramp's is many screens)
+/// can be read in any order.
+pub(crate) fn with_contents(html: &str) -> String {
+    let count = html.matches("<h2>").count();
+    if count < 4 {
+        return html.to_string();
+    }
+    let mut body = String::with_capacity(html.len() + 64 * count);
+    let mut list = String::from("<nav class=\"contents\"><b>Contents</b><ol>");
+    let mut rest = html;
+    let mut k = 0;
+    while let Some(at) = rest.find("<h2>") {
+        let (before, from) = rest.split_at(at);
+        body.push_str(before);
+        let from = &from["<h2>".len()..];
+        let end = from.find("</h2>").unwrap_or(from.len());
+        k += 1;
+        body.push_str(&format!("<a id=\"s{k}\"></a><h2>"));
+        list.push_str(&format!("<li><a href=\"#s{k}\">{}</a></li>", &from[..end]));
+        rest = from;
+    }
+    body.push_str(rest);
+    list.push_str("</ol></nav>\n");
+    let first = body.find("<a id=\"s1\">").unwrap_or(0);
+    body.insert_str(first, &list);
+    body
+}
+
+#[cfg(test)]
+mod tests {
+    use super::with_contents;
+
+    #[test]
+    fn a_long_report_gets_a_contents_list_and_a_short_one_none() {
+        let short = "<h1>u</h1><h2>a</h2><h2>b</h2><h2>c</h2>";
+        assert_eq!(with_contents(short), short);
+        let long = "<h1>u</h1><p>v</p><h2>a</h2>x<h2>b &amp; c</h2>y<h2>d</h2><h2>e</h2>z";
+        assert_eq!(
+            with_contents(long),
+            "<h1>u</h1><p>v</p><nav class=\"contents\"><b>Contents</b><ol>\
+             <li><a href=\"#s1\">a</a></li><li><a href=\"#s2\">b &amp; c</a></li>\
+             <li><a href=\"#s3\">d</a></li><li><a href=\"#s4\">e</a></li></ol></nav>\n\
+             <a id=\"s1\"></a><h2>a</h2>x<a id=\"s2\"></a><h2>b &amp; c</h2>y\
+             <a id=\"s3\"></a><h2>d</h2><a id=\"s4\"></a><h2>e</h2>z"
+        );
+    }
+}

@@ -2,6 +2,10 @@
 //! browser, so no font files are needed).
 
 use super::Error;
+use super::axis::Ticks;
+use plotters::coord::combinators::LogCoord;
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 /// A named set of points and how to draw it.
@@ -98,12 +102,33 @@ fn bounds(fig: &Figure<'_>) -> ((f64, f64), (f64, f64)) {
     (pad(x), pad(y))
 }
 
-/// The plotting area of a 720 x 360 figure, in pixels (less the caption, margins and the axes'
-/// label areas).
-const PLOT_PX: (f64, f64) = (616.0, 266.0);
+/// A figure's size in pixels: the report's column (1000 px), scaled down with the window.
+const SIZE: (u32, u32) = (1000, 440);
 
-/// The plotting area of the 720 x 420 log-log figure.
-const LOGLOG_PX: (f64, f64) = (616.0, 326.0);
+/// The log-log figure's size.
+const LOGLOG_SIZE: (u32, u32) = (1000, 540);
+
+/// The plotting area of a figure, in pixels (less the caption, margins and the axes' label
+/// areas).
+const PLOT_PX: (f64, f64) = (SIZE.0 as f64 - 110.0, SIZE.1 as f64 - 100.0);
+
+/// The plotting area of the log-log figure.
+const LOGLOG_PX: (f64, f64) = (LOGLOG_SIZE.0 as f64 - 110.0, LOGLOG_SIZE.1 as f64 - 100.0);
+
+/// Text sizes in pixels: the title, the axes' names, the tick labels and the legend.
+const TITLE_PX: u32 = 20;
+const NAME_PX: u32 = 15;
+const TICK_PX: u32 = 13;
+const LEGEND_PX: u32 = 14;
+
+/// The title's font size: the standard size, or smaller so that a long title fits the figure's
+/// width (sans-serif glyphs average about 0.55 of the size).
+fn title_px(title: &str, width: u32) -> u32 {
+    let room = f64::from(width) - 40.0;
+    let chars = title.chars().count().max(1) as f64;
+    let fits = (room / (0.58 * chars)).floor() as u32;
+    fits.clamp(11, TITLE_PX)
+}
 
 /// How a figure's axes map values to distance: the legend's place is chosen in that space.
 #[derive(Debug, Clone, Copy)]
@@ -130,7 +155,7 @@ impl Axes {
     }
 }
 
-/// The legend's size in pixels: plotters' entries are about 18 px high, their text about 6.5
+/// The legend's size in pixels: plotters' entries are about 22 px high, their text about 7.8
 /// px a character beside a 12 px mark.
 fn legend_px(fig: &Figure<'_>) -> Option<(f64, f64)> {
     let mut names: Vec<&str> = fig
@@ -144,8 +169,8 @@ fn legend_px(fig: &Figure<'_>) -> Option<(f64, f64)> {
     }
     let longest = names.iter().map(|n| n.chars().count()).max()?;
     Some((
-        40.0 + 6.5 * longest as f64,
-        12.0 + 18.0 * names.len() as f64,
+        40.0 + 7.8 * longest as f64,
+        12.0 + 22.0 * names.len() as f64,
     ))
 }
 
@@ -199,6 +224,49 @@ fn legend_spot(
     )
 }
 
+/// An axis' coordinate with the ticks of [`Ticks`] (plotters' own choice of ticks formats each
+/// label on its own).
+struct Ticked<R> {
+    inner: R,
+    bold: Vec<f64>,
+    light: Vec<f64>,
+}
+
+impl<R: Ranged<ValueType = f64>> Ticked<R> {
+    fn new(inner: R, ticks: &Ticks) -> Self {
+        Self {
+            inner,
+            bold: ticks.bold.clone(),
+            light: ticks.light.clone(),
+        }
+    }
+}
+
+impl<R: Ranged<ValueType = f64>> Ranged for Ticked<R> {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            self.light.clone()
+        } else {
+            self.bold.clone()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.inner.range()
+    }
+
+    fn axis_pixel_range(&self, limit: (i32, i32)) -> std::ops::Range<i32> {
+        self.inner.axis_pixel_range(limit)
+    }
+}
+
 /// Appends `fig` to an HTML page `h`, as an inline SVG in a `fig` block.
 ///
 /// # Errors
@@ -217,7 +285,7 @@ pub fn figure(h: &mut String, fig: &Figure<'_>) -> Result<(), Error> {
 pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
     let mut out = String::new();
     {
-        let root = SVGBackend::with_string(&mut out, (720, 360)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, SIZE).into_drawing_area();
         root.fill(&WHITE)?;
         let ((x0, x1), (y0, y1)) = bounds(fig);
         let (spot, y1) = legend_spot(fig, (x0, x1), (y0, y1), (Axes::Linear, PLOT_PX));
@@ -239,18 +307,24 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
             } else {
                 fig.x.to_string()
             };
+        let (xt, yt) = (Ticks::linear(x0, x1, 10), Ticks::linear(y0, y1, 8));
         let mut chart = ChartBuilder::on(&root)
-            .caption(fig.title, ("sans-serif", 18))
+            .caption(fig.title, ("sans-serif", title_px(fig.title, SIZE.0)))
             .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(80)
-            .build_cartesian_2d(x0..x1, y0..y1)?;
+            .x_label_area_size(48)
+            .y_label_area_size(86)
+            .build_cartesian_2d(
+                Ticked::new(RangedCoordf64::from(x0..x1), &xt),
+                Ticked::new(RangedCoordf64::from(y0..y1), &yt),
+            )?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(fig.y)
-            .x_label_formatter(&|v| super::terminal::num(*v))
-            .y_label_formatter(&|v| super::terminal::num(*v))
+            .x_label_formatter(&|v| xt.label(*v))
+            .y_label_formatter(&|v| yt.label(*v))
+            .label_style(("sans-serif", TICK_PX))
+            .axis_desc_style(("sans-serif", NAME_PX))
             .light_line_style(RGBColor(235, 235, 235))
             .draw()?;
         if !fig.bands.is_empty() {
@@ -327,6 +401,7 @@ where
     chart
         .configure_series_labels()
         .position(position)
+        .label_font(("sans-serif", LEGEND_PX))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.3))
         .draw()?;
@@ -341,12 +416,18 @@ where
 pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, Error> {
     let mut out = String::new();
     {
-        let root = SVGBackend::with_string(&mut out, (720, 420)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, LOGLOG_SIZE).into_drawing_area();
         root.fill(&WHITE)?;
+        // The points and the ends of their error bars.
         let pos: Vec<(f64, f64)> = fig
             .series
             .iter()
-            .flat_map(|s| s.points.iter().copied())
+            .flat_map(|s| {
+                s.points.iter().enumerate().flat_map(move |(i, (x, y))| {
+                    let e = s.errors.and_then(|e| e.get(i)).copied().unwrap_or(0.0);
+                    [(*x, *y), (*x, y - e), (*x, y + e)]
+                })
+            })
             .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
             .collect();
         let fold = |f: fn(&(f64, f64)) -> f64| {
@@ -362,18 +443,27 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, Error> {
         }
         let (x0, x1, y0) = (x0 / 1.5, x1 * 1.5, y0 / 1.5);
         let (spot, y1) = legend_spot(fig, (x0, x1), (y0, y1 * 1.5), (Axes::Log, LOGLOG_PX));
+        let (xt, yt) = (Ticks::log(x0, x1), Ticks::log(y0, y1));
         let mut chart = ChartBuilder::on(&root)
-            .caption(fig.title, ("sans-serif", 18))
+            .caption(
+                fig.title,
+                ("sans-serif", title_px(fig.title, LOGLOG_SIZE.0)),
+            )
             .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+            .x_label_area_size(48)
+            .y_label_area_size(86)
+            .build_cartesian_2d(
+                Ticked::new(LogCoord::from((x0..x1).log_scale()), &xt),
+                Ticked::new(LogCoord::from((y0..y1).log_scale()), &yt),
+            )?;
         chart
             .configure_mesh()
             .x_desc(fig.x)
             .y_desc(fig.y)
-            .x_label_formatter(&|v| super::terminal::num(*v))
-            .y_label_formatter(&|v| super::terminal::num(*v))
+            .x_label_formatter(&|v| xt.label(*v))
+            .y_label_formatter(&|v| yt.label(*v))
+            .label_style(("sans-serif", TICK_PX))
+            .axis_desc_style(("sans-serif", NAME_PX))
             .light_line_style(RGBColor(235, 235, 235))
             .draw()?;
         for s in &fig.series {
@@ -383,6 +473,18 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, Error> {
                 .copied()
                 .filter(|(x, y)| *x > 0.0 && *y > 0.0)
                 .collect();
+            if let Some(errors) = s.errors {
+                let color = s.color;
+                chart.draw_series(
+                    s.points
+                        .iter()
+                        .zip(errors)
+                        .filter(|((x, y), e)| *x > 0.0 && y - *e > 0.0)
+                        .map(|((x, y), e)| {
+                            ErrorBar::new_vertical(*x, y - e, *y, y + e, color.filled(), 6)
+                        }),
+                )?;
+            }
             line_or_marks(&mut chart, s, &pts, 3)?;
         }
         legend(&mut chart, spot)?;
@@ -442,9 +544,9 @@ mod tests {
 
     #[test]
     fn on_log_axes_the_legend_is_placed_by_decades() {
-        // In decades, (500, 500) is in the upper right and (1.5, 500) in the upper left; on
+        // In decades, (700, 700) is in the upper right and (1.5, 700) in the upper left; on
         // linear axes both are far from those corners.
-        let pts = [(500.0, 500.0), (1.5, 500.0), (1.5, 1.5)];
+        let pts = [(700.0, 700.0), (1.5, 700.0), (1.5, 1.5)];
         let range = ((1.0, 1000.0), (1.0, 1000.0));
         let (spot, top) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Log, LOGLOG_PX));
         assert!(matches!(spot, SeriesLabelPosition::LowerRight));

@@ -369,7 +369,11 @@ pub fn html(
         title: "Threshold search: accelerometer RMS at each threshold",
         x: "threshold [x initial rest level]",
         y: "RMS |a| - g [mm/s^2]",
-        series: vec![Series::curve("linear fit", &trials, 0)],
+        series: vec![Series::curve(
+            "RMS of |a| - g over the poses found",
+            &trials,
+            0,
+        )],
         bands: Vec::new(),
         band_label: "",
         zero_line: false,
@@ -426,5 +430,5 @@ pub fn html(
         "<h2>Convention</h2>\n<p>{}</p>\n</body>\n</html>",
         esc(CONVENTION)
     );
-    Ok(h)
+    Ok(super::page::with_contents(&h))
 }

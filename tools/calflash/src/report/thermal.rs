@@ -230,7 +230,10 @@ fn triad_figures(c: &Calibrated) -> Result<String, Error> {
     };
     let wide = grid(first, 0.15);
     let top = |k: usize| c.ranges.get(k).map_or(0.0, |r| f64::from(r.hi));
-    let sigma: Vec<(String, Vec<(f64, f64)>)> = c
+    let unit = |k: usize| c.units.get(k).copied().unwrap_or("output units");
+    // (output index, name, 1-sigma over temperature)
+    type Curve = (usize, String, Vec<(f64, f64)>);
+    let sigma: Vec<Curve> = c
         .thermal
         .iter()
         .enumerate()
@@ -239,29 +242,37 @@ fn triad_figures(c: &Calibrated) -> Result<String, Error> {
                 .iter()
                 .map(|t| linear_at(tf, *t).map(|(_, s)| (*t, s(top(k)))))
                 .collect::<Option<Vec<_>>>()?;
-            Some((
-                format!("{} ({})", tf.fit.output, c.units.get(k).unwrap_or(&"")),
-                points,
-            ))
+            Some((k, tf.fit.output.clone(), points))
         })
         .collect();
     if sigma.len() == c.thermal.len() {
-        figure(
-            &mut h,
-            &Figure {
-                title: "1-sigma calibration error of each corrected output along its own axis, at the top of its range",
-                x: "temperature (C)",
-                y: "1-sigma (output units)",
-                series: sigma
-                    .iter()
-                    .enumerate()
-                    .map(|(k, (name, p))| Series::curve(name, p, k))
-                    .collect(),
-                bands: vec![(first.scale.lo, first.scale.hi)],
-                band_label: "calibrated range",
-                zero_line: true,
-            },
-        )?;
+        // One figure per unit: an IMU's accelerometers and gyros apart.
+        let mut families: Vec<&str> = Vec::new();
+        for (k, _, _) in &sigma {
+            if !families.contains(&unit(*k)) {
+                families.push(unit(*k));
+            }
+        }
+        for family in families {
+            let y = format!("1-sigma ({family})");
+            figure(
+                &mut h,
+                &Figure {
+                    title: "1-sigma calibration error of each corrected output along its own axis, at the top of its range",
+                    x: "temperature (C)",
+                    y: &y,
+                    series: sigma
+                        .iter()
+                        .filter(|(k, _, _)| unit(*k) == family)
+                        .enumerate()
+                        .map(|(j, (_, name, p))| Series::curve(name, p, j))
+                        .collect(),
+                    bands: vec![(first.scale.lo, first.scale.hi)],
+                    band_label: "calibrated range",
+                    zero_line: true,
+                },
+            )?;
+        }
     }
     let cal = spincal::blob::decode(&c.blob)?;
     let env = &cal.data().environment;
