@@ -41,7 +41,7 @@ fn lot(location: &Location) -> usize {
         prefix: "LOT-",
         ..Selection::all()
     };
-    let lot = calflash::cmd::lot::load(location, &sel, 0.001).unwrap();
+    let lot = calflash::lot::history::load(location, &sel, 0.001).unwrap();
     assert_eq!(lot.units.len(), UNITS);
     let charts = vec![
         (

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use crate::db::{Db, Location, Selection};
-use crate::lot::{self, Judge, Unit};
+use crate::db::Selection;
+use crate::lot::{self, Judge};
 use crate::stats::chart;
 
 /// Judge a lot: every unit's newest coefficients from the history, their spread, each unit's
@@ -61,72 +61,6 @@ pub enum ChartKind {
     Ewma,
 }
 
-/// The units `sel` takes from the history at `path`, without those `excluded` (the units
-/// being calibrated are compared with the others), judged at `alpha`.
-///
-/// # Errors
-/// As [`load`].
-pub fn load_without(
-    path: &Location,
-    sel: &Selection<'_>,
-    excluded: impl Fn(&str) -> bool,
-    alpha: f64,
-) -> Result<lot::Lot, String> {
-    let mut units = units(path, sel)?;
-    units.retain(|u| !excluded(&u.serial));
-    judge(path, sel, units, alpha)
-}
-
-fn judge(
-    path: &Location,
-    sel: &Selection<'_>,
-    units: Vec<Unit>,
-    alpha: f64,
-) -> Result<lot::Lot, String> {
-    lot::judge(units, alpha).map_err(|e| format!("{sel} in {path}: {e}"))
-}
-
-/// Every unit `sel` takes, with its newest fit.
-fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, String> {
-    let rows = Db::open_existing(path)
-        .and_then(|mut d| d.latest_fits(sel))
-        .map_err(|e| e.to_string())?;
-    rows.into_iter()
-        .map(|row| {
-            lot::coefficients(&row.coefficients)
-                .map(|coefficients| Unit {
-                    serial: row.serial.clone(),
-                    time: row.time,
-                    station: row.station,
-                    coefficients,
-                })
-                .map_err(|e| format!("{path}: the fit of {}: {e}", row.serial))
-        })
-        .collect()
-}
-
-/// The units `sel` takes from the history at `path`, judged at `alpha`.
-///
-/// # Errors
-/// An unreadable history, too few units, or no shared coefficients.
-pub fn load(path: &Location, sel: &Selection<'_>, alpha: f64) -> Result<lot::Lot, Failure> {
-    let units = units(path, sel)?;
-    if units.is_empty()
-        && let Some(name) = sel.lot
-    {
-        return Err(format!(
-            "no such lot: no unit in {path} was calibrated in lot `{name}`{} (`calflash calibrate --lot {name}` records one; `calflash history` lists the units)",
-            if sel.prefix.is_empty() && sel.station.is_none() {
-                String::new()
-            } else {
-                format!(" within {sel}")
-            }
-        )
-        .into());
-    }
-    Ok(judge(path, sel, units, alpha)?)
-}
-
 /// Runs `calflash lot`.
 ///
 /// # Errors
@@ -153,7 +87,7 @@ pub fn run(args: &LotArgs) -> Result<(), Failure> {
         until: args.until.map_or(i64::MAX, |u| u + 86_399),
         station: args.station.as_deref(),
     };
-    let lot = load(&path, &sel, args.alpha)?;
+    let lot = lot::history::load(&path, &sel, args.alpha)?;
     let kind = match args.chart_kind {
         ChartKind::Individuals => chart::Kind::Individuals,
         ChartKind::Ewma => chart::Kind::Ewma,

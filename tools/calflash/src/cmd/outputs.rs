@@ -106,7 +106,7 @@ impl Outputs {
                 read = crate::db::Location::or_default(self.db.as_ref())
                     .map_err(|e| e.to_string())
                     .and_then(|path| {
-                        crate::cmd::lot::load_without(&path, &sel, |s| s == serial, alpha)
+                        crate::lot::history::load_without(&path, &sel, |s| s == serial, alpha)
                     });
                 read.as_ref()
             }

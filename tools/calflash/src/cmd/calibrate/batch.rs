@@ -161,7 +161,7 @@ pub fn calibrate_all(
             crate::db::Location::or_default(args.out.db.as_ref())
                 .map_err(|e| e.to_string())
                 .and_then(|path| {
-                    crate::cmd::lot::load_without(&path, &sel, |s| serials.contains(s), 0.001)
+                    crate::lot::history::load_without(&path, &sel, |s| serials.contains(s), 0.001)
                 }),
         )
     });

@@ -3,6 +3,8 @@
 //! units outside the stated limit and the coefficients that put them there, and control charts
 //! of chosen coefficients in the order the units were calibrated.
 
+pub mod history;
+
 use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, DVector};
