@@ -5,7 +5,8 @@
 use std::ops::Range;
 
 use super::super::{gravity, statics};
-use super::{MIN_POSES, Options, SelfCalError, Trial, directions};
+use super::gyro::directions;
+use super::{MIN_POSES, Options, SelfCalError, Trial};
 use crate::obs::recording::Recording;
 
 /// Finds the still poses of a recording: what [`statics::poses`] needs besides the measure.

@@ -5,16 +5,20 @@
 
 use std::ops::Range;
 
-use nalgebra::Matrix3;
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 
 use super::gravity::{self, AccelFit};
 use super::lm::LmError;
-use super::rotation::{self, GyroFit};
+use super::rotation::GyroFit;
 use super::statics;
 use crate::obs::recording::Recording;
 
 mod few_poses;
+mod gyro;
+mod rest;
+
+use gyro::{directions, gyro_fit};
+use rest::Rest;
 mod segments;
 
 /// Whether to fit the accelerometer's quadratic terms.
@@ -434,111 +438,6 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
     })
 }
 
-/// The initial rest, checked: long enough and still.
-struct Rest {
-    /// The first sample after it.
-    end: usize,
-    /// The accelerometer's quantisation variance, which floors every variance.
-    floor: [f64; 3],
-    /// Its level of motion (the accelerometer's measure at rest).
-    level: f64,
-    /// Two still runs whose means agree within this (8 sigma of the rest's noise, per axis),
-    /// a window apart at most, are one hold.
-    tol: [f64; 3],
-    /// One-sample glitches inside it, left out of its level (sample indices).
-    glitches: Vec<usize>,
-}
-
-impl Rest {
-    /// The rest of `opts.init_rest` seconds at the start of `rec`.
-    ///
-    /// # Errors
-    /// A recording shorter than the rest, or a rest with a second far noisier than its
-    /// quietest (the unit was moved).
-    fn checked(rec: &Recording, opts: &Options) -> Result<Self, SelfCalError> {
-        let source = rec.source.as_str();
-        let t0 = rec.t[0];
-        let end = rec.t.partition_point(|t| *t < t0 + opts.init_rest);
-        if end >= rec.len() {
-            return Err(SelfCalError::TooShort {
-                file: source.into(),
-                len: rec.t[rec.len() - 1] - t0,
-                rest: opts.init_rest,
-            });
-        }
-        // The quantisation's variance floors every variance: identical codes are not silence.
-        let floor = statics::floor(statics::quantum(&rec.acc));
-        // One-sample glitches (a converter's or a link's misread): samples far outside the
-        // rest's robust spread, too few and too short to be motion. They are left out of the
-        // rest and named; real motion moves many samples, and is refused below.
-        let glitches = glitches(&rec.acc[..end], floor);
-        let kept: Vec<[f64; 3]> = (0..end)
-            .filter(|i| glitches.binary_search(i).is_err())
-            .map(|i| rec.acc[i])
-            .collect();
-        // The rest must be still: no second of it far noisier than its quietest.
-        let second = ((rec.rate()).round() as usize).max(1);
-        let blocks: Vec<(usize, f64)> = (0..end / second)
-            .map(|b| {
-                let block: Vec<[f64; 3]> = (b * second..(b + 1) * second)
-                    .filter(|i| glitches.binary_search(i).is_err())
-                    .map(|i| rec.acc[i])
-                    .collect();
-                (b * second, statics::rest_level(&block, floor))
-            })
-            .collect();
-        let quietest = blocks
-            .iter()
-            .map(|b| b.1)
-            .fold(f64::INFINITY, f64::min)
-            .max(1e-12);
-        if let Some(&(at, level)) = blocks.iter().find(|b| b.1 > 25.0 * quietest) {
-            return Err(SelfCalError::RestNotStill {
-                file: source.into(),
-                at: rec.t[at] - t0,
-                rest: opts.init_rest,
-                ratio: level / quietest,
-            });
-        }
-        Ok(Self {
-            end,
-            floor,
-            level: statics::rest_level(&kept, floor),
-            tol: statics::variances(&kept, floor).map(|v| 8.0 * v.sqrt()),
-            glitches,
-        })
-    }
-}
-
-/// The samples of a rest `acc` (in order) that are glitches: on some axis more than 30
-/// robust standard deviations (the scaled MAD, floored by a quantisation step) from the rest's median,
-/// in runs of at most 3 samples, and at most one in 1,000 of the rest (at least 3). Anything
-/// more is motion, and none are returned.
-fn glitches(acc: &[[f64; 3]], floor: [f64; 3]) -> Vec<usize> {
-    let n = acc.len();
-    let mut far = vec![false; n];
-    for j in 0..3 {
-        let x: Vec<f64> = acc.iter().map(|a| a[j]).collect();
-        let (median, mad) = crate::stats::robust::median_mad(&x);
-        let sigma = mad.max((12.0 * floor[j]).sqrt());
-        for (f, a) in far.iter_mut().zip(acc) {
-            *f |= (a[j] - median).abs() > 30.0 * sigma;
-        }
-    }
-    let found: Vec<usize> = (0..n).filter(|&i| far[i]).collect();
-    let longest_run = found
-        .chunk_by(|a, b| b - a == 1)
-        .map(<[usize]>::len)
-        .max()
-        .unwrap_or(0);
-    let allowed = (n / 1000).max(3);
-    if found.len() <= allowed && longest_run <= 3 {
-        found
-    } else {
-        Vec::new()
-    }
-}
-
 /// The chosen threshold's index among the trials, and the poses it found.
 type Chosen = (usize, Vec<Range<usize>>);
 
@@ -601,111 +500,4 @@ fn spread_and_rms(means: &[[f64; 3]], bias: [f64; 3]) -> ([f64; 3], [f64; 3]) {
         (means.iter().map(|m| (m[j] - bias[j]).powi(2)).sum::<f64>() / means.len() as f64).sqrt()
     });
     (spread, rms)
-}
-
-/// The gyro's fit to the rotations between poses (`turns`), its covariance including the
-/// accelerometer's error in the rotations' end directions, and the angle each rotation of the
-/// constant-bias check turned through.
-///
-/// # Errors
-/// Too few usable rotations (each skipped one says why), or a fit that fails.
-fn gyro_fit(
-    source: &str,
-    turns: &segments::Turns,
-    accel: &AccelFit,
-    pose_means: &[[f64; 3]],
-) -> Result<(GyroFit, Vec<f64>), SelfCalError> {
-    let segments::Turns {
-        segments,
-        const_segments,
-        rotations,
-        skipped,
-    } = turns;
-    if segments.len() < MIN_ROTATIONS {
-        let why = if skipped.is_empty() {
-            "none".into()
-        } else {
-            skipped
-                .iter()
-                .map(|s| s.why.clone())
-                .collect::<Vec<_>>()
-                .join("; ")
-        };
-        return Err(SelfCalError::TooFewRotations {
-            file: source.into(),
-            usable: segments.len(),
-            skipped: skipped.len(),
-            why,
-            needed: MIN_ROTATIONS,
-        });
-    }
-    let start = segments::gyro_start(segments);
-    let mut gyro = rotation::fit(segments, start).map_err(fit_err(source, "gyro"))?;
-    // The rotations' ends are the accelerometer's gravity directions: its error is the gyro's.
-    if let Some(cov_a) = &accel.covariance {
-        let center = accel.model.center;
-        let ends = |q: &[f64]| {
-            let model = gravity::AccelModel::from_params(center, q);
-            rotations
-                .iter()
-                .map(|&k| {
-                    (
-                        unit(model.apply(pose_means[k])),
-                        unit(model.apply(pose_means[k + 1])),
-                    )
-                })
-                .collect::<Vec<_>>()
-        };
-        if let Some(c) = rotation::with_direction_error(segments, &gyro, &accel.params, cov_a, ends)
-        {
-            gyro.covariance = Some(c);
-        }
-    }
-    let m = Matrix3::from_fn(|i, j| gyro.matrix[i][j]);
-    let constant_bias_angles = const_segments
-        .iter()
-        .map(|s| rotation::angle(&m, s))
-        .collect();
-    Ok((gyro, constant_bias_angles))
-}
-
-/// How many of the pose means `means` (counts) face directions at least 10 degrees from each
-/// other: the poses a fit can tell apart. The directions are taken about the middle of the
-/// means' range; means that spread less than 100 times the noise (`rest_level`, a variance)
-/// face one direction.
-fn directions(means: &[[f64; 3]], rest_level: f64) -> usize {
-    if means.is_empty() {
-        return 0;
-    }
-    let span = |j: usize| {
-        let (lo, hi) = means
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| {
-                (lo.min(m[j]), hi.max(m[j]))
-            });
-        (lo, hi)
-    };
-    let ranges: [(f64, f64); 3] = std::array::from_fn(span);
-    let widest = ranges.iter().map(|(lo, hi)| hi - lo).fold(0.0f64, f64::max);
-    if widest < 100.0 * rest_level.sqrt().max(1.0) {
-        return 1;
-    }
-    let center: [f64; 3] = std::array::from_fn(|j| (ranges[j].0 + ranges[j].1) / 2.0);
-    let cos_limit = 10f64.to_radians().cos();
-    let mut seen: Vec<[f64; 3]> = Vec::new();
-    for m in means {
-        let d: [f64; 3] = std::array::from_fn(|j| m[j] - center[j]);
-        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        if n == 0.0 {
-            continue;
-        }
-        let u = d.map(|x| x / n);
-        if seen
-            .iter()
-            .all(|s| s[0] * u[0] + s[1] * u[1] + s[2] * u[2] < cos_limit)
-        {
-            seen.push(u);
-        }
-    }
-    seen.len().max(1)
 }

@@ -1,0 +1,115 @@
+//! The gyro from the rotations between poses: its fit with the accelerometer's error in the
+//! rotations' end directions, and how many directions the poses face.
+
+use super::super::gravity::{self, AccelFit};
+use super::super::rotation::{self, GyroFit};
+use nalgebra::Matrix3;
+
+use super::{MIN_ROTATIONS, SelfCalError, fit_err, segments, unit};
+
+/// The gyro's fit to the rotations between poses (`turns`), its covariance including the
+/// accelerometer's error in the rotations' end directions, and the angle each rotation of the
+/// constant-bias check turned through.
+///
+/// # Errors
+/// Too few usable rotations (each skipped one says why), or a fit that fails.
+pub(super) fn gyro_fit(
+    source: &str,
+    turns: &segments::Turns,
+    accel: &AccelFit,
+    pose_means: &[[f64; 3]],
+) -> Result<(GyroFit, Vec<f64>), SelfCalError> {
+    let segments::Turns {
+        segments,
+        const_segments,
+        rotations,
+        skipped,
+    } = turns;
+    if segments.len() < MIN_ROTATIONS {
+        let why = if skipped.is_empty() {
+            "none".into()
+        } else {
+            skipped
+                .iter()
+                .map(|s| s.why.clone())
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        return Err(SelfCalError::TooFewRotations {
+            file: source.into(),
+            usable: segments.len(),
+            skipped: skipped.len(),
+            why,
+            needed: MIN_ROTATIONS,
+        });
+    }
+    let start = segments::gyro_start(segments);
+    let mut gyro = rotation::fit(segments, start).map_err(fit_err(source, "gyro"))?;
+    // The rotations' ends are the accelerometer's gravity directions: its error is the gyro's.
+    if let Some(cov_a) = &accel.covariance {
+        let center = accel.model.center;
+        let ends = |q: &[f64]| {
+            let model = gravity::AccelModel::from_params(center, q);
+            rotations
+                .iter()
+                .map(|&k| {
+                    (
+                        unit(model.apply(pose_means[k])),
+                        unit(model.apply(pose_means[k + 1])),
+                    )
+                })
+                .collect::<Vec<_>>()
+        };
+        if let Some(c) = rotation::with_direction_error(segments, &gyro, &accel.params, cov_a, ends)
+        {
+            gyro.covariance = Some(c);
+        }
+    }
+    let m = Matrix3::from_fn(|i, j| gyro.matrix[i][j]);
+    let constant_bias_angles = const_segments
+        .iter()
+        .map(|s| rotation::angle(&m, s))
+        .collect();
+    Ok((gyro, constant_bias_angles))
+}
+
+/// How many of the pose means `means` (counts) face directions at least 10 degrees from each
+/// other: the poses a fit can tell apart. The directions are taken about the middle of the
+/// means' range; means that spread less than 100 times the noise (`rest_level`, a variance)
+/// face one direction.
+pub(super) fn directions(means: &[[f64; 3]], rest_level: f64) -> usize {
+    if means.is_empty() {
+        return 0;
+    }
+    let span = |j: usize| {
+        let (lo, hi) = means
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| {
+                (lo.min(m[j]), hi.max(m[j]))
+            });
+        (lo, hi)
+    };
+    let ranges: [(f64, f64); 3] = std::array::from_fn(span);
+    let widest = ranges.iter().map(|(lo, hi)| hi - lo).fold(0.0f64, f64::max);
+    if widest < 100.0 * rest_level.sqrt().max(1.0) {
+        return 1;
+    }
+    let center: [f64; 3] = std::array::from_fn(|j| (ranges[j].0 + ranges[j].1) / 2.0);
+    let cos_limit = 10f64.to_radians().cos();
+    let mut seen: Vec<[f64; 3]> = Vec::new();
+    for m in means {
+        let d: [f64; 3] = std::array::from_fn(|j| m[j] - center[j]);
+        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if n == 0.0 {
+            continue;
+        }
+        let u = d.map(|x| x / n);
+        if seen
+            .iter()
+            .all(|s| s[0] * u[0] + s[1] * u[1] + s[2] * u[2] < cos_limit)
+        {
+            seen.push(u);
+        }
+    }
+    seen.len().max(1)
+}
