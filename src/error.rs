@@ -256,9 +256,9 @@ pub enum Error {
     /// The calibration expects samples in another format than the corrector's.
     CorrectorWrongFormat {
         /// The format the calibration states.
-        expected: crate::model::SampleFormat,
+        expected: crate::sample_format::SampleFormat,
         /// The corrector's sample format.
-        found: crate::model::SampleFormat,
+        found: crate::sample_format::SampleFormat,
     },
 }
 
@@ -334,7 +334,7 @@ impl fmt::Display for Error {
             Error::HeaderUnsupportedVersion { found } => write!(
                 f,
                 "blob format version {found} is not supported (this firmware reads version {})",
-                crate::blob::FORMAT_VERSION
+                crate::limits::FORMAT_VERSION
             ),
             Error::LengthTruncated { declared, found } => {
                 write!(
@@ -410,7 +410,7 @@ impl fmt::Display for Error {
             Error::InvalidLeverArm { axis } => write!(
                 f,
                 "the lever arm of accelerometer axis {axis} is longer than {} m",
-                crate::model::MAX_LEVER_ARM_M
+                crate::limits::MAX_LEVER_ARM_M
             ),
             Error::InvalidUnboundedOutput { part, set } => write!(
                 f,
@@ -435,7 +435,7 @@ impl fmt::Display for Error {
             Error::CorrectorBadSampleRate => write!(
                 f,
                 "the sample rate must be finite, positive and at most {} Hz",
-                crate::model::MAX_SAMPLE_RATE_HZ
+                crate::limits::MAX_SAMPLE_RATE_HZ
             ),
             Error::CorrectorBadAngularAcceleration => f.write_str(
                 "the largest angular acceleration must be finite and positive (rad/s^2)",

@@ -93,5 +93,7 @@ pub mod signed;
 pub mod store;
 
 mod error;
+mod limits;
+mod sample_format;
 
 pub use error::{Error, Field, Part};

@@ -37,8 +37,7 @@ use crate::model::{Calibration, CalibrationData};
 
 /// The first four bytes of every blob.
 pub const MAGIC: [u8; 4] = *b"SCAL";
-/// The format version this crate writes and reads.
-pub const FORMAT_VERSION: u8 = 5;
+pub use crate::limits::FORMAT_VERSION;
 /// Bytes in the fixed header.
 pub const HEADER_LEN: usize = 11;
 /// Upper bound on the encoded length of any valid calibration (the largest IMU table with

@@ -63,12 +63,8 @@ pub const MAX_VOLTAGES: usize = 8;
 pub const MAX_SETS: usize = 16;
 /// Longest serial number, in bytes.
 pub const SERIAL_CAPACITY: usize = 16;
-/// Longest lever arm accepted, in metres.
-pub const MAX_LEVER_ARM_M: f32 = 10.0;
-/// Highest sample rate an IMU corrector accepts, Hz: above any IMU's output rate, and the rate
-/// at which validation proves the lever term's feedback bounded (the tangential term grows
-/// with the rate, so that bound holds at every lower rate).
-pub const MAX_SAMPLE_RATE_HZ: f32 = 1.0e5;
+pub use crate::limits::{MAX_LEVER_ARM_M, MAX_SAMPLE_RATE_HZ};
+pub use crate::sample_format::SampleFormat;
 
 /// The physical quantity a sensor measures, and so the unit of its corrected output.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -101,42 +97,6 @@ impl Span {
     #[must_use]
     pub fn contains(&self, x: f32) -> bool {
         self.lo <= x && x <= self.hi
-    }
-}
-
-/// The container the part delivers its codes in, which a corrector's samples must have: the
-/// blob states it and a corrector for another refuses it when it is built
-/// ([`Error::CorrectorWrongFormat`]), never per sample.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum SampleFormat {
-    /// `u16`: unsigned (offset-binary) codes of up to 16 bits.
-    U16,
-    /// `i16`: two's-complement codes of up to 16 bits.
-    I16,
-    /// `i32`: codes of up to 32 bits (signed) or 31 bits (unsigned).
-    I32,
-}
-
-impl SampleFormat {
-    /// The smallest and largest code the container holds.
-    #[must_use]
-    pub const fn limits(self) -> (i32, i32) {
-        match self {
-            SampleFormat::U16 => (0, u16::MAX as i32),
-            SampleFormat::I16 => (i16::MIN as i32, i16::MAX as i32),
-            SampleFormat::I32 => (i32::MIN, i32::MAX),
-        }
-    }
-
-    /// The container's name in Rust: `u16`, `i16` or `i32`.
-    #[must_use]
-    pub const fn name(self) -> &'static str {
-        match self {
-            SampleFormat::U16 => "u16",
-            SampleFormat::I16 => "i16",
-            SampleFormat::I32 => "i32",
-        }
     }
 }
 
