@@ -687,3 +687,27 @@ fn allan_analyses_both_sensors_and_writes_a_report_and_kalibrs_file() {
         "{said}"
     );
 }
+
+/// `calibrate --help` lists the column names of an observation file itself (it once pointed
+/// to the rustdoc of `calflash::columns`).
+#[test]
+fn calibrate_help_lists_the_columns() {
+    let d = tempfile::tempdir().unwrap();
+    let (code, help, _) = calflash(d.path(), &["calibrate", "--help"]);
+    assert_eq!(code, 0);
+    assert!(!help.contains("calflash::columns"), "{help}");
+    for column in [
+        "`input`",
+        "`output`",
+        "`f_x f_y f_z`",
+        "`a_x a_y a_z`",
+        "`w_x w_y w_z`",
+        "`g_x g_y g_z`",
+        "`dw_x dw_y dw_z`",
+        "`h_x h_y h_z`",
+        "`temp`",
+        "`volt`",
+    ] {
+        assert!(help.contains(column), "{column} in {help}");
+    }
+}

@@ -46,9 +46,16 @@ pub enum ThermalArg {
 /// Calibrate a sensor: fit, decide, invert, and write the blob, the report and the record.
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
-    /// The observations (see `calflash::columns` for the column names). Several files, or a
-    /// directory of them, make a batch: one unit per file, whose serial is the file's name
-    /// without extension, calibrated on every core, each unit's files in `--out-dir`.
+    /// The observations: a CSV with a header of these columns. A single axis: `input` (the
+    /// reference input, m/s^2 or rad/s) and `output` (counts), optionally `input_p`, `input_o`
+    /// (cross-axis inputs), `dir` (+1 ascending, -1 descending). A triad or an IMU, in the
+    /// unit's axes: `f_x f_y f_z` (reference specific force, m/s^2) and `a_x a_y a_z`
+    /// (accelerometer counts); `w_x w_y w_z` (reference rate, rad/s) and `g_x g_y g_z` (gyro
+    /// counts); optionally `dw_x dw_y dw_z` (angular acceleration, rad/s^2), `h_x h_y h_z` (the
+    /// fixture's reference mark, for the Earth's rate). Any: `temp` (C), `volt` (V),
+    /// `chamber_temp`, `time` (s). Several files, or a directory of them, make a batch: one
+    /// unit per file, whose serial is the file's name without extension, calibrated on every
+    /// core, each unit's files in `--out-dir`.
     #[arg(required = true, num_args = 1..)]
     pub data: Vec<PathBuf>,
     /// What the observations are of.
