@@ -1,0 +1,314 @@
+//! Is each sensor error the flight filter estimates within its stated uncertainty? Simulated
+//! shells, each with its own calibration (a spin rig simulated and calibrated at its own
+//! seed), against the truth of what the unit's correction got wrong in that flight.
+//!
+//! The truth of a flight: the unit's noise-free codes along the simulated flight (the truth
+//! model's outputs with the launch shift after launch, dithered by a uniform draw before
+//! rounding so that the rounding averages out, held at the converter's rails), corrected by
+//! the device's own correction of the flight's blob, less what the unit truly felt; per axis
+//! the straight line `error = bias + scale * input` fitted to the flight's unflagged samples
+//! after launch. That is the filter's own model of a sensor error, over the same flight.
+//!
+//! The statistic is the normalised estimation error squared (NEES) of each term the flight
+//! observes (the filter learnt more than half of its variance): `((estimate - truth) /
+//! sigma)^2`, whose average over `n` independent flights lies inside the chi-square(n) / n
+//! band at 95 % when the stated 1-sigma is right. The Monte Carlo (50 flights of each kind)
+//! is `cargo test --release -p calflash --test flight_nees -- --ignored --nocapture`
+//! (`BENCHMARKS.md`); CI runs two flights and holds the shifted bias within 4 of its sigmas.
+
+mod common;
+
+use std::path::Path;
+
+use calflash::sim::flight::receivers::LaunchShift;
+use calflash::sim::truth::ImuTruth;
+use common::calflash;
+use rand::{RngExt, SeedableRng};
+use spincal::correct::AnyImuCorrector;
+
+const TRUTH: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../examples/data/spinning_round.truth.json"
+);
+
+fn ok(dir: &Path, args: &[&str]) {
+    let (code, out, err) = calflash(dir, args);
+    assert!(code == 0 || code == 3, "{args:?}: {out}{err}");
+}
+
+/// One term as the flight reported it, with its truth.
+#[derive(Debug, Clone)]
+struct Term {
+    name: String,
+    estimate: f64,
+    sigma: f64,
+    learnt: f64,
+    truth: f64,
+}
+
+impl Term {
+    fn nees(&self) -> f64 {
+        ((self.estimate - self.truth) / self.sigma).powi(2)
+    }
+}
+
+/// Per output (ax ay az wx wy wz) the bias and scale factor of the correction's error over the
+/// flight in `dir/s.csv` with `blob`, as the filter models them.
+fn truth_of_flight(dir: &Path, shift: &LaunchShift) -> [(f64, f64); 6] {
+    let truth: ImuTruth = serde_json::from_str(&std::fs::read_to_string(TRUTH).unwrap()).unwrap();
+    let bytes = std::fs::read(dir.join("round.blob")).unwrap();
+    let cal = spincal::blob::decode(&bytes).unwrap();
+    let mut imu = AnyImuCorrector::new(&cal, 2000.0).unwrap();
+    let mut reader = csv::Reader::from_path(dir.join("s.csv")).unwrap();
+    let head = reader.headers().unwrap().clone();
+    let at = |name: &str| head.iter().position(|h| h == name).unwrap();
+    let (t, temp, volt) = (at("t"), at("temp"), at("volt"));
+    let cols = |names: [&str; 3]| names.map(&at);
+    let (fc, wc, dwc) = (
+        cols(["f_x", "f_y", "f_z"]),
+        cols(["w_x", "w_y", "w_z"]),
+        cols(["dw_x", "dw_y", "dw_z"]),
+    );
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    // Sums for the six straight lines: n, x, y, xx, xy.
+    let mut sums = [[0.0f64; 5]; 6];
+    let mut environment = None;
+    for row in reader.records() {
+        let row = row.unwrap();
+        let v = |c: usize| row[c].parse::<f64>().unwrap();
+        let get = |c: [usize; 3]| c.map(v);
+        let (f, w, dw) = (get(fc), get(wc), get(dwc));
+        let (tc, vc) = (v(temp), v(volt));
+        if environment != Some((tc, vc)) {
+            imu.set_environment(tc as f32, vc as f32);
+            environment = Some((tc, vc));
+        }
+        let (fs, ws) = if v(t) > 0.0 {
+            shift.apply(f, w)
+        } else {
+            (f, w)
+        };
+        let a = truth.accel.accel_output(fs, ws, dw, tc, vc);
+        let g = truth.gyro.gyro_output(ws, fs, tc, vc);
+        let raw: [i32; 6] = std::array::from_fn(|i| {
+            let x = if i < 3 { a[i] } else { g[i - 3] };
+            (x + rng.random::<f64>() - 0.5).round().clamp(0.0, 65_535.0) as i32
+        });
+        let out = imu.correct(raw);
+        // The samples the filter navigates on doubt (a rail, out of range, a rate step) are
+        // not the sensor's error; a temperature held at the calibrated span's end is.
+        let rails = spincal::model::Rails::unsigned(16);
+        if v(t) <= 0.0 || spincal::flight::doubted(&raw, out.flags, rails, rails) != [false; 2] {
+            continue;
+        }
+        for i in 0..6 {
+            let x = if i < 3 { f[i] } else { w[i - 3] };
+            let y = f64::from(out.values[i]) - x;
+            let s = &mut sums[i];
+            s[0] += 1.0;
+            s[1] += x;
+            s[2] += y;
+            s[3] += x * x;
+            s[4] += x * y;
+        }
+    }
+    sums.map(|[n, x, y, xx, xy]| {
+        let det = n * xx - x * x;
+        if det.abs() <= 1e-12 * n * xx.max(1.0) {
+            // No spread of the input: the mean error is the bias.
+            return (y / n, 0.0);
+        }
+        let scale = (n * xy - x * y) / det;
+        ((y - scale * x) / n, scale)
+    })
+}
+
+/// A spin rig and a shell at `seed`: the rig calibrated, the shell flown with `shift` and
+/// checked by `calflash flight`; each term with its truth.
+fn fly(seed: u64, shift: &str) -> Vec<Term> {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let seed = seed.to_string();
+    ok(
+        dir,
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            TRUTH,
+            "--plan",
+            "tumble:24",
+            "--plan",
+            "rate:-1900:1900:9",
+            "--plan",
+            "diagonal:-1900:1900:9",
+            "--plan",
+            "centrifuge:1:1500:6",
+            "--seed",
+            &seed,
+            "-o",
+            "rig.csv",
+        ],
+    );
+    ok(
+        dir,
+        &[
+            "calibrate",
+            "rig.csv",
+            "--sensor",
+            "imu",
+            "--nonlinear",
+            "--serial",
+            "ROUND-NEES",
+            "--blob",
+            "round.blob",
+            "--no-db",
+            "--quiet",
+        ],
+    );
+    let mut sim = vec![
+        "simulate",
+        "--sensor",
+        "imu",
+        "--truth",
+        TRUTH,
+        "--flight",
+        "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=22",
+        "--sample-rate",
+        "2000",
+        "-o",
+        "s.csv",
+        "--gnss",
+        "g.csv",
+        "--baro",
+        "b.csv",
+        "--seed",
+        &seed,
+    ];
+    if !shift.is_empty() {
+        sim.extend(["--launch-shift", shift]);
+    }
+    ok(dir, &sim);
+    ok(
+        dir,
+        &[
+            "flight",
+            "s.csv",
+            "--blob",
+            "round.blob",
+            "--gnss",
+            "g.csv",
+            "--baro",
+            "b.csv",
+            "--json",
+            "f.json",
+            "--no-db",
+        ],
+    );
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("f.json")).unwrap()).unwrap();
+    let truth = truth_of_flight(dir, &LaunchShift::parse(shift).unwrap());
+    record["terms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| {
+            let name = t["name"].as_str().unwrap().to_string();
+            let axis = match name.chars().last() {
+                Some('x') => 0,
+                Some('y') => 1,
+                _ => 2,
+            };
+            let output = if name.starts_with("gyro") {
+                3 + axis
+            } else {
+                axis
+            };
+            let truth = if name.contains("bias") {
+                truth[output].0
+            } else {
+                truth[output].1
+            };
+            Term {
+                estimate: t["estimate"].as_f64().unwrap(),
+                sigma: t["sigma"].as_f64().unwrap(),
+                learnt: t["learnt"].as_f64().unwrap(),
+                truth,
+                name,
+            }
+        })
+        .collect()
+}
+
+/// Two flights with a 4-sigma axial bias shift: the shifted bias is observed and estimated
+/// within 4 of its sigmas of the truth. (The roll gyro's scale factor, also observed, is not
+/// held to its sigma here: over 50 flights its error spreads 2.9 times its stated 1-sigma,
+/// `BENCHMARKS.md`.)
+#[test]
+fn a_shifted_bias_is_estimated_within_its_stated_uncertainty() {
+    for seed in [201, 202] {
+        let terms = fly(seed, "ax=0.4");
+        let observed: Vec<&Term> = terms.iter().filter(|t| t.learnt > 0.5).collect();
+        println!("seed {seed}: {observed:?}");
+        let ax = observed
+            .iter()
+            .find(|t| t.name == "accel bias x")
+            .unwrap_or_else(|| panic!("accel bias x not observed: {terms:?}"));
+        assert!(ax.nees() < 16.0, "seed {seed}: {ax:?}, NEES {}", ax.nees());
+        // The truth holds the shift and the calibration's own error of that bias (its stated
+        // 1-sigma about 0.1 m/s^2).
+        assert!((ax.truth - 0.4).abs() < 0.4, "{ax:?}");
+    }
+}
+
+/// The chi-square(n) / n band at 95 % (Wilson-Hilferty).
+fn band(n: f64) -> (f64, f64) {
+    let q = |z: f64| (1.0 - 2.0 / (9.0 * n) + z * (2.0 / (9.0 * n)).sqrt()).powi(3);
+    (q(-1.959_964), q(1.959_964))
+}
+
+/// The Monte Carlo of `BENCHMARKS.md`: 50 flights of each kind, the average NEES of each term
+/// the flights observe, over those flights, against its band. A term a flight does not
+/// observe keeps the calibration's estimate; its straight-line truth is no measure of it on a
+/// spinning round (a transverse axis' error under spin is not a bias and a scale factor of
+/// what it senses), so it is left out.
+#[test]
+#[ignore = "50 flights of each of three kinds: run with --release -- --ignored --nocapture"]
+fn average_nees_over_fifty_flights_of_each_kind() {
+    let n = 50u64;
+    for shift in ["", "ax=0.4", "swx=0.003"] {
+        let flights: Vec<Vec<Term>> = (0..n).map(|k| fly(300 + k, shift)).collect();
+        println!(
+            "launch shift `{}` ({n} flights, each its own calibration):",
+            if shift.is_empty() { "none" } else { shift }
+        );
+        println!(
+            "| term | flights observing it | average NEES | 95 % band | largest | mean and spread of (estimate - truth) / sigma |"
+        );
+        for name in flights[0].iter().map(|t| t.name.clone()) {
+            let seen: Vec<&Term> = flights
+                .iter()
+                .filter_map(|f| f.iter().find(|t| t.name == name))
+                .filter(|t| t.learnt > 0.5)
+                .collect();
+            if seen.is_empty() {
+                continue;
+            }
+            let observed = seen.len();
+            let m = seen.len() as f64;
+            let avg = seen.iter().map(|t| t.nees()).sum::<f64>() / m;
+            let largest = seen.iter().map(|t| t.nees()).fold(0.0, f64::max);
+            let z: Vec<f64> = seen
+                .iter()
+                .map(|t| (t.estimate - t.truth) / t.sigma)
+                .collect();
+            let mean = z.iter().sum::<f64>() / m;
+            let spread = (z.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt();
+            let (lo, hi) = band(m);
+            println!(
+                "| {name} | {observed} of {n} | {avg:.2} | {lo:.2} to {hi:.2} | {largest:.1} | {mean:+.2}, {spread:.2} |"
+            );
+        }
+    }
+}
