@@ -536,6 +536,7 @@ fn calflash_health_reads_the_unit_over_its_link() {
         temp: Some(25.0),
         volt: Some(3.3),
         json: Some(path(json)),
+        report: None,
         db: Some(path("units.sqlite").into()),
         no_db: false,
     };
