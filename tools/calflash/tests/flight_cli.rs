@@ -21,26 +21,7 @@ fn ok(dir: &Path, args: &[&str]) -> String {
 
 /// The spinning round calibrated on its rig: `round.blob`.
 fn calibrated(dir: &Path) {
-    ok(
-        dir,
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            TRUTH,
-            "--plan",
-            "tumble:24",
-            "--plan",
-            "rate:-1900:1900:9",
-            "--plan",
-            "diagonal:-1900:1900:9",
-            "--plan",
-            "centrifuge:1:1500:6",
-            "-o",
-            "rig.csv",
-        ],
-    );
+    common::simulate_rig(dir, TRUTH, &[]);
     ok(
         dir,
         &[

@@ -129,28 +129,7 @@ fn fly(seed: u64, shift: &str) -> Vec<Term> {
     let d = tempfile::tempdir().unwrap();
     let dir = d.path();
     let seed = seed.to_string();
-    ok(
-        dir,
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            TRUTH,
-            "--plan",
-            "tumble:24",
-            "--plan",
-            "rate:-1900:1900:9",
-            "--plan",
-            "diagonal:-1900:1900:9",
-            "--plan",
-            "centrifuge:1:1500:6",
-            "--seed",
-            &seed,
-            "-o",
-            "rig.csv",
-        ],
-    );
+    common::simulate_rig(dir, TRUTH, &["--seed", &seed]);
     ok(
         dir,
         &[

@@ -230,23 +230,7 @@ fn reports(d: &Path) -> Vec<PathBuf> {
     ]);
     // The spinning round from its spin rig.
     let round = example("spinning_round.truth.json");
-    run(&[
-        "simulate",
-        "--sensor",
-        "imu",
-        "--truth",
-        &round,
-        "--plan",
-        "tumble:24",
-        "--plan",
-        "rate:-1900:1900:9",
-        "--plan",
-        "diagonal:-1900:1900:9",
-        "--plan",
-        "centrifuge:1:1500:6",
-        "-o",
-        "rig.csv",
-    ]);
+    common::simulate_rig(d, &round, &[]);
     run(&[
         "calibrate",
         "rig.csv",

@@ -51,28 +51,7 @@ fn a_spin_rig_calibration_flies_at_300_hz_within_three_sigma() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let truth = truth();
-    ok(
-        d,
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            &truth,
-            "--plan",
-            "tumble:24",
-            "--plan",
-            "rate:-1900:1900:9",
-            "--plan",
-            "diagonal:-1900:1900:9",
-            "--plan",
-            "centrifuge:1:1500:6",
-            "--seed",
-            "4",
-            "-o",
-            "rig.csv",
-        ],
-    );
+    common::simulate_rig(d, &truth, &["--seed", "4"]);
     let out = ok(
         d,
         &[
@@ -362,26 +341,7 @@ fn a_quiet_high_range_unit_passes_the_f32_check() {
         truth[s]["noise"] = serde_json::json!([0.1, 0.1, 0.1]);
     }
     std::fs::write(d.join("quiet.json"), truth.to_string()).unwrap();
-    ok(
-        d,
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            "quiet.json",
-            "--plan",
-            "tumble:24",
-            "--plan",
-            "rate:-1900:1900:9",
-            "--plan",
-            "diagonal:-1900:1900:9",
-            "--plan",
-            "centrifuge:1:1500:6",
-            "-o",
-            "rig.csv",
-        ],
-    );
+    common::simulate_rig(d, "quiet.json", &[]);
     let (_, out, err) = calflash(
         d,
         &[

@@ -120,3 +120,30 @@ pub fn allan(dir: &Path, name: &str, unit: &str, n: f64, k: f64) {
         "unit": unit, "axes": [axis.clone(), axis.clone(), axis]});
     std::fs::write(dir.join(name), v.to_string()).unwrap();
 }
+
+/// The spinning round's spin rig simulated into `dir/rig.csv`: the unit `truth` (a truth file)
+/// tumbled, turned about its axes and its 45-degree diagonals to 1,900 rad/s and centrifuged
+/// to 1,500 g, with `extra` options (a seed).
+#[allow(dead_code)] // the flight, spin, NEES and report tests use it
+pub fn simulate_rig(dir: &Path, truth: &str, extra: &[&str]) {
+    let mut args = vec![
+        "simulate",
+        "--sensor",
+        "imu",
+        "--truth",
+        truth,
+        "--plan",
+        "tumble:24",
+        "--plan",
+        "rate:-1900:1900:9",
+        "--plan",
+        "diagonal:-1900:1900:9",
+        "--plan",
+        "centrifuge:1:1500:6",
+        "-o",
+        "rig.csv",
+    ];
+    args.extend_from_slice(extra);
+    let (code, out, err) = calflash(dir, &args);
+    assert_eq!(code, 0, "{args:?}: {out}{err}");
+}
