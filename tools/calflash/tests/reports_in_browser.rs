@@ -481,12 +481,14 @@ fn reports(d: &Path) -> Vec<PathBuf> {
 
 #[test]
 fn every_report_fits_a_1280_px_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let written = reports(dir.path());
+    what_a_reader_finds(dir.path());
     let Some(browser) = chromium("every_report_fits_a_1280_px_window") else {
         return;
     };
-    let dir = tempfile::tempdir().unwrap();
     let mut faults = Vec::new();
-    for report in reports(dir.path()) {
+    for report in written {
         for f in layout_faults(&browser, &report) {
             faults.push(format!(
                 "{}: {f}",
@@ -495,6 +497,34 @@ fn every_report_fits_a_1280_px_window() {
         }
     }
     assert!(faults.is_empty(), "{}", faults.join("\n"));
+}
+
+/// What the reports say beside their layout (read without a browser): the spin rig's lever
+/// arms and residuals against the spin rate, one unit per figure, contents on long pages, a
+/// control chart's units out of control named, Allan's slope lines and Kalibr's file.
+fn what_a_reader_finds(d: &Path) {
+    let page = |f: &str| std::fs::read_to_string(d.join(f)).unwrap();
+    let round = page("round.html");
+    assert!(round.contains("<h2>Under rotation</h2>"), "round.html");
+    assert!(round.contains("<th>r_x (mm)</th>") && round.contains(" &#177; "));
+    assert!(round.contains("Accelerometer residuals against the spin rate"));
+    assert!(round.contains("Gyro residuals against the spin rate"));
+    assert!(round.contains("<nav class=\"contents\">"));
+    // An IMU judged over its mission: its accelerometers and its gyros in figures of their own.
+    let mission = page("mission.html");
+    assert!(mission.contains("predicted 1-sigma error, m/s^2"));
+    assert!(mission.contains("predicted 1-sigma error, rad/s"));
+    // Plotters' own tick labels wrote each number its own way ("-2.77556e-17").
+    for f in ["imu.html", "round.html", "flight.html", "thermal.html", "mission.html"] {
+        assert!(!page(f).contains("e-17<") && !page(f).contains("e-21<"), "{f}");
+    }
+    let lot = page("lot.html");
+    assert!(lot.contains("point(s) out of control: LOT-R-"), "lot.html");
+    assert!(!lot.contains(">plotted<"), "lot.html");
+    let allan = page("allan.html");
+    assert_eq!(allan.matches("slope -1/2: N = ").count(), 6);
+    assert!(allan.contains("Kalibr imu.yaml"));
+    assert!(page("health.html").contains("<h1>Health of unit IMU-H-1 at rest</h1>"));
 }
 
 /// The check itself finds what it is there to find: a table wider than the window, and a box

@@ -64,7 +64,8 @@ pub enum ChartKind {
 /// Runs `calflash lot`.
 ///
 /// # Errors
-/// As [`load`], a coefficient to chart that the lot lacks, or an unwritable JSON file.
+/// As [`lot::history::load`], a coefficient to chart that the lot lacks, or an unwritable JSON
+/// file.
 pub fn run(args: &LotArgs) -> Result<(), Failure> {
     if let (Some(since), Some(until)) = (args.since, args.until)
         && since > until

@@ -220,7 +220,7 @@ mod tests {
             schema: SCHEMA,
             source: "r.csv",
             sensors: vec![SensorRecord {
-                sensor: if unit == "m/s^2" { "accel" } else { "gyro" },
+                sensor: if unit == "rad/s" { "gyro" } else { "accel" },
                 unit,
                 axes: ["x", "y", "z"]
                     .map(|axis| AxisRecord {
