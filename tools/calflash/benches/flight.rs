@@ -5,26 +5,21 @@
 //! (`nav::check::check`: the strapdown navigation, the filter, the roll search, the smoother,
 //! the verdict). Run with `cargo bench -p calflash --bench flight` (`taskset -c 0` for one core).
 
+#[path = "../tests/common/mod.rs"]
+mod common;
+
 use std::hint::black_box;
 use std::path::Path;
-use std::process::Command;
 
 use calflash::nav::check::{self, PriorSource, Walks};
 use calflash::nav::input;
 use calflash::nav::run::Options;
 use criterion::{Criterion, criterion_group, criterion_main};
 
-fn calflash(dir: &Path, args: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_calflash"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("calflash runs");
-    assert!(
-        out.status.code().is_some_and(|c| c == 0 || c == 3),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+/// `calflash` with `args` in `dir`, which exits 0 or 3 (a verdict other than ACCEPT).
+fn ok(dir: &Path, args: &[&str]) {
+    let (code, _, err) = common::calflash(dir, args);
+    assert!(code == 0 || code == 3, "{args:?}: {err}");
 }
 
 fn bench(c: &mut Criterion) {
@@ -34,27 +29,8 @@ fn bench(c: &mut Criterion) {
         env!("CARGO_MANIFEST_DIR"),
         "/../../examples/data/spinning_round.truth.json"
     );
-    calflash(
-        d,
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            truth,
-            "--plan",
-            "tumble:24",
-            "--plan",
-            "rate:-1900:1900:9",
-            "--plan",
-            "diagonal:-1900:1900:9",
-            "--plan",
-            "centrifuge:1:1500:6",
-            "-o",
-            "rig.csv",
-        ],
-    );
-    calflash(
+    common::simulate_rig(d, truth, &[]);
+    ok(
         d,
         &[
             "calibrate",
@@ -70,7 +46,7 @@ fn bench(c: &mut Criterion) {
             "--quiet",
         ],
     );
-    calflash(
+    ok(
         d,
         &[
             "simulate",

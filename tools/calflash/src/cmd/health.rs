@@ -231,7 +231,7 @@ fn moved_across(
     (span, mid): (spincal::model::Span, f32),
     volt: f32,
 ) -> Option<(f32, &'static str)> {
-    const OUTPUTS: [&str; 6] = ["ax", "ay", "az", "wx", "wy", "wz"];
+    use crate::report::health::OUTPUTS;
     let mut imu = AnyImuCorrector::new(cal, 1000.0).ok()?;
     let mut at = |t: f32| {
         imu.set_environment(t, volt);
@@ -340,7 +340,7 @@ fn summary(serial: &str, source: &str, h: &Health) -> String {
         "  largest statistic: {:.2} under the factory prior, {:.2} with ageing (thresholds {:.2}, {:.2})",
         h.statistic[0], h.statistic[1], h.threshold[0], h.threshold[1]
     );
-    for (i, name) in ["ax", "ay", "az", "wx", "wy", "wz"].iter().enumerate() {
+    for (i, name) in crate::report::health::OUTPUTS.iter().enumerate() {
         let unit = if i < 3 { "m/s^2" } else { "rad/s" };
         let _ = writeln!(
             s,

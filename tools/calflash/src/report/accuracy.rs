@@ -31,12 +31,7 @@ pub fn html(
         esc(title),
         acc.count()
     );
-    let mut families: Vec<&'static str> = Vec::new();
-    for u in units {
-        if !families.contains(u) {
-            families.push(u);
-        }
-    }
+    let families = super::plot::units_in_order(units.iter().copied());
     let series: Vec<Vec<(f64, f64)>> = (0..acc.names().len())
         .map(|k| peaks(acc.errors(k), x))
         .collect();

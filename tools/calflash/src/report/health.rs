@@ -11,7 +11,7 @@ use super::terminal::num;
 use spincal::health::{Health, Verdict};
 
 /// The outputs, in the health's order.
-const OUTPUTS: [&str; 6] = ["ax", "ay", "az", "wx", "wy", "wz"];
+pub const OUTPUTS: [&str; 6] = ["ax", "ay", "az", "wx", "wy", "wz"];
 
 /// The page of `h` for unit `serial`, from `source`, with `said` (how the temperature was
 /// found, when the host ran the check).

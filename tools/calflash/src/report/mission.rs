@@ -307,12 +307,7 @@ pub fn judged_html(m: &crate::mission::judge::Judged) -> Result<String, crate::r
     );
     // One figure per unit (an IMU's accelerometers and gyros apart), each shaded where its
     // first output goes beyond the calibrated range.
-    let mut families: Vec<&str> = Vec::new();
-    for x in &m.outputs {
-        if !families.contains(&x.unit) {
-            families.push(x.unit);
-        }
-    }
+    let families = crate::report::plot::units_in_order(m.outputs.iter().map(|x| x.unit));
     for unit in families {
         let outputs: Vec<&crate::mission::judge::Output> =
             m.outputs.iter().filter(|x| x.unit == unit).collect();

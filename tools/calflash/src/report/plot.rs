@@ -267,6 +267,18 @@ impl<R: Ranged<ValueType = f64>> Ranged for Ticked<R> {
     }
 }
 
+/// The distinct units of a report's outputs, in the order they first come: one figure each, so
+/// that no axis holds two units (an IMU's m/s^2 and rad/s).
+pub(crate) fn units_in_order<'a>(units: impl IntoIterator<Item = &'a str>) -> Vec<&'a str> {
+    let mut out: Vec<&str> = Vec::new();
+    for u in units {
+        if !out.contains(&u) {
+            out.push(u);
+        }
+    }
+    out
+}
+
 /// Appends `fig` to an HTML page `h`, as an inline SVG in a `fig` block.
 ///
 /// # Errors

@@ -247,12 +247,7 @@ fn triad_figures(c: &Calibrated) -> Result<String, Error> {
         .collect();
     if sigma.len() == c.thermal.len() {
         // One figure per unit: an IMU's accelerometers and gyros apart.
-        let mut families: Vec<&str> = Vec::new();
-        for (k, _, _) in &sigma {
-            if !families.contains(&unit(*k)) {
-                families.push(unit(*k));
-            }
-        }
+        let families = super::plot::units_in_order(sigma.iter().map(|(k, _, _)| unit(*k)));
         for family in families {
             let y = format!("1-sigma ({family})");
             figure(
