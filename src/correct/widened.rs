@@ -148,6 +148,18 @@ impl<'a> AnyImuCorrector<'a> {
         each!(self, |c| c.sigma(values))
     }
 
+    /// See [`ImuCorrector::error_features`].
+    #[must_use]
+    pub fn error_features(&self, values: &[f32; 6]) -> [[f32; crate::model::IMU_FEATURES]; 6] {
+        each!(self, |c| c.error_features(values))
+    }
+
+    /// See [`ImuCorrector::covariance_factors`].
+    #[must_use]
+    pub fn covariance_factors(&self) -> Option<&crate::model::ImuCovariance> {
+        each!(self, |c| c.covariance_factors())
+    }
+
     /// See [`ImuCorrector::set_overlay`].
     pub fn set_overlay(&mut self, overlay: Option<crate::correct::Overlay>) {
         each!(self, |c| c.set_overlay(overlay));

@@ -6,7 +6,7 @@ use super::super::factor_norm;
 use super::super::sample::Sample;
 use super::ImuCorrector;
 use crate::model::rotation;
-use crate::model::{ImuCovariance, ImuOutputCovariance};
+use crate::model::{IMU_FEATURES, ImuCovariance, ImuOutputCovariance};
 
 /// The accelerometer features of [`IMU_FEATURES`](crate::model::IMU_FEATURES) that do not
 /// vanish at rest: the bias, the sensitivity row and the g-squared term (the lever arm's
@@ -129,19 +129,20 @@ impl<S: Sample> ImuCorrector<'_, S> {
         Some((norms.map(|x| x * x), own.map(|x| x * x)))
     }
 
-    /// The factory 1-sigma of each output and of its bias alone.
-    fn factor_norms(&self, values: &[f32; 6]) -> Option<([f32; 6], [f32; 6])> {
-        let ImuCovariance {
-            accel: ca,
-            gyro: cg,
-        } = self.covariance.as_ref()?;
+    /// Per output of the corrected sample `values` (`[ax, ay, az, wx, wy, wz]`), the features
+    /// of its calibration error ([`IMU_FEATURES`](crate::model::IMU_FEATURES)): the output's
+    /// error is their dot product with its parameters' error, whose covariance the factor of
+    /// [`covariance_factors`](Self::covariance_factors) holds. The tangential lever term is
+    /// left out (a small part of the spin's at any rate a round spins up at).
+    #[must_use]
+    pub fn error_features(&self, values: &[f32; 6]) -> [[f32; IMU_FEATURES]; 6] {
         let [f0, f1, f2, w0, w1, w2] = *values;
         let (f, w) = ([f0, f1, f2], [w0, w1, w2]);
         let [na, ng] = &self.directions;
         let zero = [0.0; 3];
-        let accel = |i: usize| -> [f32; 8] {
+        let accel = |i: usize| -> [f32; IMU_FEATURES] {
             let (Some(n), Some(r)) = (na.get(i), self.lever.get(i)) else {
-                return [0.0; 8];
+                return [0.0; IMU_FEATURES];
             };
             let at = rotation::force_at(&f, &w, &zero, r);
             let [g0, g1, g2] = rotation::lever_gradient(n, &w, &zero);
@@ -151,21 +152,38 @@ impl<S: Sample> ImuCorrector<'_, S> {
         };
         let [h0, h1, h2] = self.g_sensitivity(zero, &f).map(|x| -x);
         let sensed_rate = [w0 + h0, w1 + h1, w2 + h2];
-        let gyro = |i: usize| -> [f32; 8] {
+        let gyro = |i: usize| -> [f32; IMU_FEATURES] {
             let x = ng.get(i).map_or(0.0, |n| rotation::dot(n, &sensed_rate));
             [1.0, w0, w1, w2, f0, f1, f2, x * x]
         };
+        [accel(0), accel(1), accel(2), gyro(0), gyro(1), gyro(2)]
+    }
+
+    /// The covariance factors at the current environment (the factory's, whatever the
+    /// overlay); `None` when the calibration has none.
+    #[must_use]
+    pub fn covariance_factors(&self) -> Option<&ImuCovariance> {
+        self.covariance.as_ref()
+    }
+
+    /// The factory 1-sigma of each output and of its bias alone.
+    fn factor_norms(&self, values: &[f32; 6]) -> Option<([f32; 6], [f32; 6])> {
+        let ImuCovariance {
+            accel: ca,
+            gyro: cg,
+        } = self.covariance.as_ref()?;
+        let [e0, e1, e2, e3, e4, e5] = self.error_features(values);
         let [a0, a1, a2] = ca;
         let [g0, g1, g2] = cg;
         let own = |l: &ImuOutputCovariance| l.as_flattened().first().map_or(0.0, |x| x.abs());
         Some((
             [
-                factor_norm(a0.as_flattened(), &accel(0)),
-                factor_norm(a1.as_flattened(), &accel(1)),
-                factor_norm(a2.as_flattened(), &accel(2)),
-                factor_norm(g0.as_flattened(), &gyro(0)),
-                factor_norm(g1.as_flattened(), &gyro(1)),
-                factor_norm(g2.as_flattened(), &gyro(2)),
+                factor_norm(a0.as_flattened(), &e0),
+                factor_norm(a1.as_flattened(), &e1),
+                factor_norm(a2.as_flattened(), &e2),
+                factor_norm(g0.as_flattened(), &e3),
+                factor_norm(g1.as_flattened(), &e4),
+                factor_norm(g2.as_flattened(), &e5),
             ],
             [own(a0), own(a1), own(a2), own(g0), own(g1), own(g2)],
         ))

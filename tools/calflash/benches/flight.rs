@@ -11,8 +11,9 @@ mod common;
 use std::hint::black_box;
 use std::path::Path;
 
-use calflash::nav::check::{self, PriorSource, Walks};
+use calflash::nav::check::{self, Walks};
 use calflash::nav::input;
+use calflash::nav::prior::{self, PriorSource};
 use calflash::nav::run::Options;
 use criterion::{Criterion, criterion_group, criterion_main};
 
@@ -68,7 +69,6 @@ fn bench(c: &mut Criterion) {
     );
     let bytes = std::fs::read(d.join("round.blob")).unwrap();
     let cal = spincal::blob::decode(&bytes).unwrap();
-    let prior = check::calibration_prior(&cal).expect("the rig's blob carries covariance");
     let (fixes, _) = input::gnss(&d.join("gnss.csv")).unwrap();
     let baro = input::baro(&d.join("baro.csv")).unwrap();
     let walks = Walks::default();
@@ -81,10 +81,16 @@ fn bench(c: &mut Criterion) {
     let imu = input::corrected(&d.join("shell.csv"), &cal).unwrap();
     g.bench_function("shell_62_s_at_2_khz_filtered_smoothed_judged", |b| {
         b.iter(|| {
+            // The prior over the flight's rates is part of the check's cost.
+            let from = calflash::nav::run::launch(&imu, opts.launch_force)
+                .unwrap()
+                .1;
+            let prior = prior::calibration_prior(&cal, &imu, from)
+                .expect("the rig's blob carries covariance");
             let checked = check::check(
                 black_box(&imu),
                 (&fixes, &baro),
-                (prior, PriorSource::Calibration),
+                (prior, PriorSource::Factors { folded: Vec::new() }),
                 &walks,
                 &opts,
                 0.01,

@@ -7,9 +7,11 @@ use clap::Args;
 
 use crate::cmd::Failure;
 use crate::files::{Paths, Staged};
-use crate::nav::check::{self, PriorSource, StatedPrior, Walks};
+use crate::nav::check::{self, Walks};
 use crate::nav::input;
+use crate::nav::prior::{self, PriorSource, StatedPrior};
 use crate::nav::run::Options;
+use crate::sensor::record::{self, Record};
 
 /// Check a calibration in flight against GNSS and a barometer.
 #[derive(Debug, Args)]
@@ -19,9 +21,16 @@ pub struct FlightArgs {
     #[arg(required_unless_present = "port")]
     pub recording: Option<PathBuf>,
     /// The unit's calibration blob: the codes go through its correction, and its covariance
-    /// factors are the prior of the sensor errors.
+    /// factors are the prior of the sensor errors (unless the calibration's record is given or
+    /// found in the unit history: `--record`).
     #[arg(long)]
     pub blob: Option<PathBuf>,
+    /// The calibration's record (`calibrate --json`) of that blob: the prior is then its
+    /// whole model's covariance, cubic and odd-quadratic terms included, over the flight's
+    /// rates. Without it, the unit history's record of the blob's calibration is used when
+    /// the history holds one, else the blob's covariance factors.
+    #[arg(long, requires = "blob")]
+    pub record: Option<PathBuf>,
     /// Columns of a physical recording (without --blob), as `--mission-columns` takes them:
     /// `t=ts,fx=Ax:m/s^2,...,wx=Gx:deg/s,...`.
     #[arg(long, default_value = "", conflicts_with = "blob")]
@@ -135,6 +144,20 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         },
         _ => StatedPrior::default(),
     };
+    let opts = Options {
+        lever: match args.lever.as_slice() {
+            [x, y, z] => [*x, *y, *z],
+            _ => [0.0; 3],
+        },
+        gnss_noise: (
+            args.gnss_noise.first().copied().unwrap_or(2.5),
+            args.gnss_noise.get(1).copied().unwrap_or(5.0),
+        ),
+        gnss_latency: args.gnss_latency,
+        baro_noise: args.baro_noise,
+        baro_cp: args.baro_cp,
+        ..Options::default()
+    };
     let mut blob_bytes = Vec::new();
     let mut data_hash = None;
     let (imu, prior, serial) = match &args.blob {
@@ -153,20 +176,41 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
                     .map(|b| format!("{b:02x}"))
                     .collect::<String>(),
             );
-            match check::calibration_prior(&cal) {
-                Some(p) => (imu, (p, PriorSource::Calibration), serial),
-                None => (
-                    imu,
-                    (check::stated_prior(&stated), PriorSource::Stated(stated)),
-                    serial,
-                ),
-            }
+            // The prior over the flight after launch (at zero input when there is none: the
+            // check then says there was no launch).
+            let from = crate::nav::run::launch(&imu, opts.launch_force).map_or(0, |l| l.1);
+            let hash = data_hash.clone().unwrap_or_default();
+            let record = match &args.record {
+                Some(path) => Some((read_record(path)?, path.display().to_string())),
+                None => db_path
+                    .as_ref()
+                    .and_then(|loc| history_record(loc, &serial, &hash)),
+            };
+            let from_record = match record {
+                Some((rec, at)) => match prior::record_prior(&rec, &cal, &imu, from) {
+                    Ok(p) => Some((p, PriorSource::Record(at))),
+                    Err(e) if args.record.is_some() => {
+                        return Err(format!("--record {at}: {e}").into());
+                    }
+                    Err(_) => None,
+                },
+                None => None,
+            };
+            let prior = from_record
+                .or_else(|| {
+                    prior::calibration_prior(&cal, &imu, from).map(|p| {
+                        let folded = prior::folded_outputs(&cal);
+                        (p, PriorSource::Factors { folded })
+                    })
+                })
+                .unwrap_or_else(|| (prior::stated_prior(&stated), PriorSource::Stated(stated)));
+            (imu, prior, serial)
         }
         None => {
             let profile = crate::mission::read(recording, &args.imu_columns)?;
             (
                 input::physical(&profile),
-                (check::stated_prior(&stated), PriorSource::Stated(stated)),
+                (prior::stated_prior(&stated), PriorSource::Stated(stated)),
                 "(no calibration)".to_string(),
             )
         }
@@ -178,20 +222,6 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         .map(input::baro)
         .transpose()?
         .unwrap_or_default();
-    let opts = Options {
-        lever: match args.lever.as_slice() {
-            [x, y, z] => [*x, *y, *z],
-            _ => [0.0; 3],
-        },
-        gnss_noise: (
-            args.gnss_noise.first().copied().unwrap_or(2.5),
-            args.gnss_noise.get(1).copied().unwrap_or(5.0),
-        ),
-        gnss_latency: args.gnss_latency,
-        baro_noise: args.baro_noise,
-        baro_cp: args.baro_cp,
-        ..Options::default()
-    };
     let walks = Walks {
         accel: args.walk.first().copied().unwrap_or(Walks::default().accel),
         gyro: args.walk.get(1).copied().unwrap_or(Walks::default().gyro),
@@ -231,4 +261,41 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         println!("  {said}");
     }
     Ok(())
+}
+
+/// A calibration record read from `path`.
+fn read_record(path: &std::path::Path) -> Result<Record, Failure> {
+    let text = crate::files::read_json_text(path, "--record")?;
+    let rec: Record = serde_json::from_str(&text).map_err(|e| {
+        format!(
+            "--record {}: not a calibration record ({e})",
+            path.display()
+        )
+    })?;
+    if rec.schema != record::SCHEMA {
+        return Err(format!(
+            "--record {}: schema `{}`; `{}` is expected",
+            path.display(),
+            rec.schema,
+            record::SCHEMA
+        )
+        .into());
+    }
+    Ok(rec)
+}
+
+/// The unit history's newest record of the calibration of unit `serial` whose data hash is
+/// `hash`, with the words for where it is; `None` when the history holds none (or cannot be
+/// read: the blob's factors serve then, and the report says which prior it took).
+fn history_record(loc: &crate::db::Location, serial: &str, hash: &str) -> Option<(Record, String)> {
+    let mut db = crate::db::Db::open_existing(loc.clone()).ok()?;
+    let entry = db
+        .history(serial)
+        .ok()?
+        .into_iter()
+        .rev()
+        .find(|e| e.kind == "fit" && e.data_hash.eq_ignore_ascii_case(hash))?;
+    let text = db.record(entry.id).ok()?;
+    let rec: Record = serde_json::from_str(&text).ok()?;
+    (rec.schema == record::SCHEMA).then(|| (rec, format!("the unit history's record {}", entry.id)))
 }

@@ -4,11 +4,11 @@
 //! the smoothed trajectory against GNSS and the barometer.
 
 use nalgebra::Vector3;
-use spincal::model::{Calibration, Sensor};
 use spincal::nav::filter::index;
 use spincal::nav::{NavNoise, SensorErrors, StateMatrix};
 
 use super::input::{Fix, ImuSeries, Pressure};
+use super::prior::{InFlight, PriorSource};
 use super::run::{self, Options, Pass, Start};
 use super::track::{self, Track};
 use super::verdict::{self, Opened, Verdict};
@@ -43,6 +43,7 @@ fn roll_scale_search(
         f: imu.f[..end].to_vec(),
         w: imu.w[..end].to_vec(),
         flagged: imu.flagged[..end].to_vec(),
+        temperature: imu.temperature,
     };
     let n = (OPEN_SCALE / SEARCH_STEP).round() as i64;
     let at = index::GYRO_SCALE + k;
@@ -111,31 +112,6 @@ fn rms_rate(imu: &ImuSeries, from: usize, k: usize) -> f64 {
     }
 }
 
-/// A stated prior (1-sigma) for a unit whose calibration carries no covariance.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StatedPrior {
-    /// Accelerometer bias, m/s^2.
-    pub accel_bias: f64,
-    /// Gyro bias, rad/s.
-    pub gyro_bias: f64,
-    /// Accelerometer scale factor.
-    pub accel_scale: f64,
-    /// Gyro scale factor.
-    pub gyro_scale: f64,
-}
-
-impl Default for StatedPrior {
-    /// A consumer MEMS unit's datasheet: 20 mg, 0.5 deg/s, 1 %, 1 %.
-    fn default() -> Self {
-        Self {
-            accel_bias: 0.2,
-            gyro_bias: 0.5f64.to_radians(),
-            accel_scale: 0.01,
-            gyro_scale: 0.01,
-        }
-    }
-}
-
 /// The random walks the filter allows the errors between measurements.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Walks {
@@ -158,65 +134,6 @@ impl Default for Walks {
             baro: 0.5,
         }
     }
-}
-
-/// Where the prior came from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum PriorSource {
-    /// The calibration's covariance factors.
-    Calibration,
-    /// Stated, because the calibration carries none (or there is no calibration).
-    Stated(StatedPrior),
-}
-
-/// The sensor errors' prior from a calibration's covariance factors (its first table point):
-/// per axis the bias, the scale factor (the sensitivity's diagonal) and their covariance.
-#[must_use]
-pub fn calibration_prior(cal: &Calibration) -> Option<StateMatrix<f64>> {
-    let Sensor::Imu {
-        covariance: Some(cov),
-        ..
-    } = &cal.data().sensor
-    else {
-        return None;
-    };
-    let c = cov.first()?;
-    let mut p = StateMatrix::zeros();
-    let block = |packed: &[f32], i: usize, j: usize| -> f64 {
-        let l = |a: usize, b: usize| {
-            packed
-                .get(a * (a + 1) / 2 + b)
-                .map_or(0.0, |x| f64::from(*x))
-        };
-        (0..=i.min(j)).map(|m| l(i, m) * l(j, m)).sum()
-    };
-    for axis in 0..3 {
-        for (out, bias, scale) in [
-            (&c.accel[axis], index::ACCEL_BIAS, index::ACCEL_SCALE),
-            (&c.gyro[axis], index::GYRO_BIAS, index::GYRO_SCALE),
-        ] {
-            let packed = out.as_flattened();
-            let (b, s) = (bias + axis, scale + axis);
-            p[(b, b)] = block(packed, 0, 0);
-            p[(s, s)] = block(packed, 1 + axis, 1 + axis);
-            p[(b, s)] = block(packed, 0, 1 + axis);
-            p[(s, b)] = p[(b, s)];
-        }
-    }
-    Some(p)
-}
-
-/// A stated prior as a covariance.
-#[must_use]
-pub fn stated_prior(s: &StatedPrior) -> StateMatrix<f64> {
-    let mut p = StateMatrix::zeros();
-    for i in 0..3 {
-        p[(index::ACCEL_BIAS + i, index::ACCEL_BIAS + i)] = s.accel_bias.powi(2);
-        p[(index::GYRO_BIAS + i, index::GYRO_BIAS + i)] = s.gyro_bias.powi(2);
-        p[(index::ACCEL_SCALE + i, index::ACCEL_SCALE + i)] = s.accel_scale.powi(2);
-        p[(index::GYRO_SCALE + i, index::GYRO_SCALE + i)] = s.gyro_scale.powi(2);
-    }
-    p
 }
 
 /// The white-noise densities seen at rest: per sensor the largest axis' standard deviation
@@ -307,7 +224,7 @@ pub enum CheckError {
 pub fn check(
     imu: &ImuSeries,
     (fixes, baro): (&[Fix], &[Pressure]),
-    (prior, source): (StateMatrix<f64>, PriorSource),
+    (in_flight, source): (InFlight, PriorSource),
     walks: &Walks,
     opts: &Options,
     alpha: f64,
@@ -384,7 +301,7 @@ pub fn check(
         scale_walk: walks.scale,
         baro_walk: walks.baro,
     };
-    let mut prior = prior;
+    let mut prior = in_flight.at_rest();
     prior[(index::BARO, index::BARO)] = 1.0;
     // A round that spins fast turns a roll scale-factor shift into a roll angle error that
     // grows faster than the filter can linearise from the calibration's prior (0.3 % at
@@ -396,19 +313,23 @@ pub fn check(
     let mut opened = Opened::default();
     if spin * SPIN_SHIFT_TO_FOLLOW > SPIN_LINEAR_LIMIT {
         let at = index::GYRO_SCALE + k;
-        opened.0[9 + k] = Some(prior[(at, at)]);
+        // The calibration's variance of it in flight (its line over the flight's rates).
+        let (t, w) = in_flight.at_launch(&[false; 12]);
+        opened.0[9 + k] = Some((t * prior * t.transpose() + w)[(at, at)]);
         for j in 0..prior.nrows() {
             prior[(at, j)] = 0.0;
             prior[(j, at)] = 0.0;
         }
         prior[(at, at)] = OPEN_SCALE * OPEN_SCALE;
     }
+    let open: [bool; 12] = std::array::from_fn(|i| opened.0[i].is_some());
     let mut start = Start {
         origin,
         prior,
         noise,
         heading,
         sensors: SensorErrors::default(),
+        launch: Some(in_flight.at_launch(&open)),
     };
     if opened.0[9 + k].is_some() {
         start.sensors.gyro_scale[k] =
@@ -451,11 +372,15 @@ pub fn check(
     let mut shifts = Vec::new();
     let mut pass = first;
     if verdict.word == "SHIFTED" {
-        let mut open = prior;
-        for (i, t) in verdict.terms.iter().enumerate() {
-            if t.shifted && opened.0[i].is_none() {
+        // The shift happened at launch: the change at launch is opened for the shifted terms.
+        let (t, mut w) = start
+            .launch
+            .unwrap_or((StateMatrix::identity(), StateMatrix::zeros()));
+        let in_flight = t * prior * t.transpose() + w;
+        for (i, term) in verdict.terms.iter().enumerate() {
+            if term.shifted && opened.0[i].is_none() {
                 let k = index::ACCEL_BIAS + i;
-                open[(k, k)] *= SHIFT_OPENED;
+                w[(k, k)] += (SHIFT_OPENED - 1.0) * in_flight[(k, k)];
             }
         }
         let second = run::forward(
@@ -463,7 +388,7 @@ pub fn check(
             fixes,
             baro,
             &Start {
-                prior: open,
+                launch: Some((t, w)),
                 ..start
             },
             opts,

@@ -24,6 +24,8 @@ pub struct ImuSeries {
     /// range or uncorrected (both). A temperature or voltage beyond the calibrated span is
     /// corrected at its edge: the calibration's own uncertainty, not a lost sample.
     pub flagged: Vec<[bool; 2]>,
+    /// The recording's median temperature, C, when it logs one.
+    pub temperature: Option<f64>,
 }
 
 /// A GNSS fix in the file's terms.
@@ -308,6 +310,14 @@ pub fn corrected(path: &Path, cal: &Calibration) -> Result<ImuSeries, InputError
             .push(spincal::flight::doubted(&codes, o.flags, rails.0, rails.1));
         last_t = t;
     }
+    if temp.is_some() {
+        let mut logged: Vec<f64> = raw.iter().filter_map(|(_, r)| r.get(7).copied()).collect();
+        let mid = logged.len() / 2;
+        if !logged.is_empty() {
+            let (_, m, _) = logged.select_nth_unstable_by(mid, f64::total_cmp);
+            series.temperature = Some(*m);
+        }
+    }
     Ok(series)
 }
 
@@ -341,6 +351,7 @@ pub fn physical(p: &Profile) -> ImuSeries {
         f: p.f.clone().unwrap_or_else(|| vec![[0.0; 3]; n]),
         w: p.w.clone().unwrap_or_else(|| vec![[0.0; 3]; n]),
         flagged: vec![[false; 2]; n],
+        temperature: None,
     }
 }
 

@@ -5,6 +5,7 @@
 
 pub mod check;
 pub mod input;
+pub mod prior;
 pub mod run;
 pub mod smooth;
 pub mod track;

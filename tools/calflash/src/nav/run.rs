@@ -73,6 +73,9 @@ pub struct Start {
     pub heading: (f64, f64),
     /// The sensor errors the pass starts from (zero: the calibration holds).
     pub sensors: SensorErrors<f64>,
+    /// How the sensor errors change at launch: the transition `T` and the added covariance
+    /// `W` ([`InFlight::at_launch`](super::prior::InFlight::at_launch)).
+    pub launch: Option<(StateMatrix<f64>, StateMatrix<f64>)>,
 }
 
 /// What one measurement said.
@@ -258,6 +261,45 @@ fn prior(start: &Start, pad_sigma: (f64, f64)) -> StateMatrix<f64> {
     p
 }
 
+/// The sensor errors' change at launch (`x = T x + w`, [`Start::launch`]), as an epoch of its
+/// own so that the smoother carries it: the covariance is stepped to the launch, the
+/// transition and the added covariance applied, and the pass's prior and what the pad taught
+/// become the flight's.
+fn change_at_launch(
+    filter: &mut ErrorFilter<f64>,
+    (t, w): &(StateMatrix<f64>, StateMatrix<f64>),
+    pass: &mut Pass,
+    at: f64,
+) {
+    let phi = t * filter.covariance_step().matrix();
+    let s = &mut filter.estimate.sensors;
+    let mut x = spincal::nav::StateVector::<f64>::zeros();
+    for i in 0..3 {
+        x[index::ACCEL_BIAS + i] = s.accel_bias[i];
+        x[index::GYRO_BIAS + i] = s.gyro_bias[i];
+        x[index::ACCEL_SCALE + i] = s.accel_scale[i];
+        x[index::GYRO_SCALE + i] = s.gyro_scale[i];
+    }
+    let x = t * x;
+    for i in 0..3 {
+        s.accel_bias[i] = x[index::ACCEL_BIAS + i];
+        s.gyro_bias[i] = x[index::GYRO_BIAS + i];
+        s.accel_scale[i] = x[index::ACCEL_SCALE + i];
+        s.gyro_scale[i] = x[index::GYRO_SCALE + i];
+    }
+    let p = t * filter.covariance * t.transpose() + w;
+    filter.covariance = (p + p.transpose()) * 0.5;
+    pass.p0 = t * pass.p0 * t.transpose() + w;
+    pass.at_launch = filter.covariance;
+    let now = (filter.estimate, filter.covariance);
+    pass.epochs.push(Epoch {
+        t: at,
+        phi,
+        predicted: now,
+        filtered: now,
+    });
+}
+
 /// Runs the filter over the flight.
 #[must_use]
 pub fn forward(
@@ -298,6 +340,11 @@ pub fn forward(
         resets: Vec::new(),
     };
     let lever = Vector3::from(opts.lever);
+    // The antenna's velocity about the unit, `C (w x l)`, summed since the last fix: a fix's
+    // velocity is the unit's plus that turn's mean over the fix's interval (the receiver's
+    // tracking smooths it: on a spinning round it averages out; on a pitching rocket it does
+    // not).
+    let (mut arm_v, mut arm_n) = (Vector3::zeros(), 0.0);
     let (mut next_fix, mut next_baro) = (0usize, 0usize);
     let mut last_baro = f64::NEG_INFINITY;
     let mut last_epoch = imu.t.first().copied().unwrap_or(0.0);
@@ -305,9 +352,19 @@ pub fn forward(
     for i in 0..imu.t.len() {
         let t = imu.t[i];
         let dt = if i == 0 { 0.0 } else { t - imu.t[i - 1] };
+        if i == launch_at
+            && i > 0
+            && let Some(change) = &start.launch
+        {
+            change_at_launch(&mut filter, change, &mut pass, t);
+        }
         let [accel, gyro] = imu.flagged[i];
         if accel || gyro {
             pass.flagged_seconds += dt;
+        }
+        if lever != Vector3::zeros() {
+            arm_v += filter.estimate.nav.attitude() * Vector3::from(imu.w[i]).cross(&lever);
+            arm_n += 1.0;
         }
         filter.sample(
             &Vector3::from(imu.f[i]),
@@ -356,6 +413,12 @@ pub fn forward(
         }
         while let Some(fix) = fixes.get(next_fix).filter(|f| f.t - opts.gnss_latency <= t) {
             next_fix += 1;
+            let arm = if arm_n > 0.0 {
+                arm_v / arm_n
+            } else {
+                Vector3::zeros()
+            };
+            (arm_v, arm_n) = (Vector3::zeros(), 0.0);
             let z = level_position(fix, start.origin);
             // The fix describes an instant up to a sample before this one.
             let back = t - (fix.t - opts.gnss_latency);
@@ -365,9 +428,9 @@ pub fn forward(
             {
                 let (h, v) = (opts.gnss_noise.0, opts.gnss_noise.1);
                 let r = opts.gnss_velocity_noise;
-                let vel = Vector3::from(vel);
-                let arm = filter.estimate.nav.attitude() * lever;
-                let at = Vector3::from(z) + vel * back - arm;
+                let vel = Vector3::from(vel) - arm;
+                let offset = filter.estimate.nav.attitude() * lever;
+                let at = Vector3::from(z) + vel * back - offset;
                 filter.reset_position_velocity(
                     &at,
                     &vel,
@@ -397,9 +460,14 @@ pub fn forward(
                 );
             }
             if let Some(vel) = fix.velocity {
+                // v_true + C_true a = v + dv + C a + psi x (C a): -[(C a) x] psi.
+                let m = -arm.cross_matrix();
                 for (axis, vi) in vel.iter().enumerate() {
-                    let h = ErrorFilter::velocity_row(axis);
-                    let nu = vi - filter.estimate.nav.v[axis];
+                    let mut h = ErrorFilter::velocity_row(axis);
+                    for j in 0..3 {
+                        h[index::ATTITUDE + j] = m[(axis, j)];
+                    }
+                    let nu = vi - (filter.estimate.nav.v[axis] + arm[axis]);
                     let r = opts.gnss_velocity_noise;
                     take(
                         &mut filter,

@@ -155,6 +155,107 @@ pub fn values(s: &SensorErrors<f64>) -> [f64; 12] {
     out
 }
 
+/// How each term's estimate moves per unit shift at launch of each term: `L = (P_L - P)
+/// P_L^-1` over the terms the calibration's prior holds, with `P_L` the covariance at launch
+/// (after what the pad taught, which a shift at launch does not move; the flight's estimate is
+/// the launch's plus what the flight's data add, linear in them); an opened term is the
+/// flight's own measure of itself (1 on its diagonal, 0 elsewhere).
+fn responses(
+    p_launch: &StateMatrix<f64>,
+    p: &StateMatrix<f64>,
+    opened: &Opened,
+) -> nalgebra::SMatrix<f64, 12, 12> {
+    use nalgebra::DMatrix;
+    let held: Vec<usize> = (0..12).filter(|i| opened.0[*i].is_none()).collect();
+    let n = held.len();
+    let at = |m: &StateMatrix<f64>, i: usize, j: usize| {
+        m[(index::ACCEL_BIAS + held[i], index::ACCEL_BIAS + held[j])]
+    };
+    let prior = DMatrix::from_fn(n, n, |i, j| at(p_launch, i, j));
+    let learnt = DMatrix::from_fn(n, n, |i, j| at(p_launch, i, j) - at(p, i, j));
+    let mut out = nalgebra::SMatrix::<f64, 12, 12>::zeros();
+    // L' = P_L^-1 (P_L - P)' (P_L symmetric), by SVD.
+    let tol = 1e-12 * prior.norm().max(f64::MIN_POSITIVE);
+    if n > 0
+        && let Ok(lt) = prior.svd(true, true).solve(&learnt.transpose(), tol)
+    {
+        for (a, &i) in held.iter().enumerate() {
+            for (b, &j) in held.iter().enumerate() {
+                out[(i, j)] = lt[(b, a)];
+            }
+        }
+    }
+    for i in (0..12).filter(|i| opened.0[*i].is_some()) {
+        out[(i, i)] = 1.0;
+    }
+    out
+}
+
+/// The terms a shift names, by a step-down over the observed terms. Under "held" the observed
+/// estimates `x` are Gaussian about zero with covariance `D` (`held_cov`); a shift `d` of term
+/// `j` moves them by `d` times column `j` of the responses `L` ([`responses`]): a shifted bias
+/// also drags the scale factor its prior correlates with. At each step every term not yet
+/// named is tested by how much its column lowers the chi-square `x' D^-1 x` left after the
+/// shifts already named (fitted together by least squares in `D`'s metric), a chi-square(1)
+/// statistic; the largest is named when its p-value is under `alpha / (m - k)` (Holm's step,
+/// `k` named of `m`), and the steps stop at the first that names none. With no correlations it
+/// is Holm's procedure on the terms' own p-values.
+fn named_step_down(
+    observed: &[usize],
+    x: &[f64; 12],
+    held_cov: &dyn Fn(usize, usize) -> f64,
+    response: &nalgebra::SMatrix<f64, 12, 12>,
+    alpha: f64,
+) -> Vec<usize> {
+    use nalgebra::{DMatrix, DVector};
+    let m = observed.len();
+    if m == 0 {
+        return Vec::new();
+    }
+    let d = DMatrix::from_fn(m, m, |a, b| held_cov(observed[a], observed[b]));
+    // Whitened by D's Cholesky factor: the chi-square left is a least-squares residual.
+    let Some(chol) = d.cholesky() else {
+        return Vec::new();
+    };
+    let white = |v: DVector<f64>| chol.l().solve_lower_triangular(&v).unwrap_or(v);
+    let y = white(DVector::from_fn(m, |a, _| x[observed[a]]));
+    let column = |j: usize| white(DVector::from_fn(m, |a, _| response[(observed[a], j)]));
+    let left = |named: &[usize]| -> f64 {
+        if named.is_empty() {
+            return y.norm_squared();
+        }
+        let a = DMatrix::from_columns(&named.iter().map(|j| column(*j)).collect::<Vec<_>>());
+        let tol = 1e-12 * a.norm().max(f64::MIN_POSITIVE);
+        a.clone()
+            .svd(true, true)
+            .solve(&y, tol)
+            .map_or(f64::NAN, |b| (&y - a * b).norm_squared())
+    };
+    let mut named: Vec<usize> = Vec::new();
+    while named.len() < m {
+        let before = left(&named);
+        let best = observed
+            .iter()
+            .filter(|j| !named.contains(j))
+            .map(|&j| {
+                let mut with = named.clone();
+                with.push(j);
+                (j, before - left(&with))
+            })
+            .filter(|(_, drop)| drop.is_finite())
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((j, drop)) = best else {
+            break;
+        };
+        let p = crate::stats::dist::normal_two_sided(drop.max(0.0).sqrt());
+        if p >= alpha / (m - named.len()) as f64 {
+            break;
+        }
+        named.push(j);
+    }
+    named
+}
+
 /// The verdict from the prior `p0`, the final estimate and covariance, and the innovations, at
 /// the false-alarm rate `alpha` (over all terms together).
 #[must_use]
@@ -211,15 +312,9 @@ pub fn judge(
         })
         .collect();
     let observed: Vec<usize> = (0..12).filter(|i| terms[*i].z.is_some()).collect();
-    let ps: Vec<f64> = observed
-        .iter()
-        .map(|i| terms[*i].p.unwrap_or(1.0))
-        .collect();
-    for (k, rejected) in crate::stats::multiple::holm(&ps, alpha)
-        .into_iter()
-        .enumerate()
-    {
-        terms[observed[k]].shifted = rejected;
+    let response = responses(at_launch, p, opened);
+    for k in named_step_down(&observed, &x, &held_cov, &response, alpha) {
+        terms[k].shifted = true;
     }
     let overall = (!observed.is_empty()).then(|| {
         let m = observed.len();
@@ -279,5 +374,45 @@ pub fn judge(
         terms,
         overall,
         consistency,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::named_step_down;
+    use nalgebra::SMatrix;
+
+    /// Two observed terms, the accelerometer's bias (0) and scale factor (6).
+    fn named(x: [f64; 2], cov: [[f64; 2]; 2], response: [[f64; 2]; 2]) -> Vec<usize> {
+        let at = |i: usize| usize::from(i == 6);
+        let mut full = [0.0; 12];
+        full[0] = x[0];
+        full[6] = x[1];
+        let mut l = SMatrix::<f64, 12, 12>::zeros();
+        for (i, j) in [(0, 0), (0, 6), (6, 0), (6, 6)] {
+            l[(i, j)] = response[at(i)][at(j)];
+        }
+        named_step_down(&[0, 6], &full, &|i, j| cov[at(i)][at(j)], &l, 0.01)
+    }
+
+    #[test]
+    fn without_correlations_the_step_down_is_holms() {
+        let one = [[1.0, 0.0], [0.0, 1.0]];
+        assert_eq!(named([4.0, 0.5], one, one), vec![0]);
+        // Holm: the second at 0.01 / 1 once the first is named.
+        assert_eq!(named([4.0, 3.0], one, one), vec![0, 6]);
+        assert_eq!(named([2.0, -2.0], one, one), Vec::<usize>::new());
+    }
+
+    /// A bias shift that drags the scale factor's estimate (their estimates correlated at -0.8)
+    /// names the bias alone, though the scale factor's own z is beyond the threshold.
+    #[test]
+    fn a_shift_names_its_term_not_the_terms_it_drags() {
+        let cov = [[1.0, -0.8], [-0.8, 1.0]];
+        let response = [[1.0, -0.8], [-0.8, 1.0]];
+        let x = [5.0, -4.0];
+        assert_eq!(named(x, cov, response), vec![0]);
+        // Both shifted: both named.
+        assert_eq!(named([5.0, 2.0], cov, response), vec![0, 6]);
     }
 }

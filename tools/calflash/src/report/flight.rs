@@ -3,8 +3,9 @@
 
 use std::fmt::Write as _;
 
-use crate::nav::check::{Checked, PriorSource};
+use crate::nav::check::Checked;
 use crate::nav::input::FixCounts;
+use crate::nav::prior::PriorSource;
 
 /// The terminal text.
 #[must_use]
@@ -43,8 +44,24 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
         );
     }
     match &c.prior {
-        PriorSource::Calibration => {
-            let _ = writeln!(s, "  prior: the calibration's own covariance");
+        PriorSource::Record(at) => {
+            let _ = writeln!(
+                s,
+                "  prior: the calibration's own covariance, its whole model over the flight's rates ({at})"
+            );
+        }
+        PriorSource::Factors { folded } => {
+            let _ = writeln!(
+                s,
+                "  prior: the calibration's own covariance, from the blob's factors over the flight's rates"
+            );
+            if !folded.is_empty() {
+                let _ = writeln!(
+                    s,
+                    "  note: the model of {} keeps a cubic, odd-quadratic or asymmetry term, whose uncertainty the blob's factors fold over the whole calibrated range: near the range's end its prior may be too narrow; give the calibration's record (--record) to take its whole model",
+                    folded.join(", ")
+                );
+            }
         }
         PriorSource::Stated(p) => {
             let _ = writeln!(
@@ -88,6 +105,10 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
                 "  overall over the observed terms: chi-square {chi2:.2} on {dof} dof, p = {p:.3}"
             );
         }
+        let _ = writeln!(
+            s,
+            "  (z and p: each term on its own; SHIFTED: the terms a step-down test names, each tested given the shifts already named, as a shifted term drags the estimates its prior correlates with)"
+        );
         for (name, x, sd) in &c.shifts {
             let _ = writeln!(
                 s,
@@ -131,7 +152,25 @@ pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value 
         "gnss_repeated": counts.repeated,
         "flagged_seconds": c.pass.flagged_seconds,
         "navigation_resets": c.pass.resets,
+        "prior": prior_json(&c.prior),
     })
+}
+
+/// Where the prior came from, for the record.
+fn prior_json(p: &PriorSource) -> serde_json::Value {
+    match p {
+        PriorSource::Record(at) => serde_json::json!({"source": "record", "from": at}),
+        PriorSource::Factors { folded } => {
+            serde_json::json!({"source": "factors", "folded": folded})
+        }
+        PriorSource::Stated(s) => serde_json::json!({
+            "source": "stated",
+            "accel_bias": s.accel_bias,
+            "gyro_bias": s.gyro_bias,
+            "accel_scale": s.accel_scale,
+            "gyro_scale": s.gyro_scale,
+        }),
+    }
 }
 
 /// Every innovation as CSV: `t, measurement, innovation, sigma, taken`.

@@ -89,6 +89,17 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
             ),
             latency: args.gnss_latency,
             outage: args.gnss_outage,
+            antenna: match args.gnss_antenna.as_slice() {
+                [x, y, z] => [*x, *y, *z],
+                [] => [0.0; 3],
+                other => {
+                    return Err(format!(
+                        "--gnss-antenna: 3 comma-separated values, {} given",
+                        other.len()
+                    )
+                    .into());
+                }
+            },
             ..Receiver::default()
         };
         staged.write(p, |w| {

@@ -95,6 +95,9 @@ pub struct SimulateArgs {
     /// No fix for this long after launch, s.
     #[arg(long, default_value_t = 1.0, requires = "gnss", value_parser = |s: &str| super::values::in_range(s, 0.0, 1.0e4))]
     pub gnss_outage: f64,
+    /// The GNSS antenna from the IMU, body axes, m: `X,Y,Z` (`calflash flight --lever`).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, requires = "gnss", num_args = 1, value_parser = super::values::finite)]
+    pub gnss_antenna: Vec<f64>,
     /// With --flight: write a barometer's readings here (CSV: t, T in C, P in Pa, 100 Hz).
     #[arg(long, requires = "flight")]
     pub baro: Option<PathBuf>,

@@ -24,6 +24,11 @@ pub struct Receiver {
     pub latency: f64,
     /// No fix for this long after launch (the antenna tumbling, the receiver re-acquiring), s.
     pub outage: f64,
+    /// The antenna from the IMU, body axes, m: a fix is the antenna's position, and its
+    /// velocity the unit's plus the arm's turn `C (w x l)` averaged over the fix's interval
+    /// (the receiver's tracking smooths what changes faster than its rate: on a spinning round
+    /// the arm's turn averages out, on a pitching rocket it does not).
+    pub antenna: [f64; 3],
 }
 
 impl Default for Receiver {
@@ -34,6 +39,7 @@ impl Default for Receiver {
             velocity_noise: 0.1,
             latency: 0.0,
             outage: 1.0,
+            antenna: [0.0; 3],
         }
     }
 }
@@ -62,21 +68,31 @@ pub fn write_gnss(
         noise(rx.velocity_noise)?,
     );
     let to_level = site.to_level();
+    let arm = Vector3::from(rx.antenna);
     let mut next = (first.t * rx.rate).ceil() / rx.rate;
+    // The arm's velocity summed since the last fix, and how many samples.
+    let (mut sum, mut n) = (Vector3::zeros(), 0.0);
     for s in samples {
+        let c = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            s.q[0], s.q[1], s.q[2], s.q[3],
+        ));
+        sum += c * Vector3::from(s.w).cross(&arm);
+        n += 1.0;
         if s.t + 1e-9 < next {
             continue;
         }
         next += 1.0 / rx.rate;
+        let antenna_v = Vector3::from(s.v) + sum / n;
+        (sum, n) = (Vector3::zeros(), 0.0);
         if (0.0..rx.outage).contains(&s.t) {
             continue;
         }
-        let level = to_level * Vector3::from(s.r);
+        let level = to_level * (Vector3::from(s.r) + c * arm);
         let noisy = level + Vector3::new(h.sample(rng), h.sample(rng), v.sample(rng));
         let flight = to_level.transpose() * noisy;
         let (lat, lon, height) = site.geodetic(&flight);
-        let vel = to_level * Vector3::from(s.v)
-            + Vector3::new(dv.sample(rng), dv.sample(rng), dv.sample(rng));
+        let vel =
+            to_level * antenna_v + Vector3::new(dv.sample(rng), dv.sample(rng), dv.sample(rng));
         writeln!(
             w,
             "{},{lat:.9},{lon:.9},{height:.3},{:.3},{:.3},{:.3},12",

@@ -1,0 +1,628 @@
+//! The sensor errors' prior: the calibration's own error, seen through the filter's model at
+//! rest and over the flight, or a stated one for a unit whose calibration carries no
+//! covariance.
+//!
+//! The filter models each output's error as a bias and a scale factor of what the axis senses,
+//! `e = b + s u`. The calibration's error is more: per output the error of every parameter the
+//! fit estimated (bias, sensitivity row, lever arm or g-sensitivity row, g-squared term; with
+//! the record, the cubic and odd-quadratic terms too) times its feature at the sample
+//! ([`IMU_FEATURES`]), `e = theta' phi`, with `theta ~ N(0, C)`. Over a flight the best
+//! straight line through that error is `(b, s) = A theta` with `A = (U'U)^-1 U' Phi` (`U` the
+//! rows `[1, u]` of the flight's samples, `Phi` their regressors), so its covariance is
+//! `A C A'`; at rest the line is the bias and the sensitivity's own term. On a round spinning at
+//! 1,500 rad/s a g-squared term known to 1e-8 per rad/s moves the roll gyro's line by 0.02 rad/s
+//! at zero rate and 3e-5 in slope, and the axial accelerometer's misalignment error turns the
+//! centripetal force across it into 0.13 m/s^2 along it: a prior taken at rest would state both
+//! a few times too small. [`InFlight`] holds both lines, and the filter passes from the one to
+//! the other at launch. The axes across a spin keep the line at rest
+//! ([`SPINNING`]).
+
+use nalgebra::{DMatrix, DVector};
+use spincal::correct::AnyImuCorrector;
+use spincal::model::{Calibration, IMU_FEATURES, ImuOutputCovariance};
+use spincal::nav::StateMatrix;
+use spincal::nav::filter::index;
+
+use super::input::{ImuSeries, median_rate};
+use crate::sensor::record::{PointRecord, Record};
+
+/// A stated prior (1-sigma) for a unit whose calibration carries no covariance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StatedPrior {
+    /// Accelerometer bias, m/s^2.
+    pub accel_bias: f64,
+    /// Gyro bias, rad/s.
+    pub gyro_bias: f64,
+    /// Accelerometer scale factor.
+    pub accel_scale: f64,
+    /// Gyro scale factor.
+    pub gyro_scale: f64,
+}
+
+impl Default for StatedPrior {
+    /// A consumer MEMS unit's datasheet: 20 mg, 0.5 deg/s, 1 %, 1 %.
+    fn default() -> Self {
+        Self {
+            accel_bias: 0.2,
+            gyro_bias: 0.5f64.to_radians(),
+            accel_scale: 0.01,
+            gyro_scale: 0.01,
+        }
+    }
+}
+
+/// Where the prior came from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PriorSource {
+    /// The calibration record's covariance of its whole model (named: the file or the unit
+    /// history's record).
+    Record(String),
+    /// The blob's covariance factors. Outputs whose model keeps a cubic or odd-quadratic term
+    /// are named: the factors fold those terms' uncertainty over the whole calibrated range,
+    /// which at a spin near the range's end can state the line through the error too narrow.
+    Factors {
+        /// Outputs (`a_x`..`g_z`) whose model keeps a term the factors fold.
+        folded: Vec<&'static str>,
+    },
+    /// Stated, because the calibration carries no covariance (or there is no calibration).
+    Stated(StatedPrior),
+}
+
+/// Output names, in the corrector's order.
+pub const OUTPUTS: [&str; 6] = ["a_x", "a_y", "a_z", "g_x", "g_y", "g_z"];
+
+/// The sensor errors' prior from a calibration's covariance factors, at the flight's
+/// temperature (the middle of the calibrated span when the recording logs none): per output the
+/// covariance of the straight line through its calibration error over the samples of `imu`
+/// from `from` on that the filter navigates on (see the module's page). `None` when the
+/// calibration carries no covariance.
+#[must_use]
+pub fn calibration_prior(cal: &Calibration, imu: &ImuSeries, from: usize) -> Option<InFlight> {
+    let corrector = corrector_at_flight(cal, imu)?;
+    let factors = *corrector.covariance_factors()?;
+    let lines = lines_over(&corrector, imu, from, IMU_FEATURES, |_, phi, out| {
+        out.copy_from_slice(&phi.map(f64::from));
+    });
+    let outputs = factors.accel.iter().chain(&factors.gyro);
+    let mut prior = InFlight::default();
+    for (out, (line, factor)) in lines.iter().zip(outputs).enumerate() {
+        let mut own = vec![None; IMU_FEATURES];
+        own[0] = Some(0);
+        own[1 + out % 3] = Some(1);
+        prior.set(out, line, &own, &covariance(factor));
+    }
+    Some(prior)
+}
+
+/// The outputs whose model keeps a term the blob's covariance factors fold over the calibrated
+/// range (a cubic or odd-quadratic one, by the blob's nonlinear coefficients).
+#[must_use]
+pub fn folded_outputs(cal: &Calibration) -> Vec<&'static str> {
+    let spincal::model::Sensor::Imu { sets, .. } = &cal.data().sensor else {
+        return Vec::new();
+    };
+    let Some(set) = sets.first() else {
+        return Vec::new();
+    };
+    set.accel
+        .axes
+        .iter()
+        .chain(&set.gyro.axes)
+        .zip(OUTPUTS)
+        .filter(|(a, _)| a.cubic != 0.0 || a.odd_quadratic != 0.0 || a.asymmetry != 0.0)
+        .map(|(_, n)| n)
+        .collect()
+}
+
+/// What stops a record from giving the prior.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RecordPriorError {
+    /// Another calibration's record.
+    #[error("it is the record of another calibration (data {record}; the blob's {blob})")]
+    Other {
+        /// The record's data hash.
+        record: String,
+        /// The blob's.
+        blob: String,
+    },
+    /// Not an IMU's, or an output missing.
+    #[error("it holds no fit of {0}")]
+    Missing(&'static str),
+    /// A term this prior cannot evaluate along a flight.
+    #[error("{output}'s term `{term}` is not one the flight can evaluate")]
+    Term {
+        /// The output.
+        output: &'static str,
+        /// The term.
+        term: String,
+    },
+    /// The calibration has no IMU corrector.
+    #[error("the calibration does not correct an IMU")]
+    NotImu,
+}
+
+/// The sensor errors' prior from the calibration's record (`calibrate --json`): as
+/// [`calibration_prior`], over the whole model each output's fit kept (cubic, odd-quadratic
+/// and asymmetry terms included), at the record's table point nearest the flight's temperature.
+///
+/// # Errors
+/// [`RecordPriorError`]: the record of another calibration, a missing output, a term the flight
+/// cannot evaluate.
+pub fn record_prior(
+    record: &Record,
+    cal: &Calibration,
+    imu: &ImuSeries,
+    from: usize,
+) -> Result<InFlight, RecordPriorError> {
+    let hash: String = cal
+        .data()
+        .identity
+        .data_hash
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    if !record.data_hash.eq_ignore_ascii_case(&hash) {
+        return Err(RecordPriorError::Other {
+            record: record.data_hash.clone(),
+            blob: hash,
+        });
+    }
+    let corrector = corrector_at_flight(cal, imu).ok_or(RecordPriorError::NotImu)?;
+    let at = imu.temperature.unwrap_or(f64::NAN);
+    let point = record
+        .points
+        .iter()
+        .min_by(|a, b| {
+            let d = |p: &PointRecord| p.temp.map_or(0.0, |t| (t - at).abs());
+            d(a).total_cmp(&d(b))
+        })
+        .ok_or(RecordPriorError::Missing("any output"))?;
+    let mut prior = InFlight::default();
+    for (out, name) in OUTPUTS.iter().enumerate() {
+        let fit = point
+            .axes
+            .iter()
+            .find(|a| a.output == *name)
+            .ok_or(RecordPriorError::Missing(name))?;
+        let axis = out % 3;
+        let own = if out < 3 {
+            ["f_x", "f_y", "f_z"]
+        } else {
+            ["w_x", "w_y", "w_z"]
+        }[axis];
+        let terms: Vec<Regressor> = fit
+            .terms
+            .iter()
+            .map(|t| {
+                Regressor::of(t, out).ok_or_else(|| RecordPriorError::Term {
+                    output: name,
+                    term: t.clone(),
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        let slope = fit
+            .terms
+            .iter()
+            .position(|t| t == own)
+            .and_then(|k| fit.coefficients.get(k).copied())
+            .filter(|s| s.abs() > 0.0)
+            .ok_or(RecordPriorError::Missing(name))?;
+        let n = terms.len();
+        let line = lines_over(&corrector, imu, from, n, |o, phi, row| {
+            if o == out {
+                for (r, t) in row.iter_mut().zip(&terms) {
+                    *r = t.value(phi, o, slope);
+                }
+            }
+        })[out]
+            .clone();
+        let q = DMatrix::from_fn(n, n, |i, j| {
+            fit.covariance
+                .get(i)
+                .and_then(|r| r.get(j))
+                .copied()
+                .unwrap_or(0.0)
+                / (slope * slope)
+        });
+        let own_at: Vec<Option<usize>> = fit
+            .terms
+            .iter()
+            .map(|t| match t.as_str() {
+                "1" => Some(0),
+                t if t == own => Some(1),
+                _ => None,
+            })
+            .collect();
+        prior.set(out, &line, &own_at, &q);
+    }
+    Ok(prior)
+}
+
+/// A term of a record's fit, as the flight evaluates it from the device's error features
+/// ([`IMU_FEATURES`]).
+#[derive(Debug, Clone, Copy)]
+enum Regressor {
+    /// A device feature times a factor of the axis' sensitivity (`true`: a lever arm, whose
+    /// regressor is the sensitivity times the feature).
+    Feature(usize, bool),
+    /// `x^3`, `x |x|`, `|x|` of what the axis senses.
+    Cubic,
+    OddSquare,
+    Kink,
+}
+
+impl Regressor {
+    fn of(term: &str, out: usize) -> Option<Self> {
+        let xyz = |prefix: &str| {
+            ["x", "y", "z"]
+                .iter()
+                .position(|a| term == format!("{prefix}{a}"))
+        };
+        let s = crate::sensor::lever::SENSED;
+        Some(match term {
+            "1" => Self::Feature(0, false),
+            t if t == format!("{s}^2") => Self::Feature(7, false),
+            t if t == format!("{s}^3") => Self::Cubic,
+            t if t == format!("{s}:abs({s})") => Self::OddSquare,
+            crate::sensor::lever::SENSED_KINK => Self::Kink,
+            _ if out < 3 => {
+                if let Some(k) = xyz("f_") {
+                    Self::Feature(1 + k, false)
+                } else {
+                    let lever = format!("lever_{}", ["x", "y", "z"][out]);
+                    Self::Feature(4 + xyz(&lever)?, true)
+                }
+            }
+            _ => match (xyz("w_"), xyz("f_")) {
+                (Some(k), _) => Self::Feature(1 + k, false),
+                (None, Some(k)) => Self::Feature(4 + k, false),
+                (None, None) => return None,
+            },
+        })
+    }
+
+    /// Its value at a sample whose device features for output `out` are `phi`.
+    fn value(self, phi: &[f32; IMU_FEATURES], out: usize, slope: f64) -> f64 {
+        let phi = phi.map(f64::from);
+        // What the axis senses: the square root of the g-squared feature, signed as the axis'
+        // own input.
+        let x = phi[7].max(0.0).sqrt().copysign(phi[1 + out % 3]);
+        match self {
+            Self::Feature(k, lever) => phi[k] * if lever { slope } else { 1.0 },
+            Self::Cubic => x * x * x,
+            Self::OddSquare => x * x.abs(),
+            Self::Kink => x.abs(),
+        }
+    }
+}
+
+/// The corrector of `cal` at the flight's sample rate and temperature.
+fn corrector_at_flight<'a>(cal: &'a Calibration, imu: &ImuSeries) -> Option<AnyImuCorrector<'a>> {
+    let mut corrector =
+        AnyImuCorrector::new(cal, median_rate(imu.t.iter().copied()) as f32).ok()?;
+    let env = &cal.data().environment;
+    let mid = |s: spincal::model::Span| 0.5 * (s.lo + s.hi);
+    let temperature = imu
+        .temperature
+        .map_or(mid(env.temperature_span), |t| t as f32);
+    corrector.set_environment(temperature, mid(env.voltage_span));
+    Some(corrector)
+}
+
+/// Per output, the sums of the straight line through its error over the samples of `imu` from
+/// `from` on that the filter navigates on, with `p` regressors that `fill(output, features,
+/// row)` writes from the device's error features at each sample.
+fn lines_over(
+    corrector: &AnyImuCorrector<'_>,
+    imu: &ImuSeries,
+    from: usize,
+    p: usize,
+    fill: impl Fn(usize, &[f32; IMU_FEATURES], &mut [f64]),
+) -> [Line; 6] {
+    let mut lines: [Line; 6] = std::array::from_fn(|_| Line::new(p));
+    let across = across_the_spin(imu, from);
+    let mut row = vec![0.0; p];
+    for k in from..imu.t.len() {
+        let (f, w) = (imu.f[k], imu.w[k]);
+        let values = [f[0], f[1], f[2], w[0], w[1], w[2]];
+        let features = corrector.error_features(&values.map(|x| x as f32));
+        for (out, (line, phi)) in lines.iter_mut().zip(&features).enumerate() {
+            if imu.flagged[k][out / 3] || across[out % 3] {
+                continue;
+            }
+            row.iter_mut().for_each(|r| *r = 0.0);
+            fill(out, phi, &mut row);
+            line.add(values[out], &row);
+        }
+    }
+    lines
+}
+
+/// A flight spins when its root mean square rate about its spin axis after launch exceeds this,
+/// rad/s (16 revolutions a second).
+pub const SPINNING: f64 = 100.0;
+
+/// Per body axis, whether it lies across the spin of a flight that spins ([`SPINNING`]).
+/// What such an axis senses turns with the roll, so its error over the flight is no line in
+/// its own input: the line a regression would draw through it follows whatever drifts with
+/// the spin's decay (the lever arm's error goes as the spin's square), and given to the filter
+/// as a bias and a scale factor correlated at 0.8 it let the filter blame a transverse bias for
+/// an axial shift (40 false SHIFTED in 50 flights). Its prior is taken at zero input instead.
+fn across_the_spin(imu: &ImuSeries, from: usize) -> [bool; 3] {
+    let axis = super::run::spin_axis(imu, from);
+    let Some(k) = (0..3).find(|i| axis[*i] > 0.5) else {
+        return [false; 3];
+    };
+    let n = imu.w.len().saturating_sub(from).max(1) as f64;
+    let rms = (imu.w.iter().skip(from).map(|w| w[k] * w[k]).sum::<f64>() / n).sqrt();
+    if rms <= SPINNING {
+        return [false; 3];
+    }
+    std::array::from_fn(|i| i != k)
+}
+
+/// The sensor errors' prior of a calibration for a flight: at rest (the line through each
+/// output's error at zero input: its bias and its own sensitivity) and how the errors change
+/// at launch, when the spin and the flight's forces move each output's line (see the module's
+/// page). Both are linear in the calibration's parameter errors, so the flight's errors given
+/// those at rest are Gaussian: per output `x_flight = (I + K) x_rest + w`, with `K = C P0^-1`
+/// (`C` the covariance of the change with the errors at rest, `P0` theirs) and `w` independent
+/// of covariance `D - K C'` (`D` the change's own). The filter applies it at launch, so that what
+/// the pad teaches of the errors at rest is carried into the flight as far as it holds there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InFlight {
+    /// Per output, `P0`, `C` and `D` (2 x 2 over its bias and scale factor).
+    blocks: [[nalgebra::Matrix2<f64>; 3]; 6],
+}
+
+impl Default for InFlight {
+    fn default() -> Self {
+        Self {
+            blocks: [[nalgebra::Matrix2::zeros(); 3]; 6],
+        }
+    }
+}
+
+impl InFlight {
+    /// Output `out`'s blocks from its line over the flight and the covariance `q` of its
+    /// parameters (`own` as [`Line::through`] takes it).
+    fn set(&mut self, out: usize, line: &Line, own: &[Option<usize>], q: &DMatrix<f64>) {
+        let at_rest = Line::new(own.len()).through(own);
+        let change = line.through(own) - &at_rest;
+        let m = |a: &DMatrix<f64>, b: &DMatrix<f64>| {
+            let c = a * q * b.transpose();
+            nalgebra::Matrix2::new(c[(0, 0)], c[(0, 1)], c[(1, 0)], c[(1, 1)])
+        };
+        self.blocks[out] = [
+            m(&at_rest, &at_rest),
+            m(&change, &at_rest),
+            m(&change, &change),
+        ];
+    }
+
+    /// The prior at rest over the filter's states.
+    #[must_use]
+    pub fn at_rest(&self) -> StateMatrix<f64> {
+        let mut p = StateMatrix::zeros();
+        for (out, [p0, _, _]) in self.blocks.iter().enumerate() {
+            let (b, s) = states(out);
+            p[(b, b)] = p0[(0, 0)];
+            p[(s, s)] = p0[(1, 1)];
+            p[(b, s)] = p0[(0, 1)];
+            p[(s, b)] = p0[(1, 0)];
+        }
+        p
+    }
+
+    /// The change at launch as the filter's transition `T` and added covariance `W` over its
+    /// states. `open[6 + out]` marks an output whose scale factor starts open (the flight
+    /// estimates it from a wide prior): its scale factor passes unchanged, and its bias is
+    /// carried given its bias at rest alone.
+    #[must_use]
+    pub fn at_launch(&self, open: &[bool; 12]) -> (StateMatrix<f64>, StateMatrix<f64>) {
+        let mut t = StateMatrix::identity();
+        let mut w = StateMatrix::zeros();
+        for (out, [p0, c, d]) in self.blocks.iter().enumerate() {
+            let (b, s) = states(out);
+            let (k, added) = if open[6 + out] {
+                let k = if p0[(0, 0)] > 0.0 {
+                    c[(0, 0)] / p0[(0, 0)]
+                } else {
+                    0.0
+                };
+                (
+                    nalgebra::Matrix2::new(k, 0.0, 0.0, 0.0),
+                    nalgebra::Matrix2::new(d[(0, 0)] - k * c[(0, 0)], 0.0, 0.0, 0.0),
+                )
+            } else {
+                let inv = p0
+                    .svd(true, true)
+                    .pseudo_inverse(1e-12 * p0.abs().max())
+                    .unwrap_or_else(|_| nalgebra::Matrix2::zeros());
+                let k = c * inv;
+                (k, d - k * c.transpose())
+            };
+            let added = (added + added.transpose()) * 0.5;
+            let added = {
+                let e = added.symmetric_eigen();
+                let clamped = e.eigenvalues.map(|x| x.max(0.0));
+                e.eigenvectors
+                    * nalgebra::Matrix2::from_diagonal(&clamped)
+                    * e.eigenvectors.transpose()
+            };
+            for (i, x) in [b, s].into_iter().enumerate() {
+                for (j, y) in [b, s].into_iter().enumerate() {
+                    t[(x, y)] += k[(i, j)];
+                    w[(x, y)] = added[(i, j)];
+                }
+            }
+        }
+        (t, w)
+    }
+}
+
+/// Output `out`'s bias and scale-factor states.
+fn states(out: usize) -> (usize, usize) {
+    let axis = out % 3;
+    if out < 3 {
+        (index::ACCEL_BIAS + axis, index::ACCEL_SCALE + axis)
+    } else {
+        (index::GYRO_BIAS + axis, index::GYRO_SCALE + axis)
+    }
+}
+
+/// The sums of one output's straight line through `p` regressors: `n`, `sum u`, `sum u^2`,
+/// and per regressor `sum r`, `sum u r`.
+#[derive(Debug, Clone)]
+struct Line {
+    n: f64,
+    u: f64,
+    uu: f64,
+    r: DVector<f64>,
+    ur: DVector<f64>,
+}
+
+impl Line {
+    fn new(p: usize) -> Self {
+        Self {
+            n: 0.0,
+            u: 0.0,
+            uu: 0.0,
+            r: DVector::zeros(p),
+            ur: DVector::zeros(p),
+        }
+    }
+
+    fn add(&mut self, u: f64, row: &[f64]) {
+        self.n += 1.0;
+        self.u += u;
+        self.uu += u * u;
+        for (j, x) in row.iter().enumerate() {
+            self.r[j] += x;
+            self.ur[j] += u * x;
+        }
+    }
+
+    /// `A` (2 x p), the map from the parameters' errors to the line's bias and slope (the
+    /// slope from the centred sums, `S_ur / S_uu`). Without a spread of the input (or without
+    /// samples), the line at zero input: `own[j]` says which regressor is the bias (0) and
+    /// which the axis' own input (1).
+    fn through(&self, own: &[Option<usize>]) -> DMatrix<f64> {
+        let p = self.r.len();
+        let mut a = DMatrix::zeros(2, p);
+        let mean = self.u / self.n.max(1.0);
+        let spread = self.uu - self.n * mean * mean;
+        if self.n >= 2.0 && spread > 1e-9 * self.uu {
+            for j in 0..p {
+                let r_mean = self.r[j] / self.n;
+                let slope = (self.ur[j] - self.n * mean * r_mean) / spread;
+                a[(1, j)] = slope;
+                a[(0, j)] = r_mean - slope * mean;
+            }
+        } else {
+            for (j, o) in own.iter().enumerate() {
+                if let Some(row) = o {
+                    a[(*row, j)] = 1.0;
+                }
+            }
+        }
+        a
+    }
+}
+
+/// `L L'` of one output's packed factor.
+fn covariance(factor: &ImuOutputCovariance) -> DMatrix<f64> {
+    let packed = factor.as_flattened();
+    let l = DMatrix::from_fn(IMU_FEATURES, IMU_FEATURES, |i, j| {
+        if j <= i {
+            packed
+                .get(i * (i + 1) / 2 + j)
+                .map_or(0.0, |x| f64::from(*x))
+        } else {
+            0.0
+        }
+    });
+    &l * l.transpose()
+}
+
+/// A stated prior, the same at rest and in flight.
+#[must_use]
+pub fn stated_prior(s: &StatedPrior) -> InFlight {
+    let mut prior = InFlight::default();
+    for (out, block) in prior.blocks.iter_mut().enumerate() {
+        let (b, k) = if out < 3 {
+            (s.accel_bias, s.accel_scale)
+        } else {
+            (s.gyro_bias, s.gyro_scale)
+        };
+        block[0] = nalgebra::Matrix2::new(b * b, 0.0, 0.0, k * k);
+    }
+    prior
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Line, Regressor};
+    use nalgebra::{DMatrix, DVector};
+
+    /// The line through a quadratic error over a spin of 1,300 to 1,900 rad/s: the same as a
+    /// least-squares fit of `[1, u]` by SVD, and far from the error's own bias and slope at
+    /// zero input.
+    #[test]
+    fn the_line_through_an_error_is_its_least_squares_fit_over_the_flight() {
+        let us: Vec<f64> = (0..=600).map(|k| 1300.0 + f64::from(k)).collect();
+        // Regressors: 1, u, u^2 (a bias, a scale factor and a g-squared term).
+        let mut line = Line::new(3);
+        for u in &us {
+            line.add(*u, &[1.0, *u, u * u]);
+        }
+        let a = line.through(&[Some(0), Some(1), None]);
+        let x = DMatrix::from_fn(us.len(), 2, |i, j| if j == 0 { 1.0 } else { us[i] });
+        let svd = x.svd(true, true);
+        for (j, r) in [|_: f64| 1.0, |u: f64| u, |u: f64| u * u]
+            .iter()
+            .enumerate()
+        {
+            let y = DVector::from_iterator(us.len(), us.iter().map(|u| r(*u)));
+            let b = svd.solve(&y, 1e-12).unwrap();
+            for row in 0..2 {
+                let tol = 1e-9 * b[row].abs().max(1.0);
+                assert!((a[(row, j)] - b[row]).abs() < tol, "{a} against {b} at {j}");
+            }
+        }
+        // A g-squared error moves the line's slope by about 2 * 1600 and its bias by -1600^2.
+        assert!((a[(1, 2)] - 3200.0).abs() < 1.0, "{a}");
+        assert!(
+            (a[(0, 2)] + 1600.0 * 1600.0).abs() < 0.02 * 1600.0 * 1600.0,
+            "{a}"
+        );
+    }
+
+    #[test]
+    fn without_a_spread_of_the_input_the_line_is_taken_at_zero_input() {
+        let mut line = Line::new(3);
+        for _ in 0..10 {
+            line.add(2.0, &[1.0, 2.0, 4.0]);
+        }
+        let a = line.through(&[Some(0), Some(1), None]);
+        assert_eq!(
+            a,
+            DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0])
+        );
+    }
+
+    #[test]
+    fn a_records_terms_are_read_as_the_devices_features() {
+        let phi = [1.0, 1500.0, 2.0, 3.0, 0.5, 0.25, 0.125, 1500.0 * 1500.0];
+        let v = |t: &str, out: usize| Regressor::of(t, out).map(|r| r.value(&phi, out, 16.0));
+        // The gyro x: its rates, its g-sensitivity's force, what it senses.
+        assert_eq!(v("w_x", 3), Some(1500.0));
+        assert_eq!(v("f_y", 3), Some(0.25));
+        assert_eq!(v("sensed^3", 3), Some(1500.0f64.powi(3)));
+        assert_eq!(v("sensed:abs(sensed)", 3), Some(1500.0 * 1500.0));
+        // An accelerometer's lever arm is its sensitivity times the gradient.
+        assert_eq!(v("lever_xz", 0), Some(0.125 * 16.0));
+        assert_eq!(v("f_z", 0), Some(3.0));
+        assert!(v("temp_1", 3).is_none() && v("lever_xx", 3).is_none());
+    }
+}
