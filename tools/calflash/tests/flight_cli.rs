@@ -263,6 +263,104 @@ fn a_roll_gyro_scale_factor_shifted_at_launch_is_found_at_a_round_s_spin() {
     );
 }
 
+/// Through a 300 rev/s spin the smoothed position stays within its stated bounds: against the
+/// simulated truth, every epoch after the first fix puts the navigation back is within 4 of
+/// its 1-sigma on each axis, and 95 % within 2.
+#[test]
+fn the_smoothed_position_stays_within_its_stated_bounds_through_the_spin() {
+    let d = tempfile::tempdir().unwrap();
+    calibrated(d.path());
+    let spec = "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=20";
+    ok(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            TRUTH,
+            "--flight",
+            spec,
+            "--sample-rate",
+            "2000",
+            "-o",
+            "s.csv",
+            "--gnss",
+            "g.csv",
+            "--baro",
+            "b.csv",
+            "--flight-truth",
+            "truth.csv",
+            "--seed",
+            "7",
+        ],
+    );
+    let v = {
+        ok(
+            d.path(),
+            &[
+                "flight",
+                "s.csv",
+                "--blob",
+                "round.blob",
+                "--gnss",
+                "g.csv",
+                "--baro",
+                "b.csv",
+                "--track",
+                "track.csv",
+                "--json",
+                "f.json",
+                "--no-db",
+            ],
+        );
+        serde_json::from_str::<serde_json::Value>(
+            &std::fs::read_to_string(d.path().join("f.json")).unwrap(),
+        )
+        .unwrap()
+    };
+    let reset = v["navigation_resets"][0].as_f64().unwrap();
+    let mut launch = calflash::sim::flight::spec::Launch::parse(spec).unwrap();
+    let site = launch.site_mut().expect("the spec places the launch");
+    let read = |name: &str| -> Vec<Vec<f64>> {
+        let text = std::fs::read_to_string(d.path().join(name)).unwrap();
+        text.lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect()
+    };
+    let truth = read("truth.csv");
+    let t0 = truth[0][0];
+    let mut z = Vec::new();
+    for row in read("track.csv").iter().filter(|r| r[0] > reset) {
+        let k = (((row[0] - t0) * 2000.0).round() as usize).min(truth.len() - 1);
+        let r = nalgebra::Vector3::new(truth[k][1], truth[k][2], truth[k][3]);
+        let (lat, lon, h) = site.geodetic(&r);
+        let (e, n, u) = map_3d::geodetic2enu(
+            row[1].to_radians(),
+            row[2].to_radians(),
+            row[3],
+            lat.to_radians(),
+            lon.to_radians(),
+            h,
+            map_3d::Ellipsoid::WGS84,
+        );
+        z.extend([e / row[4], n / row[5], u / row[6]]);
+    }
+    let worst = z.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let inside = z.iter().filter(|x| x.abs() < 2.0).count() as f64 / z.len() as f64;
+    println!(
+        "{} epochs: worst {worst:.2} sigma, {:.1} % within 2",
+        z.len() / 3,
+        100.0 * inside
+    );
+    assert!(z.len() > 300, "{}", z.len());
+    assert!(
+        worst < 4.0 && inside > 0.95,
+        "worst {worst}, inside {inside}"
+    );
+}
+
 /// `--record` must be the record of the blob's calibration: another unit's (or another
 /// calibration of this one) is refused naming both data hashes, and a file that is no record
 /// is named.
@@ -459,8 +557,6 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
     );
 }
 
-/// The real Hedy rocket flight: its physical IMU log, its GNSS (a receiver that holds stale
-/// fixes) and its barometer, with the options the README documents.
 /// A rocket's GNSS antenna a metre forward of the IMU: as the rocket pitches over, the arm's
 /// turn `C (w x l)` adds to the antenna's velocity, and the filter carries it in its velocity
 /// updates (without it this flight does not fit: 58 % of the innovations inside, 551 refused).
@@ -512,6 +608,8 @@ fn a_rocket_s_antenna_a_metre_forward_is_carried_in_the_velocity_too() {
     assert_eq!(c["refused"], 0, "{c}");
 }
 
+/// The real Hedy rocket flight: its physical IMU log, its GNSS (a receiver that holds stale
+/// fixes) and its barometer, with the options the README documents.
 #[test]
 fn the_hedy_flight_fits_its_gnss_and_barometer() {
     let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))

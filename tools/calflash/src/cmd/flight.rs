@@ -90,9 +90,13 @@ pub struct FlightArgs {
     /// taken), to plot against its bounds.
     #[arg(long)]
     pub innovations: Option<PathBuf>,
+    /// Write the smoothed trajectory here (CSV: t, latitude, longitude, height, and the
+    /// 1-sigma of east, north and up in m), at every epoch of the filter.
+    #[arg(long)]
+    pub track: Option<PathBuf>,
     /// Read the flight filter running in the unit on this serial port (or tcp://HOST:PORT)
     /// instead: its estimate, 1-sigma and counts as its flight loop last published them.
-    #[arg(long, conflicts_with_all = ["recording", "blob", "gnss", "baro", "report", "innovations"])]
+    #[arg(long, conflicts_with_all = ["recording", "blob", "gnss", "baro", "report", "innovations", "track"])]
     pub port: Option<String>,
     /// Seconds to wait for each answer from the unit.
     #[arg(long, default_value_t = 2.0, value_parser = |s: &str| super::values::in_range(s, 0.01, 600.0))]
@@ -120,6 +124,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         .input("--baro", args.baro.as_deref())
         .output("--json", args.json.as_deref())
         .output("--innovations", args.innovations.as_deref())
+        .output("--track", args.track.as_deref())
         .output("--report", args.report.as_deref())
         .created(
             "the unit history",
@@ -241,6 +246,10 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
     }
     if let Some(path) = &args.innovations {
         let csv = crate::report::flight::innovations_csv(&checked.pass.said);
+        staged.write(path, |w| w.write_all(csv.as_bytes()))?;
+    }
+    if let Some(path) = &args.track {
+        let csv = crate::report::flight::track_csv(&checked.track);
         staged.write(path, |w| w.write_all(csv.as_bytes()))?;
     }
     if let Some(path) = &args.report {

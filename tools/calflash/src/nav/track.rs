@@ -3,6 +3,7 @@
 //! report's figures.
 
 use nalgebra::Vector3;
+use spincal::nav::StateMatrix;
 use spincal::nav::filter::index;
 
 use super::input::{Fix, Pressure};
@@ -29,6 +30,10 @@ pub struct Track {
     pub track_rms: Option<(f64, usize)>,
     /// Smoothed height against the barometer, RMS m, and the readings compared.
     pub height_rms: Option<(f64, usize)>,
+    /// Every epoch's smoothed position (east, north, up about `origin`, m) and its 1-sigma.
+    pub trajectory: Vec<(f64, [f64; 3], [f64; 3])>,
+    /// The level frame's origin (latitude, longitude degrees, height m).
+    pub origin: (f64, f64, f64),
 }
 
 /// Where the flight was.
@@ -80,7 +85,22 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
         (!v.is_empty()).then(|| ((v.iter().sum::<f64>() / v.len() as f64).sqrt(), v.len()))
     };
     let every = smoothed.len().div_ceil(SHOWN).max(1);
+    let sd = |p: &StateMatrix<f64>, i: usize| p[(i, i)].max(0.0).sqrt();
+    let trajectory = smoothed
+        .iter()
+        .zip(&times)
+        .map(|((x, p), t)| {
+            let at = index::POSITION;
+            (
+                *t,
+                x.nav.p.into(),
+                [sd(p, at), sd(p, at + 1), sd(p, at + 2)],
+            )
+        })
+        .collect();
     let mut out = Track {
+        trajectory,
+        origin: at.origin,
         track_rms: rms(&track),
         height_rms: rms(&height_errors),
         gnss,

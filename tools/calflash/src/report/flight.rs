@@ -173,6 +173,32 @@ fn prior_json(p: &PriorSource) -> serde_json::Value {
     }
 }
 
+/// The smoothed trajectory as CSV: `t, latitude, longitude` (degrees), `height` (m above the
+/// ellipsoid) and the 1-sigma of its east, north and up, m, at every epoch.
+#[must_use]
+pub fn track_csv(track: &crate::nav::track::Track) -> String {
+    let (lat0, lon0, h0) = track.origin;
+    let mut s = String::from("t,latitude,longitude,height,sd_east,sd_north,sd_up\n");
+    for (t, [e, n, u], [se, sn, su]) in &track.trajectory {
+        let (lat, lon, h) = map_3d::enu2geodetic(
+            *e,
+            *n,
+            *u,
+            lat0.to_radians(),
+            lon0.to_radians(),
+            h0,
+            map_3d::Ellipsoid::WGS84,
+        );
+        let _ = writeln!(
+            s,
+            "{t},{:.9},{:.9},{h:.3},{se:.3},{sn:.3},{su:.3}",
+            lat.to_degrees(),
+            lon.to_degrees()
+        );
+    }
+    s
+}
+
 /// Every innovation as CSV: `t, measurement, innovation, sigma, taken`.
 #[must_use]
 pub fn innovations_csv(said: &[crate::nav::run::Said]) -> String {
