@@ -372,15 +372,18 @@ pub fn check(
     let mut shifts = Vec::new();
     let mut pass = first;
     if verdict.word == "SHIFTED" {
-        // The shift happened at launch: the change at launch is opened for the shifted terms.
+        // A shifted term may have moved at launch or have been wrong at rest already (a
+        // datasheet's prior, a tilt levelled on a wrong bias): its prior is opened at rest and
+        // its change at launch alike.
         let (t, mut w) = start
             .launch
             .unwrap_or((StateMatrix::identity(), StateMatrix::zeros()));
-        let in_flight = t * prior * t.transpose() + w;
+        let mut open = prior;
         for (i, term) in verdict.terms.iter().enumerate() {
             if term.shifted && opened.0[i].is_none() {
                 let k = index::ACCEL_BIAS + i;
-                w[(k, k)] += (SHIFT_OPENED - 1.0) * in_flight[(k, k)];
+                open[(k, k)] *= SHIFT_OPENED;
+                w[(k, k)] *= SHIFT_OPENED;
             }
         }
         let second = run::forward(
@@ -388,6 +391,7 @@ pub fn check(
             fixes,
             baro,
             &Start {
+                prior: open,
                 launch: Some((t, w)),
                 ..start
             },
