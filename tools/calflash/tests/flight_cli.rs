@@ -49,29 +49,20 @@ fn compared(dir: &Path, flight: &str) -> (i32, String, String) {
 }
 
 fn fly(dir: &Path, shift: Option<&str>) -> serde_json::Value {
-    let mut args = vec![
-        "simulate",
-        "--sensor",
-        "imu",
-        "--truth",
-        TRUTH,
-        "--flight",
-        "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=20",
-        "--sample-rate",
-        "2000",
-        "-o",
-        "s.csv",
-        "--gnss",
-        "g.csv",
-        "--baro",
-        "b.csv",
-        "--seed",
-        "7",
-    ];
+    let mut extra = vec!["--baro", "b.csv", "--seed", "7"];
     if let Some(s) = shift {
-        args.extend(["--launch-shift", s]);
+        extra.extend(["--launch-shift", s]);
     }
-    ok(dir, &args);
+    common::simulate_flight(
+        dir,
+        TRUTH,
+        (
+            "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=20",
+            "2000",
+        ),
+        "s.csv",
+        &extra,
+    );
     let out = ok(
         dir,
         &[
@@ -184,25 +175,12 @@ fn a_shell_flight_fits_and_a_launch_shift_of_one_bias_is_found() {
 fn a_whole_shell_flight_is_put_back_on_its_fixes_after_the_setback_and_fits() {
     let d = tempfile::tempdir().unwrap();
     calibrated(d.path());
-    ok(
+    common::simulate_flight(
         d.path(),
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            TRUTH,
-            "--flight",
-            "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2",
-            "--sample-rate",
-            "2000",
-            "-o",
-            "s.csv",
-            "--gnss",
-            "g.csv",
-            "--baro",
-            "b.csv",
-        ],
+        TRUTH,
+        ("shell:lat=39.4,lon=-8.3,azimuth=60,rest=2", "2000"),
+        "s.csv",
+        &["--baro", "b.csv"],
     );
     let out = ok(
         d.path(),
@@ -271,22 +249,12 @@ fn the_smoothed_position_stays_within_its_stated_bounds_through_the_spin() {
     let d = tempfile::tempdir().unwrap();
     calibrated(d.path());
     let spec = "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=20";
-    ok(
+    common::simulate_flight(
         d.path(),
+        TRUTH,
+        (spec, "2000"),
+        "s.csv",
         &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            TRUTH,
-            "--flight",
-            spec,
-            "--sample-rate",
-            "2000",
-            "-o",
-            "s.csv",
-            "--gnss",
-            "g.csv",
             "--baro",
             "b.csv",
             "--flight-truth",
@@ -387,23 +355,15 @@ fn a_record_of_another_calibration_or_no_record_at_all_is_refused() {
             "--quiet",
         ],
     );
-    ok(
+    common::simulate_flight(
         d.path(),
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            TRUTH,
-            "--flight",
+        TRUTH,
+        (
             "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=12",
-            "--sample-rate",
             "2000",
-            "-o",
-            "s.csv",
-            "--gnss",
-            "g.csv",
-        ],
+        ),
+        "s.csv",
+        &[],
     );
     std::fs::write(
         d.path().join("not.json"),
@@ -500,29 +460,15 @@ fn gnss_that_does_not_overlap_the_imu_a_flight_without_a_launch_and_a_rate_too_s
 fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
     let d = tempfile::tempdir().unwrap();
     calibrated(d.path());
-    ok(
+    common::simulate_flight(
         d.path(),
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            TRUTH,
-            "--flight",
+        TRUTH,
+        (
             "rocket:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=60",
-            "--sample-rate",
             "1000",
-            "-o",
-            "r.csv",
-            "--gnss",
-            "g.csv",
-            "--baro",
-            "b.csv",
-            "--launch-shift",
-            "ax=0.4",
-            "--seed",
-            "3",
-        ],
+        ),
+        "r.csv",
+        &["--baro", "b.csv", "--launch-shift", "ax=0.4", "--seed", "3"],
     );
     ok(
         d.path(),
@@ -564,25 +510,15 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
 fn a_rocket_s_antenna_a_metre_forward_is_carried_in_the_velocity_too() {
     let d = tempfile::tempdir().unwrap();
     calibrated(d.path());
-    ok(
+    common::simulate_flight(
         d.path(),
-        &[
-            "simulate",
-            "--sensor",
-            "imu",
-            "--truth",
-            TRUTH,
-            "--flight",
+        TRUTH,
+        (
             "rocket:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=30",
-            "--sample-rate",
             "1000",
-            "-o",
-            "r.csv",
-            "--gnss",
-            "g.csv",
-            "--gnss-antenna",
-            "1.0,0,0.15",
-        ],
+        ),
+        "r.csv",
+        &["--gnss-antenna", "1.0,0,0.15"],
     );
     ok(
         d.path(),

@@ -158,29 +158,20 @@ fn fly(seed: u64, shift: &str, prior: Prior) -> Vec<Term> {
             "--quiet",
         ],
     );
-    let mut sim = vec![
-        "simulate",
-        "--sensor",
-        "imu",
-        "--truth",
-        TRUTH,
-        "--flight",
-        "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=22",
-        "--sample-rate",
-        "2000",
-        "-o",
-        "s.csv",
-        "--gnss",
-        "g.csv",
-        "--baro",
-        "b.csv",
-        "--seed",
-        &seed,
-    ];
+    let mut extra = vec!["--baro", "b.csv", "--seed", &seed];
     if !shift.is_empty() {
-        sim.extend(["--launch-shift", shift]);
+        extra.extend(["--launch-shift", shift]);
     }
-    ok(dir, &sim);
+    common::simulate_flight(
+        dir,
+        TRUTH,
+        (
+            "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=22",
+            "2000",
+        ),
+        "s.csv",
+        &extra,
+    );
     let mut check = vec![
         "flight",
         "s.csv",

@@ -173,14 +173,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             let imu = input::corrected(recording, &cal)?;
             let serial = cal.data().identity.serial.to_string();
-            data_hash = Some(
-                cal.data()
-                    .identity
-                    .data_hash
-                    .iter()
-                    .map(|b| format!("{b:02x}"))
-                    .collect::<String>(),
-            );
+            data_hash = Some(record::hex(&cal.data().identity.data_hash));
             // The prior over the flight after launch (at zero input when there is none: the
             // check then says there was no launch).
             let from = crate::nav::run::launch(&imu, opts.launch_force).map_or(0, |l| l.1);

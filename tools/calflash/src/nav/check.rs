@@ -102,16 +102,6 @@ const SEARCH_WINDOW: f64 = 5.0;
 /// under half a radian).
 const SEARCH_STEP: f64 = 2e-4;
 
-/// The root mean square rate about body axis `k` from sample `from` on, rad/s.
-fn rms_rate(imu: &ImuSeries, from: usize, k: usize) -> f64 {
-    let v: Vec<f64> = imu.w.iter().skip(from).map(|w| w[k] * w[k]).collect();
-    if v.is_empty() {
-        0.0
-    } else {
-        (v.iter().sum::<f64>() / v.len() as f64).sqrt()
-    }
-}
-
 /// The random walks the filter allows the errors between measurements.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Walks {
@@ -307,9 +297,7 @@ pub fn check(
     // grows faster than the filter can linearise from the calibration's prior (0.3 % at
     // 1,900 rad/s is 5.7 rad/s): the spin axis' gyro scale factor starts open, and the flight's
     // own estimate of it is held against the calibration.
-    let axis = run::spin_axis(imu, launch_at);
-    let k = (0..3).find(|i| axis[*i] > 0.5).unwrap_or(0);
-    let spin = rms_rate(imu, launch_at, k);
+    let (k, spin) = run::spin(imu, launch_at);
     let mut opened = Opened::default();
     if spin * SPIN_SHIFT_TO_FOLLOW > SPIN_LINEAR_LIMIT {
         let at = index::GYRO_SCALE + k;

@@ -80,7 +80,7 @@ pub const OUTPUTS: [&str; 6] = ["a_x", "a_y", "a_z", "g_x", "g_y", "g_z"];
 pub fn calibration_prior(cal: &Calibration, imu: &ImuSeries, from: usize) -> Option<InFlight> {
     let corrector = corrector_at_flight(cal, imu)?;
     let factors = *corrector.covariance_factors()?;
-    let lines = lines_over(&corrector, imu, from, IMU_FEATURES, |_, phi, out| {
+    let lines = lines_over(&corrector, imu, from, [IMU_FEATURES; 6], |_, phi, out| {
         out.copy_from_slice(&phi.map(f64::from));
     });
     let outputs = factors.accel.iter().chain(&factors.gyro);
@@ -154,13 +154,7 @@ pub fn record_prior(
     imu: &ImuSeries,
     from: usize,
 ) -> Result<InFlight, RecordPriorError> {
-    let hash: String = cal
-        .data()
-        .identity
-        .data_hash
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    let hash = crate::sensor::record::hex(&cal.data().identity.data_hash);
     if !record.data_hash.eq_ignore_ascii_case(&hash) {
         return Err(RecordPriorError::Other {
             record: record.data_hash.clone(),
@@ -177,19 +171,20 @@ pub fn record_prior(
             d(a).total_cmp(&d(b))
         })
         .ok_or(RecordPriorError::Missing("any output"))?;
-    let mut prior = InFlight::default();
+    // Per output: its regressors, its sensitivity, its parameters' covariance in SI and which
+    // regressors are the bias and the own input; then one pass over the flight for all six.
+    let mut fits = Vec::with_capacity(OUTPUTS.len());
     for (out, name) in OUTPUTS.iter().enumerate() {
         let fit = point
             .axes
             .iter()
             .find(|a| a.output == *name)
             .ok_or(RecordPriorError::Missing(name))?;
-        let axis = out % 3;
         let own = if out < 3 {
             ["f_x", "f_y", "f_z"]
         } else {
             ["w_x", "w_y", "w_z"]
-        }[axis];
+        }[out % 3];
         let terms: Vec<Regressor> = fit
             .terms
             .iter()
@@ -208,14 +203,6 @@ pub fn record_prior(
             .filter(|s| s.abs() > 0.0)
             .ok_or(RecordPriorError::Missing(name))?;
         let n = terms.len();
-        let line = lines_over(&corrector, imu, from, n, |o, phi, row| {
-            if o == out {
-                for (r, t) in row.iter_mut().zip(&terms) {
-                    *r = t.value(phi, o, slope);
-                }
-            }
-        })[out]
-            .clone();
         let q = DMatrix::from_fn(n, n, |i, j| {
             fit.covariance
                 .get(i)
@@ -233,7 +220,18 @@ pub fn record_prior(
                 _ => None,
             })
             .collect();
-        prior.set(out, &line, &own_at, &q);
+        fits.push((terms, slope, q, own_at));
+    }
+    let sizes = std::array::from_fn(|out| fits[out].0.len());
+    let lines = lines_over(&corrector, imu, from, sizes, |out, phi, row| {
+        let (terms, slope, ..) = &fits[out];
+        for (r, t) in row.iter_mut().zip(terms) {
+            *r = t.value(phi, out, *slope);
+        }
+    });
+    let mut prior = InFlight::default();
+    for (out, (line, (_, _, q, own_at))) in lines.iter().zip(&fits).enumerate() {
+        prior.set(out, line, own_at, q);
     }
     Ok(prior)
 }
@@ -310,29 +308,29 @@ fn corrector_at_flight<'a>(cal: &'a Calibration, imu: &ImuSeries) -> Option<AnyI
 }
 
 /// Per output, the sums of the straight line through its error over the samples of `imu` from
-/// `from` on that the filter navigates on, with `p` regressors that `fill(output, features,
-/// row)` writes from the device's error features at each sample.
+/// `from` on that the filter navigates on, with `sizes[output]` regressors that `fill(output,
+/// features, row)` writes from the device's error features at each sample.
 fn lines_over(
     corrector: &AnyImuCorrector<'_>,
     imu: &ImuSeries,
     from: usize,
-    p: usize,
+    sizes: [usize; 6],
     fill: impl Fn(usize, &[f32; IMU_FEATURES], &mut [f64]),
 ) -> [Line; 6] {
-    let mut lines: [Line; 6] = std::array::from_fn(|_| Line::new(p));
+    let mut lines: [Line; 6] = std::array::from_fn(|out| Line::new(sizes[out]));
     let across = across_the_spin(imu, from);
-    let mut row = vec![0.0; p];
+    let mut rows: [Vec<f64>; 6] = std::array::from_fn(|out| vec![0.0; sizes[out]]);
     for k in from..imu.t.len() {
         let (f, w) = (imu.f[k], imu.w[k]);
         let values = [f[0], f[1], f[2], w[0], w[1], w[2]];
         let features = corrector.error_features(&values.map(|x| x as f32));
-        for (out, (line, phi)) in lines.iter_mut().zip(&features).enumerate() {
+        for (out, ((line, row), phi)) in lines.iter_mut().zip(&mut rows).zip(&features).enumerate()
+        {
             if imu.flagged[k][out / 3] || across[out % 3] {
                 continue;
             }
-            row.iter_mut().for_each(|r| *r = 0.0);
-            fill(out, phi, &mut row);
-            line.add(values[out], &row);
+            fill(out, phi, row);
+            line.add(values[out], row);
         }
     }
     lines
@@ -349,12 +347,7 @@ pub const SPINNING: f64 = 100.0;
 /// as a bias and a scale factor correlated at 0.8 it let the filter blame a transverse bias for
 /// an axial shift (40 false SHIFTED in 50 flights). Its prior is taken at zero input instead.
 fn across_the_spin(imu: &ImuSeries, from: usize) -> [bool; 3] {
-    let axis = super::run::spin_axis(imu, from);
-    let Some(k) = (0..3).find(|i| axis[*i] > 0.5) else {
-        return [false; 3];
-    };
-    let n = imu.w.len().saturating_sub(from).max(1) as f64;
-    let rms = (imu.w.iter().skip(from).map(|w| w[k] * w[k]).sum::<f64>() / n).sqrt();
+    let (k, rms) = super::run::spin(imu, from);
     if rms <= SPINNING {
         return [false; 3];
     }

@@ -175,9 +175,10 @@ pub fn levelled(imu: &ImuSeries, rest_end: usize, heading: f64) -> UnitQuaternio
     UnitQuaternion::from_axis_angle(&Vector3::z_axis(), heading) * up
 }
 
-/// The body axis about which the flight turns most (root mean square rate after `from`).
+/// The body axis about which the flight turns most after sample `from`, and the root mean
+/// square rate about it there, rad/s (0 without samples).
 #[must_use]
-pub fn spin_axis(imu: &ImuSeries, from: usize) -> Vector3<f64> {
+pub fn spin(imu: &ImuSeries, from: usize) -> (usize, f64) {
     let mut sum = [0.0; 3];
     for w in imu.w.iter().skip(from) {
         for (s, x) in sum.iter_mut().zip(w) {
@@ -187,8 +188,20 @@ pub fn spin_axis(imu: &ImuSeries, from: usize) -> Vector3<f64> {
     let k = (0..3)
         .max_by(|a, b| sum[*a].total_cmp(&sum[*b]))
         .unwrap_or(0);
+    let n = imu.w.len().saturating_sub(from);
+    let rms = if n == 0 {
+        0.0
+    } else {
+        (sum[k] / n as f64).sqrt()
+    };
+    (k, rms)
+}
+
+/// The body axis about which the flight turns most after `from`, as a unit vector ([`spin`]).
+#[must_use]
+pub fn spin_axis(imu: &ImuSeries, from: usize) -> Vector3<f64> {
     let mut axis = Vector3::zeros();
-    axis[k] = 1.0;
+    axis[spin(imu, from).0] = 1.0;
     axis
 }
 
@@ -272,21 +285,13 @@ fn change_at_launch(
     at: f64,
 ) {
     let phi = t * filter.covariance_step().matrix();
-    let s = &mut filter.estimate.sensors;
-    let mut x = spincal::nav::StateVector::<f64>::zeros();
-    for i in 0..3 {
-        x[index::ACCEL_BIAS + i] = s.accel_bias[i];
-        x[index::GYRO_BIAS + i] = s.gyro_bias[i];
-        x[index::ACCEL_SCALE + i] = s.accel_scale[i];
-        x[index::GYRO_SCALE + i] = s.gyro_scale[i];
-    }
-    let x = t * x;
-    for i in 0..3 {
-        s.accel_bias[i] = x[index::ACCEL_BIAS + i];
-        s.gyro_bias[i] = x[index::GYRO_BIAS + i];
-        s.accel_scale[i] = x[index::ACCEL_SCALE + i];
-        s.gyro_scale[i] = x[index::GYRO_SCALE + i];
-    }
+    // The sensor errors as a state vector (their departure from none), moved by `T - I`.
+    let none = Estimate {
+        sensors: SensorErrors::default(),
+        ..filter.estimate
+    };
+    let x = filter.estimate.minus(&none);
+    filter.estimate = filter.estimate.plus(&((t - StateMatrix::identity()) * x));
     let p = t * filter.covariance * t.transpose() + w;
     filter.covariance = (p + p.transpose()) * 0.5;
     pass.p0 = t * pass.p0 * t.transpose() + w;

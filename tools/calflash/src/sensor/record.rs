@@ -142,7 +142,9 @@ fn model_points(c: &Calibrated) -> Vec<super::PointFit> {
         .collect()
 }
 
-fn hex(b: &[u8]) -> String {
+/// Bytes as lower-case hex (how a record writes its data hash).
+#[must_use]
+pub fn hex(b: &[u8]) -> String {
     b.iter().map(|x| format!("{x:02x}")).collect()
 }
 

@@ -147,3 +147,34 @@ pub fn simulate_rig(dir: &Path, truth: &str, extra: &[&str]) {
     let (code, out, err) = calflash(dir, &args);
     assert_eq!(code, 0, "{args:?}: {out}{err}");
 }
+
+/// A flight of the unit `truth` simulated into `dir`: `simulate --flight SPEC` at `rate` Hz, the
+/// IMU's codes to `out` and a GNSS receiver's fixes to `g.csv`, with `extra` options (a
+/// barometer, a launch shift, a seed, ...).
+#[allow(dead_code)] // the flight, NEES and report tests use it
+pub fn simulate_flight(
+    dir: &Path,
+    truth: &str,
+    (spec, rate): (&str, &str),
+    out: &str,
+    extra: &[&str],
+) {
+    let mut args = vec![
+        "simulate",
+        "--sensor",
+        "imu",
+        "--truth",
+        truth,
+        "--flight",
+        spec,
+        "--sample-rate",
+        rate,
+        "-o",
+        out,
+        "--gnss",
+        "g.csv",
+    ];
+    args.extend_from_slice(extra);
+    let (code, stdout, err) = calflash(dir, &args);
+    assert_eq!(code, 0, "{args:?}: {stdout}{err}");
+}
