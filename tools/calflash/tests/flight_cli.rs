@@ -392,6 +392,55 @@ fn a_record_of_another_calibration_or_no_record_at_all_is_refused() {
             "{record}: {err}"
         );
     }
+    // An output onto the record would replace the input it reads: refused, the record kept.
+    let before = std::fs::read(d.path().join("round.json")).unwrap();
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "flight",
+            "s.csv",
+            "--blob",
+            "round.blob",
+            "--gnss",
+            "g.csv",
+            "--record",
+            "round.json",
+            "--json",
+            "round.json",
+            "--no-db",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("--json round.json: that is the file --record reads"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(d.path().join("round.json")).unwrap(), before);
+    // A GNSS antenna is three coordinates.
+    let (code, _, err) = calflash(
+        d.path(),
+        &[
+            "simulate",
+            "--sensor",
+            "imu",
+            "--truth",
+            TRUTH,
+            "--flight",
+            "shell:seconds=2",
+            "-o",
+            "x.csv",
+            "--gnss",
+            "xg.csv",
+            "--gnss-antenna",
+            "1,2",
+        ],
+    );
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("--gnss-antenna: 3 comma-separated values, 2 given"),
+        "{err}"
+    );
+    assert!(!d.path().join("x.csv").exists() && !d.path().join("xg.csv").exists());
     // Its own record is taken.
     let out = ok(
         d.path(),

@@ -120,6 +120,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
     Paths::new()
         .input("the recording", Some(recording))
         .input("--blob", args.blob.as_deref())
+        .input("--record", args.record.as_deref())
         .input("--gnss", Some(gnss))
         .input("--baro", args.baro.as_deref())
         .output("--json", args.json.as_deref())
