@@ -4,7 +4,8 @@
 //! Units per second are 16 / the time. The history is a SQLite file, and (without the
 //! report) a PostgreSQL database on a server the bench starts as the tests do
 //! (`tests/common/postgres.rs`; skipped with a notice where PostgreSQL is not installed). Run
-//! with `cargo bench -p calflash --bench batch`.
+//! with `cargo bench -p calflash --bench batch`. The group `batch_check` times the batch's
+//! file check alone at 100 and 10^4 units.
 
 #[path = "../tests/common/postgres.rs"]
 mod pg_server;
@@ -12,7 +13,7 @@ mod pg_server;
 use std::path::PathBuf;
 
 use calflash::cmd::calibrate::CalibrateArgs;
-use calflash::cmd::calibrate::batch::calibrate_all;
+use calflash::cmd::calibrate::batch::{calibrate_all, unit_files};
 use calflash::sim::{self, Sensor, plan};
 use clap::Parser;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -109,5 +110,44 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// The check that no unit's file is an input or another unit's (`batch::unit_files`, run before
+/// any unit is calibrated) at 100 and at 10^4 units: its cost per unit must not grow with the
+/// batch (issue 50: it compared every pair of paths, 12,600 `readlink` a unit at 300 units).
+fn check(c: &mut Criterion) {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("in"), dir.path().join("out"));
+    std::fs::create_dir_all(&input).unwrap();
+    std::fs::create_dir_all(&out).unwrap();
+    let args = Cli::parse_from([
+        "x",
+        input.to_str().unwrap(),
+        "--sensor",
+        "imu",
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--reports",
+    ])
+    .args;
+    let mut g = c.benchmark_group("batch_check");
+    for n in [100usize, 10_000] {
+        let units: Vec<(String, PathBuf)> = (0..n)
+            .map(|i| {
+                let serial = format!("U{i:05}");
+                let f = input.join(format!("{serial}.csv"));
+                if !f.exists() {
+                    std::fs::write(&f, "").unwrap();
+                }
+                (serial, f)
+            })
+            .collect();
+        g.throughput(Throughput::Elements(n as u64));
+        g.sample_size(10);
+        g.bench_function(format!("units_{n}"), |b| {
+            b.iter(|| unit_files(&args, &units, &out).expect("no file is another's"));
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, check);
 criterion_main!(benches);

@@ -16,6 +16,7 @@
 //! A file a unit's serial names ([`unit_file`]) is made only of a serial that is a safe file
 //! name: no separator, no `..`, nothing hidden, so a serial cannot write outside its folder.
 
+use std::collections::HashMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -112,33 +113,105 @@ pub struct Paths {
     creates_dir: Vec<bool>,
 }
 
+thread_local! {
+    /// How many paths this thread has resolved against the file system (see [`resolutions`]).
+    static RESOLUTIONS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// How many times this thread has resolved a path (a `canonicalize`, a walk of every component
+/// of it) for the overlap check: a count, so a test can hold the check's cost per file constant
+/// however many files a batch has, which a timing could not.
+#[must_use]
+pub fn resolutions() -> u64 {
+    RESOLUTIONS.with(std::cell::Cell::get)
+}
+
+fn canonicalize(path: &Path) -> std::io::Result<PathBuf> {
+    RESOLUTIONS.with(|n| n.set(n.get() + 1));
+    path.canonicalize()
+}
+
 /// Where a path would be: its canonical form, or its canonical directory and its name when
-/// the file does not exist yet.
-fn resolved(path: &Path) -> PathBuf {
-    if let Ok(p) = path.canonicalize() {
+/// the file does not exist yet. `dirs` holds the directories already resolved, so the files of
+/// one folder resolve it once.
+fn resolved(path: &Path, dirs: &mut HashMap<PathBuf, Option<PathBuf>>) -> PathBuf {
+    if let Ok(p) = canonicalize(path) {
         return p;
     }
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    match (dir.canonicalize(), path.file_name()) {
-        (Ok(d), Some(name)) => d.join(name),
+    let dir = dir_of(path);
+    let canonical_dir = dirs
+        .entry(dir.to_path_buf())
+        .or_insert_with(|| canonicalize(dir).ok());
+    match (canonical_dir, path.file_name()) {
+        (Some(d), Some(name)) => d.join(name),
         _ => path.to_path_buf(),
+    }
+}
+
+/// One file as the overlap check knows it: its device and inode when it exists, and where it
+/// is (or would be).
+struct Identity {
+    inode: Option<(u64, u64)>,
+    place: PathBuf,
+}
+
+impl Identity {
+    fn of(path: &Path, dirs: &mut HashMap<PathBuf, Option<PathBuf>>) -> Self {
+        #[cfg(unix)]
+        let inode = {
+            use std::os::unix::fs::MetadataExt as _;
+            std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+        };
+        #[cfg(not(unix))]
+        let inode = None;
+        Self {
+            inode,
+            place: resolved(path, dirs),
+        }
+    }
+}
+
+/// The files seen so far, each under its inode and its place, with the option that gave it:
+/// looked up, not scanned, so a batch of n files costs n look-ups.
+struct Seen {
+    by_inode: HashMap<(u64, u64), usize>,
+    by_place: HashMap<PathBuf, usize>,
+}
+
+impl Seen {
+    fn with_capacity(n: usize) -> Self {
+        Self {
+            by_inode: HashMap::with_capacity(n),
+            by_place: HashMap::with_capacity(n),
+        }
+    }
+
+    /// The first file recorded that is `id`'s file.
+    fn find(&self, id: &Identity) -> Option<usize> {
+        id.inode
+            .and_then(|i| self.by_inode.get(&i))
+            .or_else(|| self.by_place.get(&id.place))
+            .copied()
+    }
+
+    /// Records `id` as file `k` (a file seen before keeps its first name).
+    fn add(&mut self, id: Identity, k: usize) {
+        if let Some(i) = id.inode {
+            self.by_inode.entry(i).or_insert(k);
+        }
+        self.by_place.entry(id.place).or_insert(k);
     }
 }
 
 /// True when `a` and `b` are the same file (or would be).
 #[must_use]
 pub fn same_file(a: &Path, b: &Path) -> bool {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt as _;
-        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
-            return x.dev() == y.dev() && x.ino() == y.ino();
-        }
+    let mut dirs = HashMap::new();
+    let (a, b) = (Identity::of(a, &mut dirs), Identity::of(b, &mut dirs));
+    match (a.inode, b.inode) {
+        (Some(x), Some(y)) => x == y,
+        _ => a.place == b.place,
     }
-    resolved(a) == resolved(b)
 }
 
 impl Paths {
@@ -183,6 +256,12 @@ impl Paths {
     /// # Errors
     /// The two options that name one file.
     pub fn check(&self) -> Result<(), Error> {
+        let mut dirs = HashMap::new();
+        let mut inputs = Seen::with_capacity(self.inputs.len());
+        for (k, (_, p)) in self.inputs.iter().enumerate() {
+            inputs.add(Identity::of(p, &mut dirs), k);
+        }
+        let mut outputs = Seen::with_capacity(self.outputs.len());
         for (i, (what, out)) in self.outputs.iter().enumerate() {
             let (what, path) = (what.clone(), out.clone());
             let dir = dir_of(out);
@@ -197,14 +276,16 @@ impl Paths {
                 // Written in place, never replaced: /dev/null twice is no conflict.
                 continue;
             }
-            if let Some((input, _)) = self.inputs.iter().find(|(_, p)| same_file(p, out)) {
-                let input = input.clone();
+            let id = Identity::of(out, &mut dirs);
+            if let Some(k) = inputs.find(&id) {
+                let input = self.inputs[k].0.clone();
                 return Err(Error::ReplacesInput { what, path, input });
             }
-            if let Some((other, _)) = self.outputs[..i].iter().find(|(_, p)| same_file(p, out)) {
-                let other = other.clone();
+            if let Some(k) = outputs.find(&id) {
+                let other = self.outputs[k].0.clone();
                 return Err(Error::SameOutput { what, path, other });
             }
+            outputs.add(id, i);
         }
         Ok(())
     }

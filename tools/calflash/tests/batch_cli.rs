@@ -447,3 +447,65 @@ fn out_dir_is_made_when_missing_and_refused_when_a_file() {
     assert!(err.contains("--out-dir taken: not a directory"), "{err}");
     assert_eq!(std::fs::read_to_string(d.join("taken")).unwrap(), "mine");
 }
+
+/// The check that no unit's file is an input or another unit's resolves each path once: its
+/// cost per unit (counted in path resolutions, not timed) at 2,000 units is the same as at 100,
+/// and it still refuses two units' files that are one file.
+#[test]
+fn a_batch_s_file_check_costs_the_same_per_unit_at_any_size() {
+    use calflash::cmd::calibrate::CalibrateArgs;
+    use calflash::cmd::calibrate::batch::unit_files;
+    use clap::Parser as _;
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: CalibrateArgs,
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("in"), dir.path().join("out"));
+    std::fs::create_dir_all(&input).unwrap();
+    std::fs::create_dir_all(&out).unwrap();
+    let args = Cli::parse_from([
+        "x",
+        input.to_str().unwrap(),
+        "--sensor",
+        "imu",
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--reports",
+    ])
+    .args;
+    let per_unit = |n: usize| {
+        let units: Vec<(String, std::path::PathBuf)> = (0..n)
+            .map(|i| {
+                let serial = format!("U{i:05}");
+                let f = input.join(format!("{serial}.csv"));
+                std::fs::write(&f, "").unwrap();
+                (serial, f)
+            })
+            .collect();
+        let before = calflash::files::resolutions();
+        let files = unit_files(&args, &units, &out).unwrap();
+        assert_eq!(files.len(), n);
+        (calflash::files::resolutions() - before) as f64 / n as f64
+    };
+    let (small, large) = (per_unit(100), per_unit(2_000));
+    println!("path resolutions per unit: {small:.2} at 100 units, {large:.2} at 2,000");
+    assert!(small > 0.0, "the check resolved no path at all");
+    assert!(
+        large <= 2.0 * small,
+        "the check's cost per unit grows with the batch: {small:.1} resolutions a unit at 100 units, {large:.1} at 2,000"
+    );
+    // What it refuses stays refused: a unit whose record would be another unit's observations.
+    let units = vec![
+        ("A".to_string(), input.join("A.csv")),
+        ("B".to_string(), out.join("A.json")),
+    ];
+    std::fs::write(&units[1].1, "").unwrap();
+    let e = unit_files(&args, &units, &out).unwrap_err().to_string();
+    assert!(
+        e.contains("unit A's record") && e.contains("unit B's observations"),
+        "{e}"
+    );
+}

@@ -522,6 +522,72 @@ fn a_calibration_is_judged_over_its_mission() {
     let (code, _, err) = calibrate(&["--requirement", "a=-1"]);
     assert_ne!(code, 0);
     assert!(err.contains("expected a=SI,g=SI"), "{err}");
+    // A key this accelerometer triad has not (a gyro's family, a word, a gyro output) is
+    // refused naming the keys that apply, and nothing is written; a key given twice too.
+    for key in ["g=1e-4", "gyro=1e-4", "w=1e-4", "g_x=1e-4"] {
+        let (code, _, err) = calibrate(&["--requirement", key, "--json", "refused.json"]);
+        assert_eq!(code, 1, "{key}: {err}");
+        let name = key.split('=').next().unwrap();
+        assert!(
+            err.contains(&format!("--requirement `{name}`"))
+                && err.contains("the keys that apply are a_x, a, a_y, a_z"),
+            "{key}: {err}"
+        );
+        assert!(!d.path().join("refused.json").exists(), "{key}");
+    }
+    let (code, _, err) = calibrate(&["--requirement", "a=1e-9,a=100"]);
+    assert_ne!(code, 0, "{err}");
+    assert!(err.contains("`a` is given twice"), "{err}");
+}
+
+/// A single gyro's requirement is its family's, `g=` (it was read as an accelerometer's: `g=`
+/// was ignored and `a=` applied).
+#[test]
+fn a_single_gyro_is_held_to_the_gyro_requirement() {
+    let d = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| calflash(d.path(), args);
+    let (code, _, err) = run(&[
+        "simulate",
+        "--sensor",
+        "single-gyro",
+        "--plan",
+        "rate:-8:8:9",
+        "--repeat",
+        "2",
+        "-o",
+        "gyro.csv",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = run(&[
+        "simulate",
+        "--sensor",
+        "imu",
+        "--flight",
+        "rocket:seconds=20",
+        "-o",
+        "rocket.csv",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let calibrate = |req: &str| {
+        run(&[
+            "calibrate",
+            "gyro.csv",
+            "--sensor",
+            "single-gyro",
+            "--serial",
+            "G1",
+            "--no-db",
+            "--mission",
+            "rocket.csv",
+            "--requirement",
+            req,
+        ])
+    };
+    let (_, out, err) = calibrate("g=1e-9");
+    assert!(out.contains("exceeds the requirement"), "{out}{err}");
+    let (code, _, err) = calibrate("a=1e-9");
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("the keys that apply are"), "{err}");
 }
 
 /// An IMU calibrated on a rate table (its accelerometers' lever arms fitted) judged over a

@@ -82,18 +82,32 @@ const BROWSER: [&str; 10] = [
     "--virtual-time-budget=5000",
 ];
 
-/// Debian's Chromium, or `None` with a notice (an error when `SPINCAL_REQUIRE_CHROMIUM=1`).
+/// The typeface the reports name (DejaVu Sans, Debian's `fonts-dejavu-core`): without it the
+/// browser lays them out in whatever font the machine prefers, and what fits differs.
+const REPORT_FONT: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+
+/// Debian's Chromium with the reports' typeface, or `None` with a notice (an error when
+/// `SPINCAL_REQUIRE_CHROMIUM=1`).
 fn chromium(test: &str) -> Option<PathBuf> {
     let path = PathBuf::from("/usr/bin/chromium");
-    if path.is_file() {
+    let missing = [
+        (path.as_path(), "chromium"),
+        (Path::new(REPORT_FONT), "fonts-dejavu-core"),
+    ]
+    .into_iter()
+    .filter(|(p, _)| !p.is_file())
+    .map(|(_, package)| package)
+    .collect::<Vec<_>>()
+    .join(" ");
+    if missing.is_empty() {
         return Some(path);
     }
     assert!(
         std::env::var("SPINCAL_REQUIRE_CHROMIUM").as_deref() != Ok("1"),
-        "Chromium is required (SPINCAL_REQUIRE_CHROMIUM=1) but /usr/bin/chromium is not installed"
+        "Chromium and the reports' typeface are required (SPINCAL_REQUIRE_CHROMIUM=1) but Debian's {missing} is not installed"
     );
     println!(
-        "SKIPPED {test}: Chromium is not installed (Debian: apt-get install -y chromium; `cargo xtask test` does it as root)"
+        "SKIPPED {test}: Debian's {missing} is not installed (apt-get install -y {missing}; `cargo xtask test` does it as root)"
     );
     None
 }
@@ -555,12 +569,17 @@ fn the_check_finds_a_page_too_wide_and_a_clipped_box() {
     };
     let dir = tempfile::tempdir().unwrap();
     let page = dir.path().join("wide.html");
+    // In the reports' own typeface and size, and far past each limit: a title of 40 characters
+    // at 16 px is over 300 px in DejaVu Sans (and over 250 px in any common typeface) in a
+    // figure of 200 px, centred, so it passes both edges.
     std::fs::write(
         &page,
-        "<!doctype html><html><body><table style=\"width:1600px\"><tr><td>wide</td></tr></table>\
+        "<!doctype html><html><body style=\"font-family:'DejaVu Sans',sans-serif;font-size:16px\">\
+         <table style=\"width:1600px\"><tr><td>wide</td></tr></table>\
          <div style=\"width:200px;overflow:hidden;white-space:nowrap\">a line far longer than two \
          hundred pixels can hold, clipped at its edge</div>\
-         <svg width=\"200\" height=\"60\"><text x=\"100\" y=\"20\" text-anchor=\"middle\">a title far too long for its figure</text>\
+         <svg width=\"200\" height=\"60\" font-family=\"DejaVu Sans, sans-serif\" font-size=\"16\">\
+         <text x=\"100\" y=\"20\" text-anchor=\"middle\">a title far too long for its figure, really</text>\
          <text x=\"10\" y=\"50\">0.001</text><text x=\"30\" y=\"50\">8.00000e-4</text></svg></body></html>",
     )
     .unwrap();
@@ -574,7 +593,7 @@ fn the_check_finds_a_page_too_wide_and_a_clipped_box() {
     assert!(
         faults
             .iter()
-            .any(|f| f.contains("\"a title far too long for its figure\" is cut")),
+            .any(|f| f.contains("\"a title far too long for its figure, really\" is cut")),
         "{faults:?}"
     );
     assert!(

@@ -361,3 +361,52 @@ fn a_quiet_high_range_unit_passes_the_f32_check() {
         .unwrap_or_else(|| panic!("{out}{err}"));
     assert!(line.trim_start().starts_with("ACCEPT"), "{line}");
 }
+
+/// A unit the device cannot hold (its g-sensitivity, fed the lever term, makes the rate
+/// unbounded inside the rails) is a REJECT with its record and the reason, not a failure
+/// that leaves nothing (it exited 1 with no record).
+#[test]
+fn a_unit_the_device_cannot_hold_is_rejected_with_its_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(truth()).unwrap()).unwrap();
+    for row in truth["gyro"]["g"].as_array_mut().unwrap() {
+        for v in row.as_array_mut().unwrap() {
+            *v = (v.as_f64().unwrap() * 30.0).into();
+        }
+    }
+    let t = dir.path().join("big_g.json");
+    std::fs::write(&t, truth.to_string()).unwrap();
+    common::simulate_rig(dir.path(), t.to_str().unwrap(), &[]);
+    let (code, out, err) = calflash(
+        dir.path(),
+        &[
+            "calibrate",
+            "rig.csv",
+            "--sensor",
+            "imu",
+            "--nonlinear",
+            "--serial",
+            "BIG-G",
+            "--blob",
+            "big.blob",
+            "--json",
+            "big.json",
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 3, "{out}{err}");
+    assert!(out.contains("unit BIG-G: REJECT"), "{out}");
+    assert!(
+        out.contains(
+            "REJECT the device cannot hold this calibration: the coefficients of the gyro"
+        ),
+        "{out}"
+    );
+    assert!(!dir.path().join("big.blob").exists());
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("big.json")).unwrap())
+            .unwrap();
+    assert_eq!(record["verdict"], "reject");
+    assert_eq!(record["blob"], "");
+}

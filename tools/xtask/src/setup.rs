@@ -1,6 +1,6 @@
 //! What a fresh machine needs: the thumb target (rustup), qemu-system-arm, and for the tests
-//! a PostgreSQL server (the shared history) and Chromium (the reports in a real browser), all
-//! Debian's packages.
+//! a PostgreSQL server (the shared history) and Chromium with the reports' typeface (the reports
+//! in a real browser: `chromium`, `fonts-dejavu-core`), all Debian's packages.
 
 use std::process::{Command, Stdio};
 
@@ -97,6 +97,14 @@ fn have_chromium() -> bool {
     std::path::Path::new("/usr/bin/chromium").is_file()
 }
 
+/// The typeface the reports name (`report::page::FONT`), so that the browser lays them out
+/// the same on every machine: Debian's `fonts-dejavu-core`.
+const REPORT_FONT: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+
+fn have_report_font() -> bool {
+    std::path::Path::new(REPORT_FONT).is_file()
+}
+
 fn quiet(cmd: &mut Command) -> bool {
     cmd.stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -147,7 +155,10 @@ pub fn run(components: bool) -> Result<Setup, String> {
         .then(|| debian_package("postgresql", have_postgres))
         .flatten();
     let chromium_missing = components
-        .then(|| debian_package("chromium", have_chromium))
+        .then(|| {
+            debian_package("chromium", have_chromium)
+                .or_else(|| debian_package("fonts-dejavu-core", have_report_font))
+        })
         .flatten();
     if have_qemu() {
         return Ok(Setup {

@@ -142,7 +142,11 @@ pub fn run() -> Result<(), String> {
             s
         },
         {
-            let mut s = step("tests (host and QEMU)", &["test", "--workspace"]);
+            // Every test binary runs, whatever fails before it: one failure must not hide others.
+            let mut s = step(
+                "tests (host and QEMU)",
+                &["test", "--workspace", "--no-fail-fast"],
+            );
             if setup.qemu_missing.is_none() {
                 s.cmd.env(REQUIRE_ENV, "1");
             }

@@ -89,14 +89,30 @@ pub enum JudgeError {
         "--requirement `{0}`: expected a=SI,g=SI (accelerometer in m/s^2, gyro in rad/s) or OUTPUT=SI, a positive number each"
     )]
     Requirement(String),
+    /// A requirement given twice.
+    #[error("--requirement: `{0}` is given twice; give each output or family once")]
+    RepeatedRequirement(String),
+    /// A requirement for an output or family the calibration does not have.
+    #[error(
+        "--requirement `{key}`: this calibration has no such output or family; the keys that apply are {}",
+        .applicable.join(", ")
+    )]
+    UnknownRequirement {
+        /// The key given.
+        key: String,
+        /// The keys that apply: each output, and `a` or `g` for its family.
+        applicable: Vec<String>,
+    },
 }
 
-/// Reads `--requirement`: `a=0.05,g=0.002` (SI) or per output (`a_x=0.05`).
+/// Reads `--requirement`: `a=0.05,g=0.002` (SI) or per output (`a_x=0.05`). Which keys apply
+/// is the calibration's to say ([`judge`]).
 ///
 /// # Errors
-/// An item that is not `NAME=positive number`.
+/// An item that is not `NAME=positive number`, or a name given twice.
 pub fn requirements(text: &str) -> Result<Vec<(String, f64)>, JudgeError> {
-    text.split(',')
+    let items: Vec<(String, f64)> = text
+        .split(',')
         .map(str::trim)
         .filter(|s| !s.is_empty())
         .map(|item| {
@@ -111,7 +127,49 @@ pub fn requirements(text: &str) -> Result<Vec<(String, f64)>, JudgeError> {
                 .ok_or_else(|| JudgeError::Requirement(item.to_string()))?;
             Ok((k.trim().to_string(), v))
         })
-        .collect()
+        .collect::<Result<_, JudgeError>>()?;
+    for (i, (key, _)) in items.iter().enumerate() {
+        if items[..i].iter().any(|(k, _)| k == key) {
+            return Err(JudgeError::RepeatedRequirement(key.clone()));
+        }
+    }
+    Ok(items)
+}
+
+/// Refuses a requirement whose key is neither an output of `c` nor the family (`a`, `g`) of
+/// one (`single_gyro` says a single axis' family).
+fn check_requirements(
+    c: &Calibrated,
+    single_gyro: bool,
+    requirement: &[(String, f64)],
+) -> Result<(), JudgeError> {
+    let mut applicable: Vec<String> = Vec::new();
+    for axis in &c.points[c.reference].axes {
+        let gyro = is_gyro(axis, single_gyro);
+        for key in [
+            axis.output.clone(),
+            (if gyro { "g" } else { "a" }).to_string(),
+        ] {
+            if !applicable.contains(&key) {
+                applicable.push(key);
+            }
+        }
+    }
+    match requirement.iter().find(|(k, _)| !applicable.contains(k)) {
+        Some((key, _)) => Err(JudgeError::UnknownRequirement {
+            key: key.clone(),
+            applicable,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Whether an axis reads a rate: a gyro triad's, or a single axis calibrated as a gyro.
+fn is_gyro(axis: &AxisFit, single_gyro: bool) -> bool {
+    match kind(axis) {
+        (Unit::Triad, gyro, _) => gyro,
+        _ => single_gyro,
+    }
 }
 
 /// What kind of input an axis reads: the unit kind for the profile, whether it is a gyro, and
@@ -161,6 +219,7 @@ pub fn judge(
     requirement: &[(String, f64)],
     alpha: f64,
 ) -> Result<Judged, JudgeError> {
+    check_requirements(c, single_gyro, requirement)?;
     let point = &c.points[c.reference];
     let mut out = Judged {
         profile: profile.source.display().to_string(),
@@ -170,7 +229,8 @@ pub fn judge(
         findings: Vec::new(),
     };
     for (a, axis) in point.axes.iter().enumerate() {
-        let (mut unit, gyro, k) = kind(axis);
+        let (mut unit, _, k) = kind(axis);
+        let gyro = is_gyro(axis, single_gyro);
         if unit != Unit::Triad {
             unit = if single_gyro {
                 Unit::SingleGyro

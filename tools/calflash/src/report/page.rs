@@ -8,15 +8,21 @@ pub(crate) fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// The typeface every report names, in its text and its figures: DejaVu Sans (Debian's
+/// `fonts-dejavu-core`, which `cargo xtask test` installs beside Chromium), then the reader's
+/// sans-serif. Named, so that a page lays out the same on every machine that has it: the generic
+/// `sans-serif` is whatever font the machine's fontconfig prefers.
+pub(crate) const FONT: &str = "DejaVu Sans, sans-serif";
+
 /// The style sheet of every report (one column at most 1000 px wide; nothing wider overflows).
-pub(crate) const STYLE: &str = "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}\
+pub(crate) const STYLE: &str = "body{font-family:'DejaVu Sans',sans-serif;max-width:1000px;margin:2em auto;color:#222}\
 h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #ccc}\
 .verdict{font-size:1.4em;padding:.5em 1em;border-radius:6px;display:inline-block}\
 .accept{background:#d9f2d9}.review{background:#fff3cd}.reject{background:#f8d7da}\
 table{border-collapse:collapse;margin:.5em 0}td,th{padding:2px 10px;text-align:right;border-bottom:1px solid #eee}\
 th{background:#f4f4f4}td:first-child,th:first-child{text-align:left}.fig{margin:1em 0}\
 .fig svg{display:block;max-width:100%;height:auto}\
-pre{white-space:pre-wrap;overflow-wrap:anywhere}\
+pre{font-family:'DejaVu Sans Mono',monospace;white-space:pre-wrap;overflow-wrap:anywhere}\
 .contents{background:#f7f7f7;padding:.5em 1em;border-radius:6px}.contents ol{columns:2;margin:.3em 0}";
 
 /// `html` with a contents list before its first section when it has at least four: each

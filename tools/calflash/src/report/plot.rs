@@ -321,7 +321,7 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
             };
         let (xt, yt) = (Ticks::linear(x0, x1, 10), Ticks::linear(y0, y1, 8));
         let mut chart = ChartBuilder::on(&root)
-            .caption(fig.title, ("sans-serif", title_px(fig.title, SIZE.0)))
+            .caption(fig.title, (super::page::FONT, title_px(fig.title, SIZE.0)))
             .margin(12)
             .x_label_area_size(48)
             .y_label_area_size(86)
@@ -335,8 +335,8 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
             .y_desc(fig.y)
             .x_label_formatter(&|v| xt.label(*v))
             .y_label_formatter(&|v| yt.label(*v))
-            .label_style(("sans-serif", TICK_PX))
-            .axis_desc_style(("sans-serif", NAME_PX))
+            .label_style((super::page::FONT, TICK_PX))
+            .axis_desc_style((super::page::FONT, NAME_PX))
             .light_line_style(RGBColor(235, 235, 235))
             .draw()?;
         if !fig.bands.is_empty() {
@@ -413,7 +413,7 @@ where
     chart
         .configure_series_labels()
         .position(position)
-        .label_font(("sans-serif", LEGEND_PX))
+        .label_font((super::page::FONT, LEGEND_PX))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.3))
         .draw()?;
@@ -459,7 +459,7 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, Error> {
         let mut chart = ChartBuilder::on(&root)
             .caption(
                 fig.title,
-                ("sans-serif", title_px(fig.title, LOGLOG_SIZE.0)),
+                (super::page::FONT, title_px(fig.title, LOGLOG_SIZE.0)),
             )
             .margin(12)
             .x_label_area_size(48)
@@ -474,8 +474,8 @@ pub fn svg_loglog(fig: &Figure<'_>) -> Result<String, Error> {
             .y_desc(fig.y)
             .x_label_formatter(&|v| xt.label(*v))
             .y_label_formatter(&|v| yt.label(*v))
-            .label_style(("sans-serif", TICK_PX))
-            .axis_desc_style(("sans-serif", NAME_PX))
+            .label_style((super::page::FONT, TICK_PX))
+            .axis_desc_style((super::page::FONT, NAME_PX))
             .light_line_style(RGBColor(235, 235, 235))
             .draw()?;
         for s in &fig.series {

@@ -95,7 +95,11 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
             zero_line: true,
         },
     )?;
-    // The device against the model: its correction of the model's own codes.
+    // The device against the model: its correction of the model's own codes (none when the
+    // device refused the calibration).
+    if c.blob.is_empty() {
+        return Ok(h);
+    }
     let cal = spincal::blob::decode(&c.blob)?;
     let mut device = AnyAxisCorrector::new(&cal)?;
     let volt =
@@ -268,6 +272,9 @@ fn triad_figures(c: &Calibrated) -> Result<String, Error> {
                 },
             )?;
         }
+    }
+    if c.blob.is_empty() {
+        return Ok(h);
     }
     let cal = spincal::blob::decode(&c.blob)?;
     let env = &cal.data().environment;

@@ -319,6 +319,52 @@ fn imu_of_row(v: &[f64]) -> ImuSet {
     }
 }
 
+/// A calibration made into a blob and checked ([`build_or_reject`]).
+#[derive(Debug)]
+pub struct Built {
+    /// The blob; empty when the device refused the calibration.
+    pub blob: Vec<u8>,
+    /// Each output's largest f32 error (SI); empty without a blob.
+    pub output_errors: Vec<f64>,
+    /// The REJECT finding when the device refused it.
+    pub refused: Option<super::Finding>,
+}
+
+/// [`build_and_check`], but a calibration the device's validation refuses (a coefficient set
+/// that can overflow single precision inside the rails, a lever arm beyond its bound: a unit
+/// too nonlinear for the device's correction form) is a judgement, not a failure: no blob, no
+/// f32 errors, and the REJECT finding that says why, so that the record keeps the fit.
+///
+/// # Errors
+/// As [`build_and_check`], but for the device's validation.
+pub fn build_or_reject(
+    path: &Path,
+    data: &CalibrationData,
+    points: &[PointFit],
+) -> Result<Built, WorkflowError> {
+    match build_and_check(path, data, points) {
+        Ok((blob, output_errors)) => Ok(Built {
+            blob,
+            output_errors,
+            refused: None,
+        }),
+        Err(WorkflowError::Blob {
+            source: BlobError::Invalid(why),
+            ..
+        }) => Ok(Built {
+            blob: Vec::new(),
+            output_errors: Vec::new(),
+            refused: Some(super::Finding {
+                verdict: super::Verdict::Reject,
+                text: format!(
+                    "the device cannot hold this calibration: {why}: the unit is too nonlinear for the device's correction form (the record keeps the fit; no blob is made)"
+                ),
+            }),
+        }),
+        Err(e) => Err(e),
+    }
+}
+
 /// Validates and encodes `data`, decodes the blob back as the device does, and runs the
 /// device's f32 correction at each table point over codes spanning the calibrated range,
 /// against the same stored coefficients evaluated in f64. Returns the blob and the largest

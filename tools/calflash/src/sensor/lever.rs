@@ -15,10 +15,13 @@ use spincal::model::rotation::{dot, force_at, lever_gradient};
 use crate::columns as col;
 use crate::obs::Table;
 
-/// A lever-arm regressor must reach this fraction of its axis' strongest one somewhere in the
-/// plan to be estimated: below it only fixture misalignment or the sensor's own misalignment
-/// would carry it, and its estimate would be noise.
-pub const ESTIMABLE_FRACTION: f64 = 0.05;
+/// A lever-arm regressor that never reaches this fraction of its axis' strongest one is zero
+/// in the plan but for rounding: the plan does not move that component at all. Any other
+/// component is a candidate, whatever its share: the fit keeps it when dropping it costs more
+/// than the noise (the partial F test of the terms' backward elimination), so a tilted
+/// fixture's 2.5 % regressor on a 1.5 mm arm (37 m/s^2 at 1,000 rad/s) is fitted, not left in
+/// the residuals.
+pub const ROUNDING_FRACTION: f64 = 1e-9;
 
 /// Axis letters.
 pub const AXES: [&str; 3] = ["x", "y", "z"];
@@ -45,7 +48,8 @@ pub fn gradient(s: &[f64; 3], w: &[f64; 3], dw: &[f64; 3]) -> [f64; 3] {
 
 /// Which lever-arm components (row: accelerometer axis, column: component) the plan's rates
 /// and angular accelerations can estimate: those whose regressor, for an axis sensing along
-/// itself, reaches [`ESTIMABLE_FRACTION`] of that axis' strongest one.
+/// itself, is not zero in the plan (it reaches [`ROUNDING_FRACTION`] of that axis' strongest
+/// one somewhere). Whether the data support each is the fit's test, not the plan's.
 #[must_use]
 pub fn estimable(motion: impl Iterator<Item = ([f64; 3], [f64; 3])>) -> [[bool; 3]; 3] {
     let mut peak = [[0.0f64; 3]; 3];
@@ -60,7 +64,7 @@ pub fn estimable(motion: impl Iterator<Item = ([f64; 3], [f64; 3])>) -> [[bool; 
     }
     peak.map(|row| {
         let top = row.iter().copied().fold(0.0, f64::max);
-        row.map(|p| top > 0.0 && p >= ESTIMABLE_FRACTION * top)
+        row.map(|p| top > 0.0 && p >= ROUNDING_FRACTION * top)
     })
 }
 
@@ -212,5 +216,11 @@ mod tests {
         ];
         let e = estimable(axes.iter().copied().chain(diag));
         assert!(e.iter().flatten().all(|x| *x));
+        // A fixture tilted 1.4 degrees off the x axis: its 2.5 % regressor moves r_yx (by
+        // 37 m/s^2 on a 1.5 mm arm at 1,000 rad/s): a candidate, for the fit to test.
+        let tilted = [([1000.0, 25.0, 0.0], [0.0; 3])];
+        let e = estimable(axes.iter().copied().chain(tilted));
+        assert!(e[1][0] && e[0][1], "{e:?}");
+        assert!(!e[2][0] && !e[0][2], "{e:?}");
     }
 }

@@ -275,6 +275,72 @@ pub struct AxisFit {
     pub dir: Option<Vec<f64>>,
     /// File lines of the observations.
     pub lines: Vec<u64>,
+    /// The noise of the observations estimated without the model's form, to hold the fit's
+    /// residual noise against (`None` without replicates or rows at rest enough for one).
+    pub noise_reference: Option<NoiseReference>,
+}
+
+/// The noise of a fit's observations estimated without its model's form.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NoiseReference {
+    /// The estimate, in the response's units.
+    pub noise: crate::stats::pure_error::Noise,
+    /// Where it comes from.
+    pub source: NoiseSource,
+}
+
+/// Where a [`NoiseReference`] comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoiseSource {
+    /// Repeated observations of one condition (pure error).
+    Replicates,
+    /// The observations at rest (no rate, no angular acceleration), fitted alone.
+    Rest,
+}
+
+impl NoiseSource {
+    /// In words, for a finding.
+    #[must_use]
+    pub fn words(self) -> &'static str {
+        match self {
+            Self::Replicates => "its repeated observations",
+            Self::Rest => "its observations at rest fitted alone",
+        }
+    }
+}
+
+/// The noise of `table`'s observations without the model's form: the pure
+/// error of replicated rows, else the rows at rest fitted alone when some rows turn.
+/// `(x, y)` are the design's rows and response.
+fn noise_reference(
+    (x, y): (&nalgebra::DMatrix<f64>, &[f64]),
+    table: &crate::obs::Table,
+) -> Option<NoiseReference> {
+    use crate::stats::pure_error;
+    if let Some(noise) = pure_error::replicates(x, y) {
+        return Some(NoiseReference {
+            noise,
+            source: NoiseSource::Replicates,
+        });
+    }
+    let motion: Vec<&[f64]> = crate::columns::W
+        .iter()
+        .chain(&crate::columns::DW)
+        .filter_map(|c| table.column(c))
+        .collect();
+    if motion.is_empty() {
+        return None;
+    }
+    let rest: Vec<usize> = (0..table.len())
+        .filter(|&r| motion.iter().all(|c| c[r] == 0.0))
+        .collect();
+    if rest.len() == table.len() {
+        return None;
+    }
+    pure_error::subset(x, y, &rest).map(|noise| NoiseReference {
+        noise,
+        source: NoiseSource::Rest,
+    })
 }
 
 impl AxisFit {
@@ -406,6 +472,7 @@ impl AxisFit {
             input: table.column(own).unwrap_or_default().to_vec(),
             dir: None,
             lines: table.lines.clone(),
+            noise_reference: noise_reference((&d.x, &d.y), table),
             fit,
         })
     }

@@ -9,6 +9,7 @@ pub mod influence;
 pub mod multiple;
 pub mod ols;
 pub mod pattern;
+pub mod pure_error;
 pub mod robust;
 pub mod select;
 

@@ -249,9 +249,10 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, Failure> {
     ready_out_dir(out_dir)?;
     let files = files(&args.data)?;
     let mut units: Vec<(String, PathBuf)> = Vec::with_capacity(files.len());
+    let mut seen = std::collections::HashMap::with_capacity(files.len());
     for f in &files {
         let serial = serial_of(f)?;
-        if let Some((_, other)) = units.iter().find(|(s, _)| *s == serial) {
+        if let Some(other) = seen.insert(serial.clone(), f) {
             return Err(format!(
                 "{} and {}: two files for unit {serial}",
                 other.display(),
@@ -374,7 +375,7 @@ fn index_html(outcomes: &[Outcome]) -> String {
         ));
     }
     format!(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>calflash batch</title><style>body{{font-family:sans-serif;max-width:1200px;margin:1em auto}}td,th{{text-align:left;vertical-align:top;padding:2px 8px}}ul{{margin:0;padding-left:1.2em}}</style></head><body>\n<h1>{} units</h1>\n<table>\n<tr><th>unit</th><th>verdict</th><th>why (the findings that gave the verdict)</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>calflash batch</title><style>body{{font-family:'DejaVu Sans',sans-serif;max-width:1200px;margin:1em auto}}td,th{{text-align:left;vertical-align:top;padding:2px 8px}}ul{{margin:0;padding-left:1.2em}}</style></head><body>\n<h1>{} units</h1>\n<table>\n<tr><th>unit</th><th>verdict</th><th>why (the findings that gave the verdict)</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
         outcomes.len()
     )
 }

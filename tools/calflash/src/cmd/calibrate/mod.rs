@@ -354,7 +354,8 @@ pub fn calibrate_one(
         SensorKind::Imu => triad::calibrate(&opts, triad::Kind::Imu, args.nonlinear),
     }?;
     let mut c = c;
-    if let Some(terms) = noise {
+    // A calibration the device refused has no blob to carry the noise terms.
+    if let Some(terms) = noise.filter(|_| !c.blob.is_empty()) {
         c.data.noise = Some(terms);
         c.blob = sensor::blob::encode_checked(&c.data)
             .map_err(|e| format!("--noise-terms: {e}"))?

@@ -620,7 +620,11 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         },
         noise: None,
     };
-    let (blob, output_errors) = blob::build_and_check(path, &data, &points)?;
+    let blob::Built {
+        blob,
+        output_errors,
+        refused,
+    } = blob::build_or_reject(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);
     let unit = blob::unit(quantity);
     let mut findings = super::findings(
@@ -630,6 +634,7 @@ pub fn calibrate(opts: &Options, quantity: Quantity) -> Result<Calibrated, Workf
         opts,
         &output_errors,
     );
+    findings.extend(refused);
     findings.extend(findings_extra);
     findings.extend(beyond);
     Ok(Calibrated {

@@ -68,19 +68,8 @@ pub(super) fn fit_axis(
         if !iterate {
             return Ok(fit);
         }
-        let s = spec.inputs.map(|n| fit.coef(n));
-        // The first step's lever coefficients are S_ii r_ik (its regressors assume a unit
-        // sensitivity); later ones are r_ik.
-        let per = if step == 0 { s[i] } else { 1.0 };
-        let next = lever::Estimate {
-            s,
-            r: std::array::from_fn(|k| fit.coef(&lever::column(i, k)) / per),
-            g: if spec.gyro {
-                col::F.map(|n| fit.coef(n))
-            } else {
-                [0.0; 3]
-            },
-        };
+        let next = estimate_of(spec, &fit, i, step == 0);
+        let s = next.s;
         let scale = s[i].abs().max(f64::MIN_POSITIVE);
         let moved = (0..3)
             .map(|k| {
@@ -105,6 +94,28 @@ pub(super) fn fit_axis(
             steps: MAX_STEPS,
         },
     ))
+}
+
+/// Axis `i`'s estimate from its fit: the sensitivity row, the lever arm and the g-sensitivity
+/// row. The `first` step's lever coefficients are `S_ii r_ik` (its regressors assume a unit
+/// sensitivity); later ones are `r_ik`.
+fn estimate_of(spec: &Spec<'_>, fit: &AxisFit, i: usize, first: bool) -> lever::Estimate {
+    let s = spec.inputs.map(|n| fit.coef(n));
+    let per = if first { s[i] } else { 1.0 };
+    lever::Estimate {
+        s,
+        r: std::array::from_fn(|k| fit.coef(&lever::column(i, k)) / per),
+        g: if spec.gyro {
+            col::F.map(|n| fit.coef(n))
+        } else {
+            [0.0; 3]
+        },
+    }
+}
+
+/// Which of axis `i`'s lever-arm components `f` has.
+fn lever_terms(f: &Formula, i: usize) -> [bool; 3] {
+    std::array::from_fn(|k| f.terms.iter().any(|t| t.name() == lever::column(i, k)))
 }
 
 /// Notes on the lever-arm components the plan cannot estimate.
@@ -188,7 +199,35 @@ fn axis_formula(
     };
     fit(&f)?;
     if !opts.keep_all_terms {
-        let d = f.design(&first);
+        // The terms are chosen on the regressors at the whole model's converged estimate. At
+        // the start (a unit sensitivity along the axis, no lever arm) the bilinear term, the
+        // axis' misalignment times the centripetal force across it (1.5 m/s^2 for 1 mrad at
+        // 1,000 rad/s on a 1.5 mm arm), is not yet in the regressors, and its residual would
+        // hide a lever component worth a tenth of that, thirty times the noise.
+        let chosen_on = if estimable.is_some() || spec.nonlinear {
+            let lever_use = estimable.map(|_| lever_terms(&f, i));
+            let whole = fit_axis(
+                spec,
+                &f,
+                ref_table,
+                i,
+                lever_use.as_ref(),
+                opts,
+                (ref_where, weights),
+            )?;
+            lever::axis_table(
+                ref_table,
+                spec.gyro,
+                i,
+                spec.outputs[i],
+                &estimate_of(spec, &whole, i, false),
+                lever_use.as_ref(),
+                spec.nonlinear,
+            )
+        } else {
+            first
+        };
+        let d = f.design(&chosen_on);
         let sopts = stats::Options {
             alpha: opts.alpha,
             ..stats::Options::default()
@@ -269,16 +308,8 @@ pub(super) fn fit_triad(
         )?);
     }
     // The lever components each axis' formula kept.
-    let lever_use: Option<[[bool; 3]; 3]> = estimable.map(|_| {
-        std::array::from_fn(|i| {
-            std::array::from_fn(|k| {
-                formulas[i]
-                    .terms
-                    .iter()
-                    .any(|t| t.name() == lever::column(i, k))
-            })
-        })
-    });
+    let lever_use: Option<[[bool; 3]; 3]> =
+        estimable.map(|_| std::array::from_fn(|i| lever_terms(&formulas[i], i)));
     let one = |f: &Formula, t: &Table, i: usize, at: (&str, Option<&[f64]>)| {
         fit_axis(spec, f, t, i, lever_use.as_ref().map(|u| &u[i]), opts, at)
     };

@@ -626,7 +626,11 @@ fn finish(
     };
     let parts: Vec<&TriadResult> = accel.iter().chain(gyro.iter()).collect();
     let points = assemble::point_fits(layout, &parts);
-    let (blob, output_errors) = blob::build_and_check(path, &data, &points)?;
+    let blob::Built {
+        blob,
+        output_errors,
+        refused,
+    } = blob::build_or_reject(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);
     let (names, units, ranges) = described(
         accel.as_ref(),
@@ -635,6 +639,7 @@ fn finish(
         &mut notes,
     );
     let mut findings = super::findings(&points, &names, &units, opts, &output_errors);
+    findings.extend(refused);
     findings.extend(findings_in);
     if let (Some(g), None) = (&gyro, &opts.earth) {
         findings.push(earth_neglected(&g.fits[layout.reference()]));
