@@ -69,16 +69,18 @@ fn bench(c: &mut Criterion) {
     );
     let bytes = std::fs::read(d.join("round.blob")).unwrap();
     let cal = spincal::blob::decode(&bytes).unwrap();
-    let (fixes, _) = input::gnss(&d.join("gnss.csv")).unwrap();
-    let baro = input::baro(&d.join("baro.csv")).unwrap();
+    let (fixes, _) = input::gnss(&d.join("gnss.csv"), input::MAX_ROWS).unwrap();
+    let baro = input::baro(&d.join("baro.csv"), input::MAX_ROWS).unwrap();
     let walks = Walks::default();
     let opts = Options::default();
     let mut g = c.benchmark_group("flight");
     g.sample_size(10);
     g.bench_function("shell_62_s_at_2_khz_corrected", |b| {
-        b.iter(|| input::corrected(black_box(&d.join("shell.csv")), &cal).unwrap());
+        b.iter(|| {
+            input::corrected(black_box(&d.join("shell.csv")), &cal, input::MAX_ROWS).unwrap()
+        });
     });
-    let imu = input::corrected(&d.join("shell.csv"), &cal).unwrap();
+    let imu = input::corrected(&d.join("shell.csv"), &cal, input::MAX_ROWS).unwrap();
     g.bench_function("shell_62_s_at_2_khz_filtered_smoothed_judged", |b| {
         b.iter(|| {
             // The prior over the flight's rates is part of the check's cost.

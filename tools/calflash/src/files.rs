@@ -52,6 +52,17 @@ pub enum Error {
         /// The option that gave the input.
         input: String,
     },
+    /// Two inputs that must be two files (the two records compared, the two sensors' recordings)
+    /// and are one.
+    #[error("{what} {} and {other} name one file: each must be its own", .path.display())]
+    SameInput {
+        /// The option that gave the input.
+        what: String,
+        /// The input.
+        path: PathBuf,
+        /// The option that gave the other.
+        other: String,
+    },
     /// Two outputs that are one file.
     #[error("{what} {} and {other} name one file: give each output its own path", .path.display())]
     SameOutput {
@@ -108,6 +119,8 @@ pub enum Error {
 #[derive(Debug, Clone, Default)]
 pub struct Paths {
     inputs: Vec<(String, PathBuf)>,
+    /// The indices of the inputs that must each be a file of its own.
+    distinct: Vec<usize>,
     outputs: Vec<(String, PathBuf)>,
     /// The outputs whose directories the command creates (the unit history).
     creates_dir: Vec<bool>,
@@ -230,6 +243,18 @@ impl Paths {
         self
     }
 
+    /// A file the command reads that must not be another such input: it holds something
+    /// the others do not (the later of two records, the gyro's recording beside the
+    /// accelerometer's), and one file given twice would be read as both.
+    #[must_use]
+    pub fn distinct_input(mut self, what: &str, path: Option<&Path>) -> Self {
+        if let Some(p) = path {
+            self.distinct.push(self.inputs.len());
+            self.inputs.push((what.into(), p.to_path_buf()));
+        }
+        self
+    }
+
     /// A file the command writes, given by `what`.
     #[must_use]
     pub fn output(mut self, what: &str, path: Option<&Path>) -> Self {
@@ -258,8 +283,20 @@ impl Paths {
     pub fn check(&self) -> Result<(), Error> {
         let mut dirs = HashMap::new();
         let mut inputs = Seen::with_capacity(self.inputs.len());
-        for (k, (_, p)) in self.inputs.iter().enumerate() {
-            inputs.add(Identity::of(p, &mut dirs), k);
+        let mut distinct = Seen::with_capacity(self.distinct.len());
+        for (k, (what, p)) in self.inputs.iter().enumerate() {
+            let id = Identity::of(p, &mut dirs);
+            if self.distinct.contains(&k) {
+                if let Some(j) = distinct.find(&id) {
+                    return Err(Error::SameInput {
+                        what: what.clone(),
+                        path: p.clone(),
+                        other: self.inputs[j].0.clone(),
+                    });
+                }
+                distinct.add(Identity::of(p, &mut dirs), k);
+            }
+            inputs.add(id, k);
         }
         let mut outputs = Seen::with_capacity(self.outputs.len());
         for (i, (what, out)) in self.outputs.iter().enumerate() {
@@ -618,6 +655,29 @@ mod tests {
             Paths::new()
                 .input("the data", Some(&a))
                 .output("-o", Some(&n))
+                .check()
+                .is_ok()
+        );
+    }
+
+    #[test]
+    fn two_inputs_that_must_differ_are_refused_when_one_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("acc.txt");
+        std::fs::write(&a, "x").unwrap();
+        let dotted = dir.path().join(".").join("acc.txt");
+        let e = Paths::new()
+            .distinct_input("the recording", Some(&a))
+            .distinct_input("--gyro", Some(&dotted))
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--gyro") && e.contains("the recording"), "{e}");
+        // Inputs that may be one file (a blob read twice) are not refused.
+        assert!(
+            Paths::new()
+                .input("--blob", Some(&a))
+                .input("the data", Some(&a))
                 .check()
                 .is_ok()
         );

@@ -90,6 +90,19 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
     assert_eq!(code, 0, "{out}{err}");
     let (code, out, err) = health(d, "aged.csv", &["--no-db"]);
     assert_eq!(code, 3, "{out}{err}");
+    // With the history down, SUSPECT keeps its exit code and the failure is said beside it
+    // (it exited 1, as if nothing had been judged).
+    let (code, out, err) = health(
+        d,
+        "aged.csv",
+        &[
+            "--db",
+            "postgres://calflash@127.0.0.1:1/nothing_listens_here",
+        ],
+    );
+    assert_eq!(code, 3, "{out}{err}");
+    assert!(out.contains(": SUSPECT"), "{out}");
+    assert!(err.contains("SUSPECT but is not in the history"), "{err}");
     // The last report (gyro z 6 sigma off) held against the calibration it judged.
     let (code, out, err) = health(
         d,

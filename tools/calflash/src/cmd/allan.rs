@@ -106,8 +106,8 @@ struct Analysed {
 /// Bad input or too short a recording.
 pub fn run(args: &AllanArgs) -> Result<(), Failure> {
     crate::files::Paths::new()
-        .input("the recording", Some(&args.acc))
-        .input("--gyro", args.gyro.as_deref())
+        .distinct_input("the recording", Some(&args.acc))
+        .distinct_input("--gyro", args.gyro.as_deref())
         .output("--plot", args.plot.as_deref())
         .output("--json", args.json.as_deref())
         .output("--report", args.report.as_deref())

@@ -44,8 +44,8 @@ pub fn run(args: &CompareArgs) -> Result<bool, Failure> {
         .map(crate::db::Given::location)
         .transpose()?;
     crate::files::Paths::new()
-        .input("the earlier record", before.as_deref())
-        .input("the later record", after.as_deref())
+        .distinct_input("the earlier record", before.as_deref())
+        .distinct_input("the later record", after.as_deref())
         .input("--db", db.as_ref().and_then(crate::db::Location::file))
         .output("--json", args.json.as_deref())
         .check()?;

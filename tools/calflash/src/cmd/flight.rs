@@ -58,6 +58,10 @@ pub struct FlightArgs {
     /// `CP v^2 / 2g` with the speed (0 for a barometer that reads the true static pressure).
     #[arg(long, default_value_t = 0.03, value_parser = |s: &str| super::values::in_range(s, 0.0, 2.0))]
     pub baro_cp: f64,
+    /// The most rows read of each file (IMU, GNSS, barometer): a longer file is refused, not
+    /// read until the memory runs out.
+    #[arg(long, default_value_t = crate::nav::input::MAX_ROWS, value_parser = |s: &str| super::values::count_in(s, 2, 1_000_000_000))]
+    pub max_samples: usize,
     /// The barometer's bias random walk, m/sqrt(s) (the air against the standard atmosphere).
     #[arg(long, default_value_t = 0.5, value_parser = |s: &str| super::values::in_range(s, 0.0, 100.0))]
     pub baro_walk: f64,
@@ -172,7 +176,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
             blob_bytes.clone_from(&bytes);
             let cal = crate::signing::calibration(&bytes)
                 .map_err(|e| format!("{}: {e}", path.display()))?;
-            let imu = input::corrected(recording, &cal)?;
+            let imu = input::corrected(recording, &cal, args.max_samples)?;
             let serial = cal.data().identity.serial.to_string();
             data_hash = Some(record::hex(&cal.data().identity.data_hash));
             // The prior over the flight after launch (at zero input when there is none: the
@@ -206,7 +210,8 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
             (imu, prior, serial)
         }
         None => {
-            let profile = crate::mission::read(recording, &args.imu_columns)?;
+            let profile =
+                crate::mission::read_at_most(recording, &args.imu_columns, args.max_samples)?;
             (
                 input::physical(&profile),
                 (prior::stated_prior(&stated), PriorSource::Stated(stated)),
@@ -214,11 +219,21 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
             )
         }
     };
-    let (fixes, counts) = input::gnss(gnss)?;
+    let (fixes, counts) = input::gnss(gnss, args.max_samples)?;
+    if fixes.is_empty() {
+        return Err(format!(
+            "{}: no usable fix in its {} rows: {} without a fix (fewer than four satellites, or the no-fix marker), {} repeating the fix before; the check needs a receiver's fixes",
+            gnss.display(),
+            counts.rows,
+            counts.no_fix,
+            counts.repeated
+        )
+        .into());
+    }
     let baro = args
         .baro
         .as_deref()
-        .map(input::baro)
+        .map(|p| input::baro(p, args.max_samples))
         .transpose()?
         .unwrap_or_default();
     let walks = Walks {

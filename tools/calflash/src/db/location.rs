@@ -47,6 +47,33 @@ pub enum LocationError {
         /// The text before the first `:`.
         scheme: String,
     },
+    /// A path that exists and is not a regular file: a device (`/dev/null`), a directory, a
+    /// FIFO. SQLite would open it and write its journal beside it (`/dev/null-journal`).
+    #[error(
+        "{}: the unit history must be a SQLite file (or a postgres:// URL); this is {kind}:          give a file's path, or --no-db to record nothing",
+        .path.display()
+    )]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+        /// What it is.
+        kind: &'static str,
+    },
+}
+
+/// A history file's path, refused when it exists and is not a regular file.
+fn history_file(path: PathBuf) -> Result<Location, LocationError> {
+    match std::fs::metadata(&path) {
+        Ok(m) if !m.is_file() => Err(LocationError::NotAFile {
+            kind: if m.is_dir() {
+                "a directory"
+            } else {
+                "a device, a FIFO or a socket, not a file"
+            },
+            path,
+        }),
+        _ => Ok(Location::File(path)),
+    }
 }
 
 impl Location {
@@ -61,7 +88,7 @@ impl Location {
     pub fn parse(text: &OsStr) -> Result<Self, LocationError> {
         let Some(t) = text.to_str() else {
             // Not UTF-8: a path, never a URL.
-            return Ok(Self::File(PathBuf::from(text)));
+            return history_file(PathBuf::from(text));
         };
         if t.is_empty() {
             return Err(LocationError::Empty);
@@ -91,7 +118,7 @@ impl Location {
                 });
             }
         }
-        Ok(Self::File(PathBuf::from(t)))
+        history_file(PathBuf::from(t))
     }
 }
 
@@ -266,6 +293,15 @@ mod tests {
             from("C:/units.sqlite"),
             Location::File("C:/units.sqlite".into())
         );
+    }
+
+    #[test]
+    fn a_device_or_a_directory_is_no_history() {
+        for (path, kind) in [("/dev/null", "a device"), ("/tmp", "a directory")] {
+            let e = Location::parse(OsStr::new(path)).unwrap_err();
+            assert!(matches!(e, LocationError::NotAFile { .. }), "{e}");
+            assert!(e.to_string().contains(kind), "{e}");
+        }
     }
 
     #[test]

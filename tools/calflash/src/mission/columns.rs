@@ -126,6 +126,18 @@ pub enum ColumnsError {
     /// A role given twice.
     #[error("--mission-columns `{0}`: that role is given twice")]
     Twice(String),
+    /// One column given to two roles.
+    #[error(
+        "--mission-columns `{item}`: column `{name}` is already {other}; each role reads its own column"
+    )]
+    SameColumn {
+        /// The item.
+        item: String,
+        /// The column.
+        name: String,
+        /// The role it already has.
+        other: String,
+    },
 }
 
 /// The scale to SI of `unit` for `role`, and its name.
@@ -201,6 +213,13 @@ pub fn parse(text: &str) -> Result<Vec<Column>, ColumnsError> {
         }
         if out.iter().any(|c| c.role == role) {
             return Err(ColumnsError::Twice(item.to_string()));
+        }
+        if let Some(c) = out.iter().find(|c| c.name == name) {
+            return Err(ColumnsError::SameColumn {
+                item: item.to_string(),
+                name: name.to_string(),
+                other: c.role.name(),
+            });
         }
         out.push(Column {
             role,
@@ -314,5 +333,8 @@ mod tests {
             "--mission-columns `wx=Gx:furlong`: `furlong` is not a unit of wx (expected rad/s, deg/s or mdeg/s)"
         );
         assert!(matches!(parse("fx=a,fx=b"), Err(ColumnsError::Twice(_))));
+        let e = parse("wx=Gx,wy=Gx,wz=Gx").unwrap_err();
+        assert!(matches!(e, ColumnsError::SameColumn { .. }), "{e}");
+        assert!(e.to_string().contains("column `Gx` is already"), "{e}");
     }
 }

@@ -164,6 +164,34 @@ fn check_requirements(
     }
 }
 
+/// A term kept by the fit's selection whose t statistic is below this may be there only
+/// because it was selected: a term that is not there passes the 5 % test by chance with an
+/// estimate of 2 to 3 standard errors, but reaches 4 only once in 16,000.
+const SELECTION_T: f64 = 4.0;
+
+/// The covariance the mission is predicted with when the fit chose its terms: each term the
+/// selection could have dropped and kept with `|t| <` [`SELECTION_T`] has its estimate's
+/// square added to its variance, so that the prediction covers the chance that the term is
+/// not there at all and its estimate is the selection's (kept by chance, such a term's
+/// estimate is 2.4 standard errors on average: the prediction of its own covariance was 2.1
+/// to 2.3 times too small). Terms the fit keeps by construction (the bias, the inputs, the
+/// temperature terms) and terms far beyond chance are left as they are.
+fn selection_covariance(axis: &AxisFit) -> nalgebra::DMatrix<f64> {
+    let mut cov = axis.fit.covariance.clone();
+    for (j, name) in axis.fit.names.iter().enumerate() {
+        let forced = name == "1"
+            || name == &axis.own
+            || crate::columns::W.contains(&name.as_str()) && axis.own.starts_with("w_")
+            || crate::columns::F.contains(&name.as_str()) && axis.own.starts_with("f_")
+            || crate::sensor::thermal::is_thermal(name);
+        let t = axis.fit.t.get(j).copied().unwrap_or(f64::INFINITY);
+        if !forced && t.abs() < SELECTION_T {
+            cov[(j, j)] += axis.fit.coefficients[j].powi(2);
+        }
+    }
+    cov
+}
+
 /// Whether an axis reads a rate: a gyro triad's, or a single axis calibrated as a gyro.
 fn is_gyro(axis: &AxisFit, single_gyro: bool) -> bool {
     match kind(axis) {
@@ -217,7 +245,7 @@ pub fn judge(
     profile: &Profile,
     single_gyro: bool,
     requirement: &[(String, f64)],
-    alpha: f64,
+    (alpha, selected): (f64, bool),
 ) -> Result<Judged, JudgeError> {
     check_requirements(c, single_gyro, requirement)?;
     let point = &c.points[c.reference];
@@ -254,7 +282,12 @@ pub fn judge(
             .iter()
             .position(|n| *n == axis.own)
             .map_or(1.0, |j| axis.fit.coefficients[j].abs());
-        let cov = &axis.fit.covariance;
+        let widened = if selected {
+            selection_covariance(axis)
+        } else {
+            axis.fit.covariance.clone()
+        };
+        let cov = &widened;
         let w = weight::weight(profile, &axis.formula, &lookup, &reach);
         let rms = weight::mean_variance(cov, 1, &w.inside).max(0.0).sqrt() / scale;
         let (worst_in, _) = weight::worst_variance(profile, &axis.formula, &lookup, &reach, cov, 1);

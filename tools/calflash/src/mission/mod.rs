@@ -12,7 +12,7 @@ pub mod weight;
 
 use std::path::PathBuf;
 
-pub use read::{MAX_SAMPLES, read};
+pub use read::{MAX_SAMPLES, read, read_at_most};
 
 /// The largest specific force a profile may hold, m/s^2 (about 100,000 g: beyond any gun).
 pub const MAX_SPECIFIC_FORCE: f64 = 1.0e6;
@@ -274,7 +274,7 @@ pub enum MissionError {
     },
     /// Time not increasing.
     #[error(
-        "{path}, line {line}: time {t} s is not after the previous sample's {before} s (time must increase)"
+        "{path}, line {line}: time {} s is not after the previous sample's {} s (time must increase)", crate::report::terminal::num(*.t), crate::report::terminal::num(*.before)
     )]
     TimeBackwards {
         /// The file.
@@ -300,9 +300,21 @@ pub enum MissionError {
         /// Samples.
         count: usize,
     },
+    /// Rates and angular accelerations in units that disagree by a degree's factor.
+    #[error(
+        "{path}: the rates' own change over time is {ratio:.1} times the angular acceleration columns: {which}; state the unit with --mission-columns (wx=NAME:deg/s, ...) or convert the file"
+    )]
+    RateUnits {
+        /// The file.
+        path: PathBuf,
+        /// d(w)/dt over dw, least squares over the samples.
+        ratio: f64,
+        /// Which is likely in degrees.
+        which: &'static str,
+    },
     /// Too many samples.
     #[error(
-        "{path}: more than {max} samples; decimate the profile (a mission's moments need far fewer)"
+        "{path}: more than {max} samples; decimate the profile (a mission's moments need far fewer), or for `calflash flight` give --max-samples N"
     )]
     TooLong {
         /// The file.
@@ -337,7 +349,7 @@ pub struct Impossible {
 /// A step no airframe makes.
 #[derive(Debug, thiserror::Error)]
 #[error(
-    "{path}, line {line}, column `{column}`: from {from} to {to} {unit} in {dt} s is {rate:.3e} {unit}/s, a jump no airframe makes (at most {limit:.0e})"
+    "{path}, line {line}, column `{column}`: from {} to {} {unit} in {} s is {rate:.3e} {unit}/s, a jump no airframe makes (at most {limit:.0e})", crate::report::terminal::num(*.from), crate::report::terminal::num(*.to), crate::report::terminal::num(*.dt)
 )]
 pub struct Jump {
     /// The file.

@@ -21,6 +21,14 @@ pub const MAX_SAMPLES: usize = 10_000_000;
 /// not physically possible, time not increasing, a jump no airframe makes: each named by
 /// line and column.
 pub fn read(path: &Path, chosen: &str) -> Result<Profile, MissionError> {
+    read_at_most(path, chosen, MAX_SAMPLES)
+}
+
+/// [`read`], refusing more than `max` samples (`calflash flight --max-samples`).
+///
+/// # Errors
+/// As [`read`].
+pub fn read_at_most(path: &Path, chosen: &str, max: usize) -> Result<Profile, MissionError> {
     let io = |source| MissionError::Io {
         path: path.to_path_buf(),
         source,
@@ -69,10 +77,10 @@ pub fn read(path: &Path, chosen: &str) -> Result<Profile, MissionError> {
                 expected: width,
             });
         }
-        if lines.len() == MAX_SAMPLES {
+        if lines.len() == max {
             return Err(MissionError::TooLong {
                 path: path.to_path_buf(),
-                max: MAX_SAMPLES,
+                max,
             });
         }
         for ((k, c), out) in found.iter().enumerate().zip(cols.iter_mut()) {
@@ -111,6 +119,9 @@ pub fn read(path: &Path, chosen: &str) -> Result<Profile, MissionError> {
         dw = Some(differentiate(&t, w));
         notes
             .push("dw: no angular acceleration columns; differentiated from the rates".to_string());
+    }
+    if let (Some(w), Some(dw), false) = (&w, &dw, notes.iter().any(|n| n.starts_with("dw:"))) {
+        degrees_against_radians(path, &t, w, dw)?;
     }
     let f = triad([Role::F(0), Role::F(1), Role::F(2)]);
     let profile = Profile {
@@ -262,6 +273,47 @@ fn units(found: &[(Column, usize)]) -> (Vec<String>, Vec<f64>) {
 }
 
 /// The derivative of `w` by central differences (one-sided at the ends).
+/// Refuses rates and angular accelerations whose units differ by a degree's factor: the
+/// least-squares ratio of the rates' own change over time to the `dw` columns, over samples
+/// that turn, near 180/pi (rates in deg/s under SI names) or its inverse, with the two in step
+/// (correlation above 0.9, so noise alone never trips it).
+fn degrees_against_radians(
+    path: &Path,
+    t: &[f64],
+    w: &[[f64; 3]],
+    dw: &[[f64; 3]],
+) -> Result<(), MissionError> {
+    let slope = differentiate(t, w);
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (d, x) in slope.iter().zip(dw) {
+        for k in 0..3 {
+            sxy += d[k] * x[k];
+            sxx += x[k] * x[k];
+            syy += d[k] * d[k];
+        }
+    }
+    if sxx <= 0.0 || syy <= 0.0 {
+        return Ok(());
+    }
+    let (ratio, correlation) = (sxy / sxx, sxy / (sxx * syy).sqrt());
+    let degree = 180.0 / std::f64::consts::PI;
+    let which = if (ratio / degree - 1.0).abs() < 0.1 {
+        "the rates look like deg/s read as rad/s"
+    } else if (ratio * degree - 1.0).abs() < 0.1 {
+        "the angular accelerations look like deg/s^2 read as rad/s^2"
+    } else {
+        return Ok(());
+    };
+    if correlation < 0.9 {
+        return Ok(());
+    }
+    Err(MissionError::RateUnits {
+        path: path.to_path_buf(),
+        ratio,
+        which,
+    })
+}
+
 fn differentiate(t: &[f64], w: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let n = t.len();
     (0..n)

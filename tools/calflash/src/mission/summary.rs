@@ -214,8 +214,9 @@ fn spin(t: &[f64], w: &[[f64; 3]], dwell: &[f64]) -> Spin {
 
 /// The vibration of axis `k`: the specific force less its centred moving average over one
 /// period of the cut-off, in Welch segments (Hann windows whose bins are at most half the
-/// cut-off, half overlapped). Segments whose mean square is over ten times the median segment's are
-/// transients (a setback, a motor's ignition and burnout, the muzzle exit): they are counted
+/// cut-off, half overlapped). Segments whose mean square is over ten times the lower quartile
+/// segment's are transients (the quartile, not the median: in a record of a few segments, most
+/// may hold the setback) (a setback, a motor's ignition and burnout, the muzzle exit): they are counted
 /// and left out of the mean square and the spectrum, which describe the flight's steady
 /// vibration.
 fn vibration(t: &[f64], f: &[[f64; 3]], k: usize, step: f64, above: f64) -> Vibration {
@@ -237,9 +238,9 @@ fn vibration(t: &[f64], f: &[[f64; 3]], k: usize, step: f64, above: f64) -> Vibr
     let segments = welch_segments(&v, seg, step);
     let mut squares: Vec<f64> = segments.iter().map(|s| s.0).collect();
     squares.sort_by(f64::total_cmp);
-    let median = squares.get(squares.len() / 2).copied().unwrap_or(0.0);
+    let quiet = squares.get(squares.len() / 4).copied().unwrap_or(0.0);
     // A segment of under 1 mg rms is never a transient.
-    let steady = |ms: f64| ms <= (10.0 * median).max(TRANSIENT_FLOOR);
+    let steady = |ms: f64| ms <= (10.0 * quiet).max(TRANSIENT_FLOOR);
     let kept: Vec<&(f64, Vec<f64>, usize)> = segments.iter().filter(|s| steady(s.0)).collect();
     let transients: Vec<f64> = segments
         .iter()
@@ -422,5 +423,19 @@ mod transients {
         assert!((v.mean_square_g2 - 0.005).abs() < 0.0005, "{v:?}");
         assert!(!v.transients.is_empty() && v.transients.len() < 6, "{v:?}");
         assert!(v.transients.iter().all(|t| (1.8..2.1).contains(t)), "{v:?}");
+        // A record of 0.3 s around the shock: two of its three segments hold it, and it is
+        // still a transient, not the vibration (it was, when the median segment held it).
+        let keep: Vec<usize> = (0..n).filter(|&i| (1.85..2.15).contains(&p.t[i])).collect();
+        let short = Profile {
+            t: keep.iter().map(|&i| p.t[i]).collect(),
+            line: keep.iter().map(|&i| p.line[i]).collect(),
+            f: p.f.as_ref().map(|f| keep.iter().map(|&i| f[i]).collect()),
+            ..p.clone()
+        };
+        let v = &summarise(&short, 20.0).vibration[0];
+        assert!(!v.transients.is_empty(), "{v:?}");
+        // The one segment kept holds the edge of the shock's smeared moving average: far
+        // below the shock's own mean square (over 5 g^2), not the steady 0.005.
+        assert!(v.mean_square_g2 < 0.2, "{v:?}");
     }
 }

@@ -120,7 +120,21 @@ pub enum InputError {
     /// The corrector refused the calibration.
     #[error("{0}")]
     Corrector(String),
+    /// More rows than the bound: an endless or mistaken file is refused, not read until the
+    /// memory runs out.
+    #[error(
+        "{file}: more than {max} rows: read no further (1,000 s of a 10 kHz log is 10^7); give --max-samples N to read a longer record"
+    )]
+    TooLong {
+        /// The file.
+        file: String,
+        /// The bound.
+        max: usize,
+    },
 }
+
+/// The rows `calflash flight` reads of one file unless `--max-samples` says more.
+pub const MAX_ROWS: usize = 10_000_000;
 
 /// The longest line read, bytes.
 const MAX_LINE: usize = 1 << 20;
@@ -130,10 +144,12 @@ struct Table {
     file: String,
     reader: csv::Reader<crate::files::LineBound<std::fs::File>>,
     header: Vec<String>,
+    /// The most rows read.
+    max_rows: usize,
 }
 
 impl Table {
-    fn open(path: &Path) -> Result<Self, InputError> {
+    fn open(path: &Path, max_rows: usize) -> Result<Self, InputError> {
         let file = path.display().to_string();
         let inner = std::fs::File::open(path).map_err(|source| InputError::Io {
             file: file.clone(),
@@ -156,6 +172,7 @@ impl Table {
             file,
             reader,
             header,
+            max_rows,
         })
     }
 
@@ -190,6 +207,7 @@ impl Table {
     ) -> Result<(), InputError> {
         let mut record = csv::StringRecord::new();
         let mut values = vec![None; columns.len()];
+        let mut count = 0usize;
         loop {
             let more = self
                 .reader
@@ -200,6 +218,13 @@ impl Table {
                 })?;
             if !more {
                 return Ok(());
+            }
+            count += 1;
+            if count > self.max_rows {
+                return Err(InputError::TooLong {
+                    file: self.file.clone(),
+                    max: self.max_rows,
+                });
             }
             let line = record.position().map_or(0, csv::Position::line);
             for (v, &c) in values.iter_mut().zip(columns) {
@@ -231,9 +256,9 @@ impl Table {
 ///
 /// # Errors
 /// An unreadable file, a missing column, a field that is not a number, time running back.
-pub fn corrected(path: &Path, cal: &Calibration) -> Result<ImuSeries, InputError> {
+pub fn corrected(path: &Path, cal: &Calibration, max_rows: usize) -> Result<ImuSeries, InputError> {
     use crate::columns as col;
-    let mut table = Table::open(path)?;
+    let mut table = Table::open(path, max_rows)?;
     let codes = "t and the raw codes a_x a_y a_z g_x g_y g_z (as simulate --flight writes them)";
     let mut cols = vec![table.need(&["t", "time", "ts"], codes)?];
     for name in col::A.iter().chain(&col::GYRO) {
@@ -243,13 +268,17 @@ pub fn corrected(path: &Path, cal: &Calibration) -> Result<ImuSeries, InputError
     cols.extend(temp);
     let mut raw: Vec<(u64, Vec<f64>)> = Vec::new();
     let file = table.file.clone();
+    let names: Vec<String> = cols
+        .iter()
+        .map(|&c| table.header.get(c).cloned().unwrap_or_default())
+        .collect();
     table.rows(&cols, |line, v| {
         let mut row = Vec::with_capacity(v.len());
-        for (x, &c) in v.iter().zip(&cols) {
+        for (x, name) in v.iter().zip(&names) {
             row.push(x.ok_or_else(|| InputError::Field {
                 file: file.clone(),
                 line,
-                column: c.to_string(),
+                column: name.clone(),
                 text: String::new(),
                 why: "is empty; expected a number",
             })?);
@@ -365,8 +394,8 @@ pub const NO_FIX_MARKER: f64 = 193.0;
 ///
 /// # Errors
 /// As [`corrected`]; a latitude or longitude out of range.
-pub fn gnss(path: &Path) -> Result<(Vec<Fix>, FixCounts), InputError> {
-    let mut table = Table::open(path)?;
+pub fn gnss(path: &Path, max_rows: usize) -> Result<(Vec<Fix>, FixCounts), InputError> {
+    let mut table = Table::open(path, max_rows)?;
     let what =
         "t, latitude, longitude in degrees; height, v_east, v_north, v_up, satellites optional";
     let mut cols = vec![
@@ -461,8 +490,8 @@ pub fn gnss(path: &Path) -> Result<(Vec<Fix>, FixCounts), InputError> {
 ///
 /// # Errors
 /// As [`corrected`]; a pressure outside 1 to 120,000 Pa.
-pub fn baro(path: &Path) -> Result<Vec<Pressure>, InputError> {
-    let mut table = Table::open(path)?;
+pub fn baro(path: &Path, max_rows: usize) -> Result<Vec<Pressure>, InputError> {
+    let mut table = Table::open(path, max_rows)?;
     let what = "t and P (static pressure, Pa)";
     let cols = [
         table.need(&["t", "ts", "time"], what)?,

@@ -114,7 +114,7 @@ pub fn text(p: &Profile, s: &Summary, k2: Option<[f64; 3]>) -> String {
                 if let (Some(first), Some(last)) = (v.transients.first(), v.transients.last()) {
                     let _ = writeln!(
                         o,
-                        "       {} of {} segments left out as transients (over ten times the median's mean square), from t = {first:.3} s to {last:.3} s",
+                        "       {} of {} segments left out as transients (over ten times the lower quartile's mean square), from t = {first:.3} s to {last:.3} s",
                         v.transients.len(),
                         v.segments
                     );

@@ -368,7 +368,7 @@ pub fn calibrate_one(
             &profile,
             args.sensor == SensorKind::SingleGyro,
             args.requirement.as_ref().map_or(&[][..], |r| &r.0[..]),
-            args.alpha,
+            (args.alpha, !args.keep_all_terms),
         )?;
         c.findings.extend(judged.findings.iter().cloned());
         c.mission = Some(judged);

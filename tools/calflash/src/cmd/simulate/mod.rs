@@ -140,8 +140,10 @@ pub struct SimulateArgs {
     /// `calflash design optimize` writes it. Each row is one observation.
     #[arg(long, conflicts_with = "plan")]
     pub plan_file: Option<PathBuf>,
-    /// Chamber temperatures, C (comma-separated).
-    #[arg(long, default_value = "25", value_delimiter = ',', value_parser = super::values::finite)]
+    /// Chamber temperatures, C (comma-separated). A hand-turned recording, a unit at rest and a
+    /// flight have no chamber: refused with them (a flight's temperature is its
+    /// `conditioned=` key).
+    #[arg(long, default_value = "25", value_delimiter = ',', value_parser = super::values::finite, conflicts_with_all = ["tumble", "rest", "flight"])]
     pub temps: Vec<f64>,
     /// A chamber ramp instead of fixed temperatures, `FROM:TO` in C: the plan (repeated
     /// `--repeat` times) is run while the chamber sweeps, each observation at its own
@@ -317,6 +319,18 @@ fn imu_truth(args: &SimulateArgs) -> Result<truth::ImuTruth, Failure> {
 /// The most samples a simulated flight holds (about 2 GB of CSV).
 const MAX_FLIGHT_SAMPLES: f64 = 1e7;
 
+/// Refuses a simulation of more than [`MAX_FLIGHT_SAMPLES`] samples (`what`: the option),
+/// saying how many and what lowers them, before anything is allocated.
+fn too_many_samples(what: &str, samples: f64) -> Result<(), Failure> {
+    if samples.is_finite() && samples <= MAX_FLIGHT_SAMPLES {
+        return Ok(());
+    }
+    Err(format!(
+        "{what}: that is {samples:.3e} samples; a simulated recording holds at most {MAX_FLIGHT_SAMPLES:e} (about 2 GB): lower --sample-rate or the number of poses, or shorten --hold"
+    )
+    .into())
+}
+
 /// A spin-rig flight of an IMU, written as CSV.
 fn spin_rig(args: &SimulateArgs, profile: &str) -> Result<(), Failure> {
     use crate::sim::spin;
@@ -437,6 +451,7 @@ fn rest(args: &SimulateArgs, blob: &std::path::Path) -> Result<(), Failure> {
             .try_into()
             .map_err(|_| "--shift: six values, ax,ay,az,wx,wy,wz".to_string())?,
     };
+    too_many_samples("--rest", (args.poses as f64 * args.hold + args.hold) * rate)?;
     let session = sim::rest::Session {
         rate,
         shift_sigmas: shift,
@@ -516,6 +531,8 @@ fn tumble(args: &SimulateArgs, poses: usize) -> Result<(), Failure> {
         seed: args.seed,
         ..sim::recording::Tumble::default()
     };
+    let samples = (session.rest + poses as f64 * (session.hold + session.turn)) * session.rate;
+    too_many_samples("--tumble", samples)?;
     let rec = session.record();
     let mut text = String::with_capacity(rec.t.len() * 48);
     for ((t, a), g) in rec.t.iter().zip(&rec.acc).zip(&rec.gyro) {
@@ -596,6 +613,8 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         .output("-o", Some(&args.output))
         .output("--write-truth", args.write_truth.as_deref())
         .output("--flight-truth", args.flight_truth.as_deref())
+        .output("--gnss", args.gnss.as_deref())
+        .output("--baro", args.baro.as_deref())
         .check()?;
     if let Some(spec) = &args.flight {
         return flight::run(args, spec);

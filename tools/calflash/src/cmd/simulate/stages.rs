@@ -120,7 +120,15 @@ pub fn run(args: &SimulateArgs, dir: &Path) -> Result<(), Failure> {
         args.repeat,
         false,
     )?;
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    if dir.exists() && !dir.is_dir() {
+        return Err(format!(
+            "--stages {}: that is a file; give the directory the six stage-one files go into (it is made when missing)",
+            dir.display()
+        )
+        .into());
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| format!("--stages {}: cannot make the directory: {e}", dir.display()))?;
     let mut staged = Staged::new();
     let mut said = Vec::new();
     for (k, output) in OUTPUTS.iter().enumerate() {

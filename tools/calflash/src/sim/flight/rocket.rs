@@ -32,6 +32,25 @@ pub struct Rocket {
     pub waiting: f64,
 }
 
+impl Rocket {
+    /// Refuses a rocket that cannot fly: its peak thrust does not lift its weight along the
+    /// rail (it would sit on the rail until the simulation ends).
+    ///
+    /// # Errors
+    /// Why, in words.
+    pub fn flies(&self) -> Result<(), String> {
+        let peak = self.airframe.thrust.iter().map(|p| p.1).fold(0.0, f64::max);
+        let along = self.airframe.mass * super::atmosphere::G0 * self.elevation.to_radians().sin();
+        if peak <= along {
+            return Err(format!(
+                "a thrust of {peak} N never leaves its rail: the rocket's {} kg weigh {along:.0} N along a rail at {} degrees; give thrust= above that",
+                self.airframe.mass, self.elevation
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for Rocket {
     fn default() -> Self {
         Self {

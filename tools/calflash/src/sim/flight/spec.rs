@@ -58,10 +58,18 @@ impl Launch {
                 )));
             }
         };
+        let mut seen: Vec<&str> = Vec::new();
         for item in rest.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let (key, value) = item
                 .split_once('=')
                 .ok_or_else(|| bad(format!("`{item}`: expected KEY=VALUE")))?;
+            if seen.contains(&key.trim()) {
+                return Err(bad(format!(
+                    "`{}` is given twice; give each key once",
+                    key.trim()
+                )));
+            }
+            seen.push(key.trim());
             let value: f64 = value
                 .trim()
                 .parse()
@@ -71,6 +79,9 @@ impl Launch {
             launch
                 .set(key.trim(), value)
                 .map_err(|why| bad(format!("`{item}`: {why}")))?;
+        }
+        if let Self::Rocket(r) = &launch {
+            r.flies().map_err(bad)?;
         }
         Ok(launch)
     }
@@ -132,7 +143,7 @@ impl Launch {
                     r.airframe.thrust = thrust(f, b);
                 }
                 "elevation" => r.elevation = within(10.0, 90.0, "the elevation (degrees)")?,
-                "rail" => r.rail = within(0.0, 100.0, "the rail (m)")?,
+                "rail" => r.rail = within(0.1, 100.0, "the rail (m; a rocket leaves a rail)")?,
                 "cant" => r.airframe.roll_drive = within(-1.0, 1.0, "the roll drive")?,
                 "seconds" => r.seconds = within(0.01, 3_600.0, "the duration (s)")?,
                 "conditioned" => r.conditioned = within(-60.0, 80.0, "the conditioning (C)")?,
@@ -228,6 +239,12 @@ mod tests {
             ("shell:spin=nan", "is not a number"),
             ("shell:spin=5000", "must be from 1 to 1000"),
             ("shell:thrust=5", "a shell has no `thrust`"),
+            (
+                "rocket:rail=0",
+                "the rail (m; a rocket leaves a rail) must be from 0.1",
+            ),
+            ("rocket:thrust=10", "never leaves its rail"),
+            ("rocket:burn=2,burn=3", "`burn` is given twice"),
         ] {
             let e = Launch::parse(text).unwrap_err().to_string();
             assert!(e.contains(says), "{text}: {e}");
