@@ -455,7 +455,7 @@ fn a_line_is_read_only_as_far_as_a_line_can_be_long() {
             "calibrate /dev/zero --fixture --sensor single-accel --out-dir out --no-db",
             "line 1 is longer than",
         ),
-        ("compare /dev/zero /dev/zero", "/dev/zero: longer than"),
+        ("compare /dev/zero /dev/urandom", "/dev/zero: longer than"),
     ] {
         let r = cli(d, line);
         refused(&r, 1, says, line);

@@ -51,6 +51,12 @@ pub struct FlightArgs {
     /// How late each fix is stamped, s.
     #[arg(long, default_value_t = 0.0, value_parser = |s: &str| super::values::in_range(s, 0.0, 5.0))]
     pub gnss_latency: f64,
+    /// The receiver's slowly varying position error, 1-sigma, m (per axis): the part of a
+    /// fix's error that stays over a flight (atmosphere, orbits, multipath; tens of seconds).
+    /// A flight shorter than it changes cannot average it out, so the smoothed track's stated
+    /// 1-sigma carries it. 1.5 m is a single-frequency receiver's.
+    #[arg(long, default_value_t = 1.5, value_parser = |s: &str| super::values::in_range(s, 0.0, 100.0))]
+    pub gnss_correlated: f64,
     /// 1-sigma of a barometric height, m.
     #[arg(long, default_value_t = 1.5, value_parser = |s: &str| super::values::in_range(s, 0.01, 1000.0))]
     pub baro_noise: f64,
@@ -164,6 +170,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
             args.gnss_noise.get(1).copied().unwrap_or(5.0),
         ),
         gnss_latency: args.gnss_latency,
+        gnss_correlated: args.gnss_correlated,
         baro_noise: args.baro_noise,
         baro_cp: args.baro_cp,
         ..Options::default()

@@ -82,10 +82,15 @@ fn roll_scale_search(
 /// within a step is no longer carried by the trapezoid.
 pub const MAX_TURN_PER_SAMPLE: f64 = 1.2;
 
-/// A shifted term's prior variance is widened by this for the pass that estimates its shift
-/// (ten times its 1-sigma: wide enough for the flight alone to say where it went, narrow
-/// enough to stay linear).
+/// A term the held pass names has its prior at rest widened by this (ten times its 1-sigma) for
+/// the flight alone: it may have been wrong at rest already.
 const SHIFT_OPENED: f64 = 100.0;
+
+/// How wide each kind of term's change at launch is opened for the flight alone, 1-sigma:
+/// accelerometer biases (m/s^2), gyro biases (rad/s), accelerometer and gyro scale factors.
+/// Far beyond any calibration's (a 0.06 m/s^2 axial shift, a 5e-3 rad/s transverse gyro bias
+/// on a rocket), within what the error model stays linear over.
+const OPEN_WIDE: [f64; 4] = [1.0, 0.05, 1e-3, 1e-3];
 
 /// At most this many passes again from the opened scale factor a pass found.
 const REFLY: usize = 2;
@@ -346,62 +351,44 @@ pub fn check(
         start = again;
         first = pass;
     }
-    let last = first
-        .epochs
-        .last()
-        .map_or_else(|| (at_pad(), first.p0), |e| e.filtered);
-    let verdict = verdict::judge(
-        (&first.p0, &first.at_launch),
+    // The pass with the calibration's prior: held, the flight's data fit it.
+    let launched = just_after_launch(&first);
+    let held = verdict::judge(
+        (&launched.prior, &launched.prior),
         &opened,
-        (&last.0.sensors, &last.1),
+        (&launched.estimate, &launched.covariance),
         &first.said,
         alpha,
     );
-    let mut shifts = Vec::new();
-    let mut pass = first;
-    if verdict.word == "SHIFTED" {
-        // A shifted term may have moved at launch or have been wrong at rest already (a
-        // datasheet's prior, a tilt levelled on a wrong bias): its prior is opened at rest and
-        // its change at launch alike.
-        let (t, mut w) = start
-            .launch
-            .unwrap_or((StateMatrix::identity(), StateMatrix::zeros()));
-        let mut open = prior;
-        for (i, term) in verdict.terms.iter().enumerate() {
-            if term.shifted && opened.0[i].is_none() {
-                let k = index::ACCEL_BIAS + i;
-                open[(k, k)] *= SHIFT_OPENED;
-                w[(k, k)] *= SHIFT_OPENED;
-            }
-        }
-        let second = run::forward(
+    let (verdict, pass) = if held.word == "HELD" {
+        // A flight the calibration's prior fits and holds is HELD, with that pass's tighter
+        // estimates.
+        (held, first)
+    } else {
+        let (alone, second) = flight_alone(
             imu,
-            fixes,
-            baro,
-            &Start {
-                prior: open,
-                launch: Some((t, w)),
-                ..start
-            },
+            (fixes, baro),
+            (&start, prior, &opened),
+            &held,
             opts,
             (rest_end, launch_at),
+            alpha,
         );
-        if let Some(e) = second.epochs.last() {
-            let v = verdict::judge(
-                (&second.p0, &second.at_launch),
-                &opened,
-                (&e.filtered.0.sensors, &e.filtered.1),
-                &second.said,
-                alpha,
-            );
-            for (t, t2) in verdict.terms.iter().zip(&v.terms) {
-                if t.shifted {
-                    shifts.push((t.name, t2.estimate, t2.sigma));
-                }
-            }
+        // The flight alone answers, its model following a shift of any size (the held pass
+        // names a shift by how far the data pull the calibration's tight prior, but cannot say
+        // how large it is), unless it does not fit where the held pass does.
+        if alone.consistency.fits || !held.consistency.fits {
+            (alone, second)
+        } else {
+            (held, first)
         }
-        pass = second;
-    }
+    };
+    let shifts = verdict
+        .terms
+        .iter()
+        .filter(|t| t.shifted)
+        .map(|t| (t.name, t.estimate, t.sigma))
+        .collect();
     let track = track::track(
         &pass,
         (fixes, baro),
@@ -409,6 +396,7 @@ pub fn check(
             origin,
             launch: t_launch,
             latency: opts.gnss_latency,
+            correlated: opts.gnss_correlated,
         },
     );
     Ok(Checked {
@@ -423,10 +411,99 @@ pub fn check(
     })
 }
 
-/// An estimate at the pad, for a pass that recorded no epoch.
-fn at_pad() -> spincal::nav::filter::Estimate<f64> {
-    spincal::nav::filter::Estimate {
-        nav: spincal::nav::Navigation::at_rest(nalgebra::UnitQuaternion::identity(), Vector3::x()),
-        sensors: spincal::nav::SensorErrors::default(),
+/// The flight alone: every term's change at launch opened wide, so that a shift of any size is
+/// followed, and each term's change as the flight alone finds it held against the
+/// calibration's variance of it in flight. A term the held pass named may also have been wrong
+/// at rest already (a datasheet's prior, a tilt levelled on a wrong bias): its prior at rest is
+/// opened too. Returns the verdict and the pass.
+fn flight_alone(
+    imu: &ImuSeries,
+    (fixes, baro): (&[Fix], &[Pressure]),
+    (start, prior, opened): (&Start, StateMatrix<f64>, &Opened),
+    held: &Verdict,
+    opts: &Options,
+    (rest_end, launch_at): (usize, usize),
+    alpha: f64,
+) -> (Verdict, Pass) {
+    let (t, mut w) = start
+        .launch
+        .unwrap_or((StateMatrix::identity(), StateMatrix::zeros()));
+    let at_launch = just_after_launch_prior(held);
+    let mut open = prior;
+    let mut alone_opened = *opened;
+    for (i, term) in held.terms.iter().enumerate() {
+        let k = index::ACCEL_BIAS + i;
+        if alone_opened.0[i].is_none() {
+            alone_opened.0[i] = Some(at_launch[i]);
+            w[(k, k)] += OPEN_WIDE[i / 3].powi(2);
+            if term.shifted {
+                open[(k, k)] *= SHIFT_OPENED;
+            }
+        }
+    }
+    let second = run::forward(
+        imu,
+        fixes,
+        baro,
+        &Start {
+            prior: open,
+            launch: Some((t, w)),
+            ..*start
+        },
+        opts,
+        (rest_end, launch_at),
+    );
+    let launched = just_after_launch(&second);
+    let alone = verdict::judge(
+        (&launched.prior, &launched.prior),
+        &alone_opened,
+        (&launched.estimate, &launched.covariance),
+        &second.said,
+        alpha,
+    );
+    (alone, second)
+}
+
+/// The calibration's variance of each term just after the launch, as the held pass's verdict
+/// states it (its 1-sigma at launch, squared).
+fn just_after_launch_prior(held: &Verdict) -> [f64; 12] {
+    std::array::from_fn(|i| held.terms[i].prior_sigma.powi(2))
+}
+
+/// The sensor errors just after the launch, as the whole flight tells them.
+struct Launched {
+    /// Their covariance just after the launch's change, before the flight's data: the
+    /// calibration's (its line over the flight) with what the pad taught.
+    prior: StateMatrix<f64>,
+    /// The smoothed estimate there.
+    estimate: SensorErrors<f64>,
+    /// Its covariance.
+    covariance: StateMatrix<f64>,
+}
+
+/// The smoothed sensor errors at the first epoch from the launch on (the launch's own epoch
+/// when the pass changes the errors there), with the covariance the pass had there before the
+/// flight's data. A shift at launch is a step there; the random walks the filter allows
+/// afterwards widen the last epoch's estimate (to ten times the calibration's 1-sigma on an
+/// axial bias over 20 s), so the test is made where the step is, on everything the flight
+/// says of it.
+fn just_after_launch(pass: &Pass) -> Launched {
+    let k = pass
+        .epochs
+        .iter()
+        .position(|e| e.t >= pass.launch)
+        .unwrap_or_else(|| pass.epochs.len().saturating_sub(1));
+    let smoothed = super::smooth::smooth(&pass.epochs);
+    match (pass.epochs.get(k), smoothed.get(k)) {
+        (Some(e), Some((x, p))) => Launched {
+            prior: e.filtered.1,
+            estimate: x.sensors,
+            covariance: *p,
+        },
+        _ => Launched {
+            prior: pass.p0,
+            estimate: SensorErrors::default(),
+            covariance: pass.p0,
+        },
     }
 }

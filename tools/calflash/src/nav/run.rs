@@ -21,6 +21,9 @@ pub struct Options {
     pub gnss_velocity_noise: f64,
     /// How late each fix is stamped, s.
     pub gnss_latency: f64,
+    /// The receiver's slowly varying position error, 1-sigma, m (see `flight
+    /// --gnss-correlated`): carried into the smoothed track's 1-sigma.
+    pub gnss_correlated: f64,
     /// 1-sigma of a barometric height, m.
     pub baro_noise: f64,
     /// Barometer updates per second at most.
@@ -48,6 +51,7 @@ impl Default for Options {
             gnss_noise: (2.5, 5.0),
             gnss_velocity_noise: 0.2,
             gnss_latency: 0.0,
+            gnss_correlated: 1.5,
             baro_noise: 1.5,
             baro_rate: 10.0,
             max_step: 0.01,
@@ -59,6 +63,10 @@ impl Default for Options {
         }
     }
 }
+
+/// The prior 1-sigma of the pad's position (each axis) and of the barometer's offset, m, when
+/// no fix was made on the pad: a shell's first fix comes most of a kilometre downrange.
+pub const PAD_UNKNOWN: f64 = 2_000.0;
 
 /// The filter's start: the launch point and the errors' prior and noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -325,12 +333,19 @@ pub fn forward(
     let pad_fix = fixes
         .iter()
         .any(|f| imu.t.get(launch_at).is_some_and(|t| f.t < *t));
+    // Without a fix on the pad (a GNSS fuze acquires in flight), where the pad is is not known
+    // from anything but what the navigation carries back from the first fixes: its prior is
+    // wide, the position is not held on the pad, and the barometer's offset is the flight's to
+    // learn (its readings are heights above the pad, the frame's origin is a fix's).
     let pad_sigma = if pad_fix {
         (opts.gnss_noise.0, 1.0)
     } else {
-        (10.0, 1.0)
+        (PAD_UNKNOWN, PAD_UNKNOWN)
     };
-    let p0 = prior(start, pad_sigma);
+    let mut p0 = prior(start, pad_sigma);
+    if !pad_fix {
+        p0[(index::BARO, index::BARO)] = PAD_UNKNOWN * PAD_UNKNOWN;
+    }
     let mut filter = ErrorFilter::new(estimate, &Prior { covariance: p0 }, earth, start.noise);
     let t_launch = imu.t.get(launch_at).copied().unwrap_or(0.0);
     let baro_ref = pad_height(baro, t_launch);
@@ -404,6 +419,9 @@ pub fn forward(
                     1e-4,
                     opts.gate,
                 );
+                if !pad_fix {
+                    continue;
+                }
                 let (h, at) = filter.antenna_row(&Vector3::zeros(), axis);
                 take(
                     &mut filter,
@@ -591,6 +609,13 @@ pub fn heading(
             0.0,
         ]
     };
+    // Without a fix on the pad the track is taken from the first fix after launch (where the
+    // pad is is not known), the navigation's from its own position then.
+    let first = pad
+        .is_empty()
+        .then(|| fixes.iter().find(|f| f.t > t_launch))
+        .flatten();
+    let start = first.map_or(start, |f| level_position(f, origin));
     let target = fixes.iter().find(|f| {
         let p = level_position(f, origin);
         f.t > t_launch && (p[0] - start[0]).hypot(p[1] - start[1]) >= min_distance
@@ -598,7 +623,11 @@ pub fn heading(
     let earth = Earth::new(origin.0.to_radians(), origin.2);
     let mut nav = Navigation::at_rest(levelled(imu, rest_end, 0.0), spin_axis(imu, launch_at));
     let mut k = 1;
+    let mut from = Vector3::zeros();
     while k < imu.t.len() && imu.t[k] <= target.t {
+        if first.is_some_and(|f| imu.t[k - 1] < f.t && imu.t[k] >= f.t) {
+            from = nav.p;
+        }
         let step = spincal::nav::Step {
             w: [Vector3::from(imu.w[k - 1]), Vector3::from(imu.w[k])],
             f: [Vector3::from(imu.f[k - 1]), Vector3::from(imu.f[k])],
@@ -609,7 +638,7 @@ pub fn heading(
     }
     let p = level_position(target, origin);
     let (ge, gn) = (p[0] - start[0], p[1] - start[1]);
-    let (ie, inn) = (nav.p.x, nav.p.y);
+    let (ie, inn) = (nav.p.x - from.x, nav.p.y - from.y);
     let d = ge.hypot(gn);
     let yaw = gn.atan2(ge) - inn.atan2(ie);
     let mismatch = (d - ie.hypot(inn)).abs();

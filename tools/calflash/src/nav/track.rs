@@ -28,8 +28,12 @@ pub struct Track {
     pub baro: Vec<(f64, f64)>,
     /// Smoothed horizontal track against GNSS, RMS m, and the fixes compared.
     pub track_rms: Option<(f64, usize)>,
-    /// Smoothed height against the barometer, RMS m, and the readings compared.
+    /// Smoothed height against the barometer, RMS m, and the readings compared, after their
+    /// mean difference ([`baro_offset`](Self::baro_offset)).
     pub height_rms: Option<(f64, usize)>,
+    /// The mean of the smoothed height less the barometer's height above the pad, m: where
+    /// the pad is in the frame (0 within the noise when a fix was made on the pad).
+    pub baro_offset: Option<f64>,
     /// Every epoch's smoothed position (east, north, up about `origin`, m) and its 1-sigma.
     pub trajectory: Vec<(f64, [f64; 3], [f64; 3])>,
     /// The level frame's origin (latitude, longitude degrees, height m).
@@ -45,6 +49,11 @@ pub struct Setting {
     pub launch: f64,
     /// The GNSS latency, s.
     pub latency: f64,
+    /// The receiver's slowly varying position error, 1-sigma, m: what the fixes share over
+    /// the flight, which the filter (taking each fix's error as its own) cannot average out;
+    /// added to every position's 1-sigma (the pad's too: it is known from fixes, its own or
+    /// those the navigation carries back).
+    pub correlated: f64,
 }
 
 /// Smooths `pass` and holds it against the fixes and the barometer.
@@ -77,10 +86,19 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
         .filter(|b| b.t >= at.launch)
         .map(|b| (b.t, run::pressure_height(b.pa) - reference))
         .collect();
-    let height_errors: Vec<f64> = heights
+    // The barometer gives heights above the pad; the frame's origin is the pad only when a fix
+    // was made there: the two are held together after their mean difference (the pad's height
+    // in the frame), which is said apart.
+    let differences: Vec<f64> = heights
         .iter()
-        .filter_map(|(t, h)| Some((position(*t)?.z - h).powi(2)))
+        .filter_map(|(t, h)| Some(position(*t)?.z - h))
         .collect();
+    let offset = if differences.is_empty() {
+        0.0
+    } else {
+        differences.iter().sum::<f64>() / differences.len() as f64
+    };
+    let height_errors: Vec<f64> = differences.iter().map(|d| (d - offset).powi(2)).collect();
     let rms = |v: &[f64]| {
         (!v.is_empty()).then(|| ((v.iter().sum::<f64>() / v.len() as f64).sqrt(), v.len()))
     };
@@ -90,11 +108,12 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
         .iter()
         .zip(&times)
         .map(|((x, p), t)| {
-            let at = index::POSITION;
+            let at_ = index::POSITION;
+            let with = |s: f64| s.hypot(at.correlated);
             (
                 *t,
                 x.nav.p.into(),
-                [sd(p, at), sd(p, at + 1), sd(p, at + 2)],
+                [with(sd(p, at_)), with(sd(p, at_ + 1)), with(sd(p, at_ + 2))],
             )
         })
         .collect();
@@ -103,6 +122,7 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
         origin: at.origin,
         track_rms: rms(&track),
         height_rms: rms(&height_errors),
+        baro_offset: (!differences.is_empty()).then_some(offset),
         gnss,
         baro: heights
             .iter()

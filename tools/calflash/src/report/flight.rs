@@ -74,7 +74,7 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
     if k.fits {
         let _ = writeln!(
             s,
-            "  | term | calibration 1-sigma | in flight | 1-sigma | learnt | z | p | |"
+            "  | term | calibration 1-sigma | in flight | 1-sigma | the flight alone, 1-sigma | z | p | |"
         );
         for t in &v.terms {
             let (z, p) = match (t.z, t.p) {
@@ -88,15 +88,13 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
             } else {
                 ""
             };
+            let alone = t
+                .flight_sigma
+                .map_or_else(|| "nothing".to_string(), |f| format!("{f:.3e}"));
             let _ = writeln!(
                 s,
-                "  | {} {} | {:.3e} | {:+.3e} | {:.3e} | {:.0} % | {z} | {p} | {mark} |",
-                t.name,
-                t.unit,
-                t.prior_sigma,
-                t.estimate,
-                t.sigma,
-                100.0 * t.learnt
+                "  | {} {} | {:.3e} | {:+.3e} | {:.3e} | {alone} | {z} | {p} | {mark} |",
+                t.name, t.unit, t.prior_sigma, t.estimate, t.sigma,
             );
         }
         if let Some((chi2, dof, p)) = v.overall {
@@ -125,7 +123,8 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
     if let Some((rms, n)) = c.track.height_rms {
         let _ = writeln!(
             s,
-            "  smoothed height against {n} barometer readings: RMS {rms:.2} m"
+            "  smoothed height against {n} barometer readings: RMS {rms:.2} m after their mean difference of {:+.2} m (the pad's height in the frame)",
+            c.track.baro_offset.unwrap_or(0.0)
         );
     }
     s

@@ -199,12 +199,14 @@ fn axis_formula(
     };
     fit(&f)?;
     if !opts.keep_all_terms {
-        // The terms are chosen on the regressors at the whole model's converged estimate. At
+        // With lever arms, the terms are chosen on the regressors at the whole model's converged
+        // estimate (elsewhere the first step's are the converged ones but for the small change
+        // of what the axis senses, and the choice is left as it was). At
         // the start (a unit sensitivity along the axis, no lever arm) the bilinear term, the
         // axis' misalignment times the centripetal force across it (1.5 m/s^2 for 1 mrad at
         // 1,000 rad/s on a 1.5 mm arm), is not yet in the regressors, and its residual would
         // hide a lever component worth a tenth of that, thirty times the noise.
-        let chosen_on = if estimable.is_some() || spec.nonlinear {
+        let chosen_on = if estimable.is_some() {
             let lever_use = estimable.map(|_| lever_terms(&f, i));
             let whole = fit_axis(
                 spec,

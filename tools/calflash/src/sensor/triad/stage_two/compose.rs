@@ -234,9 +234,15 @@ pub(super) fn composed(
         .iter()
         .map(|x| own_poly.output(*x))
         .collect();
+    // The noise without the model, in the output's units as the residuals are.
+    let noise_reference = o.fit.noise_reference.map(|mut r| {
+        r.noise.variance *= slope * slope;
+        r
+    });
     Ok(AxisFit {
         formula,
         fit,
+        noise_reference,
         ..o.fit.clone()
     })
 }
