@@ -96,7 +96,13 @@ fn main() -> ExitCode {
         Command::Design(args) => cmd::design::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Mission(args) => cmd::mission::run(args),
-        Command::Flight(args) => cmd::flight::run(args),
+        Command::Flight(args) => match cmd::flight::run(args) {
+            // As `health` and `compare`: a calibration that did not survive exits 3; a flight
+            // the filter's model does not fit, 4 (nothing could be told).
+            Ok("SHIFTED") => return ExitCode::from(3),
+            Ok("FILTER DOES NOT FIT") => return ExitCode::from(4),
+            other => other.map(|_| ()),
+        },
         Command::Apply(args) => cmd::apply::run(args),
         Command::Compare(args) => match cmd::compare::run(args) {
             // A unit that changed beyond its uncertainty: the rejected unit's exit code.

@@ -42,8 +42,9 @@ pub struct FlightArgs {
     /// Barometer: `t`, `P` (Pa).
     #[arg(long)]
     pub baro: Option<PathBuf>,
-    /// The GNSS antenna from the IMU, body axes, m: `X,Y,Z`.
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = super::values::finite)]
+    /// The GNSS antenna from the IMU, body axes, m: `X,Y,Z` (each within 5 m: an arm in mm typed
+    /// as m is refused).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = lever_component)]
     pub lever: Vec<f64>,
     /// 1-sigma of a fix, m: `HORIZONTAL,VERTICAL`.
     #[arg(long, value_delimiter = ',', default_values_t = [2.5, 5.0], value_parser = |s: &str| super::values::in_range(s, 0.01, 1000.0))]
@@ -113,13 +114,25 @@ pub struct FlightArgs {
     pub timeout: f64,
 }
 
-/// Runs `calflash flight`.
+/// A component of the antenna's arm, m: finite and within 5 m of the IMU.
+fn lever_component(s: &str) -> Result<f64, String> {
+    let v = super::values::finite(s)?;
+    if v.abs() > 5.0 {
+        return Err(format!(
+            "{v} m: an antenna more than 5 m from the IMU on a round or a rocket; in m, not mm (50 mm is 0.05)"
+        ));
+    }
+    Ok(v)
+}
+
+/// Runs `calflash flight`; the verdict (`HELD`, `SHIFTED`, `CANNOT TELL`, `FILTER DOES NOT
+/// FIT`; `READ` for a unit's own filter read over `--port`).
 ///
 /// # Errors
 /// Unreadable inputs, a flight that cannot be checked.
-pub fn run(args: &FlightArgs) -> Result<(), Failure> {
+pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
     if let Some(port) = &args.port {
-        return super::flight_unit::run(args, port);
+        return super::flight_unit::run(args, port).map(|()| "READ");
     }
     let (Some(recording), Some(gnss)) = (&args.recording, &args.gnss) else {
         return Err("calflash flight: give a recording and --gnss, or --port to read the unit's own flight filter".into());
@@ -189,12 +202,9 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
             // The prior over the flight after launch (at zero input when there is none: the
             // check then says there was no launch).
             let from = crate::nav::run::launch(&imu, opts.launch_force).map_or(0, |l| l.1);
-            let hash = data_hash.clone().unwrap_or_default();
             let record = match &args.record {
                 Some(path) => Some((read_record(path)?, path.display().to_string())),
-                None => db_path
-                    .as_ref()
-                    .and_then(|loc| history_record(loc, &serial, &hash)),
+                None => db_path.as_ref().and_then(|loc| history_record(loc, &cal)),
             };
             let from_record = match record {
                 Some((rec, at)) => match prior::record_prior(&rec, &cal, &imu, from) {
@@ -285,7 +295,7 @@ pub fn run(args: &FlightArgs) -> Result<(), Failure> {
         )?;
         println!("  {said}");
     }
-    Ok(())
+    Ok(checked.verdict.word)
 }
 
 /// A calibration record read from `path`.
@@ -312,15 +322,25 @@ fn read_record(path: &std::path::Path) -> Result<Record, Failure> {
 /// The unit history's newest record of the calibration of unit `serial` whose data hash is
 /// `hash`, with the words for where it is; `None` when the history holds none (or cannot be
 /// read: the blob's factors serve then, and the report says which prior it took).
-fn history_record(loc: &crate::db::Location, serial: &str, hash: &str) -> Option<(Record, String)> {
+fn history_record(
+    loc: &crate::db::Location,
+    cal: &spincal::model::Calibration,
+) -> Option<(Record, String)> {
+    let id = &cal.data().identity;
+    let hash = record::hex(&id.data_hash);
     let mut db = crate::db::Db::open_existing(loc.clone()).ok()?;
-    let entry = db
-        .history(serial)
+    let entries: Vec<_> = db
+        .history(id.serial.as_str())
         .ok()?
         .into_iter()
         .rev()
-        .find(|e| e.kind == "fit" && e.data_hash.eq_ignore_ascii_case(hash))?;
-    let text = db.record(entry.id).ok()?;
-    let rec: Record = serde_json::from_str(&text).ok()?;
-    (rec.schema == record::SCHEMA).then(|| (rec, format!("the unit history's record {}", entry.id)))
+        .filter(|e| e.kind == "fit" && e.data_hash.eq_ignore_ascii_case(&hash))
+        .collect();
+    // The newest record of this very blob: another fit of the same data is not its record.
+    entries.into_iter().find_map(|entry| {
+        let text = db.record(entry.id).ok()?;
+        let rec: Record = serde_json::from_str(&text).ok()?;
+        (rec.schema == record::SCHEMA && crate::nav::prior::record_is_of(&rec, cal).is_ok())
+            .then(|| (rec, format!("the unit history's record {}", entry.id)))
+    })
 }

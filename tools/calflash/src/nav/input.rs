@@ -120,6 +120,14 @@ pub enum InputError {
     /// The corrector refused the calibration.
     #[error("{0}")]
     Corrector(String),
+    /// A column in a unit other than the one expected.
+    #[error("{file}: {what}")]
+    Unit {
+        /// The file.
+        file: String,
+        /// What was found and what to do.
+        what: String,
+    },
     /// More rows than the bound: an endless or mistaken file is refused, not read until the
     /// memory runs out.
     #[error(
@@ -524,5 +532,22 @@ pub fn baro(path: &Path, max_rows: usize) -> Result<Vec<Pressure>, InputError> {
         out.push(Pressure { t, pa });
         Ok(())
     })?;
+    // A logger's hPa or kPa taken as Pa is a pressure of 30 km up or higher at the pad.
+    if let Some(first) = out.first() {
+        let unit = match first.pa {
+            p if (300.0..1_100.0).contains(&p) => Some("hPa (mbar)"),
+            p if (30.0..110.0).contains(&p) => Some("kPa"),
+            _ => None,
+        };
+        if let Some(unit) = unit {
+            return Err(InputError::Unit {
+                file,
+                what: format!(
+                    "its first pressure, {} `Pa`, is the air 30 km up or higher; it looks like {unit}: give the pressure in Pa",
+                    first.pa
+                ),
+            });
+        }
+    }
     Ok(out)
 }

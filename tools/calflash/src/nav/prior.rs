@@ -125,6 +125,25 @@ pub enum RecordPriorError {
         /// The blob's.
         blob: String,
     },
+    /// The record of another unit.
+    #[error("it is the record of unit {record}; the blob is unit {blob}'s")]
+    OtherUnit {
+        /// The record's serial.
+        record: String,
+        /// The blob's.
+        blob: String,
+    },
+    /// The record of another fit of the same data (another model, another day): its blob is
+    /// not the blob given.
+    #[error(
+        "it is the record of another fit of the same data: its blob ({record}) is not the blob given ({blob}); give the record `calibrate --json` wrote with this blob"
+    )]
+    OtherFit {
+        /// What the record's blob is (its calibration's creation time, or why it has none).
+        record: String,
+        /// The blob's creation time.
+        blob: String,
+    },
     /// Not an IMU's, or an output missing.
     #[error("it holds no fit of {0}")]
     Missing(&'static str),
@@ -141,6 +160,48 @@ pub enum RecordPriorError {
     NotImu,
 }
 
+/// Refuses a record that is not the blob's: another unit's (serial), another calibration's
+/// (data hash), or another fit of the same data (the blob the record holds is not this one:
+/// a record of a linear fit of the same file turned a SHIFTED flight into HELD). The blob is
+/// compared as the calibration it carries, so a signed and an unsigned copy of one
+/// calibration are one.
+///
+/// # Errors
+/// The first of [`RecordPriorError::OtherUnit`], [`RecordPriorError::Other`] and
+/// [`RecordPriorError::OtherFit`] that applies.
+pub fn record_is_of(record: &Record, cal: &Calibration) -> Result<(), RecordPriorError> {
+    let id = &cal.data().identity;
+    if record.serial != id.serial.as_str() {
+        return Err(RecordPriorError::OtherUnit {
+            record: record.serial.clone(),
+            blob: id.serial.as_str().to_string(),
+        });
+    }
+    let hash = crate::sensor::record::hex(&id.data_hash);
+    if !record.data_hash.eq_ignore_ascii_case(&hash) {
+        return Err(RecordPriorError::Other {
+            record: record.data_hash.clone(),
+            blob: hash,
+        });
+    }
+    let blob_made = format!("made at {} s", id.created_unix_s);
+    let held = crate::sensor::record::unhex(&record.blob)
+        .filter(|b| !b.is_empty())
+        .ok_or_else(|| "none: the calibration was rejected".to_string())
+        .and_then(|b| crate::signing::calibration(&b).map_err(|e| format!("unreadable: {e}")));
+    match held {
+        Ok(c) if c.data() == cal.data() => Ok(()),
+        Ok(c) => Err(RecordPriorError::OtherFit {
+            record: format!("made at {} s", c.data().identity.created_unix_s),
+            blob: blob_made,
+        }),
+        Err(why) => Err(RecordPriorError::OtherFit {
+            record: why,
+            blob: blob_made,
+        }),
+    }
+}
+
 /// The sensor errors' prior from the calibration's record (`calibrate --json`): as
 /// [`calibration_prior`], over the whole model each output's fit kept (cubic, odd-quadratic
 /// and asymmetry terms included), at the record's table point nearest the flight's temperature.
@@ -154,13 +215,7 @@ pub fn record_prior(
     imu: &ImuSeries,
     from: usize,
 ) -> Result<InFlight, RecordPriorError> {
-    let hash = crate::sensor::record::hex(&cal.data().identity.data_hash);
-    if !record.data_hash.eq_ignore_ascii_case(&hash) {
-        return Err(RecordPriorError::Other {
-            record: record.data_hash.clone(),
-            blob: hash,
-        });
-    }
+    record_is_of(record, cal)?;
     let corrector = corrector_at_flight(cal, imu).ok_or(RecordPriorError::NotImu)?;
     let at = imu.temperature.unwrap_or(f64::NAN);
     let point = record

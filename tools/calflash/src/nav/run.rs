@@ -151,14 +151,34 @@ pub struct Pass {
     pub resets: Vec<f64>,
 }
 
-/// The launch: the first sample whose specific force exceeds `force`, and the rest before it
-/// (at least 0.2 s, up to 0.1 s before the launch).
+/// How long the specific force must stay over the launch's threshold, s (a gun's setback lasts
+/// a few ms, a rocket's boost seconds; a glitch one sample).
+pub const LAUNCH_HELD: f64 = 2e-3;
+
+/// The launch: the first sample whose specific force exceeds `force` and stays over it for
+/// [`LAUNCH_HELD`] (three samples at least), and the rest before it (at least 0.2 s, up to
+/// 0.1 s before the launch).
 #[must_use]
 pub fn launch(imu: &ImuSeries, force: f64) -> Option<(usize, usize)> {
-    let at = imu
-        .f
-        .iter()
-        .position(|f| Vector3::from(*f).norm() > force)?;
+    // Sustained: every sample over the next LAUNCH_HELD s (at least two) over `force`, or
+    // flagged (a setback at the accelerometers' rails): a single glitch on the pad is no launch.
+    let over = |i: usize| Vector3::from(imu.f[i]).norm() > force || imu.flagged[i][0];
+    let at = (0..imu.f.len()).find(|&i| {
+        if Vector3::from(imu.f[i]).norm() <= force {
+            return false;
+        }
+        let until = imu.t[i] + LAUNCH_HELD;
+        let mut j = i + 1;
+        let mut count = 1;
+        while j < imu.t.len() && (imu.t[j] <= until || count < 3) {
+            if !over(j) {
+                return false;
+            }
+            count += 1;
+            j += 1;
+        }
+        count >= 3
+    })?;
     let t_launch = imu.t.get(at).copied()?;
     let rest_end = imu.t.iter().position(|t| *t > t_launch - 0.1).unwrap_or(0);
     let t0 = imu.t.first().copied()?;
