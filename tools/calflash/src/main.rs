@@ -33,7 +33,7 @@ enum Command {
     /// a barometer, each sensor error's shift since the calibration (HELD, SHIFTED, CANNOT TELL).
     Flight(cmd::flight::FlightArgs),
     /// Simulate a sensor through a test plan, writing an observation file.
-    Simulate(cmd::simulate::SimulateArgs),
+    Simulate(Box<cmd::simulate::SimulateArgs>),
     /// Run raw counts through the device's correction.
     Apply(cmd::apply::ApplyArgs),
     /// Compare two calibrations of one unit.

@@ -89,6 +89,18 @@ pub(super) fn run(args: &SimulateArgs, spec: &str) -> Result<(), Failure> {
             ),
             latency: args.gnss_latency,
             outage: args.gnss_outage,
+            in_flight_only: match args.gnss_acquire.as_deref() {
+                Some(when) => when == "flight",
+                None => matches!(launch, Launch::Shell(_)),
+            },
+            correlated: match args.gnss_correlated.as_slice() {
+                [sigma, tau] => (*sigma, tau.max(1e-3)),
+                _ => {
+                    return Err(
+                        "--gnss-correlated: two values, SIGMA,TAU (m, s); 0,60 for none".into(),
+                    );
+                }
+            },
             antenna: match args.gnss_antenna.as_slice() {
                 [x, y, z] => [*x, *y, *z],
                 [] => [0.0; 3],

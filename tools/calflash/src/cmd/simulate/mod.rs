@@ -95,6 +95,14 @@ pub struct SimulateArgs {
     /// No fix for this long after launch, s.
     #[arg(long, default_value_t = 1.0, requires = "gnss", value_parser = |s: &str| super::values::in_range(s, 0.0, 1.0e4))]
     pub gnss_outage: f64,
+    /// When the receiver has fixes: `flight` (a shell's GNSS fuze acquires in flight, no fix on
+    /// the pad: a shell's default) or `pad` (from the pad on: a rocket's default).
+    #[arg(long, requires = "gnss", value_parser = ["flight", "pad"])]
+    pub gnss_acquire: Option<String>,
+    /// The receiver's slowly varying position error, `SIGMA,TAU` (m, s): a first-order
+    /// Gauss-Markov error on each axis beside the white noise, 0 for none.
+    #[arg(long, default_values_t = [1.5, 60.0], value_delimiter = ',', requires = "gnss", value_parser = |s: &str| super::values::in_range(s, 0.0, 1.0e4))]
+    pub gnss_correlated: Vec<f64>,
     /// The GNSS antenna from the IMU, body axes, m: `X,Y,Z` (`calflash flight --lever`).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true, requires = "gnss", num_args = 1, value_parser = super::values::finite)]
     pub gnss_antenna: Vec<f64>,

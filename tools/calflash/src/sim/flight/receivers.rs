@@ -24,6 +24,13 @@ pub struct Receiver {
     pub latency: f64,
     /// No fix for this long after launch (the antenna tumbling, the receiver re-acquiring), s.
     pub outage: f64,
+    /// No fix on the pad: the receiver acquires only in flight (a shell's GNSS fuze), its
+    /// first fix after [`outage`](Self::outage).
+    pub in_flight_only: bool,
+    /// The receiver's slowly varying position error per axis (east, north, up): 1-sigma, m,
+    /// and time constant, s (a first-order Gauss-Markov process started from its stationary
+    /// distribution; atmosphere, orbits and multipath), beside the white [`noise`](Self::noise).
+    pub correlated: (f64, f64),
     /// The antenna from the IMU, body axes, m: a fix is the antenna's position, and its
     /// velocity the unit's plus the arm's turn `C (w x l)` averaged over the fix's interval
     /// (the receiver's tracking smooths what changes faster than its rate: on a spinning round
@@ -39,6 +46,8 @@ impl Default for Receiver {
             velocity_noise: 0.1,
             latency: 0.0,
             outage: 1.0,
+            in_flight_only: false,
+            correlated: (0.0, 60.0),
             antenna: [0.0; 3],
         }
     }
@@ -69,6 +78,12 @@ pub fn write_gnss(
     );
     let to_level = site.to_level();
     let arm = Vector3::from(rx.antenna);
+    // The slowly varying error, stepped once per fix interval.
+    let (gm_sigma, gm_tau) = rx.correlated;
+    let phi = (-1.0 / (rx.rate * gm_tau.max(1e-9))).exp();
+    let gm = noise(gm_sigma)?;
+    let mut slow = Vector3::new(gm.sample(rng), gm.sample(rng), gm.sample(rng));
+    let step = (1.0 - phi * phi).sqrt();
     let mut next = (first.t * rx.rate).ceil() / rx.rate;
     // The arm's velocity summed since the last fix, and how many samples.
     let (mut sum, mut n) = (Vector3::zeros(), 0.0);
@@ -84,11 +99,12 @@ pub fn write_gnss(
         next += 1.0 / rx.rate;
         let antenna_v = Vector3::from(s.v) + sum / n;
         (sum, n) = (Vector3::zeros(), 0.0);
-        if (0.0..rx.outage).contains(&s.t) {
+        slow = slow * phi + Vector3::new(gm.sample(rng), gm.sample(rng), gm.sample(rng)) * step;
+        if (0.0..rx.outage).contains(&s.t) || (rx.in_flight_only && s.t < 0.0) {
             continue;
         }
         let level = to_level * (Vector3::from(s.r) + c * arm);
-        let noisy = level + Vector3::new(h.sample(rng), h.sample(rng), v.sample(rng));
+        let noisy = level + slow + Vector3::new(h.sample(rng), h.sample(rng), v.sample(rng));
         let flight = to_level.transpose() * noisy;
         let (lat, lon, height) = site.geodetic(&flight);
         let vel =
