@@ -499,6 +499,56 @@ fn a_record_of_another_calibration_or_no_record_at_all_is_refused() {
     );
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("in m, not mm"), "{err}");
+    // GNSS times in ms, angles in radians, and a CRLF file's line numbers.
+    let gnss = std::fs::read_to_string(d.path().join("g.csv")).unwrap();
+    let mut lines = gnss.lines();
+    let head = lines.next().unwrap();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let write = |name: &str, end: &str, f: &dyn Fn(&mut Vec<f64>)| {
+        let mut text = format!("{head}{end}");
+        for r in &rows {
+            let mut r = r.clone();
+            f(&mut r);
+            let r: Vec<String> = r.iter().map(f64::to_string).collect();
+            text += &format!("{}{end}", r.join(","));
+        }
+        std::fs::write(d.path().join(name), text).unwrap();
+    };
+    write("ms.csv", "\n", &|r| r[0] *= 1000.0);
+    write("rad.csv", "\n", &|r| {
+        r[1] = r[1].to_radians();
+        r[2] = r[2].to_radians();
+    });
+    write("crlf.csv", "\r\n", &|_| ());
+    let crlf = std::fs::read_to_string(d.path().join("crlf.csv")).unwrap();
+    let mut crlf: Vec<&str> = crlf.split("\r\n").collect();
+    let mut row: Vec<&str> = crlf[11].split(',').collect();
+    row[1] = "north";
+    let row = row.join(",");
+    crlf[11] = &row;
+    std::fs::write(d.path().join("crlf.csv"), crlf.join("\r\n")).unwrap();
+    for (file, says) in [
+        ("ms.csv", "if its times are in milliseconds"),
+        ("rad.csv", "they look like radians"),
+        ("crlf.csv", "crlf.csv line 12, column `latitude`: `north`"),
+    ] {
+        let (code, _, err) = calflash(
+            d.path(),
+            &[
+                "flight",
+                "s.csv",
+                "--blob",
+                "round.blob",
+                "--gnss",
+                file,
+                "--no-db",
+            ],
+        );
+        assert_eq!(code, 1, "{file}: {err}");
+        assert!(err.contains(says), "{file}: {err}");
+    }
     // A GNSS antenna is three coordinates.
     let (code, _, err) = calflash(
         d.path(),

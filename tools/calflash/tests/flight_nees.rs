@@ -171,6 +171,9 @@ fn fly(seed: u64, shift: &str, prior: Prior) -> Flight {
     if !shift.is_empty() {
         extra.extend(["--launch-shift", shift]);
     }
+    // The Monte Carlo's receiver or flight varied from the command line (NEES_SIMULATE).
+    let varied = std::env::var("NEES_SIMULATE").unwrap_or_default();
+    extra.extend(varied.split_whitespace());
     common::simulate_flight(
         dir,
         TRUTH,
@@ -355,14 +358,24 @@ fn band(n: f64) -> (f64, f64) {
 #[test]
 #[ignore = "50 flights of each of three kinds, twice: run with --release -- --ignored --nocapture"]
 fn average_nees_over_fifty_flights_of_each_kind() {
-    let n = 50u64;
+    // NEES_FLIGHTS flights of each kind (50), NEES_ONLY a kind's shift (`ax=0.8`, `none`).
+    let n: u64 = std::env::var("NEES_FLIGHTS").map_or(50, |v| v.parse().unwrap());
+    let only = std::env::var("NEES_ONLY").ok();
     for prior in [Prior::Record, Prior::Factors] {
         for (shift, term) in [
             ("", ""),
             ("ax=0.8", "accel bias x"),
             ("swx=0.003", "gyro scale x"),
         ] {
+            let kind = if shift.is_empty() { "none" } else { shift };
+            if only.as_deref().is_some_and(|o| o != kind) {
+                continue;
+            }
             let flown: Vec<Flight> = (0..n).map(|k| fly(300 + k, shift, prior)).collect();
+            let worst = (0..flown.len())
+                .min_by(|&a, &b| flown[a].track_share.total_cmp(&flown[b].track_share))
+                .map_or(0, |k| 300 + k);
+            println!("the track's worst flight: seed {worst}");
             let shares: Vec<f64> = flown.iter().map(|f| f.track_share).collect();
             let not_fit = flown
                 .iter()

@@ -39,10 +39,7 @@ pub fn read_at_most(path: &Path, chosen: &str, max: usize) -> Result<Profile, Mi
         .comment(Some(b'#'))
         .flexible(true)
         .trim(csv::Trim::All)
-        .from_reader(crate::files::LineBound::new(
-            std::io::BufReader::new(file),
-            LONGEST_HEAD_LINE,
-        ));
+        .from_reader(crate::files::LineBound::new(file, LONGEST_HEAD_LINE));
     let csv_error = |e: csv::Error| match e.into_kind() {
         csv::ErrorKind::Io(e) => io(e),
         other => io(std::io::Error::new(

@@ -491,7 +491,51 @@ pub fn gnss(path: &Path, max_rows: usize) -> Result<(Vec<Fix>, FixCounts), Input
         });
         Ok(())
     })?;
+    if let Some(what) = misread_units(&fixes) {
+        return Err(InputError::Unit { file, what });
+    }
     Ok((fixes, counts))
+}
+
+/// A logger's milliseconds taken as seconds, or radians as degrees, said: fixes a median of
+/// seconds apart (a receiver gives one to twenty a second), or a track that moves some 57
+/// times slower than the file's own velocities.
+fn misread_units(fixes: &[Fix]) -> Option<String> {
+    let steps: Vec<f64> = fixes.windows(2).map(|w| w[1].t - w[0].t).collect();
+    let gap = median_rate(fixes.iter().map(|f| f.t));
+    if steps.len() >= 4 && gap.is_finite() && gap > 0.0 && 1.0 / gap > 5.0 {
+        return Some(format!(
+            "its fixes are a median {:.3} s apart in `t`, where a receiver gives one to twenty a second: if its times are in milliseconds, give them in seconds",
+            1.0 / gap
+        ));
+    }
+    let in_radians_range = fixes.iter().all(|f| {
+        f.lat_lon.0.abs() <= std::f64::consts::FRAC_PI_2
+            && f.lat_lon.1.abs() <= std::f64::consts::PI
+    });
+    if !in_radians_range {
+        return None;
+    }
+    // The track's horizontal distance read as degrees, against the file's own velocities'.
+    let (mut drawn, mut told) = (0.0, 0.0);
+    for w in fixes.windows(2) {
+        let (Some(a), Some(b)) = (w[0].velocity, w[1].velocity) else {
+            continue;
+        };
+        let dt = w[1].t - w[0].t;
+        let speed = |v: [f64; 3]| v[0].hypot(v[1]);
+        told += 0.5 * (speed(a) + speed(b)) * dt;
+        let metres = 6.371e6 * std::f64::consts::PI / 180.0;
+        let north = (w[1].lat_lon.0 - w[0].lat_lon.0) * metres;
+        let east = (w[1].lat_lon.1 - w[0].lat_lon.1) * metres * w[0].lat_lon.0.to_radians().cos();
+        drawn += north.hypot(east);
+    }
+    let ratio = told / drawn;
+    (told > 200.0 && (15.0..120.0).contains(&ratio)).then(|| {
+        format!(
+            "its latitudes and longitudes draw a track {ratio:.0} times shorter than its own velocities: they look like radians; give them in degrees"
+        )
+    })
 }
 
 /// Reads a barometer: `t` (or `ts`) and `P` (Pa).

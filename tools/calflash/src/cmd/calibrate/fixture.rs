@@ -123,7 +123,7 @@ pub fn split(
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
         .from_reader(crate::files::LineBound::new(
-            std::io::BufReader::new(file),
+            file,
             crate::obs::fields::LONGEST_HEAD_LINE,
         ));
     let header = reader
