@@ -120,7 +120,7 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     opts.temp_span = spincal::model::Span::new(-40.0, 85.0);
     opts.rails = job.codes;
     let c = triad::calibrate(&opts, triad::Kind::Imu, false).map_err(|e| e.to_string())?;
-    let record = Record::new(&c, &data.display().to_string());
+    let record = Record::new(&c, &data.display().to_string()).sealed();
     let html = calflash::report::html::render(&c, &data.display().to_string())
         .map_err(|e| e.to_string())?;
     let (blob, report, json) = (w("unit.blob"), w("report.html"), w("calibration.json"));

@@ -412,7 +412,8 @@ fn a_record_of_another_calibration_or_no_record_at_all_is_refused() {
             "other.json",
             "it is the record of unit ROUND-2; the blob is unit ROUND-1's",
         ),
-        ("renamed.json", "it is the record of unit ROUND-9"),
+        // An edited record is refused by its seal before its serial is compared.
+        ("renamed.json", "its seal does not match its content"),
         (
             "linear.json",
             "it is the record of another fit of the same data",

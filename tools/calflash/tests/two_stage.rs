@@ -64,7 +64,8 @@ fn stage_one(truth: &AssembledTruth, dir: &Path, seed: u64) -> Vec<PathBuf> {
             let json = dir.join(format!("s1_{}.json", one::OUTPUTS[k]));
             std::fs::write(
                 &json,
-                serde_json::to_string(&Record::new(&c, &csv.display().to_string())).unwrap(),
+                serde_json::to_string(&Record::new(&c, &csv.display().to_string()).sealed())
+                    .unwrap(),
             )
             .unwrap();
             json
@@ -562,6 +563,92 @@ fn stage_one_records_that_do_not_fit_are_named() {
         &rejected.join(","),
         "unit.csv",
         "rejected.json (a_z): stage one of sensor S-6-2 was judged REJECT",
+    );
+    // Records edited after they were written: each refused, naming what does not match.
+    let edit = |name: &str, f: &dyn Fn(&mut serde_json::Value)| {
+        let mut v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join(list[2])).unwrap()).unwrap();
+        f(&mut v);
+        std::fs::write(d.join(name), v.to_string()).unwrap();
+        let mut edited = list.clone();
+        edited[2] = name;
+        edited.join(",")
+    };
+    let coefficient = |k: usize, by: &'static dyn Fn(f64) -> f64| {
+        move |v: &mut serde_json::Value| {
+            for p in v["points"].as_array_mut().unwrap() {
+                let c = &mut p["axes"][0]["coefficients"][k];
+                *c = by(c.as_f64().unwrap()).into();
+            }
+        }
+    };
+    let broken = "a_z): its seal does not match its content";
+    let bias = edit("bias.json", &coefficient(0, &|c| c + 100.0));
+    fails(&bias, "unit.csv", broken);
+    let scale = edit("scale.json", &coefficient(1, &|c| c * 1.01));
+    fails(&scale, "unit.csv", broken);
+    let covariance = edit("cov.json", &|v| {
+        for p in v["points"].as_array_mut().unwrap() {
+            for row in p["axes"][0]["covariance"].as_array_mut().unwrap() {
+                for x in row.as_array_mut().unwrap() {
+                    *x = (x.as_f64().unwrap() / 100.0).into();
+                }
+            }
+        }
+    });
+    fails(&covariance, "unit.csv", broken);
+    let hot = edit("hot.json", &|v| {
+        let points = v["points"].as_array_mut().unwrap();
+        let last = points.len() - 1;
+        points[last]["temp"] = 90.0.into();
+    });
+    fails(
+        &hot,
+        "unit.csv",
+        "hot.json (a_z): field `points[4].temp`: 90 C is not a temperature point of its blob (calibrated -20 to 70 C)",
+    );
+    let unsealed = edit("unsealed.json", &|v| {
+        v.as_object_mut().unwrap().remove("seal");
+    });
+    fails(&unsealed, "unit.csv", "a_z): the record has no seal");
+    // A REJECTed stage one whose blob was forced, its verdict edited to accept.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "s1/a_z.csv",
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "S-6-2",
+            "--keep-all-terms",
+            "--asymmetry",
+            "keep",
+            "--thermal",
+            "table",
+            "--max-noise",
+            "1e-6",
+            "--force-blob",
+            "--blob",
+            "rej.blob",
+            "--json",
+            "rej.json",
+            "--no-db",
+        ],
+    );
+    // REJECT exits 3.
+    assert_eq!(code, 3, "{out}{err}");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("rej.json")).unwrap()).unwrap();
+    assert_eq!(v["verdict"], "reject");
+    v["verdict"] = "accept".into();
+    std::fs::write(d.join("accepted.json"), v.to_string()).unwrap();
+    let mut forged = list.clone();
+    forged[2] = "accepted.json";
+    fails(
+        &forged.join(","),
+        "unit.csv",
+        "accepted.json (a_z): field `verdict`: the record says ACCEPT, while its blob was written from a fit judged REJECT",
     );
     // A triad's record.
     let (code, out, err) = calflash(

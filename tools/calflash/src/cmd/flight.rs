@@ -316,6 +316,8 @@ fn read_record(path: &std::path::Path) -> Result<Record, Failure> {
         )
         .into());
     }
+    rec.check_seal()
+        .map_err(|e| format!("--record {}: {e}", path.display()))?;
     Ok(rec)
 }
 
@@ -340,7 +342,9 @@ fn history_record(
     entries.into_iter().find_map(|entry| {
         let text = db.record(entry.id).ok()?;
         let rec: Record = serde_json::from_str(&text).ok()?;
-        (rec.schema == record::SCHEMA && crate::nav::prior::record_is_of(&rec, cal).is_ok())
-            .then(|| (rec, format!("the unit history's record {}", entry.id)))
+        (rec.schema == record::SCHEMA
+            && rec.check_seal().is_ok()
+            && crate::nav::prior::record_is_of(&rec, cal).is_ok())
+        .then(|| (rec, format!("the unit history's record {}", entry.id)))
     })
 }

@@ -52,6 +52,14 @@ pub enum Error {
         /// `calflash selfcal`'s.
         selfcal: &'static str,
     },
+    /// A record changed after it was written.
+    #[error("{file}: {why}")]
+    Edited {
+        /// The record.
+        file: String,
+        /// What does not match.
+        why: crate::sensor::record::Unsealed,
+    },
     /// No schema at all.
     #[error("{file}: no `schema`: not a record of `calflash calibrate` or `calflash selfcal`")]
     NoSchema {
@@ -355,6 +363,10 @@ impl Estimates {
                 let r: Record = serde_json::from_value(v).map_err(|e| Error::NotRecord {
                     file: source.to_string(),
                     source: e,
+                })?;
+                r.check_seal().map_err(|why| Error::Edited {
+                    file: source.to_string(),
+                    why,
                 })?;
                 Ok(Self::of_record(&r))
             }

@@ -10,6 +10,29 @@ use super::{Calibrated, Finding, Verdict};
 /// The schema identifier.
 pub const SCHEMA: &str = "calflash.calibration/1";
 
+/// A record that is not as `calflash` wrote it.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum Unsealed {
+    /// No seal: written by hand, or before records were sealed.
+    #[error(
+        "the record has no seal (written by hand, or by a calflash before records were sealed): calibrate again to make a sealed record"
+    )]
+    Missing,
+    /// A field that contradicts the record's own blob.
+    #[error("field `{field}`: {why}: the record was changed after calflash wrote it")]
+    Field {
+        /// The field.
+        field: String,
+        /// What it says against the blob.
+        why: String,
+    },
+    /// The seal does not match.
+    #[error(
+        "its seal does not match its content: a field (a coefficient, a covariance, a finding, the verdict) was changed after calflash wrote it"
+    )]
+    Broken,
+}
+
 /// One forward fit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AxisRecord {
@@ -86,6 +109,12 @@ pub struct Record {
     pub device_error: f64,
     /// The blob, hex.
     pub blob: String,
+    /// The record's seal: the SHA-256 (hex) of the record as `calflash` wrote it, every field
+    /// but this one ([`Record::sealed`]). A record changed after it was written (a coefficient,
+    /// a covariance, the verdict) no longer matches its seal and is refused where it is taken
+    /// as evidence (stage two, the flight's prior, `compare`).
+    #[serde(default)]
+    pub seal: String,
     /// The station whose Earth rate was a known input of the gyro fits.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub earth: Option<crate::earth::Station>,
@@ -222,6 +251,7 @@ impl Record {
                 .collect(),
             device_error: c.device_error,
             blob: hex(&c.blob),
+            seal: String::new(),
             earth: c.earth,
             lot: None,
             mission: c
@@ -233,6 +263,85 @@ impl Record {
                 .as_ref()
                 .and_then(|s| serde_json::to_value(s).ok()),
         }
+    }
+
+    /// This record with its seal: to be set last, when every other field is final.
+    #[must_use]
+    pub fn sealed(mut self) -> Self {
+        self.seal = self.content_seal();
+        self
+    }
+
+    /// The SHA-256 of the record with its seal empty, as `serde_json` writes it (the fields in
+    /// their declared order; a float as its shortest round-tripping decimal, so a record read
+    /// back and written again gives the same bytes).
+    fn content_seal(&self) -> String {
+        use sha2::Digest as _;
+        let mut open = self.clone();
+        open.seal.clear();
+        let bytes = serde_json::to_vec(&open).unwrap_or_default();
+        hex(&sha2::Sha256::digest(&bytes))
+    }
+
+    /// Whether this record is as `calflash` wrote it: its seal matches its content, and the
+    /// verdict and the temperature points agree with the blob it carries.
+    ///
+    /// # Errors
+    /// [`Unsealed`], naming the field that does not match where it can be named.
+    pub fn check_seal(&self) -> Result<(), Unsealed> {
+        if let Some(cal) = self.calibration() {
+            let data = cal.data();
+            if data.identity.fit_rejected && self.verdict != Verdict::Reject {
+                return Err(Unsealed::Field {
+                    field: "verdict".into(),
+                    why: format!(
+                        "the record says {}, while its blob was written from a fit judged REJECT",
+                        self.verdict.word()
+                    ),
+                });
+            }
+            let env = &data.environment;
+            let span = env.temperature_span;
+            let table = matches!(
+                env.temperature_model,
+                spincal::model::TemperatureModel::Table
+            ) && !env.temperatures.is_empty();
+            for (i, p) in self.points.iter().enumerate() {
+                let Some(t) = p.temp else { continue };
+                let inside = f64::from(span.lo) - 1e-3 <= t && t <= f64::from(span.hi) + 1e-3;
+                let breakpoint = !table
+                    || env
+                        .temperatures
+                        .iter()
+                        .any(|&b| (f64::from(b) - t).abs() <= 1e-3 * t.abs().max(1.0));
+                if !(inside && breakpoint) {
+                    return Err(Unsealed::Field {
+                        field: format!("points[{i}].temp"),
+                        why: format!(
+                            "{t} C is not a temperature point of its blob (calibrated {} to {} C)",
+                            span.lo, span.hi
+                        ),
+                    });
+                }
+            }
+        }
+        if self.seal.is_empty() {
+            return Err(Unsealed::Missing);
+        }
+        if self.seal != self.content_seal() {
+            return Err(Unsealed::Broken);
+        }
+        Ok(())
+    }
+
+    /// The calibration inside the record's blob (signed or not).
+    #[must_use]
+    pub fn calibration(&self) -> Option<spincal::model::Calibration> {
+        let bytes = self.blob_bytes();
+        spincal::blob::decode(&bytes).ok().or_else(|| {
+            let (inner, _) = spincal::signed::split(&bytes).ok()?;
+            spincal::blob::decode(inner).ok()
+        })
     }
 
     /// The blob's bytes.

@@ -400,6 +400,7 @@ pub fn calibrate_one(
     let mut record = Record::new(&c, &data_name);
     record.lot.clone_from(&out.lot);
     record.blob = blob.as_deref().map(hex).unwrap_or_default();
+    let record = record.sealed();
     out.write(blob.as_deref(), &record, || {
         report::html::render(&c, &data_name)
     })?;

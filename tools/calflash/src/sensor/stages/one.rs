@@ -115,6 +115,16 @@ pub enum StageOneError {
         /// The sensor's serial.
         serial: String,
     },
+    /// A record changed after it was written.
+    #[error("{} ({output}): {why}", path.display())]
+    Edited {
+        /// The record.
+        path: PathBuf,
+        /// The output it was given for.
+        output: &'static str,
+        /// What does not match.
+        why: crate::sensor::record::Unsealed,
+    },
     /// A record with a supply-voltage axis.
     #[error("{} ({output}): the record has a supply-voltage table; stage two carries temperature points only", path.display())]
     Voltage {
@@ -144,14 +154,6 @@ fn unreadable(path: &Path, why: impl ToString) -> StageOneError {
         path: path.to_path_buf(),
         why: why.to_string(),
     }
-}
-
-/// The calibration inside a record's blob (signed or not).
-fn calibration(bytes: &[u8]) -> Option<spincal::model::Calibration> {
-    spincal::blob::decode(bytes).ok().or_else(|| {
-        let (inner, _) = spincal::signed::split(bytes).ok()?;
-        spincal::blob::decode(inner).ok()
-    })
 }
 
 fn quantity_words(q: Quantity) -> (&'static str, &'static str) {
@@ -201,7 +203,13 @@ pub fn from_text(text: &str, path: &Path, k: usize) -> Result<Sensor1, StageOneE
             serial: rec.serial,
         });
     }
-    let cal = calibration(&rec.blob_bytes())
+    rec.check_seal().map_err(|why| StageOneError::Edited {
+        path: path.to_path_buf(),
+        output,
+        why,
+    })?;
+    let cal = rec
+        .calibration()
         .ok_or_else(|| unreadable(path, "its blob does not decode"))?;
     let data = cal.data();
     let Sensor::Single {
