@@ -650,6 +650,68 @@ fn stage_one_records_that_do_not_fit_are_named() {
         "unit.csv",
         "accepted.json (a_z): field `verdict`: the record says ACCEPT, while its blob was written from a fit judged REJECT",
     );
+    // Records in each other's place: named as possibly swapped, and refused against the
+    // unit's as-built list.
+    let mut crossed = list.clone();
+    crossed.swap(3, 4);
+    let stage_two = |records: &str, data: &str, extra: &[&str]| {
+        let mut args = vec![
+            "calibrate",
+            data,
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-7",
+            "--keep-all-terms",
+            "--stage-one",
+            records,
+            "--blob",
+            "crossed.blob",
+            "--no-db",
+        ];
+        args.extend(extra);
+        calflash(d, &args)
+    };
+    let (code, out, err) = stage_two(&crossed.join(","), "unit.csv", &[]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("both moved by more than 10 of their sigmas: their stage-one records may be in each other's place"),
+        "{out}"
+    );
+    let built = "a_x=S-6-0,a_y=S-6-1,a_z=S-6-2,g_x=S-6-3,g_y=S-6-4,g_z=S-6-5";
+    std::fs::remove_file(d.join("crossed.blob")).unwrap();
+    let (code, out, err) = stage_two(&crossed.join(","), "unit.csv", &["--as-built", built]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(
+        err.contains("--stage-one s1/g_y.json (given for g_x) is the record of sensor S-6-4, which is mounted at g_y; the as-built list puts sensor S-6-3 at g_x"),
+        "{err}"
+    );
+    assert!(!d.join("crossed.blob").exists());
+    let (code, out, err) = stage_two(&records, "unit.csv", &["--as-built", built]);
+    assert_eq!(code, 0, "{out}{err}");
+    std::fs::remove_file(d.join("crossed.blob")).unwrap();
+    // A sensor mounted backwards: its codes mirrored about mid-scale.
+    let csv = std::fs::read_to_string(d.join("unit.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    let ax = header.split(',').position(|c| c == "a_x").unwrap();
+    let back: Vec<String> = std::iter::once(header.to_string())
+        .chain(lines.map(|l| {
+            let mut f: Vec<String> = l.split(',').map(str::to_string).collect();
+            f[ax] = (65535.0 - f[ax].parse::<f64>().unwrap()).to_string();
+            f.join(",")
+        }))
+        .collect();
+    std::fs::write(d.join("back.csv"), back.join("\n") + "\n").unwrap();
+    let (code, out, err) = stage_two(&records, "back.csv", &[]);
+    assert_eq!(code, 3, "{out}{err}");
+    assert!(
+        out.contains(
+            "REJECT a_x (sensor S-6-0, stage one s1/a_x.json): senses along its own axis reversed"
+        ) && out.contains("the sensor is mounted backwards"),
+        "{out}"
+    );
+    assert!(!d.join("crossed.blob").exists());
     // A triad's record.
     let (code, out, err) = calflash(
         d,

@@ -192,6 +192,17 @@ pub struct CalibrateArgs {
     /// that sensor's newest calibration from the unit history (`--db`, or the default).
     #[arg(long, value_name = "AX.json,...,GZ.json", value_delimiter = ',')]
     pub stage_one: Vec<PathBuf>,
+    /// With --stage-one: the unit's as-built list, the serial of the sensor mounted at each
+    /// output (`a_x=S-0,a_y=S-1,...,g_z=S-5`, as the assembly's traveller records it). Each
+    /// stage-one record's sensor must be the one mounted at its output: records given in the
+    /// wrong order are refused, naming both serials.
+    #[arg(
+        long,
+        value_name = "OUTPUT=SERIAL,...",
+        value_delimiter = ',',
+        requires = "stage_one"
+    )]
+    pub as_built: Vec<String>,
 }
 
 /// `--requirement`: `(output or family, SI)` pairs.
@@ -345,6 +356,7 @@ pub fn calibrate_one(
     let c = match args.sensor {
         SensorKind::Imu if two_stage => {
             let sensors = stage_one(&args.stage_one, out)?;
+            as_built(&args.as_built, &sensors)?;
             triad::stage_two::calibrate(&opts, &sensors).map(|(c, _)| c)
         }
         SensorKind::SingleAccel => single::calibrate(&opts, Quantity::Acceleration),
@@ -423,6 +435,58 @@ pub fn calibrate_one(
         .map(|f| f.text.clone())
         .collect();
     Ok(Judged { verdict, reasons })
+}
+
+/// `--as-built`: every output named once with its sensor's serial, and each stage-one record
+/// of that sensor.
+fn as_built(list: &[String], sensors: &[sensor::stages::Sensor1]) -> Result<(), Failure> {
+    use sensor::stages::one::OUTPUTS;
+    if list.is_empty() {
+        return Ok(());
+    }
+    let mut serials: [Option<&str>; 6] = [None; 6];
+    for item in list {
+        let Some((output, serial)) = item.split_once('=') else {
+            return Err(format!("--as-built: `{item}` is not OUTPUT=SERIAL (a_x=S-0)").into());
+        };
+        let Some(k) = OUTPUTS.iter().position(|o| *o == output.trim()) else {
+            return Err(format!(
+                "--as-built: `{output}` is not an output; the outputs are {}",
+                OUTPUTS.join(", ")
+            )
+            .into());
+        };
+        if serials[k].replace(serial.trim()).is_some() {
+            return Err(format!("--as-built: {output} is given twice").into());
+        }
+    }
+    for (k, s) in sensors.iter().enumerate() {
+        let Some(serial) = serials[k] else {
+            return Err(format!(
+                "--as-built: no serial for {}: the list names the sensor at each of the six outputs",
+                OUTPUTS[k]
+            )
+            .into());
+        };
+        if s.serial != serial {
+            let at = serials
+                .iter()
+                .position(|x| *x == Some(s.serial.as_str()))
+                .map_or_else(
+                    || "is not in the as-built list".to_string(),
+                    |j| format!("is mounted at {}", OUTPUTS[j]),
+                );
+            return Err(format!(
+                "--stage-one {} (given for {}) is the record of sensor {}, which {at}; the as-built list puts sensor {serial} at {}",
+                s.file.display(),
+                OUTPUTS[k],
+                s.serial,
+                OUTPUTS[k]
+            )
+            .into());
+        }
+    }
+    Ok(())
 }
 
 /// `history:SERIAL` in `--stage-one`: the serial.

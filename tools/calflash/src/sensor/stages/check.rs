@@ -34,6 +34,8 @@ pub struct SensorCheck {
     /// The sensing direction's angle from the unit's axis, rad (the misalignment assembly
     /// made).
     pub misalignment: f64,
+    /// The sensing direction, a unit vector in the unit's axes.
+    pub direction: [f64; 3],
 }
 
 /// The check of all six sensors.
@@ -87,6 +89,7 @@ pub fn check(moved: &[Moved], who: &[(String, String)], alpha: f64) -> Check {
             scale_se,
             scale_moved: false,
             misalignment: (m.m[own] / norm).clamp(-1.0, 1.0).acos(),
+            direction: m.m.map(|v| v / norm),
         });
     }
     let rejected = crate::stats::multiple::holm(&p, alpha);
@@ -98,6 +101,42 @@ pub fn check(moved: &[Moved], who: &[(String, String)], alpha: f64) -> Check {
         alpha,
         sensors: rows,
     }
+}
+
+/// A bias change this many of its sigmas is more than assembly moves a part.
+const FAR_MOVED: f64 = 10.0;
+
+/// A sensing direction no assembly tolerance explains (beyond 60 degrees of its axis): the
+/// sensor mounted backwards or on another axis, or its record given for another output.
+fn mounted_wrong(s: &SensorCheck) -> Option<String> {
+    let (angle, d) = (s.misalignment, s.direction);
+    if angle <= 60f64.to_radians() {
+        return None;
+    }
+    let axes = ["x", "y", "z"];
+    let own = axes.iter().position(|a| s.output.ends_with(a)).unwrap_or(0);
+    let (k, _) = d
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        .unwrap_or((own, &1.0));
+    let sign = if d[k] < 0.0 { "-" } else { "+" };
+    Some(if k == own && d[k] < 0.0 {
+        format!(
+            "senses along its own axis reversed ({:.1} degrees off, its scale factor negated): the sensor is mounted backwards; mount it as stage one had it, or calibrate it again as mounted",
+            angle.to_degrees()
+        )
+    } else if k == own {
+        format!(
+            "senses {:.1} degrees off its axis: no assembly tolerance explains it; check the sensor's mounting and its record",
+            angle.to_degrees()
+        )
+    } else {
+        format!(
+            "senses along the unit's {sign}{} axis, not {}: the sensor is mounted on another axis, or its record was given for another output (the records go in the order a_x,a_y,a_z,g_x,g_y,g_z as mounted)",
+            axes[k], axes[own]
+        )
+    })
 }
 
 impl Check {
@@ -112,6 +151,16 @@ impl Check {
             } else {
                 "rad/s"
             };
+            if let Some(how) = mounted_wrong(s) {
+                out.push(Finding {
+                    verdict: Verdict::Reject,
+                    text: format!(
+                        "{} (sensor {}, stage one {}): {how}",
+                        s.output, s.serial, s.record
+                    ),
+                });
+                continue;
+            }
             if s.scale_moved {
                 out.push(Finding {
                     verdict: Verdict::Review,
@@ -137,6 +186,37 @@ impl Check {
                         s.bias_se,
                         s.bias_change / s.bias_se,
                         s.record
+                    ),
+                });
+            }
+        }
+        // Two sensors of one kind that both moved by far more than assembly moves a part: their
+        // records may have been given in each other's place.
+        for family in ["a", "g"] {
+            let far: Vec<&SensorCheck> = self
+                .sensors
+                .iter()
+                .filter(|s| s.output.starts_with(family) && s.bias_moved)
+                .filter(|s| (s.bias_change / s.bias_se).abs() >= FAR_MOVED)
+                .collect();
+            if far.len() >= 2 {
+                let names: Vec<String> = far
+                    .iter()
+                    .map(|s| {
+                        format!(
+                            "{} (sensor {}, z {:.0})",
+                            s.output,
+                            s.serial,
+                            s.bias_change / s.bias_se
+                        )
+                    })
+                    .collect();
+                out.push(Finding {
+                    verdict: Verdict::Review,
+                    text: format!(
+                        "{} {} moved by more than {FAR_MOVED} of their sigmas: their stage-one records may be in each other's place; --as-built checks each record's sensor against the unit's as-built list",
+                        names.join(", "),
+                        if far.len() == 2 { "both" } else { "all" }
                     ),
                 });
             }
