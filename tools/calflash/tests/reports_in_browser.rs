@@ -551,6 +551,19 @@ fn what_a_reader_finds(d: &Path) {
             assert!(!long_mantissa, "{f}: a tick label {label}");
         }
     }
+    // The flight's report: its verdict in a box, its facts and terms in tables (no terminal
+    // text pasted), its figures saying which pass they are drawn from.
+    let flight = page("flight.html");
+    assert!(flight.contains("<p class=\"verdict "), "flight.html");
+    assert!(!flight.contains("<pre"), "flight.html holds a pre block");
+    assert!(flight.contains("<h2>The filter's fit and its inputs</h2>\n<table>"));
+    assert!(flight.contains("<table class=\"terms\">"), "flight.html");
+    assert!(
+        flight.contains(
+            "<p>Drawn from the pass with the calibration's prior, the pass the table reports"
+        ) || flight.contains("<p>Drawn from the flight alone"),
+        "flight.html"
+    );
     let lot = page("lot.html");
     assert!(lot.contains("point(s) out of control: LOT-R-"), "lot.html");
     assert!(!lot.contains(">plotted<"), "lot.html");

@@ -158,8 +158,11 @@ pub struct Checked {
     /// The shifted terms' estimates from the pass with their prior opened: name, estimate,
     /// 1-sigma.
     pub shifts: Vec<(&'static str, f64, f64)>,
-    /// The pass whose smoothed trajectory is reported.
+    /// The pass whose smoothed trajectory is reported: the verdict's table, the track and
+    /// every figure are of it.
     pub pass: Pass,
+    /// Which pass it is, in words.
+    pub pass_name: &'static str,
     /// The smoothed flight against GNSS and the barometer.
     pub track: Track,
     /// Heading at rest and its 1-sigma, degrees.
@@ -360,10 +363,11 @@ pub fn check(
         &first.said,
         alpha,
     );
-    let (verdict, pass) = if held.word == "HELD" {
+    let with_prior = "the pass with the calibration's prior";
+    let (verdict, pass, pass_name) = if held.word == "HELD" {
         // A flight the calibration's prior fits and holds is HELD, with that pass's tighter
         // estimates.
-        (held, first)
+        (held, first, with_prior)
     } else {
         let (alone, second) = flight_alone(
             imu,
@@ -378,9 +382,13 @@ pub fn check(
         // names a shift by how far the data pull the calibration's tight prior, but cannot say
         // how large it is), unless it does not fit where the held pass does.
         if alone.consistency.fits || !held.consistency.fits {
-            (alone, second)
+            (
+                alone,
+                second,
+                "the flight alone (every term's change at launch opened)",
+            )
         } else {
-            (held, first)
+            (held, first, with_prior)
         }
     };
     let shifts = verdict
@@ -408,6 +416,7 @@ pub fn check(
         prior: source,
         rest_seconds: imu.t[rest_end] - t0,
         pass,
+        pass_name,
     })
 }
 

@@ -22,8 +22,11 @@ pub struct Track {
     pub position: Vec<[f64; 3]>,
     /// Each sensor error (in [`super::verdict::TERMS`]' order) and its 1-sigma.
     pub terms: Vec<([f64; 12], [f64; 12])>,
-    /// GNSS fixes after launch in the level frame: time and position.
+    /// GNSS fixes after launch in the level frame: time and position (up 0 for a fix without
+    /// a height).
     pub gnss: Vec<(f64, [f64; 3])>,
+    /// The fixes after launch that carry a height: time and height above the origin, m.
+    pub gnss_height: Vec<(f64, f64)>,
     /// Barometric heights above the pad after launch: time and height, m.
     pub baro: Vec<(f64, f64)>,
     /// Smoothed horizontal track against GNSS, RMS m, and the fixes compared.
@@ -123,6 +126,11 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
         track_rms: rms(&track),
         height_rms: rms(&height_errors),
         baro_offset: (!differences.is_empty()).then_some(offset),
+        gnss_height: fixes
+            .iter()
+            .filter(|f| f.t >= at.launch && f.height.is_some())
+            .map(|f| (f.t - at.latency, run::level_position(f, at.origin)[2]))
+            .collect(),
         gnss,
         baro: heights
             .iter()

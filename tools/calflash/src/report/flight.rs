@@ -234,14 +234,27 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, sup
     use super::page::{STYLE, esc};
     use super::plot::{Figure, Series, figure};
     use crate::nav::run::Kind;
-    let title = format!("Unit {serial} in flight: {}", c.verdict.word);
+    let v = &c.verdict;
+    let title = format!("Unit {serial} in flight: {}", v.word);
+    let class = match v.word {
+        "HELD" => "accept",
+        "SHIFTED" => "reject",
+        _ => "review",
+    };
     let mut h = String::new();
     let _ = writeln!(
         h,
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>{0}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{0}</h1>\n<pre>{1}</pre>",
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>{0}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>Unit {1} in flight</h1>\n<p class=\"verdict {class}\">{2}</p>\n<p>{3}</p>",
         esc(&title),
-        esc(&text(serial, c, counts))
+        esc(serial),
+        esc(v.word),
+        esc(&v.why)
     );
+    h.push_str(&facts_table(c, counts));
+    if v.consistency.fits {
+        h.push_str(&terms_table(c));
+    }
+    h.push_str("<h2>Innovations</h2>\n");
     // Innovations over their predicted sigma, with the 95 % bounds.
     let said = &c.pass.said;
     let span = said.first().map(|s| s.t).unwrap_or(0.0)..=said.last().map(|s| s.t).unwrap_or(1.0);
@@ -290,18 +303,27 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, sup
             .zip(&tr.position)
             .map(|(t, p)| (*t, p[2]))
             .collect();
-    let gnss_height: Vec<(f64, f64)> = tr.gnss.iter().map(|(t, p)| (*t, p[2])).collect();
+    h.push_str("<h2>The trajectory</h2>\n");
+    if tr.gnss_height.is_empty() {
+        h.push_str("<p>The GNSS log holds no height: only the smoothed height and the barometer's are drawn.</p>\n");
+    }
+    let gnss_height = &tr.gnss_height;
     let mut series = vec![Series::curve("smoothed", &height, 0)];
-    if !tr.baro.is_empty() {
-        series.push(Series::dots("barometer", &tr.baro, 1));
+    // The barometer's heights above the pad, moved by their mean difference from the smoothed
+    // height (where the pad is in the frame), as the table compares them.
+    let offset = tr.baro_offset.unwrap_or(0.0);
+    let baro: Vec<(f64, f64)> = tr.baro.iter().map(|(t, z)| (*t, z + offset)).collect();
+    let baro_name = format!("barometer {offset:+.1} m");
+    if !baro.is_empty() {
+        series.push(Series::dots(&baro_name, &baro, 1));
     }
     if !gnss_height.is_empty() {
-        series.push(Series::dots("GNSS", &gnss_height, 2));
+        series.push(Series::dots("GNSS", gnss_height, 2));
     }
     figure(
         &mut h,
         &Figure {
-            title: "Height above the pad",
+            title: "Height above the level frame's origin (the pad, or the first fix)",
             x: "time, s",
             y: "height, m",
             series,
@@ -328,6 +350,12 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, sup
         },
     )?;
     // Each sensor error along the flight with its 1-sigma, a figure per kind of term.
+    let _ = writeln!(
+        h,
+        "<h2>Sensor errors along the flight</h2>\n<p>Drawn from {}, the pass the table reports: each term's smoothed estimate with its 1-sigma; the table's value is the curve just after the launch ({:.3} s). The calibration's own 1-sigma of each term is the table's first column.</p>",
+        esc(c.pass_name),
+        c.pass.launch
+    );
     let every = tr.t.len().div_ceil(60).max(1);
     for (group, unit, first) in [
         ("Accelerometer biases", "m/s^2", 0),
@@ -369,4 +397,135 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, sup
     }
     h.push_str("<p>Each sensor error is the smoothed estimate of its shift from the calibration, with its 1-sigma; the innovations are GNSS and barometer readings against the filter's prediction, over the spread the filter expected.</p>\n</body>\n</html>\n");
     Ok(super::page::with_contents(&h))
+}
+
+/// The check's facts as a table: the filter's fit, the inputs, the prior, the track.
+fn facts_table(c: &Checked, counts: &FixCounts) -> String {
+    use super::page::esc;
+    let k = &c.verdict.consistency;
+    let mut rows: Vec<(String, String)> = vec![
+        (
+            "GNSS and barometer innovations inside their 95 % bounds".into(),
+            format!(
+                "{} of {} ({:.1} %)",
+                k.inside_95,
+                k.innovations,
+                100.0 * k.inside_95 as f64 / k.innovations.max(1) as f64
+            ),
+        ),
+        (
+            "mean NIS of those taken (1 when the covariance is right)".into(),
+            format!("{:.2}", k.mean_nis),
+        ),
+        ("refused beyond 5 sigma".into(), k.refused.to_string()),
+        (
+            "GNSS rows: without a fix, repeating the last (left out)".into(),
+            format!("{}: {}, {}", counts.rows, counts.no_fix, counts.repeated),
+        ),
+        (
+            "heading at rest, from the track".into(),
+            format!("{:.1} &plusmn; {:.1} deg", c.heading_deg.0, c.heading_deg.1),
+        ),
+        (
+            "at rest before launch".into(),
+            format!("{:.2} s", c.rest_seconds),
+        ),
+        (
+            "noise densities at rest: accelerometer, gyro".into(),
+            format!(
+                "{:.3e} m/s<sup>2</sup>/&radic;Hz, {:.3e} rad/s/&radic;Hz",
+                c.noise.0, c.noise.1
+            ),
+        ),
+        (
+            "flagged samples navigated on doubt".into(),
+            format!("{:.3} s", c.pass.flagged_seconds),
+        ),
+        (
+            "barometer left out near and beyond Mach 1".into(),
+            format!("{:.1} s", c.pass.baro_skipped_seconds),
+        ),
+    ];
+    if !c.pass.resets.is_empty() {
+        rows.push((
+            "navigation put back on GNSS after losing track".into(),
+            format!(
+                "{} time(s), first at {:.2} s",
+                c.pass.resets.len(),
+                c.pass.resets[0]
+            ),
+        ));
+    }
+    let prior = match &c.prior {
+        PriorSource::Record(at) => format!("the calibration's record ({})", esc(at)),
+        PriorSource::Factors { .. } => "the blob's covariance factors".into(),
+        PriorSource::Stated(_) => "a stated prior (--prior)".into(),
+    };
+    rows.push(("prior".into(), prior));
+    if let Some((rms, n)) = c.track.track_rms {
+        rows.push((
+            format!("smoothed horizontal track against {n} GNSS fixes, RMS"),
+            format!("{rms:.2} m"),
+        ));
+    }
+    if let Some((rms, n)) = c.track.height_rms {
+        rows.push((
+            format!(
+                "smoothed height against {n} barometer readings, RMS after their mean difference"
+            ),
+            format!(
+                "{rms:.2} m (difference {:+.2} m)",
+                c.track.baro_offset.unwrap_or(0.0)
+            ),
+        ));
+    }
+    let mut t = String::from("<h2>The filter's fit and its inputs</h2>\n<table>\n");
+    for (what, value) in rows {
+        let _ = writeln!(t, "<tr><td>{what}</td><td>{value}</td></tr>");
+    }
+    t.push_str("</table>\n");
+    t
+}
+
+/// Each sensor error against the calibration, as a table.
+fn terms_table(c: &Checked) -> String {
+    use super::page::esc;
+    let v = &c.verdict;
+    let mut t = format!(
+        "<h2>Sensor errors at launch</h2>\n<p>From {}: each term's smoothed estimate just after the launch, tested against the calibration's 1-sigma of it over the flight.</p>\n<table class=\"terms\">\n<tr><th>term</th><th>unit</th><th>calibration 1-sigma</th><th>in flight</th><th>1-sigma</th><th>the flight alone, 1-sigma</th><th>z</th><th>p</th><th></th></tr>\n",
+        esc(c.pass_name)
+    );
+    for term in &v.terms {
+        let (z, p) = match (term.z, term.p) {
+            (Some(z), Some(p)) => (format!("{z:+.2}"), format!("{p:.3}")),
+            _ => ("&ndash;".into(), "&ndash;".into()),
+        };
+        let mark = if term.shifted {
+            "<b>SHIFTED</b>"
+        } else if term.z.is_none() {
+            "not observed"
+        } else {
+            ""
+        };
+        let alone = term
+            .flight_sigma
+            .map_or_else(|| "nothing".to_string(), |f| format!("{f:.3e}"));
+        let _ = writeln!(
+            t,
+            "<tr><td>{}</td><td>{}</td><td>{:.3e}</td><td>{:+.3e}</td><td>{:.3e}</td><td>{alone}</td><td>{z}</td><td>{p}</td><td>{mark}</td></tr>",
+            esc(term.name),
+            esc(term.unit),
+            term.prior_sigma,
+            term.estimate,
+            term.sigma
+        );
+    }
+    t.push_str("</table>\n");
+    if let Some((chi2, dof, p)) = v.overall {
+        let _ = writeln!(
+            t,
+            "<p>Over the observed terms: chi-square {chi2:.2} on {dof} degrees of freedom, p = {p:.3}. z and p test each term on its own; SHIFTED marks the terms a step-down test names, each tested given the shifts already named.</p>"
+        );
+    }
+    t
 }

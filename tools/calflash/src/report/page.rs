@@ -20,7 +20,7 @@ h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #cc
 .verdict{font-size:1.4em;padding:.5em 1em;border-radius:6px;display:inline-block}\
 .accept{background:#d9f2d9}.review{background:#fff3cd}.reject{background:#f8d7da}\
 table{border-collapse:collapse;margin:.5em 0}td,th{padding:2px 10px;text-align:right;border-bottom:1px solid #eee}\
-th{background:#f4f4f4}td:first-child,th:first-child{text-align:left}.fig{margin:1em 0}\
+th{background:#f4f4f4}.terms td{white-space:nowrap}td:first-child,th:first-child{text-align:left}.fig{margin:1em 0}\
 .fig svg{display:block;max-width:100%;height:auto}\
 pre{font-family:'DejaVu Sans Mono',monospace;white-space:pre-wrap;overflow-wrap:anywhere}\
 .contents{background:#f7f7f7;padding:.5em 1em;border-radius:6px}.contents ol{columns:2;margin:.3em 0}";
