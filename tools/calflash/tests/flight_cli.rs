@@ -100,7 +100,8 @@ fn fly(dir: &Path, shift: Option<&str>) -> serde_json::Value {
     assert_eq!(code, expected, "{out}{err}");
     let page = std::fs::read_to_string(dir.join("f.html")).unwrap();
     assert!(
-        page.contains("<h1>Unit ROUND-1 in flight: ") && page.matches("<svg").count() == 7,
+        page.contains("<h1>Unit ROUND-1 in flight</h1>\n<p class=\"verdict ")
+            && page.matches("<svg").count() == 7,
         "{}",
         &page[..300]
     );

@@ -364,9 +364,13 @@ pub fn check(
         alpha,
     );
     let with_prior = "the pass with the calibration's prior";
-    let (verdict, pass, pass_name) = if held.word == "HELD" {
+    let named = held.terms.iter().any(|t| t.shifted);
+    let (verdict, pass, pass_name) = if held.word == "HELD" || (held.consistency.fits && !named) {
         // A flight the calibration's prior fits and holds is HELD, with that pass's tighter
-        // estimates.
+        // estimates. One whose terms moved together, none named on its own, keeps that
+        // pass too: the flight alone, every term opened, would hand the shift to whichever
+        // terms it correlates with (on a rolling rocket, a transverse gyro bias's to both
+        // transverse accelerometer biases at a metre per second squared).
         (held, first, with_prior)
     } else {
         let (alone, second) = flight_alone(

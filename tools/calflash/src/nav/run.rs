@@ -381,10 +381,12 @@ pub fn forward(
     };
     let lever = Vector3::from(opts.lever);
     // The antenna's velocity about the unit, `C (w x l)`, summed since the last fix: a fix's
-    // velocity is the unit's plus that turn's mean over the fix's interval (the receiver's
-    // tracking smooths it: on a spinning round it averages out; on a pitching rocket it does
-    // not).
-    let (mut arm_v, mut arm_n) = (Vector3::zeros(), 0.0);
+    // velocity is the unit's plus that turn, which a receiver takes over its own short
+    // integration somewhere in the fix's interval (a rolling rocket's arm turns through a
+    // revolution or more between fixes). The filter predicts the turn's mean over the interval
+    // and adds its spread there to the velocity's variance, so a fix taken at any instant of
+    // the interval, or averaged over it, fits.
+    let (mut arm_v, mut arm_sq, mut arm_n) = (Vector3::zeros(), Vector3::zeros(), 0.0);
     let (mut next_fix, mut next_baro) = (0usize, 0usize);
     let mut last_baro = f64::NEG_INFINITY;
     let mut last_epoch = imu.t.first().copied().unwrap_or(0.0);
@@ -403,7 +405,9 @@ pub fn forward(
             pass.flagged_seconds += dt;
         }
         if lever != Vector3::zeros() {
-            arm_v += filter.estimate.nav.attitude() * Vector3::from(imu.w[i]).cross(&lever);
+            let turn = filter.estimate.nav.attitude() * Vector3::from(imu.w[i]).cross(&lever);
+            arm_v += turn;
+            arm_sq += turn.component_mul(&turn);
             arm_n += 1.0;
         }
         filter.sample(
@@ -456,12 +460,16 @@ pub fn forward(
         }
         while let Some(fix) = fixes.get(next_fix).filter(|f| f.t - opts.gnss_latency <= t) {
             next_fix += 1;
-            let arm = if arm_n > 0.0 {
-                arm_v / arm_n
+            let (arm, spread) = if arm_n > 0.0 {
+                let mean = arm_v / arm_n;
+                (
+                    mean,
+                    (arm_sq / arm_n - mean.component_mul(&mean)).map(|x| x.max(0.0)),
+                )
             } else {
-                Vector3::zeros()
+                (Vector3::zeros(), Vector3::zeros())
             };
-            (arm_v, arm_n) = (Vector3::zeros(), 0.0);
+            (arm_v, arm_sq, arm_n) = (Vector3::zeros(), Vector3::zeros(), 0.0);
             let z = level_position(fix, start.origin);
             // The fix describes an instant up to a sample before this one.
             let back = t - (fix.t - opts.gnss_latency);
@@ -477,7 +485,14 @@ pub fn forward(
                 filter.reset_position_velocity(
                     &at,
                     &vel,
-                    [h * h, h * h, v * v, r * r, r * r, r * r],
+                    [
+                        h * h,
+                        h * h,
+                        v * v,
+                        r * r + spread.x,
+                        r * r + spread.y,
+                        r * r + spread.z,
+                    ],
                 );
                 pass.resets.push(t);
                 continue;
@@ -518,7 +533,7 @@ pub fn forward(
                         (t, Kind::Velocity(axis)),
                         &h,
                         nu,
-                        r * r,
+                        r * r + spread[axis],
                         opts.gate,
                     );
                 }

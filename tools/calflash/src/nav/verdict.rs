@@ -410,6 +410,15 @@ pub fn judge(
             "SHIFTED",
             format!("shifted in flight: {}", shifted.join(", ")),
         )
+    } else if let Some((chi2, m, p)) = overall.filter(|o| o.2 < alpha) {
+        // No one term named, yet the observed terms together moved: the calibration did not
+        // hold (a shift shared among correlated terms, each under the bar alone).
+        (
+            "SHIFTED",
+            format!(
+                "the observed terms together moved beyond their calibration uncertainty (chi-square {chi2:.1} on {m} degrees of freedom, p = {p:.1e}), no one term named on its own"
+            ),
+        )
     } else if observed.is_empty() {
         (
             "CANNOT TELL",
