@@ -308,7 +308,11 @@ fn track_within_three_sigma(dir: &Path) -> f64 {
             (lat, lon, h),
         );
         n += 1;
-        inside += usize::from((0..3).all(|i| e[i].abs() <= 3.0 * r[4 + i]));
+        let ok = (0..3).all(|i| e[i].abs() <= 3.0 * r[4 + i]);
+        inside += usize::from(ok);
+        if !ok && std::env::var("NEES_DEBUG").is_ok() && n % 50 == 0 {
+            println!("t {:.2}: error {e:?}, 1-sigma {:?}", r[0], &r[4..7]);
+        }
     }
     inside as f64 / n.max(1) as f64
 }
@@ -371,10 +375,12 @@ fn average_nees_over_fifty_flights_of_each_kind() {
             if only.as_deref().is_some_and(|o| o != kind) {
                 continue;
             }
-            let flown: Vec<Flight> = (0..n).map(|k| fly(300 + k, shift, prior)).collect();
+            // NEES_FIRST: the first seed (300).
+            let first: u64 = std::env::var("NEES_FIRST").map_or(300, |v| v.parse().unwrap());
+            let flown: Vec<Flight> = (0..n).map(|k| fly(first + k, shift, prior)).collect();
             let worst = (0..flown.len())
                 .min_by(|&a, &b| flown[a].track_share.total_cmp(&flown[b].track_share))
-                .map_or(0, |k| 300 + k);
+                .map_or(0, |k| first + k as u64);
             println!("the track's worst flight: seed {worst}");
             let shares: Vec<f64> = flown.iter().map(|f| f.track_share).collect();
             let not_fit = flown
