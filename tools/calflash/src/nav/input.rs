@@ -497,13 +497,17 @@ pub fn gnss(path: &Path, max_rows: usize) -> Result<(Vec<Fix>, FixCounts), Input
     Ok((fixes, counts))
 }
 
+/// The longest median interval between GNSS fixes taken as seconds, s.
+const SLOWEST_FIX: f64 = 30.0;
+
 /// A logger's milliseconds taken as seconds, or radians as degrees, said: fixes a median of
-/// seconds apart (a receiver gives one to twenty a second), or a track that moves some 57
-/// times slower than the file's own velocities.
+/// over [`SLOWEST_FIX`] s apart (a receiver gives one to twenty a second: in milliseconds
+/// that is 50 to 1,000), or a track that moves some 57 times slower than the file's own
+/// velocities.
 fn misread_units(fixes: &[Fix]) -> Option<String> {
     let steps: Vec<f64> = fixes.windows(2).map(|w| w[1].t - w[0].t).collect();
     let gap = median_rate(fixes.iter().map(|f| f.t));
-    if steps.len() >= 4 && gap.is_finite() && gap > 0.0 && 1.0 / gap > 5.0 {
+    if steps.len() >= 4 && gap.is_finite() && gap > 0.0 && 1.0 / gap > SLOWEST_FIX {
         return Some(format!(
             "its fixes are a median {:.3} s apart in `t`, where a receiver gives one to twenty a second: if its times are in milliseconds, give them in seconds",
             1.0 / gap
