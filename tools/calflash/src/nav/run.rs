@@ -275,6 +275,22 @@ pub fn level_position(fix: &Fix, origin: (f64, f64, f64)) -> [f64; 3] {
     [e, n, u]
 }
 
+/// A fix's velocity in the level frame of `origin`: a receiver gives east, north and up at its
+/// own position, whose axes turn from the origin's by the distance over the Earth's radius (1
+/// mrad at 6 km: 0.5 m/s of a shell's 500 m/s).
+#[must_use]
+pub fn level_velocity(fix: &Fix, origin: (f64, f64, f64)) -> Option<[f64; 3]> {
+    let v = Vector3::from(fix.velocity?);
+    let to_local = |lat: f64, lon: f64| {
+        let (sp, cp) = lat.to_radians().sin_cos();
+        let (sl, cl) = lon.to_radians().sin_cos();
+        nalgebra::Matrix3::new(-sl, cl, 0.0, -sp * cl, -sp * sl, cp, cp * cl, cp * sl, sp)
+    };
+    let at_fix = to_local(fix.lat_lon.0, fix.lat_lon.1);
+    let at_origin = to_local(origin.0, origin.1);
+    Some((at_origin * at_fix.transpose() * v).into())
+}
+
 /// The whole prior: the sensor errors' from `start`, the rest from the levelling and the pad.
 fn prior(start: &Start, pad_sigma: (f64, f64)) -> StateMatrix<f64> {
     let mut p = start.prior;
@@ -473,7 +489,8 @@ pub fn forward(
             let z = level_position(fix, start.origin);
             // The fix describes an instant up to a sample before this one.
             let back = t - (fix.t - opts.gnss_latency);
-            if let Some(vel) = fix.velocity
+            let velocity = level_velocity(fix, start.origin);
+            if let Some(vel) = velocity
                 && fix.height.is_some()
                 && filter.velocity_lost(spincal::flight::LOST_VELOCITY)
             {
@@ -517,7 +534,7 @@ pub fn forward(
                     opts.gate,
                 );
             }
-            if let Some(vel) = fix.velocity {
+            if let Some(vel) = velocity {
                 // v_true + C_true a = v + dv + C a + psi x (C a): -[(C a) x] psi.
                 let m = -arm.cross_matrix();
                 for (axis, vi) in vel.iter().enumerate() {

@@ -107,8 +107,10 @@ pub fn write_gnss(
         let noisy = level + slow + Vector3::new(h.sample(rng), h.sample(rng), v.sample(rng));
         let flight = to_level.transpose() * noisy;
         let (lat, lon, height) = site.geodetic(&flight);
-        let vel =
-            to_level * antenna_v + Vector3::new(dv.sample(rng), dv.sample(rng), dv.sample(rng));
+        // The velocity in east, north and up at the receiver's own position, as receivers
+        // give it (the site's level frame turned by the distance over the Earth's radius).
+        let vel = site.local_enu(lat, lon) * antenna_v
+            + Vector3::new(dv.sample(rng), dv.sample(rng), dv.sample(rng));
         writeln!(
             w,
             "{},{lat:.9},{lon:.9},{height:.3},{:.3},{:.3},{:.3},12",

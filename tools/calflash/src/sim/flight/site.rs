@@ -49,6 +49,16 @@ impl Site {
         self.to_level().transpose() * self.earth().rate()
     }
 
+    /// The rotation from the flight's frame to east, north and up at latitude `lat` and
+    /// longitude `lon` (degrees): the level frame at that point, turned from the site's by the
+    /// distance over the Earth's radius (what a receiver there gives its velocity in).
+    #[must_use]
+    pub fn local_enu(&self, lat: f64, lon: f64) -> Matrix3<f64> {
+        enu_from_ecef(lat, lon)
+            * enu_from_ecef(self.latitude, self.longitude).transpose()
+            * self.to_level()
+    }
+
     /// Latitude and longitude (degrees) and height (m) of `r` (flight frame).
     #[must_use]
     pub fn geodetic(&self, r: &Vector3<f64>) -> (f64, f64, f64) {
@@ -64,6 +74,14 @@ impl Site {
         );
         (lat.to_degrees(), lon.to_degrees(), h)
     }
+}
+
+/// The rotation from Earth-centred, Earth-fixed axes to east, north, up at geodetic latitude
+/// `lat` and longitude `lon`, degrees.
+fn enu_from_ecef(lat: f64, lon: f64) -> Matrix3<f64> {
+    let (sp, cp) = lat.to_radians().sin_cos();
+    let (sl, cl) = lon.to_radians().sin_cos();
+    Matrix3::new(-sl, cl, 0.0, -sp * cl, -sp * sl, cp, cp * cl, cp * sl, sp)
 }
 
 #[cfg(test)]
@@ -94,5 +112,23 @@ mod tests {
             (e - 5_000.0).abs() < 1e-6 && (n - 200.0).abs() < 1e-6 && (u - 3_000.0).abs() < 1e-6
         );
         assert!((site.rate().norm() - spincal::nav::earth::RATE).abs() < 1e-18);
+        assert!((site.local_enu(site.latitude, site.longitude) - site.to_level()).norm() < 1e-15);
+        // 10 km east, the local up leans 1.6 mrad east of the site's.
+        let (lat, lon, _) = site.geodetic(&Vector3::new(10_000.0, 0.0, 0.0));
+        let up_there = site.local_enu(lat, lon).transpose() * Vector3::z();
+        let lean = up_there.x.atan2(up_there.z);
+        assert!((lean - 10_000.0 / 6.371e6).abs() < 2e-5, "{lean}");
+        // What a receiver there says, taken back into the site's level frame by the flight
+        // check, is the velocity in the site's frame.
+        let v = Vector3::new(300.0, -20.0, 150.0);
+        let fix = crate::nav::input::Fix {
+            t: 0.0,
+            lat_lon: (lat, lon),
+            height: Some(0.0),
+            velocity: Some((site.local_enu(lat, lon) * v).into()),
+        };
+        let back = crate::nav::run::level_velocity(&fix, (site.latitude, site.longitude, 0.0));
+        let back = Vector3::from(back.unwrap());
+        assert!((back - site.to_level() * v).norm() < 1e-9, "{back}");
     }
 }
