@@ -82,6 +82,24 @@ impl Origin {
         self.enu
             .map(|row| row[0] * d[0] + row[1] * d[1] + row[2] * d[2])
     }
+
+    /// A velocity given in east, north, up at `at` (as a receiver gives it, at its own
+    /// position) in the level frame: the two frames differ by the turn of the vertical over
+    /// the distance between them (1 mrad at 6 km).
+    #[must_use]
+    pub fn level_velocity(&self, at: &Geodetic, v: &[f32; 3]) -> [f64; 3] {
+        let (sl, cl) = libm::sincos(at.latitude.to_radians());
+        let (so, co) = libm::sincos(at.longitude.to_radians());
+        // Earth-centred: east, north and up there, weighted by the velocity's components.
+        let [e, n, u] = v.map(f64::from);
+        let ecef = [
+            -so * e - sl * co * n + cl * co * u,
+            co * e - sl * so * n + cl * so * u,
+            cl * n + sl * u,
+        ];
+        self.enu
+            .map(|row| row[0] * ecef[0] + row[1] * ecef[1] + row[2] * ecef[2])
+    }
 }
 
 #[cfg(test)]
@@ -109,5 +127,26 @@ mod tests {
             ..o.geodetic()
         });
         assert!(up[0].abs() < 1e-6 && up[1].abs() < 1e-6 && (up[2] - 100.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_velocity_given_up_at_a_point_north_leans_north_in_the_level_frame() {
+        let o = Origin::new(Geodetic {
+            latitude: 45.0,
+            longitude: 7.0,
+            height: 300.0,
+        });
+        let at = o.geodetic();
+        let same = o.level_velocity(&at, &[3.0, 4.0, 5.0]);
+        assert!((same[0] - 3.0).abs() < 1e-6 && (same[1] - 4.0).abs() < 1e-6);
+        // 0.054 degrees north (6 km): up there is 0.94 mrad north of up here.
+        let north = Geodetic {
+            latitude: 45.054,
+            ..at
+        };
+        let v = o.level_velocity(&north, &[0.0, 0.0, 100.0]);
+        let lean = v[1] / v[2];
+        assert!((lean - 0.054f64.to_radians()).abs() < 1e-5, "{v:?}");
+        assert!(v[0].abs() < 1e-9, "{v:?}");
     }
 }

@@ -23,7 +23,8 @@ pub struct GnssFix {
     pub t_us: u64,
     /// The antenna's position.
     pub position: Geodetic,
-    /// The antenna's velocity (east, north, up, m/s), when the receiver gives one.
+    /// The antenna's velocity (east, north, up at the antenna's own position, as receivers
+    /// give it, m/s), when the receiver gives one: the filter turns it into the level frame.
     pub velocity: Option<[f32; 3]>,
     /// Satellites in the solution.
     pub satellites: u8,
@@ -393,12 +394,12 @@ impl<T: Real> FlightFilter<T> {
         let (h_sigma, v_sigma) = self.config.gnss_sigma;
         let lever = self.config.lever;
         let velocity_lost = self.filter.velocity_lost(c::<T>(LOST_VELOCITY));
-        if let (true, Some(vel)) = (velocity_lost, fix.velocity) {
-            let v = Vector3::new(
-                c(f64::from(vel[0])),
-                c(f64::from(vel[1])),
-                c(f64::from(vel[2])),
-            );
+        // The receiver's east, north, up at its own position, in the level frame.
+        let velocity = fix
+            .velocity
+            .map(|v| origin.level_velocity(&fix.position, &v));
+        if let (true, Some(vel)) = (velocity_lost, velocity) {
+            let v = Vector3::new(c(vel[0]), c(vel[1]), c(vel[2]));
             let arm = self.filter.estimate.nav.attitude() * lever;
             let at = Vector3::new(c::<T>(z[0]), c(z[1]), c(z[2])) + v * back - arm;
             let r = self.config.gnss_velocity_sigma;
@@ -414,10 +415,10 @@ impl<T: Real> FlightFilter<T> {
             let r = if axis == 2 { v_sigma } else { h_sigma };
             self.take(Aiding::Position, &h, c::<T>(*zi) - (at - v * back), r * r);
         }
-        if let Some(vel) = fix.velocity {
+        if let Some(vel) = velocity {
             let r = self.config.gnss_velocity_sigma;
             for (axis, vi) in vel.iter().enumerate() {
-                self.take_velocity(Aiding::Velocity, axis, c(f64::from(*vi)), r * r);
+                self.take_velocity(Aiding::Velocity, axis, c(*vi), r * r);
             }
         }
     }
