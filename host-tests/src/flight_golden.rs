@@ -212,7 +212,8 @@ pub fn flight_of(spec: &str) -> Flight {
                     gv.sample(&mut rng),
                 );
             let (latitude, longitude, height) = site.geodetic(&(to_level.transpose() * noisy));
-            let v = to_level * Vector3::from(s.v);
+            // East, north, up at the receiver, as receivers give it.
+            let v = site.local_enu(latitude, longitude) * Vector3::from(s.v);
             events.push(Event::Fix(GnssFix {
                 t_us,
                 position: Geodetic {

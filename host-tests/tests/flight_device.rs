@@ -133,6 +133,32 @@ fn the_flight_finds_the_launch_shift_and_its_innovations_are_consistent() {
     );
 }
 
+/// The fixes taken 80 ms after their instant, as a receiver delivers them: the position and the
+/// velocity are both predicted at the fix's instant (the velocity by the navigation's rate of
+/// change since), so a shell decelerating at tens of m/s^2 has its velocities taken, not
+/// refused at 4 m/s of innovation, and the launch shift is still found.
+#[test]
+fn fixes_taken_late_are_predicted_at_their_own_instant() {
+    let (events, flight) = golden();
+    let mut config = flight_golden::config::<f64>(&flight);
+    config.gnss_latency_us = 80_000;
+    let mut filter = FlightFilter::<f64>::new(config);
+    for e in &events {
+        feed(&mut filter, e);
+    }
+    let s = filter.stats();
+    println!("{s:?}");
+    for kind in [Aiding::Position, Aiding::Velocity] {
+        let nis = s.mean_nis(kind).unwrap();
+        let k = kind as usize;
+        assert!((0.2..2.0).contains(&nis), "{kind:?}: mean NIS {nis}: {s:?}");
+        assert!(s.refused[k] * 20 <= s.taken[k], "{kind:?}: {s:?}");
+    }
+    let ax = filter.estimate().sensors.accel_bias.x;
+    let sigma = filter.covariance()[(index::ACCEL_BIAS, index::ACCEL_BIAS)].sqrt();
+    assert!((ax - SHIFT_AX).abs() < 3.0 * sigma, "{ax} +- {sigma}");
+}
+
 #[test]
 fn bad_input_is_refused_counted_and_never_reaches_the_estimate() {
     let (events, flight) = golden();

@@ -55,6 +55,10 @@ pub struct FlightFilter<T: Real> {
     rest: (Vector3<T>, u32, u64),
     now_us: Option<u64>,
     last_epoch_us: u64,
+    /// The navigation's velocity after the last epoch's updates, and its rate of change over
+    /// the interval before this epoch (level frame): a fix's velocity is predicted at its own
+    /// instant, `back` before the epoch that takes it.
+    pace: (Vector3<T>, Vector3<T>),
     launch_us: Option<u64>,
     fix: Option<GnssFix>,
     last_fix: Option<Geodetic>,
@@ -106,6 +110,7 @@ impl<T: Real> FlightFilter<T> {
             rest: (Vector3::zeros(), 0, 0),
             now_us: None,
             last_epoch_us: 0,
+            pace: (Vector3::zeros(), Vector3::zeros()),
             launch_us: None,
             fix: None,
             last_fix: None,
@@ -363,6 +368,11 @@ impl<T: Real> FlightFilter<T> {
 
     /// A covariance step and the updates due at `t_us`, then the feedback.
     fn epoch(&mut self, t_us: u64, fix_due: bool, baro_due: bool) {
+        let since: T = micros(t_us.saturating_sub(self.last_epoch_us));
+        let v = self.filter.estimate.nav.v;
+        if since > T::zero() {
+            self.pace.1 = (v - self.pace.0) / since;
+        }
         self.last_epoch_us = t_us;
         self.stats.epochs += 1;
         self.filter.covariance_step();
@@ -384,6 +394,7 @@ impl<T: Real> FlightFilter<T> {
             }
         }
         self.filter.feedback();
+        self.pace.0 = self.filter.estimate.nav.v;
         self.check();
     }
 
@@ -401,7 +412,10 @@ impl<T: Real> FlightFilter<T> {
         if let (true, Some(vel)) = (velocity_lost, velocity) {
             let v = Vector3::new(c(vel[0]), c(vel[1]), c(vel[2]));
             let arm = self.filter.estimate.nav.attitude() * lever;
+            // Put back at this epoch: the fix's position carried forward by its velocity,
+            // its velocity by the navigation's rate of change since.
             let at = Vector3::new(c::<T>(z[0]), c(z[1]), c(z[2])) + v * back - arm;
+            let v = v + self.pace.1 * back;
             let r = self.config.gnss_velocity_sigma;
             let (h2, v2, r2) = (h_sigma * h_sigma, v_sigma * v_sigma, r * r);
             self.filter
@@ -417,8 +431,11 @@ impl<T: Real> FlightFilter<T> {
         }
         if let Some(vel) = velocity {
             let r = self.config.gnss_velocity_sigma;
+            // The navigation's velocity at the fix's instant, `back` ago.
+            let then = self.pace.1 * back;
             for (axis, vi) in vel.iter().enumerate() {
-                self.take_velocity(Aiding::Velocity, axis, c(*vi), r * r);
+                let earlier = then.get(axis).copied().unwrap_or_else(T::zero);
+                self.take_velocity(Aiding::Velocity, axis, c::<T>(*vi) + earlier, r * r);
             }
         }
     }
