@@ -13,8 +13,12 @@ pub struct FlightConfig<T: Real> {
     /// The launch point, when the fire control knows it; `None`: the first good GNSS fix
     /// becomes the origin (the filter waits for it before it levels).
     pub origin: Option<Geodetic>,
-    /// The unit's heading at rest (rad, a turn about the vertical from the level frame's
-    /// east axis) and its 1-sigma.
+    /// The unit's heading at rest and its 1-sigma, rad: the turn about the vertical that,
+    /// after the shortest rotation taking the specific force at rest to up (the levelling),
+    /// gives the unit's attitude in the level frame (east, north, up). It is not the azimuth of
+    /// the barrel or the rail (a 155 mm round in its tube is pi from it):
+    /// [`heading_of_azimuth`](Self::heading_of_azimuth) turns the fire control's azimuth into
+    /// it.
     pub heading: (T, T),
     /// The body axis the round spins about.
     pub spin_axis: Vector3<T>,
@@ -63,6 +67,27 @@ fn c<T: Real>(x: f64) -> T {
 }
 
 impl<T: Real> FlightConfig<T> {
+    /// The [`heading`](Self::heading) of a unit at rest whose body axis `axis` (the spin axis,
+    /// in body axes) points at `azimuth` (rad, clockwise from north, as the fire control gives
+    /// the line of fire), levelled on the specific force `f` it senses at rest (body axes). The
+    /// axis must not point straight up (its azimuth is then undefined: `None`).
+    #[must_use]
+    pub fn heading_of_azimuth(f: &Vector3<T>, axis: &Vector3<T>, azimuth: T) -> Option<T> {
+        let up = crate::nav::real::rotation_between(f, &Vector3::z());
+        let levelled = up * axis;
+        let across = levelled.x * levelled.x + levelled.y * levelled.y;
+        if across <= c::<T>(1e-12) * levelled.norm_squared() {
+            return None;
+        }
+        // Where the levelled axis points (from east, counter-clockwise) and where it should.
+        let now = levelled.y.atan2_libm(levelled.x);
+        let wanted = T::frac_pi_2() - azimuth;
+        let turn = wanted - now;
+        // Within -pi .. pi.
+        let (s, c_) = turn.sin_cos_libm();
+        Some(s.atan2_libm(c_))
+    }
+
     /// The defaults of `calflash flight` with the heading, the noise and the prior given:
     /// GNSS 2.5 m / 5 m / 0.2 m/s, barometer 1.5 m with a port coefficient of 0.03 up to
     /// Mach 0.8 at 10 Hz, a 5-sigma gate, the covariance stepped at 100 Hz, zero-velocity
@@ -93,5 +118,56 @@ impl<T: Real> FlightConfig<T> {
             sensor_sigma,
             launch_shift: sensor_sigma,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reference rocket at rest (RocketPy's Calisto on its rail, 85 degrees up at azimuth
+    /// 120, `../shared/data/reference-flights/rocket_calisto`): its truth's specific force at
+    /// rest, and the heading its truth's attitude gives (-161.35 degrees, computed from the
+    /// truth's quaternion in `calflash`'s reference-flights test).
+    #[test]
+    fn the_fire_controls_azimuth_gives_the_levelled_heading() {
+        let f = Vector3::new(9.754_074_11, -0.603_424_357, -0.603_424_355);
+        let h = FlightConfig::<f64>::heading_of_azimuth(&f, &Vector3::x(), 120f64.to_radians())
+            .unwrap();
+        assert!(
+            (h.to_degrees() + 161.350_75).abs() < 0.01,
+            "{}",
+            h.to_degrees()
+        );
+        // f32 as on the device.
+        let f32_h = FlightConfig::<f32>::heading_of_azimuth(
+            &f.map(|x| x as f32),
+            &Vector3::x(),
+            120f32.to_radians(),
+        )
+        .unwrap();
+        assert!((f64::from(f32_h) - h).abs() < 1e-5);
+        // A unit lying level with x along the line of fire, north-east: the levelling leaves x
+        // east, so the heading turns it 45 degrees back towards north.
+        let level = FlightConfig::<f64>::heading_of_azimuth(
+            &Vector3::new(0.0, 0.0, 9.8),
+            &Vector3::x(),
+            45f64.to_radians(),
+        )
+        .unwrap();
+        assert!(
+            (level.to_degrees() - 45.0).abs() < 1e-9,
+            "{}",
+            level.to_degrees()
+        );
+        // Straight up: no azimuth.
+        assert!(
+            FlightConfig::<f64>::heading_of_azimuth(
+                &Vector3::new(9.8, 0.0, 0.0),
+                &Vector3::x(),
+                0.0
+            )
+            .is_none()
+        );
     }
 }
