@@ -133,7 +133,7 @@ mod tests {
     fn the_fire_controls_azimuth_gives_the_levelled_heading() {
         let f = Vector3::new(9.754_074_11, -0.603_424_357, -0.603_424_355);
         let h = FlightConfig::<f64>::heading_of_azimuth(&f, &Vector3::x(), 120f64.to_radians())
-            .unwrap();
+            .unwrap_or(f64::NAN);
         assert!(
             (h.to_degrees() + 161.350_75).abs() < 0.01,
             "{}",
@@ -145,7 +145,7 @@ mod tests {
             &Vector3::x(),
             120f32.to_radians(),
         )
-        .unwrap();
+        .unwrap_or(f32::NAN);
         assert!((f64::from(f32_h) - h).abs() < 1e-5);
         // A unit lying level with x along the line of fire, north-east: the levelling leaves x
         // east, so the heading turns it 45 degrees back towards north.
@@ -154,7 +154,7 @@ mod tests {
             &Vector3::x(),
             45f64.to_radians(),
         )
-        .unwrap();
+        .unwrap_or(f64::NAN);
         assert!(
             (level.to_degrees() - 45.0).abs() < 1e-9,
             "{}",
