@@ -238,7 +238,7 @@ fn the_hedy_flight_is_a_mission() {
             "--model",
             "triad-nonlinear",
             "--candidates",
-            "rate:-40:40:21",
+            "rate:-35:35:21",
             "--n",
             "40",
             "--mission",
