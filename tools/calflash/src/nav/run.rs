@@ -280,14 +280,10 @@ pub fn level_position(fix: &Fix, origin: (f64, f64, f64)) -> [f64; 3] {
 /// mrad at 6 km: 0.5 m/s of a shell's 500 m/s).
 #[must_use]
 pub fn level_velocity(fix: &Fix, origin: (f64, f64, f64)) -> Option<[f64; 3]> {
+    use crate::sim::flight::site::enu_from_ecef;
     let v = Vector3::from(fix.velocity?);
-    let to_local = |lat: f64, lon: f64| {
-        let (sp, cp) = lat.to_radians().sin_cos();
-        let (sl, cl) = lon.to_radians().sin_cos();
-        nalgebra::Matrix3::new(-sl, cl, 0.0, -sp * cl, -sp * sl, cp, cp * cl, cp * sl, sp)
-    };
-    let at_fix = to_local(fix.lat_lon.0, fix.lat_lon.1);
-    let at_origin = to_local(origin.0, origin.1);
+    let at_fix = enu_from_ecef(fix.lat_lon.0, fix.lat_lon.1);
+    let at_origin = enu_from_ecef(origin.0, origin.1);
     Some((at_origin * at_fix.transpose() * v).into())
 }
 

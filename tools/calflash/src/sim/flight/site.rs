@@ -78,7 +78,8 @@ impl Site {
 
 /// The rotation from Earth-centred, Earth-fixed axes to east, north, up at geodetic latitude
 /// `lat` and longitude `lon`, degrees.
-fn enu_from_ecef(lat: f64, lon: f64) -> Matrix3<f64> {
+#[must_use]
+pub fn enu_from_ecef(lat: f64, lon: f64) -> Matrix3<f64> {
     let (sp, cp) = lat.to_radians().sin_cos();
     let (sl, cl) = lon.to_radians().sin_cos();
     Matrix3::new(-sl, cl, 0.0, -sp * cl, -sp * sl, cp, cp * cl, cp * sl, sp)
