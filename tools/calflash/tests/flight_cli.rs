@@ -680,8 +680,17 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
         term(&v, "accel bias x")["shifted"].as_bool().unwrap(),
         "{v}"
     );
-    // A rocket that rolls a few turns a second does not show its roll gyro's scale factor.
-    assert!(term(&v, "gyro scale x")["z"].is_null(), "{v}");
+    // A rocket that rolls a few turns a second barely shows its roll gyro's scale factor:
+    // what the flight alone determines of it is tens of times wider than the calibration's,
+    // and it is not named.
+    let roll = term(&v, "gyro scale x");
+    assert!(!roll["shifted"].as_bool().unwrap(), "{v}");
+    assert!(
+        roll["flight_sigma"]
+            .as_f64()
+            .is_none_or(|f| f > 10.0 * roll["prior_sigma"].as_f64().unwrap()),
+        "{v}"
+    );
     assert!(
         v["track_rms_m"].as_f64().unwrap() < 10.0 && v["height_rms_m"].as_f64().unwrap() < 10.0,
         "{v}"
@@ -899,6 +908,15 @@ fn the_reference_flights_are_named_and_held_and_their_tracks_within_their_bounds
                 "{case} {name}: {x} +- {s} against {truth}: {out}"
             );
         }
+        if case == "shell155" {
+            // Opened alone (the terms it correlates with at their calibration), the axial bias
+            // is what the flight determines of it: 4.0e-3 m/s^2; with every term opened at
+            // once the axial scale factor took part of it, 9.4e-3.
+            let s = term(&v, "accel bias x")["sigma"].as_f64().unwrap();
+            assert!(s < 5e-3, "{case}: accel bias x 1-sigma {s}: {out}");
+        }
+        // What the flight cannot tell apart is said, not hidden.
+        assert!(v["undecided"].is_array(), "{case}: {v}");
         let k = &v["consistency"];
         let inside = k["inside_95"].as_f64().unwrap() / k["innovations"].as_f64().unwrap();
         assert!(inside >= 0.95, "{case}: {inside}: {out}");

@@ -398,16 +398,21 @@ fn average_nees_over_fifty_flights_of_each_kind() {
                 .flat_map(|f| f.iter().filter(|t| t.shifted && t.name != term))
                 .map(|t| t.name.clone())
                 .collect();
-            let alarms = flights
-                .iter()
-                .filter(|f| f.iter().any(|t| t.shifted && t.name != term))
-                .count();
+            let alarmed: Vec<u64> = (0..n)
+                .filter(|&k| {
+                    flights[k as usize]
+                        .iter()
+                        .any(|t| t.shifted && t.name != term)
+                })
+                .map(|k| first + k)
+                .collect();
+            let alarms = alarmed.len();
             let found = flights
                 .iter()
                 .filter(|f| f.iter().any(|t| t.shifted && t.name == term))
                 .count();
             println!(
-                "prior {prior:?}, launch shift `{}` ({n} flights, each its own calibration): the shifted term called SHIFTED in {found}, another term in {alarms} ({others:?})",
+                "prior {prior:?}, launch shift `{}` ({n} flights, each its own calibration): the shifted term called SHIFTED in {found}, another term in {alarms} ({others:?}; seeds {alarmed:?})",
                 if shift.is_empty() { "none" } else { shift }
             );
             println!(

@@ -158,6 +158,9 @@ pub struct Checked {
     /// The shifted terms' estimates from the pass with their prior opened: name, estimate,
     /// 1-sigma.
     pub shifts: Vec<(&'static str, f64, f64)>,
+    /// Terms each of which alone explains what moved, none clearly better (the flight cannot
+    /// tell which): name, estimate and 1-sigma with it opened alone.
+    pub undecided: Vec<(&'static str, f64, f64)>,
     /// The pass whose smoothed trajectory is reported: the verdict's table, the track and
     /// every figure are of it.
     pub pass: Pass,
@@ -364,37 +367,56 @@ pub fn check(
         alpha,
     );
     let with_prior = "the pass with the calibration's prior";
-    let named = held.terms.iter().any(|t| t.shifted);
-    let (verdict, pass, pass_name) = if held.word == "HELD" || (held.consistency.fits && !named) {
-        // A flight the calibration's prior fits and holds is HELD, with that pass's tighter
-        // estimates. One whose terms moved together, none named on its own, keeps that
-        // pass too: the flight alone, every term opened, would hand the shift to whichever
-        // terms it correlates with (on a rolling rocket, a transverse gyro bias's to both
-        // transverse accelerometer biases at a metre per second squared).
+    let mut undecided = Vec::new();
+    let (verdict, pass, pass_name) = if held.word == "HELD" {
         (held, first, with_prior)
     } else {
-        let (alone, second) = flight_alone(
+        // Something moved (a term named, or the observed terms together), or the
+        // calibration's prior does not fit the flight: which terms' change at launch the
+        // flight needs, opened one at a time by the likelihood of its innovations.
+        let chosen = select_opened(
             imu,
             (fixes, baro),
             (&start, prior, &opened),
-            &held,
+            (&held, &first),
             opts,
             (rest_end, launch_at),
             alpha,
         );
-        // The flight alone answers, its model following a shift of any size (the held pass
-        // names a shift by how far the data pull the calibration's tight prior, but cannot say
-        // how large it is), unless it does not fit where the held pass does.
-        if alone.consistency.fits || !held.consistency.fits {
-            (
-                alone,
-                second,
-                "the flight alone (every term's change at launch opened)",
-            )
-        } else {
-            (held, first, with_prior)
+        undecided = chosen
+            .undecided
+            .iter()
+            .map(|&(i, x, sd)| (verdict::TERMS[i], x, sd))
+            .collect();
+        match chosen.opened {
+            Some((terms, second)) => {
+                let alone = judge_opened(&second, &held, &opened, &terms, alpha);
+                // The flight alone answers for the terms it needed opened (the held pass
+                // names a shift by how far the data pull the calibration's tight prior, but
+                // cannot say how large it is), unless it does not fit where the held pass
+                // does.
+                if alone.consistency.fits || !held.consistency.fits {
+                    (
+                        alone,
+                        second,
+                        "the flight alone for the terms that moved (their change at launch opened)",
+                    )
+                } else {
+                    (held, first, with_prior)
+                }
+            }
+            None => (held, first, with_prior),
         }
     };
+    let mut verdict = verdict;
+    if !undecided.is_empty() {
+        let names: Vec<&str> = undecided.iter().map(|u| u.0).collect();
+        verdict.why = format!(
+            "{}; the flight cannot tell which of {} moved",
+            verdict.why,
+            names.join(", ")
+        );
+    }
     let shifts = verdict
         .terms
         .iter()
@@ -414,6 +436,7 @@ pub fn check(
     Ok(Checked {
         verdict,
         shifts,
+        undecided,
         track,
         heading_deg: (heading.0.to_degrees(), heading.1.to_degrees()),
         noise: (aw, gw),
@@ -424,57 +447,180 @@ pub fn check(
     })
 }
 
-/// The flight alone: every term's change at launch opened wide, so that a shift of any size is
-/// followed, and each term's change as the flight alone finds it held against the
-/// calibration's variance of it in flight. A term the held pass named may also have been wrong
-/// at rest already (a datasheet's prior, a tilt levelled on a wrong bias): its prior at rest is
-/// opened too. Returns the verdict and the pass.
-fn flight_alone(
+/// How far (twice the log-likelihood) the term chosen must fit the flight better than every
+/// other that passes the bar: chi-square on one degree of freedom at 95 %, 6.8 times as likely.
+const DISTINGUISHED: f64 = 3.84;
+
+/// What [`select_opened`] found.
+struct Selection {
+    /// The terms chosen, in order, and the pass with them opened (`None`: none chosen).
+    opened: Option<(Vec<usize>, Pass)>,
+    /// Terms each of which alone explains what the calibration's prior (with the terms
+    /// chosen) does not, none clearly better than the others: each with its estimate and
+    /// 1-sigma opened alone.
+    undecided: Vec<(usize, f64, f64)>,
+}
+
+/// The terms whose change at launch the flight needs opened, found by forward selection on the
+/// innovations' likelihood (a generalised likelihood-ratio test per term): each step flies one
+/// pass per term not yet opened, with that term's change at launch opened wide
+/// ([`OPEN_WIDE`]), and keeps the one whose innovations fit best when its gain in
+/// log-likelihood (twice it: the drop in [`run::misfit`], chi-square on one degree of freedom
+/// under "held") passes the bar at `alpha` shared over the candidates. Opening every term at
+/// once instead hands a shift to whichever terms it correlates with over the flight (on a
+/// rolling rocket, a transverse gyro bias's to both transverse accelerometer biases at a metre
+/// per second squared; on a shell's drag, an axial bias's partly to the axial scale factor);
+/// opened one at a time, the term that moved explains the data best. A term the held pass named
+/// may have been wrong at rest already (a datasheet's prior, a tilt levelled on a wrong bias):
+/// its prior at rest is widened too ([`SHIFT_OPENED`]). Where two or more terms pass the bar
+/// within [`DISTINGUISHED`] of the best, none is chosen at that step: the flight cannot tell
+/// which of them moved (on a rolling rocket, a transverse gyro bias's tilt before the roll
+/// builds up against either transverse accelerometer bias), and they are returned as
+/// undecided.
+fn select_opened(
     imu: &ImuSeries,
     (fixes, baro): (&[Fix], &[Pressure]),
     (start, prior, opened): (&Start, StateMatrix<f64>, &Opened),
-    held: &Verdict,
+    (held, first): (&Verdict, &Pass),
     opts: &Options,
     (rest_end, launch_at): (usize, usize),
     alpha: f64,
-) -> (Verdict, Pass) {
-    let (t, mut w) = start
-        .launch
-        .unwrap_or((StateMatrix::identity(), StateMatrix::zeros()));
-    let at_launch = just_after_launch_prior(held);
-    let mut open = prior;
-    let mut alone_opened = *opened;
-    for (i, term) in held.terms.iter().enumerate() {
-        let k = index::ACCEL_BIAS + i;
-        if alone_opened.0[i].is_none() {
-            alone_opened.0[i] = Some(at_launch[i]);
+) -> Selection {
+    use rayon::prelude::*;
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let end_t = imu.t.last().copied().unwrap_or(0.0);
+    let fly = |terms: &[usize]| {
+        let (t, mut w) = start
+            .launch
+            .unwrap_or((StateMatrix::identity(), StateMatrix::zeros()));
+        let mut at_rest = prior;
+        for &i in terms {
+            let k = index::ACCEL_BIAS + i;
             w[(k, k)] += OPEN_WIDE[i / 3].powi(2);
-            if term.shifted {
-                open[(k, k)] *= SHIFT_OPENED;
+            if held.terms[i].shifted {
+                at_rest[(k, k)] *= SHIFT_OPENED;
             }
         }
+        run::forward(
+            imu,
+            fixes,
+            baro,
+            &Start {
+                prior: at_rest,
+                launch: Some((t, w)),
+                ..*start
+            },
+            opts,
+            (rest_end, launch_at),
+        )
+    };
+    let mut chosen: Vec<usize> = Vec::new();
+    let mut best: Option<Pass> = None;
+    let mut undecided = Vec::new();
+    let mut misfit = profile_misfit(first, &[], end_t, opts.gate);
+    loop {
+        let candidates: Vec<usize> = (0..12)
+            .filter(|i| opened.0[*i].is_none() && !chosen.contains(i))
+            .collect();
+        if candidates.is_empty() {
+            break;
+        }
+        let bar = ChiSquared::new(1.0).map_or(f64::INFINITY, |c| {
+            c.inverse_cdf(1.0 - alpha / candidates.len() as f64)
+        });
+        let trials: Vec<(f64, usize, Pass)> = candidates
+            .par_iter()
+            .map(|&c| {
+                let mut terms = chosen.clone();
+                terms.push(c);
+                let pass = fly(&terms);
+                (profile_misfit(&pass, &terms, end_t, opts.gate), c, pass)
+            })
+            .collect();
+        let mut trials = trials;
+        trials.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let Some(lead) = trials.first().map(|t| t.0).filter(|m| misfit - m > bar) else {
+            break;
+        };
+        let close: Vec<&(f64, usize, Pass)> = trials
+            .iter()
+            .filter(|t| misfit - t.0 > bar && t.0 - lead < DISTINGUISHED)
+            .collect();
+        if close.len() > 1 {
+            // Each of these alone explains what the calibration's prior does not, none
+            // clearly better: the flight cannot tell which moved.
+            undecided = close
+                .iter()
+                .map(|(_, c, pass)| {
+                    let launched = just_after_launch(pass);
+                    let k = index::ACCEL_BIAS + c;
+                    (
+                        *c,
+                        verdict::values(&launched.estimate)[*c],
+                        launched.covariance[(k, k)].max(0.0).sqrt(),
+                    )
+                })
+                .collect();
+            break;
+        }
+        let Some((m, c, pass)) = trials.into_iter().next() else {
+            break;
+        };
+        chosen.push(c);
+        misfit = m;
+        best = Some(pass);
     }
-    let second = run::forward(
-        imu,
-        fixes,
-        baro,
-        &Start {
-            prior: open,
-            launch: Some((t, w)),
-            ..*start
-        },
-        opts,
-        (rest_end, launch_at),
-    );
-    let launched = just_after_launch(&second);
-    let alone = verdict::judge(
+    Selection {
+        opened: best.map(|pass| (chosen, pass)),
+        undecided,
+    }
+}
+
+/// A pass's misfit ([`run::misfit`]) with the opened `terms` at their best: less, for each, the
+/// log of its variance at launch before the flight's data over its variance after (the Occam
+/// factor of a prior opened wide). The drop from one set of opened terms to a larger is then
+/// the generalised likelihood ratio of the terms added (twice its log), whatever width they were
+/// opened to.
+fn profile_misfit(pass: &Pass, terms: &[usize], until: f64, gate: f64) -> f64 {
+    let launched = just_after_launch(pass);
+    let occam: f64 = terms
+        .iter()
+        .map(|&i| {
+            let k = index::ACCEL_BIAS + i;
+            let (before, after) = (launched.prior[(k, k)], launched.covariance[(k, k)]);
+            if before > 0.0 && after > 0.0 {
+                (before / after).ln().max(0.0)
+            } else {
+                0.0
+            }
+        })
+        .sum();
+    run::misfit(pass, until, gate) - occam
+}
+
+/// The verdict of a pass with the `terms` chosen by [`select_opened`] opened: each of them, as
+/// the flight alone finds its change, held against the calibration's variance of it in flight
+/// (and, as in the held pass, every other term against its prior).
+fn judge_opened(
+    second: &Pass,
+    held: &Verdict,
+    opened: &Opened,
+    terms: &[usize],
+    alpha: f64,
+) -> Verdict {
+    let at_launch = just_after_launch_prior(held);
+    let mut alone_opened = *opened;
+    for &i in terms {
+        alone_opened.0[i] = Some(at_launch[i]);
+    }
+    let launched = just_after_launch(second);
+    verdict::judge(
         (&launched.prior, &launched.prior),
         &alone_opened,
         (&launched.estimate, &launched.covariance),
         &second.said,
         alpha,
-    );
-    (alone, second)
+    )
 }
 
 /// The calibration's variance of each term just after the launch, as the held pass's verdict

@@ -113,6 +113,9 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
                 "  {name}: shifted by {x:+.4e} +- {sd:.2e} (the flight alone, its prior opened)"
             );
         }
+        if let Some(line) = undecided(c) {
+            let _ = writeln!(s, "  {line}");
+        }
     }
     if let Some((rms, n)) = c.track.track_rms {
         let _ = writeln!(
@@ -130,6 +133,23 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
     s
 }
 
+/// The terms the flight cannot tell apart, in a sentence (`None` when there are none).
+#[must_use]
+pub fn undecided(c: &Checked) -> Option<String> {
+    if c.undecided.is_empty() {
+        return None;
+    }
+    let each: Vec<String> = c
+        .undecided
+        .iter()
+        .map(|(n, x, sd)| format!("{n} ({x:+.3e} +- {sd:.2e})"))
+        .collect();
+    Some(format!(
+        "the flight cannot tell which moved: each of {} alone explains it (its change opened alone), none fits the flight 6.8 times better than the others",
+        each.join(", ")
+    ))
+}
+
 /// The JSON record.
 #[must_use]
 pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value {
@@ -143,6 +163,7 @@ pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value 
         "terms": c.verdict.terms,
         "overall": c.verdict.overall,
         "shifts": c.shifts.iter().map(|(n, x, s)| serde_json::json!({"term": n, "estimate": x, "sigma": s})).collect::<Vec<_>>(),
+        "undecided": c.undecided.iter().map(|(n, x, s)| serde_json::json!({"term": n, "estimate": x, "sigma": s})).collect::<Vec<_>>(),
         "track_rms_m": c.track.track_rms.map(|x| x.0),
         "height_rms_m": c.track.height_rms.map(|x| x.0),
         "heading_deg": [c.heading_deg.0, c.heading_deg.1],
@@ -526,6 +547,9 @@ fn terms_table(c: &Checked) -> String {
             t,
             "<p>Over the observed terms: chi-square {chi2:.2} on {dof} degrees of freedom, p = {p:.3}. z and p test each term on its own; SHIFTED marks the terms a step-down test names, each tested given the shifts already named.</p>"
         );
+    }
+    if let Some(line) = undecided(c) {
+        let _ = writeln!(t, "<p>{}.</p>", esc(&line));
     }
     t
 }
