@@ -388,24 +388,39 @@ pub fn check(
             .iter()
             .map(|&(i, x, sd)| (verdict::TERMS[i], x, sd))
             .collect();
+        // Where no chosen term is confirmed, the pass with the calibration's prior answers;
+        // its SHIFTED by the overall chi-square alone (no term named) stands only where some
+        // term's change, opened, fits the flight better by the bar (the undecided): the
+        // overall test rests on the directions the flight barely informs, where what the
+        // filter does not model of the calibration's error weighs most (3 in 15 unshifted
+        // shells were SHIFTED by it alone).
+        let by_prior = |held: Verdict| {
+            let named = held.terms.iter().any(|t| t.shifted);
+            if held.word == "SHIFTED" && !named && chosen.undecided.is_empty() {
+                held_after_all(held)
+            } else {
+                held
+            }
+        };
         match chosen.opened {
             Some((terms, second)) => {
                 let alone = judge_opened(&second, &held, &opened, &terms, alpha);
                 // The flight alone answers for the terms it needed opened (the held pass
                 // names a shift by how far the data pull the calibration's tight prior, but
-                // cannot say how large it is), unless it does not fit where the held pass
-                // does.
-                if alone.consistency.fits || !held.consistency.fits {
+                // cannot say how large it is) where it names one of them, unless it does not
+                // fit where the held pass does.
+                let confirmed = terms.iter().any(|&i| alone.terms[i].shifted);
+                if confirmed && (alone.consistency.fits || !held.consistency.fits) {
                     (
                         alone,
                         second,
                         "the flight alone for the terms that moved (their change at launch opened)",
                     )
                 } else {
-                    (held, first, with_prior)
+                    (by_prior(held), first, with_prior)
                 }
             }
-            None => (held, first, with_prior),
+            None => (by_prior(held), first, with_prior),
         }
     };
     let mut verdict = verdict;
@@ -596,6 +611,19 @@ fn profile_misfit(pass: &Pass, terms: &[usize], until: f64, gate: f64) -> f64 {
         })
         .sum();
     run::misfit(pass, until, gate) - occam
+}
+
+/// The held pass's verdict when its SHIFTED rested on the overall chi-square alone and no
+/// term's change at launch, opened, fits the flight better by the bar: HELD, saying so.
+fn held_after_all(mut held: Verdict) -> Verdict {
+    held.word = "HELD";
+    held.why = match held.overall {
+        Some((chi2, m, _)) => format!(
+            "no term named, and no term's change at launch, opened on its own, fits the flight better than the calibration by the bar (the observed terms' overall chi-square {chi2:.1} on {m} degrees of freedom is within what the filter does not model)"
+        ),
+        None => "no term named".to_string(),
+    };
+    held
 }
 
 /// The verdict of a pass with the `terms` chosen by [`select_opened`] opened: each of them, as
