@@ -359,9 +359,10 @@ pub fn check(
     }
     // The pass with the calibration's prior: held, the flight's data fit it.
     let launched = just_after_launch(&first);
+    let unmodelled = in_flight.unmodelled();
     let held = verdict::judge(
         (&launched.prior, &launched.prior),
-        &opened,
+        (&opened, &unmodelled),
         (&launched.estimate, &launched.covariance),
         &first.said,
         alpha,
@@ -404,7 +405,7 @@ pub fn check(
         };
         match chosen.opened {
             Some((terms, second)) => {
-                let alone = judge_opened(&second, &held, &opened, &terms, alpha);
+                let alone = judge_opened(&second, &held, (&opened, &unmodelled), &terms, alpha);
                 // The flight alone answers for the terms it needed opened (the held pass
                 // names a shift by how far the data pull the calibration's tight prior, but
                 // cannot say how large it is) where it names one of them, unless it does not
@@ -632,7 +633,7 @@ fn held_after_all(mut held: Verdict) -> Verdict {
 fn judge_opened(
     second: &Pass,
     held: &Verdict,
-    opened: &Opened,
+    (opened, unmodelled): (&Opened, &[f64; 12]),
     terms: &[usize],
     alpha: f64,
 ) -> Verdict {
@@ -644,7 +645,7 @@ fn judge_opened(
     let launched = just_after_launch(second);
     verdict::judge(
         (&launched.prior, &launched.prior),
-        &alone_opened,
+        (&alone_opened, unmodelled),
         (&launched.estimate, &launched.covariance),
         &second.said,
         alpha,

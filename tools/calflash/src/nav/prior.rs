@@ -428,12 +428,17 @@ fn across_the_spin(imu: &ImuSeries, from: usize) -> [bool; 3] {
 pub struct InFlight {
     /// Per output, `P0`, `C` and `D` (2 x 2 over its bias and scale factor).
     blocks: [[nalgebra::Matrix2<f64>; 3]; 6],
+    /// Per output, the variance of the calibration's error about its line over the flight,
+    /// averaged over the flight's samples: what the filter's bias and scale factor do not
+    /// model of it.
+    residual: [f64; 6],
 }
 
 impl Default for InFlight {
     fn default() -> Self {
         Self {
             blocks: [[nalgebra::Matrix2::zeros(); 3]; 6],
+            residual: [0.0; 6],
         }
     }
 }
@@ -453,6 +458,22 @@ impl InFlight {
             m(&change, &at_rest),
             m(&change, &change),
         ];
+        self.residual[out] = line.residual(&line.through(own), q);
+    }
+
+    /// Per term in the filter's order ([`super::verdict::TERMS`]), the variance an estimate
+    /// the flight alone makes of it (its prior opened) may carry from what the filter does not
+    /// model of the calibration's error: an output's error about its line over the flight (a
+    /// g-squared term's curvature, a lever arm's spin-squared drift along the flight) is no
+    /// white noise, and the filter's bias takes a weighted mean of it where the line's fit
+    /// takes an even one. Its mean square over the flight is the bias's allowance; the scale
+    /// factors carry none.
+    #[must_use]
+    pub fn unmodelled(&self) -> [f64; 12] {
+        std::array::from_fn(|i| match i {
+            0..6 => self.residual[i],
+            _ => 0.0,
+        })
     }
 
     /// The prior at rest over the filter's states.
@@ -538,6 +559,8 @@ struct Line {
     uu: f64,
     r: DVector<f64>,
     ur: DVector<f64>,
+    /// `sum r r'` (upper triangle).
+    rr: DMatrix<f64>,
 }
 
 impl Line {
@@ -549,6 +572,7 @@ impl Line {
             uu: 0.0,
             r: DVector::zeros(p),
             ur: DVector::zeros(p),
+            rr: DMatrix::zeros(p, p),
         }
     }
 
@@ -559,7 +583,25 @@ impl Line {
         for (j, x) in row.iter().enumerate() {
             self.r[j] += x;
             self.ur[j] += u * x;
+            for (k, y) in row.iter().enumerate().skip(j) {
+                self.rr[(j, k)] += x * y;
+            }
         }
+    }
+
+    /// The mean over the samples of the variance, under the parameters' covariance `q`, of the
+    /// error about the line `a` ([`Line::through`]): `tr(q S) / n` with `S` the scatter of the
+    /// regressors about the line, `sum (r - a'[1 u]) (r - a'[1 u])'`.
+    fn residual(&self, a: &DMatrix<f64>, q: &DMatrix<f64>) -> f64 {
+        if self.n < 1.0 {
+            return 0.0;
+        }
+        let p = self.r.len();
+        let rr = DMatrix::from_fn(p, p, |j, k| self.rr[(j.min(k), j.max(k))]);
+        let b = DMatrix::from_fn(p, 2, |j, c| if c == 0 { self.r[j] } else { self.ur[j] });
+        let g = DMatrix::from_row_slice(2, 2, &[self.n, self.u, self.u, self.uu]);
+        let scatter = &rr - &b * a - a.transpose() * b.transpose() + a.transpose() * g * a;
+        ((q * scatter).trace() / self.n).max(0.0)
     }
 
     /// `A` (2 x p), the map from the parameters' errors to the line's bias and slope (the
@@ -661,6 +703,31 @@ mod tests {
             (a[(0, 2)] + 1600.0 * 1600.0).abs() < 0.02 * 1600.0 * 1600.0,
             "{a}"
         );
+    }
+
+    /// What the line leaves of a g-squared error over a spin of 1,300 to 1,900 rad/s: its
+    /// variance about the line, averaged over the samples, is the mean square of the
+    /// least-squares residual of `u^2` times the term's variance; a bias or a scale error
+    /// leaves nothing.
+    #[test]
+    fn what_the_line_leaves_of_an_error_is_its_mean_squared_residual() {
+        let us: Vec<f64> = (0..=600).map(|k| 1300.0 + f64::from(k)).collect();
+        let mut line = Line::new(3);
+        for u in &us {
+            line.add(*u, &[1.0, *u, u * u]);
+        }
+        let a = line.through(&[Some(0), Some(1), None]);
+        let x = DMatrix::from_fn(us.len(), 2, |i, j| if j == 0 { 1.0 } else { us[i] });
+        let y = DVector::from_iterator(us.len(), us.iter().map(|u| u * u));
+        let b = x.clone().svd(true, true).solve(&y, 1e-12).unwrap();
+        let mean_square = (&y - &x * b).norm_squared() / us.len() as f64;
+        let sigma2 = 1e-16;
+        let q = DMatrix::from_diagonal(&DVector::from_vec(vec![0.0, 0.0, sigma2]));
+        let got = line.residual(&a, &q);
+        let want = sigma2 * mean_square;
+        assert!((got - want).abs() < 1e-6 * want, "{got} against {want}");
+        let q = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 1e-6, 0.0]));
+        assert!(line.residual(&a, &q) < 1e-9, "{}", line.residual(&a, &q));
     }
 
     #[test]

@@ -304,11 +304,15 @@ fn named_step_down(
 }
 
 /// The verdict from the prior `p0`, the final estimate and covariance, and the innovations, at
-/// the false-alarm rate `alpha` (over all terms together).
+/// the false-alarm rate `alpha` (over all terms together). `unmodelled` is each term's
+/// variance from what the filter does not model of the calibration's error
+/// ([`InFlight::unmodelled`](super::prior::InFlight::unmodelled)): an opened term, no longer
+/// anchored by its prior, carries it in its stated 1-sigma and in the variance it is tested
+/// with.
 #[must_use]
 pub fn judge(
     (p0, at_launch): (&StateMatrix<f64>, &StateMatrix<f64>),
-    opened: &Opened,
+    (opened, unmodelled): (&Opened, &[f64; 12]),
     (estimate, p): (&SensorErrors<f64>, &StateMatrix<f64>),
     said: &[Said],
     alpha: f64,
@@ -321,7 +325,7 @@ pub fn judge(
     // calibration's prior, the flight's own variance plus the calibration's of an opened one.
     let held_cov = |i: usize, j: usize| match (opened.0[i], opened.0[j]) {
         (None, None) => at(p0, i, j) - at(p, i, j),
-        (Some(c), Some(_)) if i == j => at(p, i, i) + c + allowance(i).powi(2),
+        (Some(c), Some(_)) if i == j => at(p, i, i) + c + allowance(i).powi(2) + unmodelled[i],
         (Some(_), Some(_)) => at(p, i, j),
         _ => 0.0,
     };
@@ -338,6 +342,12 @@ pub fn judge(
                 0.0
             };
             // The flight's own information of the term: its posterior's less its prior's.
+            // An opened term's 1-sigma carries what the filter does not model.
+            let s = if opened.0[i].is_some() {
+                s + unmodelled[i]
+            } else {
+                s
+            };
             let flight_sigma = match opened.0[i] {
                 Some(_) => Some(s.sqrt()),
                 None if s > 0.0 && before > s => {
