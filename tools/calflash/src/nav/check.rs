@@ -535,14 +535,22 @@ fn select_opened(
     let mut undecided = Vec::new();
     let mut misfit = profile_misfit(first, &[], end_t, opts.gate);
     loop {
-        let candidates: Vec<usize> = (0..12)
+        let open: Vec<usize> = (0..12)
             .filter(|i| opened.0[*i].is_none() && !chosen.contains(i))
+            .collect();
+        // Only a term the flight resolves can explain it (one it does not, opened, moves the
+        // misfit by nothing: a spinning shell's transverse terms); the bar is shared over
+        // every term still closed all the same.
+        let candidates: Vec<usize> = open
+            .iter()
+            .copied()
+            .filter(|&i| held.terms[i].z.is_some())
             .collect();
         if candidates.is_empty() {
             break;
         }
         let bar = ChiSquared::new(1.0).map_or(f64::INFINITY, |c| {
-            c.inverse_cdf(1.0 - alpha / candidates.len() as f64)
+            c.inverse_cdf(1.0 - alpha / open.len() as f64)
         });
         let trials: Vec<(f64, usize, Pass)> = candidates
             .par_iter()
