@@ -9,7 +9,7 @@ use spincal::nav::{NavNoise, SensorErrors, StateMatrix};
 
 use super::input::{Fix, ImuSeries, Pressure};
 use super::prior::{InFlight, PriorSource};
-use super::run::{self, Options, Pass, Start};
+use super::run::{self, Options, Pass, Said, Start};
 use super::track::{self, Track};
 use super::verdict::{self, Opened, Verdict};
 
@@ -379,7 +379,7 @@ pub fn check(
             imu,
             (fixes, baro),
             (&start, prior, &opened),
-            (&held, &first),
+            (&held, &first, &launched),
             opts,
             (rest_end, launch_at),
             alpha,
@@ -404,8 +404,15 @@ pub fn check(
             }
         };
         match chosen.opened {
-            Some((terms, second)) => {
-                let alone = judge_opened(&second, &held, (&opened, &unmodelled), &terms, alpha);
+            Some((terms, second, second_launched)) => {
+                let alone = judge_opened(
+                    &second_launched,
+                    &second.said,
+                    &held,
+                    (&opened, &unmodelled),
+                    &terms,
+                    alpha,
+                );
                 // The flight alone answers for the terms it needed opened (the held pass
                 // names a shift by how far the data pull the calibration's tight prior, but
                 // cannot say how large it is) where it names one of them, unless it does not
@@ -463,14 +470,19 @@ pub fn check(
     })
 }
 
+/// The most terms [`select_opened`] opens: each step flies a pass per term still closed, and a
+/// launch that moves more than this many terms at once is SHIFTED on the ones it names first.
+const MAX_OPENED: usize = 4;
+
 /// How far (twice the log-likelihood) the term chosen must fit the flight better than every
 /// other that passes the bar: chi-square on one degree of freedom at 95 %, 6.8 times as likely.
 const DISTINGUISHED: f64 = 3.84;
 
 /// What [`select_opened`] found.
 struct Selection {
-    /// The terms chosen, in order, and the pass with them opened (`None`: none chosen).
-    opened: Option<(Vec<usize>, Pass)>,
+    /// The terms chosen, in order, the pass with them opened and what it tells of the launch
+    /// (`None`: none chosen).
+    opened: Option<(Vec<usize>, Pass, Launched)>,
     /// Terms each of which alone explains what the calibration's prior (with the terms
     /// chosen) does not, none clearly better than the others: each with its estimate and
     /// 1-sigma opened alone.
@@ -497,7 +509,7 @@ fn select_opened(
     imu: &ImuSeries,
     (fixes, baro): (&[Fix], &[Pressure]),
     (start, prior, opened): (&Start, StateMatrix<f64>, &Opened),
-    (held, first): (&Verdict, &Pass),
+    (held, first, first_launched): (&Verdict, &Pass, &Launched),
     opts: &Options,
     (rest_end, launch_at): (usize, usize),
     alpha: f64,
@@ -531,10 +543,10 @@ fn select_opened(
         )
     };
     let mut chosen: Vec<usize> = Vec::new();
-    let mut best: Option<Pass> = None;
+    let mut best: Option<(Pass, Launched)> = None;
     let mut undecided = Vec::new();
-    let mut misfit = profile_misfit(first, &[], end_t, opts.gate);
-    loop {
+    let mut misfit = profile_misfit(first, first_launched, &[], end_t, opts.gate);
+    while chosen.len() < MAX_OPENED {
         let open: Vec<usize> = (0..12)
             .filter(|i| opened.0[*i].is_none() && !chosen.contains(i))
             .collect();
@@ -552,52 +564,70 @@ fn select_opened(
         let bar = ChiSquared::new(1.0).map_or(f64::INFINITY, |c| {
             c.inverse_cdf(1.0 - alpha / open.len() as f64)
         });
-        let trials: Vec<(f64, usize, Pass)> = candidates
+        let mut trials: Vec<Trial> = candidates
             .par_iter()
             .map(|&c| {
                 let mut terms = chosen.clone();
                 terms.push(c);
                 let pass = fly(&terms);
-                (profile_misfit(&pass, &terms, end_t, opts.gate), c, pass)
+                let launched = just_after_launch(&pass);
+                let misfit = profile_misfit(&pass, &launched, &terms, end_t, opts.gate);
+                Trial {
+                    misfit,
+                    term: c,
+                    pass,
+                    launched,
+                }
             })
             .collect();
-        let mut trials = trials;
-        trials.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let Some(lead) = trials.first().map(|t| t.0).filter(|m| misfit - m > bar) else {
+        trials.sort_by(|a, b| a.misfit.total_cmp(&b.misfit));
+        let Some(lead) = trials
+            .first()
+            .map(|t| t.misfit)
+            .filter(|m| misfit - m > bar)
+        else {
             break;
         };
-        let close: Vec<&(f64, usize, Pass)> = trials
+        let close: Vec<&Trial> = trials
             .iter()
-            .filter(|t| misfit - t.0 > bar && t.0 - lead < DISTINGUISHED)
+            .filter(|t| misfit - t.misfit > bar && t.misfit - lead < DISTINGUISHED)
             .collect();
         if close.len() > 1 {
             // Each of these alone explains what the calibration's prior does not, none
             // clearly better: the flight cannot tell which moved.
             undecided = close
                 .iter()
-                .map(|(_, c, pass)| {
-                    let launched = just_after_launch(pass);
-                    let k = index::ACCEL_BIAS + c;
+                .map(|t| {
+                    let k = index::ACCEL_BIAS + t.term;
                     (
-                        *c,
-                        verdict::values(&launched.estimate)[*c],
-                        launched.covariance[(k, k)].max(0.0).sqrt(),
+                        t.term,
+                        verdict::values(&t.launched.estimate)[t.term],
+                        t.launched.covariance[(k, k)].max(0.0).sqrt(),
                     )
                 })
                 .collect();
             break;
         }
-        let Some((m, c, pass)) = trials.into_iter().next() else {
+        let Some(lead) = trials.into_iter().next() else {
             break;
         };
-        chosen.push(c);
-        misfit = m;
-        best = Some(pass);
+        chosen.push(lead.term);
+        misfit = lead.misfit;
+        best = Some((lead.pass, lead.launched));
     }
     Selection {
-        opened: best.map(|pass| (chosen, pass)),
+        opened: best.map(|(pass, launched)| (chosen, pass, launched)),
         undecided,
     }
+}
+
+/// One term tried by [`select_opened`]: the pass with it (and the terms chosen before it)
+/// opened, what that pass tells of the launch, and its misfit ([`profile_misfit`]).
+struct Trial {
+    misfit: f64,
+    term: usize,
+    pass: Pass,
+    launched: Launched,
 }
 
 /// A pass's misfit ([`run::misfit`]) with the opened `terms` at their best: less, for each, the
@@ -605,8 +635,7 @@ fn select_opened(
 /// factor of a prior opened wide). The drop from one set of opened terms to a larger is then
 /// the generalised likelihood ratio of the terms added (twice its log), whatever width they were
 /// opened to.
-fn profile_misfit(pass: &Pass, terms: &[usize], until: f64, gate: f64) -> f64 {
-    let launched = just_after_launch(pass);
+fn profile_misfit(pass: &Pass, launched: &Launched, terms: &[usize], until: f64, gate: f64) -> f64 {
     let occam: f64 = terms
         .iter()
         .map(|&i| {
@@ -639,7 +668,8 @@ fn held_after_all(mut held: Verdict) -> Verdict {
 /// the flight alone finds its change, held against the calibration's variance of it in flight
 /// (and, as in the held pass, every other term against its prior).
 fn judge_opened(
-    second: &Pass,
+    launched: &Launched,
+    said: &[Said],
     held: &Verdict,
     (opened, unmodelled): (&Opened, &[f64; 12]),
     terms: &[usize],
@@ -650,12 +680,11 @@ fn judge_opened(
     for &i in terms {
         alone_opened.0[i] = Some(at_launch[i]);
     }
-    let launched = just_after_launch(second);
     verdict::judge(
         (&launched.prior, &launched.prior),
         (&alone_opened, unmodelled),
         (&launched.estimate, &launched.covariance),
-        &second.said,
+        said,
         alpha,
     )
 }
