@@ -5,11 +5,13 @@
 
 use nalgebra::Vector3;
 use spincal::nav::filter::index;
-use spincal::nav::{NavNoise, SensorErrors, StateMatrix};
+use spincal::nav::{NavNoise, SensorErrors};
 
 use super::input::{Fix, ImuSeries, Pressure};
 use super::prior::{InFlight, PriorSource};
 use super::run::{self, Options, Pass, Said, Start};
+use super::select::{self, Launched, just_after_launch, select_opened};
+pub use super::select::{POWER, Unseen};
 use super::track::{self, Track};
 use super::verdict::{self, Opened, Verdict};
 
@@ -82,16 +84,6 @@ fn roll_scale_search(
 /// within a step is no longer carried by the trapezoid.
 pub const MAX_TURN_PER_SAMPLE: f64 = 1.2;
 
-/// A term the held pass names has its prior at rest widened by this (ten times its 1-sigma) for
-/// the flight alone: it may have been wrong at rest already.
-const SHIFT_OPENED: f64 = 100.0;
-
-/// How wide each kind of term's change at launch is opened for the flight alone, 1-sigma:
-/// accelerometer biases (m/s^2), gyro biases (rad/s), accelerometer and gyro scale factors.
-/// Far beyond any calibration's (a 0.06 m/s^2 axial shift, a 5e-3 rad/s transverse gyro bias
-/// on a rocket), within what the error model stays linear over.
-const OPEN_WIDE: [f64; 4] = [1.0, 0.05, 1e-3, 1e-3];
-
 /// At most this many passes again from the opened scale factor a pass found.
 const REFLY: usize = 2;
 /// A pass is flown again when it moved the opened scale factor by more than this.
@@ -161,6 +153,9 @@ pub struct Checked {
     /// Terms each of which alone explains what moved, none clearly better (the flight cannot
     /// tell which): name, estimate and 1-sigma with it opened alone.
     pub undecided: Vec<(&'static str, f64, f64)>,
+    /// Each term the flight resolves and does not name, with the smallest change at launch it
+    /// would have named: below that, the flight cannot tell.
+    pub unseen: Vec<Unseen>,
     /// The pass whose smoothed trajectory is reported: the verdict's table, the track and
     /// every figure are of it.
     pub pass: Pass,
@@ -369,6 +364,16 @@ pub fn check(
     );
     let with_prior = "the pass with the calibration's prior";
     let mut undecided = Vec::new();
+    // Each term's 1-sigma as the flight alone tells its change at launch, and the bar a term
+    // is held to: the held pass's where it answers, the selection's first step where it ran.
+    let closed = opened.0.iter().filter(|o| o.is_none()).count().max(1);
+    let mut alone: (Vec<(usize, f64)>, f64) = (
+        (0..12)
+            .filter(|&i| held.terms[i].z.is_some())
+            .filter_map(|i| held.terms[i].flight_sigma.map(|f| (i, f)))
+            .collect(),
+        select::chi_square_1_bar(alpha / closed as f64),
+    );
     let (verdict, pass, pass_name) = if held.word == "HELD" {
         (held, first, with_prior)
     } else {
@@ -384,6 +389,9 @@ pub fn check(
             (rest_end, launch_at),
             alpha,
         );
+        if !chosen.alone.0.is_empty() {
+            alone = chosen.alone.clone();
+        }
         undecided = chosen
             .undecided
             .iter()
@@ -440,12 +448,13 @@ pub fn check(
             names.join(", ")
         );
     }
-    let shifts = verdict
+    let shifts: Vec<(&'static str, f64, f64)> = verdict
         .terms
         .iter()
         .filter(|t| t.shifted)
         .map(|t| (t.name, t.estimate, t.sigma))
         .collect();
+    let unseen = select::unseen(&alone, &shifts, &undecided);
     let track = track::track(
         &pass,
         (fixes, baro),
@@ -460,6 +469,7 @@ pub fn check(
         verdict,
         shifts,
         undecided,
+        unseen,
         track,
         heading_deg: (heading.0.to_degrees(), heading.1.to_degrees()),
         noise: (aw, gw),
@@ -468,187 +478,6 @@ pub fn check(
         pass,
         pass_name,
     })
-}
-
-/// The most terms [`select_opened`] opens: each step flies a pass per term still closed, and a
-/// launch that moves more than this many terms at once is SHIFTED on the ones it names first.
-const MAX_OPENED: usize = 4;
-
-/// How far (twice the log-likelihood) the term chosen must fit the flight better than every
-/// other that passes the bar: chi-square on one degree of freedom at 95 %, 6.8 times as likely.
-const DISTINGUISHED: f64 = 3.84;
-
-/// What [`select_opened`] found.
-struct Selection {
-    /// The terms chosen, in order, the pass with them opened and what it tells of the launch
-    /// (`None`: none chosen).
-    opened: Option<(Vec<usize>, Pass, Launched)>,
-    /// Terms each of which alone explains what the calibration's prior (with the terms
-    /// chosen) does not, none clearly better than the others: each with its estimate and
-    /// 1-sigma opened alone.
-    undecided: Vec<(usize, f64, f64)>,
-}
-
-/// The terms whose change at launch the flight needs opened, found by forward selection on the
-/// innovations' likelihood (a generalised likelihood-ratio test per term): each step flies one
-/// pass per term not yet opened, with that term's change at launch opened wide
-/// ([`OPEN_WIDE`]), and keeps the one whose innovations fit best when its gain in
-/// log-likelihood (twice it: the drop in [`run::misfit`], chi-square on one degree of freedom
-/// under "held") passes the bar at `alpha` shared over the candidates. Opening every term at
-/// once instead hands a shift to whichever terms it correlates with over the flight (on a
-/// rolling rocket, a transverse gyro bias's to both transverse accelerometer biases at a metre
-/// per second squared; on a shell's drag, an axial bias's partly to the axial scale factor);
-/// opened one at a time, the term that moved explains the data best. A term the held pass named
-/// may have been wrong at rest already (a datasheet's prior, a tilt levelled on a wrong bias):
-/// its prior at rest is widened too ([`SHIFT_OPENED`]). Where two or more terms pass the bar
-/// within [`DISTINGUISHED`] of the best, none is chosen at that step: the flight cannot tell
-/// which of them moved (on a rolling rocket, a transverse gyro bias's tilt before the roll
-/// builds up against either transverse accelerometer bias), and they are returned as
-/// undecided.
-fn select_opened(
-    imu: &ImuSeries,
-    (fixes, baro): (&[Fix], &[Pressure]),
-    (start, prior, opened): (&Start, StateMatrix<f64>, &Opened),
-    (held, first, first_launched): (&Verdict, &Pass, &Launched),
-    opts: &Options,
-    (rest_end, launch_at): (usize, usize),
-    alpha: f64,
-) -> Selection {
-    use rayon::prelude::*;
-    use statrs::distribution::{ChiSquared, ContinuousCDF};
-    let end_t = imu.t.last().copied().unwrap_or(0.0);
-    let fly = |terms: &[usize]| {
-        let (t, mut w) = start
-            .launch
-            .unwrap_or((StateMatrix::identity(), StateMatrix::zeros()));
-        let mut at_rest = prior;
-        for &i in terms {
-            let k = index::ACCEL_BIAS + i;
-            w[(k, k)] += OPEN_WIDE[i / 3].powi(2);
-            if held.terms[i].shifted {
-                at_rest[(k, k)] *= SHIFT_OPENED;
-            }
-        }
-        run::forward(
-            imu,
-            fixes,
-            baro,
-            &Start {
-                prior: at_rest,
-                launch: Some((t, w)),
-                ..*start
-            },
-            opts,
-            (rest_end, launch_at),
-        )
-    };
-    let mut chosen: Vec<usize> = Vec::new();
-    let mut best: Option<(Pass, Launched)> = None;
-    let mut undecided = Vec::new();
-    let mut misfit = profile_misfit(first, first_launched, &[], end_t, opts.gate);
-    while chosen.len() < MAX_OPENED {
-        let open: Vec<usize> = (0..12)
-            .filter(|i| opened.0[*i].is_none() && !chosen.contains(i))
-            .collect();
-        // Only a term the flight resolves can explain it (one it does not, opened, moves the
-        // misfit by nothing: a spinning shell's transverse terms); the bar is shared over
-        // every term still closed all the same.
-        let candidates: Vec<usize> = open
-            .iter()
-            .copied()
-            .filter(|&i| held.terms[i].z.is_some())
-            .collect();
-        if candidates.is_empty() {
-            break;
-        }
-        let bar = ChiSquared::new(1.0).map_or(f64::INFINITY, |c| {
-            c.inverse_cdf(1.0 - alpha / open.len() as f64)
-        });
-        let mut trials: Vec<Trial> = candidates
-            .par_iter()
-            .map(|&c| {
-                let mut terms = chosen.clone();
-                terms.push(c);
-                let pass = fly(&terms);
-                let launched = just_after_launch(&pass);
-                let misfit = profile_misfit(&pass, &launched, &terms, end_t, opts.gate);
-                Trial {
-                    misfit,
-                    term: c,
-                    pass,
-                    launched,
-                }
-            })
-            .collect();
-        trials.sort_by(|a, b| a.misfit.total_cmp(&b.misfit));
-        let Some(lead) = trials
-            .first()
-            .map(|t| t.misfit)
-            .filter(|m| misfit - m > bar)
-        else {
-            break;
-        };
-        let close: Vec<&Trial> = trials
-            .iter()
-            .filter(|t| misfit - t.misfit > bar && t.misfit - lead < DISTINGUISHED)
-            .collect();
-        if close.len() > 1 {
-            // Each of these alone explains what the calibration's prior does not, none
-            // clearly better: the flight cannot tell which moved.
-            undecided = close
-                .iter()
-                .map(|t| {
-                    let k = index::ACCEL_BIAS + t.term;
-                    (
-                        t.term,
-                        verdict::values(&t.launched.estimate)[t.term],
-                        t.launched.covariance[(k, k)].max(0.0).sqrt(),
-                    )
-                })
-                .collect();
-            break;
-        }
-        let Some(lead) = trials.into_iter().next() else {
-            break;
-        };
-        chosen.push(lead.term);
-        misfit = lead.misfit;
-        best = Some((lead.pass, lead.launched));
-    }
-    Selection {
-        opened: best.map(|(pass, launched)| (chosen, pass, launched)),
-        undecided,
-    }
-}
-
-/// One term tried by [`select_opened`]: the pass with it (and the terms chosen before it)
-/// opened, what that pass tells of the launch, and its misfit ([`profile_misfit`]).
-struct Trial {
-    misfit: f64,
-    term: usize,
-    pass: Pass,
-    launched: Launched,
-}
-
-/// A pass's misfit ([`run::misfit`]) with the opened `terms` at their best: less, for each, the
-/// log of its variance at launch before the flight's data over its variance after (the Occam
-/// factor of a prior opened wide). The drop from one set of opened terms to a larger is then
-/// the generalised likelihood ratio of the terms added (twice its log), whatever width they were
-/// opened to.
-fn profile_misfit(pass: &Pass, launched: &Launched, terms: &[usize], until: f64, gate: f64) -> f64 {
-    let occam: f64 = terms
-        .iter()
-        .map(|&i| {
-            let k = index::ACCEL_BIAS + i;
-            let (before, after) = (launched.prior[(k, k)], launched.covariance[(k, k)]);
-            if before > 0.0 && after > 0.0 {
-                (before / after).ln().max(0.0)
-            } else {
-                0.0
-            }
-        })
-        .sum();
-    run::misfit(pass, until, gate) - occam
 }
 
 /// The held pass's verdict when its SHIFTED rested on the overall chi-square alone and no
@@ -693,42 +522,4 @@ fn judge_opened(
 /// states it (its 1-sigma at launch, squared).
 fn just_after_launch_prior(held: &Verdict) -> [f64; 12] {
     std::array::from_fn(|i| held.terms[i].prior_sigma.powi(2))
-}
-
-/// The sensor errors just after the launch, as the whole flight tells them.
-struct Launched {
-    /// Their covariance just after the launch's change, before the flight's data: the
-    /// calibration's (its line over the flight) with what the pad taught.
-    prior: StateMatrix<f64>,
-    /// The smoothed estimate there.
-    estimate: SensorErrors<f64>,
-    /// Its covariance.
-    covariance: StateMatrix<f64>,
-}
-
-/// The smoothed sensor errors at the first epoch from the launch on (the launch's own epoch
-/// when the pass changes the errors there), with the covariance the pass had there before the
-/// flight's data. A shift at launch is a step there; the random walks the filter allows
-/// afterwards widen the last epoch's estimate (to ten times the calibration's 1-sigma on an
-/// axial bias over 20 s), so the test is made where the step is, on everything the flight
-/// says of it.
-fn just_after_launch(pass: &Pass) -> Launched {
-    let k = pass
-        .epochs
-        .iter()
-        .position(|e| e.t >= pass.launch)
-        .unwrap_or_else(|| pass.epochs.len().saturating_sub(1));
-    let smoothed = super::smooth::smooth(&pass.epochs);
-    match (pass.epochs.get(k), smoothed.get(k)) {
-        (Some(e), Some((x, p))) => Launched {
-            prior: e.filtered.1,
-            estimate: x.sensors,
-            covariance: *p,
-        },
-        _ => Launched {
-            prior: pass.p0,
-            estimate: SensorErrors::default(),
-            covariance: pass.p0,
-        },
-    }
 }

@@ -7,6 +7,7 @@ pub mod check;
 pub mod input;
 pub mod prior;
 pub mod run;
+pub mod select;
 pub mod smooth;
 pub mod track;
 pub mod verdict;

@@ -116,6 +116,17 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
         if let Some(line) = undecided(c) {
             let _ = writeln!(s, "  {line}");
         }
+        if !c.unseen.is_empty() {
+            let _ = writeln!(s, "  not named, {UNSEEN_HEAD}:");
+            for u in &c.unseen {
+                let [from, sd] = unseen_cells(c, u);
+                let _ = writeln!(
+                    s,
+                    "  | {} | named from {from} | the flight's own 1-sigma {sd} |",
+                    u.term
+                );
+            }
+        }
     }
     if let Some((rms, n)) = c.track.track_rms {
         let _ = writeln!(
@@ -131,6 +142,23 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
         );
     }
     s
+}
+
+/// What the list of terms not named says.
+const UNSEEN_HEAD: &str = "the smallest change at launch this flight names 19 times in 20 (each term's change opened alone, at the bar it was held to): a smaller one it CANNOT TELL";
+
+/// A term not named: the smallest change the flight names and its own 1-sigma, with the unit.
+fn unseen_cells(c: &Checked, u: &crate::nav::check::Unseen) -> [String; 2] {
+    let unit = c
+        .verdict
+        .terms
+        .iter()
+        .find(|t| t.name == u.term)
+        .map_or("", |t| t.unit);
+    [
+        format!("{:.2e} {unit}", u.smallest).trim_end().to_string(),
+        format!("{:.2e}", u.sigma),
+    ]
 }
 
 /// The terms the flight cannot tell apart, in a sentence (`None` when there are none).
@@ -164,6 +192,7 @@ pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value 
         "overall": c.verdict.overall,
         "shifts": c.shifts.iter().map(|(n, x, s)| serde_json::json!({"term": n, "estimate": x, "sigma": s})).collect::<Vec<_>>(),
         "undecided": c.undecided.iter().map(|(n, x, s)| serde_json::json!({"term": n, "estimate": x, "sigma": s})).collect::<Vec<_>>(),
+        "unseen": c.unseen,
         "track_rms_m": c.track.track_rms.map(|x| x.0),
         "height_rms_m": c.track.height_rms.map(|x| x.0),
         "heading_deg": [c.heading_deg.0, c.heading_deg.1],
@@ -550,6 +579,24 @@ fn terms_table(c: &Checked) -> String {
     }
     if let Some(line) = undecided(c) {
         let _ = writeln!(t, "<p>{}.</p>", esc(&line));
+    }
+    if !c.unseen.is_empty() {
+        let _ = writeln!(
+            t,
+            "<p>Terms not named, {}.</p>\n<table><tr><th>term</th><th>named from</th><th>the flight's own 1-sigma</th></tr>",
+            esc(UNSEEN_HEAD)
+        );
+        for u in &c.unseen {
+            let [from, sd] = unseen_cells(c, u);
+            let _ = writeln!(
+                t,
+                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
+                esc(u.term),
+                esc(&from),
+                esc(&sd)
+            );
+        }
+        t.push_str("</table>\n");
     }
     t
 }
