@@ -72,22 +72,40 @@ pub fn available_or_skip(test: &str) -> bool {
 /// # Errors
 /// The build's output when it fails.
 pub fn build_firmware() -> Result<PathBuf, String> {
+    build_firmware_as(None)
+}
+
+/// [`build_firmware`] for a unit whose serial number is `serial` (the example device's
+/// `SPINCAL_UNIT_SERIAL`), built in a target directory of its own
+/// (`firmware/target/unit-SERIAL`) so that the tests' QEMU-0001 build is left as it is.
+///
+/// # Errors
+/// When cargo fails; its stderr is in the message.
+pub fn build_firmware_as(serial: Option<&str>) -> Result<PathBuf, String> {
     let dir = root().join("firmware");
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let out = Command::new(cargo)
-        .current_dir(&dir)
+    let mut cmd = Command::new(cargo);
+    cmd.current_dir(&dir)
         .args(["build", "--release", "--target", TARGET, "--bins"])
         .env_remove("RUSTFLAGS")
-        .env_remove("CARGO_TARGET_DIR")
-        .output()
-        .map_err(|e| format!("cannot run cargo: {e}"))?;
+        .env_remove("CARGO_TARGET_DIR");
+    let target = match serial {
+        Some(s) => {
+            let t = dir.join("target").join(format!("unit-{s}"));
+            cmd.env("SPINCAL_UNIT_SERIAL", s)
+                .env("CARGO_TARGET_DIR", &t);
+            t
+        }
+        None => dir.join("target"),
+    };
+    let out = cmd.output().map_err(|e| format!("cannot run cargo: {e}"))?;
     if !out.status.success() {
         return Err(format!(
             "firmware build failed:\n{}",
             String::from_utf8_lossy(&out.stderr)
         ));
     }
-    Ok(dir.join("target").join(TARGET).join("release"))
+    Ok(target.join(TARGET).join("release"))
 }
 
 /// What a QEMU run printed and how it ended.

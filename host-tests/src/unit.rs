@@ -54,10 +54,34 @@ impl QemuUnit {
     /// # Errors
     /// When QEMU cannot be started or the log cannot be created.
     pub fn power_on(elf: &Path, flash: Option<&Path>, log: &Path) -> Result<Self, String> {
-        let (port, monitor) = (free_port()?, free_port()?);
+        Self::power_on_at(elf, flash, log, None)
+    }
+
+    /// [`QemuUnit::power_on`] with the UART on `port` (a free one when `None`). A unit on a
+    /// port of its own starts at once, as a unit on a bench does, and takes one client after
+    /// another on its UART; on a free port it waits for its first client.
+    ///
+    /// # Errors
+    /// When QEMU cannot be started, the log cannot be created or `port` is taken.
+    pub fn power_on_at(
+        elf: &Path,
+        flash: Option<&Path>,
+        log: &Path,
+        port: Option<u16>,
+    ) -> Result<Self, String> {
+        let wait = if port.is_some() { "off" } else { "on" };
+        let port = match port {
+            Some(p) => {
+                TcpListener::bind(("127.0.0.1", p))
+                    .map_err(|e| format!("port {p} on 127.0.0.1 cannot be listened on: {e}"))?;
+                p
+            }
+            None => free_port()?,
+        };
+        let monitor = free_port()?;
         let mut cmd = qemu::command(elf, &[]);
         cmd.arg("-serial")
-            .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"));
+            .arg(format!("tcp:127.0.0.1:{port},server=on,wait={wait}"));
         cmd.arg("-monitor")
             .arg(format!("tcp:127.0.0.1:{monitor},server=on,wait=off"));
         if let Some(f) = flash.filter(|f| f.exists()) {
@@ -109,40 +133,36 @@ impl QemuUnit {
     /// When the monitor does not answer or the image is not written completely; the old file
     /// is then left as it was.
     pub fn power_off(mut self) -> Result<(), String> {
-        let Some(flash) = self.flash.clone() else {
-            return Ok(());
-        };
-        let tmp = flash.with_extension("bin.partial");
-        let _ = std::fs::remove_file(&tmp);
-        let mon = connect_tcp(self.monitor)?;
-        mon.set_read_timeout(Some(Duration::from_secs(10)))
-            .map_err(|e| e.to_string())?;
-        let mut w = mon.try_clone().map_err(|e| e.to_string())?;
-        let mut r = BufReader::new(mon);
-        let prompt = |r: &mut BufReader<TcpStream>| -> Result<(), String> {
-            let mut seen = Vec::new();
-            let mut byte = [0u8; 1];
-            while !seen.ends_with(b"(qemu) ") {
-                r.read_exact(&mut byte)
-                    .map_err(|e| format!("the QEMU monitor stopped answering: {e}"))?;
-                seen.push(byte[0]);
-            }
-            Ok(())
-        };
-        prompt(&mut r)?;
-        let (start, size) = region();
-        writeln!(w, "pmemsave {start:#x} {size:#x} \"{}\"", tmp.display())
-            .map_err(|e| e.to_string())?;
-        prompt(&mut r)?;
-        let _ = writeln!(w, "quit");
-        let mut rest = String::new();
-        let _ = r.read_line(&mut rest);
+        self.save_flash()?;
+        let mut monitor = Monitor::open(self.monitor)?;
+        monitor.quit();
         let start = Instant::now();
         while self.child.try_wait().map_err(|e| e.to_string())?.is_none()
             && start.elapsed() < Duration::from_secs(10)
         {
             std::thread::sleep(Duration::from_millis(20));
         }
+        Ok(())
+    }
+
+    /// Copies the unit's flash, as it is now, to its file (when one was given): into a
+    /// temporary file first, renamed over the old one only when complete. Taken while the
+    /// unit runs, it is what a power cut at this instant would leave.
+    ///
+    /// # Errors
+    /// When the monitor does not answer or the image is not written completely; the old file
+    /// is then left as it was.
+    pub fn save_flash(&self) -> Result<(), String> {
+        let Some(flash) = self.flash.clone() else {
+            return Ok(());
+        };
+        let tmp = flash.with_extension("bin.partial");
+        let _ = std::fs::remove_file(&tmp);
+        let (start, size) = region();
+        Monitor::open(self.monitor)?.command(&format!(
+            "pmemsave {start:#x} {size:#x} \"{}\"",
+            tmp.display()
+        ))?;
         let len = std::fs::metadata(&tmp).map(|m| m.len()).unwrap_or(0);
         if len != u64::from(size) {
             let _ = std::fs::remove_file(&tmp);
@@ -152,6 +172,57 @@ impl QemuUnit {
             ));
         }
         std::fs::rename(&tmp, &flash).map_err(|e| format!("{}: {e}", flash.display()))
+    }
+
+    /// Whether QEMU still runs.
+    #[must_use]
+    pub fn running(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(None))
+    }
+}
+
+/// A connection to QEMU's human monitor, at its prompt.
+struct Monitor {
+    w: TcpStream,
+    r: BufReader<TcpStream>,
+}
+
+impl Monitor {
+    fn open(port: u16) -> Result<Self, String> {
+        let mon = connect_tcp(port)?;
+        mon.set_read_timeout(Some(Duration::from_secs(10)))
+            .map_err(|e| e.to_string())?;
+        let w = mon.try_clone().map_err(|e| e.to_string())?;
+        let mut m = Self {
+            w,
+            r: BufReader::new(mon),
+        };
+        m.prompt()?;
+        Ok(m)
+    }
+
+    fn prompt(&mut self) -> Result<(), String> {
+        let mut seen = Vec::new();
+        let mut byte = [0u8; 1];
+        while !seen.ends_with(b"(qemu) ") {
+            self.r
+                .read_exact(&mut byte)
+                .map_err(|e| format!("the QEMU monitor stopped answering: {e}"))?;
+            seen.push(byte[0]);
+        }
+        Ok(())
+    }
+
+    /// Runs one command and waits for the prompt after it.
+    fn command(&mut self, line: &str) -> Result<(), String> {
+        writeln!(self.w, "{line}").map_err(|e| e.to_string())?;
+        self.prompt()
+    }
+
+    fn quit(&mut self) {
+        let _ = writeln!(self.w, "quit");
+        let mut rest = String::new();
+        let _ = self.r.read_line(&mut rest);
     }
 }
 

@@ -5,6 +5,7 @@
 //!   and the host criterion benchmarks.
 //! - `bench-fit`: the regression engine against statsmodels, in the same run.
 //! - `calibrate`: the main job, end to end, on the QEMU device.
+//! - `unit`: the example unit on QEMU with its UART on a local TCP port, left running.
 //! - `fuzz`: a longer fuzzing run of every target (`--secs N` each).
 //! - `setup`: only the setup steps.
 #![forbid(unsafe_code)]
@@ -15,16 +16,19 @@ mod disk;
 mod fuzz;
 mod setup;
 mod test;
+mod unit;
 
 use std::process::ExitCode;
 
-const USAGE: &str = "usage: cargo xtask <test | bench | bench-fit | calibrate | fuzz | setup>
+const USAGE: &str =
+    "usage: cargo xtask <test | bench | bench-fit | calibrate | unit | fuzz | setup>
 
   test       rustfmt, clippy (host and thumb), docs, every host test and the QEMU tests;
              installs the thumb target and qemu-system-arm when missing
   bench      instruction counts on the Cortex-M4F (QEMU -icount), sizes, host benchmarks
   bench-fit  the regression engine at n = 10^4..10^6 by 10 terms, and statsmodels in the same run
   calibrate  the main job on the QEMU device
+  unit       the example unit on QEMU, its UART on tcp://127.0.0.1:4444, left running
   fuzz       every fuzz target for --secs N seconds (default 300), with executions and findings
   setup      add the thumb target and install qemu-system-arm, nothing else";
 
@@ -35,6 +39,7 @@ fn main() -> ExitCode {
         Some("bench") => bench::run(&args[1..]),
         Some("bench-fit") => bench::fit(),
         Some("calibrate") => calibrate::run(&args[1..]),
+        Some("unit") => unit::run(&args[1..]),
         Some("fuzz") => fuzz::command(&args[1..]),
         Some("setup") => setup::run(true).map(|_| ()),
         Some("-h" | "--help" | "help") => {

@@ -1,0 +1,77 @@
+//! The example unit a newcomer leaves running (`cargo xtask unit`): QEMU on a port of its own,
+//! up at once, taking one client after another on its UART as a unit on a bench does, its flash
+//! saved while it runs and at power-off, and its calibration still there after a power cycle.
+//! Skips without QEMU unless SPINCAL_REQUIRE_QEMU=1 (as in CI).
+
+use std::net::TcpListener;
+use std::time::Duration;
+
+use calflash::device::{self, FlashOptions};
+use host_tests::unit::{QemuUnit, region};
+use host_tests::{golden, qemu};
+use spincal::model::CalibrationData;
+
+#[test]
+fn a_unit_on_its_own_port_takes_one_client_after_another_and_keeps_its_flash() {
+    if !qemu::available_or_skip(
+        "a_unit_on_its_own_port_takes_one_client_after_another_and_keeps_its_flash",
+    ) {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let elf = qemu::build_firmware().unwrap().join("device");
+    let port = TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let flash = dir.path().join("flash.bin");
+    let log = dir.path().join("qemu.log");
+    let mut unit = QemuUnit::power_on_at(&elf, Some(&flash), &log, Some(port)).unwrap();
+    assert_eq!(unit.port, port);
+
+    // The first client: an empty unit, flashed.
+    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    let id = client.identify().unwrap();
+    assert!(id.calibration.is_none(), "{id:?}");
+    let blob = golden::encode(&CalibrationData::example_imu());
+    let opts = FlashOptions {
+        force: true,
+        ..FlashOptions::default()
+    };
+    let report = device::flash(&mut client, &id, &blob, &opts, |_, _| {}).unwrap();
+    assert!(report.read_back_identical);
+    drop(client);
+
+    // Another on the same port, later: the unit still runs and holds it.
+    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    let id = client.identify().unwrap();
+    assert_eq!(
+        id.calibration.as_ref().map(|s| s.as_str()),
+        Some("IMU-FULL-0042")
+    );
+    drop(client);
+
+    // Its port is its own: a second unit there is refused, naming it.
+    let taken = QemuUnit::power_on_at(&elf, None, &dir.path().join("other.log"), Some(port));
+    let err = taken.err().expect("a second unit on a taken port");
+    assert!(err.contains(&port.to_string()), "{err}");
+
+    // Saved while it runs (what a power cut would leave), then at power-off.
+    unit.save_flash().unwrap();
+    assert_eq!(
+        std::fs::metadata(&flash).unwrap().len(),
+        u64::from(region().1)
+    );
+    assert!(unit.running());
+    unit.power_off().unwrap();
+
+    // Powered on again from its file: the calibration is there.
+    let unit = QemuUnit::power_on(&elf, Some(&flash), &dir.path().join("again.log")).unwrap();
+    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    let id = client.identify().unwrap();
+    assert_eq!(
+        id.calibration.as_ref().map(|s| s.as_str()),
+        Some("IMU-FULL-0042")
+    );
+}
