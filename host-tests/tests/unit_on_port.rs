@@ -54,7 +54,9 @@ fn a_unit_on_its_own_port_takes_one_client_after_another_and_keeps_its_flash() {
 
     // Its port is its own: a second unit there is refused, naming it.
     let taken = QemuUnit::power_on_at(&elf, None, &dir.path().join("other.log"), Some(port));
-    let err = taken.err().expect("a second unit on a taken port");
+    let Err(err) = taken else {
+        panic!("a second unit started on the taken port {port}");
+    };
     assert!(err.contains(&port.to_string()), "{err}");
 
     // Saved while it runs (what a power cut would leave), then at power-off.
