@@ -167,6 +167,13 @@ pub struct Channel {
     pub range: Span,
 }
 
+impl Channel {
+    /// The axis' `v` (code less its centre) at the two rails.
+    pub(crate) fn rail_offsets(&self, rails: &Rails) -> (f32, f32) {
+        (rails.lo as f32 - self.center, rails.hi as f32 - self.center)
+    }
+}
+
 /// The calibrated temperature and voltage spans, and the breakpoints of the coefficient table.
 ///
 /// The table holds `nt x nv` coefficient sets, `nt = max(1, temperatures.len())` and

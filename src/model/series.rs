@@ -73,7 +73,7 @@ pub(super) fn triad_bound<'a>(
     let mut u = [Bound::point(0.0); 3];
     for (a, (b, c)) in u.iter_mut().zip(channels).enumerate() {
         let axes = series.clone().filter_map(move |s| s.axes.get(a));
-        let (lo, hi) = super::validate::rail_offsets(rails, c);
+        let (lo, hi) = c.rail_offsets(rails);
         *b = Bound::point(axis_magnitude(
             &axis_envelope(axes.clone()),
             break_sum(axes),

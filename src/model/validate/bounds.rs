@@ -8,14 +8,6 @@ use crate::model::interval::{Bound, affine_bound, axis_bound};
 use crate::model::sets::TriadSet;
 use crate::model::{Channel, Rails};
 
-/// `v` at the two rails of an axis.
-pub(crate) fn rail_offsets(rails: &Rails, channel: &Channel) -> (f32, f32) {
-    (
-        rails.lo as f32 - channel.center,
-        rails.hi as f32 - channel.center,
-    )
-}
-
 /// Bound of a triad's outputs over every code inside its rails.
 pub(crate) fn triad_output_bound(
     set: &TriadSet,
@@ -24,7 +16,7 @@ pub(crate) fn triad_output_bound(
 ) -> [Bound; 3] {
     let mut u = [Bound::point(0.0); 3];
     for ((b, n), c) in u.iter_mut().zip(&set.axes).zip(channels) {
-        let (lo, hi) = rail_offsets(rails, c);
+        let (lo, hi) = c.rail_offsets(rails);
         *b = axis_bound(n, lo, hi);
     }
     let mut y = [Bound::point(0.0); 3];

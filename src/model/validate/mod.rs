@@ -13,7 +13,6 @@ use crate::error::{Field, Part};
 mod bounds;
 mod lever;
 
-pub(crate) use bounds::rail_offsets;
 use bounds::{check_bounded, triad_output_bound};
 use lever::{validate_lever_arm, validate_lever_feedback, validate_sensing_directions};
 
@@ -360,7 +359,7 @@ fn validate_single_set(
     if set.scale == 0.0 {
         return Err(Error::InvalidSingularMatrix { part, set: i });
     }
-    let (v_lo, v_hi) = rail_offsets(rails, channel);
+    let (v_lo, v_hi) = channel.rail_offsets(rails);
     let bound = Bound::point(set.offset).add(axis_bound(&set.axis, v_lo, v_hi).scale(set.scale));
     check_bounded(&[bound], part, i)
 }
@@ -382,7 +381,7 @@ fn validate_single_series(
         finite(set.scale, Field::Scale, Some(part), Some(i as u8), None)?;
         finite(set.offset, Field::Offset, Some(part), Some(i as u8), None)?;
     }
-    let (v_lo, v_hi) = rail_offsets(rails, channel);
+    let (v_lo, v_hi) = channel.rail_offsets(rails);
     for v in 0..voltages {
         let series = series::terms(sets, v, voltages);
         let first = v as u8;

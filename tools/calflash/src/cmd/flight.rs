@@ -132,7 +132,7 @@ fn lever_component(s: &str) -> Result<f64, String> {
 /// Unreadable inputs, a flight that cannot be checked.
 pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
     if let Some(port) = &args.port {
-        return super::flight_unit::run(args, port).map(|()| "READ");
+        return super::flight_unit::run(port, args.timeout, args.json.as_deref()).map(|()| "READ");
     }
     let (Some(recording), Some(gnss)) = (&args.recording, &args.gnss) else {
         return Err("calflash flight: give a recording and --gnss, or --port to read the unit's own flight filter".into());

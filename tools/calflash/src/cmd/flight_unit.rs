@@ -7,20 +7,18 @@ use std::time::Duration;
 
 use spincal::flight::{Aiding, FlightReport, Phase};
 
-use super::flight::FlightArgs;
 use crate::cmd::Failure;
 use crate::device::{Client, link::Link};
 use crate::files::{Paths, Staged};
 
-/// Reads the unit's flight filter on `port`.
+/// Reads the unit's flight filter on `port` (each reply awaited `timeout_s` seconds), writing
+/// its JSON to `json` when given.
 ///
 /// # Errors
 /// The link's, or a unit that has published no flight filter state since power-on.
-pub fn run(args: &FlightArgs, port: &str) -> Result<(), Failure> {
-    Paths::new()
-        .output("--json", args.json.as_deref())
-        .check()?;
-    let timeout = Duration::from_secs_f64(args.timeout);
+pub fn run(port: &str, timeout_s: f64, json_path: Option<&std::path::Path>) -> Result<(), Failure> {
+    Paths::new().output("--json", json_path).check()?;
+    let timeout = Duration::from_secs_f64(timeout_s);
     let link = Link::open(port, timeout)?;
     let mut client = Client::new(link, timeout);
     let id = client.identify().map_err(|e| format!("{port}: {e}"))?;
@@ -31,7 +29,7 @@ pub fn run(args: &FlightArgs, port: &str) -> Result<(), Failure> {
         )
         .into());
     };
-    if let Some(path) = &args.json {
+    if let Some(path) = json_path {
         let json = serde_json::to_string_pretty(&json(&serial, &report))?;
         let mut staged = Staged::new();
         staged.write(path, |w| w.write_all(json.as_bytes()))?;

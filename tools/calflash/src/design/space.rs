@@ -183,7 +183,12 @@ impl Space {
         };
         let lookup = Lookup::new(p, &block.formula, self.unit)?;
         let vars: Vec<String> = block.formula.columns().into_iter().skip(1).collect();
-        let reach = Reach::of(reach, &vars, &self.limits);
+        let limits: Vec<(&str, f64, f64)> = self
+            .limits
+            .iter()
+            .map(|l| (l.name.as_str(), l.lo, l.hi))
+            .collect();
+        let reach = Reach::of(reach, &vars, &limits);
         let w = weight::weight(p, &block.formula, &lookup, &reach);
         if w.share_inside == 0.0 {
             return Err(Error::MissionBeyondReach {

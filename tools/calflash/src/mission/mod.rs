@@ -6,6 +6,7 @@
 
 pub mod columns;
 pub mod judge;
+pub mod judged;
 mod read;
 pub mod summary;
 pub mod weight;

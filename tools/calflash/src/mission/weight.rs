@@ -52,9 +52,10 @@ pub struct Reach {
 impl Reach {
     /// The range of each of `vars` over `pts`, widened by [`REACH_MARGIN`] of its span (a
     /// recorded flight's own instrument reads 1 g at rest as 9.9 m/s^2 where the bench's
-    /// reference is 9.807), then narrowed by `limits`.
+    /// reference is 9.807), then narrowed by `limits` (an equipment's: variable, lowest and
+    /// highest value it reaches).
     #[must_use]
-    pub fn of(pts: &Points, vars: &[String], limits: &[crate::design::space::Limit]) -> Self {
+    pub fn of(pts: &Points, vars: &[String], limits: &[(&str, f64, f64)]) -> Self {
         let bounds = vars
             .iter()
             .filter(|v| !v.starts_with("lever_"))
@@ -67,9 +68,9 @@ impl Reach {
                 let margin = REACH_MARGIN * (hi - lo);
                 lo -= margin;
                 hi += margin;
-                for l in limits.iter().filter(|l| l.name == *v) {
-                    lo = lo.max(l.lo);
-                    hi = hi.min(l.hi);
+                for &(_, l_lo, l_hi) in limits.iter().filter(|l| l.0 == v.as_str()) {
+                    lo = lo.max(l_lo);
+                    hi = hi.min(l_hi);
                 }
                 (v.clone(), lo, hi)
             })

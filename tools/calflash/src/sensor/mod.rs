@@ -11,6 +11,7 @@ pub mod accuracy;
 pub mod blob;
 pub mod compare;
 pub mod covariance;
+pub mod finding;
 pub mod hysteresis;
 pub mod invert;
 pub mod lever;
@@ -23,6 +24,7 @@ pub mod thermal;
 pub mod threshold;
 pub mod triad;
 
+pub use finding::{Finding, Verdict};
 use std::path::{Path, PathBuf};
 
 use spincal::model::{CalibrationData, Rails, Span};
@@ -520,41 +522,6 @@ pub struct Decision {
     pub figure: Vec<(String, Vec<(f64, f64)>)>,
 }
 
-/// Accept, review or reject.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
-)]
-#[serde(rename_all = "snake_case")]
-pub enum Verdict {
-    /// Every check passed.
-    Accept,
-    /// A person should look at a finding before accepting.
-    Review,
-    /// The unit or the calibration does not meet its requirements.
-    Reject,
-}
-
-impl Verdict {
-    /// The word the reports print: `ACCEPT`, `REVIEW` or `REJECT`.
-    #[must_use]
-    pub fn word(self) -> &'static str {
-        match self {
-            Self::Accept => "ACCEPT",
-            Self::Review => "REVIEW",
-            Self::Reject => "REJECT",
-        }
-    }
-}
-
-/// One check of the acceptance summary.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Finding {
-    /// Its outcome.
-    pub verdict: Verdict,
-    /// What it found, in words.
-    pub text: String,
-}
-
 /// The outcome of a calibration workflow.
 #[derive(Debug, Clone)]
 pub struct Calibrated {
@@ -592,7 +559,7 @@ pub struct Calibrated {
     /// The observations as fitted (with the references the workflow added), every point.
     pub table: crate::obs::Table,
     /// The calibration judged over a mission (`calibrate --mission`).
-    pub mission: Option<crate::mission::judge::Judged>,
+    pub mission: Option<crate::mission::judged::Judged>,
     /// A two-stage calibration's check between the stages (`sensor::stages`).
     pub stages: Option<stages::Check>,
 }
