@@ -5,20 +5,10 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::mission_columns::MissionColumns;
 use crate::files::{Paths, Staged};
 use crate::mission::{self, summary};
 use crate::report::mission as show;
-
-/// The options every command that reads a mission profile takes.
-#[derive(Debug, Args, Clone)]
-pub struct MissionColumns {
-    /// Columns of the mission profile chosen by name, with their units where the names do not
-    /// state them: `t=ts,fx=Ay:m/s^2,wx=Gy:deg/s,...` (roles t, fx, fy, fz, wx, wy, wz, dwx,
-    /// dwy, dwz, temp, volt). Roles not given are found by the header's names (t, ts, time_ms;
-    /// f_x, ax, acc_x; w_x, gx, gyro_x; dw_x; temp; volt), in SI unless a name states its unit.
-    #[arg(long, default_value = "")]
-    pub mission_columns: String,
-}
 
 /// A mission profile: what a unit feels over a flight.
 #[derive(Debug, Args)]

@@ -16,6 +16,7 @@ pub mod image;
 pub mod keys;
 pub mod lot;
 pub mod mission;
+pub mod mission_columns;
 pub mod outputs;
 pub mod selfcal;
 pub mod simulate;

@@ -107,6 +107,7 @@ impl Outputs {
                     .map_err(|e| e.to_string())
                     .and_then(|path| {
                         crate::lot::history::load_without(&path, &sel, |s| s == serial, alpha)
+                            .map_err(|e| e.to_string())
                     });
                 read.as_ref()
             }

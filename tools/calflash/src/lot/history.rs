@@ -5,6 +5,46 @@
 use super::{Lot, Unit};
 use crate::db::{Db, Location, Selection};
 
+/// Why a lot cannot be had from the history.
+#[derive(Debug, thiserror::Error)]
+pub enum HistoryError {
+    /// The history cannot be opened or read.
+    #[error(transparent)]
+    Db(#[from] crate::db::Error),
+    /// A unit's fit in it holds no coefficients a lot can use.
+    #[error("{path}: the fit of {serial}: {source}")]
+    Fit {
+        /// The history.
+        path: String,
+        /// The unit.
+        serial: String,
+        /// What is wrong with its fit.
+        source: super::Error,
+    },
+    /// The units taken cannot be judged as a lot.
+    #[error("{selection} in {path}: {source}")]
+    Judge {
+        /// What was taken.
+        selection: String,
+        /// The history.
+        path: String,
+        /// Why.
+        source: super::Error,
+    },
+    /// No unit was calibrated in the lot named.
+    #[error(
+        "no such lot: no unit in {path} was calibrated in lot `{name}`{within} (`calflash calibrate --lot {name}` records one; `calflash history` lists the units)"
+    )]
+    NoSuchLot {
+        /// The history.
+        path: String,
+        /// The lot.
+        name: String,
+        /// The rest of the selection, in words (empty when there is none).
+        within: String,
+    },
+}
+
 /// The units `sel` takes from the history at `path`, without those `excluded` (the units
 /// being calibrated are compared with the others), judged at `alpha`.
 ///
@@ -15,7 +55,7 @@ pub fn load_without(
     sel: &Selection<'_>,
     excluded: impl Fn(&str) -> bool,
     alpha: f64,
-) -> Result<Lot, String> {
+) -> Result<Lot, HistoryError> {
     let mut units = units(path, sel)?;
     units.retain(|u| !excluded(&u.serial));
     judge(path, sel, units, alpha)
@@ -26,15 +66,17 @@ fn judge(
     sel: &Selection<'_>,
     units: Vec<Unit>,
     alpha: f64,
-) -> Result<Lot, String> {
-    super::judge(units, alpha).map_err(|e| format!("{sel} in {path}: {e}"))
+) -> Result<Lot, HistoryError> {
+    super::judge(units, alpha).map_err(|source| HistoryError::Judge {
+        selection: sel.to_string(),
+        path: path.to_string(),
+        source,
+    })
 }
 
 /// Every unit `sel` takes, with its newest fit.
-fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, String> {
-    let rows = Db::open_existing(path)
-        .and_then(|mut d| d.latest_fits(sel))
-        .map_err(|e| e.to_string())?;
+fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, HistoryError> {
+    let rows = Db::open_existing(path).and_then(|mut d| d.latest_fits(sel))?;
     rows.into_iter()
         .map(|row| {
             super::coefficients(&row.coefficients)
@@ -44,7 +86,11 @@ fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, String> {
                     station: row.station,
                     coefficients,
                 })
-                .map_err(|e| format!("{path}: the fit of {}: {e}", row.serial))
+                .map_err(|source| HistoryError::Fit {
+                    path: path.to_string(),
+                    serial: row.serial.clone(),
+                    source,
+                })
         })
         .collect()
 }
@@ -53,19 +99,20 @@ fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, String> {
 ///
 /// # Errors
 /// An unreadable history, too few units, or no shared coefficients.
-pub fn load(path: &Location, sel: &Selection<'_>, alpha: f64) -> Result<Lot, String> {
+pub fn load(path: &Location, sel: &Selection<'_>, alpha: f64) -> Result<Lot, HistoryError> {
     let units = units(path, sel)?;
     if units.is_empty()
         && let Some(name) = sel.lot
     {
-        return Err(format!(
-            "no such lot: no unit in {path} was calibrated in lot `{name}`{} (`calflash calibrate --lot {name}` records one; `calflash history` lists the units)",
-            if sel.prefix.is_empty() && sel.station.is_none() {
+        return Err(HistoryError::NoSuchLot {
+            path: path.to_string(),
+            name: name.to_string(),
+            within: if sel.prefix.is_empty() && sel.station.is_none() {
                 String::new()
             } else {
                 format!(" within {sel}")
-            }
-        ));
+            },
+        });
     }
     judge(path, sel, units, alpha)
 }

@@ -162,6 +162,7 @@ pub fn calibrate_all(
                 .map_err(|e| e.to_string())
                 .and_then(|path| {
                     crate::lot::history::load_without(&path, &sel, |s| serials.contains(s), 0.001)
+                        .map_err(|e| e.to_string())
                 }),
         )
     });

@@ -178,7 +178,7 @@ pub struct CalibrateArgs {
     #[arg(long)]
     pub mission: Option<PathBuf>,
     #[command(flatten)]
-    pub mission_columns: crate::cmd::mission::MissionColumns,
+    pub mission_columns: crate::cmd::mission_columns::MissionColumns,
     /// With --mission: the largest acceptable predicted error over the flight, SI per output
     /// family or output: `a=0.05,g=0.002` (m/s^2, rad/s) or `a_x=0.05,...`; above it, REVIEW.
     #[arg(long, requires = "mission", value_parser = requirement)]

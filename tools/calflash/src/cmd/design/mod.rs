@@ -71,7 +71,7 @@ pub struct ModelArgs {
     #[arg(long)]
     pub mission: Option<PathBuf>,
     #[command(flatten)]
-    pub mission_columns: crate::cmd::mission::MissionColumns,
+    pub mission_columns: crate::cmd::mission_columns::MissionColumns,
 }
 
 impl ModelArgs {

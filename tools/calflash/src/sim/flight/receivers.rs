@@ -176,23 +176,45 @@ pub struct LaunchShift {
 /// The keys of `--launch-shift`.
 pub const SHIFT_KEYS: &str = "ax ay az (accelerometer biases, m/s^2), wx wy wz (gyro biases, rad/s), sax say saz, swx swy swz (scale factors, relative: 0.003 is 0.3 %)";
 
+/// A `--launch-shift` that cannot be read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ShiftError {
+    /// An item without `=`.
+    #[error("--launch-shift `{0}`: expected KEY=VALUE")]
+    NotKeyValue(String),
+    /// A value that is not a finite number.
+    #[error("--launch-shift `{0}`: not a number")]
+    NotNumber(String),
+    /// A key that is none of [`SHIFT_KEYS`].
+    #[error("--launch-shift: no key `{0}`; the keys: {SHIFT_KEYS}")]
+    NoKey(String),
+    /// A value beyond what a launch shift can be.
+    #[error("--launch-shift `{item}`: at most {limit} in size; the keys: {SHIFT_KEYS}")]
+    TooLarge {
+        /// The item.
+        item: String,
+        /// Its kind's limit.
+        limit: f64,
+    },
+}
+
 impl LaunchShift {
     /// Reads `KEY=VALUE,...`.
     ///
     /// # Errors
     /// An unknown key or a value that is not a finite number (or beyond 10 % or 100 units).
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, ShiftError> {
         let mut out = Self::default();
         for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let (key, value) = item
                 .split_once('=')
-                .ok_or_else(|| format!("--launch-shift `{item}`: expected KEY=VALUE"))?;
+                .ok_or_else(|| ShiftError::NotKeyValue(item.to_string()))?;
             let v: f64 = value
                 .trim()
                 .parse()
                 .ok()
                 .filter(|v: &f64| v.is_finite())
-                .ok_or_else(|| format!("--launch-shift `{item}`: not a number"))?;
+                .ok_or_else(|| ShiftError::NotNumber(item.to_string()))?;
             let key = key.trim();
             let axis = match key.chars().last() {
                 Some('x') => 0,
@@ -205,16 +227,13 @@ impl LaunchShift {
                 Some("w") => (&mut out.gyro_bias, 100.0),
                 Some("sa") => (&mut out.accel_scale, 0.1),
                 Some("sw") => (&mut out.gyro_scale, 0.1),
-                _ => {
-                    return Err(format!(
-                        "--launch-shift: no key `{key}`; the keys: {SHIFT_KEYS}"
-                    ));
-                }
+                _ => return Err(ShiftError::NoKey(key.to_string())),
             };
             if v.abs() > limit || axis > 2 {
-                return Err(format!(
-                    "--launch-shift `{item}`: at most {limit} in size; the keys: {SHIFT_KEYS}"
-                ));
+                return Err(ShiftError::TooLarge {
+                    item: item.to_string(),
+                    limit,
+                });
             }
             slot[axis] = v;
         }
@@ -247,7 +266,7 @@ mod tests {
             ("swx=0.5", "at most 0.1"),
             ("ax=nan", "not a number"),
         ] {
-            let e = LaunchShift::parse(text).unwrap_err();
+            let e = LaunchShift::parse(text).unwrap_err().to_string();
             assert!(e.contains(says), "{text}: {e}");
         }
     }

@@ -32,20 +32,38 @@ pub struct Rocket {
     pub waiting: f64,
 }
 
+/// A rocket whose thrust never lifts it along its rail.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "a thrust of {peak} N never leaves its rail: the rocket's {mass} kg weigh {along:.0} N along a rail at {elevation} degrees; give thrust= above that"
+)]
+pub struct Grounded {
+    /// Its peak thrust, N.
+    pub peak: f64,
+    /// Its mass, kg.
+    pub mass: f64,
+    /// Its weight along the rail, N.
+    pub along: f64,
+    /// The rail's elevation, degrees.
+    pub elevation: f64,
+}
+
 impl Rocket {
     /// Refuses a rocket that cannot fly: its peak thrust does not lift its weight along the
     /// rail (it would sit on the rail until the simulation ends).
     ///
     /// # Errors
-    /// Why, in words.
-    pub fn flies(&self) -> Result<(), String> {
+    /// [`Grounded`]: its weight along the rail and its peak thrust.
+    pub fn flies(&self) -> Result<(), Grounded> {
         let peak = self.airframe.thrust.iter().map(|p| p.1).fold(0.0, f64::max);
         let along = self.airframe.mass * super::atmosphere::G0 * self.elevation.to_radians().sin();
         if peak <= along {
-            return Err(format!(
-                "a thrust of {peak} N never leaves its rail: the rocket's {} kg weigh {along:.0} N along a rail at {} degrees; give thrust= above that",
-                self.airframe.mass, self.elevation
-            ));
+            return Err(Grounded {
+                peak,
+                mass: self.airframe.mass,
+                along,
+                elevation: self.elevation,
+            });
         }
         Ok(())
     }

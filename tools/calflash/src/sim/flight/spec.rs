@@ -33,6 +33,25 @@ pub struct SpecError {
     pub why: String,
 }
 
+/// Why one `KEY=VALUE` of a `--flight` cannot be set.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+enum KeyError {
+    /// A value beyond its key's range.
+    #[error("{what} must be from {lo} to {hi}")]
+    OutOfRange {
+        what: &'static str,
+        lo: f64,
+        hi: f64,
+    },
+    /// A key the kind of flight does not have.
+    #[error("a {kind} has no `{key}`; its keys: {keys}")]
+    NoKey {
+        kind: &'static str,
+        key: String,
+        keys: &'static str,
+    },
+}
+
 /// The keys of a shell and what they set.
 pub const SHELL_KEYS: &str = "setback (g, 15000), velocity (muzzle, m/s, 800), spin (muzzle, rev/s, 300), elevation (degrees, 45), tip-off (rad/s, 5), seconds (60), conditioned (C, 21), altitude (m, 0), rest (s loaded before firing, 0.02); and where: lat, lon (degrees), azimuth (of fire, degrees from north)";
 /// The keys of a rocket.
@@ -81,17 +100,17 @@ impl Launch {
                 .map_err(|why| bad(format!("`{item}`: {why}")))?;
         }
         if let Self::Rocket(r) = &launch {
-            r.flies().map_err(bad)?;
+            r.flies().map_err(|e| bad(e.to_string()))?;
         }
         Ok(launch)
     }
 
-    fn set(&mut self, key: &str, v: f64) -> Result<(), String> {
-        let within = |lo: f64, hi: f64, what: &str| {
+    fn set(&mut self, key: &str, v: f64) -> Result<(), KeyError> {
+        let within = |lo: f64, hi: f64, what: &'static str| {
             if (lo..=hi).contains(&v) {
                 Ok(v)
             } else {
-                Err(format!("{what} must be from {lo} to {hi}"))
+                Err(KeyError::OutOfRange { what, lo, hi })
             }
         };
         let place = match key {
@@ -129,7 +148,13 @@ impl Launch {
                 "conditioned" => s.conditioned = within(-60.0, 80.0, "the conditioning (C)")?,
                 "altitude" => s.altitude = within(-400.0, 5_000.0, "the altitude (m)")?,
                 "rest" => s.loaded = within(0.0, 600.0, "the rest (s)")?,
-                other => return Err(format!("a shell has no `{other}`; its keys: {SHELL_KEYS}")),
+                other => {
+                    return Err(KeyError::NoKey {
+                        kind: "shell",
+                        key: other.to_string(),
+                        keys: SHELL_KEYS,
+                    });
+                }
             },
             Self::Rocket(r) => match key {
                 "thrust" => {
@@ -150,9 +175,11 @@ impl Launch {
                 "altitude" => r.altitude = within(-400.0, 5_000.0, "the altitude (m)")?,
                 "rest" => r.waiting = within(0.0, 600.0, "the rest (s)")?,
                 other => {
-                    return Err(format!(
-                        "a rocket has no `{other}`; its keys: {ROCKET_KEYS}"
-                    ));
+                    return Err(KeyError::NoKey {
+                        kind: "rocket",
+                        key: other.to_string(),
+                        keys: ROCKET_KEYS,
+                    });
                 }
             },
         }
