@@ -8,6 +8,7 @@ pub mod golden;
 pub mod health_golden;
 pub mod mainjob;
 pub mod nor;
+pub mod postgres;
 pub mod qemu;
 pub mod reference;
 pub mod spin_rig;

@@ -3,11 +3,11 @@
 //! blob, record and history entry, with and without the HTML report, on one and on two threads.
 //! Units per second are 16 / the time. The history is a SQLite file, and (without the
 //! report) a PostgreSQL database on a server the bench starts as the tests do
-//! (`tests/common/postgres.rs`; skipped with a notice where PostgreSQL is not installed). Run
+//! (`host-tests/src/postgres.rs`; skipped with a notice where PostgreSQL is not installed). Run
 //! with `cargo bench -p calflash --bench batch`. The group `batch_check` times the batch's
 //! file check alone at 100 and 10^4 units.
 
-#[path = "../tests/common/postgres.rs"]
+#[path = "../../../host-tests/src/postgres.rs"]
 mod pg_server;
 
 use std::path::PathBuf;

@@ -3,12 +3,12 @@
 //! an individuals and an EWMA chart, and the HTML report with their plots. The SQLite history
 //! is written once into the target directory; the PostgreSQL one is a copy of it (`calflash db
 //! migrate`'s copy, timed once and printed) on a server the bench starts as the tests do
-//! (`tests/common/postgres.rs`), skipped with a notice where PostgreSQL is not installed. Run
+//! (`host-tests/src/postgres.rs`), skipped with a notice where PostgreSQL is not installed. Run
 //! with `cargo bench -p calflash --bench lot`.
 
 #[path = "../tests/common/lot_history.rs"]
 mod lot_history;
-#[path = "../tests/common/postgres.rs"]
+#[path = "../../../host-tests/src/postgres.rs"]
 mod pg_server;
 
 use std::hint::black_box;

@@ -3,7 +3,7 @@
 //! status and the table say which), and options of one unit are refused in a batch.
 
 mod common;
-#[path = "common/postgres.rs"]
+#[path = "../../../host-tests/src/postgres.rs"]
 mod pg_server;
 
 use common::calflash;

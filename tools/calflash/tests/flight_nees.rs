@@ -253,10 +253,24 @@ fn fly(seed: u64, shift: &str, prior: Prior) -> Flight {
             }
         })
         .collect();
+    let unseen = record["unseen"]
+        .as_array()
+        .map(|u| {
+            u.iter()
+                .map(|u| {
+                    (
+                        u["term"].as_str().unwrap_or_default().to_string(),
+                        u["smallest"].as_f64().unwrap_or(f64::NAN),
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default();
     Flight {
         terms,
         track_share: share,
         verdict: word,
+        unseen,
     }
 }
 
@@ -267,6 +281,8 @@ struct Flight {
     terms: Vec<Term>,
     track_share: f64,
     verdict: String,
+    /// Each term not named, with the smallest change at launch the flight says it names.
+    unseen: Vec<(String, f64)>,
 }
 
 /// The share of the smoothed track's epochs (`dir/track.csv`) from launch on within 3 of
@@ -418,6 +434,24 @@ fn average_nees_over_fifty_flights_of_each_kind() {
             println!(
                 "prior {prior:?}, launch shift `{kind}`: verdicts {words:?}; SHIFTED at seeds {called:?}"
             );
+            // The stated smallest change named, held against the truth: a flight that leaves
+            // the shifted term unnamed though its shift is beyond that figure.
+            let beyond: Vec<u64> = (0..n)
+                .filter(|&k| {
+                    let f = &flown[k as usize];
+                    let truth = f.terms.iter().find(|t| t.name == term).map(|t| t.truth);
+                    f.unseen.iter().any(|(u, smallest)| {
+                        u == term && truth.is_some_and(|x| x.abs() > *smallest)
+                    })
+                })
+                .map(|k| first + k)
+                .collect();
+            if !term.is_empty() {
+                println!(
+                    "prior {prior:?}, launch shift `{kind}`: not named though beyond the smallest change the flight says it names: {} ({beyond:?})",
+                    beyond.len()
+                );
+            }
             let flights: Vec<Vec<Term>> = flown.into_iter().map(|f| f.terms).collect();
             let others: Vec<String> = flights
                 .iter()

@@ -1,5 +1,5 @@
 //! The unit history on both of its backends (issue 18): a SQLite file, and a database on a
-//! real PostgreSQL server that the test starts itself (`common/postgres.rs`; skipped with a
+//! real PostgreSQL server that the test starts itself (`host-tests/src/postgres.rs`; skipped with a
 //! notice where PostgreSQL is not installed). The same tests run against both: what is
 //! recorded reads back alike, two writers at once lose nothing, a record is whole or absent, a
 //! history of a newer schema or another program's table is refused and left alone; and on the
@@ -9,7 +9,7 @@
 mod common;
 #[path = "common/lot_history.rs"]
 mod lot_history;
-#[path = "common/postgres.rs"]
+#[path = "../../../host-tests/src/postgres.rs"]
 mod pg_server;
 
 use std::path::{Path, PathBuf};
@@ -656,4 +656,37 @@ fn a_history_of_schema_4_takes_in_flight_checks_once_written() {
             "{l}"
         );
     }
+}
+
+/// The server `cargo xtask history` starts keeps its cluster: a database made in one run is
+/// there in the next, and a port already taken is refused, naming it.
+#[test]
+fn a_kept_history_server_keeps_its_databases_between_runs() {
+    if Server::start("a_kept_history_server_keeps_its_databases_between_runs")
+        .unwrap()
+        .is_none()
+    {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let cluster = dir.path().join("cluster");
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let first = Server::start_kept(&cluster, port).unwrap();
+    first.execute("postgres", "CREATE DATABASE kept");
+    first.execute("kept", "CREATE TABLE t (x int); INSERT INTO t VALUES (42)");
+    let Err(taken) = Server::start_kept(&dir.path().join("other"), port) else {
+        panic!("a second server started on the taken port {port}");
+    };
+    assert!(taken.contains(&port.to_string()), "{taken}");
+    drop(first);
+    let again = Server::start_kept(&cluster, port).unwrap();
+    again.execute(
+        "kept",
+        "DO $$ BEGIN IF (SELECT x FROM t) <> 42 THEN RAISE 'lost'; END IF; END $$",
+    );
+    assert!(again.try_execute("nothere", "SELECT 1").is_err());
 }

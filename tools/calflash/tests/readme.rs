@@ -7,7 +7,7 @@
 //!   device's own protocol handler over a simulated NOR flash, on a local TCP port
 //!   (`host-tests/src/tcp_unit.rs`), unit IMU-0042.
 //! - The shared history (`CALFLASH_DB=postgres://...`) is a real PostgreSQL server started here
-//!   (`common/postgres.rs`); without one the commands that need it are skipped, said.
+//!   (`host-tests/src/postgres.rs`); without one the commands that need it are skipped, said.
 //! - `cargo xtask ...` is not run here: CI runs `cargo xtask test` itself (`.ci/run`), and the
 //!   main job has its own test (`host-tests/tests/mainjob.rs`).
 //! - `../shared` is beside the scratch directory as it is beside a checkout; without it the
@@ -22,7 +22,7 @@
 
 #[path = "../../../host-tests/src/nor.rs"]
 mod nor;
-#[path = "common/postgres.rs"]
+#[path = "../../../host-tests/src/postgres.rs"]
 mod postgres;
 #[path = "../../../host-tests/src/tcp_unit.rs"]
 mod tcp_unit;
@@ -225,6 +225,7 @@ fn every_readme_example_runs_as_written() {
             cmd.replace_range(start..end, url);
         }
         let assignment = cmd.starts_with("export ")
+            || cmd.starts_with("unset ")
             || cmd.split_once('=').is_some_and(|(name, _)| {
                 !name.is_empty() && name.chars().all(|c| c.is_ascii_uppercase() || c == '_')
             });

@@ -6,6 +6,7 @@
 //! - `bench-fit`: the regression engine against statsmodels, in the same run.
 //! - `calibrate`: the main job, end to end, on the QEMU device.
 //! - `unit`: the example unit on QEMU with its UART on a local TCP port, left running.
+//! - `history`: a local PostgreSQL shared unit history, left running.
 //! - `fuzz`: a longer fuzzing run of every target (`--secs N` each).
 //! - `setup`: only the setup steps.
 #![forbid(unsafe_code)]
@@ -14,6 +15,7 @@ mod bench;
 mod calibrate;
 mod disk;
 mod fuzz;
+mod history;
 mod setup;
 mod test;
 mod unit;
@@ -21,7 +23,7 @@ mod unit;
 use std::process::ExitCode;
 
 const USAGE: &str =
-    "usage: cargo xtask <test | bench | bench-fit | calibrate | unit | fuzz | setup>
+    "usage: cargo xtask <test | bench | bench-fit | calibrate | unit | history | fuzz | setup>
 
   test       rustfmt, clippy (host and thumb), docs, every host test and the QEMU tests;
              installs the thumb target and qemu-system-arm when missing
@@ -29,6 +31,7 @@ const USAGE: &str =
   bench-fit  the regression engine at n = 10^4..10^6 by 10 terms, and statsmodels in the same run
   calibrate  the main job on the QEMU device
   unit       the example unit on QEMU, its UART on tcp://127.0.0.1:4444, left running
+  history    a local PostgreSQL shared history on 127.0.0.1:5433, left running
   fuzz       every fuzz target for --secs N seconds (default 300), with executions and findings
   setup      add the thumb target and install qemu-system-arm, nothing else";
 
@@ -40,6 +43,7 @@ fn main() -> ExitCode {
         Some("bench-fit") => bench::fit(),
         Some("calibrate") => calibrate::run(&args[1..]),
         Some("unit") => unit::run(&args[1..]),
+        Some("history") => history::run(&args[1..]),
         Some("fuzz") => fuzz::command(&args[1..]),
         Some("setup") => setup::run(true).map(|_| ()),
         Some("-h" | "--help" | "help") => {

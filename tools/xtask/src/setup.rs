@@ -123,6 +123,14 @@ fn is_root() -> bool {
         .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
 }
 
+/// Installs Debian's PostgreSQL server when missing (as root), for `cargo xtask history`.
+///
+/// # Errors
+/// Why it is not there and cannot be installed.
+pub fn postgres() -> Result<(), String> {
+    debian_package("postgresql", have_postgres).map_or(Ok(()), Err)
+}
+
 /// Adds the target and installs QEMU when missing. `components` also adds rustfmt and clippy.
 pub fn run(components: bool) -> Result<Setup, String> {
     let installed = Command::new("rustup")

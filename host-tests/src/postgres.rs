@@ -1,9 +1,14 @@
-//! A real PostgreSQL server for the history tests (issue 18): Debian's `postgresql` package
-//! (`cargo xtask test` installs it when missing and it can), a cluster made by `initdb` in a
-//! temporary directory, run as an unprivileged user (`nobody` when the tests run as root: the
-//! server refuses root), listening on a free port of 127.0.0.1 and on a socket in that
-//! directory; stopped (and its files removed) when dropped. Local connections are trusted,
-//! except the logins of [`Server::login`], which must give their password (SCRAM).
+//! A real PostgreSQL server for the history tests (issue 18) and for a newcomer's shared
+//! history (`cargo xtask history`): Debian's `postgresql` package (`cargo xtask test` installs
+//! it when missing and it can), a cluster made by `initdb` in a temporary directory (or one
+//! kept between runs), run as an unprivileged user (`nobody` when run as root: the server
+//! refuses root), listening on 127.0.0.1 (a free port, or the one given) and on a socket in
+//! that directory; stopped when dropped (a temporary cluster's files removed). Local
+//! connections are trusted, except the logins of [`Server::login`], which must give their
+//! password (SCRAM).
+
+// Also included by path into calflash's test and bench crates, each using a part of it.
+#![allow(dead_code)]
 
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
@@ -11,9 +16,26 @@ use std::process::{Command, Stdio};
 /// The logins that must give a password (see [`Server::login`]).
 pub const LOGINS: [&str; 2] = ["station", "reader"];
 
+/// Where a cluster lives.
+enum Place {
+    /// Removed when the server stops.
+    Temporary(tempfile::TempDir),
+    /// Kept for the next run.
+    Kept(PathBuf),
+}
+
+impl Place {
+    fn path(&self) -> &std::path::Path {
+        match self {
+            Self::Temporary(t) => t.path(),
+            Self::Kept(p) => p,
+        }
+    }
+}
+
 /// A running server.
 pub struct Server {
-    dir: tempfile::TempDir,
+    dir: Place,
     bin: PathBuf,
     /// Its TCP port on 127.0.0.1.
     pub port: u16,
@@ -59,10 +81,35 @@ impl Server {
             );
             return Ok(None);
         };
-        let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
+        let dir = Place::Temporary(tempfile::tempdir().map_err(|e| e.to_string())?);
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .and_then(|l| l.local_addr())
+            .map_err(|e| format!("no free TCP port: {e}"))?
+            .port();
+        Self::start_at(bin, dir, port).map(Some)
+    }
+
+    /// Starts a server on `port` whose cluster is kept in `dir` (made there on the first run).
+    ///
+    /// # Errors
+    /// PostgreSQL not installed, the port taken, or a server that does not start, with its log.
+    pub fn start_kept(dir: &std::path::Path, port: u16) -> Result<Self, String> {
+        let bin = server_bin().ok_or(
+            "PostgreSQL is not installed: no /usr/lib/postgresql/N/bin/initdb (Debian: apt-get install -y postgresql)",
+        )?;
+        std::net::TcpListener::bind(("127.0.0.1", port))
+            .map_err(|e| format!("port {port} on 127.0.0.1 cannot be listened on: {e}"))?;
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        Self::start_at(bin, Place::Kept(dir.to_path_buf()), port)
+    }
+
+    fn start_at(bin: PathBuf, dir: Place, port: u16) -> Result<Self, String> {
         let as_nobody = is_root();
         let data = dir.path().join("data");
-        std::fs::create_dir(&data).map_err(|e| e.to_string())?;
+        let fresh = !data.join("PG_VERSION").is_file();
+        if fresh {
+            std::fs::create_dir_all(&data).map_err(|e| e.to_string())?;
+        }
         if as_nobody {
             // The server's user must own the cluster and reach the directory.
             let ok = Command::new("chmod")
@@ -80,10 +127,6 @@ impl Server {
                 ));
             }
         }
-        let port = std::net::TcpListener::bind("127.0.0.1:0")
-            .and_then(|l| l.local_addr())
-            .map_err(|e| format!("no free TCP port: {e}"))?
-            .port();
         let s = Self {
             dir,
             bin,
@@ -91,7 +134,35 @@ impl Server {
             as_nobody,
         };
         let log = s.dir.path().join("server.log");
+        if fresh {
+            s.init(&data)?;
+        }
+        let options = format!(
+            "-p {port} -k {} -c listen_addresses=127.0.0.1 -c fsync=off",
+            s.dir.path().display()
+        );
         s.run(
+            "pg_ctl",
+            &[
+                "-D",
+                &data.display().to_string(),
+                "-o",
+                &options,
+                "-l",
+                &log.display().to_string(),
+                "-w",
+                "-t",
+                "60",
+                "start",
+            ],
+        )
+        .map_err(|e| format!("{e}\n{}", std::fs::read_to_string(&log).unwrap_or_default()))?;
+        Ok(s)
+    }
+
+    /// Makes the cluster in `data`: trusted locally, [`LOGINS`] by password over TCP.
+    fn init(&self, data: &std::path::Path) -> Result<(), String> {
+        self.run(
             "initdb",
             &[
                 "-D",
@@ -115,28 +186,7 @@ impl Server {
                 LOGINS.join(",")
             ),
         )
-        .map_err(|e| e.to_string())?;
-        let options = format!(
-            "-p {port} -k {} -c listen_addresses=127.0.0.1 -c fsync=off",
-            s.dir.path().display()
-        );
-        s.run(
-            "pg_ctl",
-            &[
-                "-D",
-                &data.display().to_string(),
-                "-o",
-                &options,
-                "-l",
-                &log.display().to_string(),
-                "-w",
-                "-t",
-                "60",
-                "start",
-            ],
-        )
-        .map_err(|e| format!("{e}\n{}", std::fs::read_to_string(&log).unwrap_or_default()))?;
-        Ok(Some(s))
+        .map_err(|e| e.to_string())
     }
 
     /// Runs one of the server's programs as the server's user.
@@ -178,10 +228,17 @@ impl Server {
     /// SQL the server refuses.
     #[allow(dead_code)] // not every test file makes databases
     pub fn execute(&self, db: &str, sql: &str) {
+        self.try_execute(db, sql).unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// Runs `sql` as the superuser in database `db`.
+    ///
+    /// # Errors
+    /// The server's refusal, with the SQL.
+    pub fn try_execute(&self, db: &str, sql: &str) -> Result<(), String> {
         let mut c = postgres::Client::connect(&self.url(db), postgres::NoTls)
-            .unwrap_or_else(|e| panic!("{}: {e}", self.url(db)));
-        c.batch_execute(sql)
-            .unwrap_or_else(|e| panic!("{sql}: {e}"));
+            .map_err(|e| format!("{}: {e}", self.url(db)))?;
+        c.batch_execute(sql).map_err(|e| format!("{sql}: {e}"))
     }
 
     /// Makes login `name` (one of [`LOGINS`]) with `password`; a URL of database `db` as it.

@@ -1,0 +1,77 @@
+//! `cargo xtask history`: a local PostgreSQL (Debian's `postgresql`) holding a shared unit
+//! history, for the README's walk where a plant's history server would be: login `station`,
+//! database `calflash`, on 127.0.0.1, its cluster kept between runs.
+
+use std::io::BufRead as _;
+use std::path::PathBuf;
+
+use host_tests::postgres::Server;
+
+use crate::setup;
+
+const USAGE: &str = "usage: cargo xtask history [--port N] [--dir DIR]
+
+  --port N   the server on 127.0.0.1:N (default 5433)
+  --dir DIR  its cluster, kept between runs (default /tmp/calflash-history-N; delete it for
+             an empty history)
+
+Runs until Enter is pressed or its input closes; installs Debian's postgresql when missing
+(as root).";
+
+/// The login and its password the README's walk uses.
+const LOGIN: (&str, &str) = ("station", "calflash");
+
+pub fn run(args: &[String]) -> Result<(), String> {
+    let mut port: u16 = 5433;
+    let mut dir = None;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut value = |name: &str| {
+            it.next()
+                .cloned()
+                .ok_or(format!("{name} needs a value\n\n{USAGE}"))
+        };
+        match a.as_str() {
+            "--port" => {
+                let v = value("--port")?;
+                port = v
+                    .parse()
+                    .map_err(|_| format!("--port: expected a TCP port number, found `{v}`"))?;
+            }
+            "--dir" => dir = Some(PathBuf::from(value("--dir")?)),
+            "-h" | "--help" => return Err(USAGE.to_string()),
+            other => return Err(format!("unknown option `{other}`\n\n{USAGE}")),
+        }
+    }
+    let dir = dir.unwrap_or_else(|| std::env::temp_dir().join(format!("calflash-history-{port}")));
+    setup::postgres()?;
+    let server = Server::start_kept(&dir, port)?;
+    let (login, password) = LOGIN;
+    server.try_execute(
+        "postgres",
+        &format!(
+            "DO $$ BEGIN IF NOT EXISTS (SELECT FROM pg_roles WHERE rolname = '{login}') THEN CREATE ROLE {login} LOGIN PASSWORD '{password}'; END IF; END $$"
+        ),
+    )?;
+    // CREATE DATABASE runs outside a transaction, so not in the block above: made once.
+    if server.try_execute("calflash", "SELECT 1").is_err() {
+        server.try_execute(
+            "postgres",
+            &format!("CREATE DATABASE calflash OWNER {login}"),
+        )?;
+    }
+    println!(
+        "xtask: a shared unit history on 127.0.0.1:{port} (PostgreSQL; its cluster in {})",
+        dir.display()
+    );
+    println!("xtask: it runs until Enter is pressed (or this input closes); in another terminal:");
+    println!("  export CALFLASH_DB=postgres://{login}:{password}@127.0.0.1:{port}/calflash");
+    let mut line = String::new();
+    let _ = std::io::stdin().lock().read_line(&mut line);
+    drop(server);
+    println!(
+        "xtask: the history server stopped; its cluster is kept in {}",
+        dir.display()
+    );
+    Ok(())
+}
