@@ -84,7 +84,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("shell_62_s_at_2_khz_filtered_smoothed_judged", |b| {
         b.iter(|| {
             // The prior over the flight's rates is part of the check's cost.
-            let from = calflash::nav::run::launch(&imu, opts.launch_force)
+            let from = calflash::nav::launch::launch(&imu, opts.launch_force)
                 .unwrap()
                 .1;
             let prior = prior::calibration_prior(&cal, &imu, from)

@@ -980,7 +980,7 @@ fn the_reference_flights_are_named_and_held_and_their_tracks_within_their_bounds
             let (a, b) = (truth[at - 1], truth[at]);
             let u = (v[0] - a[0]) / (b[0] - a[0]);
             let true_at = [0, 1, 2].map(|k| a[1 + k] * (1.0 - u) + b[1 + k] * u);
-            let e = calflash::nav::run::level_position(
+            let e = calflash::nav::frame::level_position(
                 &calflash::nav::input::Fix {
                     t: v[0],
                     lat_lon: (v[1], v[2]),

@@ -314,7 +314,7 @@ fn track_within_three_sigma(dir: &Path) -> f64 {
         let u = (r[0] - a[0]) / (b[0] - a[0]);
         let flight = nalgebra::Vector3::from_fn(|i, _| a[1 + i] * (1.0 - u) + b[1 + i] * u);
         let (lat, lon, h) = site.geodetic(&flight);
-        let e = calflash::nav::run::level_position(
+        let e = calflash::nav::frame::level_position(
             &calflash::nav::input::Fix {
                 t: r[0],
                 lat_lon: (r[1], r[2]),

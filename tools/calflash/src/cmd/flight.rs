@@ -201,7 +201,7 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
             data_hash = Some(record::hex(&cal.data().identity.data_hash));
             // The prior over the flight after launch (at zero input when there is none: the
             // check then says there was no launch).
-            let from = crate::nav::run::launch(&imu, opts.launch_force).map_or(0, |l| l.1);
+            let from = crate::nav::launch::launch(&imu, opts.launch_force).map_or(0, |l| l.1);
             let record = match &args.record {
                 Some(path) => Some((read_record(path)?, path.display().to_string())),
                 None => db_path.as_ref().and_then(|loc| history_record(loc, &cal)),

@@ -8,6 +8,7 @@ use spincal::nav::filter::index;
 use spincal::nav::{NavNoise, SensorErrors};
 
 use super::input::{Fix, ImuSeries, Pressure};
+use super::launch;
 use super::prior::{InFlight, PriorSource};
 use super::run::{self, Options, Pass, Said, Start};
 use super::select::{self, Launched, just_after_launch, select_opened};
@@ -259,7 +260,7 @@ pub fn check(
         });
     }
     let (rest_end, launch_at) =
-        run::launch(imu, opts.launch_force).ok_or(CheckError::NoLaunch(opts.launch_force))?;
+        launch::launch(imu, opts.launch_force).ok_or(CheckError::NoLaunch(opts.launch_force))?;
     let t_launch = imu.t[launch_at];
     let pad: Vec<&Fix> = fixes.iter().filter(|f| f.t < t_launch).collect();
     let origin = {
@@ -303,7 +304,7 @@ pub fn check(
     // grows faster than the filter can linearise from the calibration's prior (0.3 % at
     // 1,900 rad/s is 5.7 rad/s): the spin axis' gyro scale factor starts open, and the flight's
     // own estimate of it is held against the calibration.
-    let (k, spin) = run::spin(imu, launch_at);
+    let (k, spin) = launch::spin(imu, launch_at);
     let mut opened = Opened::default();
     if spin * SPIN_SHIFT_TO_FOLLOW > SPIN_LINEAR_LIMIT {
         let at = index::GYRO_SCALE + k;

@@ -4,7 +4,9 @@
 //! calibration with the filter's own consistency.
 
 pub mod check;
+pub mod frame;
 pub mod input;
+pub mod launch;
 pub mod prior;
 pub mod run;
 pub mod select;

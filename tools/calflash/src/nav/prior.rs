@@ -409,7 +409,7 @@ pub const SPINNING: f64 = 100.0;
 /// error of 0.015 rad/s at 1,500 rad/s, which the bias at zero input leaves out (the
 /// transverse gyro biases' NEES was 5 to 7 over 50 flights with it left out).
 fn across_the_spin(imu: &ImuSeries, from: usize) -> [bool; 3] {
-    let (k, rms) = super::run::spin(imu, from);
+    let (k, rms) = super::launch::spin(imu, from);
     if rms <= SPINNING {
         return [false; 3];
     }

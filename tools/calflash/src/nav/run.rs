@@ -3,11 +3,13 @@
 //! strapdown navigation with its error-state filter, GNSS and barometer updates, and a record
 //! of every epoch for the smoother.
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 use spincal::nav::filter::{Doubt, Estimate, StateMatrix, index};
 use spincal::nav::{Earth, ErrorFilter, NavNoise, Navigation, Prior, SensorErrors, StateVector};
 
+use super::frame::{level_position, level_velocity, pad_height, pressure_height};
 use super::input::{Fix, ImuSeries, Pressure};
+use super::launch::{levelled, spin_axis};
 use crate::sim::flight::atmosphere;
 
 /// How the filter is set up beyond its inputs.
@@ -149,142 +151,6 @@ pub struct Pass {
     /// device's filter does, where an update would ask the covariance to fall by orders of
     /// magnitude at once.
     pub resets: Vec<f64>,
-}
-
-/// How long the specific force must stay over the launch's threshold, s (a gun's setback lasts
-/// a few ms, a rocket's boost seconds; a glitch one sample).
-pub const LAUNCH_HELD: f64 = 2e-3;
-
-/// The launch: the first sample whose specific force exceeds `force` and stays over it for
-/// [`LAUNCH_HELD`] (three samples at least), and the rest before it (at least 0.2 s, up to
-/// 0.1 s before the launch).
-#[must_use]
-pub fn launch(imu: &ImuSeries, force: f64) -> Option<(usize, usize)> {
-    // Sustained: every sample over the next LAUNCH_HELD s (at least two) over `force`, or
-    // flagged (a setback at the accelerometers' rails): a single glitch on the pad is no launch.
-    let over = |i: usize| Vector3::from(imu.f[i]).norm() > force || imu.flagged[i][0];
-    let at = (0..imu.f.len()).find(|&i| {
-        if Vector3::from(imu.f[i]).norm() <= force {
-            return false;
-        }
-        let until = imu.t[i] + LAUNCH_HELD;
-        let mut j = i + 1;
-        let mut count = 1;
-        while j < imu.t.len() && (imu.t[j] <= until || count < 3) {
-            if !over(j) {
-                return false;
-            }
-            count += 1;
-            j += 1;
-        }
-        count >= 3
-    })?;
-    let t_launch = imu.t.get(at).copied()?;
-    let rest_end = imu.t.iter().position(|t| *t > t_launch - 0.1).unwrap_or(0);
-    let t0 = imu.t.first().copied()?;
-    (imu.t.get(rest_end).is_some_and(|t| t - t0 >= 0.2) && rest_end >= 10).then_some((rest_end, at))
-}
-
-/// The attitude of a unit at rest from its mean specific force, with heading `heading` (rad,
-/// a turn about the vertical) and its body axis of greatest rate as the spin axis.
-#[must_use]
-pub fn levelled(imu: &ImuSeries, rest_end: usize, heading: f64) -> UnitQuaternion<f64> {
-    let n = rest_end.max(1) as f64;
-    let mean: Vector3<f64> = imu
-        .f
-        .iter()
-        .take(rest_end)
-        .map(|f| Vector3::from(*f))
-        .sum::<Vector3<f64>>()
-        / n;
-    let up = UnitQuaternion::rotation_between(&mean, &Vector3::z()).unwrap_or_else(|| {
-        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
-    });
-    UnitQuaternion::from_axis_angle(&Vector3::z_axis(), heading) * up
-}
-
-/// The body axis about which the flight turns most after sample `from`, and the root mean
-/// square rate about it there, rad/s (0 without samples).
-#[must_use]
-pub fn spin(imu: &ImuSeries, from: usize) -> (usize, f64) {
-    let mut sum = [0.0; 3];
-    for w in imu.w.iter().skip(from) {
-        for (s, x) in sum.iter_mut().zip(w) {
-            *s += x * x;
-        }
-    }
-    let k = (0..3)
-        .max_by(|a, b| sum[*a].total_cmp(&sum[*b]))
-        .unwrap_or(0);
-    let n = imu.w.len().saturating_sub(from);
-    let rms = if n == 0 {
-        0.0
-    } else {
-        (sum[k] / n as f64).sqrt()
-    };
-    (k, rms)
-}
-
-/// The body axis about which the flight turns most after `from`, as a unit vector ([`spin`]).
-#[must_use]
-pub fn spin_axis(imu: &ImuSeries, from: usize) -> Vector3<f64> {
-    let mut axis = Vector3::zeros();
-    axis[spin(imu, from).0] = 1.0;
-    axis
-}
-
-/// Pressure altitude of the standard atmosphere's troposphere, m.
-#[must_use]
-pub fn pressure_height(pa: f64) -> f64 {
-    const T0: f64 = 288.15;
-    const L: f64 = 0.0065;
-    const P0: f64 = 101_325.0;
-    const R: f64 = 287.052_87;
-    T0 / L * (1.0 - (pa / P0).powf(R * L / atmosphere::G0))
-}
-
-/// The pressure height of the pad: of the mean pressure read more than 0.1 s before the
-/// launch `t_launch`, or of the first reading when none was.
-#[must_use]
-pub fn pad_height(baro: &[Pressure], t_launch: f64) -> f64 {
-    let pad: Vec<f64> = baro
-        .iter()
-        .filter(|b| b.t < t_launch - 0.1)
-        .map(|b| b.pa)
-        .collect();
-    let p = if pad.is_empty() {
-        baro.first().map_or(101_325.0, |b| b.pa)
-    } else {
-        pad.iter().sum::<f64>() / pad.len() as f64
-    };
-    pressure_height(p)
-}
-
-/// A fix's position in the level frame of `origin`.
-#[must_use]
-pub fn level_position(fix: &Fix, origin: (f64, f64, f64)) -> [f64; 3] {
-    let (e, n, u) = map_3d::geodetic2enu(
-        fix.lat_lon.0.to_radians(),
-        fix.lat_lon.1.to_radians(),
-        fix.height.unwrap_or(origin.2),
-        origin.0.to_radians(),
-        origin.1.to_radians(),
-        origin.2,
-        map_3d::Ellipsoid::WGS84,
-    );
-    [e, n, u]
-}
-
-/// A fix's velocity in the level frame of `origin`: a receiver gives east, north and up at its
-/// own position, whose axes turn from the origin's by the distance over the Earth's radius (1
-/// mrad at 6 km: 0.5 m/s of a shell's 500 m/s).
-#[must_use]
-pub fn level_velocity(fix: &Fix, origin: (f64, f64, f64)) -> Option<[f64; 3]> {
-    use crate::sim::flight::site::enu_from_ecef;
-    let v = Vector3::from(fix.velocity?);
-    let at_fix = enu_from_ecef(fix.lat_lon.0, fix.lat_lon.1);
-    let at_origin = enu_from_ecef(origin.0, origin.1);
-    Some((at_origin * at_fix.transpose() * v).into())
 }
 
 /// The whole prior: the sensor errors' from `start`, the rest from the levelling and the pad.

@@ -6,8 +6,9 @@ use nalgebra::Vector3;
 use spincal::nav::StateMatrix;
 use spincal::nav::filter::index;
 
+use super::frame;
 use super::input::{Fix, Pressure};
-use super::run::{self, Pass};
+use super::run::Pass;
 use super::smooth::smooth;
 
 /// The most epochs a figure's series keeps.
@@ -74,7 +75,7 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
     let gnss: Vec<(f64, [f64; 3])> = fixes
         .iter()
         .filter(|f| f.t >= at.launch)
-        .map(|f| (f.t - at.latency, run::level_position(f, at.origin)))
+        .map(|f| (f.t - at.latency, frame::level_position(f, at.origin)))
         .collect();
     let track: Vec<f64> = gnss
         .iter()
@@ -83,11 +84,11 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
             Some((p.x - z[0]).powi(2) + (p.y - z[1]).powi(2))
         })
         .collect();
-    let reference = run::pad_height(baro, at.launch);
+    let reference = frame::pad_height(baro, at.launch);
     let heights: Vec<(f64, f64)> = baro
         .iter()
         .filter(|b| b.t >= at.launch)
-        .map(|b| (b.t, run::pressure_height(b.pa) - reference))
+        .map(|b| (b.t, frame::pressure_height(b.pa) - reference))
         .collect();
     // The barometer gives heights above the pad; the frame's origin is the pad only when a fix
     // was made there: the two are held together after their mean difference (the pad's height
@@ -129,7 +130,7 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
         gnss_height: fixes
             .iter()
             .filter(|f| f.t >= at.launch && f.height.is_some())
-            .map(|f| (f.t - at.latency, run::level_position(f, at.origin)[2]))
+            .map(|f| (f.t - at.latency, frame::level_position(f, at.origin)[2]))
             .collect(),
         gnss,
         baro: heights

@@ -128,7 +128,7 @@ mod tests {
             height: Some(0.0),
             velocity: Some((site.local_enu(lat, lon) * v).into()),
         };
-        let back = crate::nav::run::level_velocity(&fix, (site.latitude, site.longitude, 0.0));
+        let back = crate::nav::frame::level_velocity(&fix, (site.latitude, site.longitude, 0.0));
         let back = Vector3::from(back.unwrap());
         assert!((back - site.to_level() * v).norm() < 1e-9, "{back}");
     }
