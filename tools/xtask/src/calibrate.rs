@@ -28,27 +28,19 @@ fn parse(args: &[String]) -> Result<Job, String> {
     let mut db = None;
     let mut seed = 43;
     let mut codes = mainjob::DEFAULT_CODES;
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut value = |name: &str| {
-            it.next()
-                .cloned()
-                .ok_or(format!("{name} needs a value\n\n{USAGE}"))
-        };
-        match a.as_str() {
-            "--data" => data = Some(PathBuf::from(value("--data")?)),
-            "--out" => out = PathBuf::from(value("--out")?),
-            "--db" => db = Some(PathBuf::from(value("--db")?)),
+    for (name, v) in crate::options(args, USAGE)? {
+        match name {
+            "--data" => data = Some(PathBuf::from(v)),
+            "--out" => out = PathBuf::from(v),
+            "--db" => db = Some(PathBuf::from(v)),
             "--seed" => {
-                let v = value("--seed")?;
                 seed = v
                     .parse()
                     .map_err(|_| format!("--seed: expected a whole number, found `{v}`"))?;
             }
             "--codes" => {
-                codes = mainjob::codes(&value("--codes")?).map_err(|e| format!("--codes: {e}"))?;
+                codes = mainjob::codes(v).map_err(|e| format!("--codes: {e}"))?;
             }
-            "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown option `{other}`\n\n{USAGE}")),
         }
     }

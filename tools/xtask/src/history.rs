@@ -24,22 +24,14 @@ const LOGIN: (&str, &str) = ("station", "calflash");
 pub fn run(args: &[String]) -> Result<(), String> {
     let mut port: u16 = 5433;
     let mut dir = None;
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut value = |name: &str| {
-            it.next()
-                .cloned()
-                .ok_or(format!("{name} needs a value\n\n{USAGE}"))
-        };
-        match a.as_str() {
+    for (name, v) in crate::options(args, USAGE)? {
+        match name {
             "--port" => {
-                let v = value("--port")?;
                 port = v
                     .parse()
                     .map_err(|_| format!("--port: expected a TCP port number, found `{v}`"))?;
             }
-            "--dir" => dir = Some(PathBuf::from(value("--dir")?)),
-            "-h" | "--help" => return Err(USAGE.to_string()),
+            "--dir" => dir = Some(PathBuf::from(v)),
             other => return Err(format!("unknown option `{other}`\n\n{USAGE}")),
         }
     }

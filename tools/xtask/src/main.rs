@@ -61,6 +61,21 @@ fn main() -> ExitCode {
     }
 }
 
+/// A task's options, each `--name VALUE`, as `(name, value)` pairs in their order; `-h` or
+/// `--help` answers with `usage`, as does an option without its value.
+fn options<'a>(args: &'a [String], usage: &str) -> Result<Vec<(&'a str, &'a str)>, String> {
+    let mut out = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        if a == "-h" || a == "--help" {
+            return Err(usage.to_string());
+        }
+        let value = it.next().ok_or(format!("{a} needs a value\n\n{usage}"))?;
+        out.push((a.as_str(), value.as_str()));
+    }
+    Ok(out)
+}
+
 /// The repository root.
 fn root() -> std::path::PathBuf {
     host_tests::qemu::root()

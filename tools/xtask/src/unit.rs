@@ -38,25 +38,17 @@ fn parse(args: &[String]) -> Result<Job, String> {
         serial: "IMU-0042".into(),
         flash: None,
     };
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut value = |name: &str| {
-            it.next()
-                .cloned()
-                .ok_or(format!("{name} needs a value\n\n{USAGE}"))
-        };
-        match a.as_str() {
+    for (name, v) in crate::options(args, USAGE)? {
+        match name {
             "--port" => {
-                let v = value("--port")?;
                 job.port = v
                     .strip_prefix("tcp://127.0.0.1:")
-                    .unwrap_or(&v)
+                    .unwrap_or(v)
                     .parse()
                     .map_err(|_| format!("--port: expected a TCP port number, found `{v}`"))?;
             }
-            "--serial" => job.serial = value("--serial")?,
-            "--flash" => job.flash = Some(PathBuf::from(value("--flash")?)),
-            "-h" | "--help" => return Err(USAGE.to_string()),
+            "--serial" => job.serial = v.to_string(),
+            "--flash" => job.flash = Some(PathBuf::from(v)),
             other => return Err(format!("unknown option `{other}`\n\n{USAGE}")),
         }
     }
