@@ -672,19 +672,26 @@ mod tests {
     use super::{Line, Regressor};
     use nalgebra::{DMatrix, DVector};
 
-    /// The line through a quadratic error over a spin of 1,300 to 1,900 rad/s: the same as a
-    /// least-squares fit of `[1, u]` by SVD, and far from the error's own bias and slope at
-    /// zero input.
-    #[test]
-    fn the_line_through_an_error_is_its_least_squares_fit_over_the_flight() {
+    /// A spin of 1,300 to 1,900 rad/s (one sample a rad/s), its line through regressors
+    /// `1, u, u^2` (a bias, a scale factor and a g-squared term), the line's matrix with the
+    /// first two its own, and the least-squares design `[1, u]` over the spin.
+    fn spin_line() -> (Vec<f64>, Line, DMatrix<f64>, DMatrix<f64>) {
         let us: Vec<f64> = (0..=600).map(|k| 1300.0 + f64::from(k)).collect();
-        // Regressors: 1, u, u^2 (a bias, a scale factor and a g-squared term).
         let mut line = Line::new(3);
         for u in &us {
             line.add(*u, &[1.0, *u, u * u]);
         }
         let a = line.through(&[Some(0), Some(1), None]);
         let x = DMatrix::from_fn(us.len(), 2, |i, j| if j == 0 { 1.0 } else { us[i] });
+        (us, line, a, x)
+    }
+
+    /// The line through a quadratic error over a spin of 1,300 to 1,900 rad/s: the same as a
+    /// least-squares fit of `[1, u]` by SVD, and far from the error's own bias and slope at
+    /// zero input.
+    #[test]
+    fn the_line_through_an_error_is_its_least_squares_fit_over_the_flight() {
+        let (us, _, a, x) = spin_line();
         let svd = x.svd(true, true);
         for (j, r) in [|_: f64| 1.0, |u: f64| u, |u: f64| u * u]
             .iter()
@@ -711,13 +718,7 @@ mod tests {
     /// leaves nothing.
     #[test]
     fn what_the_line_leaves_of_an_error_is_its_mean_squared_residual() {
-        let us: Vec<f64> = (0..=600).map(|k| 1300.0 + f64::from(k)).collect();
-        let mut line = Line::new(3);
-        for u in &us {
-            line.add(*u, &[1.0, *u, u * u]);
-        }
-        let a = line.through(&[Some(0), Some(1), None]);
-        let x = DMatrix::from_fn(us.len(), 2, |i, j| if j == 0 { 1.0 } else { us[i] });
+        let (us, line, a, x) = spin_line();
         let y = DVector::from_iterator(us.len(), us.iter().map(|u| u * u));
         let b = x.clone().svd(true, true).solve(&y, 1e-12).unwrap();
         let mean_square = (&y - &x * b).norm_squared() / us.len() as f64;
