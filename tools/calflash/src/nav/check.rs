@@ -381,7 +381,7 @@ pub fn check(
         // Something moved (a term named, or the observed terms together), or the
         // calibration's prior does not fit the flight: which terms' change at launch the
         // flight needs, opened one at a time by the likelihood of its innovations.
-        let chosen = select_opened(
+        let mut chosen = select_opened(
             imu,
             (fixes, baro),
             (&start, prior, &opened),
@@ -391,7 +391,7 @@ pub fn check(
             alpha,
         );
         if !chosen.alone.0.is_empty() {
-            alone = chosen.alone.clone();
+            alone = std::mem::take(&mut chosen.alone);
         }
         undecided = chosen
             .undecided

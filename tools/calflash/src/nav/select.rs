@@ -154,10 +154,7 @@ pub(super) fn select_opened(
             alone = (
                 trials
                     .iter()
-                    .map(|t| {
-                        let k = index::ACCEL_BIAS + t.term;
-                        (t.term, t.launched.covariance[(k, k)].max(0.0).sqrt())
-                    })
+                    .map(|t| (t.term, t.launched.sigma(t.term)))
                     .collect(),
                 bar,
             );
@@ -179,11 +176,10 @@ pub(super) fn select_opened(
             undecided = close
                 .iter()
                 .map(|t| {
-                    let k = index::ACCEL_BIAS + t.term;
                     (
                         t.term,
                         verdict::values(&t.launched.estimate)[t.term],
-                        t.launched.covariance[(k, k)].max(0.0).sqrt(),
+                        t.launched.sigma(t.term),
                     )
                 })
                 .collect();
@@ -274,6 +270,15 @@ pub(super) struct Launched {
     pub(super) estimate: SensorErrors<f64>,
     /// Its covariance.
     pub(super) covariance: StateMatrix<f64>,
+}
+
+impl Launched {
+    /// Term `i`'s 1-sigma (in [`verdict::TERMS`]' order) just after the launch, as the whole
+    /// flight tells it.
+    pub(super) fn sigma(&self, i: usize) -> f64 {
+        let k = index::ACCEL_BIAS + i;
+        self.covariance[(k, k)].max(0.0).sqrt()
+    }
 }
 
 /// The smoothed sensor errors at the first epoch from the launch on (the launch's own epoch
