@@ -11,9 +11,10 @@ use super::input::{Fix, ImuSeries, Pressure};
 use super::launch;
 use super::prior::{InFlight, PriorSource};
 use super::run::{self, Options, Pass, Said, Start};
-use super::select::{self, Launched, just_after_launch, select_opened};
+use super::select::{self, Launched, just_after_launch, opened_start, select_opened};
 pub use super::select::{POWER, Unseen};
 use super::track::{self, Track};
+use super::unmodelled::Unmodelled;
 use super::verdict::{self, Opened, Verdict};
 
 /// The scale-factor shift a spinning round's check must follow (0.3 %).
@@ -355,10 +356,9 @@ pub fn check(
     }
     // The pass with the calibration's prior: held, the flight's data fit it.
     let launched = just_after_launch(&first);
-    let unmodelled = in_flight.unmodelled();
     let held = verdict::judge(
         (&launched.prior, &launched.prior),
-        (&opened, &unmodelled),
+        (&opened, &[0.0; 12]),
         (&launched.estimate, &launched.covariance),
         &first.said,
         alpha,
@@ -414,6 +414,14 @@ pub fn check(
         };
         match chosen.opened {
             Some((terms, second, second_launched)) => {
+                let unmodelled = unmodelled_in(
+                    in_flight.unmodelled(),
+                    (imu, fixes, baro),
+                    &opened_start(&start, prior, &held, &terms),
+                    opts,
+                    (rest_end, launch_at),
+                    (&terms, &second_launched),
+                );
                 let alone = judge_opened(
                     &second_launched,
                     &second.said,
@@ -479,6 +487,33 @@ pub fn check(
         pass,
         pass_name,
     })
+}
+
+/// The variance what the filter does not model of the calibration's error adds to the opened
+/// `terms`' estimates in the pass flown from `start` (`launched` its estimate just after the
+/// launch): measured by flying it again with each of the remainder's principal directions
+/// added to the samples of the terms' outputs ([`Unmodelled::variance_in`]). Other terms
+/// get none: their estimates are held against the calibration's prior, which holds it.
+fn unmodelled_in(
+    unmodelled: &Unmodelled,
+    (imu, fixes, baro): (&ImuSeries, &[Fix], &[Pressure]),
+    start: &Start,
+    opts: &Options,
+    at: (usize, usize),
+    (terms, launched): (&[usize], &Launched),
+) -> [f64; 12] {
+    let mut outputs: Vec<usize> = terms
+        .iter()
+        .map(|&i| if i < 6 { i } else { i - 6 })
+        .collect();
+    outputs.sort_unstable();
+    outputs.dedup();
+    let fly = |moved: &ImuSeries| {
+        let pass = run::forward(moved, fixes, baro, start, opts, at);
+        verdict::values(&just_after_launch(&pass).estimate)
+    };
+    let all = unmodelled.variance_in(imu, &outputs, fly, &verdict::values(&launched.estimate));
+    std::array::from_fn(|i| if terms.contains(&i) { all[i] } else { 0.0 })
 }
 
 /// The held pass's verdict when its SHIFTED rested on the overall chi-square alone and no

@@ -88,26 +88,11 @@ pub(super) fn select_opened(
     use rayon::prelude::*;
     let end_t = imu.t.last().copied().unwrap_or(0.0);
     let fly = |terms: &[usize]| {
-        let (t, mut w) = start
-            .launch
-            .unwrap_or((StateMatrix::identity(), StateMatrix::zeros()));
-        let mut at_rest = prior;
-        for &i in terms {
-            let k = index::ACCEL_BIAS + i;
-            w[(k, k)] += OPEN_WIDE[i / 3].powi(2);
-            if held.terms[i].shifted {
-                at_rest[(k, k)] *= SHIFT_OPENED;
-            }
-        }
         run::forward(
             imu,
             fixes,
             baro,
-            &Start {
-                prior: at_rest,
-                launch: Some((t, w)),
-                ..*start
-            },
+            &opened_start(start, prior, held, terms),
             opts,
             (rest_end, launch_at),
         )
@@ -196,6 +181,33 @@ pub(super) fn select_opened(
         opened: best.map(|(pass, launched)| (chosen, pass, launched)),
         undecided,
         alone,
+    }
+}
+
+/// The start of a pass with the change at launch of `terms` opened wide ([`OPEN_WIDE`]), and
+/// the prior at rest of those the held pass named widened ([`SHIFT_OPENED`]): `start` with the
+/// calibration's `prior` at rest otherwise.
+pub(super) fn opened_start(
+    start: &Start,
+    prior: StateMatrix<f64>,
+    held: &Verdict,
+    terms: &[usize],
+) -> Start {
+    let (t, mut w) = start
+        .launch
+        .unwrap_or((StateMatrix::identity(), StateMatrix::zeros()));
+    let mut at_rest = prior;
+    for &i in terms {
+        let k = index::ACCEL_BIAS + i;
+        w[(k, k)] += OPEN_WIDE[i / 3].powi(2);
+        if held.terms[i].shifted {
+            at_rest[(k, k)] *= SHIFT_OPENED;
+        }
+    }
+    Start {
+        prior: at_rest,
+        launch: Some((t, w)),
+        ..*start
     }
 }
 

@@ -306,7 +306,7 @@ fn named_step_down(
 /// The verdict from the prior `p0`, the final estimate and covariance, and the innovations, at
 /// the false-alarm rate `alpha` (over all terms together). `unmodelled` is each term's
 /// variance from what the filter does not model of the calibration's error
-/// ([`InFlight::unmodelled`](super::prior::InFlight::unmodelled)): an opened term, no longer
+/// ([`Unmodelled::variance_in`](super::unmodelled::Unmodelled::variance_in)): an opened term, no longer
 /// anchored by its prior, carries it in its stated 1-sigma and in the variance it is tested
 /// with.
 #[must_use]
