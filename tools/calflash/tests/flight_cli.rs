@@ -961,11 +961,16 @@ fn the_reference_flights_are_named_and_held_and_their_tracks_within_their_bounds
                 assert!(out.contains("CANNOT TELL"), "{out}");
             }
         }
-        // A term named is not among those the flight could not see.
+        // A term named is not among those the flight could not see, and one that is has one
+        // figure of what the flight alone tells of it: the table's is the list's.
         for u in v["unseen"].as_array().unwrap() {
-            assert!(
-                !named.contains(&u["term"].as_str().unwrap()),
-                "{case}: {u} named and unseen"
+            let name = u["term"].as_str().unwrap();
+            assert!(!named.contains(&name), "{case}: {u} named and unseen");
+            let table = term(&v, name)["flight_sigma"].as_f64();
+            assert_eq!(
+                table,
+                u["sigma"].as_f64(),
+                "{case}: {name}'s flight alone in the table and the list"
             );
         }
         // The smoothed track against the truth (its 200 Hz rows), epoch by epoch.

@@ -163,6 +163,8 @@ pub struct Checked {
     pub pass: Pass,
     /// Which pass it is, in words.
     pub pass_name: &'static str,
+    /// What the "flight alone" 1-sigma of the terms is ([`ALONE_OPENED`] or [`ALONE_ADDED`]).
+    pub alone_from: &'static str,
     /// The smoothed flight against GNSS and the barometer.
     pub track: Track,
     /// Heading at rest and its 1-sigma, degrees.
@@ -375,6 +377,7 @@ pub fn check(
             .collect(),
         select::chi_square_1_bar(alpha / closed as f64),
     );
+    let mut searched = false;
     let (verdict, pass, pass_name) = if held.word == "HELD" {
         (held, first, with_prior)
     } else {
@@ -392,6 +395,7 @@ pub fn check(
         );
         if !chosen.alone.0.is_empty() {
             alone = std::mem::take(&mut chosen.alone);
+            searched = true;
         }
         undecided = chosen
             .undecided
@@ -452,7 +456,7 @@ pub fn check(
     if !undecided.is_empty() {
         let names: Vec<&str> = undecided.iter().map(|u| u.0).collect();
         verdict.why = format!(
-            "{}; the flight cannot tell which of {} moved",
+            "{}; the flight cannot tell what moved ({} each explain it alone)",
             verdict.why,
             names.join(", ")
         );
@@ -464,6 +468,17 @@ pub fn check(
         .map(|t| (t.name, t.estimate, t.sigma))
         .collect();
     let unseen = select::unseen(&alone, &shifts, &undecided);
+    // One figure per term: where the flight was searched, a term's "flight alone" is its
+    // change opened alone (as the list of what the flight could not have seen states it), not
+    // the held pass's information, which with every other term anchored said 8.0e-4 rad/s of
+    // the reference rocket's gyro bias y where its pass opened alone says 1.6e-3.
+    if searched {
+        for &(i, sd) in &alone.0 {
+            if !verdict.terms[i].shifted {
+                verdict.terms[i].flight_sigma = Some(sd);
+            }
+        }
+    }
     let track = track::track(
         &pass,
         (fixes, baro),
@@ -486,6 +501,7 @@ pub fn check(
         rest_seconds: imu.t[rest_end] - t0,
         pass,
         pass_name,
+        alone_from: if searched { ALONE_OPENED } else { ALONE_ADDED },
     })
 }
 
@@ -515,6 +531,12 @@ fn unmodelled_in(
     let all = unmodelled.variance_in(imu, &outputs, fly, &verdict::values(&launched.estimate));
     std::array::from_fn(|i| if terms.contains(&i) { all[i] } else { 0.0 })
 }
+
+/// The flight alone's 1-sigma of a term where the flight was searched for what moved.
+pub const ALONE_OPENED: &str = "each term's change at launch opened alone, one pass each, as the search for what moved flew it (a named term: its own pass's)";
+
+/// The flight alone's 1-sigma of a term where the pass with the calibration's prior answered.
+pub const ALONE_ADDED: &str = "what the flight's data add to the calibration's prior of the term, as information (one over the variance after, less one over the variance before)";
 
 /// The held pass's verdict when its SHIFTED rested on the overall chi-square alone and no
 /// term's change at launch, opened, fits the flight better by the bar: HELD, saying so.

@@ -86,3 +86,59 @@ pub fn spin_axis(imu: &ImuSeries, from: usize) -> Vector3<f64> {
     axis[spin(imu, from).0] = 1.0;
     axis
 }
+
+#[cfg(test)]
+mod tests {
+    use super::launch;
+    use crate::nav::input::ImuSeries;
+
+    /// One second on the pad at 1 kHz, then a setback: `glitch` puts one sample of 30 g on the
+    /// pad at 0.5 s, `flagged` has the setback's first samples at the rails (flagged, read
+    /// low).
+    fn pad_then_setback(glitch: bool, flagged: bool) -> ImuSeries {
+        let n = 1_500;
+        let t: Vec<f64> = (0..n).map(|k| f64::from(k) * 1e-3).collect();
+        let f = t
+            .iter()
+            .enumerate()
+            .map(|(k, t)| {
+                if glitch && k == 500 {
+                    [300.0, 0.0, 0.0]
+                } else if *t >= 1.0 && !(flagged && (1_001..1_004).contains(&k)) {
+                    [400.0, 0.0, 9.8]
+                } else {
+                    [0.0, 0.0, 9.8]
+                }
+            })
+            .collect();
+        let flagged = (0..n)
+            .map(|k| [flagged && (1_001..1_004).contains(&k), false])
+            .collect();
+        ImuSeries {
+            t,
+            f,
+            w: vec![[0.0; 3]; n as usize],
+            flagged,
+            temperature: None,
+        }
+    }
+
+    /// A single glitch on the pad is no launch; the sustained setback is, through samples at
+    /// the rails (flagged) as well.
+    #[test]
+    fn a_single_glitch_on_the_pad_is_not_the_launch() {
+        let force = 2.0 * 9.80665;
+        assert_eq!(
+            launch(&pad_then_setback(false, false), force),
+            Some((901, 1_000))
+        );
+        assert_eq!(
+            launch(&pad_then_setback(true, false), force),
+            Some((901, 1_000))
+        );
+        assert_eq!(
+            launch(&pad_then_setback(true, true), force),
+            Some((901, 1_000))
+        );
+    }
+}

@@ -107,6 +107,7 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
             s,
             "  (z and p: each term on its own; SHIFTED: the terms a step-down test names, each tested given the shifts already named, as a shifted term drags the estimates its prior correlates with)"
         );
+        let _ = writeln!(s, "  (the flight alone: {})", c.alone_from);
         for (name, x, sd) in &c.shifts {
             let _ = writeln!(
                 s,
@@ -173,7 +174,7 @@ pub fn undecided(c: &Checked) -> Option<String> {
         .map(|(n, x, sd)| format!("{n} ({x:+.3e} +- {sd:.2e})"))
         .collect();
     Some(format!(
-        "the flight cannot tell which moved: each of {} alone explains it (its change opened alone), none fits the flight 6.8 times better than the others",
+        "the flight cannot tell what moved: each of {} alone explains it (its change opened alone), none fits the flight 6.8 times better than the others; they are the candidates the flight offers, not findings: a change of another term too small for it to name (listed below) may be what moved",
         each.join(", ")
     ))
 }
@@ -542,8 +543,9 @@ fn terms_table(c: &Checked) -> String {
     use super::page::esc;
     let v = &c.verdict;
     let mut t = format!(
-        "<h2>Sensor errors at launch</h2>\n<p>From {}: each term's smoothed estimate just after the launch, tested against the calibration's 1-sigma of it over the flight.</p>\n<table class=\"terms\">\n<tr><th>term</th><th>unit</th><th>calibration 1-sigma</th><th>in flight</th><th>1-sigma</th><th>the flight alone, 1-sigma</th><th>z</th><th>p</th><th></th></tr>\n",
-        esc(c.pass_name)
+        "<h2>Sensor errors at launch</h2>\n<p>From {}: each term's smoothed estimate just after the launch, tested against the calibration's 1-sigma of it over the flight. The flight alone: {}.</p>\n<table class=\"terms\">\n<tr><th>term</th><th>unit</th><th>calibration 1-sigma</th><th>in flight</th><th>1-sigma</th><th>the flight alone, 1-sigma</th><th>z</th><th>p</th><th></th></tr>\n",
+        esc(c.pass_name),
+        esc(c.alone_from)
     );
     for term in &v.terms {
         let (z, p) = match (term.z, term.p) {
