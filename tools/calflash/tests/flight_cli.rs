@@ -954,8 +954,9 @@ fn the_reference_flights_are_named_and_held_and_their_tracks_within_their_bounds
                     from > 5.0e-3 && from >= 4.0 * sd,
                     "{case}: gyro bias y named from {from} (1-sigma {sd}), not named at 5e-3: {out}"
                 );
+                let cal = u["calibration"].as_f64().unwrap();
                 let line = format!(
-                    "| gyro bias y | named from {from:.2e} rad/s | the flight's own 1-sigma {sd:.2e} |"
+                    "| gyro bias y | named from {from:.2e} rad/s | the flight's own 1-sigma {sd:.2e}, the calibration's {cal:.2e} |"
                 );
                 assert!(out.contains(&line), "{line} not in {out}");
                 assert!(out.contains("CANNOT TELL"), "{out}");

@@ -43,6 +43,8 @@ struct Term {
     name: String,
     estimate: f64,
     sigma: f64,
+    /// The calibration's own 1-sigma of it in flight.
+    calibration: f64,
     /// Tested by the verdict (the flight determines it).
     observed: bool,
     truth: f64,
@@ -246,6 +248,7 @@ fn fly(seed: u64, shift: &str, prior: Prior) -> Flight {
             Term {
                 estimate,
                 sigma,
+                calibration: t["prior_sigma"].as_f64().unwrap(),
                 observed: !t["z"].is_null(),
                 shifted: t["shifted"].as_bool().unwrap(),
                 truth,
@@ -476,7 +479,7 @@ fn average_nees_over_fifty_flights_of_each_kind() {
                 if shift.is_empty() { "none" } else { shift }
             );
             println!(
-                "| term | flights observing it | average NEES | 95 % band | largest | mean and spread of (estimate - truth) / sigma |"
+                "| term | flights observing it | average NEES | 95 % band | largest | mean and spread of (estimate - truth) / sigma | median stated 1-sigma | median calibration 1-sigma in flight |"
             );
             for name in flights[0].iter().map(|t| t.name.clone()) {
                 print_nees(&flights, &name);
@@ -505,8 +508,14 @@ fn print_nees(flights: &[Vec<Term>], name: &str) {
     let mean = z.iter().sum::<f64>() / m;
     let spread = (z.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt();
     let (lo, hi) = band(m);
+    let mut sigmas: Vec<f64> = seen.iter().map(|t| t.sigma).collect();
+    sigmas.sort_by(f64::total_cmp);
+    let median = sigmas[sigmas.len() / 2];
+    let mut cal: Vec<f64> = seen.iter().map(|t| t.calibration).collect();
+    cal.sort_by(f64::total_cmp);
+    let cal = cal[cal.len() / 2];
     println!(
-        "| {name} | {} of {} | {avg:.2} | {lo:.2} to {hi:.2} | {largest:.1} | {mean:+.2}, {spread:.2} |",
+        "| {name} | {} of {} | {avg:.2} | {lo:.2} to {hi:.2} | {largest:.1} | {mean:+.2}, {spread:.2} | {median:.3e} | {cal:.3e} |",
         seen.len(),
         flights.len()
     );

@@ -467,7 +467,8 @@ pub fn check(
         .filter(|t| t.shifted)
         .map(|t| (t.name, t.estimate, t.sigma))
         .collect();
-    let unseen = select::unseen(&alone, &shifts, &undecided);
+    let calibration: [f64; 12] = std::array::from_fn(|i| verdict.terms[i].prior_sigma);
+    let unseen = select::unseen(&alone, &calibration, &shifts, &undecided);
     // One figure per term: where the flight was searched, a term's "flight alone" is its
     // change opened alone (as the list of what the flight could not have seen states it), not
     // the held pass's information, which with every other term anchored said 8.0e-4 rad/s of

@@ -31,7 +31,11 @@ pub struct Unseen {
     /// The flight's own 1-sigma of its change at launch (the term opened alone, every other
     /// held to the calibration).
     pub sigma: f64,
-    /// The smallest change the flight would have named: `(sqrt(bar) + z_power) * sigma`.
+    /// The calibration's own 1-sigma of the term in flight: a change at launch is held against
+    /// it as well as against the flight's.
+    pub calibration: f64,
+    /// The smallest change the flight would have named:
+    /// `(sqrt(bar) + z_power) * sqrt(sigma^2 + calibration^2)`.
     pub smallest: f64,
 }
 
@@ -252,6 +256,7 @@ pub(super) fn chi_square_1_bar(alpha: f64) -> f64 {
 /// the bar).
 pub(super) fn unseen(
     (alone, bar): &(Vec<(usize, f64)>, f64),
+    calibration: &[f64; 12],
     shifts: &[(&'static str, f64, f64)],
     undecided: &[(&'static str, f64, f64)],
 ) -> Vec<Unseen> {
@@ -261,14 +266,15 @@ pub(super) fn unseen(
     );
     alone
         .iter()
-        .map(|&(i, sigma)| (verdict::TERMS[i], sigma))
-        .filter(|(name, _)| {
+        .map(|&(i, sigma)| (verdict::TERMS[i], sigma, calibration[i]))
+        .filter(|(name, ..)| {
             !shifts.iter().any(|s| s.0 == *name) && !undecided.iter().any(|u| u.0 == *name)
         })
-        .map(|(term, sigma)| Unseen {
+        .map(|(term, sigma, calibration)| Unseen {
             term,
             sigma,
-            smallest: (bar.sqrt() + z_power) * sigma,
+            calibration,
+            smallest: (bar.sqrt() + z_power) * sigma.hypot(calibration),
         })
         .collect()
 }
@@ -325,14 +331,18 @@ mod tests {
     use super::{POWER, chi_square_1_bar, unseen};
 
     /// The smallest change named is the bar's root plus the power's normal quantile, in the
-    /// term's own 1-sigma; a term named or undecided is not listed.
+    /// 1-sigma its test has (the flight's and the calibration's together); a term named or
+    /// undecided is not listed.
     #[test]
     fn the_smallest_change_named_is_baardas_and_named_terms_are_left_out() {
         let bar = chi_square_1_bar(0.05);
         assert!((bar - 3.841).abs() < 1e-3, "{bar}");
         let alone = (vec![(0, 2.0), (4, 1e-3), (9, 3e-6)], bar);
+        let mut calibration = [0.0; 12];
+        calibration[4] = 0.75e-3;
         let u = unseen(
             &alone,
+            &calibration,
             &[("accel bias x", 0.1, 0.01)],
             &[("gyro scale x", 1e-5, 3e-6)],
         );
@@ -340,11 +350,7 @@ mod tests {
         assert_eq!(u[0].term, "gyro bias y");
         assert!((POWER - 0.95).abs() < 1e-12);
         // 1.960 + 1.645 at alpha 0.05 and power 0.95.
-        assert!(
-            (u[0].smallest / u[0].sigma - 3.605).abs() < 1e-3,
-            "{:?}",
-            u[0]
-        );
+        assert!((u[0].smallest / 1.25e-3 - 3.605).abs() < 1e-3, "{:?}", u[0]);
         assert!((u[0].sigma - 1e-3).abs() < 1e-15);
     }
 }

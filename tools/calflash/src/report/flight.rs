@@ -120,10 +120,10 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
         if !c.unseen.is_empty() {
             let _ = writeln!(s, "  not named, {UNSEEN_HEAD}:");
             for u in &c.unseen {
-                let [from, sd] = unseen_cells(c, u);
+                let [from, sd, cal] = unseen_cells(c, u);
                 let _ = writeln!(
                     s,
-                    "  | {} | named from {from} | the flight's own 1-sigma {sd} |",
+                    "  | {} | named from {from} | the flight's own 1-sigma {sd}, the calibration's {cal} |",
                     u.term
                 );
             }
@@ -146,10 +146,11 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
 }
 
 /// What the list of terms not named says.
-const UNSEEN_HEAD: &str = "the smallest change at launch this flight names 19 times in 20 (each term's change opened alone, at the bar it was held to): a smaller one it CANNOT TELL";
+const UNSEEN_HEAD: &str = "the smallest change at launch this flight names 19 times in 20 (each term's change opened alone, held against the flight's own 1-sigma of it and the calibration's, at the bar it was held to): a smaller one it CANNOT TELL from the calibration's own error and the flight's noise";
 
-/// A term not named: the smallest change the flight names and its own 1-sigma, with the unit.
-fn unseen_cells(c: &Checked, u: &crate::nav::check::Unseen) -> [String; 2] {
+/// A term not named: the smallest change the flight names, with the unit, its own 1-sigma and
+/// the calibration's.
+fn unseen_cells(c: &Checked, u: &crate::nav::check::Unseen) -> [String; 3] {
     let unit = c
         .verdict
         .terms
@@ -159,6 +160,7 @@ fn unseen_cells(c: &Checked, u: &crate::nav::check::Unseen) -> [String; 2] {
     [
         format!("{:.2e} {unit}", u.smallest).trim_end().to_string(),
         format!("{:.2e}", u.sigma),
+        format!("{:.2e}", u.calibration),
     ]
 }
 
@@ -585,17 +587,18 @@ fn terms_table(c: &Checked) -> String {
     if !c.unseen.is_empty() {
         let _ = writeln!(
             t,
-            "<p>Terms not named, {}.</p>\n<table><tr><th>term</th><th>named from</th><th>the flight's own 1-sigma</th></tr>",
+            "<p>Terms not named, {}.</p>\n<table><tr><th>term</th><th>named from</th><th>the flight's own 1-sigma</th><th>the calibration's 1-sigma in flight</th></tr>",
             esc(UNSEEN_HEAD)
         );
         for u in &c.unseen {
-            let [from, sd] = unseen_cells(c, u);
+            let [from, sd, cal] = unseen_cells(c, u);
             let _ = writeln!(
                 t,
-                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
                 esc(u.term),
                 esc(&from),
-                esc(&sd)
+                esc(&sd),
+                esc(&cal)
             );
         }
         t.push_str("</table>\n");
