@@ -1,4 +1,3 @@
-
 use super::*;
 
 fn unit(k: usize, bias: f64) -> Unit {

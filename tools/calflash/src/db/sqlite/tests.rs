@@ -1,4 +1,3 @@
-
 use super::super::{Db, Error, Location};
 use super::*;
 

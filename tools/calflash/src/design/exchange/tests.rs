@@ -1,4 +1,3 @@
-
 use super::*;
 
 fn grid(k: usize) -> Vec<f64> {

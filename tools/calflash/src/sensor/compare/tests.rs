@@ -1,4 +1,3 @@
-
 use super::*;
 
 fn one(kind: &str, value: f64) -> Estimates {

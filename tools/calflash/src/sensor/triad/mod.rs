@@ -10,19 +10,22 @@
 //! regressions (Gauss-Newton for the lever arms). The device applies
 //! `y = S^-1 (u - (b - center))`, `G = S^-1 g`, and the lever arms `r_i` as fitted.
 
-use nalgebra::Matrix3;
 use spincal::model::{
-    BoundedVec, CalibrationData, ImuOutputCovariance, MAX_TEMPERATURES, Quantity, Span,
-    TemperatureModel, TriadCovariance, TriadSet,
+    BoundedVec, CalibrationData, ImuOutputCovariance, Quantity, Span, TemperatureModel,
+    TriadCovariance, TriadSet,
 };
 
 mod assemble;
+mod earth;
 mod error;
 mod fit;
 mod sets;
+mod span;
 pub mod stage_two;
 pub mod still;
 mod thermal;
+use earth::{add_earth_rate, earth_neglected};
+use span::{calibrated_ranges, temperature_points};
 
 pub use self::error::TriadError;
 use self::fit::fit_triad;
@@ -135,172 +138,6 @@ struct TriadModel {
     lever: Option<[[f64; 3]; 3]>,
     centers: [f64; 3],
     ranges: [Span; 3],
-}
-
-/// Adds the Earth's rate at `station` to the reference rate of every observation
-/// (`crate::earth`): a still one needs the fixture's mark `h_*`.
-fn add_earth_rate(
-    table: &mut Table,
-    station: &crate::earth::Station,
-    path: &std::path::Path,
-) -> Result<(), WorkflowError> {
-    let get = |t: &Table, names: [&str; 3], r: usize| -> [f64; 3] {
-        std::array::from_fn(|k| t.column(names[k]).map_or(0.0, |c| c[r]))
-    };
-    let mut w: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::with_capacity(table.len()));
-    for r in 0..table.len() {
-        let (f, wr, h) = (
-            get(table, col::F, r),
-            get(table, col::W, r),
-            get(table, col::H, r),
-        );
-        let e = station.rate_in_body(f, wr, h).map_err(|source| {
-            WorkflowError::triad(
-                path,
-                TriadError::EarthRate {
-                    line: table.lines[r],
-                    source,
-                },
-            )
-        })?;
-        for k in 0..3 {
-            w[k].push(wr[k] + e[k]);
-        }
-    }
-    for (name, values) in col::W.iter().zip(w) {
-        table.set_column(name, values);
-    }
-    Ok(())
-}
-
-/// Without a station the Earth's rate is left out of the gyro's reference: how large it is
-/// against the gyro bias's standard error. A REVIEW when the gyro resolves it.
-fn earth_neglected(fits: &[AxisFit; 3]) -> super::Finding {
-    let (axis, se) = fits
-        .iter()
-        .map(|f| {
-            let i = f.index("1").unwrap_or(0);
-            (f.output.clone(), f.fit.std_errors[i] / f.coef(&f.own).abs())
-        })
-        .fold((String::new(), f64::INFINITY), |best, x| {
-            if x.1 < best.1 { x } else { best }
-        });
-    let ratio = crate::earth::RATE / se;
-    let text = format!(
-        "{axis}: the Earth's rate ({:.3e} rad/s, 15.04 deg/h), not in the model, is {ratio:.2} times the gyro bias's standard error ({se:.2e} rad/s)",
-        crate::earth::RATE
-    );
-    if ratio >= 1.0 {
-        super::Finding {
-            verdict: super::Verdict::Review,
-            text: format!(
-                "{text}: the bias and misalignment absorb it; give --latitude and --heading, and the fixture's mark h_x h_y h_z of each still position"
-            ),
-        }
-    } else {
-        super::Finding {
-            verdict: super::Verdict::Accept,
-            text: format!("{text}: below what this gyro resolves"),
-        }
-    }
-}
-
-/// The calibrated range of each output: what the device range-checks. For a gyro, the
-/// reference rates; for an accelerometer, the sensor-domain force `f + e(w, dw)` the axes
-/// sensed (`spincal::model::rotation`), centripetal included, over every observation: a rate
-/// table that drove an axis past the centrifuge's levels calibrated it there.
-fn calibrated_ranges(
-    spec: &Spec<'_>,
-    table: &Table,
-    s: &Matrix3<f64>,
-    lever_arm: Option<&[[f64; 3]; 3]>,
-) -> [Span; 3] {
-    let get = |names: [&str; 3], r: usize| -> [f64; 3] {
-        std::array::from_fn(|k| table.column(names[k]).map_or(0.0, |c| c[r]))
-    };
-    let inv = s.try_inverse();
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for r in 0..table.len() {
-        let mut x = get(spec.inputs, r);
-        if let (Some(arm), Some(inv)) = (lever_arm, &inv) {
-            let (f, w, dw) = (get(col::F, r), get(col::W, r), get(col::DW, r));
-            // z_i - s_i . f: what axis i sensed of its lever terms; S^-1 of it.
-            let d: [f64; 3] = std::array::from_fn(|i| {
-                let at = spincal::model::rotation::force_at(&f, &w, &dw, &arm[i]);
-                (0..3).map(|j| s[(i, j)] * (at[j] - f[j])).sum()
-            });
-            for (j, xj) in x.iter_mut().enumerate() {
-                *xj += (0..3).map(|k| inv[(j, k)] * d[k]).sum::<f64>();
-            }
-        }
-        for j in 0..3 {
-            lo[j] = lo[j].min(x[j]);
-            hi[j] = hi[j].max(x[j]);
-        }
-    }
-    std::array::from_fn(|j| Span::new(lo[j] as f32, hi[j] as f32))
-}
-
-/// How the temperature enters the model: along a ramp (`--thermal continuous`, or `auto` when
-/// the temperatures are not held at setpoints), with the table prepared for the continuous
-/// model; else at the table's points (temperature and voltage setpoints). `has` says whether
-/// the table has a temperature and a voltage column.
-fn temperature_points(
-    table: &mut Table,
-    opts: &Options,
-    has: (bool, bool),
-    notes: &mut Vec<String>,
-) -> Result<Temperature, WorkflowError> {
-    let path = &opts.file;
-    let (has_temp, has_volt) = has;
-    let layout = table::layout(
-        table,
-        has_temp.then_some(col::TEMP),
-        has_volt.then_some(col::VOLT),
-    );
-    let spread = || {
-        let temps = table.column(col::TEMP).unwrap_or_default();
-        temps
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
-                (a.min(*t), b.max(*t))
-            })
-    };
-    let setpoints = layout.as_ref().is_ok_and(|l| {
-        l.temps.len() <= MAX_TEMPERATURES && table::exact_setpoints(table, col::TEMP, l)
-    });
-    let continuous = match opts.thermal {
-        Thermal::Table => {
-            if !setpoints && table.varies(col::TEMP) {
-                let (lo, hi) = spread();
-                return Err(WorkflowError::triad(
-                    path,
-                    TriadError::NotSetpoints { lo, hi },
-                ));
-            }
-            false
-        }
-        Thermal::Continuous => true,
-        Thermal::Auto => table.varies(col::TEMP) && !setpoints,
-    };
-    notes.extend(super::thermal::unused_order(
-        opts.thermal_order,
-        continuous,
-        table.varies(col::TEMP),
-    ));
-    if continuous {
-        if table.varies(col::VOLT) {
-            return Err(WorkflowError::triad(path, TriadError::VoltageVaries));
-        }
-        return Ok(Temperature::Continuous(continuous::prepare(table, notes)?));
-    }
-    layout
-        .map(Temperature::Points)
-        .map_err(|source| WorkflowError::Grid {
-            path: path.to_path_buf(),
-            source,
-        })
 }
 
 /// The observations `kind` needs from the file, with the references, temperature and voltage
@@ -672,81 +509,4 @@ fn finish(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn written(name: &str, text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
-        let dir = tempfile::tempdir().unwrap();
-        let file = dir.path().join(name);
-        std::fs::write(&file, text).unwrap();
-        (dir, file)
-    }
-
-    #[test]
-    fn a_file_or_plan_the_triad_workflow_cannot_use_is_a_typed_error() {
-        let (_dir, file) = written("nogyro.csv", "f_x,f_y,f_z,a_x,a_y,a_z\n0,0,9.8,1,2,3\n");
-        let e = calibrate(&Options::new(&file, "U-1"), Kind::Gyro, false).unwrap_err();
-        match &e {
-            WorkflowError::Triad {
-                source: TriadError::MissingColumns { missing, .. },
-                ..
-            } => assert_eq!(missing, &["w_x", "w_y", "w_z", "g_x", "g_y", "g_z"]),
-            other => panic!("{other:?}"),
-        }
-        assert!(e.to_string().contains("missing the columns w_x"), "{e}");
-
-        // Six positions that never turn the unit about y's input: f_y is always zero.
-        let mut text = String::from("f_x,f_y,f_z,a_x,a_y,a_z\n");
-        for (fx, fz) in [
-            (9.8, 0.0),
-            (-9.8, 0.0),
-            (0.0, 9.8),
-            (0.0, -9.8),
-            (6.9, 6.9),
-            (-6.9, 6.9),
-        ] {
-            for k in 0..3 {
-                let n = f64::from(k) * 0.01;
-                text += &format!(
-                    "{fx},0,{fz},{},{},{}\n",
-                    32768.0 + 1000.0 * fx + n,
-                    32768.0 + n,
-                    32768.0 + 1000.0 * fz - n
-                );
-            }
-        }
-        let (_dir, file) = written("flat.csv", &text);
-        let e = calibrate(&Options::new(&file, "U-1"), Kind::Accel, false).unwrap_err();
-        assert!(
-            matches!(
-                &e,
-                WorkflowError::Fit {
-                    source: crate::stats::FitError::RankDeficient { .. },
-                    ..
-                }
-            ),
-            "{e:?}"
-        );
-        assert!(
-            e.to_string()
-                .ends_with("a_x at the single table point: f_y is not observable: it is 0 for every observation"),
-            "{e}"
-        );
-
-        // A still ramp's pose has no known heading: the error names the recording.
-        let mut opts = Options::new(&file, "U-1");
-        opts.still_ramp = Some("still.csv".into());
-        opts.earth = Some(crate::earth::Station::new(45.0, 0.0).unwrap());
-        let e = calibrate(&opts, Kind::Accel, false).unwrap_err();
-        assert!(
-            matches!(
-                &e,
-                WorkflowError::Triad {
-                    path,
-                    source: TriadError::StillRampWithLatitude,
-                } if path == std::path::Path::new("still.csv")
-            ),
-            "{e:?}"
-        );
-    }
-}
+mod tests;

@@ -1,4 +1,3 @@
-
 use super::super::header::{ACCEL, GYRO, axis};
 use super::super::tests::write;
 use super::*;
