@@ -1,6 +1,6 @@
 //! The straight line through one output's calibration error over a flight: the filter models
 //! each output's error as `b + s u`, and the calibration's error `theta' phi` over the flight's
-//! samples is that line plus what it leaves ([`Line::residual`]). See [`super::prior`].
+//! samples is that line plus what it leaves (its scatter about the line, [`Line::scatter`]). See [`super::prior`].
 
 use nalgebra::{DMatrix, DVector};
 use spincal::correct::AnyImuCorrector;

@@ -7,7 +7,7 @@ pub mod check;
 pub mod frame;
 pub mod input;
 pub mod launch;
-pub mod line;
+mod line;
 pub mod prior;
 pub mod run;
 pub mod select;

@@ -15,7 +15,7 @@
 //! centripetal force across it into 0.13 m/s^2 along it: a prior taken at rest would state both
 //! a few times too small. [`InFlight`] holds both lines, and the filter passes from the one to
 //! the other at launch. The axes across a spin keep the line at rest
-//! ([`super::line::SPINNING`]).
+//! (a flight whose rate about its spin axis exceeds 100 rad/s RMS).
 
 use nalgebra::DMatrix;
 use spincal::correct::AnyImuCorrector;

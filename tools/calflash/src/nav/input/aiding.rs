@@ -14,7 +14,7 @@ pub const NO_FIX_MARKER: f64 = 193.0;
 /// position: a receiver holding it).
 ///
 /// # Errors
-/// As [`corrected`]; a latitude or longitude out of range.
+/// As [`super::corrected`]; a latitude or longitude out of range.
 pub fn gnss(path: &Path, max_rows: usize) -> Result<(Vec<Fix>, FixCounts), InputError> {
     let mut table = Table::open(path, max_rows)?;
     let what =
@@ -158,7 +158,7 @@ fn misread_units(fixes: &[Fix]) -> Option<String> {
 /// Reads a barometer: `t` (or `ts`) and `P` (Pa).
 ///
 /// # Errors
-/// As [`corrected`]; a pressure outside 1 to 120,000 Pa.
+/// As [`super::corrected`]; a pressure outside 1 to 120,000 Pa.
 pub fn baro(path: &Path, max_rows: usize) -> Result<Vec<Pressure>, InputError> {
     let mut table = Table::open(path, max_rows)?;
     let what = "t and P (static pressure, Pa)";
