@@ -19,8 +19,10 @@
 use nalgebra::{Matrix3, RealField, SMatrix, SVector, Vector3};
 
 use super::earth::Earth;
-use super::real::{Real, rotation};
-use super::strapdown::{Interval, Navigation, Step};
+use super::real::Real;
+use super::strapdown::{Interval, Step};
+
+pub use super::estimate::{Estimate, SensorErrors};
 
 /// The number of error states.
 pub const STATES: usize = 22;
@@ -74,103 +76,6 @@ impl<T: RealField + Copy> Transition<T> {
 }
 /// A vector over the error states.
 pub type StateVector<T> = SVector<T, STATES>;
-
-/// The residual errors of the corrected samples and the barometer, as estimated.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SensorErrors<T: RealField + Copy> {
-    /// Accelerometer biases, m/s^2.
-    pub accel_bias: Vector3<T>,
-    /// Gyro biases, rad/s.
-    pub gyro_bias: Vector3<T>,
-    /// Accelerometer scale factors (relative: 0.001 reads 0.1 % high).
-    pub accel_scale: Vector3<T>,
-    /// Gyro scale factors.
-    pub gyro_scale: Vector3<T>,
-    /// The barometer's height bias, m.
-    pub baro_bias: T,
-}
-
-impl<T: RealField + Copy> Default for SensorErrors<T> {
-    fn default() -> Self {
-        Self {
-            accel_bias: Vector3::zeros(),
-            gyro_bias: Vector3::zeros(),
-            accel_scale: Vector3::zeros(),
-            gyro_scale: Vector3::zeros(),
-            baro_bias: T::zero(),
-        }
-    }
-}
-
-impl<T: RealField + Copy> SensorErrors<T> {
-    /// A corrected sample with these errors taken out: `(f - b) / (1 + s)` per axis.
-    #[must_use]
-    pub fn compensate(&self, f: &Vector3<T>, w: &Vector3<T>) -> (Vector3<T>, Vector3<T>) {
-        let one = Vector3::repeat(T::one());
-        (
-            (f - self.accel_bias).component_div(&(one + self.accel_scale)),
-            (w - self.gyro_bias).component_div(&(one + self.gyro_scale)),
-        )
-    }
-}
-
-/// The navigation and the sensor errors together: what the filter estimates.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Estimate<T: RealField + Copy> {
-    /// The navigation.
-    pub nav: Navigation<T>,
-    /// The sensor errors.
-    pub sensors: SensorErrors<T>,
-}
-
-fn block<T: RealField + Copy>(x: &StateVector<T>, at: usize) -> Vector3<T> {
-    x.fixed_rows::<3>(at).into_owned()
-}
-
-impl<T: Real> Estimate<T> {
-    /// This estimate corrected by the error `dx`.
-    #[must_use]
-    pub fn plus(&self, dx: &StateVector<T>) -> Self {
-        use index::*;
-        let mut out = *self;
-        out.nav.p += block(dx, POSITION);
-        out.nav.v += block(dx, VELOCITY);
-        out.nav.turn(&rotation(&block(dx, ATTITUDE)));
-        out.sensors.accel_bias += block(dx, ACCEL_BIAS);
-        out.sensors.gyro_bias += block(dx, GYRO_BIAS);
-        out.sensors.accel_scale += block(dx, ACCEL_SCALE);
-        out.sensors.gyro_scale += block(dx, GYRO_SCALE);
-        out.sensors.baro_bias += dx.get(BARO).copied().unwrap_or_else(T::zero);
-        out
-    }
-
-    /// The error that takes `other` to this estimate (`self = other.plus(dx)`).
-    #[must_use]
-    pub fn minus(&self, other: &Self) -> StateVector<T> {
-        use index::*;
-        let mut dx = StateVector::zeros();
-        let (a, b) = (&self.sensors, &other.sensors);
-        let parts = [
-            (POSITION, self.nav.p - other.nav.p),
-            (VELOCITY, self.nav.v - other.nav.v),
-            (
-                ATTITUDE,
-                (self.nav.attitude() * other.nav.attitude().inverse()).scaled_axis(),
-            ),
-            (ACCEL_BIAS, a.accel_bias - b.accel_bias),
-            (GYRO_BIAS, a.gyro_bias - b.gyro_bias),
-            (ACCEL_SCALE, a.accel_scale - b.accel_scale),
-            (GYRO_SCALE, a.gyro_scale - b.gyro_scale),
-        ];
-        for (at, v) in parts {
-            dx.fixed_rows_mut::<3>(at).copy_from(&v);
-        }
-        if let Some(x) = dx.get_mut(BARO) {
-            *x = a.baro_bias - b.baro_bias;
-        }
-        dx
-    }
-}
 
 /// The noise that drives the errors between measurements.
 #[derive(Debug, Clone, Copy, PartialEq)]

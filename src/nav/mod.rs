@@ -7,6 +7,7 @@
 //! writes nothing but its own state.
 
 pub mod earth;
+mod estimate;
 pub mod filter;
 pub mod real;
 pub mod strapdown;

@@ -1,9 +1,12 @@
 //! The IMU corrector: an accelerometer triad and a gyro triad sampled together, with gyro
 //! g-sensitivity and the accelerometer size effect (lever arm).
 
+mod doubt;
 #[cfg(all(target_arch = "arm", target_abi = "eabihf", target_os = "none"))]
 mod fast;
 mod uncertainty;
+
+use doubt::{lever_bound, step_sq};
 
 use super::environment::{effective_covariance_into, effective_set};
 use super::kernel::{Shape, TriadKernel, affine, range_bounds};
@@ -568,36 +571,6 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         out.values = join(f, w);
         out.flags = flags;
     }
-}
-
-/// The square of the largest rate change between two samples at `rate_hz` for an angular
-/// acceleration `rad_per_s2`.
-fn step_sq(rad_per_s2: f32, rate_hz: f32) -> f32 {
-    let step = rad_per_s2 / rate_hz;
-    step * step
-}
-
-/// A bound on the lever term `e` for rates inside the gyro's calibrated ranges and rate
-/// differences no wider than them.
-fn lever_bound(terms: &LeverTerms<f32>, gyro: &[Channel; 3]) -> [Bound; 3] {
-    let big = |c: &Channel| libm::fmaxf(libm::fabsf(c.range.lo), libm::fabsf(c.range.hi));
-    let [b0, b1, b2] = gyro.map(|c| big(&c));
-    let m = [b0 * b0, b1 * b1, b2 * b2, b0 * b1, b0 * b2, b1 * b2];
-    let d = gyro.map(|c| c.range.hi - c.range.lo);
-    core::array::from_fn(|j| {
-        let (Some(q), Some(t)) = (terms.quad.get(j), terms.tangential.get(j)) else {
-            return Bound::point(0.0);
-        };
-        let e = q
-            .iter()
-            .zip(&m)
-            .map(|(c, x)| libm::fabsf(*c) * x)
-            .chain(t.iter().zip(&d).map(|(c, x)| libm::fabsf(*c) * x))
-            .fold(0.0, |s, x| s + x);
-        // Room for the rounding of both evaluations.
-        let e = e * 1.0001;
-        Bound::new(-e, e)
-    })
 }
 
 #[inline(always)]
