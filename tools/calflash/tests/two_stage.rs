@@ -186,6 +186,10 @@ struct Score {
     inside: usize,
     total: usize,
     inside_f: [usize; 2],
+    /// Per family, the sum of squared errors over the stated 1-sigma at zero input, and the
+    /// count.
+    z0: [f64; 2],
+    n0: [usize; 2],
 }
 
 fn score(c: &Calibrated, truth: &AssembledTruth) -> Score {
@@ -197,6 +201,22 @@ fn score(c: &Calibrated, truth: &AssembledTruth) -> Score {
         device.set_environment(t as f32, 3.3);
         let accel = conditions(&["sphere:20"], &[t], 1, false);
         let gyro = conditions(&["rate:-8:8:7"], &[t], 1, false);
+        // At zero input (no force, no rate): the stated 1-sigma against the error there.
+        if let Some(zero) = gyro.first().map(|c| Condition {
+            f: [0.0; 3],
+            w: [0.0; 3],
+            ..*c
+        }) {
+            let stated = device.sigma(&[0.0; 6]).unwrap();
+            let outputs = truth.outputs(&zero);
+            for (k, sigma) in stated.iter().enumerate() {
+                let (value, _) = predicted(&point.axes[k].fit, k, &zero);
+                let err = (value - outputs[k]) / truth.sensors[k].k1;
+                let family = usize::from(k >= 3);
+                s.z0[family] += (err / f64::from(*sigma)).powi(2);
+                s.n0[family] += 1;
+            }
+        }
         for k in 0..6 {
             let fit = &point.axes[k].fit;
             let family = usize::from(k >= 3);
@@ -297,6 +317,18 @@ fn two_stages_beat_one_and_state_their_error_honestly() {
         s.iter().map(|x| x.inside).sum::<usize>() as f64
             / s.iter().map(|x| x.total).sum::<usize>() as f64
     };
+    let z0 = |s: &[Score], family: usize| {
+        (s.iter().map(|x| x.z0[family]).sum::<f64>()
+            / s.iter().map(|x| x.n0[family]).sum::<usize>() as f64)
+            .sqrt()
+    };
+    println!(
+        "at zero input, the error over the device's stated 1-sigma, RMS: two stages {:.2} (accelerometers), {:.2} (gyros); one stage {:.2}, {:.2}",
+        z0(&two, 0),
+        z0(&two, 1),
+        z0(&one, 0),
+        z0(&one, 1)
+    );
     for (name, family) in [("accelerometers, m/s^2", 0), ("gyros, rad/s", 1)] {
         println!(
             "{name}: RMS error over the operating range: two stages {:.3e}, one stage {:.3e}, ratio {:.3}",
