@@ -23,7 +23,7 @@ pub static EVENTS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/flight.even
 pub static EXPECTED: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/flight.expected"));
 
 /// Values per checkpoint (`host_tests::flight_golden::CHECKPOINT_VALUES`).
-pub const VALUES: usize = 45;
+pub const VALUES: usize = 23 + spincal::nav::STATES;
 
 /// Samples between two checkpoints (`host_tests::flight_golden::CHECKPOINT_EVERY`).
 pub const EVERY: usize = 200;

@@ -120,8 +120,8 @@ pub fn inputs(cal: &Calibration, events: &[Event]) -> Vec<Input> {
 pub const CHECKPOINT_EVERY: usize = 200;
 
 /// Values per checkpoint: position, velocity, attitude (w x y z), the 13 sensor errors, the
-/// 22 variances.
-pub const CHECKPOINT_VALUES: usize = 3 + 3 + 4 + 13 + 22;
+/// variances of every state.
+pub const CHECKPOINT_VALUES: usize = 3 + 3 + 4 + 13 + spincal::nav::STATES;
 
 /// The sample rate, Hz.
 pub const RATE: f64 = 2000.0;
@@ -257,14 +257,14 @@ fn pad_noise(inputs: &[Input], truth: &[(u64, Vector3<f64>, Vector3<f64>)]) -> (
     ((sa / n / RATE).sqrt(), (sg / n / RATE).sqrt())
 }
 
-fn body_to_flight(q: [f64; 4]) -> UnitQuaternion<f64> {
+pub(crate) fn body_to_flight(q: [f64; 4]) -> UnitQuaternion<f64> {
     let [w, x, y, z] = q;
     UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
 }
 
 /// The heading the filter should level to: the turn about the vertical between the attitude
 /// levelled from gravity alone and the true one.
-fn true_heading(body_to_level: &Matrix3<f64>, f: &Vector3<f64>) -> f64 {
+pub(crate) fn true_heading(body_to_level: &Matrix3<f64>, f: &Vector3<f64>) -> f64 {
     let up = spincal::nav::real::rotation_between(f, &Vector3::z());
     let truth = UnitQuaternion::from_matrix(body_to_level);
     let turn = truth * up.inverse();
@@ -285,6 +285,9 @@ pub fn config<T: Real>(flight: &Flight) -> FlightConfig<T> {
         gyro_walk: c(1e-6),
         scale_walk: c(1e-7),
         baro_walk: c(0.1),
+        // The golden flight's receiver errs white.
+        receiver_sigma: Vector3::zeros(),
+        receiver_tau: c(0.0),
     };
     let prior = SensorErrors {
         accel_bias: Vector3::repeat(c(0.2)),
@@ -457,7 +460,7 @@ pub fn flight_config() -> FlightConfig<f32> {{
         level_us: {},
         launch_force: {},
         doubt: ({}, {}),
-        noise: NavNoise {{ accel_white: {}, gyro_white: {}, accel_walk: {}, gyro_walk: {}, scale_walk: {}, baro_walk: {} }},
+        noise: NavNoise {{ accel_white: {}, gyro_white: {}, accel_walk: {}, gyro_walk: {}, scale_walk: {}, baro_walk: {}, receiver_sigma: {}, receiver_tau: {} }},
         sensor_sigma: {},
         launch_shift: {},
     }}
@@ -489,6 +492,8 @@ pub fn flight_config() -> FlightConfig<f32> {{
         f(n.gyro_walk),
         f(n.scale_walk),
         f(n.baro_walk),
+        v(&n.receiver_sigma),
+        f(n.receiver_tau),
         errors(&c.sensor_sigma),
         errors(&c.launch_shift),
     )

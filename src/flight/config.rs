@@ -58,7 +58,9 @@ pub struct FlightConfig<T: Real> {
     pub sensor_sigma: SensorErrors<T>,
     /// How far the sensor errors may shift at the launch (setback, the spin-up), 1-sigma each:
     /// added to their variances when the launch is detected, so that what the pad taught
-    /// does not pin them.
+    /// does not pin them, and again at the end of the setback
+    /// ([`FlightFilter::setback_end_us`](super::FlightFilter::setback_end_us)), so that what
+    /// the in-bore samples taught does not pin a shift at muzzle exit either.
     pub launch_shift: SensorErrors<T>,
 }
 

@@ -28,8 +28,10 @@
 //! use spincal::flight::{FlightConfig, FlightFilter, Geodetic, GnssFix, Phase};
 //! use spincal::nav::{NavNoise, SensorErrors};
 //!
+//! // The receiver's position error wanders by 1.5 m (3 m in height) over 60 s.
 //! let noise = NavNoise { accel_white: 1e-3, gyro_white: 1e-4, accel_walk: 1e-4,
-//!                        gyro_walk: 1e-5, scale_walk: 1e-6, baro_walk: 0.1 };
+//!                        gyro_walk: 1e-5, scale_walk: 1e-6, baro_walk: 0.1,
+//!                        receiver_sigma: Vector3::new(1.5, 1.5, 3.0), receiver_tau: 60.0 };
 //! let prior = SensorErrors { accel_bias: Vector3::repeat(0.05), gyro_bias: Vector3::repeat(0.005),
 //!                            accel_scale: Vector3::repeat(1e-3), gyro_scale: Vector3::repeat(1e-3),
 //!                            baro_bias: 5.0 };

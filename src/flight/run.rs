@@ -60,6 +60,9 @@ pub struct FlightFilter<T: Real> {
     /// instant, `back` before the epoch that takes it.
     pace: (Vector3<T>, Vector3<T>),
     launch_us: Option<u64>,
+    /// The largest specific force squared since the launch, until the setback ends.
+    setback_peak: T,
+    setback_end_us: Option<u64>,
     fix: Option<GnssFix>,
     last_fix: Option<Geodetic>,
     pressure: Option<(u64, T)>,
@@ -96,6 +99,7 @@ impl<T: Real> FlightFilter<T> {
                 Estimate {
                     nav: Navigation::at_rest(UnitQuaternion::identity(), config.spin_axis),
                     sensors: SensorErrors::default(),
+                    receiver: Vector3::zeros(),
                 },
                 &Prior {
                     covariance: StateMatrix::from_diagonal(&prior),
@@ -112,6 +116,8 @@ impl<T: Real> FlightFilter<T> {
             last_epoch_us: 0,
             pace: (Vector3::zeros(), Vector3::zeros()),
             launch_us: None,
+            setback_peak: T::zero(),
+            setback_end_us: None,
             fix: None,
             last_fix: None,
             pressure: None,
@@ -141,6 +147,7 @@ impl<T: Real> FlightFilter<T> {
         put(index::VELOCITY, &Vector3::repeat(c(1e-2)));
         let tilt = (tilt * tilt + c(1e-6)).sqrt();
         put(index::ATTITUDE, &Vector3::new(tilt, tilt, config.heading.1));
+        put(index::RECEIVER, &config.noise.receiver_sigma);
         StateVector::from(d)
     }
 
@@ -200,6 +207,14 @@ impl<T: Real> FlightFilter<T> {
         self.launch_us
     }
 
+    /// The end of the setback on the samples' clock, us, once seen: the first trusted sample
+    /// after the launch whose specific force is under a tenth of the largest since the launch
+    /// (a shell's muzzle exit, a rocket's burn-out).
+    #[must_use]
+    pub fn setback_end_us(&self) -> Option<u64> {
+        self.setback_end_us
+    }
+
     /// One corrected sample at `t_us` on the IMU's clock: specific force (m/s^2) and rate
     /// (rad/s), body axes, and whether the corrector's flags (or the codes at their rails)
     /// leave the accelerometer's and the gyro's readings in doubt.
@@ -246,18 +261,23 @@ impl<T: Real> FlightFilter<T> {
         {
             self.phase = Phase::Flight;
             self.launch_us = Some(t_us);
-            let shift = Self::sensor_variances(&self.config.launch_shift);
-            for (i, v) in shift.iter().enumerate() {
-                if let Some(p) = self.filter.covariance.get_mut((i, i)) {
-                    *p += *v;
-                }
-            }
+            self.open_shift();
             self.baro_reference = Some(air::pressure_height(if self.pad_pressure.1 > 0 {
                 self.pad_pressure.0 / c(f64::from(self.pad_pressure.1))
             } else {
                 self.pressure.map_or(c(101_325.0), |p| p.1)
             }));
             self.pressure = None;
+        }
+        if self.phase == Phase::Flight && self.setback_end_us.is_none() {
+            let f2 = f.norm_squared();
+            if f2 > self.setback_peak {
+                self.setback_peak = f2;
+            }
+            if !doubted[0] && f2 * c(100.0) < self.setback_peak {
+                self.setback_end_us = Some(t_us);
+                self.open_shift();
+            }
         }
         let fix_due = self
             .fix
@@ -268,6 +288,25 @@ impl<T: Real> FlightFilter<T> {
         let step_due = since >= u64::from(self.config.covariance_interval_us);
         if fix_due || baro_due || pad_due || step_due {
             self.epoch(t_us, fix_due, baro_due);
+        }
+    }
+
+    /// Lets the sensor errors move by the launch's shift: their variances gain
+    /// [`FlightConfig::launch_shift`]'s. Done at the launch and again at the end of the
+    /// setback, so that a shift at any instant through the setback is free after it: opened
+    /// only at the launch, a sensor that shifts at muzzle exit would be pinned at its old value
+    /// by what the in-bore samples (thousands of g, no saturation) told the filter through the
+    /// velocity they built.
+    ///
+    /// The covariance is stepped first over the samples navigated since the last step, so
+    /// that the shift is added after what they built (a whole setback falls inside one step).
+    fn open_shift(&mut self) {
+        self.filter.covariance_step();
+        let shift = Self::sensor_variances(&self.config.launch_shift);
+        for (i, v) in shift.iter().enumerate() {
+            if let Some(p) = self.filter.covariance.get_mut((i, i)) {
+                *p += *v;
+            }
         }
     }
 
@@ -297,6 +336,7 @@ impl<T: Real> FlightFilter<T> {
             Estimate {
                 nav: Navigation::at_rest(q, self.config.spin_axis),
                 sensors: SensorErrors::default(),
+                receiver: Vector3::zeros(),
             },
             &Prior {
                 covariance: StateMatrix::from_diagonal(&self.prior),
@@ -424,7 +464,7 @@ impl<T: Real> FlightFilter<T> {
             return;
         }
         for (axis, zi) in z.iter().enumerate() {
-            let (h, at) = self.filter.antenna_row(&lever, axis);
+            let (h, at) = self.filter.fix_row_back(&lever, axis, back);
             let v = self.velocity(axis);
             let r = if axis == 2 { v_sigma } else { h_sigma };
             self.take(Aiding::Position, &h, c::<T>(*zi) - (at - v * back), r * r);
@@ -435,7 +475,21 @@ impl<T: Real> FlightFilter<T> {
             let then = self.pace.1 * back;
             for (axis, vi) in vel.iter().enumerate() {
                 let earlier = then.get(axis).copied().unwrap_or_else(T::zero);
-                self.take_velocity(Aiding::Velocity, axis, c::<T>(*vi) + earlier, r * r);
+                let nu = c::<T>(*vi) + earlier - self.velocity(axis);
+                // The errors then, through their rates over the fix's age (the attitude's
+                // through the specific force). Where that term's own variance is beyond the
+                // fix's (the navigation just put back after a saturated setback, its attitude
+                // tenths of a radian off), the linear model is not to be trusted to learn the
+                // attitude from 80 ms: the term widens the fix's variance instead.
+                let now = ErrorFilter::velocity_row(axis);
+                let delayed = self.filter.velocity_row_back(axis, back);
+                let d = delayed - now;
+                let lag = d.dot(&(self.filter.covariance * d));
+                if lag <= r * r {
+                    self.take(Aiding::Velocity, &delayed, nu, r * r);
+                } else {
+                    self.take(Aiding::Velocity, &now, nu, r * r + lag);
+                }
             }
         }
     }
@@ -497,12 +551,14 @@ impl<T: Real> FlightFilter<T> {
         }
     }
 
-    /// A covariance that is no longer one (a NaN, an infinity, a variance not positive) goes
+    /// A covariance that is no longer one (a NaN, an infinity, a negative variance) goes
     /// back to the prior, counted; an estimate that is no longer finite levels again.
     fn check(&mut self) {
         let p = &self.filter.covariance;
+        // A zero variance is one: a state the set-up leaves out (the receiver's error of a
+        // receiver that errs white) is known exactly to be zero.
         let broken =
-            p.iter().any(|x| !x.is_finite()) || p.diagonal().iter().any(|d| *d <= T::zero());
+            p.iter().any(|x| !x.is_finite()) || p.diagonal().iter().any(|d| *d < T::zero());
         if broken {
             self.stats.resets += 1;
             self.filter.covariance = StateMatrix::from_diagonal(&self.prior);

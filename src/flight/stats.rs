@@ -53,7 +53,7 @@ pub struct FlightStats {
     /// Fixes that put the navigation back after it lost track (its velocity's 1-sigma over
     /// [`LOST_VELOCITY`](super::run::LOST_VELOCITY) m/s, as after a saturated setback).
     pub navigation_resets: u32,
-    /// Covariance resets to the prior (a NaN, an infinity or a variance not positive).
+    /// Covariance resets to the prior (a NaN, an infinity or a negative variance).
     pub resets: u32,
 }
 

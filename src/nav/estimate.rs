@@ -53,6 +53,11 @@ pub struct Estimate<T: RealField + Copy> {
     pub nav: Navigation<T>,
     /// The sensor errors.
     pub sensors: SensorErrors<T>,
+    /// The GNSS receiver's correlated position error (east, north, up, m): what its fixes
+    /// hold beside the antenna's position and their white noise, a first-order Gauss-Markov
+    /// process ([`NavNoise::receiver_sigma`](super::NavNoise::receiver_sigma)); zero while
+    /// nothing has told the filter otherwise.
+    pub receiver: Vector3<T>,
 }
 
 fn block<T: RealField + Copy>(x: &StateVector<T>, at: usize) -> Vector3<T> {
@@ -73,6 +78,7 @@ impl<T: Real> Estimate<T> {
         out.sensors.accel_scale += block(dx, ACCEL_SCALE);
         out.sensors.gyro_scale += block(dx, GYRO_SCALE);
         out.sensors.baro_bias += dx.get(BARO).copied().unwrap_or_else(T::zero);
+        out.receiver += block(dx, RECEIVER);
         out
     }
 
@@ -93,6 +99,7 @@ impl<T: Real> Estimate<T> {
             (GYRO_BIAS, a.gyro_bias - b.gyro_bias),
             (ACCEL_SCALE, a.accel_scale - b.accel_scale),
             (GYRO_SCALE, a.gyro_scale - b.gyro_scale),
+            (RECEIVER, self.receiver - other.receiver),
         ];
         for (at, v) in parts {
             dx.fixed_rows_mut::<3>(at).copy_from(&v);

@@ -1,8 +1,16 @@
 //! The error-state Kalman filter: the navigation's errors (position, velocity, attitude) and
 //! the corrected samples' residual sensor errors (per axis the accelerometer's and the gyro's
-//! bias and scale factor) and the barometer's bias, 22 states, propagated with the
-//! navigation and corrected by scalar measurements (GNSS position and velocity, barometric
-//! height), fed back into the navigation after each group of updates.
+//! bias and scale factor), the barometer's bias and the GNSS receiver's correlated position
+//! error, 25 states, propagated with the navigation and corrected by scalar measurements
+//! (GNSS position and velocity, barometric height), fed back into the navigation after each
+//! group of updates.
+//!
+//! A receiver's position error is not white: most of it is a slow wander (the satellites'
+//! geometry, the atmosphere's delays) over tens of seconds, as long as a shell's flight. Taken
+//! as white, ten fixes a second average it away and the filter believes its track to a
+//! fraction of the wander. It is carried as three first-order Gauss-Markov states
+//! ([`NavNoise::receiver_sigma`], [`NavNoise::receiver_tau`]); at zero sigma they stay zero and
+//! change nothing.
 //!
 //! Errors are true minus estimated; the attitude error `psi` is the small rotation, in the
 //! level frame, from the estimated attitude to the true one (`C = (I + [psi x]) C_hat`). A
@@ -25,7 +33,7 @@ use super::strapdown::{Interval, Step};
 pub use super::estimate::{Estimate, SensorErrors};
 
 /// The number of error states.
-pub const STATES: usize = 22;
+pub const STATES: usize = 25;
 
 /// Where each error state block starts.
 pub mod index {
@@ -45,6 +53,8 @@ pub mod index {
     pub const GYRO_SCALE: usize = 18;
     /// The barometer's height bias, m.
     pub const BARO: usize = 21;
+    /// The GNSS receiver's correlated position error, m (east, north, up).
+    pub const RECEIVER: usize = 22;
 }
 
 /// A square matrix over the error states.
@@ -58,11 +68,13 @@ pub const NAV: usize = 9;
 pub type NavRows<T> = SMatrix<T, NAV, STATES>;
 
 /// The transition of the errors over one covariance step: the identity but for its first
-/// [`NAV`] rows.
+/// [`NAV`] rows and the receiver's error, which decays.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Transition<T: RealField + Copy> {
     /// The first [`NAV`] rows.
     pub top: NavRows<T>,
+    /// The receiver error's decay over the step, `exp(-dt / tau)` (1 without one).
+    pub receiver_decay: T,
 }
 
 impl<T: RealField + Copy> Transition<T> {
@@ -71,6 +83,11 @@ impl<T: RealField + Copy> Transition<T> {
     pub fn matrix(&self) -> StateMatrix<T> {
         let mut phi = StateMatrix::identity();
         phi.fixed_rows_mut::<NAV>(0).copy_from(&self.top);
+        for i in index::RECEIVER..index::RECEIVER + 3 {
+            if let Some(x) = phi.get_mut((i, i)) {
+                *x = self.receiver_decay;
+            }
+        }
         phi
     }
 }
@@ -93,6 +110,23 @@ pub struct NavNoise<T> {
     /// The barometer bias's random walk, m/sqrt(s) (the weather and the air's temperature
     /// against the standard atmosphere's).
     pub baro_walk: T,
+    /// The GNSS receiver's correlated position error, 1-sigma (east, north, up, m): its
+    /// stationary spread, which fixes cannot average away within [`receiver_tau`]
+    /// (Self::receiver_tau). Zero for a receiver whose error is white.
+    pub receiver_sigma: Vector3<T>,
+    /// The receiver error's time constant, s (not positive: constant over the flight).
+    pub receiver_tau: T,
+}
+
+impl<T: Real> NavNoise<T> {
+    /// `exp(-dt / tau)`: what is left of the receiver's error after `dt` s.
+    fn receiver_decay(&self, dt: T) -> T {
+        if self.receiver_tau > T::zero() {
+            (-dt / self.receiver_tau).exp_libm()
+        } else {
+            T::one()
+        }
+    }
 }
 
 /// The prior of the errors: the covariance at the start.
@@ -163,6 +197,9 @@ pub struct ErrorFilter<T: RealField + Copy> {
     pub noise: NavNoise<T>,
     dx: StateVector<T>,
     acc: Integrals<T>,
+    /// The error model's velocity rows over the last covariance step (`d dv / dt` as a row
+    /// over the errors): what a late fix's velocity and position are compared through.
+    velocity_rates: SMatrix<T, 3, STATES>,
     /// The last sample, compensated: rate and specific force.
     last: Option<(Vector3<T>, Vector3<T>)>,
 }
@@ -214,6 +251,7 @@ impl<T: Real> ErrorFilter<T> {
             noise,
             dx: StateVector::zeros(),
             acc: Integrals::zero(),
+            velocity_rates: SMatrix::zeros(),
             last: None,
         }
     }
@@ -303,7 +341,10 @@ impl<T: Real> ErrorFilter<T> {
             }
         }
         if a.dt <= T::zero() {
-            return Transition { top };
+            return Transition {
+                top,
+                receiver_decay: T::one(),
+            };
         }
         let inv = T::one() / a.dt;
         let omega = self.earth.rate();
@@ -325,6 +366,7 @@ impl<T: Real> ErrorFilter<T> {
         put(ATTITUDE, ATTITUDE, -skew(&omega));
         put(ATTITUDE, GYRO_BIAS, -a.c * inv);
         put(ATTITUDE, GYRO_SCALE, -a.cw * inv);
+        self.velocity_rates = f.fixed_rows::<3>(VELOCITY).into_owned();
         // Phi = I + F dt + (F dt)^2 / 2, of which only the top rows are not the identity's.
         let fd = f * a.dt;
         let square = fd.fixed_columns::<NAV>(0) * fd;
@@ -383,7 +425,41 @@ impl<T: Real> ErrorFilter<T> {
         }
         let moved = top * self.dx;
         self.dx.fixed_rows_mut::<NAV>(0).copy_from(&moved);
-        Transition { top }
+        let receiver_decay = self.receiver_step(a.dt);
+        Transition {
+            top,
+            receiver_decay,
+        }
+    }
+
+    /// The receiver's error over `dt` s: its estimate and its rows and columns of the
+    /// covariance decay by `phi = exp(-dt / tau)`, its variance gains `sigma^2 (1 - phi^2)`.
+    /// Returns `phi`.
+    fn receiver_step(&mut self, dt: T) -> T {
+        let phi = self.noise.receiver_decay(dt);
+        if self.noise.receiver_sigma == Vector3::zeros() {
+            return phi;
+        }
+        let gain = T::one() - phi * phi;
+        for (k, sigma) in self.noise.receiver_sigma.iter().enumerate() {
+            let i = index::RECEIVER + k;
+            for j in 0..STATES {
+                if let Some(x) = self.covariance.get_mut((i, j)) {
+                    *x *= phi;
+                }
+                if let Some(x) = self.covariance.get_mut((j, i)) {
+                    *x *= phi;
+                }
+            }
+            if let Some(x) = self.covariance.get_mut((i, i)) {
+                *x += *sigma * *sigma * gain;
+            }
+            if let Some(x) = self.dx.get_mut(i) {
+                *x *= phi;
+            }
+        }
+        self.estimate.receiver *= phi;
+        phi
     }
 
     /// What a scalar measurement's innovation would be, without taking it (to gate it):
@@ -474,8 +550,13 @@ impl<T: Real> ErrorFilter<T> {
     /// (position then velocity, each axis), independent of every other error: for a first
     /// fix after the navigation lost track (a saturated setback), where the update would ask
     /// the covariance to fall by more orders of magnitude than `f32` holds.
+    ///
+    /// `p` is a fix's position (the antenna's, carried to the unit): the receiver's estimated
+    /// error is taken out of it, and what is not known of that error stays in the position's
+    /// variance, shared with the receiver's state (`p = z - e_hat`: the position's error is
+    /// the fix's white error less the receiver error's).
     pub fn reset_position_velocity(&mut self, p: &Vector3<T>, v: &Vector3<T>, variances: [T; 6]) {
-        self.estimate.nav.p = *p;
+        self.estimate.nav.p = *p - self.estimate.receiver;
         self.estimate.nav.v = *v;
         for (i, var) in variances.iter().enumerate() {
             if let Some(x) = self.dx.get_mut(i) {
@@ -489,6 +570,21 @@ impl<T: Real> ErrorFilter<T> {
                 if let Some(x) = self.covariance.get_mut((j, i)) {
                     *x = value;
                 }
+            }
+        }
+        for axis in 0..3 {
+            let (p, r) = (index::POSITION + axis, index::RECEIVER + axis);
+            let known = self.covariance.get((r, r)).copied().unwrap_or_else(T::zero);
+            if let Some(x) = self.covariance.get_mut((p, p)) {
+                *x += known;
+            }
+            for (i, j) in [(p, r), (r, p)] {
+                if let Some(x) = self.covariance.get_mut((i, j)) {
+                    *x = -known;
+                }
+            }
+            if let Some(x) = self.dx.get_mut(r) {
+                *x = T::zero();
             }
         }
     }
@@ -528,6 +624,50 @@ impl<T: Real> ErrorFilter<T> {
             }
         }
         (h, at.get(axis).copied().unwrap_or_else(T::zero))
+    }
+
+    /// A GNSS fix's sensitivity row along the level-frame axis `axis` for an antenna at
+    /// `lever` and the fix's predicted value there: the antenna's position
+    /// ([`antenna_row`](Self::antenna_row)) plus the receiver's estimated error.
+    #[must_use]
+    pub fn fix_row(&self, lever: &Vector3<T>, axis: usize) -> (StateVector<T>, T) {
+        let (mut h, at) = self.antenna_row(lever, axis);
+        if let Some(x) = h.get_mut(index::RECEIVER + axis) {
+            *x = T::one();
+        }
+        let e = self
+            .estimate
+            .receiver
+            .get(axis)
+            .copied()
+            .unwrap_or_else(T::zero);
+        (h, at + e)
+    }
+
+    /// The sensitivity row of a velocity measured `back` s ago (a late fix's) along the
+    /// level-frame axis `axis`: the errors then were the errors now less `back` times their
+    /// rate (`dv(t - back) = dv - back F_v dx`). The rate carries the attitude's error through
+    /// the specific force: a shell decelerating at 3 g with its attitude 50 mrad off sees its
+    /// velocity's rate 1.5 m/s^2 wrong, 0.12 m/s over an 80 ms latency, which a fix's own
+    /// 0.1 m/s would otherwise blame on the velocity now.
+    #[must_use]
+    pub fn velocity_row_back(&self, axis: usize, back: T) -> StateVector<T> {
+        let mut h = Self::velocity_row(axis);
+        if axis < 3 {
+            h -= self.velocity_rates.row(axis).transpose() * back;
+        }
+        h
+    }
+
+    /// [`fix_row`](Self::fix_row) for a fix `back` s ago: the position's error then was the
+    /// error now less `back` times the velocity's.
+    #[must_use]
+    pub fn fix_row_back(&self, lever: &Vector3<T>, axis: usize, back: T) -> (StateVector<T>, T) {
+        let (mut h, at) = self.fix_row(lever, axis);
+        if let Some(x) = h.get_mut(index::VELOCITY + axis) {
+            *x -= back;
+        }
+        (h, at)
     }
 
     /// The barometer's sensitivity row and its predicted reading (height of the unit plus the

@@ -16,6 +16,8 @@ pub trait Real: RealField + Copy {
     fn sqrt_libm(self) -> Self;
     /// `atan2(self, x)`, from `libm`.
     fn atan2_libm(self, x: Self) -> Self;
+    /// `e^self`, from `libm`.
+    fn exp_libm(self) -> Self;
     /// This value as an `f64`.
     fn to_f64(self) -> f64;
 }
@@ -55,6 +57,9 @@ impl Real for f32 {
     fn atan2_libm(self, x: Self) -> Self {
         libm::atan2f(self, x)
     }
+    fn exp_libm(self) -> Self {
+        libm::expf(self)
+    }
     fn sqrt_libm(self) -> Self {
         libm::sqrtf(self)
     }
@@ -72,6 +77,9 @@ impl Real for f64 {
     }
     fn atan2_libm(self, x: Self) -> Self {
         libm::atan2(self, x)
+    }
+    fn exp_libm(self) -> Self {
+        libm::exp(self)
     }
     fn sqrt_libm(self) -> Self {
         libm::sqrt(self)

@@ -300,6 +300,10 @@ pub fn check(
         gyro_walk: walks.gyro,
         scale_walk: walks.scale,
         baro_walk: walks.baro,
+        // The receiver's correlated error is carried into the smoothed track's 1-sigma
+        // (`track.rs`), not as states: the selection's passes were measured so.
+        receiver_sigma: nalgebra::Vector3::zeros(),
+        receiver_tau: 0.0,
     };
     let mut prior = in_flight.at_rest();
     prior[(index::BARO, index::BARO)] = 1.0;

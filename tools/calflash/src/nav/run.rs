@@ -227,6 +227,7 @@ pub fn forward(
     let estimate = Estimate {
         nav,
         sensors: start.sensors,
+        receiver: Vector3::zeros(),
     };
     let pad_fix = fixes
         .iter()

@@ -3,8 +3,8 @@
 //! prediction, `dx_k = G_k (x_{k+1|N} - x_{k+1|k})`, `G_k = P_k|k Phi' P_{k+1|k}^-1` (by
 //! Cholesky), and `P_k|N = P_k|k + G_k (P_{k+1|N} - P_{k+1|k}) G_k'`.
 
-use spincal::nav::StateMatrix;
 use spincal::nav::filter::Estimate;
+use spincal::nav::{STATES, StateMatrix};
 
 use super::run::Epoch;
 
@@ -17,7 +17,16 @@ pub fn smooth(epochs: &[Epoch]) -> Vec<(Estimate<f64>, StateMatrix<f64>)> {
         let next = &epochs[k + 1];
         let (xf, pf) = &epochs[k].filtered;
         let (xp, pp) = &next.predicted;
-        let Some(chol) = pp.cholesky() else {
+        // A state the pass leaves out (the receiver's error when the fixes are taken as
+        // white) has no variance and no covariance: a unit on its diagonal leaves the others'
+        // solution as it is and its own gain row zero (its `P_k|k` row is).
+        let mut pp_solved = *pp;
+        for i in 0..STATES {
+            if pp[(i, i)] == 0.0 {
+                pp_solved[(i, i)] = 1.0;
+            }
+        }
+        let Some(chol) = pp_solved.cholesky() else {
             continue;
         };
         // G' = P_{k+1|k}^-1 Phi P_k|k.

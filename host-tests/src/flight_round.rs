@@ -1,0 +1,355 @@
+//! A shell from our round-Earth simulator as a round's own sensors and receiver give it to
+//! `spincal::flight`: the corrected samples straight from the truth (the unit's pre-launch
+//! errors taken out exactly, so that only the launch shift, the noise and the random walk are
+//! left to find; nothing saturates, so the in-bore samples are all trusted), a shift of the
+//! axial accelerometer's bias and scale factor after the setback, and a GNSS fuze's fixes:
+//! none before muzzle exit plus an acquisition time, each delivered 80 ms after the instant it
+//! describes, its velocity in east, north, up at the receiver, its position carrying a
+//! correlated (first-order Gauss-Markov) error beside the white one
+//! (`calflash::sim::flight::receivers`).
+//!
+//! The truth of the navigation comes with every sample, in the filter's level frame at the
+//! launch point, so a test can hold the filter's position and velocity against their 1-sigma
+//! at every epoch.
+
+use calflash::sim::flight::atmosphere;
+use calflash::sim::flight::receivers::{Receiver, write_gnss};
+use calflash::sim::flight::spec::Launch;
+use nalgebra::Vector3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use spincal::flight::{FlightConfig, FlightFilter, Geodetic, GnssFix};
+use spincal::nav::filter::index;
+use spincal::nav::{NavNoise, Real, STATES, SensorErrors};
+
+use crate::flight_golden::{Input, body_to_flight, true_heading};
+
+/// The sample rate, Hz.
+pub const RATE: f64 = 2000.0;
+
+/// The corrected samples' white noise: m/s^2/sqrt(Hz) and rad/s/sqrt(Hz).
+pub const NOISE: (f64, f64) = (2e-3, 1e-4);
+
+/// What a flight carries and how its receiver errs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scenario {
+    /// The shell (a `calflash simulate --flight` spec with its site).
+    pub spec: &'static str,
+    /// The random draws' seed (noise and receiver).
+    pub seed: u64,
+    /// The axial accelerometer's shift: bias (m/s^2) and scale factor.
+    pub shift: (f64, f64),
+    /// The shift comes this long after muzzle exit, s.
+    pub shift_after_muzzle: f64,
+    /// The fixes arrive this long after the instant they describe, us.
+    pub latency_us: u64,
+    /// The receiver's correlated position error: 1-sigma (m, each axis) and time constant (s).
+    pub correlated: (f64, f64),
+    /// The first fix comes this long after muzzle exit, s.
+    pub acquisition: f64,
+    /// The accelerometers' bias random walk, m/s^2/sqrt(s), every axis (the filter is told).
+    pub walk: f64,
+}
+
+impl Scenario {
+    /// A 155 mm-like shell, 20 s from a site at 48.6 N, its axial accelerometer shifting by
+    /// +0.04 m/s^2 and +6e-4 5 ms after muzzle exit, fixes 80 ms late from 0.8 s after the
+    /// muzzle with a 1.5 m wander of 45 s (the independent reference shell's receiver), the
+    /// biases not walking.
+    #[must_use]
+    pub fn shell(seed: u64) -> Self {
+        Self {
+            spec: "shell:lat=48.6,lon=-2.2,azimuth=75,rest=1,seconds=20",
+            seed,
+            shift: (0.04, 6e-4),
+            shift_after_muzzle: 0.005,
+            latency_us: 80_000,
+            correlated: (1.5, 45.0),
+            acquisition: 0.8,
+            walk: 0.0,
+        }
+    }
+}
+
+/// A simulated flight as the filter receives it, and its truth.
+#[derive(Debug, Clone)]
+pub struct RoundFlight {
+    /// The inputs in the order the unit receives them (a fix when it is delivered).
+    pub inputs: Vec<Input>,
+    /// At each sample: its time (us), the true position and velocity in the level frame at
+    /// the launch point (east, north, up; m, m/s).
+    pub truth: Vec<(u64, Vector3<f64>, Vector3<f64>)>,
+    /// The unit's true heading at rest (rad, as [`FlightConfig::heading`] counts it).
+    pub heading: f64,
+    /// The launch point.
+    pub origin: Geodetic,
+    /// When the shift comes, us.
+    pub shift_us: u64,
+    /// The scenario.
+    pub scenario: Scenario,
+}
+
+/// Flies `scenario`.
+///
+/// # Panics
+/// If the simulator refuses the spec or the receiver's file does not parse (neither does).
+#[must_use]
+pub fn fly(scenario: &Scenario) -> RoundFlight {
+    let mut launch = Launch::parse(scenario.spec).expect("the scenario's spec");
+    let site = launch.site_mut().expect("the scenario names its site");
+    let flown = launch.fly(1.0 / RATE);
+    let muzzle = flown
+        .events
+        .iter()
+        .find(|e| e.0 == "muzzle")
+        .map_or(0.0, |e| e.1);
+    let to_level = site.to_level();
+    let earth_rate = site.rate();
+    let mut rng = ChaCha8Rng::seed_from_u64(scenario.seed);
+    let per_sample = |density: f64| Normal::new(0.0, density * RATE.sqrt()).expect("sigma");
+    let (na, ng, pa) = (
+        per_sample(NOISE.0),
+        per_sample(NOISE.1),
+        Normal::new(0.0, 2.0).expect("sigma"),
+    );
+    let t0 = flown.samples.first().map_or(0.0, |s| s.t);
+    let us = |t: f64| ((t - t0) * 1e6).round() as u64;
+    let shift_at = muzzle + scenario.shift_after_muzzle;
+    let step = Normal::new(0.0, scenario.walk / RATE.sqrt()).expect("sigma");
+    let mut walked = Vector3::<f64>::zeros();
+    // (delivery time, order, input): samples first at a tie, then what arrives with them.
+    let mut timed: Vec<(u64, u8, Input)> = Vec::new();
+    let mut truth = Vec::with_capacity(flown.samples.len());
+    let mut heading = 0.0;
+    for (k, s) in flown.samples.iter().enumerate() {
+        let t_us = us(s.t);
+        let q = body_to_flight(s.q);
+        let mut f = Vector3::from(s.f);
+        let w = Vector3::from(s.w) + q.inverse() * earth_rate;
+        if k == 0 {
+            heading = true_heading(&(to_level * q.to_rotation_matrix().into_inner()), &f);
+        }
+        if s.t >= shift_at {
+            f.x = f.x * (1.0 + scenario.shift.1) + scenario.shift.0;
+        }
+        walked += Vector3::from_fn(|_, _| step.sample(&mut rng));
+        f += walked;
+        let fm: [f32; 3] = core::array::from_fn(|i| (f[i] + na.sample(&mut rng)) as f32);
+        let wm: [f32; 3] = core::array::from_fn(|i| (w[i] + ng.sample(&mut rng)) as f32);
+        timed.push((t_us, 0, Input::Sample(t_us, fm, wm, [false, false])));
+        truth.push((
+            t_us,
+            to_level * Vector3::from(s.r),
+            to_level * Vector3::from(s.v),
+        ));
+        if k.is_multiple_of(RATE as usize / 100) {
+            let p = atmosphere::standard(site.height + s.r[2]).pressure + pa.sample(&mut rng);
+            timed.push((t_us, 1, Input::Pressure(t_us, p as f32)));
+        }
+    }
+    let receiver = Receiver {
+        outage: muzzle + scenario.acquisition,
+        in_flight_only: true,
+        correlated: scenario.correlated,
+        ..Receiver::default()
+    };
+    let mut file = Vec::new();
+    write_gnss(&flown.samples, &site, &receiver, &mut rng, &mut file).expect("in memory");
+    let text = String::from_utf8(file).expect("the receiver writes text");
+    for line in text.lines().skip(1) {
+        let v: Vec<f64> = line
+            .split(',')
+            .map(|x| x.parse().expect("a number"))
+            .collect();
+        let t_us = us(v[0]);
+        timed.push((
+            t_us + scenario.latency_us,
+            2,
+            Input::Fix(GnssFix {
+                t_us,
+                position: Geodetic {
+                    latitude: v[1],
+                    longitude: v[2],
+                    height: v[3],
+                },
+                velocity: Some([v[4] as f32, v[5] as f32, v[6] as f32]),
+                satellites: 12,
+            }),
+        ));
+    }
+    timed.sort_by_key(|e| (e.0, e.1));
+    RoundFlight {
+        inputs: timed.into_iter().map(|e| e.2).collect(),
+        truth,
+        heading,
+        origin: Geodetic {
+            latitude: site.latitude,
+            longitude: site.longitude,
+            height: site.height,
+        },
+        shift_us: us(shift_at),
+        scenario: *scenario,
+    }
+}
+
+/// The filter's set-up for `flight`: the receiver as the scenario says (white 2 m / 4 m /
+/// 0.1 m/s, the correlated part, the latency), the heading off by 1 degree with a 2-degree
+/// sigma, the pre-launch errors' prior small (they were taken out), a launch shift that
+/// covers the scenario's.
+#[must_use]
+pub fn config<T: Real>(flight: &RoundFlight) -> FlightConfig<T> {
+    let c = |x: f64| -> T { nalgebra::convert(x) };
+    let (sigma, tau) = flight.scenario.correlated;
+    let noise = NavNoise {
+        accel_white: c(NOISE.0),
+        gyro_white: c(NOISE.1),
+        accel_walk: c(flight.scenario.walk.max(1e-5)),
+        gyro_walk: c(1e-6),
+        scale_walk: c(1e-7),
+        baro_walk: c(0.1),
+        receiver_sigma: Vector3::repeat(c(sigma)),
+        receiver_tau: c(tau),
+    };
+    let prior = SensorErrors {
+        accel_bias: Vector3::repeat(c(0.01)),
+        gyro_bias: Vector3::repeat(c(1e-4)),
+        accel_scale: Vector3::repeat(c(1e-4)),
+        gyro_scale: Vector3::repeat(c(1e-5)),
+        baro_bias: c(5.0),
+    };
+    let mut config = FlightConfig::new(
+        (c(flight.heading + 1f64.to_radians()), c(2f64.to_radians())),
+        noise,
+        prior,
+    );
+    config.origin = Some(flight.origin);
+    config.gnss_sigma = (c(2.0), c(4.0));
+    config.gnss_velocity_sigma = c(0.1);
+    config.gnss_latency_us = u32::try_from(flight.scenario.latency_us).expect("a latency");
+    config.launch_shift = SensorErrors {
+        accel_bias: Vector3::repeat(c(0.1)),
+        gyro_bias: Vector3::repeat(c(1e-3)),
+        accel_scale: Vector3::repeat(c(2e-3)),
+        gyro_scale: Vector3::repeat(c(1e-4)),
+        baro_bias: c(5.0),
+    };
+    config
+}
+
+/// How the filter held its own 1-sigma over a flight, from its first GNSS update on.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Held {
+    /// Epochs counted.
+    pub epochs: usize,
+    /// Of them, those with every position axis within 3 sigma of the truth.
+    pub position_inside: usize,
+    /// Likewise the velocity.
+    pub velocity_inside: usize,
+    /// Sums of the position's and the velocity's NEES (3 degrees of freedom each).
+    pub nees: (f64, f64),
+    /// At the end: the position error (m) and velocity error (m/s), 3-D.
+    pub end: (f64, f64),
+    /// At the end, the same errors' stated 1-sigma (3-D, root of the trace).
+    pub end_sigma: (f64, f64),
+}
+
+impl Held {
+    /// The fractions of epochs inside 3 sigma: position, velocity.
+    #[must_use]
+    pub fn inside(&self) -> (f64, f64) {
+        let n = self.epochs.max(1) as f64;
+        (
+            self.position_inside as f64 / n,
+            self.velocity_inside as f64 / n,
+        )
+    }
+}
+
+/// `filter` over `flight`, the navigation held against the truth at every epoch after the
+/// first fix; calls `each` after every input.
+pub fn run<T: Real>(
+    filter: &mut FlightFilter<T>,
+    flight: &RoundFlight,
+    mut each: impl FnMut(&FlightFilter<T>),
+) -> Held {
+    let mut held = Held::default();
+    let mut at = flight.truth.iter().peekable();
+    let mut now = None;
+    for input in &flight.inputs {
+        let before = filter.stats().epochs;
+        crate::flight_golden::feed(filter, input);
+        each(filter);
+        if let Input::Sample(t, ..) = input {
+            while let Some(x) = at.next_if(|x| x.0 <= *t) {
+                now = Some(x);
+            }
+        }
+        let fixed = filter.stats().taken[spincal::flight::Aiding::Position as usize] > 0;
+        if filter.stats().epochs == before || !fixed {
+            continue;
+        }
+        let Some((_, p, v)) = now else { continue };
+        let e = filter.estimate();
+        let cov = filter.covariance();
+        let dp: Vector3<f64> = Vector3::from_fn(|i, _| p[i] - e.nav.p[i].to_f64());
+        let dv: Vector3<f64> = Vector3::from_fn(|i, _| v[i] - e.nav.v[i].to_f64());
+        let block = |at: usize| nalgebra::Matrix3::from_fn(|i, j| cov[(at + i, at + j)].to_f64());
+        let (pp, pv) = (block(index::POSITION), block(index::VELOCITY));
+        let within = |d: &Vector3<f64>, m: &nalgebra::Matrix3<f64>| {
+            (0..3).all(|i| d[i].abs() <= 3.0 * m[(i, i)].max(0.0).sqrt())
+        };
+        let nees = |d: &Vector3<f64>, m: &nalgebra::Matrix3<f64>| {
+            m.cholesky().map_or(f64::INFINITY, |c| d.dot(&c.solve(d)))
+        };
+        held.epochs += 1;
+        held.position_inside += usize::from(within(&dp, &pp));
+        held.velocity_inside += usize::from(within(&dv, &pv));
+        held.nees.0 += nees(&dp, &pp);
+        held.nees.1 += nees(&dv, &pv);
+        held.end = (dp.norm(), dv.norm());
+        held.end_sigma = (pp.trace().sqrt(), pv.trace().sqrt());
+    }
+    held
+}
+
+/// The axial accelerometer's estimate against the scenario's shift, in the filter's own
+/// sigma: bias, then scale factor.
+#[must_use]
+pub fn axial_z<T: Real>(filter: &FlightFilter<T>, flight: &RoundFlight) -> (f64, f64) {
+    let s = &filter.estimate().sensors;
+    let p = filter.covariance();
+    let z = |x: T, at: usize, truth: f64| (x.to_f64() - truth) / p[(at, at)].to_f64().sqrt();
+    (
+        z(s.accel_bias.x, index::ACCEL_BIAS, flight.scenario.shift.0),
+        z(s.accel_scale.x, index::ACCEL_SCALE, flight.scenario.shift.1),
+    )
+}
+
+/// The state of `a` against `b` in `b`'s sigma: the largest ratio and the state it is in.
+#[must_use]
+pub fn departure(a: &FlightFilter<f32>, b: &FlightFilter<f64>) -> (f64, usize) {
+    let (ea, eb) = (a.estimate(), b.estimate());
+    let mut d = [0.0f64; STATES];
+    for i in 0..3 {
+        d[index::POSITION + i] = f64::from(ea.nav.p[i]) - eb.nav.p[i];
+        d[index::VELOCITY + i] = f64::from(ea.nav.v[i]) - eb.nav.v[i];
+        d[index::ACCEL_BIAS + i] = f64::from(ea.sensors.accel_bias[i]) - eb.sensors.accel_bias[i];
+        d[index::GYRO_BIAS + i] = f64::from(ea.sensors.gyro_bias[i]) - eb.sensors.gyro_bias[i];
+        d[index::ACCEL_SCALE + i] =
+            f64::from(ea.sensors.accel_scale[i]) - eb.sensors.accel_scale[i];
+        d[index::GYRO_SCALE + i] = f64::from(ea.sensors.gyro_scale[i]) - eb.sensors.gyro_scale[i];
+        d[index::RECEIVER + i] = f64::from(ea.receiver[i]) - eb.receiver[i];
+    }
+    d[index::BARO] = f64::from(ea.sensors.baro_bias) - eb.sensors.baro_bias;
+    let qa = ea.nav.attitude().cast::<f64>();
+    let turn = (qa * eb.nav.attitude().inverse()).scaled_axis();
+    for i in 0..3 {
+        d[index::ATTITUDE + i] = turn[i];
+    }
+    let p = b.covariance();
+    (0..STATES)
+        .filter(|i| p[(*i, *i)] > 0.0)
+        .map(|i| (d[i].abs() / p[(i, i)].sqrt(), i))
+        .fold((0.0, 0), |m, x| if x.0 > m.0 { x } else { m })
+}
