@@ -80,6 +80,8 @@ pub struct RoundFlight {
     /// At each sample: its time (us), the true position and velocity in the level frame at
     /// the launch point (east, north, up; m, m/s).
     pub truth: Vec<(u64, Vector3<f64>, Vector3<f64>)>,
+    /// At each sample, the true attitude (body to the level frame).
+    pub attitude: Vec<nalgebra::UnitQuaternion<f64>>,
     /// The unit's true heading at rest (rad, as [`FlightConfig::heading`] counts it).
     pub heading: f64,
     /// The launch point.
@@ -121,6 +123,8 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
     // (delivery time, order, input): samples first at a tie, then what arrives with them.
     let mut timed: Vec<(u64, u8, Input)> = Vec::new();
     let mut truth = Vec::with_capacity(flown.samples.len());
+    let mut attitude = Vec::with_capacity(flown.samples.len());
+    let level = nalgebra::UnitQuaternion::from_matrix(&to_level);
     let mut heading = 0.0;
     for (k, s) in flown.samples.iter().enumerate() {
         let t_us = us(s.t);
@@ -138,6 +142,7 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
         let fm: [f32; 3] = core::array::from_fn(|i| (f[i] + na.sample(&mut rng)) as f32);
         let wm: [f32; 3] = core::array::from_fn(|i| (w[i] + ng.sample(&mut rng)) as f32);
         timed.push((t_us, 0, Input::Sample(t_us, fm, wm, [false, false])));
+        attitude.push(level * q);
         truth.push((
             t_us,
             to_level * Vector3::from(s.r),
@@ -182,6 +187,7 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
     RoundFlight {
         inputs: timed.into_iter().map(|e| e.2).collect(),
         truth,
+        attitude,
         heading,
         origin: Geodetic {
             latitude: site.latitude,

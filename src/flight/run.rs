@@ -463,11 +463,17 @@ impl<T: Real> FlightFilter<T> {
             self.stats.navigation_resets += 1;
             return;
         }
+        // The antenna `back` ago: moved back by the velocity now less the half of the
+        // navigation's rate of change over the age (a shell decelerating at 5 g is 0.16 m
+        // from the linear guess after 80 ms, twice the track's 1-sigma).
+        let half: T = c(0.5);
         for (axis, zi) in z.iter().enumerate() {
             let (h, at) = self.filter.fix_row_back(&lever, axis, back);
             let v = self.velocity(axis);
+            let a = self.pace.1.get(axis).copied().unwrap_or_else(T::zero);
             let r = if axis == 2 { v_sigma } else { h_sigma };
-            self.take(Aiding::Position, &h, c::<T>(*zi) - (at - v * back), r * r);
+            let then = at - v * back + half * a * back * back;
+            self.take(Aiding::Position, &h, c::<T>(*zi) - then, r * r);
         }
         if let Some(vel) = velocity {
             let r = self.config.gnss_velocity_sigma;
