@@ -280,22 +280,32 @@ pub fn run<T: Real>(
     mut each: impl FnMut(&FlightFilter<T>),
 ) -> Held {
     let mut held = Held::default();
-    let mut at = flight.truth.iter().peekable();
-    let mut now = None;
+    let truth = &flight.truth;
+    let mut k = 0usize;
     for input in &flight.inputs {
         let before = filter.stats().epochs;
         crate::flight_golden::feed(filter, input);
         each(filter);
-        if let Input::Sample(t, ..) = input {
-            while let Some(x) = at.next_if(|x| x.0 <= *t) {
-                now = Some(x);
-            }
-        }
         let fixed = filter.stats().taken[spincal::flight::Aiding::Position as usize] > 0;
+        let Input::Sample(t, ..) = input else {
+            continue;
+        };
         if filter.stats().epochs == before || !fixed {
             continue;
         }
-        let Some((_, p, v)) = now else { continue };
+        // The truth at this sample, between its rows (a reference flight's are 5 ms apart).
+        while k + 1 < truth.len() && truth[k + 1].0 <= *t {
+            k += 1;
+        }
+        let (Some(a), Some(b)) = (truth.get(k), truth.get(k + 1)) else {
+            continue;
+        };
+        if a.0 > *t {
+            continue;
+        }
+        let u = (*t - a.0) as f64 / (b.0 - a.0).max(1) as f64;
+        let p = a.1 + (b.1 - a.1) * u;
+        let v = a.2 + (b.2 - a.2) * u;
         let e = filter.estimate();
         let cov = filter.covariance();
         let dp: Vector3<f64> = Vector3::from_fn(|i, _| p[i] - e.nav.p[i].to_f64());

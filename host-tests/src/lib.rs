@@ -4,6 +4,7 @@
 
 pub mod fields;
 pub mod flight_golden;
+pub mod flight_reference;
 pub mod flight_round;
 pub mod golden;
 pub mod health_golden;
