@@ -111,8 +111,8 @@ pub struct NavNoise<T> {
     /// against the standard atmosphere's).
     pub baro_walk: T,
     /// The GNSS receiver's correlated position error, 1-sigma (east, north, up, m): its
-    /// stationary spread, which fixes cannot average away within [`receiver_tau`]
-    /// (Self::receiver_tau). Zero for a receiver whose error is white.
+    /// stationary spread, which fixes cannot average away within
+    /// [`receiver_tau`](Self::receiver_tau). Zero for a receiver whose error is white.
     pub receiver_sigma: Vector3<T>,
     /// The receiver error's time constant, s (not positive: constant over the flight).
     pub receiver_tau: T,
