@@ -114,9 +114,7 @@ pub fn shell(name: &str) -> Option<RoundFlight> {
     // The angular acceleration from one sample to the next (its noise puts about 0.4 m/s^2 on
     // the transverse accelerometers through their arms; rates 4 ms apart lag the yaw and did
     // worse: 0.8 m/s^2 against the truth).
-    const SPAN: usize = 1;
-    let mut past: std::collections::VecDeque<(f64, Vector3<f64>)> =
-        std::collections::VecDeque::with_capacity(SPAN + 1);
+    let mut previous: Option<(f64, Vector3<f64>)> = None;
     for r in &imu {
         let t = r[0];
         let ya = Vector3::new(r[1], r[2], r[3]).component_mul(&lsb_a);
@@ -141,7 +139,7 @@ pub fn shell(name: &str) -> Option<RoundFlight> {
         let gyro_unscaled = gyro.unscaled(&yg, temp);
         let mut f = u_a_inv * a;
         let mut w = m_g_inv * gyro_unscaled;
-        let (t_then, w_then) = past.front().copied().unwrap_or((t, Vector3::zeros()));
+        let (t_then, w_then) = previous.unwrap_or((t, Vector3::zeros()));
         let dt = t - t_then;
         for _ in 0..2 {
             w = m_g_inv * (gyro_unscaled - gyro_scale_div(&gyro, temp, &(g_sens * f)));
@@ -158,10 +156,7 @@ pub fn shell(name: &str) -> Option<RoundFlight> {
             });
             f = u_a_inv * (a - felt);
         }
-        past.push_back((t, w));
-        if past.len() > SPAN {
-            past.pop_front();
-        }
+        previous = Some((t, w));
         let t_us = us(t);
         timed.push((
             t_us,
