@@ -4,9 +4,9 @@
 //! counted, never applied.
 
 use host_tests::flight_golden::{self, Input, SHIFT_AX, feed};
+use host_tests::flight_round::departure;
 use nalgebra::Vector3;
 use spincal::flight::{Aiding, FlightFilter, Geodetic, GnssFix, Phase};
-use spincal::nav::STATES;
 use spincal::nav::filter::index;
 
 /// The `f32` filter's largest departure from the `f64` one allowed, in the `f64` one's sigma,
@@ -21,31 +21,6 @@ fn golden() -> (Vec<Input>, flight_golden::Flight) {
         flight_golden::inputs(&flight_golden::calibration(), &flight.events),
         flight,
     )
-}
-
-/// The state of `a` against `b` in `b`'s sigma: the largest ratio and the state it is in.
-fn departure(a: &FlightFilter<f32>, b: &FlightFilter<f64>) -> (f64, usize) {
-    let (ea, eb) = (a.estimate(), b.estimate());
-    let mut d = [0.0f64; STATES];
-    for i in 0..3 {
-        d[index::POSITION + i] = f64::from(ea.nav.p[i]) - eb.nav.p[i];
-        d[index::VELOCITY + i] = f64::from(ea.nav.v[i]) - eb.nav.v[i];
-        d[index::ACCEL_BIAS + i] = f64::from(ea.sensors.accel_bias[i]) - eb.sensors.accel_bias[i];
-        d[index::GYRO_BIAS + i] = f64::from(ea.sensors.gyro_bias[i]) - eb.sensors.gyro_bias[i];
-        d[index::ACCEL_SCALE + i] =
-            f64::from(ea.sensors.accel_scale[i]) - eb.sensors.accel_scale[i];
-        d[index::GYRO_SCALE + i] = f64::from(ea.sensors.gyro_scale[i]) - eb.sensors.gyro_scale[i];
-    }
-    d[index::BARO] = f64::from(ea.sensors.baro_bias) - eb.sensors.baro_bias;
-    let qa = ea.nav.attitude().cast::<f64>();
-    let turn = (qa * eb.nav.attitude().inverse()).scaled_axis();
-    for i in 0..3 {
-        d[index::ATTITUDE + i] = turn[i];
-    }
-    let p = b.covariance();
-    (0..STATES)
-        .map(|i| (d[i].abs() / p[(i, i)].sqrt(), i))
-        .fold((0.0, 0), |m, x| if x.0 > m.0 { x } else { m })
 }
 
 /// Runs a flight through the `f32` and the `f64` filter side by side; returns the largest
