@@ -276,7 +276,6 @@ pub fn config<T: Real>(flight: &RoundFlight, antenna: [f64; 3]) -> FlightConfig<
     let mean = rest.iter().sum::<Vector3<f64>>() / rest.len().max(1) as f64;
     let heading = FlightConfig::<f64>::heading_of_azimuth(&mean, &Vector3::x(), flight.heading)
         .unwrap_or(0.0);
-    let (sigma, tau) = flight.scenario.correlated;
     let noise = NavNoise {
         accel_white: c(3e-3),
         gyro_white: c(1e-3),
@@ -284,8 +283,8 @@ pub fn config<T: Real>(flight: &RoundFlight, antenna: [f64; 3]) -> FlightConfig<
         gyro_walk: c(2e-5),
         scale_walk: c(1e-7),
         baro_walk: c(0.1),
-        receiver_sigma: Vector3::repeat(c(sigma)),
-        receiver_tau: c(tau),
+        receiver_sigma: Vector3::zeros(),
+        receiver_tau: c(0.0),
     };
     let prior = SensorErrors {
         accel_bias: Vector3::repeat(c(0.01)),
@@ -295,11 +294,8 @@ pub fn config<T: Real>(flight: &RoundFlight, antenna: [f64; 3]) -> FlightConfig<
         baro_bias: c(10.0),
     };
     let mut config = FlightConfig::new((c(heading), c(1f64.to_radians())), noise, prior);
-    config.origin = Some(flight.origin);
+    crate::flight_round::receiver(&mut config, flight);
     config.lever = Vector3::from_fn(|i, _| c(antenna[i]));
-    config.gnss_sigma = (c(2.0), c(4.0));
-    config.gnss_velocity_sigma = c(0.1);
-    config.gnss_latency_us = u32::try_from(flight.scenario.latency_us).expect("a latency");
     config.launch_shift = SensorErrors {
         accel_bias: Vector3::repeat(c(0.1)),
         gyro_bias: Vector3::repeat(c(1e-3)),

@@ -206,7 +206,6 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
 #[must_use]
 pub fn config<T: Real>(flight: &RoundFlight) -> FlightConfig<T> {
     let c = |x: f64| -> T { nalgebra::convert(x) };
-    let (sigma, tau) = flight.scenario.correlated;
     let noise = NavNoise {
         accel_white: c(NOISE.0),
         gyro_white: c(NOISE.1),
@@ -214,8 +213,8 @@ pub fn config<T: Real>(flight: &RoundFlight) -> FlightConfig<T> {
         gyro_walk: c(1e-6),
         scale_walk: c(1e-7),
         baro_walk: c(0.1),
-        receiver_sigma: Vector3::repeat(c(sigma)),
-        receiver_tau: c(tau),
+        receiver_sigma: Vector3::zeros(),
+        receiver_tau: c(0.0),
     };
     let prior = SensorErrors {
         accel_bias: Vector3::repeat(c(0.01)),
@@ -229,10 +228,7 @@ pub fn config<T: Real>(flight: &RoundFlight) -> FlightConfig<T> {
         noise,
         prior,
     );
-    config.origin = Some(flight.origin);
-    config.gnss_sigma = (c(2.0), c(4.0));
-    config.gnss_velocity_sigma = c(0.1);
-    config.gnss_latency_us = u32::try_from(flight.scenario.latency_us).expect("a latency");
+    receiver(&mut config, flight);
     config.launch_shift = SensorErrors {
         accel_bias: Vector3::repeat(c(0.1)),
         gyro_bias: Vector3::repeat(c(1e-3)),
@@ -270,6 +266,37 @@ impl Held {
             self.velocity_inside as f64 / n,
         )
     }
+}
+
+impl core::fmt::Display for Held {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let (p, v) = self.inside();
+        write!(
+            f,
+            "position within 3 sigma on {:.1} % of {} epochs, velocity {:.1} %; end error {:.2} m \
+             (stated {:.2}), {:.3} m/s (stated {:.3})",
+            100.0 * p,
+            self.epochs,
+            100.0 * v,
+            self.end.0,
+            self.end_sigma.0,
+            self.end.1,
+            self.end_sigma.1
+        )
+    }
+}
+
+/// Sets `config` up for `flight`'s receiver: the launch point given, the fixes' white 2 m /
+/// 4 m / 0.1 m/s, their latency, and their correlated wander as the receiver's states.
+pub fn receiver<T: Real>(config: &mut FlightConfig<T>, flight: &RoundFlight) {
+    let c = |x: f64| -> T { nalgebra::convert(x) };
+    let (sigma, tau) = flight.scenario.correlated;
+    config.origin = Some(flight.origin);
+    config.gnss_sigma = (c(2.0), c(4.0));
+    config.gnss_velocity_sigma = c(0.1);
+    config.gnss_latency_us = u32::try_from(flight.scenario.latency_us).expect("a latency");
+    config.noise.receiver_sigma = Vector3::repeat(c(sigma));
+    config.noise.receiver_tau = c(tau);
 }
 
 /// `filter` over `flight`, the navigation held against the truth at every epoch after the
