@@ -19,7 +19,7 @@ use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use spincal::flight::{FlightConfig, FlightFilter, Geodetic, GnssFix};
+use spincal::flight::{DelayedFlight, FlightConfig, FlightFilter, Geodetic, GnssFix};
 use spincal::nav::filter::index;
 use spincal::nav::{NavNoise, Real, STATES, SensorErrors};
 
@@ -40,6 +40,8 @@ pub struct Scenario {
     pub seed: u64,
     /// The axial accelerometer's shift: bias (m/s^2) and scale factor.
     pub shift: (f64, f64),
+    /// The roll gyro's scale-factor shift, at the same instant.
+    pub roll_scale_shift: f64,
     /// The shift comes this long after muzzle exit, s.
     pub shift_after_muzzle: f64,
     /// The fixes arrive this long after the instant they describe, us.
@@ -63,6 +65,7 @@ impl Scenario {
             spec: "shell:lat=48.6,lon=-2.2,azimuth=75,rest=1,seconds=20",
             seed,
             shift: (0.04, 6e-4),
+            roll_scale_shift: 0.0,
             shift_after_muzzle: 0.005,
             latency_us: 80_000,
             correlated: (1.5, 45.0),
@@ -86,6 +89,8 @@ pub struct RoundFlight {
     pub heading: f64,
     /// The launch point.
     pub origin: Geodetic,
+    /// The GNSS antenna from the IMU's reference point, body axes, m.
+    pub antenna: Vector3<f64>,
     /// When the shift comes, us.
     pub shift_us: u64,
     /// The scenario.
@@ -130,12 +135,13 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
         let t_us = us(s.t);
         let q = body_to_flight(s.q);
         let mut f = Vector3::from(s.f);
-        let w = Vector3::from(s.w) + q.inverse() * earth_rate;
+        let mut w = Vector3::from(s.w) + q.inverse() * earth_rate;
         if k == 0 {
             heading = true_heading(&(to_level * q.to_rotation_matrix().into_inner()), &f);
         }
         if s.t >= shift_at {
             f.x = f.x * (1.0 + scenario.shift.1) + scenario.shift.0;
+            w.x *= 1.0 + scenario.roll_scale_shift;
         }
         walked += Vector3::from_fn(|_, _| step.sample(&mut rng));
         f += walked;
@@ -189,6 +195,7 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
         truth,
         attitude,
         heading,
+        antenna: Vector3::zeros(),
         origin: Geodetic {
             latitude: site.latitude,
             longitude: site.longitude,
@@ -286,12 +293,13 @@ impl core::fmt::Display for Held {
     }
 }
 
-/// Sets `config` up for `flight`'s receiver: the launch point given, the fixes' white 2 m /
+/// Sets `config` up for `flight`'s receiver: the launch point given, its antenna, the fixes' white 2 m /
 /// 4 m / 0.1 m/s, their latency, and their correlated wander as the receiver's states.
 pub fn receiver<T: Real>(config: &mut FlightConfig<T>, flight: &RoundFlight) {
     let c = |x: f64| -> T { nalgebra::convert(x) };
     let (sigma, tau) = flight.scenario.correlated;
     config.origin = Some(flight.origin);
+    config.lever = flight.antenna.map(c);
     config.gnss_sigma = (c(2.0), c(4.0));
     config.gnss_velocity_sigma = c(0.1);
     config.gnss_latency_us = u32::try_from(flight.scenario.latency_us).expect("a latency");
@@ -299,10 +307,57 @@ pub fn receiver<T: Real>(config: &mut FlightConfig<T>, flight: &RoundFlight) {
     config.noise.receiver_tau = c(tau);
 }
 
-/// `filter` over `flight`, the navigation held against the truth at every epoch after the
-/// first fix; calls `each` after every input.
-pub fn run<T: Real>(
-    filter: &mut FlightFilter<T>,
+/// A flight filter the harness can feed: [`FlightFilter`] itself, or run on a delayed
+/// horizon ([`DelayedFlight`]).
+pub trait Flown<T: Real> {
+    /// One input.
+    fn feed(&mut self, input: &Input);
+    /// The filter inside.
+    fn filter(&self) -> &FlightFilter<T>;
+    /// Everything held, to the filter (the end of the flight).
+    fn flush(&mut self) {}
+}
+
+impl<T: Real> Flown<T> for FlightFilter<T> {
+    fn feed(&mut self, input: &Input) {
+        crate::flight_golden::feed(self, input);
+    }
+    fn filter(&self) -> &FlightFilter<T> {
+        self
+    }
+}
+
+impl<T: Real, const N: usize> Flown<T> for DelayedFlight<T, N> {
+    fn feed(&mut self, input: &Input) {
+        let c = |x: f32| -> T { nalgebra::convert(f64::from(x)) };
+        match input {
+            Input::Sample(t, f, w, doubt) => self.sample(
+                *t,
+                &Vector3::new(c(f[0]), c(f[1]), c(f[2])),
+                &Vector3::new(c(w[0]), c(w[1]), c(w[2])),
+                *doubt,
+            ),
+            Input::Fix(fix) => self.gnss(fix),
+            Input::Pressure(t, p) => self.pressure(*t, c(*p)),
+        }
+    }
+    fn filter(&self) -> &FlightFilter<T> {
+        DelayedFlight::filter(self)
+    }
+    fn flush(&mut self) {
+        DelayedFlight::flush(self);
+    }
+}
+
+/// The delayed horizon's buffer the round-Earth and reference shells are run on: 1,024 samples
+/// (512 ms at 2 kHz, 102 ms at 10 kHz), more than their 80 ms latency at either rate.
+pub const HORIZON_SAMPLES: usize = 1024;
+
+/// `flown` over `flight`, the navigation held against the truth at every epoch after the
+/// first fix (at the filter's own instant, the horizon's age when it runs delayed); calls
+/// `each` after every input, and flushes at the end.
+pub fn run<T: Real, F: Flown<T>>(
+    flown: &mut F,
     flight: &RoundFlight,
     mut each: impl FnMut(&FlightFilter<T>),
 ) -> Held {
@@ -310,27 +365,28 @@ pub fn run<T: Real>(
     let truth = &flight.truth;
     let mut k = 0usize;
     for input in &flight.inputs {
-        let before = filter.stats().epochs;
-        crate::flight_golden::feed(filter, input);
+        let before = flown.filter().stats().epochs;
+        flown.feed(input);
+        let filter = flown.filter();
         each(filter);
         let fixed = filter.stats().taken[spincal::flight::Aiding::Position as usize] > 0;
-        let Input::Sample(t, ..) = input else {
+        let Some(t) = filter.now_us() else {
             continue;
         };
         if filter.stats().epochs == before || !fixed {
             continue;
         }
         // The truth at this sample, between its rows (a reference flight's are 5 ms apart).
-        while k + 1 < truth.len() && truth[k + 1].0 <= *t {
+        while k + 1 < truth.len() && truth[k + 1].0 <= t {
             k += 1;
         }
         let (Some(a), Some(b)) = (truth.get(k), truth.get(k + 1)) else {
             continue;
         };
-        if a.0 > *t {
+        if a.0 > t {
             continue;
         }
-        let u = (*t - a.0) as f64 / (b.0 - a.0).max(1) as f64;
+        let u = (t - a.0) as f64 / (b.0 - a.0).max(1) as f64;
         let p = a.1 + (b.1 - a.1) * u;
         let v = a.2 + (b.2 - a.2) * u;
         let e = filter.estimate();
@@ -353,6 +409,7 @@ pub fn run<T: Real>(
         held.end = (dp.norm(), dv.norm());
         held.end_sigma = (pp.trace().sqrt(), pv.trace().sqrt());
     }
+    flown.flush();
     held
 }
 
@@ -367,6 +424,15 @@ pub fn axial_z<T: Real>(filter: &FlightFilter<T>, flight: &RoundFlight) -> (f64,
         z(s.accel_bias.x, index::ACCEL_BIAS, flight.scenario.shift.0),
         z(s.accel_scale.x, index::ACCEL_SCALE, flight.scenario.shift.1),
     )
+}
+
+/// The roll gyro's scale-factor estimate against the scenario's shift, in the filter's own
+/// sigma.
+#[must_use]
+pub fn roll_scale_z<T: Real>(filter: &FlightFilter<T>, flight: &RoundFlight) -> f64 {
+    let x = filter.estimate().sensors.gyro_scale.x.to_f64();
+    let p = filter.covariance()[(index::GYRO_SCALE, index::GYRO_SCALE)].to_f64();
+    (x - flight.scenario.roll_scale_shift) / p.sqrt()
 }
 
 /// The state of `a` against `b` in `b`'s sigma: the largest ratio and the state it is in.

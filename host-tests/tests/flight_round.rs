@@ -4,17 +4,23 @@
 //! 45 s beside its white noise; the axial accelerometer shifting 5 ms after muzzle exit, the
 //! setback not saturating (`host_tests::flight_round`).
 
-use host_tests::flight_round::{Scenario, axial_z, config, departure, fly, run};
-use spincal::flight::{Aiding, FlightFilter};
+use host_tests::flight_round::{
+    HORIZON_SAMPLES, Scenario, axial_z, config, departure, fly, roll_scale_z, run,
+};
+use spincal::flight::{Aiding, DelayedFlight, FlightFilter};
 use spincal::nav::filter::index;
 
 #[test]
 fn a_gnss_fuzes_late_wandering_fixes_keep_the_track_within_its_sigma_and_the_shift_is_found() {
     let flight = fly(&Scenario::shell(1));
-    let mut filter = FlightFilter::<f32>::new(config(&flight));
-    let held = run(&mut filter, &flight, |_| {});
+    let mut late = FlightFilter::<f32>::new(config(&flight));
+    let taken_late = run(&mut late, &flight, |_| {});
+    let mut delayed = DelayedFlight::<f32, HORIZON_SAMPLES>::new(config(&flight));
+    let held = run(&mut delayed, &flight, |_| {});
+    println!("each fix taken as it arrives: {taken_late}");
+    let filter = delayed.filter();
     let (pin, vin) = held.inside();
-    let (zb, zs) = axial_z(&filter, &flight);
+    let (zb, zs) = axial_z(filter, &flight);
     let s = filter.stats();
     println!("{held:?}\n{s:?}");
     println!(
@@ -59,11 +65,11 @@ fn the_receivers_wander_taken_as_white_leaves_the_track_outside_its_sigma() {
         walk: 1e-3,
         ..Scenario::shell(1)
     });
-    let mut carried = FlightFilter::<f32>::new(config(&flight));
+    let mut carried = DelayedFlight::<f32, HORIZON_SAMPLES>::new(config(&flight));
     let with = run(&mut carried, &flight, |_| {});
     let mut white = config::<f32>(&flight);
     white.noise.receiver_sigma = nalgebra::Vector3::zeros();
-    let mut filter = FlightFilter::<f32>::new(white);
+    let mut filter = DelayedFlight::<f32, HORIZON_SAMPLES>::new(white);
     let without = run(&mut filter, &flight, |_| {});
     println!(
         "biases walking: position within 3 sigma {:.1} % with the receiver's states, {:.1} % \
@@ -77,8 +83,10 @@ fn the_receivers_wander_taken_as_white_leaves_the_track_outside_its_sigma() {
     assert!(without.inside().0 < 0.8, "{without:?}");
 }
 
-/// 50 flights (`FLIGHTS=n` for another count, `WALK=x` for walking biases): the position's and the velocity's NEES, the
-/// innovations' NIS, the axial shift's z, and the `f32` filter against the `f64` one.
+/// 50 flights on the delayed horizon (`FLIGHTS=n` for another count, `WALK=x` for walking
+/// biases, `LATE=1` for the filter alone taking the fixes late): the position's and the
+/// velocity's NEES, the innovations' NIS, the axial shift's z, and the `f32` filter against
+/// the `f64` one.
 #[test]
 #[ignore = "a population: cargo test --release -p host-tests --test flight_round -- --ignored --nocapture"]
 fn population() {
@@ -94,15 +102,27 @@ fn population() {
         .ok()
         .and_then(|x| x.parse().ok())
         .unwrap_or(0.0);
+    // LATE=1: the filter alone, taking each fix as it arrives (the delayed horizon's
+    // comparison).
+    let late = std::env::var("LATE").is_ok();
     for seed in 0..n {
         let flight = fly(&Scenario {
             walk,
             ..Scenario::shell(100 + seed)
         });
-        let mut single = FlightFilter::<f32>::new(config(&flight));
-        let mut double = FlightFilter::<f64>::new(config(&flight));
-        let held = run(&mut single, &flight, |_| {});
-        run(&mut double, &flight, |_| {});
+        let (held, single, double) = if late {
+            let mut single = FlightFilter::<f32>::new(config(&flight));
+            let mut double = FlightFilter::<f64>::new(config(&flight));
+            let held = run(&mut single, &flight, |_| {});
+            run(&mut double, &flight, |_| {});
+            (held, single, double)
+        } else {
+            let mut single = DelayedFlight::<f32, HORIZON_SAMPLES>::new(config(&flight));
+            let mut double = DelayedFlight::<f64, HORIZON_SAMPLES>::new(config(&flight));
+            let held = run(&mut single, &flight, |_| {});
+            run(&mut double, &flight, |_| {});
+            (held, single.filter().clone(), double.filter().clone())
+        };
         let (a, b) = held.inside();
         pin.push(a);
         vin.push(b);
@@ -143,34 +163,54 @@ fn population() {
     );
 }
 
-/// The independent simulator's shells (`../shared/data/reference-flights`), the unit's
-/// pre-launch errors taken out exactly: the track against the truth, and the launch shift. A
-/// measurement (the round's filter does not yet hold on them: BENCHMARKS.md).
+/// The independent simulator's shells (`../shared/data/reference-flights`: McCoy 6-DOF,
+/// WGS-84 with the Earth turning, 4 kHz, fixes 80 ms late with a Gauss-Markov wander), the
+/// unit's pre-launch errors taken out exactly, run on the delayed horizon: the track within
+/// its 3 sigma, the 155 mm's launch shift (axial bias +0.06 m/s^2, roll scale +2e-4) found,
+/// the 105 mm held, `f32` against `f64`. The filter alone, taking each fix as it arrives, is
+/// printed beside it (it does not hold: BENCHMARKS.md).
 #[test]
-#[ignore = "a measurement: cargo test --release -p host-tests --test flight_round reference -- --ignored --nocapture"]
-fn the_reference_shells_through_the_rounds_filter() {
+fn the_reference_shells_hold_their_track_on_a_delayed_horizon_and_the_shift_is_found() {
     for name in ["shell155", "shell105"] {
         let Some(flight) = host_tests::flight_reference::shell(name) else {
             return;
         };
-        let mut filter = FlightFilter::<f32>::new(host_tests::flight_reference::config(
-            &flight,
-            [0.05, 0.0, 0.0],
-        ));
-        let held = run(&mut filter, &flight, |_| {});
+        let config = host_tests::flight_reference::config(&flight);
+        let mut late = FlightFilter::<f32>::new(config);
+        let taken_late = run(&mut late, &flight, |_| {});
+        let mut single = DelayedFlight::<f32, HORIZON_SAMPLES>::new(config);
+        let held = run(&mut single, &flight, |_| {});
+        let mut double = DelayedFlight::<f64, HORIZON_SAMPLES>::new(
+            host_tests::flight_reference::config(&flight),
+        );
+        run(&mut double, &flight, |_| {});
+        let (worst, state) = departure(single.filter(), double.filter());
+        let filter = single.filter();
+        let (zb, zs) = axial_z(filter, &flight);
+        let zr = roll_scale_z(filter, &flight);
         let e = filter.estimate();
-        let p = filter.covariance();
-        let sd = |i: usize| f64::from(p[(i, i)]).sqrt();
         println!(
-            "{name}: {held}; accel bias x {:+.4} +- {:.4}, gyro scale x {:+.2e} +- {:.1e}; {:?}",
+            "{name}: each fix as it arrives: {taken_late}\n{name}: on the delayed horizon: {held}; \
+             axial bias {:+.4} (z {zb:+.2}), axial scale z {zs:+.2}, roll scale {:+.3e} \
+             (z {zr:+.2}); f32 against f64 at the end {worst:.3} sigma (state {state}); {:?}",
             e.sensors.accel_bias.x,
-            sd(index::ACCEL_BIAS),
             e.sensors.gyro_scale.x,
-            sd(index::GYRO_SCALE),
             filter.stats()
+        );
+        let (pin, vin) = held.inside();
+        assert!(held.epochs > 1500, "{name}: {held:?}");
+        assert!(pin >= 0.95 && vin >= 0.95, "{name}: {held}");
+        assert!(
+            zb.abs() <= 3.0 && zs.abs() <= 3.0 && zr.abs() <= 3.0,
+            "{name}: {zb} {zs} {zr}"
+        );
+        assert!(
+            worst < 0.1,
+            "{name}: f32 {worst} sigma from f64 in state {state}"
         );
     }
 }
+
 /// The harness's inverse of the reference unit's sensor model, held against the truth's own
 /// specific force and rate (200 Hz rows): what is left is the noise, the differenced angular
 /// acceleration's noise on the arms, and the launch shift (the 155's roll scale, 0.32 rad/s).
@@ -211,9 +251,6 @@ fn the_reference_shells_corrected_samples_match_their_truth() {
                     continue;
                 }
                 if let Some(r) = truth.get(t) {
-                    if r[0] < 0.02 && r[0] > -0.001 {
-                        continue;
-                    }
                     let df = nalgebra::Vector3::from_fn(|k, _| f64::from(f[k]) - r[11 + k]);
                     let dw = nalgebra::Vector3::from_fn(|k, _| f64::from(w[k]) - r[14 + k]);
                     sf += df.component_mul(&df);

@@ -51,6 +51,7 @@
 
 mod air;
 mod config;
+mod delayed;
 mod doubt;
 mod origin;
 mod overlay;
@@ -60,6 +61,7 @@ mod stats;
 
 pub use air::{pressure_height, speed_of_sound};
 pub use config::FlightConfig;
+pub use delayed::DelayedFlight;
 pub use doubt::doubted;
 pub use origin::{Geodetic, Origin};
 pub use report::FlightReport;

@@ -215,6 +215,18 @@ impl<T: Real> FlightFilter<T> {
         self.setback_end_us
     }
 
+    /// The instant of the last sample taken, us.
+    #[must_use]
+    pub fn now_us(&self) -> Option<u64> {
+        self.now_us
+    }
+
+    /// The error-state filter inside (its estimate, covariance, Earth and noise).
+    #[must_use]
+    pub fn error_filter(&self) -> &ErrorFilter<T> {
+        &self.filter
+    }
+
     /// One corrected sample at `t_us` on the IMU's clock: specific force (m/s^2) and rate
     /// (rad/s), body axes, and whether the corrector's flags (or the codes at their rails)
     /// leave the accelerometer's and the gyro's readings in doubt.

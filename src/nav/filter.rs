@@ -28,7 +28,7 @@ use nalgebra::{Matrix3, RealField, SMatrix, SVector, Vector3};
 
 use super::earth::Earth;
 use super::real::Real;
-use super::strapdown::{Interval, Step};
+use super::strapdown::{Interval, Navigation, Step};
 
 pub use super::estimate::{Estimate, SensorErrors};
 
@@ -323,6 +323,44 @@ impl<T: Real> ErrorFilter<T> {
             a.lost.0 += d.force * dt;
             a.lost.1 += d.rate * dt;
         }
+    }
+
+    /// The navigation carried through further samples, the filter left as it is: each
+    /// compensated by the sensor errors as estimated, a doubted reading replaced by the last
+    /// trusted one as [`sample`](Self::sample) does. What a filter run on a delayed horizon
+    /// gives as the navigation now.
+    #[must_use]
+    pub fn carried<I>(&self, samples: I) -> Navigation<T>
+    where
+        I: IntoIterator<Item = (Vector3<T>, Vector3<T>, Interval<T>, [bool; 2])>,
+    {
+        let mut nav = self.estimate.nav;
+        let mut last = self.last;
+        for (f, w, step, doubted) in samples {
+            let (mut fc, mut wc) = self.estimate.sensors.compensate(&f, &w);
+            if let Some((w0, f0)) = last {
+                if doubted[0] {
+                    fc = f0;
+                }
+                if doubted[1] {
+                    wc = w0;
+                }
+            }
+            let Some((w0, f0)) = last.replace((wc, fc)) else {
+                continue;
+            };
+            if step.seconds_of() > T::zero() {
+                nav.propagate(
+                    &self.earth,
+                    &Step {
+                        w: [w0, wc],
+                        f: [f0, fc],
+                        dt: step,
+                    },
+                );
+            }
+        }
+        nav
     }
 
     /// Steps the covariance over the samples navigated since the last step; returns the
