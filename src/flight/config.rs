@@ -123,9 +123,217 @@ impl<T: Real> FlightConfig<T> {
     }
 }
 
+/// A field of a [`FlightConfig`] the filter cannot run with: which, and what it must be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ConfigFault {
+    /// The field, as the struct names it (`noise.gyro_white`, `gnss_sigma.1`).
+    pub field: &'static str,
+    /// What it must be.
+    pub expected: &'static str,
+}
+
+impl core::fmt::Display for ConfigFault {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "flight config: {} must be {}", self.field, self.expected)
+    }
+}
+
+const POSITIVE: &str = "finite and above zero";
+const NOT_NEGATIVE: &str = "finite and not negative";
+
+/// `Err` naming `field` unless `ok`.
+fn need(ok: bool, field: &'static str, expected: &'static str) -> Result<(), ConfigFault> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ConfigFault { field, expected })
+    }
+}
+
+fn positive<T: Real>(x: T, field: &'static str) -> Result<(), ConfigFault> {
+    need(x.is_finite() && x > T::zero(), field, POSITIVE)
+}
+
+fn not_negative<T: Real>(x: T, field: &'static str) -> Result<(), ConfigFault> {
+    need(x.is_finite() && x >= T::zero(), field, NOT_NEGATIVE)
+}
+
+/// Each of a prior's (or a shift's) 1-sigmas finite and not negative; `names` in the order
+/// accelerometer bias, gyro bias, accelerometer scale, gyro scale, barometer bias.
+fn sigmas<T: Real>(s: &SensorErrors<T>, names: [&'static str; 5]) -> Result<(), ConfigFault> {
+    let [ab, gb, as_, gs, bb] = names;
+    let all = |v: &Vector3<T>| v.iter().all(|x| x.is_finite() && *x >= T::zero());
+    need(all(&s.accel_bias), ab, NOT_NEGATIVE)?;
+    need(all(&s.gyro_bias), gb, NOT_NEGATIVE)?;
+    need(all(&s.accel_scale), as_, NOT_NEGATIVE)?;
+    need(all(&s.gyro_scale), gs, NOT_NEGATIVE)?;
+    not_negative(s.baro_bias, bb)
+}
+
+impl<T: Real> FlightConfig<T> {
+    /// The first field the filter cannot run with, named: a NaN, an infinity or a negative
+    /// 1-sigma would otherwise reach the covariance, which the filter would put back to a
+    /// prior that is itself broken at every step; a zero 1-sigma of a fix divides by zero at
+    /// its first update; a latency beyond [`MAX_FIX_AGE_US`](super::MAX_FIX_AGE_US) refuses
+    /// every fix as stale; a launch force under 1 g launches on the pad.
+    ///
+    /// # Errors
+    /// The first field that is not what it must be.
+    pub fn check(&self) -> Result<(), ConfigFault> {
+        if let Some(o) = self.origin {
+            need(
+                o.is_plausible(),
+                "origin",
+                "a position on the Earth (latitude within 90 degrees, longitude within 360, height within 100 km)",
+            )?;
+        }
+        need(self.heading.0.is_finite(), "heading.0", "finite, rad")?;
+        positive(self.heading.1, "heading.1")?;
+        need(
+            self.spin_axis.iter().all(|x| x.is_finite()) && self.spin_axis.norm() > T::zero(),
+            "spin_axis",
+            "a finite axis that is not zero",
+        )?;
+        need(
+            self.lever.iter().all(|x| x.is_finite()) && self.lever.norm() < c(10.0),
+            "lever",
+            "finite and shorter than 10 m",
+        )?;
+        positive(self.gnss_sigma.0, "gnss_sigma.0")?;
+        positive(self.gnss_sigma.1, "gnss_sigma.1")?;
+        positive(self.gnss_velocity_sigma, "gnss_velocity_sigma")?;
+        need(
+            u64::from(self.gnss_latency_us) < super::MAX_FIX_AGE_US,
+            "gnss_latency_us",
+            "under 1,000,000 us (a fix older than a second is refused as stale)",
+        )?;
+        positive(self.baro_sigma, "baro_sigma")?;
+        not_negative(self.baro_cp, "baro_cp")?;
+        positive(self.baro_mach, "baro_mach")?;
+        need(self.baro_interval_us > 0, "baro_interval_us", "above zero")?;
+        positive(self.gate, "gate")?;
+        need(
+            self.covariance_interval_us > 0
+                && u64::from(self.covariance_interval_us) <= super::MAX_SAMPLE_GAP_US,
+            "covariance_interval_us",
+            "1 .. 100,000 us",
+        )?;
+        need(self.pad_interval_us > 0, "pad_interval_us", "above zero")?;
+        need(self.level_us > 0, "level_us", "above zero")?;
+        need(
+            self.launch_force.is_finite() && self.launch_force > c(super::air::G0),
+            "launch_force",
+            "finite and above 1 g (9.80665 m/s^2): at rest the unit senses 1 g",
+        )?;
+        not_negative(self.doubt.0, "doubt.0")?;
+        not_negative(self.doubt.1, "doubt.1")?;
+        let n = &self.noise;
+        not_negative(n.accel_white, "noise.accel_white")?;
+        not_negative(n.gyro_white, "noise.gyro_white")?;
+        not_negative(n.accel_walk, "noise.accel_walk")?;
+        not_negative(n.gyro_walk, "noise.gyro_walk")?;
+        not_negative(n.scale_walk, "noise.scale_walk")?;
+        not_negative(n.baro_walk, "noise.baro_walk")?;
+        need(
+            n.receiver_sigma
+                .iter()
+                .all(|x| x.is_finite() && *x >= T::zero()),
+            "noise.receiver_sigma",
+            NOT_NEGATIVE,
+        )?;
+        if n.receiver_sigma.iter().any(|x| *x > T::zero()) {
+            positive(n.receiver_tau, "noise.receiver_tau")?;
+        }
+        sigmas(
+            &self.sensor_sigma,
+            [
+                "sensor_sigma.accel_bias",
+                "sensor_sigma.gyro_bias",
+                "sensor_sigma.accel_scale",
+                "sensor_sigma.gyro_scale",
+                "sensor_sigma.baro_bias",
+            ],
+        )?;
+        sigmas(
+            &self.launch_shift,
+            [
+                "launch_shift.accel_bias",
+                "launch_shift.gyro_bias",
+                "launch_shift.accel_scale",
+                "launch_shift.gyro_scale",
+                "launch_shift.baro_bias",
+            ],
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn good() -> FlightConfig<f32> {
+        let noise = NavNoise {
+            accel_white: 1e-3,
+            gyro_white: 1e-4,
+            accel_walk: 1e-4,
+            gyro_walk: 1e-5,
+            scale_walk: 1e-6,
+            baro_walk: 0.1,
+            receiver_sigma: Vector3::new(1.5, 1.5, 3.0),
+            receiver_tau: 60.0,
+        };
+        let prior = SensorErrors {
+            accel_bias: Vector3::repeat(0.05),
+            gyro_bias: Vector3::repeat(0.005),
+            accel_scale: Vector3::repeat(1e-3),
+            gyro_scale: Vector3::repeat(1e-3),
+            baro_bias: 5.0,
+        };
+        FlightConfig::new((0.3, 0.05), noise, prior)
+    }
+
+    /// Each kind of field a filter cannot run with is named; the defaults pass.
+    #[test]
+    fn a_config_the_filter_cannot_run_with_is_named_by_its_field() {
+        assert_eq!(good().check(), Ok(()));
+        type Spoil = fn(&mut FlightConfig<f32>);
+        let cases: [(&str, Spoil); 12] = [
+            ("heading.1", |c| c.heading.1 = 0.0),
+            ("heading.0", |c| c.heading.0 = f32::NAN),
+            ("spin_axis", |c| c.spin_axis = Vector3::zeros()),
+            ("gnss_sigma.1", |c| c.gnss_sigma.1 = -4.0),
+            ("gnss_velocity_sigma", |c| c.gnss_velocity_sigma = 0.0),
+            ("gnss_latency_us", |c| c.gnss_latency_us = 2_000_000),
+            ("covariance_interval_us", |c| c.covariance_interval_us = 0),
+            ("launch_force", |c| c.launch_force = 5.0),
+            ("noise.gyro_white", |c| c.noise.gyro_white = f32::NAN),
+            ("noise.receiver_tau", |c| c.noise.receiver_tau = 0.0),
+            ("sensor_sigma.gyro_scale", |c| {
+                c.sensor_sigma.gyro_scale.y = f32::INFINITY
+            }),
+            ("launch_shift.baro_bias", |c| {
+                c.launch_shift.baro_bias = -1.0
+            }),
+        ];
+        for (field, spoil) in cases {
+            let mut c = good();
+            spoil(&mut c);
+            assert_eq!(c.check().map_err(|f| f.field), Err(field));
+        }
+        // A receiver that errs white needs no time constant.
+        let mut white = good();
+        white.noise.receiver_sigma = Vector3::zeros();
+        white.noise.receiver_tau = 0.0;
+        assert_eq!(white.check(), Ok(()));
+        let mut far = good();
+        far.origin = Some(Geodetic {
+            latitude: 95.0,
+            longitude: 0.0,
+            height: 0.0,
+        });
+        assert_eq!(far.check().map_err(|f| f.field), Err("origin"));
+    }
 
     /// The reference rocket at rest (RocketPy's Calisto on its rail, 85 degrees up at azimuth
     /// 120, `../shared/data/reference-flights/rocket_calisto`): its truth's specific force at

@@ -91,6 +91,15 @@ pub struct DelayedFlight<T: Real, const N: usize> {
 }
 
 impl<T: Real, const N: usize> DelayedFlight<T, N> {
+    /// [`new`](Self::new), once [`FlightConfig::check`] passes.
+    ///
+    /// # Errors
+    /// The first field of `config` the filter cannot run with, named.
+    pub fn try_new(config: FlightConfig<T>) -> Result<Self, crate::flight::ConfigFault> {
+        config.check()?;
+        Ok(Self::new(config))
+    }
+
     /// A filter set up by `config`, run [`FlightConfig::gnss_latency_us`] behind the samples
     /// (the filter inside takes each fix at its instant: its own latency is zero).
     #[must_use]

@@ -60,7 +60,7 @@ mod run;
 mod stats;
 
 pub use air::{pressure_height, speed_of_sound};
-pub use config::FlightConfig;
+pub use config::{ConfigFault, FlightConfig};
 pub use delayed::DelayedFlight;
 pub use doubt::doubted;
 pub use origin::{Geodetic, Origin};

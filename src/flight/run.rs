@@ -86,7 +86,20 @@ fn micros<T: Real>(us: u64) -> T {
 }
 
 impl<T: Real> FlightFilter<T> {
-    /// A filter set up by `config`, levelling from its first sample.
+    /// A filter set up by `config`, levelling from its first sample, once
+    /// [`FlightConfig::check`] passes.
+    ///
+    /// # Errors
+    /// The first field of `config` the filter cannot run with, named.
+    pub fn try_new(config: FlightConfig<T>) -> Result<Self, super::ConfigFault> {
+        config.check()?;
+        Ok(Self::new(config))
+    }
+
+    /// A filter set up by `config`, levelling from its first sample. The config is taken as
+    /// it is ([`try_new`](Self::try_new) checks it first): an implausible origin is dropped
+    /// (the first good fix becomes the origin), anything else not finite reaches the
+    /// covariance.
     #[must_use]
     pub fn new(config: FlightConfig<T>) -> Self {
         let prior = Self::prior(&config);

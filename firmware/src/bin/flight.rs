@@ -49,7 +49,13 @@ fn main() -> ! {
         hprintln!("FAIL: imu_spin.blob is not an IMU's");
         spincal_firmware::exit(false);
     };
-    let mut filter = FlightFilter::new(flight_config());
+    let mut filter = match FlightFilter::try_new(flight_config()) {
+        Ok(filter) => filter,
+        Err(fault) => {
+            hprintln!("FAIL: {}", fault.field);
+            spincal_firmware::exit(false);
+        }
+    };
     let mut expected = EXPECTED
         .chunks_exact(4)
         .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
