@@ -1,6 +1,7 @@
-//! The README runs as written (issue 35): every ```sh block is taken from `README.md` and each
-//! of its commands run in order, in one scratch directory, as a newcomer would type them, so
-//! that an example cannot drift from the tool again.
+//! The README and the guide run as written (issues 35, 48): every ```sh block is taken from
+//! `README.md` and then from the guide's chapters (`docs/src/`, in `SUMMARY.md`'s order), and
+//! each of its commands run in order, in one scratch directory, as a newcomer would type them,
+//! so that an example cannot drift from the tool again.
 //!
 //! - `calflash ...` and `cargo run --release -p calflash -- ...` run this build's `calflash`.
 //! - The device port (`/dev/ttyUSB0`, `tcp://127.0.0.1:4444`) is the one stand-in: the
@@ -48,9 +49,10 @@ const VERDICTS: [&str; 11] = [
 /// Far above what any README command needs in a debug build.
 const LIMIT_S: u32 = 900;
 
-/// One command of a block: its README line, the command and its comment.
+/// One command of a block: its file and line, the command and its comment.
 #[derive(Debug)]
 struct Line {
+    file: String,
     block: usize,
     at: usize,
     command: String,
@@ -80,6 +82,7 @@ fn commands(readme: &str) -> Vec<Line> {
             None => (code.to_string(), false),
         };
         let line = pending.get_or_insert_with(|| Line {
+            file: String::new(),
             block,
             at,
             command: String::new(),
@@ -100,6 +103,35 @@ fn commands(readme: &str) -> Vec<Line> {
                 ..l
             });
         }
+    }
+    out
+}
+
+/// The README, then the guide's chapters in the order `docs/src/SUMMARY.md` lists them: each
+/// command with its file (`README.md`, `docs/src/fit.md`), blocks numbered across them all.
+fn documents(repo: &Path) -> Vec<Line> {
+    let mut files = vec!["README.md".to_string()];
+    let summary = std::fs::read_to_string(repo.join("docs/src/SUMMARY.md"))
+        .expect("docs/src/SUMMARY.md: the guide's contents");
+    for l in summary.lines() {
+        if let Some((_, rest)) = l.split_once("](") {
+            let name = rest.trim_end_matches(')');
+            files.push(format!("docs/src/{name}"));
+        }
+    }
+    let mut out = Vec::new();
+    let mut blocks = 0;
+    for file in files {
+        let text = std::fs::read_to_string(repo.join(&file))
+            .unwrap_or_else(|e| panic!("{file}, listed in docs/src/SUMMARY.md: {e}"));
+        let lines = commands(&text);
+        let most = lines.iter().map(|l| l.block).max().unwrap_or(0);
+        out.extend(lines.into_iter().map(|l| Line {
+            file: file.clone(),
+            block: l.block + blocks,
+            ..l
+        }));
+        blocks += most;
     }
     out
 }
@@ -170,8 +202,7 @@ fn scratch(repo: &Path) -> (tempfile::TempDir, PathBuf, bool) {
 #[test]
 fn every_readme_example_runs_as_written() {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let readme = std::fs::read_to_string(repo.join("README.md")).unwrap();
-    let lines = commands(&readme);
+    let lines = documents(&repo);
     assert!(lines.len() > 40, "only {} commands found", lines.len());
     let (dir, work, has_shared) = scratch(&repo);
     let home = dir.path().join("home");
@@ -198,7 +229,7 @@ fn every_readme_example_runs_as_written() {
             .command
             .replace("/dev/ttyUSB0", &port)
             .replace("tcp://127.0.0.1:4444", &port);
-        let what = format!("README.md line {}: `{}`", line.at, line.command);
+        let what = format!("{} line {}: `{}`", line.file, line.at, line.command);
         if cmd.starts_with("cargo xtask") {
             skipped.push(format!("{what}: CI runs it (.ci/run)"));
             continue;
@@ -255,7 +286,8 @@ fn every_readme_example_runs_as_written() {
         ran += 1;
         if std::env::var("README_SHOW").is_ok_and(|v| v == "1") {
             println!(
-                "line {} exit {code}: {}",
+                "{} line {} exit {code}: {}",
+                line.file,
                 line.at,
                 stdout.lines().next().unwrap_or("")
             );
@@ -304,4 +336,44 @@ fn commands_are_read_as_a_shell_reads_them() {
     assert_eq!(lines[1].command, "X=1");
     assert_eq!(split_comment("a '#b' \"#c\" #d"), ("a '#b' \"#c\" ", "d"));
     assert_eq!(split_comment("a#b"), ("a#b", ""));
+}
+
+/// Every chapter in `docs/src/` is in `SUMMARY.md` (mdBook leaves the others out), every
+/// chapter `SUMMARY.md` lists is there, and the README links each of them.
+#[test]
+fn the_guide_lists_every_chapter_and_the_readme_links_them() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let summary = std::fs::read_to_string(repo.join("docs/src/SUMMARY.md")).unwrap();
+    let listed: Vec<String> = summary
+        .lines()
+        .filter_map(|l| {
+            l.split_once("](")
+                .map(|(_, r)| r.trim_end_matches(')').to_string())
+        })
+        .collect();
+    let mut present: Vec<String> = std::fs::read_dir(repo.join("docs/src"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".md") && n != "SUMMARY.md")
+        .collect();
+    present.sort();
+    let mut sorted = listed.clone();
+    sorted.sort();
+    assert_eq!(
+        sorted, present,
+        "docs/src/SUMMARY.md against the files in docs/src"
+    );
+    let readme = std::fs::read_to_string(repo.join("README.md")).unwrap();
+    for name in listed.iter().filter(|n| *n != "introduction.md") {
+        assert!(
+            readme.contains(&format!("](docs/src/{name})")),
+            "README.md does not link docs/src/{name}"
+        );
+    }
+    // The README stays a first screen and a tour, not the guide.
+    assert!(
+        readme.lines().count() < 150,
+        "README.md has {} lines",
+        readme.lines().count()
+    );
 }

@@ -187,6 +187,18 @@ pub fn run() -> Result<(), String> {
         }
     };
     println!("=== fuzz smoke: {fuzz_line} in {:.0?} ===", start.elapsed());
+    println!("\n=== xtask test: the guide (mdbook build docs) ===");
+    let start = Instant::now();
+    let guide = guide();
+    let guide_line = match &guide {
+        Ok(None) => "ok".to_string(),
+        Ok(Some(why)) => format!("SKIPPED: {why}"),
+        Err(e) => {
+            failed.push("the guide");
+            format!("FAILED: {e}")
+        }
+    };
+    println!("=== the guide: {guide_line} in {:.0?} ===", start.elapsed());
     println!("\n=== summary ({:.0?}) ===", total.elapsed());
     for s in &steps {
         println!(
@@ -200,6 +212,7 @@ pub fn run() -> Result<(), String> {
         );
     }
     println!("  {:<40} {fuzz_line}", "fuzz smoke");
+    println!("  {:<40} {guide_line}", "the guide (mdbook)");
     if let Some(free) = report_disk("at the end")
         && !failed.is_empty()
         && free < (1 << 30)
@@ -221,8 +234,35 @@ pub fn run() -> Result<(), String> {
         Err(format!(
             "{} of {} steps failed: {}",
             failed.len(),
-            steps.len() + 1,
+            steps.len() + 2,
             failed.join(", ")
         ))
+    }
+}
+
+/// Builds the guide (`docs/`) with mdBook into `docs/book/`, when `mdbook` is installed:
+/// `Ok(Some(why))` when it is not (its chapters' commands still run in the README's test,
+/// and its contents are checked there).
+fn guide() -> Result<Option<String>, String> {
+    let installed = Command::new("mdbook")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !installed {
+        return Ok(Some(
+            "mdbook is not installed (`cargo install mdbook` to build the guide); the README's \
+             test still runs its chapters' commands and checks its contents"
+                .to_string(),
+        ));
+    }
+    let status = Command::new("mdbook")
+        .arg("build")
+        .arg(root().join("docs"))
+        .status()
+        .map_err(|e| format!("mdbook build: {e}"))?;
+    if status.success() {
+        Ok(None)
+    } else {
+        Err(format!("mdbook build docs: {status}"))
     }
 }
