@@ -268,29 +268,36 @@ impl<T: Real> FlightConfig<T> {
     }
 }
 
+/// A config the tests of the flight module start from: a MEMS unit's noise, its receiver
+/// wandering by 1.5 m (3 m in height) over 60 s, a prior of 50 mm/s^2, 5 mrad/s and 1e-3.
+#[cfg(test)]
+pub(crate) fn example<T: Real>() -> FlightConfig<T> {
+    let noise = NavNoise {
+        accel_white: c(1e-3),
+        gyro_white: c(1e-4),
+        accel_walk: c(1e-4),
+        gyro_walk: c(1e-5),
+        scale_walk: c(1e-6),
+        baro_walk: c(0.1),
+        receiver_sigma: Vector3::new(c(1.5), c(1.5), c(3.0)),
+        receiver_tau: c(60.0),
+    };
+    let prior = SensorErrors {
+        accel_bias: Vector3::repeat(c(0.05)),
+        gyro_bias: Vector3::repeat(c(0.005)),
+        accel_scale: Vector3::repeat(c(1e-3)),
+        gyro_scale: Vector3::repeat(c(1e-3)),
+        baro_bias: c(5.0),
+    };
+    FlightConfig::new((c(0.3), c(0.05)), noise, prior)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn good() -> FlightConfig<f32> {
-        let noise = NavNoise {
-            accel_white: 1e-3,
-            gyro_white: 1e-4,
-            accel_walk: 1e-4,
-            gyro_walk: 1e-5,
-            scale_walk: 1e-6,
-            baro_walk: 0.1,
-            receiver_sigma: Vector3::new(1.5, 1.5, 3.0),
-            receiver_tau: 60.0,
-        };
-        let prior = SensorErrors {
-            accel_bias: Vector3::repeat(0.05),
-            gyro_bias: Vector3::repeat(0.005),
-            accel_scale: Vector3::repeat(1e-3),
-            gyro_scale: Vector3::repeat(1e-3),
-            baro_bias: 5.0,
-        };
-        FlightConfig::new((0.3, 0.05), noise, prior)
+        example()
     }
 
     /// Each kind of field a filter cannot run with is named; the defaults pass.

@@ -244,27 +244,11 @@ fn c<T: Real>(x: f64) -> T {
 mod tests {
     use super::*;
     use crate::flight::Geodetic;
-    use crate::nav::{NavNoise, SensorErrors};
 
     fn config() -> FlightConfig<f64> {
-        let noise = NavNoise {
-            accel_white: 1e-3,
-            gyro_white: 1e-4,
-            accel_walk: 1e-4,
-            gyro_walk: 1e-5,
-            scale_walk: 1e-6,
-            baro_walk: 0.1,
-            receiver_sigma: Vector3::zeros(),
-            receiver_tau: 60.0,
-        };
-        let prior = SensorErrors {
-            accel_bias: Vector3::repeat(0.05),
-            gyro_bias: Vector3::repeat(0.005),
-            accel_scale: Vector3::repeat(1e-3),
-            gyro_scale: Vector3::repeat(1e-3),
-            baro_bias: 5.0,
-        };
-        let mut config = FlightConfig::new((0.0, 0.05), noise, prior);
+        let mut config = crate::flight::config::example::<f64>();
+        config.heading = (0.0, 0.05);
+        config.noise.receiver_sigma = Vector3::zeros();
         config.origin = Some(Geodetic {
             latitude: 45.0,
             longitude: 7.0,
