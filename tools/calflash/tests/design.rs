@@ -132,6 +132,29 @@ fn known_optima_come_out() {
     let html = std::fs::read_to_string(p("cubic.html")).unwrap();
     assert_eq!(html.matches("<svg").count(), 1);
     assert!(html.contains("range of the plans") && html.contains("D-efficiency vs best"));
+    // A reviewer's page: a real table, a recommendation in a box, each plan under the IEEE
+    // count of observations (4 (p + 2) = 24 here) marked as such.
+    assert!(html.contains("<h1>Test plans compared: model"), "{html}");
+    assert!(html.contains("<table>") && !html.contains("<pre>"));
+    assert!(
+        html.contains("class=\"verdict")
+            && (html.contains("recommended: ") || html.contains("no plan has the IEEE")),
+        "{html}"
+    );
+    let n = |k: usize| {
+        j["plans"][k]["blocks"][0]["criteria"]["n"]
+            .as_u64()
+            .unwrap()
+    };
+    for k in 0..2 {
+        let name = j["plans"][k]["name"].as_str().unwrap();
+        assert_eq!(
+            html.contains(&format!("{name} (under the IEEE count)")),
+            n(k) < 24,
+            "{name}: {} observations",
+            n(k)
+        );
+    }
     let d = |k: usize| {
         j["plans"][k]["blocks"][0]["criteria"]["d"]
             .as_f64()

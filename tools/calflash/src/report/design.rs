@@ -33,7 +33,74 @@ fn d_eff(a: &Criteria, best: f64) -> f64 {
     a.d / best
 }
 
-/// The comparison table.
+/// One row of the comparison: its label and one cell per plan.
+struct Row {
+    label: String,
+    cells: Vec<String>,
+}
+
+/// The comparison's rows for block `b`.
+fn rows(block: &Block, b: usize, plans: &[PlanResult]) -> Vec<Row> {
+    let p = block.formula.width();
+    let best_d = plans
+        .iter()
+        .map(|pl| pl.criteria[b].d)
+        .fold(0.0f64, f64::max);
+    let mut out = Vec::new();
+    let mut row = |label: &str, f: &dyn Fn(&PlanResult) -> String| {
+        out.push(Row {
+            label: label.to_string(),
+            cells: plans.iter().map(f).collect(),
+        });
+    };
+    row("observations n", &|pl| pl.criteria[b].n.to_string());
+    row("distinct points", &|pl| {
+        points::tally(&pl.points).len().to_string()
+    });
+    row("IEEE 4(p+2)", &|_| (4 * (p + 2)).to_string());
+    row("residual dof n - p", &|pl| {
+        (pl.criteria[b].n as i64 - p as i64).to_string()
+    });
+    row("D  det(M)^(1/p)", &|pl| num(pl.criteria[b].d));
+    row("D-efficiency vs best", &|pl| {
+        format!("{:.4}", d_eff(&pl.criteria[b], best_d))
+    });
+    row("A  trace(M^-1)/p", &|pl| num(pl.criteria[b].a));
+    row("E  min eig(M)", &|pl| num(pl.criteria[b].e));
+    row("G  max n x'(X'X)^-1 x", &|pl| num(pl.criteria[b].g));
+    row("G-efficiency p / G", &|pl| {
+        format!("{:.4}", p as f64 / pl.criteria[b].g)
+    });
+    row("I  mean n x'(X'X)^-1 x", &|pl| num(pl.criteria[b].i));
+    row("condition number", &|pl| {
+        num(pl.criteria[b].condition_number)
+    });
+    row("largest VIF", &|pl| {
+        num(pl.criteria[b]
+            .vif
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max(*v)))
+    });
+    let names = block.formula.term_names();
+    for (k, name) in names.iter().enumerate() {
+        row(&format!("sd({name}) / sigma"), &|pl| {
+            num(pl.criteria[b].unscaled_covariance[(k, k)].sqrt())
+        });
+    }
+    if plans.iter().any(|pl| pl.fixture.is_some()) {
+        for (k, name) in names.iter().enumerate() {
+            row(&format!("sd({name}) + fixture"), &|pl| {
+                pl.fixture.as_ref().map_or("-".into(), |f| {
+                    format!("{} ({})", num(f[b].1[k]), num(f[b].0[k]))
+                })
+            });
+        }
+    }
+    out
+}
+
+/// The comparison table, as text.
 fn table(blocks: &[Block], plans: &[PlanResult]) -> String {
     let mut s = String::new();
     let w = plans
@@ -52,72 +119,77 @@ fn table(blocks: &[Block], plans: &[PlanResult]) -> String {
                 block.formula.term_names().join(" + ")
             );
         }
-        let best_d = plans
-            .iter()
-            .map(|pl| pl.criteria[b].d)
-            .fold(0.0f64, f64::max);
         let _ = write!(s, "  {:<26}", "");
         for pl in plans {
             let _ = write!(s, " {:>w$}", truncate(&pl.name, w));
         }
         s.push('\n');
-        let row = |s: &mut String, label: &str, f: &dyn Fn(&PlanResult) -> String| {
-            let _ = write!(s, "  {label:<26}");
-            for pl in plans {
-                let _ = write!(s, " {:>w$}", f(pl));
+        for r in rows(block, b, plans) {
+            let _ = write!(s, "  {:<26}", r.label);
+            for c in &r.cells {
+                let _ = write!(s, " {c:>w$}");
             }
             s.push('\n');
-        };
-        row(&mut s, "observations n", &|pl| pl.criteria[b].n.to_string());
-        row(&mut s, "distinct points", &|pl| {
-            points::tally(&pl.points).len().to_string()
-        });
-        row(&mut s, "IEEE 4(p+2)", &|_| (4 * (p + 2)).to_string());
-        row(&mut s, "residual dof n - p", &|pl| {
-            (pl.criteria[b].n as i64 - p as i64).to_string()
-        });
-        row(&mut s, "D  det(M)^(1/p)", &|pl| num(pl.criteria[b].d));
-        row(&mut s, "D-efficiency vs best", &|pl| {
-            format!("{:.4}", d_eff(&pl.criteria[b], best_d))
-        });
-        row(&mut s, "A  trace(M^-1)/p", &|pl| num(pl.criteria[b].a));
-        row(&mut s, "E  min eig(M)", &|pl| num(pl.criteria[b].e));
-        row(&mut s, "G  max n x'(X'X)^-1 x", &|pl| num(pl.criteria[b].g));
-        row(&mut s, "G-efficiency p / G", &|pl| {
-            format!("{:.4}", p as f64 / pl.criteria[b].g)
-        });
-        row(
-            &mut s,
-            "I  mean n x'(X'X)^-1 x",
-            &|pl| num(pl.criteria[b].i),
-        );
-        row(&mut s, "condition number", &|pl| {
-            num(pl.criteria[b].condition_number)
-        });
-        row(&mut s, "largest VIF", &|pl| {
-            num(pl.criteria[b]
-                .vif
-                .iter()
-                .flatten()
-                .fold(0.0f64, |m, v| m.max(*v)))
-        });
-        let names = block.formula.term_names();
-        for (k, name) in names.iter().enumerate() {
-            row(&mut s, &format!("sd({name}) / sigma"), &|pl| {
-                num(pl.criteria[b].unscaled_covariance[(k, k)].sqrt())
-            });
         }
-        if plans.iter().any(|pl| pl.fixture.is_some()) {
-            for (k, name) in names.iter().enumerate() {
-                row(&mut s, &format!("sd({name}) + fixture"), &|pl| {
-                    pl.fixture.as_ref().map_or("-".into(), |f| {
-                        format!("{} ({})", num(f[b].1[k]), num(f[b].0[k]))
-                    })
-                });
-            }
+        if let Some(advice) = recommend(block, b, plans) {
+            let _ = writeln!(s, "  {advice}");
         }
     }
     s
+}
+
+/// Which plan to choose for block `b`: the lowest mean prediction variance over the operating
+/// region among the plans with at least the IEEE count of observations (`4 (p + 2)`, so that
+/// the residuals can test the model), and the most efficient per observation when that is
+/// another plan. `None` with a single plan.
+fn recommend(block: &Block, b: usize, plans: &[PlanResult]) -> Option<String> {
+    if plans.len() < 2 {
+        return None;
+    }
+    let p = block.formula.width();
+    let ieee = 4 * (p + 2);
+    // Mean prediction variance over the region, in sigma^2: I / n.
+    let mean = |pl: &PlanResult| pl.criteria[b].i / pl.criteria[b].n.max(1) as f64;
+    let lowest = |it: &mut dyn Iterator<Item = &PlanResult>, f: &dyn Fn(&PlanResult) -> f64| {
+        it.filter(|pl| f(pl).is_finite())
+            .min_by(|x, y| f(x).total_cmp(&f(y)))
+            .map(|pl| pl.name.clone())
+    };
+    let enough = lowest(
+        &mut plans.iter().filter(|pl| pl.criteria[b].n >= ieee),
+        &mean,
+    );
+    let any = lowest(&mut plans.iter(), &mean)?;
+    let efficient = lowest(&mut plans.iter(), &|pl: &PlanResult| pl.criteria[b].i)?;
+    let under: Vec<&str> = plans
+        .iter()
+        .filter(|pl| pl.criteria[b].n < ieee)
+        .map(|pl| pl.name.as_str())
+        .collect();
+    let mut s = match &enough {
+        Some(best) => format!(
+            "recommended: {best} (the lowest mean prediction variance over the operating region, with at least the IEEE {ieee} observations)"
+        ),
+        None => format!(
+            "no plan has the IEEE {ieee} observations this model needs for its residuals to test it; the lowest mean prediction variance is {any}'s"
+        ),
+    };
+    if enough.as_ref().is_some_and(|b| *b != any) {
+        let _ = write!(
+            s,
+            "; {any} predicts better but has fewer than {ieee} observations"
+        );
+    }
+    if efficient != *enough.as_ref().unwrap_or(&any) {
+        let _ = write!(
+            s,
+            "; per observation {efficient} is the most efficient (lowest I): at equal cost, its points repeated"
+        );
+    }
+    if !under.is_empty() {
+        let _ = write!(s, "; under the IEEE count: {}", under.join(", "));
+    }
+    Some(s)
 }
 
 fn truncate(s: &str, w: usize) -> String {
@@ -240,6 +312,55 @@ pub fn evaluate_json(blocks: &[Block], plans: &[PlanResult]) -> Value {
     })
 }
 
+/// Block `b`'s comparison as an HTML table, its recommendation in a box above it, the plans
+/// under the IEEE count marked.
+fn html_table(h: &mut String, block: &Block, b: usize, plans: &[PlanResult], titled: bool) {
+    let p = block.formula.width();
+    let ieee = 4 * (p + 2);
+    if titled {
+        let _ = writeln!(h, "<h2>Axis {}</h2>", esc(&block.label));
+    }
+    let _ = writeln!(
+        h,
+        "<p>{} ({p} parameters)</p>",
+        esc(&block.formula.term_names().join(" + "))
+    );
+    if let Some(advice) = recommend(block, b, plans) {
+        let class = if plans.iter().any(|pl| pl.criteria[b].n >= ieee) {
+            "accept"
+        } else {
+            "review"
+        };
+        let _ = writeln!(h, "<p class=\"verdict {class}\">{}</p>", esc(&advice));
+    }
+    h.push_str("<table>\n<tr><th></th>");
+    for pl in plans {
+        let under = pl.criteria[b].n < ieee;
+        let _ = write!(
+            h,
+            "<th{}>{}{}</th>",
+            if under { " class=\"review\"" } else { "" },
+            esc(&pl.name),
+            if under { " (under the IEEE count)" } else { "" }
+        );
+    }
+    h.push_str("</tr>\n");
+    for r in rows(block, b, plans) {
+        let _ = write!(h, "<tr><td>{}</td>", esc(&r.label));
+        for (c, pl) in r.cells.iter().zip(plans) {
+            let under = r.label == "observations n" && pl.criteria[b].n < ieee;
+            let _ = write!(
+                h,
+                "<td{}>{}</td>",
+                if under { " class=\"review\"" } else { "" },
+                esc(c)
+            );
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</table>\n");
+}
+
 /// `design evaluate`'s HTML: the table and, with a curve variable, the prediction variance over
 /// it for every plan with the plan's points marked.
 ///
@@ -252,11 +373,14 @@ pub fn evaluate_html(
     curve: Option<&Points>,
 ) -> Result<String, Error> {
     let mut h = format!(
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>Plans for {0}</title>\n<style>{1}</style>\n</head>\n<body>\n<h1>Plans for {0}</h1>\n<pre>{2}</pre>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>Test plans compared: model {0}</title>\n<style>{1}</style>\n</head>\n<body>\n<h1>Test plans compared: model {0}</h1>\n<p>{2} plan(s). M = X'X / n; a standard error is sigma times its sd/sigma; G and I are over the operating region (n x'(X'X)^-1 x is at least p, the number of parameters). A plan with fewer observations than the IEEE count 4(p+2) is marked: its residuals cannot test the model.</p>\n",
         esc(model),
         super::page::STYLE,
-        esc(&table(blocks, plans))
+        plans.len()
     );
+    for (b, block) in blocks.iter().enumerate() {
+        html_table(&mut h, block, b, plans, blocks.len() > 1);
+    }
     if let Some(c) = curve {
         let var = c.names[0].clone();
         for (b, block) in blocks.iter().enumerate() {
