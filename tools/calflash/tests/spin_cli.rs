@@ -110,8 +110,20 @@ fn a_spin_rig_calibration_flies_at_300_hz_within_three_sigma() {
     // Robust figures beside the RMS, and the error along the flight drawn per unit.
     assert!(out.contains("| median error | robust spread |"), "{out}");
     let html = std::fs::read_to_string(d.join("flight.html")).unwrap();
-    assert_eq!(html.matches("Error along the recording").count(), 2);
-    assert!(html.contains("error, m/s^2") && html.contains("error, rad/s"));
+    // One figure per output, each titled by it (none hides another), a verdict, the units in
+    // their own column.
+    assert_eq!(html.matches(": error along the recording, ").count(), 6);
+    assert!(html.contains("ax: error along the recording, m/s^2"));
+    assert!(html.contains("wz: error along the recording, rad/s"));
+    assert!(
+        html.contains("<p class=\"verdict accept\">Holds: "),
+        "{html}"
+    );
+    assert!(html.contains("<td>ax</td><td>m/s^2</td>"), "{html}");
+    assert!(
+        !html.contains(" m/s^2</td><td>"),
+        "a unit in a figure's cell: {html}"
+    );
     assert!(out.contains("2000.000000 Hz from the timestamps"), "{out}");
     let rows = figures(&out);
     assert_eq!(rows.len(), 6, "{out}");

@@ -1,5 +1,6 @@
-//! `apply --reference --report`: each output's error against its reference along the
-//! recording, one figure per physical unit, with the robust figures in a table.
+//! `apply --reference --report`: a verdict, each output's figures in a table (units in their
+//! column, not in every cell), and each output's error against its reference along the
+//! recording in a figure of its own.
 
 use std::fmt::Write as _;
 
@@ -7,7 +8,7 @@ use super::Error;
 use super::page::{STYLE, esc};
 use super::plot::{Figure, Series, figure};
 use super::terminal::num;
-use crate::sensor::accuracy::Accuracy;
+use crate::sensor::accuracy::{Accuracy, Row};
 
 /// Points a figure's series keeps: the largest error of each stretch of samples, so that no
 /// spike is lost.
@@ -27,55 +28,107 @@ pub fn html(
     let mut h = String::new();
     let _ = writeln!(
         h,
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>{0}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{0}</h1>\n<p>Each output's error (corrected minus reference) over the {1} samples the device did not flag; each point drawn is the largest error of its stretch of samples.</p>",
-        esc(title),
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n<title>{0}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{0}</h1>",
+        esc(title)
+    );
+    let rows = acc.rows();
+    let (class, verdict) = verdict(&rows, acc.count());
+    let _ = writeln!(h, "<p class=\"verdict {class}\">{}</p>", esc(&verdict));
+    let _ = writeln!(
+        h,
+        "<p>Each output's error (corrected minus reference) over the {} samples the device did not flag, one figure per output so that none hides another; each point drawn is the largest error of its stretch of samples.</p>",
         acc.count()
     );
-    let families = super::plot::units_in_order(units.iter().copied());
+    h.push_str("<table class=\"terms\">\n<tr><th>output</th><th>unit</th><th>mean</th><th>mean z</th><th>RMS</th><th>stated 1-sigma</th><th>robust spread</th><th>99 % below</th><th>worst</th><th>far out</th></tr>\n");
+    for (r, unit) in rows.iter().zip(units) {
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&r.name),
+            unit,
+            num(r.mean),
+            mean_z(r, acc.count()).map_or("-".to_string(), |z| format!("{z:+.2}")),
+            num(r.rms),
+            r.sigma.map_or("-".to_string(), num),
+            num(r.spread),
+            num(r.p99),
+            num(r.worst.0),
+            r.far_out,
+        );
+    }
+    h.push_str("</table>\n<p>The stated 1-sigma is the calibration's error alone (the mean of what the blob states at each sample); the robust spread (1.4826 times the median absolute deviation) includes each sample's noise; mean z: the mean over its sigma, the stated 1-sigma and the spread over the square root of the samples together; 99 % below: of the absolute errors; far out: samples more than five robust spreads from the median.</p>\n");
     let series: Vec<Vec<(f64, f64)>> = (0..acc.names().len())
         .map(|k| peaks(acc.errors(k), x))
         .collect();
-    for unit in families {
-        let y = format!("error, {unit}");
+    for (k, name) in acc.names().iter().enumerate() {
+        let unit = units.get(k).copied().unwrap_or("");
+        let title = format!("{name}: error along the recording, {unit}");
+        let y = format!("{name} error, {unit}");
         figure(
             &mut h,
             &Figure {
-                title: "Error along the recording",
+                title: &title,
                 x: x_label,
                 y: &y,
-                series: acc
-                    .names()
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| units[*k] == unit)
-                    .map(|(k, name)| Series::curve(name, &series[k], k))
-                    .collect(),
+                series: vec![Series::curve(name, &series[k], k)],
                 bands: Vec::new(),
                 band_label: "",
                 zero_line: true,
             },
         )?;
     }
-    h.push_str("<table>\n<tr><th>output</th><th>mean</th><th>RMS</th><th>stated 1-sigma</th><th>median</th><th>robust spread</th><th>99 % of |error| below</th><th>worst</th><th>far out</th></tr>\n");
-    for (r, unit) in acc.rows().iter().zip(units) {
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td>{} {u}</td><td>{} {u}</td><td>{}</td><td>{} {u}</td><td>{} {u}</td><td>{} {u}</td><td>{} {u}</td><td>{}</td></tr>",
-            esc(&r.name),
-            num(r.mean),
-            num(r.rms),
-            r.sigma
-                .map_or("-".to_string(), |s| format!("{} {unit}", num(s))),
-            num(r.median),
-            num(r.spread),
-            num(r.p99),
-            num(r.worst.0),
-            r.far_out,
-            u = unit,
+    h.push_str("</body>\n</html>\n");
+    Ok(h)
+}
+
+/// Output `r`'s mean error over its sigma: the stated 1-sigma (the calibration's error, which
+/// does not average out) and the robust spread over `sqrt(n)` (the noise, which does).
+fn mean_z(r: &Row, n: usize) -> Option<f64> {
+    let sigma = r.sigma?;
+    let sd = (sigma * sigma + r.spread * r.spread / n.max(1) as f64).sqrt();
+    (sd > 0.0).then(|| r.mean / sd)
+}
+
+/// The page's verdict: whether every output's mean error is within 3 of its sigma
+/// ([`mean_z`]), naming those that are not; its style class.
+fn verdict(rows: &[Row], n: usize) -> (&'static str, String) {
+    if n == 0 {
+        return (
+            "review",
+            "No sample the device did not flag: nothing to hold against the reference.".to_string(),
         );
     }
-    h.push_str("</table>\n<p>The stated 1-sigma is the calibration's error alone; the robust spread (1.4826 times the median absolute deviation) includes each sample's noise; far out: samples more than five robust spreads from the median.</p>\n</body>\n</html>\n");
-    Ok(h)
+    if rows.iter().any(|r| r.sigma.is_none()) {
+        return (
+            "review",
+            "The calibration states no 1-sigma: the errors below are not held against one."
+                .to_string(),
+        );
+    }
+    let beyond: Vec<String> = rows
+        .iter()
+        .filter_map(|r| {
+            mean_z(r, n)
+                .filter(|z| z.abs() > 3.0)
+                .map(|z| format!("{} ({z:+.1})", r.name))
+        })
+        .collect();
+    if beyond.is_empty() {
+        (
+            "accept",
+            format!(
+                "Holds: every output's mean error against the reference is within 3 sigma of what its stated 1-sigma and its noise allow, over {n} samples."
+            ),
+        )
+    } else {
+        (
+            "review",
+            format!(
+                "Does not hold: the mean error of {} is beyond 3 sigma of its stated 1-sigma and noise, over {n} samples.",
+                beyond.join(", ")
+            ),
+        )
+    }
 }
 
 /// At most [`SHOWN`] points: the largest absolute error of each stretch, at its sample's `x`.
