@@ -135,6 +135,30 @@ fn calibrate_with_noise_then_judge_a_unit_at_rest() {
         .unwrap_or_else(|| panic!("{wz}"));
     assert!(ratio < -3.0, "gyro z 6 sigma off: {wz}");
     assert_eq!(page.matches("<svg").count(), 1);
+    // The figure names the outputs on its axis, and a refined 1-sigma wider than the
+    // calibration's is explained (the aged start, one pose), naming the outputs it is for.
+    for name in ["ax", "ay", "az", "wx", "wy", "wz"] {
+        assert!(
+            page.contains(&format!("\n{name}\n</text>")),
+            "{name} on the axis: {page}"
+        );
+    }
+    assert!(!page.contains("1-3 accelerometer"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("health.json")).unwrap()).unwrap();
+    let wider = (0..6).any(|i| {
+        let (a, b) = (
+            json["health"]["bias_sigma"][i].as_f64().unwrap_or(0.0),
+            json["health"]["stated_sigma"][i].as_f64().unwrap_or(0.0),
+        );
+        b > 0.0 && a > 1.05 * b
+    });
+    assert_eq!(
+        page.contains("Why the refined 1-sigma of "),
+        wider,
+        "{}",
+        json["health"]
+    );
     let (code, out, err) = calflash(d, &["compare", "fit.json", "health.json"]);
     assert_eq!(code, 3, "one verdict and its exit code: {out}{err}");
     let moved: Vec<&str> = out.lines().filter(|l| l.ends_with("MOVED")).collect();

@@ -74,6 +74,7 @@ pub fn html(
                 bands: Vec::new(),
                 band_label: "",
                 zero_line: true,
+                x_names: None,
             },
         )?;
     }

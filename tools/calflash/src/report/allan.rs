@@ -59,6 +59,7 @@ pub fn figure(curves: &[Vec<Point>], terms: &[NoiseTerms], unit: &str) -> Result
         bands: Vec::new(),
         band_label: "",
         zero_line: false,
+        x_names: None,
     })
 }
 
@@ -143,6 +144,7 @@ pub fn axis_figure(
         bands: Vec::new(),
         band_label: "",
         zero_line: false,
+        x_names: None,
     })
 }
 

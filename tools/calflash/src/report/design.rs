@@ -446,6 +446,7 @@ pub fn evaluate_html(
                 },
                 band_label: "range of the plans' points",
                 zero_line: true,
+                x_names: None,
             };
             figure(&mut h, &fig)?;
         }

@@ -80,6 +80,19 @@ pub fn html(serial: &str, source: &str, h: &Health, said: Option<&str>) -> Resul
         }
     }
     p.push_str("</table>\n");
+    let wider: Vec<&str> = OUTPUTS
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| h.bias_sigma[*i] > 1.05 * h.stated_sigma[*i] && h.stated_sigma[*i] > 0.0)
+        .map(|(_, name)| *name)
+        .collect();
+    if !wider.is_empty() {
+        let _ = writeln!(
+            p,
+            "<p>Why the refined 1-sigma of {} is wider than the calibration's: the refined biases are those of the check that allows the calibration's ageing, so each starts from the calibration's 1-sigma widened by its bias random walk over the stated ageing time. At rest in one pose an accelerometer is observed along gravity only (a gyro on every axis, against zero rate): across gravity its bias keeps that widened start until the unit is turned to another pose.</p>",
+            wider.join(", ")
+        );
+    }
     if !ratio.is_empty() {
         let mut s = Series::dots("refined bias, with its 1-sigma", &ratio, 0);
         s.errors = Some(&bars);
@@ -87,12 +100,13 @@ pub fn html(serial: &str, source: &str, h: &Health, said: Option<&str>) -> Resul
             &mut p,
             &Figure {
                 title: "Refined bias of each output, in the calibration's stated 1-sigma",
-                x: "output: 1-3 accelerometer x, y, z; 4-6 gyro x, y, z",
+                x: "output (a: accelerometer, w: gyro)",
                 y: "bias / stated 1-sigma",
                 series: vec![s],
                 bands: Vec::new(),
                 band_label: "",
                 zero_line: true,
+                x_names: Some(&OUTPUTS),
             },
         )?;
     }

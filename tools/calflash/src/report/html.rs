@@ -274,6 +274,7 @@ fn residual_figure(
                 ""
             },
             zero_line: true,
+            x_names: None,
         },
     )
 }
@@ -317,6 +318,7 @@ fn error_figure(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
             bands: vec![(lo, hi)],
             band_label: "calibrated range",
             zero_line: true,
+            x_names: None,
         },
     )?;
     Ok(())
@@ -371,6 +373,7 @@ fn temperature_figures(
                     bands: Vec::new(),
                     band_label: "",
                     zero_line: false,
+                    x_names: None,
                 },
             )?;
         }

@@ -18,6 +18,7 @@ fn figure(title: &str, x: &str, y: &str, series: Vec<Series<'_>>) -> Result<Stri
         bands: Vec::new(),
         band_label: "",
         zero_line: false,
+        x_names: None,
     })
 }
 

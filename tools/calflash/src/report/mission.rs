@@ -339,6 +339,7 @@ pub fn judged_html(m: &crate::mission::judge::Judged) -> Result<String, crate::r
                 bands: outputs.first().map_or_else(Vec::new, |x| beyond(x)),
                 band_label: "beyond the calibrated range",
                 zero_line: false,
+                x_names: None,
             },
         )?;
     }

@@ -71,6 +71,9 @@ pub struct Figure<'a> {
     pub band_label: &'a str,
     /// Draw y = 0.
     pub zero_line: bool,
+    /// Names for the whole numbers on the x axis (1 names the first), instead of the numbers:
+    /// a figure over named things (the outputs), not over a quantity.
+    pub x_names: Option<&'a [&'a str]>,
 }
 
 fn bounds(fig: &Figure<'_>) -> ((f64, f64), (f64, f64)) {
@@ -290,6 +293,17 @@ pub fn figure(h: &mut String, fig: &Figure<'_>) -> Result<(), Error> {
     Ok(())
 }
 
+/// The name of whole number `v` (1 names the first), empty between them.
+fn named_tick(names: &[&str], v: f64) -> String {
+    let k = v.round();
+    if (v - k).abs() > 1e-6 || k < 1.0 {
+        return String::new();
+    }
+    names
+        .get(k as usize - 1)
+        .map_or(String::new(), |n| (*n).to_string())
+}
+
 /// Draws a figure as an SVG document (a string).
 ///
 /// # Errors
@@ -333,7 +347,10 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(fig.y)
-            .x_label_formatter(&|v| xt.label(*v))
+            .x_label_formatter(&|v| match fig.x_names {
+                Some(names) => named_tick(names, *v),
+                None => xt.label(*v),
+            })
             .y_label_formatter(&|v| yt.label(*v))
             .label_style((super::page::FONT, TICK_PX))
             .axis_desc_style((super::page::FONT, NAME_PX))

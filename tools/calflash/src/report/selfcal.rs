@@ -332,6 +332,7 @@ pub fn html(
         bands: bands.clone(),
         band_label: "still pose",
         zero_line: false,
+        x_names: None,
     };
     let _ = writeln!(
         h,
@@ -358,6 +359,7 @@ pub fn html(
         bands,
         band_label: "still pose",
         zero_line: false,
+        x_names: None,
     };
     figure(&mut h, &fig)?;
     let trials: Vec<(f64, f64)> = c
@@ -377,6 +379,7 @@ pub fn html(
         bands: Vec::new(),
         band_label: "",
         zero_line: false,
+        x_names: None,
     };
     figure(&mut h, &fig)?;
     let res: Vec<(f64, f64)> = c
@@ -394,6 +397,7 @@ pub fn html(
         bands: Vec::new(),
         band_label: "",
         zero_line: true,
+        x_names: None,
     };
     let _ = writeln!(
         h,
@@ -423,6 +427,7 @@ pub fn html(
         bands: Vec::new(),
         band_label: "",
         zero_line: true,
+        x_names: None,
     };
     let _ = writeln!(h, "<h2>Gyro</h2>\n<div class=\"fig\">{}</div>", svg(&fig)?);
     let _ = writeln!(

@@ -59,6 +59,7 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
                 bands: Vec::new(),
                 band_label: "",
                 zero_line: true,
+                x_names: None,
             },
         )?;
     }

@@ -93,6 +93,7 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
             bands: range.clone(),
             band_label: "calibrated range",
             zero_line: true,
+            x_names: None,
         },
     )?;
     // The device against the model: its correction of the model's own codes (none when the
@@ -183,6 +184,7 @@ fn coefficient_figures(h: &mut String, tf: &ThermalFit, axis: &str) -> Result<()
                 bands: Vec::new(),
                 band_label: "",
                 zero_line: false,
+                x_names: None,
             },
         )?;
     }
@@ -269,6 +271,7 @@ fn triad_figures(c: &Calibrated) -> Result<String, Error> {
                     bands: vec![(first.scale.lo, first.scale.hi)],
                     band_label: "calibrated range",
                     zero_line: true,
+                    x_names: None,
                 },
             )?;
         }
@@ -375,6 +378,7 @@ fn departure_figure(
             bands: Vec::new(),
             band_label: "",
             zero_line: true,
+            x_names: None,
         },
     )?;
     Ok(())

@@ -82,6 +82,7 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, Err
             bands: Vec::new(),
             band_label: "",
             zero_line: true,
+            x_names: None,
         },
     )?;
     let tr = &c.track;
@@ -117,6 +118,7 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, Err
             bands: Vec::new(),
             band_label: "",
             zero_line: false,
+            x_names: None,
         },
     )?;
     let path: Vec<(f64, f64)> = tr.position.iter().map(|p| (p[0], p[1])).collect();
@@ -134,6 +136,7 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, Err
             bands: Vec::new(),
             band_label: "",
             zero_line: false,
+            x_names: None,
         },
     )?;
     // Each sensor error along the flight with its 1-sigma, a figure per kind of term.
@@ -179,6 +182,7 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, Err
                 bands: Vec::new(),
                 band_label: "",
                 zero_line: true,
+                x_names: None,
             },
         )?;
     }

@@ -17,6 +17,7 @@ fn a_figure_is_an_svg_with_its_marks() {
         bands: vec![(0.5, 1.5)],
         band_label: "calibrated range",
         zero_line: true,
+        x_names: None,
     })
     .unwrap();
     assert!(s.starts_with("<svg"));
@@ -42,6 +43,7 @@ fn figure<'a>(pts: &'a [(f64, f64)]) -> Figure<'a> {
         bands: Vec::new(),
         band_label: "",
         zero_line: false,
+        x_names: None,
     }
 }
 
