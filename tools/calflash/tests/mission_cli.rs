@@ -502,9 +502,35 @@ fn a_calibration_is_judged_over_its_mission() {
     assert!(!record["mission"]["terms"].as_array().unwrap().is_empty());
     let html = std::fs::read_to_string(d.path().join("r.html")).unwrap();
     assert!(html.contains("<h2>Over the mission</h2>"));
-    assert!(html.contains("Predicted error along the flight"));
-    // A requirement tighter than the bench can give: REVIEW, naming the output.
-    let (_, out, _) = calibrate(&["--requirement", "a=1e-5"]);
+    assert!(html.contains("Predicted error along the flight, m/s^2"));
+    // The requirement drawn across the flight, the left-out terms in a figure of their own
+    // beside it, the tables' units in a column.
+    assert!(html.contains("requirement 0.5 m/s^2"), "{html}");
+    assert!(
+        html.contains("left-out terms over the flight, m/s^2"),
+        "{html}"
+    );
+    assert!(html.contains("<th>up to, over the flight</th><th>unit</th>"));
+    assert!(html.contains("<td>a_x</td><td>m/s^2</td>"), "{html}");
+    // A requirement tighter than the bench can give: REVIEW, naming the output; its findings
+    // worst first.
+    let (_, out, _) = calibrate(&["--requirement", "a=1e-5", "--report", "tight.html"]);
+    let tight = std::fs::read_to_string(d.path().join("tight.html")).unwrap();
+    let words: Vec<&str> = tight
+        .split("<li><b>")
+        .skip(1)
+        .filter_map(|l| l.split("</b>").next())
+        .collect();
+    assert!(
+        words.contains(&"REVIEW") && words.contains(&"ACCEPT"),
+        "{words:?}"
+    );
+    assert!(
+        words
+            .windows(2)
+            .all(|w| !(w[0] == "ACCEPT" && w[1] != "ACCEPT")),
+        "the worst first: {words:?}"
+    );
     assert!(out.contains("unit M1: REVIEW"), "{out}");
     assert!(
         out.contains("a_x: predicted 1-sigma error over the flight"),

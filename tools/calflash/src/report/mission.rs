@@ -325,16 +325,52 @@ pub fn judged_html(m: &crate::mission::judge::Judged) -> Result<String, crate::r
             })
             .collect();
         let y = format!("predicted 1-sigma error, {unit}");
+        // The requirement across the flight, so the figure says how far inside it the error is.
+        let span = outputs
+            .iter()
+            .flat_map(|x| x.timeline.iter().map(|p| p.0))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                (a.min(t), b.max(t))
+            });
+        let requirements: Vec<(String, Vec<(f64, f64)>)> = outputs
+            .iter()
+            .filter_map(|x| {
+                x.requirement.filter(|_| span.0 < span.1).map(|r| {
+                    (
+                        format!("requirement, {}", x.output),
+                        vec![(span.0, r), (span.1, r)],
+                    )
+                })
+            })
+            .fold(Vec::new(), |mut v, (name, pts)| {
+                // One line for a requirement the outputs share.
+                if let Some(same) = v
+                    .iter_mut()
+                    .find(|(_, p): &&mut (String, Vec<(f64, f64)>)| p == &pts)
+                {
+                    same.0 = format!("requirement {} {unit}", num(pts[0].1));
+                } else {
+                    v.push((name, pts));
+                }
+                v
+            });
+        let title = format!("Predicted error along the flight, {unit}");
         figure(
             &mut h,
             &Figure {
-                title: "Predicted error along the flight",
+                title: &title,
                 x: "time, s",
                 y: &y,
                 series: series
                     .iter()
                     .enumerate()
                     .map(|(k, (name, pts))| Series::curve(name, pts, k))
+                    .chain(
+                        requirements
+                            .iter()
+                            .enumerate()
+                            .map(|(k, (name, pts))| Series::curve(name, pts, series.len() + k)),
+                    )
                     .collect(),
                 bands: outputs.first().map_or_else(Vec::new, |x| beyond(x)),
                 band_label: "beyond the calibrated range",
@@ -343,36 +379,135 @@ pub fn judged_html(m: &crate::mission::judge::Judged) -> Result<String, crate::r
             },
         )?;
     }
-    h.push_str("<table>\n<tr><th>output</th><th>rms</th><th>worst</th><th>within range</th><th>requirement</th></tr>\n");
+    h.push_str("<table class=\"terms\">\n<tr><th>output</th><th>unit</th><th>rms</th><th>worst</th><th>within range</th><th>requirement</th></tr>\n");
     for x in &m.outputs {
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td>{} {u}</td><td>{} {u}</td><td>{} %</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} %</td><td>{}</td></tr>",
             esc(&x.output),
+            esc(x.unit),
             num(x.rms),
             num(x.worst),
             crate::design::space::percent(x.share_inside),
             x.requirement.map_or("-".to_string(), num),
-            u = esc(x.unit)
         );
     }
     h.push_str("</table>\n");
+    left_out_figure(&mut h, m)?;
     if !m.terms.is_empty() {
-        h.push_str("<p>Terms the model leaves out, at their bench bound (the upper confidence bound of the coefficient with the term added), over the flight:</p>\n<table>\n<tr><th>output</th><th>term</th><th>estimate</th><th>bound</th><th>up to, over the flight</th></tr>\n");
+        h.push_str("<p>Terms the model leaves out, at their bench bound (the upper confidence bound of the coefficient with the term added), over the flight; the estimate and the bound are in counts per unit of the term, what they may cost in the output's unit:</p>\n<table class=\"terms\">\n<tr><th>output</th><th>term</th><th>estimate</th><th>bound</th><th>up to, over the flight</th><th>unit</th></tr>\n");
         for t in &m.terms {
+            let unit = m
+                .outputs
+                .iter()
+                .find(|x| x.output == t.output)
+                .map_or("", |x| x.unit);
             let _ = writeln!(
                 h,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
                 esc(&t.output),
                 esc(&t.term),
                 num(t.estimate),
                 num(t.bound),
-                num(t.worst)
+                num(t.worst),
+                esc(unit)
             );
         }
         h.push_str("</table>\n");
     }
     Ok(h)
+}
+
+/// Left-out terms the figure names on its axis (the table lists them all).
+const LEFT_OUT_SHOWN: usize = 8;
+
+/// The terms the model leaves out, each at what it may cost over the flight, beside each
+/// output's worst predicted error and its requirement, one figure per unit: what makes a
+/// mission's verdict REVIEW when the predicted error alone is within the requirement.
+///
+/// # Errors
+/// A figure that cannot be drawn.
+fn left_out_figure(
+    h: &mut String,
+    m: &crate::mission::judge::Judged,
+) -> Result<(), crate::report::Error> {
+    use crate::report::plot::{Figure, Series, figure};
+    for unit in crate::report::plot::units_in_order(m.outputs.iter().map(|x| x.unit)) {
+        let outputs: Vec<&crate::mission::judge::Output> =
+            m.outputs.iter().filter(|x| x.unit == unit).collect();
+        // The costliest first (the judge's order), as many as the axis can name.
+        let all: Vec<_> = m
+            .terms
+            .iter()
+            .filter(|t| outputs.iter().any(|x| x.output == t.output))
+            .collect();
+        if all.is_empty() {
+            continue;
+        }
+        let terms = &all[..all.len().min(LEFT_OUT_SHOWN)];
+        let names: Vec<String> = terms
+            .iter()
+            .map(|t| format!("{}: {}", t.output, t.term))
+            .collect();
+        let labels: Vec<&str> = names.iter().map(String::as_str).collect();
+        let costs: Vec<(f64, f64)> = terms
+            .iter()
+            .enumerate()
+            .map(|(k, t)| ((k + 1) as f64, t.worst))
+            .collect();
+        let predicted: Vec<(f64, f64)> = terms
+            .iter()
+            .enumerate()
+            .filter_map(|(k, t)| {
+                outputs
+                    .iter()
+                    .find(|x| x.output == t.output)
+                    .map(|x| ((k + 1) as f64, x.worst))
+            })
+            .collect();
+        let requirement: Vec<(f64, f64)> = terms
+            .iter()
+            .enumerate()
+            .filter_map(|(k, t)| {
+                outputs
+                    .iter()
+                    .find(|x| x.output == t.output)
+                    .and_then(|x| x.requirement)
+                    .map(|r| ((k + 1) as f64, r))
+            })
+            .collect();
+        let mut series = vec![
+            Series::dots("what the left-out term may cost", &costs, 0),
+            Series::dots("the output's worst predicted 1-sigma error", &predicted, 1),
+        ];
+        if !requirement.is_empty() {
+            series.push(Series::dots("the output's requirement", &requirement, 3));
+        }
+        let title = if all.len() > terms.len() {
+            format!(
+                "The {} costliest of {} left-out terms over the flight, {unit}",
+                terms.len(),
+                all.len()
+            )
+        } else {
+            format!("Left-out terms over the flight, {unit}")
+        };
+        let y = format!("error over the flight, {unit}");
+        figure(
+            h,
+            &Figure {
+                title: &title,
+                x: "output: term left out",
+                y: &y,
+                series,
+                bands: Vec::new(),
+                band_label: "",
+                zero_line: true,
+                x_names: Some(&labels),
+            },
+        )?;
+    }
+    Ok(())
 }
 
 /// The stretches of the flight where `x` is beyond its calibrated range: (start, end) times.

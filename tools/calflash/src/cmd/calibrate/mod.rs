@@ -190,6 +190,9 @@ pub fn calibrate_one(
     if let Some(f) = out.lot_finding(c.data.identity.serial.as_str(), &coefficients, 0.001) {
         c.findings.push(f);
     }
+    // The worst first, in every print of them (terminal, record, report); each kind in the
+    // order it was found.
+    c.findings.sort_by_key(|f| std::cmp::Reverse(f.verdict));
     // A rejected calibration has no blob, unless forced; a forced one says so in its identity.
     let blob = match (c.verdict(), out.force_blob) {
         (Verdict::Reject, false) => None,
