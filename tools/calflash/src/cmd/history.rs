@@ -75,7 +75,7 @@ pub fn run(args: &HistoryArgs) -> Result<(), Failure> {
 }
 
 /// `YYYY-MM-DD HH:MM:SS` of a Unix time (UTC), without a date crate.
-fn format_time(t: i64) -> String {
+pub(crate) fn format_time(t: i64) -> String {
     let days = t.div_euclid(86_400);
     let secs = t.rem_euclid(86_400);
     // Civil from days (Howard Hinnant's algorithm).

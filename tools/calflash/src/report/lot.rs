@@ -9,22 +9,78 @@ use super::page::{STYLE, esc};
 use super::plot::{Figure, Series, svg};
 use crate::lot::{Judge, Lot, UnitChart};
 
-fn figure(title: &str, x: &str, y: &str, series: Vec<Series<'_>>) -> Result<String, Error> {
+/// Units a figure names by serial on its axis; beyond, they are numbered in calibration order.
+const NAMED_UNITS: usize = 12;
+
+fn figure(
+    title: &str,
+    y: &str,
+    serials: &[&str],
+    series: Vec<Series<'_>>,
+) -> Result<String, Error> {
+    let named = serials.len() <= NAMED_UNITS;
     svg(&Figure {
         title,
-        x,
+        x: if named {
+            "unit, in calibration order"
+        } else {
+            "unit, numbered in calibration order"
+        },
         y,
         series,
         bands: Vec::new(),
         band_label: "",
         zero_line: false,
-        x_names: None,
+        x_names: named.then_some(serials),
     })
 }
 
-/// Values as points against their position (the units' calibration order).
+/// Values as points against their position (the units' calibration order, the first at 1).
 fn indexed(values: impl Iterator<Item = f64>) -> Vec<(f64, f64)> {
-    values.enumerate().map(|(i, v)| (i as f64, v)).collect()
+    values
+        .enumerate()
+        .map(|(i, v)| ((i + 1) as f64, v))
+        .collect()
+}
+
+/// The unit of a lot's coefficient `output:term` (`a_x:1`, `g_y:w_x`, `a_x:f_x^2`): counts
+/// per unit of the term (the fit's coefficients are in the converter's counts).
+fn coefficient_unit(name: &str) -> String {
+    let Some((_, term)) = name.split_once(':') else {
+        return String::new();
+    };
+    if term == "1" {
+        return "counts".to_string();
+    }
+    let factor = |f: &str| -> String {
+        let (base, power) = match f.split_once('^') {
+            Some((b, p)) => (b, Some(p)),
+            None => (f, None),
+        };
+        let base = base
+            .strip_prefix("abs(")
+            .and_then(|b| b.strip_suffix(')'))
+            .unwrap_or(base);
+        let unit = if base.starts_with("dw_") {
+            "rad/s^2"
+        } else if base.starts_with("f_") {
+            "m/s^2"
+        } else if base.starts_with("w_") {
+            "rad/s"
+        } else if base == "temp" {
+            "C"
+        } else if base == "volt" {
+            "V"
+        } else {
+            return format!("unit of {f}");
+        };
+        match power {
+            Some(p) => format!("({unit})^{p}"),
+            None => unit.to_string(),
+        }
+    };
+    let parts: Vec<String> = term.split(':').map(factor).collect();
+    format!("counts per {}", parts.join(" "))
 }
 
 /// Renders the report of `lot` (described by `name`, as [`crate::db::Selection`] says it)
@@ -71,12 +127,13 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
             esc(&lot.left_out.join(", "))
         );
     }
-    h.push_str("</p><h2>Coefficients</h2><table><tr><th>coefficient</th><th>median</th><th>MAD</th><th>min</th><th>max</th></tr>");
+    h.push_str("</p><h2>Coefficients</h2><p>Each output's fitted coefficients (<code>output:term</code>), in the converter's counts per unit of the term.</p><table class=\"terms\"><tr><th>coefficient</th><th>unit</th><th>median</th><th>MAD</th><th>min</th><th>max</th></tr>");
     for s in &lot.spread {
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{:.6e}</td><td>{:.3e}</td><td>{:.6e}</td><td>{:.6e}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{:.6e}</td><td>{:.3e}</td><td>{:.6e}</td><td>{:.6e}</td></tr>",
             esc(&s.name),
+            esc(&coefficient_unit(&s.name)),
             s.median,
             s.mad,
             s.min,
@@ -91,14 +148,26 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
         .filter(|(_, d)| *d > lot.distance_limit())
         .collect();
     let limit = [
-        (0.0, lot.distance_limit()),
-        ((n - 1) as f64, lot.distance_limit()),
+        (1.0, lot.distance_limit()),
+        (n as f64, lot.distance_limit()),
     ];
+    let serials: Vec<&str> = lot.units.iter().map(|u| u.serial.as_str()).collect();
+    let (what, axis) = match &lot.judge {
+        Judge::Scatter { .. } => (
+            "A unit's distance is its robust Mahalanobis distance from the lot: how many of the lot's own (robust) standard deviations its coefficients lie from the lot's robust centre, counting the coefficients' correlations; a unit of the lot is beyond the limit with the probability stated above.",
+            "robust Mahalanobis distance",
+        ),
+        Judge::Columns { .. } => (
+            "A unit's distance is its largest robust z over the coefficients: how many MADs (scaled to a standard deviation) its furthest coefficient lies from the lot's median.",
+            "largest robust z (MADs)",
+        ),
+    };
+    let _ = write!(h, "<p>{what}</p>");
     h.push_str("<div class=\"fig\">");
     h.push_str(&figure(
-        "each unit's distance, in calibration order",
-        "unit (calibration order)",
-        "distance",
+        "Each unit's distance from the lot, in calibration order",
+        axis,
+        &serials,
         vec![
             Series::dots("units", &all, 0),
             Series::dots("outside", &outside, 3),
@@ -152,16 +221,20 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
         };
         let lo = indexed(c.limits.iter().map(|l| l.0));
         let hi = indexed(c.limits.iter().map(|l| l.1));
+        let centre = [(1.0, c.centre), (c.plotted.len().max(1) as f64, c.centre)];
         let out: Vec<(f64, f64)> = c.out_of_control.iter().map(|&i| plotted[i]).collect();
+        let serials: Vec<&str> = c.serials.iter().map(String::as_str).collect();
+        let title = format!("{name} ({})", coefficient_unit(name));
         h.push_str(&figure(
+            &title,
             name,
-            "unit (calibration order)",
-            name,
+            &serials,
             vec![
                 Series::curve(statistic, &plotted, 0),
                 Series::dots("", &plotted, 0),
+                Series::curve("centre", &centre, 2),
                 Series::curve("lower limit", &lo, 1),
-                Series::curve("upper limit", &hi, 1),
+                Series::curve("upper limit", &hi, 4),
                 Series::dots("out of control", &out, 3),
             ],
         )?);
@@ -169,4 +242,23 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
     }
     h.push_str("</body></html>\n");
     Ok(super::page::with_contents(&h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::coefficient_unit;
+
+    #[test]
+    fn a_coefficient_says_its_unit() {
+        assert_eq!(coefficient_unit("a_x:1"), "counts");
+        assert_eq!(coefficient_unit("a_x:f_y"), "counts per m/s^2");
+        assert_eq!(coefficient_unit("g_z:w_x"), "counts per rad/s");
+        assert_eq!(coefficient_unit("a_x:f_x^2"), "counts per (m/s^2)^2");
+        assert_eq!(coefficient_unit("g_x:w_x:temp"), "counts per rad/s C");
+        assert_eq!(
+            coefficient_unit("a_y:f_y:abs(f_y)"),
+            "counts per m/s^2 m/s^2"
+        );
+        assert_eq!(coefficient_unit("a_x:dw_z"), "counts per rad/s^2");
+    }
 }

@@ -310,7 +310,11 @@ pub fn run_units(
     );
     if args.reports {
         let index = out_dir.join("index.html");
-        crate::files::write_atomically(&index, |w| w.write_all(index_html(&outcomes).as_bytes()))?;
+        crate::files::write_atomically(&index, |w| {
+            w.write_all(
+                index_html(&outcomes, args.out.lot.as_deref(), data_dir_name(&outcomes)).as_bytes(),
+            )
+        })?;
         println!("  reports: {}", index.display());
     }
     if !failed.is_empty() {
@@ -345,25 +349,45 @@ fn reason_line(reasons: &[String]) -> String {
     line
 }
 
-/// The batch's report: one table, a row and a link per unit to its own page.
-fn index_html(outcomes: &[Outcome]) -> String {
-    use crate::report::page::esc;
+/// The folder the batch's files came from (the first unit's), for the index's heading.
+fn data_dir_name(outcomes: &[Outcome]) -> String {
+    outcomes
+        .first()
+        .and_then(|o| o.file.parent())
+        .map(|p| p.display().to_string())
+        .unwrap_or_default()
+}
+
+/// The batch's report: a heading that says which batch (its lot, its folder, when, the
+/// totals), then one table with a row and a link per unit to its own page, each verdict in its
+/// colour.
+fn index_html(outcomes: &[Outcome], lot: Option<&str>, folder: String) -> String {
+    use crate::report::page::{STYLE, esc};
     let mut rows = String::new();
+    let mut counts = [0usize; 4];
     for o in outcomes {
-        let (verdict, page, why) = match &o.result {
-            Ok(j) => (
-                j.verdict.word().to_string(),
-                format!("<a href=\"{0}.html\">{0}</a>", esc(&o.serial)),
-                j.reasons
-                    .iter()
-                    .map(|r| format!("<li>{}</li>", esc(r)))
-                    .collect::<String>(),
-            ),
-            Err(e) => (
-                "FAILED".to_string(),
-                esc(&o.serial),
-                format!("<li>{}</li>", esc(e)),
-            ),
+        let (verdict, class, page, why) = match &o.result {
+            Ok(j) => {
+                counts[j.verdict as usize] += 1;
+                (
+                    j.verdict.word(),
+                    j.verdict.word().to_lowercase(),
+                    format!("<a href=\"{0}.html\">{0}</a>", esc(&o.serial)),
+                    j.reasons
+                        .iter()
+                        .map(|r| format!("<li>{}</li>", esc(r)))
+                        .collect::<String>(),
+                )
+            }
+            Err(e) => {
+                counts[3] += 1;
+                (
+                    "FAILED",
+                    "reject".to_string(),
+                    esc(&o.serial),
+                    format!("<li>{}</li>", esc(e)),
+                )
+            }
         };
         let why = if why.is_empty() {
             String::new()
@@ -371,12 +395,26 @@ fn index_html(outcomes: &[Outcome]) -> String {
             format!("<ul>{why}</ul>")
         };
         rows.push_str(&format!(
-            "<tr><td>{page}</td><td>{verdict}</td><td>{why}</td><td>{}</td></tr>\n",
-            esc(&o.file.display().to_string())
+            "<tr><td>{page}</td><td class=\"{class}\">{verdict}</td><td class=\"why\">{why}</td><td>{}</td></tr>\n",
+            esc(&o.file.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned()))
         ));
     }
+    let when = crate::cmd::history::format_time(
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs() as i64),
+    );
+    let title = match lot {
+        Some(l) => format!("Batch of lot {l}: {} units", outcomes.len()),
+        None => format!("Batch of {} units", outcomes.len()),
+    };
     format!(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>calflash batch</title><style>body{{font-family:'DejaVu Sans',sans-serif;max-width:1200px;margin:1em auto}}td,th{{text-align:left;vertical-align:top;padding:2px 8px}}ul{{margin:0;padding-left:1.2em}}</style></head><body>\n<h1>{} units</h1>\n<table>\n<tr><th>unit</th><th>verdict</th><th>why (the findings that gave the verdict)</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
-        outcomes.len()
+        "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title><style>{STYLE}td.why{{text-align:left}}ul{{margin:0;padding-left:1.2em}}</style></head><body>\n<h1>{0}</h1>\n<p>From {1}, calibrated {when} UTC: <b>{2} ACCEPT, {3} REVIEW, {4} REJECT, {5} failed</b>. Each unit's page is linked from its serial; the reasons are the findings that gave its verdict.</p>\n<table>\n<tr><th>unit</th><th>verdict</th><th>why</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
+        esc(&title),
+        esc(&folder),
+        counts[0],
+        counts[1],
+        counts[2],
+        counts[3],
     )
 }
