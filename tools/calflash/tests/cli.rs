@@ -462,10 +462,27 @@ fn calibrate_says_its_fit_in_engineering_units() {
             "--serial",
             "E-1",
             "--no-db",
+            "--report",
+            "e1.html",
         ],
     );
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("  fit at 25.0 C (the record"), "{out}");
+    // The report's first screen: the verdict, the same datasheet lines, the checks that
+    // passed folded under one line.
+    let page = std::fs::read_to_string(d.path().join("e1.html")).unwrap();
+    let sheet = page
+        .find("<b>In engineering units</b>")
+        .expect("the datasheet");
+    assert!(sheet < page.find("<h2>").unwrap_or(usize::MAX));
+    for line in out.lines().filter(|l| l.contains(": bias (")) {
+        assert!(
+            page.contains(&format!("<li>{}</li>", line.trim().replace('&', "&amp;"))),
+            "{line}"
+        );
+    }
+    assert!(page.contains("check(s) passed (ACCEPT)</summary>"));
+    assert!(!page.contains("<li><b>ACCEPT</b>"));
     let fit = out
         .lines()
         .find(|l| l.starts_with("  a_x: 1 "))

@@ -65,11 +65,41 @@ fn summary(h: &mut String, c: &Calibrated, data_file: &str) {
         verdict.word().to_lowercase(),
         verdict.word()
     );
-    let _ = writeln!(h, "<ul>");
-    for f in &c.findings {
-        let _ = writeln!(h, "<li><b>{}</b>: {}</li>", f.verdict.word(), esc(&f.text));
+    // What needs a person first; the checks that passed folded under one line.
+    let (passed, open): (Vec<_>, Vec<_>) = c
+        .findings
+        .iter()
+        .partition(|f| f.verdict == crate::sensor::finding::Verdict::Accept);
+    if !open.is_empty() {
+        let _ = writeln!(h, "<ul>");
+        for f in &open {
+            let _ = writeln!(h, "<li><b>{}</b>: {}</li>", f.verdict.word(), esc(&f.text));
+        }
+        let _ = writeln!(h, "</ul>");
     }
-    let _ = writeln!(h, "</ul>");
+    if !passed.is_empty() {
+        let _ = writeln!(
+            h,
+            "<details><summary>{} check(s) passed (ACCEPT)</summary><ul>",
+            passed.len()
+        );
+        for f in &passed {
+            let _ = writeln!(h, "<li>{}</li>", esc(&f.text));
+        }
+        let _ = writeln!(h, "</ul></details>");
+    }
+    // The datasheet's figures, as the terminal prints them.
+    let sheet = super::engineering::lines(c);
+    if !sheet.is_empty() {
+        let _ = writeln!(
+            h,
+            "<p><b>In engineering units</b> (bias: the reading at zero input from the converter's mid-scale; 1-sigma in brackets):</p><ul>"
+        );
+        for line in &sheet {
+            let _ = writeln!(h, "<li>{}</li>", esc(line.trim()));
+        }
+        let _ = writeln!(h, "</ul>");
+    }
     let hash: String = id.data_hash.iter().map(|b| format!("{b:02x}")).collect();
     let _ = writeln!(
         h,
