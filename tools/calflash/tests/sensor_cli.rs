@@ -111,6 +111,11 @@ fn simulate_calibrate_report_apply() {
     ] {
         assert!(html.contains(title), "missing figure: {title}");
     }
+    // Against temperature in a datasheet's units: the bias at zero input in the input's unit
+    // (not counts with the mid-scale in them), the scale factor's change in ppm.
+    assert!(html.contains(": bias at zero input ("), "{html}");
+    assert!(html.contains(": scale factor change from "), "{html}");
+    assert!(!html.contains("bias (counts) against temperature"));
     // The record reads back; the blob decodes.
     let rec: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("a.json")).unwrap()).unwrap();

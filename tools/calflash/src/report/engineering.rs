@@ -21,7 +21,7 @@ fn engineering(si: &str) -> (&'static str, f64) {
 
 /// The converter's mid-scale code of output `output` (`a_*` an accelerometer's, `g_*` a
 /// gyro's, anything else the single axis's).
-fn mid_scale(c: &Calibrated, output: &str) -> f64 {
+pub(crate) fn mid_scale(c: &Calibrated, output: &str) -> f64 {
     let rails = match &c.data.sensor {
         Sensor::Single { rails, .. } | Sensor::Triad { rails, .. } => *rails,
         Sensor::Imu {

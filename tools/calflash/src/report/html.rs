@@ -362,28 +362,51 @@ fn temperature_figures(
     axis: &AxisFit,
 ) -> Result<(), Error> {
     let unit = c.units[a];
-    // Coefficients against temperature.
-    if c.temps.len() > 1 {
-        let per_unit = format!("scale factor (counts per {unit})");
-        for (term, what) in [
-            ("1", "bias (counts)"),
-            (axis.own.as_str(), per_unit.as_str()),
+    // The bias and the scale factor against temperature, in the units a datasheet reads: the
+    // bias at zero input in the output's own unit (from the converter's mid-scale, through the
+    // scale factor at that temperature), the scale factor as its change from the reference
+    // point's, in ppm.
+    let mid = super::engineering::mid_scale(c, &axis.output);
+    let own = axis.own.as_str();
+    let reference = c
+        .points
+        .get(c.reference)
+        .map(|p| p.axes[a].coef(own))
+        .filter(|s| s.is_finite() && *s != 0.0);
+    if let (true, Some(s_ref)) = (c.temps.len() > 1, reference) {
+        let se = |p: &crate::sensor::PointFit, term: &str| {
+            p.axes[a]
+                .index(term)
+                .map_or(0.0, |i| p.axes[a].fit.std_errors[i])
+        };
+        let at = c.points.iter().filter(|p| p.temp.is_some());
+        let bias: Vec<(f64, f64)> = at
+            .clone()
+            .filter_map(|p| {
+                let s = p.axes[a].coef(own);
+                Some((p.temp?, (p.axes[a].coef("1") - mid) / s))
+            })
+            .collect();
+        let bias_err: Vec<f64> = at
+            .clone()
+            .map(|p| se(p, "1") / p.axes[a].coef(own).abs())
+            .collect();
+        let scale: Vec<(f64, f64)> = at
+            .clone()
+            .filter_map(|p| Some((p.temp?, (p.axes[a].coef(own) / s_ref - 1.0) * 1e6)))
+            .collect();
+        let scale_err: Vec<f64> = at.map(|p| se(p, own) / s_ref.abs() * 1e6).collect();
+        let t_ref = c
+            .points
+            .get(c.reference)
+            .and_then(|p| p.temp)
+            .map_or(String::new(), |t| format!(" {t:.1} C"));
+        let bias_label = format!("bias at zero input ({unit})");
+        let scale_label = format!("scale factor change from{t_ref} (ppm)");
+        for (what, pts, errs) in [
+            (bias_label.as_str(), &bias, &bias_err),
+            (scale_label.as_str(), &scale, &scale_err),
         ] {
-            let pts: Vec<(f64, f64)> = c
-                .points
-                .iter()
-                .filter_map(|p| Some((p.temp?, p.axes[a].coef(term))))
-                .collect();
-            let errs: Vec<f64> = c
-                .points
-                .iter()
-                .filter(|p| p.temp.is_some())
-                .map(|p| {
-                    p.axes[a]
-                        .index(term)
-                        .map_or(0.0, |i| p.axes[a].fit.std_errors[i])
-                })
-                .collect();
             figure(
                 h,
                 &Figure {
@@ -395,10 +418,10 @@ fn temperature_figures(
                     y: what,
                     series: vec![Series {
                         name: what,
-                        points: &pts,
+                        points: pts,
                         color: COLORS[1],
                         line: true,
-                        errors: Some(&errs),
+                        errors: Some(errs),
                     }],
                     bands: Vec::new(),
                     band_label: "",
