@@ -119,7 +119,8 @@ fn a_chamber_ramp_calibrates_and_the_device_gets_a_temperature_series() {
     let report = std::fs::read_to_string(d.join("r.html")).unwrap();
     for needle in [
         "<h2>Temperature</h2>",
-        "bias (counts) against temperature",
+        "bias at zero input (m/s^2) against temperature",
+        "scale factor change from ",
         "1-sigma calibration error of the corrected input over the temperature",
         "the device's Chebyshev series of",
         // 16 positions 25 times: each observation counted once, not once a breakpoint.

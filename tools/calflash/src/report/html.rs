@@ -198,7 +198,9 @@ fn axis_section(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
     let _ = writeln!(h, "</table>");
     residual_figures(h, c, a, axis)?;
     error_figure(h, c, a, axis)?;
-    if c.temps.len() > 1 {
+    // With a continuous temperature model its section draws bias and scale over the whole
+    // span; the table's few points would only repeat it.
+    if c.temps.len() > 1 && c.thermal.is_empty() {
         temperature_figures(h, c, a, axis)?;
     }
     Ok(())

@@ -46,41 +46,9 @@ fn indexed(values: impl Iterator<Item = f64>) -> Vec<(f64, f64)> {
 /// The unit of a lot's coefficient `output:term` (`a_x:1`, `g_y:w_x`, `a_x:f_x^2`): counts
 /// per unit of the term (the fit's coefficients are in the converter's counts).
 fn coefficient_unit(name: &str) -> String {
-    let Some((_, term)) = name.split_once(':') else {
-        return String::new();
-    };
-    if term == "1" {
-        return "counts".to_string();
-    }
-    let factor = |f: &str| -> String {
-        let (base, power) = match f.split_once('^') {
-            Some((b, p)) => (b, Some(p)),
-            None => (f, None),
-        };
-        let base = base
-            .strip_prefix("abs(")
-            .and_then(|b| b.strip_suffix(')'))
-            .unwrap_or(base);
-        let unit = if base.starts_with("dw_") {
-            "rad/s^2"
-        } else if base.starts_with("f_") {
-            "m/s^2"
-        } else if base.starts_with("w_") {
-            "rad/s"
-        } else if base == "temp" {
-            "C"
-        } else if base == "volt" {
-            "V"
-        } else {
-            return format!("unit of {f}");
-        };
-        match power {
-            Some(p) => format!("({unit})^{p}"),
-            None => unit.to_string(),
-        }
-    };
-    let parts: Vec<String> = term.split(':').map(factor).collect();
-    format!("counts per {}", parts.join(" "))
+    name.split_once(':').map_or_else(String::new, |(_, term)| {
+        super::page::term_unit(term, "unit of input")
+    })
 }
 
 /// Renders the report of `lot` (described by `name`, as [`crate::db::Selection`] says it)
@@ -260,5 +228,6 @@ mod tests {
             "counts per m/s^2 m/s^2"
         );
         assert_eq!(coefficient_unit("a_x:dw_z"), "counts per rad/s^2");
+        assert_eq!(coefficient_unit("ax:input"), "counts per unit of input");
     }
 }

@@ -54,9 +54,77 @@ pub(crate) fn with_contents(html: &str) -> String {
     body
 }
 
+/// The unit of a fitted coefficient of `term` (`1`, `f_x`, `w_y^2`, `input:input_o`,
+/// `w_x:temp`): counts per unit of the term, `input` and `input_o` (a single axis's input and
+/// the one across it) in `input_unit`.
+pub(crate) fn term_unit(term: &str, input_unit: &str) -> String {
+    if term == "1" {
+        return "counts".to_string();
+    }
+    let factor = |f: &str| -> String {
+        let (base, power) = match f.split_once('^') {
+            Some((b, p)) => (b, Some(p)),
+            None => (f, None),
+        };
+        let base = base
+            .strip_prefix("abs(")
+            .and_then(|b| b.strip_suffix(')'))
+            .unwrap_or(base);
+        let unit = if base.starts_with("dw_") {
+            "rad/s^2"
+        } else if base.starts_with("f_") {
+            "m/s^2"
+        } else if base.starts_with("w_") {
+            "rad/s"
+        } else if base == "temp" {
+            "C"
+        } else if base == "volt" {
+            "V"
+        } else if base == "input" || base == "input_o" {
+            input_unit
+        } else {
+            return format!("unit of {f}");
+        };
+        match power {
+            Some(p) => format!("({unit})^{p}"),
+            None => unit.to_string(),
+        }
+    };
+    let parts: Vec<String> = term.split(':').map(factor).collect();
+    format!("counts per {}", parts.join(" "))
+}
+
+/// What a term is, in words, where its name is the fit's own (`input_o`: the input across a
+/// single axis).
+pub(crate) fn term_words(term: &str) -> String {
+    term.split(':')
+        .map(|f| match f {
+            "input_o" => "the cross-axis input (input_o)".to_string(),
+            other => other.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join(" x ")
+}
+
 #[cfg(test)]
 mod tests {
-    use super::with_contents;
+    use super::{term_unit, with_contents};
+
+    #[test]
+    fn a_term_says_its_unit() {
+        assert_eq!(term_unit("1", "m/s^2"), "counts");
+        assert_eq!(term_unit("f_y", ""), "counts per m/s^2");
+        assert_eq!(term_unit("w_x", ""), "counts per rad/s");
+        assert_eq!(term_unit("f_x^2", ""), "counts per (m/s^2)^2");
+        assert_eq!(term_unit("w_x:temp", ""), "counts per rad/s C");
+        assert_eq!(term_unit("f_y:abs(f_y)", ""), "counts per m/s^2 m/s^2");
+        assert_eq!(term_unit("dw_z", ""), "counts per rad/s^2");
+        assert_eq!(
+            term_unit("input:input_o", "m/s^2"),
+            "counts per m/s^2 m/s^2"
+        );
+        assert_eq!(term_unit("input^3", "rad/s"), "counts per (rad/s)^3");
+    }
 
     #[test]
     fn a_long_report_gets_a_contents_list_and_a_short_one_none() {

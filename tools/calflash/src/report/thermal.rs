@@ -50,7 +50,7 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
             let _ = writeln!(h, "<li>{}temperature order of {}</li>", esc(&axis), esc(r));
         }
         let _ = writeln!(h, "</ul>");
-        coefficient_figures(&mut h, tf, &axis)?;
+        coefficient_figures(&mut h, c, tf, &axis)?;
     }
     if several || !matches!(c.data.sensor, spincal::model::Sensor::Single { .. }) {
         h.push_str(&triad_figures(c)?);
@@ -133,21 +133,68 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
     Ok(h)
 }
 
+/// How a coefficient is shown at a temperature: `(t, value, 1-sigma)` to `(value, 1-sigma)`.
+type Shown<'a> = dyn Fn(f64, f64, f64) -> (f64, f64) + 'a;
+
 /// Each coefficient of `tf` against the temperature with its 95 % band (the bias with the
-/// observations' partial residuals), titled with `axis`.
-fn coefficient_figures(h: &mut String, tf: &ThermalFit, axis: &str) -> Result<(), Error> {
+/// observations' partial residuals), titled with `axis`, in a datasheet's units: the bias at
+/// zero input in the input's unit (from the converter's mid-scale, through the scale factor at
+/// that temperature), the scale factor as its change in ppm from its value mid-span, every
+/// other coefficient in counts per unit of its term.
+fn coefficient_figures(
+    h: &mut String,
+    c: &Calibrated,
+    tf: &ThermalFit,
+    axis: &str,
+) -> Result<(), Error> {
     let names = tf.base.term_names();
     let temps = grid(tf, 0.0);
+    let own = names.iter().position(|n| *n == tf.fit.own);
+    let unit = c
+        .points
+        .get(c.reference)
+        .and_then(|p| p.axes.iter().position(|x| x.output == tf.fit.output))
+        .and_then(|a| c.units.get(a))
+        .copied()
+        .unwrap_or("");
+    let mid = super::engineering::mid_scale(c, &tf.fit.output);
+    let t_mid = temps.get(temps.len() / 2).copied().unwrap_or(25.0);
+    let scale_at = |t: f64| own.map(|o| tf.coefficients_at(t).0[o]);
+    let s_mid = scale_at(t_mid).filter(|s| s.is_finite() && *s != 0.0);
     for (j, name) in names.iter().enumerate() {
-        let mut mid = Vec::new();
+        // How a coefficient is shown at temperature t: its value, its 1-sigma.
+        let (what, show): (String, Box<Shown<'_>>) = match (name.as_str(), own, s_mid) {
+            ("1", Some(_), Some(_)) => (
+                format!("bias at zero input ({unit})"),
+                Box::new(|t: f64, v: f64, se: f64| {
+                    let s = scale_at(t).unwrap_or(1.0);
+                    ((v - mid) / s, se / s.abs())
+                }),
+            ),
+            (_, Some(o), Some(sm)) if o == j => (
+                format!("scale factor change from {t_mid:.0} C (ppm)"),
+                Box::new(move |_t: f64, v: f64, se: f64| {
+                    ((v / sm - 1.0) * 1e6, se / sm.abs() * 1e6)
+                }),
+            ),
+            _ => (
+                format!(
+                    "{} coefficient ({})",
+                    crate::report::page::term_words(name),
+                    crate::report::page::term_unit(name, unit)
+                ),
+                Box::new(|_t: f64, v: f64, se: f64| (v, se)),
+            ),
+        };
+        let mut mid_line = Vec::new();
         let mut upper = Vec::new();
         let mut lower = Vec::new();
         for t in &temps {
             let (b, cov) = tf.coefficients_at(*t);
-            let se = cov[(j, j)].max(0.0).sqrt();
-            mid.push((*t, b[j]));
-            upper.push((*t, b[j] + 1.96 * se));
-            lower.push((*t, b[j] - 1.96 * se));
+            let (v, se) = show(*t, b[j], cov[(j, j)].max(0.0).sqrt());
+            mid_line.push((*t, v));
+            upper.push((*t, v + 1.96 * se));
+            lower.push((*t, v - 1.96 * se));
         }
         // The bias with each observation's partial residual: its residual about the model
         // plus the bias at its temperature.
@@ -155,19 +202,14 @@ fn coefficient_figures(h: &mut String, tf: &ThermalFit, axis: &str) -> Result<()
             tf.temps
                 .iter()
                 .zip(&tf.fit.fit.residuals)
-                .map(|(t, e)| (*t, tf.coefficients_at(*t).0[j] + e))
+                .map(|(t, e)| (*t, show(*t, tf.coefficients_at(*t).0[j] + e, 0.0).0))
                 .collect()
         } else {
             Vec::new()
         };
-        let what = if name == "1" {
-            "bias (counts)".to_string()
-        } else {
-            format!("{name} coefficient")
-        };
         let title = format!("{axis}{what} against temperature");
         let mut series = vec![
-            Series::curve("model", &mid, 0),
+            Series::curve("model", &mid_line, 0),
             Series::curve("95 % band", &upper, 1),
             Series::curve("", &lower, 1),
         ];
