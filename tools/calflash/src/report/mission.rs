@@ -455,27 +455,22 @@ fn left_out_figure(
             .enumerate()
             .map(|(k, t)| ((k + 1) as f64, t.worst))
             .collect();
-        let predicted: Vec<(f64, f64)> = terms
-            .iter()
-            .enumerate()
-            .filter_map(|(k, t)| {
-                outputs
-                    .iter()
-                    .find(|x| x.output == t.output)
-                    .map(|x| ((k + 1) as f64, x.worst))
-            })
-            .collect();
-        let requirement: Vec<(f64, f64)> = terms
-            .iter()
-            .enumerate()
-            .filter_map(|(k, t)| {
-                outputs
-                    .iter()
-                    .find(|x| x.output == t.output)
-                    .and_then(|x| x.requirement)
-                    .map(|r| ((k + 1) as f64, r))
-            })
-            .collect();
+        // Each term's output's figure `of`, at the term's place on the axis.
+        let per_output = |of: &dyn Fn(&crate::mission::judge::Output) -> Option<f64>| {
+            terms
+                .iter()
+                .enumerate()
+                .filter_map(|(k, t)| {
+                    outputs
+                        .iter()
+                        .find(|x| x.output == t.output)
+                        .and_then(|x| of(x))
+                        .map(|v| ((k + 1) as f64, v))
+                })
+                .collect::<Vec<(f64, f64)>>()
+        };
+        let predicted = per_output(&|x| Some(x.worst));
+        let requirement = per_output(&|x| x.requirement);
         let mut series = vec![
             Series::dots("what the left-out term may cost", &costs, 0),
             Series::dots("the output's worst predicted 1-sigma error", &predicted, 1),
