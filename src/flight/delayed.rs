@@ -151,34 +151,18 @@ impl<T: Real, const N: usize> DelayedFlight<T, N> {
     /// A GNSS fix as it arrives: held until the filter's samples reach its instant (one whose
     /// instant the filter has passed goes to it now, and is taken late).
     pub fn gnss(&mut self, fix: &GnssFix) {
-        let passed = self.samples.front().is_none_or(|s| fix.t_us < s.t_us)
-            || self.fixes.back().is_some_and(|b| fix.t_us < b.t_us);
-        if passed {
-            self.filter.gnss(fix);
-            return;
-        }
-        if let Err(fix) = self.fixes.push_back(*fix) {
-            if let Some(oldest) = self.fixes.pop_front() {
-                self.filter.gnss(&oldest);
-            }
-            let _ = self.fixes.push_back(fix);
+        let front = self.samples.front().map(|s| s.t_us);
+        if let Some(now) = hold(&mut self.fixes, *fix, |f| f.t_us, front) {
+            self.filter.gnss(&now);
         }
     }
 
     /// A static pressure (Pa) read at `t_us` (as [`FlightFilter::pressure`]): held until the
     /// filter's samples reach it.
     pub fn pressure(&mut self, t_us: u64, pa: T) {
-        let passed = self.samples.front().is_none_or(|s| t_us < s.t_us)
-            || self.pressures.back().is_some_and(|b| t_us < b.0);
-        if passed {
-            self.filter.pressure(t_us, pa);
-            return;
-        }
-        if let Err(p) = self.pressures.push_back((t_us, pa)) {
-            if let Some((t, pa)) = self.pressures.pop_front() {
-                self.filter.pressure(t, pa);
-            }
-            let _ = self.pressures.push_back(p);
+        let front = self.samples.front().map(|s| s.t_us);
+        if let Some((t, pa)) = hold(&mut self.pressures, (t_us, pa), |p| p.0, front) {
+            self.filter.pressure(t, pa);
         }
     }
 
@@ -218,21 +202,51 @@ impl<T: Real, const N: usize> DelayedFlight<T, N> {
         let Some(s) = self.samples.pop_front() else {
             return;
         };
-        while let Some(fix) = self.fixes.front().copied() {
-            if fix.t_us > s.t_us {
-                break;
-            }
-            self.fixes.pop_front();
+        while let Some(fix) = due(&mut self.fixes, |f| f.t_us, s.t_us) {
             self.filter.gnss(&fix);
         }
-        while let Some((t, pa)) = self.pressures.front().copied() {
-            if t > s.t_us {
-                break;
-            }
-            self.pressures.pop_front();
+        while let Some((t, pa)) = due(&mut self.pressures, |p| p.0, s.t_us) {
             self.filter.pressure(t, pa);
         }
         self.filter.sample(s.t_us, &s.f, &s.w, s.doubted);
+    }
+}
+
+/// Holds `event` (its instant `t`) in `queue` until the filter's samples reach it, the
+/// oldest held sample being at `front`; what must go to the filter now instead: the event
+/// itself when the filter has passed its instant (or it is older than the last held), or the
+/// oldest held one when the queue is full.
+fn hold<E: Copy, const M: usize>(
+    queue: &mut Deque<E, M>,
+    event: E,
+    t: impl Fn(&E) -> u64,
+    front: Option<u64>,
+) -> Option<E> {
+    let passed =
+        front.is_none_or(|f| t(&event) < f) || queue.back().is_some_and(|b| t(&event) < t(b));
+    if passed {
+        return Some(event);
+    }
+    match queue.push_back(event) {
+        Ok(()) => None,
+        Err(event) => {
+            let oldest = queue.pop_front();
+            let _ = queue.push_back(event);
+            oldest
+        }
+    }
+}
+
+/// The oldest event of `queue` whose instant `t` is not after `until`, taken out.
+fn due<E: Copy, const M: usize>(
+    queue: &mut Deque<E, M>,
+    t: impl Fn(&E) -> u64,
+    until: u64,
+) -> Option<E> {
+    if queue.front().is_some_and(|e| t(e) <= until) {
+        queue.pop_front()
+    } else {
+        None
     }
 }
 
