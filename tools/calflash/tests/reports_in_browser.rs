@@ -564,6 +564,19 @@ fn what_a_reader_finds(d: &Path) {
         ) || flight.contains("<p>Drawn from the flight alone"),
         "flight.html"
     );
+    // Each observed term after the launch in a figure of its own, in its unit, between the
+    // calibration's 1-sigma; the terms not observed named, not drawn as flat priors.
+    assert!(flight.contains("accel bias x: its shift from the calibration after the launch"));
+    assert!(flight.contains("shift, m/s^2") && flight.contains("shift, rad/s"));
+    assert!(
+        flight.contains("the calibration&#39;s 1-sigma")
+            || flight.contains("the calibration's 1-sigma")
+    );
+    assert!(flight.contains("<p>Not drawn: "), "flight.html");
+    assert!(
+        !flight.contains("accel bias y: its shift"),
+        "an unobserved term drawn"
+    );
     let lot = page("lot.html");
     assert!(lot.contains("point(s) out of control: LOT-R-"), "lot.html");
     assert!(!lot.contains(">plotted<"), "lot.html");

@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 use spincal::nav::StateMatrix;
-use spincal::nav::filter::index;
+use spincal::nav::filter::{Estimate, index};
 
 use super::frame;
 use super::input::{Fix, Pressure};
@@ -21,8 +21,11 @@ pub struct Track {
     pub t: Vec<f64>,
     /// Smoothed position (east, north, up), m.
     pub position: Vec<[f64; 3]>,
-    /// Each sensor error (in [`super::verdict::TERMS`]' order) and its 1-sigma.
+    /// Each sensor error (in [`super::verdict::TERMS`]' order) and its 1-sigma, smoothed
+    /// (what the whole flight tells of it at each epoch).
     pub terms: Vec<([f64; 12], [f64; 12])>,
+    /// The same from the forward pass alone (what the flight had told of it by each epoch).
+    pub filtered: Vec<([f64; 12], [f64; 12])>,
     /// GNSS fixes after launch in the level frame: time and position (up 0 for a fix without
     /// a height).
     pub gnss: Vec<(f64, [f64; 3])>,
@@ -143,13 +146,18 @@ pub fn track(pass: &Pass, (fixes, baro): (&[Fix], &[Pressure]), at: &Setting) ->
     for (k, (x, p)) in smoothed.iter().enumerate().step_by(every) {
         out.t.push(times[k]);
         out.position.push(x.nav.p.into());
-        let v = super::verdict::values(&x.sensors);
-        let mut sd = [0.0; 12];
-        for (i, d) in sd.iter_mut().enumerate() {
-            let j = index::ACCEL_BIAS + i;
-            *d = p[(j, j)].max(0.0).sqrt();
-        }
-        out.terms.push((v, sd));
+        out.terms.push(terms(x, p));
+        let (x, p) = &pass.epochs[k].filtered;
+        out.filtered.push(terms(x, p));
     }
     out
+}
+
+/// The sensor errors of an estimate, with their 1-sigma from its covariance.
+fn terms(x: &Estimate<f64>, p: &StateMatrix<f64>) -> ([f64; 12], [f64; 12]) {
+    let sd = std::array::from_fn(|i| {
+        let j = index::ACCEL_BIAS + i;
+        p[(j, j)].max(0.0).sqrt()
+    });
+    (super::verdict::values(&x.sensors), sd)
 }

@@ -424,6 +424,7 @@ fn temperature_figures(
                         color: COLORS[1],
                         line: true,
                         errors: Some(errs),
+                        band: None,
                     }],
                     bands: Vec::new(),
                     band_label: "",

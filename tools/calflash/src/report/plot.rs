@@ -20,6 +20,9 @@ pub struct Series<'a> {
     pub line: bool,
     /// Vertical error bars (half-widths, one per point).
     pub errors: Option<&'a [f64]>,
+    /// A shaded band about the line (half-widths, one per point): a 1-sigma that changes
+    /// smoothly along a curve, where error bars would hide each other.
+    pub band: Option<&'a [f64]>,
 }
 
 /// Blue, orange, green, red, purple, brown: distinguishable series colours.
@@ -42,6 +45,7 @@ impl<'a> Series<'a> {
             color: COLORS[k % COLORS.len()],
             line: false,
             errors: None,
+            band: None,
         }
     }
 
@@ -84,7 +88,9 @@ fn bounds(fig: &Figure<'_>) -> ((f64, f64), (f64, f64)) {
             if !(px.is_finite() && py.is_finite()) {
                 continue;
             }
-            let e = s.errors.and_then(|e| e.get(i)).copied().unwrap_or(0.0);
+            let bar = s.errors.and_then(|e| e.get(i)).copied().unwrap_or(0.0);
+            let band = s.band.and_then(|e| e.get(i)).copied().unwrap_or(0.0);
+            let e = bar.max(band);
             x = (x.0.min(*px), x.1.max(*px));
             y = (y.0.min(py - e), y.1.max(py + e));
         }
@@ -380,6 +386,25 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
                 .copied()
                 .filter(|(a, b)| a.is_finite() && b.is_finite())
                 .collect();
+            if let Some(half) = s.band {
+                // The band's outline: up along the upper edge, back along the lower.
+                let edge: Vec<(f64, f64)> = s
+                    .points
+                    .iter()
+                    .zip(half)
+                    .filter(|((a, b), e)| a.is_finite() && b.is_finite() && e.is_finite())
+                    .map(|((x, y), e)| (*x, y + e))
+                    .chain(
+                        s.points
+                            .iter()
+                            .zip(half)
+                            .rev()
+                            .filter(|((a, b), e)| a.is_finite() && b.is_finite() && e.is_finite())
+                            .map(|((x, y), e)| (*x, y - e)),
+                    )
+                    .collect();
+                chart.draw_series(std::iter::once(Polygon::new(edge, color.mix(0.2).filled())))?;
+            }
             if let Some(errors) = s.errors {
                 chart.draw_series(pts.iter().zip(errors).map(|((x, y), e)| {
                     ErrorBar::new_vertical(*x, y - e, *y, y + e, color.filled(), 6)

@@ -139,46 +139,99 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, Err
             x_names: None,
         },
     )?;
-    // Each sensor error along the flight with its 1-sigma, a figure per kind of term.
+    terms_over_time(&mut h, c)?;
+    h.push_str("</body>\n</html>\n");
+    Ok(crate::report::page::with_contents(&h))
+}
+
+/// Each term the flight observes, its estimate after the launch with its 1-sigma band against
+/// the calibration's 1-sigma: a figure a term, in the term's own unit (the terms' scales differ
+/// by orders of magnitude, and a term unobserved is only its prior).
+///
+/// # Errors
+/// A figure that cannot be drawn.
+fn terms_over_time(h: &mut String, c: &Checked) -> Result<(), Error> {
+    use crate::report::page::esc;
+    use crate::report::plot::{Figure, Series, figure};
+    let tr = &c.track;
+    let launch = c.pass.launch;
+    let v = &c.verdict;
+    let drawn: Vec<usize> = (0..v.terms.len())
+        .filter(|&i| v.terms[i].z.is_some() || v.terms[i].shifted)
+        .collect();
     let _ = writeln!(
         h,
-        "<h2>Sensor errors along the flight</h2>\n<p>Drawn from {}, the pass the table reports: each term's smoothed estimate with its 1-sigma; the table's value is the curve just after the launch ({:.3} s). The calibration's own 1-sigma of each term is the table's first column.</p>",
-        esc(c.pass_name),
-        c.pass.launch
+        "<h2>Sensor errors along the flight</h2>\n<p>Drawn from {}, the pass the table reports: each observed term's shift from the calibration from the launch on, as the flight had told it by each moment (the forward pass, shaded 1-sigma either side: the band narrows as the fixes come) and as the whole flight tells it (the smoothed estimate, green), between the calibration's own 1-sigma of it (red). The table's value is the green curve just after the launch ({launch:.3} s). Before the launch the filter's states are the errors at the pad's rates, another quantity, and are not drawn.</p>",
+        esc(c.pass_name)
     );
-    let every = tr.t.len().div_ceil(60).max(1);
-    for (group, unit, first) in [
-        ("Accelerometer biases", "m/s^2", 0),
-        ("Gyro biases", "rad/s", 3),
-        ("Accelerometer scale factors", "relative", 6),
-        ("Gyro scale factors", "relative", 9),
-    ] {
-        let values: Vec<Vec<(f64, f64)>> = (first..first + 3)
-            .map(|i| {
-                tr.t.iter()
-                    .zip(&tr.terms)
-                    .step_by(every)
-                    .map(|(t, (v, _))| (*t, v[i]))
-                    .collect()
-            })
+    let unobserved: Vec<&str> = v
+        .terms
+        .iter()
+        .filter(|t| t.z.is_none() && !t.shifted)
+        .map(|t| t.name)
+        .collect();
+    if !unobserved.is_empty() {
+        let _ = writeln!(
+            h,
+            "<p>Not drawn: {}, which the flight does not observe; each keeps the calibration's value and 1-sigma.</p>",
+            esc(&unobserved.join(", "))
+        );
+    }
+    let after: Vec<usize> = (0..tr.t.len()).filter(|&k| tr.t[k] >= launch).collect();
+    let span = (
+        after.first().map_or(launch, |&k| tr.t[k]),
+        after.last().map_or(launch, |&k| tr.t[k]),
+    );
+    for i in drawn {
+        let term = &v.terms[i];
+        let smoothed: Vec<(f64, f64)> =
+            after.iter().map(|&k| (tr.t[k], tr.terms[k].0[i])).collect();
+        // Before the first fixes the forward pass may know a term far less than the
+        // calibration does (a term opened at launch, the navigation put back on GNSS): its
+        // band is clipped so that the calibration's and the flight's stay readable.
+        let limit = 3.0 * term.prior_sigma.max(term.estimate.abs() + term.sigma);
+        let filtered: Vec<(f64, f64)> = after
+            .iter()
+            .map(|&k| (tr.t[k], tr.filtered[k].0[i].clamp(-limit, limit)))
             .collect();
-        let sigmas: Vec<Vec<f64>> = (first..first + 3)
-            .map(|i| tr.terms.iter().step_by(every).map(|(_, s)| s[i]).collect())
+        let sigma: Vec<f64> = after
+            .iter()
+            .map(|&k| tr.filtered[k].1[i].min(limit))
             .collect();
-        let mut series: Vec<Series<'_>> = Vec::new();
-        for (k, (v, s)) in values.iter().zip(&sigmas).enumerate() {
-            let mut one = Series::curve(crate::nav::verdict::TERMS[first + k], v, k);
-            one.errors = Some(s);
-            series.push(one);
-        }
-        let y = format!("smoothed estimate, {unit}");
+        let clipped = after
+            .iter()
+            .any(|&k| tr.filtered[k].1[i] > limit || tr.filtered[k].0[i].abs() > limit);
+        let name = if clipped {
+            format!("by then (forward pass), 1-sigma shaded, clipped at {limit:.2e}")
+        } else {
+            "by then (forward pass), 1-sigma shaded".to_string()
+        };
+        let upper = [(span.0, term.prior_sigma), (span.1, term.prior_sigma)];
+        let lower = [(span.0, -term.prior_sigma), (span.1, -term.prior_sigma)];
+        let mut line = Series::curve(&name, &filtered, 0);
+        line.band = Some(&sigma);
+        let title = format!(
+            "{}: its shift from the calibration after the launch{}",
+            term.name,
+            if term.shifted { " (SHIFTED)" } else { "" }
+        );
+        let y = if term.unit.is_empty() {
+            "shift, relative".to_string()
+        } else {
+            format!("shift, {}", term.unit)
+        };
         figure(
-            &mut h,
+            h,
             &Figure {
-                title: group,
+                title: &title,
                 x: "time, s",
                 y: &y,
-                series,
+                series: vec![
+                    line,
+                    Series::curve("the whole flight (smoothed, the table's)", &smoothed, 2),
+                    Series::curve("the calibration's 1-sigma", &upper, 3),
+                    Series::curve("", &lower, 3),
+                ],
                 bands: Vec::new(),
                 band_label: "",
                 zero_line: true,
@@ -186,8 +239,7 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, Err
             },
         )?;
     }
-    h.push_str("<p>Each sensor error is the smoothed estimate of its shift from the calibration, with its 1-sigma; the innovations are GNSS and barometer readings against the filter's prediction, over the spread the filter expected.</p>\n</body>\n</html>\n");
-    Ok(crate::report::page::with_contents(&h))
+    Ok(())
 }
 
 /// The check's facts as a table: the filter's fit, the inputs, the prior, the track.
@@ -210,8 +262,11 @@ fn facts_table(c: &Checked, counts: &FixCounts) -> String {
         ),
         ("refused beyond 5 sigma".into(), k.refused.to_string()),
         (
-            "GNSS rows: without a fix, repeating the last (left out)".into(),
-            format!("{}: {}, {}", counts.rows, counts.no_fix, counts.repeated),
+            "GNSS rows read".into(),
+            format!(
+                "{}: {} without a fix, {} repeating the last fix (left out)",
+                counts.rows, counts.no_fix, counts.repeated
+            ),
         ),
         (
             "heading at rest, from the track".into(),

@@ -13,6 +13,7 @@ fn a_figure_is_an_svg_with_its_marks() {
             color: COLORS[0],
             line: false,
             errors: Some(&[0.1, 0.1, 0.1]),
+            band: None,
         }],
         bands: vec![(0.5, 1.5)],
         band_label: "calibrated range",
