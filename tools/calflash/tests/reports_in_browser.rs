@@ -513,11 +513,45 @@ fn every_report_fits_a_1280_px_window() {
     assert!(faults.is_empty(), "{}", faults.join("\n"));
 }
 
-/// What the reports say beside their layout (read without a browser): the spin rig's lever
-/// arms and residuals against the spin rate, one unit per figure, contents on long pages, a
-/// control chart's units out of control named, Allan's slope lines and Kalibr's file.
+/// What the reports say beside their layout (read without a browser): the answer in a box
+/// before the first section, no terminal text pasted, the spin rig's lever arms and residuals
+/// against the spin rate, one unit per figure, contents on long pages, a control chart's units
+/// out of control named, Allan's slope lines and Kalibr's file.
 fn what_a_reader_finds(d: &Path) {
     let page = |f: &str| std::fs::read_to_string(d.join(f)).unwrap();
+    for f in [
+        "imu.html",
+        "single.html",
+        "thermal.html",
+        "round.html",
+        "accuracy.html",
+        "flight.html",
+        "mission.html",
+        "selfcal.html",
+        "allan.html",
+        "health.html",
+        "design.html",
+        "lot.html",
+        "out/index.html",
+    ] {
+        let html = page(f);
+        let verdict = html.find("<p class=\"verdict ");
+        let first_section = html.find("<h2").unwrap_or(html.len());
+        assert!(
+            verdict.is_some_and(|v| v < first_section),
+            "{f}: no verdict box before its first section"
+        );
+        // A pre block is for a file's text (Kalibr's imu.yaml), never a table or the
+        // terminal's summary.
+        for block in html.split("<pre").skip(1) {
+            let text = block.split("</pre>").next().unwrap_or("");
+            assert!(
+                !text.contains(" | ") && !text.contains("calflash:") && !text.contains("unit ") && !text.contains("±"),
+                "{f}: a pre block holds terminal text or a table: {}",
+                &text[..text.len().min(200)]
+            );
+        }
+    }
     let round = page("round.html");
     assert!(round.contains("<h2>Under rotation</h2>"), "round.html");
     assert!(round.contains("<th>r_x (mm)</th>") && round.contains(" &#177; "));

@@ -175,6 +175,7 @@ pub fn html(
         esc(source),
         esc(read)
     );
+    h.push_str(&resolved_box(sensors));
     for s in sensors {
         let u = s.unit;
         let _ = writeln!(
@@ -210,6 +211,41 @@ pub fn html(
     }
     h.push_str("</body>\n</html>\n");
     Ok(super::page::with_contents(&h))
+}
+
+/// The report's answer first: which of the noise terms a datasheet states (N, B, K) this
+/// record resolves on every axis, and which it is too short or too quiet to read.
+fn resolved_box(sensors: &[Sensor<'_>]) -> String {
+    let mut missing: Vec<String> = Vec::new();
+    let mut axes = 0;
+    for s in sensors {
+        for (axis, t) in ["x", "y", "z"].iter().zip(s.terms) {
+            axes += 1;
+            for (name, v) in [
+                ("N", t.random_walk),
+                ("B", t.bias_instability),
+                ("K", t.rate_random_walk),
+            ] {
+                if v.is_nan() || v <= 0.0 {
+                    missing.push(format!("{} {axis} {name}", s.name));
+                }
+            }
+        }
+    }
+    let (class, said) = if missing.is_empty() {
+        ("accept", format!("N, B and K read on all {axes} axes"))
+    } else {
+        (
+            "review",
+            format!(
+                "{} of the {} terms N, B and K on {axes} axes read; not resolved in this record: {}",
+                3 * axes - missing.len(),
+                3 * axes,
+                missing.join(", ")
+            ),
+        )
+    };
+    format!("<p class=\"verdict {class}\">{}</p>\n", esc(&said))
 }
 
 /// `gyro` as `Gyro`.

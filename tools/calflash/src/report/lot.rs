@@ -43,6 +43,21 @@ fn indexed(values: impl Iterator<Item = f64>) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// Serials in a sentence: the first six, then how many more.
+fn shortened(serials: &[&str]) -> String {
+    let mut unique: Vec<&str> = Vec::new();
+    for s in serials {
+        if !unique.contains(s) {
+            unique.push(s);
+        }
+    }
+    if unique.len() <= 6 {
+        unique.join(", ")
+    } else {
+        format!("{}, and {} more", unique[..6].join(", "), unique.len() - 6)
+    }
+}
+
 /// The unit of a lot's coefficient `output:term` (`a_x:1`, `g_y:w_x`, `a_x:f_x^2`): counts
 /// per unit of the term (the fit's coefficients are in the converter's counts).
 fn coefficient_unit(name: &str) -> String {
@@ -63,11 +78,42 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
     let _ = write!(
         h,
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>{}</title><style>{STYLE}</style></head><body>\
-         <h1>{}: {n} units, {} outside</h1><p>",
+         <h1>{}: {n} units, {} outside</h1>",
         esc(&name),
         esc(&name),
         lot.outliers.len()
     );
+    // The lot's verdict: the units outside it and the control charts' points out of control.
+    let out_of_control: Vec<&str> = charts
+        .iter()
+        .flat_map(|(_, c)| c.out_of_control.iter().filter_map(|&i| c.serials.get(i)))
+        .map(String::as_str)
+        .collect();
+    let outside: Vec<&str> = lot.outliers.iter().map(|o| o.serial.as_str()).collect();
+    let (class, verdict) = if outside.is_empty() && out_of_control.is_empty() {
+        (
+            "accept",
+            format!("All {n} units within the lot and in control"),
+        )
+    } else {
+        let mut said = Vec::new();
+        if !outside.is_empty() {
+            said.push(format!(
+                "{} outside the lot ({})",
+                outside.len(),
+                shortened(&outside)
+            ));
+        }
+        if !out_of_control.is_empty() {
+            said.push(format!(
+                "{} point(s) out of control ({})",
+                out_of_control.len(),
+                shortened(&out_of_control)
+            ));
+        }
+        ("review", format!("{n} units: {}", said.join("; ")))
+    };
+    let _ = write!(h, "<p class=\"verdict {class}\">{}</p><p>", esc(&verdict));
     match &lot.judge {
         Judge::Scatter { robust, .. } => {
             let _ = write!(

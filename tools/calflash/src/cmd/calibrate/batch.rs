@@ -408,8 +408,16 @@ fn index_html(outcomes: &[Outcome], lot: Option<&str>, folder: String) -> String
         Some(l) => format!("Batch of lot {l}: {} units", outcomes.len()),
         None => format!("Batch of {} units", outcomes.len()),
     };
+    // The batch's verdict is its worst unit's: a failed or REJECTed unit rejects the batch.
+    let class = if counts[2] + counts[3] > 0 {
+        "reject"
+    } else if counts[1] > 0 {
+        "review"
+    } else {
+        "accept"
+    };
     format!(
-        "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title><style>{STYLE}td.why{{text-align:left}}ul{{margin:0;padding-left:1.2em}}</style></head><body>\n<h1>{0}</h1>\n<p>From {1}, calibrated {when} UTC: <b>{2} ACCEPT, {3} REVIEW, {4} REJECT, {5} failed</b>. Each unit's page is linked from its serial; the reasons are the findings that gave its verdict.</p>\n<table>\n<tr><th>unit</th><th>verdict</th><th>why</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
+        "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title><style>{STYLE}td.why{{text-align:left}}ul{{margin:0;padding-left:1.2em}}</style></head><body>\n<h1>{0}</h1>\n<p class=\"verdict {class}\">{2} ACCEPT, {3} REVIEW, {4} REJECT, {5} failed</p>\n<p>From {1}, calibrated {when} UTC. Each unit's page is linked from its serial; the reasons are the findings that gave its verdict.</p>\n<table>\n<tr><th>unit</th><th>verdict</th><th>why</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
         esc(&title),
         esc(&folder),
         counts[0],

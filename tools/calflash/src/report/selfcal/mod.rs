@@ -4,6 +4,8 @@
 use super::Error;
 use std::fmt::Write as _;
 
+mod tables;
+
 use super::page::esc;
 use super::plot::{Figure, Series, figure, svg};
 use super::terminal::{num, pval};
@@ -302,10 +304,12 @@ pub fn html(
         word.to_lowercase(),
         word
     );
-    let _ = writeln!(h, "<pre>{}</pre>", esc(&summary(c, rec, check, serial)));
     for n in &notes {
         let _ = writeln!(h, "<p><b>{word}</b>: {}</p>", esc(n));
     }
+    let _ = writeln!(h, "<p>From {}.</p>", esc(&rec.source));
+    h.push_str(&tables::facts(c, rec, check));
+    h.push_str(&tables::coefficients(c, rec));
     // The signal and the poses found. Every k-th sample keeps the figure small.
     let step = (rec.len() / 3000).max(1);
     let names = ["x", "y", "z"];

@@ -1,0 +1,225 @@
+//! The self-calibration's summary as HTML tables: what the recording held and how well each
+//! fit closes, then each sensor's coefficients with their 1-sigma (the terminal prints the
+//! same as text).
+
+use std::fmt::Write as _;
+
+use super::{accel_sd, gyro_sd, plural};
+use crate::nonlinear::selfcal::{GyroBias, SelfCal};
+use crate::obs::recording::Recording;
+use crate::obs::units::Sensor;
+use crate::report::page::esc;
+use crate::report::terminal::{num, pval};
+use crate::sensor::selfcal::DeviceCheck;
+use crate::sensor::selfcal::record::{NO_BLOB, Temperature, rms_deg};
+
+/// The recording, the poses and rotations found, and each fit's closure, as a two-column
+/// table.
+pub(super) fn facts(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>) -> String {
+    let mut rows: Vec<(String, String)> = Vec::new();
+    let dur = rec.t[rec.len() - 1] - rec.t[0];
+    rows.push((
+        "recording".into(),
+        format!(
+            "{} samples at {:.1} Hz over {dur:.1} s; {} gaps ({} samples dropped)",
+            rec.len(),
+            rec.rate(),
+            rec.gaps.len(),
+            rec.gaps.iter().map(|g| g.missing).sum::<usize>()
+        ),
+    ));
+    rows.push((
+        "saturated samples left out".into(),
+        format!(
+            "{} accelerometer, {} gyro",
+            rec.saturated_count.0, rec.saturated_count.1
+        ),
+    ));
+    if let Some(t) = Temperature::of(rec) {
+        rows.push((
+            format!("temperature (column {})", t.column),
+            format!(
+                "{} to {}, mean {:.2} (carried into the record)",
+                t.min, t.max, t.mean
+            ),
+        ));
+    }
+    if !c.rest_glitches.is_empty() {
+        rows.push((
+            "glitches in the initial rest, left out of it (a misread, not motion)".into(),
+            c.rest_glitches
+                .iter()
+                .map(|t| format!("{t:.3} s"))
+                .collect::<Vec<_>>()
+                .join(", "),
+        ));
+    }
+    rows.push((
+        "still poses found".into(),
+        format!(
+            "{} at {} &times; the initial rest's level ({} s rest, window {} s, at least {} s still)",
+            c.poses.len(),
+            c.trials[c.chosen].multiplier,
+            c.options.init_rest,
+            c.options.window,
+            c.options.min_still
+        ),
+    ));
+    rows.push((
+        "accelerometer: |a| &minus; g over the poses".into(),
+        format!(
+            "RMS {:.3} mm/s<sup>2</sup>, max {:.3} mm/s<sup>2</sup> (g = {} m/s<sup>2</sup>)",
+            c.accel.rms() * 1e3,
+            c.accel.max() * 1e3,
+            c.options.g
+        ),
+    ));
+    rows.push((
+        format!("accelerometer: held out ({} folds)", c.holdout.folds),
+        format!(
+            "RMS {:.3} mm/s<sup>2</sup>, max {:.3} mm/s<sup>2</sup>",
+            c.holdout.rms * 1e3,
+            c.holdout.max * 1e3
+        ),
+    ));
+    if let Some(q) = &c.quadratic_test {
+        rows.push((
+            "accelerometer: quadratic terms".into(),
+            format!(
+                "F = {}, p = {}: {}",
+                num(q.f),
+                pval(q.p),
+                if q.kept {
+                    "kept"
+                } else {
+                    "not significant, not kept"
+                }
+            ),
+        ));
+    }
+    let bias = match c.options.gyro_bias {
+        GyroBias::Poses => "the bias from the poses on either side",
+        GyroBias::Rest => "the bias from the initial rest",
+    };
+    rows.push((
+        format!(
+            "gyro: gravity-direction error over {} rotations",
+            c.rotations.len()
+        ),
+        format!(
+            "RMS {:.3} deg, max {:.3} deg ({bias}); with the stored constant bias RMS {:.3} deg",
+            c.gyro.rms_deg(),
+            c.gyro.max_deg(),
+            rms_deg(&c.constant_bias_angles)
+        ),
+    ));
+    for k in &c.skipped {
+        rows.push((
+            format!("gyro: rotation after pose {} left out", k.pose + 1),
+            esc(&k.why),
+        ));
+    }
+    rows.push(match check {
+        Some(d) => (
+            format!("the device (blob {} bytes)", d.blob.len()),
+            format!(
+                "its f32 correction against the f64 fit: {:.1e} m/s<sup>2</sup>, {:.1e} rad/s; |a| &minus; g from its corrected samples: RMS {:.3} mm/s<sup>2</sup>",
+                d.accel,
+                d.gyro,
+                d.device_accel_rms * 1e3
+            ),
+        ),
+        None => ("the device".into(), esc(NO_BLOB)),
+    });
+    let mut t = String::from("<h2>The recording and the fits</h2>\n<table>\n");
+    for (what, value) in rows {
+        let _ = writeln!(t, "<tr><td>{what}</td><td>{value}</td></tr>");
+    }
+    t.push_str("</table>\n");
+    t
+}
+
+/// A value with its 1-sigma (none where the fit does not estimate it).
+fn with_sd(v: f64, sd: Option<f64>) -> String {
+    match sd {
+        Some(s) if s > 0.0 => format!("{} &plusmn; {}", num(v), num(s)),
+        _ => num(v),
+    }
+}
+
+/// One row of a coefficient table: its name, unit and three cells.
+fn row(t: &mut String, name: &str, unit: &str, cells: [String; 3]) {
+    let _ = writeln!(
+        t,
+        "<tr><td>{name}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+        esc(unit),
+        cells[0],
+        cells[1],
+        cells[2]
+    );
+}
+
+/// Each sensor's coefficients with their 1-sigma: the accelerometer's matrix, offset,
+/// quadratic terms and centre, the gyro's matrix and bias.
+pub(super) fn coefficients(c: &SelfCal, rec: &Recording) -> String {
+    let [ua, ug] = rec.units;
+    let (pa, pg) = (ua.per(Sensor::Accel), ug.per(Sensor::Gyro));
+    let mut t = format!(
+        "<h2>Coefficients</h2>\n<p>Inputs: the accelerometer in {}, the gyro in {}. Each cell is the value &plusmn; its 1-sigma; the matrices' rows are the corrected axes x, y, z, their columns the inputs.</p>\n<table class=\"terms\">\n<tr><th>coefficient</th><th>unit</th><th>x</th><th>y</th><th>z</th></tr>\n",
+        esc(&ua.describe(Sensor::Accel)),
+        esc(&ug.describe(Sensor::Gyro))
+    );
+    let sd = accel_sd(c);
+    let m = &c.accel.model;
+    for (i, name) in ["M, row x", "M, row y", "M, row z"].iter().enumerate() {
+        row(
+            &mut t,
+            name,
+            &format!("m/s^2 per {pa}"),
+            std::array::from_fn(|j| with_sd(m.matrix[i][j], sd.map(|s| s.0[i][j]))),
+        );
+    }
+    row(
+        &mut t,
+        "offset o",
+        "m/s^2",
+        std::array::from_fn(|j| with_sd(m.offset[j], sd.map(|s| s.1[j]))),
+    );
+    if c.accel.params.len() == 12 {
+        row(
+            &mut t,
+            "quadratic q",
+            &format!("1/({pa})"),
+            std::array::from_fn(|j| with_sd(m.quadratic[j], sd.map(|s| s.2[j]))),
+        );
+    }
+    row(
+        &mut t,
+        "accelerometer centre",
+        plural(pa),
+        std::array::from_fn(|j| format!("{}", m.center[j])),
+    );
+    let gsd = gyro_sd(c);
+    for (i, name) in ["G, row x", "G, row y", "G, row z"].iter().enumerate() {
+        row(
+            &mut t,
+            name,
+            &format!("rad/s per {pg}"),
+            std::array::from_fn(|j| with_sd(c.gyro.matrix[i][j], gsd.map(|s| s[i][j]))),
+        );
+    }
+    row(
+        &mut t,
+        "gyro bias (stored as its centre)",
+        plural(pg),
+        std::array::from_fn(|j| format!("{:.5}", c.gyro_bias[j])),
+    );
+    row(
+        &mut t,
+        "gyro bias: spread between poses",
+        plural(pg),
+        std::array::from_fn(|j| format!("{:.5}", c.gyro_bias_spread[j])),
+    );
+    t.push_str("</table>\n");
+    t
+}
