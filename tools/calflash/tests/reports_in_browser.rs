@@ -546,12 +546,30 @@ fn what_a_reader_finds(d: &Path) {
         for block in html.split("<pre").skip(1) {
             let text = block.split("</pre>").next().unwrap_or("");
             assert!(
-                !text.contains(" | ") && !text.contains("calflash:") && !text.contains("unit ") && !text.contains("±"),
+                !text.contains(" | ")
+                    && !text.contains("calflash:")
+                    && !text.contains("unit ")
+                    && !text.contains("±"),
                 "{f}: a pre block holds terminal text or a table: {}",
                 &text[..text.len().min(200)]
             );
         }
     }
+    // Residuals in the input's unit (over the scale factor), not in the converter's counts.
+    for f in [
+        "imu.html",
+        "round.html",
+        "single.html",
+        "thermal.html",
+        "mission.html",
+    ] {
+        assert!(
+            !page(f).contains("residual (counts)"),
+            "{f}: residuals in counts"
+        );
+    }
+    assert!(page("imu.html").contains("residual (m/s^2)"));
+    assert!(page("round.html").contains("residual (rad/s)"));
     let round = page("round.html");
     assert!(round.contains("<h2>Under rotation</h2>"), "round.html");
     assert!(round.contains("<th>r_x (mm)</th>") && round.contains(" &#177; "));

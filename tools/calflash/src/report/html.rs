@@ -152,10 +152,14 @@ fn model(h: &mut String, c: &Calibrated) -> Result<(), Error> {
                 .enumerate()
                 .map(|(k, (name, pts))| Series::dots(name, pts, k))
                 .collect();
+            let unit = c.units.first().copied().unwrap_or("");
             residual_figure(
                 h,
-                (&format!("{}: residuals without the term", d.name), "input"),
-                series,
+                (
+                    &format!("{}: residuals without the term", d.name),
+                    &format!("input ({unit})"),
+                ),
+                (series, unit),
                 None,
             )?;
         }
@@ -210,15 +214,17 @@ fn axis_section(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
 fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Result<(), Error> {
     let unit = c.units[a];
     // Residuals against the input, every table point.
+    // In the input's unit: each point's residual counts over its own scale factor.
     let by_point: Vec<Vec<(f64, f64)>> = c
         .points
         .iter()
         .map(|p| {
+            let scale = p.axes[a].coef(&axis.own);
             p.axes[a]
                 .input
                 .iter()
                 .copied()
-                .zip(p.axes[a].fit.residuals.iter().copied())
+                .zip(p.axes[a].fit.residuals.iter().map(|r| r / scale))
                 .collect()
         })
         .collect();
@@ -251,18 +257,19 @@ fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) ->
             &format!("{}: residuals against the input", axis.output),
             &format!("{} ({unit})", axis.own),
         ),
-        series,
+        (series, unit),
         Some((f64::from(range.lo), f64::from(range.hi))),
     )?;
     let order: Vec<Vec<(f64, f64)>> = c
         .points
         .iter()
         .map(|p| {
+            let scale = p.axes[a].coef(&axis.own);
             p.axes[a]
                 .lines
                 .iter()
                 .map(|l| *l as f64)
-                .zip(p.axes[a].fit.residuals.iter().copied())
+                .zip(p.axes[a].fit.residuals.iter().map(|r| r / scale))
                 .collect()
         })
         .collect();
@@ -278,26 +285,28 @@ fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) ->
             &format!("{}: residuals in test order", axis.output),
             "line of the data file",
         ),
-        series,
+        (series, unit),
         None,
     )?;
     Ok(())
 }
 
-/// A figure of residuals (counts) about zero, titled and with its x axis as `(title, x)`, and
-/// the calibrated range when `range` is given.
+/// A figure of residuals about zero in the input's `unit` (each residual count over the scale
+/// factor), titled and with its x axis as `(title, x)`, and the calibrated range when `range`
+/// is given.
 fn residual_figure(
     h: &mut String,
     (title, x): (&str, &str),
-    series: Vec<Series<'_>>,
+    (series, unit): (Vec<Series<'_>>, &str),
     range: Option<(f64, f64)>,
 ) -> Result<(), Error> {
+    let y = format!("residual ({unit})");
     figure(
         h,
         &Figure {
             title,
             x,
-            y: "residual (counts)",
+            y: &y,
             series,
             bands: range.into_iter().collect(),
             band_label: if range.is_some() {

@@ -32,11 +32,13 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
             .iter()
             .filter(|a| outputs.contains(&a.output.as_str()))
             .map(|a| {
+                // In the output's unit: each residual count over its scale factor.
+                let scale = a.coef(&a.own);
                 let p = a
                     .lines
                     .iter()
                     .zip(&a.fit.residuals)
-                    .filter_map(|(l, r)| rates.get(l).map(|w| (*w, *r)))
+                    .filter_map(|(l, r)| rates.get(l).map(|w| (*w, *r / scale)))
                     .collect();
                 (a.output.clone(), p)
             })
@@ -45,12 +47,21 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
             continue;
         }
         let title = format!("{sensor} residuals against the spin rate");
+        // The sensor's outputs share a unit (one figure per sensor).
+        let unit = reference
+            .axes
+            .iter()
+            .position(|a| outputs.contains(&a.output.as_str()))
+            .and_then(|i| c.units.get(i))
+            .copied()
+            .unwrap_or("");
+        let y = format!("residual ({unit})");
         figure(
             &mut h,
             &Figure {
                 title: &title,
                 x: "spin rate |w| (rad/s)",
-                y: "residual (counts)",
+                y: &y,
                 series: pts
                     .iter()
                     .enumerate()

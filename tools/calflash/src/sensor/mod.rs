@@ -458,7 +458,8 @@ pub struct Decision {
     pub detail: String,
     /// Whether the term is kept in the device model.
     pub kept: bool,
-    /// The figure: residuals of the model without the term against the input, by group.
+    /// The figure: residuals of the model without the term against the input, by group, in
+    /// the input's unit (each residual count over the scale factor).
     pub figure: Vec<(String, Vec<(f64, f64)>)>,
 }
 

@@ -137,13 +137,14 @@ pub(super) fn asymmetry(
     let k1 = full.coef(col::INPUT);
     let ca = full.coef(KINK);
     let kept = opts.asymmetry.unwrap_or(test.p < opts.alpha);
+    let scale = reduced.coef(col::INPUT);
     let side = |below: bool| -> Vec<(f64, f64)> {
         reduced
             .input
             .iter()
             .zip(&reduced.fit.residuals)
             .filter(|(x, _)| (**x < bp) == below)
-            .map(|(x, e)| (*x, *e))
+            .map(|(x, e)| (*x, *e / scale))
             .collect()
     };
     let decision = Decision {
@@ -177,11 +178,13 @@ pub(super) fn hysteresis(model: &Formula, decide: &Decide<'_>) -> Result<Decisio
     let test = select::partial_f(&full.fit, &reduced.fit);
     let h = full.coef(col::DIR);
     let se = full.fit.std_errors[full.index(col::DIR).unwrap_or(0)];
+    let scale = reduced.coef(col::INPUT);
+    let in_input = |v: Vec<(f64, f64)>| v.into_iter().map(|(x, e)| (x, e / scale)).collect();
     let figure = super::super::hysteresis::by_direction(&reduced)
         .map(|(up, down)| {
             vec![
-                ("ascending".to_string(), up),
-                ("descending".to_string(), down),
+                ("ascending".to_string(), in_input(up)),
+                ("descending".to_string(), in_input(down)),
             ]
         })
         .unwrap_or_default();
