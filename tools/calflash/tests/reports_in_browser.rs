@@ -150,6 +150,10 @@ fn layout_faults(browser: &Path, report: &Path) -> Vec<String> {
         .and_then(|h| h.parse().ok())
         .unwrap_or_else(|| panic!("{}: the check said {found}", report.display()));
     if let Some(dir) = std::env::var_os("REPORT_SCREENSHOTS") {
+        eprintln!(
+            "{}: page {height} px at 1280 px",
+            report.file_name().unwrap().to_string_lossy()
+        );
         screenshot(browser, report, height, Path::new(&dir));
     }
     lines.map(str::to_string).collect()
