@@ -11,12 +11,14 @@ pub const TARGET: &str = "thumbv7em-none-eabihf";
 /// Set to `1` to make a missing QEMU or thumb target a failure instead of a skip (CI does).
 pub const REQUIRE_ENV: &str = "SPINCAL_REQUIRE_QEMU";
 
-/// The repository root.
+/// The repository root: the nearest folder above the crate that holds the firmware (this
+/// module is also taken by path into calflash's README test, two floors further down).
 #[must_use]
 pub fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("host-tests sits in the repository")
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    here.ancestors()
+        .find(|d| d.join("firmware").join("Cargo.toml").is_file())
+        .unwrap_or_else(|| here.parent().expect("the crate sits in the repository"))
         .to_path_buf()
 }
 

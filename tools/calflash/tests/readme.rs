@@ -4,9 +4,10 @@
 //! so that an example cannot drift from the tool again.
 //!
 //! - `calflash ...` and `cargo run --release -p calflash -- ...` run this build's `calflash`.
-//! - The device port (`/dev/ttyUSB0`, `tcp://127.0.0.1:4444`) is the one stand-in: the
-//!   device's own protocol handler over a simulated NOR flash, on a local TCP port
-//!   (`host-tests/src/tcp_unit.rs`), unit IMU-0042.
+//! - The device port (`/dev/ttyUSB0`, `tcp://127.0.0.1:4444`) is the example unit as `cargo
+//!   xtask unit` starts it: the firmware built as IMU-0042 on QEMU, its UART on a local TCP
+//!   port. Without QEMU (and unless `SPINCAL_REQUIRE_QEMU=1`) the device's own protocol
+//!   handler over a simulated NOR flash stands in, said (`host-tests/src/tcp_unit.rs`).
 //! - The shared history (`CALFLASH_DB=postgres://...`) is a real PostgreSQL server started here
 //!   (`host-tests/src/postgres.rs`); without one the commands that need it are skipped, said.
 //! - `cargo xtask ...` is not run here: CI runs `cargo xtask test` itself (`.ci/run`), and the
@@ -25,8 +26,12 @@
 mod nor;
 #[path = "../../../host-tests/src/postgres.rs"]
 mod postgres;
+#[path = "../../../host-tests/src/qemu.rs"]
+mod qemu;
 #[path = "../../../host-tests/src/tcp_unit.rs"]
 mod tcp_unit;
+#[path = "../../../host-tests/src/unit.rs"]
+mod unit;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -199,6 +204,38 @@ fn scratch(repo: &Path) -> (tempfile::TempDir, PathBuf, bool) {
     (dir, work, has_shared)
 }
 
+/// The unit on the README's port, as `cargo xtask unit` starts it: the example firmware built
+/// as IMU-0042 under QEMU (mps2-an386), its flash erased, its UART on a local TCP port. Where
+/// QEMU cannot run (and `SPINCAL_REQUIRE_QEMU` does not require it), the device's own protocol
+/// handler over a simulated NOR flash on the host, said.
+fn example_unit(scratch: &Path) -> (String, Option<unit::QemuUnit>) {
+    let stand_in = |why: &str| {
+        eprintln!(
+            "README test: the QEMU unit cannot run ({why}): the README's port is the device's protocol handler on the host instead"
+        );
+        let port =
+            tcp_unit::TcpUnit::serve_forever(tcp_unit::device(tcp_unit::blank_flash(), "IMU-0042"));
+        (port, None)
+    };
+    if !qemu::available_or_skip("every_readme_example_runs_as_written (its unit on a port)") {
+        return stand_in("no qemu-system-arm or thumb target");
+    }
+    let elf = match qemu::build_firmware_as(Some("IMU-0042")) {
+        Ok(dir) => dir.join("device"),
+        Err(e) => panic!("the example unit's firmware does not build: {e}"),
+    };
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map(|a| a.port())
+        .unwrap();
+    let flash = scratch.join("IMU-0042-flash.bin");
+    let log = scratch.join("IMU-0042-qemu.log");
+    let unit = unit::QemuUnit::power_on_at(&elf, Some(&flash), &log, Some(port))
+        .unwrap_or_else(|e| panic!("the QEMU unit does not start: {e}"));
+    eprintln!("README test: unit IMU-0042 on QEMU at tcp://127.0.0.1:{port}");
+    (format!("tcp://127.0.0.1:{port}"), Some(unit))
+}
+
 #[test]
 fn every_readme_example_runs_as_written() {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -206,9 +243,7 @@ fn every_readme_example_runs_as_written() {
     assert!(lines.len() > 40, "only {} commands found", lines.len());
     let (dir, work, has_shared) = scratch(&repo);
     let home = dir.path().join("home");
-    // The stand-in for the device port: unit IMU-0042, unprovisioned, empty.
-    let port =
-        tcp_unit::TcpUnit::serve_forever(tcp_unit::device(tcp_unit::blank_flash(), "IMU-0042"));
+    let (port, _unit) = example_unit(dir.path());
     let postgres = postgres::Server::start("every_readme_example_runs_as_written").unwrap();
     let history = postgres.as_ref().map(|pg| {
         pg.execute("postgres", "CREATE DATABASE calflash");
