@@ -113,7 +113,10 @@ fn simulate_calibrate_report_apply() {
     }
     // Against temperature in a datasheet's units: the bias at zero input in the input's unit
     // (not counts with the mid-scale in them), the scale factor's change in ppm.
-    assert!(html.contains(": bias at zero input ("), "{html}");
+    assert!(
+        html.contains(": bias change from 25.0 C (m/s^2) against"),
+        "{html}"
+    );
     assert!(html.contains(": scale factor change from "), "{html}");
     assert!(!html.contains("bias (counts) against temperature"));
     // The record reads back; the blob decodes.

@@ -4,7 +4,7 @@ use super::Error;
 use std::fmt::Write as _;
 
 use super::page::{STYLE, esc};
-use super::plot::{COLORS, Figure, Series, figure};
+use super::plot::{Figure, Series, figure};
 use super::terminal::{num, pval};
 use crate::sensor::{AxisFit, Calibrated};
 
@@ -25,6 +25,9 @@ pub fn render(c: &Calibrated, data_file: &str) -> Result<String, Error> {
     for (a, axis) in c.points[c.reference].axes.iter().enumerate() {
         axis_section(&mut h, c, a, axis)?;
     }
+    // With a continuous temperature model its section draws bias and scale over the whole
+    // span; the table's few points would only repeat it.
+    temperature_section(&mut h, c)?;
     h.push_str(&super::spin::section(c)?);
     h.push_str(&super::thermal::section(c)?);
     if let Some(m) = &c.mission {
@@ -168,8 +171,8 @@ fn model(h: &mut String, c: &Calibrated) -> Result<(), Error> {
     Ok(())
 }
 
-/// One output axis at the reference point: its fit, its residuals, its calibration error over
-/// the range, and its bias and scale factor against temperature.
+/// One output axis at the reference point: its fit, its residuals and its calibration error
+/// over the range.
 fn axis_section(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Result<(), Error> {
     let reference = &c.points[c.reference];
     let unit = c.units[a];
@@ -202,11 +205,6 @@ fn axis_section(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
     let _ = writeln!(h, "</table>");
     residual_figures(h, c, a, axis)?;
     error_figure(h, c, a, axis)?;
-    // With a continuous temperature model its section draws bias and scale over the whole
-    // span; the table's few points would only repeat it.
-    if c.temps.len() > 1 && c.thermal.is_empty() {
-        temperature_figures(h, c, a, axis)?;
-    }
     Ok(())
 }
 
@@ -365,76 +363,113 @@ fn error_figure(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
     Ok(())
 }
 
-/// The bias and the scale factor of axis `a` at each temperature, with their standard errors.
-fn temperature_figures(
-    h: &mut String,
-    c: &Calibrated,
-    a: usize,
-    axis: &AxisFit,
-) -> Result<(), Error> {
-    let unit = c.units[a];
-    // The bias and the scale factor against temperature, in the units a datasheet reads: the
-    // bias at zero input in the output's own unit (from the converter's mid-scale, through the
-    // scale factor at that temperature), the scale factor as its change from the reference
-    // point's, in ppm.
+/// One output's bias and scale factor at each temperature with their 1-sigma, as changes from
+/// the reference point's (the datasheet summary gives their values there): the bias at zero
+/// input in the output's own unit, the scale factor in ppm.
+struct AgainstTemperature {
+    bias: Vec<(f64, f64)>,
+    bias_err: Vec<f64>,
+    scale: Vec<(f64, f64)>,
+    scale_err: Vec<f64>,
+}
+
+/// [`AgainstTemperature`] of axis `a`: `None` without two temperatures or a usable reference
+/// scale factor.
+fn against_temperature(c: &Calibrated, a: usize, axis: &AxisFit) -> Option<AgainstTemperature> {
+    // In the units a datasheet reads: the bias at zero input from the converter's mid-scale,
+    // through the scale factor at that temperature.
     let mid = super::engineering::mid_scale(c, &axis.output);
     let own = axis.own.as_str();
-    let reference = c
+    let s_ref = c
         .points
         .get(c.reference)
         .map(|p| p.axes[a].coef(own))
-        .filter(|s| s.is_finite() && *s != 0.0);
-    if let (true, Some(s_ref)) = (c.temps.len() > 1, reference) {
-        let se = |p: &crate::sensor::PointFit, term: &str| {
-            p.axes[a]
-                .index(term)
-                .map_or(0.0, |i| p.axes[a].fit.std_errors[i])
-        };
-        let at = c.points.iter().filter(|p| p.temp.is_some());
-        let bias: Vec<(f64, f64)> = at
-            .clone()
-            .filter_map(|p| {
-                let s = p.axes[a].coef(own);
-                Some((p.temp?, (p.axes[a].coef("1") - mid) / s))
-            })
-            .collect();
-        let bias_err: Vec<f64> = at
-            .clone()
+        .filter(|s| s.is_finite() && *s != 0.0)?;
+    if c.temps.len() < 2 {
+        return None;
+    }
+    let se = |p: &crate::sensor::PointFit, term: &str| {
+        p.axes[a]
+            .index(term)
+            .map_or(0.0, |i| p.axes[a].fit.std_errors[i])
+    };
+    let at: Vec<&crate::sensor::PointFit> = c.points.iter().filter(|p| p.temp.is_some()).collect();
+    let bias = |p: &crate::sensor::PointFit| (p.axes[a].coef("1") - mid) / p.axes[a].coef(own);
+    let b_ref = c.points.get(c.reference).map(bias)?;
+    Some(AgainstTemperature {
+        bias: at
+            .iter()
+            .filter_map(|p| Some((p.temp?, bias(p) - b_ref)))
+            .collect(),
+        bias_err: at
+            .iter()
             .map(|p| se(p, "1") / p.axes[a].coef(own).abs())
-            .collect();
-        let scale: Vec<(f64, f64)> = at
-            .clone()
+            .collect(),
+        scale: at
+            .iter()
             .filter_map(|p| Some((p.temp?, (p.axes[a].coef(own) / s_ref - 1.0) * 1e6)))
-            .collect();
-        let scale_err: Vec<f64> = at.map(|p| se(p, own) / s_ref.abs() * 1e6).collect();
-        let t_ref = c
-            .points
-            .get(c.reference)
-            .and_then(|p| p.temp)
-            .map_or(String::new(), |t| format!(" {t:.1} C"));
-        let bias_label = format!("bias at zero input ({unit})");
+            .collect(),
+        scale_err: at.iter().map(|p| se(p, own) / s_ref.abs() * 1e6).collect(),
+    })
+}
+
+/// The outputs' bias and scale factor against temperature, a figure of each per unit (the
+/// three accelerometers together, the three gyros together), each output a series with its
+/// 1-sigma bars: where the table's temperatures are the only thermal model.
+fn temperature_section(h: &mut String, c: &Calibrated) -> Result<(), Error> {
+    if c.temps.len() < 2 || !c.thermal.is_empty() {
+        return Ok(());
+    }
+    let axes = &c.points[c.reference].axes;
+    let each: Vec<(usize, AgainstTemperature)> = axes
+        .iter()
+        .enumerate()
+        .filter_map(|(a, axis)| Some((a, against_temperature(c, a, axis)?)))
+        .collect();
+    if each.is_empty() {
+        return Ok(());
+    }
+    let t_ref = c
+        .points
+        .get(c.reference)
+        .and_then(|p| p.temp)
+        .map_or(String::new(), |t| format!(" {t:.1} C"));
+    let _ = writeln!(
+        h,
+        "<h2>Bias and scale factor against temperature</h2>\n<p>At each table point, as changes from the reference point's{t_ref} (their values there are in the summary above): the bias at zero input (from the converter's mid-scale, through that point's scale factor) in the output's unit, and the scale factor in ppm; the bars are each point's 1-sigma.</p>"
+    );
+    for unit in super::plot::units_in_order(each.iter().map(|(a, _)| c.units[*a])) {
+        let of_unit: Vec<&(usize, AgainstTemperature)> =
+            each.iter().filter(|(a, _)| c.units[*a] == unit).collect();
+        let bias_label = format!("bias change from{t_ref} ({unit})");
         let scale_label = format!("scale factor change from{t_ref} (ppm)");
-        for (what, pts, errs) in [
-            (bias_label.as_str(), &bias, &bias_err),
-            (scale_label.as_str(), &scale, &scale_err),
-        ] {
+        for (what, bias) in [(bias_label.as_str(), true), (scale_label.as_str(), false)] {
+            let series = of_unit
+                .iter()
+                .enumerate()
+                .map(|(k, (a, t))| {
+                    let (pts, errs) = if bias {
+                        (&t.bias, &t.bias_err)
+                    } else {
+                        (&t.scale, &t.scale_err)
+                    };
+                    Series {
+                        errors: Some(errs),
+                        ..Series::curve(&axes[*a].output, pts, k)
+                    }
+                })
+                .collect();
+            let names: Vec<&str> = of_unit
+                .iter()
+                .map(|(a, _)| axes[*a].output.as_str())
+                .collect();
             figure(
                 h,
                 &Figure {
-                    title: &format!(
-                        "{}: {what} against temperature (error bars 1-sigma)",
-                        axis.output
-                    ),
+                    title: &format!("{}: {what} against temperature", names.join(", ")),
                     x: "temperature (C)",
                     y: what,
-                    series: vec![Series {
-                        name: what,
-                        points: pts,
-                        color: COLORS[1],
-                        line: true,
-                        errors: Some(errs),
-                        band: None,
-                    }],
+                    series,
                     bands: Vec::new(),
                     band_label: "",
                     zero_line: false,
