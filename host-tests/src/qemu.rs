@@ -78,7 +78,7 @@ pub fn build_firmware() -> Result<PathBuf, String> {
 }
 
 /// [`build_firmware`] for a unit whose serial number is `serial` (the example device's
-/// `SPINCAL_UNIT_SERIAL`), built in a target directory of its own
+/// `SPINCAL_UNIT_SERIAL`): its `device` binary alone, built in a target directory of its own
 /// (`firmware/target/unit-SERIAL`) so that the tests' QEMU-0001 build is left as it is.
 ///
 /// # Errors
@@ -88,17 +88,22 @@ pub fn build_firmware_as(serial: Option<&str>) -> Result<PathBuf, String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
     cmd.current_dir(&dir)
-        .args(["build", "--release", "--target", TARGET, "--bins"])
+        .args(["build", "--release", "--target", TARGET])
         .env_remove("RUSTFLAGS")
         .env_remove("CARGO_TARGET_DIR");
+    // A unit of its own runs only the device's firmware; the tests' build makes every binary.
     let target = match serial {
         Some(s) => {
             let t = dir.join("target").join(format!("unit-{s}"));
-            cmd.env("SPINCAL_UNIT_SERIAL", s)
+            cmd.args(["--bin", "device"])
+                .env("SPINCAL_UNIT_SERIAL", s)
                 .env("CARGO_TARGET_DIR", &t);
             t
         }
-        None => dir.join("target"),
+        None => {
+            cmd.arg("--bins");
+            dir.join("target")
+        }
     };
     let out = cmd.output().map_err(|e| format!("cannot run cargo: {e}"))?;
     if !out.status.success() {

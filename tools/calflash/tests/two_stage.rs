@@ -329,6 +329,14 @@ fn two_stages_beat_one_and_state_their_error_honestly() {
         z0(&one, 0),
         z0(&one, 1)
     );
+    // The accelerometers' stated 1-sigma at zero input is the full model's there (the folded
+    // terms carry no constant): 1.42 before the fold kept zero input exact. The gyros' (0.76)
+    // and one stage's (0.38, 0.41) are not yet: see BENCHMARKS.md.
+    assert!(
+        (0.9..=1.1).contains(&z0(&two, 0)),
+        "two stages, accelerometers at zero input: z RMS {}",
+        z0(&two, 0)
+    );
     for (name, family) in [("accelerometers, m/s^2", 0), ("gyros, rad/s", 1)] {
         println!(
             "{name}: RMS error over the operating range: two stages {:.3e}, one stage {:.3e}, ratio {:.3}",

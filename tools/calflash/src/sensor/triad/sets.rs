@@ -347,14 +347,16 @@ fn imu_covariance(
 type Feature = fn(f64) -> f64;
 
 /// Axis `i`'s fit with the uncertainty of the terms the device's stated 1-sigma has no feature
-/// for (cubic, odd-quadratic, asymmetry) folded into those it has: over the calibrated range
-/// `span` of the axis' own input, each such term is its least-squares best `b0 + b1 x + b2 x^2`,
-/// and the covariance becomes that of `bias + b0 c`, `own + b1 c`, `g-squared + b2 c` (the
-/// terms themselves then carry none); what the folded variance falls short of the full
-/// model's along the own input, on average over the range, is added to the bias's variance
-/// (over 200 simulated two-stage units the device's 95 % intervals then cover the truth 95.8 %
-/// of the time: `tests/two_stage.rs`). Their errors are strongly correlated with the bias's and
-/// the g-squared term's; left out, the stated 1-sigma would overstate the error.
+/// for (cubic, odd-quadratic, asymmetry) folded into those it has. Each such term is zero at
+/// zero input; over the calibrated range `span` of the axis' own input it is taken as its
+/// least-squares best `b1 x + b2 x^2` (no constant: at zero input the stated variance is then
+/// the full model's bias variance, not a fixed multiple of it), and the covariance becomes that
+/// of `own + b1 c`, `g-squared + b2 c` (the terms themselves then carry none). What the folded
+/// variance falls short of the full model's along the own input is added where it falls short:
+/// its least-squares fit by `a0 + a2 x^2 + a4 x^4` with no coefficient negative goes to the
+/// variances of the bias, the own input and the g-squared term. Their errors are strongly
+/// correlated with the bias's and the g-squared term's; left out, the stated 1-sigma would
+/// overstate the error.
 fn folded(spec: &Spec<'_>, fit: &AxisFit, i: usize, span: (f64, f64)) -> AxisFit {
     let s = lever::SENSED;
     let extra: [(String, Feature); 3] = [
@@ -370,14 +372,11 @@ fn folded(spec: &Spec<'_>, fit: &AxisFit, i: usize, span: (f64, f64)) -> AxisFit
         return fit.clone();
     }
     let sq = format!("{s}^2");
-    let targets: Vec<(usize, Feature)> = [
-        (fit.index("1"), (|_| 1.0) as Feature),
-        (fit.index(spec.inputs[i]), |x| x),
-        (fit.index(&sq), |x| x * x),
-    ]
-    .into_iter()
-    .filter_map(|(k, g)| k.map(|k| (k, g)))
-    .collect();
+    let (bias, own, square) = (fit.index("1"), fit.index(spec.inputs[i]), fit.index(&sq));
+    let targets: Vec<(usize, Feature)> = [(own, (|x| x) as Feature), (square, |x| x * x)]
+        .into_iter()
+        .filter_map(|(k, g)| k.map(|k| (k, g)))
+        .collect();
     let n = 201;
     let xs: Vec<f64> = (0..n)
         .map(|k| span.0 + (span.1 - span.0) * k as f64 / (n - 1) as f64)
@@ -400,10 +399,14 @@ fn folded(spec: &Spec<'_>, fit: &AxisFit, i: usize, span: (f64, f64)) -> AxisFit
     }
     let mut out = fit.clone();
     out.fit.covariance = &t * &fit.fit.covariance * t.transpose();
-    // Along the own input, the variance the full model states and the folded one: what the
-    // folded one falls short by, at its worst over the range, goes into the bias's variance.
+    // Along the own input, the variance the full model states and the folded one.
+    let basis: Vec<(usize, Feature)> = bias
+        .map(|b| (b, (|_| 1.0) as Feature))
+        .into_iter()
+        .chain(targets.iter().copied())
+        .collect();
     let along = |c: &DMatrix<f64>, x: f64, with_extra: bool| -> f64 {
-        let mut phi: Vec<(usize, f64)> = targets.iter().map(|(k, g)| (*k, g(x))).collect();
+        let mut phi: Vec<(usize, f64)> = basis.iter().map(|(k, g)| (*k, g(x))).collect();
         if with_extra {
             phi.extend(present.iter().map(|(k, e)| (*k, e(x))));
         }
@@ -411,17 +414,62 @@ fn folded(spec: &Spec<'_>, fit: &AxisFit, i: usize, span: (f64, f64)) -> AxisFit
             .flat_map(|(a, fa)| phi.iter().map(move |(b, fb)| fa * fb * c[(*a, *b)]))
             .sum()
     };
-    let short = xs
+    let short: Vec<f64> = xs
         .iter()
         .map(|x| {
             (along(&fit.fit.covariance, *x, true) - along(&out.fit.covariance, *x, false)).max(0.0)
         })
-        .sum::<f64>()
-        / n as f64;
-    if let Some(b) = fit.index("1") {
-        out.fit.covariance[(b, b)] += short;
+        .collect();
+    // The shortfall's shape: a constant on the bias, x^2 on the own input, x^4 on g-squared.
+    let shapes: Vec<(usize, Feature)> = [
+        (bias, (|_| 1.0) as Feature),
+        (own, |x| x * x),
+        (square, |x| x.powi(4)),
+    ]
+    .into_iter()
+    .filter_map(|(k, g)| k.map(|k| (k, g)))
+    .collect();
+    let added = non_negative_fit(&xs, &short, &shapes);
+    for (k, v) in added {
+        out.fit.covariance[(k, k)] += v;
     }
     out
+}
+
+/// The least-squares fit of `y` at `xs` by the `shapes` with no coefficient negative (every
+/// subset of the shapes tried: there are at most three): each shape's index and coefficient.
+fn non_negative_fit(xs: &[f64], y: &[f64], shapes: &[(usize, Feature)]) -> Vec<(usize, f64)> {
+    let m = shapes.len();
+    let target = nalgebra::DVector::from_column_slice(y);
+    let mut best: (f64, Vec<(usize, f64)>) = (target.norm_squared(), Vec::new());
+    for mask in 1..(1usize << m) {
+        let chosen: Vec<&(usize, Feature)> = (0..m)
+            .filter(|j| mask & (1 << j) != 0)
+            .map(|j| &shapes[j])
+            .collect();
+        let a = DMatrix::from_fn(xs.len(), chosen.len(), |r, c| (chosen[c].1)(xs[r]));
+        let Ok(svd) = crate::stats::decompose::svd(a.clone(), true, true) else {
+            continue;
+        };
+        let Ok(w) = svd.solve(&target, 1e-12) else {
+            continue;
+        };
+        if w.iter().any(|v| *v < 0.0 || !v.is_finite()) {
+            continue;
+        }
+        let rss = (&a * &w - &target).norm_squared();
+        if rss < best.0 {
+            best = (
+                rss,
+                chosen
+                    .iter()
+                    .zip(w.iter())
+                    .map(|(s, v)| (s.0, *v))
+                    .collect(),
+            );
+        }
+    }
+    best.1
 }
 
 /// What axis `i` sensed (SI, along itself) at each observation of `t`, under its fit.
