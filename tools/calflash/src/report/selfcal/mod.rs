@@ -176,17 +176,7 @@ fn accel_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
         c.holdout.max * 1e3
     );
     if let Some(q) = &c.quadratic_test {
-        let _ = writeln!(
-            s,
-            "    quadratic terms: F = {}, p = {}: {}",
-            num(q.f),
-            pval(q.p),
-            if q.kept {
-                "kept"
-            } else {
-                "not significant, not kept"
-            }
-        );
+        let _ = writeln!(s, "    quadratic terms: {}", quadratic_words(q));
     }
     let sd = accel_sd(c);
     let m = &c.accel.model;
@@ -275,6 +265,20 @@ fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
             k.why
         );
     }
+}
+
+/// The accelerometer's quadratic terms' test in words.
+fn quadratic_words(q: &crate::nonlinear::selfcal::QuadraticTest) -> String {
+    format!(
+        "F = {}, p = {}: {}",
+        num(q.f),
+        pval(q.p),
+        if q.kept {
+            "kept"
+        } else {
+            "not significant, not kept"
+        }
+    )
 }
 
 /// `count` -> `counts`; a unit stays as it is.

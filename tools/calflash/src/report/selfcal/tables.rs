@@ -4,12 +4,12 @@
 
 use std::fmt::Write as _;
 
-use super::{accel_sd, gyro_sd, plural};
+use super::{accel_sd, gyro_sd, plural, quadratic_words};
 use crate::nonlinear::selfcal::{GyroBias, SelfCal};
 use crate::obs::recording::Recording;
 use crate::obs::units::Sensor;
 use crate::report::page::esc;
-use crate::report::terminal::{num, pval};
+use crate::report::terminal::num;
 use crate::sensor::selfcal::DeviceCheck;
 use crate::sensor::selfcal::record::{NO_BLOB, Temperature, rms_deg};
 
@@ -83,19 +83,7 @@ pub(super) fn facts(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>) -
         ),
     ));
     if let Some(q) = &c.quadratic_test {
-        rows.push((
-            "accelerometer: quadratic terms".into(),
-            format!(
-                "F = {}, p = {}: {}",
-                num(q.f),
-                pval(q.p),
-                if q.kept {
-                    "kept"
-                } else {
-                    "not significant, not kept"
-                }
-            ),
-        ));
+        rows.push(("accelerometer: quadratic terms".into(), quadratic_words(q)));
     }
     let bias = match c.options.gyro_bias {
         GyroBias::Poses => "the bias from the poses on either side",
