@@ -388,20 +388,17 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
                 .collect();
             if let Some(half) = s.band {
                 // The band's outline: up along the upper edge, back along the lower.
-                let edge: Vec<(f64, f64)> = s
+                let kept: Vec<(f64, f64, f64)> = s
                     .points
                     .iter()
                     .zip(half)
-                    .filter(|((a, b), e)| a.is_finite() && b.is_finite() && e.is_finite())
-                    .map(|((x, y), e)| (*x, y + e))
-                    .chain(
-                        s.points
-                            .iter()
-                            .zip(half)
-                            .rev()
-                            .filter(|((a, b), e)| a.is_finite() && b.is_finite() && e.is_finite())
-                            .map(|((x, y), e)| (*x, y - e)),
-                    )
+                    .map(|((x, y), e)| (*x, *y, *e))
+                    .filter(|(x, y, e)| x.is_finite() && y.is_finite() && e.is_finite())
+                    .collect();
+                let edge: Vec<(f64, f64)> = kept
+                    .iter()
+                    .map(|(x, y, e)| (*x, y + e))
+                    .chain(kept.iter().rev().map(|(x, y, e)| (*x, y - e)))
                     .collect();
                 chart.draw_series(std::iter::once(Polygon::new(edge, color.mix(0.2).filled())))?;
             }

@@ -156,8 +156,9 @@ fn terms_over_time(h: &mut String, c: &Checked) -> Result<(), Error> {
     let tr = &c.track;
     let launch = c.pass.launch;
     let v = &c.verdict;
+    let observed = |t: &crate::nav::verdict::Term| t.z.is_some() || t.shifted;
     let drawn: Vec<usize> = (0..v.terms.len())
-        .filter(|&i| v.terms[i].z.is_some() || v.terms[i].shifted)
+        .filter(|&i| observed(&v.terms[i]))
         .collect();
     let _ = writeln!(
         h,
@@ -167,7 +168,7 @@ fn terms_over_time(h: &mut String, c: &Checked) -> Result<(), Error> {
     let unobserved: Vec<&str> = v
         .terms
         .iter()
-        .filter(|t| t.z.is_none() && !t.shifted)
+        .filter(|t| !observed(t))
         .map(|t| t.name)
         .collect();
     if !unobserved.is_empty() {
