@@ -8,6 +8,9 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::calflash;
+#[path = "common/stage_score.rs"]
+mod stage_score;
+use stage_score::{Input, Score, Truth, coverage, coverage_all, rms, z0};
 
 use calflash::sensor::record::Record;
 use calflash::sensor::stages::{Check, one};
@@ -109,139 +112,41 @@ fn one_stage(truth: &AssembledTruth, dir: &Path, seed: u64) -> Calibrated {
     triad::calibrate(&opts, Kind::Imu, true).unwrap()
 }
 
-/// What a calibration's forward model predicts (counts) for output `k` at condition `c`, and
-/// its stated 1-sigma (over the features the device states it with: all but the cubic,
-/// odd-quadratic and asymmetry terms).
-fn predicted(fit: &calflash::stats::Fit, k: usize, c: &Condition) -> (f64, f64) {
-    let coef = |n: &str| {
-        fit.names
-            .iter()
-            .position(|m| m == n)
-            .map_or(0.0, |i| fit.coefficients[i])
-    };
-    let (inputs, values) = if k < 3 {
-        (["f_x", "f_y", "f_z"], c.f)
-    } else {
-        (["w_x", "w_y", "w_z"], c.w)
-    };
-    let z: f64 = (0..3).map(|j| coef(inputs[j]) * values[j]).sum::<f64>()
-        + if k < 3 {
-            0.0
-        } else {
-            (0..3)
-                .map(|j| coef(["f_x", "f_y", "f_z"][j]) * c.f[j])
-                .sum()
-        };
-    let x = z / coef(inputs[k % 3]);
-    let feature = |n: &str| -> f64 {
-        match n {
-            "1" => 1.0,
-            "sensed^2" => x * x,
-            "sensed^3" => x * x * x,
-            "sensed:abs(sensed)" => x * x.abs(),
-            "sensed_kink" => x.abs(),
-            n if n.starts_with("lever_") => 0.0,
-            n => match inputs.iter().position(|m| *m == n) {
-                Some(j) => values[j],
-                None => ["f_x", "f_y", "f_z"]
-                    .iter()
-                    .position(|m| *m == n)
-                    .map_or(0.0, |j| c.f[j]),
-            },
-        }
-    };
-    let phi: Vec<f64> = fit.names.iter().map(|n| feature(n)).collect();
-    let value = fit.coefficients.iter().zip(&phi).map(|(b, f)| b * f).sum();
-    let stated: Vec<f64> = fit
-        .names
-        .iter()
-        .zip(&phi)
-        .map(|(n, f)| {
-            if matches!(
-                n.as_str(),
-                "sensed^3" | "sensed:abs(sensed)" | "sensed_kink"
-            ) {
-                0.0
-            } else {
-                *f
-            }
+/// Our simulator's unit as the shared scoring reads a truth.
+struct Sim<'a>(&'a AssembledTruth);
+
+impl Truth for Sim<'_> {
+    fn outputs(&self, input: &Input, temp: f64) -> [f64; 6] {
+        self.0.outputs(&Condition {
+            f: input.f,
+            w: input.w,
+            dw: [0.0; 3],
+            h: [0.0; 3],
+            temp,
+            volt: 3.3,
+            dir: 0.0,
         })
-        .collect();
-    let p = stated.len();
-    let var: f64 = (0..p)
-        .flat_map(|a| (0..p).map(move |b| (a, b)))
-        .map(|(a, b)| stated[a] * fit.covariance[(a, b)] * stated[b])
-        .sum();
-    (value, var.max(0.0).sqrt())
+    }
+    fn slope(&self, k: usize, _temp: f64) -> f64 {
+        self.0.sensors[k].k1
+    }
 }
 
-/// A calibration against the truth over the operating range at each of its temperatures:
-/// gravity from 20 directions at rest (accelerometers) and rates up to 8 rad/s about the six
-/// axis directions (gyros). Per output family, the sum of squared errors (SI) and the count;
-/// and how many errors fall inside 1.96 stated sigma.
-#[derive(Default, Clone, Copy)]
-struct Score {
-    sq: [f64; 2],
-    n: [usize; 2],
-    inside: usize,
-    total: usize,
-    inside_f: [usize; 2],
-    /// Per family, the sum of squared errors over the stated 1-sigma at zero input, and the
-    /// count.
-    z0: [f64; 2],
-    n0: [usize; 2],
+/// The operating range: gravity from 20 directions at rest (accelerometers) and rates up to
+/// 8 rad/s about the six axis directions (gyros).
+fn range() -> (Vec<Input>, Vec<Input>) {
+    let inputs = |items: &[&str]| -> Vec<Input> {
+        conditions(items, &[25.0], 1, false)
+            .iter()
+            .map(|c| Input { f: c.f, w: c.w })
+            .collect()
+    };
+    (inputs(&["sphere:20"]), inputs(&["rate:-8:8:7"]))
 }
 
 fn score(c: &Calibrated, truth: &AssembledTruth) -> Score {
-    let mut s = Score::default();
-    let cal = spincal::blob::decode(&c.blob).unwrap();
-    let mut device = spincal::correct::AnyImuCorrector::new(&cal, 1000.0).unwrap();
-    for point in &c.points {
-        let t = point.temp.unwrap_or(25.0);
-        device.set_environment(t as f32, 3.3);
-        let accel = conditions(&["sphere:20"], &[t], 1, false);
-        let gyro = conditions(&["rate:-8:8:7"], &[t], 1, false);
-        // At zero input (no force, no rate): the stated 1-sigma against the error there.
-        if let Some(zero) = gyro.first().map(|c| Condition {
-            f: [0.0; 3],
-            w: [0.0; 3],
-            ..*c
-        }) {
-            let stated = device.sigma(&[0.0; 6]).unwrap();
-            let outputs = truth.outputs(&zero);
-            for (k, sigma) in stated.iter().enumerate() {
-                let (value, _) = predicted(&point.axes[k].fit, k, &zero);
-                let err = (value - outputs[k]) / truth.sensors[k].k1;
-                let family = usize::from(k >= 3);
-                s.z0[family] += (err / f64::from(*sigma)).powi(2);
-                s.n0[family] += 1;
-            }
-        }
-        for k in 0..6 {
-            let fit = &point.axes[k].fit;
-            let family = usize::from(k >= 3);
-            for cond in if k < 3 { &accel } else { &gyro } {
-                let (value, _) = predicted(fit, k, cond);
-                let slope = truth.sensors[k].k1;
-                let err = (value - truth.outputs(cond)[k]) / slope;
-                let inputs: [f32; 6] =
-                    std::array::from_fn(|j| (if j < 3 { cond.f[j] } else { cond.w[j - 3] }) as f32);
-                let stated = f64::from(device.sigma(&inputs).unwrap()[k]);
-                s.sq[family] += err * err;
-                s.n[family] += 1;
-                s.inside += usize::from(err.abs() <= 1.96 * stated);
-                s.inside_f[family] += usize::from(err.abs() <= 1.96 * stated);
-                s.total += 1;
-            }
-        }
-    }
-    s
-}
-
-fn rms(scores: &[Score], family: usize) -> f64 {
-    let sq: f64 = scores.iter().map(|s| s.sq[family]).sum();
-    let n: usize = scores.iter().map(|s| s.n[family]).sum();
-    (sq / n as f64).sqrt()
+    let (accel, gyro) = range();
+    stage_score::score(c, &Sim(truth), &accel, &gyro)
 }
 
 #[test]
@@ -313,15 +218,6 @@ fn two_stages_beat_one_and_state_their_error_honestly() {
     assert!(hits as f64 >= 0.95 * UNITS as f64, "{hits}");
     let two: Vec<Score> = results.iter().map(|r| r.0).collect();
     let one: Vec<Score> = results.iter().map(|r| r.1).collect();
-    let coverage = |s: &[Score]| {
-        s.iter().map(|x| x.inside).sum::<usize>() as f64
-            / s.iter().map(|x| x.total).sum::<usize>() as f64
-    };
-    let z0 = |s: &[Score], family: usize| {
-        (s.iter().map(|x| x.z0[family]).sum::<f64>()
-            / s.iter().map(|x| x.n0[family]).sum::<usize>() as f64)
-            .sqrt()
-    };
     println!(
         "at zero input, the error over the device's stated 1-sigma, RMS: two stages {:.2} (accelerometers), {:.2} (gyros); one stage {:.2}, {:.2}",
         z0(&two, 0),
@@ -347,31 +243,27 @@ fn two_stages_beat_one_and_state_their_error_honestly() {
     }
     println!(
         "95% intervals cover the truth: two stages {:.4}, one stage {:.4}",
-        coverage(&two),
-        coverage(&one)
+        coverage_all(&two),
+        coverage_all(&one)
     );
     for (name, f) in [("accelerometers", 0), ("gyros", 1)] {
-        let share = |s: &[Score]| {
-            s.iter().map(|x| x.inside_f[f]).sum::<usize>() as f64
-                / s.iter().map(|x| x.n[f]).sum::<usize>() as f64
-        };
         println!(
             "{name}: the device's 95% intervals cover the truth: two stages {:.4}, one stage {:.4}",
-            share(&two),
-            share(&one)
+            coverage(&two, f),
+            coverage(&one, f)
         );
         assert!(
-            (0.915..=0.985).contains(&share(&two)),
+            (0.915..=0.985).contains(&coverage(&two, f)),
             "{name}: {}",
-            share(&two)
+            coverage(&two, f)
         );
     }
     assert!(rms(&two, 0) < rms(&one, 0));
     assert!(rms(&two, 1) < rms(&one, 1));
     assert!(
-        (0.915..=0.985).contains(&coverage(&two)),
+        (0.915..=0.985).contains(&coverage_all(&two)),
         "{}",
-        coverage(&two)
+        coverage_all(&two)
     );
 }
 
