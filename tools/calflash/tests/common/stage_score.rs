@@ -129,7 +129,10 @@ pub fn coverage(scores: &[Score], family: usize) -> f64 {
 
 /// Both families together.
 pub fn coverage_all(scores: &[Score]) -> f64 {
-    scores.iter().map(|s| s.inside[0] + s.inside[1]).sum::<usize>() as f64
+    scores
+        .iter()
+        .map(|s| s.inside[0] + s.inside[1])
+        .sum::<usize>() as f64
         / scores.iter().map(|s| s.n[0] + s.n[1]).sum::<usize>() as f64
 }
 

@@ -1,0 +1,416 @@
+//! Two stages against one on units from a forward model written here, apart from `sim/`: the
+//! model of `../shared/data/reference-flights/two-stage/README` (an independent simulator's),
+//! drawn afresh per unit so that the Monte Carlo is not three units but a population.
+//!
+//! The model, per single-axis sensor `k` (counts):
+//!
+//! ```text
+//! out = K0(T) + K1(T) (x + k2 x^2 + k3 x^3) + n,   n ~ N(0, 2^2)
+//! K0(T) = k0 + a1 dT + a2 dT^2,   K1(T) = k1 (1 + b1 dT + b2 dT^2),   dT = T - 25 C
+//! ```
+//!
+//! with `x` what the sensor senses along its own axis: at stage one its input exactly; in the
+//! assembled unit `n_k . (f + w x (w x r_k))` for an accelerometer (sensing direction `n_k`
+//! about 3 mrad off its axis, lever arm `r_k` of 1-4 mm per component) and `n_k . w + G_k . f`
+//! for a gyro (g-sensitivity `G_k` about 1e-4 rad/s per m/s^2). The draws: `k0` 32768 +- 800,
+//! `k1` 400 (accelerometers, per m/s^2) or 900 (gyros, per rad/s) +- 0.5 %, `k2` 1.5e-4 and
+//! `k3` 4e-6 (accelerometers) or 1.2e-4 and 2e-6 (gyros) standard deviation, `a1` 0.5 counts/C,
+//! `a2` 2e-3 counts/C^2, `b1` 1e-4 /C, `b2` 2e-7 /C^2.
+//!
+//! The plans are the reference units': stage one at -20, 5, 25, 45 and 70 C, each accelerometer
+//! on a dividing head (28 angles, twice), each gyro on a rate table (9 rates from -8 to 8 rad/s
+//! four times and 20 at rest); stage two at 25 C, 26 still poses and turns at +-4 and +-8 rad/s
+//! about the three axes and three diagonals, the turning axis up and down (74 observations);
+//! one stage the same 74 at the five temperatures (370).
+
+#[path = "common/stage_score.rs"]
+mod stage_score;
+
+use std::path::Path;
+
+use calflash::sensor::stages::one;
+use calflash::sensor::triad::{self, Kind};
+use calflash::sensor::{Calibrated, Options, Thermal, Verdict, single};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+use spincal::model::Quantity;
+use stage_score::{Input, Score, Truth, coverage, coverage_all, rms, z0};
+
+const G: f64 = 9.806_65;
+const TEMPS: [f64; 5] = [-20.0, 5.0, 25.0, 45.0, 70.0];
+const NOISE: f64 = 2.0;
+const OUTPUTS: [&str; 6] = ["a_x", "a_y", "a_z", "g_x", "g_y", "g_z"];
+
+#[derive(Clone, Copy)]
+struct Sensor {
+    k0: f64,
+    k1: f64,
+    k2: f64,
+    k3: f64,
+    a1: f64,
+    a2: f64,
+    b1: f64,
+    b2: f64,
+}
+
+impl Sensor {
+    fn slope(&self, t: f64) -> f64 {
+        let d = t - 25.0;
+        self.k1 * (1.0 + self.b1 * d + self.b2 * d * d)
+    }
+    fn out(&self, x: f64, t: f64) -> f64 {
+        let d = t - 25.0;
+        self.k0
+            + self.a1 * d
+            + self.a2 * d * d
+            + self.slope(t) * (x + self.k2 * x * x + self.k3 * x * x * x)
+    }
+}
+
+struct Unit {
+    sensors: [Sensor; 6],
+    /// Sensing directions, unit axes.
+    n: [[f64; 3]; 6],
+    /// Accelerometer lever arms, m.
+    r: [[f64; 3]; 3],
+    /// Gyro g-sensitivity rows, rad/s per m/s^2.
+    g: [[f64; 3]; 3],
+}
+
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn normalised(v: [f64; 3]) -> [f64; 3] {
+    let n = dot(&v, &v).sqrt();
+    v.map(|c| c / n)
+}
+
+impl Unit {
+    fn draw(seed: u64) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut normal = |s: f64| Normal::new(0.0, s).unwrap().sample(&mut rng);
+        let sensors = std::array::from_fn(|k| {
+            let gyro = k >= 3;
+            let k1 = if gyro { 900.0 } else { 400.0 };
+            Sensor {
+                k0: 32768.0 + 800.0 * (2.0 * normal(0.5).tanh()),
+                k1: k1 * (1.0 + normal(0.005)),
+                k2: normal(if gyro { 1.2e-4 } else { 1.5e-4 }),
+                k3: normal(if gyro { 2e-6 } else { 4e-6 }),
+                a1: normal(0.5),
+                a2: normal(2e-3),
+                b1: normal(1e-4),
+                b2: normal(2e-7),
+            }
+        });
+        let n = std::array::from_fn(|k| {
+            let mut v: [f64; 3] = std::array::from_fn(|_| normal(3e-3));
+            v[k % 3] = 1.0;
+            normalised(v)
+        });
+        let r = std::array::from_fn(|_| {
+            std::array::from_fn(|_| {
+                let m = 1e-3 + 3e-3 * (0.5 + 0.5 * normal(1.0).tanh());
+                if normal(1.0) < 0.0 { -m } else { m }
+            })
+        });
+        let g = std::array::from_fn(|_| std::array::from_fn(|_| normal(1e-4)));
+        Self { sensors, n, r, g }
+    }
+
+    /// What sensor `k` senses along its own axis in the assembled unit.
+    fn sensed(&self, k: usize, f: &[f64; 3], w: &[f64; 3]) -> f64 {
+        if k < 3 {
+            let centripetal = cross(w, &cross(w, &self.r[k]));
+            let at = [
+                f[0] + centripetal[0],
+                f[1] + centripetal[1],
+                f[2] + centripetal[2],
+            ];
+            dot(&self.n[k], &at)
+        } else {
+            dot(&self.n[k], w) + dot(&self.g[k - 3], f)
+        }
+    }
+}
+
+impl Truth for Unit {
+    fn outputs(&self, input: &Input, temp: f64) -> [f64; 6] {
+        std::array::from_fn(|k| self.sensors[k].out(self.sensed(k, &input.f, &input.w), temp))
+    }
+    fn slope(&self, k: usize, temp: f64) -> f64 {
+        self.sensors[k].slope(temp)
+    }
+}
+
+/// The 26 directions of {-1, 0, 1}^3 but zero, normalised.
+fn directions() -> Vec<[f64; 3]> {
+    let mut out = Vec::new();
+    for a in -1..=1 {
+        for b in -1..=1 {
+            for c in -1..=1 {
+                if (a, b, c) != (0, 0, 0) {
+                    out.push(normalised([f64::from(a), f64::from(b), f64::from(c)]));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The assembled unit's plan at one temperature: 26 still poses, then turns at +-4 and +-8
+/// rad/s about the three axes and three diagonals, the turning axis up and down.
+fn unit_plan() -> Vec<Input> {
+    let mut out: Vec<Input> = directions()
+        .into_iter()
+        .map(|u| Input {
+            f: u.map(|c| G * c),
+            w: [0.0; 3],
+        })
+        .collect();
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    let axes = [
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [s, s, 0.0],
+        [s, 0.0, s],
+        [0.0, s, s],
+    ];
+    for a in axes {
+        for up in [1.0, -1.0] {
+            for rate in [-8.0, -4.0, 4.0, 8.0] {
+                out.push(Input {
+                    f: a.map(|c| up * G * c),
+                    w: a.map(|c| rate * c),
+                });
+            }
+        }
+    }
+    out
+}
+
+fn noisy(rng: &mut ChaCha8Rng) -> f64 {
+    Normal::new(0.0, NOISE).unwrap().sample(rng)
+}
+
+/// Stage one's file of sensor `k` (the reference units' columns) and its calibration.
+fn stage_one(unit: &Unit, k: usize, dir: &Path, rng: &mut ChaCha8Rng) -> Calibrated {
+    let s = unit.sensors[k];
+    let mut text = String::from("input,input_p,input_o,temp,output\n");
+    for t in TEMPS {
+        if k < 3 {
+            for _ in 0..2 {
+                for i in 0..28 {
+                    let th = 2.0 * std::f64::consts::PI * f64::from(i) / 28.0;
+                    let (x, p) = (G * th.cos(), G * th.sin());
+                    let y = s.out(x, t) + noisy(rng);
+                    text += &format!("{x},{p},0,{t},{y}\n");
+                }
+            }
+        } else {
+            let rates = (0..4).flat_map(|_| (0..9).map(|i| -8.0 + 2.0 * f64::from(i)));
+            for x in rates.chain(std::iter::repeat_n(0.0, 20)) {
+                let y = s.out(x, t) + noisy(rng);
+                text += &format!("{x},0,0,{t},{y}\n");
+            }
+        }
+    }
+    let csv = dir.join(format!("s1_{}.csv", OUTPUTS[k]));
+    std::fs::write(&csv, text).unwrap();
+    let mut opts = Options::new(&csv, &format!("S-{}", OUTPUTS[k]));
+    opts.thermal = Thermal::Table;
+    opts.created = Some(0);
+    opts.keep_all_terms = true;
+    opts.asymmetry = Some(true);
+    let q = if k < 3 {
+        Quantity::Acceleration
+    } else {
+        Quantity::AngularRate
+    };
+    single::calibrate(&opts, q).unwrap()
+}
+
+/// The unit's file (`f_x .. g_z` columns) over `plan` at `temps`.
+fn unit_file(unit: &Unit, temps: &[f64], path: &Path, rng: &mut ChaCha8Rng) {
+    let mut text = String::from("f_x,f_y,f_z,w_x,w_y,w_z,temp,a_x,a_y,a_z,g_x,g_y,g_z\n");
+    for &t in temps {
+        for p in unit_plan() {
+            let y = unit.outputs(&p, t).map(|o| o + noisy(rng));
+            let [f0, f1, f2] = p.f;
+            let [w0, w1, w2] = p.w;
+            let [y0, y1, y2, y3, y4, y5] = y;
+            text += &format!("{f0},{f1},{f2},{w0},{w1},{w2},{t},{y0},{y1},{y2},{y3},{y4},{y5}\n");
+        }
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+fn two_stage(unit: &Unit, dir: &Path, rng: &mut ChaCha8Rng) -> Calibrated {
+    let records: Vec<_> = (0..6)
+        .map(|k| {
+            let c = stage_one(unit, k, dir, rng);
+            let json = dir.join(format!("s1_{}.json", OUTPUTS[k]));
+            let csv = dir.join(format!("s1_{}.csv", OUTPUTS[k]));
+            let record = calflash::sensor::record::Record::new(&c, &csv.display().to_string());
+            std::fs::write(&json, serde_json::to_string(&record.sealed()).unwrap()).unwrap();
+            json
+        })
+        .collect();
+    let csv = dir.join("unit.csv");
+    unit_file(unit, &[25.0], &csv, rng);
+    let sensors = one::read_all(&records).unwrap();
+    let mut opts = Options::new(&csv, "IMU-1");
+    opts.created = Some(0);
+    opts.keep_all_terms = true;
+    triad::stage_two::calibrate(&opts, &sensors).unwrap().0
+}
+
+fn one_stage(unit: &Unit, dir: &Path, rng: &mut ChaCha8Rng) -> Calibrated {
+    let csv = dir.join("one.csv");
+    unit_file(unit, &TEMPS, &csv, rng);
+    let mut opts = Options::new(&csv, "IMU-1");
+    opts.created = Some(0);
+    opts.thermal = Thermal::Table;
+    opts.keep_all_terms = true;
+    triad::calibrate(&opts, Kind::Imu, true).unwrap()
+}
+
+/// The operating range the errors are taken over: gravity along the 26 directions at rest
+/// (accelerometers); rates of +-2, 4, 6 and 8 rad/s about the three axes and three diagonals,
+/// the axis up (gyros).
+fn range() -> (Vec<Input>, Vec<Input>) {
+    let accel = directions()
+        .into_iter()
+        .map(|u| Input {
+            f: u.map(|c| G * c),
+            w: [0.0; 3],
+        })
+        .collect();
+    let gyro = directions()
+        .into_iter()
+        .filter(|u| u.iter().filter(|c| **c != 0.0).count() <= 2 && u.iter().all(|c| *c >= 0.0))
+        .flat_map(|u| {
+            [-8.0, -6.0, -4.0, -2.0, 2.0, 4.0, 6.0, 8.0].map(|rate| Input {
+                f: u.map(|c| G * c),
+                w: u.map(|c| rate * c),
+            })
+        })
+        .collect();
+    (accel, gyro)
+}
+
+/// A unit the device refused a calibration of: its seed and each plan's REJECT.
+type Refused = (u64, Option<String>, Option<String>);
+
+/// Units drawn.
+const UNITS: u64 = 120;
+
+/// Both plans over the same drawn units: their RMS errors over the operating range, the share
+/// of errors inside the device's 95 % intervals, and the error over the stated 1-sigma at zero
+/// input (`BENCHMARKS.md`, "Two stages on an independent forward model").
+#[test]
+fn two_stages_and_one_on_an_independent_forward_model() {
+    let (accel, gyro) = range();
+    let all: Vec<Result<(Score, Score), Refused>> = (0..UNITS)
+        .into_par_iter()
+        .map(|seed| {
+            let dir = tempfile::tempdir().unwrap();
+            let unit = Unit::draw(70_000 + seed);
+            let mut rng = ChaCha8Rng::seed_from_u64(90_000 + seed);
+            let two = two_stage(&unit, dir.path(), &mut rng);
+            let one = one_stage(&unit, dir.path(), &mut rng);
+            // A calibration the device refuses (no blob) is counted, not scored.
+            if two.blob.is_empty() || one.blob.is_empty() {
+                let why = |c: &Calibrated| {
+                    c.findings
+                        .iter()
+                        .find(|f| f.verdict == Verdict::Reject)
+                        .map(|f| f.text.clone())
+                };
+                return Err((seed, why(&two), why(&one)));
+            }
+            Ok((
+                stage_score::score(&two, &unit, &accel, &gyro),
+                stage_score::score(&one, &unit, &accel, &gyro),
+            ))
+        })
+        .collect();
+    let refused: Vec<&Refused> = all.iter().filter_map(|r| r.as_ref().err()).collect();
+    for (seed, two, one) in &refused {
+        println!("unit {seed}: the device refused two stages: {two:?}; one stage: {one:?}");
+    }
+    let results: Vec<&(Score, Score)> = all.iter().filter_map(|r| r.as_ref().ok()).collect();
+    let two: Vec<Score> = results.iter().map(|r| r.0).collect();
+    let one: Vec<Score> = results.iter().map(|r| r.1).collect();
+    println!(
+        "independent forward model, {UNITS} units, {} scored ({} refused by the device's bounds)",
+        results.len(),
+        refused.len()
+    );
+    for (name, f) in [("accelerometers, m/s^2", 0), ("gyros, rad/s", 1)] {
+        println!(
+            "  {name}: RMS error two stages {:.3e}, one stage {:.3e} (two/one {:.3}); 95 % coverage {:.4} / {:.4}; z RMS at zero input {:.2} / {:.2}",
+            rms(&two, f),
+            rms(&one, f),
+            rms(&two, f) / rms(&one, f),
+            coverage(&two, f),
+            coverage(&one, f),
+            z0(&two, f),
+            z0(&one, f)
+        );
+    }
+    println!(
+        "  95 % coverage, both families: two stages {:.4}, one stage {:.4}",
+        coverage_all(&two),
+        coverage_all(&one)
+    );
+    // What holds today. The issue's goal (coverage 0.95 +- 0.02 and z RMS at zero input
+    // 1.00 +- 0.1 for both plans and both families) is not met: the accelerometers' coverage
+    // is 0.92 (two stages) and 1.00 (one stage), the gyros' z RMS at zero input 0.66 and 0.47,
+    // one stage's accelerometers' 0.35 (BENCHMARKS.md says why). These bounds catch a
+    // regression of what holds and a change of the figures the note states.
+    assert!(
+        refused.len() * 20 <= UNITS as usize,
+        "{} of {UNITS} units refused",
+        refused.len()
+    );
+    assert!(
+        (0.9..=1.1).contains(&z0(&two, 0)),
+        "two stages, accelerometers: z RMS at zero input {}",
+        z0(&two, 0)
+    );
+    for (name, s) in [("two stages", &two), ("one stage", &one)] {
+        assert!(
+            (0.93..=0.97).contains(&coverage(s, 1)),
+            "{name}, gyros: coverage {}",
+            coverage(s, 1)
+        );
+        assert!(
+            coverage(s, 0) >= 0.9,
+            "{name}, accelerometers: coverage {}",
+            coverage(s, 0)
+        );
+    }
+    // On this model one stage wins for the accelerometers (its plan sees every term at every
+    // temperature; stage one's eight terms over 280 rows determine the bias worse) and the two
+    // tie for the gyros: the issue's 1.12 is reproduced.
+    let ratio = rms(&two, 0) / rms(&one, 0);
+    assert!(
+        (1.05..=1.2).contains(&ratio),
+        "accelerometers, two/one {ratio}"
+    );
+    let ratio = rms(&two, 1) / rms(&one, 1);
+    assert!((0.9..=1.1).contains(&ratio), "gyros, two/one {ratio}");
+}
