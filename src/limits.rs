@@ -3,7 +3,7 @@
 //! re-export them).
 
 /// The blob format version this crate writes and reads.
-pub const FORMAT_VERSION: u8 = 5;
+pub const FORMAT_VERSION: u8 = 6;
 
 /// Longest lever arm accepted, in metres.
 pub const MAX_LEVER_ARM_M: f32 = 10.0;

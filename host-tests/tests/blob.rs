@@ -12,7 +12,7 @@ use spincal::{Error, Field, Part};
 /// invalid calibrations can be put in well-formed blobs.
 fn frame(payload: &[u8]) -> Vec<u8> {
     let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
-    let mut out = b"SCAL\x05".to_vec();
+    let mut out = b"SCAL\x06".to_vec();
     out.extend_from_slice(&(payload.len() as u16).to_le_bytes());
     let mut digest = crc.digest();
     digest.update(&out);

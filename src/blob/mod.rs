@@ -22,7 +22,7 @@
 //! let cal = Calibration::new(CalibrationData::example_triad())?;
 //! let mut buf = [0u8; blob::MAX_BLOB_LEN];
 //! let n = blob::encode(&cal, &mut buf)?;
-//! assert_eq!(&buf[..5], b"SCAL\x05");
+//! assert_eq!(&buf[..5], b"SCAL\x06");
 //! assert_eq!(blob::decode(&buf[..n])?, cal);
 //! // One flipped bit anywhere is caught before decoding.
 //! buf[20] ^= 0x10;

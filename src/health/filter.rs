@@ -364,7 +364,18 @@ mod tests {
     }
 
     fn phi(f: [f32; 3]) -> [[f32; FEATURES]; 3] {
-        core::array::from_fn(|i| [1.0, f[0], f[1], f[2], f[i] * f[i]])
+        core::array::from_fn(|i| {
+            [
+                1.0,
+                f[0],
+                f[1],
+                f[2],
+                f[i] * f[i],
+                f[i].abs(),
+                f[i] * f[i] * f[i],
+                f[i] * f[i].abs(),
+            ]
+        })
     }
 
     #[test]

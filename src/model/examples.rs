@@ -106,7 +106,7 @@ fn accel_set(t: f32, nonlinear: bool) -> TriadSet {
 
 /// A packed factor over the [`IMU_FEATURES`](super::IMU_FEATURES) features of output `i`:
 /// independent sigmas for bias, the own and the cross components of the sensitivity row, the
-/// lever arm (or g-sensitivity) row and the g-squared term, and a correlation of the bias with
+/// lever arm (or g-sensitivity) row and the nonlinear terms, and a correlation of the bias with
 /// the g-squared term.
 fn imu_output_factor(i: usize, sigma: [f32; 5]) -> super::ImuOutputCovariance {
     let [bias, own, cross, lever, k2] = sigma;
@@ -119,16 +119,20 @@ fn imu_output_factor(i: usize, sigma: [f32; 5]) -> super::ImuOutputCovariance {
         lever,
         lever,
         k2,
+        // The kink, a tenth of the own scale factor's; the cubic and odd-quadratic terms.
+        0.1 * own,
+        k2 * 1e-2,
+        k2 * 0.5,
     ];
-    let mut packed = [0.0f32; 36];
+    let mut packed = [0.0f32; 66];
     for (r, d) in diag.iter().enumerate() {
         packed[r * (r + 1) / 2 + r] = *d;
     }
     // Row 7 (x^2), column 0 (bias).
     packed[28] = -0.3 * k2;
-    let mut out = [[0.0; 6]; 6];
+    let mut out = [[0.0; 11]; 6];
     for (k, v) in packed.iter().enumerate() {
-        out[k / 6][k % 6] = *v;
+        out[k / 11][k % 11] = *v;
     }
     out
 }

@@ -98,23 +98,29 @@ impl TriadSet {
 
 /// Features of one IMU output's 1-sigma (SI units), [`IMU_FEATURES`] of them.
 ///
-/// - Accelerometer output `i`: `[1, F_i0, F_i1, F_i2, G_i0, G_i1, G_i2, x_i^2]`, with `F_i` the
+/// - Accelerometer output `i`: `[1, F_i0, F_i1, F_i2, G_i0, G_i1, G_i2, x_i^2, |x_i|, x_i^3,
+///   x_i |x_i|]`, with `F_i` the
 ///   specific force at axis `i`'s position (reference force plus what the spin adds there),
 ///   `G_i = w (n_i . w) - n_i |w|^2` the gradient of what the axis senses of the spin in its
 ///   lever arm, and `x_i = n_i . F_i` what it senses along itself
 ///   ([`rotation`](super::rotation)).
-/// - Gyro output `i`: `[1, w_0, w_1, w_2, f_0, f_1, f_2, x_i^2]`, with `f` the specific force at
-///   the reference point (g-sensitivity) and `x_i = n_i . (w + G f)` what it senses.
+/// - Gyro output `i`: `[1, w_0, w_1, w_2, f_0, f_1, f_2, x_i^2, |x_i|, x_i^3, x_i |x_i|]`, with
+///   `f` the specific force at the reference point (g-sensitivity) and `x_i = n_i . (w + G f)`
+///   what it senses.
 ///
 /// Their coefficients are the axis' forward parameters: bias, sensitivity row, lever arm or
-/// g-sensitivity row, g-squared term; the factor holds their covariance scaled to the output.
-pub const IMU_FEATURES: usize = 8;
+/// g-sensitivity row, and the nonlinear terms the correction applies (g-squared, the
+/// asymmetry's kink, cubic, odd-quadratic); the factor holds their covariance scaled to the
+/// output. Every term the correction carries has its own feature: folded into fewer features,
+/// the nonlinear terms' error (the kink's V about zero, the odd terms' sign change) cannot be
+/// stated both at zero input and across the range.
+pub const IMU_FEATURES: usize = 11;
 
-/// The packed lower-triangular Cholesky factor `L` (row-major, `L00; L10 L11; ...`, 36 values
+/// The packed lower-triangular Cholesky factor `L` (row-major, `L00; L10 L11; ...`, 66 values
 /// for [`IMU_FEATURES`] features) of the covariance of one IMU output over its features: the
-/// output's 1-sigma calibration error is `|L' phi|`. Stored as six rows of six (serde's arrays
-/// stop at 32); read it flat with `as_flattened`.
-pub type ImuOutputCovariance = [[f32; 6]; 6];
+/// output's 1-sigma calibration error is `|L' phi|`. Stored as six rows of eleven (serde's
+/// arrays stop at 32); read it flat with `as_flattened`.
+pub type ImuOutputCovariance = [[f32; 11]; 6];
 
 /// Covariance factors of an IMU at one table point: per output, over that output's features
 /// (see [`IMU_FEATURES`]), so that the stated 1-sigma covers the lever arm and the g-squared

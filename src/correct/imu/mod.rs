@@ -297,8 +297,8 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         match src.covariance {
             Some(table) => {
                 let c = self.covariance.get_or_insert(ImuCovariance {
-                    accel: [[[0.0; 6]; 6]; 3],
-                    gyro: [[[0.0; 6]; 6]; 3],
+                    accel: [[[0.0; 11]; 6]; 3],
+                    gyro: [[[0.0; 11]; 6]; 3],
                 });
                 if !effective_covariance_into(src.env, table, temperature, voltage, c) {
                     self.covariance = None;

@@ -9,9 +9,9 @@ use crate::model::rotation;
 use crate::model::{IMU_FEATURES, ImuCovariance, ImuOutputCovariance};
 
 /// The accelerometer features of [`IMU_FEATURES`](crate::model::IMU_FEATURES) that do not
-/// vanish at rest: the bias, the sensitivity row and the g-squared term (the lever arm's
+/// vanish at rest: the bias, the sensitivity row and the nonlinear terms (the lever arm's
 /// gradient is zero without a spin).
-pub const REST_FEATURES: [usize; 5] = [0, 1, 2, 3, 7];
+pub const REST_FEATURES: [usize; 8] = [0, 1, 2, 3, 7, 8, 9, 10];
 
 /// Elements of a packed upper triangle over [`REST_FEATURES`].
 const REST_BLOCK: usize = REST_FEATURES.len() * (REST_FEATURES.len() + 1) / 2;
@@ -77,7 +77,8 @@ impl<S: Sample> ImuCorrector<'_, S> {
     }
 
     /// The accelerometer error's features at rest (no spin) under the specific force `f`, per
-    /// axis `i`: `[1, f_0, f_1, f_2, x_i^2]` with `x_i = n_i . f`, the features of
+    /// axis `i`: `[1, f_0, f_1, f_2, x_i^2, |x_i|, x_i^3, x_i |x_i|]` with `x_i = n_i . f`, the
+    /// features of
     /// [`IMU_FEATURES`](crate::model::IMU_FEATURES) that do not vanish at rest
     /// ([`REST_FEATURES`] picks them). The axis' error is their dot product with its
     /// parameters' error.
@@ -86,7 +87,8 @@ impl<S: Sample> ImuCorrector<'_, S> {
         let [na, _] = &self.directions;
         core::array::from_fn(|i| {
             let x = na.get(i).map_or(0.0, |n| rotation::dot(n, f));
-            [1.0, f[0], f[1], f[2], x * x]
+            let (a, s) = (libm::fabsf(x), x * x);
+            [1.0, f[0], f[1], f[2], s, a, s * x, x * a]
         })
     }
 
@@ -148,13 +150,15 @@ impl<S: Sample> ImuCorrector<'_, S> {
             let [g0, g1, g2] = rotation::lever_gradient(n, &w, &zero);
             let x = rotation::dot(n, &at);
             let [a0, a1, a2] = at;
-            [1.0, a0, a1, a2, g0, g1, g2, x * x]
+            let (a, s) = (libm::fabsf(x), x * x);
+            [1.0, a0, a1, a2, g0, g1, g2, s, a, s * x, x * a]
         };
         let [h0, h1, h2] = self.g_sensitivity(zero, &f).map(|x| -x);
         let sensed_rate = [w0 + h0, w1 + h1, w2 + h2];
         let gyro = |i: usize| -> [f32; IMU_FEATURES] {
             let x = ng.get(i).map_or(0.0, |n| rotation::dot(n, &sensed_rate));
-            [1.0, w0, w1, w2, f0, f1, f2, x * x]
+            let (a, s) = (libm::fabsf(x), x * x);
+            [1.0, w0, w1, w2, f0, f1, f2, s, a, s * x, x * a]
         };
         [accel(0), accel(1), accel(2), gyro(0), gyro(1), gyro(2)]
     }

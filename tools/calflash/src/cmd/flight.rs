@@ -218,10 +218,7 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
             };
             let prior = from_record
                 .or_else(|| {
-                    prior::calibration_prior(&cal, &imu, from).map(|p| {
-                        let folded = prior::folded_outputs(&cal);
-                        (p, PriorSource::Factors { folded })
-                    })
+                    prior::calibration_prior(&cal, &imu, from).map(|p| (p, PriorSource::Factors))
                 })
                 .unwrap_or_else(|| (prior::stated_prior(&stated), PriorSource::Stated(stated)));
             (imu, prior, serial)

@@ -59,13 +59,10 @@ pub enum PriorSource {
     /// The calibration record's covariance of its whole model (named: the file or the unit
     /// history's record).
     Record(String),
-    /// The blob's covariance factors. Outputs whose model keeps a cubic or odd-quadratic term
-    /// are named: the factors fold those terms' uncertainty over the whole calibrated range,
-    /// which at a spin near the range's end can state the line through the error too narrow.
-    Factors {
-        /// Outputs (`a_x`..`g_z`) whose model keeps a term the factors fold.
-        folded: Vec<&'static str>,
-    },
+    /// The blob's covariance factors: over every term the correction applies, the same
+    /// covariance as the record's but for the terms the device does not carry (temperature
+    /// curves between the table's points).
+    Factors,
     /// Stated, because the calibration carries no covariance (or there is no calibration).
     Stated(StatedPrior),
 }
@@ -99,26 +96,6 @@ pub fn calibration_prior(cal: &Calibration, imu: &ImuSeries, from: usize) -> Opt
     });
     prior.unmodelled = Unmodelled::over((&corrector, imu, from), (sizes, &fill), &lines, &fits);
     Some(prior)
-}
-
-/// The outputs whose model keeps a term the blob's covariance factors fold over the calibrated
-/// range (a cubic or odd-quadratic one, by the blob's nonlinear coefficients).
-#[must_use]
-pub fn folded_outputs(cal: &Calibration) -> Vec<&'static str> {
-    let spincal::model::Sensor::Imu { sets, .. } = &cal.data().sensor else {
-        return Vec::new();
-    };
-    let Some(set) = sets.first() else {
-        return Vec::new();
-    };
-    set.accel
-        .axes
-        .iter()
-        .chain(&set.gyro.axes)
-        .zip(OUTPUTS)
-        .filter(|(a, _)| a.cubic != 0.0 || a.odd_quadratic != 0.0 || a.asymmetry != 0.0)
-        .map(|(_, n)| n)
-        .collect()
 }
 
 /// What stops a record from giving the prior.
@@ -288,7 +265,7 @@ pub fn record_prior(
     let fill = |out: usize, phi: &[f32; IMU_FEATURES], row: &mut [f64]| {
         let (terms, slope, ..) = &fits[out];
         for (r, t) in row.iter_mut().zip(terms) {
-            *r = t.value(phi, out, *slope);
+            *r = t.value(phi, *slope);
         }
     };
     let lines = lines_over(&corrector, imu, from, sizes, &fill);
@@ -304,17 +281,10 @@ pub fn record_prior(
 }
 
 /// A term of a record's fit, as the flight evaluates it from the device's error features
-/// ([`IMU_FEATURES`]).
+/// ([`IMU_FEATURES`]): the feature's index, and whether the regressor is the axis' sensitivity
+/// times it (a lever arm).
 #[derive(Debug, Clone, Copy)]
-enum Regressor {
-    /// A device feature times a factor of the axis' sensitivity (`true`: a lever arm, whose
-    /// regressor is the sensitivity times the feature).
-    Feature(usize, bool),
-    /// `x^3`, `x |x|`, `|x|` of what the axis senses.
-    Cubic,
-    OddSquare,
-    Kink,
-}
+struct Regressor(usize, bool);
 
 impl Regressor {
     fn of(term: &str, out: usize) -> Option<Self> {
@@ -325,39 +295,30 @@ impl Regressor {
         };
         let s = crate::sensor::lever::SENSED;
         Some(match term {
-            "1" => Self::Feature(0, false),
-            t if t == format!("{s}^2") => Self::Feature(7, false),
-            t if t == format!("{s}^3") => Self::Cubic,
-            t if t == format!("{s}:abs({s})") => Self::OddSquare,
-            crate::sensor::lever::SENSED_KINK => Self::Kink,
+            "1" => Self(0, false),
+            t if t == format!("{s}^2") => Self(7, false),
+            crate::sensor::lever::SENSED_KINK => Self(8, false),
+            t if t == format!("{s}^3") => Self(9, false),
+            t if t == format!("{s}:abs({s})") => Self(10, false),
             _ if out < 3 => {
                 if let Some(k) = xyz("f_") {
-                    Self::Feature(1 + k, false)
+                    Self(1 + k, false)
                 } else {
                     let lever = format!("lever_{}", ["x", "y", "z"][out]);
-                    Self::Feature(4 + xyz(&lever)?, true)
+                    Self(4 + xyz(&lever)?, true)
                 }
             }
             _ => match (xyz("w_"), xyz("f_")) {
-                (Some(k), _) => Self::Feature(1 + k, false),
-                (None, Some(k)) => Self::Feature(4 + k, false),
+                (Some(k), _) => Self(1 + k, false),
+                (None, Some(k)) => Self(4 + k, false),
                 (None, None) => return None,
             },
         })
     }
 
-    /// Its value at a sample whose device features for output `out` are `phi`.
-    fn value(self, phi: &[f32; IMU_FEATURES], out: usize, slope: f64) -> f64 {
-        let phi = phi.map(f64::from);
-        // What the axis senses: the square root of the g-squared feature, signed as the axis'
-        // own input.
-        let x = phi[7].max(0.0).sqrt().copysign(phi[1 + out % 3]);
-        match self {
-            Self::Feature(k, lever) => phi[k] * if lever { slope } else { 1.0 },
-            Self::Cubic => x * x * x,
-            Self::OddSquare => x * x.abs(),
-            Self::Kink => x.abs(),
-        }
+    /// Its value at a sample whose device features are `phi`.
+    fn value(self, phi: &[f32; IMU_FEATURES], slope: f64) -> f64 {
+        f64::from(phi[self.0]) * if self.1 { slope } else { 1.0 }
     }
 }
 
@@ -530,13 +491,27 @@ mod tests {
 
     #[test]
     fn a_records_terms_are_read_as_the_devices_features() {
-        let phi = [1.0, 1500.0, 2.0, 3.0, 0.5, 0.25, 0.125, 1500.0 * 1500.0];
-        let v = |t: &str, out: usize| Regressor::of(t, out).map(|r| r.value(&phi, out, 16.0));
+        let x = 64.0f32;
+        let phi = [
+            1.0,
+            x,
+            2.0,
+            3.0,
+            0.5,
+            0.25,
+            0.125,
+            x * x,
+            x,
+            x * x * x,
+            x * x,
+        ];
+        let v = |t: &str, out: usize| Regressor::of(t, out).map(|r| r.value(&phi, 16.0));
         // The gyro x: its rates, its g-sensitivity's force, what it senses.
-        assert_eq!(v("w_x", 3), Some(1500.0));
+        assert_eq!(v("w_x", 3), Some(64.0));
         assert_eq!(v("f_y", 3), Some(0.25));
-        assert_eq!(v("sensed^3", 3), Some(1500.0f64.powi(3)));
-        assert_eq!(v("sensed:abs(sensed)", 3), Some(1500.0 * 1500.0));
+        assert_eq!(v("sensed^3", 3), Some(64.0f64.powi(3)));
+        assert_eq!(v("sensed:abs(sensed)", 3), Some(64.0 * 64.0));
+        assert_eq!(v("sensed_kink", 3), Some(64.0));
         // An accelerometer's lever arm is its sensitivity times the gradient.
         assert_eq!(v("lever_xz", 0), Some(0.125 * 16.0));
         assert_eq!(v("f_z", 0), Some(3.0));

@@ -123,7 +123,7 @@ pub fn imu_output(
 /// An IMU output's factor from the covariance `q` (4x4) of its offset and matrix row over the
 /// device features `[1, u0, u1, u2]` of a triad whose outputs are `y = M u + off`: the same
 /// covariance over `[1, y]` (`u = M^-1 (y - off)`), in the first four of the IMU's features
-/// (a unit with no lever arm, g-sensitivity or g-squared term to account for).
+/// (a unit with no lever arm, g-sensitivity or nonlinear term to account for).
 ///
 /// # Errors
 /// A [`CovarianceError`].
@@ -151,9 +151,9 @@ pub fn imu_output_from_triad(
 
 fn imu_packed(q: &DMatrix<f64>) -> Result<ImuOutputCovariance, CovarianceError> {
     let l = packed_cholesky(q)?;
-    let mut out = [[0.0f32; 6]; 6];
-    for (k, v) in l.iter().enumerate().take(36) {
-        out[k / 6][k % 6] = *v as f32;
+    let mut out = [[0.0f32; 11]; 6];
+    for (k, v) in l.iter().enumerate().take(66) {
+        out[k / 11][k % 11] = *v as f32;
     }
     Ok(out)
 }

@@ -53,18 +53,11 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
                 "  prior: the calibration's own covariance, its whole model over the flight's rates ({at})"
             );
         }
-        PriorSource::Factors { folded } => {
+        PriorSource::Factors => {
             let _ = writeln!(
                 s,
                 "  prior: the calibration's own covariance, from the blob's factors over the flight's rates"
             );
-            if !folded.is_empty() {
-                let _ = writeln!(
-                    s,
-                    "  note: the model of {} keeps a cubic, odd-quadratic or asymmetry term, whose uncertainty the blob's factors fold over the whole calibrated range: near the range's end its prior may be too narrow; give the calibration's record (--record) to take its whole model",
-                    folded.join(", ")
-                );
-            }
         }
         PriorSource::Stated(p) => {
             let _ = writeln!(
@@ -215,9 +208,7 @@ pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value 
 fn prior_json(p: &PriorSource) -> serde_json::Value {
     match p {
         PriorSource::Record(at) => serde_json::json!({"source": "record", "from": at}),
-        PriorSource::Factors { folded } => {
-            serde_json::json!({"source": "factors", "folded": folded})
-        }
+        PriorSource::Factors => serde_json::json!({"source": "factors"}),
         PriorSource::Stated(s) => serde_json::json!({
             "source": "stated",
             "accel_bias": s.accel_bias,

@@ -214,11 +214,10 @@ pub(super) fn device_sets(
             source,
         };
         let factors = a.factors;
-        let span = |i: usize| (f64::from(ranges[i].lo), f64::from(ranges[i].hi));
         out.imu_covs.push([
-            imu_covariance(spec, &folded(spec, &f[0], 0, span(0)), 0).map_err(located)?,
-            imu_covariance(spec, &folded(spec, &f[1], 1, span(1)), 1).map_err(located)?,
-            imu_covariance(spec, &folded(spec, &f[2], 2, span(2)), 2).map_err(located)?,
+            imu_covariance(spec, &f[0], 0).map_err(located)?,
+            imu_covariance(spec, &f[1], 1).map_err(located)?,
+            imu_covariance(spec, &f[2], 2).map_err(located)?,
         ]);
         out.covs.push(std::array::from_fn(|i| {
             std::array::from_fn(|k| factors[i][k] as f32)
@@ -300,14 +299,16 @@ impl TriadResult {
 
 /// Axis `i`'s factor over the IMU's features of its output
 /// (`spincal::model::IMU_FEATURES`): bias, sensitivity row, lever arm (its regressor is
-/// `S_ii` times the device's feature) or g-sensitivity row, g-squared term.
+/// `S_ii` times the device's feature) or g-sensitivity row, and the nonlinear terms (g-squared,
+/// kink, cubic, odd-quadratic): every term the correction applies.
 fn imu_covariance(
     spec: &Spec<'_>,
     fit: &AxisFit,
     i: usize,
 ) -> Result<ImuOutputCovariance, covariance::CovarianceError> {
     let slope = fit.coef(spec.inputs[i]);
-    let sq = format!("{}^2", lever::SENSED);
+    let s = lever::SENSED;
+    let (sq, cube, odd) = (format!("{s}^2"), format!("{s}^3"), format!("{s}:abs({s})"));
     let levers: [String; 3] = std::array::from_fn(|k| lever::column(i, k));
     let [i0, i1, i2] = spec.inputs;
     let (names, scale) = if spec.gyro {
@@ -322,8 +323,11 @@ fn imu_covariance(
                 Some(f1),
                 Some(f2),
                 Some(sq.as_str()),
+                Some(lever::SENSED_KINK),
+                Some(cube.as_str()),
+                Some(odd.as_str()),
             ],
-            [1.0; 8],
+            [1.0; 11],
         )
     } else {
         (
@@ -336,140 +340,14 @@ fn imu_covariance(
                 Some(levers[1].as_str()),
                 Some(levers[2].as_str()),
                 Some(sq.as_str()),
+                Some(lever::SENSED_KINK),
+                Some(cube.as_str()),
+                Some(odd.as_str()),
             ],
-            [1.0, 1.0, 1.0, 1.0, slope, slope, slope, 1.0],
+            [1.0, 1.0, 1.0, 1.0, slope, slope, slope, 1.0, 1.0, 1.0, 1.0],
         )
     };
     covariance::imu_output(&fit.fit, &names, &scale, slope)
-}
-
-/// A feature of what an axis senses, as a function of it.
-type Feature = fn(f64) -> f64;
-
-/// Axis `i`'s fit with the uncertainty of the terms the device's stated 1-sigma has no feature
-/// for (cubic, odd-quadratic, asymmetry) folded into those it has. Each such term is zero at
-/// zero input; over the calibrated range `span` of the axis' own input it is taken as its
-/// least-squares best `b1 x + b2 x^2` (no constant: at zero input the stated variance is then
-/// the full model's bias variance, not a fixed multiple of it), and the covariance becomes that
-/// of `own + b1 c`, `g-squared + b2 c` (the terms themselves then carry none). What the folded
-/// variance falls short of the full model's along the own input is added where it falls short:
-/// its least-squares fit by `a0 + a2 x^2 + a4 x^4` with no coefficient negative goes to the
-/// variances of the bias, the own input and the g-squared term. Their errors are strongly
-/// correlated with the bias's and the g-squared term's; left out, the stated 1-sigma would
-/// overstate the error.
-fn folded(spec: &Spec<'_>, fit: &AxisFit, i: usize, span: (f64, f64)) -> AxisFit {
-    let s = lever::SENSED;
-    let extra: [(String, Feature); 3] = [
-        (format!("{s}^3"), |x| x * x * x),
-        (format!("{s}:abs({s})"), |x| x * x.abs()),
-        (lever::SENSED_KINK.to_string(), f64::abs),
-    ];
-    let present: Vec<(usize, Feature)> = extra
-        .iter()
-        .filter_map(|(n, e)| fit.index(n).map(|k| (k, *e)))
-        .collect();
-    if present.is_empty() || span.1 <= span.0 {
-        return fit.clone();
-    }
-    let sq = format!("{s}^2");
-    let (bias, own, square) = (fit.index("1"), fit.index(spec.inputs[i]), fit.index(&sq));
-    let targets: Vec<(usize, Feature)> = [(own, (|x| x) as Feature), (square, |x| x * x)]
-        .into_iter()
-        .filter_map(|(k, g)| k.map(|k| (k, g)))
-        .collect();
-    let n = 201;
-    let xs: Vec<f64> = (0..n)
-        .map(|k| span.0 + (span.1 - span.0) * k as f64 / (n - 1) as f64)
-        .collect();
-    let a = DMatrix::from_fn(n, targets.len(), |r, c| (targets[c].1)(xs[r]));
-    let Ok(svd) = crate::stats::decompose::svd(a, true, true) else {
-        return fit.clone();
-    };
-    let p = fit.fit.coefficients.len();
-    let mut t = DMatrix::<f64>::identity(p, p);
-    for (k, e) in &present {
-        let b = nalgebra::DVector::from_iterator(n, xs.iter().map(|x| e(*x)));
-        let Ok(w) = svd.solve(&b, 1e-12) else {
-            return fit.clone();
-        };
-        for (c, (tk, _)) in targets.iter().enumerate() {
-            t[(*tk, *k)] = w[c];
-        }
-        t[(*k, *k)] = 0.0;
-    }
-    let mut out = fit.clone();
-    out.fit.covariance = &t * &fit.fit.covariance * t.transpose();
-    // Along the own input, the variance the full model states and the folded one.
-    let basis: Vec<(usize, Feature)> = bias
-        .map(|b| (b, (|_| 1.0) as Feature))
-        .into_iter()
-        .chain(targets.iter().copied())
-        .collect();
-    let along = |c: &DMatrix<f64>, x: f64, with_extra: bool| -> f64 {
-        let mut phi: Vec<(usize, f64)> = basis.iter().map(|(k, g)| (*k, g(x))).collect();
-        if with_extra {
-            phi.extend(present.iter().map(|(k, e)| (*k, e(x))));
-        }
-        phi.iter()
-            .flat_map(|(a, fa)| phi.iter().map(move |(b, fb)| fa * fb * c[(*a, *b)]))
-            .sum()
-    };
-    let short: Vec<f64> = xs
-        .iter()
-        .map(|x| {
-            (along(&fit.fit.covariance, *x, true) - along(&out.fit.covariance, *x, false)).max(0.0)
-        })
-        .collect();
-    // The shortfall's shape: a constant on the bias, x^2 on the own input, x^4 on g-squared.
-    let shapes: Vec<(usize, Feature)> = [
-        (bias, (|_| 1.0) as Feature),
-        (own, |x| x * x),
-        (square, |x| x.powi(4)),
-    ]
-    .into_iter()
-    .filter_map(|(k, g)| k.map(|k| (k, g)))
-    .collect();
-    let added = non_negative_fit(&xs, &short, &shapes);
-    for (k, v) in added {
-        out.fit.covariance[(k, k)] += v;
-    }
-    out
-}
-
-/// The least-squares fit of `y` at `xs` by the `shapes` with no coefficient negative (every
-/// subset of the shapes tried: there are at most three): each shape's index and coefficient.
-fn non_negative_fit(xs: &[f64], y: &[f64], shapes: &[(usize, Feature)]) -> Vec<(usize, f64)> {
-    let m = shapes.len();
-    let target = nalgebra::DVector::from_column_slice(y);
-    let mut best: (f64, Vec<(usize, f64)>) = (target.norm_squared(), Vec::new());
-    for mask in 1..(1usize << m) {
-        let chosen: Vec<&(usize, Feature)> = (0..m)
-            .filter(|j| mask & (1 << j) != 0)
-            .map(|j| &shapes[j])
-            .collect();
-        let a = DMatrix::from_fn(xs.len(), chosen.len(), |r, c| (chosen[c].1)(xs[r]));
-        let Ok(svd) = crate::stats::decompose::svd(a.clone(), true, true) else {
-            continue;
-        };
-        let Ok(w) = svd.solve(&target, 1e-12) else {
-            continue;
-        };
-        if w.iter().any(|v| *v < 0.0 || !v.is_finite()) {
-            continue;
-        }
-        let rss = (&a * &w - &target).norm_squared();
-        if rss < best.0 {
-            best = (
-                rss,
-                chosen
-                    .iter()
-                    .zip(w.iter())
-                    .map(|(s, v)| (s.0, *v))
-                    .collect(),
-            );
-        }
-    }
-    best.1
 }
 
 /// What axis `i` sensed (SI, along itself) at each observation of `t`, under its fit.
