@@ -178,13 +178,13 @@ impl embedded_storage::nor_flash::NorFlashError for RamFlashError {
 
 impl RamFlash {
     /// Bytes per slot (`_calib_slot_size` of memory.x).
-    pub const SLOT_SIZE: u32 = 0x7000;
+    pub const SLOT_SIZE: u32 = 0x8000;
 
-    /// The 64 KiB region at `_calib_start` (0x003F0000).
+    /// The 72 KiB region at `_calib_start` (0x003EE000).
     pub fn calibration_region() -> Self {
         Self {
-            base: 0x003F_0000,
-            len: 0x1_0000,
+            base: 0x003E_E000,
+            len: 0x1_2000,
         }
     }
 

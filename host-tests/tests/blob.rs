@@ -122,7 +122,7 @@ fn wrong_magic_version_and_length_are_refused() {
     );
     // The previous formats (their IMU covariance and lever term mean other things, or they
     // lack a field) and the next.
-    for version in [1, 2, 3, 4, 6] {
+    for version in [1, 2, 3, 4, 5, 7] {
         let mut bad = good.clone();
         bad[4] = version;
         assert_eq!(

@@ -518,11 +518,11 @@ fn sigma_is_the_quadratic_form_of_the_covariance_over_each_outputs_features() {
     };
     let (na, ng) = (dirs(&set.accel.matrix), dirs(&set.gyro.matrix));
     let dot = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let quad = |packed: &[f32], phi: &[f64; 8]| -> f64 {
+    let quad = |packed: &[f32], phi: &[f64; 11]| -> f64 {
         // |L' phi| for packed row-major lower-triangular L.
         let l = |r: usize, k: usize| f64::from(packed[r * (r + 1) / 2 + k]);
-        (0..8)
-            .map(|k| (k..8).map(|r| l(r, k) * phi[r]).sum::<f64>().powi(2))
+        (0..11)
+            .map(|k| (k..11).map(|r| l(r, k) * phi[r]).sum::<f64>().powi(2))
             .sum::<f64>()
             .sqrt()
     };
@@ -536,7 +536,19 @@ fn sigma_is_the_quadratic_form_of_the_covariance_over_each_outputs_features() {
         let at = spincal::model::rotation::force_at(&f, &w, &[0.0; 3], &ri);
         let g = spincal::model::rotation::lever_gradient(&na[i], &w, &[0.0; 3]);
         let x = dot(&na[i], &at);
-        let phi = [1.0, at[0], at[1], at[2], g[0], g[1], g[2], x * x];
+        let phi = [
+            1.0,
+            at[0],
+            at[1],
+            at[2],
+            g[0],
+            g[1],
+            g[2],
+            x * x,
+            x.abs(),
+            x * x * x,
+            x * x.abs(),
+        ];
         let want = quad(cov[4].accel[i].as_flattened(), &phi);
         assert!(
             (f64::from(sigma[i]) - want).abs() < 1e-4 * want,
@@ -544,7 +556,19 @@ fn sigma_is_the_quadratic_form_of_the_covariance_over_each_outputs_features() {
             sigma[i]
         );
         let xg = dot(&ng[i], &[w[0] + gf[0], w[1] + gf[1], w[2] + gf[2]]);
-        let phi = [1.0, w[0], w[1], w[2], f[0], f[1], f[2], xg * xg];
+        let phi = [
+            1.0,
+            w[0],
+            w[1],
+            w[2],
+            f[0],
+            f[1],
+            f[2],
+            xg * xg,
+            xg.abs(),
+            xg * xg * xg,
+            xg * xg.abs(),
+        ];
         let want = quad(cov[4].gyro[i].as_flattened(), &phi);
         assert!(
             (f64::from(sigma[i + 3]) - want).abs() < 1e-4 * want,

@@ -42,7 +42,7 @@ pub use crate::limits::FORMAT_VERSION;
 pub const HEADER_LEN: usize = 11;
 /// Upper bound on the encoded length of any valid calibration (the largest IMU table with
 /// covariance factors and a full-length serial fits; a test checks it).
-pub const MAX_BLOB_LEN: usize = 18_432;
+pub const MAX_BLOB_LEN: usize = 30_720;
 
 const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
 

@@ -92,7 +92,7 @@ fn bench(c: &mut Criterion) {
             let checked = check::check(
                 black_box(&imu),
                 (&fixes, &baro),
-                (prior, PriorSource::Factors { folded: Vec::new() }),
+                (prior, PriorSource::Factors),
                 &walks,
                 &opts,
                 0.01,

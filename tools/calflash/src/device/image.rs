@@ -158,8 +158,8 @@ mod tests {
         assert_eq!(
             r,
             Region {
-                start: 0x003f_0000,
-                slot_size: 0x7000,
+                start: 0x003e_e000,
+                slot_size: 0x8000,
                 lock_size: 4096
             }
         );

@@ -15,6 +15,8 @@ use rand_distr::{Distribution, Normal};
 use spincal::correct::{Corrected, ImuCorrector};
 use spincal::model::Calibration;
 
+/// Accelerometer features at rest ([`spincal::correct::REST_FEATURES`]).
+const REST: usize = spincal::correct::REST_FEATURES.len();
 /// Earth's rate, rad/s.
 const EARTH_RATE: f64 = 7.292_115e-5;
 
@@ -30,7 +32,7 @@ pub struct Unit<'a> {
     /// Per accelerometer axis, its parameters' error over the features at rest
     /// ([`ImuCorrector::accel_rest_features`]): the pose-dependent part of a unit's own
     /// calibration error (zero unless [`Unit::with_accel_error`]).
-    pub accel_error: [[f64; 5]; 3],
+    pub accel_error: [[f64; REST]; 3],
     /// The magnitude of gravity where it rests.
     pub gravity: f64,
     white: [f64; 6],
@@ -70,7 +72,7 @@ impl<'a> Unit<'a> {
             imu,
             rate,
             bias,
-            accel_error: [[0.0; 5]; 3],
+            accel_error: [[0.0; REST]; 3],
             gravity,
             white: noise.white.map(|d| f64::from(d) * rate.sqrt()),
             rng: ChaCha8Rng::seed_from_u64(seed),
@@ -83,7 +85,7 @@ impl<'a> Unit<'a> {
     /// This unit carrying the accelerometer calibration error `theta` (per axis, over the
     /// features at rest): its error then depends on the pose, as a real unit's does.
     #[must_use]
-    pub fn with_accel_error(mut self, theta: [[f64; 5]; 3]) -> Self {
+    pub fn with_accel_error(mut self, theta: [[f64; REST]; 3]) -> Self {
         self.accel_error = theta;
         self
     }
@@ -94,20 +96,21 @@ impl<'a> Unit<'a> {
     ///
     /// # Panics
     /// When `cal` is not an IMU with covariance factors.
-    pub fn draw_accel_error(&mut self, cal: &Calibration) -> [[f64; 5]; 3] {
+    pub fn draw_accel_error(&mut self, cal: &Calibration) -> [[f64; REST]; 3] {
         let mut imu = ImuCorrector::<u16>::new(cal, 1000.0).expect("an IMU calibration");
         imu.set_environment(TEMPERATURE as f32, 3.3);
         let blocks = imu.accel_rest_covariance().expect("covariance factors");
         std::array::from_fn(|axis| {
-            let c = nalgebra::Matrix5::from_fn(|i, j| {
+            // The packed upper triangle, row by row.
+            let c = nalgebra::DMatrix::from_fn(REST, REST, |i, j| {
                 let (a, b) = (i.min(j), i.max(j));
-                let k = a * 5 - a * (a.saturating_sub(1)) / 2 + (b - a);
+                let k = a * REST - a * (a.saturating_sub(1)) / 2 + (b - a);
                 f64::from(blocks[axis][k])
             });
             // A covariance that is only semi-definite (an unobserved feature) draws nothing
             // along its null space.
             let eig = c.symmetric_eigen();
-            let z = nalgebra::Vector5::from_fn(|i, _| {
+            let z = nalgebra::DVector::from_fn(REST, |i, _| {
                 eig.eigenvalues[i].max(0.0).sqrt() * self.normal.sample(&mut self.rng)
             });
             let theta = eig.eigenvectors * z;
