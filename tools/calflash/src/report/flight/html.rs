@@ -305,7 +305,7 @@ fn facts_table(c: &Checked, counts: &FixCounts) -> String {
     }
     let prior = match &c.prior {
         PriorSource::Record(at) => format!("the calibration's record ({})", esc(at)),
-        PriorSource::Factors { .. } => "the blob's covariance factors".into(),
+        PriorSource::Factors => "the blob's covariance factors".into(),
         PriorSource::Stated(_) => "a stated prior (--prior)".into(),
     };
     rows.push(("prior".into(), prior));

@@ -286,7 +286,10 @@ impl TriadResult {
         self.imu_covs = series_of(
             &self.imu_covs,
             |c| c.iter().flat_map(flat_f32).collect(),
-            |v| std::array::from_fn(|i| unflat_f32(&v[i * 36..(i + 1) * 36])),
+            |v| {
+                let n = size_of::<spincal::model::ImuOutputCovariance>() / size_of::<f32>();
+                std::array::from_fn(|i| unflat_f32(&v[i * n..(i + 1) * n]))
+            },
         );
         self.g = series_of(
             &self.g,
