@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use common::calflash;
 #[path = "common/stage_score.rs"]
 mod stage_score;
-use stage_score::{Input, Score, Truth, coverage, coverage_all, rms, z0};
+use stage_score::{Input, Score, Truth, coverage, coverage_all, rms, stated_rms, z0};
 
 use calflash::sensor::record::Record;
 use calflash::sensor::stages::{Check, one};
@@ -243,6 +243,11 @@ fn two_stages_beat_one_and_state_their_error_honestly() {
             rms(&two, family),
             rms(&one, family),
             rms(&two, family) / rms(&one, family)
+        );
+        println!(
+            "{name}: RMS of the stated 1-sigma: two stages {:.3e}, one stage {:.3e}",
+            stated_rms(&two, family),
+            stated_rms(&one, family)
         );
     }
     println!(
@@ -831,6 +836,48 @@ fn design_compares_two_stages_with_one() {
     assert!(
         one.contains("RMS error of two stages against one at equal totals: "),
         "{one}"
+    );
+    // The calibrated comparison: the error each plan's calibrations state, and at equal cost
+    // the winner; with stage one's fixtures cheap and the unit's table dear, two stages win.
+    let calibrated = |costs: [&str; 2]| -> Vec<String> {
+        let (code, out, err) = calflash(
+            d,
+            &[
+                "design",
+                "evaluate",
+                "--model",
+                "triad-nonlinear",
+                "--sensor",
+                "accel",
+                "--temps=-20,5,25,45,70",
+                "--stage-one",
+                "head:56",
+                "--plan",
+                unit,
+                "--plan",
+                unit,
+                "--cost-stage-one",
+                costs[0],
+                "--cost-unit",
+                costs[1],
+            ],
+        );
+        assert_eq!(code, 0, "{out}{err}");
+        out.lines()
+            .filter(|l| {
+                l.contains(", accelerometers: two stages ") || l.contains(", gyros: two stages ")
+            })
+            .map(str::to_string)
+            .collect()
+    };
+    let even = calibrated(["1", "1"]);
+    assert_eq!(even.len(), 2, "{even:?}");
+    assert!(even[0].contains("cost a unit 1754 against 370"), "{even:?}");
+    assert!(even[0].ends_with("one stage wins"), "{even:?}");
+    let cheap = calibrated(["0.01", "10"]);
+    assert!(
+        cheap.iter().all(|l| l.ends_with("two stages win")),
+        "{cheap:?}"
     );
     // A one-stage plan that cannot estimate the nonlinear terms is named.
     let (code, _, err) = calflash(

@@ -36,7 +36,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 use spincal::model::Quantity;
-use stage_score::{Input, Score, Truth, coverage, coverage_all, rms, z0};
+use stage_score::{Input, Score, Truth, coverage, coverage_all, rms, stated_rms, z0};
 
 const G: f64 = 9.806_65;
 const TEMPS: [f64; 5] = [-20.0, 5.0, 25.0, 45.0, 70.0];
@@ -371,6 +371,14 @@ fn two_stages_and_one_on_an_independent_forward_model() {
             z0(&one, f)
         );
     }
+    for (name, f) in [("accelerometers", 0), ("gyros", 1)] {
+        println!(
+            "  {name}: RMS of the stated 1-sigma two stages {:.3e}, one stage {:.3e} (two/one {:.3})",
+            stated_rms(&two, f),
+            stated_rms(&one, f),
+            stated_rms(&two, f) / stated_rms(&one, f)
+        );
+    }
     println!(
         "  95 % coverage, both families: two stages {:.4}, one stage {:.4}",
         coverage_all(&two),
@@ -398,6 +406,36 @@ fn two_stages_and_one_on_an_independent_forward_model() {
                 z0(s, f)
             );
         }
+    }
+    // The design's prediction (`design::stages`: our simulator's units through the same
+    // plans, each calibration's stated 1-sigma over the range) against the measured ratio.
+    let plans = |items: &[&str], temps: &[f64], single: bool| {
+        let items: Vec<String> = items.iter().map(|s| (*s).to_string()).collect();
+        calflash::sim::plan::plan(&items, temps, &[3.3], 1, single).unwrap()
+    };
+    let rate = "rate:-8:8:9";
+    let unit_items = ["tumble:26", "rate:-8:8:4", "diagonal:-8:8:2"];
+    let p = calflash::design::stages::Plans {
+        accel_one: plans(&["head:56"], &TEMPS, true),
+        gyro_one: plans(&[rate, rate, rate, rate, "rate:0:0:20"], &TEMPS, true),
+        unit: plans(&unit_items, &[25.0], false),
+        one_stage: plans(&unit_items, &TEMPS, false),
+    };
+    let predicted = calflash::design::stages::predict(&p, &TEMPS, 24).unwrap();
+    for (name, f) in [("accelerometers", 0), ("gyros", 1)] {
+        let measured = rms(&two, f) / rms(&one, f);
+        println!(
+            "  {name}: the design predicts two stages {:.3e}, one stage {:.3e} (two/one {:.3}) over {} simulated units; measured {measured:.3}",
+            predicted.two[f],
+            predicted.one[f],
+            predicted.ratio()[f],
+            predicted.units
+        );
+        assert!(
+            (predicted.ratio()[f] / measured - 1.0).abs() <= 0.1,
+            "{name}: predicted {} against measured {measured}",
+            predicted.ratio()[f]
+        );
     }
     // On this model one stage wins for the accelerometers (its plan sees every term at every
     // temperature; stage one's eight terms over 280 rows determine the bias worse) and the two

@@ -10,5 +10,6 @@ pub mod points;
 pub mod predict;
 pub mod search;
 pub mod space;
+pub mod stages;
 
 pub use error::Error;

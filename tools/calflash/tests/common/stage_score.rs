@@ -66,6 +66,8 @@ pub struct Score {
     pub inside: [usize; 2],
     pub z0: [f64; 2],
     pub n0: [usize; 2],
+    /// The sum of the squared stated 1-sigma over the range, per family.
+    pub stated: [f64; 2],
 }
 
 /// The unit's truth: its six noise-free outputs (counts) at an input and a temperature, and
@@ -106,6 +108,7 @@ pub fn score(c: &Calibrated, truth: &impl Truth, accel: &[Input], gyro: &[Input]
                 });
                 let stated = f64::from(device.sigma(&values).unwrap()[k]);
                 s.sq[family] += err * err;
+                s.stated[family] += stated * stated;
                 s.n[family] += 1;
                 s.inside[family] += usize::from(err.abs() <= 1.96 * stated);
             }
@@ -118,6 +121,14 @@ pub fn score(c: &Calibrated, truth: &impl Truth, accel: &[Input], gyro: &[Input]
 /// intervals, and the RMS of the error over the stated 1-sigma at zero input.
 pub fn rms(scores: &[Score], family: usize) -> f64 {
     let sq: f64 = scores.iter().map(|s| s.sq[family]).sum();
+    let n: usize = scores.iter().map(|s| s.n[family]).sum();
+    (sq / n as f64).sqrt()
+}
+
+/// Pooled over units, per family: the RMS of the device's stated 1-sigma over the range (what
+/// the calibration says its error is).
+pub fn stated_rms(scores: &[Score], family: usize) -> f64 {
+    let sq: f64 = scores.iter().map(|s| s.stated[family]).sum();
     let n: usize = scores.iter().map(|s| s.n[family]).sum();
     (sq / n as f64).sqrt()
 }

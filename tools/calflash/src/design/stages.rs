@@ -1,0 +1,247 @@
+//! Two stages against one, predicted as the calibrations themselves state it: simulated units
+//! (our simulator's six sensors, with the terms both plans' models carry) go through both
+//! plans, both calibrations are made exactly as `calibrate` makes them, and each calibration's
+//! stated 1-sigma (the device's, from its blob) is averaged over the operating range. The
+//! stated 1-sigma covers the truth (`tests/two_stage_independent.rs`: 95 % intervals cover
+//! 94.3-95.2 % on a forward model we did not write), so its RMS is the error each plan will
+//! have; unlike a variance over a simplified model, it carries every term each calibration
+//! fits (stage two's lever arms and g-sensitivity, the holds of what did not move, one stage's
+//! lever arms and nonlinear terms). What it cannot carry is a bias from a term a plan's model
+//! lacks.
+
+use std::path::Path;
+
+use rayon::prelude::*;
+use spincal::model::Quantity;
+
+use crate::sensor::record::Record;
+use crate::sensor::stages::one;
+use crate::sensor::triad::{self, Kind};
+use crate::sensor::{Calibrated, Options, Thermal, WorkflowError, single};
+use crate::sim::plan::{self, Condition};
+use crate::sim::stages::AssembledTruth;
+
+/// The plans compared, every condition at its temperature.
+#[derive(Debug, Clone)]
+pub struct Plans {
+    /// Each accelerometer alone (single-axis conditions).
+    pub accel_one: Vec<Condition>,
+    /// Each gyro alone.
+    pub gyro_one: Vec<Condition>,
+    /// The assembled unit in stage two.
+    pub unit: Vec<Condition>,
+    /// The assembled unit in one stage.
+    pub one_stage: Vec<Condition>,
+}
+
+/// Per family (accelerometers, gyros), the RMS of the stated 1-sigma over the operating range
+/// (SI), two stages then one; and how many simulated units gave both calibrations a blob.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prediction {
+    pub two: [f64; 2],
+    pub one: [f64; 2],
+    pub units: usize,
+}
+
+impl Prediction {
+    /// Two stages' error over one stage's, per family.
+    #[must_use]
+    pub fn ratio(&self) -> [f64; 2] {
+        [self.two[0] / self.one[0], self.two[1] / self.one[1]]
+    }
+}
+
+/// Per unit of equipment time: the cost of one observation of one sensor on its own fixture
+/// (stage one) and of one observation of the assembled unit (stage two, one stage).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Costs {
+    pub stage_one: f64,
+    pub unit: f64,
+}
+
+impl Costs {
+    /// What each plan costs a unit: stage one's observations of its six sensors and stage
+    /// two's of the unit; one stage's of the unit.
+    #[must_use]
+    pub fn of(&self, p: &Plans) -> (f64, f64) {
+        let two = 3.0 * (p.accel_one.len() + p.gyro_one.len()) as f64 * self.stage_one
+            + p.unit.len() as f64 * self.unit;
+        (two, p.one_stage.len() as f64 * self.unit)
+    }
+
+    /// Two stages' error over one stage's at equal cost (each plan repeated in proportion,
+    /// the errors going as one over the square root of the observations).
+    #[must_use]
+    pub fn at_equal_cost(&self, p: &Plans, ratio: f64) -> f64 {
+        let (two, one) = self.of(p);
+        ratio * (two / one).sqrt()
+    }
+}
+
+/// Why the prediction could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum StagesError {
+    #[error("{0}")]
+    Plan(#[from] plan::PlanError),
+    #[error(transparent)]
+    Workflow(#[from] Box<WorkflowError>),
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+    #[error("the stage-one records: {0}")]
+    StageOne(String),
+    #[error(
+        "none of the {0} simulated units could be calibrated into a blob by both plans (the device refused them)"
+    )]
+    NoUnit(usize),
+}
+
+fn conditions(items: &[&str], temps: &[f64]) -> Result<Vec<Condition>, StagesError> {
+    let items: Vec<String> = items.iter().map(|s| (*s).to_string()).collect();
+    Ok(plan::plan(&items, temps, &[3.3], 1, false)?)
+}
+
+/// The operating range at each of `temps`: gravity along 26 directions at rest
+/// (accelerometers); rates up to the unit plan's largest about the axes and diagonals (gyros).
+fn range(p: &Plans, temps: &[f64]) -> Result<(Vec<Condition>, Vec<Condition>), StagesError> {
+    let top = p
+        .unit
+        .iter()
+        .flat_map(|c| c.w.iter().map(|w| w.abs()))
+        .fold(0.0, f64::max)
+        .max(1.0);
+    let rates = format!("rate:{}:{top}:9", -top);
+    let diagonals = format!("diagonal:{}:{top}:9", -top);
+    Ok((
+        conditions(&["tumble:26"], temps)?,
+        conditions(&[&rates, &diagonals], temps)?,
+    ))
+}
+
+fn calibrated(r: Result<Calibrated, WorkflowError>) -> Result<Calibrated, StagesError> {
+    r.map_err(|e| StagesError::Workflow(Box::new(e)))
+}
+
+fn write(obs: &crate::sim::Observations, path: &Path) -> Result<(), StagesError> {
+    let mut f = std::fs::File::create(path)?;
+    obs.write_csv(&mut f)?;
+    Ok(())
+}
+
+/// Both calibrations of `truth`, as `calibrate` makes them (stage one with every term, the
+/// asymmetry and a temperature table; one stage with every term and a table).
+fn both(
+    p: &Plans,
+    truth: &AssembledTruth,
+    dir: &Path,
+    seed: u64,
+) -> Result<(Calibrated, Calibrated), StagesError> {
+    let mut records = Vec::new();
+    for (k, output) in one::OUTPUTS.iter().enumerate() {
+        let plan = if k < 3 { &p.accel_one } else { &p.gyro_one };
+        let csv = dir.join(format!("s1_{output}.csv"));
+        write(&truth.stage_one(k, plan, seed * 10 + k as u64), &csv)?;
+        let mut opts = Options::new(&csv, &format!("S-{output}"));
+        opts.thermal = Thermal::Table;
+        opts.created = Some(0);
+        opts.keep_all_terms = true;
+        opts.asymmetry = Some(true);
+        let q = if k < 3 {
+            Quantity::Acceleration
+        } else {
+            Quantity::AngularRate
+        };
+        let c = calibrated(single::calibrate(&opts, q))?;
+        let json = dir.join(format!("s1_{output}.json"));
+        let record = Record::new(&c, &csv.display().to_string()).sealed();
+        std::fs::write(
+            &json,
+            serde_json::to_string(&record).map_err(std::io::Error::other)?,
+        )?;
+        records.push(json);
+    }
+    let sensors = one::read_all(&records).map_err(|e| StagesError::StageOne(e.to_string()))?;
+    let csv = dir.join("unit.csv");
+    write(&truth.stage_two(&p.unit, seed + 7), &csv)?;
+    let mut opts = Options::new(&csv, "UNIT");
+    opts.created = Some(0);
+    opts.keep_all_terms = true;
+    let two = triad::stage_two::calibrate(&opts, &sensors)
+        .map(|(c, _)| c)
+        .map_err(|e| StagesError::Workflow(Box::new(e)))?;
+    let csv = dir.join("one.csv");
+    write(&truth.stage_two(&p.one_stage, seed + 11), &csv)?;
+    let mut opts = Options::new(&csv, "UNIT");
+    opts.created = Some(0);
+    opts.thermal = Thermal::Table;
+    opts.keep_all_terms = true;
+    let one = calibrated(triad::calibrate(&opts, Kind::Imu, true))?;
+    Ok((two, one))
+}
+
+/// The sums of the squared stated 1-sigma per family over the range, and their counts; `None`
+/// when the device refused the calibration.
+fn stated(
+    c: &Calibrated,
+    accel: &[Condition],
+    gyro: &[Condition],
+) -> Option<([f64; 2], [usize; 2])> {
+    let cal = spincal::blob::decode(&c.blob).ok()?;
+    let mut device = spincal::correct::AnyImuCorrector::new(&cal, 1000.0).ok()?;
+    let (mut sq, mut n) = ([0.0; 2], [0usize; 2]);
+    for (family, points) in [(0, accel), (1, gyro)] {
+        for p in points {
+            device.set_environment(p.temp as f32, 3.3);
+            let values: [f32; 6] =
+                std::array::from_fn(|j| (if j < 3 { p.f[j] } else { p.w[j - 3] }) as f32);
+            let s = device.sigma(&values)?;
+            for k in (0..3).map(|i| i + 3 * family) {
+                sq[family] += f64::from(s[k]).powi(2);
+                n[family] += 1;
+            }
+        }
+    }
+    Some((sq, n))
+}
+
+/// The prediction over `units` simulated units (our simulator's draws, their asymmetric terms
+/// taken out so that both plans' models fit them) at the stage-one `temps`.
+///
+/// # Errors
+/// A plan item that cannot be read, a calibration that fails, no unit calibrated by both.
+pub fn predict(p: &Plans, temps: &[f64], units: u64) -> Result<Prediction, StagesError> {
+    let (accel, gyro) = range(p, temps)?;
+    let runs: Vec<Result<Option<_>, StagesError>> = (0..units)
+        .into_par_iter()
+        .map(|seed| {
+            let dir = tempfile::tempdir()?;
+            let mut truth = AssembledTruth::draw(5_000 + seed);
+            for s in &mut truth.sensors {
+                s.asym = 0.0;
+            }
+            let (two, one) = both(p, &truth, dir.path(), seed)?;
+            Ok(stated(&two, &accel, &gyro).zip(stated(&one, &accel, &gyro)))
+        })
+        .collect();
+    let (mut two, mut one, mut n) = ([0.0; 2], [0.0; 2], 0usize);
+    let (mut count_two, mut count_one) = ([0usize; 2], [0usize; 2]);
+    for r in runs {
+        if let Some(((s2, n2), (s1, n1))) = r? {
+            for f in 0..2 {
+                two[f] += s2[f];
+                one[f] += s1[f];
+                count_two[f] += n2[f];
+                count_one[f] += n1[f];
+            }
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return Err(StagesError::NoUnit(units as usize));
+    }
+    let rms = |s: [f64; 2], c: [usize; 2]| [0, 1].map(|f| (s[f] / c[f] as f64).sqrt());
+    Ok(Prediction {
+        two: rms(two, count_two),
+        one: rms(one, count_one),
+        units: n,
+    })
+}
