@@ -5,111 +5,56 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use common::calflash;
 #[path = "common/stage_score.rs"]
 mod stage_score;
 use stage_score::{Input, Score, Truth, coverage, coverage_all, rms, stated_rms, z0};
 
-use calflash::sensor::record::Record;
+use calflash::design::stages::{self, Plans};
 use calflash::sensor::stages::{Check, one};
-use calflash::sensor::triad::{self, Kind};
-use calflash::sensor::{Calibrated, Options, Thermal, Verdict, single};
+use calflash::sensor::{Calibrated, Verdict};
 use calflash::sim::plan::{self, Condition};
 use calflash::sim::stages::AssembledTruth;
 use rayon::prelude::*;
-use spincal::model::Quantity;
 
 /// The chamber's temperatures for stage one and for one stage.
 const TEMPS: [f64; 5] = [-20.0, 5.0, 25.0, 45.0, 70.0];
-
-fn write(obs: &calflash::sim::Observations, path: &Path) {
-    let mut f = std::fs::File::create(path).unwrap();
-    obs.write_csv(&mut f).unwrap();
-}
 
 fn conditions(items: &[&str], temps: &[f64], repeat: usize, single: bool) -> Vec<Condition> {
     let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
     plan::plan(&items, temps, &[3.3], repeat, single).unwrap()
 }
 
-/// Stage one of every sensor of `truth`: each on its own fixture (a dividing head of 24
-/// angles, a rate table of 24 rates up to 8 rad/s) at the five temperatures; the records'
-/// paths.
-fn stage_one(truth: &AssembledTruth, dir: &Path, seed: u64) -> Vec<PathBuf> {
-    (0..6)
-        .map(|k| {
-            let plan = if k < 3 {
-                conditions(&["head:56"], &TEMPS, 1, true)
-            } else {
-                conditions(&["rate:-8:8:41", "rate:0:0:15"], &TEMPS, 1, true)
-            };
-            let obs = truth.stage_one(k, &plan, seed * 10 + k as u64);
-            let csv = dir.join(format!("s1_{}.csv", one::OUTPUTS[k]));
-            write(&obs, &csv);
-            let mut opts = Options::new(&csv, &format!("S{seed}-{k}"));
-            opts.thermal = Thermal::Table;
-            opts.created = Some(0);
-            opts.keep_all_terms = true;
-            opts.asymmetry = Some(true);
-            let q = if k < 3 {
-                Quantity::Acceleration
-            } else {
-                Quantity::AngularRate
-            };
-            let c = single::calibrate(&opts, q).unwrap();
-            if c.verdict() == Verdict::Reject {
-                for f in &c.findings {
-                    println!("stage one {k}: {:?} {}", f.verdict, f.text);
-                }
-            }
-            let json = dir.join(format!("s1_{}.json", one::OUTPUTS[k]));
-            std::fs::write(
-                &json,
-                serde_json::to_string(&Record::new(&c, &csv.display().to_string()).sealed())
-                    .unwrap(),
-            )
-            .unwrap();
-            json
-        })
-        .collect()
-}
-
-/// The assembled unit's plan: a 26-position tumble (axes, edges and corners) and rate steps about the six axis
-/// directions, at 25 C.
-fn unit_plan(temps: &[f64], repeat: usize) -> Vec<Condition> {
-    conditions(
-        &["tumble:26", "rate:-8:8:4", "diagonal:-8:8:2"],
-        temps,
-        repeat,
-        false,
-    )
+/// The plans: stage one of each sensor on its own fixture (a dividing head of 56 angles, a rate
+/// table of 41 rates up to 8 rad/s and 15 at rest) at the five temperatures; the assembled
+/// unit through a 26-position tumble (axes, edges and corners) and rate steps about the six
+/// axis directions, at 25 C (stage two) or at the five temperatures (one stage, every term
+/// fitted at once).
+fn plans() -> Plans {
+    let unit = |temps: &[f64]| {
+        conditions(
+            &["tumble:26", "rate:-8:8:4", "diagonal:-8:8:2"],
+            temps,
+            1,
+            false,
+        )
+    };
+    Plans {
+        accel_one: conditions(&["head:56"], &TEMPS, 1, true),
+        gyro_one: conditions(&["rate:-8:8:41", "rate:0:0:15"], &TEMPS, 1, true),
+        unit: unit(&[25.0]),
+        one_stage: unit(&TEMPS),
+    }
 }
 
 fn two_stage(truth: &AssembledTruth, dir: &Path, seed: u64) -> (Calibrated, Check) {
-    let records = stage_one(truth, dir, seed);
-    let obs = truth.stage_two(&unit_plan(&[25.0], 1), seed + 7);
-    let csv = dir.join("unit.csv");
-    write(&obs, &csv);
-    let sensors = one::read_all(&records).unwrap();
-    let mut opts = Options::new(&csv, "IMU-1");
-    opts.created = Some(0);
-    opts.keep_all_terms = true;
-    triad::stage_two::calibrate(&opts, &sensors).unwrap()
+    stages::two_stages(&plans(), truth, dir, seed).unwrap()
 }
 
-/// One stage: the assembled unit through the same tumble and rate steps at the five
-/// temperatures, every term (g-squared, cubic, odd-quadratic per axis) fitted at once.
 fn one_stage(truth: &AssembledTruth, dir: &Path, seed: u64) -> Calibrated {
-    let obs = truth.stage_two(&unit_plan(&TEMPS, 1), seed + 11);
-    let csv = dir.join("one.csv");
-    write(&obs, &csv);
-    let mut opts = Options::new(&csv, "IMU-1");
-    opts.created = Some(0);
-    opts.thermal = Thermal::Table;
-    opts.keep_all_terms = true;
-    triad::calibrate(&opts, Kind::Imu, true).unwrap()
+    stages::one_stage_of(&plans(), truth, dir, seed).unwrap()
 }
 
 /// Our simulator's unit as the shared scoring reads a truth.

@@ -28,14 +28,12 @@ mod stage_score;
 
 use std::path::Path;
 
-use calflash::sensor::stages::one;
-use calflash::sensor::triad::{self, Kind};
-use calflash::sensor::{Calibrated, Options, Thermal, Verdict, single};
+use calflash::design::stages;
+use calflash::sensor::{Calibrated, Verdict};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
-use spincal::model::Quantity;
 use stage_score::{Input, Score, Truth, coverage, coverage_all, rms, stated_rms, z0};
 
 const G: f64 = 9.806_65;
@@ -229,17 +227,7 @@ fn stage_one(unit: &Unit, k: usize, dir: &Path, rng: &mut ChaCha8Rng) -> Calibra
     }
     let csv = dir.join(format!("s1_{}.csv", OUTPUTS[k]));
     std::fs::write(&csv, text).unwrap();
-    let mut opts = Options::new(&csv, &format!("S-{}", OUTPUTS[k]));
-    opts.thermal = Thermal::Table;
-    opts.created = Some(0);
-    opts.keep_all_terms = true;
-    opts.asymmetry = Some(true);
-    let q = if k < 3 {
-        Quantity::Acceleration
-    } else {
-        Quantity::AngularRate
-    };
-    single::calibrate(&opts, q).unwrap()
+    stages::stage_one(&csv, k, &format!("S-{}", OUTPUTS[k])).unwrap()
 }
 
 /// The unit's file (`f_x .. g_z` columns) over `plan` at `temps`.
@@ -263,28 +251,19 @@ fn two_stage(unit: &Unit, dir: &Path, rng: &mut ChaCha8Rng) -> Calibrated {
             let c = stage_one(unit, k, dir, rng);
             let json = dir.join(format!("s1_{}.json", OUTPUTS[k]));
             let csv = dir.join(format!("s1_{}.csv", OUTPUTS[k]));
-            let record = calflash::sensor::record::Record::new(&c, &csv.display().to_string());
-            std::fs::write(&json, serde_json::to_string(&record.sealed()).unwrap()).unwrap();
+            stages::write_record(&c, &csv, &json).unwrap();
             json
         })
         .collect();
     let csv = dir.join("unit.csv");
     unit_file(unit, &[25.0], &csv, rng);
-    let sensors = one::read_all(&records).unwrap();
-    let mut opts = Options::new(&csv, "IMU-1");
-    opts.created = Some(0);
-    opts.keep_all_terms = true;
-    triad::stage_two::calibrate(&opts, &sensors).unwrap().0
+    stages::stage_two(&csv, &records).unwrap().0
 }
 
 fn one_stage(unit: &Unit, dir: &Path, rng: &mut ChaCha8Rng) -> Calibrated {
     let csv = dir.join("one.csv");
     unit_file(unit, &TEMPS, &csv, rng);
-    let mut opts = Options::new(&csv, "IMU-1");
-    opts.created = Some(0);
-    opts.thermal = Thermal::Table;
-    opts.keep_all_terms = true;
-    triad::calibrate(&opts, Kind::Imu, true).unwrap()
+    stages::one_stage(&csv).unwrap()
 }
 
 /// The operating range the errors are taken over: gravity along the 26 directions at rest
@@ -415,13 +394,13 @@ fn two_stages_and_one_on_an_independent_forward_model() {
     };
     let rate = "rate:-8:8:9";
     let unit_items = ["tumble:26", "rate:-8:8:4", "diagonal:-8:8:2"];
-    let p = calflash::design::stages::Plans {
+    let p = stages::Plans {
         accel_one: plans(&["head:56"], &TEMPS, true),
         gyro_one: plans(&[rate, rate, rate, rate, "rate:0:0:20"], &TEMPS, true),
         unit: plans(&unit_items, &[25.0], false),
         one_stage: plans(&unit_items, &TEMPS, false),
     };
-    let predicted = calflash::design::stages::predict(&p, &TEMPS, 24).unwrap();
+    let predicted = stages::predict(&p, &TEMPS, 24).unwrap();
     for (name, f) in [("accelerometers", 0), ("gyros", 1)] {
         let measured = rms(&two, f) / rms(&one, f);
         println!(

@@ -15,6 +15,7 @@ use rayon::prelude::*;
 use spincal::model::Quantity;
 
 use crate::sensor::record::Record;
+use crate::sensor::stages::Check;
 use crate::sensor::stages::one;
 use crate::sensor::triad::{self, Kind};
 use crate::sensor::{Calibrated, Options, Thermal, WorkflowError, single};
@@ -117,65 +118,122 @@ fn range(p: &Plans, temps: &[f64]) -> Result<(Vec<Condition>, Vec<Condition>), S
     ))
 }
 
-fn calibrated(r: Result<Calibrated, WorkflowError>) -> Result<Calibrated, StagesError> {
-    r.map_err(|e| StagesError::Workflow(Box::new(e)))
-}
-
 fn write(obs: &crate::sim::Observations, path: &Path) -> Result<(), StagesError> {
     let mut f = std::fs::File::create(path)?;
     obs.write_csv(&mut f)?;
     Ok(())
 }
 
-/// Both calibrations of `truth`, as `calibrate` makes them (stage one with every term, the
-/// asymmetry and a temperature table; one stage with every term and a table).
-fn both(
+/// Stage one of output `k` (`one::OUTPUTS`) from the observations in `csv`, as the README
+/// makes it: every term kept, the asymmetry, a temperature table.
+///
+/// # Errors
+/// The calibration's.
+pub fn stage_one(csv: &Path, k: usize, serial: &str) -> Result<Calibrated, Box<WorkflowError>> {
+    let mut opts = Options::new(csv, serial);
+    opts.thermal = Thermal::Table;
+    opts.created = Some(0);
+    opts.keep_all_terms = true;
+    opts.asymmetry = Some(true);
+    let q = if k < 3 {
+        Quantity::Acceleration
+    } else {
+        Quantity::AngularRate
+    };
+    single::calibrate(&opts, q).map_err(Box::new)
+}
+
+/// `c`'s record, sealed, written to `json` (its data file named `csv`).
+///
+/// # Errors
+/// Writing the file.
+pub fn write_record(c: &Calibrated, csv: &Path, json: &Path) -> std::io::Result<()> {
+    let record = Record::new(c, &csv.display().to_string()).sealed();
+    std::fs::write(
+        json,
+        serde_json::to_string(&record).map_err(std::io::Error::other)?,
+    )
+}
+
+/// Stage two of the assembled unit's observations in `csv` on the six stage-one `records`.
+///
+/// # Errors
+/// A record that cannot be read (its text), the calibration's.
+pub fn stage_two(
+    csv: &Path,
+    records: &[std::path::PathBuf],
+) -> Result<(Calibrated, Check), StagesError> {
+    let sensors = one::read_all(records).map_err(|e| StagesError::StageOne(e.to_string()))?;
+    let mut opts = Options::new(csv, "UNIT");
+    opts.created = Some(0);
+    opts.keep_all_terms = true;
+    triad::stage_two::calibrate(&opts, &sensors).map_err(|e| StagesError::Workflow(Box::new(e)))
+}
+
+/// One stage of the assembled unit's observations in `csv`: every term, a temperature table.
+///
+/// # Errors
+/// The calibration's.
+pub fn one_stage(csv: &Path) -> Result<Calibrated, Box<WorkflowError>> {
+    let mut opts = Options::new(csv, "UNIT");
+    opts.created = Some(0);
+    opts.thermal = Thermal::Table;
+    opts.keep_all_terms = true;
+    triad::calibrate(&opts, Kind::Imu, true).map_err(Box::new)
+}
+
+/// Stage one of every sensor of our simulator's `truth` through `p`, its records in `dir`.
+///
+/// # Errors
+/// Writing the files, a calibration's.
+pub fn stage_one_records(
     p: &Plans,
     truth: &AssembledTruth,
     dir: &Path,
     seed: u64,
-) -> Result<(Calibrated, Calibrated), StagesError> {
+) -> Result<Vec<std::path::PathBuf>, StagesError> {
     let mut records = Vec::new();
     for (k, output) in one::OUTPUTS.iter().enumerate() {
         let plan = if k < 3 { &p.accel_one } else { &p.gyro_one };
         let csv = dir.join(format!("s1_{output}.csv"));
         write(&truth.stage_one(k, plan, seed * 10 + k as u64), &csv)?;
-        let mut opts = Options::new(&csv, &format!("S-{output}"));
-        opts.thermal = Thermal::Table;
-        opts.created = Some(0);
-        opts.keep_all_terms = true;
-        opts.asymmetry = Some(true);
-        let q = if k < 3 {
-            Quantity::Acceleration
-        } else {
-            Quantity::AngularRate
-        };
-        let c = calibrated(single::calibrate(&opts, q))?;
+        let c = stage_one(&csv, k, &format!("S{seed}-{k}"))?;
         let json = dir.join(format!("s1_{output}.json"));
-        let record = Record::new(&c, &csv.display().to_string()).sealed();
-        std::fs::write(
-            &json,
-            serde_json::to_string(&record).map_err(std::io::Error::other)?,
-        )?;
+        write_record(&c, &csv, &json)?;
         records.push(json);
     }
-    let sensors = one::read_all(&records).map_err(|e| StagesError::StageOne(e.to_string()))?;
+    Ok(records)
+}
+
+/// Two stages of our simulator's `truth` through `p` (files in `dir`).
+///
+/// # Errors
+/// Writing the files, a calibration's.
+pub fn two_stages(
+    p: &Plans,
+    truth: &AssembledTruth,
+    dir: &Path,
+    seed: u64,
+) -> Result<(Calibrated, Check), StagesError> {
+    let records = stage_one_records(p, truth, dir, seed)?;
     let csv = dir.join("unit.csv");
     write(&truth.stage_two(&p.unit, seed + 7), &csv)?;
-    let mut opts = Options::new(&csv, "UNIT");
-    opts.created = Some(0);
-    opts.keep_all_terms = true;
-    let two = triad::stage_two::calibrate(&opts, &sensors)
-        .map(|(c, _)| c)
-        .map_err(|e| StagesError::Workflow(Box::new(e)))?;
+    stage_two(&csv, &records)
+}
+
+/// One stage of our simulator's `truth` through `p` (files in `dir`).
+///
+/// # Errors
+/// Writing the file, the calibration's.
+pub fn one_stage_of(
+    p: &Plans,
+    truth: &AssembledTruth,
+    dir: &Path,
+    seed: u64,
+) -> Result<Calibrated, StagesError> {
     let csv = dir.join("one.csv");
     write(&truth.stage_two(&p.one_stage, seed + 11), &csv)?;
-    let mut opts = Options::new(&csv, "UNIT");
-    opts.created = Some(0);
-    opts.thermal = Thermal::Table;
-    opts.keep_all_terms = true;
-    let one = calibrated(triad::calibrate(&opts, Kind::Imu, true))?;
-    Ok((two, one))
+    Ok(one_stage(&csv)?)
 }
 
 /// The sums of the squared stated 1-sigma per family over the range, and their counts; `None`
@@ -218,7 +276,8 @@ pub fn predict(p: &Plans, temps: &[f64], units: u64) -> Result<Prediction, Stage
             for s in &mut truth.sensors {
                 s.asym = 0.0;
             }
-            let (two, one) = both(p, &truth, dir.path(), seed)?;
+            let (two, _) = two_stages(p, &truth, dir.path(), seed)?;
+            let one = one_stage_of(p, &truth, dir.path(), seed)?;
             Ok(stated(&two, &accel, &gyro).zip(stated(&one, &accel, &gyro)))
         })
         .collect();
