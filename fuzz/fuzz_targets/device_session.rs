@@ -22,7 +22,7 @@ const IMU: protocol::UnitSensor = protocol::UnitSensor::Imu {
     gyro_rails: spincal::model::Rails::unsigned(16),
 };
 
-const SLOT: u32 = 12 * 1024;
+const SLOT: u32 = 16 * 1024;
 
 fn encode(data: CalibrationData) -> Vec<u8> {
     let cal = Calibration::new(data).expect("example validates");

@@ -16,7 +16,7 @@ const IMU: protocol::UnitSensor = protocol::UnitSensor::Imu {
     gyro_rails: spincal::model::Rails::unsigned(16),
 };
 
-const SLOT: u32 = 12 * 1024;
+const SLOT: u32 = 16 * 1024;
 
 fuzz_target!(|data: &[u8]| {
     let mut scratch = [0u8; MAX_FRAME];

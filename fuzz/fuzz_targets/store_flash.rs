@@ -12,7 +12,7 @@ use spincal::model::{CalibrationData, Serial};
 use spincal::store::{Policy, Provisioning, SlotState, Store, StoreError};
 use spincal_fuzz::RamNor;
 
-const SLOT: u32 = 12 * 1024;
+const SLOT: u32 = 16 * 1024;
 const REGION: usize = Store::<RamNor>::region_len(SLOT, 1024) as usize;
 
 fn encode(data: CalibrationData) -> Vec<u8> {
