@@ -824,6 +824,24 @@ fn design_compares_two_stages_with_one() {
         cheap.iter().all(|l| l.ends_with("two stages win")),
         "{cheap:?}"
     );
+    // Costs mean nothing without a two-stage plan: refused, naming what is missing.
+    let (code, _, err) = calflash(
+        d,
+        &[
+            "design",
+            "evaluate",
+            "--model",
+            "triad",
+            "--sensor",
+            "accel",
+            "--plan",
+            "tumble:24",
+            "--cost-unit",
+            "3",
+        ],
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--stage-one"), "{err}");
     // A one-stage plan that cannot estimate the nonlinear terms is named.
     let (code, _, err) = calflash(
         d,

@@ -50,15 +50,15 @@ pub struct EvaluateArgs {
     /// With --stage-one: the other family's stage-one plan items for the calibrated comparison
     /// (default: `head:56` for accelerometers; `rate:-8:8:9` four times and `rate:0:0:20` for
     /// gyros).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', requires = "stage_one")]
     pub stage_one_other: Vec<String>,
     /// With --stage-one: the cost of one observation of one sensor on its own fixture (a
     /// fixture holding several sensors at once: the cost of an observation over their number).
-    #[arg(long, default_value = "1", value_parser = crate::cmd::values::positive)]
+    #[arg(long, default_value = "1", requires = "stage_one", value_parser = crate::cmd::values::positive)]
     pub cost_stage_one: f64,
     /// With --stage-one: the cost of one observation of the assembled unit (stage two and
     /// one stage).
-    #[arg(long, default_value = "1", value_parser = crate::cmd::values::positive)]
+    #[arg(long, default_value = "1", requires = "stage_one", value_parser = crate::cmd::values::positive)]
     pub cost_unit: f64,
 }
 
