@@ -16,6 +16,13 @@ pub const REST_FEATURES: [usize; 8] = [0, 1, 2, 3, 7, 8, 9, 10];
 /// Elements of a packed upper triangle over [`REST_FEATURES`].
 const REST_BLOCK: usize = REST_FEATURES.len() * (REST_FEATURES.len() + 1) / 2;
 
+/// The nonlinear terms' features of what an axis senses, `x`, in the order of
+/// [`IMU_FEATURES`](crate::model::IMU_FEATURES): `x^2, |x|, x^3, x |x|`.
+fn nonlinear_features(x: f32) -> [f32; 4] {
+    let (a, s) = (libm::fabsf(x), x * x);
+    [s, a, s * x, x * a]
+}
+
 impl<S: Sample> ImuCorrector<'_, S> {
     /// Per output, the variance that quantisation adds to one corrected sample:
     /// `sum_j M_ij^2 / 12` (a code is uniform over its width).
@@ -87,8 +94,8 @@ impl<S: Sample> ImuCorrector<'_, S> {
         let [na, _] = &self.directions;
         core::array::from_fn(|i| {
             let x = na.get(i).map_or(0.0, |n| rotation::dot(n, f));
-            let (a, s) = (libm::fabsf(x), x * x);
-            [1.0, f[0], f[1], f[2], s, a, s * x, x * a]
+            let [s, a, c, o] = nonlinear_features(x);
+            [1.0, f[0], f[1], f[2], s, a, c, o]
         })
     }
 
@@ -150,15 +157,15 @@ impl<S: Sample> ImuCorrector<'_, S> {
             let [g0, g1, g2] = rotation::lever_gradient(n, &w, &zero);
             let x = rotation::dot(n, &at);
             let [a0, a1, a2] = at;
-            let (a, s) = (libm::fabsf(x), x * x);
-            [1.0, a0, a1, a2, g0, g1, g2, s, a, s * x, x * a]
+            let [s, a, c, o] = nonlinear_features(x);
+            [1.0, a0, a1, a2, g0, g1, g2, s, a, c, o]
         };
         let [h0, h1, h2] = self.g_sensitivity(zero, &f).map(|x| -x);
         let sensed_rate = [w0 + h0, w1 + h1, w2 + h2];
         let gyro = |i: usize| -> [f32; IMU_FEATURES] {
             let x = ng.get(i).map_or(0.0, |n| rotation::dot(n, &sensed_rate));
-            let (a, s) = (libm::fabsf(x), x * x);
-            [1.0, w0, w1, w2, f0, f1, f2, s, a, s * x, x * a]
+            let [s, a, c, o] = nonlinear_features(x);
+            [1.0, w0, w1, w2, f0, f1, f2, s, a, c, o]
         };
         [accel(0), accel(1), accel(2), gyro(0), gyro(1), gyro(2)]
     }

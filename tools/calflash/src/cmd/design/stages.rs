@@ -235,11 +235,16 @@ fn calibrated_comparison(
         costs.stage_one,
         costs.unit
     );
+    let (accel_one, gyro_one) = (
+        plan(accel_items, temps, true)?,
+        plan(gyro_items, temps, true)?,
+    );
+    let unit = plan(&split(unit_plan), &temps[..1], false)?;
     for name in one_stage {
         let p = Plans {
-            accel_one: plan(accel_items, temps, true)?,
-            gyro_one: plan(gyro_items, temps, true)?,
-            unit: plan(&split(unit_plan), &temps[..1], false)?,
+            accel_one: accel_one.clone(),
+            gyro_one: gyro_one.clone(),
+            unit: unit.clone(),
             one_stage: plan(&split(name), temps, false)?,
         };
         let pred = stages::predict(&p, temps, UNITS).map_err(|e| Failure::from(e.to_string()))?;
