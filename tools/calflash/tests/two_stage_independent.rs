@@ -400,7 +400,8 @@ fn two_stages_and_one_on_an_independent_forward_model() {
         unit: plans(&unit_items, &[25.0], false),
         one_stage: plans(&unit_items, &TEMPS, false),
     };
-    let predicted = stages::predict(&p, &TEMPS, 24).unwrap();
+    let range = stages::operating_range(&p, &TEMPS).unwrap();
+    let predicted = stages::predict(&p, &range, 24).unwrap();
     for (name, f) in [("accelerometers", 0), ("gyros", 1)] {
         let measured = rms(&two, f) / rms(&one, f);
         println!(

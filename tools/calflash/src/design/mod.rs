@@ -10,6 +10,7 @@ pub mod points;
 pub mod predict;
 pub mod search;
 pub mod space;
+pub mod stage_plans;
 pub mod stages;
 
 pub use error::Error;

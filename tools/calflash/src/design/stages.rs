@@ -22,6 +22,11 @@ use crate::sensor::{Calibrated, Options, Thermal, WorkflowError, single};
 use crate::sim::plan::{self, Condition};
 use crate::sim::stages::AssembledTruth;
 
+/// Stage one's model of a sensor over its own input: bias, scale factor, g-squared, cubic,
+/// odd-quadratic and asymmetry.
+pub const STAGE_ONE_MODEL: &str =
+    "output ~ 1 + input + input^2 + input^3 + input:abs(input) + abs(input)";
+
 /// The plans compared, every condition at its temperature.
 #[derive(Debug, Clone)]
 pub struct Plans {
@@ -90,6 +95,12 @@ pub enum StagesError {
     Io(#[from] std::io::Error),
     #[error("the stage-one records: {0}")]
     StageOne(String),
+    #[error("{0}")]
+    Mission(String),
+    #[error("{0}")]
+    Budget(String),
+    #[error(transparent)]
+    Design(#[from] super::Error),
     #[error(
         "none of the {0} simulated units could be calibrated into a blob by both plans (the device refused them)"
     )]
@@ -101,21 +112,123 @@ fn conditions(items: &[&str], temps: &[f64]) -> Result<Vec<Condition>, StagesErr
     Ok(plan::plan(&items, temps, &[3.3], 1, false)?)
 }
 
+/// Where each family's stated 1-sigma is averaged: the conditions of the accelerometers' and
+/// of the gyros' range, and what they are, in words.
+#[derive(Debug, Clone)]
+pub struct Range {
+    pub accel: Vec<Condition>,
+    pub gyro: Vec<Condition>,
+    pub what: String,
+}
+
 /// The operating range at each of `temps`: gravity along 26 directions at rest
 /// (accelerometers); rates up to the unit plan's largest about the axes and diagonals (gyros).
-fn range(p: &Plans, temps: &[f64]) -> Result<(Vec<Condition>, Vec<Condition>), StagesError> {
-    let top = p
-        .unit
-        .iter()
-        .flat_map(|c| c.w.iter().map(|w| w.abs()))
-        .fold(0.0, f64::max)
-        .max(1.0);
+///
+/// # Errors
+/// None in practice (the items are fixed); a plan error if they could not be read.
+pub fn operating_range(p: &Plans, temps: &[f64]) -> Result<Range, StagesError> {
+    let top = largest(&p.unit, |c| c.w).max(1.0);
     let rates = format!("rate:{}:{top}:9", -top);
     let diagonals = format!("diagonal:{}:{top}:9", -top);
-    Ok((
-        conditions(&["tumble:26"], temps)?,
-        conditions(&[&rates, &diagonals], temps)?,
-    ))
+    Ok(Range {
+        accel: conditions(&["tumble:26"], temps)?,
+        gyro: conditions(&[&rates, &diagonals], temps)?,
+        what: format!(
+            "the operating range: gravity along 26 directions; rates to {top} rad/s about the axes and diagonals"
+        ),
+    })
+}
+
+fn largest(conditions: &[Condition], of: impl Fn(&Condition) -> [f64; 3]) -> f64 {
+    conditions
+        .iter()
+        .flat_map(|c| of(c).map(f64::abs))
+        .fold(0.0, f64::max)
+}
+
+/// Most moments of a mission the comparison takes (evenly in time).
+pub const MISSION_MOMENTS: usize = 400;
+
+/// The mission's moments the plans reach: the flight's specific force, rates and temperature
+/// (each of `temps` when it has none), taken at [`MISSION_MOMENTS`] instants evenly in time; a
+/// moment whose specific force or rate on any axis is beyond the largest the plans apply
+/// (either plan's unit, stage one's own axis), or whose temperature is beyond `temps`, is
+/// extrapolation, left out and counted. Accelerometers take the moments whose specific force is
+/// reached, gyros those whose rate and specific force are (the g-sensitivity).
+///
+/// # Errors
+/// A profile without specific force or rates, or a flight wholly beyond the plans' reach.
+pub fn mission_range(
+    profile: &crate::mission::Profile,
+    p: &Plans,
+    temps: &[f64],
+) -> Result<Range, StagesError> {
+    let unit: Vec<Condition> = p.unit.iter().chain(&p.one_stage).copied().collect();
+    let reach_f = largest(&unit, |c| c.f).max(largest(&p.accel_one, |c| c.f));
+    let reach_w = largest(&unit, |c| c.w).max(largest(&p.gyro_one, |c| c.w));
+    let (t_lo, t_hi) = temps
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+            (a.min(*t), b.max(*t))
+        });
+    let source = profile.source.display().to_string();
+    let (Some(f), Some(w)) = (&profile.f, &profile.w) else {
+        return Err(StagesError::Mission(format!(
+            "{source}: the comparison needs the flight's specific force and rates (f_x..f_z, w_x..w_z)"
+        )));
+    };
+    let n = profile.len();
+    let take = n.min(MISSION_MOMENTS);
+    let (mut accel, mut gyro) = (Vec::new(), Vec::new());
+    let (mut beyond_f, mut beyond_w) = (0usize, 0usize);
+    for k in 0..take {
+        let i = if take < 2 {
+            0
+        } else {
+            k * (n - 1) / (take - 1)
+        };
+        let at_temps: Vec<f64> = match &profile.temp {
+            Some(t) if (t_lo..=t_hi).contains(&t[i]) => vec![t[i]],
+            Some(_) => Vec::new(),
+            None => temps.to_vec(),
+        };
+        let f_in = f[i].iter().all(|x| x.abs() <= reach_f);
+        let w_in = w[i].iter().all(|x| x.abs() <= reach_w);
+        beyond_f += usize::from(!f_in || at_temps.is_empty());
+        beyond_w += usize::from(!(f_in && w_in) || at_temps.is_empty());
+        for temp in at_temps {
+            let c = Condition {
+                f: f[i],
+                w: w[i],
+                dw: [0.0; 3],
+                h: [0.0; 3],
+                temp,
+                volt: 3.3,
+                dir: 0.0,
+            };
+            if f_in {
+                accel.push(c);
+            }
+            if f_in && w_in {
+                gyro.push(c);
+            }
+        }
+    }
+    if accel.is_empty() || gyro.is_empty() {
+        return Err(StagesError::Mission(format!(
+            "{source}: no moment of the flight is within the plans' reach ({reach_f:.3} m/s^2, {reach_w:.3} rad/s on every axis, {t_lo} to {t_hi} C); {beyond_f} of {take} moments beyond it for the accelerometers, {beyond_w} for the gyros"
+        )));
+    }
+    let share = |b: usize| 100.0 * b as f64 / take as f64;
+    Ok(Range {
+        accel,
+        gyro,
+        what: format!(
+            "the mission {source} ({take} moments evenly in time; beyond the plans' reach of {reach_f:.3} m/s^2, {reach_w:.3} rad/s and {t_lo} to {t_hi} C, so extrapolation and left out: {:.1} % of them for the accelerometers, {:.1} % for the gyros)",
+            share(beyond_f),
+            share(beyond_w)
+        ),
+    })
 }
 
 fn write(obs: &crate::sim::Observations, path: &Path) -> Result<(), StagesError> {
@@ -262,12 +375,13 @@ fn stated(
 }
 
 /// The prediction over `units` simulated units (our simulator's draws, their asymmetric terms
-/// taken out so that both plans' models fit them) at the stage-one `temps`.
+/// taken out so that both plans' models fit them), each calibration's stated 1-sigma averaged
+/// over `range`.
 ///
 /// # Errors
-/// A plan item that cannot be read, a calibration that fails, no unit calibrated by both.
-pub fn predict(p: &Plans, temps: &[f64], units: u64) -> Result<Prediction, StagesError> {
-    let (accel, gyro) = range(p, temps)?;
+/// A calibration that fails, no unit calibrated by both.
+pub fn predict(p: &Plans, range: &Range, units: u64) -> Result<Prediction, StagesError> {
+    let (accel, gyro) = (&range.accel, &range.gyro);
     let runs: Vec<Result<Option<_>, StagesError>> = (0..units)
         .into_par_iter()
         .map(|seed| {
@@ -278,7 +392,7 @@ pub fn predict(p: &Plans, temps: &[f64], units: u64) -> Result<Prediction, Stage
             }
             let (two, _) = two_stages(p, &truth, dir.path(), seed)?;
             let one = one_stage_of(p, &truth, dir.path(), seed)?;
-            Ok(stated(&two, &accel, &gyro).zip(stated(&one, &accel, &gyro)))
+            Ok(stated(&two, accel, gyro).zip(stated(&one, accel, gyro)))
         })
         .collect();
     let (mut two, mut one, mut n) = ([0.0; 2], [0.0; 2], 0usize);

@@ -2,6 +2,7 @@
 
 mod evaluate;
 mod optimize;
+mod optimize_stages;
 mod predict;
 mod stages;
 

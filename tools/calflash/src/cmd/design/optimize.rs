@@ -46,12 +46,18 @@ pub struct OptimizeArgs {
     /// Compare with these plans too (files or items, repeatable), besides the usual ones.
     #[arg(long)]
     pub compare: Vec<String>,
-    /// The plan file to write (CSV), for `calflash simulate --plan-file` and a test station.
+    /// The plan file to write (CSV), for `calflash simulate --plan-file` and a test station;
+    /// with --stage-one-candidates, one stage's plan at every temperature.
     #[arg(long, short)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub stages: super::optimize_stages::StagesArgs,
 }
 
 pub(super) fn run(o: &OptimizeArgs) -> Result<(), Failure> {
+    if !o.stages.stage_one_candidates.is_empty() {
+        return super::optimize_stages::run(o);
+    }
     plan_files(&o.candidates, "--candidates", Paths::new())
         .input("--mission", o.model.mission.as_deref())
         .output("-o", Some(&o.output))

@@ -23,8 +23,7 @@ use crate::formula::{self, Formula};
 
 use super::EvaluateArgs;
 
-/// Stage one's model of a sensor, over its own input.
-const STAGE_ONE: &str = "output ~ 1 + input + input^2 + input^3 + input:abs(input) + abs(input)";
+use crate::design::stages::STAGE_ONE_MODEL as STAGE_ONE;
 
 fn largest_vif(c: &Criteria) -> f64 {
     c.vif.iter().flatten().copied().fold(0.0, f64::max)
@@ -65,8 +64,8 @@ pub(super) fn run(a: &EvaluateArgs, stage_one: &[String]) -> Result<(), Failure>
     if one_stage.is_empty() {
         return Err("--stage-one: give one-stage plans to compare as further --plan".into());
     }
-    if a.json.is_some() || a.report.is_some() || a.curve.is_some() || a.model.mission.is_some() {
-        return Err("--stage-one: the comparison is printed; --json, --report, --curve and --mission are for one-stage plans".into());
+    if a.json.is_some() || a.report.is_some() || a.curve.is_some() {
+        return Err("--stage-one: the comparison is printed; --json, --report and --curve are for one-stage plans".into());
     }
     let space = a.model.space()?;
     // Stage one runs at every temperature, stage two once: each plan is evaluated at one
@@ -182,7 +181,7 @@ pub(super) fn run(a: &EvaluateArgs, stage_one: &[String]) -> Result<(), Failure>
             );
         }
     }
-    calibrated_comparison(a, stage_one, unit_plan, one_stage, gyro)
+    calibrated_comparison(a, &space, stage_one, unit_plan, one_stage, gyro)
 }
 
 /// Both plans through simulated units and the calibrations themselves
@@ -190,6 +189,7 @@ pub(super) fn run(a: &EvaluateArgs, stage_one: &[String]) -> Result<(), Failure>
 /// given and at equal cost, and which plan wins.
 fn calibrated_comparison(
     a: &EvaluateArgs,
+    space: &space::Space,
     stage_one: &[String],
     unit_plan: &str,
     one_stage: &[String],
@@ -203,22 +203,7 @@ fn calibrated_comparison(
     };
     let split =
         |spec: &str| -> Vec<String> { spec.split(',').map(|s| s.trim().to_string()).collect() };
-    let rate = "rate:-8:8:9".to_string();
-    let other: Vec<String> = if a.stage_one_other.is_empty() {
-        if gyro {
-            vec!["head:56".into()]
-        } else {
-            vec![
-                rate.clone(),
-                rate.clone(),
-                rate.clone(),
-                rate,
-                "rate:0:0:20".into(),
-            ]
-        }
-    } else {
-        a.stage_one_other.clone()
-    };
+    let other = other_stage_one(gyro, &a.stage_one_other);
     let (accel_items, gyro_items): (&[String], &[String]) = if gyro {
         (&other, stage_one)
     } else {
@@ -229,7 +214,7 @@ fn calibrated_comparison(
         unit: a.cost_unit,
     };
     println!(
-        "  calibrated: {UNITS} simulated units (our simulator's sensors: 400 counts per m/s^2, 900 per rad/s, 2 counts of noise, with the terms both models carry) through both plans, each calibration made as `calibrate` makes it; its stated 1-sigma over the operating range (gravity along 26 directions; rates to the unit plan's largest about the axes and diagonals). Stage one: accelerometers {}, gyros {}; costs an observation: a sensor on its fixture {}, the unit {}",
+        "  calibrated: {UNITS} simulated units (our simulator's sensors: 400 counts per m/s^2, 900 per rad/s, 2 counts of noise, with the terms both models carry) through both plans, each calibration made as `calibrate` makes it; its stated 1-sigma over the range below (the operating range, or the mission's moments the plans reach with --mission). Stage one: accelerometers {}, gyros {}; costs an observation: a sensor on its fixture {}, the unit {}",
         accel_items.join(","),
         gyro_items.join(","),
         costs.stage_one,
@@ -247,7 +232,13 @@ fn calibrated_comparison(
             unit: unit.clone(),
             one_stage: plan(&split(name), temps, false)?,
         };
-        let pred = stages::predict(&p, temps, UNITS).map_err(|e| Failure::from(e.to_string()))?;
+        let range = match &space.mission {
+            Some(profile) => stages::mission_range(profile, &p, temps),
+            None => stages::operating_range(&p, temps),
+        }
+        .map_err(|e| Failure::from(e.to_string()))?;
+        println!("    one stage {name}: over {}", range.what);
+        let pred = stages::predict(&p, &range, UNITS).map_err(|e| Failure::from(e.to_string()))?;
         let (c2, c1) = costs.of(&p);
         for (family, f, unit) in [("accelerometers", 0, "m/s^2"), ("gyros", 1, "rad/s")] {
             let ratio = pred.ratio()[f];
@@ -266,8 +257,27 @@ fn calibrated_comparison(
     Ok(())
 }
 
+/// The other family's stage one: `given`, or by default the gyros on a rate table (+-8 rad/s,
+/// four times, and still) or the accelerometers on a dividing head (56 angles).
+pub(super) fn other_stage_one(gyro: bool, given: &[String]) -> Vec<String> {
+    if !given.is_empty() {
+        return given.to_vec();
+    }
+    if gyro {
+        return vec!["head:56".into()];
+    }
+    let rate = "rate:-8:8:9".to_string();
+    vec![
+        rate.clone(),
+        rate.clone(),
+        rate.clone(),
+        rate,
+        "rate:0:0:20".into(),
+    ]
+}
+
 /// Simulated units in the calibrated comparison.
-const UNITS: u64 = 24;
+pub(super) const UNITS: u64 = 24;
 
 /// One stage's model of axis `i`: bias, the three inputs, and the own-axis g-squared, cubic,
 /// odd-quadratic and asymmetry terms (on the own input: misalignment is small).
