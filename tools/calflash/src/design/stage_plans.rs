@@ -19,6 +19,7 @@ use super::Error;
 use super::exchange::Criterion;
 use super::models::Block;
 use super::points::{Points, Unit};
+use super::predict::conditions;
 use super::search::{Method, Search};
 use super::space::Space;
 use super::stages::{self, Costs, Plans, Prediction, Range, StagesError};
@@ -144,26 +145,6 @@ pub fn at_temps(p: &Points, temps: &[f64]) -> Points {
     Points { names, rows }
 }
 
-/// The conditions of plan points: their specific force and rates as the equipment applies them
-/// (a single axis' input along its `x`), angular acceleration, temperature and supply.
-#[must_use]
-pub fn conditions(p: &Points) -> Vec<Condition> {
-    (0..p.rows.len())
-        .map(|r| {
-            let v = |n: &str| p.value(r, n);
-            Condition {
-                f: col::F.map(v),
-                w: col::W.map(v),
-                dw: col::DW.map(v),
-                h: col::H.map(v),
-                temp: v(col::TEMP),
-                volt: v(col::VOLT),
-                dir: 0.0,
-            }
-        })
-        .collect()
-}
-
 fn space(unit: Unit, temp: f64, mission: Option<Arc<Profile>>) -> Space {
     Space {
         unit,
@@ -250,11 +231,11 @@ pub fn optimize(ask: &Ask, mut progress: impl FnMut(usize)) -> Result<Found, Sta
     let one_stage = search(ask, ask.n, &ask.unit_candidates)
         .run(Method::Fedorov, &one_space, &one_stage_blocks()?, |_| {})?
         .plan;
-    let one_conditions = conditions(&at_temps(&one_stage, &ask.temps));
+    let one_conditions = conditions(&at_temps(&one_stage, &ask.temps), Unit::Triad);
     // The range from what the equipment reaches, the same for every share.
     let reach = |items: &[String], unit: Unit| -> Result<Vec<Condition>, StagesError> {
         let pts = space(unit, t0, None).candidates(items, &[])?;
-        Ok(conditions(&at_temps(&pts, &ask.temps)))
+        Ok(conditions(&at_temps(&pts, &ask.temps), unit))
     };
     let unit_reach = reach(&ask.unit_candidates, Unit::Triad)?;
     let (accel_one, gyro_one) = {
@@ -319,7 +300,7 @@ pub fn optimize(ask: &Ask, mut progress: impl FnMut(usize)) -> Result<Found, Sta
                 )
                 .map_err(|e| NotMade::Failed(format!("stage two: {e}")))?
                 .plan;
-            let designed = conditions(&at_temps(&s1, &ask.temps));
+            let designed = conditions(&at_temps(&s1, &ask.temps), single);
             let (accel_one, gyro_one) = if ask.gyro {
                 (ask.other_stage_one.clone(), designed)
             } else {
@@ -328,7 +309,7 @@ pub fn optimize(ask: &Ask, mut progress: impl FnMut(usize)) -> Result<Found, Sta
             let plans = Plans {
                 accel_one,
                 gyro_one,
-                unit: conditions(&s2),
+                unit: conditions(&s2, Unit::Triad),
                 one_stage: one_conditions.clone(),
             };
             let prediction = stages::predict(&plans, &range, ask.units)
