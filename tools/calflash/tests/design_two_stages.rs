@@ -324,6 +324,28 @@ fn the_stage_comparison_over_a_mission_takes_the_flights_moments_the_plans_reach
         gentle.1 < 0.95 * range.1 && gentle.0 != range.0,
         "{gentle:?} {range:?}"
     );
+    // The design at one budget judges over the same moments.
+    let (code, out, err) = optimize(
+        d,
+        "gyro",
+        "rate:-8:8:9",
+        &[
+            "--stage-one-other",
+            "head:12",
+            "--cost-stage-one",
+            "0.05",
+            "--cost-unit",
+            "1",
+            "--mission",
+            &flight,
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("averaged over the mission flight.csv (300 moments"),
+        "{out}"
+    );
+    assert!(out.contains("two stages win"), "{out}");
     // A flight to 12 rad/s: the moments beyond 8 are extrapolation, counted and left out.
     let flight = mission(d, 12.0);
     let (code, out, err) = evaluate(d, &["--mission", &flight]);

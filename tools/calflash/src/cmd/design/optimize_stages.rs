@@ -76,8 +76,9 @@ pub(super) fn run(o: &OptimizeArgs) -> Result<(), Failure> {
         || !o.model.region.is_empty()
         || !o.model.limit.is_empty()
         || o.criterion.is_some()
+        || o.method == crate::design::search::Method::Coordinate
     {
-        return Err("--stage-one-candidates: --grid, --compare, --region, --limit and --criterion are for one-stage designs (each plan here is I-optimal over its candidates)".into());
+        return Err("--stage-one-candidates: --grid, --compare, --region, --limit, --criterion and --method coordinate are for one-stage designs (each plan here is I-optimal over its candidates)".into());
     }
     if o.model.model.trim() != "triad-nonlinear" {
         return Err(format!(
