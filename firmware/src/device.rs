@@ -162,6 +162,38 @@ fn report_trust(device: &Device<RamFlash>) {
 /// Runs the example device: unit `serial` carrying `sensor` (it commits no calibration of
 /// another kind). Never returns: it serves the update protocol on UART0.
 pub fn run(serial: &'static str, sensor: UnitSensor) -> ! {
+    serve(boot(serial, sensor))
+}
+
+/// Runs the example round: the example device that, before it serves the update protocol,
+/// flies the recorded flight in its flash through its own calibration and the flight filter
+/// ([`crate::flight_golden::fly`]) and publishes the filter's snapshot, which `calflash
+/// flight --port` reads. Without a calibration (or with one that is not an IMU's) it flies
+/// nothing and publishes nothing.
+pub fn run_round(serial: &'static str, sensor: UnitSensor) -> ! {
+    let device = boot(serial, sensor);
+    let report = device.calibration().and_then(crate::flight_golden::fly);
+    match report {
+        Some(r) => {
+            hprintln!(
+                "round: flew the recorded flight: {} epochs, {} fixes taken, {} refused; published",
+                r.stats.epochs,
+                r.stats.taken[1],
+                r.stats.refused[1]
+            );
+            device.publish_flight(r);
+        }
+        None => hprintln!("round: no IMU calibration loaded; no flight flown"),
+    }
+    serve(device)
+}
+
+/// Boots the example device: its store, its identity, the trust it reports, the self-test.
+#[expect(
+    clippy::mut_from_ref,
+    reason = "the device is the `cortex_m::singleton!`'s, not borrowed from `serial`"
+)]
+fn boot(serial: &'static str, sensor: UnitSensor) -> &'static mut Device<RamFlash> {
     let flash = RamFlash::calibration_region();
     let Ok(store) = Store::new(flash, 0, RamFlash::SLOT_SIZE) else {
         hprintln!("device: the calibration region does not fit its sectors");
@@ -187,6 +219,11 @@ pub fn run(serial: &'static str, sensor: UnitSensor) -> ! {
         }
     };
     self_test(device, mid);
+    device
+}
+
+/// Serves the update protocol on UART0, for ever.
+fn serve(device: &mut Device<RamFlash>) -> ! {
     let uart = Uart::uart0();
     let mut frame = [0u8; MAX_FRAME];
     let mut len = 0usize;

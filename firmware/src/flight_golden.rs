@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 use spincal::correct::AnyImuCorrector;
-use spincal::flight::{FlightConfig, Geodetic, GnssFix, doubted};
+use spincal::flight::{FlightConfig, FlightFilter, FlightReport, Geodetic, GnssFix, doubted};
 use spincal::model::{Calibration, Rails, Sensor};
 use spincal::nav::{NavNoise, SensorErrors};
 
@@ -85,6 +85,28 @@ pub fn inputs<'a, 'c>(
         Event::Fix(f) => Some(Input::Fix(f)),
         Event::Pressure(t, p) => Some(Input::Pressure(t, p)),
     })
+}
+
+/// Gives the flight filter one input.
+pub fn feed(filter: &mut FlightFilter<f32>, input: Input) {
+    match input {
+        Input::Sample(t, f, w, doubt) => filter.sample(t, &f, &w, doubt),
+        Input::Fix(fix) => filter.gnss(&fix),
+        Input::Pressure(t, p) => filter.pressure(t, p),
+    }
+}
+
+/// The round's flight loop over the recorded flight in flash: its raw codes through `cal`
+/// (the unit's own calibration), with its fixes and pressures, through the flight filter;
+/// the filter's snapshot at the end. `None` for a calibration that is not an IMU's.
+pub fn fly(cal: &Calibration) -> Option<FlightReport> {
+    let rails = rails(cal)?;
+    let mut imu = AnyImuCorrector::new(cal, RATE).ok()?;
+    let mut filter = FlightFilter::try_new(flight_config()).ok()?;
+    for input in inputs(&mut imu, rails) {
+        feed(&mut filter, input);
+    }
+    Some(filter.report())
 }
 
 struct Reader<'a> {

@@ -340,3 +340,112 @@ fn the_flight_filters_biases_reach_the_corrector_as_an_overlay_and_never_the_sto
     assert!((overlay.bias[0] - SHIFT_AX as f32).abs() < 0.15);
     assert_eq!(*cal.data(), stored);
 }
+
+/// The example round on QEMU (`device_round`): booted with the round's calibration in its
+/// store, it flies the recorded flight in its flash through its own flight loop and publishes
+/// the snapshot; `calflash flight --port` reads it over the UART, bit for bit the host's `f32`
+/// filter on the same flight. Without a calibration it flies nothing, and the reader says so.
+#[test]
+fn the_round_on_qemu_flies_its_recorded_flight_and_calflash_flight_port_reads_it() {
+    use calflash::device::image::{Region, region_image};
+    use clap::{Args, Command, FromArgMatches};
+    use host_tests::{golden, qemu, unit::QemuUnit};
+    if !qemu::available_or_skip(
+        "the_round_on_qemu_flies_its_recorded_flight_and_calflash_flight_port_reads_it",
+    ) {
+        return;
+    }
+    let bin = qemu::build_firmware().unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("round.json");
+    let read = |port: u16| {
+        let cmd = calflash::cmd::flight::FlightArgs::augment_args(Command::new("flight"));
+        let m = cmd
+            .try_get_matches_from([
+                "flight",
+                "--port",
+                &format!("tcp://127.0.0.1:{port}"),
+                "--timeout",
+                "120",
+                "--json",
+                json.to_str().unwrap(),
+            ])
+            .unwrap();
+        calflash::cmd::flight::run(
+            &calflash::cmd::flight::FlightArgs::from_arg_matches(&m).unwrap(),
+        )
+    };
+    // A round on a port of its own, as on a bench: it starts at once and takes one client
+    // after another; `calflash` connects once QEMU listens.
+    let power_on = |flash: Option<&std::path::Path>, log: &std::path::Path| {
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let unit =
+            QemuUnit::power_on_at(&bin.join("device_round"), flash, log, Some(port)).unwrap();
+        drop(unit.connect(std::time::Duration::from_secs(5)).unwrap());
+        unit
+    };
+    // An erased store: nothing flown, nothing published.
+    let log = dir.path().join("blank.log");
+    let unit = power_on(None, &log);
+    let err = read(unit.port).unwrap_err().to_string();
+    drop(unit);
+    assert!(
+        err.contains("unit ROUND-0001 has published no flight filter state"),
+        "{err}"
+    );
+    assert!(
+        std::fs::read_to_string(&log)
+            .unwrap()
+            .contains("round: no IMU calibration loaded; no flight flown")
+    );
+    // The round's calibration in its store, as a flasher writes it.
+    let blob = std::fs::read(golden::dir().join(format!("{}.blob", golden::SPIN_CASE))).unwrap();
+    let flash = dir.path().join("flash.bin");
+    std::fs::write(
+        &flash,
+        region_image(&blob, Region::from_memory_x()).unwrap(),
+    )
+    .unwrap();
+    let log = dir.path().join("round.log");
+    let unit = power_on(Some(&flash), &log);
+    read(unit.port).unwrap();
+    drop(unit);
+    let printed = std::fs::read_to_string(&log).unwrap();
+    assert!(
+        printed.contains("round: flew the recorded flight"),
+        "{printed}"
+    );
+    println!("{}", printed.trim());
+    // The host's f32 filter on the same flight and calibration.
+    let (events, flight) = golden();
+    let mut filter = FlightFilter::<f32>::new(flight_golden::config(&flight));
+    for e in &events {
+        feed(&mut filter, e);
+    }
+    let host = filter.report();
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(v["unit"], "ROUND-0001");
+    assert_eq!(v["phase"], "in flight");
+    let bits = |key: &str| -> Vec<u32> {
+        v[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| (x.as_f64().unwrap() as f32).to_bits())
+            .collect()
+    };
+    let of = |x: &[f32]| -> Vec<u32> { x.iter().map(|x| x.to_bits()).collect() };
+    assert_eq!(bits("position_m"), of(&host.position));
+    assert_eq!(bits("velocity_m_s"), of(&host.velocity));
+    assert_eq!(bits("attitude_wxyz"), of(&host.attitude));
+    assert_eq!(bits("sigma"), of(&host.sigma));
+    let ax = v["sensors"]["accel_bias"][0].as_f64().unwrap();
+    assert_eq!((ax as f32).to_bits(), host.sensors[0].to_bits());
+    assert!((ax - SHIFT_AX).abs() < 0.15, "{v}");
+    assert_eq!(v["epochs"], host.stats.epochs);
+    assert_eq!(v["taken"][1], host.stats.taken[1]);
+}

@@ -10,7 +10,7 @@ use cortex_m_semihosting::hprintln;
 use spincal::correct::AnyImuCorrector;
 use spincal::flight::FlightFilter;
 use spincal_firmware::flight_golden::{
-    BLOB, EVERY, EXPECTED, Input, RATE, VALUES, flight_config, inputs, rails,
+    BLOB, EVERY, EXPECTED, Input, RATE, VALUES, feed, flight_config, inputs, rails,
 };
 
 /// A checkpoint's values: position, velocity, attitude, sensor errors, variances.
@@ -79,16 +79,13 @@ fn main() -> ! {
         }
     };
     for e in inputs(&mut imu, rails) {
-        match e {
-            Input::Sample(t, f, w, doubt) => {
-                filter.sample(t, &f, &w, doubt);
-                samples += 1;
-                if samples % EVERY == 0 {
-                    check(&filter, &mut checkpoints);
-                }
+        let sample = matches!(e, Input::Sample(..));
+        feed(&mut filter, e);
+        if sample {
+            samples += 1;
+            if samples % EVERY == 0 {
+                check(&filter, &mut checkpoints);
             }
-            Input::Fix(fix) => filter.gnss(&fix),
-            Input::Pressure(t, p) => filter.pressure(t, p),
         }
     }
     check(&filter, &mut checkpoints);
