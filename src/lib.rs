@@ -95,5 +95,6 @@ pub mod store;
 mod error;
 mod limits;
 mod sample_format;
+mod sqrt;
 
 pub use error::{Error, Field, Part};

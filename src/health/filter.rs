@@ -198,7 +198,7 @@ impl Filter {
         let [e0, e1, e2] = self.accel_error();
         let [m0, m1, m2] = *mean;
         let a = [m0 - e0, m1 - e1, m2 - e2];
-        let norm = libm::sqrtf(a.iter().map(|v| v * v).sum());
+        let norm = crate::sqrt::sqrtf(a.iter().map(|v| v * v).sum());
         if !(norm > 0.0 && norm.is_finite()) {
             return;
         }

@@ -292,12 +292,7 @@ impl<T: Real> ErrorFilter<T> {
             return;
         }
         let half: T = nalgebra::convert(0.5);
-        let c0 = self
-            .estimate
-            .nav
-            .attitude()
-            .to_rotation_matrix()
-            .into_inner();
+        let c0 = self.estimate.nav.attitude_matrix();
         let forces = self.estimate.nav.propagate(
             &self.earth,
             &Step {
@@ -306,12 +301,7 @@ impl<T: Real> ErrorFilter<T> {
                 dt: step,
             },
         );
-        let c1 = self
-            .estimate
-            .nav
-            .attitude()
-            .to_rotation_matrix()
-            .into_inner();
+        let c1 = self.estimate.nav.attitude_matrix();
         let a = &mut self.acc;
         let h = half * dt;
         a.c += (c0 + c1) * h;

@@ -12,7 +12,8 @@ pub trait Real: RealField + Copy {
     fn sin_cos_libm(self) -> (Self, Self);
     /// `self^e`, from `libm`.
     fn powf_libm(self, e: Self) -> Self;
-    /// The square root, from `libm` (nalgebra's own takes the platform's with `std`).
+    /// The square root, correctly rounded: `crate::sqrt::sqrtf` for `f32` (the FPU's on the
+    /// Cortex-M4F), `libm`'s for `f64` (nalgebra's own takes the platform's with `std`).
     fn sqrt_libm(self) -> Self;
     /// `atan2(self, x)`, from `libm`.
     fn atan2_libm(self, x: Self) -> Self;
@@ -61,7 +62,7 @@ impl Real for f32 {
         libm::expf(self)
     }
     fn sqrt_libm(self) -> Self {
-        libm::sqrtf(self)
+        crate::sqrt::sqrtf(self)
     }
     fn to_f64(self) -> f64 {
         f64::from(self)

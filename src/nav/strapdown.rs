@@ -12,7 +12,7 @@
 //! force within the step, which sculling corrects when increments are held at the step's
 //! start, is followed by the attitude itself.
 
-use nalgebra::{RealField, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, RealField, UnitQuaternion, Vector3};
 
 use super::earth::Earth;
 use super::real::{Real, normalised, rotation};
@@ -26,7 +26,7 @@ use super::real::{Real, normalised, rotation};
 /// round the transverse rates turn through a revolution every few samples in the body but are
 /// slow in the de-spun frame (the nutation and precession), so the coning correction works
 /// on slow rates; on a body that does not spin it is the plain quaternion.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 pub struct Navigation<T: RealField + Copy> {
     despun: UnitQuaternion<T>,
     roll: T,
@@ -45,6 +45,38 @@ pub struct Navigation<T: RealField + Copy> {
     /// compensated sum): in `f32` a shell's 800 m/s takes a step's 0.04 m/s to within
     /// 3e-5 m/s, which over a minute at 2 kHz would walk well past the filter's sigma.
     carry: (Vector3<T>, Vector3<T>),
+    /// `despun * spin` and its rotation matrix, kept with them: the attitude every sample
+    /// reads several times.
+    attitude: UnitQuaternion<T>,
+    matrix: Matrix3<T>,
+    /// The last step's second rate and its de-spun part, and its second specific force and
+    /// that force in the level frame: the next step's first ones when it starts where this
+    /// one ended (same reading, attitude not turned since). Work saved, not state.
+    ends: Option<Ends<T>>,
+}
+
+/// What a step's end gives the next step's start ([`Navigation::propagate`]).
+#[derive(Debug, Clone, Copy)]
+struct Ends<T: RealField + Copy> {
+    w: Vector3<T>,
+    despun_rate: Vector3<T>,
+    f: Vector3<T>,
+    level_force: Vector3<T>,
+}
+
+/// Equal where it navigates: the kept attitude and the step's ends are work saved.
+impl<T: RealField + Copy> PartialEq for Navigation<T> {
+    fn eq(&self, other: &Self) -> bool {
+        self.despun == other.despun
+            && self.roll == other.roll
+            && self.roll_carry == other.roll_carry
+            && self.earth_pending == other.earth_pending
+            && self.spin == other.spin
+            && self.axis == other.axis
+            && self.v == other.v
+            && self.p == other.p
+            && self.carry == other.carry
+    }
 }
 
 /// `sum += x` with Kahan's compensation `carry`, for a scalar.
@@ -130,7 +162,7 @@ impl<T: Real> Navigation<T> {
         let axis = axis
             .try_normalize(T::default_epsilon())
             .unwrap_or_else(Vector3::x);
-        Self {
+        let mut nav = Self {
             despun: q,
             roll: T::zero(),
             roll_carry: T::zero(),
@@ -140,13 +172,30 @@ impl<T: Real> Navigation<T> {
             v: Vector3::zeros(),
             p: Vector3::zeros(),
             carry: (Vector3::zeros(), Vector3::zeros()),
-        }
+            attitude: q,
+            matrix: Matrix3::identity(),
+            ends: None,
+        };
+        nav.keep_attitude();
+        nav
+    }
+
+    /// Keeps the attitude and its matrix with `despun` and `spin`.
+    fn keep_attitude(&mut self) {
+        self.attitude = self.despun * self.spin;
+        self.matrix = self.attitude.to_rotation_matrix().into_inner();
+    }
+
+    /// The attitude's rotation matrix, body to level frame.
+    #[must_use]
+    pub fn attitude_matrix(&self) -> Matrix3<T> {
+        self.matrix
     }
 
     /// The attitude, body to level frame.
     #[must_use]
     pub fn attitude(&self) -> UnitQuaternion<T> {
-        self.despun * self.spin
+        self.attitude
     }
 
     /// The attitude with the level frame's turn with the Earth that is still gathering
@@ -159,6 +208,8 @@ impl<T: Real> Navigation<T> {
     /// Turns the attitude by `r` in the level frame (`q <- r q`).
     pub fn turn(&mut self, r: &UnitQuaternion<T>) {
         self.despun = r * self.despun;
+        self.keep_attitude();
+        self.ends = None;
     }
 
     /// The rate `w` without its part about the spin axis, seen in the de-spun frame at the
@@ -195,7 +246,11 @@ impl<T: Real> Navigation<T> {
             kahan_add(&mut roll1, &mut self.roll_carry, -(turns * low));
         }
         let spin1 = rotation(&(self.axis * roll1));
-        let d0 = self.despun_rate(&w0, &self.spin);
+        let ends = self.ends.take();
+        let d0 = match ends {
+            Some(e) if e.w == w0 => e.despun_rate,
+            _ => self.despun_rate(&w0, &self.spin),
+        };
         let d1 = self.despun_rate(&w1, &spin1);
         let body = rotation(&rotation_vector(&d0, &d1, dt));
         // The level frame turns with the Earth by 3.6e-8 rad in a 0.5 ms step, under the
@@ -215,10 +270,21 @@ impl<T: Real> Navigation<T> {
         self.despun = normalised(despun.into_inner());
         self.roll = roll1;
         self.spin = spin1;
-        let after = self.attitude();
+        self.keep_attitude();
+        let after = self.attitude;
         let lag1 = omega * self.earth_pending;
         let [f0, f1] = step.f;
-        let (b0, b1) = (before * f0, after * f1);
+        let b0 = match ends {
+            Some(e) if e.f == f0 => e.level_force,
+            _ => before * f0,
+        };
+        let b1 = after * f1;
+        self.ends = Some(Ends {
+            w: w1,
+            despun_rate: d1,
+            f: f1,
+            level_force: b1,
+        });
         let forces = [b0 - lag0.cross(&b0), b1 - lag1.cross(&b1)];
         let [n0, n1] = forces;
         let mid = self.p + self.v * (half * dt);
