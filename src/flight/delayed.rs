@@ -192,7 +192,12 @@ impl<T: Real, const N: usize> DelayedFlight<T, N> {
             .carried(self.samples.iter().map(|s| {
                 let dt = last.map_or(0, |t| s.t_us.saturating_sub(t));
                 last = Some(s.t_us);
-                (s.f, s.w, Interval::micros(c::<T>(dt as f64)), s.doubted)
+                (
+                    s.f,
+                    s.w,
+                    Interval::micros(crate::nav::real::from_count(dt)),
+                    s.doubted,
+                )
             }))
     }
 
@@ -248,10 +253,6 @@ fn due<E: Copy, const M: usize>(
     } else {
         None
     }
-}
-
-fn c<T: Real>(x: f64) -> T {
-    nalgebra::convert(x)
 }
 
 #[cfg(test)]

@@ -90,6 +90,19 @@ impl Real for f64 {
     }
 }
 
+/// The count `n` (microseconds, samples) as a `T`: the value `n as f64` converted to `T`
+/// gives, but below 2^24 by single precision's own conversion (exact there), so that a
+/// Cortex-M4F, whose FPU has no double precision, converts it in one instruction instead of
+/// two calls into software.
+#[must_use]
+#[inline]
+pub fn from_count<T: Real>(n: u64) -> T {
+    match u32::try_from(n) {
+        Ok(small) if small < 1 << 24 => nalgebra::convert::<f32, T>(small as f32),
+        _ => nalgebra::convert::<f64, T>(n as f64),
+    }
+}
+
 /// The rotation by the rotation vector `v` (axis times angle, rad).
 #[must_use]
 pub fn rotation<T: Real>(v: &Vector3<T>) -> UnitQuaternion<T> {

@@ -84,7 +84,7 @@ pub const LOST_VELOCITY: f64 = 30.0;
 
 fn micros<T: Real>(us: u64) -> T {
     // Exact for differences below 2^24 us in f32: a flight's steps and ages.
-    c::<T>(us as f64) * c(1e-6)
+    crate::nav::real::from_count::<T>(us) * c(1e-6)
 }
 
 impl<T: Real> FlightFilter<T> {
@@ -277,7 +277,7 @@ impl<T: Real> FlightFilter<T> {
         self.filter.sample(
             &f,
             &w,
-            Interval::micros(c::<T>(dt_us as f64)),
+            Interval::micros(crate::nav::real::from_count(dt_us)),
             (doubted[0] || doubted[1]).then_some(Doubt {
                 force: if doubted[0] { df } else { T::zero() },
                 rate: if doubted[1] { dw } else { T::zero() },
