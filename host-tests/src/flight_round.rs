@@ -52,6 +52,9 @@ pub struct Scenario {
     pub acquisition: f64,
     /// The accelerometers' bias random walk, m/s^2/sqrt(s), every axis (the filter is told).
     pub walk: f64,
+    /// The samples' white noise as a multiple of [`NOISE`]: accelerometers, gyros (1 and 1;
+    /// the filter is told [`NOISE`] whatever this is, to see what the noise does).
+    pub noise_scale: (f64, f64),
 }
 
 impl Scenario {
@@ -71,6 +74,7 @@ impl Scenario {
             correlated: (1.5, 45.0),
             acquisition: 0.8,
             walk: 0.0,
+            noise_scale: (1.0, 1.0),
         }
     }
 }
@@ -116,8 +120,8 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
     let mut rng = ChaCha8Rng::seed_from_u64(scenario.seed);
     let per_sample = |density: f64| Normal::new(0.0, density * RATE.sqrt()).expect("sigma");
     let (na, ng, pa) = (
-        per_sample(NOISE.0),
-        per_sample(NOISE.1),
+        per_sample(NOISE.0 * scenario.noise_scale.0),
+        per_sample(NOISE.1 * scenario.noise_scale.1),
         Normal::new(0.0, 2.0).expect("sigma"),
     );
     let t0 = flown.samples.first().map_or(0.0, |s| s.t);

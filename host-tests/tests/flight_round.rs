@@ -33,10 +33,11 @@ fn a_gnss_fuzes_late_wandering_fixes_keep_the_track_within_its_sigma_and_the_shi
     );
     println!("{held}; axial bias z {zb:+.2}, scale z {zs:+.2}");
     assert!(held.epochs > 1500, "{held:?}");
-    // The velocity is not yet held to the issue's 95 % on our 2 kHz shells (80.5 % on this
-    // flight, 93.7 % over 50, 97.9 % over 20 flown at 4 kHz: BENCHMARKS.md, the round's filter
-    // on a delayed horizon); taken as they arrive, 85.6 % here and 88.3 % over 50.
-    assert!(pin >= 0.95 && vin >= 0.75, "{held:?}");
+    // Both within 3 sigma on 95 % of epochs (this flight: 100 % and 100 %; over 50, 99.4 % and
+    // 98.8 %: BENCHMARKS.md, the round's filter on a delayed horizon). Before the attitude
+    // carried the angle a kink in the rate hides between two samples (`Navigation::hidden`:
+    // the muzzle's tip-off), the velocity held 80.5 % here.
+    assert!(pin >= 0.95 && vin >= 0.95, "{held:?}");
     assert!(zb.abs() <= 3.0 && zs.abs() <= 3.0, "{zb} {zs}");
     // The shift was learnt, not left at its prior.
     let p = filter.covariance();
@@ -84,7 +85,8 @@ fn the_receivers_wander_taken_as_white_leaves_the_track_outside_its_sigma() {
 }
 
 /// 50 flights on the delayed horizon (`FLIGHTS=n` for another count, `WALK=x` for walking
-/// biases, `LATE=1` for the filter alone taking the fixes late): the position's and the
+/// biases, `LATE=1` for the filter alone taking the fixes late, `NOISE=A,G` for the samples'
+/// noise at A and G times what the filter is told): the position's and the
 /// velocity's NEES, the innovations' NIS, the axial shift's z, and the `f32` filter against
 /// the `f64` one.
 #[test]
@@ -105,9 +107,17 @@ fn population() {
     // LATE=1: the filter alone, taking each fix as it arrives (the delayed horizon's
     // comparison).
     let late = std::env::var("LATE").is_ok();
+    let noise_scale = std::env::var("NOISE")
+        .ok()
+        .and_then(|x| {
+            let (a, g) = x.split_once(',')?;
+            Some((a.trim().parse().ok()?, g.trim().parse().ok()?))
+        })
+        .unwrap_or((1.0, 1.0));
     for seed in 0..n {
         let flight = fly(&Scenario {
             walk,
+            noise_scale,
             ..Scenario::shell(100 + seed)
         });
         let (held, single, double) = if late {
@@ -270,4 +280,67 @@ fn the_reference_shells_corrected_samples_match_their_truth() {
             "{name}: {rf:?} {rw:?}"
         );
     }
+}
+
+/// What the velocity's 3-sigma lacked on our 2 kHz shells: the strapdown alone, on noise-free
+/// samples from the truth, holds the spin axis to micro-radians through the bore and loses a
+/// milliradian in the one sample where the round takes its tip-off at the muzzle (a step in
+/// the transverse rate the trapezoid cannot place); `Navigation::hidden` states that loss, so
+/// the filter's attitude variance holds it.
+#[test]
+fn the_tip_off_at_the_muzzle_is_lost_between_two_samples_and_the_step_says_so() {
+    use nalgebra::Vector3;
+    use spincal::nav::{Earth, Interval, Navigation, Step};
+    let flight = fly(&Scenario {
+        shift: (0.0, 0.0),
+        noise_scale: (0.0, 0.0),
+        ..Scenario::shell(1)
+    });
+    let earth = Earth::new(flight.origin.latitude.to_radians(), flight.origin.height);
+    let mut nav = Navigation::at_rest(flight.attitude[0], Vector3::x());
+    let mut last: Option<(u64, Vector3<f64>, Vector3<f64>)> = None;
+    let (mut k, mut bore, mut lost, mut hidden) = (0usize, 0.0f64, 0.0f64, 0.0f64);
+    let mut muzzle = None;
+    for e in &flight.inputs {
+        let host_tests::flight_golden::Input::Sample(t, f, w, _) = e else {
+            continue;
+        };
+        let (f, w) = (
+            Vector3::from(f.map(f64::from)),
+            Vector3::from(w.map(f64::from)),
+        );
+        if let Some((t0, f0, w0)) = last {
+            nav.propagate(
+                &earth,
+                &Step {
+                    w: [w0, w],
+                    f: [f0, f],
+                    dt: Interval::micros((t - t0) as f64),
+                },
+            );
+            hidden += nav.hidden();
+        }
+        last = Some((*t, f, w));
+        let axis = (nav.attitude() * Vector3::x()).angle(&(flight.attitude[k] * Vector3::x()));
+        // The bore: spinning up under thousands of g; the muzzle: the force falls to drag.
+        if f.norm() > 1_000.0 {
+            bore = bore.max(axis);
+            muzzle = None;
+        } else if bore > 0.0 && muzzle.is_none() && w.norm() > 1_000.0 {
+            muzzle = Some(k);
+        }
+        if muzzle.is_some_and(|m| k == m + 20) {
+            lost = axis;
+            break;
+        }
+        k += 1;
+    }
+    println!(
+        "spin axis off by {bore:.2e} rad through the bore, {lost:.2e} rad 20 samples after the \
+         muzzle; stated as hidden by then: {hidden:.2e} rad (1-sigma)"
+    );
+    assert!(muzzle.is_some(), "no muzzle exit found");
+    assert!(bore < 1e-5, "{bore}");
+    assert!(lost > 5e-4, "the tip-off's step no longer lost: {lost}");
+    assert!(lost < 3.0 * hidden, "{lost} against {hidden} stated");
 }

@@ -314,6 +314,7 @@ impl<T: Real> ErrorFilter<T> {
             a.lost.0 += d.force * dt;
             a.lost.1 += d.rate * dt;
         }
+        a.lost.1 += self.estimate.nav.hidden();
     }
 
     /// The navigation carried through further samples, the filter left as it is: each

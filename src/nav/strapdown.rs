@@ -49,20 +49,31 @@ pub struct Navigation<T: RealField + Copy> {
     /// reads several times.
     attitude: UnitQuaternion<T>,
     matrix: Matrix3<T>,
-    /// The last step's second rate and its de-spun part, and its second specific force and
-    /// that force in the level frame: the next step's first ones when it starts where this
-    /// one ended (same reading, attitude not turned since). Work saved, not state.
-    ends: Option<Ends<T>>,
+    /// The last step's second rate, its de-spun part and the de-spun rate a sample before:
+    /// the next step's first rate when it starts where this one ended (same reading; the
+    /// de-spun part depends on the roll alone), and the rates' kink ([`hidden`](Self::hidden)).
+    rate_end: Option<RateEnd<T>>,
+    /// The last step's second specific force and that force in the level frame, while the
+    /// attitude has not been turned since. Work saved, not state.
+    force_end: Option<(Vector3<T>, Vector3<T>)>,
+    /// The angle the last step could not integrate (1-sigma, rad): see
+    /// [`hidden`](Self::hidden).
+    hidden: T,
 }
 
-/// What a step's end gives the next step's start ([`Navigation::propagate`]).
+/// What a step's end rate gives the next step ([`Navigation::propagate`]).
 #[derive(Debug, Clone, Copy)]
-struct Ends<T: RealField + Copy> {
+struct RateEnd<T: RealField + Copy> {
     w: Vector3<T>,
     despun_rate: Vector3<T>,
-    f: Vector3<T>,
-    level_force: Vector3<T>,
+    before: Option<Vector3<T>>,
 }
+
+/// A step in the rate at an unknown instant of a sample interval hides up to its size times
+/// the interval in angle: uniform over the interval, `|step| dt / sqrt(12)` 1-sigma. The
+/// second difference of the sampled rates sees a step twice (`+step`, then `-step`), so each
+/// counts half: `1 / (2 sqrt(12))`.
+const KINK: f64 = 0.144_337_567_297_406_4;
 
 /// Equal where it navigates: the kept attitude and the step's ends are work saved.
 impl<T: RealField + Copy> PartialEq for Navigation<T> {
@@ -174,7 +185,9 @@ impl<T: Real> Navigation<T> {
             carry: (Vector3::zeros(), Vector3::zeros()),
             attitude: q,
             matrix: Matrix3::identity(),
-            ends: None,
+            rate_end: None,
+            force_end: None,
+            hidden: T::zero(),
         };
         nav.keep_attitude();
         nav
@@ -209,7 +222,19 @@ impl<T: Real> Navigation<T> {
     pub fn turn(&mut self, r: &UnitQuaternion<T>) {
         self.despun = r * self.despun;
         self.keep_attitude();
-        self.ends = None;
+        self.force_end = None;
+    }
+
+    /// The angle the last step could not integrate, 1-sigma (rad). The steps take the rate
+    /// as linear between two samples, exact for a ramp however steep; where the de-spun rate
+    /// kinks or steps between samples (the transverse rate a round takes at the muzzle, in
+    /// one instant) the step cannot know when, and that many radians of attitude are not
+    /// known: the second difference of the last three de-spun rates times the interval
+    /// times `1 / (2 sqrt(12))`. The filter adds it to the attitude's variance. Zero while the rates
+    /// are smooth to the sample rate.
+    #[must_use]
+    pub fn hidden(&self) -> T {
+        self.hidden
     }
 
     /// The rate `w` without its part about the spin axis, seen in the de-spun frame at the
@@ -246,12 +271,21 @@ impl<T: Real> Navigation<T> {
             kahan_add(&mut roll1, &mut self.roll_carry, -(turns * low));
         }
         let spin1 = rotation(&(self.axis * roll1));
-        let ends = self.ends.take();
-        let d0 = match ends {
-            Some(e) if e.w == w0 => e.despun_rate,
-            _ => self.despun_rate(&w0, &self.spin),
+        let rate_end = self.rate_end.take().filter(|e| e.w == w0);
+        let d0 = match rate_end {
+            Some(e) => e.despun_rate,
+            None => self.despun_rate(&w0, &self.spin),
         };
         let d1 = self.despun_rate(&w1, &spin1);
+        self.hidden = match rate_end.and_then(|e| e.before) {
+            Some(dm) => (d1 - d0 * two + dm).norm() * dt * nalgebra::convert::<f64, T>(KINK),
+            None => T::zero(),
+        };
+        self.rate_end = Some(RateEnd {
+            w: w1,
+            despun_rate: d1,
+            before: Some(d0),
+        });
         let body = rotation(&rotation_vector(&d0, &d1, dt));
         // The level frame turns with the Earth by 3.6e-8 rad in a 0.5 ms step, under the
         // resolution of an f32 quaternion (6e-8): the turn is gathered and applied once it
@@ -274,17 +308,12 @@ impl<T: Real> Navigation<T> {
         let after = self.attitude;
         let lag1 = omega * self.earth_pending;
         let [f0, f1] = step.f;
-        let b0 = match ends {
-            Some(e) if e.f == f0 => e.level_force,
+        let b0 = match self.force_end.take() {
+            Some((f, level)) if f == f0 => level,
             _ => before * f0,
         };
         let b1 = after * f1;
-        self.ends = Some(Ends {
-            w: w1,
-            despun_rate: d1,
-            f: f1,
-            level_force: b1,
-        });
+        self.force_end = Some((f1, b1));
         let forces = [b0 - lag0.cross(&b0), b1 - lag1.cross(&b1)];
         let [n0, n1] = forces;
         let mid = self.p + self.v * (half * dt);
