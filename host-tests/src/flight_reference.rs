@@ -261,6 +261,7 @@ pub fn shell(name: &str) -> Option<RoundFlight> {
             acquisition: 0.0,
             walk: 1e-4,
             noise_scale: (1.0, 1.0),
+            residual: false,
         },
     })
 }

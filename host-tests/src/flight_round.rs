@@ -55,7 +55,14 @@ pub struct Scenario {
     /// The samples' white noise as a multiple of [`NOISE`]: accelerometers, gyros (1 and 1;
     /// the filter is told [`NOISE`] whatever this is, to see what the noise does).
     pub noise_scale: (f64, f64),
+    /// The unit carries residual errors (per axis each bias and scale factor) drawn from the
+    /// filter's prior ([`PRIOR_SIGMA`]) rather than none, from the pad on.
+    pub residual: bool,
 }
+
+/// The filter's prior of the residual errors, 1-sigma: accelerometer bias (m/s^2), gyro bias
+/// (rad/s), accelerometer and gyro scale factors.
+pub const PRIOR_SIGMA: (f64, f64, f64, f64) = (0.01, 1e-4, 1e-4, 1e-5);
 
 impl Scenario {
     /// A 155 mm-like shell, 20 s from a site at 48.6 N, its axial accelerometer shifting by
@@ -75,6 +82,7 @@ impl Scenario {
             acquisition: 0.8,
             walk: 0.0,
             noise_scale: (1.0, 1.0),
+            residual: false,
         }
     }
 }
@@ -129,6 +137,22 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
     let shift_at = muzzle + scenario.shift_after_muzzle;
     let step = Normal::new(0.0, scenario.walk / RATE.sqrt()).expect("sigma");
     let mut walked = Vector3::<f64>::zeros();
+    // The residual errors, from draws of their own (the noise's stay as without them).
+    let residual = {
+        let mut own = ChaCha8Rng::seed_from_u64(scenario.seed ^ 0x5eed_0f_e770);
+        let mut draw = |sigma: f64| {
+            let n = Normal::new(0.0, sigma).expect("sigma");
+            Vector3::from_fn(|_, _| {
+                if scenario.residual {
+                    n.sample(&mut own)
+                } else {
+                    0.0
+                }
+            })
+        };
+        let (ab, gb, as_, gs) = PRIOR_SIGMA;
+        [draw(ab), draw(gb), draw(as_), draw(gs)]
+    };
     // (delivery time, order, input): samples first at a tie, then what arrives with them.
     let mut timed: Vec<(u64, u8, Input)> = Vec::new();
     let mut truth = Vec::with_capacity(flown.samples.len());
@@ -149,6 +173,9 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
         }
         walked += Vector3::from_fn(|_, _| step.sample(&mut rng));
         f += walked;
+        let [ab, gb, as_, gs] = &residual;
+        f += f.component_mul(as_) + ab;
+        w += w.component_mul(gs) + gb;
         let fm: [f32; 3] = core::array::from_fn(|i| (f[i] + na.sample(&mut rng)) as f32);
         let wm: [f32; 3] = core::array::from_fn(|i| (w[i] + ng.sample(&mut rng)) as f32);
         timed.push((t_us, 0, Input::Sample(t_us, fm, wm, [false, false])));
@@ -228,10 +255,10 @@ pub fn config<T: Real>(flight: &RoundFlight) -> FlightConfig<T> {
         receiver_tau: c(0.0),
     };
     let prior = SensorErrors {
-        accel_bias: Vector3::repeat(c(0.01)),
-        gyro_bias: Vector3::repeat(c(1e-4)),
-        accel_scale: Vector3::repeat(c(1e-4)),
-        gyro_scale: Vector3::repeat(c(1e-5)),
+        accel_bias: Vector3::repeat(c(PRIOR_SIGMA.0)),
+        gyro_bias: Vector3::repeat(c(PRIOR_SIGMA.1)),
+        accel_scale: Vector3::repeat(c(PRIOR_SIGMA.2)),
+        gyro_scale: Vector3::repeat(c(PRIOR_SIGMA.3)),
         baro_bias: c(5.0),
     };
     let mut config = FlightConfig::new(

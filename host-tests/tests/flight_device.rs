@@ -243,6 +243,14 @@ fn a_covariance_that_overflows_goes_back_to_the_prior_and_is_counted() {
             .overlay()
             .is_none_or(|o| o.bias.iter().all(|x| x.is_finite()))
     );
+    // A filter whose covariance went back to the prior finds nothing.
+    let verdict = filter.verdict();
+    assert_eq!(
+        verdict.word,
+        spincal::flight::Word::DoesNotFit,
+        "{verdict:?}"
+    );
+    assert_eq!(verdict.resets, s.resets);
 }
 
 #[test]
@@ -295,6 +303,12 @@ fn the_unit_publishes_its_flight_filter_and_calflash_flight_port_reads_it() {
     assert!((ax - SHIFT_AX).abs() < 0.15, "{v}");
     assert_eq!(v["taken"][1], filter.stats().taken[1]);
     assert_eq!(v["navigation_resets"], 1);
+    // The round's verdict: its 0.3 m/s^2 axial shift makes the observed terms move together
+    // beyond the calibration (this short flight with a saturating setback names the roll gyro,
+    // not the axial bias at z 2.5: BENCHMARKS.md).
+    assert_eq!(v["verdict"]["word"], "SHIFTED", "{v}");
+    assert_eq!(v["verdict"]["terms"][0]["name"], "accel bias x");
+    assert_eq!(v["verdict"]["terms"][0]["observed"], true, "{v}");
     let sigma = v["sigma"][index::ACCEL_BIAS].as_f64().unwrap();
     assert_eq!(
         sigma as f32,
@@ -448,4 +462,24 @@ fn the_round_on_qemu_flies_its_recorded_flight_and_calflash_flight_port_reads_it
     assert!((ax - SHIFT_AX).abs() < 0.15, "{v}");
     assert_eq!(v["epochs"], host.stats.epochs);
     assert_eq!(v["taken"][1], host.stats.taken[1]);
+    // The round's own verdict, computed on the device, is the host's to the bit: SHIFTED (the
+    // golden flight carries a 0.3 m/s^2 axial shift).
+    let verdict = &v["verdict"];
+    assert_eq!(verdict["word"], "SHIFTED", "{verdict}");
+    assert_eq!(host.verdict.word.as_str(), "SHIFTED");
+    for (i, term) in verdict["terms"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(term["shifted"], host.verdict.is_shifted(i), "{term}");
+        assert_eq!(term["observed"], host.verdict.is_observed(i), "{term}");
+        let z = term["z"].as_f64().map(|z| (z as f32).to_bits());
+        let expected = host.verdict.z[i];
+        assert_eq!(
+            z,
+            expected.is_finite().then(|| expected.to_bits()),
+            "{term}"
+        );
+    }
+    assert_eq!(
+        verdict["chi2"].as_f64().map(|c| (c as f32).to_bits()),
+        Some(host.verdict.chi2.0.to_bits())
+    );
 }

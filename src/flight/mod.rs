@@ -58,6 +58,7 @@ mod overlay;
 mod report;
 mod run;
 mod stats;
+pub mod verdict;
 
 pub use air::{pressure_height, speed_of_sound};
 pub use config::{ConfigFault, FlightConfig};
@@ -67,3 +68,4 @@ pub use origin::{Geodetic, Origin};
 pub use report::FlightReport;
 pub use run::{FlightFilter, GnssFix, LOST_VELOCITY, Phase};
 pub use stats::{Aiding, FlightStats, MAX_FIX_AGE_US, MAX_SAMPLE_GAP_US};
+pub use verdict::{Verdict, Word};

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::run::{FlightFilter, Phase};
 use super::stats::FlightStats;
+use super::verdict::Verdict;
 use crate::nav::{Real, STATES};
 
 /// A snapshot of the flight filter.
@@ -29,6 +30,8 @@ pub struct FlightReport {
     pub sigma: [f32; STATES],
     /// The counts.
     pub stats: FlightStats,
+    /// The round's verdict on its calibration ([`FlightFilter::verdict`]).
+    pub verdict: Verdict,
 }
 
 fn f<T: Real>(x: T) -> f32 {
@@ -66,6 +69,7 @@ impl<T: Real> FlightFilter<T> {
             sensors,
             sigma,
             stats: *self.stats(),
+            verdict: self.verdict(),
         }
     }
 }

@@ -25,6 +25,9 @@ pub struct FlightStats {
     pub taken: [u32; 4],
     /// Scalar measurements refused at the gate, per [`Aiding`].
     pub refused: [u32; 4],
+    /// Scalar measurements (taken or refused) whose innovation was inside its 95 % bounds
+    /// (`|nu| <= 1.96 sigma`), per [`Aiding`].
+    pub inside: [u32; 4],
     /// Sum of the normalised innovation squared (`nu^2 / s`) of those taken, per [`Aiding`].
     pub nis: [f32; 4],
     /// Fixes not a position on the Earth (NaN, out of range), or with a NaN velocity.

@@ -2,13 +2,14 @@
 //! then the strapdown navigation at the IMU's rate, the covariance stepped at most every
 //! [`FlightConfig::covariance_interval_us`], and the GNSS and barometer updates as they come.
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{SMatrix, SVector, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::air;
 use super::config::FlightConfig;
 use super::origin::{Geodetic, Origin};
 use super::stats::{Aiding, FlightStats, MAX_FIX_AGE_US, MAX_SAMPLE_GAP_US};
+use super::verdict::{Opening, TERMS, Verdict};
 use crate::nav::filter::{Doubt, Estimate, index};
 
 mod update;
@@ -72,6 +73,16 @@ pub struct FlightFilter<T: Real> {
     baro_reference: Option<T>,
     last_baro_us: Option<u64>,
     stats: FlightStats,
+    /// The sensor terms' estimate and covariance just after the launch's shift was last
+    /// opened (the end of the setback), and the variance the openings hold open then: what the
+    /// round's verdict tests against.
+    opening: Option<(
+        SVector<T, TERMS>,
+        SMatrix<T, TERMS, TERMS>,
+        SVector<T, TERMS>,
+    )>,
+    /// The sensor terms' variances before the first opening (the launch).
+    before_launch: SVector<T, TERMS>,
 }
 
 fn c<T: Real>(x: f64) -> T {
@@ -140,6 +151,8 @@ impl<T: Real> FlightFilter<T> {
             baro_reference: None,
             last_baro_us: None,
             stats: FlightStats::default(),
+            opening: None,
+            before_launch: SVector::zeros(),
         }
     }
 
@@ -329,12 +342,72 @@ impl<T: Real> FlightFilter<T> {
     /// that the shift is added after what they built (a whole setback falls inside one step).
     fn open_shift(&mut self) {
         self.filter.covariance_step();
-        let shift = Self::sensor_variances(&self.config.launch_shift);
-        for (i, v) in shift.iter().enumerate() {
+        let variances = Self::sensor_variances(&self.config.launch_shift);
+        let shift: SVector<T, TERMS> = SVector::from_iterator(
+            variances
+                .iter()
+                .skip(index::ACCEL_BIAS)
+                .copied()
+                .chain(core::iter::repeat(T::zero())),
+        );
+        let now = self.term_covariance().diagonal();
+        // What is still open of the earlier openings: the variance above the launch's, at
+        // most what they opened (the samples between may have taught some of it).
+        let open = match &self.opening {
+            None => {
+                self.before_launch = now;
+                SVector::zeros()
+            }
+            Some((_, _, opened)) => now.zip_zip_map(&self.before_launch, opened, |p, b, o| {
+                (p - b).max(T::zero()).min(o)
+            }),
+        };
+        for (i, v) in variances.iter().enumerate() {
             if let Some(p) = self.filter.covariance.get_mut((i, i)) {
                 *p += *v;
             }
         }
+        self.opening = Some((self.terms(), self.term_covariance(), open + shift));
+    }
+
+    /// The sensor terms' covariance, in [`TERM_NAMES`](super::verdict::TERM_NAMES)' order.
+    fn term_covariance(&self) -> SMatrix<T, TERMS, TERMS> {
+        self.filter
+            .covariance
+            .fixed_view::<TERMS, TERMS>(index::ACCEL_BIAS, index::ACCEL_BIAS)
+            .into_owned()
+    }
+
+    /// The sensor terms' estimate, in [`TERM_NAMES`](super::verdict::TERM_NAMES)' order.
+    fn terms(&self) -> SVector<T, TERMS> {
+        let s = &self.filter.estimate.sensors;
+        SVector::from_iterator(
+            s.accel_bias
+                .iter()
+                .chain(s.gyro_bias.iter())
+                .chain(s.accel_scale.iter())
+                .chain(s.gyro_scale.iter())
+                .copied(),
+        )
+    }
+
+    /// The round's verdict on its calibration now ([`super::verdict`]): [`Word::NotYet`]
+    /// before the launch's shift is opened.
+    ///
+    /// [`Word::NotYet`]: super::verdict::Word::NotYet
+    #[must_use]
+    pub fn verdict(&self) -> Verdict {
+        let Some((m, pi, open)) = &self.opening else {
+            return Verdict::not_yet(&self.stats);
+        };
+        let wide = |v: T| v.to_f64();
+        let opening = Opening {
+            estimate: m.map(wide),
+            covariance: pi.map(wide),
+            shift: open.map(wide),
+        };
+        let p = self.term_covariance().map(wide);
+        opening.judge(&self.terms().map(wide), &p, &self.stats)
     }
 
     /// Averages the rest; levels the unit once it has rested long enough and the origin is

@@ -113,6 +113,10 @@ impl<T: Real> FlightFilter<T> {
         let peek = self.filter.innovation(h, nu, r2);
         let k = kind as usize;
         let inside = peek.value * peek.value <= self.config.gate * self.config.gate * peek.variance;
+        let within_95 = peek.value * peek.value <= c::<T>(1.96 * 1.96) * peek.variance;
+        if let (true, Some(n)) = (within_95, self.stats.inside.get_mut(k)) {
+            *n += 1;
+        }
         let taken = inside && self.filter.update(h, nu, r2).is_some();
         let (count, nis) = if taken {
             (

@@ -5,7 +5,8 @@
 use std::fmt::Write as _;
 use std::time::Duration;
 
-use spincal::flight::{Aiding, FlightReport, Phase};
+use spincal::flight::verdict::{TERM_NAMES, TERMS};
+use spincal::flight::{Aiding, FlightReport, Phase, Verdict, Word};
 
 use crate::cmd::Failure;
 use crate::device::{Client, link::Link};
@@ -90,6 +91,7 @@ pub fn text(serial: &str, port: &str, r: &FlightReport) -> String {
     row(&mut out, "accelerometer scale", "", &s[6..9], &sig[15..18]);
     row(&mut out, "gyro scale", "", &s[9..12], &sig[18..21]);
     row(&mut out, "barometer bias", "m", &s[12..13], &sig[21..22]);
+    verdict(&mut out, &r.verdict);
     let st = &r.stats;
     for (kind, name) in KINDS {
         let k = kind as usize;
@@ -124,6 +126,84 @@ pub fn text(serial: &str, port: &str, r: &FlightReport) -> String {
         st.epochs
     );
     out
+}
+
+/// The round's verdict in words: the word and why, then each observed term's shift and z.
+fn verdict(out: &mut String, v: &Verdict) {
+    let named: Vec<&str> = (0..TERMS)
+        .filter(|i| v.is_shifted(*i))
+        .map(|i| TERM_NAMES[i])
+        .collect();
+    let unseen: Vec<&str> = (0..TERMS)
+        .filter(|i| !v.is_observed(*i))
+        .map(|i| TERM_NAMES[i])
+        .collect();
+    let (n, inside, refused, nis) = v.innovations;
+    let why = match v.word {
+        Word::NotYet => {
+            "the launch's shift is not opened yet (no launch, or the setback goes on)".to_string()
+        }
+        Word::DoesNotFit if v.resets > 0 => format!(
+            "its covariance was reset {} times: its estimates are no findings",
+            v.resets
+        ),
+        Word::DoesNotFit => format!(
+            "{:.1} % of {n} aiding innovations inside their 95 % bounds, {:.1} % refused, mean NIS {nis:.2}: the filter does not fit this flight, its estimates are no findings",
+            100.0 * inside,
+            100.0 * refused
+        ),
+        Word::Shifted if named.is_empty() => format!(
+            "the observed terms together moved beyond what the filter expects had nothing shifted (chi-square {:.1} on {} degrees of freedom, p = {:.1e}), no one term named",
+            v.chi2.0,
+            v.observed.count_ones(),
+            v.chi2.1
+        ),
+        Word::Shifted => format!("shifted in flight: {}", named.join(", ")),
+        Word::CannotTell => "the flight observes no term".to_string(),
+        Word::Held => format!(
+            "the observed terms within what the filter expects had nothing shifted (chi-square {:.1} on {} degrees of freedom, p = {:.2})",
+            v.chi2.0,
+            v.observed.count_ones(),
+            v.chi2.1
+        ),
+    };
+    let _ = writeln!(out, "  the round's verdict: {}: {why}", v.word.as_str());
+    for i in (0..TERMS).filter(|i| v.is_observed(*i)) {
+        let _ = writeln!(
+            out,
+            "    {:<14} moved {:>+11.4e} since the setback, z {:>+6.2}{}",
+            TERM_NAMES[i],
+            v.shift[i],
+            v.z[i],
+            if v.is_shifted(i) { "  SHIFTED" } else { "" }
+        );
+    }
+    if !unseen.is_empty() && v.word != Word::NotYet {
+        let _ = writeln!(out, "    not observed: {}", unseen.join(", "));
+    }
+}
+
+/// The round's verdict as JSON.
+fn verdict_json(v: &Verdict) -> serde_json::Value {
+    let finite = |x: f32| x.is_finite().then_some(x);
+    serde_json::json!({
+        "word": v.word.as_str(),
+        "terms": (0..TERMS).map(|i| serde_json::json!({
+            "name": TERM_NAMES[i],
+            "moved": v.shift[i],
+            "observed": v.is_observed(i),
+            "z": finite(v.z[i]),
+            "shifted": v.is_shifted(i),
+        })).collect::<Vec<_>>(),
+        "chi2": finite(v.chi2.0),
+        "dof": v.observed.count_ones(),
+        "p": finite(v.chi2.1),
+        "aiding_innovations": v.innovations.0,
+        "inside_95": finite(v.innovations.1),
+        "refused": finite(v.innovations.2),
+        "mean_nis": finite(v.innovations.3),
+        "covariance_resets": v.resets,
+    })
 }
 
 /// The report as JSON (schema `calflash.flight-unit/1`).
@@ -164,5 +244,7 @@ pub fn json(serial: &str, r: &FlightReport) -> serde_json::Value {
         "navigation_resets": st.navigation_resets,
         "covariance_resets": st.resets,
         "epochs": st.epochs,
+        "inside_95": st.inside,
+        "verdict": verdict_json(&r.verdict),
     })
 }
