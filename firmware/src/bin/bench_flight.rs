@@ -113,6 +113,15 @@ fn main() -> ! {
         1,
     );
     let _ = first_flight_t;
+    // The round's verdict at the end of the flight: a few 12 x 12 decompositions in software
+    // double precision, once when it is read.
+    let (verdict, ticks) = timed(|| filter.verdict());
+    report("flight_verdict", ticks.saturating_sub(overhead), 1);
+    if verdict.word != spincal::flight::Word::Shifted {
+        fail("the golden flight's verdict");
+    }
+    let (_, used) = stack::high_water(|| black_box(filter.verdict()));
+    hprintln!("stack flight_verdict {}", used);
 
     // The parts: an error filter in flight, from the golden flight's state at its end.
     let estimate = *filter.estimate();
