@@ -4,7 +4,9 @@
 
 use nalgebra::Vector3;
 use spincal::correct::AnyImuCorrector;
-use spincal::flight::{FlightConfig, FlightFilter, FlightReport, Geodetic, GnssFix, doubted};
+use spincal::flight::{
+    FlightConfig, FlightFilter, FlightReport, Geodetic, GnssFix, Round, doubted,
+};
 use spincal::model::{Calibration, Rails, Sensor};
 use spincal::nav::{NavNoise, SensorErrors};
 
@@ -97,16 +99,38 @@ pub fn feed(filter: &mut FlightFilter<f32>, input: Input) {
 }
 
 /// The round's flight loop over the recorded flight in flash: its raw codes through `cal`
-/// (the unit's own calibration), with its fixes and pressures, through the flight filter;
-/// the filter's snapshot at the end. `None` for a calibration that is not an IMU's.
+/// (the unit's own calibration), with its fixes and pressures, through the flight filter and
+/// the flight's lines ([`Round`]), the calibration's own error at rest its sensor errors'
+/// prior; the snapshot at the end, its verdict carrying the calibration's own change of line
+/// into the flight. `None` for a calibration that is not an
+/// IMU's.
 pub fn fly(cal: &Calibration) -> Option<FlightReport> {
-    let rails = rails(cal)?;
+    let (accel, gyro) = rails(cal)?;
     let mut imu = AnyImuCorrector::new(cal, RATE).ok()?;
-    let mut filter = FlightFilter::try_new(flight_config()).ok()?;
-    for input in inputs(&mut imu, rails) {
-        feed(&mut filter, input);
+    // The calibration's own error at rest is the sensor errors' prior, at the flight's
+    // first temperature and supply.
+    if let Some(Event::Environment(t, v)) = events().find(|e| matches!(e, Event::Environment(..)))
+    {
+        imu.set_environment(t, v);
     }
-    Some(filter.report())
+    let mut config = flight_config();
+    if let Some(factors) = imu.covariance_factors() {
+        config.take_calibration_prior(factors);
+    }
+    let mut round = Round::new(FlightFilter::try_new(config).ok()?);
+    for e in events() {
+        match e {
+            Event::Sample(t, raw) => {
+                let out = imu.correct(raw);
+                let doubt = doubted(&raw, out.flags, accel, gyro);
+                round.sample(t, &out.values, doubt, || imu.error_features(&out.values));
+            }
+            Event::Environment(t, v) => imu.set_environment(t, v),
+            Event::Fix(fix) => round.filter.gnss(&fix),
+            Event::Pressure(t, p) => round.filter.pressure(t, p),
+        }
+    }
+    Some(round.report(imu.covariance_factors()))
 }
 
 struct Reader<'a> {

@@ -326,6 +326,54 @@ pub fn run<T: Real>(
     checkpoint(filter);
 }
 
+/// The round's flight loop on `events` through `cal`, as the example round runs it
+/// (`spincal_firmware::flight_golden::fly`): the calibration's own error at rest its sensor
+/// errors' prior, the filter with the flight's lines beside it, the snapshot at the end with its
+/// verdict carrying the calibration's change of line. `added` is added to the axial
+/// accelerometer's corrected output from the end of the setback on (a shift of the test's own;
+/// zero for the recorded flight).
+///
+/// # Panics
+/// If the calibration is not an IMU's or the set-up is refused.
+#[must_use]
+pub fn round(
+    cal: &Calibration,
+    events: &[Event],
+    flight: &Flight,
+    added: f32,
+) -> spincal::flight::FlightReport {
+    let (accel, gyro) = rails(cal);
+    let mut imu = AnyImuCorrector::new(cal, RATE as f32).expect("an IMU corrector");
+    if let Some(Event::Environment(t, v)) =
+        events.iter().find(|e| matches!(e, Event::Environment(..)))
+    {
+        imu.set_environment(*t, *v);
+    }
+    let mut config = config::<f32>(flight);
+    if let Some(factors) = imu.covariance_factors() {
+        config.take_calibration_prior(factors);
+    }
+    let filter = FlightFilter::<f32>::try_new(config).expect("the golden set-up");
+    let mut round = spincal::flight::Round::new(filter);
+    for e in events {
+        match e {
+            Event::Sample(t, raw) => {
+                let out = imu.correct(*raw);
+                let doubt = doubted(raw, out.flags, accel, gyro);
+                let mut values = out.values;
+                if round.filter.setback_end_us().is_some() {
+                    values[0] += added;
+                }
+                round.sample(*t, &values, doubt, || imu.error_features(&values));
+            }
+            Event::Environment(t, v) => imu.set_environment(*t, *v),
+            Event::Fix(f) => round.filter.gnss(f),
+            Event::Pressure(t, p) => round.filter.pressure(*t, *p),
+        }
+    }
+    round.report(imu.covariance_factors())
+}
+
 /// One input into `filter`.
 pub fn feed<T: Real>(filter: &mut FlightFilter<T>, input: &Input) {
     let c = |x: f32| -> T { nalgebra::convert(f64::from(x)) };

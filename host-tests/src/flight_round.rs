@@ -139,7 +139,7 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
     let mut walked = Vector3::<f64>::zeros();
     // The residual errors, from draws of their own (the noise's stay as without them).
     let residual = {
-        let mut own = ChaCha8Rng::seed_from_u64(scenario.seed ^ 0x5eed_0f_e770);
+        let mut own = ChaCha8Rng::seed_from_u64(scenario.seed ^ 0x005e_ed0f_e770);
         let mut draw = |sigma: f64| {
             let n = Normal::new(0.0, sigma).expect("sigma");
             Vector3::from_fn(|_, _| {

@@ -121,6 +121,25 @@ impl<T: Real> FlightConfig<T> {
             launch_shift: sensor_sigma,
         }
     }
+
+    /// Takes the calibration's own error at rest as the sensor errors' prior (each output's
+    /// bias and scale factor, [`LaunchChange::at_rest_sigma`] of the blob's covariance
+    /// `factors`) in place of a stated one; the barometer's stays.
+    ///
+    /// [`LaunchChange::at_rest_sigma`]: super::LaunchChange::at_rest_sigma
+    pub fn take_calibration_prior(&mut self, factors: &crate::model::ImuCovariance) {
+        let rest = super::LaunchChange::of(factors, &super::FlightLines::default()).at_rest_sigma();
+        let s = &mut self.sensor_sigma;
+        let slots = s
+            .accel_bias
+            .iter_mut()
+            .chain(s.gyro_bias.iter_mut())
+            .zip(s.accel_scale.iter_mut().chain(s.gyro_scale.iter_mut()));
+        for ((bias, scale), (b, k)) in slots.zip(rest) {
+            *bias = c(b);
+            *scale = c(k);
+        }
+    }
 }
 
 /// A field of a [`FlightConfig`] the filter cannot run with: which, and what it must be.

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::line::LaunchChange;
 use super::run::{FlightFilter, Phase};
 use super::stats::FlightStats;
 use super::verdict::Verdict;
@@ -39,9 +40,16 @@ fn f<T: Real>(x: T) -> f32 {
 }
 
 impl<T: Real> FlightFilter<T> {
-    /// The snapshot of the filter now.
+    /// The snapshot of the filter now, its verdict on its stated prior alone.
     #[must_use]
     pub fn report(&self) -> FlightReport {
+        self.report_given(None)
+    }
+
+    /// The snapshot, its verdict carrying the calibration's own change of line into the
+    /// flight when given ([`FlightFilter::verdict_given`]).
+    #[must_use]
+    pub fn report_given(&self, change: Option<&LaunchChange>) -> FlightReport {
         let e = self.estimate();
         let s = &e.sensors;
         let q = e.nav.attitude();
@@ -69,7 +77,7 @@ impl<T: Real> FlightFilter<T> {
             sensors,
             sigma,
             stats: *self.stats(),
-            verdict: self.verdict(),
+            verdict: self.verdict_given(change),
         }
     }
 }

@@ -28,6 +28,7 @@
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
+use super::line::LaunchChange;
 use super::stats::{Aiding, FlightStats};
 
 /// The sensor terms: accelerometer biases, gyro biases, accelerometer and gyro scale factors,
@@ -111,7 +112,8 @@ impl Word {
 pub struct Verdict {
     /// The word.
     pub word: Word,
-    /// Per term its shift since the opening, `x - m`.
+    /// Per term its shift since the opening, `x - m`, less what the calibration's own change
+    /// of line into the flight moves it by.
     pub shift: [f32; TERMS],
     /// Per term its Wald statistic against "held", NaN when not observed.
     pub z: [f32; TERMS],
@@ -266,14 +268,27 @@ impl Opening {
     /// The verdict on the estimate `x` and covariance `p` now (over the sensor terms), with the
     /// filter's counts.
     #[must_use]
-    pub fn judge(&self, x: &TermVector, p: &TermMatrix, stats: &FlightStats) -> Verdict {
+    pub fn judge(
+        &self,
+        x: &TermVector,
+        p: &TermMatrix,
+        stats: &FlightStats,
+        change: Option<&LaunchChange>,
+    ) -> Verdict {
         let (innovations, fits) = consistency(stats);
         let pi = &self.covariance;
         let learnt = pi - p;
         let l = learnt * pseudo_inverse(pi);
-        let d = learnt - l * TermMatrix::from_diagonal(&self.shift) * l.transpose();
+        // Had nothing shifted, the errors are those at rest (`Pi - S`) carried into the flight
+        // by the calibration's own change of line, `(I + K) x + w`: the filter opened `Pi`
+        // less that.
+        let (k, w) = change.map_or((TermMatrix::zeros(), TermMatrix::zeros()), terms);
+        let carried = TermMatrix::identity() + k;
+        let rest = pi - TermMatrix::from_diagonal(&self.shift);
+        let held = carried * rest * carried.transpose() + w;
+        let d = learnt - l * (pi - held) * l.transpose();
         let d = (d + d.transpose()) * 0.5;
-        let shift = x - self.estimate;
+        let shift = x - self.estimate - l * k * self.estimate;
         // Observed: learnt from, and what the flight alone determines within UNRESOLVED
         // times the prior's 1-sigma.
         let seen = TermVector::from_iterator(
@@ -342,6 +357,27 @@ impl Opening {
             resets: stats.resets,
         }
     }
+}
+
+/// `K` and `W` of `change` over the sensor terms (each output's bias and scale factor).
+fn terms(change: &LaunchChange) -> (TermMatrix, TermMatrix) {
+    let (mut k, mut w) = (TermMatrix::zeros(), TermMatrix::zeros());
+    for (out, (_, ko, wo)) in change.outputs.iter().enumerate() {
+        let at = [out, 6 + out];
+        for (i, a) in at.iter().enumerate() {
+            for (j, b) in at.iter().enumerate() {
+                if let (Some(x), Some(y), Some(kv), Some(wv)) = (
+                    k.get_mut((*a, *b)),
+                    w.get_mut((*a, *b)),
+                    ko.get((i, j)),
+                    wo.get((i, j)),
+                ) {
+                    (*x, *y) = (*kv, *wv);
+                }
+            }
+        }
+    }
+    (k, w)
 }
 
 /// Holm's step-down over the `m` observed terms: at each step the term whose whitened column
@@ -445,23 +481,23 @@ mod tests {
         let mut x = TermVector::zeros();
         x[0] = 6.0 * d.sqrt();
         x[4] = 1.0 * d.sqrt();
-        let v = opening.judge(&x, &p, &stats_that_fit());
+        let v = opening.judge(&x, &p, &stats_that_fit(), None);
         assert_eq!(v.word, Word::Shifted);
         assert_eq!(v.shifted, 1);
         assert_eq!(v.observed, 0x0fff);
         assert!((f64::from(v.z[0]) - 6.0).abs() < 1e-4, "{:?}", v.z);
         assert!((f64::from(v.z[4]) - 1.0).abs() < 1e-4, "{:?}", v.z);
         x[0] = 2.0 * d.sqrt();
-        let v = opening.judge(&x, &p, &stats_that_fit());
+        let v = opening.judge(&x, &p, &stats_that_fit(), None);
         assert_eq!(v.word, Word::Held, "{v:?}");
         // The same with innovations outside their bounds: no finding.
         let mut bad = stats_that_fit();
         bad.inside[1] = 400;
-        assert_eq!(opening.judge(&x, &p, &bad).word, Word::DoesNotFit);
+        assert_eq!(opening.judge(&x, &p, &bad, None).word, Word::DoesNotFit);
         // A term the flight does not learn is not observed.
         let mut unseen = p;
         unseen[(3, 3)] = 101.0;
-        let v = opening.judge(&x, &unseen, &stats_that_fit());
+        let v = opening.judge(&x, &unseen, &stats_that_fit(), None);
         assert!(!v.is_observed(3) && v.is_observed(2) && v.z[3].is_nan());
     }
 }

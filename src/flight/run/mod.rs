@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::air;
 use super::config::FlightConfig;
+use super::line::LaunchChange;
 use super::origin::{Geodetic, Origin};
 use super::stats::{Aiding, FlightStats, MAX_FIX_AGE_US, MAX_SAMPLE_GAP_US};
 use super::verdict::{Opening, TERMS, Verdict};
@@ -391,12 +392,20 @@ impl<T: Real> FlightFilter<T> {
         )
     }
 
-    /// The round's verdict on its calibration now ([`super::verdict`]): [`Word::NotYet`]
-    /// before the launch's shift is opened.
+    /// The round's verdict on its calibration now ([`super::verdict`]), with its stated prior
+    /// alone: [`Word::NotYet`] before the launch's shift is opened.
     ///
     /// [`Word::NotYet`]: super::verdict::Word::NotYet
     #[must_use]
     pub fn verdict(&self) -> Verdict {
+        self.verdict_given(None)
+    }
+
+    /// The round's verdict, "nothing shifted" carrying the calibration's own change of line
+    /// into the flight (`change`, [`LaunchChange::of`] the calibration's factors over the
+    /// flight's lines) when given.
+    #[must_use]
+    pub fn verdict_given(&self, change: Option<&LaunchChange>) -> Verdict {
         let Some((m, pi, open)) = &self.opening else {
             return Verdict::not_yet(&self.stats);
         };
@@ -407,7 +416,7 @@ impl<T: Real> FlightFilter<T> {
             shift: open.map(wide),
         };
         let p = self.term_covariance().map(wide);
-        opening.judge(&self.terms().map(wide), &p, &self.stats)
+        opening.judge(&self.terms().map(wide), &p, &self.stats, change)
     }
 
     /// Averages the rest; levels the unit once it has rested long enough and the origin is
