@@ -342,6 +342,25 @@ pub fn round(
     flight: &Flight,
     added: f32,
 ) -> spincal::flight::FlightReport {
+    let (round, factors) = round_flown(cal, events, flight, added);
+    round.report(factors.as_ref())
+}
+
+/// [`round`]'s loop at the end of the flight, and the calibration's covariance factors at the
+/// flight's last temperature.
+///
+/// # Panics
+/// As [`round`].
+#[must_use]
+pub fn round_flown(
+    cal: &Calibration,
+    events: &[Event],
+    flight: &Flight,
+    added: f32,
+) -> (
+    spincal::flight::Round<f32>,
+    Option<spincal::model::ImuCovariance>,
+) {
     let (accel, gyro) = rails(cal);
     let mut imu = AnyImuCorrector::new(cal, RATE as f32).expect("an IMU corrector");
     if let Some(Event::Environment(t, v)) =
@@ -371,7 +390,8 @@ pub fn round(
             Event::Pressure(t, p) => round.filter.pressure(*t, *p),
         }
     }
-    round.report(imu.covariance_factors())
+    let factors = imu.covariance_factors().copied();
+    (round, factors)
 }
 
 /// One input into `filter`.

@@ -510,3 +510,76 @@ fn the_rounds_verdict_holds_the_calibrations_own_error_over_its_flight_and_finds
     assert_eq!(shifted.word, Word::Shifted, "{shifted:?}");
     assert!(shifted.is_shifted(0), "{shifted:?}");
 }
+
+/// The round's change of line at launch (`spincal::flight::LaunchChange`, `no_std`, its lines'
+/// sums in single precision by blocks) against `calflash`'s (`nav::prior`, double precision),
+/// over the same samples of the golden flight from the end of the setback through the same
+/// calibration: the axial accelerometer's and the roll gyro's `K` and `W` agree to 1 %.
+#[test]
+fn the_rounds_change_of_line_is_calflashs_on_the_same_flight() {
+    use calflash::nav::input::ImuSeries;
+    use spincal::flight::LaunchChange;
+    let flight = flight_golden::flight();
+    let cal = flight_golden::calibration();
+    let (round, factors) = flight_golden::round_flown(&cal, &flight.events, &flight, 0.0);
+    let factors = factors.expect("the round's calibration carries covariance");
+    let change = LaunchChange::of(&factors, &round.lines);
+    let end = round.filter.setback_end_us().expect("the setback ended");
+    // The same samples through the same corrector, as calflash reads a recording.
+    let mut imu = spincal::correct::AnyImuCorrector::new(&cal, 2000.0).unwrap();
+    let mut series = ImuSeries {
+        t: Vec::new(),
+        f: Vec::new(),
+        w: Vec::new(),
+        flagged: Vec::new(),
+        temperature: None,
+    };
+    let mut from = None;
+    for e in &flight.events {
+        match e {
+            flight_golden::Event::Sample(t, raw) => {
+                let v = imu.correct(*raw).values.map(f64::from);
+                if *t >= end {
+                    from.get_or_insert(series.t.len());
+                }
+                series.t.push(*t as f64 * 1e-6);
+                series.f.push([v[0], v[1], v[2]]);
+                series.w.push([v[3], v[4], v[5]]);
+                series.flagged.push([false, false]);
+            }
+            flight_golden::Event::Environment(t, v) => {
+                imu.set_environment(*t, *v);
+                series.temperature.get_or_insert(f64::from(*t));
+            }
+            _ => {}
+        }
+    }
+    let host = calflash::nav::prior::calibration_prior(&cal, &series, from.unwrap()).unwrap();
+    let (t, w) = host.at_launch(&[false; 12]);
+    for (out, b, s) in [
+        (0, index::ACCEL_BIAS, index::ACCEL_SCALE),
+        (3, index::GYRO_BIAS, index::GYRO_SCALE),
+    ] {
+        let (_, k, wr) = change.outputs[out];
+        let kh = nalgebra::Matrix2::new(t[(b, b)] - 1.0, t[(b, s)], t[(s, b)], t[(s, s)] - 1.0);
+        let wh = nalgebra::Matrix2::new(w[(b, b)], w[(b, s)], w[(s, b)], w[(s, s)]);
+        println!("output {out}: K round {k} calflash {kh}; W round {wr} calflash {wh}");
+        // Each entry within 1 % of its matrix's scale in its row (the rows are the bias and
+        // the scale factor, units apart): single-precision sums against double.
+        for r in 0..2 {
+            let scale = |m: &nalgebra::Matrix2<f64>| m.row(r).amax();
+            for c in 0..2 {
+                let kt = 0.01 * scale(&kh).max(1e-12);
+                assert!(
+                    (k[(r, c)] - kh[(r, c)]).abs() <= kt,
+                    "K[{r},{c}] {k} against {kh}"
+                );
+                let wt = 0.01 * (wh[(r, r)] * wh[(c, c)]).sqrt().max(1e-30);
+                assert!(
+                    (wr[(r, c)] - wh[(r, c)]).abs() <= wt,
+                    "W[{r},{c}] {wr} against {wh}"
+                );
+            }
+        }
+    }
+}

@@ -32,8 +32,7 @@ impl<T: Real> Round<T> {
 
     /// One corrected sample at `t_us` (`ax ay az gx gy gz`, which sensors are in doubt);
     /// `features` gives the corrector's error features there (`error_features`), asked for only
-    /// when the lines take the sample (at most every
-    /// [`LINE_INTERVAL_US`](super::line::LINE_INTERVAL_US), after the setback).
+    /// when the lines take the sample (every sample after the setback).
     pub fn sample(
         &mut self,
         t_us: u64,
@@ -49,8 +48,8 @@ impl<T: Real> Round<T> {
             &Vector3::new(c(gx), c(gy), c(gz)),
             doubted,
         );
-        if self.filter.setback_end_us().is_some() && self.lines.due(t_us) {
-            self.lines.add(t_us, values, &features(), doubted);
+        if self.filter.setback_end_us().is_some() {
+            self.lines.add(values, &features(), doubted);
         }
     }
 
