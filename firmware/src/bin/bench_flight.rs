@@ -13,7 +13,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use nalgebra::Vector3;
 use spincal::correct::AnyImuCorrector;
-use spincal::flight::{DelayedFlight, FlightFilter, Phase};
+use spincal::flight::{DelayedFlight, FlightFilter, FlightLines, LaunchChange, Phase};
 use spincal::nav::ErrorFilter;
 use spincal_firmware::flight_golden::{BLOB, Input, RATE, flight_config, inputs, rails};
 use spincal_firmware::{stack, timer};
@@ -55,6 +55,9 @@ fn main() -> ! {
         fail("not an IMU")
     };
     let Ok(mut imu) = AnyImuCorrector::new(&cal, RATE) else {
+        fail("corrector")
+    };
+    let Ok(features_of) = AnyImuCorrector::new(&cal, RATE) else {
         fail("corrector")
     };
     let (_, overhead) = timed(|| black_box(0));
@@ -215,6 +218,38 @@ fn main() -> ! {
         delayed_all.saturating_sub(all),
         samples,
     );
+    // The round's lines beside the filter (every flight sample after the setback: the
+    // corrector's error features and the single-precision sums), and the change of line and
+    // the verdict it carries, once at the end.
+    let Some(setback_end) = again.setback_end_us() else {
+        fail("the golden flight's setback")
+    };
+    let Ok(mut imu) = AnyImuCorrector::new(&cal, RATE) else {
+        fail("corrector")
+    };
+    let mut lines = FlightLines::default();
+    let (mut line_ticks, mut line_samples) = (0u64, 0u64);
+    for e in inputs(&mut imu, rails) {
+        if let Input::Sample(t, f, w, doubt) = e
+            && t >= setback_end
+        {
+            let v = [f.x, f.y, f.z, w.x, w.y, w.z];
+            let (_, ticks) = timed(|| {
+                let features = features_of.error_features(black_box(&v));
+                lines.add(&v, &features, doubt);
+            });
+            line_ticks += ticks.saturating_sub(overhead);
+            line_samples += 1;
+        }
+    }
+    report("flight_lines_per_sample", line_ticks, line_samples);
+    let Some(factors) = features_of.covariance_factors() else {
+        fail("the golden calibration's covariance")
+    };
+    let (change, ticks) = timed(|| LaunchChange::of(factors, &lines));
+    report("flight_launch_change", ticks.saturating_sub(overhead), 1);
+    let (_, ticks) = timed(|| black_box(again.verdict_given(Some(&change))));
+    report("flight_verdict_with_change", ticks.saturating_sub(overhead), 1);
     hprintln!(
         "size delayed_flight_256 {}",
         core::mem::size_of::<DelayedFlight<f32, 256>>()
@@ -223,5 +258,6 @@ fn main() -> ! {
         "size flight_filter {}",
         core::mem::size_of::<FlightFilter<f32>>()
     );
+    hprintln!("size flight_lines {}", core::mem::size_of::<FlightLines>());
     spincal_firmware::exit(true);
 }
