@@ -11,6 +11,11 @@
 //! an [`Overlay`](crate::correct::Overlay) through [`FlightFilter::overlay`]: in RAM, never
 //! written into the stored calibration (a new calibration still needs a signed blob).
 //!
+//! Its verdict on the calibration ([`FlightFilter::verdict`], [`verdict`]) tests each sensor
+//! term's in-flight estimate against what it would be had nothing shifted at launch; with the
+//! calibration's covariance, [`Round`] gathers the flight's own lines ([`line`]) so that
+//! "nothing shifted" is the calibration's own error carried into the flight.
+//!
 //! Generic over the scalar: `f32` on the Cortex-M4F; the host runs the same code in `f64` as
 //! the reference, and the two agree on a flight to a small fraction of the 1-sigma
 //! (`host-tests/tests/flight_device.rs`). Transcendentals come from `libm` on every target, so

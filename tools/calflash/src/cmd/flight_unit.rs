@@ -1,6 +1,6 @@
 //! `calflash flight --port`: the flight filter running in the unit (`spincal::flight`), read
-//! over the update protocol: its estimate, 1-sigma and counts as its flight loop last
-//! published them.
+//! over the update protocol: its estimate, 1-sigma, counts and its own verdict on its
+//! calibration (`spincal::flight::verdict`) as its flight loop last published them.
 
 use std::fmt::Write as _;
 use std::time::Duration;
