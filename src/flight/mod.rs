@@ -13,7 +13,7 @@
 //!
 //! Its verdict on the calibration ([`FlightFilter::verdict`], [`verdict`]) tests each sensor
 //! term's in-flight estimate against what it would be had nothing shifted at launch; with the
-//! calibration's covariance, [`Round`] gathers the flight's own lines ([`line`]) so that
+//! calibration's covariance, [`Round`] gathers the flight's own lines ([`line`](mod@line)) so that
 //! "nothing shifted" is the calibration's own error carried into the flight.
 //!
 //! Generic over the scalar: `f32` on the Cortex-M4F; the host runs the same code in `f64` as
