@@ -35,7 +35,6 @@ pub const OUTPUTS: usize = 6;
 pub const SPINNING: f64 = 100.0;
 
 type Row = SMatrix<f64, 1, IMU_FEATURES>;
-type Row32 = SMatrix<f32, 1, IMU_FEATURES>;
 type Map = SMatrix<f64, 2, IMU_FEATURES>;
 type Features = SMatrix<f64, IMU_FEATURES, IMU_FEATURES>;
 
@@ -45,45 +44,56 @@ type Features = SMatrix<f64, IMU_FEATURES, IMU_FEATURES>;
 /// sums of a block of [`BLOCK`] samples (the FPU's), each block into double-precision ones.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Sums {
-    origin: Option<(f32, Row32)>,
-    block: Moments<f32>,
-    total: Moments<f64>,
+    origin: Option<(f32, [f32; IMU_FEATURES])>,
+    block: Block,
+    total: Moments,
 }
 
 /// Samples summed in single precision before they are carried into double.
-const BLOCK: f32 = 64.0;
+const BLOCK: f32 = 128.0;
 
-/// `n`, `sum u`, `sum u^2`, `sum r`, `sum u r`.
+/// `n`, `sum u`, `sum u^2`, `sum r`, `sum u r` of one block, single precision.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Moments<T: nalgebra::Scalar> {
-    n: T,
-    u: T,
-    uu: T,
-    r: SMatrix<T, 1, IMU_FEATURES>,
-    ur: SMatrix<T, 1, IMU_FEATURES>,
+struct Block {
+    n: f32,
+    u: f32,
+    uu: f32,
+    r: [f32; IMU_FEATURES],
+    ur: [f32; IMU_FEATURES],
 }
 
-impl Moments<f32> {
+impl Block {
     const ZERO: Self = Self {
         n: 0.0,
         u: 0.0,
         uu: 0.0,
-        r: Row32::from_array_storage(nalgebra::ArrayStorage([[0.0]; IMU_FEATURES])),
-        ur: Row32::from_array_storage(nalgebra::ArrayStorage([[0.0]; IMU_FEATURES])),
+        r: [0.0; IMU_FEATURES],
+        ur: [0.0; IMU_FEATURES],
     };
 
-    fn wide(&self) -> Moments<f64> {
+    fn wide(&self) -> Moments {
+        let wide = |x: &[f32; IMU_FEATURES]| Row::from_iterator(x.iter().map(|v| f64::from(*v)));
         Moments {
             n: f64::from(self.n),
             u: f64::from(self.u),
             uu: f64::from(self.uu),
-            r: self.r.map(f64::from),
-            ur: self.ur.map(f64::from),
+            r: wide(&self.r),
+            ur: wide(&self.ur),
         }
     }
 }
 
-impl Moments<f64> {
+/// `n`, `sum u`, `sum u^2`, `sum r`, `sum u r`, double precision.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Moments {
+    n: f64,
+    u: f64,
+    uu: f64,
+    r: Row,
+    ur: Row,
+}
+
+impl Moments {
     const ZERO: Self = Self {
         n: 0.0,
         u: 0.0,
@@ -106,22 +116,25 @@ impl Moments<f64> {
 impl Sums {
     const ZERO: Self = Self {
         origin: None,
-        block: Moments::<f32>::ZERO,
-        total: Moments::<f64>::ZERO,
+        block: Block::ZERO,
+        total: Moments::ZERO,
     };
 
-    fn add(&mut self, u: f32, r: &Row32) {
-        let (u0, r0) = *self.origin.get_or_insert((u, *r));
-        let (u, r) = (u - u0, r - r0);
+    fn add(&mut self, u: f32, phi: &[f32; IMU_FEATURES]) {
+        let (u0, r0) = self.origin.get_or_insert((u, *phi));
+        let u = u - *u0;
         let b = &mut self.block;
         b.n += 1.0;
         b.u += u;
         b.uu += u * u;
-        b.r += r;
-        b.ur += r * u;
+        for (((sr, sur), x), x0) in b.r.iter_mut().zip(b.ur.iter_mut()).zip(phi).zip(r0.iter()) {
+            let r = x - x0;
+            *sr += r;
+            *sur += r * u;
+        }
         if b.n >= BLOCK {
             self.total = self.total.plus(&b.wide());
-            self.block = Moments::<f32>::ZERO;
+            self.block = Block::ZERO;
         }
     }
 
@@ -133,7 +146,10 @@ impl Sums {
         let Some((u0, r0)) = self.origin else {
             return a;
         };
-        let (u0, r0) = (f64::from(u0), r0.map(f64::from));
+        let (u0, r0) = (
+            f64::from(u0),
+            Row::from_iterator(r0.iter().map(|v| f64::from(*v))),
+        );
         let m = self.total.plus(&self.block.wide());
         let n = m.n;
         let mean = m.u / n.max(1.0);
@@ -175,8 +191,10 @@ fn own_feature(out: usize) -> usize {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FlightLines {
     sums: [Sums; OUTPUTS],
-    /// `sum w_i^2` per body axis and the samples, for the spin's axis and RMS.
+    /// `sum w_i^2` per body axis and the samples, for the spin's axis and RMS: the blocks'
+    /// and the block's.
     spin: ([f64; 3], f64),
+    spin_block: ([f32; 3], f32),
 }
 
 impl Default for FlightLines {
@@ -184,6 +202,7 @@ impl Default for FlightLines {
         Self {
             sums: [Sums::ZERO; OUTPUTS],
             spin: ([0.0; 3], 0.0),
+            spin_block: ([0.0; 3], 0.0),
         }
     }
 }
@@ -202,24 +221,47 @@ impl FlightLines {
             if doubted.get(out / 3).copied().unwrap_or(true) || !u.is_finite() {
                 continue;
             }
-            let r = Row32::from_iterator(phi.iter().copied());
-            if r.iter().any(|x| !x.is_finite()) {
+            if !phi.iter().all(|x| x.is_finite()) {
                 continue;
             }
-            sums.add(*u, &r);
+            sums.add(*u, phi);
         }
         if !doubted.get(1).copied().unwrap_or(true) {
-            for (s, w) in self.spin.0.iter_mut().zip(values.iter().skip(3)) {
-                *s += f64::from(*w) * f64::from(*w);
+            let (sum, n) = &mut self.spin_block;
+            for (s, w) in sum.iter_mut().zip(values.iter().skip(3)) {
+                *s += w * w;
             }
-            self.spin.1 += 1.0;
+            *n += 1.0;
+            if *n >= BLOCK {
+                self.fold_spin();
+            }
         }
+    }
+
+    /// Carries the spin's block into the totals.
+    fn fold_spin(&mut self) {
+        let (sum, n) = &mut self.spin_block;
+        for (total, s) in self.spin.0.iter_mut().zip(sum.iter()) {
+            *total += f64::from(*s);
+        }
+        self.spin.1 += f64::from(*n);
+        self.spin_block = ([0.0; 3], 0.0);
+    }
+
+    /// `sum w_i^2` per body axis and the samples so far.
+    fn spin_sums(&self) -> ([f64; 3], f64) {
+        let mut out = self.spin;
+        for (total, s) in out.0.iter_mut().zip(self.spin_block.0.iter()) {
+            *total += f64::from(*s);
+        }
+        out.1 += f64::from(self.spin_block.1);
+        out
     }
 
     /// Samples taken.
     #[must_use]
     pub fn samples(&self) -> f64 {
-        self.spin.1
+        self.spin_sums().1
     }
 
     /// Per body axis, whether it lies across the spin of a flight that spins ([`SPINNING`]).

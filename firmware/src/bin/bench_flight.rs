@@ -228,7 +228,7 @@ fn main() -> ! {
         fail("corrector")
     };
     let mut lines = FlightLines::default();
-    let (mut line_ticks, mut line_samples) = (0u64, 0u64);
+    let (mut line_ticks, mut line_samples, mut feature_ticks) = (0u64, 0u64, 0u64);
     for e in inputs(&mut imu, rails) {
         if let Input::Sample(t, f, w, doubt) = e
             && t >= setback_end
@@ -240,9 +240,12 @@ fn main() -> ! {
             });
             line_ticks += ticks.saturating_sub(overhead);
             line_samples += 1;
+            let (_, ticks) = timed(|| black_box(features_of.error_features(black_box(&v))));
+            feature_ticks += ticks.saturating_sub(overhead);
         }
     }
     report("flight_lines_per_sample", line_ticks, line_samples);
+    report("flight_lines_features_alone", feature_ticks, line_samples);
     let Some(factors) = features_of.covariance_factors() else {
         fail("the golden calibration's covariance")
     };
