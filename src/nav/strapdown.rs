@@ -66,7 +66,7 @@ pub struct Navigation<T: RealField + Copy> {
 struct RateEnd<T: RealField + Copy> {
     w: Vector3<T>,
     despun_rate: Vector3<T>,
-    before: Option<Vector3<T>>,
+    before: Vector3<T>,
 }
 
 /// A step in the rate at an unknown instant of a sample interval hides up to its size times
@@ -230,8 +230,8 @@ impl<T: Real> Navigation<T> {
     /// kinks or steps between samples (the transverse rate a round takes at the muzzle, in
     /// one instant) the step cannot know when, and that many radians of attitude are not
     /// known: the second difference of the last three de-spun rates times the interval
-    /// times `1 / (2 sqrt(12))`. The filter adds it to the attitude's variance. Zero while the rates
-    /// are smooth to the sample rate.
+    /// times `1 / (2 sqrt(12))`. The filter adds it to the attitude's variance. Zero while the
+    /// rates are smooth to the sample rate.
     #[must_use]
     pub fn hidden(&self) -> T {
         self.hidden
@@ -277,14 +277,14 @@ impl<T: Real> Navigation<T> {
             None => self.despun_rate(&w0, &self.spin),
         };
         let d1 = self.despun_rate(&w1, &spin1);
-        self.hidden = match rate_end.and_then(|e| e.before) {
-            Some(dm) => (d1 - d0 * two + dm).norm() * dt * nalgebra::convert::<f64, T>(KINK),
+        self.hidden = match rate_end {
+            Some(e) => (d1 - d0 * two + e.before).norm() * dt * nalgebra::convert::<f64, T>(KINK),
             None => T::zero(),
         };
         self.rate_end = Some(RateEnd {
             w: w1,
             despun_rate: d1,
-            before: Some(d0),
+            before: d0,
         });
         let body = rotation(&rotation_vector(&d0, &d1, dt));
         // The level frame turns with the Earth by 3.6e-8 rad in a 0.5 ms step, under the
