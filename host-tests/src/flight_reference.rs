@@ -250,6 +250,7 @@ pub fn shell(name: &str) -> Option<RoundFlight> {
         origin,
         antenna: v3(&unit["geometry"]["gnss_antenna_from_imu_body_m"]),
         shift_us,
+        axial_residual: (0.0, 0.0),
         scenario: crate::flight_round::Scenario {
             spec: "reference",
             seed: 0,

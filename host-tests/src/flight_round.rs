@@ -105,6 +105,9 @@ pub struct RoundFlight {
     pub antenna: Vector3<f64>,
     /// When the shift comes, us.
     pub shift_us: u64,
+    /// The axial accelerometer's residual bias and scale factor before the shift
+    /// ([`Scenario::residual`]; zero without).
+    pub axial_residual: (f64, f64),
     /// The scenario.
     pub scenario: Scenario,
 }
@@ -233,6 +236,7 @@ pub fn fly(scenario: &Scenario) -> RoundFlight {
             height: site.height,
         },
         shift_us: us(shift_at),
+        axial_residual: (residual[0].x, residual[2].x),
         scenario: *scenario,
     }
 }
@@ -444,16 +448,18 @@ pub fn run<T: Real, F: Flown<T>>(
     held
 }
 
-/// The axial accelerometer's estimate against the scenario's shift, in the filter's own
-/// sigma: bias, then scale factor.
+/// The axial accelerometer's estimate against its truth after the shift (the scenario's shift
+/// on its residual error), in the filter's own sigma: bias, then scale factor.
 #[must_use]
 pub fn axial_z<T: Real>(filter: &FlightFilter<T>, flight: &RoundFlight) -> (f64, f64) {
     let s = &filter.estimate().sensors;
     let p = filter.covariance();
     let z = |x: T, at: usize, truth: f64| (x.to_f64() - truth) / p[(at, at)].to_f64().sqrt();
+    // The output after the shift: ((1 + k) f + b) (1 + k1) + b1.
+    let ((b, k), (b1, k1)) = (flight.axial_residual, flight.scenario.shift);
     (
-        z(s.accel_bias.x, index::ACCEL_BIAS, flight.scenario.shift.0),
-        z(s.accel_scale.x, index::ACCEL_SCALE, flight.scenario.shift.1),
+        z(s.accel_bias.x, index::ACCEL_BIAS, b * (1.0 + k1) + b1),
+        z(s.accel_scale.x, index::ACCEL_SCALE, k + k1 + k * k1),
     )
 }
 
