@@ -36,7 +36,8 @@ pub const SPINNING: f64 = 100.0;
 
 type Row = SMatrix<f64, 1, IMU_FEATURES>;
 type Map = SMatrix<f64, 2, IMU_FEATURES>;
-type Features = SMatrix<f64, IMU_FEATURES, IMU_FEATURES>;
+/// A matrix over an output's error features.
+pub type Features = SMatrix<f64, IMU_FEATURES, IMU_FEATURES>;
 
 /// The sums of one output's line about its first sample `(u0, r0)` (so that a spin of 1,800
 /// rad/s and its square lose nothing to cancellation): `n`, `sum u`, `sum u^2`, per feature
@@ -294,8 +295,10 @@ impl FlightLines {
     }
 }
 
-/// `L L'` of one output's packed factor.
-fn covariance(factor: &ImuOutputCovariance) -> Features {
+/// `L L'` of one output's packed factor: the covariance of its parameters' errors over its
+/// features ([`IMU_FEATURES`]).
+#[must_use]
+pub fn factor_covariance(factor: &ImuOutputCovariance) -> Features {
     let packed = factor.as_flattened();
     let l = Features::from_fn(|i, j| {
         if j <= i {
@@ -332,7 +335,7 @@ impl LaunchChange {
             .zip(factors.accel.iter().chain(&factors.gyro))
             .enumerate()
         {
-            let c = covariance(factor);
+            let c = factor_covariance(factor);
             let rest = at_rest(own_feature(out));
             let change = lines.through(out) - rest;
             let p0 = rest * c * rest.transpose();

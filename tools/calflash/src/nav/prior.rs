@@ -455,19 +455,10 @@ fn states(out: usize) -> (usize, usize) {
     }
 }
 
-/// `L L'` of one output's packed factor.
+/// `L L'` of one output's packed factor (the round's own, as a matrix of this size).
 fn covariance(factor: &ImuOutputCovariance) -> DMatrix<f64> {
-    let packed = factor.as_flattened();
-    let l = DMatrix::from_fn(IMU_FEATURES, IMU_FEATURES, |i, j| {
-        if j <= i {
-            packed
-                .get(i * (i + 1) / 2 + j)
-                .map_or(0.0, |x| f64::from(*x))
-        } else {
-            0.0
-        }
-    });
-    &l * l.transpose()
+    let c = spincal::flight::line::factor_covariance(factor);
+    DMatrix::from_column_slice(IMU_FEATURES, IMU_FEATURES, c.as_slice())
 }
 
 /// A stated prior, the same at rest and in flight.

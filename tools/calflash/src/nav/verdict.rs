@@ -18,21 +18,9 @@ use spincal::nav::filter::{SensorErrors, index};
 
 use super::run::{Kind, Said};
 
-/// The terms, in the filter's order from [`index::ACCEL_BIAS`].
-pub const TERMS: [&str; 12] = [
-    "accel bias x",
-    "accel bias y",
-    "accel bias z",
-    "gyro bias x",
-    "gyro bias y",
-    "gyro bias z",
-    "accel scale x",
-    "accel scale y",
-    "accel scale z",
-    "gyro scale x",
-    "gyro scale y",
-    "gyro scale z",
-];
+/// The terms, in the filter's order from [`index::ACCEL_BIAS`] (the round's own verdict's
+/// names).
+pub const TERMS: [&str; 12] = spincal::flight::verdict::TERM_NAMES;
 
 /// A term is not observed when what the flight alone determines of it (its flight-alone
 /// 1-sigma) is wider than this many times its prior's 1-sigma at launch: the flight then adds
