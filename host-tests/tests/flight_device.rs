@@ -464,6 +464,7 @@ fn the_round_on_qemu_flies_its_recorded_flight_and_calflash_flight_port_reads_it
     // `the_rounds_verdict_holds_the_calibrations_own_error_over_its_flight_and_finds_a_shift`).
     let verdict = &v["verdict"];
     assert_eq!(verdict["word"], "HELD", "{verdict}");
+    assert_eq!(verdict["calibration_carried"], true, "{verdict}");
     assert_eq!(host.verdict.word.as_str(), "HELD");
     for (i, term) in verdict["terms"].as_array().unwrap().iter().enumerate() {
         assert_eq!(term["shifted"], host.verdict.is_shifted(i), "{term}");
@@ -503,6 +504,7 @@ fn the_rounds_verdict_holds_the_calibrations_own_error_over_its_flight_and_finds
     let held = flight_golden::round(&cal, &flight.events, &flight, 0.0).verdict;
     println!("the calibration's own error over the flight: {held:?}");
     assert_eq!(held.word, Word::Held, "{held:?}");
+    assert!(held.carried && !alone.carried);
     assert!(held.is_observed(0) && held.is_observed(9), "{held:?}");
     assert!(held.z[9].abs() < 2.0, "{held:?}");
     let shifted = flight_golden::round(&cal, &flight.events, &flight, 2.0).verdict;

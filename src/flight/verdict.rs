@@ -128,6 +128,9 @@ pub struct Verdict {
     pub innovations: (u32, f32, f32, f32),
     /// Covariance resets since the start ([`FlightStats::resets`]).
     pub resets: u32,
+    /// "Nothing shifted" carried the calibration's own change of line into the flight
+    /// ([`LaunchChange`]); false: the sensor errors' prior alone, as stated or at rest.
+    pub carried: bool,
 }
 
 impl Verdict {
@@ -143,6 +146,7 @@ impl Verdict {
             chi2: (f32::NAN, f32::NAN),
             innovations: consistency(stats).0,
             resets: stats.resets,
+            carried: false,
         }
     }
 
@@ -355,6 +359,7 @@ impl Opening {
             chi2,
             innovations,
             resets: stats.resets,
+            carried: change.is_some(),
         }
     }
 }

@@ -168,6 +168,17 @@ fn verdict(out: &mut String, v: &Verdict) {
         ),
     };
     let _ = writeln!(out, "  the round's verdict: {}: {why}", v.word.as_str());
+    if v.word != Word::NotYet {
+        let _ = writeln!(
+            out,
+            "    held to {}",
+            if v.carried {
+                "the calibration's own error carried over this flight"
+            } else {
+                "the sensor errors' prior (no calibration covariance carried over the flight)"
+            }
+        );
+    }
     for i in (0..TERMS).filter(|i| v.is_observed(*i)) {
         let _ = writeln!(
             out,
@@ -203,6 +214,7 @@ fn verdict_json(v: &Verdict) -> serde_json::Value {
         "refused": finite(v.innovations.2),
         "mean_nis": finite(v.innovations.3),
         "covariance_resets": v.resets,
+        "calibration_carried": v.carried,
     })
 }
 
