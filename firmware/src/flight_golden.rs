@@ -109,8 +109,7 @@ pub fn fly(cal: &Calibration) -> Option<FlightReport> {
     let mut imu = AnyImuCorrector::new(cal, RATE).ok()?;
     // The calibration's own error at rest is the sensor errors' prior, at the flight's
     // first temperature and supply.
-    if let Some(Event::Environment(t, v)) = events().find(|e| matches!(e, Event::Environment(..)))
-    {
+    if let Some(Event::Environment(t, v)) = events().find(|e| matches!(e, Event::Environment(..))) {
         imu.set_environment(t, v);
     }
     let mut config = flight_config();

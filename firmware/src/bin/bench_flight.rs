@@ -252,7 +252,11 @@ fn main() -> ! {
     let (change, ticks) = timed(|| LaunchChange::of(factors, &lines));
     report("flight_launch_change", ticks.saturating_sub(overhead), 1);
     let (_, ticks) = timed(|| black_box(again.verdict_given(Some(&change))));
-    report("flight_verdict_with_change", ticks.saturating_sub(overhead), 1);
+    report(
+        "flight_verdict_with_change",
+        ticks.saturating_sub(overhead),
+        1,
+    );
     hprintln!(
         "size delayed_flight_256 {}",
         core::mem::size_of::<DelayedFlight<f32, 256>>()
