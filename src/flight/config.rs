@@ -44,6 +44,10 @@ pub struct FlightConfig<T: Real> {
     pub gate: T,
     /// Longest time between two covariance steps, us.
     pub covariance_interval_us: u32,
+    /// Longest time between two of the navigation's lower-rate steps (the attitude, velocity
+    /// and position; the samples between are gathered at their own rate, the roll exact), us;
+    /// zero: every sample. A covariance step ends one too.
+    pub navigation_interval_us: u32,
     /// Time between two zero-velocity updates on the pad, us.
     pub pad_interval_us: u32,
     /// Rest averaged before the filter levels the unit, us.
@@ -92,9 +96,10 @@ impl<T: Real> FlightConfig<T> {
 
     /// The defaults of `calflash flight` with the heading, the noise and the prior given:
     /// GNSS 2.5 m / 5 m / 0.2 m/s, barometer 1.5 m with a port coefficient of 0.03 up to
-    /// Mach 0.8 at 10 Hz, a 5-sigma gate, the covariance stepped at 100 Hz, zero-velocity
-    /// updates at 20 Hz on the pad after 0.2 s of levelling, the launch at 2 g, the spin
-    /// about the body x axis, and a launch shift as large as the prior.
+    /// Mach 0.8 at 10 Hz, a 5-sigma gate, the covariance stepped at 100 Hz and the
+    /// navigation's attitude, velocity and position at 200 Hz, zero-velocity updates at 20 Hz
+    /// on the pad after 0.2 s of levelling, the launch at 2 g, the spin about the body x axis,
+    /// and a launch shift as large as the prior.
     #[must_use]
     pub fn new(heading: (T, T), noise: NavNoise<T>, sensor_sigma: SensorErrors<T>) -> Self {
         Self {
@@ -112,6 +117,7 @@ impl<T: Real> FlightConfig<T> {
             baro_interval_us: 100_000,
             gate: c(5.0),
             covariance_interval_us: 10_000,
+            navigation_interval_us: 5_000,
             pad_interval_us: 50_000,
             level_us: 200_000,
             launch_force: c(2.0 * super::air::G0),
@@ -238,6 +244,11 @@ impl<T: Real> FlightConfig<T> {
             "covariance_interval_us",
             "1 .. 100,000 us",
         )?;
+        need(
+            u64::from(self.navigation_interval_us) <= super::MAX_SAMPLE_GAP_US,
+            "navigation_interval_us",
+            "0 .. 100,000 us",
+        )?;
         need(self.pad_interval_us > 0, "pad_interval_us", "above zero")?;
         need(self.level_us > 0, "level_us", "above zero")?;
         need(
@@ -324,7 +335,7 @@ mod tests {
     fn a_config_the_filter_cannot_run_with_is_named_by_its_field() {
         assert_eq!(good().check(), Ok(()));
         type Spoil = fn(&mut FlightConfig<f32>);
-        let cases: [(&str, Spoil); 12] = [
+        let cases: [(&str, Spoil); 13] = [
             ("heading.1", |c| c.heading.1 = 0.0),
             ("heading.0", |c| c.heading.0 = f32::NAN),
             ("spin_axis", |c| c.spin_axis = Vector3::zeros()),
@@ -332,6 +343,9 @@ mod tests {
             ("gnss_velocity_sigma", |c| c.gnss_velocity_sigma = 0.0),
             ("gnss_latency_us", |c| c.gnss_latency_us = 2_000_000),
             ("covariance_interval_us", |c| c.covariance_interval_us = 0),
+            ("navigation_interval_us", |c| {
+                c.navigation_interval_us = 200_000
+            }),
             ("launch_force", |c| c.launch_force = 5.0),
             ("noise.gyro_white", |c| c.noise.gyro_white = f32::NAN),
             ("noise.receiver_tau", |c| c.noise.receiver_tau = 0.0),

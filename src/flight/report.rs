@@ -52,7 +52,10 @@ impl<T: Real> FlightFilter<T> {
     pub fn report_given(&self, change: Option<&LaunchChange>) -> FlightReport {
         let e = self.estimate();
         let s = &e.sensors;
-        let q = e.nav.attitude();
+        // The navigation now: the samples gathered since its last lower-rate step stepped.
+        let mut nav = e.nav;
+        let _ = nav.flush(&self.error_filter().earth);
+        let q = nav.attitude();
         let mut sensors = [0.0; 13];
         let errors = s
             .accel_bias
@@ -71,8 +74,8 @@ impl<T: Real> FlightFilter<T> {
         FlightReport {
             phase: self.phase(),
             launch_us: self.launch_us(),
-            position: [f(e.nav.p.x), f(e.nav.p.y), f(e.nav.p.z)],
-            velocity: [f(e.nav.v.x), f(e.nav.v.y), f(e.nav.v.z)],
+            position: [f(nav.p.x), f(nav.p.y), f(nav.p.z)],
+            velocity: [f(nav.v.x), f(nav.v.y), f(nav.v.z)],
             attitude: [f(q.w), f(q.i), f(q.j), f(q.k)],
             sensors,
             sigma,

@@ -28,7 +28,7 @@ use nalgebra::{Matrix3, RealField, SMatrix, SVector, Vector3};
 
 use super::earth::Earth;
 use super::real::Real;
-use super::strapdown::{Interval, Navigation, Step};
+use super::strapdown::{Interval, Navigation, Step, Swept};
 
 pub use super::estimate::{Estimate, SensorErrors};
 
@@ -162,6 +162,15 @@ struct Integrals<T: RealField + Copy> {
 }
 
 impl<T: RealField + Copy> Integrals<T> {
+    /// Adds one of the navigation's lower-rate intervals.
+    fn add(&mut self, s: &Swept<T>) {
+        self.c += s.c;
+        self.cf += s.cf;
+        self.cw += s.cw;
+        self.f += s.f;
+        self.dt += s.dt;
+    }
+
     fn zero() -> Self {
         Self {
             c: Matrix3::zeros(),
@@ -225,15 +234,6 @@ fn symmetrise<T: RealField + Copy>(p: &mut StateMatrix<T>) {
     }
 }
 
-/// `m diag(v)`: each column of `m` times its entry of `v`.
-fn scale_columns<T: RealField + Copy>(m: &Matrix3<T>, v: &Vector3<T>) -> Matrix3<T> {
-    let mut out = *m;
-    for (mut column, x) in out.column_iter_mut().zip(v.iter()) {
-        column *= *x;
-    }
-    out
-}
-
 fn skew<T: RealField + Copy>(v: &Vector3<T>) -> Matrix3<T> {
     v.cross_matrix()
 }
@@ -262,7 +262,7 @@ impl<T: Real> ErrorFilter<T> {
     /// Time integrated since the last covariance step, s.
     #[must_use]
     pub fn pending(&self) -> T {
-        self.acc.dt
+        self.acc.dt + self.estimate.nav.pending()
     }
 
     /// Navigates one corrected sample `dt` s after the previous one. A sample with a
@@ -291,9 +291,7 @@ impl<T: Real> ErrorFilter<T> {
         if dt <= T::zero() {
             return;
         }
-        let half: T = nalgebra::convert(0.5);
-        let c0 = self.estimate.nav.attitude_matrix();
-        let forces = self.estimate.nav.propagate(
+        let swept = self.estimate.nav.propagate(
             &self.earth,
             &Step {
                 w: [w0, wc],
@@ -301,15 +299,10 @@ impl<T: Real> ErrorFilter<T> {
                 dt: step,
             },
         );
-        let c1 = self.estimate.nav.attitude_matrix();
         let a = &mut self.acc;
-        let h = half * dt;
-        a.c += (c0 + c1) * h;
-        a.cf += (scale_columns(&c0, &f0) + scale_columns(&c1, &fc)) * h;
-        a.cw += (scale_columns(&c0, &w0) + scale_columns(&c1, &wc)) * h;
-        let [n0, n1] = forces;
-        a.f += (n0 + n1) * h;
-        a.dt += dt;
+        if let Some(s) = swept {
+            a.add(&s);
+        }
         if let Some(d) = doubt {
             a.lost.0 += d.force * dt;
             a.lost.1 += d.rate * dt;
@@ -342,7 +335,7 @@ impl<T: Real> ErrorFilter<T> {
                 continue;
             };
             if step.seconds_of() > T::zero() {
-                nav.propagate(
+                let _ = nav.propagate(
                     &self.earth,
                     &Step {
                         w: [w0, wc],
@@ -352,6 +345,7 @@ impl<T: Real> ErrorFilter<T> {
                 );
             }
         }
+        let _ = nav.flush(&self.earth);
         nav
     }
 

@@ -1,24 +1,49 @@
-//! Strapdown navigation for high rates: attitude by quaternion from the rotation vector of
-//! each step with the two-sample coning correction, velocity and position in the local level
-//! frame of [`Earth`] with gravity and the Coriolis term.
+//! Strapdown navigation for high rates, in two speeds (Savage's structure): at the sample rate
+//! the roll about the spin axis and the de-spun increments of angle and velocity with their
+//! coning and sculling terms; at a lower rate ([`Navigation::with_interval`]) the de-spun
+//! attitude, the velocity and position in the local level frame of [`Earth`] with gravity and
+//! the Coriolis term, and the error model's integrals.
 //!
 //! The inputs are corrected samples (rates and specific forces at instants, as the corrector
 //! gives them), not the integrated increments of a navigation-grade IMU. Between two samples
 //! the rate is taken as linear: the rotation vector of the step is the trapezoid of the rates
-//! plus the coning term `w0 x w1 dt^2 / 12` (Bortz's equation to second order), exact for a
-//! constant axis however fast the spin (a round at 300 rev/s turns 0.94 rad per sample at
-//! 2 kHz). Each specific force is carried into the level frame by the attitude at its own
-//! instant and the level-frame force is integrated by the trapezoid: the rotation of the
-//! force within the step, which sculling corrects when increments are held at the step's
-//! start, is followed by the attitude itself.
+//! plus the coning term `w0 x w1 dt^2 / 12` (Bortz's equation to second order).
+//!
+//! A round at 300 rev/s turns 0.94 rad per sample at 2 kHz, so the roll is integrated exactly
+//! at every sample and both the rate across the spin axis and the specific force are turned
+//! into the de-spun frame by it (one sine and cosine a sample). The de-spun frame turns only
+//! with the round's slow nutation and precession: within one lower-rate interval it turns by
+//! `phi`, gathered by Bortz's equation (`phi' = w + phi x w / 2`), and each sample's specific
+//! force is carried into the interval's starting frame to second order in `phi`
+//! (`f + phi x f + phi x (phi x f) / 2`) before it is summed into the velocity's increment
+//! (the sculling and rotation terms) and that increment into the position's (scrolling). The
+//! interval ends at its stated length, or sooner when `phi` reaches [`MAX_TURN`], so the third
+//! order left out stays under 2e-5 of the force.
+//!
+//! The error model's integrals (`int C`, `int C diag(f)`, `int C diag(w)`, `int f_n`, see
+//! [`super::filter`]) are gathered the same way: a turn about the spin axis is
+//! `cos r I + sin r [k x] + (1 - cos r) k k'`, so the sample rate sums only `cos r`, `sin r`
+//! and their products with the force and the rate (14 numbers), and the lower rate puts them
+//! together with the de-spun attitude's mean over the interval.
 
 use nalgebra::{Matrix3, RealField, UnitQuaternion, Vector3};
 
 use super::earth::Earth;
 use super::real::{Real, normalised, rotation};
 
+mod sweep;
+
+pub use sweep::Swept;
+use sweep::{End, Sweep};
+
+/// The largest turn of the de-spun frame within one lower-rate interval, rad: the interval
+/// ends when it is reached, so that carrying the forces to second order leaves out at most
+/// `MAX_TURN^3 / 6` (2e-5) of them.
+pub const MAX_TURN: f64 = 0.05;
+
 /// Where the navigator is: attitude (body to level frame), velocity and position (east,
-/// north, up; m/s and m from the origin).
+/// north, up; m/s and m from the origin), as of the end of its last lower-rate interval
+/// ([`flush`](Self::flush)).
 ///
 /// The attitude is held as a de-spun attitude and a roll about the body's spin axis
 /// (`q = despun * R(axis, roll)`): the roll is the integral of the rate about the axis, the
@@ -29,44 +54,34 @@ use super::real::{Real, normalised, rotation};
 #[derive(Debug, Clone, Copy)]
 pub struct Navigation<T: RealField + Copy> {
     despun: UnitQuaternion<T>,
+    /// The de-spun attitude's rotation matrix, kept with it.
+    despun_matrix: Matrix3<T>,
     roll: T,
     /// What the rounding of the roll's sum left out (Kahan).
     roll_carry: T,
     /// Time over which the level frame's turn with the Earth is still to be applied, s.
     earth_pending: T,
-    /// The rotation by `roll` about `axis`, kept with it.
-    spin: UnitQuaternion<T>,
     axis: Vector3<T>,
     /// Velocity, m/s.
     pub v: Vector3<T>,
     /// Position, m.
     pub p: Vector3<T>,
-    /// What the rounding of each step's increment of `v` and `p` left out (Kahan's
+    /// What the rounding of each interval's increment of `v` and `p` left out (Kahan's
     /// compensated sum): in `f32` a shell's 800 m/s takes a step's 0.04 m/s to within
     /// 3e-5 m/s, which over a minute at 2 kHz would walk well past the filter's sigma.
     carry: (Vector3<T>, Vector3<T>),
-    /// `despun * spin` and its rotation matrix, kept with them: the attitude every sample
-    /// reads several times.
+    /// `despun * R(axis, roll)` and its rotation matrix at the last flush.
     attitude: UnitQuaternion<T>,
     matrix: Matrix3<T>,
-    /// The last step's second rate, its de-spun part and the de-spun rate a sample before:
-    /// the next step's first rate when it starts where this one ended (same reading; the
-    /// de-spun part depends on the roll alone), and the rates' kink ([`hidden`](Self::hidden)).
-    rate_end: Option<RateEnd<T>>,
-    /// The last step's second specific force and that force in the level frame, while the
-    /// attitude has not been turned since. Work saved, not state.
-    force_end: Option<(Vector3<T>, Vector3<T>)>,
+    /// The lower rate's interval, s (zero: every step).
+    interval: T,
+    /// The sample rate's sums since the last flush.
+    sweep: Sweep<T>,
+    /// The last step's second sample as the next step starts from it. Work saved, not state.
+    end: Option<End<T>>,
     /// The angle the last step could not integrate (1-sigma, rad): see
     /// [`hidden`](Self::hidden).
     hidden: T,
-}
-
-/// What a step's end rate gives the next step ([`Navigation::propagate`]).
-#[derive(Debug, Clone, Copy)]
-struct RateEnd<T: RealField + Copy> {
-    w: Vector3<T>,
-    despun_rate: Vector3<T>,
-    before: Vector3<T>,
 }
 
 /// A step in the rate at an unknown instant of a sample interval hides up to its size times
@@ -82,11 +97,12 @@ impl<T: RealField + Copy> PartialEq for Navigation<T> {
             && self.roll == other.roll
             && self.roll_carry == other.roll_carry
             && self.earth_pending == other.earth_pending
-            && self.spin == other.spin
             && self.axis == other.axis
             && self.v == other.v
             && self.p == other.p
             && self.carry == other.carry
+            && self.interval == other.interval
+            && self.sweep == other.sweep
     }
 }
 
@@ -167,7 +183,9 @@ pub fn rotation_vector<T: RealField + Copy>(w0: &Vector3<T>, w1: &Vector3<T>, dt
 
 impl<T: Real> Navigation<T> {
     /// At rest at the origin with attitude `q`, spinning (if at all) about the body axis
-    /// `axis` (normalised here; a zero axis means the body x axis).
+    /// `axis` (normalised here; a zero axis means the body x axis); the attitude, velocity and
+    /// position stepped with every sample ([`with_interval`](Self::with_interval) sets a
+    /// lower rate).
     #[must_use]
     pub fn at_rest(q: UnitQuaternion<T>, axis: Vector3<T>) -> Self {
         let axis = axis
@@ -175,37 +193,49 @@ impl<T: Real> Navigation<T> {
             .unwrap_or_else(Vector3::x);
         let mut nav = Self {
             despun: q,
+            despun_matrix: Matrix3::identity(),
             roll: T::zero(),
             roll_carry: T::zero(),
             earth_pending: T::zero(),
-            spin: UnitQuaternion::identity(),
             axis,
             v: Vector3::zeros(),
             p: Vector3::zeros(),
             carry: (Vector3::zeros(), Vector3::zeros()),
             attitude: q,
             matrix: Matrix3::identity(),
-            rate_end: None,
-            force_end: None,
+            interval: T::zero(),
+            sweep: Sweep::zero(),
+            end: None,
             hidden: T::zero(),
         };
         nav.keep_attitude();
         nav
     }
 
-    /// Keeps the attitude and its matrix with `despun` and `spin`.
+    /// This navigation with its attitude, velocity and position stepped every `seconds`
+    /// (or sooner, when the de-spun frame has turned by [`MAX_TURN`]), the samples between
+    /// gathered at their own rate; zero: every step.
+    #[must_use]
+    pub fn with_interval(mut self, seconds: T) -> Self {
+        self.interval = seconds;
+        self
+    }
+
+    /// Keeps the de-spun attitude's matrix, the attitude and its matrix with `despun` and
+    /// the roll.
     fn keep_attitude(&mut self) {
-        self.attitude = self.despun * self.spin;
+        self.despun_matrix = self.despun.to_rotation_matrix().into_inner();
+        self.attitude = self.despun * rotation(&(self.axis * self.roll));
         self.matrix = self.attitude.to_rotation_matrix().into_inner();
     }
 
-    /// The attitude's rotation matrix, body to level frame.
+    /// The attitude's rotation matrix, body to level frame (at the last flush).
     #[must_use]
     pub fn attitude_matrix(&self) -> Matrix3<T> {
         self.matrix
     }
 
-    /// The attitude, body to level frame.
+    /// The attitude, body to level frame (at the last flush).
     #[must_use]
     pub fn attitude(&self) -> UnitQuaternion<T> {
         self.attitude
@@ -218,11 +248,11 @@ impl<T: Real> Navigation<T> {
         rotation(&(earth.rate() * (-self.earth_pending))) * self.attitude()
     }
 
-    /// Turns the attitude by `r` in the level frame (`q <- r q`).
+    /// Turns the attitude by `r` in the level frame (`q <- r q`): the samples gathered since
+    /// the last flush are carried from the turned frame.
     pub fn turn(&mut self, r: &UnitQuaternion<T>) {
         self.despun = r * self.despun;
         self.keep_attitude();
-        self.force_end = None;
     }
 
     /// The angle the last step could not integrate, 1-sigma (rad). The steps take the rate
@@ -237,94 +267,117 @@ impl<T: Real> Navigation<T> {
         self.hidden
     }
 
-    /// The rate `w` without its part about the spin axis, seen in the de-spun frame at the
-    /// roll whose rotation is `spin`.
-    fn despun_rate(&self, w: &Vector3<T>, spin: &UnitQuaternion<T>) -> Vector3<T> {
-        let across = w - self.axis * self.axis.dot(w);
-        spin * across
+    /// Time gathered at the sample rate since the last flush, s.
+    #[must_use]
+    pub fn pending(&self) -> T {
+        self.sweep.dt
     }
 
-    /// Advances by one step over `earth`; returns the specific force of the step's two ends in
-    /// the level frame (what the error model integrates).
-    pub fn propagate(&mut self, earth: &Earth<T>, step: &Step<T>) -> [Vector3<T>; 2] {
+    /// Advances by one step over `earth`. When the step ends a lower-rate interval, the
+    /// attitude, velocity and position are stepped ([`flush`](Self::flush)) and the
+    /// interval's error-model integrals returned.
+    pub fn propagate(&mut self, earth: &Earth<T>, step: &Step<T>) -> Option<Swept<T>> {
         let half: T = nalgebra::convert(0.5);
         let two: T = nalgebra::convert(2.0);
         let dt = step.dt.seconds_of();
-        let omega = earth.rate();
-        let before = self.attitude();
-        let lag0 = omega * self.earth_pending;
         let [w0, w1] = step.w;
+        let [f0, f1] = step.f;
+        let start = match self.end.take() {
+            Some(e) if e.w == w0 && e.f == f0 => e,
+            _ => End::at(
+                &w0,
+                &f0,
+                &self.axis,
+                self.roll.sin_cos_libm(),
+                &self.sweep.phi,
+            ),
+        };
         // The roll by Kahan's compensated sum: a step adds about 1 rad at 300 rev/s, and in
         // f32 the plain sum's rounding would drift it by 5e-5 rad/s.
         let increment =
             ((self.axis.dot(&w0) + self.axis.dot(&w1)) * (half * step.dt.ticks)) * step.dt.tick;
-        let mut roll1 = self.roll;
-        kahan_add(&mut roll1, &mut self.roll_carry, increment);
+        let mut roll = self.roll;
+        kahan_add(&mut roll, &mut self.roll_carry, increment);
         let pi = T::pi();
-        if roll1 > pi || roll1 < -pi {
+        if roll > pi || roll < -pi {
             // 2 pi in two parts (Cody and Waite): in f32 the rounded 2 pi is 1.7e-7 off; the
             // first part times a small whole number is exact.
-            let turns = (roll1 / T::two_pi()).round();
+            let turns = (roll / T::two_pi()).round();
             let high: T = nalgebra::convert(6.281_25);
             let low: T = nalgebra::convert(core::f64::consts::TAU - 6.281_25);
-            roll1 -= turns * high;
-            kahan_add(&mut roll1, &mut self.roll_carry, -(turns * low));
+            roll -= turns * high;
+            kahan_add(&mut roll, &mut self.roll_carry, -(turns * low));
         }
-        let spin1 = rotation(&(self.axis * roll1));
-        let rate_end = self.rate_end.take().filter(|e| e.w == w0);
-        let d0 = match rate_end {
-            Some(e) => e.despun_rate,
-            None => self.despun_rate(&w0, &self.spin),
-        };
-        let d1 = self.despun_rate(&w1, &spin1);
-        self.hidden = match rate_end {
-            Some(e) => (d1 - d0 * two + e.before).norm() * dt * nalgebra::convert::<f64, T>(KINK),
+        self.roll = roll;
+        let mut end = End::at(&w1, &f1, &self.axis, roll.sin_cos_libm(), &self.sweep.phi);
+        self.hidden = match start.before {
+            Some(b) => {
+                (end.rate - start.rate * two + b).norm() * dt * nalgebra::convert::<f64, T>(KINK)
+            }
             None => T::zero(),
         };
-        self.rate_end = Some(RateEnd {
-            w: w1,
-            despun_rate: d1,
-            before: d0,
-        });
-        let body = rotation(&rotation_vector(&d0, &d1, dt));
+        end.before = Some(start.rate);
+        self.sweep.step(&start, &mut end, dt);
+        self.end = Some(end);
+        let most: T = nalgebra::convert(MAX_TURN * MAX_TURN);
+        if self.sweep.dt >= self.interval || self.sweep.phi.norm_squared() >= most {
+            self.flush(earth)
+        } else {
+            None
+        }
+    }
+
+    /// Ends the lower-rate interval now: the de-spun attitude turned by what the samples
+    /// gathered, the velocity and position stepped with gravity and the Coriolis term over it;
+    /// returns the interval's error-model integrals (`None` when nothing was gathered).
+    pub fn flush(&mut self, earth: &Earth<T>) -> Option<Swept<T>> {
+        let s = self.sweep;
+        if s.dt <= T::zero() {
+            return None;
+        }
+        self.sweep = Sweep::zero();
+        if let Some(e) = self.end.as_mut() {
+            e.carried = e.force;
+        }
+        let half: T = nalgebra::convert(0.5);
+        let two: T = nalgebra::convert(2.0);
+        let t = s.dt;
+        let omega = earth.rate();
+        let start = self.despun_matrix;
+        // The forces were felt while the level frame's turn with the Earth was `lag` behind
+        // (at the interval's middle): turned back by it to first order.
+        let lag = omega * (self.earth_pending + half * t);
         // The level frame turns with the Earth by 3.6e-8 rad in a 0.5 ms step, under the
         // resolution of an f32 quaternion (6e-8): the turn is gathered and applied once it
-        // reaches 1e-5 rad (every 0.14 s; the attitude lags it by at most that, and the
-        // specific force is turned by the lag to first order, 5e-11 off).
-        self.earth_pending += dt;
+        // reaches 1e-5 rad (every 0.14 s; the attitude lags it by at most that).
+        self.earth_pending += t;
         let turn = omega * self.earth_pending;
+        let body = rotation(&s.phi);
         let despun = if turn.norm_squared() >= nalgebra::convert(1e-10) {
             self.earth_pending = T::zero();
             rotation(&(-turn)) * self.despun * body
         } else {
             self.despun * body
         };
-        // Renormalised every step: in f32 the rounding of a product of unit quaternions
+        // Renormalised every interval: in f32 the rounding of a product of unit quaternions
         // would otherwise walk the norm away over a flight's 10^5 steps.
         self.despun = normalised(despun.into_inner());
-        self.roll = roll1;
-        self.spin = spin1;
         self.keep_attitude();
-        let after = self.attitude;
-        let lag1 = omega * self.earth_pending;
-        let [f0, f1] = step.f;
-        let b0 = match self.force_end.take() {
-            Some((f, level)) if f == f0 => level,
-            _ => before * f0,
-        };
-        let b1 = after * f1;
-        self.force_end = Some((f1, b1));
-        let forces = [b0 - lag0.cross(&b0), b1 - lag1.cross(&b1)];
-        let [n0, n1] = forces;
-        let mid = self.p + self.v * (half * dt);
+        let level = start * s.dv;
+        let level = level - lag.cross(&level);
+        let moved = start * s.dp;
+        let moved = moved - lag.cross(&moved);
+        let mid = self.p + self.v * (half * t);
         let g = earth.gravity(&mid);
-        let coriolis = omega.cross(&(self.v + (n0 + g) * (half * dt))) * two;
+        let coriolis = omega.cross(&(self.v + (level + g * t) * half)) * two;
+        let free = g - coriolis;
         let v0 = self.v;
-        let dv = ((n0 + n1) * half + g - coriolis) * dt;
+        let dv = level + free * t;
         kahan(&mut self.v, &mut self.carry.0, &dv);
-        let dp = (v0 + self.v) * (half * dt);
+        let dp = v0 * t + moved + free * (half * t * t);
         kahan(&mut self.p, &mut self.carry.1, &dp);
-        forces
+        let mean = (start + self.despun_matrix) * half;
+        Some(s.swept(&mean, &self.axis, level))
     }
 }
 

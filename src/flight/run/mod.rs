@@ -124,7 +124,8 @@ impl<T: Real> FlightFilter<T> {
         Self {
             filter: ErrorFilter::new(
                 Estimate {
-                    nav: Navigation::at_rest(UnitQuaternion::identity(), config.spin_axis),
+                    nav: Navigation::at_rest(UnitQuaternion::identity(), config.spin_axis)
+                        .with_interval(micros(u64::from(config.navigation_interval_us))),
                     sensors: SensorErrors::default(),
                     receiver: Vector3::zeros(),
                 },
@@ -443,7 +444,8 @@ impl<T: Real> FlightFilter<T> {
         let at = origin.geodetic();
         self.filter = ErrorFilter::new(
             Estimate {
-                nav: Navigation::at_rest(q, self.config.spin_axis),
+                nav: Navigation::at_rest(q, self.config.spin_axis)
+                    .with_interval(micros(u64::from(self.config.navigation_interval_us))),
                 sensors: SensorErrors::default(),
                 receiver: Vector3::zeros(),
             },
@@ -518,13 +520,14 @@ impl<T: Real> FlightFilter<T> {
     /// A covariance step and the updates due at `t_us`, then the feedback.
     fn epoch(&mut self, t_us: u64, fix_due: bool, baro_due: bool) {
         let since: T = micros(t_us.saturating_sub(self.last_epoch_us));
+        self.last_epoch_us = t_us;
+        self.stats.epochs += 1;
+        // The step ends the navigation's lower-rate interval: the velocity is now's.
+        self.filter.covariance_step();
         let v = self.filter.estimate.nav.v;
         if since > T::zero() {
             self.pace.1 = (v - self.pace.0) / since;
         }
-        self.last_epoch_us = t_us;
-        self.stats.epochs += 1;
-        self.filter.covariance_step();
         if self.phase == Phase::Pad {
             for axis in 0..3 {
                 self.take_velocity(Aiding::Pad, axis, T::zero(), c(1e-4));

@@ -16,6 +16,9 @@ impl<T: Real> ErrorFilter<T> {
     /// products instead of two 22 x 22 x 22.
     pub fn covariance_step(&mut self) -> Transition<T> {
         use index::*;
+        if let Some(s) = self.estimate.nav.flush(&self.earth) {
+            self.acc.add(&s);
+        }
         let a = self.acc;
         self.acc = Integrals::zero();
         let mut top = NavRows::<T>::zeros();
