@@ -148,6 +148,18 @@ fn population() {
     let unshifted = std::env::var("HELD").is_ok();
     // RESIDUAL=1: the unit carries residual errors drawn from the filter's prior.
     let residual = std::env::var("RESIDUAL").is_ok();
+    // NAV_US=n: the navigation's lower rate every n us (0: every sample) in place of the
+    // default's.
+    let nav_us: Option<u32> = std::env::var("NAV_US").ok().and_then(|x| x.parse().ok());
+    fn set_up<T: spincal::nav::Real>(
+        mut config: spincal::flight::FlightConfig<T>,
+        nav_us: Option<u32>,
+    ) -> spincal::flight::FlightConfig<T> {
+        if let Some(us) = nav_us {
+            config.navigation_interval_us = us;
+        }
+        config
+    }
     let mut words = std::collections::BTreeMap::<&str, usize>::new();
     let mut named = std::collections::BTreeMap::<&str, usize>::new();
     let (mut z2, mut zn) = (0.0, 0usize);
@@ -161,14 +173,16 @@ fn population() {
             ..base
         });
         let (held, single, double) = if late {
-            let mut single = FlightFilter::<f32>::new(config(&flight));
-            let mut double = FlightFilter::<f64>::new(config(&flight));
+            let mut single = FlightFilter::<f32>::new(set_up(config(&flight), nav_us));
+            let mut double = FlightFilter::<f64>::new(set_up(config(&flight), nav_us));
             let held = run(&mut single, &flight, |_| {});
             run(&mut double, &flight, |_| {});
             (held, single, double)
         } else {
-            let mut single = DelayedFlight::<f32, HORIZON_SAMPLES>::new(config(&flight));
-            let mut double = DelayedFlight::<f64, HORIZON_SAMPLES>::new(config(&flight));
+            let mut single =
+                DelayedFlight::<f32, HORIZON_SAMPLES>::new(set_up(config(&flight), nav_us));
+            let mut double =
+                DelayedFlight::<f64, HORIZON_SAMPLES>::new(set_up(config(&flight), nav_us));
             let held = run(&mut single, &flight, |_| {});
             run(&mut double, &flight, |_| {});
             (held, single.filter().clone(), double.filter().clone())

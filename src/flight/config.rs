@@ -96,8 +96,8 @@ impl<T: Real> FlightConfig<T> {
 
     /// The defaults of `calflash flight` with the heading, the noise and the prior given:
     /// GNSS 2.5 m / 5 m / 0.2 m/s, barometer 1.5 m with a port coefficient of 0.03 up to
-    /// Mach 0.8 at 10 Hz, a 5-sigma gate, the covariance stepped at 100 Hz and the
-    /// navigation's attitude, velocity and position at 200 Hz, zero-velocity updates at 20 Hz
+    /// Mach 0.8 at 10 Hz, a 5-sigma gate, the covariance stepped at 100 Hz and with it the
+    /// navigation's attitude, velocity and position, zero-velocity updates at 20 Hz
     /// on the pad after 0.2 s of levelling, the launch at 2 g, the spin about the body x axis,
     /// and a launch shift as large as the prior.
     #[must_use]
@@ -117,7 +117,7 @@ impl<T: Real> FlightConfig<T> {
             baro_interval_us: 100_000,
             gate: c(5.0),
             covariance_interval_us: 10_000,
-            navigation_interval_us: 5_000,
+            navigation_interval_us: 10_000,
             pad_interval_us: 50_000,
             level_us: 200_000,
             launch_force: c(2.0 * super::air::G0),

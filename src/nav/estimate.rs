@@ -68,18 +68,23 @@ impl<T: Real> Estimate<T> {
     /// This estimate corrected by the error `dx`.
     #[must_use]
     pub fn plus(&self, dx: &StateVector<T>) -> Self {
-        use index::*;
         let mut out = *self;
-        out.nav.p += block(dx, POSITION);
-        out.nav.v += block(dx, VELOCITY);
-        out.nav.turn(&rotation(&block(dx, ATTITUDE)));
-        out.sensors.accel_bias += block(dx, ACCEL_BIAS);
-        out.sensors.gyro_bias += block(dx, GYRO_BIAS);
-        out.sensors.accel_scale += block(dx, ACCEL_SCALE);
-        out.sensors.gyro_scale += block(dx, GYRO_SCALE);
-        out.sensors.baro_bias += dx.get(BARO).copied().unwrap_or_else(T::zero);
-        out.receiver += block(dx, RECEIVER);
+        out.correct(dx);
         out
+    }
+
+    /// Corrects this estimate by the error `dx`, in place.
+    pub fn correct(&mut self, dx: &StateVector<T>) {
+        use index::*;
+        self.nav.p += block(dx, POSITION);
+        self.nav.v += block(dx, VELOCITY);
+        self.nav.turn(&rotation(&block(dx, ATTITUDE)));
+        self.sensors.accel_bias += block(dx, ACCEL_BIAS);
+        self.sensors.gyro_bias += block(dx, GYRO_BIAS);
+        self.sensors.accel_scale += block(dx, ACCEL_SCALE);
+        self.sensors.gyro_scale += block(dx, GYRO_SCALE);
+        self.sensors.baro_bias += dx.get(BARO).copied().unwrap_or_else(T::zero);
+        self.receiver += block(dx, RECEIVER);
     }
 
     /// The error that takes `other` to this estimate (`self = other.plus(dx)`).

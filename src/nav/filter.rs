@@ -18,11 +18,13 @@
 //! filter compensates with its estimates before navigating.
 //!
 //! The covariance is not propagated per sample: a round sampled at 2 kHz and spinning at
-//! 300 rev/s turns its transverse errors through a revolution in seven samples. The filter
-//! integrates, per sample, the matrices the error model needs (`int C`, `int C diag(f)`,
-//! `int C diag(w)`, `int f_n`) and steps the covariance with them over the interval
-//! (`Phi = I + F dt + (F dt)^2 / 2` with `F` the interval's mean), so what the spin averages
-//! out is averaged exactly and the cost is a few 22 x 22 products per interval.
+//! 300 rev/s turns its transverse errors through a revolution in seven samples. The
+//! navigation gathers, per sample, what the error model needs (`int C`, `int C diag(f)`,
+//! `int C diag(w)`, `int f_n`; [`Swept`], from the roll's sine and cosine at the sample rate and
+//! the de-spun attitude at the lower rate, see [`super::strapdown`]) and the filter steps the
+//! covariance with them over the interval (`Phi = I + F dt + (F dt)^2 / 2` with `F` the
+//! interval's mean), so what the spin averages out is averaged exactly and the cost is a few
+//! 22 x 22 products per interval.
 
 use nalgebra::{Matrix3, RealField, SMatrix, SVector, Vector3};
 
@@ -478,7 +480,7 @@ impl<T: Real> ErrorFilter<T> {
 
     /// Feeds the estimated errors back into the navigation and the sensor errors.
     pub fn feedback(&mut self) {
-        self.estimate = self.estimate.plus(&self.dx);
+        self.estimate.correct(&self.dx);
         self.dx = StateVector::zeros();
     }
 }

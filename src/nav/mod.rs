@@ -15,4 +15,4 @@ pub mod strapdown;
 pub use earth::Earth;
 pub use filter::{ErrorFilter, NavNoise, Prior, STATES, SensorErrors, StateMatrix, StateVector};
 pub use real::Real;
-pub use strapdown::{Interval, Navigation, Step};
+pub use strapdown::{Interval, Navigation, Step, Swept};

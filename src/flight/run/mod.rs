@@ -1,6 +1,9 @@
 //! The flight filter's run: levelling at rest, zero-velocity updates on the pad, the launch,
-//! then the strapdown navigation at the IMU's rate, the covariance stepped at most every
-//! [`FlightConfig::covariance_interval_us`], and the GNSS and barometer updates as they come.
+//! then the strapdown navigation in two speeds (the roll and the de-spun increments at the
+//! IMU's rate, the attitude, velocity and position at most every
+//! [`FlightConfig::navigation_interval_us`] and at every covariance step), the covariance
+//! stepped at most every [`FlightConfig::covariance_interval_us`], and the GNSS and barometer
+//! updates as they come.
 
 use nalgebra::{SMatrix, SVector, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};

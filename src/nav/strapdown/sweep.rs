@@ -4,39 +4,38 @@
 
 use nalgebra::{Matrix3, RealField, Vector3};
 
+use crate::nav::real::Real;
+
 /// A sample as a step ends on it and the next starts from it.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct End<T: RealField + Copy> {
     /// The reading: rate (rad/s) and specific force (m/s^2), body axes.
     pub w: Vector3<T>,
     pub f: Vector3<T>,
-    /// The roll's cosine and sine there.
-    pub cos: T,
+    /// The roll's sine and cosine there.
     pub sin: T,
+    pub cos: T,
     /// The rate across the spin axis, in the de-spun frame.
     pub rate: Vector3<T>,
-    /// The same a sample before, when known (the rates' kink).
-    pub before: Option<Vector3<T>>,
     /// The specific force in the de-spun frame, and carried into the interval's starting
     /// frame.
     pub force: Vector3<T>,
     pub carried: Vector3<T>,
-    /// The reading times the roll's cosine and sine: force then rate.
-    pub f_cos: Vector3<T>,
-    pub f_sin: Vector3<T>,
-    pub w_cos: Vector3<T>,
-    pub w_sin: Vector3<T>,
+    /// The length of the step that ended here, s.
+    pub dt: T,
 }
 
-impl<T: RealField + Copy> End<T> {
+impl<T: Real> End<T> {
     /// The sample `(w, f)` at a roll of sine `sin` and cosine `cos` about `axis`, its force
-    /// carried by `phi`.
+    /// carried by `phi`, after a step of `dt`.
+    #[inline(always)]
     pub fn at(
         w: &Vector3<T>,
         f: &Vector3<T>,
         axis: &Vector3<T>,
         (sin, cos): (T, T),
         phi: &Vector3<T>,
+        dt: T,
     ) -> Self {
         // The turn by the roll about the axis: v cos + (k x v) sin + k (k.v) (1 - cos); the
         // rate's part across the axis has no k (k.v) term.
@@ -46,16 +45,12 @@ impl<T: RealField + Copy> End<T> {
         Self {
             w: *w,
             f: *f,
-            cos,
             sin,
+            cos,
             rate,
-            before: None,
             force,
             carried: carry(phi, &force),
-            f_cos: f * cos,
-            f_sin: f * sin,
-            w_cos: w * cos,
-            w_sin: w * sin,
+            dt,
         }
     }
 }
@@ -68,6 +63,11 @@ pub(super) fn carry<T: RealField + Copy>(phi: &Vector3<T>, x: &Vector3<T>) -> Ve
 }
 
 /// The sample rate's sums over one lower-rate interval.
+///
+/// The velocity's and position's increments are trapezoids. The error model's sums are
+/// each sample's value times its step, with half a step of the interval's first sample added
+/// when it opens and half a step of its last taken away when it closes: the trapezoid when
+/// the samples are evenly spaced, at a third of its cost a sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Sweep<T: RealField + Copy> {
     /// Its length so far, s.
@@ -104,8 +104,9 @@ pub struct Swept<T: RealField + Copy> {
     pub dt: T,
 }
 
-impl<T: RealField + Copy> Sweep<T> {
-    pub fn zero() -> Self {
+impl<T: Real> Sweep<T> {
+    /// An interval with nothing in it.
+    pub fn empty() -> Self {
         Self {
             dt: T::zero(),
             phi: Vector3::zeros(),
@@ -118,10 +119,36 @@ impl<T: RealField + Copy> Sweep<T> {
         }
     }
 
-    /// One step of `dt` s from sample `a` to sample `b` (whose force is carried here).
-    pub fn step(&mut self, a: &End<T>, b: &mut End<T>, dt: T) {
+    /// An interval opening on sample `e`.
+    pub fn open(e: &End<T>) -> Self {
+        let mut s = Self::empty();
+        s.weigh(e, e.dt * nalgebra::convert(0.5));
+        s
+    }
+
+    /// Adds `weight` of sample `e` to the error model's sums.
+    fn weigh(&mut self, e: &End<T>, weight: T) {
+        let (c, s) = (e.cos * weight, e.sin * weight);
+        self.cos += c;
+        self.sin += s;
+        for (sums, x) in [(&mut self.force, &e.f), (&mut self.rate, &e.w)] {
+            let [plain, cos, sin] = sums;
+            *plain += x * weight;
+            *cos += x * c;
+            *sin += x * s;
+        }
+    }
+
+    /// Closes the interval on its last sample `e`.
+    pub fn close(&mut self, e: &End<T>) {
+        self.weigh(e, e.dt * nalgebra::convert(-0.5));
+    }
+
+    /// One step from sample `a` to sample `b` (`b.dt` long; its force is carried here).
+    pub fn step(&mut self, a: &End<T>, b: &mut End<T>) {
         let half: T = nalgebra::convert(0.5);
         let twelfth: T = nalgebra::convert(1.0 / 12.0);
+        let dt = b.dt;
         let h = half * dt;
         let turn = (a.rate + b.rate) * h + a.rate.cross(&b.rate) * (twelfth * dt * dt);
         let bortz = self.phi.cross(&turn) * half;
@@ -130,23 +157,7 @@ impl<T: RealField + Copy> Sweep<T> {
         let dv = self.dv + (a.carried + b.carried) * h;
         self.dp += (self.dv + dv) * h;
         self.dv = dv;
-        self.cos += (a.cos + b.cos) * h;
-        self.sin += (a.sin + b.sin) * h;
-        let pairs = [
-            (
-                &mut self.force,
-                [(a.f, b.f), (a.f_cos, b.f_cos), (a.f_sin, b.f_sin)],
-            ),
-            (
-                &mut self.rate,
-                [(a.w, b.w), (a.w_cos, b.w_cos), (a.w_sin, b.w_sin)],
-            ),
-        ];
-        for (sums, ends) in pairs {
-            for (sum, (x, y)) in sums.iter_mut().zip(ends) {
-                *sum += (x + y) * h;
-            }
-        }
+        self.weigh(b, dt);
         self.dt += dt;
     }
 
