@@ -309,6 +309,74 @@ fn the_reference_shells_hold_their_track_on_a_delayed_horizon_and_the_shift_is_f
     }
 }
 
+/// The navigation in two speeds (the attitude, velocity and position with the covariance
+/// step, every 10 ms) against the same filter stepping them at every sample, in `f64` on the
+/// independent 155 mm shell (4 kHz, shifted at launch): the same track within its sigma at the
+/// same epochs, the same NEES to a hundredth, the axial terms within a tenth of their sigma of
+/// each other, and the same verdict.
+#[test]
+fn the_two_speeds_keep_every_samples_track_and_verdict_on_a_reference_shell() {
+    let Some(flight) = host_tests::flight_reference::shell("shell155") else {
+        return;
+    };
+    let config = host_tests::flight_reference::config::<f64>(&flight);
+    assert_eq!(config.navigation_interval_us, 10_000, "the default");
+    let mut every_sample = config;
+    every_sample.navigation_interval_us = 0;
+    let mut two = DelayedFlight::<f64, HORIZON_SAMPLES>::new(config);
+    let mut one = DelayedFlight::<f64, HORIZON_SAMPLES>::new(every_sample);
+    let (held_two, held_one) = (
+        run(&mut two, &flight, |_| {}),
+        run(&mut one, &flight, |_| {}),
+    );
+    println!("two speeds: {held_two}\nevery sample: {held_one}");
+    assert_eq!(held_two.epochs, held_one.epochs);
+    let (a, b) = (held_two.inside(), held_one.inside());
+    assert!(
+        (a.0 - b.0).abs() < 0.005 && (a.1 - b.1).abs() < 0.005,
+        "{a:?} {b:?}"
+    );
+    let n = held_two.epochs as f64;
+    let nees = |h: &host_tests::flight_round::Held| (h.nees.0 / n, h.nees.1 / n);
+    let (x, y) = (nees(&held_two), nees(&held_one));
+    assert!(
+        (x.0 - y.0).abs() < 0.01 && (x.1 - y.1).abs() < 0.01,
+        "{x:?} {y:?}"
+    );
+    let (ft, fo) = (two.filter(), one.filter());
+    let sigma = |i: usize| fo.covariance()[(i, i)].sqrt();
+    for (i, (t, o)) in [
+        (
+            ft.estimate().sensors.accel_bias.x,
+            fo.estimate().sensors.accel_bias.x,
+        ),
+        (
+            ft.estimate().sensors.accel_scale.x,
+            fo.estimate().sensors.accel_scale.x,
+        ),
+        (
+            ft.estimate().sensors.gyro_scale.x,
+            fo.estimate().sensors.gyro_scale.x,
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let at = [index::ACCEL_BIAS, index::ACCEL_SCALE, index::GYRO_SCALE][i];
+        assert!(
+            (t - o).abs() < 0.1 * sigma(at),
+            "state {at}: {t} against {o}"
+        );
+    }
+    let (vt, vo) = (ft.verdict(), fo.verdict());
+    assert_eq!(
+        (vt.word, vt.shifted),
+        (vo.word, vo.shifted),
+        "{vt:?} {vo:?}"
+    );
+    assert_eq!((vt.word, vt.shifted), (Word::Shifted, 1 << 0 | 1 << 9));
+}
+
 /// The harness's inverse of the reference unit's sensor model, held against the truth's own
 /// specific force and rate (200 Hz rows): what is left is the noise, the differenced angular
 /// acceleration's noise on the arms, and the launch shift (the 155's roll scale, 0.32 rad/s).
