@@ -70,9 +70,8 @@ pub struct Navigation<T: RealField + Copy> {
     /// compensated sum): in `f32` a shell's 800 m/s takes a step's 0.04 m/s to within
     /// 3e-5 m/s, which over a minute at 2 kHz would walk well past the filter's sigma.
     carry: (Vector3<T>, Vector3<T>),
-    /// `despun * R(axis, roll)` and its rotation matrix at the last flush.
+    /// `despun * R(axis, roll)` at the last flush.
     attitude: UnitQuaternion<T>,
-    matrix: Matrix3<T>,
     /// The lower rate's interval, s (zero: every step).
     interval: T,
     /// The sample rate's sums since the last flush.
@@ -207,7 +206,6 @@ impl<T: Real> Navigation<T> {
             p: Vector3::zeros(),
             carry: (Vector3::zeros(), Vector3::zeros()),
             attitude: q,
-            matrix: Matrix3::identity(),
             interval: T::zero(),
             sweep: Sweep::empty(),
             end: End::at(
@@ -235,18 +233,10 @@ impl<T: Real> Navigation<T> {
         self
     }
 
-    /// Keeps the de-spun attitude's matrix, the attitude and its matrix with `despun` and
-    /// the roll.
+    /// Keeps the de-spun attitude's matrix and the attitude with `despun` and the roll.
     fn keep_attitude(&mut self) {
         self.despun_matrix = self.despun.to_rotation_matrix().into_inner();
         self.attitude = self.despun * rotation(&(self.axis * self.roll));
-        self.matrix = self.attitude.to_rotation_matrix().into_inner();
-    }
-
-    /// The attitude's rotation matrix, body to level frame (at the last flush).
-    #[must_use]
-    pub fn attitude_matrix(&self) -> Matrix3<T> {
-        self.matrix
     }
 
     /// The attitude, body to level frame (at the last flush).

@@ -127,8 +127,7 @@ impl<T: Real> FlightFilter<T> {
         Self {
             filter: ErrorFilter::new(
                 Estimate {
-                    nav: Navigation::at_rest(UnitQuaternion::identity(), config.spin_axis)
-                        .with_interval(micros(u64::from(config.navigation_interval_us))),
+                    nav: Self::navigation(&config, UnitQuaternion::identity()),
                     sensors: SensorErrors::default(),
                     receiver: Vector3::zeros(),
                 },
@@ -159,6 +158,13 @@ impl<T: Real> FlightFilter<T> {
             opening: None,
             before_launch: SVector::zeros(),
         }
+    }
+
+    /// The navigation at rest with attitude `q`, about `config`'s spin axis, at its
+    /// lower rate.
+    fn navigation(config: &FlightConfig<T>, q: UnitQuaternion<T>) -> Navigation<T> {
+        Navigation::at_rest(q, config.spin_axis)
+            .with_interval(micros(u64::from(config.navigation_interval_us)))
     }
 
     /// The prior covariance: the sensor errors' from the set-up, position as the GNSS knows
@@ -447,8 +453,7 @@ impl<T: Real> FlightFilter<T> {
         let at = origin.geodetic();
         self.filter = ErrorFilter::new(
             Estimate {
-                nav: Navigation::at_rest(q, self.config.spin_axis)
-                    .with_interval(micros(u64::from(self.config.navigation_interval_us))),
+                nav: Self::navigation(&self.config, q),
                 sensors: SensorErrors::default(),
                 receiver: Vector3::zeros(),
             },

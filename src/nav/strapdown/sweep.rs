@@ -147,10 +147,9 @@ impl<T: Real> Sweep<T> {
     /// One step from sample `a` to sample `b` (`b.dt` long; its force is carried here).
     pub fn step(&mut self, a: &End<T>, b: &mut End<T>) {
         let half: T = nalgebra::convert(0.5);
-        let twelfth: T = nalgebra::convert(1.0 / 12.0);
         let dt = b.dt;
         let h = half * dt;
-        let turn = (a.rate + b.rate) * h + a.rate.cross(&b.rate) * (twelfth * dt * dt);
+        let turn = super::rotation_vector(&a.rate, &b.rate, dt);
         let bortz = self.phi.cross(&turn) * half;
         self.phi += turn + bortz;
         b.carried = carry(&self.phi, &b.force);
