@@ -51,9 +51,10 @@ fn main() {
                     raw,
                     expected,
                     flags,
+                    sigma,
                 } => writeln!(
                     src,
-                    "    Step::Sample {{ raw: &{raw:?}, expected: &{expected:?}, flags: {flags} }},"
+                    "    Step::Sample {{ raw: &{raw:?}, expected: &{expected:?}, flags: {flags}, sigma: &{sigma:?} }},"
                 )
                 .unwrap(),
             }

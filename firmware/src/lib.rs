@@ -33,6 +33,8 @@ pub enum Step {
         expected: &'static [u32],
         /// Expected flag bits.
         flags: u8,
+        /// Expected 1-sigma of each output as bits; empty without covariance factors.
+        sigma: &'static [u32],
     },
 }
 
@@ -112,6 +114,18 @@ impl<'a> Runner<'a> {
             *o = v.to_bits();
         }
         Some((self.0.outputs(), c.flags.bits()))
+    }
+
+    /// The stated 1-sigma of each output of the sample `raw` that [`correct`](Self::correct)
+    /// gave `values` (as bits) into `out`; `false` without covariance factors.
+    pub fn sigma(&self, raw: &[i32], values: &[u32; 6], out: &mut [u32; 6]) -> bool {
+        match self.0.sigma(raw, &values.map(f32::from_bits)) {
+            Some(s) => {
+                *out = s.map(f32::to_bits);
+                true
+            }
+            None => false,
+        }
     }
 }
 

@@ -44,6 +44,7 @@ fn main() -> ! {
                     raw,
                     expected,
                     flags,
+                    sigma,
                 } => {
                     checked += 1;
                     let mut out = [0u32; 6];
@@ -64,6 +65,25 @@ fn main() -> ! {
                             got_flags,
                             expected,
                             flags
+                        );
+                    }
+                    // The stated 1-sigma of the outputs, where the case holds it.
+                    let mut stated = [0u32; 6];
+                    let has = runner.sigma(raw, &out, &mut stated);
+                    let got = if has {
+                        stated.get(..n).unwrap_or_default()
+                    } else {
+                        &[]
+                    };
+                    if got != *sigma {
+                        failures += 1;
+                        hprintln!(
+                            "FAIL {} step {}: raw {:?}: 1-sigma {:08x?}, expected {:08x?}",
+                            case.name,
+                            i,
+                            raw,
+                            got,
+                            sigma
                         );
                     }
                 }
@@ -216,6 +236,7 @@ fn check_batch_as<S: Sample>(
                 raw,
                 expected,
                 flags,
+                ..
             } => {
                 if !batch.push(raw, expected, *flags) {
                     hprintln!("FAIL {} batch: a sample is not 6 codes", case.name);

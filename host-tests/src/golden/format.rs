@@ -37,6 +37,7 @@ pub fn render(case: &Case) -> String {
                 raw,
                 expected,
                 flags,
+                sigma,
             } => {
                 let raw: Vec<String> = raw.iter().map(ToString::to_string).collect();
                 let out: Vec<String> = expected.iter().map(|b| format!("{b:08x}")).collect();
@@ -44,9 +45,15 @@ pub fn render(case: &Case) -> String {
                     .iter()
                     .map(|b| format!("{:.6e}", f32::from_bits(*b)))
                     .collect();
+                let stated = if sigma.is_empty() {
+                    String::new()
+                } else {
+                    let bits: Vec<String> = sigma.iter().map(|b| format!("{b:08x}")).collect();
+                    format!(" sigma {}", bits.join(" "))
+                };
                 writeln!(
                     s,
-                    "raw {} => {} flags {flags:02x}  # {}",
+                    "raw {} => {} flags {flags:02x}{stated}  # {}",
                     raw.join(" "),
                     out.join(" "),
                     dec.join(" ")
@@ -156,10 +163,24 @@ pub fn parse(text: &str) -> Result<Case, ParseError> {
                     return Err(err("as many outputs as raw codes are expected"));
                 }
                 let flags = flags.ok_or_else(|| err("missing flags"))?;
+                let mut sigma = Vec::new();
+                match words.next() {
+                    None => {}
+                    Some("sigma") => {
+                        for w in words {
+                            sigma.push(hex(Some(w))?);
+                        }
+                        if sigma.len() != expected.len() {
+                            return Err(err("sigma: one 1-sigma per output"));
+                        }
+                    }
+                    Some(_) => return Err(err("after the flags, only `sigma` and its bits")),
+                }
                 steps.push(Step::Sample {
                     raw,
                     expected,
                     flags,
+                    sigma,
                 });
             }
             _ => return Err(err("a line starts with blob, kind, env or raw")),

@@ -55,6 +55,9 @@ pub enum Step {
         expected: Vec<u32>,
         /// Expected flag bits.
         flags: u8,
+        /// Expected 1-sigma calibration error of each output as `f32::to_bits`
+        /// (`AnyCorrector::sigma`); empty for a calibration without covariance factors.
+        sigma: Vec<u32>,
     },
 }
 
@@ -456,11 +459,12 @@ pub fn compute(name: &str, data: &CalibrationData, kind: Kind) -> Case {
         steps.push(Step::Env(t, v));
         runner.set_environment(t, v);
         for raw in &inputs {
-            let (values, flags) = runner.correct(raw);
+            let (values, flags, sigma) = runner.correct(raw);
             steps.push(Step::Sample {
                 raw: raw.clone(),
                 expected: values.iter().map(|x| x.to_bits()).collect(),
                 flags,
+                sigma: sigma.iter().map(|x| x.to_bits()).collect(),
             });
         }
     }
@@ -502,12 +506,18 @@ impl<'a> Runner<'a> {
         self.0.set_environment(t, v);
     }
 
-    /// Corrects one sample given as a slice of the right length.
+    /// Corrects one sample given as a slice of the right length: its values, flags and the
+    /// stated 1-sigma of each value (empty without covariance factors).
     ///
     /// # Panics
     /// On a wrong length.
-    pub fn correct(&mut self, raw: &[i32]) -> (Vec<f32>, u8) {
+    pub fn correct(&mut self, raw: &[i32]) -> (Vec<f32>, u8, Vec<f32>) {
         let c = self.0.correct(raw).expect("a sample of the case's length");
-        (c.values[..self.0.outputs()].to_vec(), c.flags.bits())
+        let n = self.0.outputs();
+        let sigma = self
+            .0
+            .sigma(raw, &c.values)
+            .map_or_else(Vec::new, |s| s[..n].to_vec());
+        (c.values[..n].to_vec(), c.flags.bits(), sigma)
     }
 }

@@ -26,6 +26,7 @@ use spincal::nav::filter::index;
 use super::input::{ImuSeries, median_rate};
 use super::line::{Line, lines_over};
 use super::unmodelled::Unmodelled;
+use crate::sensor::record::stated::Regressor;
 use crate::sensor::record::{PointRecord, Record};
 
 /// A stated prior (1-sigma) for a unit whose calibration carries no covariance.
@@ -280,48 +281,6 @@ pub fn record_prior(
     Ok(prior)
 }
 
-/// A term of a record's fit, as the flight evaluates it from the device's error features
-/// ([`IMU_FEATURES`]): the feature's index, and whether the regressor is the axis' sensitivity
-/// times it (a lever arm).
-#[derive(Debug, Clone, Copy)]
-struct Regressor(usize, bool);
-
-impl Regressor {
-    fn of(term: &str, out: usize) -> Option<Self> {
-        let xyz = |prefix: &str| {
-            ["x", "y", "z"]
-                .iter()
-                .position(|a| term == format!("{prefix}{a}"))
-        };
-        let s = crate::sensor::lever::SENSED;
-        Some(match term {
-            "1" => Self(0, false),
-            t if t == format!("{s}^2") => Self(7, false),
-            crate::sensor::lever::SENSED_KINK => Self(8, false),
-            t if t == format!("{s}^3") => Self(9, false),
-            t if t == format!("{s}:abs({s})") => Self(10, false),
-            _ if out < 3 => {
-                if let Some(k) = xyz("f_") {
-                    Self(1 + k, false)
-                } else {
-                    let lever = format!("lever_{}", ["x", "y", "z"][out]);
-                    Self(4 + xyz(&lever)?, true)
-                }
-            }
-            _ => match (xyz("w_"), xyz("f_")) {
-                (Some(k), _) => Self(1 + k, false),
-                (None, Some(k)) => Self(4 + k, false),
-                (None, None) => return None,
-            },
-        })
-    }
-
-    /// Its value at a sample whose device features are `phi`.
-    fn value(self, phi: &[f32; IMU_FEATURES], slope: f64) -> f64 {
-        f64::from(phi[self.0]) * if self.1 { slope } else { 1.0 }
-    }
-}
-
 /// The corrector of `cal` at the flight's sample rate and temperature.
 fn corrector_at_flight<'a>(cal: &'a Calibration, imu: &ImuSeries) -> Option<AnyImuCorrector<'a>> {
     let mut corrector =
@@ -474,38 +433,4 @@ pub fn stated_prior(s: &StatedPrior) -> InFlight {
         block[0] = nalgebra::Matrix2::new(b * b, 0.0, 0.0, k * k);
     }
     prior
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Regressor;
-
-    #[test]
-    fn a_records_terms_are_read_as_the_devices_features() {
-        let x = 64.0f32;
-        let phi = [
-            1.0,
-            x,
-            2.0,
-            3.0,
-            0.5,
-            0.25,
-            0.125,
-            x * x,
-            x,
-            x * x * x,
-            x * x,
-        ];
-        let v = |t: &str, out: usize| Regressor::of(t, out).map(|r| r.value(&phi, 16.0));
-        // The gyro x: its rates, its g-sensitivity's force, what it senses.
-        assert_eq!(v("w_x", 3), Some(64.0));
-        assert_eq!(v("f_y", 3), Some(0.25));
-        assert_eq!(v("sensed^3", 3), Some(64.0f64.powi(3)));
-        assert_eq!(v("sensed:abs(sensed)", 3), Some(64.0 * 64.0));
-        assert_eq!(v("sensed_kink", 3), Some(64.0));
-        // An accelerometer's lever arm is its sensitivity times the gradient.
-        assert_eq!(v("lever_xz", 0), Some(0.125 * 16.0));
-        assert_eq!(v("f_z", 0), Some(3.0));
-        assert!(v("temp_1", 3).is_none() && v("lever_xx", 3).is_none());
-    }
 }

@@ -5,6 +5,8 @@
 
 use serde::{Deserialize, Serialize};
 
+pub mod stated;
+
 use super::{Calibrated, Finding, Verdict};
 
 /// The schema identifier.
