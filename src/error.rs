@@ -232,6 +232,14 @@ pub enum Error {
     CorrectorBadSampleRate,
     /// A largest angular acceleration that is not finite and positive (rad/s^2).
     CorrectorBadAngularAcceleration,
+    /// At this sample rate the g-sensitivity's feedback of the lever term (its tangential part
+    /// grows with the rate) could grow the rate without bound for some code inside the rails.
+    CorrectorUnboundedFeedback {
+        /// The coefficient set with the largest loop gain.
+        set: u8,
+        /// The highest sample rate the calibration's feedback is bounded at (Hz, 0: none).
+        max_rate_hz: u32,
+    },
     /// With a lever arm, an accelerometer axis must sense mainly along itself: the diagonal of
     /// the inverse of its scale-misalignment matrix must dominate its row.
     InvalidSensingDirection {
@@ -432,6 +440,12 @@ impl fmt::Display for Error {
             Error::CorrectorWrongSensor => {
                 f.write_str("the calibration is for another kind of sensor than this corrector")
             }
+            Error::CorrectorUnboundedFeedback { set, max_rate_hz } => write!(
+                f,
+                "at this sample rate the g-sensitivity's feedback of the lever term (coefficient \
+                 set {set}) is not bounded inside the ADC rails: the calibration corrects at up \
+                 to {max_rate_hz} Hz"
+            ),
             Error::CorrectorBadSampleRate => write!(
                 f,
                 "the sample rate must be finite, positive and at most {} Hz",

@@ -758,7 +758,7 @@ proptest! {
             runner.set_environment(20.0, 3.3);
             let n = match case { 0 => 1, 1 => 3, _ => 6 };
             for code in [0, 1, 32_768, 65_535, i32::MIN, i32::MAX] {
-                let (v, _) = runner.correct(&vec![code; n]);
+                let (v, _, _) = runner.correct(&vec![code; n]);
                 prop_assert!(v.iter().all(|x| x.is_finite()));
             }
         }

@@ -68,7 +68,7 @@ fn check_against_reference(
     };
     let mut prev = None;
     for raw in raws {
-        let (got, flags) = runner.correct(raw);
+        let (got, flags, _) = runner.correct(raw);
         let r = reference::correct(data, f64::from(env.0), f64::from(env.1), raw, rate, prev);
         let want = &r.values;
         for (i, (g, Value { y, mag, full_scale })) in got.iter().zip(want).enumerate() {
@@ -338,8 +338,57 @@ fn a_lever_feedback_without_bound_is_refused_at_the_gate() {
         })
     ));
     let imu = Calibration::new(CalibrationData::example_imu()).unwrap();
+    assert_eq!(
+        imu.max_sample_rate_hz(),
+        spincal::correct::MAX_SAMPLE_RATE_HZ
+    );
     for rate in [1.0, 1000.0, spincal::correct::MAX_SAMPLE_RATE_HZ] {
         assert!(AnyImuCorrector::new(&imu, rate).is_ok(), "{rate} Hz");
+    }
+}
+
+/// The lever term's tangential part takes the rate difference times the sample rate, so the
+/// g-sensitivity's feedback of it grows with the rate: an independent unit with g-sensitivity
+/// rows of 6.6e-4 rad/s per m/s^2 and 4 mm arms reached a loop gain of one at 100 kHz and was
+/// refused outright, though bounded at any rate it runs at. The calibration is valid; a
+/// corrector above the highest rate it is bounded at is refused, naming that rate.
+#[test]
+fn a_lever_feedback_bounded_only_below_a_rate_is_refused_above_it() {
+    let mut data = CalibrationData::example_imu();
+    if let Sensor::Imu {
+        sets, lever_arm, ..
+    } = &mut data.sensor
+    {
+        *lever_arm = Some([
+            [0.004, -0.003, 0.004],
+            [0.003, -0.004, 0.004],
+            [-0.004, -0.004, 0.003],
+        ]);
+        for s in sets.as_mut_slice() {
+            s.g_sensitivity = [
+                [1.5e-3, 1e-3, -1e-3],
+                [-1e-3, 1e-3, 1e-3],
+                [-1e-3, 1e-3, 1e-3],
+            ];
+        }
+    }
+    let cal = Calibration::new(data).expect("bounded at the rates a unit runs at");
+    let top = cal.max_sample_rate_hz();
+    assert!(
+        (1000.0..spincal::correct::MAX_SAMPLE_RATE_HZ).contains(&top),
+        "{top}"
+    );
+    assert!(AnyImuCorrector::new(&cal, 1000.0).is_ok());
+    assert!(AnyImuCorrector::new(&cal, 0.98 * top).is_ok(), "{top}");
+    match AnyImuCorrector::new(&cal, 1.02 * top).err() {
+        Some(e @ spincal::Error::CorrectorUnboundedFeedback { max_rate_hz, .. }) => {
+            assert_eq!(max_rate_hz, top as u32);
+            assert!(
+                e.to_string().contains(&format!("up to {max_rate_hz} Hz")),
+                "{e}"
+            );
+        }
+        other => panic!("{other:?}"),
     }
 }
 

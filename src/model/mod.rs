@@ -433,4 +433,30 @@ impl Calibration {
     pub fn into_data(self) -> CalibrationData {
         self.data
     }
+
+    /// The highest sample rate (Hz, to 1 %) a corrector of this calibration can run at:
+    /// [`MAX_SAMPLE_RATE_HZ`] but for an IMU with a lever arm whose g-sensitivity feeds the
+    /// lever term's tangential part (which grows with the rate) back into the rates strongly
+    /// enough to grow them without bound above it.
+    #[must_use]
+    pub fn max_sample_rate_hz(&self) -> f32 {
+        self.feedback().map_or(MAX_SAMPLE_RATE_HZ, |f| f.max_rate())
+    }
+
+    /// The g-sensitivity's feedback of an IMU's lever term, when it has a lever arm.
+    pub(crate) fn feedback(&self) -> Option<validate::Feedback> {
+        let Sensor::Imu {
+            accel_rails,
+            gyro_rails,
+            accel,
+            gyro,
+            lever_arm: Some(arm),
+            sets,
+            ..
+        } = &self.data.sensor
+        else {
+            return None;
+        };
+        validate::Feedback::of(sets, arm, (accel, accel_rails), (gyro, gyro_rails)).ok()
+    }
 }

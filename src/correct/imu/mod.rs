@@ -153,7 +153,9 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
     /// [`Error::CorrectorWrongSensor`] when `cal` is not an IMU;
     /// [`Error::CorrectorWrongFormat`] when it states another sample format than `S`;
     /// [`Error::CorrectorBadSampleRate`] when the rate is not finite, positive and at most
-    /// [`MAX_SAMPLE_RATE_HZ`].
+    /// [`MAX_SAMPLE_RATE_HZ`]; [`Error::CorrectorUnboundedFeedback`] when the g-sensitivity's
+    /// feedback of the lever term is not bounded at that rate
+    /// ([`Calibration::max_sample_rate_hz`](crate::model::Calibration::max_sample_rate_hz)).
     pub fn new(cal: &'a Calibration, sample_rate_hz: f32) -> Result<Self, Error> {
         let data = cal.data();
         let Sensor::Imu {
@@ -171,6 +173,11 @@ impl<'a, S: Sample> ImuCorrector<'a, S> {
         sample::check::<S>(accel_rails)?;
         if !(sample_rate_hz > 0.0 && sample_rate_hz <= MAX_SAMPLE_RATE_HZ) {
             return Err(Error::CorrectorBadSampleRate);
+        }
+        if let Some(f) = cal.feedback()
+            && !f.bounded_at(sample_rate_hz)
+        {
+            return Err(f.error());
         }
         let shape = Shape::of(
             sets.iter()

@@ -14,6 +14,7 @@ mod bounds;
 mod lever;
 
 use bounds::{check_bounded, triad_output_bound};
+pub(crate) use lever::Feedback;
 use lever::{validate_lever_arm, validate_lever_feedback, validate_sensing_directions};
 
 /// Largest corrected magnitude a validated calibration may produce inside its rails. Far above

@@ -182,6 +182,59 @@ fn a_shell_flight_fits_and_a_launch_shift_of_one_bias_is_found() {
     );
 }
 
+/// The guide's round given its blob alone, no record and no history (`--no-db`): the prior is
+/// the blob's covariance factors', the record's within 10 %, and a 0.8 m/s^2 axial bias shift
+/// on a 4 s shell is named as with the record. Before, the blob alone stated the axial bias to
+/// 42 m/s^2 (a term the selection dropped, kept at 1e-7 of the bias's sigma by the factor's
+/// jitter, times a cube of 10^4 m/s^2) and the verdict was HELD.
+#[test]
+fn the_blob_alone_names_the_shift_the_record_names() {
+    let d = tempfile::tempdir().unwrap();
+    calibrated(d.path());
+    common::simulate_flight(
+        d.path(),
+        TRUTH,
+        (
+            "shell:lat=39.4,lon=-8.3,azimuth=60,rest=2,seconds=4",
+            "2000",
+        ),
+        "s.csv",
+        &["--baro", "b.csv", "--launch-shift", "ax=0.8"],
+    );
+    let args = [
+        "flight",
+        "s.csv",
+        "--blob",
+        "round.blob",
+        "--record",
+        "round.json",
+        "--gnss",
+        "g.csv",
+        "--baro",
+        "b.csv",
+        "--no-db",
+        "--json",
+        "f.json",
+        "--track",
+        "track.csv",
+    ];
+    let out = exits(d.path(), &args, 3);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("f.json")).unwrap()).unwrap();
+    assert!(
+        term(&v, "accel bias x")["shifted"].as_bool().unwrap(),
+        "{out}"
+    );
+    blob_alone_as_the_record(d.path(), &args, &v, "the guide's round");
+    let alone: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("alone.json")).unwrap())
+            .unwrap();
+    assert!(
+        term(&alone, "accel bias x")["shifted"].as_bool().unwrap(),
+        "{alone}"
+    );
+}
+
 /// The README's whole shell flight (62 s): its setback leaves the navigation lost, and the
 /// first fix after it puts the navigation back, as the device's filter does; without that, the
 /// filter drifted after apogee, refused every fix that would have brought it back and did not
@@ -1001,6 +1054,49 @@ fn the_reference_flights_are_named_and_held_and_their_tracks_within_their_bounds
         let share = inside as f64 / n as f64;
         println!("{case}: {verdict}; track within 3 sigma on {inside} of {n} epochs");
         assert!(n > 1000 && share >= 0.95, "{case}: {inside} of {n}");
+        blob_alone_as_the_record(d.path(), &args, &v, case);
+    }
+}
+
+/// The same flight given the blob alone (no record): the prior from the blob's covariance
+/// factors is the record's within 10 % for every term, and the verdict is the same. Before the
+/// factor's jitter was scaled to each feature's own variance, the spinning round's blob alone
+/// stated an axial bias prior of 42 m/s^2 (the record's: 0.21) and missed its shift.
+fn blob_alone_as_the_record(dir: &Path, args: &[&str], record: &serde_json::Value, case: &str) {
+    let mut alone: Vec<&str> = Vec::with_capacity(args.len());
+    let mut skip = false;
+    for a in args {
+        if skip {
+            skip = false;
+            continue;
+        }
+        match *a {
+            "--record" => skip = true,
+            "f.json" => alone.push("alone.json"),
+            "track.csv" => alone.push("alone_track.csv"),
+            a => alone.push(a),
+        }
+    }
+    let (code, out, err) = calflash(dir, &alone);
+    assert!(code == 0 || code == 3, "{case}, the blob alone: {out}{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("alone.json")).unwrap()).unwrap();
+    assert_eq!(v["prior"]["source"], "factors", "{case}: {}", v["prior"]);
+    assert_eq!(
+        v["verdict"], record["verdict"],
+        "{case}, the blob alone: {out}"
+    );
+    for t in record["terms"].as_array().unwrap() {
+        let name = t["name"].as_str().unwrap();
+        let (a, b) = (
+            t["prior_sigma"].as_f64().unwrap(),
+            term(&v, name)["prior_sigma"].as_f64().unwrap(),
+        );
+        println!("{case}: {name} prior from the record {a:.4e}, from the blob {b:.4e}");
+        assert!(
+            (b / a - 1.0).abs() <= 0.1,
+            "{case}: {name}: the blob's prior {b} against the record's {a}"
+        );
     }
 }
 

@@ -367,8 +367,11 @@ fn two_stages_and_one_on_an_independent_forward_model() {
     // its own feature in the blob's covariance factors (before, the cubic, odd-quadratic and
     // kink terms were folded into fewer: accelerometer coverage 0.921 and 0.999, z RMS at zero
     // input 0.35 to 0.66 but for the two-stage accelerometers).
+    // Before, 3 of 120 were refused: the g-sensitivity's feedback of the lever term was
+    // bounded at the largest legal sample rate (100 kHz), where its tangential part's loop gain
+    // reached one on units with large g-sensitivity rows; it is the corrector's, at its rate.
     assert!(
-        refused.len() * 20 <= UNITS as usize,
+        refused.is_empty(),
         "{} of {UNITS} units refused",
         refused.len()
     );

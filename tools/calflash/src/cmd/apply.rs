@@ -537,15 +537,30 @@ fn report(
             acc.count()
         );
         println!(
-            "  | output | mean error | RMS error | stated 1-sigma | median error | robust spread | 99 % of abs. error below | worst (sample) | far out |"
+            "  | output | mean error | RMS error | stated 1-sigma (median) | the statement | median error | robust spread | 99 % of abs. error below | worst (sample) | far out |"
         );
+        let n = acc.count();
         for r in acc.rows() {
+            use crate::sensor::accuracy::Statement;
             println!(
-                "  | {} | {:.4e} | {:.4e} | {} | {:.4e} | {:.4e} | {:.4e} | {:.4e} ({}) | {} |",
+                "  | {} | {:.4e} | {:.4e} | {} | {} | {:.4e} | {:.4e} | {:.4e} | {:.4e} ({}) | {} |",
                 r.name,
                 r.mean,
                 r.rms,
-                r.sigma.map_or("(none)".to_string(), |s| format!("{s:.4e}")),
+                r.typical
+                    .map_or("(none)".to_string(), |s| format!("{s:.4e}")),
+                match r.statement(n) {
+                    Statement::Holds => "holds".to_string(),
+                    Statement::Overstated => format!(
+                        "OVERSTATED: over 3 times the RMS error ({:.1}x)",
+                        r.typical.unwrap_or(0.0) / r.rms
+                    ),
+                    Statement::Understated => format!(
+                        "UNDERSTATED: mean z {:+.1}",
+                        r.mean_z(n).unwrap_or(f64::NAN)
+                    ),
+                    Statement::None => "-".to_string(),
+                },
                 r.median,
                 r.spread,
                 r.p99,
@@ -555,7 +570,7 @@ fn report(
             );
         }
         println!(
-            "  (the stated 1-sigma is the calibration's error; the spread adds each sample's noise; far out: beyond five robust spreads from the median)"
+            "  (the stated 1-sigma is the calibration's error; overstated: over 3 times the RMS error, so no check against it can fail; understated: the mean error beyond 3 of its sigma; the spread adds each sample's noise; far out: beyond five robust spreads from the median)"
         );
     }
 }

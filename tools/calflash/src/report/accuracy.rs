@@ -8,7 +8,7 @@ use super::Error;
 use super::page::{STYLE, esc};
 use super::plot::{Figure, Series, figure};
 use super::terminal::num;
-use crate::sensor::accuracy::{Accuracy, Row};
+use crate::sensor::accuracy::{Accuracy, Row, Statement};
 
 /// Points a figure's series keeps: the largest error of each stretch of samples, so that no
 /// spike is lost.
@@ -39,24 +39,26 @@ pub fn html(
         "<p>Each output's error (corrected minus reference) over the {} samples the device did not flag, one figure per output so that none hides another; each point drawn is the largest error of its stretch of samples.</p>",
         acc.count()
     );
-    h.push_str("<table class=\"terms\">\n<tr><th>output</th><th>unit</th><th>mean</th><th>mean z</th><th>RMS</th><th>stated 1-sigma</th><th>robust spread</th><th>99 % below</th><th>worst</th><th>far out</th></tr>\n");
+    h.push_str("<table class=\"terms\">\n<tr><th>output</th><th>unit</th><th>mean</th><th>mean z</th><th>RMS</th><th>stated 1-sigma (median)</th><th>the statement</th><th>robust spread</th><th>99 % below</th><th>worst</th><th>far out</th></tr>\n");
     for (r, unit) in rows.iter().zip(units) {
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             esc(&r.name),
             unit,
             num(r.mean),
-            mean_z(r, acc.count()).map_or("-".to_string(), |z| format!("{z:+.2}")),
+            r.mean_z(acc.count())
+                .map_or("-".to_string(), |z| format!("{z:+.2}")),
             num(r.rms),
-            r.sigma.map_or("-".to_string(), num),
+            r.typical.map_or("-".to_string(), num),
+            statement_word(r.statement(acc.count())),
             num(r.spread),
             num(r.p99),
             num(r.worst.0),
             r.far_out,
         );
     }
-    h.push_str("</table>\n<p>The stated 1-sigma is the calibration's error alone (the mean of what the blob states at each sample); the robust spread (1.4826 times the median absolute deviation) includes each sample's noise; mean z: the mean over its sigma, the stated 1-sigma and the spread over the square root of the samples together; 99 % below: of the absolute errors; far out: samples more than five robust spreads from the median.</p>\n");
+    h.push_str("</table>\n<p>The stated 1-sigma is the calibration's error alone (the median of what the blob states at each sample); the statement is overstated when it is over three times the RMS error (a check against it cannot fail), understated when the mean error is beyond 3 of its sigma; the robust spread (1.4826 times the median absolute deviation) includes each sample's noise; mean z: the mean over its sigma, the stated 1-sigma and the spread over the square root of the samples together; 99 % below: of the absolute errors; far out: samples more than five robust spreads from the median.</p>\n");
     let series: Vec<Vec<(f64, f64)>> = (0..acc.names().len())
         .map(|k| peaks(acc.errors(k), x))
         .collect();
@@ -82,16 +84,18 @@ pub fn html(
     Ok(h)
 }
 
-/// Output `r`'s mean error over its sigma: the stated 1-sigma (the calibration's error, which
-/// does not average out) and the robust spread over `sqrt(n)` (the noise, which does).
-fn mean_z(r: &Row, n: usize) -> Option<f64> {
-    let sigma = r.sigma?;
-    let sd = (sigma * sigma + r.spread * r.spread / n.max(1) as f64).sqrt();
-    (sd > 0.0).then(|| r.mean / sd)
+/// The statement's word in the table.
+fn statement_word(s: Statement) -> &'static str {
+    match s {
+        Statement::Holds => "holds",
+        Statement::Overstated => "OVERSTATED",
+        Statement::Understated => "UNDERSTATED",
+        Statement::None => "-",
+    }
 }
 
-/// The page's verdict: whether every output's mean error is within 3 of its sigma
-/// ([`mean_z`]), naming those that are not; its style class.
+/// The page's verdict: it holds when every output's stated 1-sigma holds ([`Statement`]),
+/// naming those overstated and understated otherwise; its style class.
 fn verdict(rows: &[Row], n: usize) -> (&'static str, String) {
     if n == 0 {
         return (
@@ -99,37 +103,60 @@ fn verdict(rows: &[Row], n: usize) -> (&'static str, String) {
             "No sample the device did not flag: nothing to hold against the reference.".to_string(),
         );
     }
-    if rows.iter().any(|r| r.sigma.is_none()) {
+    if rows.iter().any(|r| r.typical.is_none()) {
         return (
             "review",
             "The calibration states no 1-sigma: the errors below are not held against one."
                 .to_string(),
         );
     }
-    let beyond: Vec<String> = rows
-        .iter()
-        .filter_map(|r| {
-            mean_z(r, n)
-                .filter(|z| z.abs() > 3.0)
-                .map(|z| format!("{} ({z:+.1})", r.name))
-        })
-        .collect();
-    if beyond.is_empty() {
-        (
+    let named = |which: Statement| -> Vec<String> {
+        rows.iter()
+            .filter(|r| r.statement(n) == which)
+            .map(|r| match which {
+                Statement::Understated => format!(
+                    "{} (mean z {:+.1})",
+                    r.name,
+                    r.mean_z(n).unwrap_or(f64::NAN)
+                ),
+                _ => format!(
+                    "{} ({} stated against an RMS error of {})",
+                    r.name,
+                    num(r.typical.unwrap_or(f64::NAN)),
+                    num(r.rms)
+                ),
+            })
+            .collect()
+    };
+    let (under, over) = (named(Statement::Understated), named(Statement::Overstated));
+    if under.is_empty() && over.is_empty() {
+        return (
             "accept",
             format!(
-                "Holds: every output's mean error against the reference is within 3 sigma of what its stated 1-sigma and its noise allow, over {n} samples."
+                "Holds: every output's mean error is within 3 sigma of what its stated 1-sigma and its noise allow, and no stated 1-sigma is over three times its RMS error, over {n} samples."
             ),
-        )
-    } else {
-        (
-            "review",
-            format!(
-                "Does not hold: the mean error of {} is beyond 3 sigma of its stated 1-sigma and noise, over {n} samples.",
-                beyond.join(", ")
-            ),
-        )
+        );
     }
+    let mut why = Vec::new();
+    if !under.is_empty() {
+        why.push(format!(
+            "understated (the mean error beyond 3 sigma of the stated 1-sigma and noise): {}",
+            under.join(", ")
+        ));
+    }
+    if !over.is_empty() {
+        why.push(format!(
+            "overstated (over three times the RMS error, so no check against it can fail): {}",
+            over.join(", ")
+        ));
+    }
+    (
+        "review",
+        format!(
+            "Does not hold over {n} samples: the stated 1-sigma is {}.",
+            why.join("; ")
+        ),
+    )
 }
 
 /// At most [`SHOWN`] points: the largest absolute error of each stretch, at its sample's `x`.

@@ -6,6 +6,11 @@
 //! median, which a Gaussian error makes once in two million), and every error kept for a
 //! figure. The stated 1-sigma is the calibration's error alone; the spread includes each
 //! sample's noise.
+//!
+//! The stated 1-sigma is judged against the errors, per output ([`Statement`]): a typical
+//! (median) stated 1-sigma over three times the RMS error is overstated (a check against it
+//! cannot fail), a mean error beyond three of its sigmas (the stated 1-sigma, which does not
+//! average out, with the noise over the root of the samples, which does) is understated.
 
 /// Running sums per output, and each sample's error.
 #[derive(Debug, Clone, PartialEq)]
@@ -15,6 +20,8 @@ pub struct Accuracy {
     sum: Vec<f64>,
     square: Vec<f64>,
     sigma: Vec<f64>,
+    /// Per output, each sample's stated 1-sigma.
+    stated_each: Vec<Vec<f64>>,
     stated: usize,
     /// Per output: `(sample index, error)`.
     errors: Vec<Vec<(usize, f64)>>,
@@ -31,6 +38,8 @@ pub struct Row {
     pub rms: f64,
     /// Mean stated 1-sigma, when every sample stated one.
     pub sigma: Option<f64>,
+    /// The typical stated 1-sigma: their median, when every sample stated one.
+    pub typical: Option<f64>,
     /// Median error.
     pub median: f64,
     /// 99th percentile of the absolute error.
@@ -54,6 +63,7 @@ impl Accuracy {
             sum: vec![0.0; k],
             square: vec![0.0; k],
             sigma: vec![0.0; k],
+            stated_each: vec![Vec::new(); k],
             stated: 0,
             errors: vec![Vec::new(); k],
         }
@@ -68,6 +78,7 @@ impl Accuracy {
             self.square[k] += e * e;
             if let Some(s) = sigma.and_then(|s| s.get(k)) {
                 self.sigma[k] += f64::from(*s);
+                self.stated_each[k].push(f64::from(*s));
             }
             self.errors[k].push((index, e));
         }
@@ -110,6 +121,11 @@ impl Accuracy {
                     mean: self.sum[k] / n,
                     rms: (self.square[k] / n).sqrt(),
                     sigma: (self.stated == self.n).then(|| self.sigma[k] / n),
+                    typical: (self.stated == self.n).then(|| {
+                        let mut v = self.stated_each[k].clone();
+                        v.sort_by(f64::total_cmp);
+                        quantile(&v, 0.5)
+                    }),
                     median,
                     p99: quantile(&absolute, 0.99),
                     worst,
@@ -130,6 +146,47 @@ impl Accuracy {
     #[must_use]
     pub fn names(&self) -> &[String] {
         &self.names
+    }
+}
+
+/// What the errors say of an output's stated 1-sigma.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Statement {
+    /// Neither overstated nor understated.
+    Holds,
+    /// The typical stated 1-sigma is over three times the RMS error: a check against it
+    /// cannot fail.
+    Overstated,
+    /// The mean error is beyond three of its sigmas.
+    Understated,
+    /// No 1-sigma stated.
+    None,
+}
+
+impl Row {
+    /// The mean error over its sigma: the typical stated 1-sigma (the calibration's error,
+    /// which does not average out) and the robust spread over `sqrt(n)` (the noise, which
+    /// does), for `n` samples.
+    #[must_use]
+    pub fn mean_z(&self, n: usize) -> Option<f64> {
+        let sigma = self.typical?;
+        let sd = (sigma * sigma + self.spread * self.spread / n.max(1) as f64).sqrt();
+        (sd > 0.0).then(|| self.mean / sd)
+    }
+
+    /// The stated 1-sigma judged against the errors of `n` samples.
+    #[must_use]
+    pub fn statement(&self, n: usize) -> Statement {
+        let Some(typical) = self.typical else {
+            return Statement::None;
+        };
+        if self.mean_z(n).is_some_and(|z| z.abs() > 3.0) {
+            Statement::Understated
+        } else if typical > 3.0 * self.rms {
+            Statement::Overstated
+        } else {
+            Statement::Holds
+        }
     }
 }
 
@@ -160,6 +217,7 @@ mod tests {
         assert_eq!((r[0].mean, r[0].rms), (0.0, 1.0));
         assert!((r[1].mean - 0.25).abs() < 1e-12 && (r[1].rms - 0.125f64.sqrt()).abs() < 1e-12);
         assert!((r[0].sigma.unwrap() - 0.6).abs() < 1e-7);
+        assert!((r[0].typical.unwrap() - 0.6).abs() < 1e-7);
         assert_eq!(r[1].worst, (0.5, 1));
         a.add(2, &[0.0, 2.0], &[0.0, 2.0], None);
         assert_eq!(a.rows()[0].sigma, None);
@@ -184,5 +242,27 @@ mod tests {
         assert_eq!(r.worst.0, 100.0);
         assert_eq!(r.far_out, 4, "{r:?}");
         assert!(r.spread > 0.0 && r.spread < 0.01, "{r:?}");
+    }
+
+    /// The two flags on a stated 1-sigma: 245 against an RMS error of 3.8 (the spinning round's
+    /// a_z before its factor was mended) is overstated; a mean error of 1 against a stated 0.1
+    /// is understated; a stated 1-sigma of the error's size holds.
+    #[test]
+    fn a_stated_sigma_is_flagged_overstated_or_understated() {
+        let judge = |sigma: f32, bias: f64| {
+            let mut a = Accuracy::new(&["x"]);
+            for i in 0..2000 {
+                let noise = 3.8 * (f64::from(i) * 0.7).sin() * std::f64::consts::SQRT_2;
+                a.add(i as usize, &[(bias + noise) as f32], &[0.0], Some(&[sigma]));
+            }
+            a.rows()[0].statement(a.count())
+        };
+        assert_eq!(judge(245.0, 0.0), Statement::Overstated);
+        assert_eq!(judge(0.1, 1.0), Statement::Understated);
+        assert_eq!(judge(0.3, 0.1), Statement::Holds);
+        assert_eq!(judge(0.3, 0.1), Statement::Holds);
+        let mut none = Accuracy::new(&["x"]);
+        none.add(0, &[1.0], &[0.0], None);
+        assert_eq!(none.rows()[0].statement(1), Statement::None);
     }
 }

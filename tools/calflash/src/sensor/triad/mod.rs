@@ -469,6 +469,14 @@ fn finish(
         refused,
     } = blob::build_or_reject(path, &data, &points)?;
     let device_error = output_errors.iter().copied().fold(0.0, f64::max);
+    if let Ok(cal) = spincal::model::Calibration::new(data.clone()) {
+        let top = cal.max_sample_rate_hz();
+        if top < spincal::model::MAX_SAMPLE_RATE_HZ {
+            notes.push(format!(
+                "the g-sensitivity feeds the lever term back into the rates, and its tangential part grows with the sample rate: this calibration corrects samples at up to {top:.0} Hz (a corrector at a higher rate is refused)"
+            ));
+        }
+    }
     let (names, units, ranges) = described(
         accel.as_ref(),
         gyro.as_ref(),
