@@ -74,17 +74,18 @@ impl<const N: usize> Default for Corrected<N> {
 }
 
 /// `|L' f|` for a packed lower-triangular `L` (row-major) of dimension `N`: the 1-sigma of an
-/// output whose features are `f`.
+/// output whose features are `f`. The factor is read once, in its own order: row `i` adds
+/// `L_ij f_i` to each `(L' f)_j`, `j <= i` (each sum over `i` in the same order as by columns,
+/// so the same bits).
 fn factor_norm<const N: usize>(packed: &[f32], f: &[f32; N]) -> f32 {
-    let mut sum = 0.0;
-    for j in 0..N {
-        let mut dot = 0.0;
-        for (i, fi) in f.iter().enumerate().skip(j) {
-            dot += packed.get(i * (i + 1) / 2 + j).copied().unwrap_or(0.0) * fi;
+    let mut v = [0.0f32; N];
+    let mut factor = packed.iter();
+    for (i, fi) in f.iter().enumerate() {
+        for vj in v.iter_mut().take(i + 1) {
+            *vj += factor.next().copied().unwrap_or(0.0) * fi;
         }
-        sum += dot * dot;
     }
-    libm::sqrtf(sum)
+    crate::sqrt::sqrtf(v.iter().fold(0.0, |s, x| s + x * x))
 }
 
 #[cfg(test)]

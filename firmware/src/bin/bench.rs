@@ -182,6 +182,23 @@ fn main() -> ! {
     bench_batch("imu_full_asym_batch", &mut c, &inside);
     bench_one("imu_full_asym_call", &mut c, &inside);
 
+    // The six 1-sigmas of a corrected sample: the blob's covariance factors (66 values an
+    // output) over the output's 11 error features (`ImuCorrector::sigma`).
+    let mut corrected = [Corrected::<6>::default(); N];
+    batch(&mut c, &inside, &mut corrected);
+    let mut stated = [[0.0f32; 6]; N];
+    let t0 = timer::now();
+    for (o, s) in corrected.iter().zip(stated.iter_mut()) {
+        if let Some(x) = c.sigma(black_box(&o.values)) {
+            *s = x;
+        }
+    }
+    let t1 = timer::now();
+    black_box(&stated);
+    report("imu_sigma", t0.wrapping_sub(t1), N);
+    let probe = corrected.first().map_or([0.0; 6], |o| o.values);
+    let (_, sigma_stack) = stack::high_water(|| black_box(c.sigma(black_box(&probe))));
+
     // set_environment over the 8-point temperature table, at points spread over the table.
     let temps = [-37.0f32, -12.5, 3.0, 16.0, 29.9, 44.0, 61.0, 84.0];
     let t0 = timer::now();
@@ -289,6 +306,7 @@ fn main() -> ! {
     let signed_stack = bench_signed();
     let [commit_stack, boot_stack] = bench_signed_store();
     hprintln!("stack correct {}", correct_stack);
+    hprintln!("stack sigma {}", sigma_stack);
     hprintln!("stack store_commit_signed {}", commit_stack);
     hprintln!("stack store_boot_signed {}", boot_stack);
     hprintln!("stack health_observe_rest {}", health_stack);

@@ -225,8 +225,8 @@ pub fn record_prior(
         } else {
             ["w_x", "w_y", "w_z"]
         }[out % 3];
-        let terms: Vec<Regressor> = fit
-            .terms
+        let (names, covariance) = fit.stated();
+        let terms: Vec<Regressor> = names
             .iter()
             .map(|t| {
                 Regressor::of(t, out).ok_or_else(|| RecordPriorError::Term {
@@ -244,15 +244,14 @@ pub fn record_prior(
             .ok_or(RecordPriorError::Missing(name))?;
         let n = terms.len();
         let q = DMatrix::from_fn(n, n, |i, j| {
-            fit.covariance
+            covariance
                 .get(i)
                 .and_then(|r| r.get(j))
                 .copied()
                 .unwrap_or(0.0)
                 / (slope * slope)
         });
-        let own_at: Vec<Option<usize>> = fit
-            .terms
+        let own_at: Vec<Option<usize>> = names
             .iter()
             .map(|t| match t.as_str() {
                 "1" => Some(0),

@@ -213,7 +213,7 @@ mod tests {
     #[test]
     fn the_factor_rebuilds_a_badly_scaled_covariance() {
         let sd = [0.1, 3e-5, 1e-9, 2e-13];
-        let rho = 0.999_999;
+        let rho: f64 = 0.999_999;
         let q = DMatrix::from_fn(4, 4, |i, j| {
             sd[i]
                 * sd[j]

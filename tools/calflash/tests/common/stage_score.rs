@@ -68,6 +68,8 @@ pub struct Score {
     pub n0: [usize; 2],
     /// The sum of the squared stated 1-sigma over the range, per family.
     pub stated: [f64; 2],
+    /// The sum of the squared errors over their stated 1-sigma over the range, per family.
+    pub zz: [f64; 2],
 }
 
 /// The unit's truth: its six noise-free outputs (counts) at an input and a temperature, and
@@ -109,6 +111,7 @@ pub fn score(c: &Calibrated, truth: &impl Truth, accel: &[Input], gyro: &[Input]
                 let stated = f64::from(device.sigma(&values).unwrap()[k]);
                 s.sq[family] += err * err;
                 s.stated[family] += stated * stated;
+                s.zz[family] += (err / stated).powi(2);
                 s.n[family] += 1;
                 s.inside[family] += usize::from(err.abs() <= 1.96 * stated);
             }
@@ -150,5 +153,13 @@ pub fn coverage_all(scores: &[Score]) -> f64 {
 pub fn z0(scores: &[Score], family: usize) -> f64 {
     (scores.iter().map(|s| s.z0[family]).sum::<f64>()
         / scores.iter().map(|s| s.n0[family]).sum::<usize>() as f64)
+        .sqrt()
+}
+
+/// Pooled over units, per family: the RMS of the error over its stated 1-sigma over the range.
+#[allow(dead_code)] // the independent model's test only
+pub fn z_rms(scores: &[Score], family: usize) -> f64 {
+    (scores.iter().map(|s| s.zz[family]).sum::<f64>()
+        / scores.iter().map(|s| s.n[family]).sum::<usize>() as f64)
         .sqrt()
 }

@@ -86,9 +86,15 @@ pub struct CalibrateArgs {
     /// Keep every preset term instead of dropping the ones that are not significant.
     #[arg(long)]
     pub keep_all_terms: bool,
-    /// Triads: add own-axis g-squared, cubic and odd-quadratic terms to the preset.
-    #[arg(long)]
+    /// Triads: add own-axis g-squared, cubic and odd-quadratic terms to the preset. An IMU
+    /// considers them by default (the data keep those they show; `--linear` to leave them out).
+    #[arg(long, conflicts_with = "linear")]
     pub nonlinear: bool,
+    /// An IMU: correct without the nonlinear terms (g-squared, cubic, odd-quadratic) even where
+    /// the data show them; their estimate then widens the stated 1-sigma, and a note names those
+    /// the data show.
+    #[arg(long)]
+    pub linear: bool,
     /// Single axis: asymmetric scale factor.
     #[arg(long, value_enum, default_value = "auto")]
     pub asymmetry: Asymmetry,

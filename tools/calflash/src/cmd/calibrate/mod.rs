@@ -92,6 +92,7 @@ pub fn calibrate_one(
     opts.format = args.format;
     opts.alpha = args.alpha;
     opts.keep_all_terms = args.keep_all_terms;
+    opts.linear = args.linear;
     opts.asymmetry = match args.asymmetry {
         Asymmetry::Auto => None,
         Asymmetry::Keep => Some(true),
@@ -144,8 +145,8 @@ pub fn calibrate_one(
         if args.sensor != SensorKind::Imu {
             return Err("--stage-one: stage two calibrates an assembled IMU (--sensor imu); stage one is each sensor's own calibration".into());
         }
-        if args.still_ramp.is_some() || args.nonlinear {
-            return Err("--stage-one carries each sensor's nonlinear terms and temperature behaviour from stage one: --still-ramp and --nonlinear do not apply".into());
+        if args.still_ramp.is_some() || args.nonlinear || args.linear {
+            return Err("--stage-one carries each sensor's nonlinear terms and temperature behaviour from stage one: --still-ramp, --nonlinear and --linear do not apply".into());
         }
     }
     let c = match args.sensor {
@@ -158,7 +159,7 @@ pub fn calibrate_one(
         SensorKind::SingleGyro => single::calibrate(&opts, Quantity::AngularRate),
         SensorKind::Accel => triad::calibrate(&opts, triad::Kind::Accel, args.nonlinear),
         SensorKind::Gyro => triad::calibrate(&opts, triad::Kind::Gyro, args.nonlinear),
-        SensorKind::Imu => triad::calibrate(&opts, triad::Kind::Imu, args.nonlinear),
+        SensorKind::Imu => triad::calibrate(&opts, triad::Kind::Imu, !args.linear),
     }?;
     let mut c = c;
     // A calibration the device refused has no blob to carry the noise terms.

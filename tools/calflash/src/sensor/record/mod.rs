@@ -60,6 +60,27 @@ pub struct AxisRecord {
     pub noise: f64,
     /// Worst inversion error of the device's correction, SI.
     pub inversion_error: f64,
+    /// When the data chose the terms and dropped some: the terms of the model before the
+    /// choice, whose covariance ([`stated_covariance`](Self::stated_covariance)) states the
+    /// error (`sensor::AxisFit::stated_fit`); empty when the fit's own do.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stated_terms: Vec<String>,
+    /// Their covariance, rows in the order of `stated_terms`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stated_covariance: Vec<Vec<f64>>,
+}
+
+impl AxisRecord {
+    /// The terms and covariance that state this axis' error: the model before the choice of
+    /// terms when it dropped some, else the fit's own.
+    #[must_use]
+    pub fn stated(&self) -> (&[String], &[Vec<f64>]) {
+        if self.stated_terms.is_empty() {
+            (&self.terms, &self.covariance)
+        } else {
+            (&self.stated_terms, &self.stated_covariance)
+        }
+    }
 }
 
 /// One table point.
@@ -247,6 +268,10 @@ impl Record {
                             n: a.fit.n,
                             noise: p.noise[k],
                             inversion_error: p.inversion_error[k],
+                            stated_terms: a.full.as_ref().map_or_else(Vec::new, |f| f.names.clone()),
+                            stated_covariance: a.full.as_ref().map_or_else(Vec::new, |f| {
+                                f.covariance.row_iter().map(|r| r.iter().copied().collect()).collect()
+                            }),
                         })
                         .collect(),
                 })

@@ -148,8 +148,8 @@ impl PointStatement {
             if slope == 0.0 {
                 return Err(StatedError::Missing(OUTPUTS[out]));
             }
-            let terms = fit
-                .terms
+            let (names, covariance) = fit.stated();
+            let terms = names
                 .iter()
                 .map(|t| {
                     Regressor::of(t, out).ok_or_else(|| StatedError::Term {
@@ -160,7 +160,7 @@ impl PointStatement {
                 .collect::<Result<Vec<_>, _>>()?;
             let n = terms.len();
             let q = DMatrix::from_fn(n, n, |i, j| {
-                fit.covariance
+                covariance
                     .get(i)
                     .and_then(|r| r.get(j))
                     .copied()

@@ -284,6 +284,7 @@ impl ThermalFit {
         AxisFit {
             formula: self.base.clone(),
             fit: self.fit.fit.combined(self.base.term_names(), &j),
+            full: None,
             ..self.fit.clone()
         }
     }

@@ -138,7 +138,8 @@ fn lever_notes(estimable: &[[bool; 3]; 3], notes: &mut Vec<String>) {
 
 /// Axis `i`'s preset formula, its terms chosen on the first step's regressors at the reference
 /// (`ref_table`, every observation for a continuous model, whose bias and own scale factor
-/// meanwhile follow the temperature at the highest order the observations can estimate).
+/// meanwhile follow the temperature at the highest order the observations can estimate); with
+/// the formula before the choice when the choice dropped a term.
 #[allow(clippy::too_many_arguments)]
 fn axis_formula(
     spec: &Spec<'_>,
@@ -149,7 +150,7 @@ fn axis_formula(
     support: Option<&continuous::Support>,
     opts: &Options,
     notes: &mut Vec<String>,
-) -> Result<Formula, WorkflowError> {
+) -> Result<(Formula, Option<Formula>), WorkflowError> {
     let inputs = format!(
         "{} + {} + {}",
         spec.inputs[0], spec.inputs[1], spec.inputs[2]
@@ -198,6 +199,12 @@ fn axis_formula(
         None => base,
     };
     fit(&f)?;
+    let before = if spec.stated_nonlinear {
+        let n = lever::SENSED;
+        formula::parse(&format!("{text} + {n}^2 + {n}^3 + {n}:abs({n})"))?
+    } else {
+        f.clone()
+    };
     if !opts.keep_all_terms {
         // With lever arms, the terms are chosen on the regressors at the whole model's converged
         // estimate (elsewhere the first step's are the converged ones but for the small change
@@ -265,7 +272,11 @@ fn axis_formula(
             f = f.without(&s.dropped);
         }
     }
-    Ok(continuous::base_of(&f))
+    let dropped = spec.stated_nonlinear || before.terms.len() != f.terms.len();
+    Ok((
+        continuous::base_of(&f),
+        dropped.then(|| continuous::base_of(&before)),
+    ))
 }
 
 /// Fits a triad: its terms, then a fit at each table point or one continuous temperature model
@@ -297,8 +308,9 @@ pub(super) fn fit_triad(
         lever_notes(e, notes);
     }
     let mut formulas = Vec::new();
+    let mut before = Vec::new();
     for i in 0..3 {
-        formulas.push(axis_formula(
+        let (chosen, all) = axis_formula(
             spec,
             i,
             &ref_table,
@@ -307,7 +319,9 @@ pub(super) fn fit_triad(
             support,
             opts,
             notes,
-        )?);
+        )?;
+        formulas.push(chosen);
+        before.push(all);
     }
     // The lever components each axis' formula kept.
     let lever_use: Option<[[bool; 3]; 3]> =
@@ -324,9 +338,20 @@ pub(super) fn fit_triad(
                 let t = table.select(&p.rows);
                 let w = table::describe(p);
                 let at = |i: usize| one(&formulas[i], &t, i, (&w, None));
-                fits.push([at(0)?, at(1)?, at(2)?]);
+                let mut point = [at(0)?, at(1)?, at(2)?];
+                // The model before the choice, for the stated error (`AxisFit::stated_fit`).
+                for (i, axis) in point.iter_mut().enumerate() {
+                    if let Some(all) = &before[i] {
+                        axis.full = stated_fit(spec, all, &t, i, estimable.as_ref(), opts, &w, axis)
+                            .map(Box::new);
+                    }
+                }
+                fits.push(point);
             }
             let reference = fits[layout.reference()].clone();
+            if spec.stated_nonlinear {
+                shown_but_left_out(spec, &reference, opts.alpha, notes);
+            }
             (None, reference)
         }
         Temperature::Continuous(prep) => {
@@ -374,6 +399,67 @@ pub(super) fn fit_triad(
         centers: b_of(&reference),
         ranges,
     })
+}
+
+/// Notes the nonlinear terms the data show (significant at `alpha` in the whole model at the
+/// reference point) that `--linear` leaves out of the correction.
+fn shown_but_left_out(spec: &Spec<'_>, reference: &[AxisFit; 3], alpha: f64, notes: &mut Vec<String>) {
+    for (i, axis) in reference.iter().enumerate() {
+        let Some(full) = &axis.full else { continue };
+        let shown: Vec<String> = full
+            .names
+            .iter()
+            .zip(&full.p_values)
+            .filter(|(n, p)| n.starts_with(lever::SENSED) && **p < alpha)
+            .map(|(n, p)| format!("{n} (p = {p:.2e})"))
+            .collect();
+        if !shown.is_empty() {
+            notes.push(format!(
+                "{}: --linear leaves out {}, which the data show: the correction does not apply it, and its estimate is in the stated 1-sigma",
+                spec.outputs[i],
+                shown.join(", ")
+            ));
+        }
+    }
+}
+
+/// The fit of axis `i`'s model before its terms were chosen (`all`), at the table point `t`,
+/// whose covariance states the error of the chosen fit `chosen` (`AxisFit::stated_fit`);
+/// `None` when it cannot be fitted there. When the correction leaves out terms the data may
+/// show (`Spec::stated_nonlinear`), the covariance widens by `d d'`, `d` the chosen
+/// coefficients (zero for a term left out) less the whole model's: the mean square error of
+/// the chosen model's estimate, `C_R + A (C_DD + b b') A'` over the terms kept and
+/// `C_DD + b b'` over those left out, `A` their alias and `b` their estimate.
+#[allow(clippy::too_many_arguments)]
+fn stated_fit(
+    spec: &Spec<'_>,
+    all: &Formula,
+    t: &Table,
+    i: usize,
+    estimable: Option<&[[bool; 3]; 3]>,
+    opts: &Options,
+    where_: &str,
+    chosen: &AxisFit,
+) -> Option<stats::Fit> {
+    let whole = Spec {
+        nonlinear: spec.nonlinear || spec.stated_nonlinear,
+        ..*spec
+    };
+    let lever = estimable.map(|_| lever_terms(all, i));
+    let mut fit = fit_axis(&whole, all, t, i, lever.as_ref(), opts, (where_, None))
+        .ok()?
+        .fit;
+    if spec.stated_nonlinear {
+        let d = nalgebra::DVector::from_iterator(
+            fit.names.len(),
+            fit.names
+                .iter()
+                .zip(&fit.coefficients)
+                .map(|(n, b)| chosen.coef(n) - b),
+        );
+        fit.covariance += &d * d.transpose();
+    }
+    Some(fit)
 }
 
 pub(super) fn s_of(spec: &Spec<'_>, f: &[AxisFit; 3]) -> Matrix3<f64> {

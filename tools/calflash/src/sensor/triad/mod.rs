@@ -67,6 +67,7 @@ struct TriadResult {
     thermal: Option<[ThermalFit; 3]>,
 }
 
+#[derive(Clone, Copy)]
 struct Spec<'a> {
     outputs: [&'a str; 3],
     inputs: [&'a str; 3],
@@ -77,6 +78,10 @@ struct Spec<'a> {
     /// Lever-arm regressors (accelerometer under spin).
     lever: bool,
     nonlinear: bool,
+    /// The correction leaves the nonlinear terms out though the stated error keeps them (an
+    /// IMU calibrated with `--linear`, `Options::linear`): the model before the choice adds
+    /// them, and its covariance widens by what leaving their estimate out moves.
+    stated_nonlinear: bool,
 }
 
 impl Spec<'static> {
@@ -89,6 +94,7 @@ impl Spec<'static> {
             g_sens: false,
             lever,
             nonlinear,
+            stated_nonlinear: false,
         }
     }
 
@@ -101,6 +107,7 @@ impl Spec<'static> {
             g_sens,
             lever: false,
             nonlinear,
+            stated_nonlinear: false,
         }
     }
 }
@@ -343,7 +350,11 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
     }
     let f_varies = col::F.iter().all(|c| table.varies(c));
     let temperature = temperature_points(&mut table, opts, (has_temp, has_volt), &mut notes)?;
-    let accel_spec = Spec::accel(accel_lever, nonlinear);
+    let linear_stated = opts.linear && kind == Kind::Imu && !nonlinear;
+    let accel_spec = Spec {
+        stated_nonlinear: linear_stated,
+        ..Spec::accel(accel_lever, nonlinear)
+    };
     let accel = (kind != Kind::Gyro)
         .then(|| fit_triad(&accel_spec, &table, &temperature, opts, &mut notes))
         .transpose()?;
@@ -360,7 +371,10 @@ pub fn calibrate(opts: &Options, kind: Kind, nonlinear: bool) -> Result<Calibrat
                 .into(),
         );
     }
-    let gyro_spec = Spec::gyro(gyro_g, nonlinear);
+    let gyro_spec = Spec {
+        stated_nonlinear: linear_stated,
+        ..Spec::gyro(gyro_g, nonlinear)
+    };
     let gyro = (kind != Kind::Accel)
         .then(|| fit_triad(&gyro_spec, &table, &temperature, opts, &mut notes))
         .transpose()?;

@@ -350,7 +350,7 @@ fn imu_covariance(
             [1.0, 1.0, 1.0, 1.0, slope, slope, slope, 1.0, 1.0, 1.0, 1.0],
         )
     };
-    covariance::imu_output(&fit.fit, &names, &scale, slope)
+    covariance::imu_output(fit.stated_fit(), &names, &scale, slope)
 }
 
 /// What axis `i` sensed (SI, along itself) at each observation of `t`, under its fit.

@@ -243,6 +243,7 @@ pub(super) fn composed(
         formula,
         fit,
         noise_reference,
+        full: None,
         ..o.fit.clone()
     })
 }
