@@ -298,9 +298,11 @@ fn a_roll_gyro_scale_factor_shifted_at_launch_is_found_at_a_round_s_spin() {
     assert!(t["shifted"].as_bool().unwrap(), "{v}");
     let x = t["estimate"].as_f64().unwrap();
     // The flight reaches a few 1e-6; its estimate carries the calibration's residual (under
-    // 1e-4, the stated allowance).
+    // 1e-4, the stated allowance; the calibration states its own error with the terms its
+    // choice dropped, 8e-5, so the estimate's 1-sigma is 7e-5).
+    let sigma = t["sigma"].as_f64().unwrap();
     assert!(
-        (x - 0.003).abs() < 1e-4 && t["sigma"].as_f64().unwrap() < 5e-5,
+        (x - 0.003).abs() < 1e-4 && sigma < 1e-4 && (x - 0.003).abs() < 3.0 * sigma,
         "{t}"
     );
     assert!(
@@ -447,6 +449,7 @@ fn a_record_of_another_calibration_or_no_record_at_all_is_refused() {
             "rig.csv",
             "--sensor",
             "imu",
+            "--linear",
             "--serial",
             "ROUND-1",
             "--json",
@@ -734,14 +737,15 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
         "{v}"
     );
     // A rocket that rolls a few turns a second barely shows its roll gyro's scale factor:
-    // what the flight alone determines of it is tens of times wider than the calibration's,
+    // what the flight alone determines of it is several times wider than the calibration's
+    // (6.4 times since the calibration states its error with the terms its choice dropped),
     // and it is not named.
     let roll = term(&v, "gyro scale x");
     assert!(!roll["shifted"].as_bool().unwrap(), "{v}");
     assert!(
         roll["flight_sigma"]
             .as_f64()
-            .is_none_or(|f| f > 10.0 * roll["prior_sigma"].as_f64().unwrap()),
+            .is_none_or(|f| f > 5.0 * roll["prior_sigma"].as_f64().unwrap()),
         "{v}"
     );
     assert!(
@@ -1053,7 +1057,9 @@ fn the_reference_flights_are_named_and_held_and_their_tracks_within_their_bounds
         }
         let share = inside as f64 / n as f64;
         println!("{case}: {verdict}; track within 3 sigma on {inside} of {n} epochs");
-        assert!(n > 1000 && share >= 0.95, "{case}: {inside} of {n}");
+        // An epoch a fix or a pressure is taken at (the covariance steps between are
+        // composed into the next): about ten a second.
+        assert!(n > 150 && share >= 0.95, "{case}: {inside} of {n}");
         blob_alone_as_the_record(d.path(), &args, &v, case);
     }
 }

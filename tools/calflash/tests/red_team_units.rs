@@ -923,7 +923,7 @@ fn a_rate_step_no_airframe_makes_is_flagged_by_the_device_correction() {
     // The worst absolute error of `az` (m/s^2) in the reference table.
     let worst_az = |out: &str| -> f64 {
         let row = out.lines().find(|l| l.starts_with("  | az |")).expect(out);
-        let cell = row.split('|').nth(8).expect(row).trim();
+        let cell = row.split('|').nth(9).expect(row).trim();
         cell.split_whitespace().next().unwrap().parse().expect(row)
     };
     assert!(worst_az(&out) < 30.0, "{out}");

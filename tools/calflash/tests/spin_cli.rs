@@ -410,9 +410,8 @@ fn a_unit_the_device_cannot_hold_is_rejected_with_its_record() {
     assert_eq!(code, 3, "{out}{err}");
     assert!(out.contains("unit BIG-G: REJECT"), "{out}");
     assert!(
-        out.contains(
-            "REJECT the device cannot hold this calibration: the coefficients of the gyro"
-        ),
+        out.contains("REJECT the device cannot hold this calibration: at this sample rate the g-sensitivity's feedback of the lever term")
+            && out.contains("Hz: the unit is too nonlinear"),
         "{out}"
     );
     assert!(!dir.path().join("big.blob").exists());

@@ -477,7 +477,10 @@ fn reference_units_one_stage(linear: bool, accel: &[Input], gyro: &[Input]) -> V
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/data/reference-flights/two-stage");
     if !root.is_dir() {
-        println!("the shared reference units: SKIPPED, {} is absent", root.display());
+        println!(
+            "the shared reference units: SKIPPED, {} is absent",
+            root.display()
+        );
         return Vec::new();
     }
     ["unit1", "unit2", "unit3"]
@@ -488,9 +491,12 @@ fn reference_units_one_stage(linear: bool, accel: &[Input], gyro: &[Input]) -> V
             let mut opts = calflash::sensor::Options::new(root.join(u).join("unit.csv"), "REF");
             opts.created = Some(0);
             opts.linear = linear;
-            let c =
-                calflash::sensor::triad::calibrate(&opts, calflash::sensor::triad::Kind::Imu, !linear)
-                    .unwrap();
+            let c = calflash::sensor::triad::calibrate(
+                &opts,
+                calflash::sensor::triad::Kind::Imu,
+                !linear,
+            )
+            .unwrap();
             assert!(!c.blob.is_empty(), "{u}: refused");
             stage_score::score(&c, &unit, accel, gyro)
         })
@@ -542,7 +548,11 @@ fn one_stage_as_the_readme_runs_it_states_its_error_on_an_independent_forward_mo
         for (seed, why, _) in &refused {
             println!("unit {seed}: refused: {why:?}");
         }
-        let mut one: Vec<Score> = all.iter().filter_map(|r| r.as_ref().ok()).copied().collect();
+        let mut one: Vec<Score> = all
+            .iter()
+            .filter_map(|r| r.as_ref().ok())
+            .copied()
+            .collect();
         // The shared reference units, calibrated from their own unit file (25 C), pooled with
         // the drawn ones and shown apart.
         let shared = reference_units_one_stage(linear, &accel, &gyro);
@@ -576,7 +586,11 @@ fn one_stage_as_the_readme_runs_it_states_its_error_on_an_independent_forward_mo
         assert!(refused.is_empty(), "{} refused", refused.len());
         for (name, f) in [("accelerometers", 0), ("gyros", 1)] {
             if linear {
-                assert!(coverage(&one, f) >= 0.93, "--linear, {name}: {}", coverage(&one, f));
+                assert!(
+                    coverage(&one, f) >= 0.93,
+                    "--linear, {name}: {}",
+                    coverage(&one, f)
+                );
             } else {
                 assert!(
                     (0.93..=0.97).contains(&coverage(&one, f)),

@@ -142,6 +142,36 @@ fn selection_covariance(axis: &AxisFit) -> nalgebra::DMatrix<f64> {
     cov
 }
 
+/// What a triad axis of a nonlinear model senses, from its fit: its sensitivity row over its
+/// own, its lever arm (an accelerometer) or its g-sensitivity row (a gyro); `None` for a single
+/// axis or a model that does not read it.
+fn sensed_axis(axis: &AxisFit, gyro: bool, k: usize) -> Option<weight::SensedAxis> {
+    use crate::columns as col;
+    if !axis
+        .formula
+        .columns()
+        .iter()
+        .any(|c| c == crate::sensor::lever::SENSED)
+    {
+        return None;
+    }
+    let inputs = if gyro { col::W } else { col::F };
+    let own = axis.coef(inputs[k]);
+    if own == 0.0 {
+        return None;
+    }
+    Some(weight::SensedAxis {
+        gyro,
+        direction: inputs.map(|n| axis.coef(n) / own),
+        lever: std::array::from_fn(|j| axis.coef(&crate::sensor::lever::column(k, j))),
+        g: if gyro {
+            col::F.map(|n| axis.coef(n) / own)
+        } else {
+            [0.0; 3]
+        },
+    })
+}
+
 /// Whether an axis reads a rate: a gyro triad's, or a single axis calibrated as a gyro.
 fn is_gyro(axis: &AxisFit, single_gyro: bool) -> bool {
     match kind(axis) {
@@ -216,7 +246,7 @@ pub fn judge(
                 Unit::SingleAccel
             };
         }
-        let lookup = Lookup::new(profile, &axis.formula, unit)?;
+        let lookup = Lookup::of_axis(profile, &axis.formula, unit, sensed_axis(axis, gyro, k))?;
         for v in lookup.assumed(profile) {
             if !out.assumed.contains(&v) {
                 out.assumed.push(v);

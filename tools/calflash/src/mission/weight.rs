@@ -20,6 +20,36 @@ enum Source {
     Of(Quantity),
     /// A lever-arm regressor `lever_ik` from the rates and angular accelerations.
     Lever(usize, usize),
+    /// What a calibrated axis senses along itself (`sensor::lever::SENSED`).
+    Sensed(SensedAxis),
+}
+
+/// A calibrated axis, as what it senses along itself is made from a profile's motion: an
+/// accelerometer's `n . (f + w x (w x r) + dw x r)`, a gyro's `n . w + g . f`, with `n` its
+/// sensitivity row over its own sensitivity (the written model of `spincal::model::rotation`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensedAxis {
+    /// A gyro.
+    pub gyro: bool,
+    /// Its sensing direction, its own component one.
+    pub direction: [f64; 3],
+    /// An accelerometer's lever arm, m.
+    pub lever: [f64; 3],
+    /// A gyro's g-sensitivity row over its own sensitivity, rad/s per m/s^2.
+    pub g: [f64; 3],
+}
+
+impl SensedAxis {
+    /// What the axis senses under specific force `f`, rate `w` and angular acceleration `dw`.
+    #[must_use]
+    pub fn sensed(&self, f: &[f64; 3], w: &[f64; 3], dw: &[f64; 3]) -> f64 {
+        use spincal::model::rotation::{dot, force_at};
+        if self.gyro {
+            dot(&self.direction, w) + dot(&self.g, f)
+        } else {
+            dot(&self.direction, &force_at(f, w, dw, &self.lever))
+        }
+    }
 }
 
 /// A variable the model reads that the profile cannot give.
@@ -107,8 +137,45 @@ impl Lookup {
     /// # Errors
     /// A variable the profile does not give.
     pub fn new(p: &Profile, formula: &Formula, unit: Unit) -> Result<Self, Missing> {
+        Self::of_axis(p, formula, unit, None)
+    }
+
+    /// As [`Lookup::new`], with what a calibrated axis senses (`sensed`) made from the
+    /// profile's motion through the axis' estimate.
+    ///
+    /// # Errors
+    /// A variable the profile does not give.
+    pub fn of_axis(
+        p: &Profile,
+        formula: &Formula,
+        unit: Unit,
+        sensed: Option<SensedAxis>,
+    ) -> Result<Self, Missing> {
         let vars: Vec<String> = formula.columns().into_iter().skip(1).collect();
-        Self::for_variables(p, &vars, unit)
+        let mut out = Self::for_variables(
+            p,
+            &vars
+                .iter()
+                .filter(|v| !(sensed.is_some() && v.as_str() == crate::sensor::lever::SENSED))
+                .cloned()
+                .collect::<Vec<_>>(),
+            unit,
+        )?;
+        if let Some(axis) =
+            sensed.filter(|_| vars.iter().any(|v| v == crate::sensor::lever::SENSED))
+        {
+            if p.f.is_none() && p.w.is_none() {
+                return Err(Missing {
+                    variable: crate::sensor::lever::SENSED.into(),
+                    path: p.source.display().to_string(),
+                    why: "no motion to make it from".into(),
+                    has: String::new(),
+                });
+            }
+            out.sources
+                .push((crate::sensor::lever::SENSED.into(), Source::Sensed(axis)));
+        }
+        Ok(out)
     }
 
     /// As [`Lookup::new`] for a list of variables.
@@ -155,7 +222,7 @@ impl Lookup {
             let source = source.ok_or_else(|| missing("no flight gives it"))?;
             let ok = match source {
                 Source::Of(q) => p.value(0, q).is_some(),
-                Source::Lever(..) => p.w.is_some(),
+                Source::Lever(..) | Source::Sensed(_) => p.w.is_some(),
             };
             if !ok {
                 // Temperature and voltage take the bench's defaults when a flight does not log
@@ -191,6 +258,12 @@ impl Lookup {
                 let w = p.w.as_ref().map_or([0.0; 3], |w| w[i]);
                 let dw = p.dw.as_ref().map_or([0.0; 3], |d| d[i]);
                 crate::sensor::lever::gradient(&e, &w, &dw)[*k]
+            }
+            Some((_, Source::Sensed(axis))) => {
+                let f = p.f.as_ref().map_or([0.0; 3], |f| f[i]);
+                let w = p.w.as_ref().map_or([0.0; 3], |w| w[i]);
+                let dw = p.dw.as_ref().map_or([0.0; 3], |d| d[i]);
+                axis.sensed(&f, &w, &dw)
             }
             None => default_value(name),
         }

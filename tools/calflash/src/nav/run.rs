@@ -189,8 +189,10 @@ fn change_at_launch(
     (t, w): &(StateMatrix<f64>, StateMatrix<f64>),
     pass: &mut Pass,
     at: f64,
+    since: Option<StateMatrix<f64>>,
 ) {
-    let phi = t * filter.covariance_step().matrix();
+    let step = filter.covariance_step().matrix();
+    let phi = t * since.map_or(step, |before| step * before);
     // The sensor errors as a state vector (their departure from none), moved by `T - I`.
     let none = Estimate {
         sensors: SensorErrors::default(),
@@ -270,6 +272,11 @@ pub fn forward(
     let mut last_baro = f64::NEG_INFINITY;
     let mut last_epoch = imu.t.first().copied().unwrap_or(0.0);
     let (doubt_f, doubt_w) = opts.doubt;
+    // The transition since the last epoch kept: a covariance step with no measurement is not
+    // kept as an epoch of its own but composed into the next (the smoother's gain over the
+    // composed step is the same), so that what a pass keeps grows with the flight's fixes and
+    // pressures, not its samples.
+    let mut phi_since: Option<StateMatrix<f64>> = None;
     for i in 0..imu.t.len() {
         let t = imu.t[i];
         let dt = if i == 0 { 0.0 } else { t - imu.t[i - 1] };
@@ -277,7 +284,7 @@ pub fn forward(
             && i > 0
             && let Some(change) = &start.launch
         {
-            change_at_launch(&mut filter, change, &mut pass, t);
+            change_at_launch(&mut filter, change, &mut pass, t, phi_since.take());
         }
         let [accel, gyro] = imu.flagged[i];
         if accel || gyro {
@@ -307,8 +314,10 @@ pub fn forward(
             continue;
         }
         last_epoch = t;
-        let phi = filter.covariance_step().matrix();
+        let step = filter.covariance_step().matrix();
+        let phi = phi_since.take().map_or(step, |before| step * before);
         let predicted = (filter.estimate, filter.covariance);
+        let (said_before, resets_before) = (pass.said.len(), pass.resets.len());
         if on_pad {
             for axis in 0..3 {
                 let h = ErrorFilter::velocity_row(axis);
@@ -446,6 +455,15 @@ pub fn forward(
                 r2,
                 opts.gate,
             );
+        }
+        if t < t_launch {
+            pass.at_launch = filter.covariance;
+        }
+        if pass.said.len() == said_before && pass.resets.len() == resets_before {
+            // Nothing measured (a covariance step alone, or readings left out): composed into
+            // the next epoch kept.
+            phi_since = Some(phi);
+            continue;
         }
         filter.feedback();
         if t < t_launch {

@@ -133,7 +133,6 @@ pub(super) fn select_opened(
                 Trial {
                     misfit,
                     term: c,
-                    pass,
                     launched,
                 }
             })
@@ -179,7 +178,7 @@ pub(super) fn select_opened(
         };
         chosen.push(lead.term);
         misfit = lead.misfit;
-        best = Some((lead.pass, lead.launched));
+        best = Some((fly(&chosen), lead.launched));
     }
     Selection {
         opened: best.map(|(pass, launched)| (chosen, pass, launched)),
@@ -217,10 +216,11 @@ pub(super) fn opened_start(
 
 /// One term tried by [`select_opened`]: the pass with it (and the terms chosen before it)
 /// opened, what that pass tells of the launch, and its misfit ([`profile_misfit`]).
+/// One term's trial: what its pass says, without the pass (flown again for the term chosen),
+/// so that the trials of a round do not hold a pass each at once.
 struct Trial {
     misfit: f64,
     term: usize,
-    pass: Pass,
     launched: Launched,
 }
 

@@ -319,6 +319,10 @@ fn imu_of_row(v: &[f64]) -> ImuSet {
     }
 }
 
+/// The sample rate the device's correction is checked at, Hz: a unit whose lever feedback is
+/// not bounded there is refused.
+const CHECK_RATE_HZ: f32 = 1000.0;
+
 /// A calibration made into a blob and checked ([`build_or_reject`]).
 #[derive(Debug)]
 pub struct Built {
@@ -449,7 +453,15 @@ pub fn build_and_check(
         Sensor::Imu {
             accel, gyro, sets, ..
         } => {
-            let mut c = AnyImuCorrector::new(&back, 1000.0)?;
+            // A unit whose lever feedback is bounded only below 1 kHz cannot run on the
+            // device at any rate a round samples at: the device cannot hold it.
+            let mut c = AnyImuCorrector::new(&back, CHECK_RATE_HZ).map_err(|e| match e {
+                spincal::Error::CorrectorUnboundedFeedback { .. } => WorkflowError::Blob {
+                    path: path.to_path_buf(),
+                    source: BlobError::Invalid(e),
+                },
+                e => e.into(),
+            })?;
             for (k, p) in points.iter().enumerate() {
                 let (t, v) = at(p);
                 let set =

@@ -204,6 +204,10 @@ pub struct Options {
     /// An IMU's correction without the nonlinear terms, even where the data show them
     /// (`calibrate --linear`): their estimate then widens the stated error.
     pub linear: bool,
+    /// The nonlinear terms were asked for (`calibrate --nonlinear`): a plan that cannot
+    /// estimate one is an error. Otherwise (an IMU's default) a term the plan cannot estimate
+    /// is left out of the candidates, said in a note.
+    pub nonlinear_required: bool,
     /// Asymmetry: `None` to decide from the test, `Some(true)` to keep, `Some(false)` to drop.
     pub asymmetry: Option<bool>,
     /// Asymmetry breakpoint (SI).
@@ -254,6 +258,7 @@ impl Options {
             volt_span: Span::new(0.0, 100.0),
             keep_all_terms: false,
             linear: false,
+            nonlinear_required: false,
             asymmetry: None,
             breakpoint: 0.0,
             model: None,

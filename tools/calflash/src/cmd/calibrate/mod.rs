@@ -93,6 +93,7 @@ pub fn calibrate_one(
     opts.alpha = args.alpha;
     opts.keep_all_terms = args.keep_all_terms;
     opts.linear = args.linear;
+    opts.nonlinear_required = args.nonlinear;
     opts.asymmetry = match args.asymmetry {
         Asymmetry::Auto => None,
         Asymmetry::Keep => Some(true),

@@ -198,10 +198,25 @@ fn axis_formula(
         }
         None => base,
     };
+    if spec.nonlinear && !opts.nonlinear_required {
+        f = observable(f, &fit, spec.outputs[i], notes);
+    }
     fit(&f)?;
     let before = if spec.stated_nonlinear {
         let n = lever::SENSED;
-        formula::parse(&format!("{text} + {n}^2 + {n}^3 + {n}:abs({n})"))?
+        let all = formula::parse(&format!("{text} + {n}^2 + {n}^3 + {n}:abs({n})"))?;
+        // Fitted on what the axis senses (the correction's own table has no such column).
+        let sensed = lever::axis_table(
+            ref_table,
+            spec.gyro,
+            i,
+            spec.outputs[i],
+            &lever::Estimate::start(i),
+            estimable.map(|e| &e[i]),
+            true,
+        );
+        let fit_all = |f: &Formula| fit_one(f, &sensed, spec.inputs[i], opts, ref_where, weights);
+        observable(all, &fit_all, spec.outputs[i], notes)
     } else {
         f.clone()
     };
@@ -342,8 +357,9 @@ pub(super) fn fit_triad(
                 // The model before the choice, for the stated error (`AxisFit::stated_fit`).
                 for (i, axis) in point.iter_mut().enumerate() {
                     if let Some(all) = &before[i] {
-                        axis.full = stated_fit(spec, all, &t, i, estimable.as_ref(), opts, &w, axis)
-                            .map(Box::new);
+                        axis.full =
+                            stated_fit(spec, all, &t, i, estimable.as_ref(), opts, &w, axis)
+                                .map(Box::new);
                     }
                 }
                 fits.push(point);
@@ -401,9 +417,38 @@ pub(super) fn fit_triad(
     })
 }
 
+/// `f` without the nonlinear terms the plan cannot estimate (the cube and the odd square need
+/// four and three distinct levels of what the axis senses; a tumble gives three), dropped
+/// highest first until `fit` can estimate the rest, each said in a note.
+fn observable(
+    mut f: Formula,
+    fit: &dyn Fn(&Formula) -> Result<AxisFit, WorkflowError>,
+    output: &str,
+    notes: &mut Vec<String>,
+) -> Formula {
+    let n = lever::SENSED;
+    for term in [format!("{n}^3"), format!("{n}:abs({n})"), format!("{n}^2")] {
+        if fit(&f).is_ok() {
+            break;
+        }
+        if f.term_names().contains(&term) {
+            notes.push(format!(
+                "{output}: {term} left out of the candidates: this plan cannot estimate it"
+            ));
+            f = f.without(&term);
+        }
+    }
+    f
+}
+
 /// Notes the nonlinear terms the data show (significant at `alpha` in the whole model at the
 /// reference point) that `--linear` leaves out of the correction.
-fn shown_but_left_out(spec: &Spec<'_>, reference: &[AxisFit; 3], alpha: f64, notes: &mut Vec<String>) {
+fn shown_but_left_out(
+    spec: &Spec<'_>,
+    reference: &[AxisFit; 3],
+    alpha: f64,
+    notes: &mut Vec<String>,
+) {
     for (i, axis) in reference.iter().enumerate() {
         let Some(full) = &axis.full else { continue };
         let shown: Vec<String> = full
