@@ -303,12 +303,17 @@ fn the_unit_publishes_its_flight_filter_and_calflash_flight_port_reads_it() {
     assert!((ax - SHIFT_AX).abs() < 0.15, "{v}");
     assert_eq!(v["taken"][1], filter.stats().taken[1]);
     assert_eq!(v["navigation_resets"], 1);
-    // The round's verdict: its 0.3 m/s^2 axial shift makes the observed terms move together
-    // beyond the calibration (this short flight with a saturating setback names the roll gyro,
-    // not the axial bias at z 2.5: BENCHMARKS.md).
-    assert_eq!(v["verdict"]["word"], "SHIFTED", "{v}");
+    // The round's verdict against the set-up's wide priors: the 0.3 m/s^2 axial shift is
+    // seen (z about 2.5) but not named on this 4 s flight, and nothing else moves: HELD, as
+    // the host's filter says. (The roll gyro was named here while the saturated setback froze
+    // its reading.)
+    assert_eq!(v["verdict"]["word"], "HELD", "{v}");
+    assert_eq!(filter.verdict().word.as_str(), "HELD");
     assert_eq!(v["verdict"]["terms"][0]["name"], "accel bias x");
     assert_eq!(v["verdict"]["terms"][0]["observed"], true, "{v}");
+    let z = v["verdict"]["terms"][0]["z"].as_f64().unwrap();
+    assert!((1.5..3.5).contains(&z), "{v}");
+    assert_eq!(v["verdict"]["terms"][9]["shifted"], false, "{v}");
     let sigma = v["sigma"][index::ACCEL_BIAS].as_f64().unwrap();
     assert_eq!(
         sigma as f32,
@@ -484,11 +489,13 @@ fn the_round_on_qemu_flies_its_recorded_flight_and_calflash_flight_port_reads_it
 }
 
 /// The round's verdict with the calibration's own error over its own flight (item 6 of the
-/// flight's issue): on the golden flight the stated prior alone names the roll gyro's scale
-/// factor SHIFTED (its g-squared error at 1,900 rad/s, which the calibration carries), while the
-/// round with the calibration's prior and its change of line holds it; the recorded 0.3 m/s^2
-/// axial shift is within what this calibration vouches for over this 4 s flight (z 1.4), and
-/// one of 2 m/s^2 added after the setback is named.
+/// flight's issue): on the golden flight the roll gyro is held both with the stated prior
+/// alone and with the calibration's prior and its change of line (its true error over the
+/// flight is about 0.01 rad/s at 1,800 rad/s). It was named SHIFTED at z -4.3 while the
+/// gyro's reading was frozen at its last trusted value through the setback because the
+/// saturated accelerometers put the whole sample out of range: about 8 rad of roll lost in
+/// 9 ms. The recorded 0.3 m/s^2 axial shift is within what this calibration vouches for over
+/// this 4 s flight (z 1.4), and one of 2 m/s^2 added after the setback is named.
 #[test]
 fn the_rounds_verdict_holds_the_calibrations_own_error_over_its_flight_and_finds_a_shift() {
     let (events, flight) = golden();
@@ -498,8 +505,7 @@ fn the_rounds_verdict_holds_the_calibrations_own_error_over_its_flight_and_finds
     }
     let alone = stated.verdict();
     println!("the stated prior alone: {alone:?}");
-    assert_eq!(alone.word, Word::Shifted, "{alone:?}");
-    assert!(alone.is_shifted(9), "{alone:?}");
+    assert!(!alone.is_shifted(9) && alone.z[9].abs() < 2.0, "{alone:?}");
     let cal = flight_golden::calibration();
     let held = flight_golden::round(&cal, &flight.events, &flight, 0.0).verdict;
     println!("the calibration's own error over the flight: {held:?}");

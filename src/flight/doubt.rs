@@ -1,9 +1,14 @@
 //! Which of a corrected IMU sample's sensors the flight filter should doubt: both when the
-//! corrector says the sample is outside the calibration (or there is none) or that its rate
-//! stepped beyond what the airframe can turn (a glitch or a gap, which neither the rate nor the
-//! lever-arm correction of the specific force survives), one when its own
-//! codes sit at their converter's rails (a round's accelerometers saturate at setback while
-//! its gyros keep counting the spin).
+//! corrector has no calibration or says the rate stepped beyond what the airframe can turn (a
+//! glitch or a gap, which neither the rate nor the lever-arm correction of the specific force
+//! survives); one when its own codes sit at their converter's rails (a round's accelerometers
+//! saturate at setback while its gyros keep counting the spin); both when the sample is outside
+//! the calibration and neither sensor is at its rails, since the flag does not say which.
+//!
+//! A gyro whose accelerometer is doubted is still read: its g-sensitivity correction used the
+//! doubted force, and the filter widens the rate for it (`FlightRun::sample`), but a spinning
+//! round's roll rate frozen at its last trusted value through a setback would lose the
+//! thousands of radians it turns.
 
 use crate::correct::Flags;
 use crate::model::Rails;
@@ -12,12 +17,13 @@ use crate::model::Rails;
 /// correction carried `flags`, the converters' rails being `accel` and `gyro`.
 #[must_use]
 pub fn doubted(raw: &[i32; 6], flags: Flags, accel: Rails, gyro: Rails) -> [bool; 2] {
-    let both = flags.contains(Flags::OUT_OF_RANGE)
-        || flags.contains(Flags::NO_CALIBRATION)
-        || flags.contains(Flags::RATE_STEP);
     let at = |codes: &[i32], r: Rails| codes.iter().any(|c| *c <= r.lo || *c >= r.hi);
     let (a, g) = raw.split_at(3);
-    [both || at(a, accel), both || at(g, gyro)]
+    let railed = [at(a, accel), at(g, gyro)];
+    let both = flags.contains(Flags::NO_CALIBRATION)
+        || flags.contains(Flags::RATE_STEP)
+        || (flags.contains(Flags::OUT_OF_RANGE) && railed == [false, false]);
+    [both || railed[0], both || railed[1]]
 }
 
 #[cfg(test)]
@@ -39,6 +45,22 @@ mod tests {
         assert_eq!(
             doubted(&railed, Flags::SATURATED, rails, rails),
             [true, false]
+        );
+        // Setback: the accelerometer at its rails puts the sample outside the calibration;
+        // the gyro, inside its own, is still read.
+        assert_eq!(
+            doubted(
+                &railed,
+                Flags::SATURATED | Flags::OUT_OF_RANGE,
+                rails,
+                rails
+            ),
+            [true, false]
+        );
+        // Outside the calibration with no sensor at its rails: which is unknown, both.
+        assert_eq!(
+            doubted(&mid, Flags::OUT_OF_RANGE, rails, rails),
+            [true, true]
         );
     }
 }

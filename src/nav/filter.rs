@@ -187,15 +187,39 @@ impl<T: RealField + Copy> Integrals<T> {
 
 /// A sample the corrector could not vouch for: the specific force and rate that may hide
 /// behind it (1-sigma, m/s^2 and rad/s; zero for a sensor whose reading is good), over which
-/// the filter widens its covariance. Only the doubted sensor's reading is replaced by its
-/// last trusted one: a round's gyros keep counting its spin while setback saturates its
-/// accelerometers.
+/// the filter widens its covariance, and which readings are replaced by their last trusted
+/// ones. A reading widened but not replaced is navigated as read: a round's gyros keep
+/// counting its spin while setback saturates the accelerometers their g-sensitivity is
+/// corrected with.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Doubt<T> {
     /// Specific force, m/s^2.
     pub force: T,
     /// Rate, rad/s.
     pub rate: T,
+    /// Whether the accelerometer's and the gyro's readings are replaced by their last
+    /// trusted ones.
+    pub replaced: [bool; 2],
+}
+
+impl<T: Real> Doubt<T> {
+    /// The doubt of a sample whose accelerometer and gyro are in doubt as `doubted` says
+    /// ([`crate::flight::doubted`]), what may hide behind a doubted reading being `force` and
+    /// `rate`: a doubted reading is replaced and widened by its own; a gyro read beside a
+    /// doubted accelerometer is widened by `rate` too (its g-sensitivity was corrected with
+    /// the doubted force).
+    #[must_use]
+    pub fn of(doubted: [bool; 2], force: T, rate: T) -> Self {
+        Self {
+            force: if doubted[0] { force } else { T::zero() },
+            rate: if doubted[0] || doubted[1] {
+                rate
+            } else {
+                T::zero()
+            },
+            replaced: doubted,
+        }
+    }
 }
 
 /// The filter.
@@ -280,10 +304,10 @@ impl<T: Real> ErrorFilter<T> {
         let dt = step.seconds_of();
         let (mut fc, mut wc) = self.estimate.sensors.compensate(f, w);
         if let (Some(d), Some((w0, f0))) = (doubt, self.last) {
-            if d.force > T::zero() {
+            if d.replaced[0] {
                 fc = f0;
             }
-            if d.rate > T::zero() {
+            if d.replaced[1] {
                 wc = w0;
             }
         }

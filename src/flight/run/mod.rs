@@ -302,10 +302,7 @@ impl<T: Real> FlightFilter<T> {
             &f,
             &w,
             Interval::micros(crate::nav::real::from_count(dt_us)),
-            (doubted[0] || doubted[1]).then_some(Doubt {
-                force: if doubted[0] { df } else { T::zero() },
-                rate: if doubted[1] { dw } else { T::zero() },
-            }),
+            (doubted[0] || doubted[1]).then_some(Doubt::of(doubted, df, dw)),
         );
         if self.phase == Phase::Pad
             && f.norm_squared() > self.config.launch_force * self.config.launch_force

@@ -509,3 +509,89 @@ fn a_batch_s_file_check_costs_the_same_per_unit_at_any_size() {
         "{e}"
     );
 }
+
+/// Red team four: a re-run judged REJECT left the first run's ACCEPTed blob at its path, and a
+/// station flashing `OUT/SERIAL.blob` would have installed it; two runs into one folder could
+/// pair one run's blob with the other's record. A REJECT now removes the blob at its path in
+/// the same commit as its record (in a batch and for one unit), and a second writer into a
+/// folder is refused naming the first.
+#[test]
+fn a_reject_leaves_no_blob_of_an_earlier_run_and_a_folder_has_one_writer() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir_all(d.join("in")).unwrap();
+    for (i, s) in ["ACC-0001", "ACC-0002"].iter().enumerate() {
+        simulate(d, &format!("in/{s}.csv"), i as u64 + 11);
+    }
+    let batch = |extra: &[&str]| {
+        let mut args = vec![
+            "calibrate",
+            "in",
+            "--sensor",
+            "single-accel",
+            "--out-dir",
+            "out",
+            "--no-db",
+        ];
+        args.extend(extra);
+        calflash(d, &args)
+    };
+    let (code, out, err) = batch(&[]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(d.join("out/ACC-0001.blob").is_file());
+    let (code, out, err) = batch(&["--max-noise", "1e-9"]);
+    assert_eq!(code, 3, "{out}{err}");
+    for s in ["ACC-0001", "ACC-0002"] {
+        assert!(
+            !d.join(format!("out/{s}.blob")).exists(),
+            "{s}: the first run's blob stayed"
+        );
+        let record = std::fs::read_to_string(d.join(format!("out/{s}.json"))).unwrap();
+        assert!(record.contains("\"verdict\": \"reject\""), "{record}");
+        let summary = std::fs::read_to_string(d.join(format!("out/{s}.txt"))).unwrap();
+        assert!(summary.contains("blob: none written"), "{summary}");
+    }
+    // One unit, named files.
+    let one = |extra: &[&str]| {
+        let mut args = vec![
+            "calibrate",
+            "in/ACC-0001.csv",
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "ACC-0001",
+            "--blob",
+            "r.blob",
+            "--json",
+            "r.json",
+            "--no-db",
+        ];
+        args.extend(extra);
+        calflash(d, &args)
+    };
+    let (code, out, err) = one(&[]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(d.join("r.blob").is_file());
+    let (code, out, err) = one(&["--max-noise", "1e-9"]);
+    assert_eq!(code, 3, "{out}{err}");
+    assert!(
+        !d.join("r.blob").exists(),
+        "the first run's blob stayed: {out}"
+    );
+    // A folder another run is writing into: refused before any work, its holder named.
+    let held = calflash::files::FolderLock::take(&d.join("out"), "the test").unwrap();
+    let (code, out, err) = batch(&[]);
+    assert_ne!(code, 0, "{out}{err}");
+    assert!(
+        err.contains("another calflash is writing there")
+            && err.contains(&format!("process {}", std::process::id())),
+        "{err}"
+    );
+    assert!(!d.join("out/ACC-0001.blob").exists());
+    let (code, out, err) = one(&[]);
+    assert_eq!(code, 0, "{out}{err}");
+    drop(held);
+    let (code, out, err) = batch(&[]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(d.join("out/ACC-0001.blob").is_file());
+}

@@ -323,6 +323,7 @@ fn track_within_three_sigma(dir: &Path) -> f64 {
                 lat_lon: (r[1], r[2]),
                 height: Some(r[3]),
                 velocity: None,
+                satellites: None,
             },
             (lat, lon, h),
         );

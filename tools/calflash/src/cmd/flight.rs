@@ -8,6 +8,7 @@ use clap::Args;
 use crate::cmd::Failure;
 use crate::files::{Paths, Staged};
 use crate::nav::check::{self, Walks};
+use crate::nav::consistency;
 use crate::nav::input;
 use crate::nav::prior::{self, PriorSource, StatedPrior};
 use crate::nav::run::Options;
@@ -105,6 +106,12 @@ pub struct FlightArgs {
     /// 1-sigma of east, north and up in m), at every epoch of the filter.
     #[arg(long)]
     pub track: Option<PathBuf>,
+    /// Keep every K-th fix after the launch out of the filter and the smoother, and hold each
+    /// against the smoothed track at its instant (over the track's 1-sigma with the fix's):
+    /// the share within 3 sigma says whether the track can be believed, on any real flight,
+    /// with no truth (under 90 %: FILTER DOES NOT FIT).
+    #[arg(long, value_name = "K", value_parser = |s: &str| super::values::count_in(s, 2, 1000))]
+    pub hold_out: Option<usize>,
     /// Read the flight filter running in the unit on this serial port (or tcp://HOST:PORT)
     /// instead: its estimate, 1-sigma and counts as its flight loop last published them.
     #[arg(long, conflicts_with_all = ["recording", "blob", "gnss", "baro", "report", "innovations", "track"])]
@@ -256,10 +263,52 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
         baro: args.baro_walk,
         ..Walks::default()
     };
-    let checked = check::check(&imu, (&fixes, &baro), prior, &walks, &opts, args.alpha)
+    let launch = crate::nav::launch::launch(&imu, opts.launch_force)
+        .map_or(f64::INFINITY, |(_, at)| imu.t[at]);
+    let all_fixes = fixes.clone();
+    let (fixes, held) = match args.hold_out {
+        Some(k) => consistency::hold_out(&fixes, k, launch),
+        None => (fixes, Vec::new()),
+    };
+    let mut checked = check::check(&imu, (&fixes, &baro), prior, &walks, &opts, args.alpha)
         .map_err(|e| format!("{}: {e}", recording.display()))?;
-    let text = crate::report::flight::text(&serial, &checked, &counts);
+    let held_out = args.hold_out.map(|k| {
+        let h = consistency::held_out(
+            &checked.track,
+            &held,
+            k,
+            opts.gnss_noise,
+            (opts.gnss_latency, opts.gnss_correlated),
+        );
+        if !h.believed && checked.verdict.word != crate::nav::verdict::DOES_NOT_FIT {
+            checked.verdict.word = crate::nav::verdict::DOES_NOT_FIT;
+            checked.verdict.why = format!(
+                "{} of {} held-out fix components within 3 sigma of the smoothed track ({:.1} %, at least {:.0} % where it can be believed): the track the filter keeps does not hold on fixes it did not see, so its estimates are not reported as findings",
+                h.within_3_sigma,
+                h.components,
+                100.0 * h.share(),
+                100.0 * consistency::HELD_OUT_AT_LEAST
+            );
+        }
+        h
+    });
+    // Where a kind's innovations were refused, what the recording shows there.
+    let diagnosis = refused_span(&checked.verdict.consistency).map(|span| {
+        let d = crate::nav::diagnosis::diagnose(span, &imu, &all_fixes, &counts);
+        if checked.verdict.word == crate::nav::verdict::DOES_NOT_FIT {
+            checked.verdict.why = format!("{}; {}", checked.verdict.why, d.sentence());
+        }
+        d
+    });
+    let mut text = crate::report::flight::text(&serial, &checked, &counts);
     let mut record = crate::report::flight::json(&serial, &checked, &counts);
+    if let Some(h) = &held_out {
+        text.push_str(&crate::report::flight::held_out_text(h));
+        record["held_out"] = serde_json::to_value(h)?;
+    }
+    if let Some(d) = &diagnosis {
+        record["diagnosis"] = serde_json::to_value(d)?;
+    }
     // Which calibration it judged, as the health record says it (for `compare`).
     record["data_hash"] = serde_json::json!(data_hash);
     let mut staged = Staged::new();
@@ -344,4 +393,13 @@ fn history_record(
             && crate::nav::prior::record_is_of(&rec, cal).is_ok())
         .then(|| (rec, format!("the unit history's record {}", entry.id)))
     })
+}
+
+/// The span over which the kinds that do not fit had their innovations refused, s.
+fn refused_span(c: &consistency::Consistency) -> Option<(f64, f64)> {
+    c.failing()
+        .iter()
+        .flat_map(|k| &k.refused_runs)
+        .map(|r| (r.from, r.to))
+        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
 }

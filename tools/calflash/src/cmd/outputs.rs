@@ -222,7 +222,8 @@ impl Outputs {
     /// Writes the files asked for, all or none: each is staged beside its destination and
     /// they are renamed into place together, so a report that cannot be drawn or a directory
     /// that does not exist leaves no file. `blob` is `None` when none may be written (a
-    /// REJECT without `--force-blob`).
+    /// REJECT without `--force-blob`): a file at the blob's path is then removed in the same
+    /// commit, so that no earlier run's blob stays beside this run's record.
     ///
     /// # Errors
     /// A file that cannot be written, or the report's error.
@@ -234,8 +235,11 @@ impl Outputs {
     ) -> Result<(), Failure> {
         let html = self.report.as_ref().map(|_| html()).transpose()?;
         let mut staged = Staged::new();
-        if let (Some(p), Some(blob)) = (&self.blob, blob) {
-            staged.write(p, |w| w.write_all(blob))?;
+        match (&self.blob, blob) {
+            (Some(p), Some(blob)) => staged.write(p, |w| w.write_all(blob))?,
+            // No blob of an earlier run stays beside this run's record.
+            (Some(p), None) => staged.remove(p),
+            _ => {}
         }
         if let (Some(p), Some(html)) = (&self.report, &html) {
             staged.write(p, |w| w.write_all(html.as_bytes()))?;

@@ -16,12 +16,14 @@
 //! A file a unit's serial names ([`unit_file`]) is made only of a serial that is a safe file
 //! name: no separator, no `..`, nothing hidden, so a serial cannot write outside its folder.
 
+mod lock;
 mod paths;
 mod read;
 mod staged;
 
 use std::path::PathBuf;
 
+pub use lock::{FolderLock, LOCK_FILE, folder_of};
 pub use paths::{Paths, resolutions, same_file};
 pub use read::{LineBound, MAX_JSON, is_special, read_blob, read_bounded, read_json_text};
 pub use staged::{Staged, unit_file, write_atomically};
@@ -30,6 +32,16 @@ pub use staged::{Staged, unit_file, write_atomically};
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
+    /// A folder another command is writing into.
+    #[error("{what} {}: another calflash is writing there ({holder}); one writer at a time, so that no unit's files come from two runs: wait for it to finish or write elsewhere", .dir.display())]
+    Locked {
+        /// The option that writes there.
+        what: String,
+        /// The folder.
+        dir: PathBuf,
+        /// The holder, as its lock file names it.
+        holder: String,
+    },
     /// An output's directory does not exist (and the command does not create it).
     #[error("{what} {}: the directory {} does not exist; create it first", .path.display(), .dir.display())]
     NoDirectory {

@@ -75,6 +75,8 @@ fn clean_stale(dir: &Path) {
 #[derive(Debug, Default)]
 pub struct Staged {
     files: Vec<(tempfile::TempPath, PathBuf)>,
+    /// Files of an earlier run that this one does not replace, removed at the commit.
+    removed: Vec<PathBuf>,
     /// Outputs that are special files: their bytes, written in place at the commit.
     special: Vec<(Vec<u8>, PathBuf)>,
 }
@@ -131,12 +133,33 @@ impl Staged {
         Ok(())
     }
 
-    /// Writes the special files in place, then renames every staged file into place (a
+    /// Removes the regular file at `path`, if there is one, at the commit, before any staged
+    /// file is renamed into place: an output this run does not write (the blob of a REJECT)
+    /// must not be left holding another run's.
+    pub fn remove(&mut self, path: &Path) {
+        self.removed.push(path.to_path_buf());
+    }
+
+    /// Removes what [`remove`](Self::remove) named, writes the special files in place, then
+    /// renames every staged file into place (a
     /// special file that cannot take its bytes, `/dev/full`, leaves no regular output).
     ///
     /// # Errors
     /// A write or rename that fails (the ones before it are done, the rest removed), naming it.
     pub fn commit(self) -> Result<(), Error> {
+        for path in self.removed {
+            let target = match std::fs::symlink_metadata(&path) {
+                Ok(m) if m.file_type().is_symlink() => path.canonicalize().unwrap_or(path),
+                Ok(_) => path,
+                Err(_) => continue,
+            };
+            if std::fs::metadata(&target).is_ok_and(|m| m.is_file()) {
+                std::fs::remove_file(&target).map_err(|source| Error::Io {
+                    path: target.clone(),
+                    source,
+                })?;
+            }
+        }
         for (bytes, path) in self.special {
             let io = |source| Error::Io {
                 path: path.clone(),

@@ -4,6 +4,8 @@
 //! calibration with the filter's own consistency.
 
 pub mod check;
+pub mod consistency;
+pub mod diagnosis;
 pub mod frame;
 pub mod input;
 pub mod launch;

@@ -300,10 +300,7 @@ pub fn forward(
             &Vector3::from(imu.f[i]),
             &Vector3::from(imu.w[i]),
             spincal::nav::Interval::seconds(dt),
-            (accel || gyro).then_some(Doubt {
-                force: if accel { doubt_f } else { 0.0 },
-                rate: if gyro { doubt_w } else { 0.0 },
-            }),
+            (accel || gyro).then_some(Doubt::of([accel, gyro], doubt_f, doubt_w)),
         );
         let fix_due = fixes
             .get(next_fix)

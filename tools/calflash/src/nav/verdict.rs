@@ -16,7 +16,7 @@ use serde::Serialize;
 use spincal::nav::StateMatrix;
 use spincal::nav::filter::{SensorErrors, index};
 
-use super::run::{Kind, Said};
+use super::run::Said;
 
 /// The terms, in the filter's order from [`index::ACCEL_BIAS`] (the round's own verdict's
 /// names).
@@ -83,22 +83,6 @@ pub struct Term {
     pub shifted: bool,
 }
 
-/// The filter's fit to the data.
-#[derive(Debug, Clone, Serialize)]
-pub struct Consistency {
-    /// Innovations of GNSS and barometer taken or refused.
-    pub innovations: usize,
-    /// Of them, inside their 95 % bounds (|nu| <= 1.96 sigma).
-    pub inside_95: usize,
-    /// Refused beyond the gate.
-    pub refused: usize,
-    /// Mean of nu^2 / sigma^2 over those taken (1 when the filter's covariance is right).
-    pub mean_nis: f64,
-    /// The filter fits the data: at least [`INSIDE_AT_LEAST`] inside, a mean NIS under 2 over
-    /// those taken, at most [`REFUSED_AT_MOST`] refused.
-    pub fits: bool,
-}
-
 /// The verdict.
 #[derive(Debug, Clone, Serialize)]
 pub struct Verdict {
@@ -114,51 +98,11 @@ pub struct Verdict {
     pub consistency: Consistency,
 }
 
-/// The share of innovations inside their 95 % bounds a filter that fits has at least: 95 % when
-/// its covariance is right, less what the innovations' correlation (a receiver's error over
-/// tens of seconds) spreads it by over a flight. A rocket's filter with 90.6 % inside and its
-/// velocity innovations drifting to 6 sigma does not fit.
-pub const INSIDE_AT_LEAST: f64 = 0.93;
+/// The verdict of a flight whose filter does not fit (or whose track does not hold on the
+/// fixes held out of it): its estimates are not findings.
+pub const DOES_NOT_FIT: &str = "FILTER DOES NOT FIT";
 
-/// The share of innovations a filter that fits may refuse beyond its gate (outliers: a
-/// receiver at high dynamics, a barometer in a gust).
-pub const REFUSED_AT_MOST: f64 = 0.05;
-
-/// The consistency of the aiding innovations (GNSS and barometer; the pad's are left out):
-/// the share inside their 95 % bounds, the mean NIS of those taken, and those refused.
-#[must_use]
-pub fn consistency(said: &[Said]) -> Consistency {
-    let aiding: Vec<&Said> = said
-        .iter()
-        .filter(|s| s.kind != Kind::Pad && s.sigma > 0.0)
-        .collect();
-    let n = aiding.len();
-    let inside = aiding
-        .iter()
-        .filter(|s| s.value.abs() <= 1.96 * s.sigma)
-        .count();
-    let taken: Vec<&&Said> = aiding.iter().filter(|s| s.taken).collect();
-    let refused = n - taken.len();
-    let mean_nis = if taken.is_empty() {
-        f64::NAN
-    } else {
-        taken
-            .iter()
-            .map(|s| (s.value / s.sigma).powi(2))
-            .sum::<f64>()
-            / taken.len() as f64
-    };
-    Consistency {
-        innovations: n,
-        inside_95: inside,
-        refused,
-        mean_nis,
-        fits: n > 0
-            && inside as f64 >= INSIDE_AT_LEAST * n as f64
-            && mean_nis < 2.0
-            && refused as f64 <= REFUSED_AT_MOST * n as f64,
-    }
-}
+pub use super::consistency::{Consistency, INSIDE_AT_LEAST, REFUSED_AT_MOST, consistency};
 
 /// The sensor errors in [`TERMS`]' order.
 #[must_use]
@@ -397,10 +341,10 @@ pub fn judge(
         .collect();
     let (word, why) = if !consistency.fits {
         (
-            "FILTER DOES NOT FIT",
+            DOES_NOT_FIT,
             format!(
-                "{} of {} innovations inside their 95 % bounds, mean NIS {:.2}: the filter's model does not fit this flight, so its estimates are not reported as findings",
-                consistency.inside_95, consistency.innovations, consistency.mean_nis
+                "{}: the filter's model does not fit this flight, so its estimates are not reported as findings",
+                consistency.failure()
             ),
         )
     } else if !shifted.is_empty() {

@@ -185,13 +185,24 @@ pub fn calibrate_all(
             };
             let mut said = String::new();
             let result = calibrate_one(args, file, serial, &out, &mut said);
-            // Each unit's summary beside its files, as `calibrate` prints it for one.
+            // Each unit's summary beside its files, as `calibrate` prints it for one; a unit
+            // that failed keeps no file of an earlier run.
+            let mut staged = crate::files::Staged::new();
             let text = match &result {
                 Ok(_) => said,
-                Err(e) => format!("{said}calflash: {e}\n"),
+                Err(e) => {
+                    for p in [Some(&files.blob), Some(&files.json), files.report.as_ref()]
+                        .into_iter()
+                        .flatten()
+                    {
+                        staged.remove(p);
+                    }
+                    format!("{said}calflash: {e}\n")
+                }
             };
-            let _ =
-                crate::files::write_atomically(&files.summary, |w| w.write_all(text.as_bytes()));
+            let _ = staged
+                .write(&files.summary, |w| w.write_all(text.as_bytes()))
+                .and_then(|()| staged.commit());
             bar.inc(1);
             Outcome {
                 serial: serial.clone(),
@@ -248,6 +259,8 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, Failure> {
     )?;
     check_options(args)?;
     ready_out_dir(out_dir)?;
+    // One writer at a time in the folder, for the whole batch.
+    let _lock = crate::files::FolderLock::take(out_dir, "--out-dir")?;
     let files = files(&args.data)?;
     let mut units: Vec<(String, PathBuf)> = Vec::with_capacity(files.len());
     let mut seen = std::collections::HashMap::with_capacity(files.len());

@@ -42,6 +42,16 @@ pub fn run(args: &CalibrateArgs) -> Result<Verdict, Failure> {
         .serial
         .as_deref()
         .ok_or("--serial: the unit's serial number is required (a batch of files takes each from its file name)")?;
+    // One writer at a time in each folder the unit's files go to.
+    let _locks = crate::files::FolderLock::take_all(
+        [
+            ("--blob", args.out.blob.as_deref()),
+            ("--json", args.out.json.as_deref()),
+            ("--report", args.out.report.as_deref()),
+        ]
+        .into_iter()
+        .filter_map(|(what, p)| p.map(|p| (what, p))),
+    )?;
     let mut said = String::new();
     let judged = calibrate_one(args, data, serial, &args.out, &mut said);
     print!("{said}");

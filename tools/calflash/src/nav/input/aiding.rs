@@ -89,6 +89,9 @@ pub fn gnss(path: &Path, max_rows: usize) -> Result<(Vec<Fix>, FixCounts), Input
             }
             if last.lat_lon == (lat, lon) && last.height == h {
                 counts.repeated += 1;
+                if counts.longest_hold.is_none_or(|(a, b)| t - last.t > b - a) {
+                    counts.longest_hold = Some((last.t, t));
+                }
                 return Ok(());
             }
         }
@@ -101,6 +104,7 @@ pub fn gnss(path: &Path, max_rows: usize) -> Result<(Vec<Fix>, FixCounts), Input
             lat_lon: (lat, lon),
             height: h,
             velocity,
+            satellites: sats,
         });
         Ok(())
     })?;

@@ -22,10 +22,11 @@ pub struct ImuSeries {
     pub f: Vec<[f64; 3]>,
     /// Rate, rad/s.
     pub w: Vec<[f64; 3]>,
-    /// Per sample, whether the accelerometers' and the gyros' readings cannot be vouched for:
-    /// a code at its rails (that sensor only), or the corrector's flags beyond the calibrated
-    /// range or uncorrected (both). A temperature or voltage beyond the calibrated span is
-    /// corrected at its edge: the calibration's own uncertainty, not a lost sample.
+    /// Per sample, whether the accelerometers' and the gyros' readings cannot be vouched for
+    /// (`spincal::flight::doubted`): a code at its rails (that sensor only), uncorrected or a
+    /// rate step (both), beyond the calibrated range with neither at its rails (both). A
+    /// temperature or voltage beyond the calibrated span is corrected at its edge: the
+    /// calibration's own uncertainty, not a lost sample.
     pub flagged: Vec<[bool; 2]>,
     /// The recording's median temperature, C, when it logs one.
     pub temperature: Option<f64>,
@@ -42,10 +43,12 @@ pub struct Fix {
     pub height: Option<f64>,
     /// Velocity east, north, up, m/s, when logged.
     pub velocity: Option<[f64; 3]>,
+    /// Satellites the receiver used, when logged.
+    pub satellites: Option<f64>,
 }
 
 /// What the GNSS file held beside its usable fixes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FixCounts {
     /// Rows read.
     pub rows: usize,
@@ -54,6 +57,8 @@ pub struct FixCounts {
     /// Rows repeating the previous fix's position and time, or its position exactly (a
     /// receiver holding its last fix).
     pub repeated: usize,
+    /// The longest hold: from the fix held to its last repeat, s (`None` without one).
+    pub longest_hold: Option<(f64, f64)>,
 }
 
 /// A barometer reading.

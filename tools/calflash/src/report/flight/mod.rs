@@ -1,6 +1,7 @@
 //! What `calflash flight` says: the verdict first, the filter's fit to the data, each sensor
 //! error against the calibration, and the trajectory against GNSS and the barometer.
 
+use crate::nav::verdict::DOES_NOT_FIT;
 use std::fmt::Write as _;
 
 use crate::nav::check::Checked;
@@ -9,6 +10,28 @@ use crate::nav::prior::PriorSource;
 
 mod html;
 pub use html::html;
+
+/// The held-out fixes' lines (`flight --hold-out`).
+#[must_use]
+pub fn held_out_text(h: &crate::nav::consistency::HeldOut) -> String {
+    format!(
+        "  held out: every {}th fix after the launch ({} fixes, {} components) kept from the filter and the smoother: {} within 3 sigma of the smoothed track ({:.1} %; {:.1} % inside their 95 % bounds), RMS {:.2} m horizontally, the worst {:.1} sigma at {:.1} s: {}\n",
+        h.every,
+        h.fixes,
+        h.components,
+        h.within_3_sigma,
+        100.0 * h.share(),
+        100.0 * h.within_95 as f64 / h.components.max(1) as f64,
+        h.rms_m,
+        h.worst.0,
+        h.worst.1,
+        if h.believed {
+            "the track can be believed"
+        } else {
+            "the track cannot be believed"
+        }
+    )
+}
 
 /// The terminal text.
 #[must_use]
@@ -26,6 +49,29 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
         k.mean_nis,
         k.refused
     );
+    for kind in &k.kinds {
+        let runs: Vec<String> = kind
+            .refused_runs
+            .iter()
+            .map(|r| format!("{} refused from {:.1} to {:.1} s", r.count, r.from, r.to))
+            .collect();
+        let _ = writeln!(
+            s,
+            "    {}: {} of {} inside ({:.1} %), mean NIS {:.2}, {} refused: {}{}",
+            kind.kind,
+            kind.inside_95,
+            kind.innovations,
+            100.0 * kind.inside_95 as f64 / kind.innovations.max(1) as f64,
+            kind.mean_nis,
+            kind.refused,
+            if kind.fits { "fits" } else { "DOES NOT FIT" },
+            if runs.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", runs.join("; "))
+            }
+        );
+    }
     let _ = writeln!(
         s,
         "  GNSS: {} rows, {} without a fix, {} repeating the last fix (left out); heading at rest {:.1} +- {:.1} deg from the track",
@@ -67,7 +113,7 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
             );
         }
     }
-    if k.fits {
+    if k.fits && c.verdict.word != DOES_NOT_FIT {
         let _ = writeln!(
             s,
             "  | term | calibration 1-sigma | in flight | 1-sigma | the flight alone, 1-sigma | z | p | |"
@@ -189,7 +235,8 @@ pub fn json(serial: &str, c: &Checked, counts: &FixCounts) -> serde_json::Value 
         "consistency": c.verdict.consistency,
         "terms": c.verdict.terms,
         "overall": c.verdict.overall,
-        "shifts": c.shifts.iter().map(|(n, x, s)| serde_json::json!({"term": n, "estimate": x, "sigma": s})).collect::<Vec<_>>(),
+        // A filter that does not fit names no shift: its estimates are not findings.
+        "shifts": c.shifts.iter().filter(|_| c.verdict.word != DOES_NOT_FIT).map(|(n, x, s)| serde_json::json!({"term": n, "estimate": x, "sigma": s})).collect::<Vec<_>>(),
         "undecided": c.undecided.iter().map(|(n, x, s)| serde_json::json!({"term": n, "estimate": x, "sigma": s})).collect::<Vec<_>>(),
         "unseen": c.unseen,
         "track_rms_m": c.track.track_rms.map(|x| x.0),

@@ -127,6 +127,7 @@ mod tests {
             lat_lon: (lat, lon),
             height: Some(0.0),
             velocity: Some((site.local_enu(lat, lon) * v).into()),
+            satellites: None,
         };
         let back = crate::nav::frame::level_velocity(&fix, (site.latitude, site.longitude, 0.0));
         let back = Vector3::from(back.unwrap());
