@@ -4,10 +4,13 @@
 //! The emulated flash is the calibration store at `_calib_start` (memory.x). At power-on the file,
 //! when given and present, is loaded there (`-device loader`); at [`QemuUnit::power_off`] the
 //! region is saved back through the QEMU monitor (`pmemsave`) to a temporary file that replaces
-//! the old one only once QEMU has written it completely.
+//! the old one only once QEMU has written it completely. The monitor listens on a Unix socket
+//! in a folder only this user can enter (0700), not on a TCP port: on a port any local user
+//! could `quit` the unit, `pmemsave` to any path this user may write, or start a gdbserver.
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
+use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Stdio};
 use std::time::{Duration, Instant};
@@ -30,7 +33,10 @@ pub struct QemuUnit {
     child: Child,
     /// The TCP port of the unit's UART.
     pub port: u16,
-    monitor: u16,
+    /// The monitor's socket, in `private`.
+    monitor: PathBuf,
+    /// A folder only this user can enter (removed with the unit).
+    _private: tempfile::TempDir,
     flash: Option<PathBuf>,
 }
 
@@ -78,12 +84,20 @@ impl QemuUnit {
             }
             None => free_port()?,
         };
-        let monitor = free_port()?;
+        let private = {
+            use std::os::unix::fs::PermissionsExt as _;
+            tempfile::Builder::new()
+                .prefix("spincal-unit-")
+                .permissions(std::fs::Permissions::from_mode(0o700))
+                .tempdir()
+        }
+        .map_err(|e| format!("no private folder for the unit's monitor: {e}"))?;
+        let monitor = private.path().join("monitor.sock");
         let mut cmd = qemu::command(elf, &[]);
         cmd.arg("-serial")
             .arg(format!("tcp:127.0.0.1:{port},server=on,wait={wait}"));
         cmd.arg("-monitor")
-            .arg(format!("tcp:127.0.0.1:{monitor},server=on,wait=off"));
+            .arg(format!("unix:{},server=on,wait=off", monitor.display()));
         if let Some(f) = flash.filter(|f| f.exists()) {
             let len = std::fs::metadata(f)
                 .map_err(|e| format!("{}: {e}", f.display()))?
@@ -111,6 +125,7 @@ impl QemuUnit {
             child,
             port,
             monitor,
+            _private: private,
             flash: flash.map(Path::to_path_buf),
         })
     }
@@ -134,7 +149,7 @@ impl QemuUnit {
     /// is then left as it was.
     pub fn power_off(mut self) -> Result<(), String> {
         self.save_flash()?;
-        let mut monitor = Monitor::open(self.monitor)?;
+        let mut monitor = Monitor::open(&self.monitor)?;
         monitor.quit();
         let start = Instant::now();
         while self.child.try_wait().map_err(|e| e.to_string())?.is_none()
@@ -159,7 +174,7 @@ impl QemuUnit {
         let tmp = flash.with_extension("bin.partial");
         let _ = std::fs::remove_file(&tmp);
         let (start, size) = region();
-        Monitor::open(self.monitor)?.command(&format!(
+        Monitor::open(&self.monitor)?.command(&format!(
             "pmemsave {start:#x} {size:#x} \"{}\"",
             tmp.display()
         ))?;
@@ -174,6 +189,12 @@ impl QemuUnit {
         std::fs::rename(&tmp, &flash).map_err(|e| format!("{}: {e}", flash.display()))
     }
 
+    /// The monitor's Unix socket (in a folder only this user can enter).
+    #[must_use]
+    pub fn monitor_socket(&self) -> &Path {
+        &self.monitor
+    }
+
     /// Whether QEMU still runs.
     #[must_use]
     pub fn running(&mut self) -> bool {
@@ -183,13 +204,27 @@ impl QemuUnit {
 
 /// A connection to QEMU's human monitor, at its prompt.
 struct Monitor {
-    w: TcpStream,
-    r: BufReader<TcpStream>,
+    w: UnixStream,
+    r: BufReader<UnixStream>,
 }
 
 impl Monitor {
-    fn open(port: u16) -> Result<Self, String> {
-        let mon = connect_tcp(port)?;
+    fn open(socket: &Path) -> Result<Self, String> {
+        let start = Instant::now();
+        let mon = loop {
+            match UnixStream::connect(socket) {
+                Ok(s) => break s,
+                Err(_) if start.elapsed() < Duration::from_secs(20) => {
+                    std::thread::sleep(Duration::from_millis(50));
+                }
+                Err(e) => {
+                    return Err(format!(
+                        "the QEMU unit's monitor {} does not answer: {e}",
+                        socket.display()
+                    ));
+                }
+            }
+        };
         mon.set_read_timeout(Some(Duration::from_secs(10)))
             .map_err(|e| e.to_string())?;
         let w = mon.try_clone().map_err(|e| e.to_string())?;

@@ -59,6 +59,16 @@ fn a_unit_on_its_own_port_takes_one_client_after_another_and_keeps_its_flash() {
     };
     assert!(err.contains(&port.to_string()), "{err}");
 
+    // Its monitor is no TCP port any local user could reach (red team four: `quit`,
+    // `pmemsave` to any path, a gdbserver): a Unix socket in a folder of mode 0700.
+    {
+        use std::os::unix::fs::{FileTypeExt as _, PermissionsExt as _};
+        let socket = unit.monitor_socket();
+        assert!(std::fs::metadata(socket).unwrap().file_type().is_socket());
+        let folder = std::fs::metadata(socket.parent().unwrap()).unwrap();
+        assert_eq!(folder.permissions().mode() & 0o777, 0o700);
+    }
+
     // Saved while it runs (what a power cut would leave), then at power-off.
     unit.save_flash().unwrap();
     assert_eq!(
