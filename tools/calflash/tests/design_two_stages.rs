@@ -164,6 +164,24 @@ fn one_stage_wins_where_the_unit_and_a_sensor_cost_alike() {
         err.contains("one stage wins: the other family's stage one alone"),
         "{err}"
     );
+    // Costs far from 1 in six significant digits (red team four: 301 digits, or 0).
+    let (code, out, err) = optimize(d, "gyro", "rate:-8:8:9", &["--cost-stage-one=1e300"]);
+    assert_ne!(code, 0, "{out}");
+    assert!(
+        err.contains("cost 5.04000e302)") && !err.contains("000000000000"),
+        "{err}"
+    );
+    let (code, out, err) = optimize(
+        d,
+        "gyro",
+        "rate:-8:8:9",
+        &["--cost-stage-one=1e-300", "--cost-unit=1e-300"],
+    );
+    assert_ne!(code, 0, "{out}");
+    assert!(
+        err.contains("budget (") && !err.contains("budget (0)"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -180,6 +180,25 @@ fn a_shell_flight_fits_and_a_launch_shift_of_one_bias_is_found() {
         !term(&shifted, "gyro scale x")["shifted"].as_bool().unwrap(),
         "{shifted}"
     );
+    // The history's record edited after it was written (red team four: the blob's factors
+    // were taken instead without a word): not taken, and said.
+    let conn = rusqlite::Connection::open(d.path().join("units.sqlite")).unwrap();
+    let edited = conn
+        .execute(
+            "UPDATE records SET record = replace(record, 'rig.csv', 'rig2.csv') WHERE kind = 'fit'",
+            [],
+        )
+        .unwrap();
+    assert_eq!(edited, 1);
+    drop(conn);
+    let tampered = fly(d.path(), None);
+    assert_eq!(
+        tampered["prior"]["source"], "factors",
+        "{}",
+        tampered["prior"]
+    );
+    let said = tampered["history_refused"][0].as_str().unwrap();
+    assert!(said.contains("fails its seal"), "{said}");
 }
 
 /// The guide's round given its blob alone, no record and no history (`--no-db`): the prior is
@@ -794,6 +813,38 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
         "{why}"
     );
     assert_eq!(v["shifts"].as_array().unwrap().len(), 0, "{v}");
+    // A logger's clock that stuck for one sample (red team four: this passed silently, with
+    // the clean log's verdict): refused, naming the line.
+    let imu = std::fs::read_to_string(d.path().join("r.csv")).unwrap();
+    let mut stuck = String::new();
+    let mut before = String::new();
+    for (i, line) in imu.lines().enumerate() {
+        let (t, rest) = line.split_once(',').unwrap();
+        if i == 101 {
+            stuck.push_str(&format!("{before},{rest}\n"));
+        } else {
+            stuck.push_str(&format!("{line}\n"));
+        }
+        before = t.to_string();
+    }
+    std::fs::write(d.path().join("stuck.csv"), stuck).unwrap();
+    let (code, out, err) = calflash(
+        d.path(),
+        &[
+            "flight",
+            "stuck.csv",
+            "--blob",
+            "round.blob",
+            "--gnss",
+            "g.csv",
+            "--no-db",
+        ],
+    );
+    assert_ne!(code, 0, "{out}");
+    assert!(
+        err.contains("stuck.csv line 102") && err.contains("is not after the line above's"),
+        "{err}"
+    );
 }
 
 /// `flight r.csv` with the round's blob, `gnss` and the barometer, `extra` options, exiting

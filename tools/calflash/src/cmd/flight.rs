@@ -197,6 +197,7 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
     };
     let mut blob_bytes = Vec::new();
     let mut data_hash = None;
+    let mut history_notes: Vec<String> = Vec::new();
     let (imu, prior, serial) = match &args.blob {
         Some(path) => {
             let bytes = crate::files::read_blob(path)?;
@@ -211,7 +212,11 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
             let from = crate::nav::launch::launch(&imu, opts.launch_force).map_or(0, |l| l.1);
             let record = match &args.record {
                 Some(path) => Some((read_record(path)?, path.display().to_string())),
-                None => db_path.as_ref().and_then(|loc| history_record(loc, &cal)),
+                None => db_path.as_ref().and_then(|loc| {
+                    let (found, notes) = history_record(loc, &cal);
+                    history_notes = notes;
+                    found
+                }),
             };
             let from_record = match record {
                 Some((rec, at)) => match prior::record_prior(&rec, &cal, &imu, from) {
@@ -309,6 +314,12 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
     if let Some(d) = &diagnosis {
         record["diagnosis"] = serde_json::to_value(d)?;
     }
+    if !history_notes.is_empty() {
+        for note in &history_notes {
+            text.push_str(&format!("  warning: {note}\n"));
+        }
+        record["history_refused"] = serde_json::json!(history_notes);
+    }
     // Which calibration it judged, as the health record says it (for `compare`).
     record["data_hash"] = serde_json::json!(data_hash);
     let mut staged = Staged::new();
@@ -369,30 +380,59 @@ fn read_record(path: &std::path::Path) -> Result<Record, Failure> {
 
 /// The unit history's newest record of the calibration of unit `serial` whose data hash is
 /// `hash`, with the words for where it is; `None` when the history holds none (or cannot be
-/// read: the blob's factors serve then, and the report says which prior it took).
+/// read: the blob's factors serve then, and the report says which prior it took). Beside it,
+/// a sentence for each record of this calibration passed over because it fails its seal or
+/// cannot be read: a tampered history is said, never silently replaced by the blob's factors.
 fn history_record(
     loc: &crate::db::Location,
     cal: &spincal::model::Calibration,
-) -> Option<(Record, String)> {
+) -> (Option<(Record, String)>, Vec<String>) {
     let id = &cal.data().identity;
     let hash = record::hex(&id.data_hash);
-    let mut db = crate::db::Db::open_existing(loc.clone()).ok()?;
-    let entries: Vec<_> = db
-        .history(id.serial.as_str())
-        .ok()?
+    let mut notes = Vec::new();
+    let Ok(mut db) = crate::db::Db::open_existing(loc.clone()) else {
+        return (None, notes);
+    };
+    let Ok(history) = db.history(id.serial.as_str()) else {
+        return (None, notes);
+    };
+    let entries: Vec<_> = history
         .into_iter()
         .rev()
         .filter(|e| e.kind == "fit" && e.data_hash.eq_ignore_ascii_case(&hash))
         .collect();
     // The newest record of this very blob: another fit of the same data is not its record.
-    entries.into_iter().find_map(|entry| {
-        let text = db.record(entry.id).ok()?;
-        let rec: Record = serde_json::from_str(&text).ok()?;
-        (rec.schema == record::SCHEMA
-            && rec.check_seal().is_ok()
-            && crate::nav::prior::record_is_of(&rec, cal).is_ok())
-        .then(|| (rec, format!("the unit history's record {}", entry.id)))
-    })
+    for entry in entries {
+        let rec = db
+            .record(entry.id)
+            .map_err(|e| e.to_string())
+            .and_then(|text| serde_json::from_str::<Record>(&text).map_err(|e| e.to_string()));
+        let rec = match rec {
+            Ok(r) if r.schema == record::SCHEMA => r,
+            Ok(_) => continue,
+            Err(e) => {
+                notes.push(format!(
+                    "the unit history's record {} of this calibration cannot be read ({e}): not taken",
+                    entry.id
+                ));
+                continue;
+            }
+        };
+        if let Err(e) = rec.check_seal() {
+            notes.push(format!(
+                "the unit history's record {} of this calibration fails its seal ({e}: edited after it was written?): not taken",
+                entry.id
+            ));
+            continue;
+        }
+        if crate::nav::prior::record_is_of(&rec, cal).is_ok() {
+            return (
+                Some((rec, format!("the unit history's record {}", entry.id))),
+                notes,
+            );
+        }
+    }
+    (None, notes)
 }
 
 /// The span over which the kinds that do not fit had their innovations refused, s.

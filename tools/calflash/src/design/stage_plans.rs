@@ -261,8 +261,10 @@ pub fn optimize(ask: &Ask, mut progress: impl FnMut(usize)) -> Result<Found, Sta
     let left = budget - other;
     if left <= 0.0 {
         return Err(StagesError::Budget(format!(
-            "one stage wins: the other family's stage one alone ({} observations a sensor, cost {other:.0}) costs more than one stage's whole budget ({budget:.0}); give it a smaller plan (--stage-one-other), or one stage more observations",
-            ask.other_stage_one.len()
+            "one stage wins: the other family's stage one alone ({} observations a sensor, cost {}) costs more than one stage's whole budget ({}); give it a smaller plan (--stage-one-other), or one stage more observations",
+            ask.other_stage_one.len(),
+            crate::report::terminal::num(other),
+            crate::report::terminal::num(budget)
         )));
     }
     let blocks_one = vec![Block {

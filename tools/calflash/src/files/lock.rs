@@ -2,8 +2,11 @@
 //! holds an advisory lock on `.calflash.lock` in each folder it writes into, for its whole
 //! run, and a second one is refused with the holder named (its process, command line and start),
 //! so that two runs can never leave a unit's blob from one beside its record from the other.
-//! The lock goes with the process (the kernel drops it when the file closes, a killed run too);
-//! the file itself stays, naming its last holder.
+//! The lock goes with the process (the kernel drops it when the file closes, a killed run too).
+//! The file is removed when the lock is let go, so that a folder keeps only the outputs; a
+//! killed run's file stays, naming it, and is taken over by the next writer. A writer that
+//! locked a file another had just removed finds its path no longer names that file, and
+//! takes the lock again on the new one.
 
 use std::io::{Read as _, Seek as _, Write as _};
 use std::path::{Path, PathBuf};
@@ -13,12 +16,29 @@ use super::Error;
 /// The lock file's name in a folder.
 pub const LOCK_FILE: &str = ".calflash.lock";
 
-/// A held lock on a folder; released when dropped.
+/// A held lock on a folder; released (and its file removed) when dropped.
 #[derive(Debug)]
 pub struct FolderLock {
-    _file: std::fs::File,
+    file: std::fs::File,
     /// The folder.
     pub dir: PathBuf,
+}
+
+impl Drop for FolderLock {
+    fn drop(&mut self) {
+        // Removed while still held: a writer that opens the path now makes a new file.
+        let _ = std::fs::remove_file(self.dir.join(LOCK_FILE));
+        let _ = self.file.unlock();
+    }
+}
+
+/// Whether `path` still names the open `file` (same device and inode).
+fn still_names(path: &Path, file: &std::fs::File) -> bool {
+    use std::os::unix::fs::MetadataExt as _;
+    match (std::fs::metadata(path), file.metadata()) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
 }
 
 /// The folder `path` is written into (`.` for a bare file name).
@@ -41,26 +61,31 @@ impl FolderLock {
             path: path.clone(),
             source,
         };
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&path)
-            .map_err(io)?;
-        match file.try_lock() {
-            Ok(()) => {}
-            Err(std::fs::TryLockError::WouldBlock) => {
-                let mut holder = String::new();
-                let _ = file.read_to_string(&mut holder);
-                return Err(Error::Locked {
-                    what: what.to_string(),
-                    dir: dir.to_path_buf(),
-                    holder: holder.trim().to_string(),
-                });
+        let mut file = loop {
+            let mut file = std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(false)
+                .open(&path)
+                .map_err(io)?;
+            match file.try_lock() {
+                // Locked, and still the file its path names: held.
+                Ok(()) if still_names(&path, &file) => break file,
+                // The holder let it go and removed it meanwhile: again, on the new file.
+                Ok(()) => {}
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    let mut holder = String::new();
+                    let _ = file.read_to_string(&mut holder);
+                    return Err(Error::Locked {
+                        what: what.to_string(),
+                        dir: dir.to_path_buf(),
+                        holder: holder.trim().to_string(),
+                    });
+                }
+                Err(std::fs::TryLockError::Error(e)) => return Err(io(e)),
             }
-            Err(std::fs::TryLockError::Error(e)) => return Err(io(e)),
-        }
+        };
         let args: Vec<String> = std::env::args().collect();
         let since = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
@@ -75,7 +100,7 @@ impl FolderLock {
         file.write_all(line.as_bytes()).map_err(io)?;
         file.flush().map_err(io)?;
         Ok(Self {
-            _file: file,
+            file,
             dir: dir.to_path_buf(),
         })
     }
@@ -126,6 +151,7 @@ mod tests {
             "{err}"
         );
         drop(first);
+        assert!(!d.path().join(LOCK_FILE).exists(), "the lock's file stays");
         let again = FolderLock::take_all([
             ("--blob", d.path().join("a.blob").as_path()),
             ("--json", d.path().join("a.json").as_path()),

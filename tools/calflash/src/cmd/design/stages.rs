@@ -249,8 +249,11 @@ fn calibrated_comparison(
                 "one stage wins"
             };
             println!(
-                "    one stage {name}, {family}: two stages {:.3e} {unit}, one stage {:.3e} (two/one {ratio:.3}); cost a unit {c2:.0} against {c1:.0}; at equal cost two/one {equal:.3}: {winner}",
-                pred.two[f], pred.one[f]
+                "    one stage {name}, {family}: two stages {:.3e} {unit}, one stage {:.3e} (two/one {ratio:.3}); cost a unit {} against {}; at equal cost two/one {equal:.3}: {winner}",
+                pred.two[f],
+                pred.one[f],
+                crate::report::terminal::num(c2),
+                crate::report::terminal::num(c1)
             );
         }
     }

@@ -113,8 +113,10 @@ pub enum InputError {
         /// What was expected.
         why: &'static str,
     },
-    /// Time running backwards.
-    #[error("{file} line {line}: time {t} s is before the line above's {before} s")]
+    /// Time running backwards or standing still (a logger's clock that stuck).
+    #[error(
+        "{file} line {line}: time {t} s is not after the line above's {before} s (time must increase: a repeated time is a logger's clock that stuck)"
+    )]
     Backwards {
         /// The file.
         file: String,
@@ -325,7 +327,7 @@ pub fn corrected(path: &Path, cal: &Calibration, max_rows: usize) -> Result<ImuS
     let mut last_temp = f32::NAN;
     for (line, row) in &raw {
         let t = row[0];
-        if t < last_t {
+        if t <= last_t {
             return Err(InputError::Backwards {
                 file,
                 line: *line,
