@@ -275,8 +275,21 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
         Some(k) => consistency::hold_out(&fixes, k, launch),
         None => (fixes, Vec::new()),
     };
-    let mut checked = check::check(&imu, (&fixes, &baro), prior, &walks, &opts, args.alpha)
-        .map_err(|e| format!("{}: {e}", recording.display()))?;
+    // On a terminal, that the filter is at work and for how long (nothing drawn otherwise).
+    let working = indicatif::ProgressBar::new_spinner();
+    working.set_style(
+        indicatif::ProgressStyle::with_template("  {spinner} {msg}, {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    working.set_message(format!(
+        "filtering, searching what moved and smoothing {} samples, {} fixes",
+        imu.t.len(),
+        fixes.len()
+    ));
+    working.enable_steady_tick(std::time::Duration::from_millis(200));
+    let checked = check::check(&imu, (&fixes, &baro), prior, &walks, &opts, args.alpha);
+    working.finish_and_clear();
+    let mut checked = checked.map_err(|e| format!("{}: {e}", recording.display()))?;
     let held_out = args.hold_out.map(|k| {
         let h = consistency::held_out(
             &checked.track,
@@ -435,11 +448,12 @@ fn history_record(
     (None, notes)
 }
 
-/// The span over which the kinds that do not fit had their innovations refused, s.
+/// The longest run of refused innovations of the kinds that do not fit (the most refused), s:
+/// where the recording is looked at for what lost the track.
 fn refused_span(c: &consistency::Consistency) -> Option<(f64, f64)> {
     c.failing()
         .iter()
         .flat_map(|k| &k.refused_runs)
+        .max_by_key(|r| r.count)
         .map(|r| (r.from, r.to))
-        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
 }

@@ -38,7 +38,8 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, Err
         esc(&v.why)
     );
     h.push_str(&facts_table(c, counts));
-    if v.consistency.fits {
+    // A filter that does not fit (or a track the held-out fixes do not hold) names no term.
+    if v.consistency.fits && v.word != crate::nav::verdict::DOES_NOT_FIT {
         h.push_str(&terms_table(c));
     }
     h.push_str("<h2>Innovations</h2>\n");
