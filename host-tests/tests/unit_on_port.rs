@@ -43,6 +43,17 @@ fn a_unit_on_its_own_port_takes_one_client_after_another_and_keeps_its_flash() {
     assert!(report.read_back_identical);
     drop(client);
 
+    // A client that leaves half a frame (two stray bytes: a cable pulled, a terminal probe):
+    // the next one still identifies the unit at once (red team four: "the unit refused
+    // Identify: BadFrame" until a retry by hand).
+    {
+        use std::io::Write as _;
+        let mut stray = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
+        stray.write_all(&[0x41, 0x42]).unwrap();
+        stray.flush().unwrap();
+        std::thread::sleep(Duration::from_millis(200));
+    }
+
     // Another on the same port, later: the unit still runs and holds it.
     let mut client = unit.connect(Duration::from_secs(5)).unwrap();
     let id = client.identify().unwrap();

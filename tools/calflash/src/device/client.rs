@@ -292,7 +292,17 @@ impl<L: Read + Write> Client<L> {
     /// # Errors
     /// As `ask`.
     pub fn identify(&mut self) -> Result<protocol::Identity, DeviceError> {
-        match self.ask(&Request::Identify)? {
+        // A client that left half a frame on the link (a cable pulled, a probe) makes the
+        // unit's first frame from this one bad: the unit answers BadFrame, has dropped those
+        // bytes with it and keeps its calibration, so Identify is asked once more.
+        let first = match self.ask(&Request::Identify) {
+            Err(DeviceError::Refused {
+                status: protocol::Status::BadFrame,
+                ..
+            }) => self.ask(&Request::Identify),
+            other => other,
+        };
+        match first? {
             Response::Identity(i) => Ok(i),
             other => Err(DeviceError::Unexpected {
                 what: "Identify".into(),
