@@ -154,28 +154,33 @@ fn beyond(count: usize, n: usize, share: f64) -> bool {
     count as f64 > share * n as f64 && binomial_tail(n, count, share) < CHANCE
 }
 
+/// Innovations, those inside their 95 % bounds, those refused, and the mean NIS of those
+/// taken (NaN when none was).
+fn counts(said: &[&Said]) -> (usize, usize, usize, f64) {
+    let inside = said
+        .iter()
+        .filter(|s| s.value.abs() <= 1.96 * s.sigma)
+        .count();
+    let taken: Vec<f64> = said
+        .iter()
+        .filter(|s| s.taken)
+        .map(|s| (s.value / s.sigma).powi(2))
+        .collect();
+    let mean_nis = if taken.is_empty() {
+        f64::NAN
+    } else {
+        taken.iter().sum::<f64>() / taken.len() as f64
+    };
+    (said.len(), inside, said.len() - taken.len(), mean_nis)
+}
+
 fn judge<'a>(kind: &'static str, said: impl Iterator<Item = &'a Said>) -> Option<KindFit> {
     let mut said: Vec<&Said> = said.collect();
     if said.is_empty() {
         return None;
     }
     said.sort_by(|a, b| a.t.total_cmp(&b.t));
-    let n = said.len();
-    let inside = said
-        .iter()
-        .filter(|s| s.value.abs() <= 1.96 * s.sigma)
-        .count();
-    let taken: Vec<&&Said> = said.iter().filter(|s| s.taken).collect();
-    let refused = n - taken.len();
-    let mean_nis = if taken.is_empty() {
-        f64::NAN
-    } else {
-        taken
-            .iter()
-            .map(|s| (s.value / s.sigma).powi(2))
-            .sum::<f64>()
-            / taken.len() as f64
-    };
+    let (n, inside, refused, mean_nis) = counts(&said);
     // Refused innovations less than RUN_GAP_S apart are one run, whatever was taken between
     // them (a filter pulled off by a fault still takes some).
     let mut refused_runs = Vec::new();
@@ -201,7 +206,7 @@ fn judge<'a>(kind: &'static str, said: impl Iterator<Item = &'a Said>) -> Option
     if let Some(r) = run.filter(|r| r.count >= RUN_AT_LEAST) {
         refused_runs.push(r);
     }
-    let fits = !taken.is_empty()
+    let fits = refused < n
         && !beyond(n - inside, n, 1.0 - INSIDE_AT_LEAST)
         && mean_nis < 2.0
         && !beyond(refused, n, REFUSED_AT_MOST);
@@ -224,22 +229,7 @@ pub fn consistency(said: &[Said]) -> Consistency {
         .iter()
         .filter(|s| kind_of(s.kind).is_some() && s.sigma > 0.0)
         .collect();
-    let n = aiding.len();
-    let inside = aiding
-        .iter()
-        .filter(|s| s.value.abs() <= 1.96 * s.sigma)
-        .count();
-    let taken: Vec<&&Said> = aiding.iter().filter(|s| s.taken).collect();
-    let refused = n - taken.len();
-    let mean_nis = if taken.is_empty() {
-        f64::NAN
-    } else {
-        taken
-            .iter()
-            .map(|s| (s.value / s.sigma).powi(2))
-            .sum::<f64>()
-            / taken.len() as f64
-    };
+    let (n, inside, refused, mean_nis) = counts(&aiding);
     let kinds: Vec<KindFit> = KINDS
         .iter()
         .enumerate()
