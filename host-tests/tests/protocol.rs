@@ -389,3 +389,37 @@ fn a_new_unit_answers_without_a_calibration() {
         Response::Error(Status::NoCalibration)
     );
 }
+
+/// A tagged request's reply carries its id (a client tells its answer from a late one meant
+/// for another request); an untagged request's reply is untagged, as before; a frame with
+/// anything after the message but one id is refused as malformed and gets an untagged reply.
+#[test]
+fn a_reply_carries_its_requests_id() {
+    let mut d = device();
+    let ask = |d: &mut Device<Flash>, frame: &[u8]| {
+        let mut out = [0u8; MAX_FRAME];
+        let n = d.handle_frame(frame, &mut out);
+        let mut scratch = [0u8; MAX_FRAME];
+        let (reply, id): (protocol::Reply, _) =
+            protocol::decode_tagged(&out[..n - 1], &mut scratch).unwrap();
+        (reply.response, id)
+    };
+    let mut frame = [0u8; MAX_FRAME];
+    let n = protocol::encode_tagged(&Request::Identify, 0xBEEF, &mut frame).unwrap();
+    let (response, id) = ask(&mut d, &frame[..n - 1]);
+    assert!(matches!(response, Response::Identity(_)), "{response:?}");
+    assert_eq!(id, Some(0xBEEF));
+    let n = protocol::encode(&Request::Identify, &mut frame).unwrap();
+    let (response, id) = ask(&mut d, &frame[..n - 1]);
+    assert!(matches!(response, Response::Identity(_)));
+    assert_eq!(id, None);
+    // Two ids: malformed, untagged.
+    let mut raw = postcard::to_allocvec(&Request::Identify).unwrap();
+    raw.extend(postcard::to_allocvec(&7u16).unwrap());
+    raw.extend(postcard::to_allocvec(&8u16).unwrap());
+    raw.extend(crc(&raw).to_le_bytes());
+    let framed = cobs::encode_vec(&raw);
+    let (response, id) = ask(&mut d, &framed);
+    assert_eq!(response, Response::Error(Status::Malformed));
+    assert_eq!(id, None);
+}

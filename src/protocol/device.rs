@@ -142,19 +142,23 @@ impl<F: NorFlash> Device<F> {
     /// Handles one frame (without its terminator) and writes the response frame into `out`;
     /// returns its length (0 if `out` is too small for it).
     pub fn handle_frame(&mut self, frame: &[u8], out: &mut [u8]) -> usize {
-        let response = match super::decode::<Request>(frame, &mut self.frame) {
-            Ok(req) => self.handle(req),
+        let (response, id) = match super::decode_tagged::<Request>(frame, &mut self.frame) {
+            Ok((req, id)) => (self.handle(req), id),
             Err(FrameError::Message) if super::unknown_request(frame, &mut self.frame) => {
-                Response::Error(Status::UnknownRequest)
+                (Response::Error(Status::UnknownRequest), None)
             }
-            Err(FrameError::Message) => Response::Error(Status::Malformed),
-            Err(_) => Response::Error(Status::BadFrame),
+            Err(FrameError::Message) => (Response::Error(Status::Malformed), None),
+            Err(_) => (Response::Error(Status::BadFrame), None),
         };
         let reply = Reply {
             trust: self.trust(),
             response,
         };
-        super::encode(&reply, out).unwrap_or(0)
+        // The reply carries the request's id, when it had one.
+        match id {
+            Some(id) => super::encode_tagged(&reply, id, out).unwrap_or(0),
+            None => super::encode(&reply, out).unwrap_or(0),
+        }
     }
 
     /// Handles one request.

@@ -1,9 +1,12 @@
 //! The update protocol over a serial link, shared by the device and `calflash`.
 //!
-//! A frame is `COBS(postcard(message) ++ CRC-32C(postcard(message)), little-endian) ++ 0x00`.
-//! The host sends a [`Request`], the device answers with one [`Reply`]: a [`Response`]
-//! and whether the unit checks signatures ([`Trust`]). A frame that does
-//! not decode, fails its CRC or carries an unknown request gets [`Response::Error`] and changes
+//! A frame is `COBS(body ++ CRC-32C(body), little-endian) ++ 0x00`, the body
+//! `postcard(message)`, or `postcard(message) ++ postcard(id: u16)` for a tagged frame
+//! ([`encode_tagged`]). The host sends a [`Request`], the device answers with one [`Reply`]: a
+//! [`Response`] and whether the unit checks signatures ([`Trust`]). The reply to a tagged
+//! request carries the request's id, so that a client tells its own answer from a late one
+//! meant for an earlier connection. A frame that does not decode, fails its CRC or carries an
+//! unknown request gets [`Response::Error`] (untagged: its id could not be read) and changes
 //! nothing. [`Device`] is the device's side, over any [`NorFlash`](embedded_storage::nor_flash::NorFlash).
 //!
 //! ```
@@ -127,7 +130,7 @@ pub const MAX_FRAME: usize = 640;
 /// (every answer a [`Reply`] saying whether the unit checks signatures; [`Status::Refused`];
 /// the station keys, counter and signer in [`Identity`]), 5 the flight filter's state
 /// ([`Request::ReadFlight`]).
-pub const PROTOCOL_VERSION: u8 = 5;
+pub const PROTOCOL_VERSION: u8 = 6;
 
 /// What the host asks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -380,6 +383,51 @@ pub fn encode<T: Serialize>(msg: &T, out: &mut [u8]) -> Result<usize, FrameError
     Ok(n + 1)
 }
 
+/// Encodes `msg` tagged with `id` into `out` (see the [module docs](self)); returns the frame
+/// length including the terminator.
+///
+/// # Errors
+/// [`FrameError::TooLong`] when the frame does not fit `out` or [`MAX_FRAME`].
+pub fn encode_tagged<T: Serialize>(msg: &T, id: u16, out: &mut [u8]) -> Result<usize, FrameError> {
+    let mut raw = [0u8; MAX_FRAME];
+    let body = postcard::to_slice(msg, &mut raw)
+        .map_err(|_| FrameError::TooLong)?
+        .len();
+    let tag = postcard::to_slice(&id, raw.get_mut(body..).unwrap_or_default())
+        .map_err(|_| FrameError::TooLong)?
+        .len();
+    let body = body + tag;
+    let crc = CRC
+        .checksum(raw.get(..body).unwrap_or_default())
+        .to_le_bytes();
+    raw.get_mut(body..body + 4)
+        .ok_or(FrameError::TooLong)?
+        .copy_from_slice(&crc);
+    let n = cobs::try_encode(raw.get(..body + 4).unwrap_or_default(), out)
+        .map_err(|_| FrameError::TooLong)?;
+    *out.get_mut(n).ok_or(FrameError::TooLong)? = 0;
+    Ok(n + 1)
+}
+
+/// Decodes a frame, tagged or not: the message and its id (`None` for an untagged frame).
+///
+/// # Errors
+/// As [`decode`]; anything after the message but one id is [`FrameError::Message`].
+pub fn decode_tagged<'a, T: Deserialize<'a>>(
+    frame: &[u8],
+    scratch: &'a mut [u8],
+) -> Result<(T, Option<u16>), FrameError> {
+    let body = checked_body(frame, scratch)?;
+    let (msg, rest) = postcard::take_from_bytes(body).map_err(|_| FrameError::Message)?;
+    if rest.is_empty() {
+        return Ok((msg, None));
+    }
+    match postcard::take_from_bytes::<u16>(rest) {
+        Ok((id, [])) => Ok((msg, Some(id))),
+        _ => Err(FrameError::Message),
+    }
+}
+
 /// Decodes a frame (without its 0x00 terminator), using `scratch` for the COBS decoding.
 ///
 /// # Errors
@@ -388,6 +436,16 @@ pub fn decode<'a, T: Deserialize<'a>>(
     frame: &[u8],
     scratch: &'a mut [u8],
 ) -> Result<T, FrameError> {
+    let body = checked_body(frame, scratch)?;
+    let (msg, rest) = postcard::take_from_bytes(body).map_err(|_| FrameError::Message)?;
+    if !rest.is_empty() {
+        return Err(FrameError::Message);
+    }
+    Ok(msg)
+}
+
+/// A frame's body, COBS-decoded into `scratch`, its CRC checked and removed.
+fn checked_body<'a>(frame: &[u8], scratch: &'a mut [u8]) -> Result<&'a [u8], FrameError> {
     if frame.len() > scratch.len() {
         return Err(FrameError::TooLong);
     }
@@ -401,11 +459,7 @@ pub fn decode<'a, T: Deserialize<'a>>(
     if CRC.checksum(body) != stored {
         return Err(FrameError::Crc);
     }
-    let (msg, rest) = postcard::take_from_bytes(body).map_err(|_| FrameError::Message)?;
-    if !rest.is_empty() {
-        return Err(FrameError::Message);
-    }
-    Ok(msg)
+    Ok(body)
 }
 
 /// Number of request kinds (the largest known postcard variant index plus one).

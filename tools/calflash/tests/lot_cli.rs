@@ -269,6 +269,74 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
         out.contains("calflash lot  lot `L-0419`: 13 units"),
         "{out}"
     );
+    // Red team four: another unit's coefficients copied into the odd unit's `coefficients`
+    // column, which no seal covers. The lot is built from the sealed records: the odd unit is
+    // still named.
+    let outliers = |json: &str| -> Vec<String> {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join(json)).unwrap()).unwrap();
+        v["outliers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|o| o["serial"].as_str().unwrap().to_string())
+            .collect()
+    };
+    let lot_json = |json: &str| {
+        calflash(
+            d,
+            &[
+                "lot",
+                "--lot",
+                "L-0419",
+                "--db",
+                "units.sqlite",
+                "--json",
+                json,
+            ],
+        )
+    };
+    let (code, out, err) = lot_json("before.json");
+    assert_eq!(code, 0, "{out}{err}");
+    let before = outliers("before.json");
+    assert!(before.contains(&"ACC-7-012".to_string()), "{before:?}");
+    let conn = rusqlite::Connection::open(d.join("units.sqlite")).unwrap();
+    let (record, coefficients): (String, String) = conn
+        .query_row(
+            "SELECT record, coefficients FROM records WHERE serial = 'ACC-7-012' AND kind = 'fit'",
+            [],
+            |r| Ok((r.get(0)?, r.get(1)?)),
+        )
+        .unwrap();
+    conn.execute(
+        "UPDATE records SET coefficients = (SELECT coefficients FROM records
+           WHERE serial = 'ACC-7-001' AND kind = 'fit') WHERE serial = 'ACC-7-012'",
+        [],
+    )
+    .unwrap();
+    let (code, out, err) = lot_json("copied.json");
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(outliers("copied.json"), before, "{out}");
+    // The record itself edited: the lot is not judged on it, and says which unit's.
+    let edited = record.replacen("\"verdict\":\"accept\"", "\"verdict\":\"review\"", 1);
+    assert_ne!(edited, record);
+    conn.execute(
+        "UPDATE records SET record = ?1 WHERE serial = 'ACC-7-012'",
+        [&edited],
+    )
+    .unwrap();
+    let (code, out, err) = lot_json("edited.json");
+    assert_ne!(code, 0, "{out}{err}");
+    assert!(
+        err.contains("the fit of ACC-7-012: its record is not as calflash wrote it"),
+        "{err}"
+    );
+    conn.execute(
+        "UPDATE records SET record = ?1, coefficients = ?2 WHERE serial = 'ACC-7-012'",
+        [&record, &coefficients],
+    )
+    .unwrap();
+    drop(conn);
     let (code, out, err) = calflash(
         d,
         &["history", "ACC-7-012", "--db", "units.sqlite", "--json"],

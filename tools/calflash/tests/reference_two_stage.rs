@@ -27,6 +27,8 @@ fn calibrate(unit: &str, dir: &Path) -> (i32, String, serde_json::Value) {
     let from = root().join(unit);
     std::fs::create_dir_all(dir.join("s1")).unwrap();
     std::fs::copy(from.join("unit.csv"), dir.join("unit.csv")).unwrap();
+    let (code, out) = run(dir, &["keygen", "station"]);
+    assert_eq!(code, 0, "{out}");
     for s in ["a_x", "a_y", "a_z", "g_x", "g_y", "g_z"] {
         let csv = format!("s1/{s}.csv");
         std::fs::copy(from.join(&csv), dir.join(&csv)).unwrap();
@@ -54,6 +56,10 @@ fn calibrate(unit: &str, dir: &Path) -> (i32, String, serde_json::Value) {
                 "--json",
                 &json,
                 "--no-db",
+                "--sign-key",
+                "station.key",
+                "--counter",
+                "1",
             ],
         );
         assert_eq!(code, 0, "{unit} {s}: stage one\n{out}");
@@ -68,6 +74,8 @@ fn calibrate(unit: &str, dir: &Path) -> (i32, String, serde_json::Value) {
             "--serial",
             "IMU-7",
             "--keep-all-terms",
+            "--trust-key",
+            "station.pub",
             "--stage-one",
             "s1/a_x.json,s1/a_y.json,s1/a_z.json,s1/g_x.json,s1/g_y.json,s1/g_z.json",
             "--blob",

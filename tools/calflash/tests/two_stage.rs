@@ -13,6 +13,7 @@ mod stage_score;
 use stage_score::{Input, Score, Truth, coverage, coverage_all, rms, stated_rms, z0};
 
 use calflash::design::stages::{self, Plans};
+use calflash::sensor::record::Record;
 use calflash::sensor::stages::{Check, one};
 use calflash::sensor::{Calibrated, Verdict};
 use calflash::sim::plan::{self, Condition};
@@ -252,6 +253,11 @@ fn stage_one_cli(d: &Path, seed: &str, shift: Option<&str>) -> String {
     let (code, out, err) = calflash(d, &args);
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("stage one, g_z: 280 observations"), "{out}");
+    // The station's key signs each stage-one record; stage two trusts its public half.
+    if !d.join("station.key").exists() {
+        let (code, out, err) = calflash(d, &["keygen", "station"]);
+        assert_eq!(code, 0, "{out}{err}");
+    }
     one::OUTPUTS
         .iter()
         .enumerate()
@@ -280,6 +286,8 @@ fn stage_one_cli(d: &Path, seed: &str, shift: Option<&str>) -> String {
                     &json,
                     "--db",
                     "history.sqlite",
+                    "--sign-key",
+                    "station.key",
                 ],
             );
             assert_eq!(code, 0, "{out}{err}");
@@ -287,6 +295,12 @@ fn stage_one_cli(d: &Path, seed: &str, shift: Option<&str>) -> String {
         })
         .collect::<Vec<_>>()
         .join(",")
+}
+
+/// The id of the station key `stage_one_cli` signed with (`station.pub` in `d`).
+fn signing_id(d: &Path) -> String {
+    let key = calflash::signing::load_public(&d.join("station.pub")).unwrap();
+    key.id().iter().map(|b| format!("{b:02x}")).collect()
 }
 
 fn stage_two_cli(d: &Path, records: &str, data: &str) -> (i32, String, String) {
@@ -300,6 +314,8 @@ fn stage_two_cli(d: &Path, records: &str, data: &str) -> (i32, String, String) {
             "--serial",
             "IMU-7",
             "--keep-all-terms",
+            "--trust-key",
+            "station.pub",
             "--stage-one",
             records,
             "--blob",
@@ -354,6 +370,8 @@ fn calflash_calibrates_in_two_stages_end_to_end() {
             "--serial",
             "IMU-7",
             "--keep-all-terms",
+            "--trust-key",
+            "station.pub",
             "--stage-one",
             &by_serial.join(","),
             "--json",
@@ -378,6 +396,34 @@ fn calflash_calibrates_in_two_stages_end_to_end() {
             "{a}"
         );
     }
+    // Red team four: the same six sensors calibrated into a second unit are named, each with
+    // the unit they are built into.
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "unit.csv",
+            "--sensor",
+            "imu",
+            "--serial",
+            "IMU-9",
+            "--keep-all-terms",
+            "--trust-key",
+            "station.pub",
+            "--stage-one",
+            &by_serial.join(","),
+            "--db",
+            "history.sqlite",
+        ],
+    );
+    assert_eq!(code, 0, "REVIEW: {out}{err}");
+    for k in 0..6 {
+        let line = format!(
+            "REVIEW {}: sensor S-5-{k} is already built into unit IMU-7",
+            one::OUTPUTS[k]
+        );
+        assert!(out.contains(&line), "want `{line}` in {out}");
+    }
     let mut unknown = by_serial.clone();
     unknown[5] = "history:NOPE".into();
     let (code, _, err) = calflash(
@@ -389,6 +435,8 @@ fn calflash_calibrates_in_two_stages_end_to_end() {
             "imu",
             "--serial",
             "IMU-7",
+            "--trust-key",
+            "station.pub",
             "--stage-one",
             &unknown.join(","),
             "--db",
@@ -538,6 +586,109 @@ fn stage_one_records_that_do_not_fit_are_named() {
         "unit.csv",
         "accepted.json (a_z): field `verdict`: the record says ACCEPT, while its blob was written from a fit judged REJECT",
     );
+    // Red team four: a record edited and re-sealed by hand (anyone can recompute a seal).
+    // +100 counts on the bias at -20 C only, which stage two at 25 C cannot see.
+    let station = signing_id(d);
+    let reseal = |name: &str, keep_signature: bool, f: &dyn Fn(&mut Record)| {
+        let rec: Record =
+            serde_json::from_str(&std::fs::read_to_string(d.join(list[2])).unwrap()).unwrap();
+        let signature = rec.signature.clone();
+        let mut edited = rec;
+        f(&mut edited);
+        let mut edited = edited.sealed();
+        if keep_signature {
+            edited.signature = signature;
+        }
+        std::fs::write(d.join(name), serde_json::to_string(&edited).unwrap()).unwrap();
+        let mut list = list.clone();
+        list[2] = name;
+        list.join(",")
+    };
+    let cold_bias = |r: &mut Record| {
+        assert_eq!(r.points[0].temp, Some(-20.0));
+        r.points[0].axes[0].coefficients[0] += 100.0;
+    };
+    fails(
+        &reseal("resealed.json", true, &cold_bias),
+        "unit.csv",
+        &format!(
+            "resealed.json (a_z): its signature by station key {station} does not match its content"
+        ),
+    );
+    // The signature removed: an unsigned record is not taken from a station that signs.
+    fails(
+        &reseal("bare.json", false, &cold_bias),
+        "unit.csv",
+        "bare.json (a_z): the record is not signed",
+    );
+    // Taken unsigned on purpose: the coefficients are still checked against the record's own
+    // blob, which the edit did not change.
+    let unsigned = |records: &str, want: &str| {
+        let (code, out, err) = calflash(
+            d,
+            &[
+                "calibrate",
+                "unit.csv",
+                "--sensor",
+                "imu",
+                "--serial",
+                "IMU-7",
+                "--keep-all-terms",
+                "--unsigned-stage-one",
+                "--stage-one",
+                records,
+                "--json",
+                "unsigned.json",
+                "--no-db",
+            ],
+        );
+        if want.is_empty() {
+            assert_eq!(code, 0, "{out}{err}");
+        } else {
+            assert_eq!(code, 1, "{out}{err}");
+            assert!(err.contains(want), "want `{want}` in: {err}");
+        }
+    };
+    unsigned(
+        &reseal("bare.json", false, &cold_bias),
+        "bare.json (a_z): field `points[0].axes[0].coefficients`: at input",
+    );
+    // Another accelerometer's blob pasted into the record, re-sealed.
+    let other: Record =
+        serde_json::from_str(&std::fs::read_to_string(d.join(list[1])).unwrap()).unwrap();
+    unsigned(
+        &reseal("pasted.json", false, &|r: &mut Record| {
+            r.blob.clone_from(&other.blob)
+        }),
+        "pasted.json (a_z): field `points[0].axes[0].coefficients`",
+    );
+    // A record signed by a station not trusted here.
+    let (code, out, err) = calflash(d, &["keygen", "stranger"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let stranger = calflash::signing::load_private(&d.join("stranger.key")).unwrap();
+    let rec: Record =
+        serde_json::from_str(&std::fs::read_to_string(d.join(list[2])).unwrap()).unwrap();
+    std::fs::write(
+        d.join("stranger.json"),
+        serde_json::to_string(&rec.signed(&stranger)).unwrap(),
+    )
+    .unwrap();
+    let mut strange = list.clone();
+    strange[2] = "stranger.json";
+    fails(
+        &strange.join(","),
+        "unit.csv",
+        "stranger.json (a_z): signed by station key",
+    );
+    // The records as written, taken unsigned on purpose: the unit's record says so.
+    unsigned(&list.join(","), "");
+    let note = std::fs::read_to_string(d.join("unsigned.json")).unwrap();
+    assert!(
+        note.contains(&format!(
+            "a_z (S-6-2) signed by station key {station}, which is not trusted here"
+        )),
+        "{note}"
+    );
     // Records in each other's place: named as possibly swapped, and refused against the
     // unit's as-built list.
     let mut crossed = list.clone();
@@ -551,6 +702,8 @@ fn stage_one_records_that_do_not_fit_are_named() {
             "--serial",
             "IMU-7",
             "--keep-all-terms",
+            "--trust-key",
+            "station.pub",
             "--stage-one",
             records,
             "--blob",

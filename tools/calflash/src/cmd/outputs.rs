@@ -149,6 +149,42 @@ impl Outputs {
         })
     }
 
+    /// `record`, sealed, and signed with the station's key when one is given (`--sign-key` or
+    /// `$CALFLASH_SIGN_KEY`): whatever its verdict, for the signature says which station wrote
+    /// the record, not that the unit passed.
+    ///
+    /// # Errors
+    /// An unreadable key or one others may read.
+    pub fn seal_record(
+        &self,
+        record: crate::sensor::record::Record,
+    ) -> Result<crate::sensor::record::Record, Failure> {
+        Ok(match crate::signing::key_path(self.sign_key.as_deref()) {
+            Some(path) => record.signed(&crate::signing::load_private(&path)?),
+            None => record.sealed(),
+        })
+    }
+
+    /// The station keys whose records this station takes as its own: the public keys `given`
+    /// (`--trust-key`) and the public half of its own signing key, when one is given.
+    ///
+    /// # Errors
+    /// A key file that cannot be read, or is the wrong half.
+    pub fn trusted(&self, given: &[PathBuf]) -> Result<Vec<spincal::signed::StationKey>, Failure> {
+        let mut keys = crate::signing::load_publics(given)?;
+        if let Some(path) = crate::signing::key_path(self.sign_key.as_deref()) {
+            let own = spincal::signed::StationKey {
+                public: crate::signing::load_private(&path)?
+                    .verifying_key()
+                    .to_bytes(),
+            };
+            if !keys.contains(&own) {
+                keys.push(own);
+            }
+        }
+        Ok(keys)
+    }
+
     /// Signs `blob` (the calibration of unit `serial`, judged `verdict`) when a key is given
     /// (`--sign-key` or `$CALFLASH_SIGN_KEY`, the same policy for both): ACCEPT is signed,
     /// REVIEW only with `--sign-review`, REJECT never. The counter is `--counter`, else one

@@ -171,8 +171,12 @@ pub struct FitRow {
     pub time: i64,
     /// The station that recorded it (empty before schema 3).
     pub station: String,
-    /// The coefficients' JSON.
+    /// The coefficients' JSON (as the history's `coefficients` column holds it: no seal
+    /// covers it).
     pub coefficients: String,
+    /// The fit's record (`calflash.calibration/1` or `calflash.selfcal/1` JSON), whose seal
+    /// does cover its coefficients.
+    pub record: Option<String>,
 }
 
 /// The station recording: `$CALFLASH_STATION`, else the machine's host name, else empty.

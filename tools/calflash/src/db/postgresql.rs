@@ -430,8 +430,8 @@ impl Backend for Postgres {
         self.later.check(sel)?;
         // The newest fit per serial: the greatest (time, id) of its fits in the range.
         let sql = format!(
-            "SELECT serial, time, station, coefficients FROM (
-               SELECT DISTINCT ON (serial) serial, time, id, station, coefficients
+            "SELECT serial, time, station, coefficients, record FROM (
+               SELECT DISTINCT ON (serial) serial, time, id, station, coefficients, record
                FROM records
                WHERE kind = 'fit' AND left(serial, length($1)) = $1
                  AND time BETWEEN $2 AND $3 AND ($4::text IS NULL OR station = $4)
@@ -455,6 +455,7 @@ impl Backend for Postgres {
                 time: r.get(1),
                 station: r.get(2),
                 coefficients: r.get(3),
+                record: r.get(4),
             })
             .collect())
     }

@@ -324,7 +324,7 @@ impl Backend for Sqlite {
         let lot = Later::column(self.later.lot, "lot");
         // The newest fit per serial: the greatest (time, id) of its fits in the range.
         let sql = format!(
-            "SELECT r.serial, r.time, {station_r}, r.coefficients FROM records r
+            "SELECT r.serial, r.time, {station_r}, r.coefficients, r.record FROM records r
              JOIN (SELECT serial, max(time * 1000000000 + id) AS k FROM records
                    WHERE kind = 'fit' AND substr(serial, 1, length(?1)) = ?1
                      AND time BETWEEN ?2 AND ?3 AND (?4 IS NULL OR {station} = ?4)
@@ -344,6 +344,7 @@ impl Backend for Sqlite {
                         time: r.get(1)?,
                         station: r.get(2)?,
                         coefficients: r.get(3)?,
+                        record: r.get(4)?,
                     })
                 },
             )

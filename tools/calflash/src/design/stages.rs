@@ -276,7 +276,8 @@ pub fn stage_two(
     csv: &Path,
     records: &[std::path::PathBuf],
 ) -> Result<(Calibrated, Check), StagesError> {
-    let sensors = one::read_all(records).map_err(|e| StagesError::StageOne(e.to_string()))?;
+    let sensors = one::read_all(records, &crate::sensor::record::Trust::own())
+        .map_err(|e| StagesError::StageOne(e.to_string()))?;
     let mut opts = Options::new(csv, "UNIT");
     opts.created = Some(0);
     opts.keep_all_terms = true;

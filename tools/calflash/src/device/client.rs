@@ -106,6 +106,20 @@ pub struct Client<L> {
     pending: Vec<u8>,
     /// Whether the unit checks signatures, as its last answer said.
     trust: Option<Trust>,
+    /// The id of the next request: each client starts at its own (from the clock and the
+    /// process), so that a late reply meant for an earlier connection's request is told apart.
+    next_id: u16,
+    /// Replies dropped as meant for another request.
+    stale: usize,
+}
+
+/// A request id no earlier client is likely to have used: the clock's nanoseconds and the
+/// process id.
+fn first_id() -> u16 {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    (nanos ^ std::process::id().rotate_left(16)) as u16
 }
 
 impl<L: Read + Write> Client<L> {
@@ -116,7 +130,15 @@ impl<L: Read + Write> Client<L> {
             timeout,
             pending: Vec::new(),
             trust: None,
+            next_id: first_id(),
+            stale: 0,
         }
+    }
+
+    /// How many replies were dropped as meant for another request (a late answer to an
+    /// earlier connection's).
+    pub const fn stale_replies(&self) -> usize {
+        self.stale
     }
 
     /// Whether the unit checks signatures, as its last answer said (`None` before one came).
@@ -131,10 +153,13 @@ impl<L: Read + Write> Client<L> {
     pub fn call(&mut self, req: &Request) -> Result<Response, DeviceError> {
         let what = name(req);
         let mut frame = [0u8; MAX_FRAME];
-        let n = protocol::encode(req, &mut frame).map_err(|why| DeviceError::Garbled {
-            what: what.clone(),
-            why,
-        })?;
+        let id = self.next_id;
+        self.next_id = self.next_id.wrapping_add(1);
+        let n =
+            protocol::encode_tagged(req, id, &mut frame).map_err(|why| DeviceError::Garbled {
+                what: what.clone(),
+                why,
+            })?;
         self.link
             .write_all(&frame[..n])
             .and_then(|()| self.link.flush())
@@ -148,8 +173,31 @@ impl<L: Read + Write> Client<L> {
             if let Some(end) = self.pending.iter().position(|b| *b == 0) {
                 let frame: Vec<u8> = self.pending.drain(..=end).collect();
                 let mut scratch = [0u8; MAX_FRAME];
-                let reply: Reply = protocol::decode(&frame[..frame.len() - 1], &mut scratch)
-                    .map_err(|why| DeviceError::Garbled { what, why })?;
+                let (reply, tag): (Reply, _) =
+                    protocol::decode_tagged(&frame[..frame.len() - 1], &mut scratch).map_err(
+                        |why| DeviceError::Garbled {
+                            what: what.clone(),
+                            why,
+                        },
+                    )?;
+                // Ours: the reply with this request's id, or an untagged refusal of a frame
+                // the unit could not read (so not its id either). Anything else was meant
+                // for another request, an earlier connection's: dropped.
+                let ours = match tag {
+                    Some(t) => t == id,
+                    None => matches!(
+                        reply.response,
+                        Response::Error(
+                            protocol::Status::BadFrame
+                                | protocol::Status::Malformed
+                                | protocol::Status::UnknownRequest
+                        )
+                    ),
+                };
+                if !ours {
+                    self.stale += 1;
+                    continue;
+                }
                 self.trust = Some(reply.trust);
                 return Ok(reply.response);
             }
@@ -309,5 +357,91 @@ impl<L: Read + Write> Client<L> {
                 got: format!("{other:?}"),
             }),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spincal::protocol::Status;
+
+    /// A link whose unit answers each request with what `answers` gives for its id: a list
+    /// of (id or none, response) frames, sent in that order.
+    struct Scripted<F: FnMut(u16) -> Vec<(Option<u16>, Response)>> {
+        answers: F,
+        out: std::collections::VecDeque<u8>,
+    }
+
+    impl<F: FnMut(u16) -> Vec<(Option<u16>, Response)>> Write for Scripted<F> {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            let mut scratch = [0u8; MAX_FRAME];
+            let end = buf.iter().position(|b| *b == 0).unwrap_or(buf.len());
+            let (_, id): (Request, _) = protocol::decode_tagged(&buf[..end], &mut scratch).unwrap();
+            for (tag, response) in (self.answers)(id.expect("the client tags its requests")) {
+                let reply = Reply {
+                    trust: Trust::Unprovisioned,
+                    response,
+                };
+                let mut frame = [0u8; MAX_FRAME];
+                let n = match tag {
+                    Some(t) => protocol::encode_tagged(&reply, t, &mut frame).unwrap(),
+                    None => protocol::encode(&reply, &mut frame).unwrap(),
+                };
+                self.out.extend(&frame[..n]);
+            }
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    impl<F: FnMut(u16) -> Vec<(Option<u16>, Response)>> Read for Scripted<F> {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            let n = buf.len().min(self.out.len());
+            for (b, o) in buf.iter_mut().zip(self.out.drain(..n)) {
+                *b = o;
+            }
+            if n == 0 {
+                return Err(std::io::ErrorKind::WouldBlock.into());
+            }
+            Ok(n)
+        }
+    }
+
+    /// Red team four: after a burst, a reply meant for an earlier connection's request reached
+    /// the next client, matched by order alone. Replies now carry their request's id: the late
+    /// ones are dropped and counted, the client's own is taken.
+    #[test]
+    fn a_late_reply_meant_for_another_request_is_dropped() {
+        let link = Scripted {
+            answers: |id: u16| {
+                vec![
+                    // An earlier connection's request, answered late.
+                    (Some(id.wrapping_sub(3)), Response::Error(Status::Locked)),
+                    // An earlier (untagged) client's.
+                    (None, Response::LockedOk),
+                    // This request's.
+                    (Some(id), Response::Ready),
+                ]
+            },
+            out: std::collections::VecDeque::new(),
+        };
+        let mut client = Client::new(link, Duration::from_secs(2));
+        assert_eq!(client.call(&Request::Lock).unwrap(), Response::Ready);
+        assert_eq!(client.stale_replies(), 2);
+        assert_eq!(client.call(&Request::Commit).unwrap(), Response::Ready);
+        assert_eq!(client.stale_replies(), 4);
+        // An untagged refusal of a frame the unit could not read is this request's answer.
+        let link = Scripted {
+            answers: |_| vec![(None, Response::Error(Status::BadFrame))],
+            out: std::collections::VecDeque::new(),
+        };
+        let mut client = Client::new(link, Duration::from_secs(2));
+        assert_eq!(
+            client.call(&Request::Identify).unwrap(),
+            Response::Error(Status::BadFrame)
+        );
+        assert_eq!(client.stale_replies(), 0);
     }
 }

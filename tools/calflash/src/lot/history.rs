@@ -79,7 +79,8 @@ fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, HistoryError
     let rows = Db::open_existing(path).and_then(|mut d| d.latest_fits(sel))?;
     rows.into_iter()
         .map(|row| {
-            super::coefficients(&row.coefficients)
+            sealed_coefficients(&row)
+                .and_then(|json| super::coefficients(&json))
                 .map(|coefficients| Unit {
                     serial: row.serial.clone(),
                     time: row.time,
@@ -93,6 +94,27 @@ fn units(path: &Location, sel: &Selection<'_>) -> Result<Vec<Unit>, HistoryError
                 })
         })
         .collect()
+}
+
+/// A unit's coefficients as its fit's sealed record holds them (red team four: the history's
+/// `coefficients` column is covered by no seal, and a row copied into it hid a unit far from
+/// its lot). A selfcal record, which has no seal, gives the column's.
+fn sealed_coefficients(row: &crate::db::FitRow) -> Result<String, super::Error> {
+    use crate::sensor::record::{Record, SCHEMA};
+    let Some(text) = &row.record else {
+        return Ok(row.coefficients.clone());
+    };
+    let schema = serde_json::from_str::<serde_json::Value>(text)
+        .ok()
+        .and_then(|v| v["schema"].as_str().map(str::to_string));
+    if schema.as_deref() != Some(SCHEMA) {
+        return Ok(row.coefficients.clone());
+    }
+    let rec: Record = serde_json::from_str(text)
+        .map_err(|e| super::Error::Unsealed(format!("its record does not read ({e})")))?;
+    rec.check_seal()
+        .map_err(|e| super::Error::Unsealed(e.to_string()))?;
+    Ok(serde_json::Value::from(crate::db::fit_coefficients(&rec)).to_string())
 }
 
 /// The units `sel` takes from the history at `path`, judged at `alpha`.

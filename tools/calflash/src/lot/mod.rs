@@ -22,6 +22,9 @@ pub enum Error {
     /// JSON that holds no coefficients calflash wrote.
     #[error("neither a calibration's points nor a selfcal record")]
     NotCoefficients,
+    /// A fit whose record fails its seal: its coefficients are not taken.
+    #[error("its record is not as calflash wrote it ({0}); the lot is not judged on it")]
+    Unsealed(String),
     /// Fewer than two units.
     #[error("a lot of {0} unit(s): at least 2 are needed to compare")]
     TooFewUnits(usize),

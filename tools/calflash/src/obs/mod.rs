@@ -76,6 +76,17 @@ pub enum ObsError {
         /// File.
         path: PathBuf,
     },
+    /// More rows than any calibration or recording is read with: an endless stream (a FIFO)
+    /// or a mistaken file is refused, not read until the memory runs out.
+    #[error(
+        "{path}: more than {max} rows: read no further (1,000 s of a 10 kHz recording is 10^7); split the file, or decimate it"
+    )]
+    TooManyRows {
+        /// File.
+        path: PathBuf,
+        /// The bound.
+        max: usize,
+    },
     /// Two columns with one name.
     #[error("{path}:{line}: the column name `{name}` appears twice in the header")]
     DuplicateColumn {
@@ -332,6 +343,10 @@ pub fn header(path: &Path, format: Format) -> Result<Vec<String>, ObsError> {
     }
 }
 
+/// The most rows an observation file or a recording is read with (the flight's logs have
+/// their own bound, `--max-samples`).
+pub const MAX_ROWS: usize = 10_000_000;
+
 /// Reads the `wanted` columns of the file at `path`.
 ///
 /// # Errors
@@ -395,6 +410,12 @@ fn read_text(
         line,
         |block, before| layout.parse(block, before),
         |part| {
+            if table.lines.len() + part.lines.len() > MAX_ROWS {
+                return Err(ObsError::TooManyRows {
+                    path: path.into(),
+                    max: MAX_ROWS,
+                });
+            }
             for (column, values) in table.columns.iter_mut().zip(part.columns) {
                 column.extend(values);
             }

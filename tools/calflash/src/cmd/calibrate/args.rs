@@ -190,6 +190,23 @@ pub struct CalibrateArgs {
     /// that sensor's newest calibration from the unit history (`--db`, or the default).
     #[arg(long, value_name = "AX.json,...,GZ.json", value_delimiter = ',')]
     pub stage_one: Vec<PathBuf>,
+    /// With --stage-one: a station public key (`calflash keygen`'s PREFIX.pub) whose signed
+    /// stage-one records are taken; repeat or separate with commas. The public half of this
+    /// station's own --sign-key (or $CALFLASH_SIGN_KEY) is trusted without it. A record
+    /// signed by another key, unsigned, or changed after it was signed is refused, naming the
+    /// key.
+    #[arg(
+        long,
+        value_name = "PUB",
+        value_delimiter = ',',
+        requires = "stage_one"
+    )]
+    pub trust_key: Vec<PathBuf>,
+    /// With --stage-one: take stage-one records that no station signed. Their seal can be
+    /// recomputed by anyone who edits them, so the stage-two record notes it; for a
+    /// laboratory without station keys.
+    #[arg(long, requires = "stage_one")]
+    pub unsigned_stage_one: bool,
     /// With --stage-one: the unit's as-built list, the serial of the sensor mounted at each
     /// output (`a_x=S-0,a_y=S-1,...,g_z=S-5`, as the assembly's traveller records it). Each
     /// stage-one record's sensor must be the one mounted at its output: records given in the

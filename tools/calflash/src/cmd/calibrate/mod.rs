@@ -162,9 +162,18 @@ pub fn calibrate_one(
     }
     let c = match args.sensor {
         SensorKind::Imu if two_stage => {
-            let sensors = stage_one(&args.stage_one, out)?;
+            let trust = crate::sensor::record::Trust {
+                keys: out.trusted(&args.trust_key)?,
+                unsigned: args.unsigned_stage_one,
+            };
+            let sensors = stage_one(&args.stage_one, out, &trust)?;
             as_built(&args.as_built, &sensors)?;
-            triad::stage_two::calibrate(&opts, &sensors).map(|(c, _)| c)
+            let elsewhere = built_elsewhere(out, serial, &sensors)?;
+            triad::stage_two::calibrate(&opts, &sensors).map(|(mut c, _)| {
+                c.notes.push(signers(&sensors));
+                c.findings.extend(elsewhere);
+                c
+            })
         }
         SensorKind::SingleAccel => single::calibrate(&opts, Quantity::Acceleration),
         SensorKind::SingleGyro => single::calibrate(&opts, Quantity::AngularRate),
@@ -222,7 +231,7 @@ pub fn calibrate_one(
     let mut record = Record::new(&c, &data_name);
     record.lot.clone_from(&out.lot);
     record.blob = blob.as_deref().map(hex).unwrap_or_default();
-    let record = record.sealed();
+    let record = out.seal_record(record)?;
     out.write(blob.as_deref(), &record, || {
         report::html::render(&c, &data_name)
     })?;
@@ -299,6 +308,60 @@ fn as_built(list: &[String], sensors: &[sensor::stages::Sensor1]) -> Result<(), 
     Ok(())
 }
 
+/// A REVIEW for each of `sensors` that the unit history has in another unit: one whose newest
+/// calibration is a stage two that took that sensor's record (red team four: the same six
+/// records built into IMU-7 and IMU-9 passed twice). None with `--no-db` or a history not yet
+/// made.
+fn built_elsewhere(
+    out: &Outputs,
+    unit: &str,
+    sensors: &[sensor::stages::Sensor1],
+) -> Result<Vec<sensor::Finding>, Failure> {
+    if out.no_db {
+        return Ok(Vec::new());
+    }
+    let at = crate::db::Location::or_default(out.db.as_ref())?;
+    if at.file().is_some_and(|f| !f.exists()) {
+        return Ok(Vec::new());
+    }
+    let rows = crate::db::Db::open_existing(&at)?.latest_fits(&crate::db::Selection::all())?;
+    let mut found = Vec::new();
+    for row in rows.iter().filter(|r| r.serial != unit) {
+        let Some(v) = row
+            .record
+            .as_deref()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(t).ok())
+        else {
+            continue;
+        };
+        let Some(built) = v["stages"]["sensors"].as_array() else {
+            continue;
+        };
+        for (s, output) in sensors.iter().zip(sensor::stages::one::OUTPUTS) {
+            if built.iter().any(|b| b["serial"] == s.serial.as_str()) {
+                found.push(sensor::Finding {
+                    verdict: Verdict::Review,
+                    text: format!(
+                        "{output}: sensor {} is already built into unit {} (its newest calibration in {at}): a sensor is in one unit at a time; check the as-built list, or calibrate unit {} again if the sensor was moved",
+                        s.serial, row.serial, row.serial
+                    ),
+                });
+            }
+        }
+    }
+    Ok(found)
+}
+
+/// Who signed each stage-one record, for the stage-two record's notes.
+fn signers(sensors: &[sensor::stages::Sensor1]) -> String {
+    let each: Vec<String> = sensors
+        .iter()
+        .zip(sensor::stages::one::OUTPUTS)
+        .map(|(s, o)| format!("{o} ({}) {}", s.serial, s.signed_by))
+        .collect();
+    format!("stage-one records: {}", each.join("; "))
+}
+
 /// `history:SERIAL` in `--stage-one`: the serial.
 fn from_history(p: &std::path::Path) -> Option<&str> {
     p.to_str().and_then(|s| s.strip_prefix("history:"))
@@ -306,12 +369,16 @@ fn from_history(p: &std::path::Path) -> Option<&str> {
 
 /// The six stage-one records `--stage-one` names: files, or `history:SERIAL` for the sensor's
 /// newest calibration in the unit history `out` names (or the default one).
-fn stage_one(items: &[PathBuf], out: &Outputs) -> Result<Vec<sensor::stages::Sensor1>, Failure> {
+fn stage_one(
+    items: &[PathBuf],
+    out: &Outputs,
+    trust: &crate::sensor::record::Trust,
+) -> Result<Vec<sensor::stages::Sensor1>, Failure> {
     use sensor::stages::{StageOneError, one};
     let history = std::cell::RefCell::new(None::<(crate::db::Location, crate::db::Db)>);
     let read = |p: &std::path::Path, k: usize| -> Result<one::Sensor1, StageOneError> {
         let Some(serial) = from_history(p) else {
-            return one::read(p, k);
+            return one::read(p, k, trust);
         };
         let fail = |why: String| StageOneError::Unreadable {
             path: p.to_path_buf(),
@@ -342,6 +409,7 @@ fn stage_one(items: &[PathBuf], out: &Outputs) -> Result<Vec<sensor::stages::Sen
             &text,
             &std::path::PathBuf::from(format!("{at} record {} ({serial})", newest.id)),
             k,
+            trust,
         )
     };
     Ok(one::read_all_with(items, read)?)

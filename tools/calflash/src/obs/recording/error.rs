@@ -5,6 +5,16 @@ use std::path::PathBuf;
 /// A failure to read a recording.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
+    /// More rows than a recording is read with ([`crate::obs::MAX_ROWS`]).
+    #[error(
+        "{path}: more than {max} rows: read no further (1,000 s of a 10 kHz recording is 10^7); split the file, or decimate it"
+    )]
+    TooManyRows {
+        /// File.
+        path: PathBuf,
+        /// The bound.
+        max: usize,
+    },
     /// The file cannot be read.
     #[error("{path}: {source}")]
     Io {

@@ -367,6 +367,12 @@ pub fn read_chosen(
                     prev,
                 });
             }
+            if rows.line.len() + part.lines.len() > crate::obs::MAX_ROWS {
+                return Err(RecordingError::TooManyRows {
+                    path: path.to_path_buf(),
+                    max: crate::obs::MAX_ROWS,
+                });
+            }
             times.extend(part.times);
             for (triad, values) in rows.triads.iter_mut().zip(part.triads) {
                 triad.extend(values);

@@ -10,7 +10,7 @@ use spincal::model::{Quantity, Sensor, Span};
 use crate::columns as col;
 use crate::sensor::Verdict;
 use crate::sensor::invert::Own;
-use crate::sensor::record::{self, Record};
+use crate::sensor::record::{self, Record, Trust};
 use crate::sensor::single::KINK;
 
 /// The own-axis terms stage one carries into the unit, in the order of [`Point::c`]: bias,
@@ -56,6 +56,8 @@ pub struct Sensor1 {
     /// Terms the record has that stage two does not carry (cross-axis terms: the unit's
     /// misalignment takes their place).
     pub left: Vec<String>,
+    /// Who signed the record.
+    pub signed_by: record::Signer,
 }
 
 /// A stage-one record stage two cannot take, naming the file and what each side says.
@@ -122,8 +124,8 @@ pub enum StageOneError {
         path: PathBuf,
         /// The output it was given for.
         output: &'static str,
-        /// What does not match.
-        why: crate::sensor::record::Unsealed,
+        /// What does not match: its seal or its signature.
+        why: crate::sensor::record::TrustError,
     },
     /// A record with a supply-voltage axis.
     #[error("{} ({output}): the record has a supply-voltage table; stage two carries temperature points only", path.display())]
@@ -164,22 +166,27 @@ fn quantity_words(q: Quantity) -> (&'static str, &'static str) {
     (what, crate::sensor::blob::unit(q))
 }
 
-/// Reads the record of output `k` ([`OUTPUTS`]).
+/// Reads the record of output `k` ([`OUTPUTS`]), taken when `trust` takes its signature.
 ///
 /// # Errors
 /// [`StageOneError`], naming the file.
-pub fn read(path: &Path, k: usize) -> Result<Sensor1, StageOneError> {
+pub fn read(path: &Path, k: usize, trust: &Trust) -> Result<Sensor1, StageOneError> {
     let text = crate::files::read_json_text(path, "a stage-one record")
         .map_err(|e| unreadable(path, e))?;
-    from_text(&text, path, k)
+    from_text(&text, path, k, trust)
 }
 
 /// The record `text` of output `k`, read from `path` (a file, or the unit history's words for
-/// where it is).
+/// where it is), taken when its seal holds and `trust` takes its signature.
 ///
 /// # Errors
 /// [`StageOneError`], naming `path`.
-pub fn from_text(text: &str, path: &Path, k: usize) -> Result<Sensor1, StageOneError> {
+pub fn from_text(
+    text: &str,
+    path: &Path,
+    k: usize,
+    trust: &Trust,
+) -> Result<Sensor1, StageOneError> {
     let output = OUTPUTS[k];
     let rec: Record = serde_json::from_str(text)
         .map_err(|e| unreadable(path, format!("not a calibration record ({e})")))?;
@@ -203,11 +210,13 @@ pub fn from_text(text: &str, path: &Path, k: usize) -> Result<Sensor1, StageOneE
             serial: rec.serial,
         });
     }
-    rec.check_seal().map_err(|why| StageOneError::Edited {
-        path: path.to_path_buf(),
-        output,
-        why,
-    })?;
+    let signed_by = rec
+        .check_trusted(trust)
+        .map_err(|why| StageOneError::Edited {
+            path: path.to_path_buf(),
+            output,
+            why,
+        })?;
     let cal = rec
         .calibration()
         .ok_or_else(|| unreadable(path, "its blob does not decode"))?;
@@ -305,16 +314,18 @@ pub fn from_text(text: &str, path: &Path, k: usize) -> Result<Sensor1, StageOneE
         temps: env.temperature_span,
         points,
         left,
+        signed_by,
     })
 }
 
-/// Reads the six records `paths`, in the order of [`OUTPUTS`].
+/// Reads the six records `paths`, in the order of [`OUTPUTS`], each taken when `trust` takes
+/// its signature.
 ///
 /// # Errors
 /// [`StageOneError`]: a count other than six, a record that does not fit its output, the same
 /// sensor twice.
-pub fn read_all(paths: &[PathBuf]) -> Result<Vec<Sensor1>, StageOneError> {
-    read_all_with(paths, read)
+pub fn read_all(paths: &[PathBuf], trust: &Trust) -> Result<Vec<Sensor1>, StageOneError> {
+    read_all_with(paths, |p, k| read(p, k, trust))
 }
 
 /// [`read_all`] with each record read by `read_one` (from a file or from the unit history).
