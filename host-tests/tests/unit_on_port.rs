@@ -41,6 +41,12 @@ fn a_unit_on_its_own_port_takes_one_client_after_another_and_keeps_its_flash() {
     };
     let report = device::flash(&mut client, &id, &blob, &opts, |_, _| {}).unwrap();
     assert!(report.read_back_identical);
+    // What it holds, read without writing (`calflash read --port`): the blob as flashed.
+    let (holding, back) = calflash::cmd::read::holding(&mut client).unwrap();
+    assert_eq!(back, blob);
+    assert_eq!(holding.calibration.as_deref(), Some("IMU-FULL-0042"));
+    assert_eq!(holding.blob_len as usize, blob.len());
+    assert_eq!(client.stale_replies(), 0);
     drop(client);
 
     // A client that leaves half a frame (two stray bytes: a cable pulled, a terminal probe):

@@ -42,6 +42,8 @@ enum Command {
     Threshold(cmd::threshold::ThresholdArgs),
     /// Write a calibration into a unit and verify it there.
     Flash(cmd::flash::FlashArgs),
+    /// What a unit holds (serial, blob hash, counter, slots), read without writing to it.
+    Read(cmd::read::ReadArgs),
     /// The calibration region as Intel HEX or binary for any flasher, or over SWD.
     Image(cmd::image::ImageArgs),
     /// A unit's fits and flashes.
@@ -111,6 +113,7 @@ fn main() -> ExitCode {
         },
         Command::Threshold(args) => cmd::threshold::run(args),
         Command::Flash(args) => cmd::flash::run(args),
+        Command::Read(args) => cmd::read::run(args),
         Command::Image(args) => cmd::image::run(args),
         Command::History(args) => cmd::history::run(args),
         Command::Db(args) => cmd::history_db::run(args),
