@@ -38,6 +38,8 @@ enum Command {
     Apply(cmd::apply::ApplyArgs),
     /// Compare two calibrations of one unit.
     Compare(cmd::compare::CompareArgs),
+    /// Whether an HTML report belongs to a blob and data files (its provenance and seal).
+    VerifyReport(cmd::verify_report::VerifyReportArgs),
     /// Threshold, dead band and resolution from a fine-step run.
     Threshold(cmd::threshold::ThresholdArgs),
     /// Write a calibration into a unit and verify it there.
@@ -109,6 +111,11 @@ fn main() -> ExitCode {
         Command::Compare(args) => match cmd::compare::run(args) {
             // A unit that changed beyond its uncertainty: the rejected unit's exit code.
             Ok(true) => return ExitCode::from(3),
+            other => other.map(|_| ()),
+        },
+        Command::VerifyReport(args) => match cmd::verify_report::run(args) {
+            // A page that is not the files': the rejected unit's exit code.
+            Ok(false) => return ExitCode::from(3),
             other => other.map(|_| ()),
         },
         Command::Threshold(args) => cmd::threshold::run(args),

@@ -525,6 +525,15 @@ fn what_a_reader_finds(d: &Path) {
     let page = |f: &str| std::fs::read_to_string(d.join(f)).unwrap();
     for f in REPORTS {
         let html = page(f);
+        // Issue 68: every page says where it comes from (when, which calflash and commit,
+        // station, operator, command, each input's and the blob's SHA-256), sealed.
+        let made = calflash::report::provenance::read(&html)
+            .unwrap_or_else(|e| panic!("{f}: no provenance a reviewer can check: {e}"));
+        assert!(
+            html.contains("<section id=\"provenance\">") && !made.command.is_empty(),
+            "{f}: the provenance block is not on the page"
+        );
+        assert!(!made.station.is_empty() && !made.git_commit.is_empty(), "{f}");
         let verdict = html.find("<p class=\"verdict ");
         let first_section = html.find("<h2").unwrap_or(html.len());
         assert!(

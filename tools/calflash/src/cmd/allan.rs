@@ -258,7 +258,17 @@ fn write_outputs(
                 terms: &a.terms,
             })
             .collect();
-        let page = report::allan::html(&rec.source, read_line, &sensors, kalibr.as_deref())?;
+        let page = crate::report::provenance::Provenance::now()
+            .inputs(&[
+                ("recording", Some(args.acc.as_path())),
+                ("gyro recording", args.gyro.as_deref()),
+            ])
+            .stamp(&report::allan::html(
+                &rec.source,
+                read_line,
+                &sensors,
+                kalibr.as_deref(),
+            )?);
         crate::files::write_atomically(p, |w| w.write_all(page.as_bytes()))?;
     }
     Ok(())

@@ -274,7 +274,19 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
             args.input.display(),
             data.identity.serial
         );
-        let html = crate::report::accuracy::html(&title, acc, (&x, label), &units)?;
+        let html = crate::report::provenance::Provenance::now()
+            .serial(data.identity.serial.as_str())
+            .inputs(&[
+                ("input", Some(args.input.as_path())),
+                ("gyro", args.gyro.as_deref()),
+            ])
+            .blob_file(&args.blob)
+            .stamp(&crate::report::accuracy::html(
+                &title,
+                acc,
+                (&x, label),
+                &units,
+            )?);
         staged.write(path, |w| w.write_all(html.as_bytes()))?;
     }
     staged.commit()?;

@@ -349,7 +349,18 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
         staged.write(path, |w| w.write_all(csv.as_bytes()))?;
     }
     if let Some(path) = &args.report {
-        let page = crate::report::flight::html(&serial, &checked, &counts)?;
+        let mut provenance = crate::report::provenance::Provenance::now()
+            .serial(&serial)
+            .inputs(&[
+                ("IMU log", args.recording.as_deref()),
+                ("--record", args.record.as_deref()),
+                ("GNSS", args.gnss.as_deref()),
+                ("barometer", args.baro.as_deref()),
+            ]);
+        if let Some(b) = &args.blob {
+            provenance = provenance.blob_file(b);
+        }
+        let page = provenance.stamp(&crate::report::flight::html(&serial, &checked, &counts)?);
         staged.write(path, |w| w.write_all(page.as_bytes()))?;
     }
     staged.commit()?;

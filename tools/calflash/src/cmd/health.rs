@@ -113,7 +113,18 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
         println!("{said}");
     }
     if let Some(p) = &args.report {
-        let page = crate::report::health::html(&serial, &source, &health, said.as_deref())?;
+        let mut provenance = crate::report::provenance::Provenance::now()
+            .serial(&serial)
+            .inputs(&[("recording", args.recording.as_deref())]);
+        if let Some(b) = &args.blob {
+            provenance = provenance.blob_file(b);
+        }
+        let page = provenance.stamp(&crate::report::health::html(
+            &serial,
+            &source,
+            &health,
+            said.as_deref(),
+        )?);
         crate::files::write_atomically(p, |w| std::io::Write::write_all(w, page.as_bytes()))?;
         println!("  report: {}", p.display());
     }

@@ -24,6 +24,7 @@ pub mod simulate;
 pub mod threshold;
 pub mod units;
 pub mod values;
+pub mod verify_report;
 
 /// Why a command failed: an error of the library below it (its source kept), or the command's
 /// own message. `calflash` prints it after `calflash: `; each converts into it with `?`.

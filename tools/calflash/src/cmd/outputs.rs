@@ -255,7 +255,8 @@ impl Outputs {
         })
     }
 
-    /// Writes the files asked for, all or none: each is staged beside its destination and
+    /// Writes the files asked for, all or none (the report stamped with `provenance`, and the
+    /// blob's hash): each is staged beside its destination and
     /// they are renamed into place together, so a report that cannot be drawn or a directory
     /// that does not exist leaves no file. `blob` is `None` when none may be written (a
     /// REJECT without `--force-blob`): a file at the blob's path is then removed in the same
@@ -267,9 +268,19 @@ impl Outputs {
         &self,
         blob: Option<&[u8]>,
         record: &impl serde::Serialize,
+        provenance: crate::report::provenance::Provenance,
         html: impl FnOnce() -> Result<String, crate::report::Error>,
     ) -> Result<(), Failure> {
-        let html = self.report.as_ref().map(|_| html()).transpose()?;
+        // The page names the blob written beside it, by its hash.
+        let provenance = match (&self.blob, blob) {
+            (Some(p), Some(b)) => provenance.blob(&p.display().to_string(), b),
+            _ => provenance,
+        };
+        let html = self
+            .report
+            .as_ref()
+            .map(|_| html().map(|page| provenance.stamp(&page)))
+            .transpose()?;
         let mut staged = Staged::new();
         match (&self.blob, blob) {
             (Some(p), Some(blob)) => staged.write(p, |w| w.write_all(blob))?,

@@ -164,7 +164,13 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, Failure> {
         .map(|b| args.out.sign(b, name, acceptance::verdict(&c, check).0))
         .transpose()?;
     let blob = signed.as_ref().map(|s| s.bytes.as_slice());
-    args.out.write(blob, &record, || {
+    let mut provenance = crate::report::provenance::Provenance::now()
+        .serial(name)
+        .input("recording", &args.acc);
+    if let Some(g) = &args.gyro {
+        provenance = provenance.input("gyro recording", g);
+    }
+    args.out.write(blob, &record, provenance, || {
         report::selfcal::html(&c, &rec, check, name)
     })?;
     print!("{}", report::selfcal::summary(&c, &rec, check, name));

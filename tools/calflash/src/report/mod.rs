@@ -14,6 +14,7 @@ pub mod lot;
 pub mod mission;
 pub(crate) mod page;
 pub mod plot;
+pub mod provenance;
 pub mod selfcal;
 pub mod spin;
 pub mod terminal;

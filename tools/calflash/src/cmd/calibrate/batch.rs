@@ -325,7 +325,13 @@ pub fn run_units(
         let index = out_dir.join("index.html");
         crate::files::write_atomically(&index, |w| {
             w.write_all(
-                index_html(&outcomes, args.out.lot.as_deref(), data_dir_name(&outcomes)).as_bytes(),
+                crate::report::provenance::Provenance::now()
+                    .stamp(&index_html(
+                        &outcomes,
+                        args.out.lot.as_deref(),
+                        data_dir_name(&outcomes),
+                    ))
+                    .as_bytes(),
             )
         })?;
         println!("  reports: {}", index.display());

@@ -232,7 +232,24 @@ pub fn calibrate_one(
     record.lot.clone_from(&out.lot);
     record.blob = blob.as_deref().map(hex).unwrap_or_default();
     let record = out.seal_record(record)?;
-    out.write(blob.as_deref(), &record, || {
+    let mut provenance = crate::report::provenance::Provenance::now()
+        .serial(serial)
+        .input("data", data);
+    for (role, p) in [
+        ("--still-ramp", args.still_ramp.as_deref()),
+        ("--mission", args.mission.as_deref()),
+    ] {
+        if let Some(p) = p {
+            provenance = provenance.input(role, p);
+        }
+    }
+    for p in &args.noise_terms {
+        provenance = provenance.input("--noise-terms", p);
+    }
+    for p in args.stage_one.iter().filter(|p| from_history(p).is_none()) {
+        provenance = provenance.input("--stage-one", p);
+    }
+    out.write(blob.as_deref(), &record, provenance, || {
         report::html::render(&c, &data_name)
     })?;
     said.push_str(&summary(&c, data, out, blob.is_some(), args.quiet));

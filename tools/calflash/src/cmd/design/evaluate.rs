@@ -172,7 +172,12 @@ fn write_evaluation(
         })?;
     }
     if let Some(path) = &a.report {
-        let html = show::evaluate_html(&a.model.model, blocks, plans, curve)?;
+        let html = crate::report::provenance::Provenance::now().stamp(&show::evaluate_html(
+            &a.model.model,
+            blocks,
+            plans,
+            curve,
+        )?);
         staged.write(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
     }
     Ok(staged.commit()?)

@@ -1,0 +1,24 @@
+//! The git commit calflash is built from, for the provenance every report carries
+//! (`CALFLASH_GIT_COMMIT`; `unknown` outside a git checkout or without git).
+
+use std::path::Path;
+use std::process::Command;
+
+fn main() {
+    let commit = Command::new("git")
+        .args(["rev-parse", "--short=12", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=CALFLASH_GIT_COMMIT={commit}");
+    for p in ["../../.git/HEAD", "../../.git/refs/heads", "../../.git/packed-refs"] {
+        if Path::new(p).exists() {
+            println!("cargo:rerun-if-changed={p}");
+        }
+    }
+    println!("cargo:rerun-if-changed=build.rs");
+}

@@ -1,0 +1,76 @@
+//! Issue 68: a report a reviewer can tie to the bytes it describes. Every page carries where it
+//! comes from (time, calflash's version and commit, station, operator, command line, the
+//! SHA-256 of each input and of the blob) and a seal; `calflash verify-report` accepts a page
+//! with its own bytes and refuses it, naming the file, with one byte changed in the blob, the
+//! data or the page.
+
+mod common;
+
+use common::calflash;
+
+#[test]
+fn a_report_belongs_to_its_own_bytes_and_to_no_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let example =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/single_accel.csv");
+    std::fs::copy(&example, d.join("data.csv")).unwrap();
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "calibrate",
+            "data.csv",
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "ACC-9",
+            "--blob",
+            "u.blob",
+            "--report",
+            "u.html",
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let html = std::fs::read_to_string(d.join("u.html")).unwrap();
+    let p = calflash::report::provenance::read(&html).unwrap();
+    assert_eq!(p.serial.as_deref(), Some("ACC-9"));
+    assert!(p.command.contains("calibrate data.csv"), "{}", p.command);
+    assert_eq!(p.inputs[0].path, "data.csv");
+    assert_eq!(p.blob.as_ref().unwrap().path, "u.blob");
+    assert!(html.contains("Where this page comes from"));
+    let verify = |page: &str, blob: &str, data: &str| {
+        calflash(
+            d,
+            &["verify-report", page, "--blob", blob, "--data", data],
+        )
+    };
+    let (code, out, err) = verify("u.html", "u.blob", "data.csv");
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("u.html: BELONGS") && out.contains("for unit ACC-9"), "{out}");
+    // One byte changed in each of the three.
+    let flipped = |from: &str, to: &str, at: usize| {
+        let mut b = std::fs::read(d.join(from)).unwrap();
+        b[at] ^= 0x01;
+        std::fs::write(d.join(to), b).unwrap();
+    };
+    flipped("u.blob", "v.blob", 40);
+    let (code, out, _) = verify("u.html", "v.blob", "data.csv");
+    assert_eq!(code, 3, "{out}");
+    assert!(out.contains("DOES NOT BELONG: v.blob: SHA-256"), "{out}");
+    assert!(out.contains("written as u.blob"), "{out}");
+    flipped("data.csv", "other.csv", 100);
+    let (code, out, _) = verify("u.html", "u.blob", "other.csv");
+    assert_eq!(code, 3, "{out}");
+    assert!(out.contains("DOES NOT BELONG: other.csv: SHA-256"), "{out}");
+    let at = html.find("<h1>").unwrap() + 5;
+    flipped("u.html", "w.html", at);
+    let (code, out, _) = verify("w.html", "u.blob", "data.csv");
+    assert_eq!(code, 3, "{out}");
+    assert!(out.contains("the page was changed after calflash made it"), "{out}");
+    // A page without a block is named as such.
+    std::fs::write(d.join("bare.html"), "<html><body></body></html>").unwrap();
+    let (code, out, _) = verify("bare.html", "u.blob", "data.csv");
+    assert_eq!(code, 3);
+    assert!(out.contains("has no provenance block"), "{out}");
+}
