@@ -40,6 +40,8 @@ enum Command {
     Compare(cmd::compare::CompareArgs),
     /// Whether an HTML report belongs to a blob and data files (its provenance and seal).
     VerifyReport(cmd::verify_report::VerifyReportArgs),
+    /// HTML reports as A4 PDFs to sign and file (headless Chromium).
+    Pdf(cmd::pdf::PdfArgs),
     /// Threshold, dead band and resolution from a fine-step run.
     Threshold(cmd::threshold::ThresholdArgs),
     /// Write a calibration into a unit and verify it there.
@@ -118,6 +120,7 @@ fn main() -> ExitCode {
             Ok(false) => return ExitCode::from(3),
             other => other.map(|_| ()),
         },
+        Command::Pdf(args) => cmd::pdf::run(args),
         Command::Threshold(args) => cmd::threshold::run(args),
         Command::Flash(args) => cmd::flash::run(args),
         Command::Read(args) => cmd::read::run(args),

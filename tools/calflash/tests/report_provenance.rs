@@ -12,8 +12,8 @@ use common::calflash;
 fn a_report_belongs_to_its_own_bytes_and_to_no_others() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let example =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/single_accel.csv");
+    let example = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/data/single_accel.csv");
     std::fs::copy(&example, d.join("data.csv")).unwrap();
     let (code, out, err) = calflash(
         d,
@@ -40,14 +40,14 @@ fn a_report_belongs_to_its_own_bytes_and_to_no_others() {
     assert_eq!(p.blob.as_ref().unwrap().path, "u.blob");
     assert!(html.contains("Where this page comes from"));
     let verify = |page: &str, blob: &str, data: &str| {
-        calflash(
-            d,
-            &["verify-report", page, "--blob", blob, "--data", data],
-        )
+        calflash(d, &["verify-report", page, "--blob", blob, "--data", data])
     };
     let (code, out, err) = verify("u.html", "u.blob", "data.csv");
     assert_eq!(code, 0, "{out}{err}");
-    assert!(out.contains("u.html: BELONGS") && out.contains("for unit ACC-9"), "{out}");
+    assert!(
+        out.contains("u.html: BELONGS") && out.contains("for unit ACC-9"),
+        "{out}"
+    );
     // One byte changed in each of the three.
     let flipped = |from: &str, to: &str, at: usize| {
         let mut b = std::fs::read(d.join(from)).unwrap();
@@ -67,7 +67,10 @@ fn a_report_belongs_to_its_own_bytes_and_to_no_others() {
     flipped("u.html", "w.html", at);
     let (code, out, _) = verify("w.html", "u.blob", "data.csv");
     assert_eq!(code, 3, "{out}");
-    assert!(out.contains("the page was changed after calflash made it"), "{out}");
+    assert!(
+        out.contains("the page was changed after calflash made it"),
+        "{out}"
+    );
     // A page without a block is named as such.
     std::fs::write(d.join("bare.html"), "<html><body></body></html>").unwrap();
     let (code, out, _) = verify("bare.html", "u.blob", "data.csv");

@@ -505,6 +505,36 @@ fn every_report_fits_a_1280_px_window() {
     let Some(browser) = chromium("every_report_fits_a_1280_px_window") else {
         return;
     };
+    // Issue 68: each report prints as an A4 PDF a person signs and files.
+    let pages: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+    let mut args = vec!["pdf"];
+    args.extend(pages.iter().map(String::as_str));
+    let (code, out, err) = calflash(dir.path(), &args);
+    assert_eq!(code, 0, "{out}{err}");
+    for report in &written {
+        let pdf = std::fs::read(report.with_extension("pdf")).unwrap();
+        let text = String::from_utf8_lossy(&pdf);
+        assert!(pdf.starts_with(b"%PDF"), "{}", report.display());
+        let pages = text.matches("/Type /Page\n").count()
+            + text.matches("/Type /Page\r").count()
+            + text.matches("/Type /Page ").count()
+            + text.matches("/Type /Page/").count()
+            + text.matches("/Type /Page>").count();
+        let a4 = text.contains("/MediaBox [0 0 594.95996 841.91998]")
+            || text.contains("/MediaBox [0 0 595 842]");
+        assert!(
+            a4,
+            "{}: not A4 ({})",
+            report.display(),
+            text.split("/MediaBox")
+                .nth(1)
+                .unwrap_or("no MediaBox")
+                .chars()
+                .take(40)
+                .collect::<String>()
+        );
+        assert!(pages >= 1, "{}: no page", report.display());
+    }
     let mut faults = Vec::new();
     for report in written {
         for f in layout_faults(&browser, &report) {
@@ -533,7 +563,10 @@ fn what_a_reader_finds(d: &Path) {
             html.contains("<section id=\"provenance\">") && !made.command.is_empty(),
             "{f}: the provenance block is not on the page"
         );
-        assert!(!made.station.is_empty() && !made.git_commit.is_empty(), "{f}");
+        assert!(
+            !made.station.is_empty() && !made.git_commit.is_empty(),
+            "{f}"
+        );
         let verdict = html.find("<p class=\"verdict ");
         let first_section = html.find("<h2").unwrap_or(html.len());
         assert!(

@@ -14,7 +14,8 @@ use crate::sensor::compare::{self, Estimates};
 #[derive(Debug, Args)]
 pub struct CompareArgs {
     /// The earlier record: a file from `calflash calibrate --json` or `calflash selfcal --json`,
-    /// or `db:ID` from `calflash history`.
+    /// `db:ID` from `calflash history`, or `db:SERIAL` for the unit's newest calibration in
+    /// the history.
     pub before: String,
     /// The later record.
     pub after: String,
@@ -51,15 +52,32 @@ pub fn run(args: &CompareArgs) -> Result<bool, Failure> {
         .check()?;
     let text = |r: &str| -> Result<(String, String), String> {
         match r.strip_prefix("db:") {
-            Some(id) => {
-                let id: i64 = id
-                    .parse()
-                    .map_err(|_| format!("`{r}`: db:ID takes a record number"))?;
+            Some(key) => {
                 let path =
                     crate::db::Location::or_default(args.db.as_ref()).map_err(|e| e.to_string())?;
-                let text = crate::db::Db::open_existing(&path)
-                    .and_then(|mut d| d.record(id))
-                    .map_err(|e| e.to_string())?;
+                let mut db = crate::db::Db::open_existing(&path).map_err(|e| e.to_string())?;
+                // db:ID, or db:SERIAL for the unit's newest calibration (a flash, refused or
+                // not, is never taken for one).
+                let id = match key.parse::<i64>() {
+                    Ok(id) => id,
+                    Err(_) if !key.is_empty() => db
+                        .history(key)
+                        .map_err(|e| e.to_string())?
+                        .into_iter()
+                        .rfind(|e| e.kind == "fit")
+                        .map(|e| e.id)
+                        .ok_or_else(|| {
+                            format!(
+                                "`{r}`: the unit history {path} has no calibration of unit {key}"
+                            )
+                        })?,
+                    Err(_) => {
+                        return Err(format!(
+                            "`{r}`: db:ID takes a record number, db:SERIAL a unit's serial"
+                        ));
+                    }
+                };
+                let text = db.record(id).map_err(|e| e.to_string())?;
                 Ok((text, format!("{path} record {id}")))
             }
             None => Ok((

@@ -186,8 +186,11 @@ pub fn run(args: &LotArgs) -> Result<(), Failure> {
         );
     }
     if let Some(p) = &args.report {
-        let html = crate::report::provenance::Provenance::now()
-            .stamp(&crate::report::lot::render(&lot, &sel.to_string(), &charts)?);
+        let html = crate::report::provenance::Provenance::now().stamp(&crate::report::lot::render(
+            &lot,
+            &sel.to_string(),
+            &charts,
+        )?);
         crate::files::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
         println!("  report: {}", p.display());
     }

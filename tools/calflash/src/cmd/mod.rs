@@ -18,6 +18,7 @@ pub mod lot;
 pub mod mission;
 pub mod mission_columns;
 pub mod outputs;
+pub mod pdf;
 pub mod read;
 pub mod selfcal;
 pub mod simulate;

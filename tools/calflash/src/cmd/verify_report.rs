@@ -100,7 +100,11 @@ pub fn run(args: &VerifyReportArgs) -> Result<bool, Failure> {
             .unwrap_or_default()
     );
     if let (Some(b), Some(stated)) = (&args.blob, &p.blob) {
-        println!("  {}: the page's blob, SHA-256 {}", b.display(), stated.sha256);
+        println!(
+            "  {}: the page's blob, SHA-256 {}",
+            b.display(),
+            stated.sha256
+        );
     }
     for d in &args.data {
         println!("  {}: one of the page's inputs", d.display());

@@ -23,7 +23,9 @@ table{border-collapse:collapse;margin:.5em 0}td,th{padding:2px 10px;text-align:r
 th{background:#f4f4f4}.terms td{white-space:nowrap}td:first-child,th:first-child{text-align:left}.fig{margin:1em 0}\
 .fig svg{display:block;max-width:100%;height:auto}\
 pre{font-family:'DejaVu Sans Mono',monospace;white-space:pre-wrap;overflow-wrap:anywhere}\
-.contents{background:#f7f7f7;padding:.5em 1em;border-radius:6px}.contents ol{columns:2;margin:.3em 0}";
+.contents{background:#f7f7f7;padding:.5em 1em;border-radius:6px}.contents ol{columns:2;margin:.3em 0}\
+@page{size:A4;margin:14mm 12mm 16mm;@bottom-center{content:'page ' counter(page) ' of ' counter(pages);font-size:8pt;color:#555}}\
+@media print{body{max-width:none;margin:0;font-size:10pt}.fig,table,tr,.verdict{break-inside:avoid}h2,h3{break-after:avoid}.contents{display:none}}";
 
 /// `html` with a contents list before its first section when it has at least four: each
 /// `<h2>` gets an anchor before it and a line in the list, so a long report (a ramp's is many screens)

@@ -224,13 +224,22 @@ impl Provenance {
         for f in self.inputs.iter().chain(&self.blob) {
             rows.push((
                 if f.role == "blob" { "blob" } else { "input" },
-                format!("{} {} ({} bytes), SHA-256 {}", f.role, f.path, f.bytes, f.sha256),
+                format!(
+                    "{} {} ({} bytes), SHA-256 {}",
+                    f.role, f.path, f.bytes, f.sha256
+                ),
             ));
         }
         rows.push(("page seal", self.page_sha256.clone()));
         let table: String = rows
             .iter()
-            .map(|(k, v)| format!("<tr><td>{}</td><td class=\"prov\">{}</td></tr>", esc(k), esc(v)))
+            .map(|(k, v)| {
+                format!(
+                    "<tr><td>{}</td><td class=\"prov\">{}</td></tr>",
+                    esc(k),
+                    esc(v)
+                )
+            })
             .collect();
         // `</` never appears inside the JSON (escaped), so the script cannot be closed early.
         let json = serde_json::to_string(self)
@@ -249,13 +258,17 @@ impl Provenance {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum NotItsPage {
     /// No provenance block.
-    #[error("the page has no provenance block (made by a calflash before 0.1 of 2026-12-07, or not by calflash)")]
+    #[error(
+        "the page has no provenance block (made by a calflash before 0.1 of 2026-12-07, or not by calflash)"
+    )]
     NoBlock,
     /// A block that does not read.
     #[error("its provenance block does not read: {0}")]
     Unreadable(String),
     /// The page was changed after it was made.
-    #[error("the page was changed after calflash made it: its seal is {stated}, its content hashes to {found}")]
+    #[error(
+        "the page was changed after calflash made it: its seal is {stated}, its content hashes to {found}"
+    )]
     Changed {
         /// The seal the page states.
         stated: String,
@@ -294,7 +307,9 @@ pub fn read(html: &str) -> Result<Provenance, NotItsPage> {
     let p: Provenance =
         serde_json::from_str(&json).map_err(|e| NotItsPage::Unreadable(e.to_string()))?;
     if p.page_sha256.len() != 64 || !p.page_sha256.bytes().all(|b| b.is_ascii_hexdigit()) {
-        return Err(NotItsPage::Unreadable("its seal is not 64 hex digits".into()));
+        return Err(NotItsPage::Unreadable(
+            "its seal is not 64 hex digits".into(),
+        ));
     }
     let found = hex(&sha2::Sha256::digest(
         html.replace(&p.page_sha256, UNSEALED).as_bytes(),
