@@ -728,3 +728,59 @@ fn a_ramp_at_two_supply_voltages_gives_a_series_the_device_blends_between_them()
         }
     }
 }
+
+/// Issue 68: a ramp's model is continuous in temperature, one fit of every observation that
+/// each of the device's coefficient sets carries. Its report draws each residual once (it drew
+/// each once per set, at temperatures it was not taken at) and does not call the sets "table
+/// points".
+#[test]
+fn a_ramp_report_draws_each_residual_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (code, out, err) = common::calflash(
+        d,
+        &[
+            "simulate",
+            "--sensor",
+            "single-accel",
+            "--plan",
+            "head:16",
+            "--repeat",
+            "10",
+            "--ramp=-40:70",
+            "--uneven",
+            "-o",
+            "ramp.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, err) = common::calflash(
+        d,
+        &[
+            "calibrate",
+            "ramp.csv",
+            "--sensor",
+            "single-accel",
+            "--serial",
+            "R-1",
+            "--report",
+            "ramp.html",
+            "--no-db",
+            "-q",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    let html = std::fs::read_to_string(d.join("ramp.html")).unwrap();
+    assert!(
+        html.contains("observations in one model continuous in temperature"),
+        "the summary"
+    );
+    assert!(!html.contains("table points;"), "sets called table points");
+    for title in ["residuals against the input", "residuals in test order"] {
+        let at = html
+            .find(title)
+            .unwrap_or_else(|| panic!("no figure `{title}`"));
+        let figure = &html[at..html[at..].find("</svg>").unwrap() + at];
+        assert_eq!(figure.matches("<circle").count(), 160, "{title}");
+    }
+}

@@ -106,7 +106,7 @@ fn summary(h: &mut String, c: &Calibrated, data_file: &str) {
     let hash: String = id.data_hash.iter().map(|b| format!("{b:02x}")).collect();
     let _ = writeln!(
         h,
-        "<p>Data {} (SHA-256 {}&#8230;), {} observations at {} table point{}; calflash {}.{}.{}; blob {} bytes.</p>",
+        "<p>Data {} (SHA-256 {}&#8230;), {} observations {}; calflash {}.{}.{}; blob {} bytes.</p>",
         esc(data_file),
         hash,
         // Each observation once: a continuous temperature model fits every observation at
@@ -116,8 +116,19 @@ fn summary(h: &mut String, c: &Calibrated, data_file: &str) {
             .flat_map(|p| p.axes[0].lines.iter())
             .collect::<std::collections::HashSet<_>>()
             .len(),
-        c.points.len(),
-        if c.points.len() == 1 { "" } else { "s" },
+        if c.thermal.is_empty() {
+            format!(
+                "at {} table point{}",
+                c.points.len(),
+                if c.points.len() == 1 { "" } else { "s" }
+            )
+        } else {
+            format!(
+                "in one model continuous in temperature (the device holds it as {} coefficient set{})",
+                c.points.len(),
+                if c.points.len() == 1 { "" } else { "s" }
+            )
+        },
         id.tool_version[0],
         id.tool_version[1],
         id.tool_version[2],
@@ -211,10 +222,16 @@ fn axis_section(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
 /// The residuals of axis `a` at every table point, against the input and in test order.
 fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Result<(), Error> {
     let unit = c.units[a];
-    // Residuals against the input, every table point.
+    // Residuals against the input, every table point. A model continuous in temperature is
+    // one fit of every observation, which each of the device's points carries: drawn once
+    // (issue 68: each residual was drawn once per point, at temperatures it was not taken at).
+    let points: &[crate::sensor::PointFit] = if c.thermal.is_empty() {
+        &c.points
+    } else {
+        std::slice::from_ref(&c.points[c.reference])
+    };
     // In the input's unit: each point's residual counts over its own scale factor.
-    let by_point: Vec<Vec<(f64, f64)>> = c
-        .points
+    let by_point: Vec<Vec<(f64, f64)>> = points
         .iter()
         .map(|p| {
             let scale = p.axes[a].coef(&axis.own);
@@ -227,11 +244,10 @@ fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) ->
         })
         .collect();
     // A legend names the table points; with only one, it says what the marks are.
-    let names: Vec<String> = c
-        .points
+    let names: Vec<String> = points
         .iter()
         .map(|p| {
-            if c.points.len() == 1 {
+            if points.len() == 1 {
                 "observations".to_string()
             } else {
                 crate::sensor::table::describe(&crate::sensor::table::Point {
@@ -258,8 +274,7 @@ fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) ->
         (series, unit),
         Some((f64::from(range.lo), f64::from(range.hi))),
     )?;
-    let order: Vec<Vec<(f64, f64)>> = c
-        .points
+    let order: Vec<Vec<(f64, f64)>> = points
         .iter()
         .map(|p| {
             let scale = p.axes[a].coef(&axis.own);
