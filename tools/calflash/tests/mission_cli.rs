@@ -557,6 +557,22 @@ fn a_calibration_is_judged_over_its_mission() {
         out.contains(", left out of the model, may cost up to"),
         "{out}"
     );
+    // Issue 68: a requirement between the RMS (the verdict's statistic, about 1.2 mm/s^2) and
+    // the worst moment (about 2.9 mm/s^2): every output over it is named, and which statistic
+    // the verdict uses.
+    let (_, out, _) = calibrate(&["--requirement", "a=0.002"]);
+    for o in ["a_x", "a_y", "a_z"] {
+        assert!(
+            out.contains(&format!(
+                "{o}: within the requirement 0.002 by the verdict's statistic (the RMS over the flight"
+            )),
+            "{o}: {out}"
+        );
+    }
+    assert!(
+        out.contains("but over it at the flight's worst moment"),
+        "{out}"
+    );
     // A requirement that cannot be read.
     let (code, _, err) = calibrate(&["--requirement", "a=-1"]);
     assert_ne!(code, 0);
