@@ -813,6 +813,48 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
         "{why}"
     );
     assert_eq!(v["shifts"].as_array().unwrap().len(), 0, "{v}");
+    // The receiver fault as written: its fixes frozen from 25 to 35 s (each the 25 s
+    // fix again), then, from 35 s on, 300 m east of where it is.
+    let mut lines = gnss.lines();
+    let mut frozen = format!("{}\n", lines.next().unwrap());
+    let mut held: Option<(String, String)> = None;
+    for line in lines {
+        let mut cols: Vec<String> = line.split(',').map(str::to_string).collect();
+        let t: f64 = cols[0].parse().unwrap();
+        if (25.0..35.0).contains(&t) {
+            let (lat, lon) = held
+                .get_or_insert_with(|| (cols[1].clone(), cols[2].clone()))
+                .clone();
+            cols[1] = lat;
+            cols[2] = lon;
+        } else if t >= 35.0 {
+            let lat: f64 = cols[1].parse().unwrap();
+            let lon: f64 = cols[2].parse().unwrap();
+            let east = 300.0 / (6_378_137.0 * lat.to_radians().cos());
+            cols[2] = format!("{:.9}", lon + east.to_degrees());
+        }
+        frozen.push_str(&cols.join(","));
+        frozen.push('\n');
+    }
+    std::fs::write(d.path().join("frozen.csv"), frozen).unwrap();
+    let v = flown(d.path(), "frozen.csv", &[], 4);
+    let why = v["why"].as_str().unwrap();
+    assert!(why.starts_with("GNSS horizontal position: "), "{why}");
+    let runs = v["consistency"]["kinds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|k| k["kind"] == "GNSS horizontal position")
+        .unwrap()["refused_runs"]
+        .clone();
+    assert!(
+        runs.as_array()
+            .unwrap()
+            .iter()
+            .any(|r| (24.0..36.0).contains(&r["from"].as_f64().unwrap())),
+        "{why}\n{runs}"
+    );
+    assert_eq!(v["shifts"].as_array().unwrap().len(), 0, "{v}");
     // A logger's clock that stuck for one sample (red team four: this passed silently, with
     // the clean log's verdict): refused, naming the line.
     let imu = std::fs::read_to_string(d.path().join("r.csv")).unwrap();
