@@ -85,6 +85,11 @@ fn units_unlike_their_lot_are_named_with_the_coefficients_that_make_them_so() {
         html.contains("LOT-A-000050") && html.contains("ay:1 +15.0"),
         "the outliers' table"
     );
+    // Issue 68: the chart says what it is judged with.
+    assert!(
+        html.contains("baseline the first 100 units in time order; limits at 3 sigma"),
+        "the chart's parameters"
+    );
 }
 
 #[test]

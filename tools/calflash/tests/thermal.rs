@@ -124,7 +124,7 @@ fn a_chamber_ramp_calibrates_and_the_device_gets_a_temperature_series() {
         "1-sigma calibration error of the corrected input over the temperature",
         "the device's Chebyshev series of",
         // 16 positions 25 times: each observation counted once, not once a breakpoint.
-        " 400 observations at ",
+        " 400 observations in one model continuous in temperature",
     ] {
         assert!(report.contains(needle), "the report lacks {needle}");
     }

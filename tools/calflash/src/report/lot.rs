@@ -210,11 +210,12 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
     for (name, c) in charts {
         let _ = write!(
             h,
-            "<h2>{:?} chart of {}</h2><p>Centre {:.6e}, sigma {:.3e} (the baseline's median and median moving range / 0.954, robust to units far out); {} point(s) out of control{}.</p><div class=\"fig\">",
+            "<h2>{:?} chart of {}</h2><p>Centre {:.6e}, sigma {:.3e} (the baseline's median and median moving range / 0.954, robust to units far out); {}; {} point(s) out of control{}.</p><div class=\"fig\">",
             c.kind,
             esc(name),
             c.centre,
             c.sigma,
+            chart_parameters(c),
             c.out_of_control.len(),
             if c.out_of_control.is_empty() {
                 String::new()
@@ -256,6 +257,30 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
     }
     h.push_str("</body></html>\n");
     Ok(super::page::with_contents(&h))
+}
+
+/// What a chart is judged with, in words (issue 68: the EWMA's baseline, lambda and L were not
+/// stated): the baseline, the limits, and a warning when the baseline is short.
+fn chart_parameters(c: &crate::stats::chart::Chart) -> String {
+    use crate::stats::chart::{EWMA_LAMBDA, Kind, SIGMAS};
+    let limits = match c.kind {
+        Kind::Individuals => format!("limits at {SIGMAS} sigma"),
+        Kind::Ewma => format!(
+            "EWMA with lambda {EWMA_LAMBDA}, limits at L = {SIGMAS} times the EWMA's own sigma (widening to their steady value)"
+        ),
+    };
+    let short = if c.baseline < 20 {
+        format!(
+            "; <b>a baseline of {} units, fewer than 20: its centre and sigma, and so its limits, are rough</b>",
+            c.baseline
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        "baseline the first {} units in time order; {limits}{short}",
+        c.baseline
+    )
 }
 
 #[cfg(test)]
