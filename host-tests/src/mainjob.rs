@@ -166,7 +166,7 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
     ));
     let log = w("qemu.log");
     let unit = QemuUnit::power_on(&elf, Some(&flash_file), &log)?;
-    let mut client = unit.connect(Duration::from_secs(5))?;
+    let mut client = unit.connect(Duration::from_secs(15))?;
     let before = client.identify().map_err(|e| e.to_string())?;
     say(&format!(
         "4. the unit answers on its UART (tcp port {}): {}, holding {} (flash kept in {})",
@@ -215,7 +215,7 @@ pub fn run(job: &Job, mut say: impl FnMut(&str)) -> Result<Summary, String> {
 
     let reboot_log = w("qemu-reboot.log");
     let unit = QemuUnit::power_on(&elf, Some(&flash_file), &reboot_log)?;
-    let mut client = unit.connect(Duration::from_secs(5))?;
+    let mut client = unit.connect(Duration::from_secs(15))?;
     let after = client.identify().map_err(|e| e.to_string())?;
     drop(client);
     drop(unit);

@@ -29,7 +29,7 @@ fn boot_unit(
     let (flash, log) = (dir.join("flash.bin"), dir.join("qemu.log"));
     std::fs::write(&flash, image).unwrap();
     let unit = QemuUnit::power_on(&bin.join(name), Some(&flash), &log).unwrap();
-    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    let mut client = unit.connect(Duration::from_secs(30)).unwrap();
     let id = client.identify().unwrap();
     let mut back = Vec::new();
     while back.len() < id.blob_len as usize {
@@ -207,7 +207,7 @@ fn a_provisioned_unit_verifies_at_boot_and_at_commit() {
     let (flash, log_path) = (dir.path().join("flash.bin"), dir.path().join("commit.log"));
     std::fs::write(&flash, unit_image(None, &[public], region).unwrap()).unwrap();
     let unit = QemuUnit::power_on(&bin.join("device"), Some(&flash), &log_path).unwrap();
-    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    let mut client = unit.connect(Duration::from_secs(30)).unwrap();
     assert_eq!(
         commit_over_uart(&mut client, &blob),
         Response::Error(Status::Refused(SignError::Unsigned))

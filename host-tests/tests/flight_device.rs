@@ -404,7 +404,7 @@ fn the_round_on_qemu_flies_its_recorded_flight_and_calflash_flight_port_reads_it
             .port();
         let unit =
             QemuUnit::power_on_at(&bin.join("device_round"), flash, log, Some(port)).unwrap();
-        drop(unit.connect(std::time::Duration::from_secs(5)).unwrap());
+        drop(unit.connect(std::time::Duration::from_secs(30)).unwrap());
         unit
     };
     // An erased store: nothing flown, nothing published.

@@ -31,7 +31,7 @@ fn a_unit_on_its_own_port_takes_one_client_after_another_and_keeps_its_flash() {
     assert_eq!(unit.port, port);
 
     // The first client: an empty unit, flashed.
-    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    let mut client = unit.connect(Duration::from_secs(30)).unwrap();
     let id = client.identify().unwrap();
     assert!(id.calibration.is_none(), "{id:?}");
     let blob = golden::encode(&CalibrationData::example_imu());
@@ -61,7 +61,7 @@ fn a_unit_on_its_own_port_takes_one_client_after_another_and_keeps_its_flash() {
     }
 
     // Another on the same port, later: the unit still runs and holds it.
-    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    let mut client = unit.connect(Duration::from_secs(30)).unwrap();
     let id = client.identify().unwrap();
     assert_eq!(
         id.calibration.as_ref().map(|s| s.as_str()),
@@ -97,7 +97,7 @@ fn a_unit_on_its_own_port_takes_one_client_after_another_and_keeps_its_flash() {
 
     // Powered on again from its file: the calibration is there.
     let unit = QemuUnit::power_on(&elf, Some(&flash), &dir.path().join("again.log")).unwrap();
-    let mut client = unit.connect(Duration::from_secs(5)).unwrap();
+    let mut client = unit.connect(Duration::from_secs(30)).unwrap();
     let id = client.identify().unwrap();
     assert_eq!(
         id.calibration.as_ref().map(|s| s.as_str()),

@@ -310,6 +310,10 @@ fn every_readme_example_runs_as_written() {
             .env_remove("XDG_DATA_HOME")
             .env_remove("CALFLASH_DB")
             .env_remove("CALFLASH_SIGN_KEY")
+            // The example unit is QEMU on a host running the other tests: it answers slower
+            // than a unit on a bench (a chunk timed out at the 3 s default on a loaded CI
+            // machine), so the walk waits as a user of a slow link would.
+            .env("CALFLASH_TIMEOUT", "30")
             .output()
             .expect("bash runs");
         let code = out.status.code().unwrap_or(-1);

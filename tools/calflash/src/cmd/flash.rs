@@ -24,8 +24,9 @@ pub struct FlashArgs {
     /// Write a blob whose fit was judged REJECT (made with `calibrate --force-blob`).
     #[arg(long)]
     pub force_rejected: bool,
-    /// Seconds to wait for each answer.
-    #[arg(long, default_value_t = 3.0, value_parser = timeout)]
+    /// Seconds to wait for each answer (a slow link, or a unit emulated on a busy host:
+    /// `$CALFLASH_TIMEOUT`).
+    #[arg(long, env = "CALFLASH_TIMEOUT", default_value_t = 3.0, value_parser = timeout)]
     pub timeout: f64,
     /// Test-vector batches (16 samples each).
     #[arg(long, default_value_t = 4, value_parser = |s: &str| super::values::count_in(s, 1, 256))]

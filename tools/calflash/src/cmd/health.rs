@@ -29,8 +29,9 @@ pub struct HealthArgs {
     /// from it (after the recording is given to it, when there is one).
     #[arg(long)]
     pub port: Option<String>,
-    /// Seconds to wait for each answer.
-    #[arg(long, default_value_t = 3.0, value_parser = |s: &str| values::in_range(s, 0.1, 3600.0))]
+    /// Seconds to wait for each answer (a slow link, or a unit emulated on a busy host:
+    /// `$CALFLASH_TIMEOUT`).
+    #[arg(long, env = "CALFLASH_TIMEOUT", default_value_t = 3.0, value_parser = |s: &str| values::in_range(s, 0.1, 3600.0))]
     pub timeout: f64,
     /// The sample rate, Hz, of a recording without timestamps.
     #[arg(long = "sample-rate", alias = "rate", value_parser = values::sample_rate)]

@@ -27,8 +27,9 @@ pub struct ReadArgs {
     /// Print what the unit holds as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Seconds to wait for each answer.
-    #[arg(long, default_value_t = 3.0, value_parser = |s: &str| super::values::in_range(s, 0.1, 3600.0))]
+    /// Seconds to wait for each answer (a slow link, or a unit emulated on a busy host:
+    /// `$CALFLASH_TIMEOUT`).
+    #[arg(long, env = "CALFLASH_TIMEOUT", default_value_t = 3.0, value_parser = |s: &str| super::values::in_range(s, 0.1, 3600.0))]
     pub timeout: f64,
 }
 
