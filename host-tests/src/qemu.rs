@@ -84,6 +84,19 @@ pub fn build_firmware() -> Result<PathBuf, String> {
 /// # Errors
 /// When cargo fails; its stderr is in the message.
 pub fn build_firmware_as(serial: Option<&str>) -> Result<PathBuf, String> {
+    build_firmware_with(serial, false)
+}
+
+/// [`build_firmware_as`] with cargo's own progress on the terminal (`cargo xtask unit`: a first
+/// build takes minutes, and a person waits for it).
+///
+/// # Errors
+/// When cargo fails (its messages were on the terminal).
+pub fn build_firmware_shown(serial: Option<&str>) -> Result<PathBuf, String> {
+    build_firmware_with(serial, true)
+}
+
+fn build_firmware_with(serial: Option<&str>, shown: bool) -> Result<PathBuf, String> {
     let dir = root().join("firmware");
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
@@ -105,6 +118,16 @@ pub fn build_firmware_as(serial: Option<&str>) -> Result<PathBuf, String> {
             dir.join("target")
         }
     };
+    if shown {
+        let status = cmd
+            .stderr(std::process::Stdio::inherit())
+            .status()
+            .map_err(|e| format!("cannot run cargo: {e}"))?;
+        if !status.success() {
+            return Err("firmware build failed (cargo's messages above)".into());
+        }
+        return Ok(target.join(TARGET).join("release"));
+    }
     let out = cmd.output().map_err(|e| format!("cannot run cargo: {e}"))?;
     if !out.status.success() {
         return Err(format!(

@@ -74,10 +74,10 @@ pub fn run(args: &[String]) -> Result<(), String> {
         .flash
         .unwrap_or_else(|| dir.join(format!("{}-flash.bin", job.serial)));
     println!(
-        "xtask: building the example unit's firmware as {}",
+        "xtask: building the example unit's firmware as {} (the first build takes minutes; cargo's progress below)",
         job.serial
     );
-    let elf = qemu::build_firmware_as(Some(&job.serial))?.join("device");
+    let elf = qemu::build_firmware_shown(Some(&job.serial))?.join("device");
     let log = dir.join(format!("{}-qemu.log", job.serial));
     let mut unit = QemuUnit::power_on_at(&elf, Some(&flash), &log, Some(job.port))?;
     println!(
