@@ -15,8 +15,8 @@ const USAGE: &str = "usage: cargo xtask history [--port N] [--dir DIR]
   --dir DIR  its cluster, kept between runs (default /tmp/calflash-history-N; delete it for
              an empty history)
 
-Runs until Enter is pressed or its input closes; installs Debian's postgresql when missing
-(as root).";
+Runs until Enter is pressed, its input closes, or Ctrl-C (SIGINT, SIGTERM, SIGHUP): each
+stops the server. Installs Debian's postgresql when missing (as root).";
 
 /// The login and its password the README's walk uses.
 const LOGIN: (&str, &str) = ("station", "calflash");
@@ -56,13 +56,28 @@ pub fn run(args: &[String]) -> Result<(), String> {
         "xtask: a shared unit history on 127.0.0.1:{port} (PostgreSQL; its cluster in {})",
         dir.display()
     );
-    println!("xtask: it runs until Enter is pressed (or this input closes); in another terminal:");
+    println!(
+        "xtask: it runs until Enter is pressed, its input closes, or Ctrl-C; in another terminal:"
+    );
     println!("  export CALFLASH_DB=postgres://{login}:{password}@127.0.0.1:{port}/calflash");
-    let mut line = String::new();
-    let _ = std::io::stdin().lock().read_line(&mut line);
+    // Enter, the input's end, or a signal (Ctrl-C, SIGTERM, SIGHUP) all stop the server: it
+    // runs detached from this process, and a Ctrl-C that only ended this process left it
+    // running on its port, so that the next start failed.
+    let (tx, rx) = std::sync::mpsc::channel::<&'static str>();
+    let signalled = tx.clone();
+    ctrlc::set_handler(move || {
+        let _ = signalled.send("a signal");
+    })
+    .map_err(|e| format!("cannot take Ctrl-C: {e}"))?;
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        let _ = std::io::stdin().lock().read_line(&mut line);
+        let _ = tx.send("Enter or the input's end");
+    });
+    let why = rx.recv().unwrap_or("the input's end");
     drop(server);
     println!(
-        "xtask: the history server stopped; its cluster is kept in {}",
+        "xtask: the history server stopped ({why}); its cluster is kept in {}",
         dir.display()
     );
     Ok(())
