@@ -367,20 +367,7 @@ pub fn checksum(bytes: &[u8]) -> u32 {
 /// # Errors
 /// [`FrameError::TooLong`] when `out` cannot hold it.
 pub fn encode<T: Serialize>(msg: &T, out: &mut [u8]) -> Result<usize, FrameError> {
-    let mut raw = [0u8; MAX_FRAME];
-    let body = postcard::to_slice(msg, &mut raw)
-        .map_err(|_| FrameError::TooLong)?
-        .len();
-    let crc = CRC
-        .checksum(raw.get(..body).unwrap_or_default())
-        .to_le_bytes();
-    raw.get_mut(body..body + 4)
-        .ok_or(FrameError::TooLong)?
-        .copy_from_slice(&crc);
-    let n = cobs::try_encode(raw.get(..body + 4).unwrap_or_default(), out)
-        .map_err(|_| FrameError::TooLong)?;
-    *out.get_mut(n).ok_or(FrameError::TooLong)? = 0;
-    Ok(n + 1)
+    encode_with(msg, None, out)
 }
 
 /// Encodes `msg` tagged with `id` into `out` (see the [module docs](self)); returns the frame
@@ -389,14 +376,25 @@ pub fn encode<T: Serialize>(msg: &T, out: &mut [u8]) -> Result<usize, FrameError
 /// # Errors
 /// [`FrameError::TooLong`] when the frame does not fit `out` or [`MAX_FRAME`].
 pub fn encode_tagged<T: Serialize>(msg: &T, id: u16, out: &mut [u8]) -> Result<usize, FrameError> {
+    encode_with(msg, Some(id), out)
+}
+
+/// [`encode`] or [`encode_tagged`]: the body (`msg`, then `id` when given), its CRC, COBS and
+/// the terminator.
+fn encode_with<T: Serialize>(
+    msg: &T,
+    id: Option<u16>,
+    out: &mut [u8],
+) -> Result<usize, FrameError> {
     let mut raw = [0u8; MAX_FRAME];
-    let body = postcard::to_slice(msg, &mut raw)
+    let mut body = postcard::to_slice(msg, &mut raw)
         .map_err(|_| FrameError::TooLong)?
         .len();
-    let tag = postcard::to_slice(&id, raw.get_mut(body..).unwrap_or_default())
-        .map_err(|_| FrameError::TooLong)?
-        .len();
-    let body = body + tag;
+    if let Some(id) = id {
+        body += postcard::to_slice(&id, raw.get_mut(body..).unwrap_or_default())
+            .map_err(|_| FrameError::TooLong)?
+            .len();
+    }
     let crc = CRC
         .checksum(raw.get(..body).unwrap_or_default())
         .to_le_bytes();

@@ -715,6 +715,21 @@ fn gnss_that_does_not_overlap_the_imu_a_flight_without_a_launch_and_a_rate_too_s
     );
 }
 
+/// A flight the GNSS horizontal position failed: the verdict's reason, which must name that
+/// kind first, and its runs of refused fixes.
+fn gnss_refused(v: &serde_json::Value) -> (String, serde_json::Value) {
+    let why = v["why"].as_str().unwrap().to_string();
+    assert!(why.starts_with("GNSS horizontal position: "), "{why}");
+    let runs = v["consistency"]["kinds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|k| k["kind"] == "GNSS horizontal position")
+        .unwrap()["refused_runs"]
+        .clone();
+    (why, runs)
+}
+
 #[test]
 fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
     let d = tempfile::tempdir().unwrap();
@@ -796,15 +811,7 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
     }
     std::fs::write(d.path().join("faulty.csv"), faulty).unwrap();
     let v = flown(d.path(), "faulty.csv", &[], 4);
-    let why = v["why"].as_str().unwrap();
-    assert!(why.starts_with("GNSS horizontal position: "), "{why}");
-    let runs = v["consistency"]["kinds"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|k| k["kind"] == "GNSS horizontal position")
-        .unwrap()["refused_runs"]
-        .clone();
+    let (why, runs) = gnss_refused(&v);
     assert!(
         runs.as_array().unwrap().iter().any(|r| {
             let (from, to) = (r["from"].as_f64().unwrap(), r["to"].as_f64().unwrap());
@@ -838,15 +845,7 @@ fn a_rocket_flight_fits_and_finds_a_launch_shift_of_its_axial_bias() {
     }
     std::fs::write(d.path().join("frozen.csv"), frozen).unwrap();
     let v = flown(d.path(), "frozen.csv", &[], 4);
-    let why = v["why"].as_str().unwrap();
-    assert!(why.starts_with("GNSS horizontal position: "), "{why}");
-    let runs = v["consistency"]["kinds"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|k| k["kind"] == "GNSS horizontal position")
-        .unwrap()["refused_runs"]
-        .clone();
+    let (why, runs) = gnss_refused(&v);
     assert!(
         runs.as_array()
             .unwrap()
