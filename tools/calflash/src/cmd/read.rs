@@ -14,6 +14,7 @@ use serde::Serialize;
 use spincal::store::SlotState;
 
 use crate::device::{Client, link::Link};
+use crate::sensor::record::hex;
 
 /// Read what a unit holds, writing nothing to it.
 #[derive(Debug, Args)]
@@ -79,10 +80,6 @@ pub struct Holding {
     slots: Vec<Slot>,
     /// Why it runs without the calibration a slot holds, when it refused it at boot.
     pub refused_at_boot: Option<String>,
-}
-
-fn hex(b: &[u8]) -> String {
-    b.iter().map(|x| format!("{x:02x}")).collect()
 }
 
 /// What the unit on `client` holds, and its blob's bytes.

@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use sha2::Digest as _;
 
 use super::page::esc;
+use crate::sensor::record::hex;
 
 /// The schema of the provenance JSON.
 pub const SCHEMA: &str = "calflash.report-provenance/1";
@@ -74,10 +75,6 @@ impl FileHash {
             bytes: bytes.len() as u64,
         }
     }
-}
-
-fn hex(b: &[u8]) -> String {
-    b.iter().map(|x| format!("{x:02x}")).collect()
 }
 
 /// What a page says of where it comes from.
