@@ -71,6 +71,14 @@ fn a_report_belongs_to_its_own_bytes_and_to_no_others() {
         out.contains("the page was changed after calflash made it"),
         "{out}"
     );
+    // `pdf -o` never writes over the report it prints.
+    let (code, _, err) = calflash(d, &["pdf", "u.html", "-o", "u.html"]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("-o u.html: that is the file the report reads"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(d.join("u.html")).unwrap(), html);
     // A page without a block is named as such.
     std::fs::write(d.join("bare.html"), "<html><body></body></html>").unwrap();
     let (code, out, _) = verify("bare.html", "u.blob", "data.csv");

@@ -98,6 +98,12 @@ pub fn run(args: &PdfArgs) -> Result<(), Failure> {
     if args.output.is_some() && args.pages.len() > 1 {
         return Err("-o: one report only (each PAGE.html gives PAGE.pdf beside it)".into());
     }
+    if let [page] = args.pages.as_slice() {
+        crate::files::Paths::new()
+            .input("the report", Some(page))
+            .output("-o", args.output.as_deref())
+            .check()?;
+    }
     let browser = args.browser.clone().or_else(find_browser).ok_or_else(|| {
         format!(
             "no browser to print with: none of {} is on the PATH (Debian: apt-get install chromium); or open the report in any browser and print it to PDF: its print style sheet gives A4 pages numbered N of M",
