@@ -117,8 +117,8 @@ fn a_model_without_a_term_the_units_have_is_never_accepted() {
 /// a linear gyro (no g-sensitivity) calibrated on the shell-optimal plan keeps a spurious
 /// g-term on some units (p < 0.05 by chance); over the flight inside the bench's specific
 /// force, the realised error of those calibrations was 1.7 to 2.0 times their predicted RMS
-/// (all units: 1.3). It is now covered (`mission::judge`: a kept term below |t| = 4 carries its
-/// own estimate as a possible error). The figures for 120 units are in BENCHMARKS.md.
+/// (all units: 1.3). It is now covered (`mission::judge`: the prediction is the model's before
+/// the choice of terms, whose covariance the unit states). The figures are in BENCHMARKS.md.
 #[test]
 fn a_term_kept_by_selection_is_covered_by_the_predicted_mission_error() {
     use calflash::sim::truth::TriadTruth;
@@ -300,5 +300,9 @@ fn a_term_kept_by_selection_is_covered_by_the_predicted_mission_error() {
     );
     assert!(kept_count >= 6, "{kept_count}");
     assert!(ratio(kept) < 1.4, "{}", ratio(kept));
-    assert!((0.75..1.25).contains(&ratio(all)), "{}", ratio(all));
+    // These units have no g-sensitivity at all, and the prediction carries the whole model's
+    // uncertainty in the g-terms the bench dropped (as the unit's stated error does): it is on
+    // the safe side here (0.57). On units with and without one, drawn from a model not ours,
+    // it is 0.80 to 0.99 (`mission_independent`).
+    assert!((0.45..1.25).contains(&ratio(all)), "{}", ratio(all));
 }
