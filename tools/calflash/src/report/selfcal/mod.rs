@@ -257,6 +257,17 @@ fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
         c.gyro_bias_spread.map(|x| format!("{x:.5}")).join(", "),
         u = plural(pg)
     );
+    if !c.turning_poses.is_empty() {
+        let _ = writeln!(
+            s,
+            "    the gyro turned through pose(s) {} (its mean far from the other poses'): left out of the bias, the rotations on either side take the constant bias there",
+            c.turning_poses
+                .iter()
+                .map(|k| (k + 1).to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     for k in &c.skipped {
         let _ = writeln!(
             s,
@@ -269,12 +280,22 @@ fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
 
 /// The accelerometer's quadratic terms' test in words.
 fn quadratic_words(q: &crate::nonlinear::selfcal::QuadraticTest) -> String {
+    let held = match q.holdout {
+        Some([l, h]) => format!(
+            "; poses held out: RMS {:.3} mm/s^2 without them, {:.3} with",
+            l * 1e3,
+            h * 1e3
+        ),
+        None => "; a hold-out fold's poses could not fit them".into(),
+    };
     format!(
-        "F = {}, p = {}: {}",
+        "F = {}, p = {}{held}: {}",
         num(q.f),
         pval(q.p),
         if q.kept {
             "kept"
+        } else if q.p < 0.05 {
+            "significant, but not better on the poses held out: not kept"
         } else {
             "not significant, not kept"
         }

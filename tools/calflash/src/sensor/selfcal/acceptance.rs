@@ -57,6 +57,18 @@ pub fn verdict(c: &SelfCal, check: Option<&DeviceCheck>) -> (Verdict, Vec<String
             c.holdout.rms / c.accel.rms()
         ));
     }
+    if c.holdout.unfitted > 0 {
+        notes.push(format!(
+            "{} of {} hold-out folds could not fit the accelerometer model on the poses left to them: too few poses for it{}",
+            c.holdout.unfitted,
+            c.holdout.folds,
+            if c.accel.params.len() == 12 {
+                " (the quadratic terms; --quadratic off leaves them out)"
+            } else {
+                ""
+            }
+        ));
+    }
     if !c.skipped.is_empty() {
         notes.push(format!(
             "{} rotations left out of the gyro fit",

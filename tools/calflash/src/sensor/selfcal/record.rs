@@ -187,6 +187,8 @@ pub struct Gyro<'a> {
     pub rotations: Vec<Rotation>,
     /// Rotations left out of the fit.
     pub skipped: &'a [Skipped],
+    /// Poses the gyro turned through (0-based): left out of the bias.
+    pub turning_poses: &'a [usize],
 }
 
 /// One rotation between poses.
@@ -340,6 +342,7 @@ impl<'a> SelfcalRecord<'a> {
                 constant_bias_rms_deg: rms_deg(&c.constant_bias_angles),
                 rotations,
                 skipped: &c.skipped,
+                turning_poses: &c.turning_poses,
             },
             inputs: Inputs {
                 accel: accel_units.describe(Sensor::Accel),
