@@ -390,6 +390,47 @@ fn a_few_poses_do_not_keep_quadratic_terms_the_poses_held_out_refute() {
     }
 }
 
+/// imucal's Ferraris session (`../shared/data/imucal-ferraris`, m/s^2 and deg/s, six faces
+/// and three turns): its 13 poses are counted as facing their six directions (they were "1
+/// distinct directions" in physical units), and the refusal says why 13 poses are not enough.
+#[test]
+fn a_six_face_session_in_physical_units_is_refused_for_its_directions() {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/imucal-ferraris/example_ferraris_session.csv");
+    if !d.is_file() {
+        println!("Ferraris session: SKIPPED, {} is absent", d.display());
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let (code, said, err) = calflash(
+        out.path(),
+        &[
+            "selfcal",
+            arg(&d),
+            "--units",
+            "m/s2,deg/s",
+            "--sample-rate",
+            "102.4",
+            "--init-rest",
+            "2.5",
+            "--g",
+            "9.81",
+            "--serial",
+            "F",
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 1, "{said}{err}");
+    assert!(
+        err.contains("13 pose(s) facing 6 distinct directions"),
+        "{err}"
+    );
+    assert!(
+        err.contains("The 13 poses face only 6 distinct directions"),
+        "{err}"
+    );
+}
+
 /// Units in a header's names (`ax_g`, `gx_dps`) are read and converted to SI; names in mixed
 /// units, and `--units` that contradicts the header, are refused at the header's line.
 #[test]

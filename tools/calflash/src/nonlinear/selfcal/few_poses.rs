@@ -155,6 +155,19 @@ pub(super) fn diagnose(
             opts.min_still
         ),
     };
+    // Enough poses, too few directions: say so, not only "too few".
+    let facing = directions(&most_means, rest_level);
+    let advice = if most.len() >= MIN_POSES && facing < MIN_POSES {
+        format!(
+            "The {} poses face only {facing} distinct directions: |a| = g alone cannot separate \
+             the accelerometer's 9 parameters on so few (a six-face session with turns, as \
+             imucal's Ferraris method takes, needs each face's known orientation, which selfcal \
+             does not take). {advice}",
+            most.len()
+        )
+    } else {
+        advice
+    };
     SelfCalError::TooFewPoses {
         file: rec.source.as_str().into(),
         tried,

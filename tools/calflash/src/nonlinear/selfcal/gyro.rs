@@ -75,8 +75,8 @@ pub(super) fn gyro_fit(
 
 /// How many of the pose means `means` (counts) face directions at least 10 degrees from each
 /// other: the poses a fit can tell apart. The directions are taken about the middle of the
-/// means' range; means that spread less than 100 times the noise (`rest_level`, a variance)
-/// face one direction.
+/// means' range; means that spread less than 100 times the noise (`rest_level`, a variance, in
+/// the means' own unit) face one direction.
 pub(super) fn directions(means: &[[f64; 3]], rest_level: f64) -> usize {
     if means.is_empty() {
         return 0;
@@ -91,7 +91,10 @@ pub(super) fn directions(means: &[[f64; 3]], rest_level: f64) -> usize {
     };
     let ranges: [(f64, f64); 3] = std::array::from_fn(span);
     let widest = ranges.iter().map(|(lo, hi)| hi - lo).fold(0.0f64, f64::max);
-    if widest < 100.0 * rest_level.sqrt().max(1.0) {
+    // The noise's own scale, not a count's: in m/s^2 a full turn spans 20 (issue 66: imucal's
+    // Ferraris session in m/s^2 had its six faces counted as one direction under a floor of
+    // one unit of noise).
+    if widest <= 100.0 * rest_level.sqrt() {
         return 1;
     }
     let center: [f64; 3] = std::array::from_fn(|j| (ranges[j].0 + ranges[j].1) / 2.0);
@@ -112,4 +115,31 @@ pub(super) fn directions(means: &[[f64; 3]], rest_level: f64) -> usize {
         }
     }
     seen.len().max(1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::directions;
+
+    /// Six faces in m/s^2 (a span of 20 against noise of 0.01) face six directions; the same
+    /// in codes too. A floor of one unit of noise once made every recording in physical units
+    /// face one direction.
+    #[test]
+    fn six_faces_face_six_directions_in_any_unit() {
+        let g = 9.81;
+        let faces = |s: f64| -> Vec<[f64; 3]> {
+            (0..6)
+                .map(|k| {
+                    let mut m = [0.0; 3];
+                    m[k / 2] = if k % 2 == 0 { s } else { -s };
+                    m
+                })
+                .collect()
+        };
+        assert_eq!(directions(&faces(g), 1e-4), 6);
+        assert_eq!(directions(&faces(16_384.0), 9.0), 6);
+        // A rest split by noise into poses facing one way is one direction.
+        let rest: Vec<[f64; 3]> = (0..6).map(|k| [0.0, 0.0, g + 1e-3 * k as f64]).collect();
+        assert_eq!(directions(&rest, 1e-4), 1);
+    }
 }

@@ -545,8 +545,6 @@ fn threshold_trials(
     (trials, best)
 }
 
-/// Per axis, the spread (largest less smallest) of the pose means `means` and their RMS
-/// about `bias`.
 /// Beyond this many robust standard deviations (1.4826 median absolute deviations) of the
 /// poses' gyro means from their median, on any axis, a pose's gyro mean is a turn, not the
 /// bias: the accelerometer's still test passes a slow turn (a real MPU-9150 log held poses
@@ -586,6 +584,8 @@ fn turning_poses(means: &[[f64; 3]]) -> Vec<bool> {
     }
 }
 
+/// Per axis, the spread (largest less smallest) of the pose means `means` and their RMS
+/// about `bias`.
 fn spread_and_rms(means: &[[f64; 3]], bias: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     let spread = std::array::from_fn(|j| {
         let (lo, hi) = means
