@@ -557,7 +557,7 @@ fn inside_mean(p: &Profile, lookup: &Lookup, reach: &Reach, per_moment: &[f64]) 
 /// triads of a model not ours flown on the three reference flights (a third without
 /// g-sensitivity, a third a MEMS gyro's, a third near the bench's detection limit), each
 /// unit's realised error was about twice the predicted (RMS 2.08, 1.99, 1.97 on the three
-/// axes; now 0.95, 0.86, 0.80): the g-sensitivity the selection dropped went unpredicted.
+/// axes; now 0.95, 0.86, 0.81): the g-sensitivity the selection dropped went unpredicted.
 fn stated_variance(
     profile: &Profile,
     axis: &AxisFit,

@@ -178,3 +178,29 @@ pub fn simulate_flight(
     let (code, stdout, err) = calflash(dir, &args);
     assert_eq!(code, 0, "{args:?}: {stdout}{err}");
 }
+
+/// A calibration record's axes at its first table point: each axis' term names and their
+/// coefficients, in the record's order.
+#[allow(dead_code)] // used by the mission tests only
+pub fn record_axes(record: &serde_json::Value) -> Vec<(Vec<String>, Vec<f64>)> {
+    record["points"][0]["axes"]
+        .as_array()
+        .expect("a record's axes")
+        .iter()
+        .map(|axis| {
+            let names = axis["terms"]
+                .as_array()
+                .expect("an axis' terms")
+                .iter()
+                .map(|n| n.as_str().expect("a term's name").to_string())
+                .collect();
+            let b = axis["coefficients"]
+                .as_array()
+                .expect("an axis' coefficients")
+                .iter()
+                .map(|v| v.as_f64().expect("a coefficient"))
+                .collect();
+            (names, b)
+        })
+        .collect()
+}
