@@ -280,6 +280,9 @@ fn accel_fit(
     let mut s = lin.params.clone();
     s.extend([0.0; 3]);
     let quad = gravity::fit(means, g, center, &s, true)?;
+    if q == Quadratic::On {
+        return Ok((quad, None));
+    }
     let (rss0, rss1) = (
         lin.residuals.iter().map(|r| r * r).sum::<f64>(),
         quad.residuals.iter().map(|r| r * r).sum::<f64>(),
@@ -298,17 +301,14 @@ fn accel_fit(
         (Ok(l), Ok(h)) if h.unfitted == 0 && l.unfitted == 0 => Some([l.rms, h.rms]),
         _ => None,
     };
-    let kept = match q {
-        Quadratic::On => true,
-        _ => p < 0.05 && holdout.is_some_and(|[l, h]| h < l),
-    };
-    let test = (q == Quadratic::Auto).then_some(QuadraticTest {
+    let kept = p < 0.05 && holdout.is_some_and(|[l, h]| h < l);
+    let test = QuadraticTest {
         f,
         p,
         holdout,
         kept,
-    });
-    Ok((if kept { quad } else { lin }, test))
+    };
+    Ok((if kept { quad } else { lin }, Some(test)))
 }
 
 fn holdout(means: &[[f64; 3]], g: f64, quadratic: bool, folds: usize) -> Result<Holdout, LmError> {
@@ -555,25 +555,14 @@ const TURNING_SIGMAS: f64 = 6.0;
 /// robust standard deviations from the poses' median on an axis. Never more than a third of
 /// the poses (a bias that drifts is followed, not refused).
 fn turning_poses(means: &[[f64; 3]]) -> Vec<bool> {
-    let median = |mut v: Vec<f64>| -> f64 {
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        if n == 0 {
-            0.0
-        } else if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            0.5 * (v[n / 2 - 1] + v[n / 2])
-        }
-    };
-    let centre: [f64; 3] = std::array::from_fn(|j| median(means.iter().map(|m| m[j]).collect()));
-    let spread: [f64; 3] = std::array::from_fn(|j| {
-        let mad = median(means.iter().map(|m| (m[j] - centre[j]).abs()).collect());
-        (1.4826 * mad).max(1e-12 * (1.0 + centre[j].abs()))
+    let robust: [(f64, f64); 3] = std::array::from_fn(|j| {
+        let (centre, sd) =
+            crate::stats::robust::median_mad(&means.iter().map(|m| m[j]).collect::<Vec<_>>());
+        (centre, sd.max(1e-12 * (1.0 + centre.abs())))
     });
     let score = |m: &[f64; 3]| -> f64 {
         (0..3)
-            .map(|j| (m[j] - centre[j]).abs() / spread[j])
+            .map(|j| (m[j] - robust[j].0).abs() / robust[j].1)
             .fold(0.0, f64::max)
     };
     let flagged: Vec<bool> = means.iter().map(|m| score(m) > TURNING_SIGMAS).collect();

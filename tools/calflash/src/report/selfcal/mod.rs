@@ -257,16 +257,8 @@ fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
         c.gyro_bias_spread.map(|x| format!("{x:.5}")).join(", "),
         u = plural(pg)
     );
-    if !c.turning_poses.is_empty() {
-        let _ = writeln!(
-            s,
-            "    the gyro turned through pose(s) {} (its mean far from the other poses'): left out of the bias, the rotations on either side take the constant bias there",
-            c.turning_poses
-                .iter()
-                .map(|k| (k + 1).to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
+    if let Some(words) = turning_words(c) {
+        let _ = writeln!(s, "    the gyro turned through {words}");
     }
     for k in &c.skipped {
         let _ = writeln!(
@@ -276,6 +268,21 @@ fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
             k.why
         );
     }
+}
+
+/// The poses the gyro turned through and what was done with them, in words (numbered from 1);
+/// `None` when there are none.
+fn turning_words(c: &SelfCal) -> Option<String> {
+    (!c.turning_poses.is_empty()).then(|| {
+        format!(
+            "pose(s) {} (its mean far from the other poses'): left out of the bias, the rotations on either side take the constant bias there",
+            c.turning_poses
+                .iter()
+                .map(|k| (k + 1).to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })
 }
 
 /// The accelerometer's quadratic terms' test in words.

@@ -101,18 +101,8 @@ pub(super) fn facts(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>) -
             rms_deg(&c.constant_bias_angles)
         ),
     ));
-    if !c.turning_poses.is_empty() {
-        rows.push((
-            "gyro: poses it turned through".into(),
-            format!(
-                "pose(s) {}: the gyro's mean there is far from the other poses'; left out of the bias, the rotations on either side take the constant bias there",
-                c.turning_poses
-                    .iter()
-                    .map(|k| (k + 1).to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        ));
+    if let Some(words) = super::turning_words(c) {
+        rows.push(("gyro: poses it turned through".into(), esc(&words)));
     }
     for k in &c.skipped {
         rows.push((
