@@ -129,7 +129,9 @@ impl<'a> Runner<'a> {
     }
 }
 
-/// UART0 of mps2-an386 (CMSDK APB UART), polled.
+/// UART0 of mps2-an386 (CMSDK APB UART). Its receiver raises IRQ 0; the core sleeps (`wfi`)
+/// until a byte comes instead of spinning on the status register, so an idle unit draws no
+/// power (and a unit under QEMU no host core).
 pub struct Uart {
     base: usize,
 }
@@ -138,15 +140,29 @@ impl Uart {
     const DATA: usize = 0x00;
     const STATE: usize = 0x04;
     const CTRL: usize = 0x08;
+    const INTCLEAR: usize = 0x0C;
     const BAUDDIV: usize = 0x10;
+    /// CTRL: transmitter, receiver, receive interrupt.
+    const TX_RX_RXIRQ: u32 = 0b1011;
+    /// INTSTATUS / INTCLEAR: the receive interrupt.
+    const RX_IRQ: u32 = 0b10;
+    /// The NVIC's set-enable and clear-pending registers for IRQs 0 to 31; UART0's receiver
+    /// is IRQ 0 on mps2-an386.
+    const NVIC_ISER0: usize = 0xE000_E100;
+    const NVIC_ICPR0: usize = 0xE000_E280;
+    const UART0_RX_IRQ: u32 = 1 << 0;
 
-    /// UART0 at 0x40004000, transmitter and receiver enabled.
+    /// UART0 at 0x40004000, transmitter and receiver enabled. Interrupts are masked (PRIMASK)
+    /// and the receive interrupt only wakes the core from `wfi`: no handler ever runs.
     pub fn uart0() -> Self {
+        cortex_m::interrupt::disable();
         let u = Self { base: 0x4000_4000 };
-        // SAFETY: the documented CMSDK UART registers of mps2-an386.
+        // SAFETY: the documented CMSDK UART registers of mps2-an386 and the NVIC's enable
+        // register of the Cortex-M4; with PRIMASK set the enabled IRQ is never taken.
         unsafe {
             ((u.base + Self::BAUDDIV) as *mut u32).write_volatile(16);
-            ((u.base + Self::CTRL) as *mut u32).write_volatile(0b11);
+            ((u.base + Self::CTRL) as *mut u32).write_volatile(Self::TX_RX_RXIRQ);
+            (Self::NVIC_ISER0 as *mut u32).write_volatile(Self::UART0_RX_IRQ);
         }
         u
     }
@@ -156,9 +172,21 @@ impl Uart {
         unsafe { ((self.base + Self::STATE) as *const u32).read_volatile() }
     }
 
-    /// Waits for and returns one byte.
+    /// Waits for and returns one byte, sleeping while none has come. The receive interrupt
+    /// is cleared at the UART and in the NVIC before the status is looked at, so a byte that
+    /// comes between the look and the `wfi` leaves the interrupt pending and `wfi` returns.
     pub fn read(&self) -> u8 {
-        while self.state() & 0b10 == 0 {}
+        loop {
+            // SAFETY: writes of the UART's INTCLEAR and the NVIC's clear-pending register.
+            unsafe {
+                ((self.base + Self::INTCLEAR) as *mut u32).write_volatile(Self::RX_IRQ);
+                (Self::NVIC_ICPR0 as *mut u32).write_volatile(Self::UART0_RX_IRQ);
+            }
+            if self.state() & 0b10 != 0 {
+                break;
+            }
+            cortex_m::asm::wfi();
+        }
         // SAFETY: a read of the DATA register with the receive buffer full.
         unsafe { ((self.base + Self::DATA) as *const u32).read_volatile() as u8 }
     }

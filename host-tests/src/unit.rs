@@ -195,6 +195,38 @@ impl QemuUnit {
         &self.monitor
     }
 
+    /// The host CPU time QEMU has used so far (user and system, from `/proc/PID/stat`; Linux).
+    ///
+    /// # Errors
+    /// When `/proc` cannot be read for the process.
+    pub fn cpu_time(&self) -> Result<Duration, String> {
+        let stat = std::fs::read_to_string(format!("/proc/{}/stat", self.child.id()))
+            .map_err(|e| format!("/proc/{}/stat: {e}", self.child.id()))?;
+        // The fields after the command name (in parentheses, which may hold spaces): utime
+        // and stime are the 14th and 15th of the line, the 12th and 13th after the name.
+        let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+        let field = |k: usize| -> Result<u64, String> {
+            rest.split_whitespace()
+                .nth(k)
+                .and_then(|v| v.parse().ok())
+                .ok_or_else(|| format!("/proc/{}/stat: no field {k}: {stat}", self.child.id()))
+        };
+        let ticks = field(11)? + field(12)?;
+        let hz = std::process::Command::new("getconf")
+            .arg("CLK_TCK")
+            .output()
+            .ok()
+            .and_then(|o| {
+                String::from_utf8_lossy(&o.stdout)
+                    .trim()
+                    .parse::<u64>()
+                    .ok()
+            })
+            .filter(|&h| h > 0)
+            .ok_or("getconf CLK_TCK gives no clock rate")?;
+        Ok(Duration::from_micros(ticks * 1_000_000 / hz))
+    }
+
     /// Whether QEMU still runs.
     #[must_use]
     pub fn running(&mut self) -> bool {

@@ -120,6 +120,35 @@ fn a_unit_with_an_mpu6050_reads_its_samples_through_the_driver() {
     );
 }
 
+/// An idle unit sleeps (`wfi` until its UART receives): over 3 s without a client it uses
+/// under a tenth of a host core (it used a whole core spinning on the UART's status), and it
+/// still answers when spoken to. The figure is printed for BENCHMARKS.
+#[test]
+fn an_idle_unit_sleeps_and_still_answers() {
+    if !qemu::available_or_skip("an_idle_unit_sleeps_and_still_answers") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let bin = qemu::build_firmware().unwrap_or_else(|e| panic!("{e}"));
+    let log = dir.path().join("qemu.log");
+    let unit = QemuUnit::power_on(&bin.join("device"), None, &log).unwrap();
+    let mut client = unit.connect(Duration::from_secs(30)).unwrap();
+    client.identify().unwrap();
+    // Booted and served once; now idle with the client connected and silent.
+    std::thread::sleep(Duration::from_secs(1));
+    let (t0, c0) = (std::time::Instant::now(), unit.cpu_time().unwrap());
+    std::thread::sleep(Duration::from_secs(3));
+    let share = (unit.cpu_time().unwrap() - c0).as_secs_f64() / t0.elapsed().as_secs_f64();
+    println!("idle unit: {:.1} % of a host core over 3 s", 100.0 * share);
+    assert!(
+        share < 0.10,
+        "the idle unit uses {:.0} % of a host core",
+        100.0 * share
+    );
+    let id = client.identify().unwrap();
+    assert_eq!(id.calibration, None);
+}
+
 /// Sends `record` to the unit over its UART and commits it; the commit's answer.
 fn commit_over_uart<L: std::io::Read + std::io::Write>(
     client: &mut calflash::device::Client<L>,
