@@ -222,7 +222,20 @@ fn a_fixture_file_of_several_units_is_calibrated_unit_by_unit() {
     );
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("3 units on"), "{out}");
-    assert!(d.join("out/index.html").is_file());
+    // One line per unit: its serial unbroken, its bias in mg, its first reason.
+    let index = std::fs::read_to_string(d.join("out/index.html")).unwrap();
+    for serial in ["ACC-F1", "ACC-F2", "u3"] {
+        let row = index
+            .lines()
+            .find(|l| l.contains(&format!("<a href=\"{serial}.html\">")))
+            .unwrap_or_else(|| panic!("no row for {serial}: {index}"));
+        assert!(row.starts_with("<tr><td class=\"unit\">"), "{row}");
+        assert!(
+            row.contains(" mg</td>"),
+            "no bias in mg on {serial}'s line: {row}"
+        );
+    }
+    assert!(index.contains("td.unit{white-space:nowrap}"), "{index}");
     for (serial, seed) in [("ACC-F1", 1), ("ACC-F2", 2), ("u3", 3)] {
         let (code, o, e) = calflash(
             d,

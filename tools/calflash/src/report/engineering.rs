@@ -39,6 +39,65 @@ pub(crate) fn mid_scale(c: &Calibrated, output: &str) -> f64 {
     (f64::from(rails.lo) + f64::from(rails.hi) + 1.0) / 2.0
 }
 
+/// Output `a`'s bias at table point `p` in SI units (its reading at zero input from the
+/// converter's mid-scale) and its 1-sigma; `None` without an offset or own-input term.
+fn bias(c: &Calibrated, p: &crate::sensor::PointFit, a: usize) -> Option<(f64, f64)> {
+    let axis = p.axes.get(a)?;
+    let fit = &axis.fit;
+    let coef = |name: &str| {
+        fit.names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| (fit.coefficients[i], fit.std_errors[i]))
+    };
+    let ((b0, e0), (s, _)) = (coef("1")?, coef(&axis.own)?);
+    let mid = mid_scale(c, &axis.output);
+    Some(((b0 - mid) / s, e0 / s.abs()))
+}
+
+/// One line for a batch's index: each output's bias at the reference point in mg or deg/h
+/// ("a_x +1.2 mg"), and the largest misalignment in mrad.
+#[must_use]
+pub fn brief(c: &Calibrated) -> String {
+    let Some(reference) = c.points.get(c.reference) else {
+        return String::new();
+    };
+    let mut parts = Vec::new();
+    let mut worst: Option<(f64, String)> = None;
+    for (a, axis) in reference.axes.iter().enumerate() {
+        let (unit, k) = engineering(c.units.get(a).copied().unwrap_or(""));
+        if let Some((b, _)) = bias(c, reference, a) {
+            let v = b * k;
+            // Four significant figures at most: a gyro's bias of 77,000 deg/h needs no decimals.
+            let decimals = if v.abs() >= 100.0 { 0 } else { 2 };
+            parts.push(format!("{} {v:+.decimals$} {unit}", axis.output));
+        }
+        let fit = &axis.fit;
+        let kind = axis.own.get(..2).unwrap_or("");
+        let Some(s) = fit
+            .names
+            .iter()
+            .position(|n| *n == axis.own)
+            .map(|i| fit.coefficients[i])
+        else {
+            continue;
+        };
+        for (j, n) in fit.names.iter().enumerate() {
+            if *n != axis.own && n.len() == 3 && kind.len() == 2 && n.starts_with(kind) {
+                let m = (fit.coefficients[j] / s * 1e3).abs();
+                if worst.as_ref().is_none_or(|(w, _)| m > *w) {
+                    worst = Some((m, format!("{} from {n}", axis.output)));
+                }
+            }
+        }
+    }
+    let mut line = parts.join(", ");
+    if let Some((m, which)) = worst {
+        line.push_str(&format!("; misalignment up to {m:.2} mrad ({which})"));
+    }
+    line
+}
+
 /// The lines, one per output: the bias at each temperature point, then the scale factor's
 /// 1-sigma and the misalignment at the reference point (whose temperature they name).
 #[must_use]
@@ -51,25 +110,10 @@ pub fn lines(c: &Calibrated) -> Vec<String> {
     for (a, axis) in reference.axes.iter().enumerate() {
         let si = c.units.get(a).copied().unwrap_or("");
         let (unit, k) = engineering(si);
-        let mid = mid_scale(c, &axis.output);
         let mut biases = Vec::new();
         for p in &c.points {
-            let Some(fit) = p.axes.get(a).map(|x| &x.fit) else {
-                continue;
-            };
-            let coef = |name: &str| {
-                fit.names
-                    .iter()
-                    .position(|n| n == name)
-                    .map(|i| (fit.coefficients[i], fit.std_errors[i]))
-            };
-            if let (Some((b0, e0)), Some((s, _))) = (coef("1"), coef(&axis.own)) {
-                biases.push(format!(
-                    "{:+.3} ({:.3}){}",
-                    (b0 - mid) / s * k,
-                    e0 / s.abs() * k,
-                    at(p.temp)
-                ));
+            if let Some((b, e)) = bias(c, p, a) {
+                biases.push(format!("{:+.3} ({:.3}){}", b * k, e * k, at(p.temp)));
             }
         }
         let fit = &axis.fit;

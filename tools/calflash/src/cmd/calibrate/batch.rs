@@ -368,6 +368,23 @@ fn reason_line(reasons: &[String]) -> String {
     line
 }
 
+/// A unit's reasons in the index: the first on its line, the others folded under it.
+fn reasons_cell(reasons: &[String]) -> String {
+    use crate::report::page::esc;
+    match reasons {
+        [] => String::new(),
+        [one] => esc(one),
+        [first, rest @ ..] => format!(
+            "<details><summary>{} (+{} more)</summary><ul>{}</ul></details>",
+            esc(first),
+            rest.len(),
+            rest.iter()
+                .map(|r| format!("<li>{}</li>", esc(r)))
+                .collect::<String>()
+        ),
+    }
+}
+
 /// The folder the batch's files came from (the first unit's), for the index's heading.
 fn data_dir_name(outcomes: &[Outcome]) -> String {
     outcomes
@@ -385,17 +402,15 @@ fn index_html(outcomes: &[Outcome], lot: Option<&str>, folder: String) -> String
     let mut rows = String::new();
     let mut counts = [0usize; 4];
     for o in outcomes {
-        let (verdict, class, page, why) = match &o.result {
+        let (verdict, class, page, figures, why) = match &o.result {
             Ok(j) => {
                 counts[j.verdict as usize] += 1;
                 (
                     j.verdict.word(),
                     j.verdict.word().to_lowercase(),
                     format!("<a href=\"{0}.html\">{0}</a>", esc(&o.serial)),
-                    j.reasons
-                        .iter()
-                        .map(|r| format!("<li>{}</li>", esc(r)))
-                        .collect::<String>(),
+                    esc(&j.figures),
+                    reasons_cell(&j.reasons),
                 )
             }
             Err(e) => {
@@ -404,17 +419,13 @@ fn index_html(outcomes: &[Outcome], lot: Option<&str>, folder: String) -> String
                     "FAILED",
                     "reject".to_string(),
                     esc(&o.serial),
-                    format!("<li>{}</li>", esc(e)),
+                    String::new(),
+                    reasons_cell(std::slice::from_ref(e)),
                 )
             }
         };
-        let why = if why.is_empty() {
-            String::new()
-        } else {
-            format!("<ul>{why}</ul>")
-        };
         rows.push_str(&format!(
-            "<tr><td>{page}</td><td class=\"{class}\">{verdict}</td><td class=\"why\">{why}</td><td>{}</td></tr>\n",
+            "<tr><td class=\"unit\">{page}</td><td class=\"{class}\">{verdict}</td><td class=\"why\">{figures}</td><td class=\"why\">{why}</td><td>{}</td></tr>\n",
             esc(&o.file.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned()))
         ));
     }
@@ -436,7 +447,7 @@ fn index_html(outcomes: &[Outcome], lot: Option<&str>, folder: String) -> String
         "accept"
     };
     format!(
-        "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title><style>{STYLE}td.why{{text-align:left}}ul{{margin:0;padding-left:1.2em}}</style></head><body>\n<h1>{0}</h1>\n<p class=\"verdict {class}\">{2} ACCEPT, {3} REVIEW, {4} REJECT, {5} failed</p>\n<p>From {1}, calibrated {when} UTC. Each unit's page is linked from its serial; the reasons are the findings that gave its verdict.</p>\n<table>\n<tr><th>unit</th><th>verdict</th><th>why</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
+        "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title><style>{STYLE}td.why{{text-align:left}}td.unit{{white-space:nowrap}}ul{{margin:0;padding-left:1.2em}}</style></head><body>\n<h1>{0}</h1>\n<p class=\"verdict {class}\">{2} ACCEPT, {3} REVIEW, {4} REJECT, {5} failed</p>\n<p>From {1}, calibrated {when} UTC. One line per unit: its page is linked from its serial; its figures are each output's bias at the reference point (mg, deg/h) and its largest misalignment (mrad); the reason is the first finding that gave its verdict, the others a click away.</p>\n<table>\n<tr><th>unit</th><th>verdict</th><th>figures</th><th>why</th><th>observations</th></tr>\n{rows}</table>\n</body></html>\n",
         esc(&title),
         esc(&folder),
         counts[0],

@@ -65,6 +65,8 @@ pub struct Judged {
     pub verdict: Verdict,
     /// The texts of the findings at that verdict.
     pub reasons: Vec<String>,
+    /// Its figures on one line (each output's bias in mg or deg/h, the largest misalignment).
+    pub figures: String,
 }
 
 /// Calibrates the unit `serial` from `data` with the options of `args`, writing what `out`
@@ -270,7 +272,11 @@ pub fn calibrate_one(
         .filter(|f| verdict != Verdict::Accept && f.verdict == verdict)
         .map(|f| f.text.clone())
         .collect();
-    Ok(Judged { verdict, reasons })
+    Ok(Judged {
+        verdict,
+        reasons,
+        figures: report::engineering::brief(&c),
+    })
 }
 
 /// `--as-built`: every output named once with its sensor's serial, and each stage-one record
