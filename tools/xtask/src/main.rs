@@ -15,6 +15,7 @@ mod bench;
 mod calibrate;
 mod disk;
 mod fuzz;
+mod guide;
 mod history;
 mod setup;
 mod test;
@@ -23,7 +24,7 @@ mod unit;
 use std::process::ExitCode;
 
 const USAGE: &str =
-    "usage: cargo xtask <test | bench | bench-fit | calibrate | unit | history | fuzz | setup>
+    "usage: cargo xtask <test | bench | bench-fit | calibrate | unit | history | fuzz | guide | setup>
 
   test       rustfmt, clippy (host and thumb), docs, every host test and the QEMU tests;
              installs the thumb target and qemu-system-arm when missing
@@ -33,6 +34,8 @@ const USAGE: &str =
   unit       the example unit on QEMU, its UART on tcp://127.0.0.1:4444, left running
   history    a local PostgreSQL shared history on 127.0.0.1:5433, left running
   fuzz       every fuzz target for --secs N seconds (default 300), with executions and findings
+  guide      build the guide (docs/) into target/book with mdBook (installed from the crate
+             registry when missing) and check every link
   setup      add the thumb target and install qemu-system-arm, nothing else";
 
 fn main() -> ExitCode {
@@ -45,6 +48,11 @@ fn main() -> ExitCode {
         Some("unit") => unit::run(&args[1..]),
         Some("history") => history::run(&args[1..]),
         Some("fuzz") => fuzz::command(&args[1..]),
+        Some("guide") => match guide::check() {
+            Ok(None) => Ok(()),
+            Ok(Some(why)) => Err(why),
+            Err(e) => Err(e),
+        },
         Some("setup") => setup::run(true).map(|_| ()),
         Some("-h" | "--help" | "help") => {
             println!("{USAGE}");

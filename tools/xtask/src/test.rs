@@ -187,9 +187,9 @@ pub fn run() -> Result<(), String> {
         }
     };
     println!("=== fuzz smoke: {fuzz_line} in {:.0?} ===", start.elapsed());
-    println!("\n=== xtask test: the guide (mdbook build docs) ===");
+    println!("\n=== xtask test: the guide (mdbook build docs, then every link) ===");
     let start = Instant::now();
-    let guide = guide();
+    let guide = crate::guide::check();
     let guide_line = match &guide {
         Ok(None) => "ok".to_string(),
         Ok(Some(why)) => format!("SKIPPED: {why}"),
@@ -237,32 +237,5 @@ pub fn run() -> Result<(), String> {
             steps.len() + 2,
             failed.join(", ")
         ))
-    }
-}
-
-/// Builds the guide (`docs/`) with mdBook into `docs/book/`, when `mdbook` is installed:
-/// `Ok(Some(why))` when it is not (its chapters' commands still run in the README's test,
-/// and its contents are checked there).
-fn guide() -> Result<Option<String>, String> {
-    let installed = Command::new("mdbook")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !installed {
-        return Ok(Some(
-            "mdbook is not installed (`cargo install mdbook` to build the guide); the README's \
-             test still runs its chapters' commands and checks its contents"
-                .to_string(),
-        ));
-    }
-    let status = Command::new("mdbook")
-        .arg("build")
-        .arg(root().join("docs"))
-        .status()
-        .map_err(|e| format!("mdbook build: {e}"))?;
-    if status.success() {
-        Ok(None)
-    } else {
-        Err(format!("mdbook build docs: {status}"))
     }
 }
