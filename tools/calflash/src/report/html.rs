@@ -4,7 +4,7 @@ use super::Error;
 use std::fmt::Write as _;
 
 use super::page::{STYLE, esc};
-use super::plot::{Figure, Series, figure};
+use super::plot::{Figure, Series, Sheet, figure};
 use super::terminal::{num, pval};
 use crate::sensor::{AxisFit, Calibrated};
 
@@ -168,7 +168,7 @@ fn model(h: &mut String, c: &Calibrated) -> Result<(), Error> {
                 .collect();
             let unit = c.units.first().copied().unwrap_or("");
             residual_figure(
-                h,
+                (h, &mut Sheet::new(false)),
                 (
                     &format!("{}: residuals without the term", d.name),
                     &format!("input ({unit})"),
@@ -214,13 +214,22 @@ fn axis_section(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
         );
     }
     let _ = writeln!(h, "</table>");
-    residual_figures(h, c, a, axis)?;
-    error_figure(h, c, a, axis)?;
+    // A triad's or an IMU's outputs: each one's figures as a row of small multiples.
+    let mut sheet = Sheet::new(reference.axes.len() > 1);
+    residual_figures(h, &mut sheet, c, a, axis)?;
+    error_figure(h, &mut sheet, c, a, axis)?;
+    sheet.finish(h);
     Ok(())
 }
 
 /// The residuals of axis `a` at every table point, against the input and in test order.
-fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Result<(), Error> {
+fn residual_figures(
+    h: &mut String,
+    sheet: &mut Sheet,
+    c: &Calibrated,
+    a: usize,
+    axis: &AxisFit,
+) -> Result<(), Error> {
     let unit = c.units[a];
     // Residuals against the input, every table point. A model continuous in temperature is
     // one fit of every observation, which each of the device's points carries: drawn once
@@ -265,12 +274,10 @@ fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) ->
         .map(|(k, (pts, name))| Series::dots(name, pts, k))
         .collect();
     let range = c.ranges[a];
+    let title = titled(sheet, &axis.output, "residuals against the input");
     residual_figure(
-        h,
-        (
-            &format!("{}: residuals against the input", axis.output),
-            &format!("{} ({unit})", axis.own),
-        ),
+        (h, sheet),
+        (&title, &format!("{} ({unit})", axis.own)),
         (series, unit),
         Some((f64::from(range.lo), f64::from(range.hi))),
     )?;
@@ -292,29 +299,37 @@ fn residual_figures(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) ->
         .enumerate()
         .map(|(k, (pts, name))| Series::dots(name, pts, k))
         .collect();
+    let title = titled(sheet, &axis.output, "residuals in test order");
     residual_figure(
-        h,
-        (
-            &format!("{}: residuals in test order", axis.output),
-            "line of the data file",
-        ),
+        (h, sheet),
+        (&title, "line of the data file"),
         (series, unit),
         None,
     )?;
     Ok(())
 }
 
+/// A figure's title: `what` alone in a row of small multiples under the output's heading,
+/// "output: what" on its own.
+fn titled(sheet: &Sheet, output: &str, what: &str) -> String {
+    if sheet.small() {
+        what.to_string()
+    } else {
+        format!("{output}: {what}")
+    }
+}
+
 /// A figure of residuals about zero in the input's `unit` (each residual count over the scale
 /// factor), titled and with its x axis as `(title, x)`, and the calibrated range when `range`
 /// is given.
 fn residual_figure(
-    h: &mut String,
+    (h, sheet): (&mut String, &mut Sheet),
     (title, x): (&str, &str),
     (series, unit): (Vec<Series<'_>>, &str),
     range: Option<(f64, f64)>,
 ) -> Result<(), Error> {
     let y = format!("residual ({unit})");
-    figure(
+    sheet.add(
         h,
         &Figure {
             title,
@@ -335,7 +350,13 @@ fn residual_figure(
 
 /// The calibration's own 1-sigma error of axis `a` over its calibrated range and half a range
 /// beyond each end.
-fn error_figure(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Result<(), Error> {
+fn error_figure(
+    h: &mut String,
+    sheet: &mut Sheet,
+    c: &Calibrated,
+    a: usize,
+    axis: &AxisFit,
+) -> Result<(), Error> {
     let unit = c.units[a];
     let f = &axis.fit;
     let range = c.ranges[a];
@@ -362,10 +383,14 @@ fn error_figure(h: &mut String, c: &Calibrated, a: usize, axis: &AxisFit) -> Res
             (x, f.predict(&row).variance.sqrt() / slope)
         })
         .collect();
-    figure(
+    sheet.add(
         h,
         &Figure {
-            title: &format!("{}: 1-sigma calibration error over the range", axis.output),
+            title: &titled(
+                sheet,
+                &axis.output,
+                "1-sigma calibration error over the range",
+            ),
             x: &format!("{} ({unit})", axis.own),
             y: &format!("1-sigma ({unit})"),
             series: vec![Series::curve("prediction standard error", &curve, 0)],

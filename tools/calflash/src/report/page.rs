@@ -22,6 +22,7 @@ h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #cc
 table{border-collapse:collapse;margin:.5em 0}td,th{padding:2px 10px;text-align:right;border-bottom:1px solid #eee}\
 th{background:#f4f4f4}.terms td{white-space:nowrap}td:first-child,th:first-child{text-align:left}.fig{margin:1em 0}\
 .fig svg{display:block;max-width:100%;height:auto}\
+.panels{display:grid;grid-template-columns:repeat(3,325px);gap:0 12px}.panels .fig{margin:.3em 0}.key{margin:.5em 0 0}\
 pre{font-family:'DejaVu Sans Mono',monospace;white-space:pre-wrap;overflow-wrap:anywhere}\
 .contents{background:#f7f7f7;padding:.5em 1em;border-radius:6px}.contents ol{columns:2;margin:.3em 0}\
 @page{size:A4;margin:14mm 12mm 16mm;@bottom-center{content:'page ' counter(page) ' of ' counter(pages);font-size:8pt;color:#555}}\

@@ -117,18 +117,138 @@ const SIZE: (u32, u32) = (1000, 440);
 /// The log-log figure's size.
 const LOGLOG_SIZE: (u32, u32) = (1000, 540);
 
-/// The plotting area of a figure, in pixels (less the caption, margins and the axes' label
-/// areas).
-const PLOT_PX: (f64, f64) = (SIZE.0 as f64 - 110.0, SIZE.1 as f64 - 100.0);
-
 /// The plotting area of the log-log figure.
 const LOGLOG_PX: (f64, f64) = (LOGLOG_SIZE.0 as f64 - 110.0, LOGLOG_SIZE.1 as f64 - 100.0);
 
-/// Text sizes in pixels: the title, the axes' names, the tick labels and the legend.
+/// Text sizes as given to plotters: the title, the axes' names, the tick labels and the
+/// legend. Its SVG backend writes them at 1/1.24 of that (a point size), so 14 is the smallest
+/// that a browser draws at 11 px or more.
 const TITLE_PX: u32 = 20;
 const NAME_PX: u32 = 15;
-const TICK_PX: u32 = 13;
+const TICK_PX: u32 = 14;
 const LEGEND_PX: u32 = 14;
+/// The smallest text size given to plotters (drawn at 11.3 px).
+const MIN_PX: u32 = 14;
+
+/// How a figure is laid out: its size, its title's largest text, its ticks and label areas,
+/// and whether it carries its own legend.
+struct Frame {
+    size: (u32, u32),
+    title_px: u32,
+    ticks: (usize, usize),
+    label_areas: (u32, u32),
+    margin: u32,
+    legend: bool,
+}
+
+/// A figure across the report's column.
+const FULL: Frame = Frame {
+    size: SIZE,
+    title_px: TITLE_PX,
+    ticks: (10, 8),
+    label_areas: (48, 86),
+    margin: 12,
+    legend: true,
+};
+
+/// One of three small multiples across the column; the key is written once beside the row.
+const PANEL: Frame = Frame {
+    size: (325, 250),
+    title_px: 15,
+    ticks: (5, 5),
+    label_areas: (44, 78),
+    margin: 8,
+    legend: false,
+};
+
+impl Frame {
+    /// The plotting area in pixels (less the caption, margins and the axes' label areas).
+    fn plot_px(&self) -> (f64, f64) {
+        (
+            f64::from(self.size.0) - f64::from(self.label_areas.1) - 24.0,
+            f64::from(self.size.1) - f64::from(self.label_areas.0) - 52.0,
+        )
+    }
+}
+
+/// Figures one under another across the column, or as small multiples three to a row with one
+/// key for the row (a triad's or an IMU's outputs side by side): [`Sheet::add`] each, then
+/// [`Sheet::finish`].
+pub struct Sheet {
+    small: bool,
+    panels: Vec<String>,
+    key: Vec<(String, RGBColor, bool)>,
+}
+
+impl Sheet {
+    /// Full-size figures (`small` false) or small multiples.
+    #[must_use]
+    pub fn new(small: bool) -> Self {
+        Self {
+            small,
+            panels: Vec::new(),
+            key: Vec::new(),
+        }
+    }
+
+    /// Whether the figures are small multiples.
+    #[must_use]
+    pub fn small(&self) -> bool {
+        self.small
+    }
+
+    /// Draws `fig`: at once into `h` at full size, or kept for the row of small multiples.
+    ///
+    /// # Errors
+    /// As [`svg`].
+    pub fn add(&mut self, h: &mut String, fig: &Figure<'_>) -> Result<(), Error> {
+        if !self.small {
+            return figure(h, fig);
+        }
+        self.panels.push(draw(fig, &PANEL)?);
+        let mut entries: Vec<(String, RGBColor, bool)> = fig
+            .series
+            .iter()
+            .filter(|s| !s.name.is_empty())
+            .map(|s| (s.name.to_string(), s.color, s.line))
+            .collect();
+        if !fig.bands.is_empty() && !fig.band_label.is_empty() {
+            entries.push((fig.band_label.to_string(), BAND, false));
+        }
+        for e in entries {
+            if !self.key.iter().any(|k| k.0 == e.0) {
+                self.key.push(e);
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the small multiples kept (nothing for full-size figures): the key, then the
+    /// panels three to a row.
+    pub fn finish(self, h: &mut String) {
+        if self.panels.is_empty() {
+            return;
+        }
+        h.push_str("<p class=\"key\">");
+        for (name, RGBColor(r, g, b), line) in &self.key {
+            let mark = if *line { "&#9644;" } else { "&#9679;" };
+            h.push_str(&format!(
+                "<span style=\"color:rgb({r},{g},{b})\">{mark}</span> {} &#160; ",
+                super::page::esc(name)
+            ));
+        }
+        h.push_str("</p>\n<div class=\"panels\">");
+        for p in &self.panels {
+            h.push_str("<div class=\"fig\">");
+            h.push_str(p);
+            h.push_str("</div>");
+        }
+        h.push_str("</div>\n");
+    }
+}
+
+/// The shade of a figure's marked intervals (the calibrated range, the still poses).
+const BAND: RGBColor = RGBColor(230, 240, 255);
 
 /// The title's font size: the standard size, or smaller so that a long title fits the figure's
 /// width (sans-serif glyphs average about 0.55 of the size).
@@ -136,7 +256,7 @@ fn title_px(title: &str, width: u32) -> u32 {
     let room = f64::from(width) - 40.0;
     let chars = title.chars().count().max(1) as f64;
     let fits = (room / (0.58 * chars)).floor() as u32;
-    fits.clamp(11, TITLE_PX)
+    fits.clamp(MIN_PX, TITLE_PX)
 }
 
 /// How a figure's axes map values to distance: the legend's place is chosen in that space.
@@ -315,12 +435,21 @@ fn named_tick(names: &[&str], v: f64) -> String {
 /// # Errors
 /// plotters' drawing error.
 pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
+    draw(fig, &FULL)
+}
+
+/// Draws a figure in `frame` as an SVG document.
+fn draw(fig: &Figure<'_>, frame: &Frame) -> Result<String, Error> {
     let mut out = String::new();
     {
-        let root = SVGBackend::with_string(&mut out, SIZE).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, frame.size).into_drawing_area();
         root.fill(&WHITE)?;
         let ((x0, x1), (y0, y1)) = bounds(fig);
-        let (spot, y1) = legend_spot(fig, (x0, x1), (y0, y1), (Axes::Linear, PLOT_PX));
+        let (spot, y1) = if frame.legend {
+            legend_spot(fig, (x0, x1), (y0, y1), (Axes::Linear, frame.plot_px()))
+        } else {
+            (SeriesLabelPosition::UpperRight, y1)
+        };
         // Error bars too short to see are said under the axis, not left to look like no
         // uncertainty.
         let largest = fig
@@ -339,12 +468,16 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
             } else {
                 fig.x.to_string()
             };
-        let (xt, yt) = (Ticks::linear(x0, x1, 10), Ticks::linear(y0, y1, 8));
+        let (xt, yt) = (
+            Ticks::linear(x0, x1, frame.ticks.0),
+            Ticks::linear(y0, y1, frame.ticks.1),
+        );
+        let title = title_px(fig.title, frame.size.0).min(frame.title_px);
         let mut chart = ChartBuilder::on(&root)
-            .caption(fig.title, (super::page::FONT, title_px(fig.title, SIZE.0)))
-            .margin(12)
-            .x_label_area_size(48)
-            .y_label_area_size(86)
+            .caption(fig.title, (super::page::FONT, title))
+            .margin(frame.margin)
+            .x_label_area_size(frame.label_areas.0)
+            .y_label_area_size(frame.label_areas.1)
             .build_cartesian_2d(
                 Ticked::new(RangedCoordf64::from(x0..x1), &xt),
                 Ticked::new(RangedCoordf64::from(y0..y1), &yt),
@@ -364,16 +497,13 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
             .draw()?;
         if !fig.bands.is_empty() {
             chart
-                .draw_series(fig.bands.iter().map(|(a, b)| {
-                    Rectangle::new([(*a, y0), (*b, y1)], RGBColor(230, 240, 255).filled())
-                }))?
+                .draw_series(
+                    fig.bands
+                        .iter()
+                        .map(|(a, b)| Rectangle::new([(*a, y0), (*b, y1)], BAND.filled())),
+                )?
                 .label(fig.band_label)
-                .legend(|(x, y)| {
-                    Rectangle::new(
-                        [(x, y - 5), (x + 12, y + 5)],
-                        RGBColor(230, 240, 255).filled(),
-                    )
-                });
+                .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], BAND.filled()));
         }
         if fig.zero_line {
             chart.draw_series(LineSeries::new([(x0, 0.0), (x1, 0.0)], BLACK.mix(0.4)))?;
@@ -409,7 +539,9 @@ pub fn svg(fig: &Figure<'_>) -> Result<String, Error> {
             }
             line_or_marks(&mut chart, s, &pts, 2)?;
         }
-        legend(&mut chart, spot)?;
+        if frame.legend {
+            legend(&mut chart, spot)?;
+        }
         root.present()?;
     }
     Ok(out)

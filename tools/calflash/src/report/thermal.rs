@@ -11,7 +11,7 @@ use spincal::correct::AnyAxisCorrector;
 use spincal::model::TemperatureModel;
 
 use super::page::esc;
-use super::plot::{Figure, Series, figure};
+use super::plot::{Figure, Series, Sheet, figure};
 use super::terminal::num;
 use crate::sensor::Calibrated;
 use crate::sensor::single::coefficients::{bias_slope_cov, own_of};
@@ -45,12 +45,18 @@ pub fn section(c: &Calibrated) -> Result<String, Error> {
         } else {
             String::new()
         };
+        // Several outputs: each one's coefficients as small multiples under its name.
+        let mut sheet = Sheet::new(several);
+        if several {
+            let _ = writeln!(h, "<h3>{}</h3>", esc(&tf.fit.output));
+        }
         let _ = writeln!(h, "<ul>");
         for r in &tf.reasons {
             let _ = writeln!(h, "<li>{}temperature order of {}</li>", esc(&axis), esc(r));
         }
         let _ = writeln!(h, "</ul>");
-        coefficient_figures(&mut h, c, tf, &axis)?;
+        coefficient_figures(&mut h, &mut sheet, c, tf, &axis)?;
+        sheet.finish(&mut h);
     }
     if several || !matches!(c.data.sensor, spincal::model::Sensor::Single { .. }) {
         h.push_str(&triad_figures(c)?);
@@ -143,6 +149,7 @@ type Shown<'a> = dyn Fn(f64, f64, f64) -> (f64, f64) + 'a;
 /// other coefficient in counts per unit of its term.
 fn coefficient_figures(
     h: &mut String,
+    sheet: &mut Sheet,
     c: &Calibrated,
     tf: &ThermalFit,
     axis: &str,
@@ -161,7 +168,20 @@ fn coefficient_figures(
     let t_mid = temps.get(temps.len() / 2).copied().unwrap_or(25.0);
     let scale_at = |t: f64| own.map(|o| tf.coefficients_at(t).0[o]);
     let s_mid = scale_at(t_mid).filter(|s| s.is_finite() && *s != 0.0);
+    // Small multiples draw what changes with the temperature; a coefficient of order 0 is a
+    // flat line, said in words.
+    let mut constant = Vec::new();
     for (j, name) in names.iter().enumerate() {
+        if sheet.small() && name != "1" && tf.orders.get(j) == Some(&0) {
+            let (b, cov) = tf.coefficients_at(t_mid);
+            constant.push(format!(
+                "{name} {} ({}) {}",
+                num(b[j]),
+                num(cov[(j, j)].max(0.0).sqrt()),
+                crate::report::page::term_unit(name, unit)
+            ));
+            continue;
+        }
         // How a coefficient is shown at temperature t: its value, its 1-sigma.
         let (what, show): (String, Box<Shown<'_>>) = match (name.as_str(), own, s_mid) {
             ("1", Some(_), Some(_)) => (
@@ -207,7 +227,11 @@ fn coefficient_figures(
         } else {
             Vec::new()
         };
-        let title = format!("{axis}{what} against temperature");
+        let title = if sheet.small() {
+            what.clone()
+        } else {
+            format!("{axis}{what} against temperature")
+        };
         let mut series = vec![
             Series::curve("model", &mid_line, 0),
             Series::curve("95 % band", &upper, 1),
@@ -216,12 +240,12 @@ fn coefficient_figures(
         if !observed.is_empty() {
             series.push(Series::dots("observations", &observed, 2));
         }
-        figure(
+        sheet.add(
             h,
             &Figure {
                 title: &title,
                 x: "temperature (C)",
-                y: &what,
+                y: if sheet.small() { "" } else { &what },
                 series,
                 bands: Vec::new(),
                 band_label: "",
@@ -229,6 +253,13 @@ fn coefficient_figures(
                 x_names: None,
             },
         )?;
+    }
+    if !constant.is_empty() {
+        let _ = writeln!(
+            h,
+            "<p>Constant over the temperature (order 0, not drawn): {}.</p>",
+            esc(&constant.join(", "))
+        );
     }
     Ok(())
 }

@@ -57,7 +57,12 @@ fn on_log_axes_the_legend_is_placed_by_decades() {
     let (spot, top) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Log, LOGLOG_PX));
     assert!(matches!(spot, SeriesLabelPosition::LowerRight));
     assert_eq!(top, 1000.0);
-    let (spot, _) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Linear, PLOT_PX));
+    let (spot, _) = legend_spot(
+        &figure(&pts),
+        range.0,
+        range.1,
+        (Axes::Linear, FULL.plot_px()),
+    );
     assert!(matches!(spot, SeriesLabelPosition::UpperRight));
     // Every corner taken: the top is raised by a share of the decades, not of the values.
     let pts = [(1.1, 1.1), (900.0, 1.1), (1.1, 900.0), (900.0, 900.0)];
@@ -74,15 +79,25 @@ fn the_legend_goes_where_it_covers_no_point() {
     let range = ((0.0, 10.0), (0.0, 10.0));
     // Points in the upper right: the upper left is free.
     let pts = [(9.5, 9.5), (5.0, 5.0)];
-    let (spot, top) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Linear, PLOT_PX));
+    let (spot, top) = legend_spot(
+        &figure(&pts),
+        range.0,
+        range.1,
+        (Axes::Linear, FULL.plot_px()),
+    );
     assert!(matches!(spot, SeriesLabelPosition::UpperLeft));
     assert_eq!(top, 10.0);
     // Points in every corner: room is made above them.
     let pts = [(0.2, 0.2), (9.8, 0.2), (0.2, 9.8), (9.8, 9.8)];
-    let (spot, top) = legend_spot(&figure(&pts), range.0, range.1, (Axes::Linear, PLOT_PX));
+    let (spot, top) = legend_spot(
+        &figure(&pts),
+        range.0,
+        range.1,
+        (Axes::Linear, FULL.plot_px()),
+    );
     assert!(matches!(spot, SeriesLabelPosition::UpperRight));
     let (_, h) = legend_px(&figure(&pts)).unwrap();
-    let share = (h + 10.0) / PLOT_PX.1;
+    let share = (h + 10.0) / FULL.plot_px().1;
     assert!((top - 10.0 / (1.0 - share)).abs() < 1e-9, "{top}");
 }
 
