@@ -632,6 +632,33 @@ fn what_a_reader_finds(d: &Path) {
             );
         }
     }
+    // Issue 68: the accuracy page names the bytes it judged (the blob's SHA-256 in its body,
+    // not only in the provenance) and draws each error with the 1-sigma the blob stated.
+    let accuracy = page("accuracy.html");
+    let blob = std::fs::read(d.join("round.blob")).unwrap();
+    let sha: String = {
+        use sha2::Digest as _;
+        sha2::Sha256::digest(&blob)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
+    };
+    let body = accuracy
+        .split("<section id=\"provenance\">")
+        .next()
+        .unwrap();
+    assert!(
+        body.contains("<b>The calibration:</b> unit ") && body.contains(&sha),
+        "accuracy.html: the blob's identity is not in the page's body"
+    );
+    let figures: Vec<&str> = body.split("<svg").skip(1).collect();
+    assert!(!figures.is_empty());
+    for fig in figures {
+        assert!(
+            fig.contains("stated 1-sigma") && fig.contains("<polygon"),
+            "accuracy.html: an error figure without the stated 1-sigma's band"
+        );
+    }
     // Residuals in the input's unit (over the scale factor), not in the converter's counts.
     for f in [
         "imu.html",

@@ -274,6 +274,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
             args.input.display(),
             data.identity.serial
         );
+        let calibration = calibration_line(&args.blob, &bytes, data);
         let html = crate::report::provenance::Provenance::now()
             .serial(data.identity.serial.as_str())
             .inputs(&[
@@ -282,7 +283,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
             ])
             .blob_file(&args.blob)
             .stamp(&crate::report::accuracy::html(
-                &title,
+                (&title, &calibration),
                 acc,
                 (&x, label),
                 &units,
@@ -292,6 +293,37 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
     staged.commit()?;
     report(args, &cal, &input, timing.as_ref(), lever, &corrected);
     Ok(())
+}
+
+/// Which calibration a page describes, from the blob's own bytes: its file, length and SHA-256,
+/// the unit, when and by which calflash it was made from which data, and who signed it.
+fn calibration_line(
+    path: &std::path::Path,
+    bytes: &[u8],
+    data: &spincal::model::CalibrationData,
+) -> String {
+    use sha2::Digest as _;
+    let id = &data.identity;
+    let hex = |b: &[u8]| b.iter().map(|x| format!("{x:02x}")).collect::<String>();
+    let [a, b, c] = id.tool_version;
+    format!(
+        "unit {}, blob {} ({} bytes, SHA-256 {}), made {} UTC by calflash {a}.{b}.{c} from data whose SHA-256 begins {}; {}{}",
+        id.serial,
+        path.display(),
+        bytes.len(),
+        hex(&sha2::Sha256::digest(bytes)),
+        crate::cmd::history::format_time(i64::try_from(id.created_unix_s).unwrap_or(i64::MAX)),
+        hex(&id.data_hash),
+        match crate::signing::signer(bytes) {
+            Some((key, counter)) => format!("signed by station key {key}, counter {counter}"),
+            None => "unsigned".to_string(),
+        },
+        if id.fit_rejected {
+            "; its fit was REJECTED and the blob forced"
+        } else {
+            ""
+        }
+    )
 }
 
 /// The raw columns a calibration's sensor corrects, the names of its outputs, and the

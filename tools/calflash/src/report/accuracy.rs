@@ -20,7 +20,7 @@ const SHOWN: usize = 3_000;
 /// # Errors
 /// A figure that cannot be drawn.
 pub fn html(
-    title: &str,
+    (title, calibration): (&str, &str),
     acc: &Accuracy,
     (x, x_label): (&[f64], &str),
     units: &[&'static str],
@@ -34,9 +34,10 @@ pub fn html(
     let rows = acc.rows();
     let (class, verdict) = verdict(&rows, acc.count());
     let _ = writeln!(h, "<p class=\"verdict {class}\">{}</p>", esc(&verdict));
+    let _ = writeln!(h, "<p><b>The calibration:</b> {}</p>", esc(calibration));
     let _ = writeln!(
         h,
-        "<p>Each output's error (corrected minus reference) over the {} samples the device did not flag, one figure per output so that none hides another; each point drawn is the largest error of its stretch of samples.</p>",
+        "<p>Each output's error (corrected minus reference) over the {} samples the device did not flag, one figure per output so that none hides another; each point drawn is the largest error of its stretch of samples, and the shade about zero is the 1-sigma the blob stated for those samples (the largest of the stretch): the calibration's error alone, which each sample's noise adds to, so a noisy record's errors go well beyond it while their mean (in the table) stays within a few of it.</p>",
         acc.count()
     );
     h.push_str("<table class=\"terms\">\n<tr><th>output</th><th>unit</th><th>mean</th><th>mean z</th><th>RMS</th><th>stated 1-sigma (median)</th><th>the statement</th><th>robust spread</th><th>99 % below</th><th>worst</th><th>far out</th></tr>\n");
@@ -59,20 +60,28 @@ pub fn html(
         );
     }
     h.push_str("</table>\n<p>The stated 1-sigma is the calibration's error alone (the median of what the blob states at each sample); the statement is overstated when it is over three times the RMS error (a check against it cannot fail), understated when the mean error is beyond 3 of its sigma; the robust spread (1.4826 times the median absolute deviation) includes each sample's noise; mean z: the mean over its sigma, the stated 1-sigma and the spread over the square root of the samples together; 99 % below: of the absolute errors; far out: samples more than five robust spreads from the median.</p>\n");
-    let series: Vec<Vec<(f64, f64)>> = (0..acc.names().len())
-        .map(|k| peaks(acc.errors(k), x))
-        .collect();
     for (k, name) in acc.names().iter().enumerate() {
         let unit = units.get(k).copied().unwrap_or("");
         let title = format!("{name}: error along the recording, {unit}");
         let y = format!("{name} error, {unit}");
+        let (errors, band) = peaks(acc.errors(k), acc.stated(k), x);
+        let zero: Vec<(f64, f64)> = band.iter().map(|(x, _)| (*x, 0.0)).collect();
+        let half: Vec<f64> = band.iter().map(|(_, s)| *s).collect();
+        // The band over the errors, so that a noisy record does not hide it.
+        let mut series = vec![Series::curve(name, &errors, k)];
+        if !half.is_empty() {
+            series.push(Series {
+                band: Some(&half),
+                ..Series::curve("stated 1-sigma", &zero, (k + 1) % 6)
+            });
+        }
         figure(
             &mut h,
             &Figure {
                 title: &title,
                 x: x_label,
                 y: &y,
-                series: vec![Series::curve(name, &series[k], k)],
+                series,
                 bands: Vec::new(),
                 band_label: "",
                 zero_line: true,
@@ -159,12 +168,30 @@ fn verdict(rows: &[Row], n: usize) -> (&'static str, String) {
     )
 }
 
-/// At most [`SHOWN`] points: the largest absolute error of each stretch, at its sample's `x`.
-fn peaks(errors: &[(usize, f64)], x: &[f64]) -> Vec<(f64, f64)> {
+/// At most [`SHOWN`] points: the largest absolute error of each stretch, at its sample's `x`;
+/// and, when `stated` is given (one per error), the largest stated 1-sigma of each stretch.
+fn peaks(
+    errors: &[(usize, f64)],
+    stated: Option<&[f64]>,
+    x: &[f64],
+) -> (Vec<(f64, f64)>, Vec<(f64, f64)>) {
     let every = errors.len().div_ceil(SHOWN).max(1);
-    errors
+    let at = |i: usize| x.get(i).copied().unwrap_or(i as f64);
+    let peaks = errors
         .chunks(every)
         .filter_map(|c| c.iter().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())))
-        .map(|(i, e)| (x.get(*i).copied().unwrap_or(*i as f64), *e))
-        .collect()
+        .map(|(i, e)| (at(*i), *e))
+        .collect();
+    let band = match stated {
+        Some(s) if s.len() == errors.len() => errors
+            .chunks(every)
+            .zip(s.chunks(every))
+            .filter_map(|(c, s)| {
+                let first = c.first()?;
+                Some((at(first.0), s.iter().copied().fold(0.0, f64::max)))
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    (peaks, band)
 }

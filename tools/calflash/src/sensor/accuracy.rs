@@ -142,6 +142,15 @@ impl Accuracy {
         self.errors.get(k).map_or(&[], Vec::as_slice)
     }
 
+    /// Output `k`'s stated 1-sigma at each clean sample (in the order of [`Accuracy::errors`]),
+    /// when every sample stated one.
+    #[must_use]
+    pub fn stated(&self, k: usize) -> Option<&[f64]> {
+        (self.stated == self.n && self.n > 0)
+            .then(|| self.stated_each.get(k).map(Vec::as_slice))
+            .flatten()
+    }
+
     /// The outputs' names.
     #[must_use]
     pub fn names(&self) -> &[String] {
