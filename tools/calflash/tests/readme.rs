@@ -416,3 +416,26 @@ fn the_guide_lists_every_chapter_and_the_readme_links_them() {
         readme.lines().count()
     );
 }
+
+/// Each chapter with commands shows its first one near its top, the theory after it (issue 68:
+/// the flight chapter opened with 1,147 words before its first command).
+#[test]
+fn every_chapter_shows_a_command_before_its_theory() {
+    const FIRST_LINES: usize = 15;
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut late = Vec::new();
+    for entry in std::fs::read_dir(repo.join("docs/src")).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        if let Some(at) = text.lines().position(|l| l.starts_with("```")) {
+            if at >= FIRST_LINES {
+                late.push(format!(
+                    "{}: first code block at line {}",
+                    path.display(),
+                    at + 1
+                ));
+            }
+        }
+    }
+    assert!(late.is_empty(), "{}", late.join("\n"));
+}

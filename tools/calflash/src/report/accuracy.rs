@@ -173,11 +173,7 @@ type Points = Vec<(f64, f64)>;
 
 /// At most [`SHOWN`] points: the largest absolute error of each stretch, at its sample's `x`;
 /// and, when `stated` is given (one per error), the largest stated 1-sigma of each stretch.
-fn peaks(
-    errors: &[(usize, f64)],
-    stated: Option<&[f64]>,
-    x: &[f64],
-) -> (Points, Points) {
+fn peaks(errors: &[(usize, f64)], stated: Option<&[f64]>, x: &[f64]) -> (Points, Points) {
     let every = errors.len().div_ceil(SHOWN).max(1);
     let at = |i: usize| x.get(i).copied().unwrap_or(i as f64);
     let peaks = errors
