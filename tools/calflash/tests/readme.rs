@@ -427,14 +427,14 @@ fn every_chapter_shows_a_command_before_its_theory() {
     for entry in std::fs::read_dir(repo.join("docs/src")).unwrap() {
         let path = entry.unwrap().path();
         let text = std::fs::read_to_string(&path).unwrap();
-        if let Some(at) = text.lines().position(|l| l.starts_with("```")) {
-            if at >= FIRST_LINES {
-                late.push(format!(
-                    "{}: first code block at line {}",
-                    path.display(),
-                    at + 1
-                ));
-            }
+        if let Some(at) = text.lines().position(|l| l.starts_with("```"))
+            && at >= FIRST_LINES
+        {
+            late.push(format!(
+                "{}: first code block at line {}",
+                path.display(),
+                at + 1
+            ));
         }
     }
     assert!(late.is_empty(), "{}", late.join("\n"));
