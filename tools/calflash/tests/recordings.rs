@@ -347,6 +347,48 @@ fn the_mpu9150_recordings_calibrate_in_physical_units() {
 /// the first log; on the second a fold cannot fit them at all), so they are not kept. Before,
 /// the first was kept with the poses held out 400 times worse than the fit, and the second
 /// stopped the calibration ("no convergence in 200 iterations").
+/// A logger set for a decimal comma writes `;` between fields (issue 66: "1 fields; expected
+/// 7"): the first MPU-9150 log written so is read as the same recording and gives the same fit.
+#[test]
+fn a_semicolon_file_with_decimal_commas_is_the_same_recording() {
+    let Some(d) = mpu9150() else { return };
+    let out = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(d.join("imu1.log")).unwrap();
+    std::fs::write(
+        out.path().join("semi.log"),
+        text.replace('.', ",").replace(' ', ";"),
+    )
+    .unwrap();
+    let fit = |file: &str, json: &str| {
+        let (code, said, err) = calflash(
+            out.path(),
+            &[
+                "selfcal",
+                file,
+                "--rate",
+                "100",
+                "--g",
+                "9.8204",
+                "--init-rest",
+                "6",
+                "--serial",
+                "imu1",
+                "--no-db",
+                "--units",
+                "m/s2,rad/s",
+                "--json",
+                json,
+            ],
+        );
+        assert_eq!(code, 0, "{said}{err}");
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.path().join(json)).unwrap()).unwrap();
+        (r["accel"].clone(), r["gyro"].clone())
+    };
+    let original = fit(arg(&d.join("imu1.log")), "a.json");
+    assert_eq!(fit("semi.log", "b.json"), original);
+}
+
 #[test]
 fn a_few_poses_do_not_keep_quadratic_terms_the_poses_held_out_refute() {
     let Some(d) = mpu9150() else { return };

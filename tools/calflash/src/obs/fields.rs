@@ -12,10 +12,14 @@ pub(crate) const MAX_FIELDS: usize = 64;
 /// The byte range of each field of a line.
 pub(crate) type Spans = [(usize, usize); MAX_FIELDS];
 
-/// Splits a line into `spans` (at commas, each field trimmed, or at runs of spaces and tabs)
-/// and returns the number of fields; fields beyond the length of `spans` are counted, not
-/// kept.
-pub(crate) fn split_bytes(bytes: &[u8], comma: bool, spans: &mut [(usize, usize)]) -> usize {
+/// Splits a line into `spans` (at each `separator`, a comma or a semicolon, each field
+/// trimmed; with none, at runs of spaces and tabs) and returns the number of fields; fields
+/// beyond the length of `spans` are counted, not kept.
+pub(crate) fn split_bytes(
+    bytes: &[u8],
+    separator: Option<u8>,
+    spans: &mut [(usize, usize)],
+) -> usize {
     let mut count = 0;
     let mut keep = |start: usize, end: usize| {
         if let Some(slot) = spans.get_mut(count) {
@@ -24,9 +28,9 @@ pub(crate) fn split_bytes(bytes: &[u8], comma: bool, spans: &mut [(usize, usize)
         count += 1;
     };
     let n = bytes.len();
-    if comma {
+    if let Some(sep) = separator {
         let mut start = 0;
-        for end in memchr::memchr_iter(b',', bytes).chain(std::iter::once(n)) {
+        for end in memchr::memchr_iter(sep, bytes).chain(std::iter::once(n)) {
             let (mut a, mut b) = (start, end);
             while a < b && bytes[a].is_ascii_whitespace() {
                 a += 1;
@@ -53,6 +57,33 @@ pub(crate) fn split_bytes(bytes: &[u8], comma: bool, spans: &mut [(usize, usize)
         }
     }
     count
+}
+
+/// The separator of a sample line: a semicolon where there is one (a logger set for a
+/// decimal comma writes `1,25;-0,5`), else a comma where there is one, else whitespace.
+pub(crate) fn separator_of(bytes: &[u8]) -> Option<u8> {
+    if bytes.contains(&b';') {
+        Some(b';')
+    } else if bytes.contains(&b',') {
+        Some(b',')
+    } else {
+        None
+    }
+}
+
+/// A field written with a decimal comma (`-0,981`) as a number; `None` otherwise.
+#[cold]
+pub(crate) fn decimal_comma(field: &[u8]) -> Option<f64> {
+    if field.len() > 64 || field.iter().filter(|b| **b == b',').count() != 1 {
+        return None;
+    }
+    let mut buf = [0u8; 64];
+    let buf = &mut buf[..field.len()];
+    buf.copy_from_slice(field);
+    buf.iter_mut()
+        .filter(|b| **b == b',')
+        .for_each(|b| *b = b'.');
+    number(buf)
 }
 
 /// Powers of ten that are exact in `f64`, up to the most fraction digits the fast path reads.
@@ -289,6 +320,22 @@ pub(crate) fn not_text_at(block: &[u8]) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_semicolon_separates_and_a_decimal_comma_reads() {
+        assert_eq!(separator_of(b"0,01;9,81;-0,5"), Some(b';'));
+        assert_eq!(separator_of(b"0.01,9.81"), Some(b','));
+        assert_eq!(separator_of(b"0.01 9.81"), None);
+        let line = b" 0,01 ; 9,81;-0,5 ";
+        let mut spans = [(0, 0); 4];
+        assert_eq!(split_bytes(line, Some(b';'), &mut spans), 3);
+        let fields: Vec<&[u8]> = spans[..3].iter().map(|(a, b)| &line[*a..*b]).collect();
+        assert_eq!(fields, [&b"0,01"[..], b"9,81", b"-0,5"]);
+        assert_eq!(decimal_comma(b"-0,5"), Some(-0.5));
+        assert_eq!(decimal_comma(b"9,81"), Some(9.81));
+        assert_eq!(decimal_comma(b"1,2,3"), None);
+        assert_eq!(decimal_comma(b"x,1"), None);
+    }
 
     #[test]
     fn blocks_come_back_in_order_with_their_lines() {

@@ -90,7 +90,7 @@ impl<'a> Layout<'a> {
                 self.quoted_row(line, row, &mut part)?;
                 continue;
             }
-            let count = fields::split_bytes(row, self.comma, &mut spans);
+            let count = fields::split_bytes(row, self.comma.then_some(b','), &mut spans);
             self.check_width(line, count)?;
             for (k, &i) in self.index.iter().enumerate() {
                 let (a, b) = spans[i];

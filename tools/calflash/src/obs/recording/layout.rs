@@ -119,10 +119,9 @@ fn setting(fields: &[&str]) -> Option<(String, f64)> {
 }
 
 fn split(s: &str) -> Vec<&str> {
-    if s.contains(',') {
-        s.split(',').map(str::trim).collect()
-    } else {
-        s.split_ascii_whitespace().collect()
+    match crate::obs::fields::separator_of(s.as_bytes()) {
+        Some(sep) => s.split(char::from(sep)).map(str::trim).collect(),
+        None => s.split_ascii_whitespace().collect(),
     }
 }
 
@@ -166,7 +165,8 @@ struct Sampler<'a> {
     /// Which of the file's counts are kept.
     kept: &'a [usize],
     holds: Holds,
-    comma: bool,
+    /// The separator (`None`: whitespace).
+    separator: Option<u8>,
 }
 
 impl Sampler<'_> {
@@ -183,7 +183,10 @@ impl Sampler<'_> {
         let field = &bytes[span.0..span.1];
         match number(field) {
             Some(x) => Ok(x),
-            None => Err(not_a_number(self.path, line, k, what, field)),
+            None => match (self.separator, crate::obs::fields::decimal_comma(field)) {
+                (Some(b';'), Some(x)) => Ok(x),
+                _ => Err(not_a_number(self.path, line, k, what, field)),
+            },
         }
     }
 
@@ -224,7 +227,7 @@ impl Sampler<'_> {
         spans: &mut Spans,
         part: &mut Part,
     ) -> Result<(), RecordingError> {
-        let count = split_bytes(bytes, self.comma, spans);
+        let count = split_bytes(bytes, self.separator, spans);
         let cols = self.cols;
         if count != cols.width {
             let why = match cols.header {
@@ -348,13 +351,13 @@ pub fn read_chosen(
         &mut rows.preamble,
         &mut spans,
     )?;
-    if let (Some((first, comma, bytes)), Some(cols)) = (first, &columns) {
+    if let (Some((first, separator, bytes)), Some(cols)) = (first, &columns) {
         let sampler = Sampler {
             path,
             cols,
             kept: &kept,
             holds,
-            comma,
+            separator,
         };
         let mut merge = |part: Part| {
             if let (Some(&t), Some(&prev)) = (part.times.first(), times.last())
@@ -438,7 +441,7 @@ pub fn read_chosen(
 struct Head {
     columns: Option<Columns>,
     header: Option<(usize, String)>,
-    first: Option<(usize, bool, Vec<u8>)>,
+    first: Option<(usize, Option<u8>, Vec<u8>)>,
 }
 
 /// Reads the preamble (its settings into `preamble`) and the header, up to and including the
@@ -470,7 +473,7 @@ fn read_head(
     let mut buf = Vec::with_capacity(256);
     let mut line = 0usize;
     // The separator, fixed by the first sample line (`None` until then).
-    let mut comma: Option<bool> = None;
+    let mut separator: Option<Option<u8>> = None;
     // The head: preamble and header lines, up to the first sample line.
     let first = loop {
         buf.clear();
@@ -520,8 +523,8 @@ fn read_head(
             }
         }
         // The first sample line fixes the separator and, without a header, the columns.
-        let comma = *comma.get_or_insert_with(|| bytes.contains(&b','));
-        let count = split_bytes(bytes, comma, spans);
+        let sep = *separator.get_or_insert_with(|| crate::obs::fields::separator_of(bytes));
+        let count = split_bytes(bytes, sep, spans);
         if columns.is_none() && !chosen.is_empty() {
             return Err(RecordingError::Columns {
                 path: path.to_path_buf(),
@@ -536,7 +539,7 @@ fn read_head(
             columns =
                 Some(positional(count, holds).ok_or_else(|| bad(line, count, expected(holds)))?);
         }
-        break Some((line, comma, bytes.to_vec()));
+        break Some((line, sep, bytes.to_vec()));
     };
     Ok(Head {
         columns,
