@@ -99,9 +99,17 @@ fn fly(dir: &Path, shift: Option<&str>) -> serde_json::Value {
     };
     assert_eq!(code, expected, "{out}{err}");
     let page = std::fs::read_to_string(dir.join("f.html")).unwrap();
+    // Six figures, and the innovations one panel per kind of measurement the flight has.
+    let innovations = page
+        .split("<h2>Innovations</h2>")
+        .nth(1)
+        .and_then(|s| s.split("<h2").next())
+        .unwrap_or("");
+    let kinds = v["consistency"]["kinds"].as_array().unwrap().len();
     assert!(
         page.contains("<h1>Unit ROUND-1 in flight</h1>\n<p class=\"verdict ")
-            && page.matches("<svg").count() == 7,
+            && innovations.matches("<svg").count() == kinds
+            && page.matches("<svg").count() == 6 + kinds,
         "{}",
         &page[..300]
     );
@@ -987,9 +995,35 @@ fn the_hedy_flight_does_not_fit_its_gnss_and_says_where() {
             "4",
             "--json",
             "h.json",
+            "--report",
+            "h.html",
         ],
         4,
     );
+    // The page shows each kind's fit and the held-out fixes, not only the pooled share.
+    let page = std::fs::read_to_string(d.path().join("h.html")).unwrap();
+    let table = page
+        .split("<h2>The fit, kind by kind</h2>")
+        .nth(1)
+        .and_then(|t| t.split("</table>").next())
+        .unwrap_or_else(|| panic!("no table of the kinds' fits"));
+    assert!(
+        table.contains("<td>GNSS horizontal position</td>")
+            && table.contains("DOES NOT FIT")
+            && table.contains("<td>barometer</td>")
+            && table.contains(" to 36.4 s"),
+        "{table}"
+    );
+    assert!(
+        page.contains("Held out: every 4th fix") && page.contains("the track cannot be believed"),
+        "no held-out fixes on the page"
+    );
+    // The innovations drawn kind by kind, each panel titled with its share inside.
+    let innovations = page.split("<h2>Innovations</h2>").nth(1).unwrap();
+    let innovations = innovations.split("<h2").next().unwrap();
+    for kind in ["GNSS horizontal position: ", "barometer: "] {
+        assert!(innovations.contains(kind), "no panel of {kind}");
+    }
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.path().join("h.json")).unwrap()).unwrap();
     assert_eq!(v["verdict"], "FILTER DOES NOT FIT", "{out}");

@@ -360,7 +360,12 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
         if let Some(b) = &args.blob {
             provenance = provenance.blob_file(b);
         }
-        let page = provenance.stamp(&crate::report::flight::html(&serial, &checked, &counts)?);
+        let page = provenance.stamp(&crate::report::flight::html(
+            &serial,
+            &checked,
+            &counts,
+            held_out.as_ref(),
+        )?);
         staged.write(path, |w| w.write_all(page.as_bytes()))?;
     }
     staged.commit()?;

@@ -9,18 +9,19 @@ use crate::nav::input::FixCounts;
 use crate::nav::prior::PriorSource;
 use crate::report::Error;
 
-/// Whether an innovation is of one kind of measurement.
-type IsKind = fn(&crate::nav::run::Kind) -> bool;
-
 /// The HTML page: the verdict, then the innovations against their 95 % bounds, the trajectory
 /// against GNSS and the barometer, and each sensor error along the flight with its 1-sigma.
 ///
 /// # Errors
 /// A figure that cannot be drawn.
-pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, Error> {
-    use crate::nav::run::Kind;
+pub fn html(
+    serial: &str,
+    c: &Checked,
+    counts: &FixCounts,
+    held_out: Option<&crate::nav::consistency::HeldOut>,
+) -> Result<String, Error> {
     use crate::report::page::{STYLE, esc};
-    use crate::report::plot::{Figure, Series, figure};
+    use crate::report::plot::{Figure, Series, Sheet, figure};
     let v = &c.verdict;
     let title = format!("Unit {serial} in flight: {}", v.word);
     let class = match v.word {
@@ -38,54 +39,57 @@ pub fn html(serial: &str, c: &Checked, counts: &FixCounts) -> Result<String, Err
         esc(&v.why)
     );
     h.push_str(&facts_table(c, counts));
+    h.push_str(&kinds_table(c, held_out));
     // A filter that does not fit (or a track the held-out fixes do not hold) names no term.
     if v.consistency.fits && v.word != crate::nav::verdict::DOES_NOT_FIT {
         h.push_str(&terms_table(c));
     }
-    h.push_str("<h2>Innovations</h2>\n");
-    // Innovations over their predicted sigma, with the 95 % bounds.
+    h.push_str("<h2>Innovations</h2>\n<p>Each kind of measurement against its own 95 % bounds: the fit is judged kind by kind, so that the barometer's many readings cannot hide a GNSS track that was lost.</p>\n");
+    // Innovations over their predicted sigma, with the 95 % bounds, one panel per kind.
     let said = &c.pass.said;
     let span = said.first().map(|s| s.t).unwrap_or(0.0)..=said.last().map(|s| s.t).unwrap_or(1.0);
     let bounds = [
         vec![(*span.start(), 1.96), (*span.end(), 1.96)],
         vec![(*span.start(), -1.96), (*span.end(), -1.96)],
     ];
-    let kinds: [(&str, IsKind); 3] = [
-        ("GNSS position", |k| matches!(k, Kind::Position(_))),
-        ("GNSS velocity", |k| matches!(k, Kind::Velocity(_))),
-        ("barometer", |k| matches!(k, Kind::Baro)),
-    ];
-    let normalised: Vec<Vec<(f64, f64)>> = kinds
-        .iter()
-        .map(|(_, is)| {
+    let kinds = crate::nav::consistency::KINDS;
+    let normalised: Vec<Vec<(f64, f64)>> = (0..kinds.len())
+        .map(|k| {
             said.iter()
-                .filter(|s| is(&s.kind) && s.sigma > 0.0)
+                .filter(|s| crate::nav::consistency::kind_of(s.kind) == Some(k) && s.sigma > 0.0)
                 .map(|s| (s.t, (s.value / s.sigma).clamp(-10.0, 10.0)))
                 .collect()
         })
         .collect();
-    let mut series: Vec<Series<'_>> = kinds
-        .iter()
-        .zip(&normalised)
-        .enumerate()
-        .filter(|(_, (_, v))| !v.is_empty())
-        .map(|(k, ((name, _), v))| Series::dots(name, v, k))
-        .collect();
-    series.push(Series::curve("95 % bounds", &bounds[0], 3));
-    series.push(Series::curve("", &bounds[1], 3));
-    figure(
-        &mut h,
-        &Figure {
-            title: "Innovations over their predicted 1-sigma (clipped at 10)",
-            x: "time, s",
-            y: "innovation / sigma",
-            series,
-            bands: Vec::new(),
-            band_label: "",
-            zero_line: true,
-            x_names: None,
-        },
-    )?;
+    let mut sheet = Sheet::new(true);
+    for (k, (name, v)) in kinds.iter().zip(&normalised).enumerate() {
+        if v.is_empty() {
+            continue;
+        }
+        let inside = v.iter().filter(|(_, z)| z.abs() <= 1.96).count();
+        let title = format!(
+            "{name}: {:.1} % inside",
+            100.0 * inside as f64 / v.len() as f64
+        );
+        sheet.add(
+            &mut h,
+            &Figure {
+                title: &title,
+                x: "time, s",
+                y: "innovation / sigma",
+                series: vec![
+                    Series::dots("innovations over their 1-sigma (clipped at 10)", v, k),
+                    Series::curve("95 % bounds", &bounds[0], 4),
+                    Series::curve("", &bounds[1], 4),
+                ],
+                bands: Vec::new(),
+                band_label: "",
+                zero_line: true,
+                x_names: None,
+            },
+        )?;
+    }
+    sheet.finish(&mut h);
     let tr = &c.track;
     let height: Vec<(f64, f64)> =
         tr.t.iter()
@@ -245,6 +249,58 @@ fn terms_over_time(h: &mut String, c: &Checked) -> Result<(), Error> {
 }
 
 /// The check's facts as a table: the filter's fit, the inputs, the prior, the track.
+/// Each kind of measurement's fit on its own (the share inside its 95 % bounds, its NIS, its
+/// refusals and where they ran), and the held-out fixes against the smoothed track.
+fn kinds_table(c: &Checked, held_out: Option<&crate::nav::consistency::HeldOut>) -> String {
+    use crate::report::page::esc;
+    let mut h = String::from(
+        "<h2>The fit, kind by kind</h2>\n<table>\n<tr><th>measurement</th><th>innovations</th><th>inside 95 %</th><th>mean NIS</th><th>refused</th><th>refused runs</th><th>fit</th></tr>\n",
+    );
+    for k in &c.verdict.consistency.kinds {
+        let runs: Vec<String> = k
+            .refused_runs
+            .iter()
+            .map(|r| format!("{} from {:.1} to {:.1} s", r.count, r.from, r.to))
+            .collect();
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{:.1} %</td><td>{:.2}</td><td>{}</td><td>{}</td><td class=\"{}\">{}</td></tr>",
+            esc(k.kind),
+            k.innovations,
+            100.0 * k.inside_95 as f64 / k.innovations.max(1) as f64,
+            k.mean_nis,
+            k.refused,
+            esc(&runs.join("; ")),
+            if k.fits { "accept" } else { "reject" },
+            if k.fits { "fits" } else { "DOES NOT FIT" }
+        );
+    }
+    h.push_str("</table>\n");
+    if let Some(o) = held_out {
+        let _ = writeln!(
+            h,
+            "<p class=\"{}\">Held out: every {}th fix after the launch ({} fixes, {} components) was kept from the filter and the smoother: {} within 3 sigma of the smoothed track ({:.1} %; at least {:.0} % where a track can be believed), {:.1} % inside their 95 % bounds, RMS {:.2} m horizontally, the worst {:.1} sigma at {:.1} s: <b>{}</b>.</p>",
+            if o.believed { "accept" } else { "reject" },
+            o.every,
+            o.fixes,
+            o.components,
+            o.within_3_sigma,
+            100.0 * o.share(),
+            100.0 * crate::nav::consistency::HELD_OUT_AT_LEAST,
+            100.0 * o.within_95 as f64 / o.components.max(1) as f64,
+            o.rms_m,
+            o.worst.0,
+            o.worst.1,
+            if o.believed {
+                "the track can be believed"
+            } else {
+                "the track cannot be believed"
+            }
+        );
+    }
+    h
+}
+
 fn facts_table(c: &Checked, counts: &FixCounts) -> String {
     use crate::report::page::esc;
     let k = &c.verdict.consistency;
