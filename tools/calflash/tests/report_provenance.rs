@@ -85,3 +85,62 @@ fn a_report_belongs_to_its_own_bytes_and_to_no_others() {
     assert_eq!(code, 3);
     assert!(out.contains("has no provenance block"), "{out}");
 }
+
+/// The page names the unit history's record of the calibration it shows (issue 68: "no page
+/// gives the history's record id"), under its seal, and `verify-report` says it; a second
+/// calibration's page names the second record.
+#[test]
+fn a_calibration_page_names_its_history_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let example = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/data/single_accel.csv");
+    std::fs::copy(&example, d.join("data.csv")).unwrap();
+    for (k, page) in [(1, "a.html"), (2, "b.html")] {
+        let (code, out, err) = calflash(
+            d,
+            &[
+                "calibrate",
+                "data.csv",
+                "--sensor",
+                "single-accel",
+                "--serial",
+                "ACC-9",
+                "--blob",
+                "u.blob",
+                "--report",
+                page,
+                "--db",
+                "units.sqlite",
+            ],
+        );
+        assert_eq!(code, 0, "{out}{err}");
+        assert!(
+            out.contains(&format!("recorded as db:{k} in units.sqlite")),
+            "{out}"
+        );
+        let html = std::fs::read_to_string(d.join(page)).unwrap();
+        let p = calflash::report::provenance::read(&html).unwrap();
+        assert_eq!(
+            p.record.as_deref(),
+            Some(&*format!("db:{k} in units.sqlite"))
+        );
+        assert_eq!(html.matches("<section id=\"provenance\">").count(), 1);
+        let (code, out, err) = calflash(
+            d,
+            &[
+                "verify-report",
+                page,
+                "--blob",
+                "u.blob",
+                "--data",
+                "data.csv",
+            ],
+        );
+        assert_eq!(code, 0, "{out}{err}");
+        assert!(
+            out.contains(&format!("the history's record db:{k} in units.sqlite")),
+            "{out}"
+        );
+    }
+}

@@ -88,7 +88,7 @@ pub fn run(args: &VerifyReportArgs) -> Result<bool, Failure> {
         }
     }
     println!(
-        "calflash verify-report  {page}: BELONGS: made {} UTC by calflash {} (commit {}) on station {}, operator {}{}; its seal holds",
+        "calflash verify-report  {page}: BELONGS: made {} UTC by calflash {} (commit {}) on station {}, operator {}{}{}; its seal holds",
         p.generated_utc,
         p.tool_version,
         p.git_commit,
@@ -97,6 +97,10 @@ pub fn run(args: &VerifyReportArgs) -> Result<bool, Failure> {
         p.serial
             .as_ref()
             .map(|s| format!(", for unit {s}"))
+            .unwrap_or_default(),
+        p.record
+            .as_ref()
+            .map(|r| format!(", the history's record {r}"))
             .unwrap_or_default()
     );
     if let (Some(b), Some(stated)) = (&args.blob, &p.blob) {

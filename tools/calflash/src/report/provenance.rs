@@ -103,6 +103,10 @@ pub struct Provenance {
     /// The blob written (or read and described), when there is one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub blob: Option<FileHash>,
+    /// The unit history's record of what the page describes (`db:12 in PATH`), where it was
+    /// recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub record: Option<String>,
     /// The page's seal: the SHA-256 of the page with these digits as zeros.
     pub page_sha256: String,
 }
@@ -136,6 +140,7 @@ impl Provenance {
             serial: None,
             inputs: Vec::new(),
             blob: None,
+            record: None,
             page_sha256: UNSEALED.into(),
         }
     }
@@ -226,6 +231,9 @@ impl Provenance {
                     f.role, f.path, f.bytes, f.sha256
                 ),
             ));
+        }
+        if let Some(r) = &self.record {
+            rows.push(("history record", r.clone()));
         }
         rows.push(("page seal", self.page_sha256.clone()));
         let table: String = rows
@@ -318,6 +326,32 @@ pub fn read(html: &str) -> Result<Provenance, NotItsPage> {
         });
     }
     Ok(p)
+}
+
+/// Adds the unit history's record (`db:12 in PATH`) to the provenance of the page at `path`
+/// (written before the history gave the record its id), sealed again; the page is replaced
+/// only once the new one is written whole.
+///
+/// # Errors
+/// The page cannot be read, holds no provenance of its own, or cannot be written.
+pub fn add_record(path: &std::path::Path, record: &str) -> Result<(), String> {
+    const START: &str = "<section id=\"provenance\">";
+    const END: &str = "id=\"calflash-provenance\">";
+    let at = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    let html = std::fs::read_to_string(path).map_err(|e| at(&e))?;
+    let mut p = read(&html).map_err(|e| at(&e))?;
+    let (Some(from), Some(script)) = (html.rfind(START), html.rfind(END)) else {
+        return Err(at(&"no provenance block"));
+    };
+    let to = html[script..]
+        .find("</script>\n")
+        .map(|e| script + e + "</script>\n".len())
+        .ok_or_else(|| at(&"an unclosed provenance block"))?;
+    let page = format!("{}{}", &html[..from], &html[to..]);
+    p.record = Some(record.to_string());
+    let stamped = p.stamp(&page);
+    crate::files::write_atomically(path, |w| std::io::Write::write_all(w, stamped.as_bytes()))
+        .map_err(|e| at(&e))
 }
 
 /// The current time, UTC, `YYYY-MM-DD HH:MM:SS`.

@@ -263,6 +263,10 @@ pub fn calibrate_one(
     if let Some(line) = out.record(serial, &fallback, |d| {
         d.record_fit(&record, report_path, blob.as_deref().unwrap_or_default())
     })? {
+        // The page names the history's record of it (written after the page, so added now).
+        if let (Some(page), Some(id)) = (report_path, line.strip_prefix("recorded as ")) {
+            crate::report::provenance::add_record(page, id)?;
+        }
         let _ = writeln!(said, "  {line}");
     }
     let verdict = c.verdict();
