@@ -409,8 +409,13 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
         );
     }
     let index = std::fs::read_to_string(d.join("out-new/index.html")).unwrap();
+    // One line per unit, each giving the reason.
     assert_eq!(
-        index.matches("<li>not compared with its lot").count(),
+        index
+            .lines()
+            .filter(|l| l.starts_with("<tr><td class=\"unit\">")
+                && l.contains("not compared with its lot"))
+            .count(),
         3,
         "{index}"
     );
