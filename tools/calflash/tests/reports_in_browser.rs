@@ -659,6 +659,20 @@ fn what_a_reader_finds(d: &Path) {
             "accuracy.html: an error figure without the stated 1-sigma's band"
         );
     }
+    // Issue 68: selfcal's coefficients in a datasheet's units beside its matrices.
+    let selfcal = page("selfcal.html");
+    let eng = selfcal
+        .split("<h2>In engineering units</h2>")
+        .nth(1)
+        .and_then(|t| t.split("</table>").next())
+        .expect("selfcal.html: no table in engineering units");
+    for unit in ["mrad", "offset (mg)", "gyro bias (deg/h)"] {
+        assert!(eng.contains(unit), "selfcal.html: {unit} missing: {eng}");
+    }
+    assert!(
+        eng.contains(" counts") || eng.contains(" ppm"),
+        "selfcal.html: no scale factor in counts per g or ppm: {eng}"
+    );
     // Residuals in the input's unit (over the scale factor), not in the converter's counts.
     for f in [
         "imu.html",

@@ -341,6 +341,7 @@ pub fn html(
     }
     let _ = writeln!(h, "<p>From {}.</p>", esc(&rec.source));
     h.push_str(&tables::facts(c, rec, check));
+    h.push_str(&tables::engineering(c, rec));
     h.push_str(&tables::coefficients(c, rec));
     // The signal and the poses found. Every k-th sample keeps the figure small.
     let step = (rec.len() / 3000).max(1);

@@ -214,3 +214,84 @@ pub(super) fn coefficients(c: &SelfCal, rec: &Recording) -> String {
     t.push_str("</table>\n");
     t
 }
+
+/// m/s^2 in one mg.
+const MG: f64 = 9.806_65e-3;
+/// deg/h in one rad/s.
+const DEG_PER_H: f64 = 180.0 / std::f64::consts::PI * 3600.0;
+
+/// The calibration in a datasheet's units, each with its 1-sigma where the fit gives one: per
+/// axis the scale factor (its error in ppm when the inputs are physical, else counts per g or
+/// per deg/s), its misalignment from the other inputs in mrad, the accelerometer's offset in mg
+/// and the gyro's bias in deg/h.
+pub(super) fn engineering(c: &SelfCal, rec: &Recording) -> String {
+    let [ua, ug] = rec.units;
+    let sd = accel_sd(c);
+    let gsd = gyro_sd(c);
+    let m = &c.accel.model;
+    let g = &c.gyro.matrix;
+    let pm = |v: f64, s: Option<f64>| match s {
+        Some(s) if s > 0.0 => format!("{v:+.3} &plusmn; {s:.3}"),
+        _ => format!("{v:+.3}"),
+    };
+    let scale = |d: f64, s: Option<f64>, si: bool, per_count: f64| {
+        let sigma_ppm = s.map(|s| s / d.abs() * 1e6);
+        if si {
+            format!(
+                "{:+.0} ppm{}",
+                (d - 1.0) * 1e6,
+                sigma_ppm.map_or(String::new(), |p| format!(" &plusmn; {p:.0}"))
+            )
+        } else {
+            format!(
+                "{} counts{}",
+                num(per_count / d),
+                sigma_ppm.map_or(String::new(), |p| format!(" (&plusmn; {p:.0} ppm)"))
+            )
+        }
+    };
+    let mis = |row: &[f64; 3], i: usize, s: Option<&[f64; 3]>| {
+        (0..3)
+            .filter(|j| *j != i && row[*j] != 0.0)
+            .map(|j| {
+                format!(
+                    "from {}: {}",
+                    ["x", "y", "z"][j],
+                    pm(row[j] / row[i] * 1e3, s.map(|s| s[j] / row[i].abs() * 1e3))
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let bias: [f64; 3] =
+        std::array::from_fn(|i| (0..3).map(|j| g[i][j] * c.gyro_bias[j]).sum::<f64>() * DEG_PER_H);
+    let mut t = format!(
+        "<h2>In engineering units</h2>\n<p>Scale factors {}; misalignments in mrad (each row's coupling from the other inputs over its own scale factor); the accelerometer's offset in mg; the gyro's bias in deg/h (its stored bias through its matrix).</p>\n<table>\n<tr><th>axis</th><th>accelerometer scale factor</th><th>accelerometer misalignment (mrad)</th><th>offset (mg)</th><th>gyro scale factor</th><th>gyro misalignment (mrad)</th><th>gyro bias (deg/h)</th></tr>\n",
+        match (ua.is_si(), ug.is_si()) {
+            (true, true) => "as their error from 1 in ppm",
+            (false, false) => "in counts per g and per deg/s",
+            _ =>
+                "as their error from 1 in ppm for physical inputs, else in counts per g or per deg/s",
+        }
+    );
+    for i in 0..3 {
+        let _ = writeln!(
+            t,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:+.1}</td></tr>",
+            ["x", "y", "z"][i],
+            scale(m.matrix[i][i], sd.map(|s| s.0[i][i]), ua.is_si(), 9.806_65),
+            mis(&m.matrix[i], i, sd.as_ref().map(|s| &s.0[i])),
+            pm(m.offset[i] / MG, sd.map(|s| s.1[i] / MG)),
+            scale(
+                g[i][i],
+                gsd.map(|s| s[i][i]),
+                ug.is_si(),
+                1.0_f64.to_radians()
+            ),
+            mis(&g[i], i, gsd.as_ref().map(|s| &s[i])),
+            bias[i]
+        );
+    }
+    t.push_str("</table>\n");
+    t
+}
