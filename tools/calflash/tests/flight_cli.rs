@@ -113,6 +113,15 @@ fn fly(dir: &Path, shift: Option<&str>) -> serde_json::Value {
         "{}",
         &page[..300]
     );
+    // The page names the history's record of the check (issue 68).
+    let made = calflash::report::provenance::read(&page).unwrap();
+    assert!(
+        made.record
+            .as_deref()
+            .is_some_and(|r| r.starts_with("db:") && r.ends_with(" in units.sqlite")),
+        "{:?}",
+        made.record
+    );
     let nu = std::fs::read_to_string(dir.join("nu.csv")).unwrap();
     assert!(
         nu.starts_with("t,measurement,innovation,sigma,taken\n") && nu.contains(",position_east,"),

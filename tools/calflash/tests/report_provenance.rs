@@ -144,3 +144,33 @@ fn a_calibration_page_names_its_history_record() {
         );
     }
 }
+
+/// A selfcal page names its history record too (the other commands that record a unit's
+/// history write the id the same way: flight, health).
+#[test]
+fn a_selfcal_page_names_its_history_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    common::write_recording(&calflash::sim::recording::Tumble::default().record(), d);
+    let (code, out, err) = calflash(
+        d,
+        &[
+            "selfcal",
+            "acc.txt",
+            "gyro.txt",
+            "--g",
+            "9.81",
+            "--serial",
+            "SIM-R-1",
+            "--report",
+            "s.html",
+            "--db",
+            "units.sqlite",
+        ],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("recorded as db:1 in units.sqlite"), "{out}");
+    let html = std::fs::read_to_string(d.join("s.html")).unwrap();
+    let p = calflash::report::provenance::read(&html).unwrap();
+    assert_eq!(p.record.as_deref(), Some("db:1 in units.sqlite"));
+}

@@ -379,6 +379,9 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
             &beside,
             &serial,
         )?;
+        if let (Some(page), Some(id)) = (&args.report, said.strip_prefix("recorded as ")) {
+            crate::report::provenance::add_record(page, id)?;
+        }
         println!("  {said}");
     }
     Ok(checked.verdict.word)

@@ -143,7 +143,12 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
             &beside,
             &serial,
         ) {
-            Ok(said) => println!("  {said}"),
+            Ok(said) => {
+                if let (Some(page), Some(id)) = (&args.report, said.strip_prefix("recorded as ")) {
+                    crate::report::provenance::add_record(page, id)?;
+                }
+                println!("  {said}");
+            }
             // A unit judged SUSPECT keeps its exit code when the history is down: the
             // verdict is the answer, the history's failure is said beside it.
             Err(e) if health.verdict.word() == "SUSPECT" => {

@@ -187,6 +187,9 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, Failure> {
     if let Some(said) = args.out.record(name, &fallback, |d| {
         d.record_selfcal(name, &record, report_path, blob.unwrap_or_default())
     })? {
+        if let (Some(page), Some(id)) = (report_path, said.strip_prefix("recorded as ")) {
+            crate::report::provenance::add_record(page, id)?;
+        }
         println!("  {said}");
     }
     Ok(reject)
