@@ -30,7 +30,8 @@ pub struct AllanArgs {
     pub acc: PathBuf,
     /// The gyro file, when separate.
     pub gyro: Option<PathBuf>,
-    /// The sample rate, Hz, of a recording without timestamps (checked against them otherwise).
+    /// The sample rate, Hz, of a recording without timestamps; over a file's own timestamps it is
+    /// taken instead of them (a host that stamps samples in batches), and said.
     #[arg(long = "sample-rate", alias = "rate", value_parser = |s: &str| values::in_range(s, 1.0e-3, 1.0e6))]
     pub rate: Option<f64>,
     /// The units of the values (counts unless stated).

@@ -33,7 +33,8 @@ pub struct SelfcalArgs {
     /// preamble states, else 30).
     #[arg(long, value_parser = super::values::positive)]
     pub init_rest: Option<f64>,
-    /// The sample rate, Hz, of a recording without timestamps (checked against them otherwise).
+    /// The sample rate, Hz, of a recording without timestamps; over a file's own timestamps it is
+    /// taken instead of them (a host that stamps samples in batches), and said.
     #[arg(long = "sample-rate", alias = "rate", value_parser = |s: &str| super::values::in_range(s, 1.0, 1.0e6))]
     pub rate: Option<f64>,
     /// The units of the values (counts unless stated).

@@ -73,7 +73,7 @@ pub struct Options {
     /// The converter's rails: samples at or beyond them are marked saturated, and codes well
     /// beyond them show another format (refused, naming it).
     pub rails: Rails,
-    /// The sample rate, Hz, for files without timestamps (checked against them otherwise).
+    /// The sample rate, Hz: for files without timestamps, or over a file's own (said).
     pub rate: Option<f64>,
     /// The sensors to keep: a command that needs one reads only its file, or only its
     /// columns of a file of both.
@@ -166,6 +166,9 @@ pub fn read_with(
             period,
             rate: 1.0 / period,
         });
+    }
+    if let Some(said) = rate::batched(&t) {
+        eprintln!("calflash: note: {}: {said}", acc.display());
     }
     let gaps = t
         .windows(2)
@@ -461,19 +464,26 @@ mod tests {
                 pre.display()
             )
         );
-        // Timestamps that disagree with the stated rate.
+        // Timestamps that disagree with --sample-rate: the option is the user's word over
+        // them (issue 66: a host's timestamps in radio batches), the samples evenly spaced.
         let timed = write(
             d.path(),
             "timed.txt",
             "0 1 2 3 4 5 6\n0.01 1 2 3 4 5 6\n0.02 1 2 3 4 5 6\n",
         );
+        let r = read_with(&timed, None, &opts(Some(50.0))).unwrap();
+        assert_eq!(r.t, [0.0, 0.02, 0.04]);
+        // Against a logger's preamble they are refused.
+        let stated = write(
+            d.path(),
+            "stated.csv",
+            "Fs,50\nt,ax,ay,az,gx,gy,gz\n0,1,2,3,4,5,6\n0.01,1,2,3,4,5,6\n0.02,1,2,3,4,5,6\n",
+        );
         assert!(
-            read_with(&timed, None, &opts(Some(50.0)))
+            read_with(&stated, None, &opts(None))
                 .unwrap_err()
                 .to_string()
-                .ends_with(
-                    ":1: the timestamps step by 0.01 s (100.0000 Hz) where --sample-rate states 50 Hz"
-                )
+                .contains("the timestamps step by 0.01 s (100.0000 Hz) where the preamble (line 1) states 50 Hz"),
         );
         // Signed codes read as unsigned are named, with the option that reads them.
         let e = read_with(

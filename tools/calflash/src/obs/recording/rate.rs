@@ -43,6 +43,21 @@ pub(super) fn timing(
         ));
     }
     match (rows.t.take(), stated) {
+        // --sample-rate is the user's word over the file's own timestamps (a logger's host
+        // stamps samples as its radio delivers them, in batches): the samples are taken as
+        // evenly spaced from the first timestamp, and said so.
+        (Some(t), Some((r, _))) if t.len() > 1 && rate.is_some() => {
+            let period = median_step(&t);
+            if differ(1.0 / period, r) {
+                eprintln!(
+                    "calflash: note: {}: --sample-rate {r} Hz over the file's timestamps ({}): the samples are taken as evenly spaced from its first timestamp",
+                    path.display(),
+                    describe(&t)
+                );
+                return Ok((0..t.len()).map(|k| t[0] + k as f64 / r).collect());
+            }
+            Ok(t)
+        }
         (Some(t), Some((r, who))) if t.len() > 1 => {
             let period = median_step(&t);
             if differ(1.0 / period, r) {
@@ -62,6 +77,35 @@ pub(super) fn timing(
             path: path.to_path_buf(),
         }),
     }
+}
+
+/// What timestamps say of the rate: their median step's and their mean over the record.
+fn describe(t: &[f64]) -> String {
+    let span = t[t.len() - 1] - t[0];
+    format!(
+        "they step by {:.6} s at the median ({:.3} Hz) and hold {} samples over {:.3} s ({:.3} Hz)",
+        median_step(t),
+        1.0 / median_step(t),
+        t.len(),
+        span,
+        (t.len() - 1) as f64 / span
+    )
+}
+
+/// Timestamps that come in batches: more samples over the record than their median step
+/// allows (dropped samples can only make fewer), by over 2 %. The sentence that says so.
+pub(super) fn batched(t: &[f64]) -> Option<String> {
+    if t.len() < 3 {
+        return None;
+    }
+    let span = t[t.len() - 1] - t[0];
+    let (mean, median) = ((t.len() - 1) as f64 / span, 1.0 / median_step(t));
+    (span > 0.0 && mean > 1.02 * median).then(|| {
+        format!(
+            "the timestamps come in batches: {}, more than their steps allow, so what looks like gaps between them is the batching, not samples dropped; --sample-rate {mean:.3} (or a sample counter, when the file has one) times the samples evenly",
+            describe(t)
+        )
+    })
 }
 
 /// The median step between timestamps, s (NaN for fewer than two).
@@ -97,4 +141,33 @@ pub(super) fn note_preamble(path: &Path, p: &layout::Preamble) {
         text.push_str(&format!("; not used: {}", p.ignored.join(", ")));
     }
     eprintln!("{text}");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn batched_timestamps_are_told_from_dropped_samples() {
+        // 100 Hz stamped as a radio delivers them: nine steps of 11 ms, then one of 1 ms as
+        // the next batch catches up (91 Hz by the median step, 100 Hz over the record).
+        let mut t = vec![0.0];
+        for k in 1..1000 {
+            let step = if k % 10 == 0 { 0.001 } else { 0.011 };
+            t.push(t[k - 1] + step);
+        }
+        let said = batched(&t).expect("batched");
+        assert!(
+            said.contains("come in batches") && said.contains("--sample-rate 99.9"),
+            "{said}"
+        );
+        // Samples dropped from an even 100 Hz: fewer over the record, not batches.
+        let dropped: Vec<f64> = (0..1000)
+            .filter(|k| k % 50 != 7)
+            .map(|k| f64::from(k) * 0.01)
+            .collect();
+        assert_eq!(batched(&dropped), None);
+        let even: Vec<f64> = (0..1000).map(|k| f64::from(k) * 0.01).collect();
+        assert_eq!(batched(&even), None);
+    }
 }
