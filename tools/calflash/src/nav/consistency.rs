@@ -63,6 +63,17 @@ pub struct RefusedRun {
     pub count: usize,
 }
 
+impl std::fmt::Display for RefusedRun {
+    /// "12 refused from 17.0 to 36.4 s".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} refused from {:.1} to {:.1} s",
+            self.count, self.from, self.to
+        )
+    }
+}
+
 /// One kind's fit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct KindFit {
@@ -114,11 +125,7 @@ impl Consistency {
             .failing()
             .iter()
             .map(|k| {
-                let runs: Vec<String> = k
-                    .refused_runs
-                    .iter()
-                    .map(|r| format!("{} refused from {:.1} to {:.1} s", r.count, r.from, r.to))
-                    .collect();
+                let runs: Vec<String> = k.refused_runs.iter().map(ToString::to_string).collect();
                 format!(
                     "{}: {} of {} inside their 95 % bounds ({:.1} %), mean NIS {:.2}, {} refused{}",
                     k.kind,

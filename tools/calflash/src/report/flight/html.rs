@@ -257,11 +257,7 @@ fn kinds_table(c: &Checked, held_out: Option<&crate::nav::consistency::HeldOut>)
         "<h2>The fit, kind by kind</h2>\n<table>\n<tr><th>measurement</th><th>innovations</th><th>inside 95 %</th><th>mean NIS</th><th>refused</th><th>refused runs</th><th>fit</th></tr>\n",
     );
     for k in &c.verdict.consistency.kinds {
-        let runs: Vec<String> = k
-            .refused_runs
-            .iter()
-            .map(|r| format!("{} from {:.1} to {:.1} s", r.count, r.from, r.to))
-            .collect();
+        let runs: Vec<String> = k.refused_runs.iter().map(ToString::to_string).collect();
         let _ = writeln!(
             h,
             "<tr><td>{}</td><td>{}</td><td>{:.1} %</td><td>{:.2}</td><td>{}</td><td>{}</td><td class=\"{}\">{}</td></tr>",

@@ -50,11 +50,7 @@ pub fn text(serial: &str, c: &Checked, counts: &FixCounts) -> String {
         k.refused
     );
     for kind in &k.kinds {
-        let runs: Vec<String> = kind
-            .refused_runs
-            .iter()
-            .map(|r| format!("{} refused from {:.1} to {:.1} s", r.count, r.from, r.to))
-            .collect();
+        let runs: Vec<String> = kind.refused_runs.iter().map(ToString::to_string).collect();
         let _ = writeln!(
             s,
             "    {}: {} of {} inside ({:.1} %), mean NIS {:.2}, {} refused: {}{}",
