@@ -644,6 +644,22 @@ fn allan_analyses_both_sensors_and_writes_a_report_and_kalibrs_file() {
     assert_eq!(html.matches("<svg").count(), 6, "six axes");
     assert_eq!(html.matches("slope -1/2: N = ").count(), 6);
     assert!(html.contains("where N, B and K are read") && html.contains("Kalibr imu.yaml"));
+    // The record is white noise and a random walk: no bias instability or ramp is drawn or
+    // stated (IEEE 952's flat line would sit under the curve), and the gyro's terms are given
+    // in a datasheet's units too.
+    assert!(!html.contains("slope 0: B"), "a bias instability drawn");
+    for t in ["bias instability", "rate ramp", "ramp"] {
+        assert!(!said.contains(&format!("{t} 0")), "{said}");
+    }
+    assert_eq!(
+        said.matches("bias instability not resolved in this record").count(),
+        6,
+        "{said}"
+    );
+    assert!(
+        html.contains("deg/sqrt(h)") && html.contains("deg/h/sqrt(h)"),
+        "the gyro's terms in deg/sqrt(h) and deg/h/sqrt(h)"
+    );
     // One file of both serves `calibrate --noise-terms` for both sensors.
     let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/imu_bench.csv");
     let (code, out, err) = calflash(

@@ -155,7 +155,7 @@ pub fn run(args: &AllanArgs) -> Result<(), Failure> {
             } else {
                 axis.to_string()
             };
-            println!("  {label}: {}", describe(t, *w, unit, si));
+            println!("  {label}: {}", crate::noise::said::line(t, unit));
         }
         done.push(Analysed {
             which: *w,
@@ -433,85 +433,4 @@ fn scale(
             Ok((scale, unit, si))
         })
         .collect()
-}
-
-fn describe(t: &NoiseTerms, which: Which, unit: &str, si: bool) -> String {
-    use crate::report::terminal::num;
-    let deg = 180.0 / std::f64::consts::PI;
-    // A term the fit set to zero was not resolved by this record (too short, or hidden under
-    // the others): said so, not printed as 0.
-    let show = |v: f64, units: &[(f64, &str)]| -> String {
-        if v > 0.0 {
-            units
-                .iter()
-                .map(|(k, u)| format!("{} {u}", num(v * k)))
-                .collect::<Vec<_>>()
-                .join(" = ")
-        } else {
-            "not resolved in this record".to_string()
-        }
-    };
-    let (rw, bi, rrw, q, ramp) = match (which, si) {
-        (Which::Gyro, true) => (
-            format!(
-                "ARW {}",
-                show(
-                    t.random_walk,
-                    &[(1.0, "rad/s/sqrt(Hz)"), (deg * 60.0, "deg/sqrt(h)")]
-                )
-            ),
-            show(
-                t.bias_instability,
-                &[(1.0, "rad/s"), (deg * 3600.0, "deg/h")],
-            ),
-            format!(
-                "RRW {}",
-                show(
-                    t.rate_random_walk,
-                    &[
-                        (1.0, "rad/s/sqrt(s)"),
-                        (deg * 3600.0 * 60.0, "deg/h/sqrt(h)")
-                    ]
-                )
-            ),
-            show(t.quantization, &[(1.0, "rad")]),
-            format!("rate ramp {}", show(t.rate_ramp, &[(1.0, "rad/s^2")])),
-        ),
-        (Which::Accel, true) => (
-            format!(
-                "VRW {}",
-                show(
-                    t.random_walk,
-                    &[(1.0, "m/s^2/sqrt(Hz)"), (60.0, "m/s/sqrt(h)")]
-                )
-            ),
-            show(
-                t.bias_instability,
-                &[(1.0, "m/s^2"), (1.0 / 9.80665e-3, "mg")],
-            ),
-            format!(
-                "acceleration random walk {}",
-                show(t.rate_random_walk, &[(1.0, "m/s^2/sqrt(s)")])
-            ),
-            show(t.quantization, &[(1.0, "m/s")]),
-            format!("ramp {}", show(t.rate_ramp, &[(1.0, "m/s^3")])),
-        ),
-        _ => {
-            let per = |suffix: &str| format!("{unit}{suffix}");
-            (
-                format!(
-                    "random walk {}",
-                    show(t.random_walk, &[(1.0, &per("/sqrt(Hz)"))])
-                ),
-                show(t.bias_instability, &[(1.0, unit)]),
-                format!(
-                    "rate random walk {}",
-                    show(t.rate_random_walk, &[(1.0, &per("/sqrt(s)"))])
-                ),
-                show(t.quantization, &[(1.0, &per(" s"))]),
-                format!("ramp {}", show(t.rate_ramp, &[(1.0, &per("/s"))])),
-            )
-        }
-    };
-    format!("{rw}; bias instability {bi}; {rrw}; quantization {q}; {ramp}")
 }

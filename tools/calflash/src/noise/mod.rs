@@ -3,4 +3,5 @@
 
 pub mod allan;
 pub mod kalibr;
+pub mod said;
 pub mod stated;

@@ -148,15 +148,6 @@ pub fn axis_figure(
     })
 }
 
-/// A term as a person reads it: its value and unit, or "not resolved in this record".
-fn term(v: f64, unit: &str) -> String {
-    if v > 0.0 {
-        format!("{} {unit}", num(v))
-    } else {
-        "not resolved in this record".to_string()
-    }
-}
-
 /// The Allan report: what was read, each sensor's terms per axis and its figures, and the
 /// Kalibr `imu.yaml` when both sensors are in SI units.
 ///
@@ -184,15 +175,11 @@ pub fn html(
             esc(&capitalised(s.name))
         );
         for (axis, t) in ["x", "y", "z"].iter().zip(s.terms) {
-            let _ = writeln!(
-                h,
-                "<tr><td>{axis}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                esc(&term(t.random_walk, &format!("{u}/sqrt(Hz)"))),
-                esc(&term(t.bias_instability, u)),
-                esc(&term(t.rate_random_walk, &format!("{u}/sqrt(s)"))),
-                esc(&term(t.quantization, &format!("{u} s"))),
-                esc(&term(t.rate_ramp, &format!("{u}/s")))
-            );
+            let _ = write!(h, "<tr><td>{axis}</td>");
+            for said in crate::noise::said::terms(t, u) {
+                let _ = write!(h, "<td>{}</td>", esc(&said.value));
+            }
+            h.push_str("</tr>\n");
         }
         h.push_str("</table>\n");
         for ((axis, c), t) in ["x", "y", "z"].iter().zip(s.curves).zip(s.terms) {
