@@ -652,7 +652,8 @@ fn allan_analyses_both_sensors_and_writes_a_report_and_kalibrs_file() {
         assert!(!said.contains(&format!("{t} 0")), "{said}");
     }
     assert_eq!(
-        said.matches("bias instability not resolved in this record").count(),
+        said.matches("bias instability not resolved in this record")
+            .count(),
         6,
         "{said}"
     );

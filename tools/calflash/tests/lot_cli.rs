@@ -85,6 +85,21 @@ fn units_unlike_their_lot_are_named_with_the_coefficients_that_make_them_so() {
         html.contains("LOT-A-000050") && html.contains("ay:1 +15.0"),
         "the outliers' table"
     );
+    // Issue 68: the spread in a datasheet's unit: the scale factor's MAD of 2 counts in 1670
+    // is about 1200 ppm (the biases are in the input's units: the fixture's outputs are
+    // single axes).
+    let ppm: f64 = v["spread"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["name"] == "ax:input")
+        .map(|s| {
+            assert_eq!(s["engineering"]["unit"], "ppm", "{s}");
+            s["engineering"]["mad"].as_f64().unwrap()
+        })
+        .unwrap();
+    assert!((900.0..1500.0).contains(&ppm), "{ppm}");
+    assert!(html.contains("spread (MAD)") && html.contains(" ppm</td>"));
     // Issue 68: the chart says what it is judged with.
     assert!(
         html.contains("baseline the first 100 units in time order; limits at 3 sigma"),
@@ -379,6 +394,18 @@ fn calibrate_with_its_lot_reviews_a_unit_unlike_the_others() {
     let (code, out, _) = calflash(d, &["lot", "--lot", "L-0419", "--db", "units.sqlite"]);
     assert_eq!(code, 0);
     assert!(out.contains(": 16 units"), "{out}");
+    // Issue 68: the spread in a datasheet's unit beside the counts: the scale factor in ppm,
+    // the cross-axis term in mrad, the square term per input unit.
+    let row = |name: &str| {
+        out.lines()
+            .find(|l| l.trim_start().starts_with(&format!("{name} ")))
+            .unwrap_or_else(|| panic!("no {name}: {out}"))
+            .to_string()
+    };
+    assert!(row("output:input").contains(" ppm ("), "{out}");
+    assert!(row("output:input_o").contains(" mrad ("), "{out}");
+    assert!(row("output:input^2").contains(" ppm/input unit ("), "{out}");
+    assert!(row("output:1").contains(" input units ("), "{out}");
     // The first batch of a new lot: every unit REVIEW, and the table and the index say why
     // on the unit's row (there was no lot to compare with), not only each unit's summary.
     let (code, out, err) = calflash(

@@ -128,12 +128,21 @@ pub fn run(args: &LotArgs) -> Result<(), Failure> {
         println!("  units of more than one kind, judged on what they share: {kinds}");
     }
     println!(
-        "  {:<28} {:>14} {:>12} {:>14} {:>14}",
+        "  {:<28} {:>14} {:>12} {:>14} {:>14}  spread in a datasheet's unit",
         "coefficient", "median", "MAD", "min", "max"
     );
     for s in &lot.spread {
+        let said = s.engineering.as_ref().map_or_else(String::new, |e| {
+            format!(
+                "MAD {} {} ({} .. {})",
+                crate::report::terminal::num(e.mad),
+                e.unit,
+                crate::report::lot::signed(e.range.0),
+                crate::report::lot::signed(e.range.1)
+            )
+        });
         println!(
-            "  {:<28} {:>14.6e} {:>12.3e} {:>14.6e} {:>14.6e}",
+            "  {:<28} {:>14.6e} {:>12.3e} {:>14.6e} {:>14.6e}  {said}",
             s.name, s.median, s.mad, s.min, s.max
         );
     }

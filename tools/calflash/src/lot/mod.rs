@@ -3,6 +3,7 @@
 //! units outside the stated limit and the coefficients that put them there, and control charts
 //! of chosen coefficients in the order the units were calibrated.
 
+pub mod engineering;
 pub mod history;
 
 use std::collections::BTreeMap;
@@ -179,6 +180,9 @@ pub struct Spread {
     pub min: f64,
     /// Largest.
     pub max: f64,
+    /// The MAD and the range about the median in a datasheet's unit (mg, ppm, mrad, ...),
+    /// where the output's scale factor is in the lot ([`engineering`]).
+    pub engineering: Option<engineering::Engineering>,
 }
 
 /// A lot judged.
@@ -235,7 +239,7 @@ pub fn judge(units: Vec<Unit>, alpha: f64) -> Result<Lot, Error> {
     let cols: Vec<Vec<f64>> = names.iter().map(|k| column(k)).collect();
     let x = DMatrix::from_fn(n, p, |i, j| cols[j][i]);
     let columns = robust::column_limits(&x, alpha);
-    let spread = names
+    let mut spread: Vec<Spread> = names
         .iter()
         .zip(&cols)
         .zip(columns.median.iter().zip(&columns.scale))
@@ -245,8 +249,13 @@ pub fn judge(units: Vec<Unit>, alpha: f64) -> Result<Lot, Error> {
             mad: *s,
             min: c.iter().copied().fold(f64::INFINITY, f64::min),
             max: c.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            engineering: None,
         })
         .collect();
+    let said = engineering::spread(&spread);
+    for (s, e) in spread.iter_mut().zip(said) {
+        s.engineering = e;
+    }
     let row = |i: usize| -> Vec<f64> { x.row(i).iter().copied().collect() };
     let (judge, distances, outside): (Judge, Vec<f64>, Vec<bool>) = match robust::estimate(&x) {
         Ok(r) => {

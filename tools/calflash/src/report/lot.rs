@@ -7,6 +7,7 @@ use std::fmt::Write as _;
 
 use super::page::{STYLE, esc};
 use super::plot::{Figure, Series, svg};
+use super::terminal::num;
 use crate::lot::{Judge, Lot, UnitChart};
 
 /// Units a figure names by serial on its axis; beyond, they are numbered in calibration order.
@@ -64,6 +65,15 @@ fn coefficient_unit(name: &str) -> String {
     name.split_once(':').map_or_else(String::new, |(_, term)| {
         super::page::term_unit(term, "unit of input")
     })
+}
+
+/// `x` with its sign, as [`num`] writes it.
+pub(crate) fn signed(x: f64) -> String {
+    if x > 0.0 {
+        format!("+{}", num(x))
+    } else {
+        num(x)
+    }
 }
 
 /// Renders the report of `lot` (described by `name`, as [`crate::db::Selection`] says it)
@@ -141,12 +151,23 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
             esc(&lot.left_out.join(", "))
         );
     }
-    h.push_str("</p><h2>Coefficients</h2><p>Each output's fitted coefficients (<code>output:term</code>), in the converter's counts per unit of the term.</p><table class=\"terms\"><tr><th>coefficient</th><th>unit</th><th>median</th><th>MAD</th><th>min</th><th>max</th></tr>");
+    h.push_str("</p><h2>Coefficients</h2><p>Each output's fitted coefficients (<code>output:term</code>). The spread first in a datasheet's unit: the MAD (scaled to a standard deviation) and the lowest and highest unit about the lot's median, each coefficient divided by the lot's median scale factor of its output (a bias in mg or deg/h, a scale factor in ppm, a cross-axis term in mrad, a gyro's g-sensitivity in deg/h/g); then in the converter's counts per unit of the term, as fitted.</p><table class=\"terms\"><tr><th>coefficient</th><th>spread (MAD)</th><th>lowest, highest about the median</th><th>unit (as fitted)</th><th>median</th><th>MAD</th><th>min</th><th>max</th></tr>");
     for s in &lot.spread {
+        let (mad, range) = s.engineering.as_ref().map_or_else(
+            || ("no datasheet unit".to_string(), String::new()),
+            |e| {
+                (
+                    format!("{} {}", num(e.mad), e.unit),
+                    format!("{} .. {} {}", signed(e.range.0), signed(e.range.1), e.unit),
+                )
+            },
+        );
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{:.6e}</td><td>{:.3e}</td><td>{:.6e}</td><td>{:.6e}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.6e}</td><td>{:.3e}</td><td>{:.6e}</td><td>{:.6e}</td></tr>",
             esc(&s.name),
+            esc(&mad),
+            esc(&range),
             esc(&coefficient_unit(&s.name)),
             s.median,
             s.mad,
