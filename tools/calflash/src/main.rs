@@ -12,6 +12,10 @@ use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Print every report the command writes as an A4 PDF beside it (PAGE.html gives
+    /// PAGE.pdf; headless Chromium, as `calflash pdf`).
+    #[arg(long, global = true)]
+    pdf: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -86,61 +90,77 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => e.exit(),
     };
-    let result = match &cli.command {
-        Command::Fit(args) => cmd::fit::run(args),
-        Command::Calibrate(args) => match cmd::calibrate::run(args) {
-            // A rejected unit is a result, not an error: its own exit code for test stations.
-            Ok(calflash::sensor::Verdict::Reject) => return ExitCode::from(3),
-            other => other.map(|_| ()),
-        },
-        Command::Selfcal(args) => match cmd::selfcal::run(args) {
-            // As for `calibrate`: a rejected unit has its own exit code.
-            Ok(true) => return ExitCode::from(3),
-            other => other.map(|_| ()),
-        },
-        Command::Allan(args) => cmd::allan::run(args),
-        Command::Design(args) => cmd::design::run(args),
-        Command::Simulate(args) => cmd::simulate::run(args),
-        Command::Mission(args) => cmd::mission::run(args),
-        Command::Flight(args) => match cmd::flight::run(args) {
-            // As `health` and `compare`: a calibration that did not survive exits 3; a flight
-            // the filter's model does not fit, 4 (nothing could be told).
-            Ok("SHIFTED") => return ExitCode::from(3),
-            Ok("FILTER DOES NOT FIT") => return ExitCode::from(4),
-            other => other.map(|_| ()),
-        },
-        Command::Apply(args) => cmd::apply::run(args),
-        Command::Compare(args) => match cmd::compare::run(args) {
-            // A unit that changed beyond its uncertainty: the rejected unit's exit code.
-            Ok(true) => return ExitCode::from(3),
-            other => other.map(|_| ()),
-        },
-        Command::VerifyReport(args) => match cmd::verify_report::run(args) {
-            // A page that is not the files': the rejected unit's exit code.
-            Ok(false) => return ExitCode::from(3),
-            other => other.map(|_| ()),
-        },
-        Command::Pdf(args) => cmd::pdf::run(args),
-        Command::Threshold(args) => cmd::threshold::run(args),
-        Command::Flash(args) => cmd::flash::run(args),
-        Command::Read(args) => cmd::read::run(args),
-        Command::Image(args) => cmd::image::run(args),
-        Command::History(args) => cmd::history::run(args),
-        Command::Db(args) => cmd::history_db::run(args),
-        Command::Keygen(args) => cmd::keys::keygen(args),
-        Command::Sign(args) => cmd::keys::sign(args),
-        Command::Lot(args) => cmd::lot::run(args),
-        Command::Health(args) => match cmd::health::run(args) {
-            // A SUSPECT unit has the rejected unit's exit code.
-            Ok("SUSPECT") => return ExitCode::from(3),
-            other => other.map(|_| ()),
-        },
+    let result = run(&cli.command);
+    // The pages are printed whatever the verdict: a REJECT's report is filed too.
+    let printed = if cli.pdf {
+        cmd::pdf::print_written()
+    } else {
+        Ok(())
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
+    match (result, printed) {
+        (Ok(code), Ok(())) => ExitCode::from(code),
+        (Ok(code), Err(e)) => {
+            eprintln!("calflash: --pdf: {e}");
+            ExitCode::from(code.max(1))
+        }
+        (Err(e), _) => {
             eprintln!("calflash: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Runs `command`: its exit code (0, or 3 and 4 for the verdicts that have their own), or why
+/// it could not run.
+fn run(command: &Command) -> Result<u8, cmd::Failure> {
+    match command {
+        Command::Fit(args) => cmd::fit::run(args).map(|()| 0),
+        Command::Calibrate(args) => match cmd::calibrate::run(args) {
+            // A rejected unit is a result, not an error: its own exit code for test stations.
+            Ok(calflash::sensor::Verdict::Reject) => Ok(3),
+            other => other.map(|_| 0),
+        },
+        Command::Selfcal(args) => match cmd::selfcal::run(args) {
+            // As for `calibrate`: a rejected unit has its own exit code.
+            Ok(true) => Ok(3),
+            other => other.map(|_| 0),
+        },
+        Command::Allan(args) => cmd::allan::run(args).map(|()| 0),
+        Command::Design(args) => cmd::design::run(args).map(|()| 0),
+        Command::Simulate(args) => cmd::simulate::run(args).map(|()| 0),
+        Command::Mission(args) => cmd::mission::run(args).map(|()| 0),
+        Command::Flight(args) => match cmd::flight::run(args) {
+            // As `health` and `compare`: a calibration that did not survive exits 3; a flight
+            // the filter's model does not fit, 4 (nothing could be told).
+            Ok("SHIFTED") => Ok(3),
+            Ok("FILTER DOES NOT FIT") => Ok(4),
+            other => other.map(|_| 0),
+        },
+        Command::Apply(args) => cmd::apply::run(args).map(|()| 0),
+        Command::Compare(args) => match cmd::compare::run(args) {
+            // A unit that changed beyond its uncertainty: the rejected unit's exit code.
+            Ok(true) => Ok(3),
+            other => other.map(|_| 0),
+        },
+        Command::VerifyReport(args) => match cmd::verify_report::run(args) {
+            // A page that is not the files': the rejected unit's exit code.
+            Ok(false) => Ok(3),
+            other => other.map(|_| 0),
+        },
+        Command::Pdf(args) => cmd::pdf::run(args).map(|()| 0),
+        Command::Threshold(args) => cmd::threshold::run(args).map(|()| 0),
+        Command::Flash(args) => cmd::flash::run(args).map(|()| 0),
+        Command::Read(args) => cmd::read::run(args).map(|()| 0),
+        Command::Image(args) => cmd::image::run(args).map(|()| 0),
+        Command::History(args) => cmd::history::run(args).map(|()| 0),
+        Command::Db(args) => cmd::history_db::run(args).map(|()| 0),
+        Command::Keygen(args) => cmd::keys::keygen(args).map(|()| 0),
+        Command::Sign(args) => cmd::keys::sign(args).map(|()| 0),
+        Command::Lot(args) => cmd::lot::run(args).map(|()| 0),
+        Command::Health(args) => match cmd::health::run(args) {
+            // A SUSPECT unit has the rejected unit's exit code.
+            Ok("SUSPECT") => Ok(3),
+            other => other.map(|_| 0),
+        },
     }
 }

@@ -204,11 +204,16 @@ fn screenshot(browser: &Path, report: &Path, height: u32, dir: &Path) {
 }
 
 /// Writes every kind of report into `d`; their paths.
-fn reports(d: &Path) -> Vec<PathBuf> {
+fn reports(d: &Path, pdf: bool) -> Vec<PathBuf> {
     let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/data");
     let example = |f: &str| examples.join(f).display().to_string();
+    // With `pdf`, each command that writes a report prints it too (`--pdf`).
     let run = |args: &[&str]| {
-        let (code, out, err) = calflash(d, args);
+        let mut args = args.to_vec();
+        if pdf && args.iter().any(|a| *a == "--report" || *a == "--reports") {
+            args.push("--pdf");
+        }
+        let (code, out, err) = calflash(d, &args);
         assert!(code == 0 || code == 3, "{args:?}: {out}{err}");
     };
     // A bench IMU and a single axis.
@@ -545,19 +550,24 @@ const REPORTS: [&str; 14] = [
 #[test]
 fn every_report_fits_a_1280_px_window() {
     let dir = tempfile::tempdir().unwrap();
-    let written = reports(dir.path());
+    let browser = chromium("every_report_fits_a_1280_px_window");
+    // Issue 68: each report prints as an A4 PDF a person signs and files: `--pdf` on the
+    // command that writes it.
+    let written = reports(dir.path(), browser.is_some());
     what_a_reader_finds(dir.path());
-    let Some(browser) = chromium("every_report_fits_a_1280_px_window") else {
+    let Some(browser) = browser else {
         return;
     };
-    // Issue 68: each report prints as an A4 PDF a person signs and files.
-    let pages: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-    let mut args = vec!["pdf"];
-    args.extend(pages.iter().map(String::as_str));
-    let (code, out, err) = calflash(dir.path(), &args);
+    // The batch's own pages too, not only its index.
+    let mut printed = written.clone();
+    printed.extend(["out/ACC-B-1.html", "out/ACC-B-2.html"].map(|f| dir.path().join(f)));
+    // And `calflash pdf` of a page already written, to a name of its own.
+    let (code, out, err) = calflash(dir.path(), &["pdf", "imu.html", "-o", "imu-again.pdf"]);
     assert_eq!(code, 0, "{out}{err}");
-    for report in &written {
-        let pdf = std::fs::read(report.with_extension("pdf")).unwrap();
+    printed.push(dir.path().join("imu-again.html"));
+    for report in &printed {
+        let pdf = std::fs::read(report.with_extension("pdf"))
+            .unwrap_or_else(|e| panic!("{}: no PDF: {e}", report.display()));
         let text = String::from_utf8_lossy(&pdf);
         assert!(pdf.starts_with(b"%PDF"), "{}", report.display());
         let pages = text.matches("/Type /Page\n").count()

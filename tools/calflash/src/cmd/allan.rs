@@ -271,6 +271,7 @@ fn write_outputs(
                 kalibr.as_deref(),
             )?);
         crate::files::write_atomically(p, |w| w.write_all(page.as_bytes()))?;
+        crate::report::written::page(p);
     }
     Ok(())
 }

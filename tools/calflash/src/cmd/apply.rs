@@ -289,6 +289,7 @@ pub fn run(args: &ApplyArgs) -> Result<(), Failure> {
                 &units,
             )?);
         staged.write(path, |w| w.write_all(html.as_bytes()))?;
+        crate::report::written::page(path);
     }
     staged.commit()?;
     report(args, &cal, &input, timing.as_ref(), lever, &corrected);

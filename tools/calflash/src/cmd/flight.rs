@@ -367,6 +367,7 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
             held_out.as_ref(),
         )?);
         staged.write(path, |w| w.write_all(page.as_bytes()))?;
+        crate::report::written::page(path);
     }
     staged.commit()?;
     print!("{text}");

@@ -127,6 +127,7 @@ pub fn run(args: &HealthArgs) -> Result<&'static str, Failure> {
             said.as_deref(),
         )?);
         crate::files::write_atomically(p, |w| std::io::Write::write_all(w, page.as_bytes()))?;
+        crate::report::written::page(p);
         println!("  report: {}", p.display());
     }
     if let Some(p) = &args.json {

@@ -201,6 +201,7 @@ pub fn run(args: &LotArgs) -> Result<(), Failure> {
             &charts,
         )?);
         crate::files::write_atomically(p, |w| w.write_all(html.as_bytes()))?;
+        crate::report::written::page(p);
         println!("  report: {}", p.display());
     }
     if let Some(p) = &args.json {

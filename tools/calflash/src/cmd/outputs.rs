@@ -290,6 +290,7 @@ impl Outputs {
         }
         if let (Some(p), Some(html)) = (&self.report, &html) {
             staged.write(p, |w| w.write_all(html.as_bytes()))?;
+            crate::report::written::page(p);
         }
         if let Some(p) = &self.json {
             staged.write(p, |w| {

@@ -90,6 +90,27 @@ fn print(browser: &Path, page: &Path, pdf: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Prints every report this run wrote ([`crate::report::written`]) as PAGE.pdf beside it:
+/// `--pdf` on any command.
+///
+/// # Errors
+/// No browser, or a page that cannot be printed.
+pub fn print_written() -> Result<(), Failure> {
+    let pages: Vec<PathBuf> = crate::report::written::pages()
+        .into_iter()
+        .filter(|p| p.is_file())
+        .collect();
+    if pages.is_empty() {
+        println!("calflash --pdf: the command wrote no report to print");
+        return Ok(());
+    }
+    run(&PdfArgs {
+        pages,
+        output: None,
+        browser: None,
+    })
+}
+
 /// Runs `calflash pdf`.
 ///
 /// # Errors

@@ -151,10 +151,15 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
             esc(&lot.left_out.join(", "))
         );
     }
-    h.push_str("</p><h2>Coefficients</h2><p>Each output's fitted coefficients (<code>output:term</code>). The spread first in a datasheet's unit: the MAD (scaled to a standard deviation) and the lowest and highest unit about the lot's median, each coefficient divided by the lot's median scale factor of its output (a bias in mg or deg/h, a scale factor in ppm, a cross-axis term in mrad, a gyro's g-sensitivity in deg/h/g); then in the converter's counts per unit of the term, as fitted.</p><table class=\"terms\"><tr><th>coefficient</th><th>spread (MAD)</th><th>lowest, highest about the median</th><th>unit (as fitted)</th><th>median</th><th>MAD</th><th>min</th><th>max</th></tr>");
+    h.push_str("</p><h2>Coefficients</h2><p>Each output's fitted coefficients (<code>output:term</code>). The spread first in a datasheet's unit: the MAD (scaled to a standard deviation) and the lowest and highest unit about the lot's median, each coefficient divided by the lot's median scale factor of its output (a bias in mg or deg/h, a scale factor in ppm, a cross-axis term in mrad, a gyro's g-sensitivity in deg/h/g); then the median and MAD as fitted, in the converter's counts per unit of the term (where a term has no datasheet unit, its range is in those too).</p><table class=\"terms\"><tr><th>coefficient</th><th>spread (MAD)</th><th>lowest, highest about the median</th><th>median as fitted</th><th>MAD as fitted</th><th>unit as fitted</th></tr>");
     for s in &lot.spread {
         let (mad, range) = s.engineering.as_ref().map_or_else(
-            || ("no datasheet unit".to_string(), String::new()),
+            || {
+                (
+                    "no datasheet unit".to_string(),
+                    format!("{:.4e} .. {:.4e}", s.min, s.max),
+                )
+            },
             |e| {
                 (
                     format!("{} {}", num(e.mad), e.unit),
@@ -164,15 +169,13 @@ pub fn render(lot: &Lot, name: &str, charts: &[(String, UnitChart)]) -> Result<S
         );
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.6e}</td><td>{:.3e}</td><td>{:.6e}</td><td>{:.6e}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.6e}</td><td>{:.3e}</td><td>{}</td></tr>",
             esc(&s.name),
             esc(&mad),
             esc(&range),
-            esc(&coefficient_unit(&s.name)),
             s.median,
             s.mad,
-            s.min,
-            s.max
+            esc(&coefficient_unit(&s.name)),
         );
     }
     h.push_str("</table><h2>Distance from the lot</h2>");

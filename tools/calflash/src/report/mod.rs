@@ -19,5 +19,6 @@ pub mod selfcal;
 pub mod spin;
 pub mod terminal;
 pub mod thermal;
+pub mod written;
 
 pub use error::Error;

@@ -334,6 +334,7 @@ pub fn run_units(
                     .as_bytes(),
             )
         })?;
+        crate::report::written::page(&index);
         println!("  reports: {}", index.display());
     }
     if !failed.is_empty() {

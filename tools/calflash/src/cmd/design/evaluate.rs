@@ -179,6 +179,7 @@ fn write_evaluation(
             curve,
         )?);
         staged.write(path, |w| std::io::Write::write_all(w, html.as_bytes()))?;
+        crate::report::written::page(path);
     }
     Ok(staged.commit()?)
 }
