@@ -1065,7 +1065,7 @@ fn the_hedy_flight_does_not_fit_its_gnss_and_says_where() {
     let held = &v["held_out"];
     assert!(!held["believed"].as_bool().unwrap(), "{held}");
     assert!(
-        held["within_3_sigma"].as_f64().unwrap() / held["components"].as_f64().unwrap() < 0.9,
+        held["within_3_sigma"].as_f64().unwrap() / held["fixes"].as_f64().unwrap() < 0.9,
         "{held}"
     );
     assert!(out.contains("the track cannot be believed"), "{out}");

@@ -301,9 +301,9 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
         if !h.believed && checked.verdict.word != crate::nav::verdict::DOES_NOT_FIT {
             checked.verdict.word = crate::nav::verdict::DOES_NOT_FIT;
             checked.verdict.why = format!(
-                "{} of {} held-out fix components within 3 sigma of the smoothed track ({:.1} %, at least {:.0} % where it can be believed): the track the filter keeps does not hold on fixes it did not see, so its estimates are not reported as findings",
+                "{} of {} held-out fixes within 3 sigma of the smoothed track ({:.1} %, at least {:.0} % where it can be believed): the track the filter keeps does not hold on fixes it did not see, so its estimates are not reported as findings",
                 h.within_3_sigma,
-                h.components,
+                h.fixes,
                 100.0 * h.share(),
                 100.0 * consistency::HELD_OUT_AT_LEAST
             );

@@ -334,8 +334,8 @@ mod tests {
     }
 }
 
-/// The share of held-out fixes' components within 3 of their sigma a track that can be
-/// believed has at least.
+/// The share of held-out fixes within 3 sigma of the track a track that can be believed has
+/// at least.
 pub const HELD_OUT_AT_LEAST: f64 = 0.9;
 
 /// Every `k`-th fix after the launch kept out of the filter and the smoother
@@ -361,9 +361,11 @@ pub fn hold_out(
     (taken, held)
 }
 
-/// The fixes the filter never saw, against the smoothed track at their instants: each
-/// component (east, north, and up where the fix has a height) over the track's stated 1-sigma
-/// together with the fix's.
+/// The fixes the filter never saw, against the smoothed track at their instants: each fix's
+/// distance from the track in sigmas, its components (east, north, and up where the fix has a
+/// height) each over the track's stated 1-sigma together with the fix's, taken together
+/// (`sqrt(z_e^2 + z_n^2 + z_u^2)`). Where the stated sigmas are true, 97.1 % of fixes with a
+/// height are within 3 (98.9 % of those without), and 95 % within their 95 % bound.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct HeldOut {
     /// Every k-th fix after the launch was held out.
@@ -372,24 +374,31 @@ pub struct HeldOut {
     pub fixes: usize,
     /// Their components compared.
     pub components: usize,
-    /// Of them, within 3 sigma.
+    /// Of the fixes, those whose distance from the track is within 3 sigma.
     pub within_3_sigma: usize,
-    /// Of them, within their 95 % bounds (1.96 sigma): about 95 % where the track's and the
+    /// Of the fixes, those within their 95 % bound (the chi-square 95 % point of their
+    /// components: 2.45 sigma with two, 2.80 with three): about 95 % where the track's and the
     /// fixes' stated 1-sigma are true.
     pub within_95: usize,
     /// The RMS horizontal distance from the track, m.
     pub rms_m: f64,
-    /// The largest normalised component and its fix's time, s.
+    /// The largest distance in sigmas and its fix's time, s.
     pub worst: (f64, f64),
     /// At least [`HELD_OUT_AT_LEAST`] within 3 sigma: the track can be believed.
     pub believed: bool,
 }
 
 impl HeldOut {
-    /// Its share within 3 sigma.
+    /// Its share of fixes within 3 sigma.
     #[must_use]
     pub fn share(&self) -> f64 {
-        self.within_3_sigma as f64 / self.components.max(1) as f64
+        self.within_3_sigma as f64 / self.fixes.max(1) as f64
+    }
+
+    /// Its share of fixes within their 95 % bound.
+    #[must_use]
+    pub fn share_95(&self) -> f64 {
+        self.within_95 as f64 / self.fixes.max(1) as f64
     }
 }
 
@@ -426,22 +435,26 @@ pub fn held_out(
         fixes += 1;
         sq += (p[0] - z[0]).powi(2) + (p[1] - z[1]).powi(2);
         let axes = if f.height.is_some() { 3 } else { 2 };
+        let mut d2 = 0.0;
         for i in 0..axes {
             let r = if i == 2 { noise.1 } else { noise.0 };
             // The receiver's slowly varying error is in the held-out fix and in the track its
             // neighbours pulled, alike: their difference holds the fix's own noise and the
             // track's error without it.
             let own = (s[i] * s[i] - correlated * correlated).max(0.0).sqrt();
-            let zn = (p[i] - z[i]).abs() / own.hypot(r);
+            d2 += ((p[i] - z[i]) / own.hypot(r)).powi(2);
             components += 1;
-            within += usize::from(zn <= 3.0);
-            within_95 += usize::from(zn <= 1.96);
-            if zn > worst.0 {
-                worst = (zn, f.t);
-            }
+        }
+        // The chi-square 95 % points of 2 and 3 degrees of freedom.
+        let bound_95 = if axes == 3 { 7.814_7 } else { 5.991_5 };
+        within += usize::from(d2 <= 9.0);
+        within_95 += usize::from(d2 <= bound_95);
+        let d = d2.sqrt();
+        if d > worst.0 {
+            worst = (d, f.t);
         }
     }
-    let share = within as f64 / components.max(1) as f64;
+    let share = within as f64 / fixes.max(1) as f64;
     HeldOut {
         every,
         fixes,
@@ -454,6 +467,6 @@ pub fn held_out(
             f64::NAN
         },
         worst,
-        believed: components > 0 && share >= HELD_OUT_AT_LEAST,
+        believed: fixes > 0 && share >= HELD_OUT_AT_LEAST,
     }
 }

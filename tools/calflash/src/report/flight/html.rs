@@ -275,15 +275,14 @@ fn kinds_table(c: &Checked, held_out: Option<&crate::nav::consistency::HeldOut>)
     if let Some(o) = held_out {
         let _ = writeln!(
             h,
-            "<p class=\"{}\">Held out: every {}th fix after the launch ({} fixes, {} components) was kept from the filter and the smoother: {} within 3 sigma of the smoothed track ({:.1} %; at least {:.0} % where a track can be believed), {:.1} % inside their 95 % bounds, RMS {:.2} m horizontally, the worst {:.1} sigma at {:.1} s: <b>{}</b>.</p>",
+            "<p class=\"{}\">Held out: every {}th fix after the launch ({} fixes) was kept from the filter and the smoother: {} within 3 sigma of the smoothed track (each fix's east, north and up together, over the track's and the fix's 1-sigma: {:.1} %; about 97 % where the stated sigmas are true, at least {:.0} % where a track can be believed), {:.1} % inside their 95 % bounds, RMS {:.2} m horizontally, the worst {:.1} sigma at {:.1} s: <b>{}</b>.</p>",
             if o.believed { "accept" } else { "reject" },
             o.every,
             o.fixes,
-            o.components,
             o.within_3_sigma,
             100.0 * o.share(),
             100.0 * crate::nav::consistency::HELD_OUT_AT_LEAST,
-            100.0 * o.within_95 as f64 / o.components.max(1) as f64,
+            100.0 * o.share_95(),
             o.rms_m,
             o.worst.0,
             o.worst.1,
