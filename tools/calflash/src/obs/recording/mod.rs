@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 use spincal::model::Rails;
 
+pub mod clipping;
 mod error;
 mod halves;
 pub mod header;
@@ -229,8 +230,46 @@ pub fn read_with(
         s.iter()
             .any(|x| *x <= f64::from(rails.lo) || *x >= f64::from(rails.hi))
     };
-    let sa: Vec<bool> = ca.iter().map(at_rail).collect();
-    let sg: Vec<bool> = cg.iter().map(at_rail).collect();
+    let mut sa: Vec<bool> = ca.iter().map(at_rail).collect();
+    let mut sg: Vec<bool> = cg.iter().map(at_rail).collect();
+    // Values in a physical unit have no rails: their clipping is found from the data.
+    for (name, values, r, marks) in [
+        ("accelerometer", &a, read[0], &mut sa),
+        ("gyro", &g, read[1], &mut sg),
+    ] {
+        if !r.is_si() || values.is_empty() {
+            continue;
+        }
+        let found = clipping::clips(values);
+        if found.is_empty() {
+            continue;
+        }
+        let said: Vec<String> = found
+            .iter()
+            .map(|c| {
+                format!(
+                    "{} at {} ({} samples)",
+                    ["x", "y", "z"][c.axis],
+                    c.level,
+                    c.samples
+                )
+            })
+            .collect();
+        eprintln!(
+            "calflash: note: {}: the {name} clips: {}; the samples there are excluded as saturated",
+            acc.display(),
+            said.join(", ")
+        );
+        *marks = values
+            .iter()
+            .map(|v| {
+                found.iter().any(|c| {
+                    let x = v[c.axis];
+                    if c.high { x >= c.level } else { x <= c.level }
+                })
+            })
+            .collect();
+    }
     let saturated_count = (
         sa.iter().filter(|x| **x).count(),
         sg.iter().filter(|x| **x).count(),
@@ -423,6 +462,49 @@ mod tests {
         );
         let r = read(&one, None, Rails::unsigned(16)).unwrap();
         assert_eq!((r.acc[1], r.gyro[1]), ([1.0, 2.0, 3.0], [4.0, 5.0, 6.0]));
+    }
+
+    /// Issue 66: an accelerometer read in m/s^2 that clips at +-20.48 (an ADXL355) has its
+    /// samples at the clip excluded as saturated, as codes at a rail are; the same motion
+    /// below the clip excludes nothing.
+    #[test]
+    fn clipping_in_a_physical_unit_is_found_from_the_data() {
+        let d = tempfile::tempdir().unwrap();
+        let file = |peak: f64| -> String {
+            let mut text = String::from("t,ax,ay,az,gx,gy,gz\n");
+            for k in 0..3000 {
+                let t = k as f64 * 0.01;
+                let ax = (peak * (t * 0.9).sin()).clamp(-20.48, 20.48);
+                text.push_str(&format!(
+                    "{t:.2},{ax:.5},{:.5},9.80665,0.001,0.002,{:.4}\n",
+                    0.01 * (k % 3) as f64,
+                    0.9 * (t * 0.9).cos()
+                ));
+            }
+            text
+        };
+        let opts = Options {
+            rails: Rails::new(i32::MIN, i32::MAX),
+            rate: None,
+            keep: layout::Keep::Both,
+            units: units::Units {
+                given: [
+                    units::Unit::parse("m/s2", units::Sensor::Accel),
+                    units::Unit::parse("rad/s", units::Sensor::Gyro),
+                ],
+                lsb: [None, None],
+            },
+            columns: header::Chosen::default(),
+        };
+        let clipped = write(d.path(), "clipped.csv", &file(25.0));
+        let r = read_with(&clipped, None, &opts).unwrap();
+        assert!(r.saturated_count.0 > 100, "{:?}", r.saturated_count);
+        assert_eq!(r.saturated_count.1, 0);
+        let k = r.acc.iter().position(|a| a[0] >= 20.48).unwrap();
+        assert!(r.saturated[k]);
+        let free = write(d.path(), "free.csv", &file(19.0));
+        let r = read_with(&free, None, &opts).unwrap();
+        assert_eq!(r.saturated_count, (0, 0));
     }
 
     #[test]
