@@ -150,6 +150,55 @@ fn a_rest_that_moves_is_named() {
     );
 }
 
+/// Issue 66: a recording whose first rest is shorter than the default 30 s (imucal's sessions
+/// rest 3 s), given without `--init-rest`, is taken with the rest up to the first motion, and
+/// says so; a rest given that moves is still refused.
+#[test]
+fn a_short_first_rest_is_found_and_said() {
+    let d = tempfile::tempdir().unwrap();
+    let rec = Tumble {
+        rest: 5.0,
+        ..Tumble::default()
+    }
+    .record();
+    let (a, g) = write(&rec, d.path());
+    let (code, said, err) = calflash(
+        d.path(),
+        &[
+            "selfcal",
+            a.to_str().unwrap(),
+            g.to_str().unwrap(),
+            "--g",
+            "9.81",
+            "--serial",
+            "SIM-5",
+            "--no-db",
+        ],
+    );
+    assert_eq!(code, 0, "{said}{err}");
+    assert!(
+        said.contains("initial rest: the first 5.0 s, up to where the unit first moves"),
+        "{said}"
+    );
+    let (code, said, err) = calflash(
+        d.path(),
+        &[
+            "selfcal",
+            a.to_str().unwrap(),
+            g.to_str().unwrap(),
+            "--g",
+            "9.81",
+            "--serial",
+            "SIM-5",
+            "--no-db",
+            "--init-rest",
+            "30",
+        ],
+    );
+    assert_eq!(code, 1, "{said}{err}");
+    assert!(err.contains("the unit moves at 5.0 s"), "{err}");
+}
+
 #[test]
 fn dropped_and_saturated_samples_are_reported_and_left_out() {
     let dir = tempfile::tempdir().unwrap();

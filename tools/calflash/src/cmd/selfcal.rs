@@ -73,6 +73,9 @@ pub struct SelfcalArgs {
 /// The initial rest assumed when neither `--init-rest` nor the recording states one, s.
 const DEFAULT_REST: f64 = 30.0;
 
+/// The shortest initial rest taken up to the first motion when the default one moves, s.
+const MIN_FOUND_REST: f64 = 2.0;
+
 /// Local gravity, m/s^2: between 9.7 and 9.9 on the Earth's surface.
 fn gravity(s: &str) -> Result<f64, String> {
     super::values::in_range(s, 9.7, 9.9).map_err(|_| {
@@ -114,7 +117,7 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, Failure> {
         (None, Some(r)) => r,
         (None, None) => DEFAULT_REST,
     };
-    let opts = Options {
+    let mut opts = Options {
         g: args.g,
         init_rest,
         window: args.window,
@@ -123,7 +126,21 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, Failure> {
         gyro_bias: args.gyro_bias,
         ..Options::default()
     };
-    let c = selfcal::calibrate(&rec, &opts)?;
+    let c = match selfcal::calibrate(&rec, &opts) {
+        // No rest was given or stated and the unit moves inside the default one: the rest is
+        // up to its first motion (issue 66: a 3 s rest was refused until the user found
+        // --init-rest), said.
+        Err(selfcal::SelfCalError::RestNotStill { at, .. })
+            if args.init_rest.is_none() && rec.rest.is_none() && at >= MIN_FOUND_REST =>
+        {
+            println!(
+                "calflash selfcal: initial rest: the first {at:.1} s, up to where the unit first moves (no --init-rest given or stated, and the default {DEFAULT_REST} s moves); give --init-rest to set it"
+            );
+            opts.init_rest = at;
+            selfcal::calibrate(&rec, &opts)?
+        }
+        other => other?,
+    };
     let reject = !acceptance::rejected(&c).is_empty();
     let mut files = vec![args.acc.as_path()];
     files.extend(args.gyro.as_deref());
