@@ -26,8 +26,9 @@ pub struct UnitArgs {
 pub struct ColumnArgs {
     /// Choose columns by their header names, `t=time_us,ax=acc_x,ay=acc_y,az=acc_z,gx=...,
     /// temp=die_c`: the roles not given are found by the recognised names (t, time_ms, ax,
-    /// acc_x, gyro_z, ...); the time column's unit from its name or `t=stamp:ms`; a temperature
-    /// column is carried into the record.
+    /// acc_x, gyro_z, ...); the time column's unit from its name or `t=stamp:ms`; a sample
+    /// counter instead of a time, `index=count` with `--sample-rate` (it may wrap; the samples
+    /// it skips are gaps); a temperature column is carried into the record.
     #[arg(long, value_parser = |s: &str| crate::obs::header::Chosen::parse(s))]
     pub columns: Option<crate::obs::header::Chosen>,
 }

@@ -48,7 +48,7 @@ pub fn clips(values: &[[f64; 3]]) -> Vec<Clip> {
                 .filter(|d| *d > 0.0)
                 .fold(f64::INFINITY, f64::min);
         }
-        if !(range > 20.0 * step) {
+        if range <= 20.0 * step || !step.is_finite() {
             continue;
         }
         for (level, high) in [(lo, false), (hi, true)] {

@@ -26,8 +26,11 @@ impl Holds {
 /// Which fields hold what.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Columns {
-    /// The timestamp's field and its scale to seconds.
+    /// The timestamp's field and its scale to seconds (1 for a sample counter).
     pub(super) t: Option<(usize, f64)>,
+    /// The time field is a sample counter (`--columns index=NAME`): it may wrap, and the rate
+    /// turns it into seconds.
+    pub(super) counter: bool,
     /// The fields of the counts, in order.
     pub(super) counts: Vec<usize>,
     /// The unit each count column's name states.
@@ -115,6 +118,9 @@ pub struct Chosen {
     pub gyro: [Option<String>; 3],
     /// A temperature column, carried into the record.
     pub temp: Option<String>,
+    /// A sample counter column taken as the time base (with the sample rate) instead of a
+    /// timestamp.
+    pub index: Option<String>,
 }
 
 impl Chosen {
@@ -144,6 +150,7 @@ impl Chosen {
                 "gy" => &mut c.gyro[1],
                 "gz" => &mut c.gyro[2],
                 "temp" => &mut c.temp,
+                "index" => &mut c.index,
                 "t" => {
                     let (column, scale) = time_column(&name, item, "t=")?;
                     if c.t.replace((column, scale)).is_some() {
@@ -168,6 +175,12 @@ impl Chosen {
                 });
             }
         }
+        if let (Some(_), Some(index)) = (&c.t, &c.index) {
+            return Err(ColumnsError::Twice {
+                item: format!("index={index}"),
+                role: "the time base (t= or index=)".into(),
+            });
+        }
         Ok(c)
     }
 }
@@ -177,7 +190,7 @@ impl Chosen {
 #[non_exhaustive]
 pub enum ColumnsError {
     /// An item not of the form `ROLE=NAME`.
-    #[error("`{0}`: expected ROLE=NAME (t, ax, ay, az, gx, gy, gz or temp)")]
+    #[error("`{0}`: expected ROLE=NAME (t, index, ax, ay, az, gx, gy, gz or temp)")]
     NotRoleName(String),
     /// A time unit that is not known.
     #[error("`{item}`: the time unit `{unit}` is not s, ms, us or ns")]
@@ -200,7 +213,7 @@ pub enum ColumnsError {
         role: &'static str,
     },
     /// A role that is not known.
-    #[error("`{item}`: `{role}` is not a role; expected t, ax, ay, az, gx, gy, gz or temp")]
+    #[error("`{item}`: `{role}` is not a role; expected t, index, ax, ay, az, gx, gy, gz or temp")]
     NotRole {
         /// The item.
         item: String,
@@ -284,9 +297,12 @@ pub(super) fn named(
             _ => None,
         })
     };
-    let t = match &chosen.t {
-        Some((name, scale)) => Some((position(header, name).ok_or_else(|| missing(name))?, *scale)),
-        None => header
+    let t = match (&chosen.t, &chosen.index) {
+        (Some((name, scale)), _) => {
+            Some((position(header, name).ok_or_else(|| missing(name))?, *scale))
+        }
+        (None, Some(name)) => Some((position(header, name).ok_or_else(|| missing(name))?, 1.0)),
+        (None, None) => header
             .iter()
             .enumerate()
             .find_map(|(i, h)| timestamp(h).map(|s| (i, s))),
@@ -305,6 +321,7 @@ pub(super) fn named(
     };
     Ok(Some(Columns {
         t,
+        counter: chosen.t.is_none() && chosen.index.is_some(),
         counts: found.iter().map(|f| f.0).collect(),
         units: found.iter().map(|f| f.1).collect(),
         sensor: found.first().map(|f| f.2),
@@ -327,6 +344,7 @@ pub(super) fn positional(width: usize, holds: Holds) -> Option<Columns> {
     let first = usize::from(t.is_some());
     Some(Columns {
         t,
+        counter: false,
         counts: (first..first + n).collect(),
         units: vec![None; n],
         sensor: None,

@@ -65,8 +65,11 @@ pub enum Keep {
 /// The samples of one file.
 #[derive(Debug, Clone)]
 pub struct Rows {
-    /// Timestamps, s, increasing; `None` when the file has no timestamp column.
+    /// Timestamps, s, increasing; `None` when the file has no timestamp column. With
+    /// [`counter`](Self::counter), a sample counter's values as read.
     pub t: Option<Vec<f64>>,
+    /// `t` holds a sample counter (`--columns index=NAME`), not seconds.
+    pub counter: bool,
     /// The kept triads: accelerometer then gyro, or the one kept (or the file's one).
     pub triads: Vec<Vec<[f64; 3]>>,
     /// The file line of each sample.
@@ -246,8 +249,10 @@ impl Sampler<'_> {
         let t = match cols.t {
             Some((k, scale)) => {
                 let x = value(k, "timestamp")? * scale;
+                // A sample counter may wrap: it is unwrapped once read whole.
                 if let Some(&prev) = part.times.last()
                     && x <= prev
+                    && !self.cols.counter
                 {
                     return Err(RecordingError::NotIncreasing {
                         path: self.path.to_path_buf(),
@@ -327,6 +332,7 @@ pub fn read_chosen(
     };
     let mut rows = Rows {
         t: None,
+        counter: false,
         triads: vec![Vec::new(); kept.len() / 3],
         line: Vec::new(),
         fields: Vec::new(),
@@ -362,6 +368,7 @@ pub fn read_chosen(
         let mut merge = |part: Part| {
             if let (Some(&t), Some(&prev)) = (part.times.first(), times.last())
                 && t <= prev
+                && !cols.counter
             {
                 return Err(RecordingError::NotIncreasing {
                     path: path.to_path_buf(),
@@ -421,6 +428,7 @@ pub fn read_chosen(
         rows.units = kept.iter().map(|&j| c.units[j]).collect();
         rows.header = c.header;
         rows.sensor = c.sensor;
+        rows.counter = c.counter;
         if let Some(k) = c.temp {
             let name = header
                 .as_ref()

@@ -191,6 +191,7 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
     }
     let first = usize::from(t.is_some());
     Ok(Rows {
+        counter: false,
         line: (1..=samples.len())
             .map(|k| u32::try_from(k).unwrap_or(u32::MAX))
             .collect(),

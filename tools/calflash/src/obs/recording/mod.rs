@@ -464,6 +464,52 @@ mod tests {
         assert_eq!((r.acc[1], r.gyro[1]), ([1.0, 2.0, 3.0], [4.0, 5.0, 6.0]));
     }
 
+    /// Issue 66: a logger's sample counter as the time base (`--columns index=NAME` with the
+    /// rate): the host's batched timestamps are not taken, the counter's wrap at 2^16 is
+    /// followed, and the one sample it skips is a gap of one; without a rate it is refused.
+    #[test]
+    fn a_sample_counter_times_the_samples() {
+        let d = tempfile::tempdir().unwrap();
+        let mut text = String::from("time_us,count,ax,ay,az,gx,gy,gz\n");
+        let mut n = 0;
+        for k in 0..300u32 {
+            if k == 200 {
+                continue; // dropped by the logger: its count skips one
+            }
+            // The host stamps ten samples at a time, as its radio delivers them.
+            let stamp = (k / 10) * 100_000 + 7;
+            let count = (65_436 + k) % 65_536;
+            text.push_str(&format!("{stamp},{count},1,2,3,4,5,6\n"));
+            n += 1;
+        }
+        let p = write(d.path(), "counted.csv", &text);
+        let opts = |rate| Options {
+            rails: Rails::new(i32::MIN, i32::MAX),
+            rate,
+            keep: layout::Keep::Both,
+            units: units::Units::DEFAULT,
+            columns: header::Chosen::parse("index=count").unwrap(),
+        };
+        let r = read_with(&p, None, &opts(Some(100.0))).unwrap();
+        assert_eq!(r.len(), n);
+        assert!((r.period - 0.01).abs() < 1e-12, "{}", r.period);
+        assert_eq!(r.gaps.len(), 1, "{:?}", r.gaps);
+        assert_eq!(r.gaps[0].missing, 1);
+        assert!(
+            (r.t[r.len() - 1] - 2.99).abs() < 1e-9,
+            "{}",
+            r.t[r.len() - 1]
+        );
+        let e = read_with(&p, None, &opts(None)).unwrap_err().to_string();
+        assert!(e.contains("give --sample-rate"), "{e}");
+        assert!(
+            header::Chosen::parse("t=time_us,index=count")
+                .unwrap_err()
+                .to_string()
+                .contains("the time base (t= or index=) is given twice"),
+        );
+    }
+
     /// Issue 66: an accelerometer read in m/s^2 that clips at +-20.48 (an ADXL355) has its
     /// samples at the clip excluded as saturated, as codes at a rail are; the same motion
     /// below the clip excludes nothing.

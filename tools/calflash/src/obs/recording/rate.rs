@@ -42,6 +42,37 @@ pub(super) fn timing(
             format!("a sample rate of {r} Hz; expected a number above 0"),
         ));
     }
+    if rows.counter {
+        let Some(counter) = rows.t.take() else {
+            return Err(RecordingError::NoRate {
+                path: path.to_path_buf(),
+            });
+        };
+        let Some((r, who)) = stated else {
+            return Err(conflict(
+                rows.line[0] as usize,
+                "the sample counter (--columns index=) counts samples: give --sample-rate to time them".into(),
+            ));
+        };
+        let t = counted(&counter, r).map_err(|k| {
+            conflict(
+                rows.line[k] as usize,
+                format!(
+                    "the sample counter goes from {} to {}: a counter steps up by one a sample (or wraps to 0)",
+                    counter[k - 1], counter[k]
+                ),
+            )
+        })?;
+        eprintln!(
+            "calflash: note: {}: timed by its sample counter at {r} Hz ({who}){}",
+            path.display(),
+            match t.len() as f64 - 1.0 - (t[t.len() - 1] - t[0]) * r {
+                d if d < -0.5 => format!(": {:.0} samples dropped by its count", -d),
+                _ => ": none dropped by its count".into(),
+            }
+        );
+        return Ok(t);
+    }
     match (rows.t.take(), stated) {
         // --sample-rate is the user's word over the file's own timestamps (a logger's host
         // stamps samples as its radio delivers them, in batches): the samples are taken as
@@ -77,6 +108,29 @@ pub(super) fn timing(
             path: path.to_path_buf(),
         }),
     }
+}
+
+/// A sample counter's values as seconds from its first at `rate` Hz: a counter that falls back
+/// wraps (at the power of two above its largest value), and the samples it skips are gaps.
+/// `Err(k)`: sample `k` repeats its counter or falls back where it cannot have wrapped.
+fn counted(counter: &[f64], rate: f64) -> Result<Vec<f64>, usize> {
+    let top = counter.iter().copied().fold(0.0f64, f64::max);
+    let modulus = 2f64.powi((top + 1.0).log2().ceil() as i32);
+    let mut t = Vec::with_capacity(counter.len());
+    let mut wraps = 0.0;
+    for (k, &c) in counter.iter().enumerate() {
+        if k > 0 {
+            let prev = counter[k - 1];
+            if c == prev || (c < prev && prev - c < 0.5 * modulus) {
+                return Err(k);
+            }
+            if c < prev {
+                wraps += modulus;
+            }
+        }
+        t.push((c + wraps - counter[0]) / rate);
+    }
+    Ok(t)
 }
 
 /// What timestamps say of the rate: their median step's and their mean over the record.
