@@ -1006,6 +1006,8 @@ fn the_hedy_flight_does_not_fit_its_gnss_and_says_where() {
             "h.json",
             "--report",
             "h.html",
+            "--track",
+            "h_track.csv",
         ],
         4,
     );
@@ -1050,14 +1052,65 @@ fn the_hedy_flight_does_not_fit_its_gnss_and_says_where() {
             && (30.0..40.0).contains(&r["to"].as_f64().unwrap())),
         "{gnss}"
     );
+    // The cause: the receiver's fixes over the span hold together (within their stated noise
+    // of one smooth path, though most used 4 or 5 satellites), so the IMU's prediction lost
+    // the track, not the receiver.
     let why = v["why"].as_str().unwrap();
     assert!(
         why.starts_with("GNSS horizontal position: ")
             && why.contains(" refused from ")
-            && why.contains("fewer than 6 satellites"),
+            && why.contains("hold together (within ")
+            && why.contains("the receiver did not lose the track, the IMU's prediction did")
+            && why.contains("fewer than 6 satellites, and still agree"),
         "{why}"
     );
     assert!(v["diagnosis"]["weak_fixes"].as_u64().unwrap() > 5, "{v}");
+    let (n, rms) = (
+        v["diagnosis"]["fixes_from_smooth_path"][0]
+            .as_u64()
+            .unwrap(),
+        v["diagnosis"]["fixes_from_smooth_path"][1]
+            .as_f64()
+            .unwrap(),
+    );
+    assert!(n >= 20 && rms < 2.5 * 3.0, "{n} fixes, {rms} m");
+    // The flight computer's own estimate (`flightInfo.csv`, its barometer and accelerometer)
+    // is an independent witness of the height: over the span the smoothed track's height above
+    // the pad is within 50 m of it (about 5 km up), so the vertical held and what was lost is
+    // the horizontal, the attitude's.
+    let witness: Vec<(f64, f64)> = std::fs::read_to_string(dir.join("flightInfo.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+            (c[0], c[1])
+        })
+        .collect();
+    let at = |t: f64| {
+        let k = witness
+            .partition_point(|w| w.0 < t)
+            .clamp(1, witness.len() - 1);
+        let (a, b) = (witness[k - 1], witness[k]);
+        a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)
+    };
+    let track: Vec<Vec<f64>> = std::fs::read_to_string(d.path().join("h_track.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let pad: Vec<f64> = track.iter().filter(|r| r[0] < 0.0).map(|r| r[3]).collect();
+    let pad = pad.iter().sum::<f64>() / pad.len() as f64;
+    let worst = track
+        .iter()
+        .filter(|r| (17.0..=36.4).contains(&r[0]))
+        .map(|r| (r[3] - pad - at(r[0])).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 50.0,
+        "the track's height is {worst} m from the flight computer's"
+    );
     // No term is named: the estimates of a filter that lost its track are not findings.
     assert_eq!(v["shifts"].as_array().unwrap().len(), 0, "{v}");
     assert!(!out.contains("SHIFTED"), "{out}");

@@ -312,7 +312,7 @@ pub fn run(args: &FlightArgs) -> Result<&'static str, Failure> {
     });
     // Where a kind's innovations were refused, what the recording shows there.
     let diagnosis = refused_span(&checked.verdict.consistency).map(|span| {
-        let d = crate::nav::diagnosis::diagnose(span, &imu, &all_fixes, &counts);
+        let d = crate::nav::diagnosis::diagnose(span, &imu, &all_fixes, &counts, opts.gnss_noise.0);
         if checked.verdict.word == crate::nav::verdict::DOES_NOT_FIT {
             checked.verdict.why = format!("{}; {}", checked.verdict.why, d.sentence());
         }

@@ -25,6 +25,18 @@ pub const HOLD_AT_MOST: f64 = 2.0;
 /// (and no check on it), five with one.
 pub const SATELLITES_AT_LEAST: f64 = 6.0;
 
+/// The fixes in a span hold together when they lie within this many of their stated 1-sigma
+/// (RMS, each horizontal axis) of one smooth path: a cubic in time through them.
+pub const SMOOTH_WITHIN_SIGMA: f64 = 3.0;
+
+/// The fewest fixes in a span for their smoothness to be judged (four fit the cubic exactly).
+pub const SMOOTH_AT_LEAST: usize = 8;
+
+/// The fixes judged for smoothness reach this far beyond the span on each side, s: a receiver
+/// whose every fix in the span is off by the same amount (a fault with a start and an end)
+/// steps there.
+pub const SMOOTH_MARGIN: f64 = 2.0;
+
 /// What was seen over one span.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnosis {
@@ -46,6 +58,12 @@ pub struct Diagnosis {
     pub satellites: Option<(usize, f64)>,
     /// Of those fixes, how many used fewer than [`SATELLITES_AT_LEAST`].
     pub weak_fixes: usize,
+    /// The fixes in the span and their RMS distance (m, each horizontal axis) from one cubic
+    /// in time through them, when there are at least [`SMOOTH_AT_LEAST`].
+    pub fixes_from_smooth_path: Option<(usize, f64)>,
+    /// What the recording shows did not lose the track (the receiver, when its fixes hold
+    /// together), a sentence.
+    pub finding: Option<String>,
     /// The causes found, each a sentence; empty when none passes its bound.
     pub causes: Vec<String>,
 }
@@ -55,6 +73,16 @@ impl Diagnosis {
     #[must_use]
     pub fn sentence(&self) -> String {
         let span = format!("from {:.1} to {:.1} s", self.from, self.to);
+        if let Some(finding) = &self.finding {
+            return if self.causes.is_empty() {
+                format!("{span} {finding}")
+            } else {
+                format!(
+                    "{span} {finding}; also seen there: {}",
+                    self.causes.join("; ")
+                )
+            };
+        }
         if self.causes.is_empty() {
             format!(
                 "{span} no sensor was flagged past {:.0} % of {} samples ({} accelerometer, {} gyro), the IMU turned at most {:.3} rad between samples ({:.0} deg/s) and the receiver gave a new fix at least every {:.1} s: the cause is not known",
@@ -75,13 +103,15 @@ impl Diagnosis {
     }
 }
 
-/// What `imu` and `fixes` show over `[from, to]` (s), `counts` being the GNSS file's.
+/// What `imu` and `fixes` show over `[from, to]` (s), `counts` being the GNSS file's and
+/// `noise` the fixes' stated horizontal 1-sigma, m.
 #[must_use]
 pub fn diagnose(
     (from, to): (f64, f64),
     imu: &ImuSeries,
     fixes: &[Fix],
     counts: &FixCounts,
+    noise: f64,
 ) -> Diagnosis {
     let mut samples = 0;
     let mut flagged = [0; 2];
@@ -128,8 +158,24 @@ pub fn diagnose(
         .reduce(f64::min)
         .map(|fewest| (in_span.len(), fewest));
     let weak_fixes = in_span.iter().filter(|s| **s < SATELLITES_AT_LEAST).count();
+    let smooth = smooth_path(fixes, (from - SMOOTH_MARGIN, to + SMOOTH_MARGIN));
+    let holds_together = smooth.is_some_and(|(_, rms)| rms <= SMOOTH_WITHIN_SIGMA * noise);
+    let finding = smooth.filter(|_| holds_together).map(|(n, rms)| {
+        format!(
+            "the receiver's {n} fixes from {:.1} to {:.1} s hold together (within {rms:.1} m RMS of one smooth path, a cubic in time, against their stated {noise} m) while the track left them: the receiver did not lose the track, the IMU's prediction did (its attitude, or errors beyond the prior the filter was given), and the filter then refused the fixes that would have brought it back{}",
+            from - SMOOTH_MARGIN,
+            to + SMOOTH_MARGIN,
+            if weak_fixes * 2 > in_span.len() {
+                format!(
+                    " ({weak_fixes} of them used fewer than {SATELLITES_AT_LEAST:.0} satellites, and still agree)"
+                )
+            } else {
+                String::new()
+            }
+        )
+    });
     let mut causes = Vec::new();
-    if weak_fixes * 2 > in_span.len() {
+    if weak_fixes * 2 > in_span.len() && !holds_together {
         causes.push(format!(
             "{weak_fixes} of the {} fixes there used fewer than {SATELLITES_AT_LEAST:.0} satellites (as few as {:.0}): a position from so few has no check on it and a geometry that can put it hundreds of metres off, which the fixes' stated noise does not cover",
             in_span.len(),
@@ -172,8 +218,43 @@ pub fn diagnose(
         repeated_rows: counts.repeated,
         satellites,
         weak_fixes,
+        fixes_from_smooth_path: smooth,
+        finding,
         causes,
     }
+}
+
+/// The new fixes in `[from, to]` and their RMS distance (m, each horizontal axis) from the
+/// least-squares cubic in time through them (by SVD, time scaled to the span), or `None`
+/// with fewer than [`SMOOTH_AT_LEAST`].
+fn smooth_path(fixes: &[Fix], (from, to): (f64, f64)) -> Option<(usize, f64)> {
+    let inside: Vec<&Fix> = fixes.iter().filter(|f| f.t >= from && f.t <= to).collect();
+    if inside.len() < SMOOTH_AT_LEAST {
+        return None;
+    }
+    let first = inside[0];
+    let origin = (
+        first.lat_lon.0,
+        first.lat_lon.1,
+        first.height.unwrap_or(0.0),
+    );
+    let (mid, half) = ((from + to) / 2.0, ((to - from) / 2.0).max(1e-9));
+    let a = nalgebra::DMatrix::from_fn(inside.len(), 4, |i, j| {
+        ((inside[i].t - mid) / half).powi(j as i32)
+    });
+    let svd = a.clone().svd(true, true);
+    let mut sq = 0.0;
+    for axis in 0..2 {
+        let y = nalgebra::DVector::from_iterator(
+            inside.len(),
+            inside
+                .iter()
+                .map(|f| super::frame::level_position(f, origin)[axis]),
+        );
+        let c = svd.solve(&y, 1e-12).ok()?;
+        sq += (&a * c - y).norm_squared();
+    }
+    Some((inside.len(), (sq / (2 * inside.len()) as f64).sqrt()))
 }
 
 #[cfg(test)]
@@ -195,14 +276,20 @@ mod tests {
         }
     }
 
+    /// Fixes every `every` s moving east, each up to 33 m north or south of the path (a
+    /// receiver whose fixes do not hold together), but for a `hold`.
     fn fixes(every: f64, seconds: f64, hold: Option<(f64, f64)>) -> Vec<Fix> {
+        jittered(every, seconds, hold, 3e-4)
+    }
+
+    fn jittered(every: f64, seconds: f64, hold: Option<(f64, f64)>, jitter: f64) -> Vec<Fix> {
         let n = (seconds / every) as usize;
         (0..n)
-            .map(|i| i as f64 * every)
-            .filter(|t| hold.is_none_or(|(a, b)| *t <= a || *t >= b))
-            .map(|t| Fix {
+            .map(|i| (i, i as f64 * every))
+            .filter(|(_, t)| hold.is_none_or(|(a, b)| *t <= a || *t >= b))
+            .map(|(i, t)| Fix {
                 t,
-                lat_lon: (0.0, t * 1e-5),
+                lat_lon: (jitter * (((i * 7919) % 13) as f64 - 6.0) / 6.0, t * 1e-5),
                 height: None,
                 velocity: None,
                 satellites: Some(if (14.0..16.0).contains(&t) { 4.0 } else { 9.0 }),
@@ -217,6 +304,7 @@ mod tests {
             &imu(10.0, 100.0, 30.0, None),
             &fixes(0.2, 30.0, None),
             &FixCounts::default(),
+            2.5,
         );
         assert!(d.causes.is_empty(), "{d:?}");
         assert!(
@@ -232,6 +320,7 @@ mod tests {
             &imu(10.0, 100.0, 30.0, None),
             &fixes(0.2, 30.0, None),
             &FixCounts::default(),
+            2.5,
         );
         assert!(d.causes.is_empty(), "{d:?}");
         let d = diagnose(
@@ -239,6 +328,7 @@ mod tests {
             &imu(10.0, 100.0, 30.0, None),
             &fixes(0.2, 30.0, None),
             &FixCounts::default(),
+            2.5,
         );
         assert_eq!(d.causes.len(), 1, "{d:?}");
         assert!(
@@ -248,6 +338,42 @@ mod tests {
         );
         assert!((d.largest_rate.1 - 0.1).abs() < 1e-9);
         assert!((d.longest_without_fix.0 - 0.2).abs() < 1e-6, "{d:?}");
+    }
+
+    /// Fixes of few satellites that lie on one smooth path (1 m of jitter against a stated
+    /// 2.5 m) are the receiver holding the track: that is the finding, and their satellites
+    /// are not named as a cause; jittered by 33 m they are not.
+    #[test]
+    fn fixes_that_hold_together_clear_the_receiver() {
+        let d = diagnose(
+            (13.9, 16.1),
+            &imu(10.0, 100.0, 30.0, None),
+            &jittered(0.2, 30.0, None, 1e-5),
+            &FixCounts::default(),
+            2.5,
+        );
+        let (n, rms) = d.fixes_from_smooth_path.unwrap();
+        assert_eq!(n, 31);
+        assert!(rms < 1.0, "{rms}");
+        assert!(d.causes.is_empty(), "{d:?}");
+        let said = d.sentence();
+        assert!(
+            said.contains("the receiver's 31 fixes from 11.9 to 18.1 s hold together")
+                && said.contains("the receiver did not lose the track, the IMU's prediction did")
+                && said.contains("10 of them used fewer than 6 satellites, and still agree"),
+            "{said}"
+        );
+        let d = diagnose(
+            (13.9, 16.1),
+            &imu(10.0, 100.0, 30.0, None),
+            &fixes(0.2, 30.0, None),
+            &FixCounts::default(),
+            2.5,
+        );
+        assert!(
+            d.finding.is_none() && d.fixes_from_smooth_path.unwrap().1 > 7.5,
+            "{d:?}"
+        );
     }
 
     #[test]
@@ -261,6 +387,7 @@ mod tests {
             &imu(10.0, 100.0, 30.0, None),
             &fixes(0.2, 30.0, Some((12.0, 15.0))),
             &counts,
+            2.5,
         );
         assert_eq!(d.causes.len(), 1, "{d:?}");
         assert!(
@@ -272,6 +399,7 @@ mod tests {
             &imu(60.0, 100.0, 30.0, Some(14.0)),
             &fixes(0.2, 30.0, None),
             &counts,
+            2.5,
         );
         assert_eq!(d.causes.len(), 2, "{d:?}");
         assert!(d.causes[0].contains("accelerometers' readings were flagged at 100 of"));
