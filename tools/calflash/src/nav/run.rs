@@ -250,8 +250,12 @@ pub fn forward(
     let mut filter = ErrorFilter::new(estimate, &Prior { covariance: p0 }, earth, start.noise);
     let t_launch = imu.t.get(launch_at).copied().unwrap_or(0.0);
     let baro_ref = pad_height(baro, t_launch);
+    // An epoch at most per fix, per pressure and per 50 ms on the pad (and one at the launch):
+    // kept in place, not copied as the list grows (an epoch is three 25 x 25 matrices).
+    let on_pad_s = imu.t.get(rest_end).zip(imu.t.first()).map_or(0.0, |(b, a)| b - a);
+    let expected = fixes.len() + baro.len() + (on_pad_s / 0.05).ceil() as usize + 2;
     let mut pass = Pass {
-        epochs: Vec::new(),
+        epochs: Vec::with_capacity(expected),
         said: Vec::new(),
         flagged_seconds: 0.0,
         baro_skipped_seconds: 0.0,
