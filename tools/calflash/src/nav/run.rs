@@ -252,7 +252,11 @@ pub fn forward(
     let baro_ref = pad_height(baro, t_launch);
     // An epoch at most per fix, per pressure and per 50 ms on the pad (and one at the launch):
     // kept in place, not copied as the list grows (an epoch is three 25 x 25 matrices).
-    let on_pad_s = imu.t.get(rest_end).zip(imu.t.first()).map_or(0.0, |(b, a)| b - a);
+    let on_pad_s = imu
+        .t
+        .get(rest_end)
+        .zip(imu.t.first())
+        .map_or(0.0, |(b, a)| b - a);
     let expected = fixes.len() + baro.len() + (on_pad_s / 0.05).ceil() as usize + 2;
     let mut pass = Pass {
         epochs: Vec::with_capacity(expected),
