@@ -162,9 +162,8 @@ fn a_short_first_rest_is_found_and_said() {
     }
     .record();
     let (a, g) = write(&rec, d.path());
-    let (code, said, err) = calflash(
-        d.path(),
-        &[
+    let selfcal = |extra: &[&str]| {
+        let mut args = vec![
             "selfcal",
             a.to_str().unwrap(),
             g.to_str().unwrap(),
@@ -173,28 +172,17 @@ fn a_short_first_rest_is_found_and_said() {
             "--serial",
             "SIM-5",
             "--no-db",
-        ],
-    );
+        ];
+        args.extend_from_slice(extra);
+        calflash(d.path(), &args)
+    };
+    let (code, said, err) = selfcal(&[]);
     assert_eq!(code, 0, "{said}{err}");
     assert!(
         said.contains("initial rest: the first 5.0 s, up to where the unit first moves"),
         "{said}"
     );
-    let (code, said, err) = calflash(
-        d.path(),
-        &[
-            "selfcal",
-            a.to_str().unwrap(),
-            g.to_str().unwrap(),
-            "--g",
-            "9.81",
-            "--serial",
-            "SIM-5",
-            "--no-db",
-            "--init-rest",
-            "30",
-        ],
-    );
+    let (code, said, err) = selfcal(&["--init-rest", "30"]);
     assert_eq!(code, 1, "{said}{err}");
     assert!(err.contains("the unit moves at 5.0 s"), "{err}");
 }

@@ -137,8 +137,8 @@ pub fn run(args: &LotArgs) -> Result<(), Failure> {
                 "MAD {} {} ({} .. {})",
                 crate::report::terminal::num(e.mad),
                 e.unit,
-                crate::report::lot::signed(e.range.0),
-                crate::report::lot::signed(e.range.1)
+                crate::report::terminal::signed(e.range.0),
+                crate::report::terminal::signed(e.range.1)
             )
         });
         println!(

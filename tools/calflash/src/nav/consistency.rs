@@ -427,6 +427,8 @@ pub fn held_out(
     };
     let (mut fixes, mut components, mut within, mut sq) = (0usize, 0usize, 0usize, 0.0f64);
     let mut within_95 = 0usize;
+    // The chi-square 95 % points of a fix's two or three components.
+    let bound_95 = [2.0, 3.0].map(|dof| crate::stats::dist::chi2_upper_quantile(0.05, dof));
     let mut worst = (0.0f64, f64::NAN);
     for f in held {
         let t = f.t - latency;
@@ -445,10 +447,8 @@ pub fn held_out(
             d2 += ((p[i] - z[i]) / own.hypot(r)).powi(2);
             components += 1;
         }
-        // The chi-square 95 % points of 2 and 3 degrees of freedom.
-        let bound_95 = if axes == 3 { 7.814_7 } else { 5.991_5 };
         within += usize::from(d2 <= 9.0);
-        within_95 += usize::from(d2 <= bound_95);
+        within_95 += usize::from(d2 <= bound_95[axes - 2]);
         let d = d2.sqrt();
         if d > worst.0 {
             worst = (d, f.t);

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 
 use super::page::{STYLE, esc};
 use super::plot::{Figure, Series, svg};
-use super::terminal::num;
+use super::terminal::{num, signed};
 use crate::lot::{Judge, Lot, UnitChart};
 
 /// Units a figure names by serial on its axis; beyond, they are numbered in calibration order.
@@ -65,15 +65,6 @@ fn coefficient_unit(name: &str) -> String {
     name.split_once(':').map_or_else(String::new, |(_, term)| {
         super::page::term_unit(term, "unit of input")
     })
-}
-
-/// `x` with its sign, as [`num`] writes it.
-pub(crate) fn signed(x: f64) -> String {
-    if x > 0.0 {
-        format!("+{}", num(x))
-    } else {
-        num(x)
-    }
 }
 
 /// Renders the report of `lot` (described by `name`, as [`crate::db::Selection`] says it)

@@ -31,6 +31,16 @@ pub fn num(x: f64) -> String {
     }
 }
 
+/// `x` with its sign, as [`num`] writes it: `+0.25`, `-3`.
+#[must_use]
+pub fn signed(x: f64) -> String {
+    if x > 0.0 {
+        format!("+{}", num(x))
+    } else {
+        num(x)
+    }
+}
+
 /// A p-value: two significant digits, and `<1e-300` below that.
 #[must_use]
 pub fn pval(p: f64) -> String {

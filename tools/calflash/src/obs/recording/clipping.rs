@@ -20,6 +20,32 @@ pub struct Clip {
     pub samples: usize,
 }
 
+impl Clip {
+    /// Whether `sample` is at this clip level or beyond it.
+    #[must_use]
+    pub fn holds(&self, sample: &[f64; 3]) -> bool {
+        let x = sample[self.axis];
+        if self.high {
+            x >= self.level
+        } else {
+            x <= self.level
+        }
+    }
+}
+
+impl std::fmt::Display for Clip {
+    /// "x at 20.48 (21 samples)".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} at {} ({} samples)",
+            ["x", "y", "z"][self.axis],
+            self.level,
+            self.samples
+        )
+    }
+}
+
 /// The clip levels of `values` (each axis, each side).
 #[must_use]
 pub fn clips(values: &[[f64; 3]]) -> Vec<Clip> {

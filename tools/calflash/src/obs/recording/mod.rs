@@ -244,17 +244,7 @@ pub fn read_with(
         if found.is_empty() {
             continue;
         }
-        let said: Vec<String> = found
-            .iter()
-            .map(|c| {
-                format!(
-                    "{} at {} ({} samples)",
-                    ["x", "y", "z"][c.axis],
-                    c.level,
-                    c.samples
-                )
-            })
-            .collect();
+        let said: Vec<String> = found.iter().map(ToString::to_string).collect();
         eprintln!(
             "calflash: note: {}: the {name} clips: {}; the samples there are excluded as saturated",
             acc.display(),
@@ -262,12 +252,7 @@ pub fn read_with(
         );
         *marks = values
             .iter()
-            .map(|v| {
-                found.iter().any(|c| {
-                    let x = v[c.axis];
-                    if c.high { x >= c.level } else { x <= c.level }
-                })
-            })
+            .map(|v| found.iter().any(|c| c.holds(v)))
             .collect();
     }
     let saturated_count = (

@@ -43,35 +43,7 @@ pub(super) fn timing(
         ));
     }
     if rows.counter {
-        let Some(counter) = rows.t.take() else {
-            return Err(RecordingError::NoRate {
-                path: path.to_path_buf(),
-            });
-        };
-        let Some((r, who)) = stated else {
-            return Err(conflict(
-                rows.line[0] as usize,
-                "the sample counter (--columns index=) counts samples: give --sample-rate to time them".into(),
-            ));
-        };
-        let t = counted(&counter, r).map_err(|k| {
-            conflict(
-                rows.line[k] as usize,
-                format!(
-                    "the sample counter goes from {} to {}: a counter steps up by one a sample (or wraps to 0)",
-                    counter[k - 1], counter[k]
-                ),
-            )
-        })?;
-        eprintln!(
-            "calflash: note: {}: timed by its sample counter at {r} Hz ({who}){}",
-            path.display(),
-            match t.len() as f64 - 1.0 - (t[t.len() - 1] - t[0]) * r {
-                d if d < -0.5 => format!(": {:.0} samples dropped by its count", -d),
-                _ => ": none dropped by its count".into(),
-            }
-        );
-        return Ok(t);
+        return by_counter(rows, path, stated);
     }
     match (rows.t.take(), stated) {
         // --sample-rate is the user's word over the file's own timestamps (a logger's host
@@ -108,6 +80,53 @@ pub(super) fn timing(
             path: path.to_path_buf(),
         }),
     }
+}
+
+/// The times of `rows` whose time column is a sample counter, at the `stated` rate (and who
+/// stated it), said on stderr with the samples the count shows dropped.
+fn by_counter(
+    rows: &mut layout::Rows,
+    path: &Path,
+    stated: Option<(f64, String)>,
+) -> Result<Vec<f64>, RecordingError> {
+    let conflict = |line: u32, what: String| RecordingError::RateConflict {
+        path: path.to_path_buf(),
+        line: line as usize,
+        what,
+    };
+    let Some(counter) = rows.t.take() else {
+        return Err(RecordingError::NoRate {
+            path: path.to_path_buf(),
+        });
+    };
+    let Some((r, who)) = stated else {
+        return Err(conflict(
+            rows.line[0],
+            "the sample counter (--columns index=) counts samples: give --sample-rate to time them"
+                .into(),
+        ));
+    };
+    let t = counted(&counter, r).map_err(|k| {
+        conflict(
+            rows.line[k],
+            format!(
+                "the sample counter goes from {} to {}: a counter steps up by one a sample (or wraps to 0)",
+                counter[k - 1],
+                counter[k]
+            ),
+        )
+    })?;
+    let dropped = (t[t.len() - 1] - t[0]) * r + 1.0 - t.len() as f64;
+    eprintln!(
+        "calflash: note: {}: timed by its sample counter at {r} Hz ({who}): {}",
+        path.display(),
+        if dropped > 0.5 {
+            format!("{dropped:.0} samples dropped by its count")
+        } else {
+            "none dropped by its count".into()
+        }
+    );
+    Ok(t)
 }
 
 /// A sample counter's values as seconds from its first at `rate` Hz: a counter that falls back
