@@ -53,7 +53,7 @@ pub struct SelfcalArgs {
     #[arg(long, value_enum, default_value = "auto")]
     pub quadratic: Quadratic,
     /// Where the gyro bias during rotations comes from.
-    #[arg(long, value_enum, default_value = "poses")]
+    #[arg(long, value_enum, default_value = "constant")]
     pub gyro_bias: GyroBias,
     /// The converter's codes: unsigned16 (also offset binary), signed16 (two's complement), any
     /// width from 8 to 32 bits, or the rails LO:HI. Samples at a rail are excluded.

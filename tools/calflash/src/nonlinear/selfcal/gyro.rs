@@ -17,13 +17,13 @@ pub(super) fn gyro_fit(
     source: &str,
     turns: &segments::Turns,
     accel: &AccelFit,
-    pose_means: &[[f64; 3]],
 ) -> Result<(GyroFit, Vec<f64>), SelfCalError> {
     let segments::Turns {
         segments,
         const_segments,
-        rotations,
+        ends: end_means,
         skipped,
+        ..
     } = turns;
     if segments.len() < MIN_ROTATIONS {
         let why = if skipped.is_empty() {
@@ -50,14 +50,9 @@ pub(super) fn gyro_fit(
         let center = accel.model.center;
         let ends = |q: &[f64]| {
             let model = gravity::AccelModel::from_params(center, q);
-            rotations
+            end_means
                 .iter()
-                .map(|&k| {
-                    (
-                        unit(model.apply(pose_means[k])),
-                        unit(model.apply(pose_means[k + 1])),
-                    )
-                })
+                .map(|[a, b]| (unit(model.apply(*a)), unit(model.apply(*b))))
                 .collect::<Vec<_>>()
         };
         if let Some(c) = rotation::with_direction_error(segments, &gyro, &accel.params, cov_a, ends)

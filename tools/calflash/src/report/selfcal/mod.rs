@@ -232,17 +232,14 @@ fn accel_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
 /// left out.
 fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
     let pg = rec.units[1].per(Sensor::Gyro);
-    let bias_word = match c.options.gyro_bias {
-        crate::nonlinear::selfcal::GyroBias::Poses => "bias from the poses on either side",
-        crate::nonlinear::selfcal::GyroBias::Rest => "bias from the initial rest",
-    };
     let _ = writeln!(
         s,
-        "  gyro  gravity-direction error over {} rotations: RMS {:.3} deg, max {:.3} deg ({bias_word}); with the stored constant bias: RMS {:.3} deg",
+        "  gyro  gravity-direction error over {} rotations: RMS {:.3} deg, max {:.3} deg ({}){}",
         c.rotations.len(),
         c.gyro.rms_deg(),
         c.gyro.max_deg(),
-        rms_deg(&c.constant_bias_angles)
+        c.options.gyro_bias.words(),
+        stored_bias_words(c),
     );
     s.push_str(&matrix_lines(
         "G",
@@ -267,6 +264,18 @@ fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
             k.pose + 1,
             k.why
         );
+    }
+}
+
+/// The rotations' error with the stored constant bias, where the fit took another.
+pub(super) fn stored_bias_words(c: &SelfCal) -> String {
+    if c.options.gyro_bias == crate::nonlinear::selfcal::GyroBias::Constant {
+        String::new()
+    } else {
+        format!(
+            "; with the stored constant bias: RMS {:.3} deg",
+            rms_deg(&c.constant_bias_angles)
+        )
     }
 }
 

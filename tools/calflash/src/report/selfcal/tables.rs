@@ -5,13 +5,13 @@
 use std::fmt::Write as _;
 
 use super::{accel_sd, gyro_sd, plural, quadratic_words};
-use crate::nonlinear::selfcal::{GyroBias, SelfCal};
+use crate::nonlinear::selfcal::SelfCal;
 use crate::obs::recording::Recording;
 use crate::obs::units::Sensor;
 use crate::report::page::esc;
 use crate::report::terminal::num;
 use crate::sensor::selfcal::DeviceCheck;
-use crate::sensor::selfcal::record::{NO_BLOB, Temperature, rms_deg};
+use crate::sensor::selfcal::record::{NO_BLOB, Temperature};
 
 /// The recording, the poses and rotations found, and each fit's closure, as a two-column
 /// table.
@@ -85,20 +85,17 @@ pub(super) fn facts(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>) -
     if let Some(q) = &c.quadratic_test {
         rows.push(("accelerometer: quadratic terms".into(), quadratic_words(q)));
     }
-    let bias = match c.options.gyro_bias {
-        GyroBias::Poses => "the bias from the poses on either side",
-        GyroBias::Rest => "the bias from the initial rest",
-    };
     rows.push((
         format!(
             "gyro: gravity-direction error over {} rotations",
             c.rotations.len()
         ),
         format!(
-            "RMS {:.3} deg, max {:.3} deg ({bias}); with the stored constant bias RMS {:.3} deg",
+            "RMS {:.3} deg, max {:.3} deg ({}){}",
             c.gyro.rms_deg(),
             c.gyro.max_deg(),
-            rms_deg(&c.constant_bias_angles)
+            c.options.gyro_bias.words(),
+            super::stored_bias_words(c),
         ),
     ));
     if let Some(words) = super::turning_words(c) {
