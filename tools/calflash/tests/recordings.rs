@@ -279,9 +279,11 @@ fn the_mpu9150_recordings_calibrate_in_physical_units() {
         assert!(r["gyro"]["rms_deg"].as_f64().unwrap() < 1.0);
         // Three of each log's poses are slow turns the accelerometer's still test passes (the
         // gyro reads up to 70 mrad/s there against a bias steady to 2 mrad/s): found, and kept
-        // out of the bias, the stored constant bias's gravity-direction error is below imu_tk's
-        // on the same rotations (its in-sample figures in the data README: 0.3221 and 0.3414
-        // deg). It was 0.334 and 0.356 with those poses in the bias.
+        // out of the bias. The stored calibration's gravity-direction error between the poses'
+        // means is within 10 % of imu_tk's on the same rotations (its in-sample figures in the
+        // data README: 0.3221 and 0.3414 deg). It was below them when the fit ran between the
+        // poses' means too, which fitted the poses' drift: held out that was 1.7 and 1.5 times
+        // imu_tk's, now 0.63 and 0.50 times (held_out.rs).
         assert_eq!(
             r["gyro"]["turning_poses"].as_array().unwrap().len(),
             3,
@@ -289,7 +291,7 @@ fn the_mpu9150_recordings_calibrate_in_physical_units() {
         );
         let constant = r["gyro"]["constant_bias_rms_deg"].as_f64().unwrap();
         let imu_tk = if unit == "imu1" { 0.3221 } else { 0.3414 };
-        assert!(constant < imu_tk, "{unit}: {constant} deg");
+        assert!(constant < 1.10 * imu_tk, "{unit}: {constant} deg");
         // A blob needs codes.
         let mut blob = si.clone();
         blob.extend(["--blob", "u.blob"]);

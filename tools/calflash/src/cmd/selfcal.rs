@@ -55,6 +55,14 @@ pub struct SelfcalArgs {
     /// Where the gyro bias during rotations comes from.
     #[arg(long, value_enum, default_value = "constant")]
     pub gyro_bias: GyroBias,
+    /// A Ferraris session's section list (imucal's JSON: the sample ranges of the six faces
+    /// x_p, x_a, y_p, y_a, z_p, z_a and the three turns x_rot, y_rot, z_rot): the faces give
+    /// the accelerometer's cross-axis terms and the turns the gyro's scale about each axis.
+    #[arg(long, value_name = "FILE")]
+    pub sections: Option<std::path::PathBuf>,
+    /// The angle of each turn of `--sections` about its axis, degrees (imucal's default).
+    #[arg(long, default_value_t = -360.0, allow_negative_numbers = true, requires = "sections")]
+    pub turn_angle: f64,
     /// The converter's codes: unsigned16 (also offset binary), signed16 (two's complement), any
     /// width from 8 to 32 bits, or the rails LO:HI. Samples at a rail are excluded.
     #[arg(long, default_value = "unsigned16", value_parser = super::values::codes)]
@@ -124,6 +132,19 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, Failure> {
         min_still: args.min_still,
         quadratic: args.quadratic,
         gyro_bias: args.gyro_bias,
+        sections: match &args.sections {
+            Some(p) => {
+                let text = std::fs::read_to_string(p)
+                    .map_err(|e| format!("{}: cannot read the section list: {e}", p.display()))?;
+                Some(selfcal::ferraris::Sections::parse(
+                    &text,
+                    &p.display().to_string(),
+                    rec.t.len(),
+                    args.turn_angle,
+                )?)
+            }
+            None => None,
+        },
         ..Options::default()
     };
     let c = match selfcal::calibrate(&rec, &opts) {

@@ -270,6 +270,81 @@ pub fn fit(
     })
 }
 
+/// `Gravity` with its cross-axis terms (`M12`, `M13`, `M23`) held near `cross` by three
+/// pseudo-observations of weight `w` (m/s^2 per unit of the term).
+struct HeldCross<'a> {
+    gravity: Gravity<'a>,
+    cross: [f64; 3],
+    w: f64,
+}
+
+/// The cross-axis terms' places among the parameters.
+const CROSS: [usize; 3] = [1, 2, 4];
+
+impl Problem for HeldCross<'_> {
+    fn residual_count(&self) -> usize {
+        self.gravity.residual_count() + 3
+    }
+
+    fn residuals(&self, p: &[f64], out: &mut [f64]) {
+        let n = self.gravity.residual_count();
+        self.gravity.residuals(p, &mut out[..n]);
+        for (k, &j) in CROSS.iter().enumerate() {
+            out[n + k] = self.w * (p[j] - self.cross[k]);
+        }
+    }
+
+    fn jacobian(&self, p: &[f64], r: &[f64], out: &mut DMatrix<f64>) {
+        let n = self.gravity.residual_count();
+        let mut top = DMatrix::zeros(n, p.len());
+        self.gravity.jacobian(p, &r[..n], &mut top);
+        out.fill(0.0);
+        out.view_mut((0, 0), (n, p.len())).copy_from(&top);
+        for (k, &j) in CROSS.iter().enumerate() {
+            out[(n + k, j)] = self.w;
+        }
+    }
+}
+
+/// Fits the linear correction to pose means with its cross-axis terms held at `start`'s by a
+/// weight `w` (m/s^2 per unit): for poses that face only the axes (a six-face session), where
+/// `|a| = g` sees the cross-axis terms only to second order. The residuals are the poses'.
+///
+/// # Errors
+/// Too few poses, or no convergence.
+pub fn fit_held_cross(
+    means: &[[f64; 3]],
+    g: f64,
+    center: [f64; 3],
+    start: &[f64],
+    w: f64,
+) -> Result<AccelFit, LmError> {
+    let v: Vec<[f64; 3]> = means
+        .iter()
+        .map(|m| std::array::from_fn(|j| m[j] - center[j]))
+        .collect();
+    let problem = HeldCross {
+        gravity: Gravity {
+            v: &v,
+            g,
+            quadratic: false,
+        },
+        cross: CROSS.map(|j| start[j]),
+        w,
+    };
+    let mut sol: Solution = lm::solve(&problem, &start[..9], 200)?;
+    let covariance = lm::covariance(&sol);
+    sol.residuals.truncate(means.len());
+    Ok(AccelFit {
+        model: AccelModel::from_params(center, &sol.p),
+        terms: LINEAR_TERMS.to_vec(),
+        params: sol.p.clone(),
+        covariance,
+        residuals: sol.residuals,
+        iterations: sol.iterations,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

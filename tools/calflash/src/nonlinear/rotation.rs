@@ -145,6 +145,70 @@ impl Problem for Rotations<'_> {
     }
 }
 
+/// A turn of known rotation vector (a Ferraris session's turn about one axis): the gyro's
+/// counts less the bias over it must integrate to `angle`.
+#[derive(Debug, Clone)]
+pub struct KnownTurn {
+    /// Time steps, s.
+    pub dt: Vec<f64>,
+    /// Gyro counts minus the bias, at each sample.
+    pub x: Vec<[f64; 3]>,
+    /// The rotation vector it turns through, rad (body frame).
+    pub angle: [f64; 3],
+}
+
+impl KnownTurn {
+    /// The counts integrated over the turn (trapezoid), count-seconds.
+    fn integral(&self) -> [f64; 3] {
+        let mut s = [0.0; 3];
+        for (w, dt) in self.x.windows(2).zip(&self.dt) {
+            for j in 0..3 {
+                s[j] += 0.5 * (w[0][j] + w[1][j]) * dt;
+            }
+        }
+        s
+    }
+}
+
+struct WithTurns<'a> {
+    rotations: Rotations<'a>,
+    /// Each known turn's integral and its rotation vector.
+    turns: Vec<([f64; 3], [f64; 3])>,
+}
+
+impl Problem for WithTurns<'_> {
+    fn residual_count(&self) -> usize {
+        self.rotations.residual_count() + 3 * self.turns.len()
+    }
+
+    fn residuals(&self, p: &[f64], out: &mut [f64]) {
+        let n = self.rotations.residual_count();
+        self.rotations.residuals(p, &mut out[..n]);
+        let m = matrix(p);
+        for (k, (s, angle)) in self.turns.iter().enumerate() {
+            let w = m * Vector3::from(*s);
+            for i in 0..3 {
+                out[n + 3 * k + i] = angle[i] - w[i];
+            }
+        }
+    }
+
+    fn jacobian(&self, p: &[f64], r: &[f64], out: &mut DMatrix<f64>) {
+        // The rotations' step, relative to the matrix's size.
+        let mut q = p.to_vec();
+        let mut hi = vec![0.0; r.len()];
+        let h = 1e-7 * p.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-12);
+        for j in 0..p.len() {
+            q[j] = p[j] + h;
+            self.residuals(&q, &mut hi);
+            q[j] = p[j];
+            for i in 0..r.len() {
+                out[(i, j)] = (hi[i] - r[i]) / h;
+            }
+        }
+    }
+}
+
 /// A fit of the gyro to the rotations.
 #[derive(Debug, Clone)]
 pub struct GyroFit {
@@ -182,13 +246,29 @@ impl GyroFit {
 /// # Errors
 /// Too few rotations (three per four parameters), or no convergence.
 pub fn fit(segments: &[Segment], start: [[f64; 3]; 3]) -> Result<GyroFit, LmError> {
-    let problem = Rotations { segments };
+    fit_with_turns(segments, &[], start)
+}
+
+/// Fits `M` from `start` (row-major) to the rotations and the turns of known rotation vector
+/// (three residuals each, in radians as the rotations' are).
+///
+/// # Errors
+/// Too few rotations and turns for the nine entries, or no convergence.
+pub fn fit_with_turns(
+    segments: &[Segment],
+    known: &[KnownTurn],
+    start: [[f64; 3]; 3],
+) -> Result<GyroFit, LmError> {
+    let problem = WithTurns {
+        rotations: Rotations { segments },
+        turns: known.iter().map(|t| (t.integral(), t.angle)).collect(),
+    };
     let p0: Vec<f64> = start.iter().flatten().copied().collect();
     let sol = lm::solve(&problem, &p0, 100)?;
     // Each segment's residual is the difference of two unit vectors: its component along the
     // measured direction is second order, so a segment carries two degrees of freedom, not
-    // three.
-    let covariance = (2 * segments.len())
+    // three; a known turn carries three.
+    let covariance = (2 * segments.len() + 3 * known.len())
         .checked_sub(9)
         .and_then(|dof| lm::covariance_with(&sol, dof));
     let m = matrix(&sol.p);

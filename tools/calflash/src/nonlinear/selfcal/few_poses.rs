@@ -160,9 +160,9 @@ pub(super) fn diagnose(
     let advice = if most.len() >= MIN_POSES && facing < MIN_POSES {
         format!(
             "The {} poses face only {facing} distinct directions: |a| = g alone cannot separate \
-             the accelerometer's 9 parameters on so few (a six-face session with turns, as \
-             imucal's Ferraris method takes, needs each face's known orientation, which selfcal \
-             does not take). {advice}",
+             the accelerometer's 9 parameters on so few. A six-face session with turns (imucal's \
+             Ferraris method) is calibrated from its section list: give it with --sections \
+             FILE (and --turn-angle if its turns are not -360 deg). {advice}",
             most.len()
         )
     } else {

@@ -2,14 +2,15 @@
 //! rotations' end directions, and how many directions the poses face.
 
 use super::super::gravity::{self, AccelFit};
-use super::super::rotation::{self, GyroFit};
+use super::super::rotation::{self, GyroFit, KnownTurn};
 use nalgebra::Matrix3;
 
 use super::{MIN_ROTATIONS, SelfCalError, fit_err, segments, unit};
 
-/// The gyro's fit to the rotations between poses (`turns`), its covariance including the
-/// accelerometer's error in the rotations' end directions, and the angle each rotation of the
-/// constant-bias check turned through.
+/// The gyro's fit to the rotations between poses (`turns`), with a Ferraris session's turns of
+/// known angle and the closed form's start where `known` holds them; its covariance including
+/// the accelerometer's error in the rotations' end directions, and the angle each rotation of
+/// the constant-bias check turned through.
 ///
 /// # Errors
 /// Too few usable rotations (each skipped one says why), or a fit that fails.
@@ -17,6 +18,7 @@ pub(super) fn gyro_fit(
     source: &str,
     turns: &segments::Turns,
     accel: &AccelFit,
+    known: Option<&(Vec<KnownTurn>, [[f64; 3]; 3])>,
 ) -> Result<(GyroFit, Vec<f64>), SelfCalError> {
     let segments::Turns {
         segments,
@@ -25,7 +27,8 @@ pub(super) fn gyro_fit(
         skipped,
         ..
     } = turns;
-    if segments.len() < MIN_ROTATIONS {
+    // Three known turns give the nine entries by themselves.
+    if segments.len() < MIN_ROTATIONS && known.is_none() {
         let why = if skipped.is_empty() {
             "none".into()
         } else {
@@ -43,10 +46,15 @@ pub(super) fn gyro_fit(
             needed: MIN_ROTATIONS,
         });
     }
-    let start = segments::gyro_start(segments);
-    let mut gyro = rotation::fit(segments, start).map_err(fit_err(source, "gyro"))?;
+    let mut gyro = match known {
+        Some((known, start)) => rotation::fit_with_turns(segments, known, *start),
+        None => rotation::fit(segments, segments::gyro_start(segments)),
+    }
+    .map_err(fit_err(source, "gyro"))?;
     // The rotations' ends are the accelerometer's gravity directions: its error is the gyro's.
-    if let Some(cov_a) = &accel.covariance {
+    // (With known turns the fit's own covariance stands: the known turns' angles do not move
+    // with the accelerometer.)
+    if let (Some(cov_a), None) = (&accel.covariance, known) {
         let center = accel.model.center;
         let ends = |q: &[f64]| {
             let model = gravity::AccelModel::from_params(center, q);

@@ -13,6 +13,7 @@ use super::rotation::GyroFit;
 use super::statics;
 use crate::obs::recording::Recording;
 
+pub mod ferraris;
 mod few_poses;
 mod gyro;
 mod rest;
@@ -77,6 +78,8 @@ pub struct Options {
     pub gyro_bias: GyroBias,
     /// Hold-out folds for validation.
     pub folds: usize,
+    /// A Ferraris session's annotated faces and turns (imucal's section list), if given.
+    pub sections: Option<ferraris::Sections>,
 }
 
 impl Default for Options {
@@ -90,6 +93,7 @@ impl Default for Options {
             quadratic: Quadratic::Auto,
             gyro_bias: GyroBias::Constant,
             folds: 5,
+            sections: None,
         }
     }
 }
@@ -159,6 +163,16 @@ pub enum SelfCalError {
         why: String,
         /// Needed.
         needed: usize,
+    },
+    /// A Ferraris session's faces do not span three axes.
+    #[error(
+        "{file}: the faces of the section list do not span three axes (each axis' up and down face must differ): {why}"
+    )]
+    Faces {
+        /// File(s).
+        file: String,
+        /// What was found.
+        why: String,
     },
     /// A fit failed.
     #[error("{file}: the {what} fit failed: {err}")]
@@ -329,6 +343,47 @@ fn accel_fit(
 }
 
 fn holdout(means: &[[f64; 3]], g: f64, quadratic: bool, folds: usize) -> Result<Holdout, LmError> {
+    holdout_with(means, g, folds, &|train| {
+        let (center, start) = gravity::center_and_start(train, g);
+        gravity::fit(train, g, center, &start, false).and_then(|fit| {
+            if quadratic {
+                let mut s = fit.params.clone();
+                s.extend([0.0; 3]);
+                gravity::fit(train, g, center, &s, true)
+            } else {
+                Ok(fit)
+            }
+        })
+    })
+}
+
+/// Each pose of `means` predicted by `fit` on the poses `others` beside it (one set each).
+fn leave_one_out(
+    means: &[[f64; 3]],
+    others: &[Vec<[f64; 3]>],
+    g: f64,
+    fit: &dyn Fn(&[[f64; 3]]) -> Result<AccelFit, LmError>,
+) -> Result<Holdout, LmError> {
+    let mut errs = Vec::new();
+    for (m, train) in means.iter().zip(others) {
+        let a = fit(train)?.model.apply(*m);
+        errs.push((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt() - g);
+    }
+    Ok(Holdout {
+        folds: means.len(),
+        rms: rms(&errs),
+        max: errs.iter().fold(0.0f64, |m, e| m.max(e.abs())),
+        unfitted: 0,
+    })
+}
+
+/// Each pose of `means` predicted by `fit` on the other folds' poses.
+fn holdout_with(
+    means: &[[f64; 3]],
+    g: f64,
+    folds: usize,
+    fit: &dyn Fn(&[[f64; 3]]) -> Result<AccelFit, LmError>,
+) -> Result<Holdout, LmError> {
     let mut errs = Vec::new();
     let mut unfitted = 0;
     let mut last_error = None;
@@ -336,16 +391,7 @@ fn holdout(means: &[[f64; 3]], g: f64, quadratic: bool, folds: usize) -> Result<
         let (train, test): (Vec<_>, Vec<_>) =
             means.iter().enumerate().partition(|(k, _)| k % folds != f);
         let train: Vec<[f64; 3]> = train.into_iter().map(|(_, m)| *m).collect();
-        let (center, start) = gravity::center_and_start(&train, g);
-        let fitted = gravity::fit(&train, g, center, &start, false).and_then(|fit| {
-            if quadratic {
-                let mut s = fit.params.clone();
-                s.extend([0.0; 3]);
-                gravity::fit(&train, g, center, &s, true)
-            } else {
-                Ok(fit)
-            }
-        });
+        let fitted = fit(&train);
         // A fold whose poses cannot fit the model (the quadratic one on a few poses does not
         // converge) is not judged, and is counted: the verdict names it.
         let fit = match fitted {
@@ -380,6 +426,11 @@ fn unit(a: [f64; 3]) -> [f64; 3] {
 /// How much more than the accelerometer, relative to each one's rest, the gyro must vary for
 /// its motion to end a pose.
 const GYRO_MARGIN: f64 = 100.0;
+
+/// How much of a pose's end gives the gravity direction a turn leaves from (and of its start
+/// the one it reaches), s: long enough to average the accelerometer's noise, short enough that
+/// the gyro's bias (orientation-dependent on the Xsens MTi) is not integrated over long.
+const END_WINDOW: f64 = 0.5;
 
 /// The gyro's still-measure window, s.
 const GYRO_WINDOW: f64 = 0.2;
@@ -434,22 +485,58 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         turned: &turned,
     };
     let (trials, best) = threshold_trials(&finder, &measure, rest_level, opts);
-    let Some((chosen, poses)) = best else {
-        return Err(few_poses::diagnose(
-            &finder, opts, &trials, &measure, rest_level, rest.floor,
-        ));
+    let (chosen, poses) = match (best, &opts.sections) {
+        (Some(best), _) => best,
+        // A six-face session: the poses the still test finds at the threshold that finds the
+        // most (the faces if it finds fewer), for the gyro's gravity directions.
+        (None, Some(s)) => most_poses(&finder, &measure, rest_level, opts)
+            .filter(|(_, p)| p.len() >= 6)
+            .unwrap_or_else(|| (0, ferraris::face_poses(s))),
+        (None, None) => {
+            return Err(few_poses::diagnose(
+                &finder, opts, &trials, &measure, rest_level, rest.floor,
+            ));
+        }
     };
     let pose_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.acc, r)).collect();
-    let (accel, quadratic_test) = accel_fit(&pose_means, opts.g, opts.quadratic, opts.folds)
-        .map_err(fit_err(source, "accelerometer"))?;
-    let quadratic = accel.params.len() == 12;
-    let holdout = holdout(
-        &pose_means,
-        opts.g,
-        quadratic,
-        opts.folds.clamp(2, pose_means.len()),
-    )
-    .map_err(fit_err(source, "hold-out accelerometer"))?;
+    let folds = opts.folds.clamp(2, pose_means.len());
+    let (accel, quadratic_test, holdout, box_frame) = if let Some(s) = &opts.sections {
+        let (accel, q) = ferraris::accel(rec, s, &pose_means, opts.g)?;
+        // Each pose left out in turn, but for a direction's only pose (without it the axis
+        // cannot be fitted: it is one of the faces that define the axis).
+        let facing = directions(&pose_means, rest_level);
+        let judged: Vec<usize> = (0..pose_means.len())
+            .filter(|&k| {
+                let rest: Vec<[f64; 3]> = (0..pose_means.len())
+                    .filter(|&i| i != k)
+                    .map(|i| pose_means[i])
+                    .collect();
+                directions(&rest, rest_level) == facing
+            })
+            .collect();
+        let means: Vec<[f64; 3]> = judged.iter().map(|&k| pose_means[k]).collect();
+        let others: Vec<Vec<[f64; 3]>> = judged
+            .iter()
+            .map(|&k| {
+                (0..pose_means.len())
+                    .filter(|&i| i != k)
+                    .map(|i| pose_means[i])
+                    .collect()
+            })
+            .collect();
+        let held = leave_one_out(&means, &others, opts.g, &|train| {
+            gravity::fit_held_cross(train, opts.g, accel.model.center, &accel.params, opts.g)
+        })
+        .map_err(fit_err(source, "hold-out accelerometer"))?;
+        (accel, None, held, Some(q))
+    } else {
+        let (accel, quadratic_test) = accel_fit(&pose_means, opts.g, opts.quadratic, opts.folds)
+            .map_err(fit_err(source, "accelerometer"))?;
+        let quadratic = accel.params.len() == 12;
+        let held = holdout(&pose_means, opts.g, quadratic, folds)
+            .map_err(fit_err(source, "hold-out accelerometer"))?;
+        (accel, quadratic_test, held, None)
+    };
 
     // The gyro.
     let gyro_means: Vec<[f64; 3]> = poses.iter().map(|r| statics::mean(&rec.gyro, r)).collect();
@@ -478,7 +565,7 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         .collect();
     let ends = segments::Ends {
         poses: &poses,
-        window: samples(opts.window),
+        window: samples(END_WINDOW),
         accel: &accel.model,
     };
     let turns = segments::turns(
@@ -489,7 +576,15 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         rest_gyro,
         gyro_bias,
     );
-    let (gyro, constant_bias_angles) = gyro_fit(source, &turns, &accel)?;
+    let known = match (&opts.sections, &box_frame) {
+        (Some(s), Some(q)) => {
+            let known = ferraris::known_turns(rec, s, q, gyro_bias);
+            let start = ferraris::gyro_start(&known, s.angle_deg, q);
+            Some((known, start))
+        }
+        _ => None,
+    };
+    let (gyro, constant_bias_angles) = gyro_fit(source, &turns, &accel, known.as_ref())?;
     Ok(SelfCal {
         options: opts.clone(),
         rate,
@@ -560,6 +655,37 @@ fn threshold_trials(
         .max_by(|a, b| a.2.cmp(&b.2).then(b.1.total_cmp(&a.1)))
         .map(|(k, _, _, poses)| (k, poses));
     (trials, best)
+}
+
+/// The multiple of `opts.multipliers` whose poses face the most directions (then the most
+/// poses), whatever an accelerometer fit of its own would make of them; `None` when none finds
+/// a pose.
+fn most_poses(
+    finder: &few_poses::Finder<'_>,
+    measure: &[f64],
+    rest_level: f64,
+    opts: &Options,
+) -> Option<Chosen> {
+    let samples = |s: f64| ((s * finder.rec.rate()).round() as usize).max(1);
+    opts.multipliers
+        .iter()
+        .enumerate()
+        .map(|(k, &m)| {
+            let poses = finder.poses(
+                measure,
+                m * rest_level,
+                samples(opts.min_still),
+                samples(opts.window),
+            );
+            let means: Vec<[f64; 3]> = poses
+                .iter()
+                .map(|r| statics::mean(&finder.rec.acc, r))
+                .collect();
+            (directions(&means, rest_level), poses.len(), k, poses)
+        })
+        .filter(|c| c.1 > 0)
+        .max_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)).then(b.2.cmp(&a.2)))
+        .map(|(_, _, k, poses)| (k, poses))
 }
 
 /// Beyond this many robust standard deviations (1.4826 median absolute deviations) of the

@@ -5,7 +5,7 @@
 //!
 //! A hand-held pose is not quite still: on the real MPU-9150 logs the accelerometer's direction
 //! moves 0.1-0.35 deg within a pose, the size of the gyro's whole error. A turn is therefore
-//! taken from the middle of the last `window` of one pose to the middle of the first `window`
+//! taken from the middle of the last half second of one pose to the middle of the first half second
 //! of the next, between the gravity directions of those two windows, not between the poses'
 //! means (held out, 0.29 -> 0.11 and 0.31 -> 0.10 deg on the two logs).
 
@@ -23,7 +23,8 @@ use crate::obs::recording::Recording;
 pub(super) struct Turns {
     /// Each turn with the bias as `--gyro-bias` says (between the poses' means, or the rest's).
     pub segments: Vec<Segment>,
-    /// Each turn with the one constant bias.
+    /// Each turn as a device with the stored constant bias sees it between the poses' means
+    /// (from the end of one pose to the start of the next): the reference tools' measure.
     pub const_segments: Vec<Segment>,
     /// The pose each turn starts from.
     pub rotations: Vec<usize>,
@@ -117,7 +118,10 @@ pub(super) fn turns(
                 std::array::from_fn(|j| rec.gyro[i][j] - b[j])
             })
             .collect();
-        let xc: Vec<[f64; 3]> = span
+        // The device's view, as the reference tools judge it: the stored constant bias from
+        // the end of one pose to the start of the next, between the poses' mean directions.
+        let edge = poses[k].end - 1..poses[k + 1].start + 1;
+        let xc: Vec<[f64; 3]> = edge
             .clone()
             .map(|i| std::array::from_fn(|j| rec.gyro[i][j] - gyro_bias[j]))
             .collect();
@@ -126,17 +130,12 @@ pub(super) fn turns(
             statics::mean(&rec.acc, &reach),
         ];
         let (from, to) = (unit(means[0]), unit(means[1]));
-        segments.push(Segment {
-            dt: dt.clone(),
-            x,
-            from,
-            to,
-        });
+        segments.push(Segment { dt, x, from, to });
         const_segments.push(Segment {
-            dt,
+            dt: rec.t[edge].windows(2).map(|w| w[1] - w[0]).collect(),
             x: xc,
-            from,
-            to,
+            from: unit(statics::mean(&rec.acc, &poses[k])),
+            to: unit(statics::mean(&rec.acc, &poses[k + 1])),
         });
         rotations.push(k);
         end_means.push(means);

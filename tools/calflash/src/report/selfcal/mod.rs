@@ -178,6 +178,9 @@ fn accel_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
     if let Some(q) = &c.quadratic_test {
         let _ = writeln!(s, "    quadratic terms: {}", quadratic_words(q));
     }
+    if let Some(words) = ferraris_words(c) {
+        let _ = writeln!(s, "  Ferraris session  {words}");
+    }
     let sd = accel_sd(c);
     let m = &c.accel.model;
     let [ua, ug] = rec.units;
@@ -267,16 +270,22 @@ fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
     }
 }
 
-/// The rotations' error with the stored constant bias, where the fit took another.
+/// What a Ferraris session's section list gave, in words.
+pub(super) fn ferraris_words(c: &SelfCal) -> Option<String> {
+    let s = c.options.sections.as_ref()?;
+    Some(format!(
+        "the section list's 6 faces (samples {}-{} to {}-{}) give the accelerometer's cross-axis terms, held while its scales and offsets fit |a| = g at every pose; its 3 turns of {} deg (x, y, z) give the gyro's scales with the rotations between poses",
+        s.faces[0].start, s.faces[0].end, s.faces[5].start, s.faces[5].end, s.angle_deg
+    ))
+}
+
+/// The rotations' error as a device with the stored calibration sees it between the poses'
+/// means (the reference tools' measure).
 pub(super) fn stored_bias_words(c: &SelfCal) -> String {
-    if c.options.gyro_bias == crate::nonlinear::selfcal::GyroBias::Constant {
-        String::new()
-    } else {
-        format!(
-            "; with the stored constant bias: RMS {:.3} deg",
-            rms_deg(&c.constant_bias_angles)
-        )
-    }
+    format!(
+        "; with the stored constant bias between the poses' means: RMS {:.3} deg",
+        rms_deg(&c.constant_bias_angles)
+    )
 }
 
 /// The poses the gyro turned through and what was done with them, in words (numbered from 1);

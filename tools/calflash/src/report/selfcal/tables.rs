@@ -85,6 +85,9 @@ pub(super) fn facts(c: &SelfCal, rec: &Recording, check: Option<&DeviceCheck>) -
     if let Some(q) = &c.quadratic_test {
         rows.push(("accelerometer: quadratic terms".into(), quadratic_words(q)));
     }
+    if let Some(words) = super::ferraris_words(c) {
+        rows.push(("Ferraris session".into(), esc(&words)));
+    }
     rows.push((
         format!(
             "gyro: gravity-direction error over {} rotations",

@@ -181,7 +181,8 @@ pub struct Gyro<'a> {
     pub rms_deg: f64,
     /// Largest.
     pub max_deg: f64,
-    /// The same with one constant bias, degrees.
+    /// The same as a device with the stored constant bias sees it between the poses' means,
+    /// from the end of one pose to the start of the next (the reference tools' measure), degrees.
     pub constant_bias_rms_deg: f64,
     /// Each rotation.
     pub rotations: Vec<Rotation>,
@@ -198,7 +199,8 @@ pub struct Rotation {
     pub after_pose: usize,
     /// Angle error of the gravity direction it predicts, degrees.
     pub angle_error_deg: f64,
-    /// The same with one constant bias, degrees.
+    /// The same as a device with the stored constant bias sees it between the poses' means,
+    /// degrees.
     pub constant_bias_angle_error_deg: f64,
 }
 
