@@ -209,3 +209,57 @@ pub(super) fn face_poses(s: &Sections) -> Vec<Range<usize>> {
     p.sort_by_key(|r| r.start);
     p
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// imucal's list is read; a missing section or one past the recording is named.
+    #[test]
+    fn the_section_list_is_read_and_its_faults_named() {
+        let list = r#"{"x_p":{"start":540,"end":1271},"x_a":{"start":1620,"end":2361},
+            "y_p":{"start":2814,"end":3298},"y_a":{"start":3740,"end":4152},
+            "z_p":{"start":4522,"end":4975},"z_a":{"start":5376,"end":5983},
+            "x_rot":{"start":6770,"end":7093},"y_rot":{"start":8081,"end":8405},
+            "z_rot":{"start":9205,"end":9512}}"#;
+        let s = Sections::parse(list, "l.json", 10_376, -360.0).unwrap();
+        assert_eq!(s.faces[0], 540..1271);
+        assert_eq!(s.turns[2], 9205..9512);
+        let err = Sections::parse(list, "l.json", 9000, -360.0).unwrap_err();
+        assert!(err.contains("section \"z_rot\" runs 9205 to 9512"), "{err}");
+        let err =
+            Sections::parse(&list.replace("y_a", "y_down"), "l.json", 10_376, -360.0).unwrap_err();
+        assert!(err.contains("section \"y_a\" needs \"start\""), "{err}");
+        let err = Sections::parse("{", "l.json", 10, -360.0).unwrap_err();
+        assert!(err.starts_with("l.json: line 1, column 1"), "{err}");
+    }
+
+    /// Three turns of -360 deg about the box's axes, seen through a known gyro matrix, give
+    /// that matrix back from the closed form; with the box turned from the accelerometer's
+    /// frame, the matrix comes back in the accelerometer's frame.
+    #[test]
+    fn the_turns_closed_form_gives_the_gyro_matrix() {
+        let m = Matrix3::new(1.02, 0.01, -0.004, 0.003, 0.97, 0.008, -0.006, 0.002, 1.01);
+        let inv = m.try_inverse().unwrap();
+        let q = nalgebra::Rotation3::from_euler_angles(0.01, -0.02, 0.015).into_inner();
+        let angle = -360f64.to_radians();
+        let turns: Vec<KnownTurn> = (0..3)
+            .map(|i| {
+                // 300 samples at 100 Hz about the box's axis i, in the accelerometer's frame.
+                let w = q.transpose() * Vector3::ith(i, angle / 2.99);
+                let x = inv * w;
+                KnownTurn {
+                    dt: vec![0.01; 299],
+                    x: vec![x.into(); 300],
+                    angle: (q.transpose() * Vector3::ith(i, angle)).into(),
+                }
+            })
+            .collect();
+        let got = gyro_start(&turns, -360.0, &q);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((got[i][j] - m[(i, j)]).abs() < 1e-12, "{got:?}");
+            }
+        }
+    }
+}

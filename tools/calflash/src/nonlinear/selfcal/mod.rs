@@ -357,12 +357,15 @@ fn holdout(means: &[[f64; 3]], g: f64, quadratic: bool, folds: usize) -> Result<
     })
 }
 
+/// An accelerometer fit to a set of pose means.
+type PoseFit<'a> = dyn Fn(&[[f64; 3]]) -> Result<AccelFit, LmError> + 'a;
+
 /// Each pose of `means` predicted by `fit` on the poses `others` beside it (one set each).
 fn leave_one_out(
     means: &[[f64; 3]],
     others: &[Vec<[f64; 3]>],
     g: f64,
-    fit: &dyn Fn(&[[f64; 3]]) -> Result<AccelFit, LmError>,
+    fit: &PoseFit<'_>,
 ) -> Result<Holdout, LmError> {
     let mut errs = Vec::new();
     for (m, train) in means.iter().zip(others) {
@@ -382,7 +385,7 @@ fn holdout_with(
     means: &[[f64; 3]],
     g: f64,
     folds: usize,
-    fit: &dyn Fn(&[[f64; 3]]) -> Result<AccelFit, LmError>,
+    fit: &PoseFit<'_>,
 ) -> Result<Holdout, LmError> {
     let mut errs = Vec::new();
     let mut unfitted = 0;
