@@ -5,7 +5,8 @@
 //! factor of the box-frame matrix), then refined on every still pose the recording holds:
 //! `|a| = g` at each for the accelerometer's scales and offsets (its cross-axis terms held by
 //! the faces, which `|a| = g` on six axis-aligned faces cannot see), and for the gyro the
-//! gravity directions across the turns between poses with the three known turns.
+//! gravity directions across the turns between poses with the known turns (a session cut short
+//! may lack some: the rotations between poses then give those axes' scales).
 
 use std::ops::Range;
 
@@ -28,8 +29,9 @@ pub const NAMES: [&str; 9] = [
 pub struct Sections {
     /// The six faces, in the order of [`NAMES`].
     pub faces: [Range<usize>; 6],
-    /// The three turns, about x, y, z.
-    pub turns: [Range<usize>; 3],
+    /// The turns about x, y, z: each may be absent (a session cut short), when the rotations
+    /// between poses must give that axis' scale.
+    pub turns: [Option<Range<usize>>; 3],
     /// The angle of each turn about its axis, degrees (imucal's default: -360).
     pub angle_deg: f64,
 }
@@ -39,7 +41,7 @@ impl Sections {
     /// (named `file` in errors), for a recording of `rows` samples.
     ///
     /// # Errors
-    /// A section missing, not a `start` below its `end`, or past the recording.
+    /// A face missing, a section without a `start` below its `end`, or past the recording.
     pub fn parse(text: &str, file: &str, rows: usize, angle_deg: f64) -> Result<Self, String> {
         let v: serde_json::Value = serde_json::from_str(text)
             .map_err(|e| format!("{file}: line {}, column {}: {e}", e.line(), e.column()))?;
@@ -63,6 +65,13 @@ impl Sections {
             }
             Ok(a..b)
         };
+        let turn = |name: &str| -> Result<Option<Range<usize>>, String> {
+            if v.get(name).is_some() {
+                range(name).map(Some)
+            } else {
+                Ok(None)
+            }
+        };
         Ok(Self {
             faces: [
                 range("x_p")?,
@@ -72,7 +81,7 @@ impl Sections {
                 range("z_p")?,
                 range("z_a")?,
             ],
-            turns: [range("x_rot")?, range("y_rot")?, range("z_rot")?],
+            turns: [turn("x_rot")?, turn("y_rot")?, turn("z_rot")?],
             angle_deg,
         })
     }
@@ -167,6 +176,7 @@ pub(super) fn known_turns(
     s.turns
         .iter()
         .enumerate()
+        .filter_map(|(i, r)| r.as_ref().map(|r| (i, r)))
         .map(|(i, r)| {
             let axis = q.transpose() * Vector3::ith(i, 1.0);
             KnownTurn {
@@ -182,8 +192,16 @@ pub(super) fn known_turns(
 }
 
 /// The gyro's closed form: each turn's integrated counts are its column in the box frame over
-/// the angle; inverted and brought into the accelerometer's frame.
-pub(super) fn gyro_start(turns: &[KnownTurn], angle_deg: f64, q: &Matrix3<f64>) -> [[f64; 3]; 3] {
+/// the angle; inverted and brought into the accelerometer's frame. `None` without all three
+/// turns.
+pub(super) fn gyro_start(
+    turns: &[KnownTurn],
+    angle_deg: f64,
+    q: &Matrix3<f64>,
+) -> Option<[[f64; 3]; 3]> {
+    if turns.len() != 3 {
+        return None;
+    }
     let angle = angle_deg.to_radians();
     let col = |t: &KnownTurn| -> Vector3<f64> {
         let sum =
@@ -195,10 +213,8 @@ pub(super) fn gyro_start(turns: &[KnownTurn], angle_deg: f64, q: &Matrix3<f64>) 
         sum / angle
     };
     let a = Matrix3::from_columns(&[col(&turns[0]), col(&turns[1]), col(&turns[2])]);
-    let m = a
-        .try_inverse()
-        .map_or_else(Matrix3::identity, |inv| q.transpose() * inv);
-    std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+    let m = q.transpose() * a.try_inverse()?;
+    Some(std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)])))
 }
 
 /// The poses for the gyro's gravity directions when the still test found too few for an
@@ -224,7 +240,15 @@ mod tests {
             "z_rot":{"start":9205,"end":9512}}"#;
         let s = Sections::parse(list, "l.json", 10_376, -360.0).unwrap();
         assert_eq!(s.faces[0], 540..1271);
-        assert_eq!(s.turns[2], 9205..9512);
+        assert_eq!(s.turns[2], Some(9205..9512));
+        let cut = Sections::parse(
+            &list.replace(r#""z_rot":{"start":9205,"end":9512}"#, r#""z":0"#),
+            "l.json",
+            9000,
+            -360.0,
+        )
+        .unwrap();
+        assert_eq!(cut.turns[2], None);
         let err = Sections::parse(list, "l.json", 9000, -360.0).unwrap_err();
         assert!(err.contains("section \"z_rot\" runs 9205 to 9512"), "{err}");
         let err =
@@ -255,7 +279,8 @@ mod tests {
                 }
             })
             .collect();
-        let got = gyro_start(&turns, -360.0, &q);
+        let got = gyro_start(&turns, -360.0, &q).unwrap();
+        assert!(gyro_start(&turns[..2], -360.0, &q).is_none());
         for i in 0..3 {
             for j in 0..3 {
                 assert!((got[i][j] - m[(i, j)]).abs() < 1e-12, "{got:?}");

@@ -28,7 +28,7 @@ pub(super) fn gyro_fit(
         ..
     } = turns;
     // Three known turns give the nine entries by themselves.
-    if segments.len() < MIN_ROTATIONS && known.is_none() {
+    if segments.len() < MIN_ROTATIONS && known.is_none_or(|(k, _)| k.len() < 3) {
         let why = if skipped.is_empty() {
             "none".into()
         } else {

@@ -582,7 +582,8 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
     let known = match (&opts.sections, &box_frame) {
         (Some(s), Some(q)) => {
             let known = ferraris::known_turns(rec, s, q, gyro_bias);
-            let start = ferraris::gyro_start(&known, s.angle_deg, q);
+            let start = ferraris::gyro_start(&known, s.angle_deg, q)
+                .unwrap_or_else(|| segments::gyro_start(&turns.segments));
             Some((known, start))
         }
         _ => None,

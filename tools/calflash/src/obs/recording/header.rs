@@ -31,6 +31,10 @@ pub(super) struct Columns {
     /// The time field is a sample counter (`--columns index=NAME`): it may wrap, and the rate
     /// turns it into seconds.
     pub(super) counter: bool,
+    /// The time field's unit is stated (by its name's suffix, `t_us`, or by the user's
+    /// `t=NAME:us`); a bare `t`, `time` or `timestamp` is read as seconds unless its steps say
+    /// otherwise.
+    pub(super) t_stated: bool,
     /// The fields of the counts, in order.
     pub(super) counts: Vec<usize>,
     /// The unit each count column's name states.
@@ -58,6 +62,16 @@ pub(crate) fn timestamp(name: &str) -> Option<f64> {
         "ns" => Some(1e-9),
         _ => None,
     }
+}
+
+/// True when the timestamp column `name` states its unit (`t_ms`, `time_us`, `timestamp_s`),
+/// not only that it is a time (`t`, `TIME`, `timestamp`).
+pub(crate) fn timestamp_unit_named(name: &str) -> bool {
+    let s = squash(name);
+    ["timestamp", "time", "t"]
+        .iter()
+        .find_map(|p| s.strip_prefix(p))
+        .is_some_and(|rest| !rest.is_empty())
 }
 
 /// A time column given as `NAME:UNIT` (s, ms, us, ns) or `NAME` whose name states its unit
@@ -112,6 +126,8 @@ pub(crate) const GYRO: [&str; 6] = ["gyroscope", "gyro", "gyr", "g", "w", "omega
 pub struct Chosen {
     /// The timestamp's column, with its scale to seconds.
     pub t: Option<(String, f64)>,
+    /// The timestamp's unit was given (`t=stamp:ms`, `t=time_us`), not only its column.
+    pub t_stated: bool,
     /// The accelerometer's x, y, z columns.
     pub accel: [Option<String>; 3],
     /// The gyro's.
@@ -153,6 +169,7 @@ impl Chosen {
                 "index" => &mut c.index,
                 "t" => {
                     let (column, scale) = time_column(&name, item, "t=")?;
+                    c.t_stated = name.contains(':') || timestamp_unit_named(&name);
                     if c.t.replace((column, scale)).is_some() {
                         return Err(ColumnsError::Twice {
                             item: item.to_string(),
@@ -307,6 +324,11 @@ pub(super) fn named(
             .enumerate()
             .find_map(|(i, h)| timestamp(h).map(|s| (i, s))),
     };
+    let t_stated = match (&chosen.t, &chosen.index) {
+        (Some(_), _) => chosen.t_stated,
+        (None, Some(_)) => true,
+        (None, None) => t.is_some_and(|(i, _)| timestamp_unit_named(header[i])),
+    };
     let temp = match &chosen.temp {
         Some(name) => Some(position(header, name).ok_or_else(|| missing(name))?),
         None => header.iter().position(|h| squash(h).starts_with("temp")),
@@ -322,6 +344,7 @@ pub(super) fn named(
     Ok(Some(Columns {
         t,
         counter: chosen.t.is_none() && chosen.index.is_some(),
+        t_stated,
         counts: found.iter().map(|f| f.0).collect(),
         units: found.iter().map(|f| f.1).collect(),
         sensor: found.first().map(|f| f.2),
@@ -345,6 +368,7 @@ pub(super) fn positional(width: usize, holds: Holds) -> Option<Columns> {
     Some(Columns {
         t,
         counter: false,
+        t_stated: false,
         counts: (first..first + n).collect(),
         units: vec![None; n],
         sensor: None,

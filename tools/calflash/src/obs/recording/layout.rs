@@ -70,6 +70,9 @@ pub struct Rows {
     pub t: Option<Vec<f64>>,
     /// `t` holds a sample counter (`--columns index=NAME`), not seconds.
     pub counter: bool,
+    /// The time column's unit is stated (its name's suffix, or given); otherwise `t` was read
+    /// as seconds and its steps may say another unit.
+    pub t_stated: bool,
     /// The kept triads: accelerometer then gyro, or the one kept (or the file's one).
     pub triads: Vec<Vec<[f64; 3]>>,
     /// The file line of each sample.
@@ -333,6 +336,7 @@ pub fn read_chosen(
     let mut rows = Rows {
         t: None,
         counter: false,
+        t_stated: false,
         triads: vec![Vec::new(); kept.len() / 3],
         line: Vec::new(),
         fields: Vec::new(),
@@ -429,6 +433,7 @@ pub fn read_chosen(
         rows.header = c.header;
         rows.sensor = c.sensor;
         rows.counter = c.counter;
+        rows.t_stated = c.t_stated;
         if let Some(k) = c.temp {
             let name = header
                 .as_ref()

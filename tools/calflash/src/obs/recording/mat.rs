@@ -192,6 +192,8 @@ pub fn read(path: &Path, holds: Holds, keep: Keep) -> Result<Rows, RecordingErro
     let first = usize::from(t.is_some());
     Ok(Rows {
         counter: false,
+        // A MAT file's time is read in the unit its variable's name gives (t, time_ms).
+        t_stated: true,
         line: (1..=samples.len())
             .map(|k| u32::try_from(k).unwrap_or(u32::MAX))
             .collect(),

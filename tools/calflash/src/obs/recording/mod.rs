@@ -495,6 +495,44 @@ mod tests {
         );
     }
 
+    /// Issue 66: a logger's `TIME` column in microseconds (its name states no unit) is read in
+    /// microseconds from its steps, by itself and when named with `--columns t=TIME`; named with
+    /// its unit it is taken as given; milliseconds are read so too; a column whose steps fit two
+    /// units (1,000: 1 Hz in ms or 1 kHz in us) is left for the user to name, and the rate's
+    /// check says so. (Steps of 10 s or less stay seconds: a slow log is one.)
+    #[test]
+    fn a_time_column_without_a_unit_is_read_in_the_unit_its_steps_show() {
+        let d = tempfile::tempdir().unwrap();
+        let file = |name: &str, step: u64| -> PathBuf {
+            let mut text = String::from("TIME,ax,ay,az,gx,gy,gz\n");
+            for k in 0..500u64 {
+                text.push_str(&format!("{},1,2,3,4,5,6\n", 1_700_000_000 + k * step));
+            }
+            write(d.path(), name, &text)
+        };
+        let opts = |columns: &str| Options {
+            rails: Rails::new(i32::MIN, i32::MAX),
+            rate: None,
+            keep: layout::Keep::Both,
+            units: units::Units::DEFAULT,
+            columns: header::Chosen::parse(columns).unwrap(),
+        };
+        let us = file("us.csv", 9_994);
+        for columns in ["", "t=TIME"] {
+            let r = read_with(&us, None, &opts(columns)).unwrap();
+            assert!((1.0 / r.period - 100.06).abs() < 0.01, "{}", 1.0 / r.period);
+        }
+        let r = read_with(&us, None, &opts("t=TIME:ns")).unwrap();
+        assert!((1.0 / r.period - 100_060.0).abs() < 10.0, "{}", r.period);
+        // Milliseconds at 50 Hz (20 s a step as seconds, 50 kHz as microseconds).
+        let ms = file("ms.csv", 20);
+        let r = read_with(&ms, None, &opts("")).unwrap();
+        assert!((r.period - 0.02).abs() < 1e-9, "{}", r.period);
+        let both = file("both.csv", 1_000);
+        let e = read_with(&both, None, &opts("")).unwrap_err().to_string();
+        assert!(e.contains("--columns t=NAME:ms"), "{e}");
+    }
+
     /// Issue 66: an accelerometer read in m/s^2 that clips at +-20.48 (an ADXL355) has its
     /// samples at the clip excluded as saturated, as codes at a rail are; the same motion
     /// below the clip excludes nothing.

@@ -1,5 +1,6 @@
-//! The timestamps of a recording: its own, checked against a stated rate (`--sample-rate`, a logger's
-//! preamble), or made from that rate.
+//! The timestamps of a recording: its own (in the unit its steps show where its name states
+//! none), checked against a stated rate (`--sample-rate`, a logger's preamble), or made from that
+//! rate.
 
 use std::path::Path;
 
@@ -45,7 +46,14 @@ pub(super) fn timing(
     if rows.counter {
         return by_counter(rows, path, stated);
     }
-    match (rows.t.take(), stated) {
+    let own = rows.t.take().map(|t| {
+        if rows.t_stated {
+            t
+        } else {
+            unit_from_steps(t, path)
+        }
+    });
+    match (own, stated) {
         // --sample-rate is the user's word over the file's own timestamps (a logger's host
         // stamps samples as its radio delivers them, in batches): the samples are taken as
         // evenly spaced from the first timestamp, and said so.
@@ -80,6 +88,39 @@ pub(super) fn timing(
             path: path.to_path_buf(),
         }),
     }
+}
+
+/// The rates a time column may be sampled at when its unit is read from its steps, Hz: an
+/// inertial sensor's, and far enough apart that one unit only (of s, ms, us, ns, a thousand
+/// apart) puts a recording's rate among them.
+const STEP_READ_RATES: std::ops::Range<f64> = 1.0..50_000.0;
+
+/// A time column whose name states no unit (`TIME`, `timestamp`), read as seconds: kept where
+/// its steps are a rate in seconds; where they are not (a logger's microseconds step by 10,000
+/// at 100 Hz), read in the one unit of ms, us, ns whose rate lies in [`STEP_READ_RATES`], and
+/// said. Left as read where no unit or more than one does (the rate's check then names it).
+fn unit_from_steps(t: Vec<f64>, path: &Path) -> Vec<f64> {
+    if t.len() < 2 {
+        return t;
+    }
+    let step = median_step(&t);
+    if step <= 10.0 {
+        return t;
+    }
+    let fits: Vec<(&str, f64)> = [("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9)]
+        .into_iter()
+        .filter(|(_, s)| STEP_READ_RATES.contains(&(1.0 / (step * s))))
+        .collect();
+    let [(unit, scale)] = fits[..] else {
+        return t;
+    };
+    eprintln!(
+        "calflash: note: {}: the time column states no unit and steps by {step} (as seconds, {:.3e} Hz): read as {unit}, {:.2} Hz; name its unit (--columns t=NAME:s) if it is another",
+        path.display(),
+        1.0 / step,
+        1.0 / (step * scale)
+    );
+    t.into_iter().map(|x| x * scale).collect()
 }
 
 /// The times of `rows` whose time column is a sample counter, at the `stated` rate (and who

@@ -274,8 +274,19 @@ fn gyro_lines(s: &mut String, c: &SelfCal, rec: &Recording) {
 pub(super) fn ferraris_words(c: &SelfCal) -> Option<String> {
     let s = c.options.sections.as_ref()?;
     Some(format!(
-        "the section list's 6 faces (samples {}-{} to {}-{}) give the accelerometer's cross-axis terms, held while its scales and offsets fit |a| = g at every pose; its 3 turns of {} deg (x, y, z) give the gyro's scales with the rotations between poses",
-        s.faces[0].start, s.faces[0].end, s.faces[5].start, s.faces[5].end, s.angle_deg
+        "the section list's 6 faces (samples {}-{} to {}-{}) give the accelerometer's cross-axis terms, held while its scales and offsets fit |a| = g at every pose; its turns of {} deg about {} give the gyro's scales with the rotations between poses",
+        s.faces[0].start,
+        s.faces[0].end,
+        s.faces[5].start,
+        s.faces[5].end,
+        s.angle_deg,
+        ["x", "y", "z"]
+            .iter()
+            .zip(&s.turns)
+            .filter(|(_, t)| t.is_some())
+            .map(|(a, _)| *a)
+            .collect::<Vec<_>>()
+            .join(", ")
     ))
 }
 
