@@ -67,6 +67,18 @@ fn six_columns(p: &Path, rate: f64) -> Rec {
     }
 }
 
+/// imucal's session: `n_samples, gyr_x, gyr_y, gyr_z` (deg/s), `acc_x, acc_y, acc_z` (m/s^2), at
+/// 102.4 Hz.
+fn ferraris_session(dir: &Path) -> Rec {
+    let text = std::fs::read_to_string(dir.join("example_ferraris_session.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = text.lines().skip(1).map(numbers).collect();
+    Rec {
+        t: rows.iter().map(|r| r[0] / 102.4).collect(),
+        acc: rows.iter().map(|r| [r[4], r[5], r[6]]).collect(),
+        gyro: rows.iter().map(|r| [r[1], r[2], r[3]]).collect(),
+    }
+}
+
 /// One recording, its facts and what was measured before this test (issue 66's table).
 struct Case {
     name: &'static str,
@@ -201,14 +213,7 @@ fn held_out_gyro_is_at_most_imu_tk_and_the_accelerometer_no_worse() {
 fn the_ferraris_session_calibrates_and_beats_imucal() {
     let Some(d) = shared() else { return };
     let dir = d.join("data/imucal-ferraris");
-    let text = std::fs::read_to_string(dir.join("example_ferraris_session.csv")).unwrap();
-    let rows: Vec<Vec<f64>> = text.lines().skip(1).map(numbers).collect();
-    // n_samples, gyr_x, gyr_y, gyr_z (deg/s), acc_x, acc_y, acc_z (m/s^2), at 102.4 Hz.
-    let rec = Rec {
-        t: rows.iter().map(|r| r[0] / 102.4).collect(),
-        acc: rows.iter().map(|r| [r[4], r[5], r[6]]).collect(),
-        gyro: rows.iter().map(|r| [r[1], r[2], r[3]]).collect(),
-    };
+    let rec = ferraris_session(&dir);
     let ivs = judge::still_intervals(&rec, 2.5, 6.0);
     let imucal: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(d.join("tools/realbench/ref/imucal-ferraris/full/imucal.json"))
@@ -268,13 +273,7 @@ fn the_ferraris_session_calibrates_and_beats_imucal() {
 fn the_ferraris_session_held_out() {
     let Some(d) = shared() else { return };
     let dir = d.join("data/imucal-ferraris");
-    let text = std::fs::read_to_string(dir.join("example_ferraris_session.csv")).unwrap();
-    let rows: Vec<Vec<f64>> = text.lines().skip(1).map(numbers).collect();
-    let rec = Rec {
-        t: rows.iter().map(|r| r[0] / 102.4).collect(),
-        acc: rows.iter().map(|r| [r[4], r[5], r[6]]).collect(),
-        gyro: rows.iter().map(|r| [r[1], r[2], r[3]]).collect(),
-    };
+    let rec = ferraris_session(&dir);
     let ivs = judge::still_intervals(&rec, 2.5, 6.0);
     let (k, t_cut) = judge::split(&rec, &ivs);
     let out = tempfile::tempdir().unwrap();

@@ -104,6 +104,22 @@ pub fn angle(m: &Matrix3<f64>, seg: &Segment) -> f64 {
     p.cross(&t).norm().atan2(p.dot(&t))
 }
 
+/// Forward differences of `problem`'s residuals `r` at the matrix `p`, with one step relative to
+/// the matrix's size (its entries share one scale; the off-diagonal ones are near zero).
+fn matrix_jacobian(problem: &impl Problem, p: &[f64], r: &[f64], out: &mut DMatrix<f64>) {
+    let mut q = p.to_vec();
+    let mut hi = vec![0.0; r.len()];
+    let h = 1e-7 * p.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-12);
+    for j in 0..p.len() {
+        q[j] = p[j] + h;
+        problem.residuals(&q, &mut hi);
+        q[j] = p[j];
+        for i in 0..r.len() {
+            out[(i, j)] = (hi[i] - r[i]) / h;
+        }
+    }
+}
+
 struct Rotations<'a> {
     segments: &'a [Segment],
 }
@@ -129,19 +145,7 @@ impl Problem for Rotations<'_> {
     }
 
     fn jacobian(&self, p: &[f64], r: &[f64], out: &mut DMatrix<f64>) {
-        // Forward differences with a step relative to the matrix's size (its entries share one
-        // scale; the off-diagonal ones are near zero).
-        let mut q = p.to_vec();
-        let mut hi = vec![0.0; r.len()];
-        let h = 1e-7 * p.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-12);
-        for j in 0..p.len() {
-            q[j] = p[j] + h;
-            self.residuals(&q, &mut hi);
-            q[j] = p[j];
-            for i in 0..r.len() {
-                out[(i, j)] = (hi[i] - r[i]) / h;
-            }
-        }
+        matrix_jacobian(self, p, r, out);
     }
 }
 
@@ -194,18 +198,7 @@ impl Problem for WithTurns<'_> {
     }
 
     fn jacobian(&self, p: &[f64], r: &[f64], out: &mut DMatrix<f64>) {
-        // The rotations' step, relative to the matrix's size.
-        let mut q = p.to_vec();
-        let mut hi = vec![0.0; r.len()];
-        let h = 1e-7 * p.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-12);
-        for j in 0..p.len() {
-            q[j] = p[j] + h;
-            self.residuals(&q, &mut hi);
-            q[j] = p[j];
-            for i in 0..r.len() {
-                out[(i, j)] = (hi[i] - r[i]) / h;
-            }
-        }
+        matrix_jacobian(self, p, r, out);
     }
 }
 
