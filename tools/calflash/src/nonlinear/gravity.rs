@@ -241,10 +241,7 @@ pub fn fit(
     start: &[f64],
     quadratic: bool,
 ) -> Result<AccelFit, LmError> {
-    let v: Vec<[f64; 3]> = means
-        .iter()
-        .map(|m| std::array::from_fn(|j| m[j] - center[j]))
-        .collect();
+    let v = about(means, center);
     let problem = Gravity {
         v: &v,
         g,
@@ -255,19 +252,36 @@ pub fn fit(
         p0.extend_from_slice(start.get(9..12).unwrap_or(&[0.0; 3]));
     }
     let sol: Solution = lm::solve(&problem, &p0, 200)?;
-    let covariance = lm::covariance(&sol);
     let mut terms = LINEAR_TERMS.to_vec();
     if quadratic {
         terms.extend(QUADRATIC_TERMS);
     }
-    Ok(AccelFit {
-        model: AccelModel::from_params(center, &sol.p),
-        terms,
-        params: sol.p.clone(),
-        covariance,
-        residuals: sol.residuals,
-        iterations: sol.iterations,
-    })
+    Ok(AccelFit::of(sol, center, terms, means.len()))
+}
+
+/// The pose means `means` less `center`.
+fn about(means: &[[f64; 3]], center: [f64; 3]) -> Vec<[f64; 3]> {
+    means
+        .iter()
+        .map(|m| std::array::from_fn(|j| m[j] - center[j]))
+        .collect()
+}
+
+impl AccelFit {
+    /// The fit of the solution `sol` about `center`, its parameters named `terms`; the residuals
+    /// are its first `poses` (the poses', before any pseudo-observation).
+    fn of(mut sol: Solution, center: [f64; 3], terms: Vec<&'static str>, poses: usize) -> Self {
+        let covariance = lm::covariance(&sol);
+        sol.residuals.truncate(poses);
+        Self {
+            model: AccelModel::from_params(center, &sol.p),
+            terms,
+            params: sol.p,
+            covariance,
+            residuals: sol.residuals,
+            iterations: sol.iterations,
+        }
+    }
 }
 
 /// `Gravity` with its cross-axis terms (`M12`, `M13`, `M23`) held near `cross` by three
@@ -319,10 +333,7 @@ pub fn fit_held_cross(
     start: &[f64],
     w: f64,
 ) -> Result<AccelFit, LmError> {
-    let v: Vec<[f64; 3]> = means
-        .iter()
-        .map(|m| std::array::from_fn(|j| m[j] - center[j]))
-        .collect();
+    let v = about(means, center);
     let problem = HeldCross {
         gravity: Gravity {
             v: &v,
@@ -332,17 +343,13 @@ pub fn fit_held_cross(
         cross: CROSS.map(|j| start[j]),
         w,
     };
-    let mut sol: Solution = lm::solve(&problem, &start[..9], 200)?;
-    let covariance = lm::covariance(&sol);
-    sol.residuals.truncate(means.len());
-    Ok(AccelFit {
-        model: AccelModel::from_params(center, &sol.p),
-        terms: LINEAR_TERMS.to_vec(),
-        params: sol.p.clone(),
-        covariance,
-        residuals: sol.residuals,
-        iterations: sol.iterations,
-    })
+    let sol: Solution = lm::solve(&problem, &start[..9], 200)?;
+    Ok(AccelFit::of(
+        sol,
+        center,
+        LINEAR_TERMS.to_vec(),
+        means.len(),
+    ))
 }
 
 #[cfg(test)]

@@ -360,24 +360,35 @@ fn holdout(means: &[[f64; 3]], g: f64, quadratic: bool, folds: usize) -> Result<
 /// An accelerometer fit to a set of pose means.
 type PoseFit<'a> = dyn Fn(&[[f64; 3]]) -> Result<AccelFit, LmError> + 'a;
 
-/// Each pose of `means` predicted by `fit` on the poses `others` beside it (one set each).
+/// Each pose of `folds` predicted by `fit` on the poses beside it.
 fn leave_one_out(
-    means: &[[f64; 3]],
-    others: &[Vec<[f64; 3]>],
+    folds: &[([f64; 3], Vec<[f64; 3]>)],
     g: f64,
     fit: &PoseFit<'_>,
 ) -> Result<Holdout, LmError> {
-    let mut errs = Vec::new();
-    for (m, train) in means.iter().zip(others) {
-        let a = fit(train)?.model.apply(*m);
-        errs.push((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt() - g);
+    let errs = folds
+        .iter()
+        .map(|(m, train)| fit(train).map(|f| misfit(&f, *m, g)))
+        .collect::<Result<Vec<f64>, _>>()?;
+    Ok(Holdout::of(&errs, folds.len(), 0))
+}
+
+/// `|a| - g` at the pose mean `m` through `fit`, m/s^2.
+fn misfit(fit: &AccelFit, m: [f64; 3], g: f64) -> f64 {
+    let a = fit.model.apply(m);
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt() - g
+}
+
+impl Holdout {
+    /// The figures of the held-out errors `errs` over `folds`, `unfitted` of them not judged.
+    fn of(errs: &[f64], folds: usize, unfitted: usize) -> Self {
+        Self {
+            folds,
+            rms: rms(errs),
+            max: errs.iter().fold(0.0f64, |m, e| m.max(e.abs())),
+            unfitted,
+        }
     }
-    Ok(Holdout {
-        folds: means.len(),
-        rms: rms(&errs),
-        max: errs.iter().fold(0.0f64, |m, e| m.max(e.abs())),
-        unfitted: 0,
-    })
 }
 
 /// Each pose of `means` predicted by `fit` on the other folds' poses.
@@ -405,20 +416,12 @@ fn holdout_with(
                 continue;
             }
         };
-        for (_, m) in test {
-            let a = fit.model.apply(*m);
-            errs.push((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt() - g);
-        }
+        errs.extend(test.into_iter().map(|(_, m)| misfit(&fit, *m, g)));
     }
     if let (true, Some(e)) = (errs.is_empty(), last_error) {
         return Err(e);
     }
-    Ok(Holdout {
-        folds,
-        rms: rms(&errs),
-        max: errs.iter().fold(0.0f64, |m, e| m.max(e.abs())),
-        unfitted,
-    })
+    Ok(Holdout::of(&errs, folds, unfitted))
 }
 
 fn unit(a: [f64; 3]) -> [f64; 3] {
@@ -508,26 +511,17 @@ pub fn calibrate(rec: &Recording, opts: &Options) -> Result<SelfCal, SelfCalErro
         // Each pose left out in turn, but for a direction's only pose (without it the axis
         // cannot be fitted: it is one of the faces that define the axis).
         let facing = directions(&pose_means, rest_level);
-        let judged: Vec<usize> = (0..pose_means.len())
-            .filter(|&k| {
-                let rest: Vec<[f64; 3]> = (0..pose_means.len())
+        let folds: Vec<([f64; 3], Vec<[f64; 3]>)> = (0..pose_means.len())
+            .map(|k| {
+                let others: Vec<[f64; 3]> = (0..pose_means.len())
                     .filter(|&i| i != k)
                     .map(|i| pose_means[i])
                     .collect();
-                directions(&rest, rest_level) == facing
+                (pose_means[k], others)
             })
+            .filter(|(_, others)| directions(others, rest_level) == facing)
             .collect();
-        let means: Vec<[f64; 3]> = judged.iter().map(|&k| pose_means[k]).collect();
-        let others: Vec<Vec<[f64; 3]>> = judged
-            .iter()
-            .map(|&k| {
-                (0..pose_means.len())
-                    .filter(|&i| i != k)
-                    .map(|i| pose_means[i])
-                    .collect()
-            })
-            .collect();
-        let held = leave_one_out(&means, &others, opts.g, &|train| {
+        let held = leave_one_out(&folds, opts.g, &|train| {
             gravity::fit_held_cross(train, opts.g, accel.model.center, &accel.params, opts.g)
         })
         .map_err(fit_err(source, "hold-out accelerometer"))?;
