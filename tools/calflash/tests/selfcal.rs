@@ -291,6 +291,51 @@ fn the_command_line_refuses_bad_input_with_one_clear_line() {
         err.contains("'981' for '--g <G>': local gravity is between 9.78 and 9.84 m/s^2"),
         "{err}"
     );
+    // A Ferraris turn of no angle, or of none at all, is refused before anything is read.
+    for angle in ["0", "nan"] {
+        let (code, err) = run(&[
+            "--g",
+            "9.81",
+            "--serial",
+            "SIM-1",
+            "--sections",
+            "absent.json",
+            "--turn-angle",
+            angle,
+        ]);
+        assert_eq!(code, Some(2), "a usage error: {err}");
+        assert!(err.contains("--turn-angle"), "{err}");
+    }
+    // A section list that cannot be read is named.
+    let (code, err) = run(&[
+        "--g",
+        "9.81",
+        "--serial",
+        "SIM-1",
+        "--sections",
+        "absent.json",
+    ]);
+    assert_eq!(code, Some(1));
+    assert!(
+        err.contains("absent.json: cannot read the section list"),
+        "{err}"
+    );
+    // Nor is the section list ever written over.
+    let list = dir.path().join("list.json");
+    std::fs::write(&list, "{}").unwrap();
+    let (code, err) = run(&[
+        "--g",
+        "9.81",
+        "--serial",
+        "SIM-1",
+        "--sections",
+        list.to_str().unwrap(),
+        "--json",
+        list.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("--sections"), "{err}");
+    assert_eq!(std::fs::read_to_string(&list).unwrap(), "{}");
 }
 
 /// Calibrates one simulated tumble of unit SIM-7 with `calflash selfcal`, recording it in

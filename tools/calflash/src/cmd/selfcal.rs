@@ -61,7 +61,7 @@ pub struct SelfcalArgs {
     #[arg(long, value_name = "FILE")]
     pub sections: Option<std::path::PathBuf>,
     /// The angle of each turn of `--sections` about its axis, degrees (imucal's default).
-    #[arg(long, default_value_t = -360.0, allow_negative_numbers = true, requires = "sections")]
+    #[arg(long, default_value_t = -360.0, allow_negative_numbers = true, requires = "sections", value_parser = super::values::non_zero)]
     pub turn_angle: f64,
     /// The converter's codes: unsigned16 (also offset binary), signed16 (two's complement), any
     /// width from 8 to 32 bits, or the rails LO:HI. Samples at a rail are excluded.
@@ -103,7 +103,8 @@ pub fn run(args: &SelfcalArgs) -> Result<bool, Failure> {
     args.out.check(
         Paths::new()
             .input("the accelerometer recording", Some(&args.acc))
-            .input("--gyro", args.gyro.as_deref()),
+            .input("--gyro", args.gyro.as_deref())
+            .input("--sections", args.sections.as_deref()),
     )?;
     let serial = blob::serial(&args.serial)?;
     let (t0, t1) = super::values::pair(&args.temp_span, "--temp-span")?;
